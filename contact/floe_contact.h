@@ -1,0 +1,105 @@
+/* floe_contact.h - contact summary (ParticLS eq 15), materials and the contact-law vtable.
+ *
+ * Convention: particle i is "p", particle j is "p'". n is the unit normal pointing from i
+ * towards j; depth > 0 when they penetrate. The law returns the force on i; j receives
+ * the opposite force. The world adds the lever-arm torques (point - x) x F to both. */
+#ifndef FLOE_CONTACT_H
+#define FLOE_CONTACT_H
+
+#include "floe_base.h"
+
+#define FLOE_MAX_HISTORY 8   /* doubles of per-contact state a law may keep */
+
+typedef struct floe_material {
+    char name[64];
+    double density;          /* kg/m^3 */
+    double young;            /* E, Pa (used by Hertz-Mindlin and time-step estimates) */
+    double poisson;          /* nu, in (-1, 0.5) */
+} floe_material;
+
+/* Contact summary, ParticLS eq 15. */
+typedef struct floe_contact {
+    int i, j;                /* particle indices */
+    double x1[3];            /* point of i's boundary deepest inside j */
+    double x2[3];            /* point of j's boundary deepest inside i */
+    double n[3];             /* unit normal from i to j */
+    double depth;            /* penetration distance |x2 - x1| (>0 overlapping) */
+    double point[3];         /* contact point (x1 + x2)/2, the moment arm of eq 16-20 */
+    double vr[3];            /* relative velocity of i with respect to j at the point (eq 15b) */
+    double vn;               /* vr . n  (> 0 approaching) */
+    double vt[3];            /* tangential relative velocity vr - vn n (eq 15c) */
+    double r_eff;            /* effective radius R* = (1/Ri + 1/Rj)^-1 (walls: infinite) */
+    double m_eff;            /* effective mass m* (fixed/kinematic partners: infinite) */
+    double dt;               /* time step the history is advanced by */
+} floe_contact;
+
+typedef struct floe_contact_result {
+    double force[3];         /* force on i, N */
+    double torque_i[3];      /* extra torque on i beyond (point - x_i) x force (rolling), N m */
+    double torque_j[3];      /* extra torque on j */
+    double energy;           /* elastic energy stored in the contact, J */
+    double dissipation;      /* energy dissipated during this step (damping + slip), J */
+    double fn;               /* magnitude of the normal force (for stress/outputs), N */
+} floe_contact_result;
+
+typedef struct floe_contact_law floe_contact_law;
+
+typedef struct floe_contact_law_class {
+    int version;             /* 1 */
+    const char *name;
+    int history_size;        /* doubles of per-contact state (<= FLOE_MAX_HISTORY) */
+    /* Force for a contact with depth > 0; history is updated in place by c->dt. */
+    int (*force)(const floe_contact_law *law, const floe_contact *c, double *history,
+                 floe_contact_result *out);
+    /* Linearised normal stiffness (N/m) and normal damping coefficient (N s/m) for a
+     * representative contact of effective radius r_eff, mass m_eff and overlap depth;
+     * used for the critical time step. */
+    void (*stiffness)(const floe_contact_law *law, double r_eff, double m_eff, double depth,
+                      double *kn, double *cn);
+    void (*destroy)(floe_contact_law *law);
+} floe_contact_law_class;
+
+struct floe_contact_law {
+    const floe_contact_law_class *klass;
+};
+
+/* Linear elastic with Coulomb friction, ParticLS eqs 16-18 (gn = gs = 0), and linear
+ * viscoelastic, eqs 19-20. */
+typedef struct floe_linear_law {
+    floe_contact_law base;
+    double kn, ks;           /* N/m */
+    double gn, gs;           /* N s/m (absolute dashpots) */
+    double mu;               /* Coulomb friction coefficient */
+    int tension;             /* 1: allow the total normal force to become attractive (paper
+                                form); 0 (default): clamp it at zero */
+} floe_linear_law;
+
+/* Hertz-Mindlin with damping from a coefficient of restitution
+ * (003 eqs 15-21, 000 eq 36): kn = 4/3 E* sqrt(R* d), kt = 8 G* sqrt(R* d). */
+typedef struct floe_hertz_mindlin_law {
+    floe_contact_law base;
+    double e_star;           /* effective Young's modulus, Pa */
+    double g_star;           /* effective shear modulus, Pa */
+    double restitution;      /* e in (0, 1] */
+    double mu;               /* friction */
+    double damping_ratio;    /* dimensionless damping calibrated so that the collision
+                                restitutes exactly e (see docs/models.md) */
+} floe_hertz_mindlin_law;
+
+extern const floe_contact_law_class floe_linear_law_class;
+extern const floe_contact_law_class floe_hertz_mindlin_law_class;
+
+/* Constructors (caller owns the result, or the world after floe_world_set_law). */
+floe_contact_law *floe_linear_law_create(double kn, double ks, double gn, double gs, double mu);
+floe_contact_law *floe_hertz_mindlin_law_create(const floe_material *a, const floe_material *b,
+                                                double restitution, double mu);
+void floe_contact_law_destroy(floe_contact_law *law);
+
+/* Hertz-Mindlin damping ratio for a restitution coefficient e (monotone map, computed by
+ * integrating the dimensionless collision ODE and bisection; cached). */
+double floe_hertz_damping_for_restitution(double e);
+/* Restitution of a linear spring-dashpot with stiffness k, damping c and mass m
+ * (force allowed to become attractive: e = exp(-pi zeta / sqrt(1 - zeta^2))). */
+double floe_linear_restitution(double k, double c, double m);
+
+#endif

@@ -1,0 +1,33 @@
+/* floe_state.h - generic state objects evolved in time by RK2 (ParticLS §4.1, eq 21).
+ * A state object is anything with an ODE dy/dt = rhs(t, y): a growing radius, a
+ * temperature, a damage variable. GSL odeiv2-style class + instance. */
+#ifndef FLOE_STATE_H
+#define FLOE_STATE_H
+
+#include "floe_world.h"
+
+typedef struct floe_state_class {
+    int version;   /* 1 */
+    const char *name;
+    size_t (*size)(const floe_state *s);
+    void (*get)(const floe_state *s, double *y);
+    /* set may change the world (e.g. a particle's radius); it returns a status */
+    int (*set)(floe_state *s, floe_world *w, const double *y);
+    int (*rhs)(const floe_state *s, const floe_world *w, double t, const double *y, double *dydt);
+    void (*destroy)(floe_state *s);
+} floe_state_class;
+
+struct floe_state {
+    const floe_state_class *klass;
+};
+
+/* Radius of a sphere particle growing as dR/dt = rate (ParticLS §5.2). The particle must
+ * own its sphere geometry (the state clones it on creation). Mass and inertia stay those
+ * of the initial particle unless update_mass is 1. */
+floe_state *floe_growing_radius_create(floe_world *w, int particle, double rate, int update_mass);
+/* Generic scalar ODE dy/dt = f(t, y, user) for tests and user models. */
+typedef double (*floe_scalar_rhs_fn)(double t, double y, void *user);
+floe_state *floe_scalar_state_create(double y0, floe_scalar_rhs_fn f, void *user);
+double floe_scalar_state_value(const floe_state *s);
+
+#endif

@@ -1,0 +1,101 @@
+/* world_internal.h - the world's data, shared by the library modules (core, contact,
+ * observers, cli). Users go through floe_world.h; this layout may change. */
+#ifndef FLOE_WORLD_INTERNAL_H
+#define FLOE_WORLD_INTERNAL_H
+
+#include "floe_world.h"
+#include "floe_state.h"
+#include "floe_kdtree.h"
+#include "../observers/floe_observer.h"
+
+/* Particle store: structure of arrays, index = particle id. */
+typedef struct floe_particles {
+    int n, cap;
+    double *x;        /* 3n centre of mass */
+    double *v;        /* 3n velocity */
+    double *q;        /* 4n orientation body -> world */
+    double *w;        /* 3n angular velocity, world frame */
+    double *L;        /* 3n angular momentum, world frame (integrated variable) */
+    double *f;        /* 3n force */
+    double *t;        /* 3n torque */
+    double *mass;     /* n */
+    double *inv_mass; /* n (0 for fixed/kinematic) */
+    double *inertia;  /* 3n principal moments, body frame */
+    double *radius;   /* n bounding radius (infinite for walls) */
+    int *geom;        /* n geometry index */
+    int *material;    /* n */
+    int *group;       /* n user tag ("body" in outputs) */
+    unsigned char *motion; /* n floe_motion */
+    unsigned char *kind;   /* n geometry kind (cached) */
+} floe_particles;
+
+typedef struct floe_motion_cb { int particle; floe_motion_fn fn; void *user; } floe_motion_cb;
+
+/* One active contact of the current step (for observers). */
+typedef struct floe_contact_rec {
+    int i, j;
+    double point[3], n[3], depth;
+    double force[3];   /* on i */
+    double fn;
+    double energy;
+} floe_contact_rec;
+
+/* Neighbour list with Verlet skin and per-pair history kept across rebuilds. */
+typedef struct floe_neighbor_list {
+    floe_kdtree *tree;
+    int npairs, cap;
+    int *pi, *pj;            /* candidate pairs, i < j, walls included */
+    double *hist;            /* npairs * FLOE_MAX_HISTORY */
+    unsigned char *touching; /* pair was in contact last step */
+    double *x_build;         /* 3n positions at the last build */
+    int n_build;
+    double skin;
+    long rebuilds;
+    int *walls; int nwalls;  /* particles with unbounded geometry (planes) */
+    int *scratch; int scratch_cap;
+} floe_neighbor_list;
+
+struct floe_world {
+    floe_world_def def;
+    char err[512];
+    floe_particles p;
+    floe_geometry **geoms; int ngeoms, geoms_cap;
+    floe_material *mats; int nmats, mats_cap;
+    floe_contact_law **laws;  /* nmats x nmats (symmetric, owned once via law_owned) */
+    floe_contact_law **law_owned; int nlaws_owned, law_owned_cap;
+    floe_motion_cb *motions; int nmotions, motions_cap;
+    floe_body_force_fn body_force; void *body_force_user;
+    floe_state **states; int nstates, states_cap;
+    floe_observer **obs; int nobs, obs_cap;
+    floe_neighbor_list nl;
+    floe_contact_rec *contacts; int ncontacts, contacts_cap;
+    double time, dt, dt_crit;
+    long step;
+    int prepared;
+    int finished;
+    floe_energy energy;
+    long detector_calls;
+};
+
+int floe_world_error(floe_world *w, int code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* neighbour list (core/neighbor.c) */
+int floe_nl_init(floe_neighbor_list *nl);
+void floe_nl_free(floe_neighbor_list *nl);
+int floe_nl_needs_rebuild(const floe_neighbor_list *nl, const floe_particles *p);
+int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int leaf_size);
+
+/* contact detection (contact/detect.c): fills c (x1, x2, n, depth, point, r_eff) for the
+ * pair; returns 1 if penetrating, 0 if not, < 0 on error. */
+int floe_detect(const floe_world *w, int i, int j, floe_contact *c);
+/* 1 if a detector exists for the two geometry kinds/classes */
+int floe_detect_supported(const floe_geometry *a, const floe_geometry *b);
+
+/* forces (core/forces.c) */
+int floe_compute_forces(floe_world *w);
+
+#endif

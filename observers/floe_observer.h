@@ -1,0 +1,49 @@
+/* floe_observer.h - observers (ParticLS §4.3): called every `period_steps` steps or every
+ * `period_time` seconds of simulated time, and once at the start and at the end (also
+ * when a run stops on an error, so that what was computed is written). */
+#ifndef FLOE_OBSERVER_H
+#define FLOE_OBSERVER_H
+
+#include "../core/floe_world.h"
+#include <stdio.h>
+
+typedef struct floe_observer_class {
+    int version; /* 1 */
+    const char *name;
+    int (*begin)(floe_observer *o, floe_world *w);      /* optional */
+    int (*observe)(floe_observer *o, floe_world *w);    /* required */
+    int (*end)(floe_observer *o, floe_world *w);        /* optional: flush, close */
+    void (*destroy)(floe_observer *o);                  /* optional */
+} floe_observer_class;
+
+struct floe_observer {
+    const floe_observer_class *klass;
+    long period_steps;      /* > 0: every n steps */
+    double period_time;     /* > 0: every this many seconds (used when period_steps = 0) */
+    double next_time;       /* bookkeeping of the world */
+    int ended;
+};
+
+/* All writers take an output path; the directory must exist. Returns NULL and writes a
+ * message to err on failure. */
+
+/* CSV of chosen particles: t, id, x, y, z, vx, vy, vz, wx, wy, wz, q0..q3, fx, fy, fz. */
+floe_observer *floe_particle_tracker_create(const char *path, const int *ids, int n,
+                                            char *err, size_t errlen);
+/* Homogenised Cauchy stress (ParticLS eq 24) of a group (-1 = all free particles):
+ * CSV t, sxx, syy, szz, sxy, sxz, syz (Pa, tension positive), coordination number,
+ * contacts, volume. volume <= 0: the axis-aligned bounding box of the collection. */
+floe_observer *floe_collection_tracker_create(const char *path, int group, double volume,
+                                              char *err, size_t errlen);
+/* Energy CSV: t, kinetic_trans, kinetic_rot, elastic, work_body, work_boundary,
+ * dissipated, balance_error. */
+floe_observer *floe_energy_tracker_create(const char *path, char *err, size_t errlen);
+/* VTK: one .vtu per frame (prefix_NNNNNN.vtu) and prefix.pvd listing them. Point data:
+ * id, radius, velocity, angular_velocity, force, body, material. */
+floe_observer *floe_vtk_writer_create(const char *dir, const char *prefix, char *err, size_t errlen);
+/* CSV snapshot of all particles per frame (one file, "t,id,..." rows). */
+floe_observer *floe_csv_writer_create(const char *path, char *err, size_t errlen);
+
+void floe_observer_destroy(floe_observer *o);
+
+#endif

@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Install every Debian package that floe's build, tests and benchmarks need.
+# Idempotent; runs apt-get directly as root, through sudo otherwise.
+#   scripts/install-deps.sh          build + tests
+#   scripts/install-deps.sh --bench  also the peer codes used by bench/ (LIGGGHTS, nanoflann)
+set -euo pipefail
+pkgs=(build-essential cmake pkg-config libfyaml-dev python3 python3-vtk9)
+if [[ "${1:-}" == "--bench" ]]; then
+  pkgs+=(g++ libnanoflann-dev liggghts)
+fi
+if [[ $(id -u) -eq 0 ]]; then SUDO=(); else SUDO=(sudo); fi
+missing=()
+for p in "${pkgs[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if (( ${#missing[@]} )); then
+  echo "install-deps: installing ${missing[*]}" >&2
+  export DEBIAN_FRONTEND=noninteractive
+  "${SUDO[@]}" apt-get update -qq
+  "${SUDO[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+else
+  echo "install-deps: all packages present" >&2
+fi
