@@ -8,7 +8,12 @@
 
 #include "floe_base.h"
 
-#define FLOE_MAX_HISTORY 8   /* doubles of per-contact state a law may keep */
+#define FLOE_MAX_HISTORY 8   /* doubles of per-contact state kept per pair */
+#define FLOE_LAW_HISTORY 4   /* of which a law may use history[0 .. 3]; the world keeps the
+                                previous force (slots 4-6) and stored energy (slot 7) there
+                                for its energy ledger */
+#define FLOE_FORCE_SLOT 4
+#define FLOE_ENERGY_SLOT 7
 
 typedef struct floe_material {
     char name[64];
@@ -38,7 +43,9 @@ typedef struct floe_contact_result {
     double torque_i[3];      /* extra torque on i beyond (point - x_i) x force (rolling), N m */
     double torque_j[3];      /* extra torque on j */
     double energy;           /* elastic energy stored in the contact, J */
-    double dissipation;      /* energy dissipated during this step (damping + slip), J */
+    double dissipation;      /* energy dissipated during this step (damping + slip), J, as the
+                                law sees it; the world's energy ledger uses work minus the
+                                change of stored energy instead (docs/models.md) */
     double fn;               /* magnitude of the normal force (for stress/outputs), N */
 } floe_contact_result;
 
@@ -47,7 +54,7 @@ typedef struct floe_contact_law floe_contact_law;
 typedef struct floe_contact_law_class {
     int version;             /* 1 */
     const char *name;
-    int history_size;        /* doubles of per-contact state (<= FLOE_MAX_HISTORY) */
+    int history_size;        /* doubles of per-contact state (<= FLOE_LAW_HISTORY) */
     /* Force for a contact with depth > 0; history is updated in place by c->dt. */
     int (*force)(const floe_contact_law *law, const floe_contact *c, double *history,
                  floe_contact_result *out);

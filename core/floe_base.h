@@ -7,6 +7,10 @@
 #include <math.h>
 #include <stddef.h>
 
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
 #define FLOE_VERSION_STRING "0.1.0"
 
 enum {

@@ -48,6 +48,7 @@ typedef struct floe_neighbor_list {
     double *hist;            /* npairs * FLOE_MAX_HISTORY */
     unsigned char *touching; /* pair was in contact last step */
     double *x_build;         /* 3n positions at the last build */
+    double *r_build;         /* n bounding radii at the last build */
     int n_build;
     double skin;
     long rebuilds;
@@ -70,6 +71,7 @@ struct floe_world {
     floe_neighbor_list nl;
     floe_contact_rec *contacts; int ncontacts, contacts_cap;
     double time, dt, dt_crit;
+    double v_expected;        /* relative speed used by the time-step estimate */
     long step;
     int prepared;
     int finished;

@@ -46,4 +46,31 @@ floe_observer *floe_csv_writer_create(const char *path, char *err, size_t errlen
 
 void floe_observer_destroy(floe_observer *o);
 
+/* ---- additions: stress evaluation, accessors, VTK options ---- */
+
+/* Result of one homogenised-stress evaluation (see observers/collection_tracker.c for the
+ * formula and the sign convention: tension positive, compression negative). */
+typedef struct floe_collection_stats {
+    double time;          /* s */
+    double sigma[6];      /* Pa: xx, yy, zz, xy, xz, yz (symmetric part) */
+    double coordination;  /* 2 x contacts / particles */
+    int particles;        /* members of the collection */
+    int contacts;         /* contacts between two members */
+    int wall_contacts;    /* contacts between a member and a non-member (wall, fixed, ...) */
+    double volume;        /* m^3 (2D: bounding area x 1 m) */
+} floe_collection_stats;
+
+/* Evaluate the homogenised stress of a group of the world now (no observer needed).
+ * group -1 = every free particle with a bounded radius; volume <= 0 = bounding box. */
+int floe_collection_stress(const floe_world *w, int group, double volume,
+                           floe_collection_stats *out);
+/* Last values computed by a collection tracker: sigma (xx, yy, zz, xy, xz, yz, Pa) and
+ * coordination number (either pointer may be NULL). FLOE_EINVAL if o is not a collection
+ * tracker or has not observed yet. */
+int floe_collection_tracker_last(const floe_observer *o, double sigma[6], double *coord);
+
+/* VTK writer output encoding: 0 (default) = raw binary appended data, 1 = ASCII (larger and
+ * slower, human-readable). Returns FLOE_EINVAL if o is not a VTK writer. */
+int floe_vtk_writer_set_ascii(floe_observer *o, int ascii);
+
 #endif

@@ -1,0 +1,123 @@
+/* forces.c - force and torque on every particle at the current positions: body forces
+ * (gravity, user callback) and contact forces over the neighbour list (detection ->
+ * contact summary, eq 15 -> contact law of the material pair -> force, torque, history,
+ * energy, dissipation). In 2D the out-of-plane components are removed. */
+#include "world_internal.h"
+#include <stdlib.h>
+#include <string.h>
+
+static int push_contact(floe_world *w, const floe_contact *c, const floe_contact_result *r) {
+    if (w->ncontacts == w->contacts_cap) {
+        int nc = w->contacts_cap ? 2 * w->contacts_cap : 1024;
+        floe_contact_rec *t = realloc(w->contacts, (size_t)nc * sizeof *t);
+        if (!t) return FLOE_ENOMEM;
+        w->contacts = t;
+        w->contacts_cap = nc;
+    }
+    floe_contact_rec *k = &w->contacts[w->ncontacts++];
+    k->i = c->i; k->j = c->j;
+    memcpy(k->point, c->point, sizeof k->point);
+    memcpy(k->n, c->n, sizeof k->n);
+    k->depth = c->depth;
+    memcpy(k->force, r->force, sizeof k->force);
+    k->fn = r->fn;
+    k->energy = r->energy;
+    return FLOE_OK;
+}
+
+int floe_compute_forces(floe_world *w) {
+    floe_particles *p = &w->p;
+    const int n = p->n, dim = w->def.dim;
+    const int stepping = w->step > 0;
+    memset(p->f, 0, (size_t)n * 3 * sizeof(double));
+    memset(p->t, 0, (size_t)n * 3 * sizeof(double));
+    for (int i = 0; i < n; i++) {
+        if (p->motion[i] != FLOE_FREE) continue;
+        for (int k = 0; k < 3; k++) p->f[3 * i + k] = p->mass[i] * w->def.gravity[k];
+    }
+    if (w->body_force) {
+        double wb = 0;
+        for (int i = 0; i < n; i++) {
+            if (p->motion[i] != FLOE_FREE) continue;
+            double f[3] = {0, 0, 0}, t[3] = {0, 0, 0};
+            w->body_force(w, i, w->time, f, t, w->body_force_user);
+            floe_v3_add(p->f + 3 * i, p->f + 3 * i, f);
+            floe_v3_add(p->t + 3 * i, p->t + 3 * i, t);
+            /* velocities are at mid-step here: work over the step ~ F . v dt */
+            wb += w->dt * (floe_v3_dot(f, p->v + 3 * i) + floe_v3_dot(t, p->w + 3 * i));
+        }
+        if (stepping) w->energy.work_body += wb;
+    }
+    w->ncontacts = 0;
+    double elastic = 0, diss = 0;
+    floe_neighbor_list *nl = &w->nl;
+    const int nm = w->nmats;
+    for (int k = 0; k < nl->npairs; k++) {
+        int i = nl->pi[k], j = nl->pj[k];
+        floe_contact c;
+        int r = floe_detect(w, i, j, &c);
+        w->detector_calls++;
+        if (r < 0)
+            return floe_world_error(w, -r, "no contact detector for particles %d and %d (%s-%s)", i, j,
+                                    w->geoms[p->geom[i]]->klass->name, w->geoms[p->geom[j]]->klass->name);
+        double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
+        if (r == 0) {
+            if (nl->touching[k]) { /* separated: reset the history (ParticLS §3.1) */
+                /* release step: the last force still did work over half a step */
+                if (stepping) {
+                    double vr[3];
+                    floe_v3_sub(vr, p->v + 3 * i, p->v + 3 * j);
+                    diss += hist[FLOE_ENERGY_SLOT] - 0.5 * floe_v3_dot(hist + FLOE_FORCE_SLOT, vr) * w->dt;
+                }
+                memset(hist, 0, FLOE_MAX_HISTORY * sizeof(double));
+                nl->touching[k] = 0;
+            }
+            continue;
+        }
+        nl->touching[k] = 1;
+        const double *xi = p->x + 3 * i, *xj = p->x + 3 * j;
+        double ri[3], rj[3], ui[3], uj[3];
+        floe_v3_sub(ri, c.point, xi);
+        floe_v3_sub(rj, c.point, xj);
+        floe_v3_cross(ui, p->w + 3 * i, ri);
+        floe_v3_cross(uj, p->w + 3 * j, rj);
+        for (int a = 0; a < 3; a++) c.vr[a] = (p->v[3 * i + a] + ui[a]) - (p->v[3 * j + a] + uj[a]);
+        c.vn = floe_v3_dot(c.vr, c.n);
+        for (int a = 0; a < 3; a++) c.vt[a] = c.vr[a] - c.vn * c.n[a];
+        double mi = p->motion[i] == FLOE_FREE ? p->mass[i] : INFINITY;
+        double mj = p->motion[j] == FLOE_FREE ? p->mass[j] : INFINITY;
+        c.m_eff = isfinite(mi) && isfinite(mj) ? mi * mj / (mi + mj) : (isfinite(mi) ? mi : mj);
+        c.dt = stepping ? w->dt : 0.0; /* prepare evaluates forces without advancing history */
+        const floe_contact_law *law = w->laws[p->material[i] * nm + p->material[j]];
+        floe_contact_result res;
+        memset(&res, 0, sizeof res);
+        int rc = law->klass->force(law, &c, hist, &res);
+        if (rc) return floe_world_error(w, rc, "contact law %s failed for particles %d and %d", law->klass->name, i, j);
+        double ti[3], tj[3];
+        floe_v3_cross(ti, ri, res.force);
+        floe_v3_cross(tj, rj, res.force);
+        for (int a = 0; a < 3; a++) {
+            p->f[3 * i + a] += res.force[a];
+            p->f[3 * j + a] -= res.force[a];
+            p->t[3 * i + a] += ti[a] + res.torque_i[a];
+            p->t[3 * j + a] += -tj[a] + res.torque_j[a];
+        }
+        elastic += res.energy;
+        /* dissipation ledger: work done on the contact by the relative motion over the step
+         * (mid-step velocities) minus the change of its stored energy */
+        if (stepping) {
+            /* trapezoid rule: the work of velocity Verlet over a step is (F_old + F_new)/2 . dx */
+            double fav[3];
+            for (int a = 0; a < 3; a++) fav[a] = 0.5 * (res.force[a] + hist[FLOE_FORCE_SLOT + a]);
+            diss += -floe_v3_dot(fav, c.vr) * c.dt - (res.energy - hist[FLOE_ENERGY_SLOT]);
+        }
+        hist[FLOE_ENERGY_SLOT] = res.energy;
+        memcpy(hist + FLOE_FORCE_SLOT, res.force, 3 * sizeof(double));
+        if (push_contact(w, &c, &res)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
+    if (dim == 2)
+        for (int i = 0; i < n; i++) { p->f[3 * i + 2] = 0; p->t[3 * i] = p->t[3 * i + 1] = 0; }
+    w->energy.elastic = elastic;
+    if (stepping) w->energy.dissipated += diss;
+    return FLOE_OK;
+}

@@ -1,0 +1,479 @@
+/* kdtree.c - static balanced k-d tree (floe_kdtree.h), a C rendering of nanoflann's
+ * KDTreeSingleIndexAdaptor (J. L. Blanco, nanoflann 1.4, after FLANN by Muja & Lowe):
+ *  - build: index permutation vind; each node is split at the midpoint of the widest
+ *    dimension of its points' bounding box, clamped to their range, with nanoflann's
+ *    tie rule (middleSplit_ + planeSplit); leaves hold up to leaf_size points;
+ *  - search: nanoflann's incremental squared distance from the query to the node box,
+ *    kept per dimension in a small vector ("dists"), so a far child is pruned without
+ *    touching its points.
+ * Differences from nanoflann, all for speed: the coordinates are copied into the tree in
+ * leaf order, one array per dimension, so a leaf scan reads contiguous memory instead of
+ * gathering through vind; nodes are 24-byte records in one array in depth-first order
+ * (left child = next node); searches use an explicit stack and never allocate; the
+ * bounding box of a node is computed once on its packed coordinates.
+ * The pruning tests carry a relative slack of 1e-12 so that rounding in the incremental
+ * box distance can never drop a point whose own distance passes the exact test: radius
+ * and k-NN results equal a brute-force scan computed as dx*dx + dy*dy + dz*dz. */
+#include "floe_kdtree.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define KD_DEFAULT_LEAF 16
+#define KD_STACK 64              /* explicit search stack; deeper trees recurse */
+#define KD_SLACK (1.0 + 1e-12)   /* conservative pruning, see the file comment */
+
+typedef struct kd_node {
+    double lo, hi; /* internal: max of the left child's points and min of the right
+                      child's points along the split dimension (nanoflann divlow/divhigh) */
+    int a;         /* internal: index of the right child; leaf: end of its point range */
+    int b;         /* internal: split dimension (0..2); leaf: -1 - begin */
+} kd_node;
+
+struct floe_kdtree {
+    int n, dim, leaf_size;
+    int nnodes, node_cap, depth;
+    int *vind;        /* tree order -> caller's index */
+    double *x, *y, *z; /* packed coordinates in tree order (z = 0 when dim == 2) */
+    kd_node *nodes;
+    double box_lo[3], box_hi[3]; /* root bounding box */
+};
+
+/* ------------------------------------------------------------------------------------
+ * build */
+
+typedef struct kd_task {
+    int begin, end;
+    int parent;   /* -1 for the root */
+    int is_right; /* which child of parent this is */
+    int depth;
+} kd_task;
+
+static int kd_new_node(floe_kdtree *t)
+{
+    if (t->nnodes == t->node_cap) {
+        int cap = t->node_cap ? 2 * t->node_cap : 16;
+        kd_node *nn = realloc(t->nodes, (size_t)cap * sizeof *nn);
+        if (!nn) return -1;
+        t->nodes = nn;
+        t->node_cap = cap;
+    }
+    return t->nnodes++;
+}
+
+static void kd_bbox(const floe_kdtree *t, int b, int e, double lo[3], double hi[3])
+{
+    const double *restrict x = t->x, *restrict y = t->y, *restrict z = t->z;
+    double x0 = x[b], x1 = x[b], y0 = y[b], y1 = y[b], z0 = z[b], z1 = z[b];
+    for (int i = b + 1; i < e; i++) {
+        x0 = x[i] < x0 ? x[i] : x0; x1 = x[i] > x1 ? x[i] : x1;
+        y0 = y[i] < y0 ? y[i] : y0; y1 = y[i] > y1 ? y[i] : y1;
+        z0 = z[i] < z0 ? z[i] : z0; z1 = z[i] > z1 ? z[i] : z1;
+    }
+    lo[0] = x0; lo[1] = y0; lo[2] = z0;
+    hi[0] = x1; hi[1] = y1; hi[2] = z1;
+}
+
+static inline void kd_swap(floe_kdtree *t, int i, int j)
+{
+    double tx = t->x[i], ty = t->y[i], tz = t->z[i];
+    int ti = t->vind[i];
+    t->x[i] = t->x[j]; t->y[i] = t->y[j]; t->z[i] = t->z[j]; t->vind[i] = t->vind[j];
+    t->x[j] = tx; t->y[j] = ty; t->z[j] = tz; t->vind[j] = ti;
+}
+
+/* Moves the points of [b, e) with key < cut (strict) or key <= cut (!strict) to the
+ * front; returns the first index of the rest. */
+static int kd_partition(floe_kdtree *t, const double *key, int b, int e, double cut, int strict)
+{
+    int i = b, j = e - 1;
+    for (;;) {
+        if (strict) {
+            while (i <= j && key[i] < cut) i++;
+            while (i <= j && !(key[j] < cut)) j--;
+        } else {
+            while (i <= j && key[i] <= cut) i++;
+            while (i <= j && !(key[j] <= cut)) j--;
+        }
+        if (i >= j) break;
+        kd_swap(t, i, j);
+        i++;
+        j--;
+    }
+    return i;
+}
+
+static int kd_build_nodes(floe_kdtree *t)
+{
+    int stack_cap = 64, sp = 0;
+    kd_task *stack = malloc((size_t)stack_cap * sizeof *stack);
+    if (!stack) return -1;
+    stack[sp++] = (kd_task){0, t->n, -1, 0, 1};
+    while (sp > 0) {
+        kd_task tk = stack[--sp];
+        for (;;) {
+            int id = kd_new_node(t);
+            if (id < 0) { free(stack); return -1; }
+            if (tk.depth > t->depth) t->depth = tk.depth;
+            double lo[3], hi[3];
+            kd_bbox(t, tk.begin, tk.end, lo, hi);
+            if (tk.parent >= 0) {
+                kd_node *p = &t->nodes[tk.parent];
+                if (tk.is_right) {
+                    p->hi = lo[p->b];
+                    p->a = id;
+                } else {
+                    p->lo = hi[p->b];
+                }
+            } else {
+                memcpy(t->box_lo, lo, sizeof lo);
+                memcpy(t->box_hi, hi, sizeof hi);
+            }
+            int count = tk.end - tk.begin;
+            kd_node *nd = &t->nodes[id];
+            if (count <= t->leaf_size) {
+                nd->lo = nd->hi = 0;
+                nd->a = tk.end;
+                nd->b = -1 - tk.begin;
+                break;
+            }
+            /* nanoflann middleSplit_: widest dimension, first one on ties */
+            int f = 0;
+            double span = hi[0] - lo[0];
+            for (int d = 1; d < t->dim; d++)
+                if (hi[d] - lo[d] > span) { span = hi[d] - lo[d]; f = d; }
+            double cut = 0.5 * lo[f] + 0.5 * hi[f];
+            if (cut < lo[f]) cut = lo[f];
+            if (cut > hi[f]) cut = hi[f];
+            const double *key = f == 0 ? t->x : f == 1 ? t->y : t->z;
+            /* planeSplit: [< cut | == cut | > cut], then nanoflann's choice of index */
+            int half = count / 2, split;
+            int lim1 = kd_partition(t, key, tk.begin, tk.end, cut, 1) - tk.begin;
+            if (lim1 > half) {
+                split = lim1;
+            } else {
+                int lim2 = kd_partition(t, key, tk.begin + lim1, tk.end, cut, 0) - tk.begin;
+                split = lim2 < half ? lim2 : half;
+            }
+            nd->b = f;
+            nd->a = -1;
+            if (sp == stack_cap) {
+                kd_task *ns = realloc(stack, (size_t)(2 * stack_cap) * sizeof *ns);
+                if (!ns) { free(stack); return -1; }
+                stack = ns;
+                stack_cap *= 2;
+            }
+            stack[sp++] = (kd_task){tk.begin + split, tk.end, id, 1, tk.depth + 1};
+            tk = (kd_task){tk.begin, tk.begin + split, id, 0, tk.depth + 1};
+        }
+    }
+    free(stack);
+    if (t->nnodes < t->node_cap) { /* shrink to fit; keep the old block if that fails */
+        kd_node *nn = realloc(t->nodes, (size_t)t->nnodes * sizeof *nn);
+        if (nn) { t->nodes = nn; t->node_cap = t->nnodes; }
+    }
+    return 0;
+}
+
+floe_kdtree *floe_kdtree_build(const double *pts, int n, int dim, int leaf_size)
+{
+    if (n < 0 || (n > 0 && !pts) || (dim != 2 && dim != 3)) return NULL;
+    floe_kdtree *t = calloc(1, sizeof *t);
+    if (!t) return NULL;
+    t->n = n;
+    t->dim = dim;
+    t->leaf_size = leaf_size > 0 ? leaf_size : KD_DEFAULT_LEAF;
+    if (n == 0) return t;
+    /* one block: x | y | z | vind */
+    size_t bytes = (size_t)n * (3 * sizeof(double) + sizeof(int));
+    double *block = malloc(bytes);
+    if (!block) { free(t); return NULL; }
+    t->x = block;
+    t->y = block + n;
+    t->z = block + 2 * (size_t)n;
+    t->vind = (int *)(block + 3 * (size_t)n);
+    for (int i = 0; i < n; i++) {
+        t->x[i] = pts[3 * (size_t)i];
+        t->y[i] = pts[3 * (size_t)i + 1];
+        t->z[i] = dim == 3 ? pts[3 * (size_t)i + 2] : 0.0;
+        t->vind[i] = i;
+    }
+    /* a balanced tree has about 2n/leaf nodes; the array grows if the data needs more */
+    t->node_cap = 2 * (n / t->leaf_size) + 16;
+    t->nodes = malloc((size_t)t->node_cap * sizeof *t->nodes);
+    if (!t->nodes || kd_build_nodes(t) != 0) {
+        floe_kdtree_destroy(t);
+        return NULL;
+    }
+    return t;
+}
+
+void floe_kdtree_destroy(floe_kdtree *t)
+{
+    if (!t) return;
+    free(t->x);
+    free(t->nodes);
+    free(t);
+}
+
+int floe_kdtree_size(const floe_kdtree *t) { return t ? t->n : 0; }
+
+const int *floe_kdtree_order(const floe_kdtree *t) { return t ? t->vind : NULL; }
+
+/* ------------------------------------------------------------------------------------
+ * search */
+
+typedef struct kd_frame {
+    int node;
+    double mind;   /* squared distance from q to the node's box */
+    double d[3];   /* its per-dimension parts (nanoflann "dists") */
+} kd_frame;
+
+/* squared distance from q to the root box, per dimension */
+static double kd_init_dists(const floe_kdtree *t, const double q[3], double d[3])
+{
+    double s = 0;
+    for (int i = 0; i < 3; i++) {
+        double v = q[i], e = 0;
+        if (v < t->box_lo[i]) e = (t->box_lo[i] - v) * (t->box_lo[i] - v);
+        else if (v > t->box_hi[i]) e = (v - t->box_hi[i]) * (v - t->box_hi[i]);
+        d[i] = e;
+        s += e;
+    }
+    return s;
+}
+
+typedef struct kd_rq {
+    double q[3], r2, r2s;
+    int *out;
+    int cap;
+} kd_rq;
+
+static int kd_radius_from(const floe_kdtree *t, const kd_rq *rq, kd_frame start, int cnt)
+{
+    const kd_node *restrict nodes = t->nodes;
+    const double *restrict X = t->x, *restrict Y = t->y, *restrict Z = t->z;
+    const int *restrict vind = t->vind;
+    const double qx = rq->q[0], qy = rq->q[1], qz = rq->q[2], r2 = rq->r2, r2s = rq->r2s;
+    int *restrict out = rq->out;
+    const int cap = rq->cap;
+    kd_frame stack[KD_STACK];
+    int sp = 0;
+    int node = start.node;
+    double mind = start.mind, dd[3] = {start.d[0], start.d[1], start.d[2]};
+    for (;;) {
+        const kd_node *nd = &nodes[node];
+        while (nd->b >= 0) {
+            const int f = nd->b;
+            const double v = rq->q[f];
+            const double diff1 = v - nd->lo, diff2 = v - nd->hi;
+            int best, other;
+            double cut;
+            if (diff1 + diff2 < 0) { best = node + 1; other = nd->a; cut = diff2 * diff2; }
+            else { best = nd->a; other = node + 1; cut = diff1 * diff1; }
+            const double nm = mind + cut - dd[f];
+            if (nm <= r2s) {
+                kd_frame fr = {other, nm, {dd[0], dd[1], dd[2]}};
+                fr.d[f] = cut;
+                if (sp < KD_STACK) stack[sp++] = fr;
+                else cnt = kd_radius_from(t, rq, fr, cnt);
+            }
+            node = best;
+            nd = &nodes[node];
+        }
+        const int b = -1 - nd->b, e = nd->a;
+        if (cnt + (e - b) <= cap) {
+            for (int i = b; i < e; i++) {
+                const double dx = X[i] - qx, dy = Y[i] - qy, dz = Z[i] - qz;
+                const double d2 = dx * dx + dy * dy + dz * dz;
+                out[cnt] = vind[i];
+                cnt += d2 <= r2;
+            }
+        } else {
+            for (int i = b; i < e; i++) {
+                const double dx = X[i] - qx, dy = Y[i] - qy, dz = Z[i] - qz;
+                const double d2 = dx * dx + dy * dy + dz * dz;
+                if (d2 <= r2) {
+                    if (cnt < cap) out[cnt] = vind[i];
+                    cnt++;
+                }
+            }
+        }
+        if (sp == 0) break;
+        const kd_frame *fr = &stack[--sp];
+        node = fr->node;
+        mind = fr->mind;
+        dd[0] = fr->d[0]; dd[1] = fr->d[1]; dd[2] = fr->d[2];
+    }
+    return cnt;
+}
+
+static int kd_query_setup(const floe_kdtree *t, const double q[3], double qq[3], kd_frame *fr)
+{
+    qq[0] = q[0];
+    qq[1] = q[1];
+    qq[2] = t->dim == 3 ? q[2] : 0.0;
+    fr->node = 0;
+    fr->mind = kd_init_dists(t, qq, fr->d);
+    return 0;
+}
+
+int floe_kdtree_radius(const floe_kdtree *t, const double q[3], double r, int *out, int cap)
+{
+    if (!t || t->n == 0 || !(r >= 0)) return 0;
+    kd_rq rq;
+    kd_frame fr;
+    kd_query_setup(t, q, rq.q, &fr);
+    rq.r2 = r * r;
+    rq.r2s = rq.r2 * KD_SLACK;
+    rq.out = out;
+    rq.cap = out ? (cap > 0 ? cap : 0) : 0;
+    if (fr.mind > rq.r2s) return 0;
+    return kd_radius_from(t, &rq, fr, 0);
+}
+
+typedef struct kd_vq {
+    double q[3], r2, r2s;
+    floe_kdtree_visit_fn fn;
+    void *user;
+} kd_vq;
+
+static void kd_visit_from(const floe_kdtree *t, const kd_vq *vq, kd_frame start)
+{
+    const kd_node *nodes = t->nodes;
+    kd_frame stack[KD_STACK];
+    int sp = 0;
+    int node = start.node;
+    double mind = start.mind, dd[3] = {start.d[0], start.d[1], start.d[2]};
+    for (;;) {
+        const kd_node *nd = &nodes[node];
+        while (nd->b >= 0) {
+            const int f = nd->b;
+            const double v = vq->q[f];
+            const double diff1 = v - nd->lo, diff2 = v - nd->hi;
+            int best, other;
+            double cut;
+            if (diff1 + diff2 < 0) { best = node + 1; other = nd->a; cut = diff2 * diff2; }
+            else { best = nd->a; other = node + 1; cut = diff1 * diff1; }
+            const double nm = mind + cut - dd[f];
+            if (nm <= vq->r2s) {
+                kd_frame fr = {other, nm, {dd[0], dd[1], dd[2]}};
+                fr.d[f] = cut;
+                if (sp < KD_STACK) stack[sp++] = fr;
+                else kd_visit_from(t, vq, fr);
+            }
+            node = best;
+            nd = &nodes[node];
+        }
+        const int b = -1 - nd->b, e = nd->a;
+        for (int i = b; i < e; i++) {
+            const double dx = t->x[i] - vq->q[0], dy = t->y[i] - vq->q[1], dz = t->z[i] - vq->q[2];
+            const double d2 = dx * dx + dy * dy + dz * dz;
+            if (d2 <= vq->r2) vq->fn(t->vind[i], d2, vq->user);
+        }
+        if (sp == 0) break;
+        const kd_frame *fr = &stack[--sp];
+        node = fr->node;
+        mind = fr->mind;
+        dd[0] = fr->d[0]; dd[1] = fr->d[1]; dd[2] = fr->d[2];
+    }
+}
+
+void floe_kdtree_radius_visit(const floe_kdtree *t, const double q[3], double r,
+                              floe_kdtree_visit_fn fn, void *user)
+{
+    if (!t || t->n == 0 || !fn || !(r >= 0)) return;
+    kd_vq vq;
+    kd_frame fr;
+    kd_query_setup(t, q, vq.q, &fr);
+    vq.r2 = r * r;
+    vq.r2s = vq.r2 * KD_SLACK;
+    vq.fn = fn;
+    vq.user = user;
+    if (fr.mind > vq.r2s) return;
+    kd_visit_from(t, &vq, fr);
+}
+
+/* k-NN: idx/d2 are the caller's buffers, kept sorted by insertion; cnt and worst live in
+ * the query record so that a recursive call (very deep trees only) shares them. */
+typedef struct kd_kq {
+    double q[3];
+    int k, cnt;
+    double worst; /* d2[k-1] once full, else +inf */
+    int *idx;
+    double *d2;
+} kd_kq;
+
+static void kd_knn_from(const floe_kdtree *t, kd_kq *kq, kd_frame start)
+{
+    const kd_node *nodes = t->nodes;
+    const double qx = kq->q[0], qy = kq->q[1], qz = kq->q[2];
+    int *idx = kq->idx;
+    double *dist = kq->d2;
+    const int k = kq->k;
+    kd_frame stack[KD_STACK];
+    int sp = 0;
+    int node = start.node;
+    double mind = start.mind, dd[3] = {start.d[0], start.d[1], start.d[2]};
+    for (;;) {
+        if (mind <= kq->worst * KD_SLACK) {
+            const kd_node *nd = &nodes[node];
+            while (nd->b >= 0) {
+                const int f = nd->b;
+                const double v = kq->q[f];
+                const double diff1 = v - nd->lo, diff2 = v - nd->hi;
+                int best, other;
+                double cut;
+                if (diff1 + diff2 < 0) { best = node + 1; other = nd->a; cut = diff2 * diff2; }
+                else { best = nd->a; other = node + 1; cut = diff1 * diff1; }
+                const double nm = mind + cut - dd[f];
+                if (nm <= kq->worst * KD_SLACK) {
+                    kd_frame fr = {other, nm, {dd[0], dd[1], dd[2]}};
+                    fr.d[f] = cut;
+                    if (sp < KD_STACK) stack[sp++] = fr;
+                    else kd_knn_from(t, kq, fr);
+                }
+                node = best;
+                nd = &nodes[node];
+            }
+            const int b = -1 - nd->b, e = nd->a;
+            for (int i = b; i < e; i++) {
+                const double dx = t->x[i] - qx, dy = t->y[i] - qy, dz = t->z[i] - qz;
+                const double d2 = dx * dx + dy * dy + dz * dz;
+                if (d2 < kq->worst) {
+                    int j = kq->cnt < k ? kq->cnt++ : k - 1;
+                    while (j > 0 && dist[j - 1] > d2) {
+                        dist[j] = dist[j - 1];
+                        idx[j] = idx[j - 1];
+                        j--;
+                    }
+                    dist[j] = d2;
+                    idx[j] = t->vind[i];
+                    if (kq->cnt == k) kq->worst = dist[k - 1];
+                }
+            }
+        }
+        if (sp == 0) break;
+        const kd_frame *fr = &stack[--sp];
+        node = fr->node;
+        mind = fr->mind;
+        dd[0] = fr->d[0]; dd[1] = fr->d[1]; dd[2] = fr->d[2];
+    }
+}
+
+int floe_kdtree_knn(const floe_kdtree *t, const double q[3], int k, int *idx, double *d2)
+{
+    if (!t || t->n == 0 || k <= 0 || !idx || !d2) return 0;
+    kd_kq kq;
+    kd_frame fr;
+    kd_query_setup(t, q, kq.q, &fr);
+    kq.k = k;
+    kq.cnt = 0;
+    kq.worst = INFINITY;
+    kq.idx = idx;
+    kq.d2 = d2;
+    kd_knn_from(t, &kq, fr);
+    return kq.cnt;
+}

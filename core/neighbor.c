@@ -1,0 +1,212 @@
+/* neighbor.c - candidate pairs from the k-d tree over bounding spheres, with a Verlet
+ * skin: the list holds every pair whose bounding spheres are closer than the skin, and
+ * is rebuilt only when some particle has moved (or grown) by more than skin/2 since the
+ * last build. Walls (unbounded planes) are paired with every particle within reach.
+ * Per-pair history (shear springs) survives rebuilds through a hash of the pair. */
+#include "world_internal.h"
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+int floe_nl_init(floe_neighbor_list *nl) {
+    memset(nl, 0, sizeof *nl);
+    return FLOE_OK;
+}
+
+void floe_nl_free(floe_neighbor_list *nl) {
+    floe_kdtree_destroy(nl->tree);
+    free(nl->pi); free(nl->pj); free(nl->hist); free(nl->touching);
+    free(nl->x_build); free(nl->walls); free(nl->scratch); free(nl->r_build);
+    memset(nl, 0, sizeof *nl);
+}
+
+int floe_nl_needs_rebuild(const floe_neighbor_list *nl, const floe_particles *p) {
+    if (!nl->x_build || nl->n_build != p->n) return 1;
+    double lim = 0.5 * nl->skin;
+    for (int i = 0; i < p->n; i++) {
+        const double *a = p->x + 3 * i, *b = nl->x_build + 3 * i;
+        double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+        double grow = isfinite(p->radius[i]) ? p->radius[i] - nl->r_build[i] : 0;
+        double d = sqrt(dx * dx + dy * dy + dz * dz) + (grow > 0 ? grow : 0);
+        if (d > lim) return 1;
+    }
+    return 0;
+}
+
+static uint64_t pair_key(int i, int j) { return ((uint64_t)(uint32_t)i << 32) | (uint32_t)j; }
+static uint64_t mix(uint64_t k) {
+    k ^= k >> 33; k *= 0xff51afd7ed558ccdULL; k ^= k >> 33; k *= 0xc4ceb9fe1a85ec53ULL; k ^= k >> 33;
+    return k;
+}
+
+static int push_pair(floe_neighbor_list *nl, int i, int j) {
+    if (nl->npairs == nl->cap) {
+        int nc = nl->cap ? 2 * nl->cap : 1024;
+        int *a = realloc(nl->pi, nc * sizeof(int));
+        if (!a) return FLOE_ENOMEM;
+        nl->pi = a;
+        int *b = realloc(nl->pj, nc * sizeof(int));
+        if (!b) return FLOE_ENOMEM;
+        nl->pj = b;
+        nl->cap = nc;
+    }
+    nl->pi[nl->npairs] = i < j ? i : j;
+    nl->pj[nl->npairs] = i < j ? j : i;
+    nl->npairs++;
+    return FLOE_OK;
+}
+
+static int cmp_pair(const void *a, const void *b) {
+    const int *x = a, *y = b;
+    if (x[0] != y[0]) return x[0] < y[0] ? -1 : 1;
+    return (x[1] > y[1]) - (x[1] < y[1]);
+}
+
+int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int leaf_size) {
+    int n = p->n;
+    /* keep the history of touching pairs */
+    int nold = 0;
+    uint64_t *okeys = NULL;
+    double *ohist = NULL;
+    int hcap = 0;
+    for (int k = 0; k < nl->npairs; k++) nold += nl->touching[k] != 0;
+    if (nold) {
+        hcap = 1;
+        while (hcap < 2 * nold) hcap <<= 1;
+        okeys = malloc(hcap * sizeof *okeys);
+        ohist = malloc((size_t)hcap * FLOE_MAX_HISTORY * sizeof *ohist);
+        if (!okeys || !ohist) { free(okeys); free(ohist); return FLOE_ENOMEM; }
+        for (int k = 0; k < hcap; k++) okeys[k] = UINT64_MAX;
+        for (int k = 0; k < nl->npairs; k++) {
+            if (!nl->touching[k]) continue;
+            uint64_t key = pair_key(nl->pi[k], nl->pj[k]);
+            size_t h = mix(key) & (hcap - 1);
+            while (okeys[h] != UINT64_MAX) h = (h + 1) & (hcap - 1);
+            okeys[h] = key;
+            memcpy(ohist + h * FLOE_MAX_HISTORY, nl->hist + (size_t)k * FLOE_MAX_HISTORY,
+                   FLOE_MAX_HISTORY * sizeof(double));
+        }
+    }
+
+    nl->npairs = 0;
+    free(nl->walls);
+    nl->walls = NULL;
+    nl->nwalls = 0;
+    /* bounded particles go into the tree */
+    int nb = 0, nw = 0;
+    for (int i = 0; i < n; i++) {
+        if (isfinite(p->radius[i])) nb++;
+        else nw++;
+    }
+    int *bidx = malloc((nb ? nb : 1) * sizeof(int));
+    double *bx = malloc((nb ? nb : 1) * 3 * sizeof(double));
+    nl->walls = malloc((nw ? nw : 1) * sizeof(int));
+    if (!bidx || !bx || !nl->walls) { free(bidx); free(bx); free(okeys); free(ohist); return FLOE_ENOMEM; }
+    double rmax = 0, rmin = INFINITY;
+    nb = 0;
+    for (int i = 0; i < n; i++) {
+        if (isfinite(p->radius[i])) {
+            memcpy(bx + 3 * nb, p->x + 3 * i, 3 * sizeof(double));
+            bidx[nb++] = i;
+            if (p->radius[i] > rmax) rmax = p->radius[i];
+            if (p->radius[i] < rmin) rmin = p->radius[i];
+        } else {
+            nl->walls[nl->nwalls++] = i;
+        }
+    }
+    if (nl->skin <= 0) nl->skin = isfinite(rmin) ? 0.1 * rmin : 0;
+    double skin = nl->skin;
+    int rc = FLOE_OK;
+    floe_kdtree_destroy(nl->tree);
+    nl->tree = nb ? floe_kdtree_build(bx, nb, dim, leaf_size) : NULL;
+    if (nb && !nl->tree) rc = FLOE_ENOMEM;
+    for (int a = 0; a < nb && rc == FLOE_OK; a++) {
+        int i = bidx[a];
+        double reach = p->radius[i] + rmax + skin;
+        int cnt;
+        for (;;) {
+            cnt = floe_kdtree_radius(nl->tree, p->x + 3 * i, reach, nl->scratch, nl->scratch_cap);
+            if (cnt <= nl->scratch_cap) break;
+            int nc = cnt + cnt / 2 + 64;
+            int *s = realloc(nl->scratch, nc * sizeof(int));
+            if (!s) { rc = FLOE_ENOMEM; break; }
+            nl->scratch = s;
+            nl->scratch_cap = nc;
+        }
+        if (rc) break;
+        for (int k = 0; k < cnt; k++) {
+            int j = bidx[nl->scratch[k]];
+            if (j <= i) continue;
+            if (p->motion[i] != FLOE_FREE && p->motion[j] != FLOE_FREE) continue;
+            double d[3];
+            floe_v3_sub(d, p->x + 3 * j, p->x + 3 * i);
+            double lim = p->radius[i] + p->radius[j] + skin;
+            if (floe_v3_dot(d, d) <= lim * lim) rc = push_pair(nl, i, j);
+        }
+    }
+    /* walls: plane through x with normal q*(0,0,1) */
+    for (int a = 0; a < nl->nwalls && rc == FLOE_OK; a++) {
+        int wi = nl->walls[a];
+        double nw[3];
+        const double ez[3] = {0, 0, 1};
+        floe_q_rotate(nw, p->q + 4 * wi, ez);
+        for (int b = 0; b < nb && rc == FLOE_OK; b++) {
+            int i = bidx[b];
+            if (p->motion[i] != FLOE_FREE && p->motion[wi] != FLOE_FREE) continue;
+            double d[3];
+            floe_v3_sub(d, p->x + 3 * i, p->x + 3 * wi);
+            if (floe_v3_dot(d, nw) <= p->radius[i] + skin) rc = push_pair(nl, i, wi);
+        }
+    }
+    free(bx);
+    free(bidx);
+    if (rc == FLOE_OK) {
+        /* deterministic order, cache friendly: sort by (i, j) */
+        int *tmp = malloc((size_t)(nl->npairs ? nl->npairs : 1) * 2 * sizeof(int));
+        if (!tmp) rc = FLOE_ENOMEM;
+        else {
+            for (int k = 0; k < nl->npairs; k++) { tmp[2 * k] = nl->pi[k]; tmp[2 * k + 1] = nl->pj[k]; }
+            qsort(tmp, nl->npairs, 2 * sizeof(int), cmp_pair);
+            for (int k = 0; k < nl->npairs; k++) { nl->pi[k] = tmp[2 * k]; nl->pj[k] = tmp[2 * k + 1]; }
+            free(tmp);
+        }
+    }
+    if (rc == FLOE_OK) {
+        size_t np = nl->npairs ? nl->npairs : 1;
+        double *h = realloc(nl->hist, np * FLOE_MAX_HISTORY * sizeof(double));
+        unsigned char *t = h ? realloc(nl->touching, np) : NULL;
+        if (h) nl->hist = h;
+        if (t) nl->touching = t;
+        if (!h || !t) rc = FLOE_ENOMEM;
+    }
+    if (rc == FLOE_OK) {
+        memset(nl->hist, 0, (size_t)nl->npairs * FLOE_MAX_HISTORY * sizeof(double));
+        memset(nl->touching, 0, nl->npairs);
+        if (nold) {
+            for (int k = 0; k < nl->npairs; k++) {
+                uint64_t key = pair_key(nl->pi[k], nl->pj[k]);
+                size_t h = mix(key) & (hcap - 1);
+                while (okeys[h] != UINT64_MAX && okeys[h] != key) h = (h + 1) & (hcap - 1);
+                if (okeys[h] == key) {
+                    memcpy(nl->hist + (size_t)k * FLOE_MAX_HISTORY, ohist + h * FLOE_MAX_HISTORY,
+                           FLOE_MAX_HISTORY * sizeof(double));
+                    nl->touching[k] = 1;
+                }
+            }
+        }
+        double *xb = nl->n_build == n && nl->x_build ? nl->x_build : realloc(nl->x_build, (size_t)(n ? n : 1) * 3 * sizeof(double));
+        double *rb = xb ? realloc(nl->r_build, (size_t)(n ? n : 1) * sizeof(double)) : NULL;
+        if (xb) nl->x_build = xb;
+        if (rb) nl->r_build = rb;
+        if (!xb || !rb) rc = FLOE_ENOMEM;
+        else {
+            memcpy(nl->x_build, p->x, (size_t)n * 3 * sizeof(double));
+            memcpy(nl->r_build, p->radius, (size_t)n * sizeof(double));
+            nl->n_build = n;
+            nl->rebuilds++;
+        }
+    }
+    free(okeys);
+    free(ohist);
+    return rc;
+}

@@ -1,0 +1,1923 @@
+/* scene.c - YAML scene files -> a prepared floe_world (format: docs/scene-format.md).
+ *
+ * Parsed with libfyaml's document API. Every mapping is checked against the keys valid at
+ * that place (unknown keys name the closest valid one by edit distance); every value is
+ * type-checked and range-checked, and every message is "file:line:column: message" with
+ * 1-based line and column. Packings (lattice, hexagonal, random) are expanded here; the
+ * world does the physics. ParticLS §5.2 (growing radius) and §5.3 (RVE) are the examples. */
+#include "floe_scene.h"
+#include "floe_state.h"
+#include "world_internal.h"
+#include "../observers/floe_observer.h"
+
+#include <errno.h>
+#include <libfyaml.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+
+#define SC_MAX_PARTICLES_PER_ENTRY 100000000L
+
+/* ------------------------------------------------------------------------------------ */
+/* Loader context                                                                        */
+
+typedef struct sc_mat {
+    floe_material m;
+    int has_young, has_poisson;
+    struct fy_node *at;           /* the entry, for messages */
+    struct fy_node *body_user;    /* first `material:` node of a body using it */
+    struct fy_node *wall_user;    /* first `material:` node of a wall using it */
+    int body_entry, wall_entry;   /* indices of those users */
+} sc_mat;
+
+typedef struct sc_law {
+    int a, b;
+    char model[32];
+    double kn, ks, gn, gs, mu, e;
+    int tension;
+} sc_law;
+
+typedef struct sc_output {
+    char type[16];
+    char target[512];
+    long every;
+    double interval;
+} sc_output;
+
+typedef struct sc {
+    const char *path;
+    char *err;
+    size_t errlen;
+    int dim;
+    floe_world *w;
+    sc_mat *mats;
+    int nmats;
+    sc_law *laws;
+    int nlaws;
+    struct fy_node **law_at;     /* nmats*nmats: node of the law given for the pair */
+    int nbody_entries;
+    int nparticles, nwalls, nstates, nobservers;
+    int nspheres, nboxes;
+    int *entry_first, *entry_count; /* particle range of each body entry */
+    sc_output *outs;
+    int nouts;
+    double duration, dt_given, safety;
+    int dt_auto;
+    int grow_particle[8];
+    int ngrow_listed;
+} sc;
+
+static int sc_loc(struct fy_node *n, int *line, int *col);
+
+static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
+static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
+{
+    char msg[768];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    int line, col;
+    if (s->err && s->errlen) {
+        if (sc_loc(at, &line, &col))
+            snprintf(s->err, s->errlen, "%s:%d:%d: %s", s->path, line, col, msg);
+        else
+            snprintf(s->err, s->errlen, "%s: %s", s->path, msg);
+    }
+    return code ? code : FLOE_EINVAL;
+}
+
+/* ------------------------------------------------------------------------------------ */
+/* Node helpers                                                                          */
+
+/* 1-based line/column of a node: scalars from their token, collections from their first
+ * entry. Returns 0 when unknown (empty collection, NULL). */
+static int sc_loc(struct fy_node *n, int *line, int *col)
+{
+    if (!n) return 0;
+    switch (fy_node_get_type(n)) {
+    case FYNT_SCALAR: {
+        struct fy_token *t = fy_node_get_scalar_token(n);
+        const struct fy_mark *m = t ? fy_token_start_mark(t) : NULL;
+        if (!m) return 0;
+        *line = m->line + 1;
+        *col = m->column + 1;
+        return 1;
+    }
+    case FYNT_MAPPING: {
+        void *it = NULL;
+        struct fy_node_pair *p = fy_node_mapping_iterate(n, &it);
+        return p ? sc_loc(fy_node_pair_key(p), line, col) : 0;
+    }
+    case FYNT_SEQUENCE: {
+        void *it = NULL;
+        struct fy_node *c = fy_node_sequence_iterate(n, &it);
+        return c ? sc_loc(c, line, col) : 0;
+    }
+    }
+    return 0;
+}
+
+static int sc_line(struct fy_node *n)
+{
+    int l = 0, c = 0;
+    return sc_loc(n, &l, &c) ? l : 0;
+}
+
+/* Scalar text (NUL-terminated, owned by the document) or NULL if not a scalar. */
+static const char *sc_text(struct fy_node *n)
+{
+    if (!n || !fy_node_is_scalar(n)) return NULL;
+    return fy_node_get_scalar0(n);
+}
+
+static int sc_is_missing(struct fy_node *n)
+{
+    if (!n) return 1;
+    if (!fy_node_is_scalar(n)) return 0;
+    if (fy_node_get_style(n) != FYNS_PLAIN) return 0;
+    const char *t = fy_node_get_scalar0(n);
+    return !t || !*t || !strcmp(t, "~") || !strcmp(t, "null") || !strcmp(t, "Null") ||
+           !strcmp(t, "NULL");
+}
+
+static const char *sc_type_name(struct fy_node *n)
+{
+    if (!n) return "nothing";
+    switch (fy_node_get_type(n)) {
+    case FYNT_SCALAR: return fy_node_get_style(n) == FYNS_PLAIN ? "a scalar" : "a string";
+    case FYNT_SEQUENCE: return "a list";
+    case FYNT_MAPPING: return "a mapping";
+    }
+    return "something else";
+}
+
+/* Optimal-string-alignment edit distance (a transposition counts as one edit). */
+static int sc_edit_distance(const char *a, const char *b)
+{
+    int la = (int)strlen(a), lb = (int)strlen(b);
+    if (la > 63 || lb > 63) return 99;
+    int d[64][64];
+    for (int i = 0; i <= la; i++) d[i][0] = i;
+    for (int j = 0; j <= lb; j++) d[0][j] = j;
+    for (int i = 1; i <= la; i++)
+        for (int j = 1; j <= lb; j++) {
+            int cost = a[i - 1] != b[j - 1];
+            int v = d[i - 1][j] + 1;
+            if (d[i][j - 1] + 1 < v) v = d[i][j - 1] + 1;
+            if (d[i - 1][j - 1] + cost < v) v = d[i - 1][j - 1] + cost;
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] &&
+                d[i - 2][j - 2] + 1 < v)
+                v = d[i - 2][j - 2] + 1;
+            d[i][j] = v;
+        }
+    return d[la][lb];
+}
+
+/* " (did you mean 'x'?)" for the closest of names[0..n), or a list of the valid names. */
+static void sc_suggest(char *buf, size_t len, const char *word, const char *const *names, int n)
+{
+    int best = -1, bestd = 1 << 30;
+    for (int i = 0; i < n; i++) {
+        int d = sc_edit_distance(word, names[i]);
+        if (d < bestd) { bestd = d; best = i; }
+    }
+    int wl = (int)strlen(word);
+    int limit = wl / 2 > 2 ? wl / 2 : 2;
+    if (best >= 0 && bestd <= limit) {
+        snprintf(buf, len, " (did you mean '%s'?)", names[best]);
+        return;
+    }
+    size_t k = (size_t)snprintf(buf, len, " (valid: ");
+    for (int i = 0; i < n && k < len; i++)
+        k += (size_t)snprintf(buf + k, len - k, "%s%s", i ? ", " : "", names[i]);
+    if (k < len) snprintf(buf + k, len - k, ")");
+}
+
+/* A mapping being read: which node, where it came from (for messages), its dotted path. */
+typedef struct sc_map {
+    struct fy_node *node;
+    struct fy_node *at;
+    char what[96];
+} sc_map;
+
+static void sc_field(char *buf, size_t len, const sc_map *m, const char *key)
+{
+    if (m->what[0]) snprintf(buf, len, "%s.%s", m->what, key);
+    else snprintf(buf, len, "%s", key);
+}
+
+/* Open a mapping and check its keys against keys[] (NULL-terminated). */
+static int sc_map_open(sc *s, struct fy_node *node, struct fy_node *at, const char *what,
+                       const char *const *keys, sc_map *m)
+{
+    m->node = node;
+    m->at = at ? at : node;
+    snprintf(m->what, sizeof m->what, "%s", what);
+    if (!node || !fy_node_is_mapping(node))
+        return sc_fail(s, FLOE_EPARSE, node && !sc_is_missing(node) ? node : at,
+                       "%s must be a mapping ({key: value, ...}), got %s", what[0] ? what : "scene",
+                       sc_is_missing(node) ? "nothing" : sc_type_name(node));
+    int nkeys = 0;
+    while (keys[nkeys]) nkeys++;
+    void *it = NULL;
+    struct fy_node_pair *p;
+    while ((p = fy_node_mapping_iterate(node, &it))) {
+        struct fy_node *k = fy_node_pair_key(p);
+        const char *ks = sc_text(k);
+        if (!ks)
+            return sc_fail(s, FLOE_EPARSE, k ? k : node, "%s: keys must be plain names",
+                           what[0] ? what : "scene");
+        int found = 0;
+        for (int i = 0; i < nkeys && !found; i++) found = !strcmp(ks, keys[i]);
+        if (!found) {
+            char sug[512];
+            sc_suggest(sug, sizeof sug, ks, keys, nkeys);
+            if (what[0])
+                return sc_fail(s, FLOE_EPARSE, k, "unknown key '%s' in %s%s", ks, what, sug);
+            return sc_fail(s, FLOE_EPARSE, k, "unknown key '%s'%s", ks, sug);
+        }
+    }
+    return FLOE_OK;
+}
+
+/* Value of key (NULL if absent); *keyp receives the key node. */
+static struct fy_node *sc_get(const sc_map *m, const char *key, struct fy_node **keyp)
+{
+    void *it = NULL;
+    struct fy_node_pair *p;
+    if (keyp) *keyp = NULL;
+    while ((p = fy_node_mapping_iterate(m->node, &it))) {
+        struct fy_node *k = fy_node_pair_key(p);
+        const char *ks = sc_text(k);
+        if (ks && !strcmp(ks, key)) {
+            if (keyp) *keyp = k;
+            struct fy_node *v = fy_node_pair_value(p);
+            return v ? v : k;   /* an empty value reads as the (scalar) key: reported missing */
+        }
+    }
+    return NULL;
+}
+
+static int sc_has(const sc_map *m, const char *key) { return sc_get(m, key, NULL) != NULL; }
+
+/* Parse a number from a node. */
+static int sc_node_num(sc *s, struct fy_node *v, struct fy_node *k, const char *field, double *out)
+{
+    if (!v || v == k || sc_is_missing(v))
+        return sc_fail(s, FLOE_EPARSE, k ? k : v, "%s: missing value (expected a number)", field);
+    if (!fy_node_is_scalar(v))
+        return sc_fail(s, FLOE_EPARSE, v, "%s: expected a number, got %s", field, sc_type_name(v));
+    const char *t = fy_node_get_scalar0(v);
+    if (fy_node_get_style(v) != FYNS_PLAIN)
+        return sc_fail(s, FLOE_EPARSE, v, "%s: expected a number, got the string \"%s\"", field, t);
+    char *end = NULL;
+    errno = 0;
+    double x = strtod(t, &end);
+    if (end == t || *end || errno == ERANGE)
+        return sc_fail(s, FLOE_EPARSE, v, "%s: expected a number, got '%s'", field, t);
+    if (!isfinite(x))
+        return sc_fail(s, FLOE_EINVAL, v, "%s must be finite (got '%s')", field, t);
+    *out = x;
+    return FLOE_OK;
+}
+
+static int sc_node_long(sc *s, struct fy_node *v, struct fy_node *k, const char *field, long *out)
+{
+    if (!v || v == k || sc_is_missing(v))
+        return sc_fail(s, FLOE_EPARSE, k ? k : v, "%s: missing value (expected an integer)", field);
+    const char *t = sc_text(v);
+    if (!t || fy_node_get_style(v) != FYNS_PLAIN)
+        return sc_fail(s, FLOE_EPARSE, v, "%s: expected an integer, got %s", field,
+                       t ? "a string" : sc_type_name(v));
+    char *end = NULL;
+    errno = 0;
+    long x = strtol(t, &end, 10);
+    if (end == t || *end || errno == ERANGE) {
+        /* accept integral floats written as 1e3 */
+        double d = strtod(t, &end);
+        if (end == t || *end || d != floor(d) || fabs(d) > 1e15)
+            return sc_fail(s, FLOE_EPARSE, v, "%s: expected an integer, got '%s'", field, t);
+        x = (long)d;
+    }
+    *out = x;
+    return FLOE_OK;
+}
+
+static int sc_num(sc *s, const sc_map *m, const char *key, int required, double def, double *out)
+{
+    struct fy_node *k;
+    struct fy_node *v = sc_get(m, key, &k);
+    char f[160];
+    sc_field(f, sizeof f, m, key);
+    if (!v) {
+        if (required) return sc_fail(s, FLOE_EPARSE, m->at, "%s is required", f);
+        *out = def;
+        return FLOE_OK;
+    }
+    return sc_node_num(s, v, k, f, out);
+}
+
+static int sc_long(sc *s, const sc_map *m, const char *key, int required, long def, long *out)
+{
+    struct fy_node *k;
+    struct fy_node *v = sc_get(m, key, &k);
+    char f[160];
+    sc_field(f, sizeof f, m, key);
+    if (!v) {
+        if (required) return sc_fail(s, FLOE_EPARSE, m->at, "%s is required", f);
+        *out = def;
+        return FLOE_OK;
+    }
+    return sc_node_long(s, v, k, f, out);
+}
+
+static int sc_bool(sc *s, const sc_map *m, const char *key, int def, int *out)
+{
+    struct fy_node *k;
+    struct fy_node *v = sc_get(m, key, &k);
+    char f[160];
+    sc_field(f, sizeof f, m, key);
+    if (!v) { *out = def; return FLOE_OK; }
+    const char *t = sc_text(v);
+    if (!t || v == k || fy_node_get_style(v) != FYNS_PLAIN)
+        return sc_fail(s, FLOE_EPARSE, v == k ? k : v, "%s: expected true or false", f);
+    if (!strcmp(t, "true") || !strcmp(t, "True") || !strcmp(t, "TRUE") || !strcmp(t, "yes")) {
+        *out = 1;
+        return FLOE_OK;
+    }
+    if (!strcmp(t, "false") || !strcmp(t, "False") || !strcmp(t, "FALSE") || !strcmp(t, "no")) {
+        *out = 0;
+        return FLOE_OK;
+    }
+    return sc_fail(s, FLOE_EPARSE, v, "%s: expected true or false, got '%s'", f, t);
+}
+
+/* A string value; *at receives its node. */
+static int sc_str(sc *s, const sc_map *m, const char *key, int required, const char *def,
+                  const char **out, struct fy_node **at)
+{
+    struct fy_node *k;
+    struct fy_node *v = sc_get(m, key, &k);
+    char f[160];
+    sc_field(f, sizeof f, m, key);
+    if (at) *at = v ? v : m->at;
+    if (!v) {
+        if (required) return sc_fail(s, FLOE_EPARSE, m->at, "%s is required", f);
+        *out = def;
+        return FLOE_OK;
+    }
+    if (v == k || sc_is_missing(v))
+        return sc_fail(s, FLOE_EPARSE, k, "%s: missing value (expected a name)", f);
+    if (!fy_node_is_scalar(v))
+        return sc_fail(s, FLOE_EPARSE, v, "%s: expected a name, got %s", f, sc_type_name(v));
+    *out = fy_node_get_scalar0(v);
+    return FLOE_OK;
+}
+
+/* One of a fixed set of words. */
+static int sc_enum(sc *s, const sc_map *m, const char *key, const char *const *names, int def,
+                   int *out)
+{
+    const char *t;
+    struct fy_node *at;
+    FLOE_TRY(sc_str(s, m, key, def < 0, NULL, &t, &at));
+    if (!t) { *out = def; return FLOE_OK; }
+    int n = 0;
+    for (; names[n]; n++)
+        if (!strcmp(t, names[n])) { *out = n; return FLOE_OK; }
+    char f[160], sug[256];
+    sc_field(f, sizeof f, m, key);
+    sc_suggest(sug, sizeof sug, t, names, n);
+    return sc_fail(s, FLOE_EINVAL, at, "%s: unknown value '%s'%s", f, t, sug);
+}
+
+/* A list of numbers of length n (or n2 when n2 > 0 is also accepted; missing entries are 0).
+ * Returns the length read in *got. */
+static int sc_node_list(sc *s, struct fy_node *v, struct fy_node *k, const char *field, int n,
+                        int n2, double *out, int *got)
+{
+    char want[64];
+    if (n2 > 0) snprintf(want, sizeof want, "a list of %d or %d numbers", n2, n);
+    else snprintf(want, sizeof want, "a list of %d numbers", n);
+    if (!v || v == k || sc_is_missing(v))
+        return sc_fail(s, FLOE_EPARSE, k ? k : v, "%s: missing value (expected %s)", field, want);
+    if (!fy_node_is_sequence(v))
+        return sc_fail(s, FLOE_EPARSE, v, "%s: expected %s, got %s", field, want, sc_type_name(v));
+    int cnt = fy_node_sequence_item_count(v);
+    if (cnt != n && !(n2 > 0 && cnt == n2))
+        return sc_fail(s, FLOE_EPARSE, k ? k : v, "%s: expected %s, got %d %s", field, want, cnt,
+                       cnt == 1 ? "entry" : "entries");
+    void *it = NULL;
+    struct fy_node *c;
+    int i = 0;
+    for (int j = 0; j < n; j++) out[j] = 0;
+    while ((c = fy_node_sequence_iterate(v, &it))) {
+        char f2[192];
+        snprintf(f2, sizeof f2, "%s[%d]", field, i);
+        FLOE_TRY(sc_node_num(s, c, c, f2, &out[i]));
+        i++;
+    }
+    *got = cnt;
+    return FLOE_OK;
+}
+
+/* A vector: 3 numbers, or 2 in a 2D scene (z = 0). */
+static int sc_vec(sc *s, const sc_map *m, const char *key, int required, const double def[3],
+                  double out[3])
+{
+    struct fy_node *k;
+    struct fy_node *v = sc_get(m, key, &k);
+    char f[160];
+    sc_field(f, sizeof f, m, key);
+    if (!v) {
+        if (required) return sc_fail(s, FLOE_EPARSE, m->at, "%s is required", f);
+        for (int i = 0; i < 3; i++) out[i] = def ? def[i] : 0.0;
+        return FLOE_OK;
+    }
+    int got;
+    return sc_node_list(s, v, k, f, 3, s->dim == 2 ? 2 : 0, out, &got);
+}
+
+/* In 2D, the z component of a point/velocity/direction must be zero. */
+static int sc_check_planar(sc *s, const sc_map *m, const char *key, const double x[3])
+{
+    if (s->dim != 2 || x[2] == 0.0) return FLOE_OK;
+    struct fy_node *k;
+    struct fy_node *v = sc_get(m, key, &k);
+    char f[160];
+    sc_field(f, sizeof f, m, key);
+    return sc_fail(s, FLOE_EINVAL, v ? v : m->at,
+                   "%s: z component must be 0 in a 2D scene (got %g)", f, x[2]);
+}
+
+/* Report a range error on a field (the value node if present). */
+static int sc_range(sc *s, const sc_map *m, const char *key, const char *cond, double got)
+{
+    struct fy_node *k;
+    struct fy_node *v = sc_get(m, key, &k);
+    char f[160];
+    sc_field(f, sizeof f, m, key);
+    return sc_fail(s, FLOE_EINVAL, v ? v : m->at, "%s must be %s (got %g)", f, cond, got);
+}
+
+/* ------------------------------------------------------------------------------------ */
+/* Random numbers: splitmix64 (deterministic per seed, platform independent)            */
+
+typedef struct sc_rng { uint64_t s; } sc_rng;
+
+static uint64_t sc_rng_next(sc_rng *r)
+{
+    uint64_t z = (r->s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+static double sc_rng_uniform(sc_rng *r) { return (double)(sc_rng_next(r) >> 11) * 0x1.0p-53; }
+
+/* ------------------------------------------------------------------------------------ */
+/* Materials and laws                                                                    */
+
+static int sc_find_material(const sc *s, const char *name)
+{
+    for (int i = 0; i < s->nmats; i++)
+        if (!strcmp(s->mats[i].m.name, name)) return i;
+    return -1;
+}
+
+static int sc_material_ref(sc *s, const char *name, struct fy_node *at, const char *field, int *out)
+{
+    int i = sc_find_material(s, name);
+    if (i >= 0) { *out = i; return FLOE_OK; }
+    const char *names[256];
+    int n = s->nmats < 256 ? s->nmats : 256;
+    for (int j = 0; j < n; j++) names[j] = s->mats[j].m.name;
+    char sug[512] = "";
+    if (n) sc_suggest(sug, sizeof sug, name, names, n);
+    else snprintf(sug, sizeof sug, " (no materials are defined)");
+    return sc_fail(s, FLOE_EINVAL, at, "%s: unknown material '%s'%s", field, name, sug);
+}
+
+static int sc_parse_materials(sc *s, struct fy_node *seq, struct fy_node *key)
+{
+    static const char *const keys[] = {"name", "density", "young", "poisson", NULL};
+    if (!seq || sc_is_missing(seq) || !fy_node_is_sequence(seq))
+        return sc_fail(s, FLOE_EPARSE, seq && !sc_is_missing(seq) ? seq : key,
+                       "materials must be a list of {name, density, young, poisson}");
+    int n = fy_node_sequence_item_count(seq);
+    if (n == 0) return sc_fail(s, FLOE_EPARSE, key, "materials: the list is empty");
+    s->mats = calloc((size_t)n, sizeof *s->mats);
+    if (!s->mats) return sc_fail(s, FLOE_ENOMEM, key, "out of memory");
+    void *it = NULL;
+    struct fy_node *e;
+    int i = 0;
+    while ((e = fy_node_sequence_iterate(seq, &it))) {
+        char what[32];
+        snprintf(what, sizeof what, "materials[%d]", i);
+        sc_map m;
+        FLOE_TRY(sc_map_open(s, e, key, what, keys, &m));
+        sc_mat *mt = &s->mats[i];
+        const char *name;
+        struct fy_node *nat;
+        FLOE_TRY(sc_str(s, &m, "name", 1, NULL, &name, &nat));
+        if (strlen(name) >= sizeof mt->m.name)
+            return sc_fail(s, FLOE_EINVAL, nat, "%s.name is too long (max %d characters)", what,
+                           (int)sizeof mt->m.name - 1);
+        int dup = sc_find_material(s, name);
+        if (dup >= 0)
+            return sc_fail(s, FLOE_EINVAL, nat, "%s.name: material '%s' is already defined at line %d",
+                           what, name, sc_line(s->mats[dup].at));
+        snprintf(mt->m.name, sizeof mt->m.name, "%s", name);
+        mt->at = e;
+        mt->body_entry = mt->wall_entry = -1;
+        FLOE_TRY(sc_num(s, &m, "density", 1, 0, &mt->m.density));
+        if (!(mt->m.density > 0)) return sc_range(s, &m, "density", "> 0 (kg/m^3)", mt->m.density);
+        mt->has_young = sc_has(&m, "young");
+        mt->has_poisson = sc_has(&m, "poisson");
+        FLOE_TRY(sc_num(s, &m, "young", 0, 0.0, &mt->m.young));
+        if (mt->has_young && !(mt->m.young > 0))
+            return sc_range(s, &m, "young", "> 0 (Pa)", mt->m.young);
+        FLOE_TRY(sc_num(s, &m, "poisson", 0, 0.3, &mt->m.poisson));
+        if (!(mt->m.poisson > -1.0 && mt->m.poisson < 0.5))
+            return sc_range(s, &m, "poisson", "in (-1, 0.5)", mt->m.poisson);
+        s->nmats = ++i;
+    }
+    return FLOE_OK;
+}
+
+static const char *const sc_models[] = {"hertz_mindlin", "linear", "viscoelastic", NULL};
+
+static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
+{
+    static const char *const keys_hm[] = {"materials", "model", "restitution", "friction", NULL};
+    static const char *const keys_lin[] = {"materials", "model", "kn", "ks", "friction", "tension",
+                                           NULL};
+    static const char *const keys_ve[] = {"materials", "model", "kn", "ks", "gn", "gs", "friction",
+                                          "tension", NULL};
+    static const char *const keys_any[] = {"materials", "model", "restitution", "friction", "kn",
+                                           "ks", "gn", "gs", "tension", NULL};
+    if (!seq) return FLOE_OK;
+    if (sc_is_missing(seq) || !fy_node_is_sequence(seq))
+        return sc_fail(s, FLOE_EPARSE, sc_is_missing(seq) ? key : seq,
+                       "laws must be a list of {materials: [a, b], model: ..., ...}");
+    int n = fy_node_sequence_item_count(seq);
+    s->laws = calloc((size_t)(n ? n : 1), sizeof *s->laws);
+    s->law_at = calloc((size_t)s->nmats * (size_t)s->nmats, sizeof *s->law_at);
+    if (!s->laws || !s->law_at) return sc_fail(s, FLOE_ENOMEM, key, "out of memory");
+    void *it = NULL;
+    struct fy_node *e;
+    int i = 0;
+    while ((e = fy_node_sequence_iterate(seq, &it))) {
+        char what[32];
+        snprintf(what, sizeof what, "laws[%d]", i);
+        sc_map m;
+        FLOE_TRY(sc_map_open(s, e, key, what, keys_any, &m));
+        int model;
+        FLOE_TRY(sc_enum(s, &m, "model", sc_models, -1, &model));
+        /* re-check the keys against those valid for this model */
+        const char *const *valid = model == 0 ? keys_hm : model == 1 ? keys_lin : keys_ve;
+        {
+            void *it2 = NULL;
+            struct fy_node_pair *p;
+            while ((p = fy_node_mapping_iterate(e, &it2))) {
+                const char *ks = sc_text(fy_node_pair_key(p));
+                int ok = 0;
+                for (int j = 0; valid[j] && !ok; j++) ok = !strcmp(ks, valid[j]);
+                if (!ok) {
+                    const char *hint = "";
+                    if (model == 1 && (!strcmp(ks, "gn") || !strcmp(ks, "gs")))
+                        hint = " (damping needs model: viscoelastic)";
+                    else if (model == 0)
+                        hint = " (hertz_mindlin takes restitution and friction; stiffness comes "
+                               "from the materials' young and poisson)";
+                    else
+                        hint = " (linear/viscoelastic laws take kn, ks, gn, gs, friction, tension)";
+                    return sc_fail(s, FLOE_EPARSE, fy_node_pair_key(p),
+                                   "%s: key '%s' is not valid for model '%s'%s", what, ks,
+                                   sc_models[model], hint);
+                }
+            }
+        }
+        sc_law *L = &s->laws[i];
+        snprintf(L->model, sizeof L->model, "%s", sc_models[model]);
+        /* materials: [a, b] */
+        struct fy_node *mk;
+        struct fy_node *mv = sc_get(&m, "materials", &mk);
+        if (!mv) return sc_fail(s, FLOE_EPARSE, e, "%s.materials is required ([a, b])", what);
+        if (mv == mk || !fy_node_is_sequence(mv) || fy_node_sequence_item_count(mv) != 2)
+            return sc_fail(s, FLOE_EPARSE, mv == mk ? mk : mv,
+                           "%s.materials: expected a list of 2 material names, got %s", what,
+                           fy_node_is_sequence(mv) ? "a list of another length" : sc_type_name(mv));
+        int ab[2];
+        for (int j = 0; j < 2; j++) {
+            struct fy_node *c = fy_node_sequence_get_by_index(mv, j);
+            const char *nm = sc_text(c);
+            char f[64];
+            snprintf(f, sizeof f, "%s.materials[%d]", what, j);
+            if (!nm || sc_is_missing(c))
+                return sc_fail(s, FLOE_EPARSE, c ? c : mv, "%s: expected a material name", f);
+            FLOE_TRY(sc_material_ref(s, nm, c, f, &ab[j]));
+        }
+        L->a = ab[0];
+        L->b = ab[1];
+        struct fy_node **slot = &s->law_at[L->a * s->nmats + L->b];
+        if (*slot)
+            return sc_fail(s, FLOE_EINVAL, mv,
+                           "%s: a law for materials (%s, %s) is already given at line %d", what,
+                           s->mats[L->a].m.name, s->mats[L->b].m.name, sc_line(*slot));
+        *slot = mv;
+        s->law_at[L->b * s->nmats + L->a] = mv;
+        FLOE_TRY(sc_num(s, &m, "friction", 0, 0.0, &L->mu));
+        if (!(L->mu >= 0)) return sc_range(s, &m, "friction", ">= 0", L->mu);
+        if (model == 0) {
+            FLOE_TRY(sc_num(s, &m, "restitution", 1, 0, &L->e));
+            if (!(L->e > 0 && L->e <= 1))
+                return sc_range(s, &m, "restitution", "in (0, 1]", L->e);
+            for (int j = 0; j < 2; j++) {
+                const sc_mat *mt = &s->mats[ab[j]];
+                if (!mt->has_young)
+                    return sc_fail(s, FLOE_EINVAL, mt->at,
+                                   "material '%s' needs young (Pa): the hertz_mindlin law %s "
+                                   "(line %d) uses it", mt->m.name, what, sc_line(e));
+            }
+        } else {
+            FLOE_TRY(sc_num(s, &m, "kn", 1, 0, &L->kn));
+            if (!(L->kn > 0)) return sc_range(s, &m, "kn", "> 0 (N/m)", L->kn);
+            FLOE_TRY(sc_num(s, &m, "ks", 1, 0, &L->ks));
+            if (!(L->ks >= 0)) return sc_range(s, &m, "ks", ">= 0 (N/m)", L->ks);
+            FLOE_TRY(sc_bool(s, &m, "tension", 0, &L->tension));
+            if (model == 2) {
+                FLOE_TRY(sc_num(s, &m, "gn", 1, 0, &L->gn));
+                if (!(L->gn >= 0)) return sc_range(s, &m, "gn", ">= 0 (N s/m)", L->gn);
+                FLOE_TRY(sc_num(s, &m, "gs", 1, 0, &L->gs));
+                if (!(L->gs >= 0)) return sc_range(s, &m, "gs", ">= 0 (N s/m)", L->gs);
+            }
+        }
+        s->nlaws = ++i;
+    }
+    return FLOE_OK;
+}
+
+static int sc_build_laws(sc *s)
+{
+    for (int i = 0; i < s->nlaws; i++) {
+        const sc_law *L = &s->laws[i];
+        floe_contact_law *law;
+        if (!strcmp(L->model, "hertz_mindlin")) {
+            law = floe_hertz_mindlin_law_create(&s->mats[L->a].m, &s->mats[L->b].m, L->e, L->mu);
+        } else {
+            law = floe_linear_law_create(L->kn, L->ks, L->gn, L->gs, L->mu);
+            if (law) ((floe_linear_law *)law)->tension = L->tension;
+        }
+        struct fy_node *at = s->law_at[L->a * s->nmats + L->b];
+        if (!law)
+            return sc_fail(s, FLOE_EINVAL, at, "laws[%d]: could not create the %s law", i, L->model);
+        int rc = floe_world_set_law(s->w, L->a, L->b, law);
+        if (rc != FLOE_OK)
+            return sc_fail(s, rc, at, "laws[%d]: %s", i, floe_world_last_error(s->w));
+    }
+    return FLOE_OK;
+}
+
+/* ------------------------------------------------------------------------------------ */
+/* Walls                                                                                 */
+
+static int sc_parse_walls(sc *s, struct fy_node *seq, struct fy_node *key)
+{
+    static const char *const keys[] = {"point", "normal", "material", "velocity", "name", NULL};
+    if (!seq) return FLOE_OK;
+    if (sc_is_missing(seq) || !fy_node_is_sequence(seq))
+        return sc_fail(s, FLOE_EPARSE, sc_is_missing(seq) ? key : seq,
+                       "walls must be a list of {point, normal, material}");
+    void *it = NULL;
+    struct fy_node *e;
+    int i = 0;
+    while ((e = fy_node_sequence_iterate(seq, &it))) {
+        char what[32];
+        snprintf(what, sizeof what, "walls[%d]", i);
+        sc_map m;
+        FLOE_TRY(sc_map_open(s, e, key, what, keys, &m));
+        double p[3], n[3], v[3];
+        FLOE_TRY(sc_vec(s, &m, "point", 1, NULL, p));
+        FLOE_TRY(sc_vec(s, &m, "normal", 1, NULL, n));
+        FLOE_TRY(sc_vec(s, &m, "velocity", 0, NULL, v));
+        FLOE_TRY(sc_check_planar(s, &m, "normal", n));
+        FLOE_TRY(sc_check_planar(s, &m, "velocity", v));
+        double nn = floe_v3_norm(n);
+        if (!(nn > 0)) {
+            struct fy_node *k;
+            struct fy_node *nv = sc_get(&m, "normal", &k);
+            return sc_fail(s, FLOE_EINVAL, nv, "%s.normal must be a non-zero vector", what);
+        }
+        floe_v3_scale(n, 1.0 / nn);
+        const char *mname;
+        struct fy_node *mat_at;
+        FLOE_TRY(sc_str(s, &m, "material", 1, NULL, &mname, &mat_at));
+        int mat;
+        char f[48];
+        snprintf(f, sizeof f, "%s.material", what);
+        FLOE_TRY(sc_material_ref(s, mname, mat_at, f, &mat));
+        if (!s->mats[mat].wall_user) {
+            s->mats[mat].wall_user = mat_at;
+            s->mats[mat].wall_entry = i;
+        }
+        const char *wname;
+        FLOE_TRY(sc_str(s, &m, "name", 0, NULL, &wname, NULL));
+        int moving = v[0] != 0 || v[1] != 0 || v[2] != 0;
+        int idx = floe_world_add_wall(s->w, p, n, mat, moving ? FLOE_KINEMATIC : FLOE_FIXED);
+        if (idx < 0) return sc_fail(s, -idx, e, "%s: %s", what, floe_world_last_error(s->w));
+        if (moving) {
+            /* a kinematic particle moves with its prescribed (here constant) velocity */
+            floe_v3_copy(s->w->p.v + 3 * idx, v);
+        }
+        s->nwalls = ++i;
+    }
+    return FLOE_OK;
+}
+
+/* ------------------------------------------------------------------------------------ */
+/* Bodies                                                                                */
+
+typedef struct sc_shape {
+    int kind;            /* 0 sphere, 1 box */
+    double radius;       /* sphere */
+    double size[3];      /* box */
+    double rb;           /* bounding radius */
+} sc_shape;
+
+static int sc_parse_shape(sc *s, const sc_map *body, sc_shape *sh)
+{
+    static const char *const kinds[] = {"sphere", "box", NULL};
+    static const char *const sphere_keys[] = {"radius", NULL};
+    static const char *const box_keys[] = {"size", NULL};
+    struct fy_node *k;
+    struct fy_node *v = sc_get(body, "shape", &k);
+    char f[128];
+    sc_field(f, sizeof f, body, "shape");
+    if (!v)
+        return sc_fail(s, FLOE_EPARSE, body->at, "%s is required ({sphere: {radius: R}} or "
+                       "{box: {size: [lx, ly, lz]}})", f);
+    sc_map m;
+    FLOE_TRY(sc_map_open(s, v == k ? NULL : v, k, f, kinds, &m));
+    if (fy_node_mapping_item_count(v) != 1)
+        return sc_fail(s, FLOE_EPARSE, v ? v : k, "%s: give exactly one shape (sphere or box)", f);
+    struct fy_node *sk;
+    struct fy_node *sv;
+    memset(sh, 0, sizeof *sh);
+    if ((sv = sc_get(&m, "sphere", &sk))) {
+        char f2[160];
+        snprintf(f2, sizeof f2, "%s.sphere", f);
+        sc_map sm;
+        FLOE_TRY(sc_map_open(s, sv == sk ? NULL : sv, sk, f2, sphere_keys, &sm));
+        sh->kind = 0;
+        FLOE_TRY(sc_num(s, &sm, "radius", 1, 0, &sh->radius));
+        if (!(sh->radius > 0)) return sc_range(s, &sm, "radius", "> 0 (m)", sh->radius);
+        sh->rb = sh->radius;
+    } else {
+        sv = sc_get(&m, "box", &sk);
+        char f2[160];
+        snprintf(f2, sizeof f2, "%s.box", f);
+        sc_map bm;
+        FLOE_TRY(sc_map_open(s, sv == sk ? NULL : sv, sk, f2, box_keys, &bm));
+        sh->kind = 1;
+        struct fy_node *zk;
+        struct fy_node *zv = sc_get(&bm, "size", &zk);
+        if (!zv) return sc_fail(s, FLOE_EPARSE, sk, "%s.size is required ([lx, ly, lz])", f2);
+        char f3[192];
+        snprintf(f3, sizeof f3, "%s.size", f2);
+        int got;
+        FLOE_TRY(sc_node_list(s, zv, zk, f3, 3, 0, sh->size, &got));
+        for (int i = 0; i < 3; i++)
+            if (!(sh->size[i] > 0))
+                return sc_fail(s, FLOE_EINVAL, fy_node_sequence_get_by_index(zv, i),
+                               "%s[%d] must be > 0 (m) (got %g)", f3, i, sh->size[i]);
+        sh->rb = 0.5 * floe_v3_norm(sh->size);
+    }
+    return FLOE_OK;
+}
+
+static floe_geometry *sc_make_geometry(const sc_shape *sh)
+{
+    if (sh->kind == 0) return floe_sphere_create(sh->radius);
+    return floe_box_create(sh->size[0], sh->size[1], sh->size[2]);
+}
+
+static int sc_add_geometry(sc *s, const sc_shape *sh, struct fy_node *at, const char *what, int *gi)
+{
+    floe_geometry *g = sc_make_geometry(sh);
+    if (!g) return sc_fail(s, FLOE_ENOMEM, at, "%s: could not create the shape", what);
+    int r = floe_world_add_geometry(s->w, g);
+    if (r < 0) return sc_fail(s, -r, at, "%s: %s", what, floe_world_last_error(s->w));
+    *gi = r;
+    return FLOE_OK;
+}
+
+/* What every body entry shares: material, initial motion, orientation, growth. */
+typedef struct sc_common {
+    sc_shape shape;
+    int material;
+    double v[3], w[3], q[4];
+    floe_motion motion;
+    int grow;            /* 1: one particle grows */
+    long grow_index;
+    double grow_rate;
+    int grow_update_mass;
+} sc_common;
+
+static const char *const sc_motions[] = {"free", "fixed", "kinematic", NULL};
+
+static int sc_parse_common(sc *s, const sc_map *m, int entry, int packing, sc_common *c)
+{
+    static const char *const grow_keys_single[] = {"rate", "update_mass", NULL};
+    static const char *const grow_keys_packing[] = {"index", "rate", "update_mass", NULL};
+    FLOE_TRY(sc_parse_shape(s, m, &c->shape));
+    const char *mname;
+    struct fy_node *mat_at;
+    FLOE_TRY(sc_str(s, m, "material", 1, NULL, &mname, &mat_at));
+    char f[64];
+    snprintf(f, sizeof f, "%s.material", m->what);
+    FLOE_TRY(sc_material_ref(s, mname, mat_at, f, &c->material));
+    if (!s->mats[c->material].body_user) {
+        s->mats[c->material].body_user = mat_at;
+        s->mats[c->material].body_entry = entry;
+    }
+    FLOE_TRY(sc_vec(s, m, "velocity", 0, NULL, c->v));
+    FLOE_TRY(sc_check_planar(s, m, "velocity", c->v));
+    {
+        struct fy_node *k;
+        struct fy_node *v = sc_get(m, "angular_velocity", &k);
+        char fw[128];
+        sc_field(fw, sizeof fw, m, "angular_velocity");
+        c->w[0] = c->w[1] = c->w[2] = 0;
+        if (v) {
+            int got;
+            FLOE_TRY(sc_node_list(s, v, k, fw, 3, 0, c->w, &got));
+            if (s->dim == 2 && (c->w[0] != 0 || c->w[1] != 0))
+                return sc_fail(s, FLOE_EINVAL, v,
+                               "%s: in a 2D scene only the z component may be non-zero", fw);
+        }
+    }
+    {
+        struct fy_node *k;
+        struct fy_node *v = sc_get(m, "orientation", &k);
+        char fq[128];
+        sc_field(fq, sizeof fq, m, "orientation");
+        floe_q_identity(c->q);
+        if (v) {
+            int got;
+            FLOE_TRY(sc_node_list(s, v, k, fq, 4, 0, c->q, &got));
+            double n = sqrt(c->q[0] * c->q[0] + c->q[1] * c->q[1] + c->q[2] * c->q[2] +
+                            c->q[3] * c->q[3]);
+            if (!(n > 0))
+                return sc_fail(s, FLOE_EINVAL, v, "%s must be a non-zero quaternion [w, x, y, z]", fq);
+            floe_q_normalize(c->q);
+            if (s->dim == 2 && (c->q[1] != 0 || c->q[2] != 0))
+                return sc_fail(s, FLOE_EINVAL, v,
+                               "%s: in a 2D scene the orientation must be a rotation about z "
+                               "([w, 0, 0, z])", fq);
+        }
+    }
+    int mo;
+    FLOE_TRY(sc_enum(s, m, "motion", sc_motions, 0, &mo));
+    c->motion = (floe_motion)mo;
+
+    c->grow = 0;
+    c->grow_index = 0;
+    c->grow_update_mass = 0;
+    struct fy_node *gk;
+    struct fy_node *gv = sc_get(m, "grow", &gk);
+    int has_rate = sc_has(m, "grow_rate");
+    if (gv && has_rate)
+        return sc_fail(s, FLOE_EPARSE, gk, "%s: give either grow_rate or grow, not both", m->what);
+    if (has_rate) {
+        if (packing)
+            return sc_fail(s, FLOE_EPARSE, m->at,
+                           "%s: grow_rate is for single bodies; for a packing use "
+                           "grow: {index: I, rate: R}", m->what);
+        FLOE_TRY(sc_num(s, m, "grow_rate", 1, 0, &c->grow_rate));
+        c->grow = 1;
+    } else if (gv) {
+        char fg[128];
+        sc_field(fg, sizeof fg, m, "grow");
+        sc_map gm;
+        FLOE_TRY(sc_map_open(s, gv == gk ? NULL : gv, gk, fg,
+                             packing ? grow_keys_packing : grow_keys_single, &gm));
+        FLOE_TRY(sc_num(s, &gm, "rate", 1, 0, &c->grow_rate));
+        if (packing) {
+            FLOE_TRY(sc_long(s, &gm, "index", 1, 0, &c->grow_index));
+            if (c->grow_index < 0) return sc_range(s, &gm, "index", ">= 0", (double)c->grow_index);
+        }
+        FLOE_TRY(sc_bool(s, &gm, "update_mass", 0, &c->grow_update_mass));
+        c->grow = 1;
+    }
+    if (c->grow && c->shape.kind != 0)
+        return sc_fail(s, FLOE_EINVAL, gv ? gk : m->at,
+                       "%s: only spheres can grow (growing radius state)", m->what);
+    return FLOE_OK;
+}
+
+static int sc_add_one(sc *s, const sc_common *c, int gi, const double x[3], int entry,
+                      struct fy_node *at, const char *what, int *pidx)
+{
+    floe_particle_def d = floe_default_particle_def();
+    d.geometry = gi;
+    d.material = c->material;
+    floe_v3_copy(d.x, x);
+    floe_v3_copy(d.v, c->v);
+    floe_v3_copy(d.w, c->w);
+    for (int k = 0; k < 4; k++) d.q[k] = c->q[k];
+    d.motion = c->motion;
+    d.group = entry;
+    int r = floe_world_add_particle(s->w, &d);
+    if (r < 0) return sc_fail(s, -r, at, "%s: %s", what, floe_world_last_error(s->w));
+    *pidx = r;
+    s->nparticles++;
+    if (c->shape.kind == 0) s->nspheres++;
+    else s->nboxes++;
+    return FLOE_OK;
+}
+
+static int sc_add_growth(sc *s, const sc_common *c, int particle, struct fy_node *at,
+                         const char *what)
+{
+    floe_state *st = floe_growing_radius_create(s->w, particle, c->grow_rate, c->grow_update_mass);
+    if (!st)
+        return sc_fail(s, FLOE_EINVAL, at, "%s: could not create the growing radius of particle %d",
+                       what, particle);
+    int r = floe_world_add_state(s->w, st);
+    if (r < 0) return sc_fail(s, -r, at, "%s: %s", what, floe_world_last_error(s->w));
+    if (s->ngrow_listed < (int)(sizeof s->grow_particle / sizeof s->grow_particle[0]))
+        s->grow_particle[s->ngrow_listed++] = particle;
+    s->nstates++;
+    return FLOE_OK;
+}
+
+/* Region {min: [...], max: [...]} with min < max on the active axes. */
+static int sc_parse_region(sc *s, const sc_map *m, double lo[3], double hi[3])
+{
+    static const char *const keys[] = {"min", "max", NULL};
+    struct fy_node *k;
+    struct fy_node *v = sc_get(m, "region", &k);
+    char f[128];
+    sc_field(f, sizeof f, m, "region");
+    sc_map rm;
+    FLOE_TRY(sc_map_open(s, v == k ? NULL : v, k, f, keys, &rm));
+    FLOE_TRY(sc_vec(s, &rm, "min", 1, NULL, lo));
+    FLOE_TRY(sc_vec(s, &rm, "max", 1, NULL, hi));
+    for (int a = 0; a < s->dim; a++)
+        if (!(hi[a] > lo[a]))
+            return sc_fail(s, FLOE_EINVAL, sc_get(&rm, "max", NULL),
+                           "%s: max must exceed min on every axis (axis %c: %g <= %g)", f, "xyz"[a],
+                           hi[a], lo[a]);
+    if (s->dim == 2) { lo[2] = hi[2] = 0; }
+    return FLOE_OK;
+}
+
+/* Lattice site (i, j, k) of a simple-cubic or hexagonal (2D triangular / 3D HCP) packing,
+ * relative to the origin. HCP: ABAB triangular layers, B shifted by (d/2, d sqrt(3)/6). */
+static void sc_site(int hex, int dim, double d, long i, long j, long k, double x[3])
+{
+    if (!hex) {
+        x[0] = (double)i * d;
+        x[1] = (double)j * d;
+        x[2] = dim == 3 ? (double)k * d : 0.0;
+        return;
+    }
+    double ox = 0, oy = 0;
+    if (dim == 3 && (k % 2)) { ox = 0.5 * d; oy = d * sqrt(3.0) / 6.0; }
+    x[0] = ox + ((j % 2) ? 0.5 * d : 0.0) + (double)i * d;
+    x[1] = oy + (double)j * (d * sqrt(3.0) / 2.0);
+    x[2] = dim == 3 ? (double)k * (d * sqrt(2.0 / 3.0)) : 0.0;
+}
+
+typedef struct sc_points { double *x; long n, cap; } sc_points;
+
+static int sc_points_push(sc_points *p, const double x[3])
+{
+    if (p->n == p->cap) {
+        long nc = p->cap ? 2 * p->cap : 256;
+        double *nx = realloc(p->x, (size_t)nc * 3 * sizeof *nx);
+        if (!nx) return FLOE_ENOMEM;
+        p->x = nx;
+        p->cap = nc;
+    }
+    floe_v3_copy(p->x + 3 * p->n, x);
+    p->n++;
+    return FLOE_OK;
+}
+
+static int sc_lattice(sc *s, const sc_map *m, int hex, sc_points *pts, const sc_common *c)
+{
+    double d;
+    FLOE_TRY(sc_num(s, m, "spacing", 1, 0, &d));
+    if (!(d > 0)) return sc_range(s, m, "spacing", "> 0 (m)", d);
+    double jitter;
+    FLOE_TRY(sc_num(s, m, "jitter", 0, 0.0, &jitter));
+    if (!(jitter >= 0)) return sc_range(s, m, "jitter", ">= 0 (m)", jitter);
+    long seed;
+    FLOE_TRY(sc_long(s, m, "seed", 0, 1, &seed));
+    /* spheres must not overlap initially: nearest neighbours are d apart in both packings */
+    if (c->shape.kind == 0 && d - 2.0 * jitter < 2.0 * c->shape.radius * (1.0 - 1e-9)) {
+        if (jitter > 0)
+            return sc_fail(s, FLOE_EINVAL, sc_get(m, "spacing", NULL),
+                           "%s.spacing - 2 x jitter (%g) is less than the sphere diameter %g: "
+                           "spheres would overlap", m->what, d - 2.0 * jitter, 2.0 * c->shape.radius);
+        return sc_fail(s, FLOE_EINVAL, sc_get(m, "spacing", NULL),
+                       "%s.spacing (%g) is less than the sphere diameter %g: spheres would overlap",
+                       m->what, d, 2.0 * c->shape.radius);
+    }
+    int has_counts = sc_has(m, "counts"), has_region = sc_has(m, "region");
+    if (has_counts == has_region)
+        return sc_fail(s, FLOE_EPARSE, has_region ? sc_get(m, "region", NULL) : m->at,
+                       "%s: give either counts (with origin) or region", m->what);
+    double origin[3];
+    long cnt[3] = {1, 1, 1};
+    double lo[3], hi[3];
+    int use_region = has_region;
+    if (has_counts) {
+        FLOE_TRY(sc_vec(s, m, "origin", 1, NULL, origin));
+        FLOE_TRY(sc_check_planar(s, m, "origin", origin));
+        struct fy_node *k;
+        struct fy_node *v = sc_get(m, "counts", &k);
+        char f[128];
+        sc_field(f, sizeof f, m, "counts");
+        double dc[3];
+        int got;
+        FLOE_TRY(sc_node_list(s, v, k, f, s->dim == 3 ? 3 : 3, s->dim == 2 ? 2 : 0, dc, &got));
+        if (got == 2) dc[2] = 1;
+        double total = 1;
+        for (int a = 0; a < 3; a++) {
+            if (dc[a] != floor(dc[a]) || dc[a] < 1)
+                return sc_fail(s, FLOE_EINVAL, fy_node_sequence_get_by_index(v, a < got ? a : 0),
+                               "%s[%d] must be an integer >= 1 (got %g)", f, a, dc[a]);
+            total *= dc[a];
+            cnt[a] = (long)dc[a];
+        }
+        if (s->dim == 2 && cnt[2] != 1)
+            return sc_fail(s, FLOE_EINVAL, v, "%s: the third count must be 1 in a 2D scene", f);
+        if (total > (double)SC_MAX_PARTICLES_PER_ENTRY)
+            return sc_fail(s, FLOE_EINVAL, v, "%s: %g particles is too many", f, total);
+    } else {
+        if (sc_has(m, "origin"))
+            return sc_fail(s, FLOE_EPARSE, sc_get(m, "origin", NULL),
+                           "%s: origin is not used with region (the lattice starts at region.min)",
+                           m->what);
+        FLOE_TRY(sc_parse_region(s, m, lo, hi));
+        floe_v3_copy(origin, lo);
+        /* counts large enough to cover the region; sites beyond max are skipped */
+        double step[3] = {d, hex ? d * sqrt(3.0) / 2.0 : d, hex ? d * sqrt(2.0 / 3.0) : d};
+        double total = 1;
+        for (int a = 0; a < 3; a++) {
+            cnt[a] = a < s->dim ? (long)floor((hi[a] - lo[a]) / step[a]) + 2 : 1;
+            total *= (double)cnt[a];
+        }
+        if (total > 4.0 * (double)SC_MAX_PARTICLES_PER_ENTRY)
+            return sc_fail(s, FLOE_EINVAL, sc_get(m, "region", NULL),
+                           "%s.region holds too many lattice sites", m->what);
+    }
+    sc_rng rng = {(uint64_t)seed};
+    for (long k = 0; k < cnt[2]; k++)
+        for (long j = 0; j < cnt[1]; j++)
+            for (long i = 0; i < cnt[0]; i++) {
+                double x[3];
+                sc_site(hex, s->dim, d, i, j, k, x);
+                floe_v3_add(x, x, origin);
+                if (use_region) {
+                    int out = 0;
+                    for (int a = 0; a < s->dim; a++)
+                        if (x[a] > hi[a] + 1e-12 * d) out = 1;
+                    if (out) continue;
+                }
+                if (jitter > 0)
+                    for (int a = 0; a < s->dim; a++)
+                        x[a] += jitter * (2.0 * sc_rng_uniform(&rng) - 1.0);
+                if (sc_points_push(pts, x)) return sc_fail(s, FLOE_ENOMEM, m->at, "out of memory");
+            }
+    if (pts->n == 0)
+        return sc_fail(s, FLOE_EINVAL, sc_get(m, "region", NULL),
+                       "%s.region is too small for a single lattice site", m->what);
+    return FLOE_OK;
+}
+
+/* Random sequential placement of non-overlapping bounding spheres inside the region (each
+ * particle lies entirely inside it), with a cell grid for the overlap test. */
+static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
+{
+    double lo[3], hi[3];
+    FLOE_TRY(sc_parse_region(s, m, lo, hi));
+    long count, seed, max_tries;
+    FLOE_TRY(sc_long(s, m, "count", 1, 0, &count));
+    if (count < 1 || count > SC_MAX_PARTICLES_PER_ENTRY)
+        return sc_range(s, m, "count", ">= 1", (double)count);
+    FLOE_TRY(sc_long(s, m, "seed", 0, 1, &seed));
+    FLOE_TRY(sc_long(s, m, "max_tries", 0, 100000, &max_tries));
+    if (max_tries < 1) return sc_range(s, m, "max_tries", ">= 1", (double)max_tries);
+    if (max_tries < count) max_tries = count;
+    double rb = c->shape.rb;
+    double a0[3], a1[3];
+    for (int a = 0; a < 3; a++) {
+        if (a < s->dim) {
+            a0[a] = lo[a] + rb;
+            a1[a] = hi[a] - rb;
+            if (a1[a] < a0[a])
+                return sc_fail(s, FLOE_EINVAL, sc_get(m, "region", NULL),
+                               "%s.region is narrower than one particle (bounding diameter %g) "
+                               "along %c", m->what, 2 * rb, "xyz"[a]);
+        } else {
+            a0[a] = a1[a] = lo[a];
+        }
+    }
+    /* cell grid: cells at least one diameter wide, at most ~4M cells */
+    double cell = 2.0 * rb;
+    long nc[3];
+    for (;;) {
+        double total = 1;
+        for (int a = 0; a < 3; a++) {
+            nc[a] = a < s->dim ? (long)floor((a1[a] - a0[a]) / cell) + 1 : 1;
+            total *= (double)nc[a];
+        }
+        if (total <= 4.0e6) break;
+        cell *= 1.5;
+    }
+    long ncells = nc[0] * nc[1] * nc[2];
+    long *head = malloc((size_t)ncells * sizeof *head);
+    long *next = malloc((size_t)count * sizeof *next);
+    if (!head || !next) {
+        free(head);
+        free(next);
+        return sc_fail(s, FLOE_ENOMEM, m->at, "out of memory");
+    }
+    for (long i = 0; i < ncells; i++) head[i] = -1;
+    sc_rng rng = {(uint64_t)seed};
+    long placed = 0, tries = 0;
+    double d2min = 4.0 * rb * rb;
+    while (placed < count && tries < max_tries) {
+        tries++;
+        double x[3];
+        long ci[3];
+        for (int a = 0; a < 3; a++) {
+            x[a] = a < s->dim ? a0[a] + (a1[a] - a0[a]) * sc_rng_uniform(&rng) : a0[a];
+            ci[a] = a < s->dim ? (long)floor((x[a] - a0[a]) / cell) : 0;
+            if (ci[a] >= nc[a]) ci[a] = nc[a] - 1;
+        }
+        int ok = 1;
+        for (long dz = (s->dim == 3 ? -1 : 0); dz <= (s->dim == 3 ? 1 : 0) && ok; dz++)
+            for (long dy = -1; dy <= 1 && ok; dy++)
+                for (long dx = -1; dx <= 1 && ok; dx++) {
+                    long cx = ci[0] + dx, cy = ci[1] + dy, cz = ci[2] + dz;
+                    if (cx < 0 || cy < 0 || cz < 0 || cx >= nc[0] || cy >= nc[1] || cz >= nc[2])
+                        continue;
+                    for (long q = head[(cz * nc[1] + cy) * nc[0] + cx]; q >= 0 && ok; q = next[q]) {
+                        double r[3];
+                        floe_v3_sub(r, x, pts->x + 3 * q);
+                        if (floe_v3_dot(r, r) < d2min) ok = 0;
+                    }
+                }
+        if (!ok) continue;
+        if (sc_points_push(pts, x)) {
+            free(head);
+            free(next);
+            return sc_fail(s, FLOE_ENOMEM, m->at, "out of memory");
+        }
+        long cid = (ci[2] * nc[1] + ci[1]) * nc[0] + ci[0];
+        next[placed] = head[cid];
+        head[cid] = placed;
+        placed++;
+    }
+    free(head);
+    free(next);
+    if (placed < count)
+        return sc_fail(s, FLOE_EINVAL, sc_get(m, "count", NULL),
+                       "%s: could only place %ld of %ld particles without overlap in the region "
+                       "after %ld tries (enlarge region, lower count, or raise max_tries)",
+                       m->what, placed, count, max_tries);
+    return FLOE_OK;
+}
+
+static const char *const sc_packings[] = {"lattice", "hexagonal", "random", NULL};
+
+static int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key)
+{
+    static const char *const keys_single[] = {"shape", "material", "position", "velocity",
+                                              "angular_velocity", "orientation", "motion", "name",
+                                              "grow_rate", "grow", "packing", NULL};
+    static const char *const keys_lattice[] = {"packing", "shape", "material", "origin", "counts",
+                                               "region", "spacing", "jitter", "seed", "velocity",
+                                               "angular_velocity", "orientation", "motion", "name",
+                                               "grow", NULL};
+    static const char *const keys_random[] = {"packing", "shape", "material", "region", "count",
+                                              "seed", "max_tries", "velocity", "angular_velocity",
+                                              "orientation", "motion", "name", "grow", NULL};
+    static const char *const keys_all[] = {"shape", "material", "position", "velocity",
+                                           "angular_velocity", "orientation", "motion", "name",
+                                           "grow_rate", "grow", "packing", "origin", "counts",
+                                           "region", "spacing", "jitter", "seed", "count",
+                                           "max_tries", NULL};
+    if (!seq || sc_is_missing(seq))
+        return sc_fail(s, FLOE_EPARSE, key, "bodies must be a non-empty list of bodies or packings");
+    if (!fy_node_is_sequence(seq))
+        return sc_fail(s, FLOE_EPARSE, seq, "bodies must be a list, got %s", sc_type_name(seq));
+    int n = fy_node_sequence_item_count(seq);
+    if (n == 0) return sc_fail(s, FLOE_EPARSE, key, "bodies: the list is empty");
+    s->entry_first = calloc((size_t)n, sizeof *s->entry_first);
+    s->entry_count = calloc((size_t)n, sizeof *s->entry_count);
+    if (!s->entry_first || !s->entry_count) return sc_fail(s, FLOE_ENOMEM, key, "out of memory");
+    void *it = NULL;
+    struct fy_node *e;
+    int entry = 0;
+    while ((e = fy_node_sequence_iterate(seq, &it))) {
+        char what[32];
+        snprintf(what, sizeof what, "bodies[%d]", entry);
+        sc_map m;
+        FLOE_TRY(sc_map_open(s, e, key, what, keys_all, &m));
+        int packing;
+        FLOE_TRY(sc_enum(s, &m, "packing", sc_packings, 3, &packing));
+        const char *const *valid = packing == 3 ? keys_single
+                                   : packing == 2 ? keys_random : keys_lattice;
+        {
+            void *it2 = NULL;
+            struct fy_node_pair *p;
+            while ((p = fy_node_mapping_iterate(e, &it2))) {
+                const char *ks = sc_text(fy_node_pair_key(p));
+                int ok = 0, nv = 0;
+                for (; valid[nv]; nv++) ok |= !strcmp(ks, valid[nv]);
+                if (!ok) {
+                    char sug[512];
+                    sc_suggest(sug, sizeof sug, ks, valid, nv);
+                    return sc_fail(s, FLOE_EPARSE, fy_node_pair_key(p),
+                                   "unknown key '%s' in %s (%s)%s", ks, what,
+                                   packing == 3 ? "a single body" : sc_packings[packing], sug);
+                }
+            }
+        }
+        sc_common c;
+        FLOE_TRY(sc_parse_common(s, &m, entry, packing != 3, &c));
+        s->entry_first[entry] = s->nparticles;
+        const char *bname;
+        FLOE_TRY(sc_str(s, &m, "name", 0, NULL, &bname, NULL));
+        if (packing == 3) {
+            double x[3];
+            FLOE_TRY(sc_vec(s, &m, "position", 1, NULL, x));
+            FLOE_TRY(sc_check_planar(s, &m, "position", x));
+            int gi, pidx;
+            FLOE_TRY(sc_add_geometry(s, &c.shape, e, what, &gi));
+            FLOE_TRY(sc_add_one(s, &c, gi, x, entry, e, what, &pidx));
+            if (c.grow) FLOE_TRY(sc_add_growth(s, &c, pidx, e, what));
+        } else {
+            sc_points pts = {0};
+            int rc = packing == 2 ? sc_random(s, &m, &pts, &c)
+                                  : sc_lattice(s, &m, packing == 1, &pts, &c);
+            if (rc == FLOE_OK && c.grow && c.grow_index >= pts.n) {
+                struct fy_node *gk;
+                sc_get(&m, "grow", &gk);
+                rc = sc_fail(s, FLOE_EINVAL, gk, "%s.grow.index %ld is out of range: the packing "
+                             "has %ld particles", what, c.grow_index, pts.n);
+            }
+            if (rc == FLOE_OK && (double)s->nparticles + (double)pts.n > 2.0e9)
+                rc = sc_fail(s, FLOE_EINVAL, e, "%s: too many particles", what);
+            int gi = -1;
+            if (rc == FLOE_OK) rc = sc_add_geometry(s, &c.shape, e, what, &gi);
+            for (long i = 0; i < pts.n && rc == FLOE_OK; i++) {
+                int g = gi, pidx;
+                if (c.grow && i == c.grow_index) rc = sc_add_geometry(s, &c.shape, e, what, &g);
+                if (rc == FLOE_OK) rc = sc_add_one(s, &c, g, pts.x + 3 * i, entry, e, what, &pidx);
+                if (rc == FLOE_OK && c.grow && i == c.grow_index)
+                    rc = sc_add_growth(s, &c, pidx, e, what);
+            }
+            free(pts.x);
+            if (rc != FLOE_OK) return rc;
+        }
+        s->entry_count[entry] = s->nparticles - s->entry_first[entry];
+        s->nbody_entries = ++entry;
+    }
+    return FLOE_OK;
+}
+
+/* Every pair of materials that can touch (body-body, body-wall) needs a law. */
+static int sc_check_pairs(sc *s)
+{
+    for (int a = 0; a < s->nmats; a++) {
+        if (!s->mats[a].body_user) continue;
+        for (int b = 0; b < s->nmats; b++) {
+            const sc_mat *A = &s->mats[a], *B = &s->mats[b];
+            int body = B->body_user != NULL && b >= a;
+            int wall = B->wall_user != NULL;
+            if (!body && !wall) continue;
+            if (s->law_at && s->law_at[a * s->nmats + b]) continue;
+            struct fy_node *at;
+            char users[128];
+            if (body) {
+                at = sc_line(B->body_user) > sc_line(A->body_user) ? B->body_user : A->body_user;
+                if (a == b) snprintf(users, sizeof users, "bodies[%d]", A->body_entry);
+                else snprintf(users, sizeof users, "bodies[%d] and bodies[%d]", A->body_entry,
+                              B->body_entry);
+            } else {
+                at = sc_line(B->wall_user) > sc_line(A->body_user) ? B->wall_user : A->body_user;
+                snprintf(users, sizeof users, "bodies[%d] and walls[%d]", A->body_entry,
+                         B->wall_entry);
+            }
+            return sc_fail(s, FLOE_EINVAL, at,
+                           "no contact law for materials (%s, %s), used by %s: add "
+                           "{materials: [%s, %s], model: ...} to laws",
+                           A->m.name, B->m.name, users, A->m.name, B->m.name);
+        }
+    }
+    return FLOE_OK;
+}
+
+/* ------------------------------------------------------------------------------------ */
+/* Outputs                                                                               */
+
+static int sc_mkdir_p(const char *dir)
+{
+    char buf[1024];
+    size_t n = strlen(dir);
+    if (n == 0 || n >= sizeof buf) return -1;
+    memcpy(buf, dir, n + 1);
+    for (size_t i = 1; i <= n; i++) {
+        if (buf[i] == '/' || buf[i] == '\0') {
+            char c = buf[i];
+            buf[i] = '\0';
+            if (mkdir(buf, 0777) != 0 && errno != EEXIST) return -1;
+            buf[i] = c;
+        }
+    }
+    struct stat st;
+    return stat(dir, &st) == 0 && S_ISDIR(st.st_mode) ? 0 : -1;
+}
+
+static const char *const sc_output_types[] = {"vtk", "csv", "energy", "stress", "tracker", NULL};
+
+static int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, const char *outdir,
+                            int with_outputs)
+{
+    static const char *const keys_by_type[5][8] = {
+        {"type", "every", "interval", "prefix", NULL},
+        {"type", "every", "interval", "file", NULL},
+        {"type", "every", "interval", "file", NULL},
+        {"type", "every", "interval", "file", "group", "volume", NULL},
+        {"type", "every", "interval", "file", "particles", NULL},
+    };
+    static const char *const keys_all[] = {"type", "every", "interval", "prefix", "file", "group",
+                                           "volume", "particles", NULL};
+    static const char *const defaults[] = {"frame", "particles.csv", "energy.csv", "stress.csv",
+                                           "track.csv"};
+    if (!seq) return FLOE_OK;
+    if (sc_is_missing(seq) || !fy_node_is_sequence(seq))
+        return sc_fail(s, FLOE_EPARSE, sc_is_missing(seq) ? key : seq,
+                       "outputs must be a list of {type: vtk|csv|energy|stress|tracker, ...}");
+    int n = fy_node_sequence_item_count(seq);
+    s->outs = calloc((size_t)(n ? n : 1), sizeof *s->outs);
+    if (!s->outs) return sc_fail(s, FLOE_ENOMEM, key, "out of memory");
+    if (with_outputs && n > 0 && sc_mkdir_p(outdir) != 0)
+        return sc_fail(s, FLOE_EIO, key, "cannot create the output directory '%s': %s", outdir,
+                       strerror(errno));
+    void *it = NULL;
+    struct fy_node *e;
+    int i = 0;
+    while ((e = fy_node_sequence_iterate(seq, &it))) {
+        char what[32];
+        snprintf(what, sizeof what, "outputs[%d]", i);
+        sc_map m;
+        FLOE_TRY(sc_map_open(s, e, key, what, keys_all, &m));
+        int type;
+        FLOE_TRY(sc_enum(s, &m, "type", sc_output_types, -1, &type));
+        {
+            int nv = 0;
+            while (keys_by_type[type][nv]) nv++;
+            void *it2 = NULL;
+            struct fy_node_pair *p;
+            while ((p = fy_node_mapping_iterate(e, &it2))) {
+                const char *ks = sc_text(fy_node_pair_key(p));
+                int ok = 0;
+                for (int j = 0; j < nv; j++) ok |= !strcmp(ks, keys_by_type[type][j]);
+                if (!ok) {
+                    char sug[512];
+                    sc_suggest(sug, sizeof sug, ks, keys_by_type[type], nv);
+                    return sc_fail(s, FLOE_EPARSE, fy_node_pair_key(p),
+                                   "unknown key '%s' in %s (type %s)%s", ks, what,
+                                   sc_output_types[type], sug);
+                }
+            }
+        }
+        sc_output *o = &s->outs[i];
+        snprintf(o->type, sizeof o->type, "%s", sc_output_types[type]);
+        if (sc_has(&m, "every") && sc_has(&m, "interval"))
+            return sc_fail(s, FLOE_EPARSE, sc_get(&m, "interval", NULL),
+                           "%s: give either every (steps) or interval (seconds), not both", what);
+        FLOE_TRY(sc_long(s, &m, "every", 0, 100, &o->every));
+        FLOE_TRY(sc_num(s, &m, "interval", 0, 0.0, &o->interval));
+        if (sc_has(&m, "interval")) {
+            if (!(o->interval > 0)) return sc_range(s, &m, "interval", "> 0 (s)", o->interval);
+            o->every = 0;
+        } else if (o->every < 1) {
+            return sc_range(s, &m, "every", ">= 1 (steps)", (double)o->every);
+        }
+        const char *name;
+        struct fy_node *name_at;
+        FLOE_TRY(sc_str(s, &m, type == 0 ? "prefix" : "file", 0, defaults[type], &name, &name_at));
+        if (!*name || (type == 0 && strchr(name, '/')))
+            return sc_fail(s, FLOE_EINVAL, name_at, "%s.%s: '%s' is not a valid %s", what,
+                           type == 0 ? "prefix" : "file", name, type == 0 ? "prefix" : "file name");
+        if (type == 0 || name[0] != '/')
+            snprintf(o->target, sizeof o->target, "%s/%s", outdir, name);
+        else
+            snprintf(o->target, sizeof o->target, "%s", name);
+
+        long group = -1;
+        double volume = 0;
+        int *ids = NULL, nids = 0;
+        if (type == 3) {
+            struct fy_node *gk;
+            struct fy_node *gv = sc_get(&m, "group", &gk);
+            if (gv && !(sc_text(gv) && !strcmp(sc_text(gv), "all"))) {
+                char f[64];
+                snprintf(f, sizeof f, "%s.group", what);
+                FLOE_TRY(sc_node_long(s, gv, gk, f, &group));
+                if (group < 0 || group >= s->nbody_entries)
+                    return sc_fail(s, FLOE_EINVAL, gv,
+                                   "%s must be 'all' or a body index in [0, %d] (got %ld)", f,
+                                   s->nbody_entries - 1, group);
+            }
+            FLOE_TRY(sc_num(s, &m, "volume", 0, 0.0, &volume));
+            if (!(volume >= 0)) return sc_range(s, &m, "volume", ">= 0 (0 = bounding box)", volume);
+        }
+        if (type == 4) {
+            struct fy_node *pk;
+            struct fy_node *pv = sc_get(&m, "particles", &pk);
+            char f[64];
+            snprintf(f, sizeof f, "%s.particles", what);
+            if (!pv) return sc_fail(s, FLOE_EPARSE, e, "%s is required (a list of particle ids)", f);
+            if (pv == pk || !fy_node_is_sequence(pv) || fy_node_sequence_item_count(pv) == 0)
+                return sc_fail(s, FLOE_EPARSE, pv == pk ? pk : pv,
+                               "%s: expected a non-empty list of particle ids", f);
+            nids = fy_node_sequence_item_count(pv);
+            ids = malloc((size_t)nids * sizeof *ids);
+            if (!ids) return sc_fail(s, FLOE_ENOMEM, pv, "out of memory");
+            for (int j = 0; j < nids; j++) {
+                struct fy_node *c = fy_node_sequence_get_by_index(pv, j);
+                char f2[80];
+                snprintf(f2, sizeof f2, "%s[%d]", f, j);
+                long id;
+                int rc = sc_node_long(s, c, c, f2, &id);
+                if (rc == FLOE_OK && (id < 0 || id >= s->nparticles))
+                    rc = sc_fail(s, FLOE_EINVAL, c, "%s: particle %ld does not exist (the scene "
+                                 "has %d particles, ids 0..%d)", f2, id, s->nparticles,
+                                 s->nparticles - 1);
+                if (rc != FLOE_OK) { free(ids); return rc; }
+                ids[j] = (int)id;
+            }
+        }
+        if (with_outputs) {
+            char oerr[512] = "";
+            floe_observer *obs = NULL;
+            switch (type) {
+            case 0: obs = floe_vtk_writer_create(outdir, name, oerr, sizeof oerr); break;
+            case 1: obs = floe_csv_writer_create(o->target, oerr, sizeof oerr); break;
+            case 2: obs = floe_energy_tracker_create(o->target, oerr, sizeof oerr); break;
+            case 3: obs = floe_collection_tracker_create(o->target, (int)group, volume, oerr,
+                                                         sizeof oerr);
+                break;
+            case 4: obs = floe_particle_tracker_create(o->target, ids, nids, oerr, sizeof oerr); break;
+            }
+            free(ids);
+            if (!obs)
+                return sc_fail(s, FLOE_EIO, e, "%s (%s): %s", what, o->type,
+                               oerr[0] ? oerr : "could not create the output");
+            obs->period_steps = o->every;
+            obs->period_time = o->every ? 0.0 : o->interval;
+            int rc = floe_world_add_observer(s->w, obs);
+            if (rc < 0)
+                return sc_fail(s, -rc, e, "%s: %s", what, floe_world_last_error(s->w));
+        } else {
+            free(ids);
+        }
+        s->nouts = ++i;
+        s->nobservers = i;
+    }
+    return FLOE_OK;
+}
+
+/* ------------------------------------------------------------------------------------ */
+/* Summary                                                                               */
+
+typedef struct sc_buf { char *p; size_t len, n; } sc_buf;
+
+static void sc_cat(sc_buf *b, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+static void sc_cat(sc_buf *b, const char *fmt, ...)
+{
+    if (b->n + 1 >= b->len) return;
+    va_list ap;
+    va_start(ap, fmt);
+    int k = vsnprintf(b->p + b->n, b->len - b->n, fmt, ap);
+    va_end(ap);
+    if (k < 0) return;
+    b->n += (size_t)k;
+    if (b->n >= b->len) {
+        b->n = b->len - 1;
+        if (b->len > 5) memcpy(b->p + b->len - 5, "...\n", 5);
+    }
+}
+
+static void sc_summary(sc *s, const char *name, const char *outdir, int with_outputs,
+                       floe_scene_info *info)
+{
+    sc_buf b = {info->summary, sizeof info->summary, 0};
+    info->summary[0] = '\0';
+    floe_world *w = s->w;
+    sc_cat(&b, "scene:      %s%s%s\n", name[0] ? name : s->path, name[0] ? " — " : "",
+           name[0] ? s->path : "");
+    sc_cat(&b, "dimension:  %d%s\n", s->dim,
+           s->dim == 2 ? (w->def.mass_2d_area ? " (motion in x-y; masses from area, per metre)"
+                                               : " (motion in x-y; masses of the 3D shapes)")
+                       : "");
+    sc_cat(&b, "particles:  %d (%d spheres, %d boxes) in %d body entr%s; walls: %d\n",
+           s->nparticles, s->nspheres, s->nboxes, s->nbody_entries,
+           s->nbody_entries == 1 ? "y" : "ies", s->nwalls);
+    for (int e = 0; e < s->nbody_entries && e < 12; e++)
+        sc_cat(&b, "  body %d: particles %d..%d\n", e, s->entry_first[e],
+               s->entry_first[e] + s->entry_count[e] - 1);
+    if (s->nbody_entries > 12) sc_cat(&b, "  ... %d more body entries\n", s->nbody_entries - 12);
+    sc_cat(&b, "materials:\n");
+    for (int i = 0; i < s->nmats && i < 16; i++) {
+        const floe_material *m = &s->mats[i].m;
+        if (s->mats[i].has_young)
+            sc_cat(&b, "  %s: density %g kg/m^3, E %g Pa, nu %g\n", m->name, m->density, m->young,
+                   m->poisson);
+        else
+            sc_cat(&b, "  %s: density %g kg/m^3\n", m->name, m->density);
+    }
+    sc_cat(&b, "laws:\n");
+    for (int i = 0; i < s->nlaws && i < 32; i++) {
+        const sc_law *L = &s->laws[i];
+        const char *a = s->mats[L->a].m.name, *c = s->mats[L->b].m.name;
+        if (!strcmp(L->model, "hertz_mindlin"))
+            sc_cat(&b, "  %s-%s: Hertz-Mindlin, restitution %g, friction %g\n", a, c, L->e, L->mu);
+        else if (!strcmp(L->model, "linear"))
+            sc_cat(&b, "  %s-%s: linear elastic, kn %g N/m, ks %g N/m, friction %g%s\n", a, c,
+                   L->kn, L->ks, L->mu, L->tension ? ", tension allowed" : "");
+        else
+            sc_cat(&b, "  %s-%s: linear viscoelastic, kn %g N/m, ks %g N/m, gn %g N s/m, "
+                   "gs %g N s/m, friction %g%s\n", a, c, L->kn, L->ks, L->gn, L->gs, L->mu,
+                   L->tension ? ", tension allowed" : "");
+    }
+    sc_cat(&b, "detectors:  ");
+    int first = 1;
+    const char *pairs[4];
+    int np = 0;
+    if (s->nspheres >= 2) pairs[np++] = "sphere-sphere analytic";
+    if (s->nspheres && s->nwalls) pairs[np++] = "sphere-wall analytic";
+    if (s->nboxes && s->nparticles >= 2) pairs[np++] = "box-particle general (SDF)";
+    if (s->nboxes && s->nwalls) pairs[np++] = "box-wall general (SDF)";
+    for (int i = 0; i < np; i++, first = 0) sc_cat(&b, "%s%s", first ? "" : ", ", pairs[i]);
+    sc_cat(&b, "%s\n", first ? "none (no pair of particles can touch)" : "");
+    sc_cat(&b, "gravity:    (%g, %g, %g) m/s^2\n", w->def.gravity[0], w->def.gravity[1],
+           w->def.gravity[2]);
+    double dtc = floe_world_critical_dt(w), dt = floe_world_dt(w);
+    sc_cat(&b, "time step:  critical dt estimate %.4g s; dt %.4g s (%s)\n", dtc, dt,
+           s->dt_auto ? "automatic" : "given");
+    if (s->dt_auto) sc_cat(&b, "            = safety %g x critical\n", s->safety);
+    else if (dt > dtc) sc_cat(&b, "            WARNING: dt is above the critical estimate "
+                               "(allow_unstable_dt: true)\n");
+    double nsteps = dt > 0 ? ceil(s->duration / dt - 1e-9) : 0;
+    sc_cat(&b, "duration:   %g s = %.0f steps\n", s->duration, nsteps);
+    if (s->nstates) {
+        sc_cat(&b, "states:     %d growing radi%s (particle", s->nstates, s->nstates == 1 ? "us" : "i");
+        for (int i = 0; i < s->ngrow_listed; i++) sc_cat(&b, "%s%d", i ? ", " : " ", s->grow_particle[i]);
+        sc_cat(&b, "%s)\n", s->nstates > s->ngrow_listed ? ", ..." : "");
+    }
+    if (s->nouts) {
+        sc_cat(&b, "outputs%s:\n", with_outputs ? "" : " (not opened by check)");
+        for (int i = 0; i < s->nouts; i++) {
+            const sc_output *o = &s->outs[i];
+            if (o->every) sc_cat(&b, "  %s every %ld steps -> %s%s\n", o->type, o->every, o->target,
+                                 !strcmp(o->type, "vtk") ? "_NNNNNN.vtu" : "");
+            else sc_cat(&b, "  %s every %g s -> %s%s\n", o->type, o->interval, o->target,
+                        !strcmp(o->type, "vtk") ? "_NNNNNN.vtu" : "");
+        }
+    } else {
+        sc_cat(&b, "outputs:    none (output directory %s unused)\n", outdir);
+    }
+}
+
+/* ------------------------------------------------------------------------------------ */
+/* Loading                                                                               */
+
+static const char *const sc_root_keys[] = {"name", "description", "dimension", "time", "gravity",
+                                           "neighbor", "mass_2d", "materials", "laws", "walls",
+                                           "bodies", "outputs", NULL};
+
+static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_outputs,
+                    floe_scene_info *info)
+{
+    static const char *const time_keys[] = {"duration", "dt", "safety", "allow_unstable_dt", NULL};
+    static const char *const nb_keys[] = {"skin", "leaf_size", NULL};
+    static const char *const mass2d[] = {"volume", "area", NULL};
+    sc_map r;
+    FLOE_TRY(sc_map_open(s, root, root, "", sc_root_keys, &r));
+
+    const char *name;
+    FLOE_TRY(sc_str(s, &r, "name", 0, "", &name, NULL));
+    snprintf(info->name, sizeof info->name, "%s", name);
+    const char *descr;
+    FLOE_TRY(sc_str(s, &r, "description", 0, "", &descr, NULL));
+
+    long dim;
+    FLOE_TRY(sc_long(s, &r, "dimension", 0, 3, &dim));
+    if (dim != 2 && dim != 3) return sc_range(s, &r, "dimension", "2 or 3", (double)dim);
+    s->dim = (int)dim;
+
+    floe_world_def def = floe_default_world_def();
+    def.dim = s->dim;
+
+    struct fy_node *tk;
+    struct fy_node *tv = sc_get(&r, "time", &tk);
+    if (!tv) return sc_fail(s, FLOE_EPARSE, root, "time is required ({duration: seconds})");
+    sc_map tm;
+    FLOE_TRY(sc_map_open(s, tv == tk ? NULL : tv, tk, "time", time_keys, &tm));
+    FLOE_TRY(sc_num(s, &tm, "duration", 1, 0, &s->duration));
+    if (!(s->duration > 0)) return sc_range(s, &tm, "duration", "> 0 (s)", s->duration);
+    {
+        struct fy_node *dk;
+        struct fy_node *dv = sc_get(&tm, "dt", &dk);
+        s->dt_given = 0;
+        if (dv && dv != dk && sc_text(dv) && !strcmp(sc_text(dv), "auto")) {
+            s->dt_given = 0;
+        } else {
+            FLOE_TRY(sc_num(s, &tm, "dt", 0, 0.0, &s->dt_given));
+            if (s->dt_given < 0)
+                return sc_range(s, &tm, "dt", "> 0 s (or 0 / auto / omitted for automatic)",
+                                s->dt_given);
+        }
+        s->dt_auto = s->dt_given == 0;
+    }
+    FLOE_TRY(sc_num(s, &tm, "safety", 0, def.dt_safety > 0 ? def.dt_safety : 0.2, &s->safety));
+    if (!(s->safety > 0 && s->safety <= 1)) return sc_range(s, &tm, "safety", "in (0, 1]", s->safety);
+    FLOE_TRY(sc_bool(s, &tm, "allow_unstable_dt", 0, &def.allow_unstable_dt));
+    def.dt = s->dt_given;
+    def.dt_safety = s->safety;
+
+    double g[3];
+    FLOE_TRY(sc_vec(s, &r, "gravity", 0, NULL, g));
+    FLOE_TRY(sc_check_planar(s, &r, "gravity", g));
+    floe_v3_copy(def.gravity, g);
+
+    struct fy_node *nk;
+    struct fy_node *nv = sc_get(&r, "neighbor", &nk);
+    if (nv) {
+        sc_map nm;
+        FLOE_TRY(sc_map_open(s, nv == nk ? NULL : nv, nk, "neighbor", nb_keys, &nm));
+        FLOE_TRY(sc_num(s, &nm, "skin", 0, 0.0, &def.skin));
+        if (!(def.skin >= 0)) return sc_range(s, &nm, "skin", ">= 0 (m; 0 = automatic)", def.skin);
+        long leaf;
+        FLOE_TRY(sc_long(s, &nm, "leaf_size", 0, def.leaf_size > 0 ? def.leaf_size : 16, &leaf));
+        if (leaf < 1 || leaf > 1024) return sc_range(s, &nm, "leaf_size", "in [1, 1024]", (double)leaf);
+        def.leaf_size = (int)leaf;
+    }
+    if (sc_has(&r, "mass_2d")) {
+        if (s->dim != 2)
+            return sc_fail(s, FLOE_EINVAL, sc_get(&r, "mass_2d", NULL),
+                           "mass_2d is only valid with dimension: 2");
+        int mm;
+        FLOE_TRY(sc_enum(s, &r, "mass_2d", mass2d, 0, &mm));
+        def.mass_2d_area = mm;
+    }
+
+    struct fy_node *mk;
+    struct fy_node *mv = sc_get(&r, "materials", &mk);
+    if (!mv) return sc_fail(s, FLOE_EPARSE, root, "materials is required (a list of {name, density, ...})");
+    FLOE_TRY(sc_parse_materials(s, mv == mk ? NULL : mv, mk));
+    struct fy_node *lk;
+    struct fy_node *lv = sc_get(&r, "laws", &lk);
+    FLOE_TRY(sc_parse_laws(s, lv == lk ? NULL : lv, lk));
+
+    char werr[512] = "";
+    s->w = floe_world_create(&def, werr, sizeof werr);
+    if (!s->w) return sc_fail(s, FLOE_EINVAL, NULL, "%s", werr[0] ? werr : "invalid world definition");
+    for (int i = 0; i < s->nmats; i++) {
+        int rc = floe_world_add_material(s->w, &s->mats[i].m);
+        if (rc < 0) return sc_fail(s, -rc, s->mats[i].at, "materials[%d]: %s", i,
+                                   floe_world_last_error(s->w));
+    }
+    FLOE_TRY(sc_build_laws(s));
+
+    /* bodies first: body particle i is world particle i (ids in outputs and trackers) */
+    struct fy_node *bk;
+    struct fy_node *bv = sc_get(&r, "bodies", &bk);
+    if (!bv) return sc_fail(s, FLOE_EPARSE, root, "bodies is required (a list of bodies or packings)");
+    FLOE_TRY(sc_parse_bodies(s, bv == bk ? NULL : bv, bk));
+    struct fy_node *wk;
+    struct fy_node *wv = sc_get(&r, "walls", &wk);
+    FLOE_TRY(sc_parse_walls(s, wv == wk ? NULL : wv, wk));
+    FLOE_TRY(sc_check_pairs(s));
+    struct fy_node *ok;
+    struct fy_node *ov = sc_get(&r, "outputs", &ok);
+    FLOE_TRY(sc_parse_outputs(s, ov == ok ? NULL : ov, ok, outdir, with_outputs));
+
+    int rc = floe_world_prepare(s->w);
+    if (rc != FLOE_OK) return sc_fail(s, rc, NULL, "%s", floe_world_last_error(s->w));
+
+    info->duration = s->duration;
+    info->nparticles = s->nparticles;
+    info->nwalls = s->nwalls;
+    info->nmaterials = s->nmats;
+    info->nlaws = s->nlaws;
+    info->nobservers = s->nobservers;
+    info->nstates = s->nstates;
+    sc_summary(s, info->name, outdir, with_outputs, info);
+    return FLOE_OK;
+}
+
+/* Collected libfyaml diagnostics -> "path:line:col: message" (first error). */
+static int sc_parse_error(sc *s, struct fy_diag *diag)
+{
+    void *it = NULL;
+    struct fy_diag_error *e;
+    while ((e = fy_diag_errors_iterate(diag, &it))) {
+        if (e->type < FYET_ERROR) continue;
+        char msg[512];
+        snprintf(msg, sizeof msg, "%s", e->msg ? e->msg : "malformed YAML");
+        size_t n = strlen(msg);
+        while (n && (msg[n - 1] == '\n' || msg[n - 1] == ' ')) msg[--n] = '\0';
+        if (e->line > 0)
+            snprintf(s->err, s->errlen, "%s:%d:%d: YAML syntax error: %s", s->path, e->line,
+                     e->column > 0 ? e->column : 1, msg);
+        else
+            snprintf(s->err, s->errlen, "%s: YAML syntax error: %s", s->path, msg);
+        return FLOE_EPARSE;
+    }
+    snprintf(s->err, s->errlen, "%s: malformed YAML", s->path);
+    return FLOE_EPARSE;
+}
+
+static void sc_diag_discard(struct fy_diag *diag, void *user, const char *buf, size_t len)
+{
+    (void)diag;
+    (void)user;
+    (void)buf;
+    (void)len;
+}
+
+int floe_scene_load_ex(const char *path, const char *text, const char *outdir, int with_outputs,
+                       floe_world **out_world, floe_scene_info *info, char *err, size_t errlen)
+{
+    char dummy_err[8];
+    floe_scene_info dummy_info;
+    if (!err || !errlen) { err = dummy_err; errlen = sizeof dummy_err; }
+    if (!info) info = &dummy_info;
+    err[0] = '\0';
+    memset(info, 0, sizeof *info);
+    if (out_world) *out_world = NULL;
+    if (!path) path = "<scene>";
+    if (!outdir) outdir = "out";
+
+    sc s;
+    memset(&s, 0, sizeof s);
+    s.path = path;
+    s.err = err;
+    s.errlen = errlen;
+    s.dim = 3;
+
+    char *owned = NULL;
+    if (!text) {
+        FILE *f = fopen(path, "rb");
+        if (!f) {
+            snprintf(err, errlen, "%s: cannot open scene file: %s", path, strerror(errno));
+            return FLOE_EIO;
+        }
+        size_t cap = 1 << 16, n = 0;
+        owned = malloc(cap);
+        while (owned) {
+            size_t k = fread(owned + n, 1, cap - n - 1, f);
+            n += k;
+            if (k == 0) break;
+            if (n + 1 == cap) {
+                char *p = realloc(owned, cap * 2);
+                if (!p) { free(owned); owned = NULL; break; }
+                owned = p;
+                cap *= 2;
+            }
+        }
+        int bad = ferror(f);
+        fclose(f);
+        if (!owned || bad) {
+            free(owned);
+            snprintf(err, errlen, "%s: cannot read scene file", path);
+            return bad ? FLOE_EIO : FLOE_ENOMEM;
+        }
+        owned[n] = '\0';
+        text = owned;
+    }
+
+    struct fy_diag_cfg dcfg;
+    fy_diag_cfg_default(&dcfg);
+    dcfg.fp = NULL;
+    dcfg.output_fn = sc_diag_discard;
+    dcfg.colorize = false;
+    struct fy_diag *diag = fy_diag_create(&dcfg);
+    if (!diag) {
+        free(owned);
+        snprintf(err, errlen, "%s: out of memory", path);
+        return FLOE_ENOMEM;
+    }
+    fy_diag_set_collect_errors(diag, true);
+    struct fy_parse_cfg pcfg;
+    memset(&pcfg, 0, sizeof pcfg);
+    pcfg.flags = FYPCF_QUIET | FYPCF_RESOLVE_DOCUMENT;
+    pcfg.diag = diag;
+    struct fy_document *doc = fy_document_build_from_string(&pcfg, text, strlen(text));
+    int rc = FLOE_OK;
+    if (!doc || fy_diag_got_error(diag)) {
+        rc = sc_parse_error(&s, diag);
+    } else {
+        struct fy_node *root = fy_document_root(doc);
+        if (!root || sc_is_missing(root))
+            rc = sc_fail(&s, FLOE_EPARSE, NULL, "empty scene: expected a mapping with time, "
+                         "materials, laws and bodies");
+        else
+            rc = sc_build(&s, root, outdir, with_outputs, info);
+    }
+    if (doc) fy_document_destroy(doc);
+    fy_diag_destroy(diag);
+    free(owned);
+
+    free(s.mats);
+    free(s.laws);
+    free(s.law_at);
+    free(s.entry_first);
+    free(s.entry_count);
+    free(s.outs);
+    if (rc != FLOE_OK) {
+        if (s.w) floe_world_destroy(s.w);
+        if (!err[0]) snprintf(err, errlen, "%s: %s", path, floe_strerror(rc));
+        return rc;
+    }
+    if (out_world) *out_world = s.w;
+    else floe_world_destroy(s.w);
+    return FLOE_OK;
+}
+
+int floe_scene_load(const char *path, const char *outdir, floe_world **out_world,
+                    floe_scene_info *info, char *err, size_t errlen)
+{
+    return floe_scene_load_ex(path, NULL, outdir, 1, out_world, info, err, errlen);
+}
+
+int floe_scene_load_string(const char *text, const char *path, const char *outdir,
+                           floe_world **out_world, floe_scene_info *info, char *err, size_t errlen)
+{
+    if (!text) {
+        if (err && errlen) snprintf(err, errlen, "%s: no scene text", path ? path : "<string>");
+        return FLOE_EINVAL;
+    }
+    return floe_scene_load_ex(path ? path : "<string>", text, outdir, 1, out_world, info, err,
+                              errlen);
+}
+
+/* ------------------------------------------------------------------------------------ */
+/* Default demo: ~2,000 glass beads poured into a box (Hertz-Mindlin, e = 0.5, mu = 0.5). */
+
+static const char sc_demo[] =
+    "# floe default demo: 2,000 glass beads (r = 1 mm) poured into a box under gravity.\n"
+    "name: pour\n"
+    "dimension: 3\n"
+    "time: {duration: 0.3, safety: 0.2}\n"
+    "gravity: [0, 0, -9.81]\n"
+    "materials:\n"
+    "  - {name: glass, density: 2500, young: 1.0e7, poisson: 0.3}\n"
+    "laws:\n"
+    "  - {materials: [glass, glass], model: hertz_mindlin, restitution: 0.5, friction: 0.5}\n"
+    "walls:\n"
+    "  - {point: [0, 0, 0], normal: [0, 0, 1], material: glass}\n"
+    "  - {point: [0, 0, 0], normal: [1, 0, 0], material: glass}\n"
+    "  - {point: [0.025, 0, 0], normal: [-1, 0, 0], material: glass}\n"
+    "  - {point: [0, 0, 0], normal: [0, 1, 0], material: glass}\n"
+    "  - {point: [0, 0.025, 0], normal: [0, -1, 0], material: glass}\n"
+    "bodies:\n"
+    "  - packing: random\n"
+    "    shape: {sphere: {radius: 0.001}}\n"
+    "    material: glass\n"
+    "    region: {min: [0, 0, 0.005], max: [0.025, 0.025, 0.085]}\n"
+    "    count: 2000\n"
+    "    seed: 7\n"
+    "outputs:\n"
+    "  - {type: vtk, interval: 0.03, prefix: frame}\n"
+    "  - {type: energy, interval: 0.001, file: energy.csv}\n"
+    "  - {type: stress, interval: 0.001, file: stress.csv, group: all}\n";
+
+const char *floe_scene_default_demo(void) { return sc_demo; }

@@ -1,0 +1,120 @@
+/* state.c - built-in state objects (ParticLS §4.1, §5.2): the growing sphere radius,
+ * dR/dt = rate, and a generic scalar ODE. Both are advanced by the world's RK2 (eq 21). */
+#include "world_internal.h"
+#include <stdlib.h>
+
+typedef struct growing_radius {
+    floe_state base;
+    int particle;
+    double rate;
+    int update_mass;
+    double R0;
+} growing_radius;
+
+static size_t gr_size(const floe_state *s) { (void)s; return 1; }
+static void gr_get_w(const floe_state *s, const floe_world *w, double *y);
+
+static floe_sphere *gr_sphere(const floe_world *w, int i) {
+    return (floe_sphere *)w->geoms[w->p.geom[i]];
+}
+
+/* The radius lives in the particle's own sphere geometry; get() needs the world, so the
+ * state keeps a pointer to it in a wrapper. */
+typedef struct growing_radius_w {
+    growing_radius g;
+    floe_world *w;
+} growing_radius_w;
+
+static void gr_get_w(const floe_state *s, const floe_world *w, double *y) {
+    const growing_radius *g = (const growing_radius *)s;
+    y[0] = gr_sphere(w, g->particle)->radius;
+}
+
+static void gr_get_real(const floe_state *s, double *y) {
+    const growing_radius_w *g = (const growing_radius_w *)s;
+    gr_get_w(s, g->w, y);
+}
+
+static int gr_set(floe_state *s, floe_world *w, const double *y) {
+    growing_radius *g = (growing_radius *)s;
+    if (!(y[0] > 0) || !isfinite(y[0]))
+        return floe_world_error(w, FLOE_EUNSTABLE, "growing radius of particle %d became %g", g->particle, y[0]);
+    floe_sphere *sp = gr_sphere(w, g->particle);
+    double r_old = sp->radius;
+    sp->radius = y[0];
+    w->p.radius[g->particle] = y[0];
+    if (g->update_mass && w->prepared) {
+        int i = g->particle;
+        double r = y[0] / r_old, s = w->def.dim == 2 && w->def.mass_2d_area ? r * r : r * r * r;
+        double m = w->p.mass[i] * s;
+        double scale = s * r * r; /* inertia ~ m R^2 */
+        w->p.mass[i] = m;
+        if (w->p.motion[i] == FLOE_FREE) w->p.inv_mass[i] = 1.0 / m;
+        for (int k = 0; k < 3; k++) w->p.inertia[3 * i + k] *= scale;
+    }
+    return FLOE_OK;
+}
+
+static int gr_rhs(const floe_state *s, const floe_world *w, double t, const double *y, double *dydt) {
+    (void)w; (void)t; (void)y;
+    dydt[0] = ((const growing_radius *)s)->rate;
+    return FLOE_OK;
+}
+
+static const floe_state_class growing_radius_class = {1, "growing_radius", gr_size, gr_get_real, gr_set, gr_rhs, NULL};
+
+floe_state *floe_growing_radius_create(floe_world *w, int particle, double rate, int update_mass) {
+    if (particle < 0 || particle >= w->p.n || !isfinite(rate)) return NULL;
+    if (w->geoms[w->p.geom[particle]]->klass != &floe_sphere_class) {
+        floe_world_error(w, FLOE_EINVAL, "growing radius: particle %d is not a sphere", particle);
+        return NULL;
+    }
+    /* give the particle its own sphere so that the others sharing the geometry keep theirs */
+    floe_geometry *own = floe_sphere_create(gr_sphere(w, particle)->radius);
+    int gi = floe_world_add_geometry(w, own);
+    if (gi < 0) { floe_geometry_destroy(own); return NULL; }
+    w->p.geom[particle] = gi;
+    growing_radius_w *g = calloc(1, sizeof *g);
+    if (!g) return NULL;
+    g->g.base.klass = &growing_radius_class;
+    g->g.particle = particle;
+    g->g.rate = rate;
+    g->g.update_mass = update_mass;
+    g->g.R0 = ((floe_sphere *)own)->radius;
+    g->w = w;
+    return &g->g.base;
+}
+
+/* ---- generic scalar ODE ---- */
+typedef struct scalar_state {
+    floe_state base;
+    double y;
+    floe_scalar_rhs_fn f;
+    void *user;
+} scalar_state;
+
+static size_t sc_size(const floe_state *s) { (void)s; return 1; }
+static void sc_get(const floe_state *s, double *y) { y[0] = ((const scalar_state *)s)->y; }
+static int sc_set(floe_state *s, floe_world *w, const double *y) {
+    (void)w;
+    ((scalar_state *)s)->y = y[0];
+    return FLOE_OK;
+}
+static int sc_rhs(const floe_state *s, const floe_world *w, double t, const double *y, double *dydt) {
+    (void)w;
+    const scalar_state *c = (const scalar_state *)s;
+    dydt[0] = c->f(t, y[0], c->user);
+    return isfinite(dydt[0]) ? FLOE_OK : FLOE_EUNSTABLE;
+}
+static const floe_state_class scalar_state_class = {1, "scalar", sc_size, sc_get, sc_set, sc_rhs, NULL};
+
+floe_state *floe_scalar_state_create(double y0, floe_scalar_rhs_fn f, void *user) {
+    if (!f) return NULL;
+    scalar_state *s = calloc(1, sizeof *s);
+    if (!s) return NULL;
+    s->base.klass = &scalar_state_class;
+    s->y = y0; s->f = f; s->user = user;
+    return &s->base;
+}
+
+double floe_scalar_state_value(const floe_state *s) { return ((const scalar_state *)s)->y; }

@@ -1,0 +1,259 @@
+/* collection_tracker.c - ParticLS CollectionTracker (§4.3): homogenised Cauchy stress,
+ * coordination number and contact counts of a collection of particles, as CSV.
+ *
+ * Collection ("members"): group -1 = every particle with motion FLOE_FREE and a bounded
+ * radius; group g >= 0 = every particle whose group tag ("body") is g and whose radius is
+ * bounded (whatever its motion). Walls (unbounded radius, FLOE_GEOM_PLANE) are never members.
+ *
+ * Stress (Love-Weber; ParticLS eq 24 written once per contact):
+ *
+ *     sigma = (1/V) sum_{p in members} sum_{c touching p} (x^c - x_p) (x) f^{c->p}
+ *
+ * where x^c is the contact point, x_p the centre of mass of p and f^{c->p} the contact force
+ * acting ON p. For a contact between two members i and j (the stored force is the force on
+ * i, F_i; j receives -F_i) the two halves add up to the branch-vector form of eq 24:
+ *
+ *     (x^c - x_i) (x) F_i + (x^c - x_j) (x) (-F_i) = d_ij (x) F_i,   d_ij = x_j - x_i,
+ *
+ * i.e. d_ij (x) F_ji with F_ji the force on i from j (= -F_ij, the force on j from i).
+ * A contact between a member and a non-member (wall, fixed or kinematic particle, a particle
+ * of another group) contributes only the member's half: (x^c - x_m) (x) f^{c->m}.
+ * Contacts between two non-members are ignored. The paper's double sum over ordered pairs
+ * (i, j) and (j, i) would count every contact twice; we count each contact once, which is
+ * the Love-Weber average (mean stress over V of a body in equilibrium: for a column of
+ * particles squeezed between two walls by a force F over an area A it gives sigma_zz = -F/A).
+ *
+ * Sign convention: TENSION POSITIVE, COMPRESSION NEGATIVE (continuum-mechanics convention).
+ * A repulsive contact pushes i away from j, so F_i . d_ij < 0 and the diagonal term is
+ * negative: a compressed packing has negative normal stresses. The tensor accumulated this
+ * way, s_ab = (1/V) sum l_a f_b, is symmetric only in static equilibrium; we report its
+ * symmetric part (sxy = (s_xy + s_yx)/2, ...).
+ *
+ * Volume V: the value given (> 0), otherwise the axis-aligned bounding box of the members,
+ * each inflated by its bounding radius (an overestimate for non-spherical shapes). In 2D the
+ * box is the bounding rectangle in x, y times a thickness of 1 m (consistent with 2D masses
+ * per metre thickness), so the stress is in Pa for a 1 m thick slab.
+ *
+ * Coordination number Z = 2 x contacts / members, where contacts counts member-member
+ * contacts only; member-non-member contacts are in the separate wall_contacts column (the
+ * coordination including them is (2 contacts + wall_contacts) / members).
+ *
+ * The contacts used are those of the world's current step (w->contacts). An empty
+ * collection writes zero stress, zero coordination and zero volume.
+ *
+ * CSV columns:
+ *   t [s],sxx [Pa],syy [Pa],szz [Pa],sxy [Pa],sxz [Pa],syz [Pa],coordination,contacts,
+ *   wall_contacts,volume [m^3]
+ * The file is created by floe_collection_tracker_create, flushed after every observation;
+ * end() writes the final state if this step was not observed yet and closes the file. */
+#include "floe_observer.h"
+#include "world_internal.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct collection_tracker {
+    floe_observer base;
+    char *path;
+    FILE *f;
+    int group;
+    double volume;
+    unsigned char *member;
+    int member_cap;
+    floe_collection_stats last;
+    long last_step;
+    int observed;
+} collection_tracker;
+
+static const floe_observer_class collection_tracker_class;
+
+static int is_wall(const floe_world *w, int i) {
+    if (!isfinite(w->p.radius[i])) return 1;
+    if (w->p.kind) return w->p.kind[i] == FLOE_GEOM_PLANE;
+    if (w->geoms && w->p.geom) {
+        const floe_geometry *g = w->geoms[w->p.geom[i]];
+        return g && g->klass && g->klass->kind == FLOE_GEOM_PLANE;
+    }
+    return 0;
+}
+
+static int is_member(const floe_world *w, int group, int i) {
+    if (is_wall(w, i)) return 0;
+    if (group < 0) return !w->p.motion || w->p.motion[i] == FLOE_FREE;
+    return w->p.group && w->p.group[i] == group;
+}
+
+/* member: scratch of w->p.n bytes */
+static void stress_eval(const floe_world *w, int group, double volume, unsigned char *member,
+                        floe_collection_stats *out) {
+    const floe_particles *p = &w->p;
+    int n = p->n, dim = w->def.dim;
+    memset(out, 0, sizeof *out);
+    out->time = w->time;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int i = 0; i < n; i++) {
+        member[i] = (unsigned char)is_member(w, group, i);
+        if (!member[i]) continue;
+        out->particles++;
+        double r = p->radius[i];
+        for (int a = 0; a < 3; a++) {
+            double x = p->x[3 * i + a];
+            if (x - r < lo[a]) lo[a] = x - r;
+            if (x + r > hi[a]) hi[a] = x + r;
+        }
+    }
+    double V = volume;
+    if (!(V > 0)) {
+        if (out->particles == 0)
+            V = 0;
+        else if (dim == 2)
+            V = (hi[0] - lo[0]) * (hi[1] - lo[1]) * 1.0; /* 1 m thickness */
+        else
+            V = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+    }
+    out->volume = V;
+
+    double s[3][3] = {{0}};
+    for (int c = 0; c < w->ncontacts; c++) {
+        const floe_contact_rec *rc = &w->contacts[c];
+        int i = rc->i, j = rc->j;
+        if (i < 0 || j < 0 || i >= n || j >= n) continue;
+        int mi = member[i], mj = member[j];
+        double l[3], f[3];
+        if (mi && mj) {
+            floe_v3_sub(l, p->x + 3 * j, p->x + 3 * i);  /* d_ij = x_j - x_i */
+            floe_v3_copy(f, rc->force);                   /* force on i (from j) */
+            out->contacts++;
+        } else if (mi) {
+            floe_v3_sub(l, rc->point, p->x + 3 * i);
+            floe_v3_copy(f, rc->force);
+            out->wall_contacts++;
+        } else if (mj) {
+            floe_v3_sub(l, rc->point, p->x + 3 * j);
+            f[0] = -rc->force[0]; f[1] = -rc->force[1]; f[2] = -rc->force[2];
+            out->wall_contacts++;
+        } else {
+            continue;
+        }
+        for (int a = 0; a < 3; a++)
+            for (int b = 0; b < 3; b++) s[a][b] += l[a] * f[b];
+    }
+    if (V > 0) {
+        double iv = 1.0 / V;
+        out->sigma[0] = s[0][0] * iv;
+        out->sigma[1] = s[1][1] * iv;
+        out->sigma[2] = s[2][2] * iv;
+        out->sigma[3] = 0.5 * (s[0][1] + s[1][0]) * iv;
+        out->sigma[4] = 0.5 * (s[0][2] + s[2][0]) * iv;
+        out->sigma[5] = 0.5 * (s[1][2] + s[2][1]) * iv;
+    }
+    out->coordination = out->particles > 0 ? 2.0 * out->contacts / out->particles : 0.0;
+}
+
+int floe_collection_stress(const floe_world *w, int group, double volume,
+                           floe_collection_stats *out) {
+    if (!w || !out) return FLOE_EINVAL;
+    unsigned char *member = malloc(w->p.n > 0 ? (size_t)w->p.n : 1);
+    if (!member) return FLOE_ENOMEM;
+    stress_eval(w, group, volume, member, out);
+    free(member);
+    return FLOE_OK;
+}
+
+static int ct_write(collection_tracker *t, floe_world *w) {
+    if (t->member_cap < w->p.n) {
+        unsigned char *m = realloc(t->member, (size_t)w->p.n);
+        if (!m) return floe_world_error(w, FLOE_ENOMEM, "collection tracker: out of memory");
+        t->member = m;
+        t->member_cap = w->p.n;
+    }
+    stress_eval(w, t->group, t->volume, t->member, &t->last);
+    if (!t->f) {
+        t->f = fopen(t->path, "a");
+        if (!t->f)
+            return floe_world_error(w, FLOE_EIO, "collection tracker: cannot reopen %s: %s",
+                                    t->path, strerror(errno));
+    }
+    const floe_collection_stats *st = &t->last;
+    fprintf(t->f, "%.17g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%d,%d,%.16g\n", st->time,
+            st->sigma[0], st->sigma[1], st->sigma[2], st->sigma[3], st->sigma[4], st->sigma[5],
+            st->coordination, st->contacts, st->wall_contacts, st->volume);
+    t->last_step = w->step;
+    t->observed = 1;
+    if (fflush(t->f) != 0 || ferror(t->f))
+        return floe_world_error(w, FLOE_EIO, "collection tracker: write to %s failed: %s",
+                                t->path, strerror(errno));
+    return FLOE_OK;
+}
+
+static int ct_observe(floe_observer *o, floe_world *w) {
+    collection_tracker *t = (collection_tracker *)o;
+    if (t->observed && t->last_step == w->step) return FLOE_OK;
+    return ct_write(t, w);
+}
+
+static int ct_end(floe_observer *o, floe_world *w) {
+    collection_tracker *t = (collection_tracker *)o;
+    int rc = FLOE_OK;
+    if (!t->observed || t->last_step != w->step) rc = ct_write(t, w);
+    if (t->f) {
+        if (fclose(t->f) != 0 && rc == FLOE_OK)
+            rc = floe_world_error(w, FLOE_EIO, "collection tracker: closing %s failed", t->path);
+        t->f = NULL;
+    }
+    return rc;
+}
+
+static void ct_destroy(floe_observer *o) {
+    collection_tracker *t = (collection_tracker *)o;
+    if (t->f) fclose(t->f);
+    free(t->member);
+    free(t->path);
+    free(t);
+}
+
+static const floe_observer_class collection_tracker_class = {
+    1, "collection_tracker", NULL, ct_observe, ct_end, ct_destroy};
+
+int floe_collection_tracker_last(const floe_observer *o, double sigma[6], double *coord) {
+    if (!o || o->klass != &collection_tracker_class) return FLOE_EINVAL;
+    const collection_tracker *t = (const collection_tracker *)o;
+    if (!t->observed) return FLOE_EINVAL;
+    if (sigma) memcpy(sigma, t->last.sigma, sizeof t->last.sigma);
+    if (coord) *coord = t->last.coordination;
+    return FLOE_OK;
+}
+
+floe_observer *floe_collection_tracker_create(const char *path, int group, double volume,
+                                              char *err, size_t errlen) {
+    if (err && errlen) err[0] = '\0';
+    if (!path || !*path || group < -1 || !(volume == volume) || isinf(volume)) {
+        if (err && errlen)
+            snprintf(err, errlen, "collection tracker: need a path, group >= -1 and a finite volume");
+        return NULL;
+    }
+    collection_tracker *t = calloc(1, sizeof *t);
+    if (t) t->path = malloc(strlen(path) + 1);
+    if (!t || !t->path) {
+        if (err && errlen) snprintf(err, errlen, "collection tracker: out of memory");
+        free(t);
+        return NULL;
+    }
+    strcpy(t->path, path);
+    t->group = group;
+    t->volume = volume;
+    t->f = fopen(path, "w");
+    if (!t->f) {
+        if (err && errlen)
+            snprintf(err, errlen, "collection tracker: cannot open %s: %s", path, strerror(errno));
+        ct_destroy(&t->base);
+        return NULL;
+    }
+    fputs("t [s],sxx [Pa],syy [Pa],szz [Pa],sxy [Pa],sxz [Pa],syz [Pa],coordination,contacts,"
+          "wall_contacts,volume [m^3]\n", t->f);
+    fflush(t->f);
+    t->base.klass = &collection_tracker_class;
+    t->base.period_steps = 1;
+    return &t->base;
+}

@@ -1,0 +1,12 @@
+/* observer.c - observer lifetime helpers shared by all observer classes. */
+#include "floe_observer.h"
+
+#include <stdlib.h>
+
+void floe_observer_destroy(floe_observer *o) {
+    if (!o) return;
+    if (o->klass && o->klass->destroy)
+        o->klass->destroy(o);
+    else
+        free(o);
+}

@@ -1,0 +1,140 @@
+/* particle_tracker.c - ParticLS ParticleTracker (§4.3): the state of chosen particles as
+ * CSV rows, one row per tracked particle per observation.
+ *
+ * Columns (header row with units):
+ *   t [s], id, x [m], y [m], z [m], vx [m/s], vy [m/s], vz [m/s],
+ *   wx [rad/s], wy [rad/s], wz [rad/s], q0, q1, q2, q3, fx [N], fy [N], fz [N]
+ * id is the world's particle index; q = (w, x, y, z) is the body -> world orientation.
+ *
+ * The file is created (truncated) by floe_particle_tracker_create and flushed after every
+ * observation. end() writes the final state if this step was not observed yet, then closes
+ * the file; a later observation (a run continued after finish) appends to it. */
+#include "floe_observer.h"
+#include "world_internal.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct particle_tracker {
+    floe_observer base;
+    char *path;
+    FILE *f;
+    int *ids;
+    int n;
+    long last_step;
+    int observed;   /* at least one row block written */
+} particle_tracker;
+
+static const floe_observer_class particle_tracker_class;
+
+static int pt_reopen(particle_tracker *t, floe_world *w) {
+    if (t->f) return FLOE_OK;
+    t->f = fopen(t->path, "a");
+    if (!t->f)
+        return floe_world_error(w, FLOE_EIO, "particle tracker: cannot reopen %s: %s", t->path,
+                                strerror(errno));
+    return FLOE_OK;
+}
+
+static int pt_check_ids(particle_tracker *t, floe_world *w) {
+    for (int k = 0; k < t->n; k++)
+        if (t->ids[k] >= w->p.n)
+            return floe_world_error(w, FLOE_EINVAL,
+                                    "particle tracker %s: particle id %d out of range (%d particles)",
+                                    t->path, t->ids[k], w->p.n);
+    return FLOE_OK;
+}
+
+static int pt_begin(floe_observer *o, floe_world *w) {
+    return pt_check_ids((particle_tracker *)o, w);
+}
+
+static int pt_write(particle_tracker *t, floe_world *w) {
+    FLOE_TRY(pt_check_ids(t, w));
+    FLOE_TRY(pt_reopen(t, w));
+    const floe_particles *p = &w->p;
+    for (int k = 0; k < t->n; k++) {
+        int i = t->ids[k];
+        const double *x = p->x + 3 * i, *v = p->v + 3 * i, *om = p->w + 3 * i;
+        const double *q = p->q + 4 * i, *f = p->f + 3 * i;
+        fprintf(t->f,
+                "%.17g,%d,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,"
+                "%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g\n",
+                w->time, i, x[0], x[1], x[2], v[0], v[1], v[2], om[0], om[1], om[2],
+                q[0], q[1], q[2], q[3], f[0], f[1], f[2]);
+    }
+    t->last_step = w->step;
+    t->observed = 1;
+    if (fflush(t->f) != 0 || ferror(t->f))
+        return floe_world_error(w, FLOE_EIO, "particle tracker: write to %s failed: %s", t->path,
+                                strerror(errno));
+    return FLOE_OK;
+}
+
+static int pt_observe(floe_observer *o, floe_world *w) {
+    particle_tracker *t = (particle_tracker *)o;
+    if (t->observed && t->last_step == w->step) return FLOE_OK; /* already written */
+    return pt_write(t, w);
+}
+
+static int pt_end(floe_observer *o, floe_world *w) {
+    particle_tracker *t = (particle_tracker *)o;
+    int rc = FLOE_OK;
+    if (!t->observed || t->last_step != w->step) rc = pt_write(t, w);
+    if (t->f) {
+        if (fclose(t->f) != 0 && rc == FLOE_OK)
+            rc = floe_world_error(w, FLOE_EIO, "particle tracker: closing %s failed", t->path);
+        t->f = NULL;
+    }
+    return rc;
+}
+
+static void pt_destroy(floe_observer *o) {
+    particle_tracker *t = (particle_tracker *)o;
+    if (t->f) fclose(t->f);
+    free(t->path);
+    free(t->ids);
+    free(t);
+}
+
+static const floe_observer_class particle_tracker_class = {
+    1, "particle_tracker", pt_begin, pt_observe, pt_end, pt_destroy};
+
+floe_observer *floe_particle_tracker_create(const char *path, const int *ids, int n,
+                                            char *err, size_t errlen) {
+    if (err && errlen) err[0] = '\0';
+    if (!path || !*path || !ids || n <= 0) {
+        if (err && errlen) snprintf(err, errlen, "particle tracker: need a path and at least one id");
+        return NULL;
+    }
+    for (int k = 0; k < n; k++)
+        if (ids[k] < 0) {
+            if (err && errlen) snprintf(err, errlen, "particle tracker: negative particle id %d", ids[k]);
+            return NULL;
+        }
+    particle_tracker *t = calloc(1, sizeof *t);
+    if (!t) goto nomem;
+    t->path = malloc(strlen(path) + 1);
+    t->ids = malloc((size_t)n * sizeof *t->ids);
+    if (!t->path || !t->ids) goto nomem;
+    strcpy(t->path, path);
+    memcpy(t->ids, ids, (size_t)n * sizeof *ids);
+    t->n = n;
+    t->f = fopen(path, "w");
+    if (!t->f) {
+        if (err && errlen) snprintf(err, errlen, "particle tracker: cannot open %s: %s", path, strerror(errno));
+        pt_destroy(&t->base);
+        return NULL;
+    }
+    fputs("t [s],id,x [m],y [m],z [m],vx [m/s],vy [m/s],vz [m/s],wx [rad/s],wy [rad/s],"
+          "wz [rad/s],q0,q1,q2,q3,fx [N],fy [N],fz [N]\n", t->f);
+    fflush(t->f);
+    t->base.klass = &particle_tracker_class;
+    t->base.period_steps = 1;
+    return &t->base;
+nomem:
+    if (err && errlen) snprintf(err, errlen, "particle tracker: out of memory");
+    if (t) { free(t->path); free(t->ids); free(t); }
+    return NULL;
+}

@@ -1,0 +1,382 @@
+/* vtk_writer.c - particles as VTK XML UnstructuredGrid files, one per frame, for ParaView
+ * and VTK 9 (vtkXMLUnstructuredGridReader).
+ *
+ * Files, in the directory given to floe_vtk_writer_create:
+ *   PREFIX_NNNNNN.vtu  frame NNNNNN (0, 1, 2, ... in order of writing)
+ *   PREFIX.pvd         ParaView collection (timestep = simulated time, file = frame file),
+ *                      rewritten after every frame (through a temporary file and rename) so
+ *                      that a run that stops or crashes still leaves a valid series.
+ * Each .vtu is also written through a temporary file and renamed when complete.
+ *
+ * Content of a frame: one point per particle with a bounded radius (walls, whose geometry is
+ * unbounded, are left out), at its centre of mass; one VTK_VERTEX cell per point.
+ * Point data:
+ *   id (Int32, world particle index), body (Int32, group tag), material (Int32),
+ *   motion (Int32: 0 free, 1 fixed, 2 kinematic), radius (Float64, bounding radius, m),
+ *   velocity (Float64 x3, m/s), angular_velocity (Float64 x3, rad/s), force (Float64 x3, N),
+ *   torque (Float64 x3, N m), orientation (Float64 x4, unit quaternion w, x, y, z,
+ *   body -> world).
+ * Field data: TimeValue (Float64, s; ParaView reads it as the time of a single file) and
+ * Step (Int64).
+ *
+ * Encoding: raw binary appended data (header_type UInt64, the machine's byte order declared
+ * in byte_order) by default; ASCII with floe_vtk_writer_set_ascii(o, 1). Frames with no
+ * particles are written in ASCII (empty arrays).
+ *
+ * end() writes the final state if this step was not written yet. */
+#include "floe_observer.h"
+#include "world_internal.h"
+
+#include <errno.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct vtk_writer {
+    floe_observer base;
+    char *dir, *prefix;
+    int ascii;
+    int frames;
+    double *times;
+    int times_cap;
+    long last_step;
+    int observed;
+    int *idx;
+    int idx_cap;
+    unsigned char *buf;
+    size_t buf_cap;
+} vtk_writer;
+
+static const floe_observer_class vtk_writer_class;
+
+enum { T_INT32, T_FLOAT64, T_INT64, T_UINT8 };
+enum {
+    A_ID, A_BODY, A_MATERIAL, A_MOTION, A_RADIUS, A_VELOCITY, A_ANGVEL, A_FORCE, A_TORQUE,
+    A_ORIENT, A_NPOINTDATA,
+    A_POINTS = A_NPOINTDATA, A_CONN, A_OFFSETS, A_TYPES, A_COUNT
+};
+
+typedef struct array_desc { const char *name; int type; int ncomp; } array_desc;
+
+static const array_desc arrays[A_COUNT] = {
+    {"id", T_INT32, 1},          {"body", T_INT32, 1},
+    {"material", T_INT32, 1},    {"motion", T_INT32, 1},
+    {"radius", T_FLOAT64, 1},    {"velocity", T_FLOAT64, 3},
+    {"angular_velocity", T_FLOAT64, 3}, {"force", T_FLOAT64, 3},
+    {"torque", T_FLOAT64, 3},    {"orientation", T_FLOAT64, 4},
+    {"Points", T_FLOAT64, 3},    {"connectivity", T_INT64, 1},
+    {"offsets", T_INT64, 1},     {"types", T_UINT8, 1},
+};
+
+static const char *type_name(int t) {
+    switch (t) {
+    case T_INT32: return "Int32";
+    case T_FLOAT64: return "Float64";
+    case T_INT64: return "Int64";
+    default: return "UInt8";
+    }
+}
+static size_t type_size(int t) {
+    switch (t) {
+    case T_INT32: return 4;
+    case T_FLOAT64: return 8;
+    case T_INT64: return 8;
+    default: return 1;
+    }
+}
+
+static int host_little_endian(void) {
+    const uint16_t one = 1;
+    unsigned char c;
+    memcpy(&c, &one, 1);
+    return c == 1;
+}
+
+static int is_wall(const floe_world *w, int i) {
+    if (!isfinite(w->p.radius[i])) return 1;
+    if (w->p.kind) return w->p.kind[i] == FLOE_GEOM_PLANE;
+    return 0;
+}
+
+/* Fill buf with array k for the m points listed in v->idx. */
+static void fill_array(const vtk_writer *v, const floe_world *w, int k, int m, void *buf) {
+    const floe_particles *p = &w->p;
+    int32_t *i32 = buf;
+    int64_t *i64 = buf;
+    double *f64 = buf;
+    uint8_t *u8 = buf;
+    const double *src = NULL;
+    int nc = arrays[k].ncomp;
+    switch (k) {
+    case A_ID: for (int a = 0; a < m; a++) i32[a] = (int32_t)v->idx[a]; return;
+    case A_BODY: for (int a = 0; a < m; a++) i32[a] = p->group ? (int32_t)p->group[v->idx[a]] : 0; return;
+    case A_MATERIAL: for (int a = 0; a < m; a++) i32[a] = p->material ? (int32_t)p->material[v->idx[a]] : 0; return;
+    case A_MOTION: for (int a = 0; a < m; a++) i32[a] = p->motion ? (int32_t)p->motion[v->idx[a]] : 0; return;
+    case A_RADIUS: for (int a = 0; a < m; a++) f64[a] = p->radius[v->idx[a]]; return;
+    case A_CONN: for (int a = 0; a < m; a++) i64[a] = a; return;
+    case A_OFFSETS: for (int a = 0; a < m; a++) i64[a] = a + 1; return;
+    case A_TYPES: for (int a = 0; a < m; a++) u8[a] = 1; /* VTK_VERTEX */ return;
+    case A_VELOCITY: src = p->v; break;
+    case A_ANGVEL: src = p->w; break;
+    case A_FORCE: src = p->f; break;
+    case A_TORQUE: src = p->t; break;
+    case A_ORIENT: src = p->q; break;
+    case A_POINTS: src = p->x; break;
+    default: return;
+    }
+    for (int a = 0; a < m; a++)
+        for (int c = 0; c < nc; c++)
+            f64[(size_t)a * nc + c] = src ? src[(size_t)v->idx[a] * nc + c] : 0.0;
+}
+
+static void write_ascii_values(FILE *f, int type, int ncomp, int m, const void *buf) {
+    const int32_t *i32 = buf;
+    const int64_t *i64 = buf;
+    const double *f64 = buf;
+    const uint8_t *u8 = buf;
+    for (int a = 0; a < m; a++) {
+        fputs("          ", f);
+        for (int c = 0; c < ncomp; c++) {
+            size_t e = (size_t)a * ncomp + c;
+            if (c) fputc(' ', f);
+            switch (type) {
+            case T_INT32: fprintf(f, "%ld", (long)i32[e]); break;
+            case T_INT64: fprintf(f, "%lld", (long long)i64[e]); break;
+            case T_UINT8: fprintf(f, "%u", (unsigned)u8[e]); break;
+            default: fprintf(f, "%.17g", f64[e]); break;
+            }
+        }
+        fputc('\n', f);
+    }
+}
+
+static void write_xml_attr(FILE *f, const char *s) {
+    for (; *s; s++) {
+        switch (*s) {
+        case '&': fputs("&amp;", f); break;
+        case '<': fputs("&lt;", f); break;
+        case '>': fputs("&gt;", f); break;
+        case '"': fputs("&quot;", f); break;
+        case '\'': fputs("&apos;", f); break;
+        default: fputc(*s, f);
+        }
+    }
+}
+
+/* malloc'd "dir/prefix" + suffix (frame >= 0: "_NNNNNN.vtu"; else suffix as given) */
+static char *make_path(const vtk_writer *v, int with_dir, int frame, const char *suffix) {
+    size_t len = strlen(v->dir) + strlen(v->prefix) + strlen(suffix) + 32;
+    char *s = malloc(len);
+    if (!s) return NULL;
+    const char *d = with_dir ? v->dir : "";
+    const char *sep = with_dir ? "/" : "";
+    if (frame >= 0)
+        snprintf(s, len, "%s%s%s_%06d%s", d, sep, v->prefix, frame, suffix);
+    else
+        snprintf(s, len, "%s%s%s%s", d, sep, v->prefix, suffix);
+    return s;
+}
+
+static int finish_file(FILE *f, const char *tmp, const char *path) {
+    int bad = ferror(f);
+    if (fclose(f) != 0) bad = 1;
+    if (bad) { remove(tmp); return FLOE_EIO; }
+    if (rename(tmp, path) != 0) { remove(tmp); return FLOE_EIO; }
+    return FLOE_OK;
+}
+
+static int write_pvd(const vtk_writer *v) {
+    char *path = make_path(v, 1, -1, ".pvd"), *tmp = make_path(v, 1, -1, ".pvd.tmp");
+    int rc = FLOE_ENOMEM;
+    FILE *f = NULL;
+    if (!path || !tmp) goto out;
+    rc = FLOE_EIO;
+    f = fopen(tmp, "w");
+    if (!f) goto out;
+    fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" "
+               "byte_order=\"%s\">\n  <Collection>\n",
+            host_little_endian() ? "LittleEndian" : "BigEndian");
+    for (int k = 0; k < v->frames; k++) {
+        char *name = make_path(v, 0, k, ".vtu");
+        if (!name) { fclose(f); remove(tmp); rc = FLOE_ENOMEM; goto out; }
+        fprintf(f, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"0\" file=\"", v->times[k]);
+        write_xml_attr(f, name);
+        fputs("\"/>\n", f);
+        free(name);
+    }
+    fputs("  </Collection>\n</VTKFile>\n", f);
+    rc = finish_file(f, tmp, path);
+out:
+    free(path);
+    free(tmp);
+    return rc;
+}
+
+static int vw_write(vtk_writer *v, floe_world *w) {
+    const floe_particles *p = &w->p;
+    /* points to write */
+    if (v->idx_cap < p->n) {
+        int *ni = realloc(v->idx, (size_t)p->n * sizeof *ni);
+        if (!ni) return floe_world_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
+        v->idx = ni;
+        v->idx_cap = p->n;
+    }
+    int m = 0;
+    for (int i = 0; i < p->n; i++)
+        if (!is_wall(w, i)) v->idx[m++] = i;
+    size_t need = (size_t)(m > 0 ? m : 1) * 4 * sizeof(double);
+    if (v->buf_cap < need) {
+        unsigned char *nb = realloc(v->buf, need);
+        if (!nb) return floe_world_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
+        v->buf = nb;
+        v->buf_cap = need;
+    }
+    if (v->frames == v->times_cap) {
+        int nc = v->times_cap ? 2 * v->times_cap : 64;
+        double *nt = realloc(v->times, (size_t)nc * sizeof *nt);
+        if (!nt) return floe_world_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
+        v->times = nt;
+        v->times_cap = nc;
+    }
+
+    int ascii = v->ascii || m == 0;
+    char *path = make_path(v, 1, v->frames, ".vtu"), *tmp = make_path(v, 1, v->frames, ".vtu.tmp");
+    if (!path || !tmp) {
+        free(path);
+        free(tmp);
+        return floe_world_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
+    }
+    FILE *f = fopen(tmp, "wb");
+    if (!f) {
+        int rc = floe_world_error(w, FLOE_EIO, "vtk writer: cannot open %s: %s", tmp, strerror(errno));
+        free(path);
+        free(tmp);
+        return rc;
+    }
+
+    fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
+               "byte_order=\"%s\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n",
+            host_little_endian() ? "LittleEndian" : "BigEndian");
+    fprintf(f, "    <FieldData>\n"
+               "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
+               "format=\"ascii\">%.17g</DataArray>\n"
+               "      <DataArray type=\"Int64\" Name=\"Step\" NumberOfTuples=\"1\" "
+               "format=\"ascii\">%ld</DataArray>\n    </FieldData>\n",
+            w->time, w->step);
+    fprintf(f, "    <Piece NumberOfPoints=\"%d\" NumberOfCells=\"%d\">\n", m, m);
+
+    uint64_t offset = 0;
+    for (int k = 0; k < A_COUNT; k++) {
+        if (k == 0) fputs("      <PointData Scalars=\"radius\" Vectors=\"velocity\">\n", f);
+        if (k == A_POINTS) fputs("      </PointData>\n      <CellData>\n      </CellData>\n      <Points>\n", f);
+        if (k == A_CONN) fputs("      </Points>\n      <Cells>\n", f);
+        const array_desc *a = &arrays[k];
+        fprintf(f, "        <DataArray type=\"%s\" Name=\"%s\"", type_name(a->type), a->name);
+        if (a->ncomp > 1) fprintf(f, " NumberOfComponents=\"%d\"", a->ncomp);
+        if (ascii) {
+            fputs(" format=\"ascii\">\n", f);
+            fill_array(v, w, k, m, v->buf);
+            write_ascii_values(f, a->type, a->ncomp, m, v->buf);
+            fputs("        </DataArray>\n", f);
+        } else {
+            fprintf(f, " format=\"appended\" offset=\"%llu\"/>\n", (unsigned long long)offset);
+            offset += sizeof(uint64_t) + (uint64_t)m * (uint64_t)a->ncomp * type_size(a->type);
+        }
+    }
+    fputs("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n", f);
+    if (!ascii) {
+        fputs("  <AppendedData encoding=\"raw\">\n   _", f);
+        for (int k = 0; k < A_COUNT; k++) {
+            const array_desc *a = &arrays[k];
+            uint64_t nbytes = (uint64_t)m * (uint64_t)a->ncomp * type_size(a->type);
+            fill_array(v, w, k, m, v->buf);
+            fwrite(&nbytes, sizeof nbytes, 1, f);
+            fwrite(v->buf, 1, (size_t)nbytes, f);
+        }
+        fputs("\n  </AppendedData>\n", f);
+    }
+    fputs("</VTKFile>\n", f);
+    int rc = finish_file(f, tmp, path);
+    if (rc != FLOE_OK)
+        rc = floe_world_error(w, rc, "vtk writer: writing %s failed: %s", path, strerror(errno));
+    free(path);
+    free(tmp);
+    if (rc != FLOE_OK) return rc;
+
+    v->times[v->frames++] = w->time;
+    v->last_step = w->step;
+    v->observed = 1;
+    rc = write_pvd(v);
+    if (rc != FLOE_OK)
+        return floe_world_error(w, rc, "vtk writer: writing %s/%s.pvd failed", v->dir, v->prefix);
+    return FLOE_OK;
+}
+
+static int vw_observe(floe_observer *o, floe_world *w) {
+    vtk_writer *v = (vtk_writer *)o;
+    if (v->observed && v->last_step == w->step) return FLOE_OK;
+    return vw_write(v, w);
+}
+
+static int vw_end(floe_observer *o, floe_world *w) {
+    vtk_writer *v = (vtk_writer *)o;
+    if (!v->observed || v->last_step != w->step) return vw_write(v, w);
+    return FLOE_OK;
+}
+
+static void vw_destroy(floe_observer *o) {
+    vtk_writer *v = (vtk_writer *)o;
+    free(v->dir);
+    free(v->prefix);
+    free(v->times);
+    free(v->idx);
+    free(v->buf);
+    free(v);
+}
+
+static const floe_observer_class vtk_writer_class = {
+    1, "vtk_writer", NULL, vw_observe, vw_end, vw_destroy};
+
+int floe_vtk_writer_set_ascii(floe_observer *o, int ascii) {
+    if (!o || o->klass != &vtk_writer_class) return FLOE_EINVAL;
+    ((vtk_writer *)o)->ascii = ascii != 0;
+    return FLOE_OK;
+}
+
+static char *dup_str(const char *s) {
+    char *d = malloc(strlen(s) + 1);
+    if (d) strcpy(d, s);
+    return d;
+}
+
+floe_observer *floe_vtk_writer_create(const char *dir, const char *prefix, char *err, size_t errlen) {
+    if (err && errlen) err[0] = '\0';
+    if (!dir || !*dir) dir = ".";
+    if (!prefix || !*prefix) prefix = "particles";
+    vtk_writer *v = calloc(1, sizeof *v);
+    if (v) {
+        v->dir = dup_str(dir);
+        v->prefix = dup_str(prefix);
+    }
+    if (!v || !v->dir || !v->prefix) {
+        if (err && errlen) snprintf(err, errlen, "vtk writer: out of memory");
+        if (v) vw_destroy(&v->base);
+        return NULL;
+    }
+    /* strip trailing slashes (keep "/") */
+    size_t L = strlen(v->dir);
+    while (L > 1 && v->dir[L - 1] == '/') v->dir[--L] = '\0';
+    /* an empty collection now: checks that the directory is writable */
+    int rc = write_pvd(v);
+    if (rc != FLOE_OK) {
+        if (err && errlen)
+            snprintf(err, errlen, "vtk writer: cannot write %s/%s.pvd: %s", v->dir, v->prefix,
+                     rc == FLOE_ENOMEM ? "out of memory" : strerror(errno));
+        vw_destroy(&v->base);
+        return NULL;
+    }
+    v->base.klass = &vtk_writer_class;
+    v->base.period_steps = 1;
+    return &v->base;
+}

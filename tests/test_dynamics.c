@@ -1,0 +1,313 @@
+/* test_dynamics.c - rigid-body dynamics through the world: torque-free asymmetric body,
+ * restitution of head-on collisions, energy conservation and balance, incline stick/slip,
+ * sliding-to-rolling, Hertz static overlap, 2D versus 3D, instability detection, RK2
+ * state convergence. Every check states its tolerance. */
+#include "floe.h"
+#include "world_internal.h"
+#include "check.h"
+#include <string.h>
+
+static floe_material glass(void) {
+    floe_material m;
+    memset(&m, 0, sizeof m);
+    strcpy(m.name, "glass");
+    m.density = 2500; m.young = 1e7; m.poisson = 0.3;
+    return m;
+}
+
+static floe_world *mkworld(int dim, double dt, const double g[3]) {
+    floe_world_def d = floe_default_world_def();
+    d.dim = dim; d.dt = dt;
+    if (g) memcpy(d.gravity, g, sizeof d.gravity);
+    return floe_world_create(&d, NULL, 0);
+}
+
+static int add_sphere(floe_world *w, int geom, double x, double y, double z, double vx, double vy, double vz) {
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = geom; p.material = 0;
+    floe_v3_set(p.x, x, y, z); floe_v3_set(p.v, vx, vy, vz);
+    return floe_world_add_particle(w, &p);
+}
+
+/* ---- torque-free asymmetric body ---- */
+static void test_free_rotation(void) {
+    floe_world *w = mkworld(3, 1e-4, NULL);
+    floe_material m = glass();
+    floe_world_add_material(w, &m);
+    int g = floe_world_add_geometry(w, floe_box_create(0.1, 0.2, 0.35));
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = g;
+    floe_v3_set(p.w, 3.0, 0.4, 1.5);   /* near the unstable middle axis: a hard case */
+    int i = floe_world_add_particle(w, &p);
+    CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
+    double L0[3], E0 = floe_world_energy(w).kinetic_rot;
+    memcpy(L0, w->p.L + 3 * i, sizeof L0);
+    double wmin = 1e9, wmax = -1e9;
+    for (int s = 0; s < 20000; s++) {
+        floe_world_step(w);
+        double wx = w->p.w[3 * i];
+        if (wx < wmin) wmin = wx;
+        if (wx > wmax) wmax = wx;
+    }
+    double L[3], om[3];
+    /* angular momentum recomputed from omega and the rotated inertia (not the stored L) */
+    double ob[3];
+    memcpy(om, w->p.w + 3 * i, sizeof om);
+    floe_q_rotate_inv(ob, w->p.q + 4 * i, om);
+    for (int k = 0; k < 3; k++) ob[k] *= w->p.inertia[3 * i + k];
+    floe_q_rotate(L, w->p.q + 4 * i, ob);
+    double dL[3];
+    floe_v3_sub(dL, L, L0);
+    double E = floe_world_energy(w).kinetic_rot;
+    printf("  free rotation: omega_x ranged %.3f..%.3f over 2 s (tumbling)\n", wmin, wmax);
+    CHECK(wmax - wmin > 0.1, "the body should tumble (omega_x varies), got range %g", wmax - wmin);
+    CHECK_NEAR(floe_v3_norm(dL) / floe_v3_norm(L0) + 1.0, 1.0, 1e-10, "|L - L0|/|L0| (tol 1e-10), 20k steps");
+    CHECK_NEAR(E, E0, 1e-5, "rotational KE drift (tol 1e-5), 20k steps");
+    floe_world_destroy(w);
+}
+
+/* ---- head-on collision restitution through the world ---- */
+static double collide(floe_contact_law *law, double v0) {
+    floe_world *w = mkworld(3, 0, NULL);
+    floe_material m = glass();
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, law);
+    int g = floe_world_add_geometry(w, floe_sphere_create(0.001));
+    add_sphere(w, g, 0, 0, 0, v0, 0, 0);
+    add_sphere(w, g, 0.00201, 0, 0, -v0, 0, 0);
+    if (floe_world_prepare(w)) { printf("%s\n", floe_world_last_error(w)); floe_world_destroy(w); return -1; }
+    for (int s = 0; s < 200000; s++) {
+        floe_world_step(w);
+        if (w->p.v[0] < 0 && w->ncontacts == 0 && w->p.x[3] - w->p.x[0] > 0.00201) break;
+    }
+    double e = (w->p.v[3] - w->p.v[0]) / (2 * v0);
+    floe_world_destroy(w);
+    return e;
+}
+
+static void test_restitution(void) {
+    floe_material m = glass();
+    double es[3] = {0.3, 0.5, 0.9};
+    for (int k = 0; k < 3; k++) {
+        for (double v0 = 0.01; v0 <= 1.0; v0 *= 10) {
+            double e = collide(floe_hertz_mindlin_law_create(&m, &m, es[k], 0.0), v0);
+            char what[96];
+            snprintf(what, sizeof what, "Hertz-Mindlin restitution e=%.1f v=%.2f m/s (tol 1%%)", es[k], v0);
+            CHECK_NEAR(e, es[k], 0.01, what);
+        }
+    }
+    /* viscoelastic: expected from the analytic spring-dashpot formula */
+    double mass = 2500 * 4.0 / 3.0 * M_PI * 1e-9, kn = 100, gn = 0.002;
+    floe_linear_law *ll = (floe_linear_law *)floe_linear_law_create(kn, kn / 2, gn, 0, 0);
+    ll->tension = 1;
+    double e = collide(&ll->base, 0.05);
+    CHECK_NEAR(e, floe_linear_restitution(kn, gn, mass / 2), 0.01, "viscoelastic restitution vs exp(-pi z/sqrt(1-z^2)) (tol 1%)");
+}
+
+/* ---- energy: elastic spheres in a box, velocity Verlet, 1e5 steps ---- */
+static floe_world *box_of_spheres(int n_side, double e, double mu, const double grav[3], double dt) {
+    floe_world *w = mkworld(3, dt, grav);
+    floe_material m = glass();
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, e, mu));
+    int g = floe_world_add_geometry(w, floe_sphere_create(0.001));
+    double Lb = n_side * 0.003 + 0.001;
+    double pts[6][3] = {{0, 0, 0}, {Lb, 0, 0}, {0, 0, 0}, {0, Lb, 0}, {0, 0, 0}, {0, 0, Lb}};
+    double nrm[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (int k = 0; k < 6; k++) floe_world_add_wall(w, pts[k], nrm[k], 0, FLOE_FIXED);
+    unsigned s = 12345;
+    for (int a = 0; a < n_side; a++)
+        for (int b = 0; b < n_side; b++)
+            for (int c = 0; c < n_side; c++) {
+                double v[3];
+                for (int k = 0; k < 3; k++) { s = s * 1103515245u + 12345u; v[k] = ((s >> 8) / 16777216.0 - 0.5) * 0.4; }
+                add_sphere(w, g, 0.002 + a * 0.003, 0.002 + b * 0.003, 0.002 + c * 0.003, v[0], v[1], v[2]);
+            }
+    return w;
+}
+
+static void test_energy(void) {
+    floe_world *w = box_of_spheres(4, 1.0, 0.0, NULL, 2e-6);
+    CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
+    double E0 = floe_world_energy(w).initial, maxdev = 0;
+    long contacts = 0;
+    for (int s = 0; s < 100000; s++) {
+        if (floe_world_step(w)) { CHECK(0, "step failed: %s", floe_world_last_error(w)); break; }
+        floe_energy e = floe_world_energy(w);
+        double E = e.kinetic_trans + e.kinetic_rot + e.elastic;
+        if (fabs(E - E0) > maxdev) maxdev = fabs(E - E0);
+        contacts += w->ncontacts;
+    }
+    printf("  elastic box: %ld contact-steps in 1e5 steps, dt = %g\n", contacts, floe_world_dt(w));
+    CHECK(contacts > 1000, "the elastic test must actually collide (%ld contact-steps)", contacts);
+    CHECK_NEAR(E0 + maxdev, E0, 1e-3, "max |E - E0|/E0 over 1e5 Verlet steps, elastic Hertz (tol 1e-3)");
+    floe_world_destroy(w);
+
+    /* friction + damping + gravity: the balance initial + work = now + dissipated closes */
+    double g[3] = {0, 0, -9.81};
+    w = box_of_spheres(4, 0.5, 0.5, g, 2e-6);
+    CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
+    for (int s = 0; s < 50000; s++)
+        if (floe_world_step(w)) { CHECK(0, "step failed: %s", floe_world_last_error(w)); break; }
+    floe_energy e = floe_world_energy(w);
+    printf("  dissipative box: KE %.3e elastic %.3e work_g %.3e dissipated %.3e\n", e.kinetic_trans + e.kinetic_rot,
+           e.elastic, e.work_body, e.dissipated);
+    CHECK(e.dissipated > 0.3 * (e.initial + e.work_body), "most energy should be dissipated by now");
+    CHECK_NEAR(1.0 + floe_world_energy_balance_error(w), 1.0, 5e-3, "energy balance error with friction (tol 0.5%)");
+    floe_world_destroy(w);
+}
+
+/* ---- block on an incline (gravity tilted by theta), Coulomb mu = 0.5 ---- */
+static double incline(double theta_deg, double *accel) {
+    double th = theta_deg * M_PI / 180, g = 9.81;
+    double grav[3] = {g * sin(th), 0, -g * cos(th)};
+    floe_world *w = mkworld(3, 1e-5, grav);
+    floe_material m = glass();
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, floe_linear_law_create(1e5, 5e4, 20, 10, 0.5));
+    int gb = floe_world_add_geometry(w, floe_box_create(0.04, 0.04, 0.01));
+    double o[3] = {0, 0, 0}, n[3] = {0, 0, 1};
+    floe_world_add_wall(w, o, n, 0, FLOE_FIXED);
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = gb;
+    floe_v3_set(p.x, 0, 0, 0.005);
+    int i = floe_world_add_particle(w, &p);
+    floe_world_prepare(w);
+    /* settle 0.2 s, then measure over 0.3 s */
+    for (int s = 0; s < 20000; s++) floe_world_step(w);
+    double x0 = w->p.x[3 * i], v0 = w->p.v[3 * i];
+    for (int s = 0; s < 30000; s++) floe_world_step(w);
+    double T = 0.3, x1 = w->p.x[3 * i];
+    *accel = 2 * (x1 - x0 - v0 * T) / (T * T);
+    floe_world_destroy(w);
+    return x1 - x0;
+}
+
+static void test_incline(void) {
+    double a, g = 9.81, mu = 0.5;
+    double d = incline(20.0, &a); /* tan 20 = 0.364 < 0.5: sticks */
+    printf("  incline 20 deg: moved %.3e m in 0.3 s\n", d);
+    CHECK(fabs(d) < 1e-5, "block should stick at tan(theta) = 0.364 < mu = 0.5 (moved %g m)", d);
+    d = incline(35.0, &a); /* tan 35 = 0.700 > 0.5: slides with a = g (sin - mu cos) */
+    double th = 35.0 * M_PI / 180;
+    CHECK_NEAR(a, g * (sin(th) - mu * cos(th)), 0.02, "sliding acceleration at 35 deg vs g(sin - mu cos) (tol 2%)");
+}
+
+/* ---- sliding sphere reaches rolling at 5/7 v0 ---- */
+static void test_rolling(void) {
+    double grav[3] = {0, 0, -9.81};
+    floe_world *w = mkworld(3, 0, grav);
+    floe_material m = glass();
+    m.young = 1e8;
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.3));
+    int g = floe_world_add_geometry(w, floe_sphere_create(0.005));
+    double o[3] = {0, 0, 0}, n[3] = {0, 0, 1};
+    floe_world_add_wall(w, o, n, 0, FLOE_FIXED);
+    /* resting overlap first, then launch */
+    int i = add_sphere(w, g, 0, 0, 0.005, 0, 0, 0);
+    CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
+    for (int s = 0; s < 20000; s++) floe_world_step(w);
+    w->p.v[3 * i] = 1.0;
+    for (int s = 0; s < 400000; s++) floe_world_step(w);
+    double v = w->p.v[3 * i], om = w->p.w[3 * i + 1];
+    printf("  rolling: v = %.5f m/s, omega*R = %.5f m/s after %.2f s\n", v, om * 0.005, floe_world_time(w));
+    CHECK_NEAR(v, 5.0 / 7.0, 0.01, "final velocity of a launched sliding sphere vs 5/7 v0 (tol 1%)");
+    CHECK_NEAR(om * 0.005, v, 0.01, "rolling without slip: omega R = v (tol 1%)");
+    floe_world_destroy(w);
+}
+
+/* ---- Hertz static overlap of a sphere resting on a plane ---- */
+static void test_hertz_rest(void) {
+    double grav[3] = {0, 0, -9.81};
+    floe_world *w = mkworld(3, 0, grav);
+    floe_material m = glass();
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.3, 0.5));
+    double R = 0.002;
+    int g = floe_world_add_geometry(w, floe_sphere_create(R));
+    double o[3] = {0, 0, 0}, n[3] = {0, 0, 1};
+    floe_world_add_wall(w, o, n, 0, FLOE_FIXED);
+    int i = add_sphere(w, g, 0, 0, R, 0, 0, 0);
+    floe_world_prepare(w);
+    for (int s = 0; s < 100000; s++) floe_world_step(w);
+    double mass = w->p.mass[i];
+    double Es = 1.0 / (2 * (1 - 0.09) / 1e7);
+    double d = pow(3 * mass * 9.81 / (4 * Es * sqrt(R)), 2.0 / 3.0);
+    CHECK_NEAR(R - w->p.x[3 * i + 2], d, 0.01, "sphere on plane: overlap vs (3mg/(4E* sqrt R))^(2/3) (tol 1%)");
+    floe_world_destroy(w);
+}
+
+/* ---- 2D scene equals the 3D scene restricted to the plane ---- */
+static void test_2d_vs_3d(void) {
+    double pos[2][5][3];
+    for (int dim = 2; dim <= 3; dim++) {
+        double grav[3] = {0, -9.81, 0};
+        floe_world *w = mkworld(dim, 2e-6, grav);
+        floe_material m = glass();
+        floe_world_add_material(w, &m);
+        floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.4));
+        int g = floe_world_add_geometry(w, floe_sphere_create(0.001));
+        double o[3] = {0, 0, 0}, n[3] = {0, 1, 0}, o2[3] = {0.01, 0, 0}, n2[3] = {-1, 0, 0};
+        floe_world_add_wall(w, o, n, 0, FLOE_FIXED);
+        floe_world_add_wall(w, o2, n2, 0, FLOE_FIXED);
+        for (int k = 0; k < 5; k++) add_sphere(w, g, 0.002 + 0.0015 * k, 0.002 + 0.0023 * k, 0, 0.3 - 0.1 * k, 0.05 * k, 0);
+        floe_world_prepare(w);
+        for (int s = 0; s < 20000; s++) floe_world_step(w);
+        for (int k = 0; k < 5; k++) memcpy(pos[dim - 2][k], w->p.x + 3 * (k + 2), 3 * sizeof(double));
+        floe_world_destroy(w);
+    }
+    double maxd = 0;
+    for (int k = 0; k < 5; k++)
+        for (int a = 0; a < 3; a++) maxd = fmax(maxd, fabs(pos[0][k][a] - pos[1][k][a]));
+    printf("  2D vs 3D: max position difference %.3e m after 20k steps\n", maxd);
+    CHECK(maxd < 1e-12, "2D and planar 3D trajectories must agree to 1e-12 m (got %g)", maxd);
+}
+
+/* ---- instability: dt above critical is refused; forced, the run stops with an id ---- */
+static void test_unstable(void) {
+    floe_world *w = box_of_spheres(2, 0.5, 0.5, NULL, 1e-3);
+    int rc = floe_world_prepare(w);
+    CHECK(rc == FLOE_EUNSTABLE && strstr(floe_world_last_error(w), "critical"),
+          "dt far above critical must be refused (rc %d: %s)", rc, floe_world_last_error(w));
+    floe_world_destroy(w);
+    w = box_of_spheres(2, 0.5, 0.5, NULL, 1e-3);
+    w->def.allow_unstable_dt = 1;
+    rc = floe_world_run(w, 1.0, NULL, NULL);
+    CHECK(rc == FLOE_EUNSTABLE && strstr(floe_world_last_error(w), "particle"),
+          "a forced unstable run stops naming the particle (rc %d: %s)", rc, floe_world_last_error(w));
+    printf("  message: %s\n", floe_world_last_error(w));
+    floe_world_destroy(w);
+}
+
+/* ---- RK2 state object: second order ---- */
+static double rhs_fn(double t, double y, void *u) { (void)u; return cos(t) * y; }
+static double rk2_error(double dt) {
+    floe_world *w = mkworld(3, dt, NULL);
+    floe_state *s = floe_scalar_state_create(1.0, rhs_fn, NULL);
+    floe_world_add_state(w, s);
+    floe_world_prepare(w);
+    floe_world_run(w, 1.0, NULL, NULL);
+    double err = fabs(floe_scalar_state_value(s) - exp(sin(floe_world_time(w))));
+    floe_world_destroy(w);
+    return err;
+}
+static void test_rk2(void) {
+    double e1 = rk2_error(0.01), e2 = rk2_error(0.005), e3 = rk2_error(0.0025);
+    printf("  RK2 errors: %.3e %.3e %.3e; ratios %.3f %.3f\n", e1, e2, e3, e1 / e2, e2 / e3);
+    CHECK_NEAR(e1 / e2, 4.0, 0.1, "RK2 error ratio when halving dt (tol 10%)");
+    CHECK_NEAR(e2 / e3, 4.0, 0.1, "RK2 error ratio when halving dt again (tol 10%)");
+}
+
+int main(void) {
+    printf("free rotation\n"); test_free_rotation();
+    printf("restitution\n"); test_restitution();
+    printf("energy\n"); test_energy();
+    printf("incline\n"); test_incline();
+    printf("rolling\n"); test_rolling();
+    printf("hertz at rest\n"); test_hertz_rest();
+    printf("2d vs 3d\n"); test_2d_vs_3d();
+    printf("unstable\n"); test_unstable();
+    printf("rk2\n"); test_rk2();
+    return check_summary("test_dynamics");
+}
