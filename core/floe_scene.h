@@ -25,4 +25,10 @@ int floe_scene_load_string(const char *text, const char *path, const char *outdi
 /* The built-in default demo scene (YAML text). */
 const char *floe_scene_default_demo(void);
 
+/* Either form, with control over the outputs: text == NULL reads the file at path;
+ * with_outputs == 0 validates the outputs section without creating any directory or file
+ * (used by `floe check`). */
+int floe_scene_load_ex(const char *path, const char *text, const char *outdir, int with_outputs,
+                       floe_world **out_world, floe_scene_info *info, char *err, size_t errlen);
+
 #endif

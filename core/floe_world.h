@@ -93,6 +93,15 @@ int floe_world_run(floe_world *w, double t_end, floe_progress_fn progress, void 
 /* Finish: call end() of every observer (idempotent). */
 int floe_world_finish(floe_world *w);
 
+/* State of one particle (copies, world frame). */
+typedef struct floe_particle_state {
+    double x[3], v[3], q[4], w[3], f[3], torque[3];
+    double mass, radius;     /* radius: bounding radius */
+    int material, group;
+    floe_motion motion;
+} floe_particle_state;
+int floe_world_get_particle(const floe_world *w, int i, floe_particle_state *out);
+
 /* Energy bookkeeping (J) maintained every step. */
 typedef struct floe_energy {
     double kinetic_trans, kinetic_rot, elastic;   /* current */

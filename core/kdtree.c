@@ -36,7 +36,9 @@ struct floe_kdtree {
     int n, dim, leaf_size;
     int nnodes, node_cap, depth;
     int *vind;        /* tree order -> caller's index */
-    double *x, *y, *z; /* packed coordinates in tree order (z = 0 when dim == 2) */
+    double *c;        /* coordinates in tree order, leaf by leaf: the leaf holding points
+                         [b, e) keeps its x, then its y, then its z values in c[3b .. 3e)
+                         (z = 0 when dim == 2); during the build, xyz per point */
     kd_node *nodes;
     double box_lo[3], box_hi[3]; /* root bounding box */
 };
@@ -65,12 +67,13 @@ static int kd_new_node(floe_kdtree *t)
 
 static void kd_bbox(const floe_kdtree *t, int b, int e, double lo[3], double hi[3])
 {
-    const double *restrict x = t->x, *restrict y = t->y, *restrict z = t->z;
-    double x0 = x[b], x1 = x[b], y0 = y[b], y1 = y[b], z0 = z[b], z1 = z[b];
+    const double *restrict c = t->c;
+    double x0 = c[3 * b], x1 = x0, y0 = c[3 * b + 1], y1 = y0, z0 = c[3 * b + 2], z1 = z0;
     for (int i = b + 1; i < e; i++) {
-        x0 = x[i] < x0 ? x[i] : x0; x1 = x[i] > x1 ? x[i] : x1;
-        y0 = y[i] < y0 ? y[i] : y0; y1 = y[i] > y1 ? y[i] : y1;
-        z0 = z[i] < z0 ? z[i] : z0; z1 = z[i] > z1 ? z[i] : z1;
+        const double x = c[3 * i], y = c[3 * i + 1], z = c[3 * i + 2];
+        x0 = x < x0 ? x : x0; x1 = x > x1 ? x : x1;
+        y0 = y < y0 ? y : y0; y1 = y > y1 ? y : y1;
+        z0 = z < z0 ? z : z0; z1 = z > z1 ? z : z1;
     }
     lo[0] = x0; lo[1] = y0; lo[2] = z0;
     hi[0] = x1; hi[1] = y1; hi[2] = z1;
@@ -78,24 +81,26 @@ static void kd_bbox(const floe_kdtree *t, int b, int e, double lo[3], double hi[
 
 static inline void kd_swap(floe_kdtree *t, int i, int j)
 {
-    double tx = t->x[i], ty = t->y[i], tz = t->z[i];
+    double *a = t->c + 3 * (size_t)i, *b = t->c + 3 * (size_t)j;
+    double tx = a[0], ty = a[1], tz = a[2];
     int ti = t->vind[i];
-    t->x[i] = t->x[j]; t->y[i] = t->y[j]; t->z[i] = t->z[j]; t->vind[i] = t->vind[j];
-    t->x[j] = tx; t->y[j] = ty; t->z[j] = tz; t->vind[j] = ti;
+    a[0] = b[0]; a[1] = b[1]; a[2] = b[2]; t->vind[i] = t->vind[j];
+    b[0] = tx; b[1] = ty; b[2] = tz; t->vind[j] = ti;
 }
 
 /* Moves the points of [b, e) with key < cut (strict) or key <= cut (!strict) to the
  * front; returns the first index of the rest. */
-static int kd_partition(floe_kdtree *t, const double *key, int b, int e, double cut, int strict)
+static int kd_partition(floe_kdtree *t, int f, int b, int e, double cut, int strict)
 {
+    const double *key = t->c + f;
     int i = b, j = e - 1;
     for (;;) {
         if (strict) {
-            while (i <= j && key[i] < cut) i++;
-            while (i <= j && !(key[j] < cut)) j--;
+            while (i <= j && key[3 * (size_t)i] < cut) i++;
+            while (i <= j && !(key[3 * (size_t)j] < cut)) j--;
         } else {
-            while (i <= j && key[i] <= cut) i++;
-            while (i <= j && !(key[j] <= cut)) j--;
+            while (i <= j && key[3 * (size_t)i] <= cut) i++;
+            while (i <= j && !(key[3 * (size_t)j] <= cut)) j--;
         }
         if (i >= j) break;
         kd_swap(t, i, j);
@@ -147,14 +152,13 @@ static int kd_build_nodes(floe_kdtree *t)
             double cut = 0.5 * lo[f] + 0.5 * hi[f];
             if (cut < lo[f]) cut = lo[f];
             if (cut > hi[f]) cut = hi[f];
-            const double *key = f == 0 ? t->x : f == 1 ? t->y : t->z;
             /* planeSplit: [< cut | == cut | > cut], then nanoflann's choice of index */
             int half = count / 2, split;
-            int lim1 = kd_partition(t, key, tk.begin, tk.end, cut, 1) - tk.begin;
+            int lim1 = kd_partition(t, f, tk.begin, tk.end, cut, 1) - tk.begin;
             if (lim1 > half) {
                 split = lim1;
             } else {
-                int lim2 = kd_partition(t, key, tk.begin + lim1, tk.end, cut, 0) - tk.begin;
+                int lim2 = kd_partition(t, f, tk.begin + lim1, tk.end, cut, 0) - tk.begin;
                 split = lim2 < half ? lim2 : half;
             }
             nd->b = f;
@@ -177,6 +181,32 @@ static int kd_build_nodes(floe_kdtree *t)
     return 0;
 }
 
+/* xyz per point -> x..., y..., z... per leaf, in place */
+static int kd_transpose_leaves(floe_kdtree *t)
+{
+    int mmax = 0;
+    for (int id = 0; id < t->nnodes; id++) {
+        const kd_node *nd = &t->nodes[id];
+        if (nd->b < 0 && nd->a - (-1 - nd->b) > mmax) mmax = nd->a - (-1 - nd->b);
+    }
+    double *tmp = malloc((size_t)3 * (size_t)mmax * sizeof *tmp);
+    if (!tmp) return -1;
+    for (int id = 0; id < t->nnodes; id++) {
+        const kd_node *nd = &t->nodes[id];
+        if (nd->b >= 0) continue;
+        const int b = -1 - nd->b, m = nd->a - b;
+        double *L = t->c + 3 * (size_t)b;
+        memcpy(tmp, L, (size_t)3 * (size_t)m * sizeof *tmp);
+        for (int i = 0; i < m; i++) {
+            L[i] = tmp[3 * i];
+            L[m + i] = tmp[3 * i + 1];
+            L[2 * m + i] = tmp[3 * i + 2];
+        }
+    }
+    free(tmp);
+    return 0;
+}
+
 floe_kdtree *floe_kdtree_build(const double *pts, int n, int dim, int leaf_size)
 {
     if (n < 0 || (n > 0 && !pts) || (dim != 2 && dim != 3)) return NULL;
@@ -190,20 +220,18 @@ floe_kdtree *floe_kdtree_build(const double *pts, int n, int dim, int leaf_size)
     size_t bytes = (size_t)n * (3 * sizeof(double) + sizeof(int));
     double *block = malloc(bytes);
     if (!block) { free(t); return NULL; }
-    t->x = block;
-    t->y = block + n;
-    t->z = block + 2 * (size_t)n;
+    t->c = block;
     t->vind = (int *)(block + 3 * (size_t)n);
     for (int i = 0; i < n; i++) {
-        t->x[i] = pts[3 * (size_t)i];
-        t->y[i] = pts[3 * (size_t)i + 1];
-        t->z[i] = dim == 3 ? pts[3 * (size_t)i + 2] : 0.0;
+        t->c[3 * (size_t)i] = pts[3 * (size_t)i];
+        t->c[3 * (size_t)i + 1] = pts[3 * (size_t)i + 1];
+        t->c[3 * (size_t)i + 2] = dim == 3 ? pts[3 * (size_t)i + 2] : 0.0;
         t->vind[i] = i;
     }
     /* a balanced tree has about 2n/leaf nodes; the array grows if the data needs more */
     t->node_cap = 2 * (n / t->leaf_size) + 16;
     t->nodes = malloc((size_t)t->node_cap * sizeof *t->nodes);
-    if (!t->nodes || kd_build_nodes(t) != 0) {
+    if (!t->nodes || kd_build_nodes(t) != 0 || kd_transpose_leaves(t) != 0) {
         floe_kdtree_destroy(t);
         return NULL;
     }
@@ -213,7 +241,7 @@ floe_kdtree *floe_kdtree_build(const double *pts, int n, int dim, int leaf_size)
 void floe_kdtree_destroy(floe_kdtree *t)
 {
     if (!t) return;
-    free(t->x);
+    free(t->c);
     free(t->nodes);
     free(t);
 }
@@ -245,6 +273,18 @@ static double kd_init_dists(const floe_kdtree *t, const double q[3], double d[3]
     return s;
 }
 
+#define KD_CHUNK 32
+
+/* squared distances from q to the points x = L[i], y = L[s + i], z = L[2s + i], i < m */
+static inline void kd_leaf_d2(const double *restrict L, int s, int m, double qx, double qy,
+                              double qz, double *restrict d2)
+{
+    for (int i = 0; i < m; i++) {
+        const double dx = L[i] - qx, dy = L[s + i] - qy, dz = L[2 * s + i] - qz;
+        d2[i] = dx * dx + dy * dy + dz * dz;
+    }
+}
+
 typedef struct kd_rq {
     double q[3], r2, r2s;
     int *out;
@@ -254,7 +294,7 @@ typedef struct kd_rq {
 static int kd_radius_from(const floe_kdtree *t, const kd_rq *rq, kd_frame start, int cnt)
 {
     const kd_node *restrict nodes = t->nodes;
-    const double *restrict X = t->x, *restrict Y = t->y, *restrict Z = t->z;
+    const double *restrict C = t->c;
     const int *restrict vind = t->vind;
     const double qx = rq->q[0], qy = rq->q[1], qz = rq->q[2], r2 = rq->r2, r2s = rq->r2s;
     int *restrict out = rq->out;
@@ -283,21 +323,24 @@ static int kd_radius_from(const floe_kdtree *t, const kd_rq *rq, kd_frame start,
             node = best;
             nd = &nodes[node];
         }
-        const int b = -1 - nd->b, e = nd->a;
-        if (cnt + (e - b) <= cap) {
-            for (int i = b; i < e; i++) {
-                const double dx = X[i] - qx, dy = Y[i] - qy, dz = Z[i] - qz;
-                const double d2 = dx * dx + dy * dy + dz * dz;
-                out[cnt] = vind[i];
-                cnt += d2 <= r2;
-            }
-        } else {
-            for (int i = b; i < e; i++) {
-                const double dx = X[i] - qx, dy = Y[i] - qy, dz = Z[i] - qz;
-                const double d2 = dx * dx + dy * dy + dz * dz;
-                if (d2 <= r2) {
-                    if (cnt < cap) out[cnt] = vind[i];
-                    cnt++;
+        const int b = -1 - nd->b, m = nd->a - b;
+        const double *restrict L = C + 3 * (size_t)b;
+        const int *restrict id = vind + b;
+        for (int i0 = 0; i0 < m; i0 += KD_CHUNK) {
+            const int mm = m - i0 < KD_CHUNK ? m - i0 : KD_CHUNK;
+            double d2[KD_CHUNK];
+            kd_leaf_d2(L + i0, m, mm, qx, qy, qz, d2);
+            if (cnt + mm <= cap) {
+                for (int i = 0; i < mm; i++) {
+                    out[cnt] = id[i0 + i];
+                    cnt += d2[i] <= r2;
+                }
+            } else {
+                for (int i = 0; i < mm; i++) {
+                    if (d2[i] <= r2) {
+                        if (cnt < cap) out[cnt] = id[i0 + i];
+                        cnt++;
+                    }
                 }
             }
         }
@@ -367,11 +410,14 @@ static void kd_visit_from(const floe_kdtree *t, const kd_vq *vq, kd_frame start)
             node = best;
             nd = &nodes[node];
         }
-        const int b = -1 - nd->b, e = nd->a;
-        for (int i = b; i < e; i++) {
-            const double dx = t->x[i] - vq->q[0], dy = t->y[i] - vq->q[1], dz = t->z[i] - vq->q[2];
-            const double d2 = dx * dx + dy * dy + dz * dz;
-            if (d2 <= vq->r2) vq->fn(t->vind[i], d2, vq->user);
+        const int b = -1 - nd->b, m = nd->a - b;
+        const double *L = t->c + 3 * (size_t)b;
+        for (int i0 = 0; i0 < m; i0 += KD_CHUNK) {
+            const int mm = m - i0 < KD_CHUNK ? m - i0 : KD_CHUNK;
+            double d2[KD_CHUNK];
+            kd_leaf_d2(L + i0, m, mm, vq->q[0], vq->q[1], vq->q[2], d2);
+            for (int i = 0; i < mm; i++)
+                if (d2[i] <= vq->r2) vq->fn(t->vind[b + i0 + i], d2[i], vq->user);
         }
         if (sp == 0) break;
         const kd_frame *fr = &stack[--sp];
@@ -438,10 +484,15 @@ static void kd_knn_from(const floe_kdtree *t, kd_kq *kq, kd_frame start)
                 node = best;
                 nd = &nodes[node];
             }
-            const int b = -1 - nd->b, e = nd->a;
-            for (int i = b; i < e; i++) {
-                const double dx = t->x[i] - qx, dy = t->y[i] - qy, dz = t->z[i] - qz;
-                const double d2 = dx * dx + dy * dy + dz * dz;
+            const int b = -1 - nd->b, m = nd->a - b;
+            const double *L = t->c + 3 * (size_t)b;
+            for (int i0 = 0; i0 < m; i0 += KD_CHUNK) {
+              const int mm = m - i0 < KD_CHUNK ? m - i0 : KD_CHUNK;
+              double dc[KD_CHUNK];
+              kd_leaf_d2(L + i0, m, mm, qx, qy, qz, dc);
+              for (int ii = 0; ii < mm; ii++) {
+                const double d2 = dc[ii];
+                const int i = i0 + ii;
                 if (d2 < kq->worst) {
                     int j = kq->cnt < k ? kq->cnt++ : k - 1;
                     while (j > 0 && dist[j - 1] > d2) {
@@ -453,6 +504,7 @@ static void kd_knn_from(const floe_kdtree *t, kd_kq *kq, kd_frame start)
                     idx[j] = t->vind[i];
                     if (kq->cnt == k) kq->worst = dist[k - 1];
                 }
+              }
             }
         }
         if (sp == 0) break;

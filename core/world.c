@@ -265,6 +265,23 @@ int floe_world_particle_count(const floe_world *w) { return w->p.n; }
 double floe_world_critical_dt(floe_world *w) { return w->dt_crit; }
 floe_energy floe_world_energy(const floe_world *w) { return w->energy; }
 
+int floe_world_get_particle(const floe_world *w, int i, floe_particle_state *o) {
+    if (i < 0 || i >= w->p.n) return FLOE_EINVAL;
+    const floe_particles *p = &w->p;
+    memcpy(o->x, p->x + 3 * i, sizeof o->x);
+    memcpy(o->v, p->v + 3 * i, sizeof o->v);
+    memcpy(o->q, p->q + 4 * i, sizeof o->q);
+    memcpy(o->w, p->w + 3 * i, sizeof o->w);
+    memcpy(o->f, p->f + 3 * i, sizeof o->f);
+    memcpy(o->torque, p->t + 3 * i, sizeof o->torque);
+    o->mass = p->mass[i];
+    o->radius = p->radius[i];
+    o->material = p->material[i];
+    o->group = p->group[i];
+    o->motion = (floe_motion)p->motion[i];
+    return FLOE_OK;
+}
+
 double floe_world_energy_balance_error(const floe_world *w) {
     const floe_energy *e = &w->energy;
     double in = e->initial + e->work_body + e->work_boundary;
@@ -453,6 +470,8 @@ int floe_world_prepare(floe_world *w) {
     int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
     if (rc) return floe_world_error(w, rc, "neighbour list build failed (out of memory)");
     w->prepared = 1;
+    w->t0 = w->time;
+    w->step0 = w->step;
     rc = floe_compute_forces(w);
     if (rc) return rc;
     /* energy at start */
@@ -491,8 +510,14 @@ static int observers_call(floe_world *w, int force_all) {
         if (!due) continue;
         if (o->period_time > 0 && o->period_steps <= 0)
             while (o->next_time <= w->time + 1e-9 * w->dt) o->next_time += o->period_time;
+        w->err[0] = 0;
         int rc = o->klass->observe(o, w);
-        if (rc) return floe_world_error(w, rc, "observer %s failed at step %ld", o->klass->name, w->step);
+        if (rc) {
+            char why[sizeof w->err];
+            memcpy(why, w->err, sizeof why);
+            return floe_world_error(w, rc, "observer %s failed at step %ld: %s", o->klass->name, w->step,
+                                    why[0] ? why : floe_strerror(rc));
+        }
     }
     return FLOE_OK;
 }
@@ -604,8 +629,8 @@ int floe_world_step(floe_world *w) {
         if (y0 != buf) free(y0);
         if (rc) return floe_world_error(w, rc, "state object %s failed at step %ld", st->klass->name, w->step);
     }
-    w->time += dt;
     w->step++;
+    w->time = w->t0 + (double)(w->step - w->step0) * dt; /* no drift from repeated sums */
     /* 3. neighbours and forces at t + dt */
     if (floe_nl_needs_rebuild(&w->nl, p)) {
         int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);

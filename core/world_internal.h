@@ -73,6 +73,7 @@ struct floe_world {
     double time, dt, dt_crit;
     double v_expected;        /* relative speed used by the time-step estimate */
     long step;
+    double t0; long step0;   /* time and step at prepare: time = t0 + (step - step0) dt */
     int prepared;
     int finished;
     floe_energy energy;

@@ -1,0 +1,249 @@
+/* main.c - the `floe` command: run a scene file (or the built-in demo), check a scene,
+ * print build information. Scene format: docs/scene-format.md. */
+#include "floe_scene.h"
+#include "world_internal.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+static const char *prog = "floe";
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: %s run [SCENE] [-o OUTDIR] [-q]   run a scene (no SCENE: the built-in demo)\n"
+            "       %s check SCENE                   load and prepare a scene, print its summary\n"
+            "       %s info                          version, build and available models\n"
+            "       %s --help\n"
+            "\n"
+            "  -o OUTDIR   directory for the scene's outputs (default ./out)\n"
+            "  -q          quiet: no summary and no progress line, only errors\n"
+            "\n"
+            "Scene files are YAML, described in docs/scene-format.md.\n",
+            prog, prog, prog, prog);
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void fmt_duration(char *buf, size_t len, double s)
+{
+    if (!(s >= 0) || s > 1e8) { snprintf(buf, len, "--:--"); return; }
+    long t = (long)(s + 0.5);
+    if (t >= 3600) snprintf(buf, len, "%ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
+    else snprintf(buf, len, "%ld:%02ld", t / 60, t % 60);
+}
+
+typedef struct progress {
+    int show;
+    double t0, last;
+    long last_step;
+    int printed;
+} progress;
+
+static int on_progress(const floe_world *w, long step, long nsteps, void *user)
+{
+    progress *p = user;
+    (void)w;
+    if (!p->show) return 0;
+    /* clock_gettime is cheap, but skip it on most steps of large runs anyway */
+    if (step != nsteps && (step & 7)) return 0;
+    double t = now_s();
+    if (t - p->last < 0.25 && step != nsteps) return 0;
+    double el = t - p->t0;
+    double rate = el > 0 ? (double)step / el : 0;
+    char eta[32], elapsed[32];
+    fmt_duration(eta, sizeof eta, rate > 0 ? (double)(nsteps - step) / rate : -1);
+    fmt_duration(elapsed, sizeof elapsed, el);
+    fprintf(stderr, "\r%6.1f%%  step %ld/%ld  %.0f steps/s  elapsed %s  ETA %s   ",
+            nsteps > 0 ? 100.0 * (double)step / (double)nsteps : 100.0, step, nsteps, rate, elapsed,
+            eta);
+    fflush(stderr);
+    p->last = t;
+    p->last_step = step;
+    p->printed = 1;
+    return 0;
+}
+
+static int cmd_run(const char *scene, const char *outdir, int quiet)
+{
+    char err[1024];
+    floe_scene_info info;
+    floe_world *w = NULL;
+    const char *label = scene ? scene : "<demo>";
+    int rc = scene ? floe_scene_load(scene, outdir, &w, &info, err, sizeof err)
+                   : floe_scene_load_string(floe_scene_default_demo(), "<demo>", outdir, &w, &info,
+                                            err, sizeof err);
+    if (rc != FLOE_OK) {
+        fprintf(stderr, "%s: error: %s\n", prog, err);
+        return 1;
+    }
+    if (!quiet) {
+        printf("%s", info.summary);
+        printf("output:     %s\n", outdir);
+        fflush(stdout);
+    }
+    progress pr = {0};
+    pr.show = !quiet && isatty(STDERR_FILENO);
+    long step0 = floe_world_step_count(w);
+    double t_start = now_s();
+    pr.t0 = pr.last = t_start;
+    rc = floe_world_run(w, info.duration, on_progress, &pr);
+    double wall = now_s() - t_start;
+    if (pr.printed) fprintf(stderr, "\r%*s\r", 100, "");
+    long steps = floe_world_step_count(w) - step0;
+    if (rc != FLOE_OK) {
+        fprintf(stderr, "%s: error: %s: %s (t = %g s, step %ld)\n", prog, label,
+                floe_world_last_error(w), floe_world_time(w), floe_world_step_count(w));
+        fprintf(stderr, "%s: outputs written so far are in %s\n", prog, outdir);
+        floe_world_destroy(w);
+        return 1;
+    }
+    if (!quiet) {
+        int n = info.nparticles;
+        double ps = wall > 0 ? (double)n * (double)steps / wall : 0;
+        printf("\nrun finished\n");
+        printf("  steps:              %ld (dt %.4g s)\n", steps, floe_world_dt(w));
+        printf("  simulated time:     %.6g s\n", floe_world_time(w));
+        printf("  wall time:          %.3f s\n", wall);
+        printf("  particle-steps/s:   %.3g (%d particles)\n", ps, n);
+        printf("  contacts (current): %d\n", w->ncontacts);
+        printf("  neighbour rebuilds: %ld\n", w->nl.rebuilds);
+        printf("  energy balance err: %.3g (relative)\n", floe_world_energy_balance_error(w));
+        printf("  outputs in:         %s\n", outdir);
+    }
+    floe_world_destroy(w);
+    return 0;
+}
+
+static int cmd_check(const char *scene)
+{
+    char err[1024];
+    floe_scene_info info;
+    floe_world *w = NULL;
+    int rc = floe_scene_load_ex(scene, NULL, NULL, 0, &w, &info, err, sizeof err);
+    if (rc != FLOE_OK) {
+        fprintf(stderr, "%s: error: %s\n", prog, err);
+        return 1;
+    }
+    printf("%s", info.summary);
+    printf("ok: %s\n", scene);
+    floe_world_destroy(w);
+    return 0;
+}
+
+static int cmd_info(void)
+{
+    printf("floe %s - particle mechanics (DEM)\n", FLOE_VERSION_STRING);
+#if defined(FLOE_BUILD_TYPE)
+    printf("build type:  %s\n", FLOE_BUILD_TYPE);
+#else
+    printf("build type:  %s%s\n",
+#if defined(__OPTIMIZE__)
+           "optimised",
+#else
+           "not optimised (debug)",
+#endif
+#if defined(NDEBUG)
+           ", assertions off"
+#else
+           ", assertions on"
+#endif
+    );
+#endif
+#if defined(__VERSION__)
+    printf("compiler:    %s\n", __VERSION__);
+#endif
+    printf("features:    CGAL: no, assimp: no, OpenMP: no\n");
+    printf("geometries:  %s, %s, %s (walls), %s (SDF callback)\n", floe_sphere_class.name,
+           floe_box_class.name, floe_plane_class.name, floe_user_shape_class.name);
+    printf("contact laws: %s (scene models: linear, viscoelastic), %s (scene model: "
+           "hertz_mindlin)\n", floe_linear_law_class.name, floe_hertz_mindlin_law_class.name);
+    printf("packings:    lattice, hexagonal, random\n");
+    printf("outputs:     vtk, csv, energy, stress, tracker\n");
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    const char *cmd = argv[1];
+    if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
+        usage(stdout);
+        return 0;
+    }
+    if (!strcmp(cmd, "--version")) {
+        printf("floe %s\n", FLOE_VERSION_STRING);
+        return 0;
+    }
+    if (!strcmp(cmd, "info")) {
+        if (argc != 2) {
+            fprintf(stderr, "%s: info takes no arguments\n", prog);
+            usage(stderr);
+            return 2;
+        }
+        return cmd_info();
+    }
+    if (!strcmp(cmd, "check")) {
+        if (argc != 3 || argv[2][0] == '-') {
+            if (argc == 3 && (!strcmp(argv[2], "-h") || !strcmp(argv[2], "--help"))) {
+                usage(stdout);
+                return 0;
+            }
+            fprintf(stderr, "%s: check needs exactly one SCENE\n", prog);
+            usage(stderr);
+            return 2;
+        }
+        return cmd_check(argv[2]);
+    }
+    if (!strcmp(cmd, "run")) {
+        const char *scene = NULL, *outdir = "out";
+        int quiet = 0;
+        for (int i = 2; i < argc; i++) {
+            const char *a = argv[i];
+            if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
+                if (i + 1 >= argc) {
+                    fprintf(stderr, "%s: %s needs a directory\n", prog, a);
+                    usage(stderr);
+                    return 2;
+                }
+                outdir = argv[++i];
+            } else if (!strncmp(a, "-o", 2) && a[2]) {
+                outdir = a + 2;
+            } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
+                quiet = 1;
+            } else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+                usage(stdout);
+                return 0;
+            } else if (a[0] == '-' && a[1]) {
+                fprintf(stderr, "%s: unknown option '%s'\n", prog, a);
+                usage(stderr);
+                return 2;
+            } else if (!scene) {
+                scene = a;
+            } else {
+                fprintf(stderr, "%s: run takes one SCENE (got '%s' and '%s')\n", prog, scene, a);
+                usage(stderr);
+                return 2;
+            }
+        }
+        if (!outdir[0]) {
+            fprintf(stderr, "%s: empty output directory\n", prog);
+            return 2;
+        }
+        return cmd_run(scene, outdir, quiet);
+    }
+    fprintf(stderr, "%s: unknown command '%s'\n", prog, cmd);
+    usage(stderr);
+    return 2;
+}

@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Install dependencies, build (warnings are errors), and run the whole test suite with
+# ctest. FLOE_SANITIZE=1 builds into build-asan with AddressSanitizer + UBSan.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/install-deps.sh
+if [[ "${FLOE_SANITIZE:-0}" == 1 ]]; then
+  dir=build-asan; flags=(-DFLOE_SANITIZE=ON -DFLOE_BUILD_BENCH=OFF)
+else
+  dir=build; flags=()
+fi
+cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFLOE_WERROR=ON "${flags[@]}"
+cmake --build "$dir" -j"$(nproc)"
+ctest --test-dir "$dir" --output-on-failure -j"$(nproc)"
