@@ -21,6 +21,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+#if defined(__AVX512F__) && defined(__AVX512VL__)
+#include <immintrin.h>
+#define KD_AVX512 1
+#else
+#define KD_AVX512 0
+#endif
+
 #define KD_DEFAULT_LEAF 16
 #define KD_STACK 64              /* explicit search stack; deeper trees recurse */
 #define KD_SLACK (1.0 + 1e-12)   /* conservative pruning, see the file comment */
@@ -299,6 +306,10 @@ static int kd_radius_from(const floe_kdtree *t, const kd_rq *rq, kd_frame start,
     const double qx = rq->q[0], qy = rq->q[1], qz = rq->q[2], r2 = rq->r2, r2s = rq->r2s;
     int *restrict out = rq->out;
     const int cap = rq->cap;
+#if KD_AVX512
+    const __m512d vqx = _mm512_set1_pd(qx), vqy = _mm512_set1_pd(qy), vqz = _mm512_set1_pd(qz);
+    const __m512d vr2 = _mm512_set1_pd(r2);
+#endif
     kd_frame stack[KD_STACK];
     int sp = 0;
     int node = start.node;
@@ -326,6 +337,24 @@ static int kd_radius_from(const floe_kdtree *t, const kd_rq *rq, kd_frame start,
         const int b = -1 - nd->b, m = nd->a - b;
         const double *restrict L = C + 3 * (size_t)b;
         const int *restrict id = vind + b;
+#if KD_AVX512
+        if (cnt + ((m + 7) & ~7) <= cap) {
+            /* 8 points at a time; hits are compressed into out with full-width stores */
+            for (int i = 0; i < m; i += 8) {
+                const __mmask8 lm = m - i >= 8 ? (__mmask8)0xff : (__mmask8)((1u << (m - i)) - 1);
+                const __m512d dx = _mm512_sub_pd(_mm512_maskz_loadu_pd(lm, L + i), vqx);
+                const __m512d dy = _mm512_sub_pd(_mm512_maskz_loadu_pd(lm, L + m + i), vqy);
+                const __m512d dz = _mm512_sub_pd(_mm512_maskz_loadu_pd(lm, L + 2 * m + i), vqz);
+                const __m512d d2 = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)),
+                                                 _mm512_mul_pd(dz, dz));
+                const __mmask8 hit = _mm512_mask_cmp_pd_mask(lm, d2, vr2, _CMP_LE_OQ);
+                const __m256i ids = _mm256_maskz_loadu_epi32(lm, id + i);
+                _mm256_storeu_si256((__m256i *)(out + cnt), _mm256_maskz_compress_epi32(hit, ids));
+                cnt += __builtin_popcount((unsigned)hit);
+            }
+            goto next;
+        }
+#endif
         for (int i0 = 0; i0 < m; i0 += KD_CHUNK) {
             const int mm = m - i0 < KD_CHUNK ? m - i0 : KD_CHUNK;
             double d2[KD_CHUNK];
@@ -344,6 +373,9 @@ static int kd_radius_from(const floe_kdtree *t, const kd_rq *rq, kd_frame start,
                 }
             }
         }
+#if KD_AVX512
+    next:
+#endif
         if (sp == 0) break;
         const kd_frame *fr = &stack[--sp];
         node = fr->node;
@@ -501,7 +533,7 @@ static void kd_knn_from(const floe_kdtree *t, kd_kq *kq, kd_frame start)
                         j--;
                     }
                     dist[j] = d2;
-                    idx[j] = t->vind[i];
+                    idx[j] = t->vind[b + i];
                     if (kq->cnt == k) kq->worst = dist[k - 1];
                 }
               }

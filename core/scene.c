@@ -140,6 +140,11 @@ static long sc_pos(const sc *s, struct fy_node *n)
                               s->text[q] == '\r'))
                 q--;
             if (q >= 0 && s->text[q] == open) pos = q;
+        } else if (pos > 0 && pos <= s->textlen && fy_node_is_sequence(n)) {
+            /* block sequence: the '-' of its first entry */
+            long q = pos - 1;
+            while (q >= 0 && (s->text[q] == ' ' || s->text[q] == '\t')) q--;
+            if (q >= 0 && s->text[q] == '-') pos = q;
         }
         return pos;
     }
@@ -560,7 +565,7 @@ static int sc_parse_materials(sc *s, struct fy_node *seq, struct fy_node *key)
         char what[32];
         snprintf(what, sizeof what, "materials[%d]", i);
         sc_map m;
-        FLOE_TRY(sc_map_open(s, e, key, what, keys, &m));
+        FLOE_TRY(sc_map_open(s, e, e, what, keys, &m));
         sc_mat *mt = &s->mats[i];
         const char *name;
         struct fy_node *nat;
@@ -616,7 +621,7 @@ static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
         char what[32];
         snprintf(what, sizeof what, "laws[%d]", i);
         sc_map m;
-        FLOE_TRY(sc_map_open(s, e, key, what, keys_any, &m));
+        FLOE_TRY(sc_map_open(s, e, e, what, keys_any, &m));
         int model;
         FLOE_TRY(sc_enum(s, &m, "model", sc_models, -1, &model));
         /* re-check the keys against those valid for this model */
@@ -650,9 +655,15 @@ static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
         struct fy_node *mv = sc_get(&m, "materials", &mk);
         if (!mv) return sc_fail(s, FLOE_EPARSE, e, "%s.materials is required ([a, b])", what);
         if (mv == mk || !fy_node_is_sequence(mv) || fy_node_sequence_item_count(mv) != 2)
+        {
+            char got[48];
+            if (mv != mk && fy_node_is_sequence(mv))
+                snprintf(got, sizeof got, "%d", fy_node_sequence_item_count(mv));
+            else
+                snprintf(got, sizeof got, "%s", mv == mk ? "nothing" : sc_type_name(mv));
             return sc_fail(s, FLOE_EPARSE, mv == mk ? mk : mv,
-                           "%s.materials: expected a list of 2 material names, got %s", what,
-                           fy_node_is_sequence(mv) ? "a list of another length" : sc_type_name(mv));
+                           "%s.materials: expected a list of 2 material names, got %s", what, got);
+        }
         int ab[2];
         for (int j = 0; j < 2; j++) {
             struct fy_node *c = fy_node_sequence_get_by_index(mv, j);
@@ -741,7 +752,7 @@ static int sc_parse_walls(sc *s, struct fy_node *seq, struct fy_node *key)
         char what[32];
         snprintf(what, sizeof what, "walls[%d]", i);
         sc_map m;
-        FLOE_TRY(sc_map_open(s, e, key, what, keys, &m));
+        FLOE_TRY(sc_map_open(s, e, e, what, keys, &m));
         double p[3], n[3], v[3];
         FLOE_TRY(sc_vec(s, &m, "point", 1, NULL, p));
         FLOE_TRY(sc_vec(s, &m, "normal", 1, NULL, n));
@@ -1278,7 +1289,7 @@ static int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key)
         char what[32];
         snprintf(what, sizeof what, "bodies[%d]", entry);
         sc_map m;
-        FLOE_TRY(sc_map_open(s, e, key, what, keys_all, &m));
+        FLOE_TRY(sc_map_open(s, e, e, what, keys_all, &m));
         int packing;
         FLOE_TRY(sc_enum(s, &m, "packing", sc_packings, 3, &packing));
         const char *const *valid = packing == 3 ? keys_single
@@ -1404,14 +1415,14 @@ static int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, con
                             int with_outputs)
 {
     static const char *const keys_by_type[5][8] = {
-        {"type", "every", "interval", "prefix", NULL},
+        {"type", "every", "interval", "prefix", "ascii", NULL},
         {"type", "every", "interval", "file", NULL},
         {"type", "every", "interval", "file", NULL},
         {"type", "every", "interval", "file", "group", "volume", NULL},
-        {"type", "every", "interval", "file", "particles", NULL},
+        {"type", "every", "interval", "file", "particles", "walls", NULL},
     };
-    static const char *const keys_all[] = {"type", "every", "interval", "prefix", "file", "group",
-                                           "volume", "particles", NULL};
+    static const char *const keys_all[] = {"type", "every", "interval", "prefix", "ascii", "file",
+                                           "group", "volume", "particles", "walls", NULL};
     static const char *const defaults[] = {"frame", "particles.csv", "energy.csv", "stress.csv",
                                            "track.csv"};
     if (!seq) return FLOE_OK;
@@ -1431,7 +1442,7 @@ static int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, con
         char what[32];
         snprintf(what, sizeof what, "outputs[%d]", i);
         sc_map m;
-        FLOE_TRY(sc_map_open(s, e, key, what, keys_all, &m));
+        FLOE_TRY(sc_map_open(s, e, e, what, keys_all, &m));
         int type;
         FLOE_TRY(sc_enum(s, &m, "type", sc_output_types, -1, &type));
         {
@@ -1478,6 +1489,8 @@ static int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, con
 
         long group = -1;
         double volume = 0;
+        int ascii = 0;
+        if (type == 0) FLOE_TRY(sc_bool(s, &m, "ascii", 0, &ascii));
         int *ids = NULL, nids = 0;
         if (type == 3) {
             struct fy_node *gk;
@@ -1495,36 +1508,49 @@ static int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, con
             if (!(volume >= 0)) return sc_range(s, &m, "volume", ">= 0 (0 = bounding box)", volume);
         }
         if (type == 4) {
-            struct fy_node *pk;
-            struct fy_node *pv = sc_get(&m, "particles", &pk);
-            char f[64];
-            snprintf(f, sizeof f, "%s.particles", what);
-            if (!pv) return sc_fail(s, FLOE_EPARSE, e, "%s is required (a list of particle ids)", f);
-            if (pv == pk || !fy_node_is_sequence(pv) || fy_node_sequence_item_count(pv) == 0)
-                return sc_fail(s, FLOE_EPARSE, pv == pk ? pk : pv,
-                               "%s: expected a non-empty list of particle ids", f);
-            nids = fy_node_sequence_item_count(pv);
-            ids = malloc((size_t)nids * sizeof *ids);
-            if (!ids) return sc_fail(s, FLOE_ENOMEM, pv, "out of memory");
-            for (int j = 0; j < nids; j++) {
-                struct fy_node *c = fy_node_sequence_get_by_index(pv, j);
-                char f2[80];
-                snprintf(f2, sizeof f2, "%s[%d]", f, j);
-                long id = -1;
-                int rc = sc_node_long(s, c, NULL, f2, &id);
-                if (rc == FLOE_OK && (id < 0 || id >= s->nparticles))
-                    rc = sc_fail(s, FLOE_EINVAL, c, "%s: particle %ld does not exist (the scene "
-                                 "has %d particles, ids 0..%d)", f2, id, s->nparticles,
-                                 s->nparticles - 1);
-                if (rc != FLOE_OK) { free(ids); return rc; }
-                ids[j] = (int)id;
+            /* particles: body particle ids; walls: wall indices (world id nparticles + i) */
+            static const char *const lists[2] = {"particles", "walls"};
+            struct fy_node *lv[2], *lk[2];
+            int cnt[2] = {0, 0};
+            for (int l = 0; l < 2; l++) {
+                lv[l] = sc_get(&m, lists[l], &lk[l]);
+                if (!lv[l]) continue;
+                if (lv[l] == lk[l] || !fy_node_is_sequence(lv[l]) ||
+                    fy_node_sequence_item_count(lv[l]) == 0)
+                    return sc_fail(s, FLOE_EPARSE, lv[l] == lk[l] ? lk[l] : lv[l],
+                                   "%s.%s: expected a non-empty list of %s", what, lists[l],
+                                   l ? "wall indices" : "particle ids");
+                cnt[l] = fy_node_sequence_item_count(lv[l]);
             }
+            if (!lv[0] && !lv[1])
+                return sc_fail(s, FLOE_EPARSE, e, "%s: give particles (a list of particle ids) "
+                               "and/or walls (a list of wall indices)", what);
+            ids = malloc((size_t)(cnt[0] + cnt[1]) * sizeof *ids);
+            if (!ids) return sc_fail(s, FLOE_ENOMEM, e, "out of memory");
+            for (int l = 0; l < 2; l++)
+                for (int j = 0; j < cnt[l]; j++) {
+                    struct fy_node *c = fy_node_sequence_get_by_index(lv[l], j);
+                    char f2[96];
+                    snprintf(f2, sizeof f2, "%s.%s[%d]", what, lists[l], j);
+                    long id = -1;
+                    long lim = l ? s->nwalls : s->nparticles;
+                    int rc = sc_node_long(s, c, NULL, f2, &id);
+                    if (rc == FLOE_OK && (id < 0 || id >= lim))
+                        rc = sc_fail(s, FLOE_EINVAL, c, "%s: %s %ld does not exist (the scene has "
+                                     "%ld %s, 0..%ld)", f2, l ? "wall" : "particle", id, lim,
+                                     l ? "walls" : "particles", lim - 1);
+                    if (rc != FLOE_OK) { free(ids); return rc; }
+                    ids[nids++] = (int)(l ? s->nparticles + id : id);
+                }
         }
         if (with_outputs) {
             char oerr[512] = "";
             floe_observer *obs = NULL;
             switch (type) {
-            case 0: obs = floe_vtk_writer_create(outdir, name, oerr, sizeof oerr); break;
+            case 0:
+                obs = floe_vtk_writer_create(outdir, name, oerr, sizeof oerr);
+                if (obs && ascii) floe_vtk_writer_set_ascii(obs, 1);
+                break;
             case 1: obs = floe_csv_writer_create(o->target, oerr, sizeof oerr); break;
             case 2: obs = floe_energy_tracker_create(o->target, oerr, sizeof oerr); break;
             case 3: obs = floe_collection_tracker_create(o->target, (int)group, volume, oerr,

@@ -88,7 +88,7 @@ floe_world *floe_world_create(const floe_world_def *def, char *err, size_t errle
 static void particles_free(floe_particles *p) {
     free(p->x); free(p->v); free(p->q); free(p->w); free(p->L); free(p->f); free(p->t);
     free(p->mass); free(p->inv_mass); free(p->inertia); free(p->radius); free(p->geom);
-    free(p->material); free(p->group); free(p->motion); free(p->kind);
+    free(p->material); free(p->group); free(p->motion); free(p->kind); free(p->iso);
 }
 
 void floe_world_destroy(floe_world *w) {
@@ -165,7 +165,7 @@ static int particles_reserve(floe_particles *p, int need) {
 #define RE(field, k) do { void *t_ = realloc(p->field, (size_t)nc * (k) * sizeof *p->field); if (!t_) return FLOE_ENOMEM; p->field = t_; } while (0)
     RE(x, 3); RE(v, 3); RE(q, 4); RE(w, 3); RE(L, 3); RE(f, 3); RE(t, 3);
     RE(mass, 1); RE(inv_mass, 1); RE(inertia, 3); RE(radius, 1); RE(geom, 1);
-    RE(material, 1); RE(group, 1); RE(motion, 1); RE(kind, 1);
+    RE(material, 1); RE(group, 1); RE(motion, 1); RE(kind, 1); RE(iso, 1);
 #undef RE
     p->cap = nc;
     return FLOE_OK;
@@ -199,6 +199,7 @@ int floe_world_add_particle(floe_world *w, const floe_particle_def *d) {
     p->group[i] = d->group;
     p->motion[i] = (unsigned char)d->motion;
     p->kind[i] = (unsigned char)g->klass->kind;
+    p->iso[i] = 0;
     p->radius[i] = floe_geometry_bounding_radius(g);
     p->mass[i] = d->mass; /* resolved at prepare */
     w->prepared = 0;
@@ -415,6 +416,13 @@ int floe_world_prepare(floe_world *w) {
         if (!(p->mass[i] > 0) || !isfinite(p->mass[i]))
             return floe_world_error(w, FLOE_EINVAL, "particle %d: mass must be > 0 and finite (got %g)", i, p->mass[i]);
         memcpy(p->inertia + 3 * i, mp.inertia, sizeof mp.inertia);
+        {
+            const double *I = mp.inertia;
+            double imax = fmax(I[0], fmax(I[1], I[2])), imin = fmin(I[0], fmin(I[1], I[2]));
+            /* 2D rotates about z only, so only I_zz matters: treat as isotropic with I_zz */
+            p->iso[i] = w->def.dim == 2 || imax - imin <= 1e-12 * imax;
+            if (w->def.dim == 2) p->inertia[3 * i] = p->inertia[3 * i + 1] = I[2];
+        }
         p->inv_mass[i] = p->motion[i] == FLOE_FREE ? 1.0 / p->mass[i] : 0;
         L_from_omega(p->q + 4 * i, p->inertia + 3 * i, p->w + 3 * i, p->L + 3 * i);
     }
@@ -596,7 +604,19 @@ int floe_world_step(floe_world *w) {
         double *L = p->L + 3 * i, *om = p->w + 3 * i;
         const double *I = p->inertia + 3 * i;
         floe_v3_axpy(L, h, p->t + 3 * i);
-        if (floe_v3_dot(L, L) > 0) {
+        if (p->iso[i]) {
+            /* isotropic body (sphere): omega = L / I is frame-independent; the orientation
+             * follows by q <- exp(dt omega / 2) q, here to third order without trig */
+            double inv = 1.0 / I[0];
+            for (int k = 0; k < 3; k++) om[k] = L[k] * inv;
+            double th[3] = {h * om[0], h * om[1], h * om[2]}, t2 = floe_v3_dot(th, th);
+            if (t2 > 0) {
+                double c = 1 - 0.5 * t2, dq[4] = {c, th[0], th[1], th[2]}, qn[4];
+                floe_q_mul(qn, dq, q);
+                floe_q_normalize(qn);
+                memcpy(q, qn, sizeof qn);
+            }
+        } else if (floe_v3_dot(L, L) > 0) {
             double qm[4], omm[3];
             omega_from_L(q, I, L, omm);
             q_advance(qm, q, omm, h);
@@ -649,18 +669,24 @@ int floe_world_step(floe_world *w) {
         }
         double *v = p->v + 3 * i, *L = p->L + 3 * i;
         double im = p->inv_mass[i];
+        /* the drift of this step was dt * v_half: a particle that moved more than half its
+         * radius, or whose state is not finite (NaN fails every comparison), is unstable */
+        double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * dt * dt, lim = 0.5 * p->radius[i];
         for (int k = 0; k < 3; k++) v[k] += h * im * p->f[3 * i + k];
         floe_v3_axpy(L, h, p->t + 3 * i);
-        omega_from_L(p->q + 4 * i, p->inertia + 3 * i, L, p->w + 3 * i);
-        kt += 0.5 * p->mass[i] * floe_v3_dot(v, v);
-        kr += 0.5 * floe_v3_dot(L, p->w + 3 * i);
-    }
-    for (int i = 0; i < n; i++) {
-        if (p->motion[i] != FLOE_FREE) continue;
-        double xold[3];
-        for (int k = 0; k < 3; k++) xold[k] = p->x[3 * i + k] - dt * (p->v[3 * i + k] - h * p->inv_mass[i] * p->f[3 * i + k]);
-        int rc = check_particle(w, i, xold);
-        if (rc) return rc;
+        if (p->iso[i]) {
+            double inv = 1.0 / p->inertia[3 * i];
+            for (int k = 0; k < 3; k++) p->w[3 * i + k] = L[k] * inv;
+        } else omega_from_L(p->q + 4 * i, p->inertia + 3 * i, L, p->w + 3 * i);
+        double ke = 0.5 * p->mass[i] * floe_v3_dot(v, v), kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
+        kt += ke;
+        kr += kre;
+        if (!(d2 <= lim * lim) || !(ke + kre < INFINITY) || !(fabs(p->x[3 * i]) + fabs(p->x[3 * i + 1]) + fabs(p->x[3 * i + 2]) < INFINITY)) {
+            double xold[3];
+            for (int k = 0; k < 3; k++) xold[k] = p->x[3 * i + k] - dt * (v[k] - h * im * p->f[3 * i + k]);
+            int rc = check_particle(w, i, xold);
+            if (rc) return rc;
+        }
     }
     w->energy.kinetic_trans = kt;
     w->energy.kinetic_rot = kr;

@@ -27,6 +27,7 @@ typedef struct floe_particles {
     int *group;       /* n user tag ("body" in outputs) */
     unsigned char *motion; /* n floe_motion */
     unsigned char *kind;   /* n geometry kind (cached) */
+    unsigned char *iso;    /* n 1 = isotropic inertia (spheres; every body in 2D) */
 } floe_particles;
 
 typedef struct floe_motion_cb { int particle; floe_motion_fn fn; void *user; } floe_motion_cb;

@@ -1,0 +1,132 @@
+#!/usr/bin/env python3
+"""test_cli.py - the floe command line (cli/main.c).
+
+usage: python3 tests/test_cli.py <floe_cli_path> <tests_dir>
+
+Checks: `floe check` on a good scene (exit 0, summary with the critical dt) and on bad ones
+(exit 1, "file:line:col: message" on stderr); `floe info` (exit 0, version); bad usage
+(exit 2, usage on stderr); `floe run` of a tiny scene into a temporary directory (exit 0,
+end-of-run summary, every output file written and non-empty); a run that fails part-way
+(exit 1, message, outputs written so far kept). Prints "N passed, N failed".
+"""
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+
+passed = 0
+failed = 0
+
+
+def check(cond, msg):
+    global passed, failed
+    if cond:
+        passed += 1
+    else:
+        failed += 1
+        print("FAIL: " + msg, file=sys.stderr)
+    return cond
+
+
+def run(args, cwd=None, timeout=300):
+    p = subprocess.run(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=cwd,
+                       timeout=timeout, universal_newlines=True)
+    return p.returncode, p.stdout, p.stderr
+
+
+def main():
+    if len(sys.argv) != 3:
+        print("usage: test_cli.py <floe_cli_path> <tests_dir>", file=sys.stderr)
+        sys.exit(2)
+    cli, tests = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
+    scenes = os.path.join(tests, "scenes")
+    if not check(os.access(cli, os.X_OK), "floe CLI not found at %s" % cli):
+        print("test_cli: %d passed, %d failed" % (passed, failed))
+        sys.exit(1)
+    tmp = tempfile.mkdtemp(prefix="floe_test_cli_")
+    try:
+        # check: good scene
+        good = os.path.join(scenes, "valid_packings.yaml")
+        rc, out, err = run([cli, "check", good], cwd=tmp)
+        check(rc == 0, "check good scene: exit %d, stderr %s" % (rc, err))
+        check(re.search(r"critical dt estimate [0-9.e+-]+ s", out) is not None,
+              "check prints the critical dt:\n" + out)
+        check("particles:  74" in out, "check prints the particle count:\n" + out)
+        check(not os.path.exists(os.path.join(tmp, "out")), "check must not create outputs")
+
+        # check: bad scenes -> exit 1 and file:line:col
+        for name, loc, words in [("bad_key.yaml", "10:5", ["frition", "did you mean 'friction'"]),
+                                 ("bad_unclosed.yaml", "11:15", ["never closed"]),
+                                 ("bad_indent.yaml", "10:4", ["YAML"]),
+                                 ("bad_missing_law.yaml", "13:50", ["no contact law"])]:
+            path = os.path.join(scenes, name)
+            rc, out, err = run([cli, "check", path], cwd=tmp)
+            check(rc == 1, "check %s: exit %d, expected 1" % (name, rc))
+            check(("%s:%s:" % (path, loc)) in err, "check %s: no '%s:%s:' in %r" % (name, path, loc, err))
+            for w in words:
+                check(w in err, "check %s: %r not in %r" % (name, w, err))
+        rc, out, err = run([cli, "check", os.path.join(tmp, "missing.yaml")], cwd=tmp)
+        check(rc == 1 and "missing.yaml" in err, "check of a missing file: exit %d, %r" % (rc, err))
+
+        # info
+        rc, out, err = run([cli, "info"], cwd=tmp)
+        check(rc == 0, "info: exit %d" % rc)
+        check(re.search(r"floe \d+\.\d+\.\d+", out) is not None, "info prints the version:\n" + out)
+        for w in ("OpenMP", "CGAL", "hertz_mindlin", "sphere"):
+            check(w in out, "info lacks %r:\n%s" % (w, out))
+
+        # usage errors
+        for args in ([], ["frobnicate"], ["run", "-x"], ["check"], ["run", "a.yaml", "b.yaml"],
+                     ["run", "-o"]):
+            rc, out, err = run([cli] + args, cwd=tmp)
+            check(rc == 2 and "usage" in err, "floe %s: exit %d, stderr %r" % (" ".join(args), rc, err))
+        rc, out, err = run([cli, "--help"], cwd=tmp)
+        check(rc == 0 and "usage" in out, "--help: exit %d" % rc)
+
+        # run a tiny scene
+        outdir = os.path.join(tmp, "tiny")
+        rc, out, err = run([cli, "run", os.path.join(scenes, "tiny_run.yaml"), "-o", outdir], cwd=tmp)
+        check(rc == 0, "run tiny: exit %d\n%s\n%s" % (rc, out, err))
+        for w in ("steps:", "simulated time:", "wall time:", "particle-steps/s:", "contacts",
+                  "neighbour rebuilds:", "energy balance"):
+            check(w in out, "run summary lacks %r:\n%s" % (w, out))
+        m = re.search(r"steps:\s+(\d+)", out.split("run finished")[-1])
+        check(m is not None and int(m.group(1)) == 500, "run: 500 steps expected:\n" + out)
+        for f in ("frame.pvd", "frame_000000.vtu", "particles.csv", "energy.csv", "stress.csv",
+                  "track.csv"):
+            p = os.path.join(outdir, f)
+            check(os.path.isfile(p) and os.path.getsize(p) > 0, "run: output %s missing or empty" % f)
+        if os.path.isfile(os.path.join(outdir, "track.csv")):
+            with open(os.path.join(outdir, "track.csv")) as fh:
+                rows = fh.read().splitlines()
+            ids = {r.split(",")[1] for r in rows[1:]}
+            check(ids == {"0", "7"}, "tracker ids %s, expected {0, 7}" % ids)
+            check(len(rows) - 1 >= 2 * 50, "tracker rows %d (every 10 of 500 steps, 2 ids)" % (len(rows) - 1))
+        # -q prints nothing on success
+        rc, out, err = run([cli, "run", os.path.join(scenes, "tiny_run.yaml"), "-q", "-o",
+                            os.path.join(tmp, "quiet")], cwd=tmp)
+        check(rc == 0 and out == "" and err == "", "run -q: exit %d, out %r, err %r" % (rc, out, err))
+
+        # a run that blows up: exit 1, message, outputs so far kept
+        bad = os.path.join(tmp, "unstable.yaml")
+        with open(os.path.join(scenes, "tiny_run.yaml")) as fh:
+            text = fh.read()
+        text = text.replace("{duration: 0.005, dt: 1.0e-5}",
+                            "{duration: 0.05, dt: 5.0e-4, allow_unstable_dt: true}")
+        with open(bad, "w") as fh:
+            fh.write(text)
+        outbad = os.path.join(tmp, "unstable")
+        rc, out, err = run([cli, "run", bad, "-o", outbad], cwd=tmp)
+        check(rc == 1, "unstable run: exit %d, expected 1\n%s\n%s" % (rc, out, err))
+        check("unstable" in err, "unstable run: message %r" % err)
+        check(os.path.isfile(os.path.join(outbad, "energy.csv")), "unstable run: outputs kept")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    print("test_cli: %d passed, %d failed" % (passed, failed))
+    sys.exit(1 if failed else 0)
+
+
+if __name__ == "__main__":
+    main()
