@@ -317,21 +317,23 @@ static int kd_radius_from(const floe_kdtree *t, const kd_rq *rq, kd_frame start,
     for (;;) {
         const kd_node *nd = &nodes[node];
         while (nd->b >= 0) {
+            /* branch-free descent: the near child is next, the far one is pushed
+             * unconditionally and kept only if its box is within reach */
             const int f = nd->b;
             const double v = rq->q[f];
             const double diff1 = v - nd->lo, diff2 = v - nd->hi;
-            int best, other;
-            double cut;
-            if (diff1 + diff2 < 0) { best = node + 1; other = nd->a; cut = diff2 * diff2; }
-            else { best = nd->a; other = node + 1; cut = diff1 * diff1; }
+            const int go_left = diff1 + diff2 < 0;
+            const int left = node + 1, right = nd->a;
+            const double cut = go_left ? diff2 * diff2 : diff1 * diff1;
             const double nm = mind + cut - dd[f];
-            if (nm <= r2s) {
-                kd_frame fr = {other, nm, {dd[0], dd[1], dd[2]}};
-                fr.d[f] = cut;
-                if (sp < KD_STACK) stack[sp++] = fr;
-                else cnt = kd_radius_from(t, rq, fr, cnt);
-            }
-            node = best;
+            kd_frame *fr = &stack[sp];
+            fr->node = go_left ? right : left;
+            fr->mind = nm;
+            fr->d[0] = dd[0]; fr->d[1] = dd[1]; fr->d[2] = dd[2];
+            fr->d[f] = cut;
+            sp += nm <= r2s;
+            if (sp == KD_STACK) cnt = kd_radius_from(t, rq, stack[--sp], cnt);
+            node = go_left ? left : right;
             nd = &nodes[node];
         }
         const int b = -1 - nd->b, m = nd->a - b;

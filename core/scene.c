@@ -864,7 +864,10 @@ static int sc_add_geometry(sc *s, const sc_shape *sh, struct fy_node *at, const 
     floe_geometry *g = sc_make_geometry(sh);
     if (!g) return sc_fail(s, FLOE_ENOMEM, at, "%s: could not create the shape", what);
     int r = floe_world_add_geometry(s->w, g);
-    if (r < 0) return sc_fail(s, -r, at, "%s: %s", what, floe_world_last_error(s->w));
+    if (r < 0) {
+        floe_geometry_destroy(g);
+        return sc_fail(s, -r, at, "%s: %s", what, floe_world_last_error(s->w));
+    }
     *gi = r;
     return FLOE_OK;
 }
@@ -1565,9 +1568,11 @@ static int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, con
             obs->period_steps = o->every;
             obs->period_time = o->every ? 0.0 : o->interval;
             int rc = floe_world_add_observer(s->w, obs);
-            if (rc != FLOE_OK)
+            if (rc != FLOE_OK) {
+                floe_observer_destroy(obs);
                 return sc_fail(s, rc < 0 ? -rc : rc, e, "%s: %s", what,
                                floe_world_last_error(s->w));
+            }
         } else {
             free(ids);
         }
