@@ -322,18 +322,21 @@ static int kd_radius_from(const floe_kdtree *t, const kd_rq *rq, kd_frame start,
             const int f = nd->b;
             const double v = rq->q[f];
             const double diff1 = v - nd->lo, diff2 = v - nd->hi;
-            const int go_left = diff1 + diff2 < 0;
+            /* the far child's plane is the farther of the two: cut = max(diff1^2, diff2^2) */
+            const double c1 = diff1 * diff1, c2 = diff2 * diff2;
+            const double cut = c1 > c2 ? c1 : c2;
             const int left = node + 1, right = nd->a;
-            const double cut = go_left ? diff2 * diff2 : diff1 * diff1;
+            const int sel = -(int)(diff1 + diff2 < 0); /* all ones: near child is left */
+            const int far = left ^ ((left ^ right) & sel);
             const double nm = mind + cut - dd[f];
             kd_frame *fr = &stack[sp];
-            fr->node = go_left ? right : left;
+            fr->node = far;
             fr->mind = nm;
             fr->d[0] = dd[0]; fr->d[1] = dd[1]; fr->d[2] = dd[2];
             fr->d[f] = cut;
             sp += nm <= r2s;
             if (sp == KD_STACK) cnt = kd_radius_from(t, rq, stack[--sp], cnt);
-            node = go_left ? left : right;
+            node = left ^ right ^ far;
             nd = &nodes[node];
         }
         const int b = -1 - nd->b, m = nd->a - b;

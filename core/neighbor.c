@@ -22,13 +22,14 @@ void floe_nl_free(floe_neighbor_list *nl) {
 
 int floe_nl_needs_rebuild(const floe_neighbor_list *nl, const floe_particles *p) {
     if (!nl->x_build || nl->n_build != p->n) return 1;
-    double lim = 0.5 * nl->skin;
+    double lim = 0.5 * nl->skin, lim2 = lim * lim;
     for (int i = 0; i < p->n; i++) {
         const double *a = p->x + 3 * i, *b = nl->x_build + 3 * i;
         double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
-        double grow = isfinite(p->radius[i]) ? p->radius[i] - nl->r_build[i] : 0;
-        double d = sqrt(dx * dx + dy * dy + dz * dz) + (grow > 0 ? grow : 0);
-        if (d > lim) return 1;
+        double grow = p->radius[i] - nl->r_build[i]; /* NaN for walls (inf - inf): not > 0 */
+        if (grow > 0) {
+            if (sqrt(dx * dx + dy * dy + dz * dz) + grow > lim) return 1;
+        } else if (dx * dx + dy * dy + dz * dz > lim2) return 1;
     }
     return 0;
 }

@@ -613,8 +613,10 @@ int floe_world_step(floe_world *w) {
             if (t2 > 0) {
                 double c = 1 - 0.5 * t2, dq[4] = {c, th[0], th[1], th[2]}, qn[4];
                 floe_q_mul(qn, dq, q);
-                floe_q_normalize(qn);
-                memcpy(q, qn, sizeof qn);
+                /* renormalise by one Newton step for 1/sqrt (|qn|^2 = 1 + O(t2^2)) */
+                double s2 = qn[0] * qn[0] + qn[1] * qn[1] + qn[2] * qn[2] + qn[3] * qn[3];
+                double sc = 1.5 - 0.5 * s2;
+                for (int k = 0; k < 4; k++) q[k] = qn[k] * sc;
             }
         } else if (floe_v3_dot(L, L) > 0) {
             double qm[4], omm[3];
