@@ -1,0 +1,48 @@
+/* memory.c - bytes per particle of a sphere scene: N spheres on a simple cubic lattice
+ * (touching neighbours at 1 % overlap, so every particle has contacts and history),
+ * Hertz-Mindlin, prepared and stepped 10 times; prints the resident memory growth per
+ * particle and the part of it that the particle store, neighbour list and contact
+ * records account for.   bench_memory [N]   (default 1000000) */
+#include "floe.h"
+#include "world_internal.h"
+#include <stdio.h>
+#include <stdlib.h>
+
+static size_t rss(void) {
+    FILE *f = fopen("/proc/self/statm", "r");
+    long a = 0, r = 0;
+    if (f) { if (fscanf(f, "%ld %ld", &a, &r) != 2) r = 0; fclose(f); }
+    return (size_t)r * 4096;
+}
+
+int main(int argc, char **argv) {
+    long N = argc > 1 ? atol(argv[1]) : 1000000;
+    int side = (int)ceil(cbrt((double)N));
+    size_t r0 = rss();
+    floe_world_def d = floe_default_world_def();
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material m = {"glass", 2500, 1e7, 0.3};
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5));
+    int g = floe_world_add_geometry(w, floe_sphere_create(0.001));
+    long n = 0;
+    for (int k = 0; k < side && n < N; k++)
+        for (int j = 0; j < side && n < N; j++)
+            for (int i = 0; i < side && n < N; i++, n++) {
+                floe_particle_def p = floe_default_particle_def();
+                p.geometry = g;
+                floe_v3_set(p.x, i * 0.00198, j * 0.00198, k * 0.00198);
+                if (floe_world_add_particle(w, &p) < 0) { fprintf(stderr, "%s\n", floe_world_last_error(w)); return 1; }
+            }
+    if (floe_world_prepare(w)) { fprintf(stderr, "%s\n", floe_world_last_error(w)); return 1; }
+    for (int s = 0; s < 10; s++) floe_world_step(w);
+    size_t r1 = rss();
+    double store = (double)w->p.cap * (3 * 8 * 8 + 4 * 8 + 3 * 8 + 2 * 8 + 8 + 4 * 3 + 3) / n;
+    double nl = (double)w->nl.cap * (2 * 4 + FLOE_MAX_HISTORY * 8 + 1) / n + 4.0 * 8;
+    double cont = (double)w->contacts_cap * sizeof(floe_contact_rec) / n;
+    printf("memory: N=%ld spheres, %d candidate pairs, %d contacts: RSS %.0f B/particle "
+           "(particle store %.0f, neighbour list + history %.0f, contact records %.0f)\n",
+           n, w->nl.npairs, w->ncontacts, (double)(r1 - r0) / n, store, nl, cont);
+    floe_world_destroy(w);
+    return 0;
+}
