@@ -96,11 +96,41 @@ static inline void kd_swap(floe_kdtree *t, int i, int j)
 }
 
 /* Moves the points of [b, e) with key < cut (strict) or key <= cut (!strict) to the
- * front; returns the first index of the rest. */
+ * front; returns the first index of the rest. Block partition (Edelkamp & Weiss,
+ * BlockQuicksort, 2016): the positions of misplaced points are collected for a block at
+ * each end without branching on the data, then swapped in pairs; a plain Hoare pass
+ * finishes the last two blocks. */
+#define KD_PBLOCK 64
+
 static int kd_partition(floe_kdtree *t, int f, int b, int e, double cut, int strict)
 {
     const double *key = t->c + f;
-    int i = b, j = e - 1;
+    unsigned char offl[KD_PBLOCK], offr[KD_PBLOCK];
+    int l = b, r = e, nl = 0, nr = 0, sl = 0, sr = 0;
+    while (r - l > 2 * KD_PBLOCK) {
+        if (nl == 0) {
+            sl = 0;
+            for (int i = 0; i < KD_PBLOCK; i++) {
+                const double k = key[3 * (size_t)(l + i)];
+                offl[nl] = (unsigned char)i;
+                nl += strict ? !(k < cut) : !(k <= cut);
+            }
+        }
+        if (nr == 0) {
+            sr = 0;
+            for (int i = 0; i < KD_PBLOCK; i++) {
+                const double k = key[3 * (size_t)(r - 1 - i)];
+                offr[nr] = (unsigned char)i;
+                nr += strict ? k < cut : k <= cut;
+            }
+        }
+        const int num = nl < nr ? nl : nr;
+        for (int k = 0; k < num; k++) kd_swap(t, l + offl[sl + k], r - 1 - offr[sr + k]);
+        nl -= num; nr -= num; sl += num; sr += num;
+        if (nl == 0) l += KD_PBLOCK;
+        if (nr == 0) r -= KD_PBLOCK;
+    }
+    int i = l, j = r - 1;
     for (;;) {
         if (strict) {
             while (i <= j && key[3 * (size_t)i] < cut) i++;
@@ -322,21 +352,18 @@ static int kd_radius_from(const floe_kdtree *t, const kd_rq *rq, kd_frame start,
             const int f = nd->b;
             const double v = rq->q[f];
             const double diff1 = v - nd->lo, diff2 = v - nd->hi;
-            /* the far child's plane is the farther of the two: cut = max(diff1^2, diff2^2) */
-            const double c1 = diff1 * diff1, c2 = diff2 * diff2;
-            const double cut = c1 > c2 ? c1 : c2;
+            const int go_left = diff1 + diff2 < 0;
             const int left = node + 1, right = nd->a;
-            const int sel = -(int)(diff1 + diff2 < 0); /* all ones: near child is left */
-            const int far = left ^ ((left ^ right) & sel);
+            const double cut = go_left ? diff2 * diff2 : diff1 * diff1;
             const double nm = mind + cut - dd[f];
             kd_frame *fr = &stack[sp];
-            fr->node = far;
+            fr->node = go_left ? right : left;
             fr->mind = nm;
             fr->d[0] = dd[0]; fr->d[1] = dd[1]; fr->d[2] = dd[2];
             fr->d[f] = cut;
             sp += nm <= r2s;
             if (sp == KD_STACK) cnt = kd_radius_from(t, rq, stack[--sp], cnt);
-            node = left ^ right ^ far;
+            node = go_left ? left : right;
             nd = &nodes[node];
         }
         const int b = -1 - nd->b, m = nd->a - b;
