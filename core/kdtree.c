@@ -41,7 +41,7 @@ typedef struct kd_node {
 
 struct floe_kdtree {
     int n, dim, leaf_size;
-    int nnodes, node_cap, depth;
+    int nnodes, node_cap;
     int *vind;        /* tree order -> caller's index */
     double *c;        /* coordinates in tree order, leaf by leaf: the leaf holding points
                          [b, e) keeps its x, then its y, then its z values in c[3b .. 3e)
@@ -57,7 +57,6 @@ typedef struct kd_task {
     int begin, end;
     int parent;   /* -1 for the root */
     int is_right; /* which child of parent this is */
-    int depth;
 } kd_task;
 
 static int kd_new_node(floe_kdtree *t)
@@ -152,13 +151,12 @@ static int kd_build_nodes(floe_kdtree *t)
     int stack_cap = 64, sp = 0;
     kd_task *stack = malloc((size_t)stack_cap * sizeof *stack);
     if (!stack) return -1;
-    stack[sp++] = (kd_task){0, t->n, -1, 0, 1};
+    stack[sp++] = (kd_task){0, t->n, -1, 0};
     while (sp > 0) {
         kd_task tk = stack[--sp];
         for (;;) {
             int id = kd_new_node(t);
             if (id < 0) { free(stack); return -1; }
-            if (tk.depth > t->depth) t->depth = tk.depth;
             double lo[3], hi[3];
             kd_bbox(t, tk.begin, tk.end, lo, hi);
             if (tk.parent >= 0) {
@@ -206,8 +204,8 @@ static int kd_build_nodes(floe_kdtree *t)
                 stack = ns;
                 stack_cap *= 2;
             }
-            stack[sp++] = (kd_task){tk.begin + split, tk.end, id, 1, tk.depth + 1};
-            tk = (kd_task){tk.begin, tk.begin + split, id, 0, tk.depth + 1};
+            stack[sp++] = (kd_task){tk.begin + split, tk.end, id, 1};
+            tk = (kd_task){tk.begin, tk.begin + split, id, 0};
         }
     }
     free(stack);
@@ -253,7 +251,7 @@ floe_kdtree *floe_kdtree_build(const double *pts, int n, int dim, int leaf_size)
     t->dim = dim;
     t->leaf_size = leaf_size > 0 ? leaf_size : KD_DEFAULT_LEAF;
     if (n == 0) return t;
-    /* one block: x | y | z | vind */
+    /* one block: coordinates | vind */
     size_t bytes = (size_t)n * (3 * sizeof(double) + sizeof(int));
     double *block = malloc(bytes);
     if (!block) { free(t); return NULL; }
@@ -265,8 +263,9 @@ floe_kdtree *floe_kdtree_build(const double *pts, int n, int dim, int leaf_size)
         t->c[3 * (size_t)i + 2] = dim == 3 ? pts[3 * (size_t)i + 2] : 0.0;
         t->vind[i] = i;
     }
-    /* a balanced tree has about 2n/leaf nodes; the array grows if the data needs more */
-    t->node_cap = 2 * (n / t->leaf_size) + 16;
+    /* a balanced tree has 2-3 n/leaf nodes; the array grows if the data needs more and is
+     * trimmed to size at the end (untouched capacity costs no memory) */
+    t->node_cap = 4 * (n / t->leaf_size) + 16;
     t->nodes = malloc((size_t)t->node_cap * sizeof *t->nodes);
     if (!t->nodes || kd_build_nodes(t) != 0 || kd_transpose_leaves(t) != 0) {
         floe_kdtree_destroy(t);
@@ -288,34 +287,67 @@ int floe_kdtree_size(const floe_kdtree *t) { return t ? t->n : 0; }
 const int *floe_kdtree_order(const floe_kdtree *t) { return t ? t->vind : NULL; }
 
 /* ------------------------------------------------------------------------------------
- * search */
+ * search
+ *
+ * Depth-first, near child first, as nanoflann's searchLevel, but with an explicit stack:
+ * at each internal node the far child is written to the stack together with its box
+ * distance and kept (sp += 1) only if that distance is within reach, so the pruning
+ * decision costs no branch. A frame carries the whole per-dimension distance vector, so
+ * nothing has to be restored on the way back. When a (degenerate, very deep) tree fills
+ * the stack, the newest frame is searched by a recursive call. */
 
 typedef struct kd_frame {
     int node;
     double mind;   /* squared distance from q to the node's box */
-    double d[3];   /* its per-dimension parts (nanoflann "dists") */
+    double d[3];   /* its per-dimension parts (nanoflann's "dists") */
 } kd_frame;
 
-/* squared distance from q to the root box, per dimension */
-static double kd_init_dists(const floe_kdtree *t, const double q[3], double d[3])
+/* query point (z = 0 in 2D) and the root frame */
+static kd_frame kd_root_frame(const floe_kdtree *t, const double q[3], double qq[3])
 {
-    double s = 0;
+    kd_frame fr = {0, 0.0, {0, 0, 0}};
+    qq[0] = q[0];
+    qq[1] = q[1];
+    qq[2] = t->dim == 3 ? q[2] : 0.0;
     for (int i = 0; i < 3; i++) {
-        double v = q[i], e = 0;
-        if (v < t->box_lo[i]) e = (t->box_lo[i] - v) * (t->box_lo[i] - v);
-        else if (v > t->box_hi[i]) e = (v - t->box_hi[i]) * (v - t->box_hi[i]);
-        d[i] = e;
-        s += e;
+        double e = 0;
+        if (qq[i] < t->box_lo[i]) e = (t->box_lo[i] - qq[i]) * (t->box_lo[i] - qq[i]);
+        else if (qq[i] > t->box_hi[i]) e = (qq[i] - t->box_hi[i]) * (qq[i] - t->box_hi[i]);
+        fr.d[i] = e;
+        fr.mind += e;
     }
-    return s;
+    return fr;
+}
+
+/* One step down from internal node nd (index node): pushes the far child onto
+ * stack[*sp] (kept if its box distance is <= reach) and returns the near child. */
+static inline int kd_descend(const kd_node *nd, int node, const double q[3], double mind,
+                             const double dd[3], double reach, kd_frame *stack, int *sp)
+{
+    const int f = nd->b;
+    const double v = q[f];
+    const double diff1 = v - nd->lo, diff2 = v - nd->hi;
+    int near, far;
+    double cut;
+    if (diff1 + diff2 < 0) { near = node + 1; far = nd->a; cut = diff2 * diff2; }
+    else { near = nd->a; far = node + 1; cut = diff1 * diff1; }
+    const double nm = mind + cut - dd[f];
+    kd_frame *fr = &stack[*sp];
+    fr->node = far;
+    fr->mind = nm;
+    fr->d[0] = dd[0]; fr->d[1] = dd[1]; fr->d[2] = dd[2];
+    fr->d[f] = cut;
+    *sp += nm <= reach;
+    return near;
 }
 
 #define KD_CHUNK 32
 
 /* squared distances from q to the points x = L[i], y = L[s + i], z = L[2s + i], i < m */
-static inline void kd_leaf_d2(const double *restrict L, int s, int m, double qx, double qy,
-                              double qz, double *restrict d2)
+static inline void kd_leaf_d2(const double *restrict L, int s, int m, const double q[3],
+                              double *restrict d2)
 {
+    const double qx = q[0], qy = q[1], qz = q[2];
     for (int i = 0; i < m; i++) {
         const double dx = L[i] - qx, dy = L[s + i] - qy, dz = L[2 * s + i] - qz;
         d2[i] = dx * dx + dy * dy + dz * dz;
@@ -323,55 +355,41 @@ static inline void kd_leaf_d2(const double *restrict L, int s, int m, double qx,
 }
 
 typedef struct kd_rq {
-    double q[3], r2, r2s;
+    double q[3], r2, reach;
     int *out;
     int cap;
 } kd_rq;
 
+/* radius search of the subtree in frame start; cnt hits so far; returns the new count */
 static int kd_radius_from(const floe_kdtree *t, const kd_rq *rq, kd_frame start, int cnt)
 {
     const kd_node *restrict nodes = t->nodes;
     const double *restrict C = t->c;
     const int *restrict vind = t->vind;
-    const double qx = rq->q[0], qy = rq->q[1], qz = rq->q[2], r2 = rq->r2, r2s = rq->r2s;
+    const double r2 = rq->r2, reach = rq->reach;
     int *restrict out = rq->out;
     const int cap = rq->cap;
 #if KD_AVX512
-    const __m512d vqx = _mm512_set1_pd(qx), vqy = _mm512_set1_pd(qy), vqz = _mm512_set1_pd(qz);
-    const __m512d vr2 = _mm512_set1_pd(r2);
+    const __m512d vqx = _mm512_set1_pd(rq->q[0]), vqy = _mm512_set1_pd(rq->q[1]);
+    const __m512d vqz = _mm512_set1_pd(rq->q[2]), vr2 = _mm512_set1_pd(r2);
 #endif
     kd_frame stack[KD_STACK];
-    int sp = 0;
-    int node = start.node;
+    int sp = 0, node = start.node;
     double mind = start.mind, dd[3] = {start.d[0], start.d[1], start.d[2]};
     for (;;) {
         const kd_node *nd = &nodes[node];
         while (nd->b >= 0) {
-            /* branch-free descent: the near child is next, the far one is pushed
-             * unconditionally and kept only if its box is within reach */
-            const int f = nd->b;
-            const double v = rq->q[f];
-            const double diff1 = v - nd->lo, diff2 = v - nd->hi;
-            const int go_left = diff1 + diff2 < 0;
-            const int left = node + 1, right = nd->a;
-            const double cut = go_left ? diff2 * diff2 : diff1 * diff1;
-            const double nm = mind + cut - dd[f];
-            kd_frame *fr = &stack[sp];
-            fr->node = go_left ? right : left;
-            fr->mind = nm;
-            fr->d[0] = dd[0]; fr->d[1] = dd[1]; fr->d[2] = dd[2];
-            fr->d[f] = cut;
-            sp += nm <= r2s;
+            node = kd_descend(nd, node, rq->q, mind, dd, reach, stack, &sp);
             if (sp == KD_STACK) cnt = kd_radius_from(t, rq, stack[--sp], cnt);
-            node = go_left ? left : right;
             nd = &nodes[node];
         }
         const int b = -1 - nd->b, m = nd->a - b;
         const double *restrict L = C + 3 * (size_t)b;
         const int *restrict id = vind + b;
 #if KD_AVX512
-        if (cnt + ((m + 7) & ~7) <= cap) {
-            /* 8 points at a time; hits are compressed into out with full-width stores */
+        if (cap - cnt >= ((m + 7) & ~7)) {
+            /* 8 points at a time; the hits' indices are compressed into out with
+             * full-width stores (room checked above) */
             for (int i = 0; i < m; i += 8) {
                 const __mmask8 lm = m - i >= 8 ? (__mmask8)0xff : (__mmask8)((1u << (m - i)) - 1);
                 const __m512d dx = _mm512_sub_pd(_mm512_maskz_loadu_pd(lm, L + i), vqx);
@@ -384,14 +402,13 @@ static int kd_radius_from(const floe_kdtree *t, const kd_rq *rq, kd_frame start,
                 _mm256_storeu_si256((__m256i *)(out + cnt), _mm256_maskz_compress_epi32(hit, ids));
                 cnt += __builtin_popcount((unsigned)hit);
             }
-            goto next;
-        }
+        } else
 #endif
         for (int i0 = 0; i0 < m; i0 += KD_CHUNK) {
             const int mm = m - i0 < KD_CHUNK ? m - i0 : KD_CHUNK;
             double d2[KD_CHUNK];
-            kd_leaf_d2(L + i0, m, mm, qx, qy, qz, d2);
-            if (cnt + mm <= cap) {
+            kd_leaf_d2(L + i0, m, mm, rq->q, d2);
+            if (cap - cnt >= mm) { /* branch-free: write every index, keep the hits */
                 for (int i = 0; i < mm; i++) {
                     out[cnt] = id[i0 + i];
                     cnt += d2[i] <= r2;
@@ -405,9 +422,6 @@ static int kd_radius_from(const floe_kdtree *t, const kd_rq *rq, kd_frame start,
                 }
             }
         }
-#if KD_AVX512
-    next:
-#endif
         if (sp == 0) break;
         const kd_frame *fr = &stack[--sp];
         node = fr->node;
@@ -417,32 +431,21 @@ static int kd_radius_from(const floe_kdtree *t, const kd_rq *rq, kd_frame start,
     return cnt;
 }
 
-static int kd_query_setup(const floe_kdtree *t, const double q[3], double qq[3], kd_frame *fr)
-{
-    qq[0] = q[0];
-    qq[1] = q[1];
-    qq[2] = t->dim == 3 ? q[2] : 0.0;
-    fr->node = 0;
-    fr->mind = kd_init_dists(t, qq, fr->d);
-    return 0;
-}
-
 int floe_kdtree_radius(const floe_kdtree *t, const double q[3], double r, int *out, int cap)
 {
     if (!t || t->n == 0 || !(r >= 0)) return 0;
     kd_rq rq;
-    kd_frame fr;
-    kd_query_setup(t, q, rq.q, &fr);
+    kd_frame fr = kd_root_frame(t, q, rq.q);
     rq.r2 = r * r;
-    rq.r2s = rq.r2 * KD_SLACK;
+    rq.reach = rq.r2 * KD_SLACK;
     rq.out = out;
-    rq.cap = out ? (cap > 0 ? cap : 0) : 0;
-    if (fr.mind > rq.r2s) return 0;
+    rq.cap = out && cap > 0 ? cap : 0;
+    if (!(fr.mind <= rq.reach)) return 0;
     return kd_radius_from(t, &rq, fr, 0);
 }
 
 typedef struct kd_vq {
-    double q[3], r2, r2s;
+    double q[3], r2, reach;
     floe_kdtree_visit_fn fn;
     void *user;
 } kd_vq;
@@ -451,27 +454,13 @@ static void kd_visit_from(const floe_kdtree *t, const kd_vq *vq, kd_frame start)
 {
     const kd_node *nodes = t->nodes;
     kd_frame stack[KD_STACK];
-    int sp = 0;
-    int node = start.node;
+    int sp = 0, node = start.node;
     double mind = start.mind, dd[3] = {start.d[0], start.d[1], start.d[2]};
     for (;;) {
         const kd_node *nd = &nodes[node];
         while (nd->b >= 0) {
-            const int f = nd->b;
-            const double v = vq->q[f];
-            const double diff1 = v - nd->lo, diff2 = v - nd->hi;
-            int best, other;
-            double cut;
-            if (diff1 + diff2 < 0) { best = node + 1; other = nd->a; cut = diff2 * diff2; }
-            else { best = nd->a; other = node + 1; cut = diff1 * diff1; }
-            const double nm = mind + cut - dd[f];
-            if (nm <= vq->r2s) {
-                kd_frame fr = {other, nm, {dd[0], dd[1], dd[2]}};
-                fr.d[f] = cut;
-                if (sp < KD_STACK) stack[sp++] = fr;
-                else kd_visit_from(t, vq, fr);
-            }
-            node = best;
+            node = kd_descend(nd, node, vq->q, mind, dd, vq->reach, stack, &sp);
+            if (sp == KD_STACK) kd_visit_from(t, vq, stack[--sp]);
             nd = &nodes[node];
         }
         const int b = -1 - nd->b, m = nd->a - b;
@@ -479,7 +468,7 @@ static void kd_visit_from(const floe_kdtree *t, const kd_vq *vq, kd_frame start)
         for (int i0 = 0; i0 < m; i0 += KD_CHUNK) {
             const int mm = m - i0 < KD_CHUNK ? m - i0 : KD_CHUNK;
             double d2[KD_CHUNK];
-            kd_leaf_d2(L + i0, m, mm, vq->q[0], vq->q[1], vq->q[2], d2);
+            kd_leaf_d2(L + i0, m, mm, vq->q, d2);
             for (int i = 0; i < mm; i++)
                 if (d2[i] <= vq->r2) vq->fn(t->vind[b + i0 + i], d2[i], vq->user);
         }
@@ -496,22 +485,21 @@ void floe_kdtree_radius_visit(const floe_kdtree *t, const double q[3], double r,
 {
     if (!t || t->n == 0 || !fn || !(r >= 0)) return;
     kd_vq vq;
-    kd_frame fr;
-    kd_query_setup(t, q, vq.q, &fr);
+    kd_frame fr = kd_root_frame(t, q, vq.q);
     vq.r2 = r * r;
-    vq.r2s = vq.r2 * KD_SLACK;
+    vq.reach = vq.r2 * KD_SLACK;
     vq.fn = fn;
     vq.user = user;
-    if (fr.mind > vq.r2s) return;
+    if (!(fr.mind <= vq.reach)) return;
     kd_visit_from(t, &vq, fr);
 }
 
-/* k-NN: idx/d2 are the caller's buffers, kept sorted by insertion; cnt and worst live in
- * the query record so that a recursive call (very deep trees only) shares them. */
+/* k-NN: idx/d2 are the caller's buffers, kept sorted by insertion. The reach shrinks as
+ * the buffer fills, so frames are checked again when popped. */
 typedef struct kd_kq {
     double q[3];
     int k, cnt;
-    double worst; /* d2[k-1] once full, else +inf */
+    double worst; /* d2[k-1] once the buffer is full, else +inf */
     int *idx;
     double *d2;
 } kd_kq;
@@ -519,45 +507,29 @@ typedef struct kd_kq {
 static void kd_knn_from(const floe_kdtree *t, kd_kq *kq, kd_frame start)
 {
     const kd_node *nodes = t->nodes;
-    const double qx = kq->q[0], qy = kq->q[1], qz = kq->q[2];
     int *idx = kq->idx;
     double *dist = kq->d2;
     const int k = kq->k;
     kd_frame stack[KD_STACK];
-    int sp = 0;
-    int node = start.node;
+    int sp = 0, node = start.node;
     double mind = start.mind, dd[3] = {start.d[0], start.d[1], start.d[2]};
     for (;;) {
         if (mind <= kq->worst * KD_SLACK) {
             const kd_node *nd = &nodes[node];
             while (nd->b >= 0) {
-                const int f = nd->b;
-                const double v = kq->q[f];
-                const double diff1 = v - nd->lo, diff2 = v - nd->hi;
-                int best, other;
-                double cut;
-                if (diff1 + diff2 < 0) { best = node + 1; other = nd->a; cut = diff2 * diff2; }
-                else { best = nd->a; other = node + 1; cut = diff1 * diff1; }
-                const double nm = mind + cut - dd[f];
-                if (nm <= kq->worst * KD_SLACK) {
-                    kd_frame fr = {other, nm, {dd[0], dd[1], dd[2]}};
-                    fr.d[f] = cut;
-                    if (sp < KD_STACK) stack[sp++] = fr;
-                    else kd_knn_from(t, kq, fr);
-                }
-                node = best;
+                node = kd_descend(nd, node, kq->q, mind, dd, kq->worst * KD_SLACK, stack, &sp);
+                if (sp == KD_STACK) kd_knn_from(t, kq, stack[--sp]);
                 nd = &nodes[node];
             }
             const int b = -1 - nd->b, m = nd->a - b;
             const double *L = t->c + 3 * (size_t)b;
             for (int i0 = 0; i0 < m; i0 += KD_CHUNK) {
-              const int mm = m - i0 < KD_CHUNK ? m - i0 : KD_CHUNK;
-              double dc[KD_CHUNK];
-              kd_leaf_d2(L + i0, m, mm, qx, qy, qz, dc);
-              for (int ii = 0; ii < mm; ii++) {
-                const double d2 = dc[ii];
-                const int i = i0 + ii;
-                if (d2 < kq->worst) {
+                const int mm = m - i0 < KD_CHUNK ? m - i0 : KD_CHUNK;
+                double dc[KD_CHUNK];
+                kd_leaf_d2(L + i0, m, mm, kq->q, dc);
+                for (int i = 0; i < mm; i++) {
+                    const double d2 = dc[i];
+                    if (!(d2 < kq->worst)) continue;
                     int j = kq->cnt < k ? kq->cnt++ : k - 1;
                     while (j > 0 && dist[j - 1] > d2) {
                         dist[j] = dist[j - 1];
@@ -565,10 +537,9 @@ static void kd_knn_from(const floe_kdtree *t, kd_kq *kq, kd_frame start)
                         j--;
                     }
                     dist[j] = d2;
-                    idx[j] = t->vind[b + i];
+                    idx[j] = t->vind[b + i0 + i];
                     if (kq->cnt == k) kq->worst = dist[k - 1];
                 }
-              }
             }
         }
         if (sp == 0) break;
@@ -583,8 +554,7 @@ int floe_kdtree_knn(const floe_kdtree *t, const double q[3], int k, int *idx, do
 {
     if (!t || t->n == 0 || k <= 0 || !idx || !d2) return 0;
     kd_kq kq;
-    kd_frame fr;
-    kd_query_setup(t, q, kq.q, &fr);
+    kd_frame fr = kd_root_frame(t, q, kq.q);
     kq.k = k;
     kq.cnt = 0;
     kq.worst = INFINITY;

@@ -336,22 +336,27 @@ static double rep_depth(const floe_contact_law *law, double r_eff, double m_eff,
     return hi;
 }
 
-static void pair_estimate(const floe_contact_law *law, double r_eff, double m_eff, int nc, double v, double *dt) {
+/* Explicit stability of one particle of mass m held by springs k and dashpots c of a law
+ * at a representative contact (r_eff, m_eff): a particle with contacts n_c has the
+ * stiffness matrix sum_c k n n^T, and by Gershgorin its highest mode is at most twice that
+ * sum's largest eigenvalue: omega^2 <= C k / m with C = 2 n_c / d (8 for the 12 contacts
+ * of a close packing in 3D, 6 for the 6 of a hexagonal packing in 2D); the dashpots add up
+ * the same way (the peers' "8 gamma / m"). Spring-dashpot limit:
+ * dt < (2/omega)(sqrt(1 + zeta^2) - zeta). */
+static void pair_estimate(const floe_contact_law *law, double r_eff, double m_eff, double m, double C, double v,
+                          double *dt) {
     double kn = 0, cn = 0;
     law->klass->stiffness(law, r_eff, m_eff, rep_depth(law, r_eff, m_eff, v), &kn, &cn);
     if (!(kn > 0)) return;
-    /* a particle with nc contacts: stiffness and damping add up (peers README: the highest
-     * mode of a packing is limited by about 8 gamma/m); stability of the explicit
-     * spring-dashpot: dt < 2/omega (sqrt(1 + zeta^2) - zeta) */
-    double k = nc * kn, c = nc * cn;
-    double om = sqrt(k / m_eff), zeta = c / (2 * sqrt(k * m_eff));
+    double k = C * kn, c = C * cn;
+    double om = sqrt(k / m), zeta = c / (2 * sqrt(k * m));
     double d = 2.0 / om * (sqrt(1 + zeta * zeta) - zeta);
     if (d < *dt) *dt = d;
 }
 
 static int estimate_dt(floe_world *w) {
     floe_particles *p = &w->p;
-    int nc = w->def.dim == 3 ? 12 : 6;
+    double C = w->def.dim == 3 ? 8.0 : 6.0;
     double dt = INFINITY;
     /* largest relative speed to expect: twice the fastest particle plus the free fall
      * over the extent of the scene along gravity */
@@ -381,8 +386,8 @@ static int estimate_dt(floe_world *w) {
             const floe_contact_law *law = w->laws[m * w->nmats + m2];
             if (!law) continue;
             /* partner of the same size (m* = m/2, R* = R/2) and a wall (m* = m, R* = R) */
-            pair_estimate(law, 0.5 * rmin, 0.5 * mmin, nc, vrel, &dt);
-            pair_estimate(law, rmin, mmin, nc, vrel, &dt);
+            pair_estimate(law, 0.5 * rmin, 0.5 * mmin, mmin, C, vrel, &dt);
+            pair_estimate(law, rmin, mmin, mmin, C, vrel, &dt);
         }
     }
     w->dt_crit = dt;

@@ -79,6 +79,8 @@ static int check_radius(const floe_kdtree *t, const double *pts, int n, int dim,
                  bsearch(&g_out[i], g_bf, (size_t)nb, sizeof(int), cmp_int) != NULL;
         }
     }
+    /* count only */
+    if (ok) ok = floe_kdtree_radius(t, q, r, NULL, 0) == nb;
     /* callback form */
     if (ok) {
         double ref[1] = {r2};
