@@ -116,9 +116,7 @@ static int cmd_run(const char *scene, const char *outdir, int quiet)
         printf("  particle-steps/s:   %.3g (%d particles)\n", ps, n);
         printf("  contacts (current): %d\n", w->ncontacts);
         printf("  neighbour rebuilds: %ld\n", w->nl.rebuilds);
-        printf("  energy balance err: %.3g (relative)%s\n", floe_world_energy_balance_error(w),
-               info.nstates ? "; not closed: state objects (growing radii) do work the "
-                              "ledger does not count" : "");
+        printf("  energy balance err: %.3g (relative)\n", floe_world_energy_balance_error(w));
         printf("  outputs in:         %s\n", outdir);
     }
     floe_world_destroy(w);

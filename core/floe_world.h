@@ -106,7 +106,8 @@ int floe_world_get_particle(const floe_world *w, int i, floe_particle_state *out
 typedef struct floe_energy {
     double kinetic_trans, kinetic_rot, elastic;   /* current */
     double work_body;         /* work done by gravity and body-force callbacks */
-    double work_boundary;     /* work done by kinematic particles/walls on the others */
+    double work_boundary;     /* work done on the free particles by kinematic particles,
+                                 walls and growing surfaces (state objects) */
     double dissipated;        /* damping and friction slip, accumulated */
     double initial;           /* kinetic + elastic at prepare */
 } floe_energy;

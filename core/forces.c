@@ -49,7 +49,7 @@ int floe_compute_forces(floe_world *w) {
         if (stepping) w->energy.work_body += wb;
     }
     w->ncontacts = 0;
-    double elastic = 0, diss = 0;
+    double elastic = 0, diss = 0, wgrow = 0;
     floe_neighbor_list *nl = &w->nl;
     const int nm = w->nmats;
     for (int k = 0; k < nl->npairs; k++) {
@@ -115,7 +115,16 @@ int floe_compute_forces(floe_world *w) {
             /* trapezoid rule: the work of velocity Verlet over a step is (F_old + F_new)/2 . dx */
             double fav[3];
             for (int a = 0; a < 3; a++) fav[a] = 0.5 * (res.force[a] + hist[FLOE_FORCE_SLOT + a]);
-            diss += -floe_v3_dot(fav, c.vr) * c.dt - (res.energy - hist[FLOE_ENERGY_SLOT]);
+            double wc = -floe_v3_dot(fav, c.vr) * c.dt;
+            /* surfaces that grow (state objects) move towards each other at rdot_i + rdot_j:
+             * that work enters the contact from outside the particle system */
+            double grow = p->rdot[i] + p->rdot[j];
+            if (grow != 0) {
+                double wg = -floe_v3_dot(fav, c.n) * grow * c.dt;
+                wc += wg;
+                wgrow += wg;
+            }
+            diss += wc - (res.energy - hist[FLOE_ENERGY_SLOT]);
         }
         hist[FLOE_ENERGY_SLOT] = res.energy;
         memcpy(hist + FLOE_FORCE_SLOT, res.force, 3 * sizeof(double));
@@ -124,6 +133,9 @@ int floe_compute_forces(floe_world *w) {
     if (dim == 2)
         for (int i = 0; i < n; i++) { p->f[3 * i + 2] = 0; p->t[3 * i] = p->t[3 * i + 1] = 0; }
     w->energy.elastic = elastic;
-    if (stepping) w->energy.dissipated += diss;
+    if (stepping) {
+        w->energy.dissipated += diss;
+        w->energy.work_boundary += wgrow;
+    }
     return FLOE_OK;
 }

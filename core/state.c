@@ -43,6 +43,7 @@ static int gr_set(floe_state *s, floe_world *w, const double *y) {
     double r_old = sp->radius;
     sp->radius = y[0];
     w->p.radius[g->particle] = y[0];
+    w->p.rdot[g->particle] = g->rate; /* for the energy ledger: growth does work */
     if (g->update_mass && w->prepared) {
         int i = g->particle;
         double r = y[0] / r_old, s = w->def.dim == 2 && w->def.mass_2d_area ? r * r : r * r * r;

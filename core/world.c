@@ -88,7 +88,7 @@ floe_world *floe_world_create(const floe_world_def *def, char *err, size_t errle
 static void particles_free(floe_particles *p) {
     free(p->x); free(p->v); free(p->q); free(p->w); free(p->L); free(p->f); free(p->t);
     free(p->mass); free(p->inv_mass); free(p->inertia); free(p->radius); free(p->geom);
-    free(p->material); free(p->group); free(p->motion); free(p->kind); free(p->iso);
+    free(p->material); free(p->group); free(p->motion); free(p->kind); free(p->iso); free(p->rdot);
 }
 
 void floe_world_destroy(floe_world *w) {
@@ -165,7 +165,7 @@ static int particles_reserve(floe_particles *p, int need) {
 #define RE(field, k) do { void *t_ = realloc(p->field, (size_t)nc * (k) * sizeof *p->field); if (!t_) return FLOE_ENOMEM; p->field = t_; } while (0)
     RE(x, 3); RE(v, 3); RE(q, 4); RE(w, 3); RE(L, 3); RE(f, 3); RE(t, 3);
     RE(mass, 1); RE(inv_mass, 1); RE(inertia, 3); RE(radius, 1); RE(geom, 1);
-    RE(material, 1); RE(group, 1); RE(motion, 1); RE(kind, 1); RE(iso, 1);
+    RE(material, 1); RE(group, 1); RE(motion, 1); RE(kind, 1); RE(iso, 1); RE(rdot, 1);
 #undef RE
     p->cap = nc;
     return FLOE_OK;
@@ -200,6 +200,7 @@ int floe_world_add_particle(floe_world *w, const floe_particle_def *d) {
     p->motion[i] = (unsigned char)d->motion;
     p->kind[i] = (unsigned char)g->klass->kind;
     p->iso[i] = 0;
+    p->rdot[i] = 0;
     p->radius[i] = floe_geometry_bounding_radius(g);
     p->mass[i] = d->mass; /* resolved at prepare */
     w->prepared = 0;
@@ -287,8 +288,8 @@ double floe_world_energy_balance_error(const floe_world *w) {
     const floe_energy *e = &w->energy;
     double in = e->initial + e->work_body + e->work_boundary;
     double out = e->kinetic_trans + e->kinetic_rot + e->elastic + e->dissipated;
-    double scale = fabs(e->initial) + fabs(e->work_body) + fabs(e->work_boundary);
-    if (!(scale > 0)) scale = fabs(out) > 0 ? fabs(out) : 1;
+    double scale = fmax(fabs(e->initial) + fabs(e->work_body) + fabs(e->work_boundary), fabs(out));
+    if (!(scale > 0)) return 0;
     return fabs(in - out) / scale;
 }
 

@@ -28,6 +28,7 @@ typedef struct floe_particles {
     unsigned char *motion; /* n floe_motion */
     unsigned char *kind;   /* n geometry kind (cached) */
     unsigned char *iso;    /* n 1 = isotropic inertia (spheres; every body in 2D) */
+    double *rdot;          /* n outward surface speed set by state objects (growing radius), m/s */
 } floe_particles;
 
 typedef struct floe_motion_cb { int particle; floe_motion_fn fn; void *user; } floe_motion_cb;
