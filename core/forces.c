@@ -29,8 +29,10 @@ int floe_compute_forces(floe_world *w) {
     floe_particles *p = &w->p;
     const int n = p->n, dim = w->def.dim;
     const int stepping = w->step > 0;
-    memset(p->f, 0, (size_t)n * 3 * sizeof(double));
-    memset(p->t, 0, (size_t)n * 3 * sizeof(double));
+    if (n > 0) {
+        memset(p->f, 0, (size_t)n * 3 * sizeof(double));
+        memset(p->t, 0, (size_t)n * 3 * sizeof(double));
+    }
     for (int i = 0; i < n; i++) {
         if (p->motion[i] != FLOE_FREE) continue;
         for (int k = 0; k < 3; k++) p->f[3 * i + k] = p->mass[i] * w->def.gravity[k];

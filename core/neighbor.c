@@ -201,8 +201,10 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
         if (rb) nl->r_build = rb;
         if (!xb || !rb) rc = FLOE_ENOMEM;
         else {
-            memcpy(nl->x_build, p->x, (size_t)n * 3 * sizeof(double));
-            memcpy(nl->r_build, p->radius, (size_t)n * sizeof(double));
+            if (n > 0) {
+                memcpy(nl->x_build, p->x, (size_t)n * 3 * sizeof(double));
+                memcpy(nl->r_build, p->radius, (size_t)n * sizeof(double));
+            }
             nl->n_build = n;
             nl->rebuilds++;
         }
