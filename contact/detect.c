@@ -17,9 +17,8 @@ static void to_body(const floe_particles *p, int i, const double x[3], double X[
     floe_q_rotate_inv(X, p->q + 4 * i, d);
 }
 
-static double sphere_r(const floe_world *w, int i) {
-    return ((const floe_sphere *)w->geoms[w->p.geom[i]])->radius;
-}
+/* a sphere's bounding radius is its radius (kept equal by the growing-radius state) */
+static double sphere_r(const floe_world *w, int i) { return w->p.radius[i]; }
 
 static void finish(floe_contact *c) {
     for (int k = 0; k < 3; k++) c->point[k] = 0.5 * (c->x1[k] + c->x2[k]);
@@ -33,7 +32,10 @@ static int sphere_sphere(const floe_world *w, int i, int j, floe_contact *c) {
     double dist2 = floe_v3_dot(d, d), rs = ri + rj;
     if (dist2 >= rs * rs) return 0;
     double dist = sqrt(dist2);
-    if (dist > 0) floe_v3_set(c->n, d[0] / dist, d[1] / dist, d[2] / dist);
+    if (dist > 0) {
+        double inv = 1.0 / dist;
+        floe_v3_set(c->n, d[0] * inv, d[1] * inv, d[2] * inv);
+    }
     else floe_v3_set(c->n, 1, 0, 0); /* coincident centres: any direction, finite */
     c->depth = rs - dist;
     for (int k = 0; k < 3; k++) {

@@ -91,6 +91,7 @@ typedef struct floe_hertz_mindlin_law {
     double mu;               /* friction */
     double damping_ratio;    /* dimensionless damping calibrated so that the collision
                                 restitutes exactly e (see docs/models.md) */
+    double tangent_damping_ratio; /* sqrt(kt / Sn) = sqrt(4 G* / E*), cached */
 } floe_hertz_mindlin_law;
 
 extern const floe_contact_law_class floe_linear_law_class;

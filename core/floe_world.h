@@ -102,6 +102,12 @@ typedef struct floe_particle_state {
 } floe_particle_state;
 int floe_world_get_particle(const floe_world *w, int i, floe_particle_state *out);
 
+/* Keep a record of every contact of the last step (point, normal, force), as stress
+ * observers need; switched on automatically when such an observer is added. */
+int floe_world_record_contacts(floe_world *w, int on);
+/* Number of contacts (penetrating pairs) at the last force evaluation. */
+int floe_world_contact_count(const floe_world *w);
+
 /* Energy bookkeeping (J) maintained every step. */
 typedef struct floe_energy {
     double kinetic_trans, kinetic_rot, elastic;   /* current */

@@ -253,8 +253,16 @@ int floe_world_add_state(floe_world *w, floe_state *s) {
     return FLOE_OK;
 }
 
+int floe_world_record_contacts(floe_world *w, int on) {
+    w->record_contacts = on != 0;
+    return FLOE_OK;
+}
+
+int floe_world_contact_count(const floe_world *w) { return w->ncontacts; }
+
 int floe_world_add_observer(floe_world *w, floe_observer *o) {
     if (!o) return floe_world_error(w, FLOE_EINVAL, "observer is NULL");
+    if (o->klass->needs_contacts) w->record_contacts = 1;
     if (grow((void **)&w->obs, &w->obs_cap, w->nobs + 1, sizeof *w->obs)) return FLOE_ENOMEM;
     w->obs[w->nobs++] = o;
     return FLOE_OK;

@@ -77,6 +77,7 @@ struct floe_world {
     long step;
     double t0; long step0;   /* time and step at prepare: time = t0 + (step - step0) dt */
     int prepared;
+    int record_contacts;      /* keep w->contacts (observers that need them, or the user) */
     int finished;
     floe_energy energy;
     long detector_calls;

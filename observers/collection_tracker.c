@@ -154,6 +154,7 @@ static void stress_eval(const floe_world *w, int group, double volume, unsigned 
 int floe_collection_stress(const floe_world *w, int group, double volume,
                            floe_collection_stats *out) {
     if (!w || !out) return FLOE_EINVAL;
+    if (!w->record_contacts) return FLOE_EINVAL; /* floe_world_record_contacts(w, 1) first */
     unsigned char *member = malloc(w->p.n > 0 ? (size_t)w->p.n : 1);
     if (!member) return FLOE_ENOMEM;
     stress_eval(w, group, volume, member, out);
@@ -214,7 +215,7 @@ static void ct_destroy(floe_observer *o) {
 }
 
 static const floe_observer_class collection_tracker_class = {
-    1, "collection_tracker", NULL, ct_observe, ct_end, ct_destroy};
+    1, "collection_tracker", NULL, ct_observe, ct_end, ct_destroy, 1};
 
 int floe_collection_tracker_last(const floe_observer *o, double sigma[6], double *coord) {
     if (!o || o->klass != &collection_tracker_class) return FLOE_EINVAL;

@@ -76,7 +76,7 @@ static void cw_destroy(floe_observer *o) {
 }
 
 static const floe_observer_class csv_writer_class = {
-    1, "csv_writer", NULL, cw_observe, cw_end, cw_destroy};
+    1, "csv_writer", NULL, cw_observe, cw_end, cw_destroy, 0};
 
 floe_observer *floe_csv_writer_create(const char *path, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';

@@ -69,7 +69,7 @@ static void et_destroy(floe_observer *o) {
 }
 
 static const floe_observer_class energy_tracker_class = {
-    1, "energy_tracker", NULL, et_observe, et_end, et_destroy};
+    1, "energy_tracker", NULL, et_observe, et_end, et_destroy, 0};
 
 floe_observer *floe_energy_tracker_create(const char *path, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';

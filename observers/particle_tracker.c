@@ -99,7 +99,7 @@ static void pt_destroy(floe_observer *o) {
 }
 
 static const floe_observer_class particle_tracker_class = {
-    1, "particle_tracker", pt_begin, pt_observe, pt_end, pt_destroy};
+    1, "particle_tracker", pt_begin, pt_observe, pt_end, pt_destroy, 0};
 
 floe_observer *floe_particle_tracker_create(const char *path, const int *ids, int n,
                                             char *err, size_t errlen) {

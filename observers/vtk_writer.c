@@ -336,7 +336,7 @@ static void vw_destroy(floe_observer *o) {
 }
 
 static const floe_observer_class vtk_writer_class = {
-    1, "vtk_writer", NULL, vw_observe, vw_end, vw_destroy};
+    1, "vtk_writer", NULL, vw_observe, vw_end, vw_destroy, 0};
 
 int floe_vtk_writer_set_ascii(floe_observer *o, int ascii) {
     if (!o || o->klass != &vtk_writer_class) return FLOE_EINVAL;

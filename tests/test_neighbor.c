@@ -71,6 +71,7 @@ int main(void) {
         p.geometry = g;
         floe_v3_set(p.x, 0, 0, 0.005);
         int i = floe_world_add_particle(w, &p);
+        floe_world_record_contacts(w, 1);
         floe_world_prepare(w);
         for (int s = 0; s < 20000; s++) {
             if (forced) floe_nl_build(&w->nl, &w->p, 3, 16);

@@ -37,6 +37,7 @@ static hand_world *hand_world_new(int dim) {
     p->cap = MAXP;
     w->contacts = h->contacts;
     w->contacts_cap = MAXC;
+    w->record_contacts = 1;
     return h;
 }
 

@@ -43,6 +43,7 @@ int main(void) {
                 floe_v3_set(p.x, (i + 0.5) * L / n + jit[0], (j + 0.5) * L / n + jit[1], (k + 0.5) * L / n + jit[2]);
                 floe_world_add_particle(w, &p);
             }
+    floe_world_record_contacts(w, 1);
     CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
     printf("  dt = %.3g s\n", floe_world_dt(w));
     for (int st = 0; st < 100000; st++)
