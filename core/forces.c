@@ -38,15 +38,25 @@ int floe_compute_forces(floe_world *w) {
         for (int k = 0; k < 3; k++) p->f[3 * i + k] = p->mass[i] * w->def.gravity[k];
     }
     if (w->body_force) {
+        if (w->fb_n < n) { /* previous callback force and torque, for the trapezoid rule */
+            double *fb = realloc(w->fb_old, (size_t)n * 6 * sizeof(double));
+            if (!fb) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+            memset(fb + 6 * w->fb_n, 0, (size_t)(n - w->fb_n) * 6 * sizeof(double));
+            w->fb_old = fb;
+            w->fb_n = n;
+        }
         double wb = 0;
         for (int i = 0; i < n; i++) {
             if (p->motion[i] != FLOE_FREE) continue;
-            double f[3] = {0, 0, 0}, t[3] = {0, 0, 0};
+            double f[3] = {0, 0, 0}, t[3] = {0, 0, 0}, *old = w->fb_old + 6 * i;
             w->body_force(w, i, w->time, f, t, w->body_force_user);
             floe_v3_add(p->f + 3 * i, p->f + 3 * i, f);
             floe_v3_add(p->t + 3 * i, p->t + 3 * i, t);
-            /* velocities are at mid-step here: work over the step ~ F . v dt */
-            wb += w->dt * (floe_v3_dot(f, p->v + 3 * i) + floe_v3_dot(t, p->w + 3 * i));
+            /* velocities are at mid-step here (dx = v dt): work = (F_old + F_new)/2 . dx */
+            for (int a = 0; a < 3; a++)
+                wb += 0.5 * w->dt * ((f[a] + old[a]) * p->v[3 * i + a] + (t[a] + old[3 + a]) * p->w[3 * i + a]);
+            memcpy(old, f, sizeof f);
+            memcpy(old + 3, t, sizeof t);
         }
         if (stepping) w->energy.work_body += wb;
     }

@@ -101,6 +101,7 @@ void floe_world_destroy(floe_world *w) {
     free(w->law_owned);
     free(w->laws);
     free(w->motions);
+    free(w->fb_old);
     for (int i = 0; i < w->nstates; i++) {
         if (w->states[i]->klass->destroy) w->states[i]->klass->destroy(w->states[i]);
         else free(w->states[i]);

@@ -120,8 +120,15 @@ def main():
         outbad = os.path.join(tmp, "unstable")
         rc, out, err = run([cli, "run", bad, "-o", outbad], cwd=tmp)
         check(rc == 1, "unstable run: exit %d, expected 1\n%s\n%s" % (rc, out, err))
-        check("unstable" in err, "unstable run: message %r" % err)
-        check(os.path.isfile(os.path.join(outbad, "energy.csv")), "unstable run: outputs kept")
+        check("unstable" in err and "particle" in err, "unstable run: message names the particle %r" % err)
+        ecsv = os.path.join(outbad, "energy.csv")
+        check(os.path.isfile(ecsv), "unstable run: outputs kept")
+        if os.path.isfile(ecsv):
+            with open(ecsv) as fh:
+                rows = [r for r in fh.read().splitlines()[1:] if r]
+            # the state at the failure is flushed: a last row after t = 0
+            check(len(rows) >= 2 and float(rows[-1].split(",")[0]) > 0,
+                  "unstable run: energy.csv holds the state at failure (%d rows)" % len(rows))
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     print("test_cli: %d passed, %d failed" % (passed, failed))
