@@ -182,16 +182,17 @@ static int hm_force(const floe_contact_law *law_, const floe_contact *c, double 
     const double limit = H->mu * Fn;
     const double ft2 = floe_v3_dot(Ft, Ft);
     diss += gt * vt2 * dt;
+    const double half_inv_kt = 0.5 / kt;
     if (ft2 > limit * limit) {
         const double ftmag = sqrt(ft2);
-        const double e_before = 0.5 * floe_v3_dot(Fs, Fs) / kt;
+        const double e_before = floe_v3_dot(Fs, Fs) * half_inv_kt;
         floe_v3_scale(Ft, limit / ftmag);
         for (int k = 0; k < 3; ++k) Fs[k] = Ft[k] + gt * c->vt[k];
-        diss += e_before - 0.5 * floe_v3_dot(Fs, Fs) / kt;
+        diss += e_before - floe_v3_dot(Fs, Fs) * half_inv_kt;
     }
 
     for (int k = 0; k < 3; ++k) out->force[k] = -Fn * c->n[k] + Ft[k];
-    out->energy = 0.4 * fel * d + 0.5 * floe_v3_dot(Fs, Fs) / kt;
+    out->energy = 0.4 * fel * d + floe_v3_dot(Fs, Fs) * half_inv_kt;
     out->dissipation = diss;
     out->fn = Fn;
     return FLOE_OK;

@@ -71,7 +71,26 @@ int floe_compute_forces(floe_world *w) {
         /* bounding spheres apart: no contact for any pair of shapes (most list pairs) */
         const double *xa = p->x + 3 * i, *xb = p->x + 3 * j;
         double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2], rs = p->radius[i] + p->radius[j];
-        if (dx * dx + dy * dy + dz * dz < rs * rs || !(rs < INFINITY)) {
+        double d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 < rs * rs) {
+            if (p->kind[i] == FLOE_GEOM_SPHERE && p->kind[j] == FLOE_GEOM_SPHERE) {
+                /* sphere-sphere inline (the bounding test above is the exact test) */
+                double dist = sqrt(d2), inv = dist > 0 ? 1.0 / dist : 0.0;
+                double ri = p->radius[i], rj = p->radius[j];
+                if (dist > 0) floe_v3_set(c.n, dx * inv, dy * inv, dz * inv);
+                else floe_v3_set(c.n, 1, 0, 0);
+                c.i = i; c.j = j;
+                c.depth = rs - dist;
+                c.r_eff = ri * rj / rs;
+                for (int a = 0; a < 3; a++) {
+                    c.x1[a] = xa[a] + ri * c.n[a];
+                    c.x2[a] = xb[a] - rj * c.n[a];
+                    c.point[a] = 0.5 * (c.x1[a] + c.x2[a]);
+                }
+                r = 1;
+            } else r = floe_detect(w, i, j, &c);
+            w->detector_calls++;
+        } else if (!(rs < INFINITY)) {
             r = floe_detect(w, i, j, &c);
             w->detector_calls++;
         }
@@ -102,9 +121,8 @@ int floe_compute_forces(floe_world *w) {
         for (int a = 0; a < 3; a++) c.vr[a] = (p->v[3 * i + a] + ui[a]) - (p->v[3 * j + a] + uj[a]);
         c.vn = floe_v3_dot(c.vr, c.n);
         for (int a = 0; a < 3; a++) c.vt[a] = c.vr[a] - c.vn * c.n[a];
-        double mi = p->motion[i] == FLOE_FREE ? p->mass[i] : INFINITY;
-        double mj = p->motion[j] == FLOE_FREE ? p->mass[j] : INFINITY;
-        c.m_eff = isfinite(mi) && isfinite(mj) ? mi * mj / (mi + mj) : (isfinite(mi) ? mi : mj);
+        /* inverse masses are 0 for fixed and kinematic particles: m* = the free one's mass */
+        c.m_eff = 1.0 / (p->inv_mass[i] + p->inv_mass[j]);
         c.dt = stepping ? w->dt : 0.0; /* prepare evaluates forces without advancing history */
         const floe_contact_law *law = w->laws[p->material[i] * nm + p->material[j]];
         floe_contact_result res;
