@@ -97,6 +97,22 @@ typedef struct floe_hertz_mindlin_law {
 extern const floe_contact_law_class floe_linear_law_class;
 extern const floe_contact_law_class floe_hertz_mindlin_law_class;
 
+/* Rotate a stored tangential history vector (shear spring) onto the plane normal to n,
+ * keeping its length, so that it follows the rigid rotation of the contact frame
+ * (LIGGGHTS/LAMMPS). For the usual small turn, 1/sqrt(1 - q) is expanded to second order
+ * in q = (s.n)^2/|s|^2 (relative error < 1e-12 for q < 1e-4); a spring parallel to n has
+ * no direction left and is zeroed. For use inside contact laws. */
+static inline void floe_contact_rotate_history(double s[3], const double n[3]) {
+    double mag2 = floe_v3_dot(s, s);
+    if (mag2 == 0.0) return;
+    double sn = floe_v3_dot(s, n);
+    floe_v3_axpy(s, -sn, n);
+    double p2 = mag2 - sn * sn, q = sn * sn / mag2;
+    if (q < 1e-4) floe_v3_scale(s, 1.0 + q * (0.5 + 0.375 * q));
+    else if (p2 > 1e-24 * mag2) floe_v3_scale(s, sqrt(mag2 / floe_v3_dot(s, s)));
+    else floe_v3_set(s, 0.0, 0.0, 0.0);
+}
+
 /* Constructors (caller owns the result, or the world after floe_world_set_law). */
 floe_contact_law *floe_linear_law_create(double kn, double ks, double gn, double gs, double mu);
 floe_contact_law *floe_hertz_mindlin_law_create(const floe_material *a, const floe_material *b,

@@ -133,23 +133,6 @@ double floe_hertz_damping_for_restitution(double e)
 
 /* ---- the law ---- */
 
-static void hm_project_tangent(double s[3], const double n[3])
-{
-    double mag2 = floe_v3_dot(s, s);
-    if (mag2 == 0.0) return;
-    double sn = floe_v3_dot(s, n);
-    floe_v3_axpy(s, -sn, n);
-    double p2 = mag2 - sn * sn, q = sn * sn / mag2;
-    if (q < 1e-4) {
-        /* the usual case, a normal that turned a little: sqrt(mag2 / p2) = 1/sqrt(1 - q)
-         * to second order in q (relative error < 1e-12 for q < 1e-4) */
-        floe_v3_scale(s, 1.0 + q * (0.5 + 0.375 * q));
-    } else if (p2 > 1e-24 * mag2)
-        floe_v3_scale(s, sqrt(mag2 / floe_v3_dot(s, s)));
-    else
-        floe_v3_set(s, 0.0, 0.0, 0.0);
-}
-
 static int hm_force(const floe_contact_law *law_, const floe_contact *c, double *hist,
                     floe_contact_result *out)
 {
@@ -174,7 +157,7 @@ static int hm_force(const floe_contact_law *law_, const floe_contact *c, double 
     const double kt = 8.0 * H->g_star * a;
     const double gt = gn * H->tangent_damping_ratio; /* sqrt(kt m) = sqrt(Sn m) sqrt(4 G* / E*) */
     double *Fs = hist;
-    hm_project_tangent(Fs, c->n);
+    floe_contact_rotate_history(Fs, c->n);
     floe_v3_axpy(Fs, -kt * dt, c->vt);
     double Ft[3];
     for (int k = 0; k < 3; ++k) Ft[k] = Fs[k] - gt * c->vt[k];

@@ -28,20 +28,6 @@
 
 static const double linear_pi = 3.14159265358979323846;
 
-/* Rotate the stored tangential vector onto the plane normal to n, keeping its length. */
-static void linear_project_tangent(double s[3], const double n[3])
-{
-    double mag2 = floe_v3_dot(s, s);
-    if (mag2 == 0.0) return;
-    double sn = floe_v3_dot(s, n);
-    floe_v3_axpy(s, -sn, n);
-    double p2 = floe_v3_dot(s, s);
-    if (p2 > 1e-24 * mag2)
-        floe_v3_scale(s, sqrt(mag2 / p2));
-    else
-        floe_v3_set(s, 0.0, 0.0, 0.0); /* spring parallel to the normal: no direction left */
-}
-
 static int linear_force(const floe_contact_law *law_, const floe_contact *c, double *hist,
                         floe_contact_result *out)
 {
@@ -56,7 +42,7 @@ static int linear_force(const floe_contact_law *law_, const floe_contact *c, dou
 
     /* tangential */
     double *s = hist;
-    linear_project_tangent(s, c->n);
+    floe_contact_rotate_history(s, c->n);
     floe_v3_axpy(s, dt, c->vt);
     double Ft[3] = {0.0, 0.0, 0.0};
     floe_v3_axpy(Ft, -L->ks, s);
