@@ -103,13 +103,12 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     double *bx = malloc((nb ? nb : 1) * 3 * sizeof(double));
     nl->walls = malloc((nw ? nw : 1) * sizeof(int));
     if (!bidx || !bx || !nl->walls) { free(bidx); free(bx); free(okeys); free(ohist); return FLOE_ENOMEM; }
-    double rmax = 0, rmin = INFINITY;
+    double rmin = INFINITY;
     nb = 0;
     for (int i = 0; i < n; i++) {
         if (isfinite(p->radius[i])) {
             memcpy(bx + 3 * nb, p->x + 3 * i, 3 * sizeof(double));
             bidx[nb++] = i;
-            if (p->radius[i] > rmax) rmax = p->radius[i];
             if (p->radius[i] < rmin) rmin = p->radius[i];
         } else {
             nl->walls[nl->nwalls++] = i;
@@ -121,9 +120,12 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     floe_kdtree_destroy(nl->tree);
     nl->tree = nb ? floe_kdtree_build(bx, nb, dim, leaf_size) : NULL;
     if (nb && !nl->tree) rc = FLOE_ENOMEM;
+    /* mixed sizes: each pair is found from its larger particle (ties: the lower index),
+     * whose query radius 2 r_i + skin covers every partner no larger than itself, so a few
+     * big particles do not inflate the search of all the small ones */
     for (int a = 0; a < nb && rc == FLOE_OK; a++) {
         int i = bidx[a];
-        double reach = p->radius[i] + rmax + skin;
+        double reach = 2 * p->radius[i] + skin;
         int cnt;
         for (;;) {
             cnt = floe_kdtree_radius(nl->tree, p->x + 3 * i, reach, nl->scratch, nl->scratch_cap);
@@ -137,7 +139,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
         if (rc) break;
         for (int k = 0; k < cnt; k++) {
             int j = bidx[nl->scratch[k]];
-            if (j <= i) continue;
+            if (p->radius[j] > p->radius[i] || (p->radius[j] == p->radius[i] && j <= i)) continue;
             if (p->motion[i] != FLOE_FREE && p->motion[j] != FLOE_FREE) continue;
             double d[3];
             floe_v3_sub(d, p->x + 3 * j, p->x + 3 * i);

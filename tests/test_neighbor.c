@@ -22,6 +22,7 @@ static void check_pairs(const char *what, double scale, double offset, int n) {
     for (int i = 0; i < n; i++) {
         for (int k = 0; k < 3; k++) p.x[3 * i + k] = offset + scale * rnd(&s);
         p.radius[i] = scale * (i % 7 == 0 ? 0.03 : 0.006) * (0.5 + rnd(&s)); /* mixed sizes */
+        if (i == 5) p.radius[i] = 0.25 * scale; /* and one boulder 40x the median size */
         p.q[4 * i] = 1;
     }
     floe_neighbor_list nl;
