@@ -91,9 +91,14 @@ static int sphere_sdf(const floe_world *w, int i, int j, floe_contact *c) {
     return 1;
 }
 
-/* box i against plane j: penetrating vertices; contact point is their depth-weighted
- * mean (a face or edge resting on the plane gets a central point, so it rests without
- * rocking), depth is the deepest vertex. */
+/* box i against plane j: the penetrating vertices lumped into one contact with
+ * depth = sum of the vertex depths, at their depth-weighted mean. For a linear law this is
+ * exactly the resultant of one spring per penetrating vertex (force k sum d_v, moment
+ * sum d_v x_v), so the contact is conservative and a face resting on the plane gets a
+ * central point and rests without rocking. For Hertz it is an approximation (a flat face
+ * has no Hertz radius anyway; R* = the bounding radius). A true manifold (one contact per
+ * vertex, each with its own shear history) comes with the multi-contact support of the
+ * convex-shape milestone. */
 static int box_plane(const floe_world *w, int i, int j, floe_contact *c) {
     const floe_box *b = (const floe_box *)w->geoms[w->p.geom[i]];
     double nw[3], rel[3];
@@ -123,10 +128,11 @@ static int box_plane(const floe_world *w, int i, int j, floe_contact *c) {
     floe_v3_sub(rel, pc, w->p.x + 3 * j);
     double s = floe_v3_dot(rel, nw);
     floe_v3_set(c->n, -nw[0], -nw[1], -nw[2]);
-    c->depth = dmax;
+    (void)dmax;
+    c->depth = wsum;
     for (int k = 0; k < 3; k++) {
         c->x2[k] = pc[k] - s * nw[k];
-        c->x1[k] = c->x2[k] - dmax * nw[k];
+        c->x1[k] = pc[k];
     }
     c->r_eff = floe_geometry_bounding_radius(&b->base);
     finish(c);
