@@ -28,7 +28,7 @@ static int push_contact(floe_world *w, const floe_contact *c, const floe_contact
 int floe_compute_forces(floe_world *w) {
     floe_particles *p = &w->p;
     const int n = p->n, dim = w->def.dim;
-    const int stepping = w->step > 0;
+    const int stepping = w->advancing; /* 0 at prepare: no history advance, no work booked */
     if (n > 0) {
         memset(p->f, 0, (size_t)n * 3 * sizeof(double));
         memset(p->t, 0, (size_t)n * 3 * sizeof(double));

@@ -16,7 +16,7 @@ int floe_nl_init(floe_neighbor_list *nl) {
 void floe_nl_free(floe_neighbor_list *nl) {
     floe_kdtree_destroy(nl->tree);
     free(nl->pi); free(nl->pj); free(nl->hist); free(nl->touching);
-    free(nl->x_build); free(nl->walls); free(nl->scratch); free(nl->r_build);
+    free(nl->x_build); free(nl->walls); free(nl->scratch); free(nl->r_build); free(nl->q_walls);
     memset(nl, 0, sizeof *nl);
 }
 
@@ -30,6 +30,11 @@ int floe_nl_needs_rebuild(const floe_neighbor_list *nl, const floe_particles *p)
         if (grow > 0) {
             if (sqrt(dx * dx + dy * dy + dz * dz) + grow > lim) return 1;
         } else if (dx * dx + dy * dy + dz * dz > lim2) return 1;
+    }
+    /* a wall that turned (kinematic rotation) moves far from its pivot: re-pair it */
+    for (int a = 0; a < nl->nwalls; a++) {
+        int wi = nl->walls[a];
+        if (memcmp(p->q + 4 * wi, nl->q_walls + 4 * a, 4 * sizeof(double))) return 1;
     }
     return 0;
 }
@@ -147,6 +152,14 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             if (floe_v3_dot(d, d) <= lim * lim) rc = push_pair(nl, i, j);
         }
     }
+    if (rc == FLOE_OK) {
+        double *qw = realloc(nl->q_walls, (size_t)(nl->nwalls ? nl->nwalls : 1) * 4 * sizeof(double));
+        if (!qw) rc = FLOE_ENOMEM;
+        else {
+            nl->q_walls = qw;
+            for (int a = 0; a < nl->nwalls; a++) memcpy(qw + 4 * a, p->q + 4 * nl->walls[a], 4 * sizeof(double));
+        }
+    }
     /* walls: plane through x with normal q*(0,0,1) */
     for (int a = 0; a < nl->nwalls && rc == FLOE_OK; a++) {
         int wi = nl->walls[a];
@@ -213,5 +226,9 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     }
     free(okeys);
     free(ohist);
+    if (rc) { /* leave a consistent (empty) list: the caller reports the error */
+        nl->npairs = 0;
+        nl->n_build = 0;
+    }
     return rc;
 }

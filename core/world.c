@@ -235,9 +235,12 @@ int floe_world_add_wall(floe_world *w, const double pt[3], const double n[3], in
 
 int floe_world_set_motion(floe_world *w, int i, floe_motion_fn fn, void *user) {
     if (i < 0 || i >= w->p.n) return floe_world_error(w, FLOE_EINVAL, "set_motion: particle %d out of range", i);
+    if (!fn) return floe_world_error(w, FLOE_EINVAL, "set_motion: the motion function is NULL");
     if (grow((void **)&w->motions, &w->motions_cap, w->nmotions + 1, sizeof *w->motions)) return FLOE_ENOMEM;
     w->motions[w->nmotions++] = (floe_motion_cb){i, fn, user};
     w->p.motion[i] = FLOE_KINEMATIC;
+    w->p.inv_mass[i] = 0;   /* no longer moved by forces (also when called after prepare) */
+    w->prepared = 0;
     return FLOE_OK;
 }
 
@@ -507,8 +510,14 @@ int floe_world_prepare(floe_world *w) {
     }
     e->kinetic_trans = kt;
     e->kinetic_rot = kr;
-    e->initial = kt + kr + e->elastic;
-    e->work_body = e->work_boundary = e->dissipated = 0;
+    if (w->step == 0) {
+        e->initial = kt + kr + e->elastic;
+        e->work_body = e->work_boundary = e->dissipated = 0;
+    } else {
+        /* re-prepared mid-run (particles added, motion changed): the ledger goes on from
+         * the present state, so the balance error restarts from 0 here */
+        e->initial = kt + kr + e->elastic + e->dissipated - e->work_body - e->work_boundary;
+    }
     for (int k = 0; k < w->nobs; k++) {
         floe_observer *o = w->obs[k];
         o->next_time = w->time;
@@ -673,7 +682,10 @@ int floe_world_step(floe_world *w) {
         int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
         if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
     }
-    FLOE_TRY(floe_compute_forces(w));
+    w->advancing = 1;
+    int frc = floe_compute_forces(w);
+    w->advancing = 0;
+    if (frc) return frc;
     /* 4. second half kick */
     double kt = 0, kr = 0, wbound = 0;
     for (int i = 0; i < n; i++) {

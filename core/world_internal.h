@@ -51,6 +51,7 @@ typedef struct floe_neighbor_list {
     unsigned char *touching; /* pair was in contact last step */
     double *x_build;         /* 3n positions at the last build */
     double *r_build;         /* n bounding radii at the last build */
+    double *q_walls;         /* 4 per wall: orientation at the last build */
     int n_build;
     double skin;
     long rebuilds;
@@ -78,6 +79,7 @@ struct floe_world {
     long step;
     double t0; long step0;   /* time and step at prepare: time = t0 + (step - step0) dt */
     int prepared;
+    int advancing;            /* forces evaluated inside a step (history and ledger advance) */
     int record_contacts;      /* keep w->contacts (observers that need them, or the user) */
     int finished;
     floe_energy energy;
