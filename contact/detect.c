@@ -150,14 +150,21 @@ static int sdf_plane(const floe_world *w, int i, int j, floe_contact *c) {
     if (floe_v3_dot(rel, nw) >= R) return 0;
     const double *qi = w->p.q + 4 * i;
     floe_q_rotate_inv(nb, qi, nw);
-    for (int it = 0; it < 64; it++) {
+    /* X <- project(X - s n) with s doubling from 2R to 1e3 R: on a flat face tilted by a
+     * from the plane each pass moves about s*a along it, so the corner is reached in a few
+     * passes; on curved surfaces the error is ~ R^3/s^2. Farther steps lose precision in
+     * the finite-difference gradient of a user SDF. Measured on a tilted cube (test_detect):
+     * depth within 0.3 % for tilts 1e-1 .. 1e-5 rad. */
+    double step = 2 * R;
+    for (int it = 0; it < 80; it++) {
         double prev[3];
         floe_v3_copy(prev, X);
         floe_v3_copy(Y, X);
-        floe_v3_axpy(Y, -2 * R, nb);
+        floe_v3_axpy(Y, -step, nb);
         floe_geometry_project(g, Y, X);
         floe_v3_sub(prev, prev, X);
-        if (floe_v3_norm(prev) < 1e-12 * R) break;
+        if (step >= 1e3 * R && floe_v3_norm(prev) < 1e-12 * R) break;
+        if (step < 1e3 * R) step *= 2;
     }
     double xw[3];
     floe_q_rotate(xw, qi, X);
