@@ -427,6 +427,15 @@ int floe_world_prepare(floe_world *w) {
         int mdim = (w->def.dim == 2 && w->def.mass_2d_area) ? 2 : 3;
         int rc = floe_geometry_mass_properties(g, mdim, w->mats[p->material[i]].density, &mp);
         if (rc) return floe_world_error(w, rc, "particle %d: mass properties of its %s failed", i, g->klass->name);
+        /* the body frame must be the principal frame at the centre of mass: the integrator
+         * rotates about the origin with the inertia diagonal in the body axes */
+        double off = floe_v3_norm(mp.centroid);
+        if (off > 1e-2 * p->radius[i] || mp.off_axis > 1e-2)
+            return floe_world_error(w, FLOE_EINVAL,
+                                    "particle %d: its %s shape has its centre of mass at (%g, %g, %g) and "
+                                    "off-diagonal inertia %.2g (relative): define the SDF about the centre "
+                                    "of mass with the principal axes along x, y, z",
+                                    i, g->klass->name, mp.centroid[0], mp.centroid[1], mp.centroid[2], mp.off_axis);
         if (p->mass[i] > 0) { /* user mass: scale inertia */
             double s = p->mass[i] / mp.mass;
             for (int k = 0; k < 3; k++) mp.inertia[k] *= s;

@@ -24,6 +24,8 @@ typedef struct floe_mass_properties {
     double centroid[3];  /* body frame, m */
     double inertia[3];   /* principal moments about the centroid, kg m^2, body axes */
     double quadrature_error; /* estimated relative error of numerical quadrature, 0 if analytic */
+    double off_axis;         /* largest off-diagonal of the inertia tensor in the body axes over
+                                its largest diagonal: 0 when the body axes are principal */
 } floe_mass_properties;
 
 typedef struct floe_geometry floe_geometry;

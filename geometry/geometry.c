@@ -118,11 +118,14 @@ static void moments_to_props(const double m[10], int dim, double density, floe_m
     double xx = m[4] / V - c[0] * c[0], yy = m[5] / V - c[1] * c[1], zz = m[6] / V - c[2] * c[2];
     double xy = m[7] / V - c[0] * c[1], xz = m[8] / V - c[0] * c[2], yz = m[9] / V - c[1] * c[2];
     double M = out->mass;
+    out->off_axis = 0;
     if (dim == 2) { /* planar: only rotation about z matters; polar moment */
         out->inertia[0] = M * yy; out->inertia[1] = M * xx; out->inertia[2] = M * (xx + yy);
         return;
     }
     double I[3][3] = {{M * (yy + zz), -M * xy, -M * xz}, {-M * xy, M * (xx + zz), -M * yz}, {-M * xz, -M * yz, M * (xx + yy)}};
+    double dmax = fmax(I[0][0], fmax(I[1][1], I[2][2]));
+    out->off_axis = dmax > 0 ? fmax(fabs(I[0][1]), fmax(fabs(I[0][2]), fabs(I[1][2]))) / dmax : 0;
     sym3_eig(I, out->inertia);
 }
 

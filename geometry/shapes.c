@@ -24,6 +24,7 @@ static int sphere_mass(const floe_geometry *g, int dim, double rho, floe_mass_pr
     double R = ((const floe_sphere *)g)->radius;
     floe_v3_set(o->centroid, 0, 0, 0);
     o->quadrature_error = 0;
+    o->off_axis = 0;
     if (dim == 2) { /* disc per unit thickness */
         o->volume = M_PI * R * R; o->mass = rho * o->volume;
         double I = 0.5 * o->mass * R * R;
@@ -93,6 +94,7 @@ static int box_mass(const floe_geometry *g, int dim, double rho, floe_mass_prope
     double a = 2 * h[0], b = 2 * h[1], c = 2 * h[2];
     floe_v3_set(o->centroid, 0, 0, 0);
     o->quadrature_error = 0;
+    o->off_axis = 0;
     if (dim == 2) {
         o->volume = a * b; o->mass = rho * o->volume;
         floe_v3_set(o->inertia, o->mass * b * b / 12, o->mass * a * a / 12, o->mass * (a * a + b * b) / 12);
@@ -132,6 +134,7 @@ static int plane_mass(const floe_geometry *g, int dim, double rho, floe_mass_pro
     floe_v3_set(o->centroid, 0, 0, 0);
     floe_v3_set(o->inertia, INFINITY, INFINITY, INFINITY);
     o->quadrature_error = 0;
+    o->off_axis = 0;
     return FLOE_OK;
 }
 const floe_geometry_class floe_plane_class = {1, "plane", FLOE_GEOM_PLANE, plane_sdf, plane_grad,

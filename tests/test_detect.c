@@ -1,9 +1,11 @@
 /* test_detect.c - analytic detectors against exact answers: a cube given only as a user
  * SDF, tilted by 1e-1 .. 1e-5 rad about y and pushed 1e-4 m into a wall (the exact depth
- * of its lowest corner) must be detected with the depth within 1 %. */
+ * of its lowest corner) must be detected with the depth within 1 %. A user shape whose
+ * centre of mass is off the body origin is refused with a message. */
 #include "floe.h"
 #include "world_internal.h"
 #include "check.h"
+#include <string.h>
 
 static double cube_sdf(const double X[3], void *u) {
     double h = *(double *)u, q[3], o = 0, in = -INFINITY;
@@ -15,7 +17,31 @@ static double cube_sdf(const double X[3], void *u) {
     return o > 0 ? sqrt(o) : in;
 }
 
+static double offset_sphere(const double X[3], void *u) {
+    (void)u;
+    double d[3] = {X[0] - 0.05, X[1], X[2]};
+    return floe_v3_norm(d) - 0.1;
+}
+
 int main(void) {
+    /* a user shape whose centre of mass is not the body origin is refused, not integrated
+     * about the wrong point */
+    {
+        floe_world_def d = floe_default_world_def();
+        d.dt = 1e-3;
+        floe_world *w = floe_world_create(&d, NULL, 0);
+        floe_material m = {"m", 1000, 1e7, 0.3};
+        floe_world_add_material(w, &m);
+        int g = floe_world_add_geometry(w, floe_user_shape_create(offset_sphere, NULL, 0.16));
+        floe_particle_def p = floe_default_particle_def();
+        p.geometry = g;
+        floe_world_add_particle(w, &p);
+        int rc = floe_world_prepare(w);
+        CHECK(rc == FLOE_EINVAL && strstr(floe_world_last_error(w), "centre of mass"),
+              "off-centre user shape must be refused (rc %d: %s)", rc, floe_world_last_error(w));
+        printf("  %s\n", floe_world_last_error(w));
+        floe_world_destroy(w);
+    }
     static double h = 0.1;
     for (double tilt = 1e-1; tilt >= 1e-5; tilt /= 10) {
         floe_world_def d = floe_default_world_def();
