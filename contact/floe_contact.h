@@ -64,6 +64,10 @@ typedef struct floe_contact_law_class {
     void (*stiffness)(const floe_contact_law *law, double r_eff, double m_eff, double depth,
                       double *kn, double *cn);
     void (*destroy)(floe_contact_law *law);
+    /* optional: tangential stiffness (N/m) and damping (N s/m) at the same representative
+     * contact, for the rotational modes in the critical time step (NULL = none) */
+    void (*tangential_stiffness)(const floe_contact_law *law, double r_eff, double m_eff, double depth,
+                                 double *kt, double *ct);
 } floe_contact_law_class;
 
 struct floe_contact_law {

@@ -194,10 +194,22 @@ static void hm_stiffness(const floe_contact_law *law_, double r_eff, double m_ef
     if (cn) *cn = g;
 }
 
+static void hm_tangential(const floe_contact_law *law_, double r_eff, double m_eff, double depth,
+                          double *kt, double *ct)
+{
+    const floe_hertz_mindlin_law *H = (const floe_hertz_mindlin_law *)law_;
+    double kn = 0.0, cn = 0.0;
+    hm_stiffness(law_, r_eff, m_eff, depth, &kn, &cn);
+    /* kt = 8 G* sqrt(R* d) = kn (4 G* / E*); damping scaled by the square root of that */
+    double ratio = H->tangent_damping_ratio * H->tangent_damping_ratio;
+    if (kt) *kt = kn * ratio;
+    if (ct) *ct = cn * H->tangent_damping_ratio;
+}
+
 static void hm_destroy(floe_contact_law *law) { free(law); }
 
 const floe_contact_law_class floe_hertz_mindlin_law_class = {
-    1, "hertz_mindlin", 3, hm_force, hm_stiffness, hm_destroy
+    1, "hertz_mindlin", 3, hm_force, hm_stiffness, hm_destroy, hm_tangential
 };
 
 static int hm_material_ok(const floe_material *m)

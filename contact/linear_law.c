@@ -86,10 +86,19 @@ static void linear_stiffness(const floe_contact_law *law_, double r_eff, double 
     if (cn) *cn = L->gn;
 }
 
+static void linear_tangential(const floe_contact_law *law_, double r_eff, double m_eff,
+                              double depth, double *kt, double *ct)
+{
+    const floe_linear_law *L = (const floe_linear_law *)law_;
+    (void)r_eff; (void)m_eff; (void)depth;
+    if (kt) *kt = L->ks;
+    if (ct) *ct = L->gs;
+}
+
 static void linear_destroy(floe_contact_law *law) { free(law); }
 
 const floe_contact_law_class floe_linear_law_class = {
-    1, "linear", 3, linear_force, linear_stiffness, linear_destroy
+    1, "linear", 3, linear_force, linear_stiffness, linear_destroy, linear_tangential
 };
 
 floe_contact_law *floe_linear_law_create(double kn, double ks, double gn, double gs, double mu)

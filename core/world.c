@@ -356,10 +356,18 @@ static double rep_depth(const floe_contact_law *law, double r_eff, double m_eff,
  * of a close packing in 3D, 6 for the 6 of a hexagonal packing in 2D); the dashpots add up
  * the same way (the peers' "8 gamma / m"). Spring-dashpot limit:
  * dt < (2/omega)(sqrt(1 + zeta^2) - zeta). */
-static void pair_estimate(const floe_contact_law *law, double r_eff, double m_eff, double m, double C, double v,
-                          double *dt) {
-    double kn = 0, cn = 0;
-    law->klass->stiffness(law, r_eff, m_eff, rep_depth(law, r_eff, m_eff, v), &kn, &cn);
+static void pair_estimate(const floe_contact_law *law, double r_eff, double m_eff, double m, double rot, double C,
+                          double v, double *dt) {
+    double kn = 0, cn = 0, depth = rep_depth(law, r_eff, m_eff, v);
+    law->klass->stiffness(law, r_eff, m_eff, depth, &kn, &cn);
+    if (law->klass->tangential_stiffness) {
+        /* tangential springs act at the surface: the contact point of a particle of mass m,
+         * radius R and inertia I moves as a mass 1/(1/m + R^2/I) = m/rot */
+        double kt = 0, ct = 0;
+        law->klass->tangential_stiffness(law, r_eff, m_eff, depth, &kt, &ct);
+        if (kt * rot > kn) kn = kt * rot;
+        if (ct * rot > cn) cn = ct * rot;
+    }
     if (!(kn > 0)) return;
     double k = C * kn, c = C * cn;
     double om = sqrt(k / m), zeta = c / (2 * sqrt(k * m));
@@ -388,19 +396,28 @@ static int estimate_dt(floe_world *w) {
     w->v_expected = vrel;
     /* per material: smallest free particle (mass, radius) */
     for (int m = 0; m < w->nmats; m++) {
-        double mmin = INFINITY, rmin = INFINITY;
+        double mmin = INFINITY, rmin = INFINITY, rot = 1;
         for (int i = 0; i < p->n; i++)
             if (p->material[i] == m && p->motion[i] == FLOE_FREE) {
                 if (p->mass[i] < mmin) mmin = p->mass[i];
                 if (p->radius[i] < rmin) rmin = p->radius[i];
+                /* 1 + m R^2 / I: 3.5 for a sphere (the largest over the material) */
+                const double *I = p->inertia + 3 * i;
+                double imin = w->def.dim == 2 ? I[2] : fmin(I[0], fmin(I[1], I[2]));
+                double rr = 1 + p->mass[i] * p->radius[i] * p->radius[i] / imin;
+                if (imin > 0 && rr > rot) rot = rr;
             }
         if (!isfinite(mmin)) continue;
         for (int m2 = 0; m2 < w->nmats; m2++) {
             const floe_contact_law *law = w->laws[m * w->nmats + m2];
             if (!law) continue;
             /* partner of the same size (m* = m/2, R* = R/2) and a wall (m* = m, R* = R) */
-            pair_estimate(law, 0.5 * rmin, 0.5 * mmin, mmin, C, vrel, &dt);
-            pair_estimate(law, rmin, mmin, mmin, C, vrel, &dt);
+            /* a packing (all contacts of a close packing at a 2 % overlap) and an impact at
+             * the expected speed (one contact, C = 2, at the overlap of the collision) */
+            pair_estimate(law, 0.5 * rmin, 0.5 * mmin, mmin, rot, C, 0, &dt);
+            pair_estimate(law, rmin, mmin, mmin, rot, C, 0, &dt);
+            pair_estimate(law, 0.5 * rmin, 0.5 * mmin, mmin, rot, 2.0, vrel, &dt);
+            pair_estimate(law, rmin, mmin, mmin, rot, 2.0, vrel, &dt);
         }
     }
     w->dt_crit = dt;
