@@ -343,7 +343,44 @@ static void test_body_force(void) {
     floe_world_destroy(w);
 }
 
+/* ---- critical time step: a disc caged by six fixed discs with ks = kn, whose fastest
+ * mode is the rotation (omega^2 = 6 ks R^2 / I = 15 ks/m); 0.9 x the estimate must run ---- */
+static floe_world *caged(double dt) {
+    floe_world_def d = floe_default_world_def();
+    d.dim = 2; d.dt = dt;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material m = glass();
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, floe_linear_law_create(1e4, 1e4, 0, 0, 1e6));
+    int g = floe_world_add_geometry(w, floe_sphere_create(0.1));
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = g; p.w[2] = 0.01;
+    floe_world_add_particle(w, &p);
+    for (int k = 0; k < 6; k++) {
+        floe_particle_def q = floe_default_particle_def();
+        q.geometry = g; q.motion = FLOE_FIXED;
+        floe_v3_set(q.x, 0.199 * cos(k * M_PI / 3), 0.199 * sin(k * M_PI / 3), 0);
+        floe_world_add_particle(w, &q);
+    }
+    return w;
+}
+static void test_critical_rotation(void) {
+    floe_world *w = caged(0);
+    floe_world_prepare(w);
+    double dc = floe_world_critical_dt(w);
+    floe_world_destroy(w);
+    int rc = 0;
+    w = caged(0.9 * dc);
+    for (int s = 0; s < 2000 && !rc; s++) rc = floe_world_step(w);
+    double om = w->p.w[2];
+    CHECK(rc == FLOE_OK && fabs(om) < 0.1, "caged disc at 0.9 x critical must stay stable (rc %d, omega %g: %s)", rc, om,
+          floe_world_last_error(w));
+    floe_world_destroy(w);
+    printf("  caged disc: critical estimate %.4g s, stable at 0.9x\n", dc);
+}
+
 int main(void) {
+    printf("critical dt with rotation\n"); test_critical_rotation();
     printf("body force\n"); test_body_force();
     printf("free rotation\n"); test_free_rotation();
     printf("restitution\n"); test_restitution();
