@@ -49,9 +49,20 @@ static int gr_set(floe_state *s, floe_world *w, const double *y) {
         double r = y[0] / r_old, s = w->def.dim == 2 && w->def.mass_2d_area ? r * r : r * r * r;
         double m = w->p.mass[i] * s;
         double scale = s * r * r; /* inertia ~ m R^2 */
+        /* the grown particle keeps its velocity and angular velocity (the added mass moves
+         * with it): momentum and angular momentum grow with the mass, and the kinetic
+         * energy this adds is booked as boundary work so that the ledger still closes */
+        const double *v = w->p.v + 3 * i, *om = w->p.w + 3 * i;
+        double *L = w->p.L + 3 * i;
+        double ke_t = 0.5 * (m - w->p.mass[i]) * floe_v3_dot(v, v);
+        double ke_r = 0.5 * (scale - 1) * floe_v3_dot(L, om);
         w->p.mass[i] = m;
         if (w->p.motion[i] == FLOE_FREE) w->p.inv_mass[i] = 1.0 / m;
-        for (int k = 0; k < 3; k++) w->p.inertia[3 * i + k] *= scale;
+        for (int k = 0; k < 3; k++) {
+            w->p.inertia[3 * i + k] *= scale;
+            L[k] *= scale;
+        }
+        if (w->p.motion[i] == FLOE_FREE) w->energy.work_boundary += ke_t + ke_r;
     }
     return FLOE_OK;
 }

@@ -102,6 +102,7 @@ void floe_world_destroy(floe_world *w) {
     free(w->laws);
     free(w->motions);
     free(w->fb_old);
+    free(w->kin_old);
     for (int i = 0; i < w->nstates; i++) {
         if (w->states[i]->klass->destroy) w->states[i]->klass->destroy(w->states[i]);
         else free(w->states[i]);
@@ -521,6 +522,11 @@ int floe_world_prepare(floe_world *w) {
     }
     int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
     if (rc) return floe_world_error(w, rc, "neighbour list build failed (out of memory)");
+    {
+        double *ko = realloc(w->kin_old, (size_t)(p->n ? p->n : 1) * 6 * sizeof(double));
+        if (!ko) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        w->kin_old = ko;
+    }
     w->prepared = 1;
     w->t0 = w->time;
     w->step0 = w->step;
@@ -639,6 +645,9 @@ int floe_world_step(floe_world *w) {
         double *x = p->x + 3 * i, *v = p->v + 3 * i, *q = p->q + 4 * i;
         if (p->motion[i] == FLOE_FIXED) continue;
         if (p->motion[i] == FLOE_KINEMATIC) {
+            /* keep the force of the step's start for the trapezoid work of the boundary */
+            memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
+            memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
             kinematic_velocity(w, i, w->time + h);
             floe_v3_axpy(x, dt, v);
             double qn[4];
@@ -717,8 +726,12 @@ int floe_world_step(floe_world *w) {
     for (int i = 0; i < n; i++) {
         if (p->motion[i] != FLOE_FREE) {
             if (p->motion[i] == FLOE_KINEMATIC) {
+                /* work done on the others over the step: -(F_old + F_new)/2 . v_half dt (the
+                 * trapezoid rule of velocity Verlet, as for the contacts) */
+                const double *fo = w->kin_old + 6 * i;
+                for (int k = 0; k < 3; k++)
+                    wbound -= h * ((fo[k] + p->f[3 * i + k]) * p->v[3 * i + k] + (fo[3 + k] + p->t[3 * i + k]) * p->w[3 * i + k]);
                 kinematic_velocity(w, i, w->time);
-                wbound -= dt * (floe_v3_dot(p->f + 3 * i, p->v + 3 * i) + floe_v3_dot(p->t + 3 * i, p->w + 3 * i));
             }
             continue;
         }

@@ -70,6 +70,7 @@ struct floe_world {
     floe_motion_cb *motions; int nmotions, motions_cap;
     floe_body_force_fn body_force; void *body_force_user;
     double *fb_old; int fb_n;   /* last callback force and torque per particle (6n) */
+    double *kin_old;            /* force and torque of kinematic particles at the step start (6n) */
     floe_state **states; int nstates, states_cap;
     floe_observer **obs; int nobs, obs_cap;
     floe_neighbor_list nl;

@@ -109,7 +109,7 @@ int main(void) {
         printf("  piston: work %.4e J, elastic %.4e J, kinetic %.2e J, dissipated %.2e J\n", e.work_boundary, e.elastic,
                e.kinetic_trans, e.dissipated);
         CHECK(e.work_boundary > 0, "the piston must do positive work");
-        CHECK_NEAR(e.elastic + e.kinetic_trans + e.dissipated, e.work_boundary, 0.01, "piston work = stored + kinetic + dissipated (tol 1%)");
+        CHECK_NEAR(e.elastic + e.kinetic_trans + e.dissipated, e.work_boundary, 1e-9, "piston work = stored + kinetic + dissipated (tol 1e-9)");
         floe_world_destroy(w);
     }
     return check_summary("test_neighbor");
