@@ -20,6 +20,19 @@ void floe_nl_free(floe_neighbor_list *nl) {
     memset(nl, 0, sizeof *nl);
 }
 
+int floe_nl_needs_rebuild_after_drift(const floe_neighbor_list *nl, const floe_particles *p, double maxd2,
+                                      int growth) {
+    if (!nl->x_build || nl->n_build != p->n) return 1;
+    if (growth) return floe_nl_needs_rebuild(nl, p);
+    double lim = 0.5 * nl->skin;
+    if (maxd2 > lim * lim) return 1;
+    for (int a = 0; a < nl->nwalls; a++) {
+        int wi = nl->walls[a];
+        if (memcmp(p->q + 4 * wi, nl->q_walls + 4 * a, 4 * sizeof(double))) return 1;
+    }
+    return 0;
+}
+
 int floe_nl_needs_rebuild(const floe_neighbor_list *nl, const floe_particles *p) {
     if (!nl->x_build || nl->n_build != p->n) return 1;
     double lim = 0.5 * nl->skin, lim2 = lim * lim;

@@ -639,7 +639,10 @@ int floe_world_step(floe_world *w) {
     floe_particles *p = &w->p;
     const double dt = w->dt, h = 0.5 * dt;
     const int n = p->n;
-    double wb = 0; /* body-force work this step */
+    double wb = 0;    /* body-force work this step */
+    double maxd2 = 0; /* largest squared displacement since the neighbour build */
+    const double *xb = w->nl.x_build;
+    const int have_xb = xb && w->nl.n_build == n;
     /* 1. first half kick + drift (eq 22), rotation by the midpoint rule (eq 23) */
     for (int i = 0; i < n; i++) {
         double *x = p->x + 3 * i, *v = p->v + 3 * i, *q = p->q + 4 * i;
@@ -650,6 +653,11 @@ int floe_world_step(floe_world *w) {
             memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
             kinematic_velocity(w, i, w->time + h);
             floe_v3_axpy(x, dt, v);
+            if (have_xb) {
+                double dx = x[0] - xb[3 * i], dy = x[1] - xb[3 * i + 1], dz = x[2] - xb[3 * i + 2];
+                double d2 = dx * dx + dy * dy + dz * dz;
+                if (d2 > maxd2) maxd2 = d2;
+            }
             double qn[4];
             q_advance(qn, q, p->w + 3 * i, dt);
             memcpy(q, qn, sizeof qn);
@@ -658,6 +666,11 @@ int floe_world_step(floe_world *w) {
         double im = p->inv_mass[i];
         for (int k = 0; k < 3; k++) v[k] += h * im * p->f[3 * i + k];
         for (int k = 0; k < 3; k++) x[k] += dt * v[k];
+        if (have_xb) {
+            double dx = x[0] - xb[3 * i], dy = x[1] - xb[3 * i + 1], dz = x[2] - xb[3 * i + 2];
+            double d2 = dx * dx + dy * dy + dz * dz;
+            if (d2 > maxd2) maxd2 = d2;
+        }
         /* body-force work over the step uses the drift displacement (exact for gravity
          * when the second half adds the same force) */
         double *L = p->L + 3 * i, *om = p->w + 3 * i;
@@ -713,7 +726,7 @@ int floe_world_step(floe_world *w) {
     w->step++;
     w->time = w->t0 + (double)(w->step - w->step0) * dt; /* no drift from repeated sums */
     /* 3. neighbours and forces at t + dt */
-    if (floe_nl_needs_rebuild(&w->nl, p)) {
+    if (floe_nl_needs_rebuild_after_drift(&w->nl, p, maxd2, !have_xb || w->nstates > 0)) {
         int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
         if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
     }

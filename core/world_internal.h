@@ -97,6 +97,10 @@ int floe_world_error(floe_world *w, int code, const char *fmt, ...)
 int floe_nl_init(floe_neighbor_list *nl);
 void floe_nl_free(floe_neighbor_list *nl);
 int floe_nl_needs_rebuild(const floe_neighbor_list *nl, const floe_particles *p);
+/* the same, given the largest squared displacement since the build measured during the
+ * drift (growth = 1: some radius may have changed, do the full check) */
+int floe_nl_needs_rebuild_after_drift(const floe_neighbor_list *nl, const floe_particles *p, double maxd2,
+                                      int growth);
 int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int leaf_size);
 
 /* contact detection (contact/detect.c): fills c (x1, x2, n, depth, point, r_eff) for the
