@@ -5,8 +5,8 @@
 #define FLOE_WORLD_H
 
 #include "floe_base.h"
-#include "../geometry/floe_geometry.h"
-#include "../contact/floe_contact.h"
+#include "floe_geometry.h"
+#include "floe_contact.h"
 
 typedef struct floe_world floe_world;
 typedef struct floe_observer floe_observer;

@@ -8,7 +8,7 @@
 #include "floe_scene.h"
 #include "floe_state.h"
 #include "world_internal.h"
-#include "../observers/floe_observer.h"
+#include "floe_observer.h"
 
 #include <errno.h>
 #include <libfyaml.h>

@@ -6,7 +6,7 @@
 #include "floe_world.h"
 #include "floe_state.h"
 #include "floe_kdtree.h"
-#include "../observers/floe_observer.h"
+#include "floe_observer.h"
 
 /* Particle store: structure of arrays, index = particle id. */
 typedef struct floe_particles {

@@ -4,7 +4,7 @@
 #ifndef FLOE_OBSERVER_H
 #define FLOE_OBSERVER_H
 
-#include "../core/floe_world.h"
+#include "floe_world.h"
 #include <stdio.h>
 
 typedef struct floe_observer_class {
