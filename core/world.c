@@ -552,6 +552,8 @@ int floe_world_prepare(floe_world *w) {
     }
     for (int k = 0; k < w->nobs; k++) {
         floe_observer *o = w->obs[k];
+        if (o->begun) continue; /* re-prepared mid-run: already writing */
+        o->begun = 1;
         o->next_time = w->time;
         if (o->klass->begin) {
             rc = o->klass->begin(o, w);

@@ -23,6 +23,7 @@ struct floe_observer {
     double period_time;     /* > 0: every this many seconds (used when period_steps = 0) */
     double next_time;       /* bookkeeping of the world */
     int ended;
+    int begun;
 };
 
 /* All writers take an output path; the directory must exist. Returns NULL and writes a
