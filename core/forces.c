@@ -112,10 +112,20 @@ int floe_compute_forces(floe_world *w) {
             continue;
         }
         nl->touching[k] = 1;
-        const double *xi = p->x + 3 * i, *xj = p->x + 3 * j;
+        /* interpenetration beyond recovery: the centre of the smaller particle inside the
+         * other (for spheres the normal would flip and they would pass through), or a
+         * particle through a wall */
+        if (c.depth > (rs < INFINITY ? fmin(p->radius[i], p->radius[j]) : 2 * fmin(p->radius[i], p->radius[j])))
+            return floe_world_error(w, FLOE_EUNSTABLE,
+                                    "unstable: particles %d and %d (bodies %d, %d) overlap by %.3g m, more than %s "
+                                    "at step %ld, t = %g s: the contact is too soft for the speeds (relative "
+                                    "normal speed %.3g m/s) or the time step too large",
+                                    i, j, p->group[i], p->group[j], c.depth,
+                                    rs < INFINITY ? "the smaller radius" : "the diameter", w->step, w->time,
+                                    floe_v3_dot(p->v + 3 * i, c.n) - floe_v3_dot(p->v + 3 * j, c.n));
         double ri[3], rj[3], ui[3], uj[3];
-        floe_v3_sub(ri, c.point, xi);
-        floe_v3_sub(rj, c.point, xj);
+        floe_v3_sub(ri, c.point, xa);
+        floe_v3_sub(rj, c.point, xb);
         floe_v3_cross(ui, p->w + 3 * i, ri);
         floe_v3_cross(uj, p->w + 3 * j, rj);
         for (int a = 0; a < 3; a++) c.vr[a] = (p->v[3 * i + a] + ui[a]) - (p->v[3 * j + a] + uj[a]);

@@ -421,6 +421,12 @@ static int estimate_dt(floe_world *w) {
             pair_estimate(law, rmin, mmin, mmin, rot, 2.0, vrel, &dt);
         }
     }
+    /* motion: no particle may move more than half its radius in a step (the stability
+     * check of the step stops the run past that) */
+    if (vrel > 0)
+        for (int i = 0; i < p->n; i++)
+            if (p->motion[i] == FLOE_FREE && isfinite(p->radius[i]) && 0.5 * p->radius[i] / vrel < dt)
+                dt = 0.5 * p->radius[i] / vrel;
     w->dt_crit = dt;
     return FLOE_OK;
 }
