@@ -168,12 +168,13 @@ int floe_compute_forces(floe_world *w) {
         }
         hist[FLOE_ENERGY_SLOT] = res.energy;
         memcpy(hist + FLOE_FORCE_SLOT, res.force, 3 * sizeof(double));
-        if (!w->record_contacts) w->ncontacts++;
+        if (!w->record_now) w->ncontacts++;
         else if (push_contact(w, &c, &res)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
     if (dim == 2)
         for (int i = 0; i < n; i++) { p->f[3 * i + 2] = 0; p->t[3 * i] = p->t[3 * i + 1] = 0; }
     w->energy.elastic = elastic;
+    w->contacts_valid = w->record_now;
     if (stepping) {
         w->energy.dissipated += diss;
         w->energy.work_boundary += wgrow;

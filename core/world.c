@@ -267,7 +267,7 @@ int floe_world_contact_count(const floe_world *w) { return w->ncontacts; }
 
 int floe_world_add_observer(floe_world *w, floe_observer *o) {
     if (!o) return floe_world_error(w, FLOE_EINVAL, "observer is NULL");
-    if (o->klass->needs_contacts) w->record_contacts = 1;
+    if (o->klass->needs_contacts) w->obs_need_contacts = 1;
     if (grow((void **)&w->obs, &w->obs_cap, w->nobs + 1, sizeof *w->obs)) return FLOE_ENOMEM;
     w->obs[w->nobs++] = o;
     return FLOE_OK;
@@ -536,6 +536,7 @@ int floe_world_prepare(floe_world *w) {
     w->prepared = 1;
     w->t0 = w->time;
     w->step0 = w->step;
+    w->record_now = w->record_contacts || w->obs_need_contacts;
     rc = floe_compute_forces(w);
     if (rc) return rc;
     /* energy at start */
@@ -570,15 +571,26 @@ int floe_world_prepare(floe_world *w) {
     return observers_call(w, 1);
 }
 
+static int observer_due(const floe_world *w, const floe_observer *o) {
+    if (o->period_steps > 0) return w->step % o->period_steps == 0;
+    if (o->period_time > 0) return w->time >= o->next_time - 1e-9 * w->dt;
+    return 1;
+}
+
+/* contact records are kept only at force evaluations that an observer will read */
+static int contacts_wanted(const floe_world *w) {
+    if (w->record_contacts) return 1;
+    if (!w->obs_need_contacts) return 0;
+    if (w->last_step_of_run) return 1; /* observers write the final state at the end */
+    for (int k = 0; k < w->nobs; k++)
+        if (w->obs[k]->klass->needs_contacts && observer_due(w, w->obs[k])) return 1;
+    return 0;
+}
+
 static int observers_call(floe_world *w, int force_all) {
     for (int k = 0; k < w->nobs; k++) {
         floe_observer *o = w->obs[k];
-        int due = force_all;
-        if (!due) {
-            if (o->period_steps > 0) due = w->step % o->period_steps == 0;
-            else if (o->period_time > 0) due = w->time >= o->next_time - 1e-9 * w->dt;
-            else due = 1;
-        }
+        int due = force_all || observer_due(w, o);
         if (!due) continue;
         if (o->period_time > 0 && o->period_steps <= 0)
             while (o->next_time <= w->time + 1e-9 * w->dt) o->next_time += o->period_time;
@@ -739,6 +751,7 @@ int floe_world_step(floe_world *w) {
         if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
     }
     w->advancing = 1;
+    w->record_now = contacts_wanted(w);
     int frc = floe_compute_forces(w);
     w->advancing = 0;
     if (frc) return frc;
@@ -790,7 +803,9 @@ int floe_world_run(floe_world *w, double t_end, floe_progress_fn progress, void 
     long nsteps = (long)ceil((t_end - w->time) / w->dt - 1e-9);
     if (nsteps < 0) nsteps = 0;
     for (long s = 0; s < nsteps; s++) {
+        w->last_step_of_run = s == nsteps - 1;
         rc = floe_world_step(w);
+        w->last_step_of_run = 0;
         if (rc) break;
         if (progress && progress(w, s + 1, nsteps, user)) {
             rc = floe_world_error(w, FLOE_ESTOP, "stopped by the progress callback at step %ld", w->step);

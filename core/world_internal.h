@@ -81,7 +81,11 @@ struct floe_world {
     double t0; long step0;   /* time and step at prepare: time = t0 + (step - step0) dt */
     int prepared;
     int advancing;            /* forces evaluated inside a step (history and ledger advance) */
-    int record_contacts;      /* keep w->contacts (observers that need them, or the user) */
+    int record_contacts;      /* the user asked to keep w->contacts every step */
+    int obs_need_contacts;    /* some observer reads w->contacts when it is due */
+    int record_now;           /* record at the next force evaluation */
+    int contacts_valid;       /* w->contacts holds every contact of the last evaluation */
+    int last_step_of_run;     /* floe_world_run's final step: record for the end() flush */
     int finished;
     floe_energy energy;
     long detector_calls;

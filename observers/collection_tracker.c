@@ -154,7 +154,7 @@ static void stress_eval(const floe_world *w, int group, double volume, unsigned 
 int floe_collection_stress(const floe_world *w, int group, double volume,
                            floe_collection_stats *out) {
     if (!w || !out) return FLOE_EINVAL;
-    if (!w->record_contacts) return FLOE_EINVAL; /* floe_world_record_contacts(w, 1) first */
+    if (!w->contacts_valid) return FLOE_EINVAL; /* floe_world_record_contacts(w, 1) first */
     unsigned char *member = malloc(w->p.n > 0 ? (size_t)w->p.n : 1);
     if (!member) return FLOE_ENOMEM;
     stress_eval(w, group, volume, member, out);
@@ -191,13 +191,14 @@ static int ct_write(collection_tracker *t, floe_world *w) {
 static int ct_observe(floe_observer *o, floe_world *w) {
     collection_tracker *t = (collection_tracker *)o;
     if (t->observed && t->last_step == w->step) return FLOE_OK;
+    if (!w->contacts_valid) return FLOE_OK; /* a flush without contact records (after a failure) */
     return ct_write(t, w);
 }
 
 static int ct_end(floe_observer *o, floe_world *w) {
     collection_tracker *t = (collection_tracker *)o;
     int rc = FLOE_OK;
-    if (!t->observed || t->last_step != w->step) rc = ct_write(t, w);
+    if ((!t->observed || t->last_step != w->step) && w->contacts_valid) rc = ct_write(t, w);
     if (t->f) {
         if (fclose(t->f) != 0 && rc == FLOE_OK)
             rc = floe_world_error(w, FLOE_EIO, "collection tracker: closing %s failed", t->path);

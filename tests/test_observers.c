@@ -38,6 +38,7 @@ static hand_world *hand_world_new(int dim) {
     w->contacts = h->contacts;
     w->contacts_cap = MAXC;
     w->record_contacts = 1;
+    w->contacts_valid = 1;
     return h;
 }
 
