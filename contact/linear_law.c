@@ -49,13 +49,13 @@ static int linear_force(const floe_contact_law *law_, const floe_contact *c, dou
     floe_v3_axpy(Ft, -L->gs, c->vt);
     const double vt2 = floe_v3_dot(c->vt, c->vt);
     const double limit = L->mu * fabs(Fn);
-    const double ftmag = floe_v3_norm(Ft);
-    if (ftmag > limit) {
-        const double ratio = limit / ftmag;
+    const double ft2 = floe_v3_dot(Ft, Ft);
+    if (ft2 > limit * limit) {
+        const double ratio = limit / sqrt(ft2);
         floe_v3_scale(Ft, ratio);
         if (L->ks > 0.0) {
-            const double e_before = 0.5 * L->ks * floe_v3_dot(s, s);
-            for (int k = 0; k < 3; ++k) s[k] = -(Ft[k] + L->gs * c->vt[k]) / L->ks;
+            const double e_before = 0.5 * L->ks * floe_v3_dot(s, s), minus_inv_ks = -1.0 / L->ks;
+            for (int k = 0; k < 3; ++k) s[k] = (Ft[k] + L->gs * c->vt[k]) * minus_inv_ks;
             diss += L->gs * vt2 * dt + (e_before - 0.5 * L->ks * floe_v3_dot(s, s));
         } else {
             /* pure dashpot: only a fraction of it is applied */
