@@ -62,6 +62,7 @@ int floe_compute_forces(floe_world *w) {
     }
     w->ncontacts = 0;
     double elastic = 0, diss = 0, wgrow = 0;
+    const int any_growth = w->nstates > 0; /* only state objects set rdot */
     floe_neighbor_list *nl = &w->nl;
     const int nm = w->nmats;
     for (int k = 0; k < nl->npairs; k++) {
@@ -158,7 +159,7 @@ int floe_compute_forces(floe_world *w) {
             double wc = -floe_v3_dot(fav, c.vr) * c.dt;
             /* surfaces that grow (state objects) move towards each other at rdot_i + rdot_j:
              * that work enters the contact from outside the particle system */
-            double grow = p->rdot[i] + p->rdot[j];
+            double grow = any_growth ? p->rdot[i] + p->rdot[j] : 0.0;
             if (grow != 0) {
                 double wg = -floe_v3_dot(fav, c.n) * grow * c.dt;
                 wc += wg;
