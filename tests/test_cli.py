@@ -16,24 +16,7 @@ import subprocess
 import sys
 import tempfile
 
-passed = 0
-failed = 0
-
-
-def check(cond, msg):
-    global passed, failed
-    if cond:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL: " + msg, file=sys.stderr)
-    return cond
-
-
-def run(args, cwd=None, timeout=300):
-    p = subprocess.run(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=cwd,
-                       timeout=timeout, universal_newlines=True)
-    return p.returncode, p.stdout, p.stderr
+from pycheck import check, finish, run
 
 
 def main():
@@ -43,7 +26,7 @@ def main():
     cli, tests = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
     scenes = os.path.join(tests, "scenes")
     if not check(os.access(cli, os.X_OK), "floe CLI not found at %s" % cli):
-        print("test_cli: %d passed, %d failed" % (passed, failed))
+        finish("test_cli")
         sys.exit(1)
     tmp = tempfile.mkdtemp(prefix="floe_test_cli_")
     try:
@@ -131,8 +114,7 @@ def main():
                   "unstable run: energy.csv holds the state at failure (%d rows)" % len(rows))
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-    print("test_cli: %d passed, %d failed" % (passed, failed))
-    sys.exit(1 if failed else 0)
+    finish("test_cli")
 
 
 if __name__ == "__main__":

@@ -19,16 +19,7 @@ import subprocess
 import sys
 import tempfile
 
-passed = failed = 0
-
-
-def check(cond, msg):
-    global passed, failed
-    if cond:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL: " + msg, file=sys.stderr)
+from pycheck import check, finish
 
 
 def main():
@@ -63,8 +54,7 @@ def main():
         print("  dilating sphere: last t = %.3f s, balance error %.2e" % (last_t, err))
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-    print("test_examples: %d passed, %d failed" % (passed, failed))
-    sys.exit(1 if failed else 0)
+    finish("test_examples")
 
 
 if __name__ == "__main__":

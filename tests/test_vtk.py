@@ -41,23 +41,11 @@ G = 9.81
 EXPECTED_ARRAYS = {"id": 1, "radius": 1, "velocity": 3, "angular_velocity": 3, "force": 3,
                    "body": 1, "material": 1, "orientation": 4}
 
-passed = 0
-failed = 0
-
-
-def check(cond, msg):
-    global passed, failed
-    if cond:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL: " + msg, file=sys.stderr)
-    return cond
+from pycheck import check, finish as _finish
 
 
 def finish():
-    print("test_vtk: %d passed, %d failed" % (passed, failed))
-    sys.exit(1 if failed else 0)
+    _finish("test_vtk")
 
 
 def read_vtu(path):
