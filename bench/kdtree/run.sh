@@ -11,7 +11,7 @@ BUILD=${BUILD:-build-bench}
 REPS=${REPS:-3}
 NS=${NS:-"100000 1000000"}
 LEAVES=${LEAVES:-"10 20"}
-sh scripts/install-deps.sh --bench   # g++, libnanoflann-dev (idempotent)
+bash scripts/install-deps.sh --bench   # g++, libnanoflann-dev (idempotent)
 mkdir -p "$BUILD/kdtree"
 PEER="$BUILD/kdtree/nanoflann_bench"
 g++ -O3 -march=native -std=c++17 -o "$PEER" bench/kdtree/nanoflann_bench.cpp
