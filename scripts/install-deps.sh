@@ -16,6 +16,10 @@ for p in "${pkgs[@]}"; do
   fi
 done
 if (( ${#missing[@]} )); then
+  if (( ${#SUDO[@]} )) && ! command -v sudo >/dev/null 2>&1; then
+    echo "install-deps: missing packages: ${missing[*]}; run this script as root (no sudo here)" >&2
+    exit 1
+  fi
   echo "install-deps: installing ${missing[*]}" >&2
   export DEBIAN_FRONTEND=noninteractive
   "${SUDO[@]}" apt-get update -qq
