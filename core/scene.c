@@ -1735,8 +1735,8 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
             s->dt_given = 0;
         } else {
             FLOE_TRY(sc_num(s, &tm, "dt", 0, 0.0, &s->dt_given));
-            if (s->dt_given < 0)
-                return sc_range(s, &tm, "dt", "> 0 s (or 0 / auto / omitted for automatic)",
+            if (dv && !(s->dt_given > 0))
+                return sc_range(s, &tm, "dt", "> 0 s (write dt: auto, or omit dt, for the automatic step)",
                                 s->dt_given);
         }
         s->dt_auto = s->dt_given == 0;

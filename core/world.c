@@ -518,7 +518,7 @@ int floe_world_prepare(floe_world *w) {
         w->dt = w->def.dt;
         if (isfinite(w->dt_crit) && w->dt > w->dt_crit && !w->def.allow_unstable_dt)
             return floe_world_error(w, FLOE_EUNSTABLE,
-                                    "time step %g s is above the critical estimate %g s; use a smaller dt, dt: 0 "
+                                    "time step %g s is above the critical estimate %g s; use a smaller dt, dt: auto "
                                     "(automatic), or allow_unstable_dt: true",
                                     w->dt, w->dt_crit);
     } else {

@@ -394,11 +394,16 @@ static void test_valid(void)
         floe_world_destroy(w);
     }
 
-    /* dt: 0 is automatic; dt above critical is accepted with allow_unstable_dt */
+    /* dt: 0 is an error naming the field; dt: auto is automatic; dt above critical is
+     * accepted with allow_unstable_dt */
     const char *t = edit(BASE_MATS ONE_BODY, "{duration: 0.01}", "{duration: 0.01, dt: 0}");
     w = NULL;
     rc = load(t, &w, &info, err, sizeof err);
-    CHECK(rc == FLOE_OK && w && floe_world_dt(w) > 0, "dt: 0 = automatic: %s", err);
+    CHECK(rc != FLOE_OK && !w && strstr(err, "dt") && strstr(err, "> 0"), "dt: 0 must be refused naming dt: %s", err);
+    t = edit(BASE_MATS ONE_BODY, "{duration: 0.01}", "{duration: 0.01, dt: auto}");
+    w = NULL;
+    rc = load(t, &w, &info, err, sizeof err);
+    CHECK(rc == FLOE_OK && w && floe_world_dt(w) > 0, "dt: auto = automatic: %s", err);
     floe_world_destroy(w);
     t = edit(BASE_MATS ONE_BODY, "{duration: 0.01}",
              "{duration: 0.01, dt: 1.0e-3, allow_unstable_dt: true}");
