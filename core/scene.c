@@ -2039,7 +2039,7 @@ int floe_scene_load_string(const char *text, const char *path, const char *outdi
 
 static const char sc_demo[] =
     "# floe default demo: 2,000 glass beads (r = 1 mm) poured into a 30 mm x 30 mm box.\n"
-    "# dt is automatic: 0.75 x the critical estimate (about 1e-5 s, 25,000 steps).\n"
+    "# dt is automatic: 0.75 x the critical estimate (about 1.6e-5 s, 15,000 steps).\n"
     "name: pour\n"
     "dimension: 3\n"
     "time: {duration: 0.25, safety: 0.75}\n"
