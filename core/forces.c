@@ -90,10 +90,8 @@ int floe_compute_forces(floe_world *w) {
                 }
                 r = 1;
             } else r = floe_detect(w, i, j, &c);
-            w->detector_calls++;
         } else if (!(rs < INFINITY)) {
             r = floe_detect(w, i, j, &c);
-            w->detector_calls++;
         }
         if (r < 0)
             return floe_world_error(w, -r, "no contact detector for particles %d and %d (%s-%s)", i, j,

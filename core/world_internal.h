@@ -88,7 +88,6 @@ struct floe_world {
     int last_step_of_run;     /* floe_world_run's final step: record for the end() flush */
     int finished;
     floe_energy energy;
-    long detector_calls;
 };
 
 int floe_world_error(floe_world *w, int code, const char *fmt, ...)
