@@ -14,9 +14,12 @@ typedef enum floe_geometry_kind {
     FLOE_GEOM_SPHERE = 0,
     FLOE_GEOM_BOX = 1,
     FLOE_GEOM_PLANE = 2,   /* half-space z <= 0 in the body frame: outward normal +z */
-    FLOE_GEOM_USER = 3,    /* any other shape: SDF only (user callback or new class) */
-    FLOE_GEOM_KIND_COUNT = 4
+    FLOE_GEOM_USER = 3,    /* any other convex shape with an SDF (user callback, polyhedron,
+                              ellipsoid, ...): contact by ADMM (contact/admm.c) */
+    FLOE_GEOM_COMPOUND = 4,/* union of convex pieces (one rigid body): one contact per piece pair */
+    FLOE_GEOM_KIND_COUNT = 5
 } floe_geometry_kind;
+#define FLOE_GEOM_CONVEX FLOE_GEOM_USER
 
 typedef struct floe_mass_properties {
     double volume;       /* m^3 (m^2 in 2D: area) */
@@ -43,6 +46,15 @@ typedef struct floe_geometry_class {
     /* optional: NULL = numerical quadrature of the indicator sdf <= 0 (dim 2 or 3) */
     int (*mass_properties)(const floe_geometry *g, int dim, double density, floe_mass_properties *out);
     void (*destroy)(floe_geometry *g);                                          /* optional */
+    /* optional: the point of the shape farthest along the unit direction d (body frame);
+     * used by the plane fast path and by support-function libraries (libccd) */
+    void (*support)(const floe_geometry *g, const double d[3], double out[3]);
+    /* optional: a polytope's vertices (body frame, 3 doubles each), for the per-vertex
+     * plane contact; NULL for curved shapes */
+    const double *(*vertices)(const floe_geometry *g, int *count);
+    /* optional: proximal operator argmin_x phi(x) + |x - v|^2 / (2 t), t > 0 (NULL: derived
+     * from sdf and gradient, exact for exact SDFs away from edges and corners) */
+    void (*prox)(const floe_geometry *g, const double v[3], double t, double out[3]);
 } floe_geometry_class;
 
 struct floe_geometry {
@@ -86,5 +98,87 @@ int floe_geometry_mass_properties(const floe_geometry *g, int dim, double densit
 /* Numerical mass properties on a grid of n^dim cells with 2^dim-point sub-sampling on
  * boundary cells; reports its own error estimate (difference between n and n/2 grids). */
 int floe_geometry_mass_numeric(const floe_geometry *g, int dim, double density, int n, floe_mass_properties *out);
+
+/* ---- convex polytopes (geometry/polytope.c), ParticLS eq 27 and Figs 3-5 ----
+ * Exact signed distance: inside, the largest face-plane distance; outside, the distance to
+ * the nearest face, edge or vertex. The constructors move the body frame to the centroid
+ * and turn it into the principal frame of inertia; `frame_x`/`frame_q` give the input
+ * coordinates of the body frame: X_input = R(frame_q) X_body + frame_x, so a scene can place
+ * the shape where its vertices were written. A polygon (dim 2) lies in the xy plane and
+ * its SDF ignores z (a prism of infinite height): it is a shape for 2D worlds. */
+typedef struct floe_polytope {
+    floe_geometry base;
+    int dim;              /* 3: polyhedron, 2: polygon */
+    int nv;               /* vertices */
+    double *v;            /* 3 nv, body frame */
+    int np;               /* distinct face planes (3D) or edges (2D) */
+    double *plane;        /* 4 np: unit outward normal n and offset d; inside: n.X <= d */
+    int nt;               /* boundary triangles (3D; 0 in 2D) */
+    int *tri;             /* 3 nt vertex indices, counter-clockwise seen from outside */
+    double radius;        /* bounding radius about the centroid */
+    double frame_x[3];    /* centroid in the input coordinates */
+    double frame_q[4];    /* principal axes in the input coordinates (body -> input) */
+} floe_polytope;
+extern const floe_geometry_class floe_polytope_class;
+
+/* Convex polygon (2D) from points: the convex hull of the points (Andrew's monotone chain;
+ * interior and collinear points are dropped). NULL, with a message in err (if given), when
+ * fewer than 3 non-collinear points or the input is not finite. */
+floe_geometry *floe_polygon_create(const double *xy, int n, char *err, size_t errlen);
+/* Convex polyhedron from half-spaces n.X <= d (4 doubles each; n need not be unit): the
+ * vertices are enumerated; NULL with a message when the region is empty, unbounded or
+ * flat (zero volume). */
+floe_geometry *floe_polyhedron_from_planes(const double *planes, int np, char *err, size_t errlen);
+/* Convex polyhedron from a closed convex triangle mesh (e.g. a convex hull): coplanar
+ * triangles are merged into one face plane. NULL with a message when the mesh is not
+ * closed, not convex (to a relative tolerance of 1e-9), or has zero volume. */
+floe_geometry *floe_polyhedron_from_mesh(const double *v, int nv, const int *tri, int nt, char *err,
+                                         size_t errlen);
+/* Prism: the convex hull of a polygon (xy points) extruded from z = -h/2 to h/2. */
+floe_geometry *floe_prism_create(const double *xy, int n, double height, char *err, size_t errlen);
+
+/* ---- curved primitives (geometry/primitives.c), axes along the body z axis, centroid at
+ * the origin; analytic mass properties ---- */
+typedef struct floe_ellipsoid { floe_geometry base; double a[3]; } floe_ellipsoid;  /* semi-axes */
+typedef struct floe_cylinder { floe_geometry base; double radius, half_height; } floe_cylinder;
+typedef struct floe_capsule { floe_geometry base; double radius, half_length; } floe_capsule; /* segment +-half_length */
+typedef struct floe_cone { floe_geometry base; double radius, height; } floe_cone; /* base at z = -h/4, apex at z = 3h/4 */
+/* "rounded" modifier: phi(X) - r, any convex shape with its edges and corners rounded. */
+typedef struct floe_rounded { floe_geometry base; floe_geometry *inner; double r; } floe_rounded;
+extern const floe_geometry_class floe_ellipsoid_class, floe_cylinder_class, floe_capsule_class,
+    floe_cone_class, floe_rounded_class;
+floe_geometry *floe_ellipsoid_create(double a, double b, double c);
+floe_geometry *floe_cylinder_create(double radius, double height);
+floe_geometry *floe_capsule_create(double radius, double length); /* length of the straight part */
+floe_geometry *floe_cone_create(double radius, double height);
+/* takes ownership of inner (destroyed with the rounded shape, also on failure) */
+floe_geometry *floe_rounded_create(floe_geometry *inner, double r);
+
+/* ---- compound (geometry/compound.c): a non-convex body as a union of convex pieces ----
+ * Each piece is a geometry placed at piece_x with orientation piece_q in the compound's
+ * body frame. The constructor moves the body frame to the combined centroid and turns it
+ * into the principal frame (frame_x/frame_q as for polytopes). SDF = min over the pieces. */
+typedef struct floe_compound {
+    floe_geometry base;
+    int n;
+    floe_geometry **piece;    /* owned */
+    double *piece_x;          /* 3 n, body frame */
+    double *piece_q;          /* 4 n, body frame */
+    double *piece_r;          /* n bounding radii of the pieces */
+    double radius;
+    double frame_x[3], frame_q[4];
+    int dim;                  /* mass properties computed for this dimension */
+} floe_compound;
+extern const floe_geometry_class floe_compound_class;
+/* takes ownership of the pieces (destroyed on failure too); density ratios per piece are
+ * not supported (one material per body). */
+floe_geometry *floe_compound_create(floe_geometry **pieces, const double *x, const double *q, int n, int dim,
+                                    char *err, size_t errlen);
+
+/* Symmetric 3x3 eigen-decomposition (cyclic Jacobi): A = V diag(l) V^T, columns of V are the
+ * eigenvectors (right-handed), l ascending. For the principal frames. */
+void floe_sym3_eigen(const double A[3][3], double l[3], double V[3][3]);
+/* Quaternion (w, x, y, z) of a rotation matrix */
+void floe_q_from_matrix(double q[4], const double R[3][3]);
 
 #endif
