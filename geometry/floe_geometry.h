@@ -62,7 +62,7 @@ struct floe_geometry {
 };
 
 typedef struct floe_sphere { floe_geometry base; double radius; } floe_sphere;
-typedef struct floe_box { floe_geometry base; double half[3]; } floe_box;   /* half extents */
+typedef struct floe_box { floe_geometry base; double half[3]; double vert[24]; } floe_box; /* half extents, corners */
 typedef struct floe_plane { floe_geometry base; } floe_plane;
 
 /* User SDF callback shape: f(X, user) in the body frame, with a bounding radius. */

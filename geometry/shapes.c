@@ -36,8 +36,13 @@ static int sphere_mass(const floe_geometry *g, int dim, double rho, floe_mass_pr
     }
     return FLOE_OK;
 }
+static void sphere_support(const floe_geometry *g, const double d[3], double o[3]) {
+    double R = ((const floe_sphere *)g)->radius;
+    o[0] = R * d[0]; o[1] = R * d[1]; o[2] = R * d[2];
+}
 const floe_geometry_class floe_sphere_class = {1, "sphere", FLOE_GEOM_SPHERE, sphere_sdf, sphere_grad,
-                                               sphere_project, sphere_radius, sphere_mass, NULL};
+                                               sphere_project, sphere_radius, sphere_mass, NULL,
+                                               sphere_support, NULL, NULL};
 
 floe_geometry *floe_sphere_create(double radius) {
     if (!(radius > 0) || !isfinite(radius)) return NULL;
@@ -105,8 +110,16 @@ static int box_mass(const floe_geometry *g, int dim, double rho, floe_mass_prope
     }
     return FLOE_OK;
 }
+static void box_support(const floe_geometry *g, const double d[3], double o[3]) {
+    const double *h = ((const floe_box *)g)->half;
+    for (int k = 0; k < 3; k++) o[k] = d[k] >= 0 ? h[k] : -h[k];
+}
+static const double *box_vertices(const floe_geometry *g, int *count) {
+    *count = 8;
+    return ((const floe_box *)g)->vert;
+}
 const floe_geometry_class floe_box_class = {1, "box", FLOE_GEOM_BOX, box_sdf, box_grad, box_project,
-                                            box_radius, box_mass, NULL};
+                                            box_radius, box_mass, NULL, box_support, box_vertices, NULL};
 
 floe_geometry *floe_box_create(double lx, double ly, double lz) {
     if (!(lx > 0 && ly > 0 && lz > 0) || !isfinite(lx + ly + lz)) return NULL;
@@ -114,6 +127,8 @@ floe_geometry *floe_box_create(double lx, double ly, double lz) {
     if (!b) return NULL;
     b->base.klass = &floe_box_class;
     floe_v3_set(b->half, 0.5 * lx, 0.5 * ly, 0.5 * lz);
+    for (int v = 0; v < 8; v++)
+        for (int k = 0; k < 3; k++) b->vert[3 * v + k] = (v >> k & 1 ? 1 : -1) * b->half[k];
     return &b->base;
 }
 
@@ -138,7 +153,7 @@ static int plane_mass(const floe_geometry *g, int dim, double rho, floe_mass_pro
     return FLOE_OK;
 }
 const floe_geometry_class floe_plane_class = {1, "plane", FLOE_GEOM_PLANE, plane_sdf, plane_grad,
-                                              plane_project, plane_radius, plane_mass, NULL};
+                                              plane_project, plane_radius, plane_mass, NULL, NULL, NULL, NULL};
 
 floe_geometry *floe_plane_create(void) {
     floe_plane *p = malloc(sizeof *p);
@@ -154,7 +169,7 @@ static double user_sdf(const floe_geometry *g, const double X[3]) {
 }
 static double user_radius(const floe_geometry *g) { return ((const floe_user_shape *)g)->radius; }
 const floe_geometry_class floe_user_shape_class = {1, "user_sdf", FLOE_GEOM_USER, user_sdf, NULL, NULL,
-                                                   user_radius, NULL, NULL};
+                                                   user_radius, NULL, NULL, NULL, NULL, NULL};
 
 floe_geometry *floe_user_shape_create(floe_sdf_fn fn, void *user, double bounding_radius) {
     if (!fn || !(bounding_radius > 0) || !isfinite(bounding_radius)) return NULL;
