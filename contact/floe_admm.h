@@ -1,0 +1,57 @@
+/* floe_admm.h - contact detection between two convex SDF shapes by ADMM (Douglas-Rachford
+ * splitting), ParticLS §3 eq 14: x1 = argmin over p of phi'(x) and x2 = argmin over p' of
+ * phi(x), each half the convex problem  min phi'(x) s.t. phi(x) <= 0, solved by
+ *
+ *     x <- prox_{t phi'}(z - u)      z <- Pi_{phi <= 0}(x + u)      u <- u + x - z
+ *
+ * with the step t = 1/rho relative to the particle size. Only `sdf` is needed; the
+ * gradient, projection and prox of the geometry vtable are used when a shape has them.
+ * Half 1 runs in p's body frame and half 2 in p''s, so the warm start (z, u) moves rigidly
+ * with the bodies and a persisting contact converges in one or two iterations. */
+#ifndef FLOE_ADMM_H
+#define FLOE_ADMM_H
+
+#include "floe_geometry.h"
+
+/* a geometry placed in the world: X_world = R(q) X_body + x */
+typedef struct floe_pose {
+    const floe_geometry *g;
+    double x[3];
+    double q[4];
+} floe_pose;
+
+typedef struct floe_admm_options {
+    double tol;       /* stop when the primal and dual residuals are below tol x size, where size
+                         is the smaller bounding radius (default 1e-6) */
+    int max_iter;     /* per half (default 200) */
+    double step;      /* t = 1/rho as a fraction of size (default 0.5); adapted by residual
+                         balancing when adapt = 1 */
+    int adapt;        /* default 1 */
+} floe_admm_options;
+
+#define FLOE_ADMM_WARM 16 /* doubles of warm-start state per pair: (z, s) and its dual per half */
+
+typedef struct floe_admm_result {
+    int penetrating;     /* both minima negative */
+    double x1[3], x2[3]; /* world: p's point deepest in p', p''s point deepest in p */
+    double phi1, phi2;   /* phi'(x1), phi(x2) (negative when penetrating) */
+    double n[3];         /* unit normal from p to p' */
+    double depth;        /* max(-phi1, -phi2) */
+    int iters;           /* iterations of both halves */
+    int converged;       /* 0: max_iter reached (result still finite) */
+} floe_admm_result;
+
+void floe_admm_default_options(floe_admm_options *o);
+
+/* One pair. warm: FLOE_ADMM_WARM doubles kept by the caller between steps (set warm[0] to
+ * NAN for a cold start), or NULL. Returns FLOE_OK; the result is always finite. */
+int floe_admm_contact(const floe_pose *a, const floe_pose *b, const floe_admm_options *o, double *warm,
+                      floe_admm_result *r);
+
+/* One half: the point of a deepest inside b (body frame of a in and out), with warm8[8]
+ * ((z, s), u in a's frame; warm8[0] NaN = cold). Returns the iterations (negative: not converged);
+ * *phi = b's SDF at the point. */
+int floe_admm_half(const floe_pose *a, const floe_pose *b, const floe_admm_options *o, double *warm8,
+                   double x_body[3], double *phi);
+
+#endif

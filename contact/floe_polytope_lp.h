@@ -1,0 +1,33 @@
+/* floe_polytope_lp.h - exact deepest point of one convex polytope inside another (a linear
+ * program in dim + 1 variables solved by a small dense simplex; see polytope_lp.c). */
+#ifndef FLOE_POLYTOPE_LP_H
+#define FLOE_POLYTOPE_LP_H
+
+#include "floe_base.h"
+
+typedef struct floe_lp_problem {
+    int dim;            /* 2 or 3 */
+    const double *a;    /* na planes of p: (n, d), n.x <= d inside (world frame) */
+    int na;
+    const double *b;    /* nb planes of p' */
+    int nb;
+    const double *va;   /* nva vertices of p (3 doubles each, world), for the cold start */
+    int nva;
+    double scale;       /* length scale for tolerances (the particle size) */
+} floe_lp_problem;
+
+typedef struct floe_lp_result {
+    double x[3];        /* p's point deepest in p' (world) */
+    double s;           /* phi'(x): negative when it penetrates */
+    double normal[3];   /* unit outward normal of p' at x (a subgradient of phi') */
+    double lambda[4];
+    int pivots;         /* simplex pivots taken */
+    int warm;           /* 1 if the given basis was feasible and used */
+} floe_lp_result;
+
+/* basis: dim + 1 row indices (A rows 0..na-1, then B rows), in: the previous optimum
+ * (basis[0] < 0 for a cold start), out: the new one. Returns FLOE_OK or FLOE_EINVAL
+ * (degenerate input: no vertex, singular basis). */
+int floe_lp_deepest(const floe_lp_problem *P, int *basis, floe_lp_result *res);
+
+#endif

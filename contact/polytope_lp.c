@@ -1,0 +1,188 @@
+/* polytope_lp.c - exact deepest point between two convex polytopes (boxes, polyhedra,
+ * polygons): the linear program  min s  s.t.  a_i.x <= b_i (faces of p),
+ * c_j.x - s <= d_j (faces of p'), whose optimum x is p's point deepest inside p' and s its
+ * SDF value (the SDF of a convex polytope is the largest face-plane distance inside).
+ *
+ * Why not ADMM here: with only an SDF, the prox of phi' at a ridge of a polytope (where two
+ * faces' distance fields meet) is approximate, and ADMM stalls on ridges; measured on 500
+ * random box pairs it missed the exact depth by more than 1e-3 x size in about half of them
+ * (docs/models.md). The LP is exact, and warm-started from the previous step's basis it
+ * usually needs no pivot at all. A dense primal simplex in dim + 1 variables (4 in 3D),
+ * starting at the deepest vertex of p, with Bland's rule against cycling. */
+#include "floe_polytope_lp.h"
+#include <string.h>
+
+/* solve M y = r (n <= 4) by Gaussian elimination with partial pivoting; 0 if singular */
+static int solve(int n, const double M[4][4], const double r[4], double y[4]) {
+    double a[4][5];
+    for (int i = 0; i < n; i++) {
+        for (int j = 0; j < n; j++) a[i][j] = M[i][j];
+        a[i][n] = r[i];
+    }
+    for (int c = 0; c < n; c++) {
+        int p = c;
+        for (int i = c + 1; i < n; i++)
+            if (fabs(a[i][c]) > fabs(a[p][c])) p = i;
+        if (fabs(a[p][c]) < 1e-12) return 0;
+        if (p != c)
+            for (int j = 0; j <= n; j++) { double t = a[c][j]; a[c][j] = a[p][j]; a[p][j] = t; }
+        for (int i = c + 1; i < n; i++) {
+            double f = a[i][c] / a[c][c];
+            for (int j = c; j <= n; j++) a[i][j] -= f * a[c][j];
+        }
+    }
+    for (int i = n - 1; i >= 0; i--) {
+        double s = a[i][n];
+        for (int j = i + 1; j < n; j++) s -= a[i][j] * y[j];
+        y[i] = s / a[i][i];
+    }
+    return 1;
+}
+
+/* row k of the LP in (x, s): A rows (a, 0) <= b, B rows (c, -1) <= d */
+static void row(const floe_lp_problem *P, int k, double r[4], double *h) {
+    int n = P->dim + 1;
+    const double *pl = k < P->na ? P->a + 4 * k : P->b + 4 * (k - P->na);
+    for (int i = 0; i < P->dim; i++) r[i] = pl[i];
+    r[n - 1] = k < P->na ? 0.0 : -1.0;
+    *h = pl[3];
+}
+
+static int basis_point(const floe_lp_problem *P, const int *basis, double y[4]) {
+    int n = P->dim + 1;
+    double M[4][4], h[4];
+    for (int i = 0; i < n; i++) row(P, basis[i], M[i], &h[i]);
+    return solve(n, M, h, y);
+}
+
+static int feasible(const floe_lp_problem *P, const double y[4], double tol) {
+    int n = P->dim + 1, m = P->na + P->nb;
+    for (int k = 0; k < m; k++) {
+        double r[4], h, v = 0;
+        row(P, k, r, &h);
+        for (int i = 0; i < n; i++) v += r[i] * y[i];
+        if (v > h + tol) return 0;
+    }
+    return 1;
+}
+
+/* cold start: the vertex of p deepest in p' (largest B row), with dim tight, independent
+ * A rows */
+static int cold_basis(const floe_lp_problem *P, int *basis, double tol) {
+    int dim = P->dim, best = -1;
+    double bs = INFINITY;
+    for (int v = 0; v < P->nva; v++) {
+        const double *x = P->va + 3 * v;
+        double s = -INFINITY;
+        for (int j = 0; j < P->nb; j++) {
+            const double *c = P->b + 4 * j;
+            double val = c[0] * x[0] + c[1] * x[1] + (dim == 3 ? c[2] * x[2] : 0.0) - c[3];
+            if (val > s) s = val;
+        }
+        if (s < bs) { bs = s; best = v; }
+    }
+    if (best < 0) return 0;
+    const double *x = P->va + 3 * best;
+    int nt = 0;
+    double N[3][3];
+    for (int i = 0; i < P->na && nt < dim; i++) {
+        const double *a = P->a + 4 * i;
+        double val = a[0] * x[0] + a[1] * x[1] + (dim == 3 ? a[2] * x[2] : 0.0) - a[3];
+        if (fabs(val) > tol) continue;
+        /* independent of those taken */
+        double c[3] = {a[0], a[1], dim == 3 ? a[2] : 0.0};
+        int indep = 1;
+        if (nt == 1) {
+            double cr[3];
+            floe_v3_cross(cr, N[0], c);
+            indep = floe_v3_norm(cr) > 1e-9;
+        } else if (nt == 2) {
+            double cr[3];
+            floe_v3_cross(cr, N[0], N[1]);
+            indep = fabs(floe_v3_dot(cr, c)) > 1e-9;
+        }
+        if (!indep) continue;
+        floe_v3_copy(N[nt], c);
+        basis[nt++] = i;
+    }
+    if (nt < dim) return 0;
+    /* the B row attaining the max */
+    int jb = 0;
+    double s = -INFINITY;
+    for (int j = 0; j < P->nb; j++) {
+        const double *c = P->b + 4 * j;
+        double val = c[0] * x[0] + c[1] * x[1] + (dim == 3 ? c[2] * x[2] : 0.0) - c[3];
+        if (val > s) { s = val; jb = j; }
+    }
+    basis[dim] = P->na + jb;
+    return 1;
+}
+
+int floe_lp_deepest(const floe_lp_problem *P, int *basis, floe_lp_result *res) {
+    const int dim = P->dim, n = dim + 1, m = P->na + P->nb;
+    const double tol = 1e-12 * (P->scale > 0 ? P->scale : 1.0);
+    double y[4];
+    memset(res, 0, sizeof *res);
+    int ok = basis[0] >= 0;
+    for (int i = 0; ok && i < n; i++) ok = basis[i] >= 0 && basis[i] < m;
+    if (ok) ok = basis_point(P, basis, y) && feasible(P, y, 1e3 * tol);
+    res->warm = ok;
+    if (!ok) {
+        if (!cold_basis(P, basis, 1e-9 * (P->scale > 0 ? P->scale : 1.0)) || !basis_point(P, basis, y))
+            return FLOE_EINVAL;
+    }
+    int it;
+    for (it = 0; it < 200; it++) {
+        double M[4][4], h[4], MT[4][4], lam[4], rhs[4] = {0, 0, 0, 0};
+        for (int i = 0; i < n; i++) row(P, basis[i], M[i], &h[i]);
+        for (int i = 0; i < n; i++)
+            for (int j = 0; j < n; j++) MT[i][j] = M[j][i];
+        rhs[n - 1] = -1.0;
+        if (!solve(n, MT, rhs, lam)) return FLOE_EINVAL;
+        /* leaving row: Bland (lowest row index among the negative multipliers) */
+        int leave = -1;
+        for (int i = 0; i < n; i++)
+            if (lam[i] < -1e-12 && (leave < 0 || basis[i] < basis[leave])) leave = i;
+        if (leave < 0) {
+            memcpy(res->lambda, lam, sizeof lam);
+            break;
+        }
+        /* edge direction: r_leave . d = -1, other basis rows stay tight */
+        double e[4] = {0, 0, 0, 0}, d[4];
+        e[leave] = -1.0;
+        if (!solve(n, M, e, d)) return FLOE_EINVAL;
+        int enter = -1;
+        double alpha = INFINITY;
+        for (int k = 0; k < m; k++) {
+            int inb = 0;
+            for (int i = 0; i < n; i++) inb |= basis[i] == k;
+            if (inb) continue;
+            double r[4], hk, rd = 0, ry = 0;
+            row(P, k, r, &hk);
+            for (int i = 0; i < n; i++) { rd += r[i] * d[i]; ry += r[i] * y[i]; }
+            if (rd <= 1e-12) continue;
+            double a = (hk - ry) / rd;
+            if (a < 0) a = 0;
+            if (a < alpha - 1e-15 || (a <= alpha + 1e-15 && enter >= 0 && k < enter)) { alpha = a; enter = k; }
+        }
+        if (enter < 0) return FLOE_EINVAL; /* unbounded: cannot happen for bounded p */
+        for (int i = 0; i < n; i++) y[i] += alpha * d[i];
+        basis[leave] = enter;
+    }
+    res->pivots = it;
+    if (it >= 200) return FLOE_EINVAL;
+    for (int i = 0; i < dim; i++) res->x[i] = y[i];
+    if (dim == 2) res->x[2] = 0.0;
+    res->s = y[n - 1];
+    /* subgradient of phi' at x: the multipliers of p''s rows (they sum to 1) */
+    double g[3] = {0, 0, 0};
+    for (int i = 0; i < n; i++) {
+        if (basis[i] < P->na) continue;
+        const double *c = P->b + 4 * (basis[i] - P->na);
+        for (int k = 0; k < dim; k++) g[k] += res->lambda[i] * c[k];
+    }
+    double gn = floe_v3_norm(g);
+    if (gn > 0) floe_v3_scale(g, 1.0 / gn);
+    floe_v3_copy(res->normal, g);
+    return FLOE_OK;
+}
