@@ -1,175 +1,183 @@
-/* detect.c - analytic contact detection for built-in geometry pairs, producing the
- * contact summary of ParticLS eq 15. Dispatch is a table over geometry kinds (Box2D
- * style): sphere-sphere, sphere-plane, sphere-anything (the other shape's SDF and
- * gradient at the sphere centre: exact for boxes and any exact SDF), box-plane (deepest
- * vertices), convex-SDF-plane (support point by iterated projection). Pairs without a
- * detector (box-box, user-user, ...) are reported by floe_detect_supported so that a
- * scene is refused at prepare time; the ADMM detector for arbitrary convex pairs plugs
- * in at `pair_table` (issue: arbitrary convex shapes). */
+/* detect.c - contact detection, producing the contact summary of ParticLS eq 15.
+ *
+ * Dispatch is a table over geometry kinds (Box2D style), applied to convex pieces (a
+ * compound body contributes one piece per list entry, so non-convex bodies get one contact
+ * per piece pair):
+ *   sphere-sphere, sphere-plane, sphere-anything (the other shape's SDF and gradient at
+ *   the sphere centre: exact for exact SDFs; spheres never enter ADMM);
+ *   polytope-plane (per-vertex springs lumped into one contact), convex-plane (support
+ *   point: the shape's `support` or iterated projection);
+ *   polytope-polytope (boxes, polyhedra, polygons): the exact deepest-point LP
+ *   (contact/polytope_lp.c), warm-started from the previous basis;
+ *   any other convex pair: ADMM on the two SDFs (contact/admm.c), warm-started.
+ * Warm-start state lives in the neighbour list (FLOE_DETECT_WARM doubles per entry) and is
+ * allocated only when a scene has such pairs. */
 #include "world_internal.h"
+#include "floe_admm.h"
+#include "floe_polytope_lp.h"
+#include <stdlib.h>
 #include <string.h>
 
-typedef int (*pair_fn)(const floe_world *w, int i, int j, floe_contact *c);
+typedef struct shape_ref {
+    const floe_geometry *g;
+    double x[3], q[4];
+    double r;   /* bounding radius (a sphere's current radius) */
+    int kind;
+} shape_ref;
 
-static void to_body(const floe_particles *p, int i, const double x[3], double X[3]) {
-    double d[3];
-    floe_v3_sub(d, x, p->x + 3 * i);
-    floe_q_rotate_inv(X, p->q + 4 * i, d);
-}
-
-/* a sphere's bounding radius is its radius (kept equal by the growing-radius state) */
-static double sphere_r(const floe_world *w, int i) { return w->p.radius[i]; }
+typedef int (*pair_fn)(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c);
 
 static void finish(floe_contact *c) {
     for (int k = 0; k < 3; k++) c->point[k] = 0.5 * (c->x1[k] + c->x2[k]);
 }
 
-static int sphere_sphere(const floe_world *w, int i, int j, floe_contact *c) {
-    const double *xi = w->p.x + 3 * i, *xj = w->p.x + 3 * j;
-    double ri = sphere_r(w, i), rj = sphere_r(w, j);
+static void to_body(const shape_ref *s, const double x[3], double X[3]) {
     double d[3];
-    floe_v3_sub(d, xj, xi);
-    double dist2 = floe_v3_dot(d, d), rs = ri + rj;
+    floe_v3_sub(d, x, s->x);
+    floe_q_rotate_inv(X, s->q, d);
+}
+
+static int sphere_sphere(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+    (void)w; (void)warm;
+    double d[3];
+    floe_v3_sub(d, b->x, a->x);
+    double dist2 = floe_v3_dot(d, d), rs = a->r + b->r;
     if (dist2 >= rs * rs) return 0;
     double dist = sqrt(dist2);
-    if (dist > 0) {
-        double inv = 1.0 / dist;
-        floe_v3_set(c->n, d[0] * inv, d[1] * inv, d[2] * inv);
-    }
+    if (dist > 0) floe_v3_set(c->n, d[0] / dist, d[1] / dist, d[2] / dist);
     else floe_v3_set(c->n, 1, 0, 0); /* coincident centres: any direction, finite */
     c->depth = rs - dist;
     for (int k = 0; k < 3; k++) {
-        c->x1[k] = xi[k] + ri * c->n[k];
-        c->x2[k] = xj[k] - rj * c->n[k];
+        c->x1[k] = a->x[k] + a->r * c->n[k];
+        c->x2[k] = b->x[k] - b->r * c->n[k];
     }
-    c->r_eff = ri * rj / rs;
+    c->r_eff = a->r * b->r / rs;
     finish(c);
     return 1;
 }
 
-static void plane_frame(const floe_world *w, int j, double nw[3]) {
+static void plane_normal(const shape_ref *s, double nw[3]) {
     const double ez[3] = {0, 0, 1};
-    floe_q_rotate(nw, w->p.q + 4 * j, ez);
+    floe_q_rotate(nw, s->q, ez);
 }
 
-static int sphere_plane(const floe_world *w, int i, int j, floe_contact *c) {
-    const double *xi = w->p.x + 3 * i;
-    double ri = sphere_r(w, i), nw[3], d[3];
-    plane_frame(w, j, nw);
-    floe_v3_sub(d, xi, w->p.x + 3 * j);
+static int sphere_plane(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+    (void)w; (void)warm;
+    double nw[3], d[3];
+    plane_normal(b, nw);
+    floe_v3_sub(d, a->x, b->x);
     double s = floe_v3_dot(d, nw);
-    if (s >= ri) return 0;
+    if (s >= a->r) return 0;
     floe_v3_set(c->n, -nw[0], -nw[1], -nw[2]);
-    c->depth = ri - s;
+    c->depth = a->r - s;
     for (int k = 0; k < 3; k++) {
-        c->x1[k] = xi[k] - ri * nw[k];
-        c->x2[k] = xi[k] - s * nw[k];
+        c->x1[k] = a->x[k] - a->r * nw[k];
+        c->x2[k] = a->x[k] - s * nw[k];
     }
-    c->r_eff = ri;
+    c->r_eff = a->r;
     finish(c);
     return 1;
 }
 
-/* sphere i against any shape j with an SDF: distance of the sphere centre */
-static int sphere_sdf(const floe_world *w, int i, int j, floe_contact *c) {
-    const double *xi = w->p.x + 3 * i;
-    double ri = sphere_r(w, i), X[3], g[3], gw[3];
-    const floe_geometry *gj = w->geoms[w->p.geom[j]];
-    to_body(&w->p, j, xi, X);
-    double phi = floe_geometry_sdf(gj, X);
-    if (phi >= ri) return 0;
-    floe_geometry_gradient(gj, X, g);
-    floe_q_rotate(gw, w->p.q + 4 * j, g);
+/* sphere a against any shape b with an SDF: distance of the sphere centre */
+static int sphere_sdf(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+    (void)w; (void)warm;
+    double X[3], g[3], gw[3];
+    to_body(b, a->x, X);
+    double phi = floe_geometry_sdf(b->g, X);
+    if (phi >= a->r) return 0;
+    floe_geometry_gradient(b->g, X, g);
+    floe_q_rotate(gw, b->q, g);
     floe_v3_set(c->n, -gw[0], -gw[1], -gw[2]);
-    c->depth = ri - phi;
+    c->depth = a->r - phi;
     for (int k = 0; k < 3; k++) {
-        c->x1[k] = xi[k] - ri * gw[k];
-        c->x2[k] = xi[k] - phi * gw[k];
+        c->x1[k] = a->x[k] - a->r * gw[k];
+        c->x2[k] = a->x[k] - phi * gw[k];
     }
-    c->r_eff = ri;
+    c->r_eff = a->r;
     finish(c);
     return 1;
 }
 
-/* box i against plane j: the penetrating vertices lumped into one contact with
- * depth = sum of the vertex depths, at their depth-weighted mean. For a linear law this is
- * exactly the resultant of one spring per penetrating vertex (force k sum d_v, moment
- * sum d_v x_v), so the contact is conservative and a face resting on the plane gets a
- * central point and rests without rocking. For Hertz it is an approximation (a flat face
- * has no Hertz radius anyway; R* = the bounding radius). A true manifold (one contact per
- * vertex, each with its own shear history) comes with the multi-contact support of the
- * convex-shape milestone. */
-static int box_plane(const floe_world *w, int i, int j, floe_contact *c) {
-    const floe_box *b = (const floe_box *)w->geoms[w->p.geom[i]];
-    double nw[3], rel[3];
-    plane_frame(w, j, nw);
-    const double *xi = w->p.x + 3 * i, *qi = w->p.q + 4 * i;
-    double wsum = 0, dmax = 0, acc[3] = {0, 0, 0};
-    int nv = w->def.dim == 2 ? 4 : 8;
-    for (int v = 0; v < 8; v++) {
-        if (w->def.dim == 2 && (v & 4)) continue; /* 2D: the face z = -h (any is fine) */
-        double X[3] = {(v & 1 ? 1 : -1) * b->half[0], (v & 2 ? 1 : -1) * b->half[1], (v & 4 ? 1 : -1) * b->half[2]};
-        if (w->def.dim == 2) X[2] = 0;
-        double xw[3];
-        floe_q_rotate(xw, qi, X);
-        floe_v3_add(xw, xw, xi);
-        floe_v3_sub(rel, xw, w->p.x + 3 * j);
+/* polytope a (vertices known) against plane b: the penetrating vertices lumped into one
+ * contact with depth = sum of the vertex depths, at their depth-weighted mean. For a linear
+ * law this is exactly the resultant of one spring per penetrating vertex (force k sum d_v,
+ * moment sum d_v x_v), so the contact is conservative and a face resting on the plane gets
+ * a central point and rests without rocking. For Hertz it is an approximation (a flat face
+ * has no Hertz radius; R* = the bounding radius). */
+static int vertices_plane(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+    (void)warm;
+    int nv = 0;
+    const double *V = a->g->klass->vertices(a->g, &nv);
+    double nw[3], rel[3], wsum = 0, acc[3] = {0, 0, 0};
+    plane_normal(b, nw);
+    floe_v3_sub(rel, a->x, b->x);
+    if (floe_v3_dot(rel, nw) >= a->r) return 0;
+    const int is_box = a->kind == FLOE_GEOM_BOX;
+    for (int v = 0; v < nv; v++) {
+        double X[3] = {V[3 * v], V[3 * v + 1], V[3 * v + 2]}, xw[3];
+        if (w->def.dim == 2 && is_box) {
+            if (X[2] > 0) continue; /* 2D: one face of the box (the z = -h corners) */
+            X[2] = 0;
+        }
+        floe_q_rotate(xw, a->q, X);
+        floe_v3_add(xw, xw, a->x);
+        floe_v3_sub(rel, xw, b->x);
         double s = floe_v3_dot(rel, nw);
         if (s < 0) {
-            double wt = -s;
-            wsum += wt;
-            floe_v3_axpy(acc, wt, xw);
-            if (-s > dmax) dmax = -s;
+            wsum += -s;
+            floe_v3_axpy(acc, -s, xw);
         }
     }
-    (void)nv;
     if (wsum <= 0) return 0;
     double pc[3] = {acc[0] / wsum, acc[1] / wsum, acc[2] / wsum};
-    floe_v3_sub(rel, pc, w->p.x + 3 * j);
+    floe_v3_sub(rel, pc, b->x);
     double s = floe_v3_dot(rel, nw);
     floe_v3_set(c->n, -nw[0], -nw[1], -nw[2]);
-    (void)dmax;
     c->depth = wsum;
     for (int k = 0; k < 3; k++) {
         c->x2[k] = pc[k] - s * nw[k];
         c->x1[k] = pc[k];
     }
-    c->r_eff = floe_geometry_bounding_radius(&b->base);
+    c->r_eff = a->r;
     finish(c);
     return 1;
 }
 
-/* convex SDF shape i against plane j: the support point in direction -n is the fixed
- * point of X <- project(X - R n) (the outward normal there is n); exact for exact SDFs. */
-static int sdf_plane(const floe_world *w, int i, int j, floe_contact *c) {
-    const floe_geometry *g = w->geoms[w->p.geom[i]];
-    double nw[3], nb[3], X[3] = {0, 0, 0}, Y[3], rel[3];
-    plane_frame(w, j, nw);
-    floe_v3_sub(rel, w->p.x + 3 * i, w->p.x + 3 * j);
-    double R = floe_geometry_bounding_radius(g);
+/* convex shape a against plane b: the support point in direction -n (the shape's own
+ * `support`, or the fixed point of X <- project(X - s n) with s doubling from 2R to 1e3 R:
+ * on a flat face tilted by a from the plane each pass moves about s*a along it; measured on
+ * a tilted cube (test_detect): depth within 0.3 % for tilts 1e-1 .. 1e-5 rad). */
+static int convex_plane(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+    (void)w; (void)warm;
+    const floe_geometry *g = a->g;
+    if (g->klass->vertices && g->klass->kind != FLOE_GEOM_COMPOUND) return vertices_plane(w, a, b, warm, c);
+    double nw[3], nb[3], X[3] = {0, 0, 0}, rel[3];
+    plane_normal(b, nw);
+    floe_v3_sub(rel, a->x, b->x);
+    double R = a->r;
     if (floe_v3_dot(rel, nw) >= R) return 0;
-    const double *qi = w->p.q + 4 * i;
-    floe_q_rotate_inv(nb, qi, nw);
-    /* X <- project(X - s n) with s doubling from 2R to 1e3 R: on a flat face tilted by a
-     * from the plane each pass moves about s*a along it, so the corner is reached in a few
-     * passes; on curved surfaces the error is ~ R^3/s^2. Farther steps lose precision in
-     * the finite-difference gradient of a user SDF. Measured on a tilted cube (test_detect):
-     * depth within 0.3 % for tilts 1e-1 .. 1e-5 rad. */
-    double step = 2 * R;
-    for (int it = 0; it < 80; it++) {
-        double prev[3];
-        floe_v3_copy(prev, X);
-        floe_v3_copy(Y, X);
-        floe_v3_axpy(Y, -step, nb);
-        floe_geometry_project(g, Y, X);
-        floe_v3_sub(prev, prev, X);
-        if (step >= 1e3 * R && floe_v3_norm(prev) < 1e-12 * R) break;
-        if (step < 1e3 * R) step *= 2;
+    floe_q_rotate_inv(nb, a->q, nw);
+    if (g->klass->support) {
+        double d[3] = {-nb[0], -nb[1], -nb[2]};
+        g->klass->support(g, d, X);
+    } else {
+        double step = 2 * R, Y[3];
+        for (int it = 0; it < 80; it++) {
+            double prev[3];
+            floe_v3_copy(prev, X);
+            floe_v3_copy(Y, X);
+            floe_v3_axpy(Y, -step, nb);
+            floe_geometry_project(g, Y, X);
+            floe_v3_sub(prev, prev, X);
+            if (step >= 1e3 * R && floe_v3_norm(prev) < 1e-12 * R) break;
+            if (step < 1e3 * R) step *= 2;
+        }
     }
     double xw[3];
-    floe_q_rotate(xw, qi, X);
-    floe_v3_add(xw, xw, w->p.x + 3 * i);
-    floe_v3_sub(rel, xw, w->p.x + 3 * j);
+    floe_q_rotate(xw, a->q, X);
+    floe_v3_add(xw, xw, a->x);
+    floe_v3_sub(rel, xw, b->x);
     double s = floe_v3_dot(rel, nw);
     if (s >= 0) return 0;
     floe_v3_set(c->n, -nw[0], -nw[1], -nw[2]);
@@ -181,38 +189,229 @@ static int sdf_plane(const floe_world *w, int i, int j, floe_contact *c) {
     return 1;
 }
 
-static const pair_fn pair_table[FLOE_GEOM_KIND_COUNT][FLOE_GEOM_KIND_COUNT] = {
-    /*            SPHERE        BOX        PLANE         USER */
+/* ---- polytope-polytope: exact LP ---- */
+
+/* body-frame face planes of a box or polytope (NULL otherwise) */
+static const double *body_planes(const floe_geometry *g, int *np, double buf[24]) {
+    if (g->klass == &floe_box_class) {
+        const double *h = ((const floe_box *)g)->half;
+        for (int a = 0; a < 3; a++)
+            for (int s = 0; s < 2; s++) {
+                double *P = buf + 4 * (2 * a + s);
+                P[0] = P[1] = P[2] = 0;
+                P[a] = s ? 1.0 : -1.0;
+                P[3] = h[a];
+            }
+        *np = 6;
+        return buf;
+    }
+    if (g->klass == &floe_polytope_class) {
+        const floe_polytope *p = (const floe_polytope *)g;
+        *np = p->np;
+        return p->plane;
+    }
+    return NULL;
+}
+
+static int is_polytope(const floe_geometry *g) {
+    return g->klass == &floe_box_class || g->klass == &floe_polytope_class;
+}
+
+/* planes and vertices of b expressed in a's body frame (scratch owned by the world) */
+static int lp_scratch(floe_world *w, int need) {
+    if (w->det.scratch_cap >= need) return FLOE_OK;
+    double *s = realloc(w->det.scratch, (size_t)need * sizeof(double));
+    if (!s) return FLOE_ENOMEM;
+    w->det.scratch = s;
+    w->det.scratch_cap = need;
+    return FLOE_OK;
+}
+
+static void plane_to_frame(const double P[4], const shape_ref *from, const shape_ref *to, double out[4]) {
+    /* n_to = R_to^T R_from n; d_to = d + n_world . (x_from - x_to) */
+    double nw[3], d[3];
+    floe_q_rotate(nw, from->q, P);
+    floe_q_rotate_inv(out, to->q, nw);
+    floe_v3_sub(d, from->x, to->x);
+    out[3] = P[3] + floe_v3_dot(nw, d);
+}
+
+/* one half: a's point deepest in b, in world coordinates */
+static int lp_half(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm4, double x[3], double *s,
+                   double n[3], int *pivots) {
+    double ba[24], bb[24];
+    int na = 0, nb = 0, nva = 0;
+    const double *pa = body_planes(a->g, &na, ba), *pb = body_planes(b->g, &nb, bb);
+    const double *va = a->g->klass->vertices(a->g, &nva);
+    if (lp_scratch(w, 4 * nb)) return FLOE_ENOMEM;
+    double *tb = w->det.scratch;
+    for (int k = 0; k < nb; k++) plane_to_frame(pb + 4 * k, b, a, tb + 4 * k);
+    floe_lp_problem P = {w->def.dim, pa, na, tb, nb, va, nva, fmin(a->r, b->r)};
+    int basis[4];
+    for (int k = 0; k < 4; k++) basis[k] = warm4 && isfinite(warm4[k]) ? (int)warm4[k] : -1;
+    floe_lp_result r;
+    int rc = floe_lp_deepest(&P, basis, &r);
+    if (rc) {
+        if (warm4) warm4[0] = NAN;
+        return rc;
+    }
+    if (warm4)
+        for (int k = 0; k < 4; k++) warm4[k] = k <= w->def.dim ? basis[k] : NAN;
+    floe_q_rotate(x, a->q, r.x);
+    floe_v3_add(x, x, a->x);
+    floe_q_rotate(n, a->q, r.normal); /* outward normal of b at x */
+    *s = r.s;
+    *pivots = r.pivots + 1;
+    return FLOE_OK;
+}
+
+static void count_iterations(floe_world *w, int it) {
+    w->det.calls++;
+    w->det.iterations += it;
+    w->det.hist[it < FLOE_DETECT_HIST - 1 ? it : FLOE_DETECT_HIST - 1]++;
+}
+
+static int polytope_pair(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+    double x1[3], x2[3], s1, s2, n1[3], n2[3];
+    int p1 = 0, p2 = 0;
+    int rc = lp_half(w, a, b, warm, x1, &s1, n1, &p1);
+    if (rc) return -rc;
+    if (!(s1 < 0)) {
+        count_iterations(w, p1);
+        return 0;
+    }
+    rc = lp_half(w, b, a, warm ? warm + 4 : NULL, x2, &s2, n2, &p2);
+    if (rc) return -rc;
+    count_iterations(w, p1 + p2);
+    w->det.lp_calls++;
+    if (!(s2 < 0)) return 0;
+    floe_v3_copy(c->x1, x1);
+    floe_v3_copy(c->x2, x2);
+    if (-s1 >= -s2) { c->depth = -s1; floe_v3_set(c->n, -n1[0], -n1[1], -n1[2]); }
+    else { c->depth = -s2; floe_v3_copy(c->n, n2); }
+    c->r_eff = a->r * b->r / (a->r + b->r);
+    finish(c);
+    return 1;
+}
+
+/* ---- any other convex pair: ADMM ---- */
+static int admm_pair(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+    if (is_polytope(a->g) && is_polytope(b->g)) return polytope_pair(w, a, b, warm, c);
+    floe_pose pa = {a->g, {a->x[0], a->x[1], a->x[2]}, {a->q[0], a->q[1], a->q[2], a->q[3]}};
+    floe_pose pb = {b->g, {b->x[0], b->x[1], b->x[2]}, {b->q[0], b->q[1], b->q[2], b->q[3]}};
+    floe_admm_result r;
+    floe_admm_contact(&pa, &pb, &w->det.admm, warm, &r);
+    count_iterations(w, r.iters);
+    w->det.admm_calls++;
+    if (!r.converged) {
+        w->det.nonconverged++;
+        if (w->det.nonconverged == 1) {
+            w->det.first_bad_i = w->det.cur_i;
+            w->det.first_bad_j = w->det.cur_j;
+            w->det.first_bad_step = w->step;
+        }
+    }
+    if (!r.penetrating) return 0;
+    floe_v3_copy(c->x1, r.x1);
+    floe_v3_copy(c->x2, r.x2);
+    floe_v3_copy(c->n, r.n);
+    c->depth = r.depth;
+    c->r_eff = a->r * b->r / (a->r + b->r);
+    finish(c);
+    return 1;
+}
+
+static const pair_fn pair_table[4][4] = {
+    /*            SPHERE        BOX         PLANE         USER */
     /* SPHERE */ {sphere_sphere, sphere_sdf, sphere_plane, sphere_sdf},
-    /* BOX    */ {NULL, NULL, box_plane, NULL},
+    /* BOX    */ {NULL, admm_pair, vertices_plane, admm_pair},
     /* PLANE  */ {NULL, NULL, NULL, NULL},
-    /* USER   */ {NULL, NULL, sdf_plane, NULL},
+    /* USER   */ {NULL, NULL, convex_plane, admm_pair},
 };
 
 static pair_fn lookup(int ka, int kb, int *swap) {
     *swap = 0;
+    if (ka > 3 || kb > 3) return NULL;
     if (pair_table[ka][kb]) return pair_table[ka][kb];
     if (pair_table[kb][ka]) { *swap = 1; return pair_table[kb][ka]; }
     return NULL;
 }
 
-int floe_detect_supported(const floe_geometry *a, const floe_geometry *b) {
+static int kinds_supported(const floe_geometry *a, const floe_geometry *b) {
     int swap;
     return lookup(a->klass->kind, b->klass->kind, &swap) != NULL;
 }
 
-int floe_detect(const floe_world *w, int i, int j, floe_contact *c) {
-    int swap;
-    pair_fn fn = lookup(w->p.kind[i], w->p.kind[j], &swap);
-    if (!fn) return -FLOE_ENOTSUP;
-    if (!swap) {
-        c->i = i; c->j = j;
-        return fn(w, i, j, c);
+int floe_detect_supported(const floe_geometry *a, const floe_geometry *b) {
+    const floe_compound *ca = a->klass == &floe_compound_class ? (const floe_compound *)a : NULL;
+    const floe_compound *cb = b->klass == &floe_compound_class ? (const floe_compound *)b : NULL;
+    int na = ca ? ca->n : 1, nb = cb ? cb->n : 1;
+    for (int i = 0; i < na; i++)
+        for (int j = 0; j < nb; j++)
+            if (!kinds_supported(ca ? ca->piece[i] : a, cb ? cb->piece[j] : b)) return 0;
+    return 1;
+}
+
+int floe_detect_needs_warm(const floe_geometry *a, const floe_geometry *b) {
+    const floe_compound *ca = a->klass == &floe_compound_class ? (const floe_compound *)a : NULL;
+    const floe_compound *cb = b->klass == &floe_compound_class ? (const floe_compound *)b : NULL;
+    int na = ca ? ca->n : 1, nb = cb ? cb->n : 1;
+    for (int i = 0; i < na; i++)
+        for (int j = 0; j < nb; j++) {
+            int swap;
+            pair_fn f = lookup((ca ? ca->piece[i] : a)->klass->kind, (cb ? cb->piece[j] : b)->klass->kind, &swap);
+            if (f == admm_pair) return 1;
+        }
+    return 0;
+}
+
+int floe_piece_count(const floe_geometry *g) {
+    return g->klass == &floe_compound_class ? ((const floe_compound *)g)->n : 1;
+}
+
+static void make_ref(const floe_world *w, int i, int piece, shape_ref *s) {
+    const floe_particles *p = &w->p;
+    const floe_geometry *g = w->geoms[p->geom[i]];
+    const double *x = p->x + 3 * i, *q = p->q + 4 * i;
+    if (g->klass == &floe_compound_class) {
+        const floe_compound *cg = (const floe_compound *)g;
+        double off[3];
+        floe_q_rotate(off, q, cg->piece_x + 3 * piece);
+        floe_v3_add(s->x, x, off);
+        floe_q_mul(s->q, q, cg->piece_q + 4 * piece);
+        s->g = cg->piece[piece];
+        s->r = cg->piece_r[piece];
+    } else {
+        floe_v3_copy(s->x, x);
+        memcpy(s->q, q, sizeof s->q);
+        s->g = g;
+        s->r = p->radius[i];
     }
-    int r = fn(w, j, i, c);
+    s->kind = s->g->klass->kind;
+}
+
+void floe_piece_centre(const floe_world *w, int i, int piece, double c[3], double *r) {
+    shape_ref s;
+    make_ref(w, i, piece, &s);
+    floe_v3_copy(c, s.x);
+    *r = s.r;
+}
+
+int floe_detect(floe_world *w, int i, int j, int sub, double *warm, floe_contact *c) {
+    shape_ref a, b;
+    make_ref(w, i, FLOE_SUB_A(sub), &a);
+    make_ref(w, j, FLOE_SUB_B(sub), &b);
+    int swap;
+    pair_fn fn = lookup(a.kind, b.kind, &swap);
+    if (!fn) return -FLOE_ENOTSUP;
+    w->det.cur_i = i;
+    w->det.cur_j = j;
+    c->i = i;
+    c->j = j;
+    if (!swap) return fn(w, &a, &b, warm, c);
+    int r = fn(w, &b, &a, warm, c);
     if (r <= 0) return r;
     /* the function computed the contact seen from j: swap the roles back */
-    c->i = i; c->j = j;
     double t[3];
     floe_v3_copy(t, c->x1); floe_v3_copy(c->x1, c->x2); floe_v3_copy(c->x2, t);
     floe_v3_scale(c->n, -1.0);

@@ -66,12 +66,22 @@ int floe_compute_forces(floe_world *w) {
     floe_neighbor_list *nl = &w->nl;
     const int nm = w->nmats;
     for (int k = 0; k < nl->npairs; k++) {
-        int i = nl->pi[k], j = nl->pj[k];
+        int i = nl->pi[k], j = nl->pj[k], sub = nl->sub[k];
+        double *warm = nl->use_warm ? nl->warm + (size_t)k * FLOE_DETECT_WARM : NULL;
         floe_contact c;
         int r = 0;
         /* bounding spheres apart: no contact for any pair of shapes (most list pairs) */
         const double *xa = p->x + 3 * i, *xb = p->x + 3 * j;
-        double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2], rs = p->radius[i] + p->radius[j];
+        double rad_i = p->radius[i], rad_j = p->radius[j];
+        double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2], rs = rad_i + rad_j;
+        if (p->pieces[i] > 1 || p->pieces[j] > 1) {
+            /* compound bodies: the bounding spheres of this entry's two pieces */
+            double ca[3], cb[3];
+            floe_piece_centre(w, i, FLOE_SUB_A(sub), ca, &rad_i);
+            floe_piece_centre(w, j, FLOE_SUB_B(sub), cb, &rad_j);
+            dx = cb[0] - ca[0]; dy = cb[1] - ca[1]; dz = cb[2] - ca[2];
+            rs = rad_i + rad_j;
+        }
         double d2 = dx * dx + dy * dy + dz * dz;
         if (d2 < rs * rs) {
             if (p->kind[i] == FLOE_GEOM_SPHERE && p->kind[j] == FLOE_GEOM_SPHERE) {
@@ -89,9 +99,11 @@ int floe_compute_forces(floe_world *w) {
                     c.point[a] = 0.5 * (c.x1[a] + c.x2[a]);
                 }
                 r = 1;
-            } else r = floe_detect(w, i, j, &c);
+            } else r = floe_detect(w, i, j, sub, warm, &c);
         } else if (!(rs < INFINITY)) {
-            r = floe_detect(w, i, j, &c);
+            r = floe_detect(w, i, j, sub, warm, &c);
+        } else if (warm) {
+            warm[0] = NAN; /* apart: the next approach starts cold */
         }
         if (r < 0)
             return floe_world_error(w, -r, "no contact detector for particles %d and %d (%s-%s)", i, j,
@@ -114,7 +126,7 @@ int floe_compute_forces(floe_world *w) {
         /* interpenetration beyond recovery: the centre of the smaller particle inside the
          * other (for spheres the normal would flip and they would pass through), or a
          * particle through a wall */
-        if (c.depth > (rs < INFINITY ? fmin(p->radius[i], p->radius[j]) : 2 * fmin(p->radius[i], p->radius[j])))
+        if (c.depth > (rs < INFINITY ? fmin(rad_i, rad_j) : 2 * fmin(rad_i, rad_j)))
             return floe_world_error(w, FLOE_EUNSTABLE,
                                     "unstable: particles %d and %d (bodies %d, %d) overlap by %.3g m, more than %s "
                                     "at step %ld, t = %g s: the contact is too soft for the speeds (relative "

@@ -15,7 +15,7 @@ int floe_nl_init(floe_neighbor_list *nl) {
 
 void floe_nl_free(floe_neighbor_list *nl) {
     floe_kdtree_destroy(nl->tree);
-    free(nl->pi); free(nl->pj); free(nl->hist); free(nl->touching);
+    free(nl->pi); free(nl->pj); free(nl->sub); free(nl->warm); free(nl->hist); free(nl->touching);
     free(nl->x_build); free(nl->walls); free(nl->scratch); free(nl->r_build); free(nl->q_walls);
     memset(nl, 0, sizeof *nl);
 }
@@ -58,7 +58,7 @@ static uint64_t mix(uint64_t k) {
     return k;
 }
 
-static int push_pair(floe_neighbor_list *nl, int i, int j) {
+static int push_one(floe_neighbor_list *nl, int i, int j, int sub) {
     if (nl->npairs == nl->cap) {
         int nc = nl->cap ? 2 * nl->cap : 1024;
         int *a = realloc(nl->pi, nc * sizeof(int));
@@ -67,45 +67,77 @@ static int push_pair(floe_neighbor_list *nl, int i, int j) {
         int *b = realloc(nl->pj, nc * sizeof(int));
         if (!b) return FLOE_ENOMEM;
         nl->pj = b;
+        int *c = realloc(nl->sub, nc * sizeof(int));
+        if (!c) return FLOE_ENOMEM;
+        nl->sub = c;
         nl->cap = nc;
     }
-    nl->pi[nl->npairs] = i < j ? i : j;
-    nl->pj[nl->npairs] = i < j ? j : i;
+    nl->pi[nl->npairs] = i;
+    nl->pj[nl->npairs] = j;
+    nl->sub[nl->npairs] = sub;
     nl->npairs++;
+    return FLOE_OK;
+}
+
+/* one entry per piece pair: compound bodies turn with respect to their centre of mass
+ * without a rebuild, so all their piece pairs are listed and culled in the force loop */
+static int push_pair(floe_neighbor_list *nl, const floe_particles *p, int i, int j) {
+    if (i > j) { int t = i; i = j; j = t; }
+    int na = p->pieces ? p->pieces[i] : 1, nb = p->pieces ? p->pieces[j] : 1;
+    if (na == 1 && nb == 1) return push_one(nl, i, j, 0);
+    for (int a = 0; a < na; a++)
+        for (int b = 0; b < nb; b++) FLOE_TRY(push_one(nl, i, j, FLOE_SUB(a, b)));
     return FLOE_OK;
 }
 
 static int cmp_pair(const void *a, const void *b) {
     const int *x = a, *y = b;
     if (x[0] != y[0]) return x[0] < y[0] ? -1 : 1;
-    return (x[1] > y[1]) - (x[1] < y[1]);
+    if (x[1] != y[1]) return x[1] < y[1] ? -1 : 1;
+    return (x[2] > y[2]) - (x[2] < y[2]);
 }
+static uint64_t entry_hash(uint64_t key, int sub) { return mix(key ^ ((uint64_t)(uint32_t)sub * 0x9E3779B97F4A7C15ULL)); }
 
 int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int leaf_size) {
     int n = p->n;
     /* keep the history of touching pairs */
     int nold = 0;
     uint64_t *okeys = NULL;
-    double *ohist = NULL;
+    double *ohist = NULL, *owarm = NULL;
+    int *osub = NULL;
+    unsigned char *otouch = NULL;
     int hcap = 0;
-    for (int k = 0; k < nl->npairs; k++) nold += nl->touching[k] != 0;
+    const int W = FLOE_DETECT_WARM, use_warm = nl->use_warm && nl->warm;
+    /* kept: touching pairs (shear history) and pairs with a warm start */
+#define KEEP(k) (nl->touching[k] || (use_warm && isfinite(nl->warm[(size_t)(k) * W])))
+    for (int k = 0; k < nl->npairs; k++) nold += KEEP(k) != 0;
     if (nold) {
         hcap = 1;
         while (hcap < 2 * nold) hcap <<= 1;
         okeys = malloc(hcap * sizeof *okeys);
+        osub = malloc(hcap * sizeof *osub);
+        otouch = malloc(hcap);
         ohist = malloc((size_t)hcap * FLOE_MAX_HISTORY * sizeof *ohist);
-        if (!okeys || !ohist) { free(okeys); free(ohist); return FLOE_ENOMEM; }
+        owarm = use_warm ? malloc((size_t)hcap * W * sizeof *owarm) : NULL;
+        if (!okeys || !osub || !otouch || !ohist || (use_warm && !owarm)) {
+            free(okeys); free(osub); free(otouch); free(ohist); free(owarm);
+            return FLOE_ENOMEM;
+        }
         for (int k = 0; k < hcap; k++) okeys[k] = UINT64_MAX;
         for (int k = 0; k < nl->npairs; k++) {
-            if (!nl->touching[k]) continue;
+            if (!KEEP(k)) continue;
             uint64_t key = pair_key(nl->pi[k], nl->pj[k]);
-            size_t h = mix(key) & (hcap - 1);
+            size_t h = entry_hash(key, nl->sub[k]) & (hcap - 1);
             while (okeys[h] != UINT64_MAX) h = (h + 1) & (hcap - 1);
             okeys[h] = key;
+            osub[h] = nl->sub[k];
+            otouch[h] = nl->touching[k];
             memcpy(ohist + h * FLOE_MAX_HISTORY, nl->hist + (size_t)k * FLOE_MAX_HISTORY,
                    FLOE_MAX_HISTORY * sizeof(double));
+            if (use_warm) memcpy(owarm + h * W, nl->warm + (size_t)k * W, W * sizeof(double));
         }
     }
+#undef KEEP
 
     nl->npairs = 0;
     free(nl->walls);
@@ -120,7 +152,10 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     int *bidx = malloc((nb ? nb : 1) * sizeof(int));
     double *bx = malloc((nb ? nb : 1) * 3 * sizeof(double));
     nl->walls = malloc((nw ? nw : 1) * sizeof(int));
-    if (!bidx || !bx || !nl->walls) { free(bidx); free(bx); free(okeys); free(ohist); return FLOE_ENOMEM; }
+    if (!bidx || !bx || !nl->walls) {
+        free(bidx); free(bx); free(okeys); free(ohist); free(osub); free(otouch); free(owarm);
+        return FLOE_ENOMEM;
+    }
     double rmin = INFINITY;
     nb = 0;
     for (int i = 0; i < n; i++) {
@@ -162,7 +197,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             double d[3];
             floe_v3_sub(d, p->x + 3 * j, p->x + 3 * i);
             double lim = p->radius[i] + p->radius[j] + skin;
-            if (floe_v3_dot(d, d) <= lim * lim) rc = push_pair(nl, i, j);
+            if (floe_v3_dot(d, d) <= lim * lim) rc = push_pair(nl, p, i, j);
         }
     }
     if (rc == FLOE_OK) {
@@ -184,19 +219,23 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             if (p->motion[i] != FLOE_FREE && p->motion[wi] != FLOE_FREE) continue;
             double d[3];
             floe_v3_sub(d, p->x + 3 * i, p->x + 3 * wi);
-            if (floe_v3_dot(d, nw) <= p->radius[i] + skin) rc = push_pair(nl, i, wi);
+            if (floe_v3_dot(d, nw) <= p->radius[i] + skin) rc = push_pair(nl, p, i, wi);
         }
     }
     free(bx);
     free(bidx);
     if (rc == FLOE_OK) {
         /* deterministic order, cache friendly: sort by (i, j) */
-        int *tmp = malloc((size_t)(nl->npairs ? nl->npairs : 1) * 2 * sizeof(int));
+        int *tmp = malloc((size_t)(nl->npairs ? nl->npairs : 1) * 3 * sizeof(int));
         if (!tmp) rc = FLOE_ENOMEM;
         else {
-            for (int k = 0; k < nl->npairs; k++) { tmp[2 * k] = nl->pi[k]; tmp[2 * k + 1] = nl->pj[k]; }
-            qsort(tmp, nl->npairs, 2 * sizeof(int), cmp_pair);
-            for (int k = 0; k < nl->npairs; k++) { nl->pi[k] = tmp[2 * k]; nl->pj[k] = tmp[2 * k + 1]; }
+            for (int k = 0; k < nl->npairs; k++) {
+                tmp[3 * k] = nl->pi[k]; tmp[3 * k + 1] = nl->pj[k]; tmp[3 * k + 2] = nl->sub[k];
+            }
+            qsort(tmp, nl->npairs, 3 * sizeof(int), cmp_pair);
+            for (int k = 0; k < nl->npairs; k++) {
+                nl->pi[k] = tmp[3 * k]; nl->pj[k] = tmp[3 * k + 1]; nl->sub[k] = tmp[3 * k + 2];
+            }
             free(tmp);
         }
     }
@@ -207,19 +246,29 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
         if (h) nl->hist = h;
         if (t) nl->touching = t;
         if (!h || !t) rc = FLOE_ENOMEM;
+        if (rc == FLOE_OK && nl->use_warm) {
+            double *wm = realloc(nl->warm, np * FLOE_DETECT_WARM * sizeof(double));
+            if (!wm) rc = FLOE_ENOMEM;
+            else nl->warm = wm;
+        }
     }
     if (rc == FLOE_OK) {
         memset(nl->hist, 0, (size_t)nl->npairs * FLOE_MAX_HISTORY * sizeof(double));
         memset(nl->touching, 0, nl->npairs);
+        if (nl->use_warm)
+            for (size_t k = 0; k < (size_t)nl->npairs * FLOE_DETECT_WARM; k++) nl->warm[k] = NAN;
         if (nold) {
             for (int k = 0; k < nl->npairs; k++) {
                 uint64_t key = pair_key(nl->pi[k], nl->pj[k]);
-                size_t h = mix(key) & (hcap - 1);
-                while (okeys[h] != UINT64_MAX && okeys[h] != key) h = (h + 1) & (hcap - 1);
+                size_t h = entry_hash(key, nl->sub[k]) & (hcap - 1);
+                while (okeys[h] != UINT64_MAX && (okeys[h] != key || osub[h] != nl->sub[k])) h = (h + 1) & (hcap - 1);
                 if (okeys[h] == key) {
                     memcpy(nl->hist + (size_t)k * FLOE_MAX_HISTORY, ohist + h * FLOE_MAX_HISTORY,
                            FLOE_MAX_HISTORY * sizeof(double));
-                    nl->touching[k] = 1;
+                    nl->touching[k] = otouch[h];
+                    if (owarm && nl->use_warm)
+                        memcpy(nl->warm + (size_t)k * FLOE_DETECT_WARM, owarm + h * FLOE_DETECT_WARM,
+                               FLOE_DETECT_WARM * sizeof(double));
                 }
             }
         }
@@ -239,6 +288,9 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     }
     free(okeys);
     free(ohist);
+    free(osub);
+    free(otouch);
+    free(owarm);
     if (rc) { /* leave a consistent (empty) list: the caller reports the error */
         nl->npairs = 0;
         nl->n_build = 0;

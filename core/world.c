@@ -82,6 +82,7 @@ floe_world *floe_world_create(const floe_world_def *def, char *err, size_t errle
     if (w->def.leaf_size <= 0) w->def.leaf_size = 16;
     floe_nl_init(&w->nl);
     w->nl.skin = def->skin;
+    floe_admm_default_options(&w->det.admm);
     return w;
 }
 
@@ -89,6 +90,7 @@ static void particles_free(floe_particles *p) {
     free(p->x); free(p->v); free(p->q); free(p->w); free(p->L); free(p->f); free(p->t);
     free(p->mass); free(p->inv_mass); free(p->inertia); free(p->radius); free(p->geom);
     free(p->material); free(p->group); free(p->motion); free(p->kind); free(p->iso); free(p->rdot);
+    free(p->pieces);
 }
 
 void floe_world_destroy(floe_world *w) {
@@ -112,6 +114,7 @@ void floe_world_destroy(floe_world *w) {
     free(w->obs);
     floe_nl_free(&w->nl);
     free(w->contacts);
+    free(w->det.scratch);
     free(w);
 }
 
@@ -167,7 +170,7 @@ static int particles_reserve(floe_particles *p, int need) {
 #define RE(field, k) do { void *t_ = realloc(p->field, (size_t)nc * (k) * sizeof *p->field); if (!t_) return FLOE_ENOMEM; p->field = t_; } while (0)
     RE(x, 3); RE(v, 3); RE(q, 4); RE(w, 3); RE(L, 3); RE(f, 3); RE(t, 3);
     RE(mass, 1); RE(inv_mass, 1); RE(inertia, 3); RE(radius, 1); RE(geom, 1);
-    RE(material, 1); RE(group, 1); RE(motion, 1); RE(kind, 1); RE(iso, 1); RE(rdot, 1);
+    RE(material, 1); RE(group, 1); RE(motion, 1); RE(kind, 1); RE(iso, 1); RE(rdot, 1); RE(pieces, 1);
 #undef RE
     p->cap = nc;
     return FLOE_OK;
@@ -203,6 +206,7 @@ int floe_world_add_particle(floe_world *w, const floe_particle_def *d) {
     p->kind[i] = (unsigned char)g->klass->kind;
     p->iso[i] = 0;
     p->rdot[i] = 0;
+    p->pieces[i] = floe_piece_count(g);
     p->radius[i] = floe_geometry_bounding_radius(g);
     p->mass[i] = d->mass; /* resolved at prepare */
     w->prepared = 0;
@@ -449,6 +453,11 @@ int floe_world_prepare(floe_world *w) {
         if (!(p->radius[i] > 0)) return floe_world_error(w, FLOE_EINVAL, "particle %d: bounding radius must be > 0", i);
         floe_mass_properties mp;
         int mdim = (w->def.dim == 2 && w->def.mass_2d_area) ? 2 : 3;
+        int polygon = g->klass == &floe_polytope_class && ((const floe_polytope *)g)->dim == 2;
+        if (polygon && w->def.dim == 3)
+            return floe_world_error(w, FLOE_EINVAL,
+                                    "particle %d: a polygon is a 2D shape (dim: 2); in 3D use a prism or polyhedron", i);
+        if (polygon) mdim = 2; /* a polygon has no 3D body: mass per metre of thickness */
         int rc = floe_geometry_mass_properties(g, mdim, w->mats[p->material[i]].density, &mp);
         if (rc) return floe_world_error(w, rc, "particle %d: mass properties of its %s failed", i, g->klass->name);
         /* the body frame must be the principal frame at the centre of mass: the integrator
@@ -505,9 +514,10 @@ int floe_world_prepare(floe_world *w) {
                 int nb = seen[2 * b] + seen[2 * b + 1];
                 if (nb < (a == b ? 2 : 1)) continue;
                 if (!floe_detect_supported(w->geoms[a], w->geoms[b]))
-                    rc = floe_world_error(w, FLOE_ENOTSUP,
-                                          "no contact detector for the pair %s-%s yet (arbitrary convex pairs need the ADMM detector)",
+                    rc = floe_world_error(w, FLOE_ENOTSUP, "no contact detector for the pair %s-%s",
                                           w->geoms[a]->klass->name, w->geoms[b]->klass->name);
+                else if (floe_detect_needs_warm(w->geoms[a], w->geoms[b]))
+                    w->nl.use_warm = 1; /* ADMM / LP pairs: keep warm starts */
             }
         }
         free(seen);

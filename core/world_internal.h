@@ -7,6 +7,7 @@
 #include "floe_state.h"
 #include "floe_kdtree.h"
 #include "floe_observer.h"
+#include "floe_admm.h"
 
 /* Particle store: structure of arrays, index = particle id. */
 typedef struct floe_particles {
@@ -29,6 +30,7 @@ typedef struct floe_particles {
     unsigned char *kind;   /* n geometry kind (cached) */
     unsigned char *iso;    /* n 1 = isotropic inertia (spheres; every body in 2D) */
     double *rdot;          /* n outward surface speed set by state objects (growing radius), m/s */
+    int *pieces;           /* n convex pieces of the geometry (compound bodies > 1) */
 } floe_particles;
 
 typedef struct floe_motion_cb { int particle; floe_motion_fn fn; void *user; } floe_motion_cb;
@@ -47,6 +49,10 @@ typedef struct floe_neighbor_list {
     floe_kdtree *tree;
     int npairs, cap;
     int *pi, *pj;            /* candidate pairs, i < j, walls included */
+    int *sub;                /* piece pair FLOE_SUB(a, b) of compound bodies (0 otherwise) */
+    double *warm;            /* npairs * FLOE_DETECT_WARM warm-start state (ADMM/LP), allocated
+                                only when the scene has such pairs (use_warm) */
+    int use_warm;
     double *hist;            /* npairs * FLOE_MAX_HISTORY */
     unsigned char *touching; /* pair was in contact last step */
     double *x_build;         /* 3n positions at the last build */
@@ -58,6 +64,25 @@ typedef struct floe_neighbor_list {
     int *walls; int nwalls;  /* particles with unbounded geometry (planes) */
     int *scratch; int scratch_cap;
 } floe_neighbor_list;
+
+/* piece pair of a neighbour-list entry (compound bodies: one entry per piece pair) */
+#define FLOE_SUB(a, b) ((a) << 16 | (b))
+#define FLOE_SUB_A(s) ((s) >> 16)
+#define FLOE_SUB_B(s) ((s) & 0xffff)
+#define FLOE_DETECT_WARM FLOE_ADMM_WARM
+#define FLOE_DETECT_HIST 64
+
+/* detector options, scratch and statistics (contact/detect.c) */
+typedef struct floe_detect_state {
+    floe_admm_options admm;
+    double *scratch; int scratch_cap;
+    long calls, iterations;      /* ADMM/LP pair evaluations and their iterations (pivots + 1) */
+    long admm_calls, lp_calls;
+    long nonconverged;           /* ADMM evaluations that hit max_iter (a counted warning) */
+    long hist[FLOE_DETECT_HIST]; /* iterations per evaluation (last bin: that many or more) */
+    int cur_i, cur_j;
+    int first_bad_i, first_bad_j; long first_bad_step;
+} floe_detect_state;
 
 struct floe_world {
     floe_world_def def;
@@ -88,6 +113,7 @@ struct floe_world {
     int last_step_of_run;     /* floe_world_run's final step: record for the end() flush */
     int finished;
     floe_energy energy;
+    floe_detect_state det;
 };
 
 int floe_world_error(floe_world *w, int code, const char *fmt, ...)
@@ -108,9 +134,14 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
 
 /* contact detection (contact/detect.c): fills c (x1, x2, n, depth, point, r_eff) for the
  * pair; returns 1 if penetrating, 0 if not, < 0 on error. */
-int floe_detect(const floe_world *w, int i, int j, floe_contact *c);
-/* 1 if a detector exists for the two geometry kinds/classes */
+int floe_detect(floe_world *w, int i, int j, int sub, double *warm, floe_contact *c);
+/* 1 if a detector exists for the two geometries (every piece pair of compounds) */
 int floe_detect_supported(const floe_geometry *a, const floe_geometry *b);
+/* 1 if some piece pair goes through ADMM or the polytope LP (needs warm-start storage) */
+int floe_detect_needs_warm(const floe_geometry *a, const floe_geometry *b);
+int floe_piece_count(const floe_geometry *g);
+/* world centre and bounding radius of piece `piece` of particle i */
+void floe_piece_centre(const floe_world *w, int i, int piece, double c[3], double *r);
 
 /* forces (core/forces.c) */
 int floe_compute_forces(floe_world *w);
