@@ -9,6 +9,7 @@
 #include "floe_state.h"
 #include "world_internal.h"
 #include "floe_observer.h"
+#include "floe_mesh.h"
 
 #include <errno.h>
 #include <libfyaml.h>
@@ -796,72 +797,310 @@ static int sc_parse_walls(sc *s, struct fy_node *seq, struct fy_node *key)
 /* Bodies                                                                                */
 
 typedef struct sc_shape {
-    int kind;            /* 0 sphere, 1 box */
+    int kind;            /* 0 sphere, 1 box, 2 any other shape (built from node) */
     double radius;       /* sphere */
     double size[3];      /* box */
     double rb;           /* bounding radius */
+    double fq[4];        /* orientation of the body frame in the shape's input coordinates */
+    struct fy_node *node, *key;
+    char field[160];
 } sc_shape;
+
+static const char *const sc_shape_kinds[] = {"sphere", "box", "polyhedron", "polygon", "prism", "ellipsoid",
+                                             "cylinder", "capsule", "cone", "rounded", "compound", "mesh",
+                                             NULL};
+
+/* body frame of a shape in its input coordinates (polytopes, compounds: centroid and
+ * principal axes; primitives: identity) */
+static void sc_geom_frame(const floe_geometry *g, double fx[3], double fq[4])
+{
+    floe_v3_set(fx, 0, 0, 0);
+    floe_q_identity(fq);
+    if (g->klass == &floe_polytope_class) {
+        const floe_polytope *p = (const floe_polytope *)g;
+        floe_v3_copy(fx, p->frame_x);
+        memcpy(fq, p->frame_q, 4 * sizeof(double));
+    } else if (g->klass == &floe_compound_class) {
+        const floe_compound *c = (const floe_compound *)g;
+        floe_v3_copy(fx, c->frame_x);
+        memcpy(fq, c->frame_q, 4 * sizeof(double));
+    }
+}
+
+/* A list of points (each 2 or 3 numbers): *out malloc'd, dim numbers per point. */
+static int sc_points_list(sc *s, struct fy_node *v, struct fy_node *k, const char *f, int dim, int min,
+                          double **out, int *n)
+{
+    *out = NULL;
+    *n = 0;
+    if (!v || v == k || !fy_node_is_sequence(v))
+        return sc_fail(s, FLOE_EPARSE, v && v != k ? v : k, "%s must be a list of %d-number points", f, dim);
+    int cnt = fy_node_sequence_item_count(v);
+    if (cnt < min)
+        return sc_fail(s, FLOE_EINVAL, v, "%s needs at least %d points (got %d)", f, min, cnt);
+    double *x = malloc((size_t)cnt * dim * sizeof(double));
+    if (!x) return sc_fail(s, FLOE_ENOMEM, v, "out of memory");
+    for (int i = 0; i < cnt; i++) {
+        char f2[192];
+        snprintf(f2, sizeof f2, "%s[%d]", f, i);
+        int got;
+        int rc = sc_node_list(s, fy_node_sequence_get_by_index(v, i), NULL, f2, dim, 0, x + (size_t)dim * i, &got);
+        if (rc) { free(x); return rc; }
+    }
+    *out = x;
+    *n = cnt;
+    return FLOE_OK;
+}
+
+static int sc_pos_num(sc *s, const sc_map *m, const char *key, double *out)
+{
+    FLOE_TRY(sc_num(s, m, key, 1, 0, out));
+    if (!(*out > 0)) return sc_range(s, m, key, "> 0 (m)", *out);
+    return FLOE_OK;
+}
+
+/* Build any shape from its {kind: {...}} mapping (f names the field in messages). */
+static int sc_build_shape(sc *s, struct fy_node *v, struct fy_node *k, const char *f, int depth,
+                          floe_geometry **out)
+{
+    *out = NULL;
+    if (depth > 8) return sc_fail(s, FLOE_EPARSE, v, "%s: shapes nested too deep", f);
+    sc_map m;
+    FLOE_TRY(sc_map_open(s, v == k ? NULL : v, k, f, sc_shape_kinds, &m));
+    if (fy_node_mapping_item_count(v) != 1)
+        return sc_fail(s, FLOE_EPARSE, v, "%s: give exactly one shape (%s)", f,
+                       "sphere, box, polyhedron, polygon, prism, ellipsoid, cylinder, capsule, cone, rounded, "
+                       "compound or mesh");
+    struct fy_node_pair *pr = fy_node_mapping_get_by_index(v, 0);
+    struct fy_node *sk = fy_node_pair_key(pr), *sv = fy_node_pair_value(pr);
+    const char *kind = sc_text(sk);
+    char f2[160], err[512] = "";
+    snprintf(f2, sizeof f2, "%s.%s", f, kind);
+    floe_geometry *g = NULL;
+    sc_map sm;
+#define OPEN(...) do { static const char *const keys_[] = {__VA_ARGS__, NULL}; \
+        FLOE_TRY(sc_map_open(s, sv == sk ? NULL : sv, sk, f2, keys_, &sm)); } while (0)
+    if (!strcmp(kind, "sphere")) {
+        double r;
+        OPEN("radius");
+        FLOE_TRY(sc_pos_num(s, &sm, "radius", &r));
+        g = floe_sphere_create(r);
+    } else if (!strcmp(kind, "box")) {
+        OPEN("size");
+        struct fy_node *zk, *zv = sc_get(&sm, "size", &zk);
+        if (!zv) return sc_fail(s, FLOE_EPARSE, sk, "%s.size is required ([lx, ly, lz])", f2);
+        double sz[3];
+        int got;
+        char f3[192];
+        snprintf(f3, sizeof f3, "%s.size", f2);
+        FLOE_TRY(sc_node_list(s, zv, zk, f3, 3, 0, sz, &got));
+        for (int i = 0; i < 3; i++)
+            if (!(sz[i] > 0))
+                return sc_fail(s, FLOE_EINVAL, fy_node_sequence_get_by_index(zv, i), "%s[%d] must be > 0 (m) (got %g)",
+                               f3, i, sz[i]);
+        g = floe_box_create(sz[0], sz[1], sz[2]);
+    } else if (!strcmp(kind, "polyhedron")) {
+        OPEN("vertices", "planes");
+        struct fy_node *vk, *vv = sc_get(&sm, "vertices", &vk), *pk, *pv = sc_get(&sm, "planes", &pk);
+        if (!vv == !pv)
+            return sc_fail(s, FLOE_EPARSE, sk, "%s: give either vertices (convex hull) or planes ([nx, ny, nz, d]: "
+                           "n.x <= d inside)", f2);
+        double *pts;
+        int n;
+        char f3[192];
+        snprintf(f3, sizeof f3, "%s.%s", f2, vv ? "vertices" : "planes");
+        if (vv) {
+            FLOE_TRY(sc_points_list(s, vv, vk, f3, 3, 4, &pts, &n));
+            g = floe_polyhedron_from_points(pts, n, err, sizeof err);
+        } else {
+            FLOE_TRY(sc_points_list(s, pv, pk, f3, 4, 4, &pts, &n));
+            g = floe_polyhedron_from_planes(pts, n, err, sizeof err);
+        }
+        free(pts);
+        if (!g) return sc_fail(s, FLOE_EINVAL, vv ? vv : pv, "%s: %s", f3, err);
+    } else if (!strcmp(kind, "polygon") || !strcmp(kind, "prism")) {
+        int prism = kind[1] == 'r';
+        if (prism) OPEN("vertices", "height");
+        else OPEN("vertices");
+        if (!prism && s->dim != 2)
+            return sc_fail(s, FLOE_EINVAL, sk, "%s: a polygon is a 2D shape (dim: 2); in 3D use prism or polyhedron", f2);
+        struct fy_node *vk, *vv = sc_get(&sm, "vertices", &vk);
+        if (!vv) return sc_fail(s, FLOE_EPARSE, sk, "%s.vertices is required ([[x, y], ...])", f2);
+        double *pts, h = 0;
+        int n;
+        char f3[192];
+        snprintf(f3, sizeof f3, "%s.vertices", f2);
+        if (prism) FLOE_TRY(sc_pos_num(s, &sm, "height", &h));
+        FLOE_TRY(sc_points_list(s, vv, vk, f3, 2, 3, &pts, &n));
+        g = prism ? floe_prism_create(pts, n, h, err, sizeof err) : floe_polygon_create(pts, n, err, sizeof err);
+        free(pts);
+        if (!g) return sc_fail(s, FLOE_EINVAL, vv, "%s: %s", f3, err);
+    } else if (!strcmp(kind, "ellipsoid")) {
+        OPEN("semi_axes");
+        struct fy_node *ak, *av = sc_get(&sm, "semi_axes", &ak);
+        if (!av) return sc_fail(s, FLOE_EPARSE, sk, "%s.semi_axes is required ([a, b, c])", f2);
+        double a3[3];
+        int got;
+        char f3[192];
+        snprintf(f3, sizeof f3, "%s.semi_axes", f2);
+        FLOE_TRY(sc_node_list(s, av, ak, f3, 3, 0, a3, &got));
+        for (int i = 0; i < 3; i++)
+            if (!(a3[i] > 0)) return sc_fail(s, FLOE_EINVAL, av, "%s[%d] must be > 0 (m) (got %g)", f3, i, a3[i]);
+        g = floe_ellipsoid_create(a3[0], a3[1], a3[2]);
+    } else if (!strcmp(kind, "cylinder") || !strcmp(kind, "cone")) {
+        double r, h;
+        OPEN("radius", "height");
+        FLOE_TRY(sc_pos_num(s, &sm, "radius", &r));
+        FLOE_TRY(sc_pos_num(s, &sm, "height", &h));
+        g = kind[1] == 'y' ? floe_cylinder_create(r, h) : floe_cone_create(r, h);
+    } else if (!strcmp(kind, "capsule")) {
+        double r, l;
+        OPEN("radius", "length");
+        FLOE_TRY(sc_pos_num(s, &sm, "radius", &r));
+        FLOE_TRY(sc_num(s, &sm, "length", 1, 0, &l));
+        if (!(l >= 0)) return sc_range(s, &sm, "length", ">= 0 (m, the straight part)", l);
+        g = floe_capsule_create(r, l);
+    } else if (!strcmp(kind, "rounded")) {
+        double r;
+        OPEN("radius", "shape");
+        FLOE_TRY(sc_pos_num(s, &sm, "radius", &r));
+        struct fy_node *ik, *iv = sc_get(&sm, "shape", &ik);
+        if (!iv) return sc_fail(s, FLOE_EPARSE, sk, "%s.shape is required (the shape to round)", f2);
+        char f3[192];
+        snprintf(f3, sizeof f3, "%s.shape", f2);
+        floe_geometry *inner;
+        FLOE_TRY(sc_build_shape(s, iv, ik, f3, depth + 1, &inner));
+        if (inner->klass->kind == FLOE_GEOM_COMPOUND || inner->klass->kind == FLOE_GEOM_PLANE) {
+            floe_geometry_destroy(inner);
+            return sc_fail(s, FLOE_EINVAL, iv, "%s: only a convex shape can be rounded", f3);
+        }
+        g = floe_rounded_create(inner, r);
+    } else if (!strcmp(kind, "compound")) {
+        OPEN("pieces");
+        struct fy_node *pk, *pv = sc_get(&sm, "pieces", &pk);
+        if (!pv || pv == pk || !fy_node_is_sequence(pv) || fy_node_sequence_item_count(pv) < 1)
+            return sc_fail(s, FLOE_EPARSE, pv && pv != pk ? pv : sk,
+                           "%s.pieces must be a list of {shape, position, orientation}", f2);
+        int n = fy_node_sequence_item_count(pv);
+        floe_geometry **pieces = calloc((size_t)n, sizeof *pieces);
+        double *px = calloc((size_t)n * 3, sizeof(double)), *pq = calloc((size_t)n * 4, sizeof(double));
+        int rc = pieces && px && pq ? FLOE_OK : sc_fail(s, FLOE_ENOMEM, pv, "out of memory");
+        for (int i = 0; i < n && rc == FLOE_OK; i++) {
+            static const char *const piece_keys[] = {"shape", "position", "orientation", NULL};
+            char f3[192];
+            snprintf(f3, sizeof f3, "%s.pieces[%d]", f2, i);
+            struct fy_node *e = fy_node_sequence_get_by_index(pv, i);
+            sc_map pm;
+            rc = sc_map_open(s, e, e, f3, piece_keys, &pm);
+            struct fy_node *shk = NULL, *shv = rc ? NULL : sc_get(&pm, "shape", &shk);
+            if (rc == FLOE_OK && !shv) rc = sc_fail(s, FLOE_EPARSE, e, "%s.shape is required", f3);
+            double pos[3] = {0, 0, 0}, q[4] = {1, 0, 0, 0};
+            if (rc == FLOE_OK) rc = sc_vec(s, &pm, "position", 0, NULL, pos);
+            struct fy_node *ok, *ov = rc ? NULL : sc_get(&pm, "orientation", &ok);
+            if (rc == FLOE_OK && ov) {
+                int got;
+                char f4[224];
+                snprintf(f4, sizeof f4, "%s.orientation", f3);
+                rc = sc_node_list(s, ov, ok, f4, 4, 0, q, &got);
+                double qn = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+                if (rc == FLOE_OK && !(qn > 0)) rc = sc_fail(s, FLOE_EINVAL, ov, "%s must be a non-zero quaternion", f4);
+                if (rc == FLOE_OK) floe_q_normalize(q);
+            }
+            if (rc == FLOE_OK) {
+                char f4[224];
+                snprintf(f4, sizeof f4, "%s.shape", f3);
+                rc = sc_build_shape(s, shv, shk, f4, depth + 1, &pieces[i]);
+            }
+            if (rc == FLOE_OK && pieces[i]->klass->kind == FLOE_GEOM_COMPOUND)
+                rc = sc_fail(s, FLOE_EINVAL, shv, "%s.shape: a piece must be convex (not a compound or mesh "
+                             "decomposition)", f3);
+            if (rc == FLOE_OK) {
+                /* the piece's body frame placed in the compound's input coordinates */
+                double fx[3], fq[4], off[3];
+                sc_geom_frame(pieces[i], fx, fq);
+                floe_q_rotate(off, q, fx);
+                for (int c = 0; c < 3; c++) px[3 * i + c] = pos[c] + off[c];
+                floe_q_mul(pq + 4 * i, q, fq);
+            }
+        }
+        if (rc == FLOE_OK) {
+            g = floe_compound_create(pieces, px, pq, n, s->dim, err, sizeof err); /* owns the pieces */
+            if (!g) rc = sc_fail(s, FLOE_EINVAL, pv, "%s: %s", f2, err);
+        } else if (pieces) {
+            for (int i = 0; i < n; i++) floe_geometry_destroy(pieces[i]);
+        }
+        free(pieces);
+        free(px);
+        free(pq);
+        if (rc) return rc;
+    } else { /* mesh */
+        OPEN("file", "mode", "scale");
+        const char *file, *mode;
+        struct fy_node *fat;
+        double scale;
+        FLOE_TRY(sc_str(s, &sm, "file", 1, NULL, &file, &fat));
+        static const char *const modes[] = {"hull", "decompose", NULL};
+        int mi;
+        FLOE_TRY(sc_enum(s, &sm, "mode", modes, 0, &mi));
+        mode = modes[mi];
+        FLOE_TRY(sc_num(s, &sm, "scale", 0, 1.0, &scale));
+        if (!(scale > 0)) return sc_range(s, &sm, "scale", "> 0", scale);
+        if (s->dim != 3) return sc_fail(s, FLOE_EINVAL, sk, "%s: meshes are 3D shapes (dim: 3)", f2);
+        /* relative paths are relative to the scene file */
+        char path[1024];
+        const char *slash = s->path ? strrchr(s->path, '/') : NULL;
+        if (file[0] != '/' && slash)
+            snprintf(path, sizeof path, "%.*s/%s", (int)(slash - s->path), s->path, file);
+        else snprintf(path, sizeof path, "%s", file);
+        g = floe_mesh_shape(path, mode, scale, err, sizeof err);
+        if (!g) return sc_fail(s, (floe_mesh_features() & (FLOE_MESH_HAVE_ASSIMP | FLOE_MESH_HAVE_CGAL)) ==
+                                      (FLOE_MESH_HAVE_ASSIMP | FLOE_MESH_HAVE_CGAL) ? FLOE_EINVAL : FLOE_ENOTSUP,
+                               fat, "%s.file: %s", f2, err);
+    }
+#undef OPEN
+    if (!g) return sc_fail(s, FLOE_EINVAL, sk, "%s: could not create the shape%s%s", f2, err[0] ? ": " : "", err);
+    *out = g;
+    return FLOE_OK;
+}
 
 static int sc_parse_shape(sc *s, const sc_map *body, sc_shape *sh)
 {
-    static const char *const kinds[] = {"sphere", "box", NULL};
-    static const char *const sphere_keys[] = {"radius", NULL};
-    static const char *const box_keys[] = {"size", NULL};
     struct fy_node *k;
     struct fy_node *v = sc_get(body, "shape", &k);
     char f[128];
     sc_field(f, sizeof f, body, "shape");
-    if (!v)
-        return sc_fail(s, FLOE_EPARSE, body->at, "%s is required ({sphere: {radius: R}} or "
-                       "{box: {size: [lx, ly, lz]}})", f);
-    sc_map m;
-    FLOE_TRY(sc_map_open(s, v == k ? NULL : v, k, f, kinds, &m));
-    if (fy_node_mapping_item_count(v) != 1)
-        return sc_fail(s, FLOE_EPARSE, v ? v : k, "%s: give exactly one shape (sphere or box)", f);
-    struct fy_node *sk;
-    struct fy_node *sv;
     memset(sh, 0, sizeof *sh);
-    if ((sv = sc_get(&m, "sphere", &sk))) {
-        char f2[160];
-        snprintf(f2, sizeof f2, "%s.sphere", f);
-        sc_map sm;
-        FLOE_TRY(sc_map_open(s, sv == sk ? NULL : sv, sk, f2, sphere_keys, &sm));
+    floe_q_identity(sh->fq);
+    if (!v)
+        return sc_fail(s, FLOE_EPARSE, body->at, "%s is required ({sphere: {radius: R}}, "
+                       "{box: {size: [lx, ly, lz]}}, polyhedron, ...: docs/scene-format.md)", f);
+    floe_geometry *g;
+    FLOE_TRY(sc_build_shape(s, v, k, f, 0, &g));
+    sh->node = v;
+    sh->key = k;
+    snprintf(sh->field, sizeof sh->field, "%s", f);
+    sh->rb = floe_geometry_bounding_radius(g);
+    if (g->klass == &floe_sphere_class) {
         sh->kind = 0;
-        FLOE_TRY(sc_num(s, &sm, "radius", 1, 0, &sh->radius));
-        if (!(sh->radius > 0)) return sc_range(s, &sm, "radius", "> 0 (m)", sh->radius);
-        sh->rb = sh->radius;
-    } else {
-        sv = sc_get(&m, "box", &sk);
-        char f2[160];
-        snprintf(f2, sizeof f2, "%s.box", f);
-        sc_map bm;
-        FLOE_TRY(sc_map_open(s, sv == sk ? NULL : sv, sk, f2, box_keys, &bm));
+        sh->radius = ((const floe_sphere *)g)->radius;
+    } else if (g->klass == &floe_box_class) {
         sh->kind = 1;
-        struct fy_node *zk;
-        struct fy_node *zv = sc_get(&bm, "size", &zk);
-        if (!zv) return sc_fail(s, FLOE_EPARSE, sk, "%s.size is required ([lx, ly, lz])", f2);
-        char f3[192];
-        snprintf(f3, sizeof f3, "%s.size", f2);
-        int got;
-        FLOE_TRY(sc_node_list(s, zv, zk, f3, 3, 0, sh->size, &got));
-        for (int i = 0; i < 3; i++)
-            if (!(sh->size[i] > 0))
-                return sc_fail(s, FLOE_EINVAL, fy_node_sequence_get_by_index(zv, i),
-                               "%s[%d] must be > 0 (m) (got %g)", f3, i, sh->size[i]);
-        sh->rb = 0.5 * floe_v3_norm(sh->size);
+        for (int i = 0; i < 3; i++) sh->size[i] = 2 * ((const floe_box *)g)->half[i];
+    } else {
+        sh->kind = 2;
+        double fx[3];
+        sc_geom_frame(g, fx, sh->fq);
     }
+    floe_geometry_destroy(g);
     return FLOE_OK;
-}
-
-static floe_geometry *sc_make_geometry(const sc_shape *sh)
-{
-    if (sh->kind == 0) return floe_sphere_create(sh->radius);
-    return floe_box_create(sh->size[0], sh->size[1], sh->size[2]);
 }
 
 static int sc_add_geometry(sc *s, const sc_shape *sh, struct fy_node *at, const char *what, int *gi)
 {
-    floe_geometry *g = sc_make_geometry(sh);
+    floe_geometry *g;
+    if (sh->kind == 0) g = floe_sphere_create(sh->radius);
+    else if (sh->kind == 1) g = floe_box_create(sh->size[0], sh->size[1], sh->size[2]);
+    else FLOE_TRY(sc_build_shape(s, sh->node, sh->key, sh->field, 0, &g));
     if (!g) return sc_fail(s, FLOE_ENOMEM, at, "%s: could not create the shape", what);
     int r = floe_world_add_geometry(s->w, g);
     if (r < 0) {
@@ -936,6 +1175,14 @@ static int sc_parse_common(sc *s, const sc_map *m, int entry, int packing, sc_co
                                "%s: in a 2D scene the orientation must be a rotation about z "
                                "([w, 0, 0, z])", fq);
         }
+    }
+    {
+        /* the orientation turns the shape as written; its body (principal) frame sits at
+         * frame_q within those coordinates */
+        double q[4];
+        floe_q_mul(q, c->q, c->shape.fq);
+        floe_q_normalize(q);
+        memcpy(c->q, q, sizeof q);
     }
     int mo;
     FLOE_TRY(sc_enum(s, m, "motion", sc_motions, 0, &mo));
@@ -1694,8 +1941,8 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
 /* Loading                                                                               */
 
 static const char *const sc_root_keys[] = {"name", "description", "dimension", "time", "gravity",
-                                           "neighbor", "mass_2d", "materials", "laws", "walls",
-                                           "bodies", "outputs", NULL};
+                                           "neighbor", "contact_detection", "mass_2d", "materials", "laws",
+                                           "walls", "bodies", "outputs", NULL};
 
 static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_outputs,
                     floe_scene_info *info)
@@ -1793,6 +2040,23 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
                                    floe_world_last_error(s->w));
     }
     FLOE_TRY(sc_build_laws(s));
+    {
+        /* ADMM options (pairs of convex shapes other than polytopes and spheres) */
+        static const char *const cd_keys[] = {"tolerance", "max_iterations", NULL};
+        struct fy_node *ck, *cv = sc_get(&r, "contact_detection", &ck);
+        if (cv) {
+            sc_map cm;
+            FLOE_TRY(sc_map_open(s, cv == ck ? NULL : cv, ck, "contact_detection", cd_keys, &cm));
+            floe_admm_options *o = &s->w->det.admm;
+            FLOE_TRY(sc_num(s, &cm, "tolerance", 0, o->tol, &o->tol));
+            if (!(o->tol > 0 && o->tol < 1))
+                return sc_range(s, &cm, "tolerance", "in (0, 1) (relative to the smaller particle size)", o->tol);
+            long mi;
+            FLOE_TRY(sc_long(s, &cm, "max_iterations", 0, o->max_iter, &mi));
+            if (mi < 1 || mi > 100000) return sc_range(s, &cm, "max_iterations", "in [1, 100000]", (double)mi);
+            o->max_iter = (int)mi;
+        }
+    }
 
     /* bodies first: body particle i is world particle i (ids in outputs and trackers) */
     struct fy_node *bk;
