@@ -106,6 +106,16 @@ static int cmd_run(const char *scene, const char *outdir, int quiet)
         floe_world_destroy(w);
         return 1;
     }
+    {
+        floe_detect_stats ds;
+        floe_world_detect_stats(w, &ds);
+        if (ds.nonconverged > 0) /* a counted warning, also with -q */
+            fprintf(stderr,
+                    "%s: warning: ADMM contact detection stopped at max_iterations in %ld of %ld evaluations "
+                    "(first: particles %d and %d at step %ld); raise contact_detection.max_iterations or "
+                    "the tolerance\n",
+                    prog, ds.nonconverged, ds.admm, ds.first_bad_i, ds.first_bad_j, ds.first_bad_step);
+    }
     if (!quiet) {
         int n = info.nparticles;
         double ps = wall > 0 ? (double)n * (double)steps / wall : 0;
@@ -116,6 +126,13 @@ static int cmd_run(const char *scene, const char *outdir, int quiet)
         printf("  particle-steps/s:   %.3g (%d particles)\n", ps, n);
         printf("  contacts (current): %d\n", w->ncontacts);
         printf("  neighbour rebuilds: %ld\n", w->nl.rebuilds);
+        floe_detect_stats ds;
+        floe_world_detect_stats(w, &ds);
+        if (ds.evaluations > 0)
+            printf("  convex detection:   %ld pair evaluations (%ld LP, %ld ADMM), iterations median %d, "
+                   "99th percentile %d%s\n",
+                   ds.evaluations, ds.lp, ds.admm, ds.iterations_median, ds.iterations_p99,
+                   ds.iterations_p99 >= FLOE_DETECT_HIST - 1 ? "+" : "");
         printf("  energy balance err: %.3g (relative)\n", floe_world_energy_balance_error(w));
         printf("  outputs in:         %s\n", outdir);
     }

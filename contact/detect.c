@@ -276,6 +276,7 @@ static int polytope_pair(floe_world *w, const shape_ref *a, const shape_ref *b, 
     int p1 = 0, p2 = 0;
     int rc = lp_half(w, a, b, warm, x1, &s1, n1, &p1);
     if (rc) return -rc;
+    w->det.lp_calls++;
     if (!(s1 < 0)) {
         count_iterations(w, p1);
         return 0;
@@ -283,7 +284,6 @@ static int polytope_pair(floe_world *w, const shape_ref *a, const shape_ref *b, 
     rc = lp_half(w, b, a, warm ? warm + 4 : NULL, x2, &s2, n2, &p2);
     if (rc) return -rc;
     count_iterations(w, p1 + p2);
-    w->det.lp_calls++;
     if (!(s2 < 0)) return 0;
     floe_v3_copy(c->x1, x1);
     floe_v3_copy(c->x2, x2);
@@ -294,12 +294,77 @@ static int polytope_pair(floe_world *w, const shape_ref *a, const shape_ref *b, 
     return 1;
 }
 
+/* separated along the line of centres (support functions): a cheap exact "no contact" */
+static int separated_on_centre_line(const shape_ref *a, const shape_ref *b) {
+    if (!a->g->klass->support || !b->g->klass->support) return 0;
+    double d[3], da[3], db[3], sa[3], sb[3], xa[3], xb[3];
+    floe_v3_sub(d, b->x, a->x);
+    double n = floe_v3_norm(d);
+    if (!(n > 0)) return 0;
+    floe_v3_scale(d, 1.0 / n);
+    floe_q_rotate_inv(da, a->q, d);
+    floe_v3_scale(d, -1.0);
+    floe_q_rotate_inv(db, b->q, d);
+    a->g->klass->support(a->g, da, sa);
+    b->g->klass->support(b->g, db, sb);
+    floe_q_rotate(xa, a->q, sa);
+    floe_q_rotate(xb, b->q, sb);
+    /* extent of a towards b and of b towards a, along the unit centre line -d */
+    return -floe_v3_dot(xa, d) + floe_v3_dot(xb, d) < n ? 1 : 0;
+}
+
 /* ---- any other convex pair: ADMM ---- */
 static int admm_pair(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     if (is_polytope(a->g) && is_polytope(b->g)) return polytope_pair(w, a, b, warm, c);
+    if (separated_on_centre_line(a, b)) {
+        if (warm) warm[0] = NAN;
+        return 0;
+    }
     floe_pose pa = {a->g, {a->x[0], a->x[1], a->x[2]}, {a->q[0], a->q[1], a->q[2], a->q[3]}};
     floe_pose pb = {b->g, {b->x[0], b->x[1], b->x[2]}, {b->q[0], b->q[1], b->q[2], b->q[3]}};
     floe_admm_result r;
+    int pa_poly = is_polytope(a->g), pb_poly = is_polytope(b->g);
+    if (pa_poly != pb_poly) {
+        /* polytope against a curved shape: only the half whose objective is the curved
+         * shape's SDF (the polytope's point deepest in it). The other half minimises the
+         * polytope's SDF, whose ridges make the SDF-only prox stall (docs/models.md); the
+         * curved half alone gives the depth and the normal of the curved surface. */
+        const floe_pose *P = pa_poly ? &pa : &pb, *S = pa_poly ? &pb : &pa;
+        double X[3], phi, xw[3], g[3], gw[3], Xs[3], d[3];
+        int it = floe_admm_half(P, S, &w->det.admm, warm, X, &phi);
+        count_iterations(w, it < 0 ? -it : it);
+        w->det.admm_calls++;
+        if (it < 0) {
+            w->det.nonconverged++;
+            if (w->det.nonconverged == 1) {
+                w->det.first_bad_i = w->det.cur_i;
+                w->det.first_bad_j = w->det.cur_j;
+                w->det.first_bad_step = w->step;
+            }
+        }
+        if (!(phi < 0)) return 0;
+        floe_q_rotate(xw, P->q, X);
+        floe_v3_add(xw, xw, P->x);
+        floe_v3_sub(d, xw, S->x);
+        floe_q_rotate_inv(Xs, S->q, d);
+        floe_geometry_gradient(S->g, Xs, g);
+        floe_q_rotate(gw, S->q, g); /* outward normal of the curved shape, towards P */
+        double xs[3];
+        for (int k = 0; k < 3; k++) xs[k] = xw[k] - phi * gw[k]; /* on the curved surface */
+        if (pa_poly) { /* normal from a (polytope) to b (curved) */
+            floe_v3_copy(c->x1, xw);
+            floe_v3_copy(c->x2, xs);
+            floe_v3_set(c->n, -gw[0], -gw[1], -gw[2]);
+        } else {
+            floe_v3_copy(c->x1, xs);
+            floe_v3_copy(c->x2, xw);
+            floe_v3_copy(c->n, gw);
+        }
+        c->depth = -phi;
+        c->r_eff = a->r * b->r / (a->r + b->r);
+        finish(c);
+        return 1;
+    }
     floe_admm_contact(&pa, &pb, &w->det.admm, warm, &r);
     count_iterations(w, r.iters);
     w->det.admm_calls++;

@@ -108,6 +108,20 @@ int floe_world_record_contacts(floe_world *w, int on);
 /* Number of contacts (penetrating pairs) at the last force evaluation. */
 int floe_world_contact_count(const floe_world *w);
 
+/* Contact detection statistics since prepare (pairs of convex shapes that go through the
+ * polytope LP or ADMM; spheres and walls are analytic and not counted). */
+typedef struct floe_detect_stats {
+    long evaluations;        /* LP/ADMM pair evaluations */
+    long lp, admm;           /* of which polytope LP, ADMM */
+    double iterations_mean;  /* iterations per evaluation (LP: pivots + 1, both halves) */
+    int iterations_median, iterations_p99;
+    long nonconverged;       /* ADMM evaluations stopped at max_iterations (a warning: the
+                                contact used the last iterate) */
+    int first_bad_i, first_bad_j; /* the first such pair and its step */
+    long first_bad_step;
+} floe_detect_stats;
+int floe_world_detect_stats(const floe_world *w, floe_detect_stats *out);
+
 /* Energy bookkeeping (J) maintained every step. */
 typedef struct floe_energy {
     double kinetic_trans, kinetic_rot, elastic;   /* current */

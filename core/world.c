@@ -278,6 +278,29 @@ int floe_world_add_observer(floe_world *w, floe_observer *o) {
 }
 
 double floe_world_dt(const floe_world *w) { return w->dt; }
+
+int floe_world_detect_stats(const floe_world *w, floe_detect_stats *o) {
+    const floe_detect_state *d = &w->det;
+    memset(o, 0, sizeof *o);
+    o->evaluations = d->calls;
+    o->lp = d->lp_calls;
+    o->admm = d->admm_calls;
+    o->nonconverged = d->nonconverged;
+    o->first_bad_i = d->first_bad_i;
+    o->first_bad_j = d->first_bad_j;
+    o->first_bad_step = d->first_bad_step;
+    if (d->calls > 0) {
+        o->iterations_mean = (double)d->iterations / (double)d->calls;
+        long acc = 0, half = (d->calls + 1) / 2, p99 = (long)ceil(0.99 * (double)d->calls);
+        o->iterations_median = o->iterations_p99 = -1;
+        for (int k = 0; k < FLOE_DETECT_HIST; k++) {
+            acc += d->hist[k];
+            if (o->iterations_median < 0 && acc >= half) o->iterations_median = k;
+            if (o->iterations_p99 < 0 && acc >= p99) o->iterations_p99 = k;
+        }
+    }
+    return FLOE_OK;
+}
 double floe_world_time(const floe_world *w) { return w->time; }
 long floe_world_step_count(const floe_world *w) { return w->step; }
 int floe_world_particle_count(const floe_world *w) { return w->p.n; }
