@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Install every Debian package that floe's build, tests and benchmarks need.
 # Idempotent; runs apt-get directly as root, through sudo otherwise.
-#   scripts/install-deps.sh          build + tests
+#   scripts/install-deps.sh          build + tests (CGAL and assimp for meshes: FLOE_WITH_CGAL,
+#                                    FLOE_WITH_ASSIMP; GLPK for a test)
 #   scripts/install-deps.sh --bench  also the peer codes used by bench/ (LIGGGHTS, nanoflann)
 set -euo pipefail
-pkgs=(build-essential cmake pkg-config libfyaml-dev python3 python3-vtk9)
+pkgs=(build-essential cmake pkg-config libfyaml-dev python3 python3-vtk9
+      g++ libcgal-dev libgmp-dev libmpfr-dev libassimp-dev libglpk-dev)
 if [[ "${1:-}" == "--bench" ]]; then
   pkgs+=(g++ libnanoflann-dev liggghts)
 fi
