@@ -21,6 +21,12 @@
 #include <sys/stat.h>
 #include <sys/types.h>
 
+/* Field names in messages ("bodies[3].shape.compound.pieces[1]...") are built in fixed
+ * buffers; a name that long is cut, which only shortens the message. */
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wformat-truncation"
+#endif
+
 #define SC_MAX_PARTICLES_PER_ENTRY 100000000L
 
 /* ------------------------------------------------------------------------------------ */
@@ -874,6 +880,7 @@ static int sc_build_shape(sc *s, struct fy_node *v, struct fy_node *k, const cha
     struct fy_node_pair *pr = fy_node_mapping_get_by_index(v, 0);
     struct fy_node *sk = fy_node_pair_key(pr), *sv = fy_node_pair_value(pr);
     const char *kind = sc_text(sk);
+    if (!kind) return sc_fail(s, FLOE_EPARSE, v, "%s: the shape kind must be a plain name", f);
     char f2[160], err[512] = "";
     snprintf(f2, sizeof f2, "%s.%s", f, kind);
     floe_geometry *g = NULL;
