@@ -2,6 +2,7 @@
  * print build information. Scene format: docs/scene-format.md. */
 #include "floe_scene.h"
 #include "world_internal.h"
+#include "floe_mesh.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -178,9 +179,11 @@ static int cmd_info(void)
 #if defined(__VERSION__)
     printf("compiler:    %s\n", __VERSION__);
 #endif
-    printf("features:    CGAL: no, assimp: no, OpenMP: no\n");
-    printf("geometries:  %s, %s, %s (walls), %s (SDF callback)\n", floe_sphere_class.name,
-           floe_box_class.name, floe_plane_class.name, floe_user_shape_class.name);
+    int feat = floe_mesh_features();
+    printf("features:    CGAL: %s, assimp: %s, OpenMP: no\n", feat & FLOE_MESH_HAVE_CGAL ? "yes" : "no",
+           feat & FLOE_MESH_HAVE_ASSIMP ? "yes" : "no");
+    printf("geometries:  sphere, box, polyhedron, polygon, prism, ellipsoid, cylinder, capsule, cone, "
+           "rounded, compound, mesh (hull, decompose), plane (walls), user SDF callback\n");
     printf("contact laws: %s (scene models: linear, viscoelastic), %s (scene model: "
            "hertz_mindlin)\n", floe_linear_law_class.name, floe_hertz_mindlin_law_class.name);
     printf("packings:    lattice, hexagonal, random\n");

@@ -1874,7 +1874,7 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
            s->dim == 2 ? (w->def.mass_2d_area ? " (motion in x-y; masses from area, per metre)"
                                                : " (motion in x-y; masses of the 3D shapes)")
                        : "");
-    sc_cat(&b, "particles:  %d (%d spheres, %d boxes) in %d body entr%s; walls: %d\n",
+    sc_cat(&b, "particles:  %d (%d spheres, %d other shapes) in %d body entr%s; walls: %d\n",
            s->nparticles, s->nspheres, s->nboxes, s->nbody_entries,
            s->nbody_entries == 1 ? "y" : "ies", s->nwalls);
     for (int e = 0; e < s->nbody_entries && e < 12; e++)
@@ -1910,9 +1910,9 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
     int np = 0;
     if (s->nspheres >= 2) pairs[np++] = "sphere-sphere analytic";
     if (s->nspheres && s->nwalls) pairs[np++] = "sphere-wall analytic";
-    if (s->nspheres && s->nboxes) pairs[np++] = "sphere-box by projection on the box SDF";
-    if (s->nboxes && s->nwalls) pairs[np++] = "box-wall analytic (vertices)";
-    if (s->nboxes >= 2) pairs[np++] = "box-box (needs the general ADMM detector)";
+    if (s->nspheres && s->nboxes) pairs[np++] = "sphere-other by the other shape's SDF at the centre";
+    if (s->nboxes && s->nwalls) pairs[np++] = "shape-wall by vertices or support point";
+    if (s->nboxes >= 2) pairs[np++] = "shape-shape by the polytope LP or ADMM";
     for (int i = 0; i < np; i++, first = 0) sc_cat(&b, "%s%s", first ? "" : ", ", pairs[i]);
     sc_cat(&b, "%s\n", first ? "none (no pair of particles can touch)" : "");
     sc_cat(&b, "gravity:    (%g, %g, %g) m/s^2\n", w->def.gravity[0], w->def.gravity[1],
