@@ -1,8 +1,11 @@
 /* admm.c - contact detection between convex SDF shapes by ADMM (see floe_admm.h).
  *
  * Prox of an SDF phi' with step t (exact for an exact SDF on a flat face or a smooth
- * surface, an approximation at edges and corners, ParticLS §3): outside, a step of t along
- * -grad phi' that stops on the surface; inside, a step of t deeper. The projection onto
+ * surface, an approximation at edges and corners, ParticLS §3): a step of t along
+ * -grad phi' that stops where the SDF stops falling at unit rate (a ridge inside, the
+ * nearest vertex or edge outside). Stopping on the surface from outside, as a cruder rule
+ * would, leaves a fixed point that can never go inside: measured, it stalls at r = depth.
+ * The projection onto
  * {phi <= 0} is the geometry's own `project` (X - phi grad phi for an exact SDF). The step
  * t starts at `step` x size and is rebalanced (Boyd et al. 2011, §3.4.1): when the primal
  * residual dominates t shrinks, when the dual residual dominates it grows (the scaled dual u
@@ -16,7 +19,7 @@
 void floe_admm_default_options(floe_admm_options *o) {
     o->tol = 1e-6;
     o->max_iter = 200;
-    o->step = 0.5;
+    o->step = 1.0;
     o->adapt = 1;
 }
 
@@ -78,21 +81,20 @@ static void prox_b(const floe_geometry *gb, const rel_frame *f, const double v[3
     }
     double phi = floe_geometry_sdf(gb, vb), g[3];
     floe_geometry_gradient(gb, vb, g);
-    double s = t;
-    if (phi > 0) s = fmin(t, phi);
-    else {
-        double tol = 1e-9 * size, p[3];
-        for (int k = 0; k < 3; k++) p[k] = vb[k] - s * g[k];
-        if (floe_geometry_sdf(gb, p) > phi - s + tol) {
-            double lo = 0, hi = s;
-            for (int it = 0; it < 40 && hi - lo > tol; it++) {
-                double m = 0.5 * (lo + hi);
-                for (int k = 0; k < 3; k++) p[k] = vb[k] - m * g[k];
-                if (floe_geometry_sdf(gb, p) > phi - m + tol) hi = m;
-                else lo = m;
-            }
-            s = lo;
+    /* along the gradient line an exact SDF falls at unit rate, across the surface too,
+     * until the line meets a ridge (inside) or passes the nearest vertex or edge (outside):
+     * the step stops there (largest s with phi(v - s g) = phi(v) - s, by bisection) */
+    double s = t, tol = 1e-9 * size, p[3];
+    for (int k = 0; k < 3; k++) p[k] = vb[k] - s * g[k];
+    if (floe_geometry_sdf(gb, p) > phi - s + tol) {
+        double lo = 0, hi = s;
+        for (int it = 0; it < 40 && hi - lo > tol; it++) {
+            double m = 0.5 * (lo + hi);
+            for (int k = 0; k < 3; k++) p[k] = vb[k] - m * g[k];
+            if (floe_geometry_sdf(gb, p) > phi - m + tol) hi = m;
+            else lo = m;
         }
+        s = lo;
     }
     for (int k = 0; k < 3; k++) xb[k] = vb[k] - s * g[k];
     to_a(f, xb, x);
@@ -119,7 +121,14 @@ int floe_admm_half(const floe_pose *a, const floe_pose *b, const floe_admm_optio
         double cb[3], ob[3] = {0, 0, 0}, zb[3], g[3];
         t = o->step * size;
         to_a(&f, ob, cb);
-        proj_a(ga, cb, z);
+        if (ga->klass->support && floe_v3_norm(cb) > 0) {
+            /* a's farthest point towards b's centre: near the deepest point of a shallow
+             * contact */
+            double d[3];
+            floe_v3_copy(d, cb);
+            floe_v3_scale(d, 1.0 / floe_v3_norm(cb));
+            ga->klass->support(ga, d, z);
+        } else proj_a(ga, cb, z);
         to_b(&f, z, zb);
         floe_geometry_gradient(gb, zb, g);
         dir_to_a(&f, g, u);

@@ -24,7 +24,7 @@ typedef struct floe_admm_options {
     double tol;       /* stop when the primal and dual residuals are below tol x size, where size
                          is the smaller bounding radius (default 1e-6) */
     int max_iter;     /* per half (default 200) */
-    double step;      /* t = 1/rho as a fraction of size (default 0.5); adapted by residual
+    double step;      /* t = 1/rho as a fraction of size (default 1); adapted by residual
                          balancing when adapt = 1 */
     int adapt;        /* default 1 */
 } floe_admm_options;
