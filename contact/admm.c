@@ -209,8 +209,11 @@ int floe_admm_contact(const floe_pose *a, const floe_pose *b, const floe_admm_op
         floe_q_rotate(gw, b->q, g);
         floe_v3_set(r->n, -gw[0], -gw[1], -gw[2]);
         r->depth = -r->phi1;
-    } else {
-        floe_geometry_gradient(a->g, X2, g);
+    } else { /* X2 is in b's frame: the gradient of a wants a's */
+        double Xa[3], d[3];
+        floe_v3_sub(d, r->x2, a->x);
+        floe_q_rotate_inv(Xa, a->q, d);
+        floe_geometry_gradient(a->g, Xa, g);
         floe_q_rotate(r->n, a->q, g);
         r->depth = -r->phi2;
     }
