@@ -404,11 +404,13 @@ static int separated_on_centre_line(const shape_ref *a, const shape_ref *b) {
 
 /* ---- any other convex pair: ADMM ---- */
 static int admm_pair(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
-    if (is_polytope(a->g) && is_polytope(b->g)) return polytope_pair(w, a, b, warm, c);
     if (separated_on_centre_line(a, b)) {
-        if (warm) warm[0] = NAN;
+        /* most list pairs of non-spherical grains: bounding spheres overlap, shapes apart */
+        if (warm) warm[0] = warm[8] = NAN;
+        w->det.separated++;
         return 0;
     }
+    if (is_polytope(a->g) && is_polytope(b->g)) return polytope_pair(w, a, b, warm, c);
     floe_pose pa = {a->g, {a->x[0], a->x[1], a->x[2]}, {a->q[0], a->q[1], a->q[2], a->q[3]}};
     floe_pose pb = {b->g, {b->x[0], b->x[1], b->x[2]}, {b->q[0], b->q[1], b->q[2], b->q[3]}};
     floe_admm_result r;

@@ -78,6 +78,7 @@ typedef struct floe_detect_state {
     double *scratch; int scratch_cap;
     long calls, iterations;      /* ADMM/LP pair evaluations and their iterations (pivots + 1) */
     long admm_calls, lp_calls;
+    long separated;              /* pairs found apart by the support test before LP/ADMM */
     long nonconverged;           /* ADMM evaluations that hit max_iter (a counted warning) */
     long hist[FLOE_DETECT_HIST]; /* iterations per evaluation (last bin: that many or more) */
     int cur_i, cur_j;
