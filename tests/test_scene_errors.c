@@ -5,6 +5,7 @@
 #include "floe_scene.h"
 #include "world_internal.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -449,6 +450,75 @@ static void test_valid(void)
     floe_world_destroy(w);
 }
 
+
+/* shapes of issue #3: every shape kind builds, bad shapes name the field and the defect */
+static void test_shapes(void)
+{
+    const char *t;
+    t = BASE_MATS "bodies:\n  - {shape: {polyhedron: {planes: [[1,0,0,1],[-1,0,0,1],[0,1,0,1],[0,-1,0,1],[0,0,1,1]]}}, "
+                  "material: glass, position: [0, 0, 0]}\n";
+    expect_error("unbounded planes", t, loc_of(t, "[[1,0,0,1]", 0), "bodies[0].shape.polyhedron.planes", "unbounded");
+    t = BASE_MATS "bodies:\n  - {shape: {polyhedron: {vertices: [[0,0,0],[1,0,0]], planes: [[1,0,0,1]]}}, "
+                  "material: glass, position: [0, 0, 0]}\n";
+    expect_error("vertices and planes", t, loc_of(t, "polyhedron", 0), "either vertices", NULL);
+    t = BASE_MATS "bodies:\n  - {shape: {polygon: {vertices: [[0,0],[1,0],[0,1]]}}, material: glass, position: [0, 0, 0]}\n";
+    expect_error("polygon in 3D", t, loc_of(t, "polygon", 0), "2D shape", NULL);
+    t = BASE_MATS "bodies:\n  - {shape: {prism: {vertices: [[0,0],[1,0],[2,0]], height: 1}}, material: glass, "
+                  "position: [0, 0, 0]}\n";
+    expect_error("collinear prism", t, loc_of(t, "[[0,0]", 0), "bodies[0].shape.prism.vertices", NULL);
+    t = BASE_MATS "bodies:\n  - {shape: {ellipsoid: {semi_axes: [1, 0, 1]}}, material: glass, position: [0, 0, 0]}\n";
+    expect_error("ellipsoid axis 0", t, loc_of(t, "[1, 0, 1]", 0), "semi_axes[1] must be > 0", NULL);
+    t = BASE_MATS "bodies:\n  - {shape: {cylinder: {radius: 1}}, material: glass, position: [0, 0, 0]}\n";
+    expect_error("cylinder without height", t, NULL, "height", "required");
+    t = BASE_MATS "bodies:\n  - {shape: {rounded: {radius: 0.1, shape: {sphre: {radius: 1}}}}, material: glass, "
+                  "position: [0, 0, 0]}\n";
+    expect_error("rounded inner misspelled", t, loc_of(t, "sphre", 0), "did you mean 'sphere'?", NULL);
+    t = BASE_MATS "bodies:\n  - {shape: {compound: {pieces: [{shape: {box: {size: [1,1,1]}}, postion: [0,0,0]}]}}, "
+                  "material: glass, position: [0, 0, 0]}\n";
+    expect_error("compound piece key", t, loc_of(t, "postion", 0), "did you mean 'position'?", NULL);
+    t = BASE_MATS "bodies:\n  - {shape: {mesh: {file: no-such-grain.stl}}, material: glass, position: [0, 0, 0]}\n";
+    expect_error("missing mesh file", t, loc_of(t, "no-such-grain.stl", 0), "no-such-grain.stl", NULL);
+    t = BASE_MATS "bodies:\n  - {shape: {mesh: {file: g.stl, mode: hul}}, material: glass, position: [0, 0, 0]}\n";
+    expect_error("mesh mode", t, loc_of(t, "hul}", 0), "did you mean 'hull'?", NULL);
+    t = BASE_MATS "contact_detection: {tolerance: 2}\n" ONE_BODY;
+    expect_error("ADMM tolerance", t, loc_of(t, "2}", 0), "contact_detection.tolerance", NULL);
+
+    /* every convex kind in one valid scene, with the orientation of a polyhedron kept */
+    t = BASE_MATS
+        "contact_detection: {tolerance: 1.0e-8, max_iterations: 50}\n"
+        "bodies:\n"
+        "  - {shape: {box: {size: [1, 1, 1]}}, material: glass, position: [0, 0, 0]}\n"
+        "  - {shape: {polyhedron: {planes: [[1,0,0,1],[-1,0,0,1],[0,1,0,2],[0,-1,0,2],[0,0,1,3],[0,0,-1,3]]}}, "
+        "material: glass, position: [5, 0, 0]}\n"
+        "  - {shape: {prism: {vertices: [[0,0],[1,0],[0,1]], height: 0.5}}, material: glass, position: [10, 0, 0]}\n"
+        "  - {shape: {ellipsoid: {semi_axes: [1, 2, 3]}}, material: glass, position: [15, 0, 0]}\n"
+        "  - {shape: {cylinder: {radius: 1, height: 2}}, material: glass, position: [20, 0, 0]}\n"
+        "  - {shape: {capsule: {radius: 1, length: 2}}, material: glass, position: [25, 0, 0]}\n"
+        "  - {shape: {cone: {radius: 1, height: 2}}, material: glass, position: [30, 0, 0]}\n"
+        "  - {shape: {rounded: {radius: 0.1, shape: {box: {size: [1, 1, 1]}}}}, material: glass, position: [35, 0, 0]}\n"
+        "  - {shape: {compound: {pieces: [{shape: {box: {size: [2, 1, 1]}}}, {shape: {box: {size: [1, 1, 2]}}, "
+        "position: [0.5, 0, 1.5]}]}}, material: glass, position: [40, 0, 0]}\n";
+    floe_world *w = NULL;
+    floe_scene_info info;
+    char err[1024];
+    int rc = load(t, &w, &info, err, sizeof err);
+    CHECK(rc == FLOE_OK, "all convex shapes load: %s", rc ? err : "");
+    if (rc == FLOE_OK) {
+        CHECK(w->p.n == 9, "9 bodies (got %d)", w->p.n);
+        CHECK(w->det.admm.tol == 1.0e-8 && w->det.admm.max_iter == 50, "contact_detection options reach the world");
+        CHECK(w->p.pieces[8] == 2, "the compound has 2 pieces (got %d)", w->p.pieces[8]);
+        /* the 2 x 4 x 6 polyhedron: principal axes are a permutation, the orientation maps
+         * them back onto the input axes, so its world extent along y is 4 */
+        const floe_geometry *g = w->geoms[w->p.geom[1]];
+        double ey[3] = {0, 1, 0}, eb[3], X[3];
+        floe_q_rotate_inv(eb, w->p.q + 4, ey);
+        g->klass->support(g, eb, X);
+        CHECK(fabs(floe_v3_dot(X, eb) - 2.0) < 1e-12, "polyhedron keeps its input orientation (half extent along y %g)",
+              floe_v3_dot(X, eb));
+        floe_world_destroy(w);
+    }
+}
+
 int main(void)
 {
     test_malformed();
@@ -458,5 +528,6 @@ int main(void)
     test_types();
     test_packing_errors();
     test_valid();
+    test_shapes();
     return check_summary("test_scene_errors");
 }
