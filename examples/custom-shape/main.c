@@ -55,14 +55,19 @@ int main(int argc, char **argv) {
     double nrm[5][3] = {{0, 0, 1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};
     for (int k = 0; k < 5; k++) floe_world_add_wall(w, pts[k], nrm[k], mat, FLOE_FIXED);
 
-    /* one tilted rounded box (two user shapes would meet through the ADMM detector,
-     * the next milestone) and spheres raining on it */
+    /* one tilted rounded box, a second one dropped on it (two user shapes meet through
+     * ADMM on their SDFs) and spheres raining on them */
     floe_particle_def p = floe_default_particle_def();
     p.geometry = g; p.material = mat; p.group = 0;
     floe_v3_set(p.x, 0.06, 0.06, 0.03);
     double th[3] = {0.5, 0.3, 0.2};
     floe_q_from_rotvec(p.q, th);
     int box = floe_world_add_particle(w, &p);
+    floe_v3_set(p.x, 0.062, 0.058, 0.06);
+    double th2[3] = {-0.3, 0.4, 0.9};
+    floe_q_from_rotvec(p.q, th2);
+    p.group = 2;
+    int box2 = floe_world_add_particle(w, &p);
     for (int k = 0; k < 6; k++) {
         floe_particle_def s = floe_default_particle_def();
         s.geometry = gs; s.material = mat; s.group = 1;
@@ -93,6 +98,19 @@ int main(int argc, char **argv) {
     int bad = fabs(st.x[2] - expect) > 0.02 * R || fabs(fabs(up[2]) - 1) > 1e-3 || floe_v3_norm(st.v) > 1e-3;
     printf("  rounded box rests at z = %.5f m (flat on the floor: %.5f m), |body z . world z| = %.5f, |v| = %.2e m/s %s\n",
            st.x[2], expect, fabs(up[2]), floe_v3_norm(st.v), bad ? "NOT AT REST" : "ok");
+    floe_particle_state st2;
+    floe_world_get_particle(w, box2, &st2);
+    /* at rest, on or above the floor, and not sunk into the first box */
+    double dc[3];
+    floe_v3_sub(dc, st2.x, st.x);
+    int bad2 = floe_v3_norm(st2.v) > 1e-3 || st2.x[2] < expect - 0.02 * R || floe_v3_norm(dc) < 2 * shape.b[2];
+    floe_detect_stats ds;
+    floe_world_detect_stats(w, &ds);
+    printf("  second rounded box at z = %.5f m, |v| = %.2e m/s %s; ADMM: %ld evaluations, iterations median %d, "
+           "99th percentile %d, %ld not converged\n",
+           st2.x[2], floe_v3_norm(st2.v), bad2 ? "NOT AT REST" : "ok", ds.admm, ds.iterations_median,
+           ds.iterations_p99, ds.nonconverged);
+    bad |= bad2;
     floe_world_destroy(w);
     printf("VTK frames: %s/frame.pvd\n", outdir);
     return bad ? 1 : 0;
