@@ -1,0 +1,166 @@
+/* floe_pd.h - peridynamic (PD) bodies on plain arrays: lattice discretisation of a box or an
+ * SDF region, bond families in CSR arrays built once with floe_kdtree, PMB (bond-based) and
+ * LPS (state-based) materials behind a small vtable, critical-stretch bond breakage, local
+ * damage and stable time-step estimates. Self-contained: no dependence on floe_world; the
+ * world integration (hybrid contact particles, self-contact exclusion, scene format) comes
+ * later and reads the arrays documented here.
+ *
+ * Sources (../shared/papers):
+ *   000_*  PD-DEM coupling: bond-based eqs 9-12 (c = 18K/(pi delta^4) in 3D), LPS eqs 15-25,
+ *          correspondence eqs 26-30, CFL time step eqs 41-42.
+ *   003_*  PMB eqs 2-7 (critical stretch s_c = sqrt(10 G_c/(pi c delta^5)), damage eq 7).
+ *   001_*  ParticLS section 2.2 / 5.4, linear peridynamic solid eqs 30-35 (Gaussian influence
+ *          exp(-|xi|^2/delta^2), eq 33).
+ *
+ * Units are whatever the caller uses consistently (SI in the tests). Forces returned are
+ * forces (N), not force densities: the point force is L_I V_I (000 eq 12 / eq 14).
+ *
+ * Bond storage: each bond is stored ONCE, in the row of its lower point index (i < j), and
+ * visited once per force evaluation; its force is applied to both ends. This halves the
+ * memory and the work of the LAMMPS both-ends layout and makes breakage symmetric by
+ * construction (one flag per bond, never two copies that could disagree). LPS per-point
+ * sums (m_i, theta_i) and the damage are accumulated into both ends in the same pass.
+ * Partners in a row are sorted ascending, so floe_pd_bonded() is a binary search.
+ *
+ * Nothing is allocated unless a body is created; all functions return FLOE_OK or an error
+ * code from floe_base.h and never call exit(). */
+#ifndef FLOE_PD_H
+#define FLOE_PD_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "floe_base.h"
+
+/* ---- region and lattice ---- */
+
+/* Signed distance of the region (negative inside). */
+typedef double (*floe_pd_sdf_fn)(const double X[3], void *user);
+
+typedef struct floe_pd_region {
+    int dim;                 /* 2 (square lattice in x-y, z = lo[2]) or 3 (simple cubic)    */
+    double dx;               /* lattice spacing                                            */
+    double horizon_factor;   /* m: delta = m dx; <= 0 selects 3                            */
+    double thickness;        /* 2D only: V = dx^2 * thickness; <= 0 selects dx             */
+    double lo[3], hi[3];     /* bounding box; lattice points at lo + (k + 1/2) dx           */
+    floe_pd_sdf_fn sdf;      /* NULL: the whole box; else keep points with sdf(X) <= 0      */
+    void *sdf_user;
+} floe_pd_region;
+
+/* ---- materials ---- */
+
+enum { FLOE_PD_PMB = 1, FLOE_PD_LPS = 2 };
+enum { FLOE_PD_W_ONE = 0, FLOE_PD_W_GAUSS = 1 };              /* LPS influence function  */
+enum { FLOE_PD_PLANE_STRESS = 0, FLOE_PD_PLANE_STRAIN = 1 };  /* 2D PMB                   */
+
+typedef struct floe_pd_material {
+    int model;          /* FLOE_PD_PMB or FLOE_PD_LPS                                       */
+    double rho;         /* mass density                                                     */
+    /* Elastic constants. PMB: give K (3D) or E (2D), or c directly; nu is fixed by the
+     * model (3D and 2D plane strain: 1/4, 2D plane stress: 1/3). LPS: K and G (3D).       */
+    double K, G, E;
+    double c;           /* PMB micromodulus; 0: 3D c = 18K/(pi delta^4) (000 eq 10,
+                         * 003 eq 3), 2D plane stress c = 9E/(pi h delta^3),
+                         * plane strain c = 48E/(5 pi h delta^3)                             */
+    double s_c;         /* critical stretch; 0: from G_c; both 0: bonds never break        */
+    double G_c;         /* fracture energy: 3D s_c = sqrt(10 G_c/(pi c delta^5)) (003 eq 5);
+                         * 2D s_c = sqrt(4 G_c/(c h delta^4)) (same integral in 2D);
+                         * for LPS the PMB c of the same K is used in this formula          */
+    int influence;      /* LPS: FLOE_PD_W_ONE or FLOE_PD_W_GAUSS                            */
+    int plane;          /* 2D PMB: FLOE_PD_PLANE_STRESS or FLOE_PD_PLANE_STRAIN             */
+    int broken_tension_only; /* PMB: 1 (default via floe_pd_material_pmb): a broken bond
+                         * still resists compression (003 eq 2: mu = 1 when s <= 0);
+                         * 0: a broken bond carries nothing                                 */
+} floe_pd_material;
+
+/* Convenience constructors (fill a floe_pd_material with defaults). */
+floe_pd_material floe_pd_material_pmb(double rho, double K, double s_c);
+floe_pd_material floe_pd_material_lps(double rho, double K, double G, double s_c, int influence);
+
+typedef struct floe_pd_body floe_pd_body;
+
+/* Material vtable: forces() adds point forces for current positions x (3n) into f (3n),
+ * breaks bonds whose stretch exceeds s_c and returns the elastic energy. */
+typedef struct floe_pd_material_ops {
+    const char *name;
+    int (*init)(floe_pd_body *b);                     /* derived constants, scratch        */
+    double (*forces)(floe_pd_body *b, const double *x, double *f);
+    double (*bond_micromodulus)(const floe_pd_body *b); /* equivalent PMB c for dt / s_c   */
+} floe_pd_material_ops;
+
+/* ---- the body ---- */
+
+struct floe_pd_body {
+    int dim, n;                /* dimension, number of points                               */
+    double dx, delta, thickness;
+    double *X;                 /* 3n reference positions                                    */
+    double *V;                 /* n volumes                                                  */
+    /* bonds, CSR over the lower index: bonds of i are k in [off[i], off[i+1]) with
+     * partner[k] > i, sorted ascending                                                      */
+    int64_t *off;              /* n + 1                                                      */
+    int64_t nbond;
+    int32_t *partner;          /* nbond                                                      */
+    double *len;               /* nbond: reference length |xi|                              */
+    float *vfac;               /* nbond: partial-volume factor in (0, 1]                    */
+    uint8_t *broken;           /* nbond: 1 once broken (never heals)                        */
+    /* material */
+    floe_pd_material mat;
+    const floe_pd_material_ops *ops;
+    double c, s_c;             /* derived PMB micromodulus and critical stretch (0: none)   */
+    /* LPS per-point state (allocated by init of LPS): weighted volume, dilatation          */
+    double *m, *theta;
+    double *wbond;             /* LPS Gaussian influence per bond (NULL for w = 1)          */
+    int64_t nbroken;           /* bonds broken so far                                       */
+};
+
+/* Create the lattice points of the region, build the families (|xi| <= delta + 1e-9 dx)
+ * with the k-d tree and the partial-volume factors:
+ *   beta = 1 for |xi| <= delta - dx/2, (delta + dx/2 - |xi|)/dx above (linear, LAMMPS PERI).
+ * Returns FLOE_EINVAL for bad fields, FLOE_ENOMEM, or FLOE_OK with *out set. */
+int floe_pd_body_create(floe_pd_body **out, const floe_pd_region *r);
+
+/* Same from explicit points (n points X[3n], volumes V[n], horizon delta, spacing dx used
+ * by the partial-volume factor; dx <= 0: no partial-volume correction). */
+int floe_pd_body_create_points(floe_pd_body **out, int dim, int n, const double *X,
+                               const double *V, double delta, double dx, double thickness);
+
+void floe_pd_body_destroy(floe_pd_body *b);
+
+/* Set the material (computes c, s_c, LPS weighted volumes). FLOE_EINVAL for bad values,
+ * FLOE_ENOTSUP for 2D LPS (not implemented yet). */
+int floe_pd_set_material(floe_pd_body *b, const floe_pd_material *m);
+
+/* Internal forces (000 eq 12 for PMB, eq 14 for LPS) for current positions x (3n), ADDED
+ * to f (3n); breaks bonds whose stretch exceeds s_c (irreversibly); returns the elastic
+ * energy (PMB: sum over bonds of 1/2 c s^2 |xi| beta V_i V_j; LPS: sum_i W_i V_i with
+ * W_i = K theta_i^2/2 + alpha_i/2 sum_j w (e^d)^2 beta V_j, 000 eq 24). */
+double floe_pd_forces(floe_pd_body *b, const double *x, double *f);
+
+/* Same without breaking bonds (for line searches, finite differences, solvers). */
+double floe_pd_forces_nobreak(floe_pd_body *b, const double *x, double *f);
+
+/* Local damage phi_i = 1 - sum_j mu beta V_j / sum_j beta V_j (003 eq 7) into phi[n].
+ * FLOE_ENOMEM when its n-double scratch cannot be allocated. */
+int floe_pd_damage(const floe_pd_body *b, double *phi);
+
+/* Number of bonds of each point (both ends counted) into cnt[n]. */
+void floe_pd_family_sizes(const floe_pd_body *b, int *cnt);
+
+/* 1 when i and j are bonded in the reference configuration (broken or not), else 0. */
+int floe_pd_bonded(const floe_pd_body *b, int i, int j);
+
+/* Stable time step estimates:
+ *   nodal (Silling & Askari 2005): min_i sqrt(2 rho / sum_j beta V_j c/|xi|);
+ *   CFL (000 eqs 41-42): dx / sqrt(K/rho) (LPS: sqrt((K + 4G/3)/rho), the P-wave speed). */
+double floe_pd_dt_nodal(const floe_pd_body *b);
+double floe_pd_dt_cfl(const floe_pd_body *b);
+
+/* Bytes of bond storage per bond (partner + length + factor + flag). */
+size_t floe_pd_bytes_per_bond(void);
+/* Total bytes held by the body. */
+size_t floe_pd_body_bytes(const floe_pd_body *b);
+
+extern const floe_pd_material_ops floe_pd_pmb_ops;
+extern const floe_pd_material_ops floe_pd_lps_ops;
+
+#endif

@@ -1,0 +1,357 @@
+/* pd.c - peridynamic bodies: lattice discretisation, families (k-d tree, CSR, one entry per
+ * bond), partial-volume factors, damage, time-step estimates. Materials in pd_pmb.c and
+ * pd_lps.c. See floe_pd.h for the sources of the equations. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "floe_pd.h"
+#include "floe_kdtree.h"
+
+floe_pd_material floe_pd_material_pmb(double rho, double K, double s_c)
+{
+    floe_pd_material m;
+    memset(&m, 0, sizeof m);
+    m.model = FLOE_PD_PMB;
+    m.rho = rho;
+    m.K = K;
+    m.E = 1.5 * K; /* nu = 1/4: E = 3K(1 - 2 nu) */
+    m.G = 0.6 * K; /* G = E / (2 (1 + nu)) */
+    m.s_c = s_c;
+    m.broken_tension_only = 1;
+    return m;
+}
+
+floe_pd_material floe_pd_material_lps(double rho, double K, double G, double s_c, int influence)
+{
+    floe_pd_material m;
+    memset(&m, 0, sizeof m);
+    m.model = FLOE_PD_LPS;
+    m.rho = rho;
+    m.K = K;
+    m.G = G;
+    m.E = 9.0 * K * G / (3.0 * K + G);
+    m.s_c = s_c;
+    m.influence = influence;
+    m.broken_tension_only = 1;
+    return m;
+}
+
+static int cmp_i32(const void *a, const void *b)
+{
+    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+    return (x > y) - (x < y);
+}
+
+void floe_pd_body_destroy(floe_pd_body *b)
+{
+    if (!b) return;
+    free(b->X);
+    free(b->V);
+    free(b->off);
+    free(b->partner);
+    free(b->len);
+    free(b->vfac);
+    free(b->broken);
+    free(b->m);
+    free(b->theta);
+    free(b->wbond);
+    free(b);
+}
+
+/* Families in the reference configuration: |xi| <= delta + 1e-9 dx (the LAMMPS PERI
+ * "3.0001 dx" tolerance for lattice neighbours), each bond once in the row of its lower
+ * index, partners sorted. Partial-volume factor (linear): 1 for |xi| <= delta - dx/2,
+ * (delta + dx/2 - |xi|)/dx above, clamped to [0, 1]. */
+static int build_families(floe_pd_body *b)
+{
+    int n = b->n;
+    b->off = malloc(((size_t)n + 1) * sizeof *b->off);
+    if (!b->off) return FLOE_ENOMEM;
+    b->off[0] = 0;
+    b->nbond = 0;
+    if (n == 0) return FLOE_OK;
+    floe_kdtree *t = floe_kdtree_build(b->X, n, b->dim, 0);
+    if (!t) return FLOE_ENOMEM;
+    double tol = b->dx > 0 ? 1e-9 * b->dx : 1e-9 * b->delta;
+    double r = b->delta + tol;
+    int cap = 256, *buf = malloc((size_t)cap * sizeof *buf);
+    int64_t bcap = 1024;
+    int32_t *part = malloc((size_t)bcap * sizeof *part);
+    int rc = FLOE_OK;
+    if (!buf || !part) { rc = FLOE_ENOMEM; goto done; }
+    for (int i = 0; i < n; i++) {
+        const double *q = b->X + 3 * (size_t)i;
+        int cnt = floe_kdtree_radius(t, q, r, buf, cap);
+        if (cnt > cap) {
+            int *nb = realloc(buf, (size_t)cnt * sizeof *nb);
+            if (!nb) { rc = FLOE_ENOMEM; goto done; }
+            buf = nb;
+            cap = cnt;
+            cnt = floe_kdtree_radius(t, q, r, buf, cap);
+        }
+        int64_t start = b->nbond;
+        for (int k = 0; k < cnt; k++) {
+            if (buf[k] <= i) continue;
+            if (b->nbond == bcap) {
+                int32_t *np = realloc(part, (size_t)(2 * bcap) * sizeof *np);
+                if (!np) { rc = FLOE_ENOMEM; goto done; }
+                part = np;
+                bcap *= 2;
+            }
+            part[b->nbond++] = buf[k];
+        }
+        qsort(part + start, (size_t)(b->nbond - start), sizeof *part, cmp_i32);
+        b->off[i + 1] = b->nbond;
+    }
+    {
+        size_t nb = (size_t)(b->nbond > 0 ? b->nbond : 1);
+        int32_t *np = realloc(part, nb * sizeof *np);
+        if (np) part = np;
+        b->partner = part;
+        part = NULL;
+        b->len = malloc(nb * sizeof *b->len);
+        b->vfac = malloc(nb * sizeof *b->vfac);
+        b->broken = calloc(nb, 1);
+        if (!b->len || !b->vfac || !b->broken) { rc = FLOE_ENOMEM; goto done; }
+        for (int i = 0; i < n; i++) {
+            const double *xi = b->X + 3 * (size_t)i;
+            for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+                const double *xj = b->X + 3 * (size_t)b->partner[k];
+                double d[3];
+                floe_v3_sub(d, xj, xi);
+                double L = floe_v3_norm(d);
+                b->len[k] = L;
+                double beta = 1.0;
+                if (b->dx > 0 && L > b->delta - 0.5 * b->dx)
+                    beta = (b->delta + 0.5 * b->dx - L) / b->dx;
+                if (beta > 1.0) beta = 1.0;
+                if (beta < 0.0) beta = 0.0;
+                b->vfac[k] = (float)beta;
+            }
+        }
+    }
+done:
+    free(buf);
+    free(part);
+    floe_kdtree_destroy(t);
+    return rc;
+}
+
+int floe_pd_body_create_points(floe_pd_body **out, int dim, int n, const double *X,
+                               const double *V, double delta, double dx, double thickness)
+{
+    if (!out) return FLOE_EINVAL;
+    *out = NULL;
+    if ((dim != 2 && dim != 3) || n < 0 || (n > 0 && (!X || !V)) || !(delta > 0))
+        return FLOE_EINVAL;
+    for (int i = 0; i < n; i++)
+        if (!(V[i] > 0)) return FLOE_EINVAL;
+    floe_pd_body *b = calloc(1, sizeof *b);
+    if (!b) return FLOE_ENOMEM;
+    b->dim = dim;
+    b->n = n;
+    b->dx = dx > 0 ? dx : 0;
+    b->delta = delta;
+    b->thickness = dim == 2 ? (thickness > 0 ? thickness : (dx > 0 ? dx : delta)) : 0;
+    size_t nn = (size_t)(n > 0 ? n : 1);
+    b->X = malloc(3 * nn * sizeof *b->X);
+    b->V = malloc(nn * sizeof *b->V);
+    if (!b->X || !b->V) { floe_pd_body_destroy(b); return FLOE_ENOMEM; }
+    if (n > 0) {
+        memcpy(b->X, X, 3 * (size_t)n * sizeof *X);
+        memcpy(b->V, V, (size_t)n * sizeof *V);
+    }
+    if (dim == 2)
+        for (int i = 0; i < n; i++) b->X[3 * (size_t)i + 2] = X[3 * (size_t)i + 2];
+    int rc = build_families(b);
+    if (rc != FLOE_OK) { floe_pd_body_destroy(b); return rc; }
+    *out = b;
+    return FLOE_OK;
+}
+
+int floe_pd_body_create(floe_pd_body **out, const floe_pd_region *r)
+{
+    if (!out) return FLOE_EINVAL;
+    *out = NULL;
+    if (!r || (r->dim != 2 && r->dim != 3) || !(r->dx > 0)) return FLOE_EINVAL;
+    double m = r->horizon_factor > 0 ? r->horizon_factor : 3.0;
+    long nk[3] = {1, 1, 1};
+    for (int d = 0; d < r->dim; d++) {
+        double ext = (r->hi[d] - r->lo[d]) / r->dx;
+        if (!(ext >= 1.0 - 1e-9) || ext > 1e7) return FLOE_EINVAL;
+        nk[d] = (long)floor(ext + 1e-9);
+    }
+    double total = (double)nk[0] * (double)nk[1] * (double)nk[2];
+    if (total > 2e9) return FLOE_EINVAL;
+    double h = r->dim == 2 ? (r->thickness > 0 ? r->thickness : r->dx) : 0;
+    double vol = r->dim == 3 ? r->dx * r->dx * r->dx : r->dx * r->dx * h;
+    /* count, then fill */
+    size_t cap = 0, n = 0;
+    double *X = NULL, *V = NULL;
+    for (int pass = 0; pass < 2; pass++) {
+        n = 0;
+        for (long k = 0; k < nk[2]; k++)
+            for (long j = 0; j < nk[1]; j++)
+                for (long i = 0; i < nk[0]; i++) {
+                    double p[3] = {r->lo[0] + (i + 0.5) * r->dx, r->lo[1] + (j + 0.5) * r->dx,
+                                   r->dim == 3 ? r->lo[2] + (k + 0.5) * r->dx
+                                               : 0.5 * (r->lo[2] + r->hi[2])};
+                    if (r->sdf && !(r->sdf(p, r->sdf_user) <= 0)) continue;
+                    if (pass == 1) {
+                        floe_v3_copy(X + 3 * n, p);
+                        V[n] = vol;
+                    }
+                    n++;
+                }
+        if (pass == 0) {
+            cap = n > 0 ? n : 1;
+            X = malloc(3 * cap * sizeof *X);
+            V = malloc(cap * sizeof *V);
+            if (!X || !V) { free(X); free(V); return FLOE_ENOMEM; }
+        }
+    }
+    int rc = floe_pd_body_create_points(out, r->dim, (int)n, X, V, m * r->dx, r->dx, h);
+    free(X);
+    free(V);
+    return rc;
+}
+
+void floe_pd_family_sizes(const floe_pd_body *b, int *cnt)
+{
+    for (int i = 0; i < b->n; i++) cnt[i] = 0;
+    for (int i = 0; i < b->n; i++) {
+        cnt[i] += (int)(b->off[i + 1] - b->off[i]);
+        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) cnt[b->partner[k]]++;
+    }
+}
+
+int floe_pd_bonded(const floe_pd_body *b, int i, int j)
+{
+    if (!b || i == j || i < 0 || j < 0 || i >= b->n || j >= b->n) return 0;
+    if (i > j) { int t = i; i = j; j = t; }
+    int64_t lo = b->off[i], hi = b->off[i + 1];
+    while (lo < hi) {
+        int64_t mid = lo + (hi - lo) / 2;
+        if (b->partner[mid] < j) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo < b->off[i + 1] && b->partner[lo] == j;
+}
+
+int floe_pd_damage(const floe_pd_body *b, double *phi)
+{
+    /* 003 eq 7: phi_i = 1 - sum_j mu beta V_j / sum_j beta V_j */
+    if (!b || (!phi && b->n > 0)) return FLOE_EINVAL;
+    int n = b->n;
+    double *tot = calloc((size_t)(n > 0 ? n : 1), sizeof *tot);
+    if (!tot) return FLOE_ENOMEM;
+    for (int i = 0; i < n; i++) phi[i] = 0;
+    for (int i = 0; i < n; i++)
+        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+            int j = b->partner[k];
+            double wi = b->vfac[k] * b->V[j], wj = b->vfac[k] * b->V[i];
+            tot[i] += wi;
+            tot[j] += wj;
+            if (!b->broken[k]) { phi[i] += wi; phi[j] += wj; }
+        }
+    for (int i = 0; i < n; i++) phi[i] = tot[i] > 0 ? 1.0 - phi[i] / tot[i] : 0.0;
+    free(tot);
+    return FLOE_OK;
+}
+
+int floe_pd_set_material(floe_pd_body *b, const floe_pd_material *m)
+{
+    if (!b || !m || !(m->rho > 0) || !(m->s_c >= 0) || !(m->G_c >= 0)) return FLOE_EINVAL;
+    const floe_pd_material_ops *ops;
+    if (m->model == FLOE_PD_PMB) ops = &floe_pd_pmb_ops;
+    else if (m->model == FLOE_PD_LPS) ops = &floe_pd_lps_ops;
+    else return FLOE_EINVAL;
+    floe_pd_material save = b->mat;
+    const floe_pd_material_ops *save_ops = b->ops;
+    b->mat = *m;
+    b->ops = ops;
+    int rc = ops->init(b);
+    if (rc != FLOE_OK) {
+        b->mat = save;
+        b->ops = save_ops;
+        return rc;
+    }
+    /* critical stretch: given, or from G_c by 003 eq 5 (3D) / its 2D analogue with the
+     * (equivalent) PMB micromodulus */
+    double c = ops->bond_micromodulus(b);
+    b->s_c = m->s_c;
+    if (b->s_c == 0 && m->G_c > 0) {
+        if (b->dim == 3) b->s_c = sqrt(10.0 * m->G_c / (M_PI * c * pow(b->delta, 5)));
+        else b->s_c = sqrt(4.0 * m->G_c / (c * b->thickness * pow(b->delta, 4)));
+    }
+    return FLOE_OK;
+}
+
+static double forces_impl(floe_pd_body *b, const double *x, double *f, int allow_break)
+{
+    if (!b || !b->ops) return 0.0;
+    double s_c = b->s_c;
+    if (!allow_break) b->s_c = 0;
+    double e = b->ops->forces(b, x, f);
+    b->s_c = s_c;
+    return e;
+}
+
+double floe_pd_forces(floe_pd_body *b, const double *x, double *f)
+{
+    return forces_impl(b, x, f, 1);
+}
+
+double floe_pd_forces_nobreak(floe_pd_body *b, const double *x, double *f)
+{
+    return forces_impl(b, x, f, 0);
+}
+
+double floe_pd_dt_nodal(const floe_pd_body *b)
+{
+    if (!b || !b->ops || b->n == 0) return 0.0;
+    double c = b->ops->bond_micromodulus(b);
+    double *sum = calloc((size_t)b->n, sizeof *sum);
+    if (!sum) return 0.0;
+    for (int i = 0; i < b->n; i++)
+        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+            int j = b->partner[k];
+            double s = b->vfac[k] * c / b->len[k];
+            sum[i] += s * b->V[j];
+            sum[j] += s * b->V[i];
+        }
+    double dt = INFINITY;
+    for (int i = 0; i < b->n; i++)
+        if (sum[i] > 0) {
+            double d = sqrt(2.0 * b->mat.rho / sum[i]);
+            if (d < dt) dt = d;
+        }
+    free(sum);
+    return dt;
+}
+
+double floe_pd_dt_cfl(const floe_pd_body *b)
+{
+    if (!b || !b->ops) return 0.0;
+    double M = b->mat.model == FLOE_PD_LPS ? b->mat.K + 4.0 / 3.0 * b->mat.G : b->mat.K;
+    if (b->mat.model == FLOE_PD_PMB && b->dim == 2) M = b->mat.E;
+    double h = b->dx > 0 ? b->dx : b->delta / 3.0;
+    return h / sqrt(M / b->mat.rho);
+}
+
+size_t floe_pd_bytes_per_bond(void)
+{
+    return sizeof(int32_t) + sizeof(double) + sizeof(float) + sizeof(uint8_t);
+}
+
+size_t floe_pd_body_bytes(const floe_pd_body *b)
+{
+    if (!b) return 0;
+    size_t n = (size_t)b->n, nb = (size_t)b->nbond;
+    size_t s = sizeof *b + n * (3 * sizeof(double) + sizeof(double)) + (n + 1) * sizeof(int64_t) +
+               nb * floe_pd_bytes_per_bond();
+    if (b->m) s += n * sizeof(double);
+    if (b->theta) s += n * sizeof(double);
+    if (b->wbond) s += nb * sizeof(double);
+    return s;
+}
