@@ -154,11 +154,284 @@ static void test_families(void)
            "flag byte), bonds stored once\n", floe_pd_bytes_per_bond());
 }
 
+
+/* ---------------------------------------------------------- single bond ---- */
+static void test_single_bond(int model)
+{
+    printf("single bond (%s)\n", model == FLOE_PD_PMB ? "PMB" : "LPS");
+    const double L = 1e-3, V = 1e-9, s_c = 1e-3;
+    double X[6] = {0, 0, 0, L, 0, 0}, Vv[2] = {V, V};
+    floe_pd_body *b = NULL;
+    int rc = floe_pd_body_create_points(&b, 3, 2, X, Vv, 1.5 * L, 0, 0);
+    CHECK(rc == FLOE_OK && b && b->nbond == 1, "two-point body");
+    if (!b) return;
+    floe_pd_material m = model == FLOE_PD_PMB ? floe_pd_material_pmb(2200, 14.9e9, s_c)
+                                              : floe_pd_material_lps(2200, 14.9e9, 9e9, s_c, FLOE_PD_W_ONE);
+    CHECK(floe_pd_set_material(b, &m) == FLOE_OK, "set material");
+    double x[6], f[6];
+    /* stretch s: positions along a skew direction so that all components matter */
+    double dir[3] = {0.6, 0.48, 0.64};
+    double steps[] = {s_c * (1 - 1e-9), s_c * (1 + 1e-9), 0.5 * s_c, -0.5 * s_c, s_c * 0.999};
+    double fprev = 0;
+    for (int t = 0; t < 5; t++) {
+        double s = steps[t];
+        memset(x, 0, sizeof x);
+        for (int d = 0; d < 3; d++) x[3 + d] = dir[d] * L * (1 + s);
+        memset(f, 0, sizeof f);
+        double e = floe_pd_forces(b, x, f);
+        double fn = floe_v3_dot(f, dir); /* force on point 0 along the bond (towards 1) */
+        double sum = fabs(f[0] + f[3]) + fabs(f[1] + f[4]) + fabs(f[2] + f[5]);
+        double want = 0;
+        if (model == FLOE_PD_PMB) want = b->c * s * V * V;               /* c s V_i V_j */
+        else want = 2 * (3 * m.K * (3 * s * L / L) / (L * L * V)) * L * V * V; /* (t_ij + t_ji) V V */
+        if (t == 0) {
+            CHECK(!b->broken[0] && fabs(fn - want) <= 1e-9 * fabs(want) && fn > 0,
+                  "just below s_c: intact, force %.6g (want %.6g)", fn, want);
+            CHECK(e > 0, "energy > 0 below s_c");
+            fprev = fn;
+        } else if (t == 1) {
+            CHECK(b->broken[0] && fn == 0 && b->nbroken == 1,
+                  "just above s_c: broken (%d), force %.3g (was %.6g)", b->broken[0], fn, fprev);
+        } else if (t == 2 || t == 4) {
+            CHECK(b->broken[0] && fn == 0, "stretch %.3g s_c after breaking: stays broken, force %g",
+                  s / s_c, fn);
+        } else if (t == 3) {
+            if (model == FLOE_PD_PMB)
+                CHECK(b->broken[0] && fn < 0 && fabs(fn - want) <= 1e-9 * fabs(want),
+                      "compressed broken bond pushes (003 eq 2, mu = 1 for s <= 0): %g vs %g", fn, want);
+            else
+                CHECK(b->broken[0] && fn == 0, "LPS: a broken bond carries nothing: %g", fn);
+        }
+        CHECK(sum <= 1e-12 * (fabs(fn) + 1e-30) || sum == 0, "momentum: forces sum to %g", sum);
+    }
+    double phi[2];
+    floe_pd_damage(b, phi);
+    CHECK(phi[0] == 1 && phi[1] == 1, "damage 1 with the only bond broken: %g %g", phi[0], phi[1]);
+    if (model == FLOE_PD_PMB) {
+        /* broken_tension_only = 0: nothing in compression either */
+        m.broken_tension_only = 0;
+        floe_pd_set_material(b, &m);
+        for (int d = 0; d < 3; d++) x[3 + d] = dir[d] * L * 0.99;
+        memset(f, 0, sizeof f);
+        floe_pd_forces(b, x, f);
+        CHECK(f[0] == 0 && f[1] == 0 && f[2] == 0, "broken_tension_only = 0: no force");
+        /* s_c from G_c (003 eq 5) */
+        floe_pd_material g = floe_pd_material_pmb(2200, 14.9e9, 0);
+        g.G_c = 38.0;
+        floe_pd_set_material(b, &g);
+        double want = sqrt(10 * g.G_c / (M_PI * b->c * pow(b->delta, 5)));
+        CHECK_NEAR(b->s_c, want, 1e-14, "s_c from G_c (003 eq 5)");
+    }
+    floe_pd_body_destroy(b);
+}
+
+/* -------------------------------------------- forces = -grad energy (FD) ---- */
+static double total_energy(floe_pd_body *b, const double *x, double *scratch)
+{
+    memset(scratch, 0, 3 * (size_t)b->n * sizeof *scratch);
+    return floe_pd_forces_nobreak(b, x, scratch);
+}
+
+static void perturb(const floe_pd_body *b, double *x, double amp)
+{
+    for (int i = 0; i < 3 * b->n; i++) x[i] = b->X[i] + amp * (2 * urand() - 1);
+}
+
+static void test_gradient(const floe_pd_material *m, const char *what)
+{
+    floe_pd_body *b = make_box(3, 1e-3, 3, 5, 4, 4);
+    if (!b) return;
+    floe_pd_set_material(b, m);
+    int n3 = 3 * b->n;
+    double *x = malloc(n3 * sizeof *x), *f = calloc(n3, sizeof *f), *s = malloc(n3 * sizeof *s);
+    perturb(b, x, 2e-6);
+    floe_pd_forces_nobreak(b, x, f);
+    double fmax = 0, errmax = 0;
+    for (int i = 0; i < n3; i++) fmax = fmax > fabs(f[i]) ? fmax : fabs(f[i]);
+    for (int t = 0; t < 30; t++) {
+        int k = (int)(urand() * n3);
+        double h = 1e-9, x0 = x[k];
+        x[k] = x0 + h;
+        double ep = total_energy(b, x, s);
+        x[k] = x0 - h;
+        double em = total_energy(b, x, s);
+        x[k] = x0;
+        double fd = -(ep - em) / (2 * h);
+        double err = fabs(fd - f[k]);
+        errmax = err > errmax ? err : errmax;
+    }
+    char buf[96];
+    snprintf(buf, sizeof buf, "%s: max |f + dE/dx| / max|f| (30 dofs)", what);
+    CHECK(errmax <= 1e-5 * fmax, "%s: %.3g", buf, errmax / fmax);
+    printf("  %-52s %.2e (tol 1e-5)\n", buf, errmax / fmax);
+    free(x); free(f); free(s);
+    floe_pd_body_destroy(b);
+}
+
+/* ---------------------------------------------------- velocity Verlet ---- */
+typedef struct vv {
+    floe_pd_body *b;
+    double *x, *v, *f, *mass;
+    double epot;
+} vv;
+
+static void vv_init(vv *s, floe_pd_body *b)
+{
+    s->b = b;
+    size_t n3 = 3 * (size_t)b->n;
+    s->x = malloc(n3 * sizeof *s->x);
+    s->v = calloc(n3, sizeof *s->v);
+    s->f = calloc(n3, sizeof *s->f);
+    s->mass = malloc((size_t)b->n * sizeof *s->mass);
+    memcpy(s->x, b->X, n3 * sizeof *s->x);
+    for (int i = 0; i < b->n; i++) s->mass[i] = b->mat.rho * b->V[i];
+}
+static void vv_free(vv *s) { free(s->x); free(s->v); free(s->f); free(s->mass); }
+static void vv_force(vv *s)
+{
+    memset(s->f, 0, 3 * (size_t)s->b->n * sizeof *s->f);
+    s->epot = floe_pd_forces(s->b, s->x, s->f);
+}
+static double vv_kinetic(const vv *s)
+{
+    double k = 0;
+    for (int i = 0; i < s->b->n; i++)
+        k += 0.5 * s->mass[i] * floe_v3_dot(s->v + 3 * i, s->v + 3 * i);
+    return k;
+}
+/* one step; fixed[i] != 0 pins dof i (velocity kept as given) */
+static void vv_step(vv *s, double dt, const unsigned char *fixed)
+{
+    int n3 = 3 * s->b->n;
+    for (int i = 0; i < n3; i++) {
+        if (!fixed || !fixed[i]) s->v[i] += 0.5 * dt * s->f[i] / s->mass[i / 3];
+        s->x[i] += dt * s->v[i];
+    }
+    vv_force(s);
+    for (int i = 0; i < n3; i++)
+        if (!fixed || !fixed[i]) s->v[i] += 0.5 * dt * s->f[i] / s->mass[i / 3];
+}
+
+/* --------------------------------------------------- energy conservation ---- */
+static void test_energy(const floe_pd_material *m, const char *what)
+{
+    floe_pd_body *b = make_box(3, 1e-3, 3, 6, 6, 6);
+    if (!b) return;
+    floe_pd_set_material(b, m);
+    vv s;
+    vv_init(&s, b);
+    perturb(b, s.x, 1e-7);
+    vv_force(&s);
+    double dt = 0.5 * floe_pd_dt_nodal(b);
+    const int nsteps = 2000, win = 500;
+    double e0 = s.epot + vv_kinetic(&s), first = 0, last = 0, emin = e0, emax = e0;
+    for (int t = 0; t < nsteps; t++) {
+        vv_step(&s, dt, NULL);
+        double e = s.epot + vv_kinetic(&s);
+        if (t < win) first += e / win;
+        if (t >= nsteps - win) last += e / win;
+        emin = e < emin ? e : emin;
+        emax = e > emax ? e : emax;
+    }
+    double drift = fabs(last - first) / e0;
+    char buf[96];
+    snprintf(buf, sizeof buf, "%s: energy drift (mean of last vs first %d steps)", what, win);
+    CHECK(drift < 1e-4 && b->nbroken == 0, "%s: %.3g", buf, drift);
+    printf("  %-52s %.2e (tol 1e-4); fluctuation %.2e, dt = 0.5 dt_nodal\n", buf, drift,
+           (emax - emin) / e0);
+    vv_free(&s);
+    floe_pd_body_destroy(b);
+}
+
+/* ----------------------------------------------------------- time step ---- */
+/* largest eigenvalue of M^-1 K by power iteration on the linearised forces at the
+ * reference configuration (forces vanish there): K v ~ -f(X + h v)/h */
+static double omega_max(floe_pd_body *b)
+{
+    int n3 = 3 * b->n;
+    double *v = malloc(n3 * sizeof *v), *x = malloc(n3 * sizeof *x), *f = malloc(n3 * sizeof *f);
+    for (int i = 0; i < n3; i++) v[i] = 2 * urand() - 1;
+    double lam = 0, h = 1e-9 * b->dx;
+    for (int it = 0; it < 300; it++) {
+        double nv = 0;
+        for (int i = 0; i < n3; i++) nv += v[i] * v[i];
+        nv = sqrt(nv);
+        for (int i = 0; i < n3; i++) { v[i] /= nv; x[i] = b->X[i] + h * v[i]; }
+        memset(f, 0, n3 * sizeof *f);
+        floe_pd_forces_nobreak(b, x, f);
+        double num = 0;
+        for (int i = 0; i < n3; i++) {
+            v[i] = -f[i] / h / (b->mat.rho * b->V[i / 3]);
+            num += v[i] * v[i];
+        }
+        lam = sqrt(num);
+    }
+    free(v); free(x); free(f);
+    return sqrt(lam);
+}
+
+/* run at dt, return max |u| / initial max |u| after nsteps */
+static double growth(floe_pd_body *b, double dt, int nsteps)
+{
+    vv s;
+    vv_init(&s, b);
+    rng_state = 12345;
+    perturb(b, s.x, 1e-9);
+    double u0 = 0, u1 = 0;
+    for (int i = 0; i < 3 * b->n; i++) u0 = fmax(u0, fabs(s.x[i] - b->X[i]));
+    vv_force(&s);
+    for (int t = 0; t < nsteps && u1 < 1e6 * u0; t++) {
+        vv_step(&s, dt, NULL);
+        if (t % 50 == 0)
+            for (int i = 0; i < 3 * b->n; i++) u1 = fmax(u1, fabs(s.x[i] - b->X[i]));
+    }
+    u1 = 0;
+    for (int i = 0; i < 3 * b->n; i++) u1 = fmax(u1, fabs(s.x[i] - b->X[i]));
+    vv_free(&s);
+    return u1 / u0;
+}
+
+static void test_timestep(const floe_pd_material *m, const char *what)
+{
+    printf("time step (%s)\n", what);
+    floe_pd_body *b = make_box(3, 1e-3, 3, 7, 7, 7);
+    if (!b) return;
+    floe_pd_set_material(b, m);
+    double dtn = floe_pd_dt_nodal(b), dtc = floe_pd_dt_cfl(b);
+    double w = omega_max(b), dt_true = 2.0 / w; /* velocity Verlet: stable iff w dt < 2 */
+    printf("  dt_nodal %.4g s, dt_cfl %.4g s, 2/omega_max %.4g s = %.2f dt_nodal = %.2f dt_cfl\n",
+           dtn, dtc, dt_true, dt_true / dtn, dt_true / dtc);
+    double g09 = growth(b, 0.9 * dtn, 2000);
+    CHECK(g09 < 10, "0.9 dt_nodal bounded: growth %.3g", g09);
+    double gl = growth(b, 0.97 * dt_true, 2000), gh = growth(b, 1.05 * dt_true, 2000);
+    CHECK(gl < 10 && gh > 1e3, "observed limit at 2/omega_max: growth %.3g at 0.97x, %.3g at 1.05x",
+          gl, gh);
+    double g2 = growth(b, 2 * dtn, 2000);
+    printf("  growth at 0.9 dt_nodal %.3g, at 2 dt_nodal %.3g, at 0.97 / 1.05 of 2/omega_max %.3g / %.3g\n",
+           g09, g2, gl, gh);
+    CHECK(dt_true >= dtn, "nodal estimate conservative: limit %.3g x estimate", dt_true / dtn);
+    if (dt_true < 2 * dtn) CHECK(g2 > 1e3, "2 dt_nodal blows up: growth %.3g", g2);
+    floe_pd_body_destroy(b);
+}
+
 int main(void)
 {
     double t0 = now_s();
-    (void)urand;
     test_families();
+    test_single_bond(FLOE_PD_PMB);
+    test_single_bond(FLOE_PD_LPS);
+    printf("forces against the energy gradient\n");
+    floe_pd_material pmb = floe_pd_material_pmb(2200, 14.9e9, 0);
+    floe_pd_material lps1 = floe_pd_material_lps(2200, 14.9e9, 6.0e9, 0, FLOE_PD_W_ONE);
+    floe_pd_material lpsg = floe_pd_material_lps(2200, 14.9e9, 6.0e9, 0, FLOE_PD_W_GAUSS);
+    test_gradient(&pmb, "PMB");
+    test_gradient(&lps1, "LPS w=1");
+    test_gradient(&lpsg, "LPS w=gauss");
+    printf("energy conservation\n");
+    test_energy(&pmb, "PMB");
+    test_energy(&lpsg, "LPS w=gauss");
+    test_timestep(&pmb, "PMB");
+    test_timestep(&lps1, "LPS w=1");
     printf("total %.2f s\n", now_s() - t0);
     return check_summary("test_pd");
 }
