@@ -103,6 +103,7 @@ struct floe_pd_body {
     double *len;               /* nbond: reference length |xi|                              */
     float *vfac;               /* nbond: partial-volume factor in (0, 1]                    */
     uint8_t *broken;           /* nbond: 1 once broken (never heals)                        */
+    float *scorr;              /* nbond: PMB surface-correction factor, NULL when off       */
     /* material */
     floe_pd_material mat;
     const floe_pd_material_ops *ops;
@@ -127,8 +128,18 @@ int floe_pd_body_create_points(floe_pd_body **out, int dim, int n, const double 
 void floe_pd_body_destroy(floe_pd_body *b);
 
 /* Set the material (computes c, s_c, LPS weighted volumes). FLOE_EINVAL for bad values,
- * FLOE_ENOTSUP for 2D LPS (not implemented yet). */
+ * FLOE_ENOTSUP for 2D LPS (not implemented yet). Drops a surface correction. */
 int floe_pd_set_material(floe_pd_body *b, const floe_pd_material *m);
+
+/* PMB surface correction, energy method (Madenci & Oterkus 2014, ch. 4.2): for each
+ * direction d the strain energy density of point i under the uniform uniaxial strain
+ * u = eps X_d e_d, W_i^d = 1/4 c sum_j (eps n_d^2)^2 |xi| beta V_j, is compared with the
+ * continuum value W_inf = c pi delta^4 eps^2/20 (3D; 2D c pi h delta^3 eps^2/16), giving
+ * g_i^d = W_inf/W_i^d; a bond gets G^d = (g_i^d + g_j^d)/2 and the factor
+ * [sum_d (n_d/G^d)^2]^(-1/2) (ellipsoidal interpolation). Interior points of a lattice get
+ * about 1 (the discretisation error of the lattice sum is corrected too). FLOE_ENOTSUP for
+ * LPS (whose per-point m_i already normalises the dilatation). Call after set_material. */
+int floe_pd_surface_correction(floe_pd_body *b);
 
 /* Internal forces (000 eq 12 for PMB, eq 14 for LPS) for current positions x (3n), ADDED
  * to f (3n); breaks bonds whose stretch exceeds s_c (irreversibly); returns the elastic

@@ -52,6 +52,7 @@ void floe_pd_body_destroy(floe_pd_body *b)
     free(b->len);
     free(b->vfac);
     free(b->broken);
+    free(b->scorr);
     free(b->m);
     free(b->theta);
     free(b->wbond);
@@ -276,6 +277,8 @@ int floe_pd_set_material(floe_pd_body *b, const floe_pd_material *m)
         b->ops = save_ops;
         return rc;
     }
+    free(b->scorr);
+    b->scorr = NULL;
     /* critical stretch: given, or from G_c by 003 eq 5 (3D) / its 2D analogue with the
      * (equivalent) PMB micromodulus */
     double c = ops->bond_micromodulus(b);
@@ -307,6 +310,47 @@ double floe_pd_forces_nobreak(floe_pd_body *b, const double *x, double *f)
     return forces_impl(b, x, f, 0);
 }
 
+int floe_pd_surface_correction(floe_pd_body *b)
+{
+    if (!b || !b->ops) return FLOE_EINVAL;
+    if (b->mat.model != FLOE_PD_PMB) return FLOE_ENOTSUP;
+    size_t n = (size_t)(b->n > 0 ? b->n : 1), nb = (size_t)(b->nbond > 0 ? b->nbond : 1);
+    double *sum = calloc(3 * n, sizeof *sum);
+    float *sc = malloc(nb * sizeof *sc);
+    if (!sum || !sc) { free(sum); free(sc); return FLOE_ENOMEM; }
+    const int nd = b->dim;
+    for (int i = 0; i < b->n; i++)
+        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+            int j = b->partner[k];
+            double L = b->len[k], d[3];
+            floe_v3_sub(d, b->X + 3 * (size_t)j, b->X + 3 * (size_t)i);
+            for (int a = 0; a < nd; a++) {
+                double na = d[a] / L, q = na * na * na * na * L * b->vfac[k];
+                sum[3 * (size_t)i + a] += q * b->V[j];
+                sum[3 * (size_t)j + a] += q * b->V[i];
+            }
+        }
+    double dl = b->delta;
+    double ref = nd == 3 ? M_PI * dl * dl * dl * dl / 5.0 : M_PI * b->thickness * dl * dl * dl / 4.0;
+    for (size_t i = 0; i < 3 * (size_t)b->n; i++) sum[i] = sum[i] > 0 ? ref / sum[i] : 1.0;
+    for (int i = 0; i < b->n; i++)
+        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+            int j = b->partner[k];
+            double L = b->len[k], d[3], q = 0;
+            floe_v3_sub(d, b->X + 3 * (size_t)j, b->X + 3 * (size_t)i);
+            for (int a = 0; a < nd; a++) {
+                double G = 0.5 * (sum[3 * (size_t)i + a] + sum[3 * (size_t)j + a]);
+                double t = d[a] / L / G;
+                q += t * t;
+            }
+            sc[k] = q > 0 ? (float)(1.0 / sqrt(q)) : 1.0f;
+        }
+    free(sum);
+    free(b->scorr);
+    b->scorr = sc;
+    return FLOE_OK;
+}
+
 double floe_pd_dt_nodal(const floe_pd_body *b)
 {
     if (!b || !b->ops || b->n == 0) return 0.0;
@@ -316,7 +360,7 @@ double floe_pd_dt_nodal(const floe_pd_body *b)
     for (int i = 0; i < b->n; i++)
         for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
             int j = b->partner[k];
-            double s = b->vfac[k] * c / b->len[k];
+            double s = b->vfac[k] * (b->scorr ? b->scorr[k] : 1.0f) * c / b->len[k];
             sum[i] += s * b->V[j];
             sum[j] += s * b->V[i];
         }
@@ -353,5 +397,6 @@ size_t floe_pd_body_bytes(const floe_pd_body *b)
     if (b->m) s += n * sizeof(double);
     if (b->theta) s += n * sizeof(double);
     if (b->wbond) s += nb * sizeof(double);
+    if (b->scorr) s += nb * sizeof(float);
     return s;
 }

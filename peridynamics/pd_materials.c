@@ -54,7 +54,7 @@ static double pmb_forces(floe_pd_body *b, const double *x, double *f)
     const double *V = b->V;
     const int32_t *part = b->partner;
     const double *len = b->len;
-    const float *vfac = b->vfac;
+    const float *vfac = b->vfac, *scorr = b->scorr;
     uint8_t *brk = b->broken;
     double energy = 0.0;
     int64_t nbroken = 0;
@@ -77,7 +77,7 @@ static double pmb_forces(floe_pd_body *b, const double *x, double *f)
                 if (!comp || s >= 0) continue;
             }
             if (!(r > 0)) continue;
-            double w = (double)vfac[k] * Vi * V[j];
+            double w = (double)vfac[k] * (scorr ? (double)scorr[k] : 1.0) * Vi * V[j];
             double fm = c * s * w / r;
             ei += 0.5 * c * s * s * L * w;
             double g0 = fm * d0, g1 = fm * d1, g2 = fm * d2;
