@@ -21,6 +21,7 @@ void floe_admm_default_options(floe_admm_options *o) {
     o->max_iter = 200;
     o->step = 1.0;
     o->adapt = 1;
+    o->relax = 1.6;
 }
 
 static void q_matrix(double R[3][3], const double q[4]) {
@@ -116,6 +117,22 @@ int floe_admm_half(const floe_pose *a, const floe_pose *b, const floe_admm_optio
         floe_v3_copy(u, warm8 + 3);
         if (warm8[6] > 0 && isfinite(warm8[6])) t = warm8[6] * size;
         if (!(isfinite(z[1] + z[2] + u[0] + u[1] + u[2]))) cold = 1;
+        else if (ga->klass->support && !ga->klass->vertices) {
+            /* predictor for a curved a: at the solution a's outward normal is opposite to
+             * b's SDF gradient, so the point of a whose normal is -grad phi_b (evaluated at
+             * the kept point, in the bodies' new relative pose) follows the motion */
+            double zb[3], g[3], d[3], zp[3];
+            to_b(&f, z, zb);
+            floe_geometry_gradient(gb, zb, g);
+            dir_to_a(&f, g, d);
+            floe_v3_scale(d, -1.0);
+            ga->klass->support(ga, d, zp);
+            to_b(&f, zp, zb);
+            floe_geometry_gradient(gb, zb, g);
+            dir_to_a(&f, g, u);
+            floe_v3_scale(u, -t);
+            floe_v3_copy(z, zp);
+        }
     }
     if (cold) {
         double cb[3], ob[3] = {0, 0, 0}, zb[3], g[3];
@@ -134,17 +151,24 @@ int floe_admm_half(const floe_pose *a, const floe_pose *b, const floe_admm_optio
         dir_to_a(&f, g, u);
         floe_v3_scale(u, -t);
     }
+    /* over-relaxation speeds up the re-convergence of a warm start (two ellipsoids moved
+     * by 3e-4 x size per step: 15 iterations plain, 9 with alpha = 1.6) but slows a cold
+     * start (31 -> 136): cold starts use alpha = 1 */
+    const double alpha = cold ? 1.0 : o->relax;
     int it, conv = 0;
     for (it = 1; it <= o->max_iter; it++) {
         double v[3], wv[3], zn[3];
         floe_v3_sub(v, z, u);
         prox_b(gb, &f, v, t, size, x);
-        floe_v3_add(wv, x, u);
+        /* over-relaxation (Boyd et al. 2011, §3.4.3): xh = alpha x + (1 - alpha) z */
+        double xh[3];
+        for (int k = 0; k < 3; k++) xh[k] = alpha * x[k] + (1.0 - alpha) * z[k];
+        floe_v3_add(wv, xh, u);
         proj_a(ga, wv, zn);
         double r[3], s[3];
         floe_v3_sub(r, x, zn);
         floe_v3_sub(s, zn, z);
-        floe_v3_add(u, u, r);
+        for (int k = 0; k < 3; k++) u[k] += xh[k] - zn[k];
         floe_v3_copy(z, zn);
         double rn = floe_v3_norm(r), sn = floe_v3_norm(s);
 #ifdef ADMM_TRACE
@@ -153,8 +177,8 @@ int floe_admm_half(const floe_pose *a, const floe_pose *b, const floe_admm_optio
 #endif
         if (rn <= eps && sn <= eps) { conv = 1; break; }
         if (o->adapt && (it % 4) == 0) {
-            if (rn > 10 * sn && t > 1e-8 * size) { t *= 0.5; floe_v3_scale(u, 2.0); }
-            else if (sn > 10 * rn && t < 1e3 * size) { t *= 2.0; floe_v3_scale(u, 0.5); }
+            if (rn > 10 * sn && t > 0.25 * size) { t *= 0.5; floe_v3_scale(u, 2.0); }
+            else if (sn > 10 * rn && t < 8 * size) { t *= 2.0; floe_v3_scale(u, 0.5); }
         }
     }
     if (!(isfinite(z[0] + z[1] + z[2]))) { floe_v3_set(z, 0, 0, 0); conv = 0; }

@@ -12,7 +12,7 @@
  *  3. Warm starts: ellipsoid pairs re-solved after motions of 1e-6 size (median <= 3), and
  *     settled packings through the world API (a background drag settles them in < 1 s):
  *     iterations per evaluation (w->det.hist) of the LP on random polyhedra (median <= 3)
- *     and of ADMM on ellipsoids (measured median 7, asserted <= 10).
+ *     and of ADMM on ellipsoids (measured median 5, p99 9; asserted <= 10).
  *  4. A non-convex L-shaped compound of two boxes resting on a wall: two contacts, at rest.
  *  5. Degenerate input: coincident centres, ADMM with max_iter = 1, a flat polyhedron. */
 #include "floe.h"
