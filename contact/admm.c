@@ -22,6 +22,7 @@ void floe_admm_default_options(floe_admm_options *o) {
     o->step = 1.0;
     o->adapt = 1;
     o->relax = 1.6;
+    o->predict = 1;
 }
 
 static void q_matrix(double R[3][3], const double q[4]) {
@@ -122,11 +123,18 @@ int floe_admm_half(const floe_pose *a, const floe_pose *b, const floe_admm_optio
              * b's SDF gradient, so the point of a whose normal is -grad phi_b (evaluated at
              * the kept point, in the bodies' new relative pose) follows the motion */
             double zb[3], g[3], d[3], zp[3];
-            to_b(&f, z, zb);
-            floe_geometry_gradient(gb, zb, g);
-            dir_to_a(&f, g, d);
-            floe_v3_scale(d, -1.0);
-            ga->klass->support(ga, d, zp);
+            floe_v3_copy(zp, z);
+            for (int k = 0; k < o->predict; k++) { /* x <- support_a(-grad phi_b(x)) */
+                double prev[3];
+                floe_v3_copy(prev, zp);
+                to_b(&f, zp, zb);
+                floe_geometry_gradient(gb, zb, g);
+                dir_to_a(&f, g, d);
+                floe_v3_scale(d, -1.0);
+                ga->klass->support(ga, d, zp);
+                floe_v3_sub(prev, prev, zp);
+                if (floe_v3_norm(prev) <= 0.1 * eps) break;
+            }
             to_b(&f, zp, zb);
             floe_geometry_gradient(gb, zb, g);
             dir_to_a(&f, g, u);

@@ -27,7 +27,9 @@ typedef struct floe_admm_options {
     double step;      /* t = 1/rho as a fraction of size (default 1); adapted by residual
                          balancing when adapt = 1 */
     int adapt;        /* default 1 */
-    double relax;     /* over-relaxation alpha in [1, 2) (default 1.6) */
+    double relax;     /* over-relaxation alpha in [1, 2) of warm starts (default 1.6) */
+    int predict;      /* support-point predictor passes on a warm start of a curved shape
+                         (default 1) */
 } floe_admm_options;
 
 #define FLOE_ADMM_WARM 16 /* doubles of warm-start state per pair: (z, s) and its dual per half */
