@@ -8,19 +8,13 @@
  * touch, or accept the excess mass. The constructor moves the body frame to the combined
  * centroid and principal axes (only about z for dim 2) and records the placement in
  * frame_x/frame_q (X_input = R(frame_q) X_body + frame_x). */
+#include "geometry_internal.h"
 #include "floe_geometry.h"
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-static void set_err(char *err, size_t errlen, const char *fmt, ...) {
-    if (!err || errlen == 0) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
 
 static double piece_sdf(const floe_compound *c, int i, const double X[3], double Y[3]) {
     double d[3];
@@ -163,7 +157,7 @@ const floe_geometry_class floe_compound_class = {1, "compound", FLOE_GEOM_COMPOU
 floe_geometry *floe_compound_create(floe_geometry **pieces, const double *x, const double *q, int n, int dim,
                                     char *err, size_t errlen) {
     floe_compound *c = NULL;
-    if (!pieces || n < 1) { set_err(err, errlen, "compound: need at least one piece"); return NULL; }
+    if (!pieces || n < 1) { floe_set_err(err, errlen, "compound: need at least one piece"); return NULL; }
     const char *msg = NULL;
     int bad = -1;
     if (dim != 2 && dim != 3) msg = "dimension must be 2 or 3";
@@ -232,8 +226,8 @@ floe_geometry *floe_compound_create(floe_geometry **pieces, const double *x, con
     memcpy(c->frame_q, qR, sizeof qR);
     return &c->base;
 fail:
-    if (bad >= 0) set_err(err, errlen, "compound: piece %d: %s", bad, msg);
-    else set_err(err, errlen, "compound: %s", msg);
+    if (bad >= 0) floe_set_err(err, errlen, "compound: piece %d: %s", bad, msg);
+    else floe_set_err(err, errlen, "compound: %s", msg);
     /* ownership is taken on failure too: c destroys the pieces it holds, the rest here */
     int owned = c && c->piece ? c->n : 0;
     if (c && c->piece) comp_destroy(&c->base);

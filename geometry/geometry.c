@@ -1,6 +1,9 @@
 /* geometry.c - dispatch of the geometry vtable with numerical defaults (SUNDIALS-style
  * optional operations), and numerical mass properties for shapes that only give an SDF. */
 #include "floe_geometry.h"
+#include "geometry_internal.h"
+#include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -156,4 +159,12 @@ void floe_geometry_destroy(floe_geometry *g) {
     if (!g) return;
     if (g->klass->destroy) g->klass->destroy(g);
     else free(g);
+}
+
+void floe_set_err(char *err, size_t errlen, const char *fmt, ...) {
+    if (!err || errlen == 0) return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, errlen, fmt, ap);
+    va_end(ap);
 }

@@ -3,6 +3,7 @@
  * algorithms are in mesh_cgal.cpp; built without CGAL (FLOE_WITH_CGAL=OFF) or without assimp
  * (FLOE_WITH_ASSIMP=OFF) the functions that need them return FLOE_ENOTSUP and a message
  * naming the option. */
+#include "geometry_internal.h"
 #include "floe_mesh.h"
 
 #include <errno.h>
@@ -21,13 +22,6 @@
 #define NO_ASSIMP_MSG "floe was built without FLOE_WITH_ASSIMP: reconfigure with -DFLOE_WITH_ASSIMP=ON (libassimp-dev)"
 #define NO_CGAL_MSG "floe was built without FLOE_WITH_CGAL: reconfigure with -DFLOE_WITH_CGAL=ON (libcgal-dev)"
 
-static void set_err(char *err, size_t errlen, const char *fmt, ...) {
-    if (!err || errlen == 0) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
 
 /* err = prefix + err (the message of a callee), e.g. the file name before a hull error */
 static void prefix_err(char *err, size_t errlen, const char *prefix) {
@@ -116,34 +110,34 @@ int floe_mesh_load(const char *path, double scale, floe_mesh *out, char *err, si
     out->v = NULL;
     out->tri = NULL;
     if (!path) {
-        set_err(err, errlen, "mesh file: no path given");
+        floe_set_err(err, errlen, "mesh file: no path given");
         return FLOE_EINVAL;
     }
 #ifndef FLOE_HAVE_ASSIMP
     (void)scale;
-    set_err(err, errlen, "cannot read mesh file '%s': " NO_ASSIMP_MSG, path);
+    floe_set_err(err, errlen, "cannot read mesh file '%s': " NO_ASSIMP_MSG, path);
     return FLOE_ENOTSUP;
 #else
     if (!(scale > 0) || !isfinite(scale)) {
-        set_err(err, errlen, "mesh file '%s': scale %g must be positive and finite", path, scale);
+        floe_set_err(err, errlen, "mesh file '%s': scale %g must be positive and finite", path, scale);
         return FLOE_EINVAL;
     }
     FILE *f = fopen(path, "rb");
     if (!f) {
-        set_err(err, errlen, "cannot read mesh file '%s': %s", path, strerror(errno));
+        floe_set_err(err, errlen, "cannot read mesh file '%s': %s", path, strerror(errno));
         return FLOE_EIO;
     }
     int c = fgetc(f);
     fclose(f);
     if (c == EOF) {
-        set_err(err, errlen, "mesh file '%s' is empty (0 bytes): no triangles", path);
+        floe_set_err(err, errlen, "mesh file '%s' is empty (0 bytes): no triangles", path);
         return FLOE_EIO;
     }
     const struct aiScene *sc = aiImportFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                                                       aiProcess_PreTransformVertices | aiProcess_SortByPType);
     if (!sc) {
         const char *msg = aiGetErrorString();
-        set_err(err, errlen, "cannot read mesh file '%s': %s", path, msg && *msg ? msg : "unknown assimp error");
+        floe_set_err(err, errlen, "cannot read mesh file '%s': %s", path, msg && *msg ? msg : "unknown assimp error");
         return FLOE_EIO;
     }
     long nv = 0, nt = 0;
@@ -156,12 +150,12 @@ int floe_mesh_load(const char *path, double scale, floe_mesh *out, char *err, si
     }
     if (nt == 0) {
         aiReleaseImport(sc);
-        set_err(err, errlen, "mesh file '%s' has no triangles (empty mesh)", path);
+        floe_set_err(err, errlen, "mesh file '%s' has no triangles (empty mesh)", path);
         return FLOE_EINVAL;
     }
     if (nv > 0x7fffffffL / 3 || nt > 0x7fffffffL / 3) {
         aiReleaseImport(sc);
-        set_err(err, errlen, "mesh file '%s' is too large (%ld vertices, %ld triangles)", path, nv, nt);
+        floe_set_err(err, errlen, "mesh file '%s' is too large (%ld vertices, %ld triangles)", path, nv, nt);
         return FLOE_EINVAL;
     }
     out->v = malloc((size_t)nv * 3 * sizeof(double));
@@ -169,7 +163,7 @@ int floe_mesh_load(const char *path, double scale, floe_mesh *out, char *err, si
     if (!out->v || !out->tri) {
         aiReleaseImport(sc);
         floe_mesh_free(out);
-        set_err(err, errlen, "mesh file '%s': out of memory", path);
+        floe_set_err(err, errlen, "mesh file '%s': out of memory", path);
         return FLOE_ENOMEM;
     }
     int iv = 0, it = 0, bad = 0;
@@ -196,13 +190,13 @@ int floe_mesh_load(const char *path, double scale, floe_mesh *out, char *err, si
     out->nt = it;
     if (bad) {
         floe_mesh_free(out);
-        set_err(err, errlen, "mesh file '%s' has a non-finite vertex coordinate (NaN or infinity after scale %g)", path,
+        floe_set_err(err, errlen, "mesh file '%s' has a non-finite vertex coordinate (NaN or infinity after scale %g)", path,
                 scale);
         return FLOE_EINVAL;
     }
     if (weld(out) != FLOE_OK) {
         floe_mesh_free(out);
-        set_err(err, errlen, "mesh file '%s': out of memory", path);
+        floe_set_err(err, errlen, "mesh file '%s': out of memory", path);
         return FLOE_ENOMEM;
     }
     return FLOE_OK;
@@ -251,23 +245,23 @@ static double volume6(const floe_mesh *m) {
 
 int floe_mesh_validate(const floe_mesh *m, const char *name, char *err, size_t errlen) {
     if (!m || m->nt <= 0 || m->nv <= 0 || !m->v || !m->tri) {
-        set_err(err, errlen, "%s is empty: no triangles", nm(name));
+        floe_set_err(err, errlen, "%s is empty: no triangles", nm(name));
         return FLOE_EINVAL;
     }
     for (int i = 0; i < 3 * m->nv; i++)
         if (!isfinite(m->v[i])) {
-            set_err(err, errlen, "%s: vertex %d has a non-finite coordinate", nm(name), i / 3);
+            floe_set_err(err, errlen, "%s: vertex %d has a non-finite coordinate", nm(name), i / 3);
             return FLOE_EINVAL;
         }
     for (int i = 0; i < 3 * m->nt; i++)
         if (m->tri[i] < 0 || m->tri[i] >= m->nv) {
-            set_err(err, errlen, "%s: triangle %d has vertex index %d out of range [0, %d)", nm(name), i / 3,
+            floe_set_err(err, errlen, "%s: triangle %d has vertex index %d out of range [0, %d)", nm(name), i / 3,
                     m->tri[i], m->nv);
             return FLOE_EINVAL;
         }
     double diag = bbox_diag(m);
     if (!(diag > 0)) {
-        set_err(err, errlen, "%s is degenerate: all vertices coincide (zero volume)", nm(name));
+        floe_set_err(err, errlen, "%s is degenerate: all vertices coincide (zero volume)", nm(name));
         return FLOE_EINVAL;
     }
     /* zero-area triangles: |cross| relative to the size of the mesh */
@@ -278,7 +272,7 @@ int floe_mesh_validate(const floe_mesh *m, const char *name, char *err, size_t e
         double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
         double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2] || len <= 1e-14 * diag * diag) {
-            set_err(err, errlen, "%s is degenerate: triangle %d (vertices %d %d %d) has zero area", nm(name), t, f[0],
+            floe_set_err(err, errlen, "%s is degenerate: triangle %d (vertices %d %d %d) has zero area", nm(name), t, f[0],
                     f[1], f[2]);
             return FLOE_EINVAL;
         }
@@ -287,7 +281,7 @@ int floe_mesh_validate(const floe_mesh *m, const char *name, char *err, size_t e
     size_t ne = 3 * (size_t)m->nt;
     dedge *e = malloc(ne * sizeof *e);
     if (!e) {
-        set_err(err, errlen, "%s: out of memory", nm(name));
+        floe_set_err(err, errlen, "%s: out of memory", nm(name));
         return FLOE_ENOMEM;
     }
     for (int t = 0; t < m->nt; t++)
@@ -305,15 +299,15 @@ int floe_mesh_validate(const floe_mesh *m, const char *name, char *err, size_t e
         while (j < ne && e[j].a == e[i].a && e[j].b == e[i].b) j++;
         size_t cnt = j - i;
         if (cnt == 1) {
-            set_err(err, errlen, "%s is open (not closed): edge %d-%d belongs to only one triangle", nm(name), e[i].a,
+            floe_set_err(err, errlen, "%s is open (not closed): edge %d-%d belongs to only one triangle", nm(name), e[i].a,
                     e[i].b);
             rc = FLOE_EINVAL;
         } else if (cnt > 2) {
-            set_err(err, errlen, "%s is not a 2-manifold: edge %d-%d belongs to %zu triangles", nm(name), e[i].a,
+            floe_set_err(err, errlen, "%s is not a 2-manifold: edge %d-%d belongs to %zu triangles", nm(name), e[i].a,
                     e[i].b, cnt);
             rc = FLOE_EINVAL;
         } else if (e[i].t == e[i + 1].t) {
-            set_err(err, errlen,
+            floe_set_err(err, errlen,
                     "%s is not consistently oriented: the two triangles at edge %d-%d run the same way", nm(name),
                     e[i].a, e[i].b);
             rc = FLOE_EINVAL;
@@ -324,11 +318,11 @@ int floe_mesh_validate(const floe_mesh *m, const char *name, char *err, size_t e
     if (rc != FLOE_OK) return rc;
     double v6 = volume6(m);
     if (fabs(v6) <= 1e-12 * diag * diag * diag) {
-        set_err(err, errlen, "%s is degenerate: it encloses zero volume (flat)", nm(name));
+        floe_set_err(err, errlen, "%s is degenerate: it encloses zero volume (flat)", nm(name));
         return FLOE_EINVAL;
     }
     if (v6 < 0) {
-        set_err(err, errlen, "%s is inside out: its triangles face inward (negative volume %g)", nm(name), v6 / 6);
+        floe_set_err(err, errlen, "%s is inside out: its triangles face inward (negative volume %g)", nm(name), v6 / 6);
         return FLOE_EINVAL;
     }
 #ifdef FLOE_HAVE_CGAL
@@ -344,7 +338,7 @@ int floe_mesh_validate(const floe_mesh *m, const char *name, char *err, size_t e
 int floe_mesh_hull(const double *pts, int n, floe_mesh *hull, char *err, size_t errlen) {
     (void)pts, (void)n;
     if (hull) hull->nv = hull->nt = 0, hull->v = NULL, hull->tri = NULL;
-    set_err(err, errlen, "convex hull: " NO_CGAL_MSG);
+    floe_set_err(err, errlen, "convex hull: " NO_CGAL_MSG);
     return FLOE_ENOTSUP;
 }
 
@@ -353,7 +347,7 @@ int floe_mesh_decompose(const floe_mesh *m, const char *name, floe_mesh **pieces
     (void)m;
     if (pieces) *pieces = NULL;
     if (npieces) *npieces = 0;
-    set_err(err, errlen, "%s: convex decomposition: " NO_CGAL_MSG, nm(name));
+    floe_set_err(err, errlen, "%s: convex decomposition: " NO_CGAL_MSG, nm(name));
     return FLOE_ENOTSUP;
 }
 
@@ -385,12 +379,12 @@ static void flip(floe_mesh *m) {
 floe_geometry *floe_mesh_shape(const char *path, const char *mode, double scale, char *err, size_t errlen) {
     int hull = mode && strcmp(mode, "hull") == 0, dec = mode && strcmp(mode, "decompose") == 0;
     if (!hull && !dec) {
-        set_err(err, errlen, "mesh file '%s': unknown mode '%s' (use \"hull\" or \"decompose\")", path ? path : "",
+        floe_set_err(err, errlen, "mesh file '%s': unknown mode '%s' (use \"hull\" or \"decompose\")", path ? path : "",
                 mode ? mode : "(null)");
         return NULL;
     }
     if (!(floe_mesh_features() & FLOE_MESH_HAVE_CGAL)) {
-        set_err(err, errlen, "mesh file '%s' (mode %s): " NO_CGAL_MSG, path ? path : "", mode);
+        floe_set_err(err, errlen, "mesh file '%s' (mode %s): " NO_CGAL_MSG, path ? path : "", mode);
         return NULL;
     }
     floe_mesh m;
@@ -419,7 +413,7 @@ floe_geometry *floe_mesh_shape(const char *path, const char *mode, double scale,
     floe_geometry **g = calloc((size_t)np, sizeof *g);
     double *x = malloc((size_t)np * 3 * sizeof *x), *q = malloc((size_t)np * 4 * sizeof *q);
     int ok = g && x && q;
-    if (!ok) set_err(err, errlen, "mesh file '%s': out of memory", path);
+    if (!ok) floe_set_err(err, errlen, "mesh file '%s': out of memory", path);
     for (int i = 0; ok && i < np; i++) {
         g[i] = floe_polyhedron_from_mesh(pc[i].v, pc[i].nv, pc[i].tri, pc[i].nt, err, errlen);
         if (!g[i]) {

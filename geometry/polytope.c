@@ -9,6 +9,7 @@
  * shoelace triangles from a reference point). The constructors put the body origin at the
  * centroid and the body axes along the principal axes of inertia (ascending moments; a
  * polygon is only turned about z), and record the input placement in frame_x/frame_q. */
+#include "geometry_internal.h"
 #include "floe_geometry.h"
 #include <stdarg.h>
 #include <stdint.h>
@@ -22,13 +23,6 @@ typedef struct poly_priv {
     int *face_start; /* np + 1 (3D): triangles of face f are face_start[f] .. face_start[f+1]-1 */
 } poly_priv;
 
-static void set_err(char *err, size_t errlen, const char *fmt, ...) {
-    if (!err || errlen == 0) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
 
 /* ---- exact closest points ---- */
 
@@ -292,19 +286,19 @@ static int hull2d(const double *pts, int n, double tol, int *out) {
 
 /* ---- polygon ---- */
 floe_geometry *floe_polygon_create(const double *xy, int n, char *err, size_t errlen) {
-    if (!xy || n < 3) { set_err(err, errlen, "polygon: need at least 3 points (got %d)", xy ? n : 0); return NULL; }
+    if (!xy || n < 3) { floe_set_err(err, errlen, "polygon: need at least 3 points (got %d)", xy ? n : 0); return NULL; }
     double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     for (int i = 0; i < 2 * n; i++) {
-        if (!isfinite(xy[i])) { set_err(err, errlen, "polygon: point %d is not finite", i / 2); return NULL; }
+        if (!isfinite(xy[i])) { floe_set_err(err, errlen, "polygon: point %d is not finite", i / 2); return NULL; }
         lo[i % 2] = fmin(lo[i % 2], xy[i]); hi[i % 2] = fmax(hi[i % 2], xy[i]);
     }
     double L = hypot(hi[0] - lo[0], hi[1] - lo[1]);
     int *h = malloc((size_t)(n + 1) * sizeof *h);
-    if (!h) { set_err(err, errlen, "polygon: out of memory"); return NULL; }
+    if (!h) { floe_set_err(err, errlen, "polygon: out of memory"); return NULL; }
     int m = L > 0 ? hull2d(xy, n, 1e-12 * L * L, h) : 0;
     if (m < 3) {
         free(h);
-        set_err(err, errlen, m < 0 ? "polygon: out of memory" : "polygon: the points are collinear (zero area)");
+        floe_set_err(err, errlen, m < 0 ? "polygon: out of memory" : "polygon: the points are collinear (zero area)");
         return NULL;
     }
     poly_priv *pp = calloc(1, sizeof *pp);
@@ -313,7 +307,7 @@ floe_geometry *floe_polygon_create(const double *xy, int n, char *err, size_t er
     if (!p || !p->v || !p->plane) {
         free(h);
         if (pp) poly_destroy(&pp->p.base);
-        set_err(err, errlen, "polygon: out of memory");
+        floe_set_err(err, errlen, "polygon: out of memory");
         return NULL;
     }
     p->base.klass = &floe_polytope_class;
@@ -326,7 +320,7 @@ floe_geometry *floe_polygon_create(const double *xy, int n, char *err, size_t er
     poly2_moments(p->v, m, mm);
     if (!(mm[0] > 1e-12 * L * L)) {
         poly_destroy(&pp->p.base);
-        set_err(err, errlen, "polygon: zero area");
+        floe_set_err(err, errlen, "polygon: zero area");
         return NULL;
     }
     moments_central(mm, c, C);
@@ -389,14 +383,14 @@ static floe_geometry *build_polyhedron(const double *cand, int nc, const double 
     double *V = NULL, *P = NULL, *uv = NULL;
     int *vid = NULL, *used = NULL, *fv = NULL, *fn = NULL, *hidx = NULL, *tri = NULL, *fstart = NULL;
     poly_priv *pp = NULL;
-    if (nc < 4) { set_err(err, errlen, "%s: %s", what, nc == 0 ? open_msg : "zero volume (fewer than 4 vertices)"); return NULL; }
+    if (nc < 4) { floe_set_err(err, errlen, "%s: %s", what, nc == 0 ? open_msg : "zero volume (fewer than 4 vertices)"); return NULL; }
     /* weld the candidates */
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int i = 0; i < nc; i++)
         for (int k = 0; k < 3; k++) { lo[k] = fmin(lo[k], cand[3 * i + k]); hi[k] = fmax(hi[k], cand[3 * i + k]); }
     double ext[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
     double L = floe_v3_norm(ext);
-    if (!(L > 0) || !isfinite(L)) { set_err(err, errlen, "%s: zero volume (all vertices coincide)", what); return NULL; }
+    if (!(L > 0) || !isfinite(L)) { floe_set_err(err, errlen, "%s: zero volume (all vertices coincide)", what); return NULL; }
     double tol_dup = 1e-10 * L, tol_on = 1e-9 * L;
     V = malloc((size_t)nc * 3 * sizeof *V);
     if (!V) goto oom;
@@ -423,11 +417,11 @@ static floe_geometry *build_polyhedron(const double *cand, int nc, const double 
             floe_v3_sub(e, V + 3 * i, V); floe_v3_cross(nrm, d, e);
             if (floe_v3_norm(nrm) / dl > best) { best = floe_v3_norm(nrm) / dl; i2 = i; }
         }
-        if (!(best > tol_on)) { set_err(err, errlen, "%s: zero volume (the vertices are collinear)", what); goto fail; }
+        if (!(best > tol_on)) { floe_set_err(err, errlen, "%s: zero volume (the vertices are collinear)", what); goto fail; }
         floe_v3_sub(e, V + 3 * i2, V); floe_v3_cross(nrm, d, e); floe_v3_scale(nrm, 1 / floe_v3_norm(nrm));
         best = 0;
         for (int i = 1; i < nv; i++) { floe_v3_sub(e, V + 3 * i, V); best = fmax(best, fabs(floe_v3_dot(e, nrm))); }
-        if (!(best > tol_on)) { set_err(err, errlen, "%s: zero volume (the vertices are coplanar: flat)", what); goto fail; }
+        if (!(best > tol_on)) { floe_set_err(err, errlen, "%s: zero volume (the vertices are coplanar: flat)", what); goto fail; }
     }
     /* faces */
     P = malloc((size_t)npl * 4 * sizeof *P);
@@ -464,7 +458,7 @@ static floe_geometry *build_polyhedron(const double *cand, int nc, const double 
         for (int j = 0; j < h; j++) fv[nfv++] = vid[hidx[j]];
         fn[++nf] = nfv;
     }
-    if (nf < 4) { set_err(err, errlen, "%s: %s", what, open_msg); goto fail; }
+    if (nf < 4) { floe_set_err(err, errlen, "%s: %s", what, open_msg); goto fail; }
     /* keep the vertices used by faces, renumbered */
     used = malloc((size_t)nv * sizeof *used);
     if (!used) goto oom;
@@ -492,13 +486,13 @@ static floe_geometry *build_polyhedron(const double *cand, int nc, const double 
     free(V); V = W;
     int closed = check_closed(tri, nt, nu);
     if (closed < 0) goto oom;
-    if (!closed) { set_err(err, errlen, "%s: %s", what, open_msg); goto fail; }
+    if (!closed) { floe_set_err(err, errlen, "%s: %s", what, open_msg); goto fail; }
     /* mass from a reference point (the vertex mean) for accuracy */
     double ref[3] = {0, 0, 0}, m[10], c[3], C[3][3], I[3][3], l[3], R[3][3];
     for (int j = 0; j < nu; j++) floe_v3_axpy(ref, 1.0 / nu, V + 3 * j);
     for (int j = 0; j < nu; j++) floe_v3_sub(V + 3 * j, V + 3 * j, ref);
     poly3_moments(V, tri, nt, m);
-    if (!(m[0] > 1e-12 * L * L * L)) { set_err(err, errlen, "%s: zero volume (%.3g)", what, m[0]); goto fail; }
+    if (!(m[0] > 1e-12 * L * L * L)) { floe_set_err(err, errlen, "%s: zero volume (%.3g)", what, m[0]); goto fail; }
     moments_central(m, c, C);
     inertia_from_cov(C, 1.0, I);
     floe_sym3_eigen(I, l, R);
@@ -539,7 +533,7 @@ static floe_geometry *build_polyhedron(const double *cand, int nc, const double 
     pp = NULL;
     goto done;
 oom:
-    set_err(err, errlen, "%s: out of memory", what);
+    floe_set_err(err, errlen, "%s: out of memory", what);
 fail:
 done:
     if (pp) poly_destroy(&pp->p.base);
@@ -549,16 +543,16 @@ done:
 
 floe_geometry *floe_polyhedron_from_planes(const double *planes, int np, char *err, size_t errlen) {
     const char *what = "polyhedron from planes";
-    if (!planes || np < 4) { set_err(err, errlen, "%s: need at least 4 planes (got %d)", what, planes ? np : 0); return NULL; }
+    if (!planes || np < 4) { floe_set_err(err, errlen, "%s: need at least 4 planes (got %d)", what, planes ? np : 0); return NULL; }
     double *pl = malloc((size_t)np * 4 * sizeof *pl);
-    if (!pl) { set_err(err, errlen, "%s: out of memory", what); return NULL; }
+    if (!pl) { floe_set_err(err, errlen, "%s: out of memory", what); return NULL; }
     double dmax = 0;
     for (int i = 0; i < np; i++) {
         const double *q = planes + 4 * i;
         double nn = floe_v3_norm(q);
         if (!isfinite(nn + q[3]) || !(nn > 0)) {
             free(pl);
-            set_err(err, errlen, "%s: plane %d has a zero or non-finite normal", what, i);
+            floe_set_err(err, errlen, "%s: plane %d has a zero or non-finite normal", what, i);
             return NULL;
         }
         for (int k = 0; k < 4; k++) pl[4 * i + k] = q[k] / nn;
@@ -568,7 +562,7 @@ floe_geometry *floe_polyhedron_from_planes(const double *planes, int np, char *e
      * (O(np^4) in the worst case; fine for the tens of faces of a grain) */
     int cap = 64, nc = 0, spans = 0;
     double *cand = malloc((size_t)cap * 3 * sizeof *cand);
-    if (!cand) { free(pl); set_err(err, errlen, "%s: out of memory", what); return NULL; }
+    if (!cand) { free(pl); floe_set_err(err, errlen, "%s: out of memory", what); return NULL; }
     for (int i = 0; i < np; i++)
         for (int j = i + 1; j < np; j++) {
             double nij[3];
@@ -590,7 +584,7 @@ floe_geometry *floe_polyhedron_from_planes(const double *planes, int np, char *e
                 if (nc == cap) {
                     cap *= 2;
                     double *t = realloc(cand, (size_t)cap * 3 * sizeof *t);
-                    if (!t) { free(cand); free(pl); set_err(err, errlen, "%s: out of memory", what); return NULL; }
+                    if (!t) { free(cand); free(pl); floe_set_err(err, errlen, "%s: out of memory", what); return NULL; }
                     cand = t;
                 }
                 floe_v3_copy(cand + 3 * nc, X);
@@ -617,10 +611,10 @@ floe_geometry *floe_polyhedron_from_planes(const double *planes, int np, char *e
         }
     floe_geometry *g = NULL;
     if (spans && nc > 0 && unbounded)
-        set_err(err, errlen, "%s: unbounded (the set extends to infinity along (%.3g, %.3g, %.3g))", what, ray[0] + 0.0, ray[1] + 0.0,
+        floe_set_err(err, errlen, "%s: unbounded (the set extends to infinity along (%.3g, %.3g, %.3g))", what, ray[0] + 0.0, ray[1] + 0.0,
                 ray[2] + 0.0);
-    else if (!spans) set_err(err, errlen, "%s: unbounded (the normals do not span 3D: the set contains a line) or empty", what);
-    else if (nc == 0) set_err(err, errlen, "%s: empty (no point satisfies all the half-spaces)", what);
+    else if (!spans) floe_set_err(err, errlen, "%s: unbounded (the normals do not span 3D: the set contains a line) or empty", what);
+    else if (nc == 0) floe_set_err(err, errlen, "%s: empty (no point satisfies all the half-spaces)", what);
     else g = build_polyhedron(cand, nc, pl, np, what, "unbounded (the half-spaces do not enclose a finite volume)", err, errlen);
     free(cand); free(pl);
     return g;
@@ -628,15 +622,15 @@ floe_geometry *floe_polyhedron_from_planes(const double *planes, int np, char *e
 
 floe_geometry *floe_polyhedron_from_mesh(const double *v, int nv, const int *tri, int nt, char *err, size_t errlen) {
     const char *what = "polyhedron from mesh";
-    if (!v || !tri || nv < 4 || nt < 4) { set_err(err, errlen, "%s: need at least 4 vertices and 4 triangles", what); return NULL; }
+    if (!v || !tri || nv < 4 || nt < 4) { floe_set_err(err, errlen, "%s: need at least 4 vertices and 4 triangles", what); return NULL; }
     for (int i = 0; i < 3 * nv; i++)
-        if (!isfinite(v[i])) { set_err(err, errlen, "%s: vertex %d is not finite", what, i / 3); return NULL; }
+        if (!isfinite(v[i])) { floe_set_err(err, errlen, "%s: vertex %d is not finite", what, i / 3); return NULL; }
     for (int i = 0; i < 3 * nt; i++)
-        if (tri[i] < 0 || tri[i] >= nv) { set_err(err, errlen, "%s: triangle %d has vertex index %d out of range", what, i / 3, tri[i]); return NULL; }
+        if (tri[i] < 0 || tri[i] >= nv) { floe_set_err(err, errlen, "%s: triangle %d has vertex index %d out of range", what, i / 3, tri[i]); return NULL; }
     int closed = check_closed(tri, nt, nv);
-    if (closed < 0) { set_err(err, errlen, "%s: out of memory", what); return NULL; }
+    if (closed < 0) { floe_set_err(err, errlen, "%s: out of memory", what); return NULL; }
     if (!closed) {
-        set_err(err, errlen, "%s: not closed (every edge must be shared by exactly two triangles of opposite orientation; weld duplicate vertices)", what);
+        floe_set_err(err, errlen, "%s: not closed (every edge must be shared by exactly two triangles of opposite orientation; weld duplicate vertices)", what);
         return NULL;
     }
     /* scale and orientation */
@@ -652,10 +646,10 @@ floe_geometry *floe_polyhedron_from_mesh(const double *v, int nv, const int *tri
         floe_v3_cross(bc, b, c);
         vol += floe_v3_dot(a, bc) / 6;
     }
-    if (!(fabs(vol) > 1e-12 * L * L * L)) { set_err(err, errlen, "%s: zero volume (flat mesh)", what); return NULL; }
+    if (!(fabs(vol) > 1e-12 * L * L * L)) { floe_set_err(err, errlen, "%s: zero volume (flat mesh)", what); return NULL; }
     double sgn = vol > 0 ? 1 : -1; /* accept either orientation */
     double *pl = malloc((size_t)nt * 4 * sizeof *pl), *cand = malloc((size_t)3 * nt * 3 * sizeof *cand);
-    if (!pl || !cand) { free(pl); free(cand); set_err(err, errlen, "%s: out of memory", what); return NULL; }
+    if (!pl || !cand) { free(pl); free(cand); floe_set_err(err, errlen, "%s: out of memory", what); return NULL; }
     int npl = 0;
     for (int t = 0; t < nt; t++) {
         const double *a = v + 3 * tri[3 * t], *b = v + 3 * tri[3 * t + 1], *c = v + 3 * tri[3 * t + 2];
@@ -669,7 +663,7 @@ floe_geometry *floe_polyhedron_from_mesh(const double *v, int nv, const int *tri
         for (int i = 0; i < nv; i++)
             if (floe_v3_dot(n, v + 3 * i) - d > 1e-9 * L) {
                 free(pl); free(cand);
-                set_err(err, errlen, "%s: not convex (vertex %d is outside the plane of triangle %d by %.3g)", what, i,
+                floe_set_err(err, errlen, "%s: not convex (vertex %d is outside the plane of triangle %d by %.3g)", what, i,
                         t, floe_v3_dot(n, v + 3 * i) - d);
                 return NULL;
             }
@@ -688,20 +682,20 @@ floe_geometry *floe_polyhedron_from_mesh(const double *v, int nv, const int *tri
 
 floe_geometry *floe_prism_create(const double *xy, int n, double height, char *err, size_t errlen) {
     const char *what = "prism";
-    if (!(height > 0) || !isfinite(height)) { set_err(err, errlen, "%s: height must be positive and finite (got %g)", what, height); return NULL; }
-    if (!xy || n < 3) { set_err(err, errlen, "%s: need at least 3 points (got %d)", what, xy ? n : 0); return NULL; }
+    if (!(height > 0) || !isfinite(height)) { floe_set_err(err, errlen, "%s: height must be positive and finite (got %g)", what, height); return NULL; }
+    if (!xy || n < 3) { floe_set_err(err, errlen, "%s: need at least 3 points (got %d)", what, xy ? n : 0); return NULL; }
     double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     for (int i = 0; i < 2 * n; i++) {
-        if (!isfinite(xy[i])) { set_err(err, errlen, "%s: point %d is not finite", what, i / 2); return NULL; }
+        if (!isfinite(xy[i])) { floe_set_err(err, errlen, "%s: point %d is not finite", what, i / 2); return NULL; }
         lo[i % 2] = fmin(lo[i % 2], xy[i]); hi[i % 2] = fmax(hi[i % 2], xy[i]);
     }
     double L = hypot(hi[0] - lo[0], hi[1] - lo[1]);
     int *h = malloc((size_t)(n + 1) * sizeof *h);
-    if (!h) { set_err(err, errlen, "%s: out of memory", what); return NULL; }
+    if (!h) { floe_set_err(err, errlen, "%s: out of memory", what); return NULL; }
     int m = L > 0 ? hull2d(xy, n, 1e-12 * L * L, h) : 0;
-    if (m < 3) { free(h); set_err(err, errlen, m < 0 ? "%s: out of memory" : "%s: the points are collinear (zero area)", what); return NULL; }
+    if (m < 3) { free(h); floe_set_err(err, errlen, m < 0 ? "%s: out of memory" : "%s: the points are collinear (zero area)", what); return NULL; }
     double *pl = malloc((size_t)(m + 2) * 4 * sizeof *pl), *cand = malloc((size_t)2 * m * 3 * sizeof *cand);
-    if (!pl || !cand) { free(h); free(pl); free(cand); set_err(err, errlen, "%s: out of memory", what); return NULL; }
+    if (!pl || !cand) { free(h); free(pl); free(cand); floe_set_err(err, errlen, "%s: out of memory", what); return NULL; }
     for (int i = 0; i < m; i++) {
         const double *a = xy + 2 * h[i], *b = xy + 2 * h[(i + 1) % m];
         double ex = b[0] - a[0], ey = b[1] - a[1], el = hypot(ex, ey);
