@@ -111,6 +111,7 @@ struct floe_pd_body {
     /* LPS per-point state (allocated by init of LPS): weighted volume, dilatation          */
     double *m, *theta;
     double *wbond;             /* LPS Gaussian influence per bond (NULL for w = 1)          */
+    double *acorr;             /* LPS per-point factor on alpha_i = 15G/m_i, NULL when off  */
     int64_t nbroken;           /* bonds broken so far                                       */
 };
 
@@ -137,8 +138,15 @@ int floe_pd_set_material(floe_pd_body *b, const floe_pd_material *m);
  * continuum value W_inf = c pi delta^4 eps^2/20 (3D; 2D c pi h delta^3 eps^2/16), giving
  * g_i^d = W_inf/W_i^d; a bond gets G^d = (g_i^d + g_j^d)/2 and the factor
  * [sum_d (n_d/G^d)^2]^(-1/2) (ellipsoidal interpolation). Interior points of a lattice get
- * about 1 (the discretisation error of the lattice sum is corrected too). FLOE_ENOTSUP for
- * LPS (whose per-point m_i already normalises the dilatation). Call after set_material. */
+ * about 1 (the discretisation error of the lattice sum is corrected too).
+ * LPS (3D): the dilatation is self-normalised by the discrete m_i (exact for an isotropic
+ * expansion), so only the deviatoric part is calibrated, per point: under the uniaxial
+ * strain eps along d, D_i^d = sum_j w beta V_j |xi|^2 (n_d^2 - thetahat_i^d/3)^2 with
+ * thetahat_i^d = 3/m_i sum_j w |xi|^2 n_d^2 beta V_j, and the continuum deviatoric energy
+ * 2/3 G eps^2 = alpha_i^d D_i^d eps^2/2 gives alpha_i^d = 4G/(3 D_i^d); alpha_i is their
+ * mean over d (000 eq 25 uses alpha = 15G/m, the continuum value). In the interior of a
+ * lattice this makes C11 and C12 exact (C44 keeps the cubic-lattice error).
+ * Call after set_material (which drops the correction). */
 int floe_pd_surface_correction(floe_pd_body *b);
 
 /* Internal forces (000 eq 12 for PMB, eq 14 for LPS) for current positions x (3n), ADDED
@@ -149,6 +157,13 @@ double floe_pd_forces(floe_pd_body *b, const double *x, double *f);
 
 /* Same without breaking bonds (for line searches, finite differences, solvers). */
 double floe_pd_forces_nobreak(floe_pd_body *b, const double *x, double *f);
+
+/* Visit every intact bond k = (i, j), i < j, with the force on i exerted through the bond
+ * (fij, N; the force on j is -fij) for current positions x, without breaking bonds: PMB
+ * c s beta V_i V_j M, LPS (t_ij + t_ji) beta V_i V_j M (a fresh dilatation pass). For
+ * stress fluxes and observers. FLOE_ENOMEM never (LPS uses the body's theta array). */
+typedef void (*floe_pd_bond_visit_fn)(int i, int j, int64_t k, const double fij[3], void *user);
+int floe_pd_bond_forces(floe_pd_body *b, const double *x, floe_pd_bond_visit_fn fn, void *user);
 
 /* Local damage phi_i = 1 - sum_j mu beta V_j / sum_j beta V_j (003 eq 7) into phi[n].
  * FLOE_ENOMEM when its n-double scratch cannot be allocated. */

@@ -148,7 +148,7 @@ static double lps_forces(floe_pd_body *b, const double *x, double *f)
 {
     const int n = b->n;
     const double K = b->mat.K, G = b->mat.G, s_c = b->s_c;
-    const double *V = b->V, *len = b->len, *wb = b->wbond, *m = b->m;
+    const double *V = b->V, *len = b->len, *wb = b->wbond, *m = b->m, *ac = b->acorr;
     const float *vfac = b->vfac;
     const int32_t *part = b->partner;
     uint8_t *brk = b->broken;
@@ -184,7 +184,7 @@ static double lps_forces(floe_pd_body *b, const double *x, double *f)
         const double xi0 = x[3 * (size_t)i], xi1 = x[3 * (size_t)i + 1], xi2 = x[3 * (size_t)i + 2];
         const double Vi = V[i], thi = th[i];
         const double mi = m[i] > 0 ? m[i] : 1.0;
-        const double ki = 3.0 * K * thi / mi, ai = 15.0 * G / mi;
+        const double ki = 3.0 * K * thi / mi, ai = 15.0 * G / mi * (ac ? ac[i] : 1.0);
         double fi0 = 0, fi1 = 0, fi2 = 0, ei = 0.5 * K * thi * thi * Vi;
         for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
             if (brk[k]) continue;
@@ -196,7 +196,7 @@ static double lps_forces(floe_pd_body *b, const double *x, double *f)
             double w = wb ? wb[k] : 1.0;
             double mj = m[j] > 0 ? m[j] : 1.0;
             double edi = e - thi * L / 3.0, edj = e - th[j] * L / 3.0;
-            double aj = 15.0 * G / mj;
+            double aj = 15.0 * G / mj * (ac ? ac[j] : 1.0);
             double tij = ki * w * L + ai * w * edi;
             double tji = 3.0 * K * th[j] / mj * w * L + aj * w * edj;
             double bv = (double)vfac[k] * Vi * V[j];
@@ -219,3 +219,50 @@ static double lps_forces(floe_pd_body *b, const double *x, double *f)
 }
 
 const floe_pd_material_ops floe_pd_lps_ops = {"lps", lps_init, lps_forces, lps_c};
+
+/* ------------------------------------------------------- bond visitor ---- */
+int floe_pd_bond_forces(floe_pd_body *b, const double *x, floe_pd_bond_visit_fn fn, void *user)
+{
+    if (!b || !b->ops || !x || !fn) return FLOE_EINVAL;
+    const int lps = b->mat.model == FLOE_PD_LPS;
+    double *th = b->theta;
+    if (lps) {
+        for (int i = 0; i < b->n; i++) th[i] = 0;
+        for (int i = 0; i < b->n; i++)
+            for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+                if (b->broken[k]) continue;
+                int j = b->partner[k];
+                double d[3];
+                floe_v3_sub(d, x + 3 * (size_t)j, x + 3 * (size_t)i);
+                double L = b->len[k], e = floe_v3_norm(d) - L;
+                double a = (b->wbond ? b->wbond[k] : 1.0) * L * e * (double)b->vfac[k];
+                th[i] += a * b->V[j];
+                th[j] += a * b->V[i];
+            }
+        for (int i = 0; i < b->n; i++) th[i] = b->m[i] > 0 ? 3.0 * th[i] / b->m[i] : 0.0;
+    }
+    for (int i = 0; i < b->n; i++)
+        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+            int j = b->partner[k];
+            double d[3];
+            floe_v3_sub(d, x + 3 * (size_t)j, x + 3 * (size_t)i);
+            double r = floe_v3_norm(d), L = b->len[k], s = (r - L) / L;
+            if (b->broken[k] && (lps || !b->mat.broken_tension_only || s >= 0)) continue;
+            if (!(r > 0)) continue;
+            double bv = (double)b->vfac[k] * b->V[i] * b->V[j], fm;
+            if (!lps) {
+                fm = b->c * s * bv * (b->scorr ? (double)b->scorr[k] : 1.0);
+            } else {
+                double w = b->wbond ? b->wbond[k] : 1.0, e = r - L;
+                double mi = b->m[i] > 0 ? b->m[i] : 1.0, mj = b->m[j] > 0 ? b->m[j] : 1.0;
+                double ai = 15.0 * b->mat.G / mi * (b->acorr ? b->acorr[i] : 1.0);
+                double aj = 15.0 * b->mat.G / mj * (b->acorr ? b->acorr[j] : 1.0);
+                double tij = 3.0 * b->mat.K * th[i] / mi * w * L + ai * w * (e - th[i] * L / 3.0);
+                double tji = 3.0 * b->mat.K * th[j] / mj * w * L + aj * w * (e - th[j] * L / 3.0);
+                fm = (tij + tji) * bv;
+            }
+            double f[3] = {fm * d[0] / r, fm * d[1] / r, fm * d[2] / r};
+            fn(i, j, k, f, user);
+        }
+    return FLOE_OK;
+}

@@ -237,11 +237,12 @@ static void perturb(const floe_pd_body *b, double *x, double amp)
     for (int i = 0; i < 3 * b->n; i++) x[i] = b->X[i] + amp * (2 * urand() - 1);
 }
 
-static void test_gradient(const floe_pd_material *m, const char *what)
+static void test_gradient(const floe_pd_material *m, int corr, const char *what)
 {
     floe_pd_body *b = make_box(3, 1e-3, 3, 5, 4, 4);
     if (!b) return;
     floe_pd_set_material(b, m);
+    if (corr) CHECK(floe_pd_surface_correction(b) == FLOE_OK, "correction");
     int n3 = 3 * b->n;
     double *x = malloc(n3 * sizeof *x), *f = calloc(n3, sizeof *f), *s = malloc(n3 * sizeof *s);
     perturb(b, x, 2e-6);
@@ -474,6 +475,165 @@ static void test_wave(void)
     CHECK_NEAR(r3, 1.0, 0.03, "3D bar 240 x 6 x 6: c / sqrt(E/rho), E = 1.5 K");
 }
 
+/* ------------------------------------------------ quasi-static tension ---- */
+/* A block nx x ny x ny (delta = m dx): the x displacement of the end slabs (three layers
+ * each, X < 3 dx and X > (nx - 3) dx) is prescribed, u_x = eps (X - x_c); every other dof is
+ * free. Static equilibrium by conjugate gradients on the linearised stiffness (matrix-free:
+ * K v = -f(X + a v)/a at a tiny amplitude a, the forces vanish at X). In the interior core
+ * (at least delta from the lateral faces, middle half in x) eps_x and eps_y, eps_z are
+ * least-squares slopes of the displacements, nu = -eps_lat/eps_x; sigma_xx is the bond-force
+ * flux through the mid plane x = x_c over the core patch (each bond crossing the patch,
+ * half weight on its edge), so E = sigma_xx/eps_x measures the interior alone. */
+typedef struct tens_ctx {
+    floe_pd_body *b;
+    double *x, *f;
+} tens_ctx;
+
+static void kmul(tens_ctx *c, const double *v, double *out, const unsigned char *fix)
+{
+    floe_pd_body *b = c->b;
+    int n3 = 3 * b->n;
+    double mx = 0;
+    for (int i = 0; i < n3; i++) mx = fmax(mx, fabs(v[i]));
+    if (mx == 0) { memset(out, 0, n3 * sizeof *out); return; }
+    double a = 1e-7 * b->dx / mx;
+    for (int i = 0; i < n3; i++) c->x[i] = b->X[i] + a * v[i];
+    memset(c->f, 0, n3 * sizeof *c->f);
+    floe_pd_forces_nobreak(b, c->x, c->f);
+    for (int i = 0; i < n3; i++) out[i] = fix[i] ? 0 : -c->f[i] / a;
+}
+
+typedef struct flux_ctx {
+    const floe_pd_body *b;
+    double xm, lo, hi, tol, sum;
+} flux_ctx;
+
+static void flux_visit(int i, int j, int64_t k, const double f[3], void *user)
+{
+    (void)k;
+    flux_ctx *F = user;
+    const double *Xi = F->b->X + 3 * i, *Xj = F->b->X + 3 * j;
+    if ((Xi[0] - F->xm) * (Xj[0] - F->xm) >= 0) return;
+    double t = (F->xm - Xi[0]) / (Xj[0] - Xi[0]), w = 1;
+    for (int d = 1; d < 3; d++) {
+        double c = Xi[d] + t * (Xj[d] - Xi[d]);
+        if (c < F->lo - F->tol || c > F->hi + F->tol) return;
+        if (fabs(c - F->lo) < F->tol || fabs(c - F->hi) < F->tol) w *= 0.5;
+    }
+    /* force on the point right of the plane from the one left of it (f acts on i) */
+    F->sum += w * (Xj[0] > F->xm ? -f[0] : f[0]);
+}
+
+static void tension(const floe_pd_material *m, double mh, int corr, int nx, int ny,
+                    double *E_ratio, double *nu_out, double *resid)
+{
+    const double dx = 1e-3, eps = 1e-4;
+    floe_pd_body *b = make_box(3, dx, mh, nx, ny, ny);
+    if (!b) return;
+    floe_pd_set_material(b, m);
+    if (corr) CHECK(floe_pd_surface_correction(b) == FLOE_OK, "correction");
+    int n3 = 3 * b->n;
+    tens_ctx c = {b, malloc(n3 * sizeof(double)), malloc(n3 * sizeof(double))};
+    unsigned char *fix = calloc(n3, 1);
+    double *u = calloc(n3, sizeof *u), *r = malloc(n3 * sizeof *r), *p = malloc(n3 * sizeof *p),
+           *Ap = malloc(n3 * sizeof *Ap);
+    double xc = 0.5 * nx * dx;
+    for (int i = 0; i < b->n; i++) {
+        double X = b->X[3 * i];
+        if (X < 3 * dx || X > (nx - 3) * dx) { fix[3 * i] = 1; u[3 * i] = eps * (X - xc); }
+    }
+    kmul(&c, u, r, fix); /* r = b - K u_free = -K u_prescribed on the free dofs */
+    for (int i = 0; i < n3; i++) r[i] = fix[i] ? 0 : -r[i];
+    memcpy(p, r, n3 * sizeof *p);
+    double rs = 0;
+    for (int i = 0; i < n3; i++) rs += r[i] * r[i];
+    double rs0 = rs;
+    int it;
+    for (it = 0; it < 2000 && rs > 1e-20 * rs0; it++) {
+        kmul(&c, p, Ap, fix);
+        double pAp = 0, rn = 0;
+        for (int i = 0; i < n3; i++) pAp += p[i] * Ap[i];
+        double al = rs / pAp;
+        for (int i = 0; i < n3; i++) {
+            if (!fix[i]) u[i] += al * p[i];
+            r[i] -= al * Ap[i];
+            rn += r[i] * r[i];
+        }
+        for (int i = 0; i < n3; i++) p[i] = r[i] + rn / rs * p[i];
+        rs = rn;
+    }
+    /* true (nonlinear) residual of the free dofs against the prescribed load */
+    for (int i = 0; i < n3; i++) c.x[i] = b->X[i] + (fix[i] ? u[i] : 0);
+    memset(c.f, 0, n3 * sizeof *c.f);
+    floe_pd_forces_nobreak(b, c.x, c.f);
+    double f0 = 0, f1 = 0;
+    for (int i = 0; i < n3; i++) if (!fix[i]) f0 += c.f[i] * c.f[i];
+    for (int i = 0; i < n3; i++) c.x[i] = b->X[i] + u[i];
+    memset(c.f, 0, n3 * sizeof *c.f);
+    floe_pd_forces_nobreak(b, c.x, c.f);
+    for (int i = 0; i < n3; i++) if (!fix[i]) f1 += c.f[i] * c.f[i];
+    *resid = sqrt(f1 / f0);
+    /* interior fits */
+    double yc = 0.5 * ny * dx, core = 0.5 * ny * dx - b->delta;
+    double sx = 0, sxx = 0, sux = 0, su = 0, sy = 0, syy = 0, suy = 0, sv = 0;
+    int cn = 0;
+    for (int i = 0; i < b->n; i++) {
+        const double *X = b->X + 3 * i;
+        if (fabs(X[0] - xc) > 0.25 * nx * dx || fabs(X[1] - yc) > core || fabs(X[2] - yc) > core) continue;
+        cn++;
+        double ax = X[0] - xc;
+        sx += ax; sxx += ax * ax; sux += ax * u[3 * i]; su += u[3 * i];
+        for (int d = 1; d < 3; d++) {
+            double ay = X[d] - yc;
+            sy += ay; syy += ay * ay; suy += ay * u[3 * i + d]; sv += u[3 * i + d];
+        }
+    }
+    double ex = (sux - sx * su / cn) / (sxx - sx * sx / cn);
+    double ey = (suy - sy * sv / (2 * cn)) / (syy - sy * sy / (2 * cn));
+    flux_ctx F = {b, xc, yc - core - 0.5 * dx, yc + core + 0.5 * dx, 1e-9 * dx, 0};
+    floe_pd_bond_forces(b, c.x, flux_visit, &F);
+    double sig = -F.sum / ((F.hi - F.lo) * (F.hi - F.lo)); /* tension > 0 */
+    *E_ratio = sig / ex / m->E;
+    *nu_out = -ey / ex;
+    printf("  CG %d it, residual %.1e, core %d points, eps_x %.4g (applied %.4g between slabs)\n",
+           it, *resid, cn, ex, eps);
+    free(c.x); free(c.f); free(fix); free(u); free(r); free(p); free(Ap);
+    floe_pd_body_destroy(b);
+}
+
+static void test_tension(void)
+{
+    printf("quasi-static uniaxial tension, interior E and nu (block 24 x 12 x 12, delta = 3 dx)\n");
+    const double E = 1e9;
+    double Er, nu, res;
+    for (int t = 0; t < 2; t++) {
+        double nu0 = t == 0 ? 0.3 : 0.45;
+        int infl = t == 0 ? FLOE_PD_W_ONE : FLOE_PD_W_GAUSS;
+        floe_pd_material m = floe_pd_material_lps(1000, E / (3 * (1 - 2 * nu0)), E / (2 * (1 + nu0)), 0, infl);
+        char what[96];
+        tension(&m, 3, 1, 24, 12, &Er, &nu, &res);
+        CHECK(res < 1e-3, "equilibrium residual %.3g (nonlinear forces at strain 1e-4)", res);
+        snprintf(what, sizeof what, "LPS nu=%.2f %s, alpha calibrated: E_int / E", nu0, infl ? "gauss" : "w=1");
+        CHECK_NEAR(Er, 1.0, 0.05, what);
+        snprintf(what, sizeof what, "LPS nu=%.2f %s, alpha calibrated: nu_int", nu0, infl ? "gauss" : "w=1");
+        CHECK_NEAR(nu, nu0, 0.05, what);
+        /* without the calibration (alpha = 15 G/m of 000 eq 25): the lattice error, shown */
+        tension(&m, 3, 0, 24, 12, &Er, &nu, &res);
+        printf("  LPS nu=%.2f %s, alpha = 15G/m (no calibration): E_int/E %.4f, nu_int %.4f "
+               "(%+.1f %%)\n", nu0, infl ? "gauss" : "w=1", Er, nu, 100 * (nu / nu0 - 1));
+    }
+    floe_pd_material pm = floe_pd_material_pmb(1000, E / 1.5, 0);
+    tension(&pm, 3, 1, 24, 12, &Er, &nu, &res);
+    CHECK(res < 1e-3, "equilibrium residual %.3g (nonlinear forces at strain 1e-4)", res);
+    CHECK_NEAR(Er, 1.0, 0.05, "PMB delta = 3 dx, surface corrected: E_int / E");
+    /* bond-based PD on a cubic lattice is cubic, not isotropic (central forces): nu along
+     * [100] is 0.269 at delta = 3 dx and tends to 1/4 as delta/dx grows */
+    CHECK_NEAR(nu, 0.25, 0.10, "PMB delta = 3 dx: nu_int (cubic lattice, tol 10 %)");
+    tension(&pm, 4, 1, 24, 12, &Er, &nu, &res);
+    CHECK_NEAR(nu, 0.25, 0.03, "PMB delta = 4 dx: nu_int");
+    CHECK_NEAR(Er, 1.0, 0.05, "PMB delta = 4 dx: E_int / E");
+}
+
 int main(void)
 {
     double t0 = now_s();
@@ -484,15 +644,18 @@ int main(void)
     floe_pd_material pmb = floe_pd_material_pmb(2200, 14.9e9, 0);
     floe_pd_material lps1 = floe_pd_material_lps(2200, 14.9e9, 6.0e9, 0, FLOE_PD_W_ONE);
     floe_pd_material lpsg = floe_pd_material_lps(2200, 14.9e9, 6.0e9, 0, FLOE_PD_W_GAUSS);
-    test_gradient(&pmb, "PMB");
-    test_gradient(&lps1, "LPS w=1");
-    test_gradient(&lpsg, "LPS w=gauss");
+    test_gradient(&pmb, 0, "PMB");
+    test_gradient(&pmb, 1, "PMB surface corrected");
+    test_gradient(&lps1, 0, "LPS w=1");
+    test_gradient(&lpsg, 0, "LPS w=gauss");
+    test_gradient(&lpsg, 1, "LPS w=gauss, alpha calibrated");
     printf("energy conservation\n");
     test_energy(&pmb, "PMB");
     test_energy(&lpsg, "LPS w=gauss");
     test_timestep(&pmb, "PMB");
     test_timestep(&lps1, "LPS w=1");
     test_wave();
+    test_tension();
     printf("total %.2f s\n", now_s() - t0);
     return check_summary("test_pd");
 }
