@@ -124,6 +124,15 @@ static void test_families(void)
           "|xi| = delta bonds get 1/2 (%d)", vbad, nhalf);
     printf("  sphere: %d points, %lld bonds (stored once), max family %d\n", n,
            (long long)b->nbond, maxc);
+    {
+        floe_pd_material pm = floe_pd_material_pmb(2200, 14.9e9, 0);
+        floe_pd_set_material(b, &pm);
+        printf("  memory: %zu bytes per bond in the bond arrays (int32 partner, double |xi|, float "
+               "factor, byte flag; each bond once); whole PMB body %.1f bytes per bond "
+               "(%.1f per bond end)\n", floe_pd_bytes_per_bond(),
+               (double)floe_pd_body_bytes(b) / (double)b->nbond,
+               (double)floe_pd_body_bytes(b) / (2.0 * (double)b->nbond));
+    }
     free(cnt);
     floe_pd_body_destroy(b);
 
@@ -150,8 +159,6 @@ static void test_families(void)
     bad_r.dim = 3;
     bad_r.dx = 0;
     CHECK(floe_pd_body_create(&nb, &bad_r) == FLOE_EINVAL, "dx 0 refused");
-    printf("  bond storage: %zu bytes per bond (partner int32, |xi| double, factor float, "
-           "flag byte), bonds stored once\n", floe_pd_bytes_per_bond());
 }
 
 
@@ -634,12 +641,57 @@ static void test_tension(void)
     CHECK_NEAR(Er, 1.0, 0.05, "PMB delta = 4 dx: E_int / E");
 }
 
+/* --------------------------------------------------------------- damage ---- */
+/* A 2D plate cut by moving its right half away: exactly the bonds crossing the cut break,
+ * points far from it keep phi = 0, points at the cut get 0 < phi < 1. */
+static void test_damage(void)
+{
+    printf("damage across a cut (2D PMB)\n");
+    const double dx = 1e-3;
+    floe_pd_body *b = make_box(2, dx, 3, 20, 10, 1);
+    if (!b) return;
+    floe_pd_material m = floe_pd_material_pmb(1000, 1e9, 1e-3);
+    floe_pd_set_material(b, &m);
+    double xc = 10 * dx;
+    int64_t crossing = 0;
+    for (int i = 0; i < b->n; i++)
+        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++)
+            crossing += (b->X[3 * i] < xc) != (b->X[3 * b->partner[k]] < xc);
+    double *x = malloc(3 * (size_t)b->n * sizeof *x), *f = calloc(3 * (size_t)b->n, sizeof *f);
+    double *phi = malloc((size_t)b->n * sizeof *phi);
+    for (int i = 0; i < 3 * b->n; i++) x[i] = b->X[i] + (i % 3 == 0 && b->X[i - i % 3] > xc ? 0.1 * dx : 0);
+    floe_pd_forces(b, x, f);
+    CHECK(b->nbroken == crossing && crossing > 0, "broken %lld, crossing the cut %lld",
+          (long long)b->nbroken, (long long)crossing);
+    CHECK(floe_pd_damage(b, phi) == FLOE_OK, "damage");
+    int bad = 0;
+    double mx = 0;
+    for (int i = 0; i < b->n; i++) {
+        double d = fabs(b->X[3 * i] - xc);
+        if (d > b->delta && phi[i] != 0) bad++;
+        if (d < dx && !(phi[i] > 0 && phi[i] < 1)) bad++;
+        mx = fmax(mx, phi[i]);
+    }
+    CHECK(bad == 0, "%d points with damage out of place", bad);
+    /* put the halves back: bonds stay broken, the halves do not attract */
+    memset(f, 0, 3 * (size_t)b->n * sizeof *f);
+    for (int i = 0; i < 3 * b->n; i++) x[i] = b->X[i] + (i % 3 == 0 && b->X[i - i % 3] > xc ? 1e-4 * dx : 0);
+    floe_pd_forces(b, x, f);
+    double fl = 0;
+    for (int i = 0; i < b->n; i++) if (b->X[3 * i] < xc) fl += f[3 * i];
+    CHECK(fl == 0 && b->nbroken == crossing, "no force across the healed-looking cut: %g", fl);
+    printf("  %lld bonds broken across the cut, max damage %.3f\n", (long long)crossing, mx);
+    free(x); free(f); free(phi);
+    floe_pd_body_destroy(b);
+}
+
 int main(void)
 {
     double t0 = now_s();
     test_families();
     test_single_bond(FLOE_PD_PMB);
     test_single_bond(FLOE_PD_LPS);
+    test_damage();
     printf("forces against the energy gradient\n");
     floe_pd_material pmb = floe_pd_material_pmb(2200, 14.9e9, 0);
     floe_pd_material lps1 = floe_pd_material_lps(2200, 14.9e9, 6.0e9, 0, FLOE_PD_W_ONE);
