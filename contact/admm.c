@@ -213,6 +213,7 @@ int floe_admm_contact(const floe_pose *a, const floe_pose *b, const floe_admm_op
                       floe_admm_result *r) {
     memset(r, 0, sizeof *r);
     double X1[3], X2[3];
+    if (warm && !isfinite(warm[0])) warm[8] = NAN; /* a cold pair: both halves cold */
     int i1 = floe_admm_half(a, b, o, warm, X1, &r->phi1);
     body_to_world(a, X1, r->x1);
     r->iters = i1 < 0 ? -i1 : i1;

@@ -351,6 +351,20 @@ static void L_from_omega(const double q[4], const double I[3], const double om[3
 /* q <- exp(h omega / 2) q, i.e. rotate by the vector h*omega */
 static void q_advance(double out[4], const double q[4], const double om[3], double h) {
     double th[3] = {h * om[0], h * om[1], h * om[2]}, dq[4];
+    double a2 = floe_v3_dot(th, th);
+    if (a2 < 1e-4) {
+        /* small turn (every stable step): the series of cos(a/2) and sin(a/2)/a to a^4,
+         * truncation below 1e-16 here, no trigonometry (profile of 5,000 polyhedra: sincos
+         * was 3 % and this function 6 % of the run) */
+        double c = 1.0 - a2 * (0.125 - a2 * (1.0 / 384.0)), s = 0.5 - a2 * (1.0 / 48.0 - a2 * (1.0 / 3840.0));
+        dq[0] = c; dq[1] = s * th[0]; dq[2] = s * th[1]; dq[3] = s * th[2];
+        floe_q_mul(out, dq, q);
+        /* |out| = 1 + O(round-off): one Newton step for 1/sqrt keeps it unit */
+        double n2 = out[0] * out[0] + out[1] * out[1] + out[2] * out[2] + out[3] * out[3];
+        double sc = 1.5 - 0.5 * n2;
+        for (int k = 0; k < 4; k++) out[k] *= sc;
+        return;
+    }
     floe_q_from_rotvec(dq, th);
     floe_q_mul(out, dq, q);
     floe_q_normalize(out);
