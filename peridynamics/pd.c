@@ -163,8 +163,6 @@ int floe_pd_body_create_points(floe_pd_body **out, int dim, int n, const double 
         memcpy(b->X, X, 3 * (size_t)n * sizeof *X);
         memcpy(b->V, V, (size_t)n * sizeof *V);
     }
-    if (dim == 2)
-        for (int i = 0; i < n; i++) b->X[3 * (size_t)i + 2] = X[3 * (size_t)i + 2];
     int rc = build_families(b);
     if (rc != FLOE_OK) { floe_pd_body_destroy(b); return rc; }
     *out = b;

@@ -145,6 +145,11 @@ static void test_families(void)
         for (int i = 0; i < b->n; i++) mx = c2[i] > mx ? c2[i] : mx;
         CHECK(b->n == 144 && mx == 28, "2D: %d points, max family %d (want 144, 28)", b->n, mx);
         CHECK(fabs(b->V[0] - dx * dx * dx) < 1e-20, "2D volume dx^2 * thickness");
+        floe_pd_material l2 = floe_pd_material_lps(1000, 1e9, 1e9, 0, FLOE_PD_W_ONE);
+        CHECK(floe_pd_set_material(b, &l2) == FLOE_ENOTSUP && b->ops == NULL,
+              "2D LPS not supported yet, body unchanged");
+        floe_pd_material bad = floe_pd_material_pmb(-1, 1e9, 0);
+        CHECK(floe_pd_set_material(b, &bad) == FLOE_EINVAL, "negative density refused");
         free(c2);
         floe_pd_body_destroy(b);
     }
