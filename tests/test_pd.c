@@ -12,7 +12,7 @@
 #include <time.h>
 
 #include "check.h"
-#include "../peridynamics/floe_pd.h"
+#include "floe_pd.h"
 
 static uint64_t rng_state = 0x2545f4914f6cdd1dull;
 static double urand(void)
