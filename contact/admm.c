@@ -17,7 +17,7 @@
 #endif
 
 void floe_admm_default_options(floe_admm_options *o) {
-    o->tol = 1e-6;
+    o->tol = 1e-5;
     o->max_iter = 200;
     o->step = 1.0;
     o->adapt = 1;
