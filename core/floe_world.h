@@ -108,6 +108,19 @@ int floe_world_record_contacts(floe_world *w, int on);
 /* Number of contacts (penetrating pairs) at the last force evaluation. */
 int floe_world_contact_count(const floe_world *w);
 
+/* Peridynamic body (peridynamics/floe_pd.h, its material set): its points become particles
+ * of the world (spheres of the contact radius R = (3V/4 pi)^(1/3) in 3D, (V/(pi h))^(1/2) in
+ * 2D, mass rho V, contact material `material`), all moving at v0, and their bond forces are
+ * added every step. Family members never get a contact force (they are bonded); other
+ * points of the same body (fragments after fracture) and every other particle do. The
+ * world takes ownership of body (also on failure). *first receives the index of the first
+ * point (points keep the body's order). */
+struct floe_pd_body;
+int floe_world_add_pd_body(floe_world *w, struct floe_pd_body *body, int material, const double v0[3], int *first);
+/* Number of PD bodies and body k (NULL if out of range). */
+int floe_world_pd_body_count(const floe_world *w);
+struct floe_pd_body *floe_world_pd_body(const floe_world *w, int k, int *first);
+
 /* Contact detection statistics since prepare (pairs of convex shapes that go through the
  * polytope LP or ADMM; spheres and walls are analytic and not counted). */
 typedef struct floe_detect_stats {

@@ -3,6 +3,7 @@
  * contact summary, eq 15 -> contact law of the material pair -> force, torque, history,
  * energy, dissipation). In 2D the out-of-plane components are removed. */
 #include "world_internal.h"
+#include "floe_pd.h"
 #include <stdlib.h>
 #include <string.h>
 
@@ -181,6 +182,33 @@ int floe_compute_forces(floe_world *w) {
         memcpy(hist + FLOE_FORCE_SLOT, res.force, 3 * sizeof(double));
         if (!w->record_now) w->ncontacts++;
         else if (push_contact(w, &c, &res)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
+    /* peridynamic bond forces. Ledger: the work of the bond forces over the step
+     * (trapezoid, as for contacts) minus the change of the stored energy is dissipated;
+     * for intact bonds it is the integration error only, a breaking bond releases its
+     * energy there. */
+    for (int b = 0, off = 0; b < w->npd; b++) {
+        floe_pd_body *pb = w->pd[b];
+        int f0 = w->pd_first[b], np = pb->n;
+        double *fold = w->pd_fold + 3 * (size_t)off, *fnew = w->pd_fnew + 3 * (size_t)off;
+        memset(fnew, 0, (size_t)3 * np * sizeof *fnew);
+        double e = floe_pd_forces(pb, p->x + 3 * (size_t)f0, fnew);
+        double wk = 0;
+        for (int i = 0; i < np; i++)
+            for (int a = 0; a < 3; a++) {
+                double fa = fnew[3 * i + a];
+                p->f[3 * (size_t)(f0 + i) + a] += fa;
+                wk += (fa + fold[3 * i + a]) * p->v[3 * (size_t)(f0 + i) + a];
+            }
+        if (stepping) diss += -0.5 * wk * w->dt - (e - w->pd_eold[b]);
+        w->pd_eold[b] = e;
+        elastic += e;
+        off += np;
+    }
+    if (w->npd) { /* the new forces become the old ones */
+        double *t = w->pd_fold;
+        w->pd_fold = w->pd_fnew;
+        w->pd_fnew = t;
     }
     if (dim == 2)
         for (int i = 0; i < n; i++) { p->f[3 * i + 2] = 0; p->t[3 * i] = p->t[3 * i + 1] = 0; }

@@ -194,6 +194,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             int j = bidx[nl->scratch[k]];
             if (p->radius[j] > p->radius[i] || (p->radius[j] == p->radius[i] && j <= i)) continue;
             if (p->motion[i] != FLOE_FREE && p->motion[j] != FLOE_FREE) continue;
+            if (nl->exclude && nl->exclude(nl->exclude_ctx, i, j)) continue;
             double d[3];
             floe_v3_sub(d, p->x + 3 * j, p->x + 3 * i);
             double lim = p->radius[i] + p->radius[j] + skin;

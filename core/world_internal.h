@@ -63,6 +63,10 @@ typedef struct floe_neighbor_list {
     long rebuilds;
     int *walls; int nwalls;  /* particles with unbounded geometry (planes) */
     int *scratch; int scratch_cap;
+    /* optional: pairs for which exclude(ctx, i, j) is non-zero are never listed (the bonded
+     * family members of a peridynamic body) */
+    int (*exclude)(const void *ctx, int i, int j);
+    const void *exclude_ctx;
 } floe_neighbor_list;
 
 /* piece pair of a neighbour-list entry (compound bodies: one entry per piece pair) */
@@ -115,6 +119,15 @@ struct floe_world {
     int finished;
     floe_energy energy;
     floe_detect_state det;
+    /* peridynamic bodies (peridynamics/floe_pd.h): body k's points are the particles
+     * pd_first[k] .. pd_first[k] + n - 1; nothing is allocated without PD bodies */
+    struct floe_pd_body **pd; int *pd_first; int npd, pd_cap;
+    int *pd_of;              /* n (only with PD bodies): body index of each particle or -1 */
+    double *pd_fold;         /* 3 x (PD points): last PD force, for the energy ledger */
+    double *pd_fnew;         /* the same size: this evaluation's (swapped with pd_fold) */
+    double *pd_eold;         /* npd: last PD elastic energy */
+    int pd_npts;
+    int pd_npts_alloc;       /* particles covered by pd_of */
 };
 
 int floe_world_error(floe_world *w, int code, const char *fmt, ...)
