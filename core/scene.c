@@ -10,6 +10,7 @@
 #include "world_internal.h"
 #include "floe_observer.h"
 #include "floe_mesh.h"
+#include "floe_pd.h"
 
 #include <errno.h>
 #include <libfyaml.h>
@@ -1610,6 +1611,157 @@ static int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key)
     return FLOE_OK;
 }
 
+/* ------------------------------------------------------------------------------------ */
+/* Peridynamic bodies                                                                    */
+
+typedef struct sc_pd_sdf { floe_geometry *g; double x[3]; } sc_pd_sdf;
+static double sc_pd_region_sdf(const double X[3], void *user)
+{
+    const sc_pd_sdf *r = user;
+    double d[3];
+    floe_v3_sub(d, X, r->x);
+    return floe_geometry_sdf(r->g, d);
+}
+
+static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
+{
+    static const char *const keys[] = {"region", "spacing", "horizon", "material", "contact_material", "velocity",
+                                       "surface_correction", "thickness", "name", NULL};
+    static const char *const region_keys[] = {"box", "shape", "position", NULL};
+    static const char *const mat_keys[] = {"model", "density", "bulk_modulus", "shear_modulus", "young",
+                                           "critical_stretch", "fracture_energy", "influence", NULL};
+    if (!seq) return FLOE_OK;
+    if (sc_is_missing(seq) || !fy_node_is_sequence(seq))
+        return sc_fail(s, FLOE_EPARSE, sc_is_missing(seq) ? key : seq,
+                       "peridynamics must be a list of {region, spacing, material, contact_material}");
+    void *it = NULL;
+    struct fy_node *e;
+    int idx = 0;
+    while ((e = fy_node_sequence_iterate(seq, &it))) {
+        char what[48];
+        snprintf(what, sizeof what, "peridynamics[%d]", idx);
+        sc_map m;
+        FLOE_TRY(sc_map_open(s, e, e, what, keys, &m));
+        floe_pd_region r;
+        memset(&r, 0, sizeof r);
+        r.dim = s->dim;
+        FLOE_TRY(sc_pos_num(s, &m, "spacing", &r.dx));
+        FLOE_TRY(sc_num(s, &m, "horizon", 0, 3.0, &r.horizon_factor));
+        if (!(r.horizon_factor >= 1 && r.horizon_factor <= 10))
+            return sc_range(s, &m, "horizon", "in [1, 10] (the horizon in lattice spacings)", r.horizon_factor);
+        if (s->dim == 2) FLOE_TRY(sc_num(s, &m, "thickness", 0, r.dx, &r.thickness));
+        /* region: a box, or any shape placed at a position (its SDF selects the points) */
+        struct fy_node *rk, *rv = sc_get(&m, "region", &rk);
+        if (!rv) return sc_fail(s, FLOE_EPARSE, e, "%s.region is required ({box: {min, max}} or {shape, position})", what);
+        char fr[64];
+        snprintf(fr, sizeof fr, "%s.region", what);
+        sc_map rm;
+        FLOE_TRY(sc_map_open(s, rv == rk ? NULL : rv, rk, fr, region_keys, &rm));
+        sc_pd_sdf reg = {NULL, {0, 0, 0}};
+        struct fy_node *bk, *bv = sc_get(&rm, "box", &bk);
+        if (bv) {
+            static const char *const box_keys[] = {"min", "max", NULL};
+            char fb[80];
+            snprintf(fb, sizeof fb, "%s.box", fr);
+            sc_map bm;
+            FLOE_TRY(sc_map_open(s, bv == bk ? NULL : bv, bk, fb, box_keys, &bm));
+            FLOE_TRY(sc_vec(s, &bm, "min", 1, NULL, r.lo));
+            FLOE_TRY(sc_vec(s, &bm, "max", 1, NULL, r.hi));
+            if (s->dim == 2) r.hi[2] = r.lo[2] = 0;
+            for (int k = 0; k < s->dim; k++)
+                if (!(r.hi[k] - r.lo[k] >= r.dx))
+                    return sc_fail(s, FLOE_EINVAL, bv, "%s: max - min must be at least one spacing on every axis", fb);
+            if (s->dim == 2) { r.lo[2] = -0.5 * r.dx; r.hi[2] = 0.5 * r.dx; }
+        } else {
+            struct fy_node *sk2, *sv2 = sc_get(&rm, "shape", &sk2);
+            if (!sv2) return sc_fail(s, FLOE_EPARSE, rv, "%s: give box or shape", fr);
+            char fs[80];
+            snprintf(fs, sizeof fs, "%s.shape", fr);
+            FLOE_TRY(sc_build_shape(s, sv2, sk2, fs, 0, &reg.g));
+            int rc = sc_vec(s, &rm, "position", 0, NULL, reg.x);
+            double rb = floe_geometry_bounding_radius(reg.g);
+            if (rc == FLOE_OK && !isfinite(rb)) rc = sc_fail(s, FLOE_EINVAL, sv2, "%s: the region must be bounded", fs);
+            if (rc) { floe_geometry_destroy(reg.g); return rc; }
+            for (int k = 0; k < 3; k++) { r.lo[k] = reg.x[k] - rb; r.hi[k] = reg.x[k] + rb; }
+            if (s->dim == 2) { r.lo[2] = -0.5 * r.dx; r.hi[2] = 0.5 * r.dx; }
+            r.sdf = sc_pd_region_sdf;
+            r.sdf_user = &reg;
+        }
+        /* material */
+        struct fy_node *mk, *mv = sc_get(&m, "material", &mk);
+        if (!mv) {
+            floe_geometry_destroy(reg.g);
+            return sc_fail(s, FLOE_EPARSE, e, "%s.material is required ({model: pmb | lps, density, ...})", what);
+        }
+        char fm[64];
+        snprintf(fm, sizeof fm, "%s.material", what);
+        sc_map mm;
+        int rc = sc_map_open(s, mv == mk ? NULL : mv, mk, fm, mat_keys, &mm);
+        static const char *const models[] = {"pmb", "lps", NULL};
+        static const char *const infl[] = {"constant", "gaussian", NULL};
+        int model = 0, inf = 0;
+        double rho = 0, K = 0, G = 0, E = 0, sc_ = 0, Gc = 0;
+        if (!rc) rc = sc_enum(s, &mm, "model", models, -1, &model);
+        if (!rc) rc = sc_pos_num(s, &mm, "density", &rho);
+        if (!rc) rc = sc_num(s, &mm, "bulk_modulus", 0, 0, &K);
+        if (!rc) rc = sc_num(s, &mm, "shear_modulus", 0, 0, &G);
+        if (!rc) rc = sc_num(s, &mm, "young", 0, 0, &E);
+        if (!rc) rc = sc_num(s, &mm, "critical_stretch", 0, 0, &sc_);
+        if (!rc) rc = sc_num(s, &mm, "fracture_energy", 0, 0, &Gc);
+        if (!rc) rc = sc_enum(s, &mm, "influence", infl, 0, &inf);
+        if (!rc && !(K > 0) && !(s->dim == 2 && model == 0 && E > 0))
+            rc = sc_fail(s, FLOE_EINVAL, mv, "%s: bulk_modulus > 0 is required%s", fm,
+                         s->dim == 2 ? " (2D PMB: or young)" : "");
+        if (!rc && model == 1 && !(G > 0)) rc = sc_fail(s, FLOE_EINVAL, mv, "%s: lps needs shear_modulus > 0", fm);
+        if (!rc && (sc_ < 0 || Gc < 0)) rc = sc_fail(s, FLOE_EINVAL, mv, "%s: critical_stretch and fracture_energy must be >= 0", fm);
+        if (!rc && sc_ > 0 && Gc > 0) rc = sc_fail(s, FLOE_EINVAL, mv, "%s: give critical_stretch or fracture_energy, not both", fm);
+        floe_pd_body *b = NULL;
+        if (!rc) {
+            int c = floe_pd_body_create(&b, &r);
+            if (c) rc = sc_fail(s, c, rv, "%s: could not discretise the region (%s)", fr, floe_strerror(c));
+            else if (b->n < 2) rc = sc_fail(s, FLOE_EINVAL, rv, "%s: the region holds %d lattice points at spacing %g", fr, b->n, r.dx);
+        }
+        floe_geometry_destroy(reg.g);
+        if (!rc) {
+            floe_pd_material pm = model == 0 ? floe_pd_material_pmb(rho, K, sc_)
+                                             : floe_pd_material_lps(rho, K, G, sc_, inf ? FLOE_PD_W_GAUSS : FLOE_PD_W_ONE);
+            if (model == 0 && s->dim == 2 && E > 0) pm.E = E;
+            pm.G_c = Gc;
+            int c = floe_pd_set_material(b, &pm);
+            if (c) rc = sc_fail(s, c, mv, "%s: %s", fm, c == FLOE_ENOTSUP ? "not available in 2D (lps is 3D only)" : "invalid values");
+        }
+        int corr = 1;
+        if (!rc) rc = sc_bool(s, &m, "surface_correction", 1, &corr);
+        if (!rc && corr) {
+            int c = floe_pd_surface_correction(b);
+            if (c) rc = sc_fail(s, c, e, "%s: surface correction failed", what);
+        }
+        const char *cname;
+        struct fy_node *cat;
+        int cmat = -1;
+        double v0[3];
+        if (!rc) rc = sc_str(s, &m, "contact_material", 1, NULL, &cname, &cat);
+        if (!rc) {
+            char fc[80];
+            snprintf(fc, sizeof fc, "%s.contact_material", what);
+            rc = sc_material_ref(s, cname, cat, fc, &cmat);
+        }
+        if (!rc) rc = sc_vec(s, &m, "velocity", 0, NULL, v0);
+        if (rc) { floe_pd_body_destroy(b); return rc; }
+        int n = b->n, first;
+        rc = floe_world_add_pd_body(s->w, b, cmat, v0, &first); /* owns b */
+        if (rc) return sc_fail(s, rc, e, "%s: %s", what, floe_world_last_error(s->w));
+        sc_mat *mt = &s->mats[cmat];
+        if (!mt->body_user) { mt->body_user = cat; mt->body_entry = idx; }
+        mt->nbody += n;
+        mt->nfree = 1;
+        s->nparticles += n;
+        s->nspheres += n; /* its points touch as spheres of the contact radius */
+        idx++;
+    }
+    return FLOE_OK;
+}
+
 /* Every pair of materials that can meet needs a law: two particles of the material (a = b)
  * or one of each, at least one of them free. Walls count as non-free particles. */
 static int sc_check_pairs(sc *s)
@@ -1881,6 +2033,14 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
         sc_cat(&b, "  body %d: particles %d..%d\n", e, s->entry_first[e],
                s->entry_first[e] + s->entry_count[e] - 1);
     if (s->nbody_entries > 12) sc_cat(&b, "  ... %d more body entries\n", s->nbody_entries - 12);
+    for (int k = 0; k < floe_world_pd_body_count(w); k++) {
+        int f0;
+        const floe_pd_body *pb = floe_world_pd_body(w, k, &f0);
+        sc_cat(&b, "  peridynamics %d: particles %d..%d (body %d in outputs), %s, %lld bonds (%.1f per point), "
+               "horizon %g m, critical stretch %g, nodal dt %.3g s\n",
+               k, f0, f0 + pb->n - 1, -2 - k, pb->ops->name, (long long)pb->nbond, 2.0 * (double)pb->nbond / pb->n,
+               pb->delta, pb->s_c, floe_pd_dt_nodal(pb));
+    }
     sc_cat(&b, "materials:\n");
     for (int i = 0; i < s->nmats && i < 16; i++) {
         const floe_material *m = &s->mats[i].m;
@@ -1949,7 +2109,7 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
 
 static const char *const sc_root_keys[] = {"name", "description", "dimension", "time", "gravity",
                                            "neighbor", "contact_detection", "mass_2d", "materials", "laws",
-                                           "walls", "bodies", "outputs", NULL};
+                                           "walls", "bodies", "peridynamics", "outputs", NULL};
 
 static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_outputs,
                     floe_scene_info *info)
@@ -2068,8 +2228,12 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     /* bodies first: body particle i is world particle i (ids in outputs and trackers) */
     struct fy_node *bk;
     struct fy_node *bv = sc_get(&r, "bodies", &bk);
-    if (!bv) return sc_fail(s, FLOE_EPARSE, root, "bodies is required (a list of bodies or packings)");
-    FLOE_TRY(sc_parse_bodies(s, bv == bk ? NULL : bv, bk));
+    struct fy_node *pdk;
+    struct fy_node *pdv = sc_get(&r, "peridynamics", &pdk);
+    if (!bv && !pdv)
+        return sc_fail(s, FLOE_EPARSE, root, "bodies is required (a list of bodies or packings; or peridynamics)");
+    if (bv) FLOE_TRY(sc_parse_bodies(s, bv == bk ? NULL : bv, bk));
+    FLOE_TRY(sc_parse_pd(s, pdv == pdk ? NULL : pdv, pdk));
     struct fy_node *wk;
     struct fy_node *wv = sc_get(&r, "walls", &wk);
     FLOE_TRY(sc_parse_walls(s, wv == wk ? NULL : wv, wk));

@@ -519,6 +519,39 @@ static void test_shapes(void)
     }
 }
 
+/* peridynamic bodies in a scene */
+static void test_pd_scene(void)
+{
+    const char *base = BASE_MATS
+        "peridynamics:\n"
+        "  - region: {box: {min: [0, 0, 0], max: [0.01, 0.01, 0.004]}}\n"
+        "    spacing: 0.001\n"
+        "    material: {model: pmb, density: 2200, bulk_modulus: 14.9e9, critical_stretch: 0.001}\n"
+        "    contact_material: glass\n";
+    floe_world *w = NULL;
+    floe_scene_info info;
+    char err[1024];
+    int rc = load(base, &w, &info, err, sizeof err);
+    CHECK(rc == FLOE_OK, "a PD-only scene loads: %s", rc ? err : "");
+    if (rc == FLOE_OK) {
+        CHECK(w->npd == 1 && w->p.n == 10 * 10 * 4, "one PD body of 400 points (got %d bodies, %d particles)", w->npd,
+              w->p.n);
+        CHECK(w->p.group[0] == -2, "PD points are body -2 in outputs");
+        floe_world_destroy(w);
+    }
+    const char *t;
+    t = edit(base, "model: pmb", "model: pdm");
+    expect_error("PD model", t, loc_of(t, "pdm", 0), "did you mean 'pmb'?", NULL);
+    t = edit(base, "spacing: 0.001", "spacing: 0");
+    expect_error("PD spacing", t, loc_of(t, "0\n    material", 0), "peridynamics[0].spacing must be > 0", NULL);
+    t = edit(base, "model: pmb", "model: lps");
+    expect_error("LPS without G", t, NULL, "shear_modulus", NULL);
+    t = edit(base, "contact_material: glass", "contact_material: glas");
+    expect_error("PD contact material", t, loc_of(t, "glas\n", 0), "glas", NULL);
+    t = edit(base, "critical_stretch: 0.001}", "critical_stretch: 0.001, fracture_energy: 10}");
+    expect_error("stretch and energy", t, NULL, "not both", NULL);
+}
+
 int main(void)
 {
     test_malformed();
@@ -529,5 +562,6 @@ int main(void)
     test_packing_errors();
     test_valid();
     test_shapes();
+    test_pd_scene();
     return check_summary("test_scene_errors");
 }
