@@ -54,7 +54,7 @@ static const floe_observer_class vtk_writer_class;
 enum { T_INT32, T_FLOAT64, T_INT64, T_UINT8 };
 enum {
     A_ID, A_BODY, A_MATERIAL, A_MOTION, A_RADIUS, A_VELOCITY, A_ANGVEL, A_FORCE, A_TORQUE,
-    A_ORIENT, A_DAMAGE, A_NPOINTDATA,
+    A_ORIENT, A_DAMAGE, A_VONMISES, A_NPOINTDATA,
     A_POINTS = A_NPOINTDATA, A_CONN, A_OFFSETS, A_TYPES, A_COUNT
 };
 
@@ -66,7 +66,7 @@ static const array_desc arrays[A_COUNT] = {
     {"radius", T_FLOAT64, 1},    {"velocity", T_FLOAT64, 3},
     {"angular_velocity", T_FLOAT64, 3}, {"force", T_FLOAT64, 3},
     {"torque", T_FLOAT64, 3},    {"orientation", T_FLOAT64, 4},
-    {"damage", T_FLOAT64, 1},
+    {"damage", T_FLOAT64, 1},    {"von_mises", T_FLOAT64, 1},
     {"Points", T_FLOAT64, 3},    {"connectivity", T_INT64, 1},
     {"offsets", T_INT64, 1},     {"types", T_UINT8, 1},
 };
@@ -136,6 +136,28 @@ static void fill_array(const vtk_writer *v, const floe_world *w, int k, int m, v
                 if (i >= 0 && i < pb->n) f64[a] = phi[i];
             }
             free(phi);
+        }
+        return;
+    }
+    case A_VONMISES: { /* peridynamic points: correspondence von Mises stress (000 eqs 26-30)
+                        * with the body's G and lambda (PMB: nu = 1/4, G = lambda = 0.6 K) */
+        for (int a = 0; a < m; a++) f64[a] = 0.0;
+        for (int b = 0; b < w->npd; b++) {
+            const floe_pd_body *pb = w->pd[b];
+            double K = pb->mat.K, G = pb->mat.model == FLOE_PD_LPS ? pb->mat.G : 0.6 * K;
+            if (pb->mat.model != FLOE_PD_LPS && !(K > 0) && pb->mat.E > 0) G = 0.4 * pb->mat.E; /* 2D PMB */
+            double lam = pb->mat.model == FLOE_PD_LPS ? K - 2.0 * G / 3.0 : G;
+            int f0 = w->pd_first[b];
+            double *vm = malloc((size_t)pb->n * sizeof *vm);
+            if (!vm || floe_pd_correspondence(pb, p->x + 3 * (size_t)f0, G, lam, NULL, NULL, NULL, vm, NULL) != FLOE_OK) {
+                free(vm);
+                continue;
+            }
+            for (int a = 0; a < m; a++) {
+                int i = v->idx[a] - f0;
+                if (i >= 0 && i < pb->n) f64[a] = vm[i];
+            }
+            free(vm);
         }
         return;
     }
@@ -288,7 +310,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
         if (k == 0) fputs("      <PointData Scalars=\"radius\" Vectors=\"velocity\">\n", f);
         if (k == A_POINTS) fputs("      </PointData>\n      <CellData>\n      </CellData>\n      <Points>\n", f);
         if (k == A_CONN) fputs("      </Points>\n      <Cells>\n", f);
-        if (k == A_DAMAGE && !w->npd) continue; /* only scenes with peridynamic bodies */
+        if ((k == A_DAMAGE || k == A_VONMISES) && !w->npd) continue; /* only scenes with PD bodies */
         const array_desc *a = &arrays[k];
         fprintf(f, "        <DataArray type=\"%s\" Name=\"%s\"", type_name(a->type), a->name);
         if (a->ncomp > 1) fprintf(f, " NumberOfComponents=\"%d\"", a->ncomp);
@@ -306,7 +328,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
     if (!ascii) {
         fputs("  <AppendedData encoding=\"raw\">\n   _", f);
         for (int k = 0; k < A_COUNT; k++) {
-            if (k == A_DAMAGE && !w->npd) continue;
+            if ((k == A_DAMAGE || k == A_VONMISES) && !w->npd) continue;
             const array_desc *a = &arrays[k];
             uint64_t nbytes = (uint64_t)m * (uint64_t)a->ncomp * type_size(a->type);
             fill_array(v, w, k, m, v->buf);

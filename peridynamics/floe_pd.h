@@ -175,6 +175,15 @@ void floe_pd_family_sizes(const floe_pd_body *b, int *cnt);
 /* 1 when i and j are bonded in the reference configuration (broken or not), else 0. */
 int floe_pd_bonded(const floe_pd_body *b, int i, int j);
 
+/* Correspondence output (000 eqs 26-30, peridynamics/pd_correspondence.c) for current
+ * positions x (3n): per point the non-local deformation gradient F (9, row-major), the
+ * Green-Lagrange strain E (9), the Cauchy stress sigma (9) of the compressible Neo-Hookean
+ * material with shear modulus G and Lame lambda (eq 29), and the von Mises stress (1). Any
+ * output may be NULL. Points whose intact bonds do not span the space get F = 1 and zero
+ * stress; their number goes to *singular (may be NULL). */
+int floe_pd_correspondence(const floe_pd_body *b, const double *x, double G, double lambda, double *F, double *E,
+                           double *sigma, double *von_mises, int *singular);
+
 /* Stable time step estimates:
  *   nodal (Silling & Askari 2005): min_i sqrt(2 rho / sum_j beta V_j c/|xi|);
  *   CFL (000 eqs 41-42): dx / sqrt(K/rho) (LPS: sqrt((K + 4G/3)/rho), the P-wave speed). */

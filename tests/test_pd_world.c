@@ -155,9 +155,68 @@ static void test_fracture(void) {
     floe_world_destroy(w);
 }
 
+/* 4. correspondence output (000 eqs 26-30): for an affine motion x = F0 X the non-local
+ * deformation gradient is F0 at every point (surface points too), E = (F0^T F0 - 1)/2, a
+ * rigid rotation has no stress, and a uniaxial stretch gives the Neo-Hookean stress */
+static void test_correspondence(void) {
+    floe_pd_body *b = bar(6, 5, 4, 1e-3, 0);
+    CHECK(b != NULL, "body");
+    if (!b) return;
+    int n = b->n;
+    double *x = malloc(sizeof(double) * 3 * n), *F = malloc(sizeof(double) * 9 * n), *E = malloc(sizeof(double) * 9 * n);
+    double *sg = malloc(sizeof(double) * 9 * n), *vm = malloc(sizeof(double) * n);
+    const double F0[9] = {1.01, 0.02, -0.005, 0.003, 0.995, 0.01, -0.004, 0.006, 1.002};
+    for (int i = 0; i < n; i++)
+        for (int r = 0; r < 3; r++)
+            x[3 * i + r] = 0.1 + F0[3 * r] * b->X[3 * i] + F0[3 * r + 1] * b->X[3 * i + 1] + F0[3 * r + 2] * b->X[3 * i + 2];
+    int sing = -1;
+    double G = 8e9, lam = 12e9;
+    CHECK(floe_pd_correspondence(b, x, G, lam, F, E, sg, vm, &sing) == FLOE_OK, "correspondence");
+    double eF = 0, eE = 0;
+    for (int i = 0; i < n; i++)
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < 3; c++) {
+                eF = fmax(eF, fabs(F[9 * i + 3 * r + c] - F0[3 * r + c]));
+                double C = F0[r] * F0[c] + F0[3 + r] * F0[3 + c] + F0[6 + r] * F0[6 + c];
+                eE = fmax(eE, fabs(E[9 * i + 3 * r + c] - 0.5 * (C - (r == c))));
+            }
+    printf("  correspondence, affine F0 on %d points (%d singular): max |F - F0| %.2e, max |E - E0| %.2e\n", n, sing, eF, eE);
+    CHECK(sing == 0 && eF < 1e-12 && eE < 1e-12, "F and E exact for an affine motion");
+    /* rigid rotation: no stress */
+    double th = 0.3, cs = cos(th), sn = sin(th);
+    for (int i = 0; i < n; i++) {
+        const double *X = b->X + 3 * i;
+        x[3 * i] = cs * X[0] - sn * X[1];
+        x[3 * i + 1] = sn * X[0] + cs * X[1];
+        x[3 * i + 2] = X[2];
+    }
+    floe_pd_correspondence(b, x, G, lam, NULL, NULL, NULL, vm, NULL);
+    double vmax = 0;
+    for (int i = 0; i < n; i++) vmax = fmax(vmax, vm[i]);
+    CHECK(vmax < 1e-6 * G, "a rigid rotation has no von Mises stress (%.2e Pa)", vmax);
+    /* uniaxial stretch l along x: C = diag(l^2, 1, 1), J = l, S_xx = G (1 - 1/l^2) + lam/2 (l^2 - 1)/l^2,
+     * sigma_xx = l S_xx, sigma_yy = S_yy / l = (lam/2 (l^2 - 1)) / l */
+    double l = 1.002;
+    for (int i = 0; i < n; i++) {
+        x[3 * i] = l * b->X[3 * i];
+        x[3 * i + 1] = b->X[3 * i + 1];
+        x[3 * i + 2] = b->X[3 * i + 2];
+    }
+    floe_pd_correspondence(b, x, G, lam, NULL, NULL, sg, vm, NULL);
+    double sxx = l * (G * (1 - 1 / (l * l)) + 0.5 * lam * (l * l - 1) / (l * l)), syy = 0.5 * lam * (l * l - 1) / l;
+    double es = 0;
+    for (int i = 0; i < n; i++) es = fmax(es, fmax(fabs(sg[9 * i] - sxx), fabs(sg[9 * i + 4] - syy)) / sxx);
+    printf("  uniaxial stretch 0.2 %%: sigma_xx %.6e Pa (Neo-Hookean %.6e), sigma_yy %.6e (%.6e), max rel error %.1e\n",
+           sg[0], sxx, sg[4], syy, es);
+    CHECK(es < 1e-10, "Neo-Hookean Cauchy stress of a uniaxial stretch (rel %.1e)", es);
+    free(x); free(F); free(E); free(sg); free(vm);
+    floe_pd_body_destroy(b);
+}
+
 int main(void) {
     test_pulse();
     test_impact();
     test_fracture();
+    test_correspondence();
     return check_summary("test_pd_world");
 }
