@@ -192,7 +192,9 @@ static int convex_plane(floe_world *w, const shape_ref *a, const shape_ref *b, d
 /* ---- polytope-polytope: exact LP ---- */
 
 /* body-frame face planes of a box or polytope (NULL otherwise) */
-static const double *body_planes(const floe_geometry *g, int *np, double buf[24]) {
+/* dim 2: a box's z faces are left out (its motion is in the xy plane; as LP rows they
+ * would cap the depth at the half thickness with a zero in-plane normal) */
+static const double *body_planes(const floe_geometry *g, int dim, int *np, double buf[24]) {
     if (g->klass == &floe_box_class) {
         const double *h = ((const floe_box *)g)->half;
         for (int a = 0; a < 3; a++)
@@ -202,7 +204,7 @@ static const double *body_planes(const floe_geometry *g, int *np, double buf[24]
                 P[a] = s ? 1.0 : -1.0;
                 P[3] = h[a];
             }
-        *np = 6;
+        *np = dim == 2 ? 4 : 6;
         return buf;
     }
     if (g->klass == &floe_polytope_class) {
@@ -241,7 +243,7 @@ static int lp_half(floe_world *w, const shape_ref *a, const shape_ref *b, double
                    double n[3], int *pivots) {
     double ba[24], bb[24];
     int na = 0, nb = 0, nva = 0;
-    const double *pa = body_planes(a->g, &na, ba), *pb = body_planes(b->g, &nb, bb);
+    const double *pa = body_planes(a->g, w->def.dim, &na, ba), *pb = body_planes(b->g, w->def.dim, &nb, bb);
     const double *va = a->g->klass->vertices(a->g, &nva);
     if (lp_scratch(w, 4 * nb)) return FLOE_ENOMEM;
     double *tb = w->det.scratch;
@@ -301,7 +303,7 @@ static void band_centroid(const shape_ref *s, const double n[3], double level, d
     floe_q_rotate(out, s->q, acc);
     floe_v3_add(out, out, s->x);
 }
-static void face_contact(const shape_ref *a, const shape_ref *b, const double *warm, floe_contact *c) {
+static void face_contact(const shape_ref *a, const shape_ref *b, int dim, const double *warm, floe_contact *c) {
     if (!warm) return;
     double cand[8][3];
     int nc = 0;
@@ -309,9 +311,9 @@ static void face_contact(const shape_ref *a, const shape_ref *b, const double *w
         const shape_ref *own = h ? a : b, *oth = h ? b : a;
         double buf[24];
         int np = 0, nrow_other = 0;
-        const double *pl = body_planes(own->g, &np, buf);
+        const double *pl = body_planes(own->g, dim, &np, buf);
         double tmp[24];
-        body_planes(oth->g, &nrow_other, tmp);
+        body_planes(oth->g, dim, &nrow_other, tmp);
         for (int k = 0; k < 4; k++) {
             double r = warm[4 * h + k];
             if (!isfinite(r)) continue;
@@ -379,7 +381,7 @@ static int polytope_pair(floe_world *w, const shape_ref *a, const shape_ref *b, 
     else { c->depth = -s2; floe_v3_copy(c->n, n2); }
     c->r_eff = a->r * b->r / (a->r + b->r);
     finish(c);
-    face_contact(a, b, warm, c);
+    face_contact(a, b, w->def.dim, warm, c);
     return 1;
 }
 

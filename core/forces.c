@@ -106,6 +106,10 @@ int floe_compute_forces(floe_world *w) {
         } else if (warm) {
             warm[0] = NAN; /* apart: the next approach starts cold */
         }
+        if (r < 0 && r != -FLOE_ENOTSUP)
+            return floe_world_error(w, -r, "contact detection failed for particles %d and %d (%s-%s): %s", i, j,
+                                    w->geoms[p->geom[i]]->klass->name, w->geoms[p->geom[j]]->klass->name,
+                                    r == -FLOE_ENOMEM ? "out of memory" : "degenerate polytope LP");
         if (r < 0)
             return floe_world_error(w, -r, "no contact detector for particles %d and %d (%s-%s)", i, j,
                                     w->geoms[p->geom[i]]->klass->name, w->geoms[p->geom[j]]->klass->name);

@@ -317,7 +317,7 @@ int floe_world_add_pd_body(floe_world *w, struct floe_pd_body *body, int materia
     floe_geometry *g = floe_sphere_create(R);
     if (!g) { floe_pd_body_destroy(body); return floe_world_error(w, FLOE_ENOMEM, "out of memory"); }
     int gi = floe_world_add_geometry(w, g);
-    if (gi < 0) { floe_pd_body_destroy(body); return -gi; }
+    if (gi < 0) { floe_geometry_destroy(g); floe_pd_body_destroy(body); return -gi; }
     int f0 = w->p.n;
     for (int i = 0; i < body->n; i++) {
         floe_particle_def d = floe_default_particle_def();
@@ -325,6 +325,7 @@ int floe_world_add_pd_body(floe_world *w, struct floe_pd_body *body, int materia
             double Ri = body->dim == 3 ? cbrt(3.0 * body->V[i] / (4.0 * M_PI)) : sqrt(body->V[i] / (M_PI * body->thickness));
             floe_geometry *gx = floe_sphere_create(Ri);
             int gx_i = gx ? floe_world_add_geometry(w, gx) : -FLOE_ENOMEM;
+            if (gx_i < 0 && gx) floe_geometry_destroy(gx);
             if (gx_i < 0) { floe_pd_body_destroy(body); return floe_world_error(w, FLOE_ENOMEM, "out of memory"); }
             d.geometry = gx_i;
         } else d.geometry = gi;
@@ -585,6 +586,9 @@ int floe_world_prepare(floe_world *w) {
             return floe_world_error(w, FLOE_EINVAL,
                                     "particle %d: a polygon is a 2D shape (dim: 2); in 3D use a prism or polyhedron", i);
         if (polygon) mdim = 2; /* a polygon has no 3D body: mass per metre of thickness */
+        if (w->def.dim == 2 && g->klass == &floe_polytope_class && !polygon)
+            return floe_world_error(w, FLOE_EINVAL,
+                                    "particle %d: a polyhedron (or prism, mesh) is a 3D shape; in 2D use a polygon", i);
         int rc = floe_geometry_mass_properties(g, mdim, w->mats[p->material[i]].density, &mp);
         if (rc) return floe_world_error(w, rc, "particle %d: mass properties of its %s failed", i, g->klass->name);
         /* the body frame must be the principal frame at the centre of mass: the integrator

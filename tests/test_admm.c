@@ -661,6 +661,32 @@ static void test_degenerate(void) {
     }
 }
 
+/* 2D: thin boxes (z half-size 0.05) overlapping by 0.2 in x: the depth is 0.2 along x (the
+ * z faces must not enter the LP and cap the depth with a zero normal) */
+static void test_2d_thin_boxes(void) {
+    floe_world_def d = floe_default_world_def();
+    d.dim = 2;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material m = {"m", 1000, 1e7, 0.3};
+    int mat = floe_world_add_material(w, &m);
+    floe_world_set_law(w, mat, mat, floe_linear_law_create(1e4, 0, 0, 0, 0));
+    int g = floe_world_add_geometry(w, floe_box_create(1.0, 1.0, 0.1));
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = g;
+    p.material = mat;
+    floe_world_add_particle(w, &p);
+    floe_v3_set(p.x, 0.8, 0.1, 0);
+    floe_world_add_particle(w, &p);
+    CHECK(floe_world_prepare(w) == FLOE_OK, "2D boxes prepare: %s", floe_world_last_error(w));
+    floe_contact c;
+    double warm[FLOE_DETECT_WARM];
+    for (int k = 0; k < FLOE_DETECT_WARM; k++) warm[k] = NAN;
+    int r = floe_detect(w, 0, 1, 0, warm, &c);
+    printf("  2D thin boxes overlapping by 0.2: r %d depth %.6g n (%.3f %.3f %.3f)\n", r, c.depth, c.n[0], c.n[1], c.n[2]);
+    CHECK(r == 1 && fabs(c.depth - 0.2) < 1e-12 && fabs(c.n[0] - 1) < 1e-12, "2D box contact: depth 0.2 along +x");
+    floe_world_destroy(w);
+}
+
 int main(void) {
     setvbuf(stdout, NULL, _IOLBF, 0);
     if (getenv("ADMM_ONLY_WARM")) { int a, b; for (double st = 1e-3; st > 1e-10; st /= 10) test_admm_warm_direct(st, &a, &b); return 0; }
@@ -668,6 +694,7 @@ int main(void) {
     test_lp_vs_glpk();
     test_degenerate();
     test_lshape();
+    test_2d_thin_boxes();
     int wm, w99;
     test_admm_warm_direct(1e-6, &wm, &w99);
     CHECK(wm <= 3, "warm ADMM on ellipsoid pairs after small motions: median iterations %d (bound 3)", wm);
