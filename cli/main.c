@@ -4,6 +4,7 @@
 #include "world_internal.h"
 #include "floe_mesh.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -121,7 +122,17 @@ static int cmd_run(const char *scene, const char *outdir, int quiet)
         int n = info.nparticles;
         double ps = wall > 0 ? (double)n * (double)steps / wall : 0;
         printf("\nrun finished\n");
-        printf("  steps:              %ld (dt %.4g s)\n", steps, floe_world_dt(w));
+        floe_step_stats st;
+        floe_world_step_stats(w, &st);
+        if (w->def.adaptive)
+            printf("  steps:              %ld accepted, %ld rejected (dt %.4g ... %.4g s)\n", st.accepted,
+                   st.rejected, st.dt_min_used, st.dt_max_used);
+        else printf("  steps:              %ld (dt %.4g s, %s)\n", steps, floe_world_dt(w),
+                    floe_integrator_name(w->def.integrator));
+        if (w->def.pd_dem == FLOE_PD_DEM_STAGGERED && floe_world_pd_body_count(w) > 0)
+            printf("  staggered PD-DEM:   %ld contact and %ld PD force evaluations (PD %s %d)\n",
+                   st.force_evaluations, st.pd_evaluations, st.pd_every > 1 ? "every" : "substeps",
+                   st.pd_every > 1 ? st.pd_every : st.pd_substeps);
         printf("  simulated time:     %.6g s\n", floe_world_time(w));
         printf("  wall time:          %.3f s\n", wall);
         printf("  particle-steps/s:   %.3g (%d particles)\n", ps, n);
@@ -141,6 +152,25 @@ static int cmd_run(const char *scene, const char *outdir, int quiet)
     return 0;
 }
 
+/* every critical time-step estimate, and which one limits (docs/models.md) */
+static void print_dt_estimates(floe_world *w)
+{
+    static const char *const what[FLOE_DT_NKINDS] = {
+        "caged particle, spring-dashpot limit (Gershgorin)", "one contact, impact at the expected speed",
+        "no move over half a radius per step", "PD nodal sqrt(2 rho / sum V c/|xi|)", "PD CFL dx / c (000 eqs 41-42)",
+        "sqrt(m/k) (000 eq 43; 004 eq 28 is 2x)", "Rayleigh wave (Hertz materials)",
+        "Hertz contact duration at the expected speed"};
+    floe_dt_estimates e;
+    if (floe_world_dt_estimates(w, &e) != FLOE_OK) return;
+    printf("time-step estimates (expected relative speed %.3g m/s):\n", e.v_expected);
+    for (int k = 0; k < FLOE_DT_NKINDS; k++) {
+        if (!isfinite(e.dt[k])) continue;
+        printf("  %-16s %10.4g s  particle %-7d %-9s %s%s\n", floe_dt_kind_name(k), e.dt[k], e.particle[k],
+               e.limits[k] ? "limit" : "reference", what[k], k == e.limiting ? "  <- limits" : "");
+    }
+    if (e.limiting < 0) printf("  (none applies: no contact law or PD body limits the step)\n");
+}
+
 static int cmd_check(const char *scene)
 {
     char err[1024];
@@ -152,6 +182,7 @@ static int cmd_check(const char *scene)
         return 1;
     }
     printf("%s", info.summary);
+    print_dt_estimates(w);
     printf("ok: %s\n", scene);
     floe_world_destroy(w);
     return 0;

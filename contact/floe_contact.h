@@ -130,4 +130,32 @@ double floe_hertz_damping_for_restitution(double e);
  * (force allowed to become attractive: e = exp(-pi zeta / sqrt(1 - zeta^2))). */
 double floe_linear_restitution(double k, double c, double m);
 
+/* ---- short-range PD contact force and the "none" law (contact/short_range.c) ---- */
+
+/* Silling's short-range repulsive force between PD nodes (Silling & Askari 2005 eq 20,
+ * c_s = factor c with factor 15 as in EMU and LAMMPS pair peri/pmb), with the short-range
+ * distance d_s = R_i + R_j (the contact radii): F_n = k d, k = c_s V_a V_b / delta, d the
+ * contact depth; no damping, friction or tension. See docs/models.md. */
+typedef struct floe_short_range_law {
+    floe_contact_law base;
+    double k;                /* N/m */
+    double c_s, delta;       /* c_s = factor c (N/m^6) and the horizon (m), 0 when k was given */
+    double v_a, v_b;         /* node volumes (m^3), 0 when k was given */
+} floe_short_range_law;
+
+extern const floe_contact_law_class floe_short_range_law_class;
+extern const floe_contact_law_class floe_no_contact_law_class;
+
+/* Short-range law with the spring constant k (N/m, > 0); NULL on bad input. */
+floe_contact_law *floe_short_range_law_create(double k);
+/* The same from the PD parameters: k = factor c v_a v_b / delta (factor <= 0: 15). */
+floe_contact_law *floe_short_range_law_create_pd(double c, double delta, double v_a, double v_b, double factor);
+/* "none": the pair of materials never interacts by contact: the world skips its pairs before
+ * detection (no force, no history, no interpenetration guard). */
+floe_contact_law *floe_no_contact_law_create(void);
+/* 1 when the world must keep the pair out of contact (the "none" law), else 0 (NULL: 0). */
+static inline int floe_contact_law_no_contact(const floe_contact_law *law) {
+    return law && law->klass == &floe_no_contact_law_class;
+}
+
 #endif

@@ -33,7 +33,39 @@ typedef struct floe_world_def {
     int leaf_size;            /* k-d tree bucket size (16) */
     int mass_2d_area;         /* 2D only: 1 = masses from area x density (per metre
                                  thickness); 0 (default) = 3D shapes moving in the plane */
+    /* time integration (docs/integrators.md) */
+    int integrator;           /* floe_integrator (FLOE_VELOCITY_VERLET) */
+    int adaptive;             /* 1: adaptive step between dt_min and dt_max (003 §4.3), driven
+                                 by the two tolerances below (velocity Verlet or RK2) */
+    double dt_min, dt_max;    /* s; 0 = automatic: dt_max = the critical estimate, dt_min =
+                                 1e-3 dt_max; dt (or safety x critical) is the first step */
+    double adapt_velocity_tol; /* a step is accepted when max_i |v_i' - v_i| dt / R_i <= this
+                                  (the velocity change over the step relative to the size, 1e-3) */
+    double adapt_depth_tol;   /* ... and the overlap of every contact changed by at most this
+                                 fraction of the smaller radius (0.02) */
+    int pd_dem;               /* floe_pd_dem_scheme (FLOE_PD_DEM_MONOLITHIC) */
+    int pd_substeps;          /* staggered: PD sub-steps per step (dt_PD = dt / m), >= 1;
+                                 0 = automatic (the integer ratio of the critical steps) */
+    int pd_every;             /* staggered: PD updated every k-th step (dt_PD = k dt), >= 1 */
 } floe_world_def;
+
+/* Time integrators for the particles (docs/integrators.md). All are explicit and second
+ * order; state objects always use RK2. */
+typedef enum floe_integrator {
+    FLOE_VELOCITY_VERLET = 0, /* kick-drift-kick, ParticLS eq 22 (symplectic) */
+    FLOE_LEAPFROG = 1,        /* 000 eq 44: velocities live at half steps t - dt/2 */
+    FLOE_RK2 = 2              /* explicit midpoint, ParticLS eq 21 applied to the particles:
+                                 two force evaluations per step, not symplectic */
+} floe_integrator;
+/* "velocity_verlet", "leapfrog", "rk2" (NULL out of range) */
+const char *floe_integrator_name(int integrator);
+
+/* Coupling of PD bond forces with the contact and body forces (000 §3.2-3.3). */
+typedef enum floe_pd_dem_scheme {
+    FLOE_PD_DEM_MONOLITHIC = 0, /* all forces every step */
+    FLOE_PD_DEM_STAGGERED = 1   /* the two force groups integrated with their own steps (multiple
+                                   time stepping, r-RESPA form): pd_substeps / pd_every */
+} floe_pd_dem_scheme;
 
 floe_world_def floe_default_world_def(void);
 
@@ -79,12 +111,65 @@ int floe_world_add_observer(floe_world *w, floe_observer *o);
  * geometry pair in the scene, or dt above critical unless allowed. */
 int floe_world_prepare(floe_world *w);
 double floe_world_critical_dt(floe_world *w);   /* estimate, s (after prepare) */
+
+/* Critical time-step estimates (docs/models.md, "Critical time step"). Each kind is the
+ * smallest over the particles it applies to, with the particle that attains it; the kinds
+ * marked `limits` are stability limits of the explicit integrators and `critical` is their
+ * minimum (the step refused above, and scaled by dt_safety for the automatic step); the
+ * others are reported for comparison with the literature. INFINITY: not applicable. */
+typedef enum floe_dt_kind {
+    FLOE_DT_CONTACT_PACKING = 0, /* limits: a particle caged by a close packing of contacts
+                                    (2 % overlap): (2/w)(sqrt(1+z^2)-z), w^2 = C k/m */
+    FLOE_DT_CONTACT_IMPACT,      /* limits: one contact at the overlap of an impact at the
+                                    expected relative speed */
+    FLOE_DT_MOTION,              /* limits: R / (2 v_expected), no move over half a radius */
+    FLOE_DT_PD_NODAL,            /* limits: sqrt(2 rho / sum_j V_j c/|xi|) per PD point */
+    FLOE_DT_PD_CFL,              /* 000 eqs 41-42: dx / sqrt(K/rho) (LPS: P-wave speed) */
+    FLOE_DT_DEM_SQRT_MK,         /* 000 eq 43: sqrt(m_i / k_i), k_i the sum of the particle's
+                                    contact stiffnesses (004 eq 28 is twice this) */
+    FLOE_DT_RAYLEIGH,            /* Hertz-Mindlin materials: pi R sqrt(rho/G)/(0.1631 nu + 0.8766) */
+    FLOE_DT_HERTZ,               /* Hertz contact duration 2.87 (m*^2/(R* E*^2 v))^(1/5) at the
+                                    expected speed */
+    FLOE_DT_NKINDS
+} floe_dt_kind;
+typedef struct floe_dt_estimates {
+    double critical;              /* min over the kinds that limit, s */
+    int limiting;                 /* the floe_dt_kind that gives it (-1: none) */
+    int limiting_particle;        /* the particle (-1: none) */
+    double dt[FLOE_DT_NKINDS];    /* each estimate, s */
+    int particle[FLOE_DT_NKINDS]; /* the particle that attains it (-1: none) */
+    int limits[FLOE_DT_NKINDS];   /* 1: a stability limit (enters critical) */
+    double critical_contact;      /* contact + motion kinds: the DEM step of a staggered scheme */
+    double critical_pd;           /* PD nodal: the PD step of a staggered scheme */
+    double v_expected;            /* relative speed used by the impact, motion and Hertz kinds, m/s */
+} floe_dt_estimates;
+/* Fill *out (prepares the world if needed). */
+int floe_world_dt_estimates(floe_world *w, floe_dt_estimates *out);
+/* "contact_packing", "contact_impact", "motion", "pd_nodal", "pd_cfl", "dem_sqrt_m_k",
+ * "rayleigh", "hertz" (NULL out of range) */
+const char *floe_dt_kind_name(int kind);
+/* Critical estimate of particle i (the smallest of its limiting kinds; INFINITY for fixed,
+ * kinematic and unconstrained particles), after prepare; -1 when i is out of range. */
+double floe_world_particle_critical_dt(const floe_world *w, int i);
+
+/* Step statistics since prepare: accepted and rejected (redone with a smaller step)
+ * steps of the adaptive scheme, the smallest and largest step taken, the PD force
+ * evaluations and the PD sub-steps of a staggered scheme. */
+typedef struct floe_step_stats {
+    long accepted, rejected;
+    double dt_min_used, dt_max_used;   /* s (0 before the first step) */
+    long force_evaluations;            /* contact + body force evaluations */
+    long pd_evaluations;               /* PD bond force evaluations */
+    int pd_substeps, pd_every;         /* of the staggered scheme (1, 1 otherwise) */
+} floe_step_stats;
+int floe_world_step_stats(const floe_world *w, floe_step_stats *out);
 double floe_world_dt(const floe_world *w);
 double floe_world_time(const floe_world *w);
 long floe_world_step_count(const floe_world *w);
 int floe_world_particle_count(const floe_world *w);
 
-/* Advance one step (velocity Verlet + RK2 states + observers). */
+/* Advance one step (the integrator of the definition, RK2 for state objects, observers).
+ * With adaptive stepping, one accepted step (rejected trials are redone inside). */
 int floe_world_step(floe_world *w);
 /* Progress callback: return non-zero to stop. */
 typedef int (*floe_progress_fn)(const floe_world *w, long step, long nsteps, void *user);
@@ -120,6 +205,44 @@ int floe_world_add_pd_body(floe_world *w, struct floe_pd_body *body, int materia
 /* Number of PD bodies and body k (NULL if out of range). */
 int floe_world_pd_body_count(const floe_world *w);
 struct floe_pd_body *floe_world_pd_body(const floe_world *w, int k, int *first);
+
+/* Boundary regions of a PD body (issue #4; ParticLS §5.4 eq 37). The points of PD body
+ * `body` whose REFERENCE position X lies in the region (sdf(X, sdf_user) <= 0, or, when sdf
+ * is NULL, lo <= X <= hi componentwise) become:
+ *   FLOE_PD_BC_FIXED         fixed particles of the world (never move);
+ *   FLOE_PD_BC_VELOCITY      kinematic particles moving at value * ramp(t) (m/s);
+ *   FLOE_PD_BC_DISPLACEMENT  kinematic particles displaced by value * ramp(t) (m) from where
+ *                            they are at t = 0 (velocity value * ramp'(t); needs a ramp);
+ *   FLOE_PD_BC_BODY_FORCE    free particles that get the external force b V every step, with
+ *                            the force density b = value * ramp(t) (N/m^3), or b = fn(t, X)
+ *                            when force_fn is set; its work goes to energy.work_body (the
+ *                            trapezoid rule, as for the body-force callback). Fixed or
+ *                            kinematic points of the region get none (as for gravity).
+ * ramp(t) = 1 (FLOE_PD_RAMP_NONE), min(t/T, 1) (LINEAR), 1 - exp(-t/T) (EXP; ParticLS eq 37
+ * is value = (+-3, 0, 0) with EXP, T = 0.1 s), with T = ramp_time and t the world time.
+ * A point may belong to one fixed/velocity/displacement region only; body-force regions
+ * add up. Returns the number of points selected (> 0), or -error: FLOE_EINVAL (message in
+ * last_error) for bad fields, a body index out of range, a region that selects no point or
+ * a point already held by another fixed/velocity/displacement region. */
+enum { FLOE_PD_BC_FIXED = 1, FLOE_PD_BC_VELOCITY = 2, FLOE_PD_BC_DISPLACEMENT = 3, FLOE_PD_BC_BODY_FORCE = 4 };
+enum { FLOE_PD_RAMP_NONE = 0, FLOE_PD_RAMP_LINEAR = 1, FLOE_PD_RAMP_EXP = 2 };
+typedef void (*floe_pd_force_fn)(double t, const double X[3], double b[3], void *user);
+typedef struct floe_pd_bc {
+    int kind;                 /* FLOE_PD_BC_* */
+    double lo[3], hi[3];      /* box in reference coordinates (used when sdf is NULL), m */
+    double (*sdf)(const double X[3], void *user); /* region: sdf <= 0 inside (read once) */
+    void *sdf_user;
+    double value[3];          /* velocity (m/s), displacement (m) or force density (N/m^3) */
+    int ramp;                 /* FLOE_PD_RAMP_* */
+    double ramp_time;         /* T > 0 for LINEAR and EXP, s */
+    floe_pd_force_fn force_fn; /* BODY_FORCE: b = force_fn(t, X, b, user) instead of value */
+    void *force_user;
+} floe_pd_bc;
+floe_pd_bc floe_default_pd_bc(void);   /* kind 0 (set it), everything else 0 / NULL */
+int floe_world_pd_region(floe_world *w, int body, const floe_pd_bc *bc);
+/* Number of PD boundary regions, and the number of points of region r (-1 out of range). */
+int floe_world_pd_region_count(const floe_world *w);
+int floe_world_pd_region_points(const floe_world *w, int r);
 
 /* Contact detection statistics since prepare (pairs of convex shapes that go through the
  * polytope LP or ADMM; spheres and walls are analytic and not counted). */

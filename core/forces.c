@@ -4,6 +4,7 @@
  * energy, dissipation). In 2D the out-of-plane components are removed. */
 #include "world_internal.h"
 #include "floe_pd.h"
+#include "floe_beam.h"
 #include <stdlib.h>
 #include <string.h>
 
@@ -26,10 +27,15 @@ static int push_contact(floe_world *w, const floe_contact *c, const floe_contact
     return FLOE_OK;
 }
 
-int floe_compute_forces(floe_world *w) {
+/* Contact and body forces (the DEM and coupling forces of 000 eq 40 with the body forces
+ * m b): gravity, external forces, the body-force callback, every contact of the list.
+ * Zeroes p->f and p->t first. */
+static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, double *wgrow_out) {
     floe_particles *p = &w->p;
-    const int n = p->n, dim = w->def.dim;
+    const int n = p->n;
     const int stepping = w->advancing; /* 0 at prepare: no history advance, no work booked */
+    const int track = w->track_depth;
+    double eta_d = 0;
     if (n > 0) {
         memset(p->f, 0, (size_t)n * 3 * sizeof(double));
         memset(p->t, 0, (size_t)n * 3 * sizeof(double));
@@ -37,6 +43,12 @@ int floe_compute_forces(floe_world *w) {
     for (int i = 0; i < n; i++) {
         if (p->motion[i] != FLOE_FREE) continue;
         for (int k = 0; k < 3; k++) p->f[3 * i + k] = p->mass[i] * w->def.gravity[k];
+    }
+    /* PD boundary regions: the external force b V of body-force regions (ParticLS eq 37),
+     * its work booked like the body-force callback's (core/world.c floe_pd_bc_forces) */
+    if (w->npd_bc) {
+        double wbc = floe_pd_bc_forces(w);
+        if (stepping) w->energy.work_body += wbc;
     }
     if (w->body_force) {
         if (w->fb_n < n) { /* previous callback force and torque, for the trapezoid rule */
@@ -66,8 +78,12 @@ int floe_compute_forces(floe_world *w) {
     const int any_growth = w->nstates > 0; /* only state objects set rdot */
     floe_neighbor_list *nl = &w->nl;
     const int nm = w->nmats;
+    /* beam bonds (contact/beam_bond.c): force, torque, energy and breakage; a pair whose
+     * bond broke enters the contact list before the loop below */
+    if (w->beams) FLOE_TRY(floe_beam_forces(w, &elastic, &diss));
     for (int k = 0; k < nl->npairs; k++) {
         int i = nl->pi[k], j = nl->pj[k], sub = nl->sub[k];
+        if (floe_contact_law_no_contact(w->laws[p->material[i] * nm + p->material[j]])) continue; /* law "none" */
         double *warm = nl->use_warm ? nl->warm + (size_t)k * FLOE_DETECT_WARM : NULL;
         floe_contact c;
         int r = 0;
@@ -146,10 +162,16 @@ int floe_compute_forces(floe_world *w) {
         floe_v3_cross(uj, p->w + 3 * j, rj);
         for (int a = 0; a < 3; a++) c.vr[a] = (p->v[3 * i + a] + ui[a]) - (p->v[3 * j + a] + uj[a]);
         c.vn = floe_v3_dot(c.vr, c.n);
+        if (track) { /* adaptive steps: overlap change over the step relative to the size */
+            double e = fabs(c.vn) * w->dt / fmin(rad_i, rad_j);
+            if (e > eta_d) eta_d = e;
+        }
         for (int a = 0; a < 3; a++) c.vt[a] = c.vr[a] - c.vn * c.n[a];
         /* inverse masses are 0 for fixed and kinematic particles: m* = the free one's mass */
         c.m_eff = 1.0 / (p->inv_mass[i] + p->inv_mass[j]);
-        c.dt = stepping ? w->dt : 0.0; /* prepare evaluates forces without advancing history */
+        /* prepare evaluates forces without advancing history; the RK2 midpoint advances it
+         * by peek_dt and the caller restores it */
+        c.dt = stepping ? w->dt : w->peek_dt;
         const floe_contact_law *law = w->laws[p->material[i] * nm + p->material[j]];
         floe_contact_result res;
         memset(&res, 0, sizeof res);
@@ -187,6 +209,18 @@ int floe_compute_forces(floe_world *w) {
         if (!w->record_now) w->ncontacts++;
         else if (push_contact(w, &c, &res)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
+    w->eta_depth = eta_d;
+    *elastic_out = elastic;
+    *diss_out = diss;
+    *wgrow_out = wgrow;
+    return FLOE_OK;
+}
+
+/* PD bond forces added to p->f, with their ledger (energy and dissipation out). */
+static int pd_bond_forces(floe_world *w, double *elastic_out, double *diss_out) {
+    floe_particles *p = &w->p;
+    const int stepping = w->advancing;
+    double elastic = 0, diss = 0;
     /* peridynamic bond forces. Ledger: the work of the bond forces over the step
      * (trapezoid, as for contacts) minus the change of the stored energy is dissipated;
      * for intact bonds it is the integration error only, a breaking bond releases its
@@ -213,13 +247,41 @@ int floe_compute_forces(floe_world *w) {
         double *t = w->pd_fold;
         w->pd_fold = w->pd_fnew;
         w->pd_fnew = t;
+        /* bonds that broke may let their pairs meet by contact: into the list now */
+        FLOE_TRY(floe_pd_after_forces(w));
     }
-    if (dim == 2)
+    *elastic_out = elastic;
+    *diss_out = diss;
+    return FLOE_OK;
+}
+
+int floe_compute_forces(floe_world *w) { return floe_compute_forces_part(w, FLOE_FORCES_ALL); }
+
+/* One or both force groups. The contact group zeroes p->f and p->t and writes its forces;
+ * the PD group adds the bond forces to p->f (the staggered scheme zeroes the PD points'
+ * forces before a PD-only evaluation). The energy ledger keeps each group's stored energy
+ * from its last evaluation. */
+int floe_compute_forces_part(floe_world *w, int part) {
+    floe_particles *p = &w->p;
+    const int n = p->n;
+    const int stepping = w->advancing;
+    double ec = 0, dc = 0, wgrow = 0, ep = 0, dp = 0;
+    if (part & FLOE_FORCES_CONTACT) {
+        FLOE_TRY(contact_forces(w, &ec, &dc, &wgrow));
+        w->elastic_contact = ec;
+        w->contacts_valid = w->record_now;
+        w->st.force_evaluations += stepping;
+    }
+    if ((part & FLOE_FORCES_PD) && w->npd) {
+        FLOE_TRY(pd_bond_forces(w, &ep, &dp));
+        w->elastic_pd = ep;
+        w->st.pd_evaluations += stepping;
+    }
+    if (w->def.dim == 2)
         for (int i = 0; i < n; i++) { p->f[3 * i + 2] = 0; p->t[3 * i] = p->t[3 * i + 1] = 0; }
-    w->energy.elastic = elastic;
-    w->contacts_valid = w->record_now;
+    w->energy.elastic = w->elastic_contact + w->elastic_pd;
     if (stepping) {
-        w->energy.dissipated += diss;
+        w->energy.dissipated += dc + dp;
         w->energy.work_boundary += wgrow;
     }
     return FLOE_OK;

@@ -11,6 +11,7 @@
 #include "floe_observer.h"
 #include "floe_mesh.h"
 #include "floe_pd.h"
+#include "floe_beam.h"
 
 #include <errno.h>
 #include <libfyaml.h>
@@ -603,7 +604,7 @@ static int sc_parse_materials(sc *s, struct fy_node *seq, struct fy_node *key)
     return FLOE_OK;
 }
 
-static const char *const sc_models[] = {"hertz_mindlin", "linear", "viscoelastic", NULL};
+static const char *const sc_models[] = {"hertz_mindlin", "linear", "viscoelastic", "short_range", "none", NULL};
 
 static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
 {
@@ -612,8 +613,12 @@ static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
                                            NULL};
     static const char *const keys_ve[] = {"materials", "model", "kn", "ks", "gn", "gs", "friction",
                                           "tension", NULL};
+    static const char *const keys_sr[] = {"materials", "model", "stiffness", "micromodulus", "horizon",
+                                          "volume", "factor", NULL};
+    static const char *const keys_none[] = {"materials", "model", NULL};
     static const char *const keys_any[] = {"materials", "model", "restitution", "friction", "kn",
-                                           "ks", "gn", "gs", "tension", NULL};
+                                           "ks", "gn", "gs", "tension", "stiffness", "micromodulus",
+                                           "horizon", "volume", "factor", NULL};
     if (!seq) return FLOE_OK;
     if (sc_is_missing(seq) || !fy_node_is_sequence(seq))
         return sc_fail(s, FLOE_EPARSE, sc_is_missing(seq) ? key : seq,
@@ -633,7 +638,8 @@ static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
         int model;
         FLOE_TRY(sc_enum(s, &m, "model", sc_models, -1, &model));
         /* re-check the keys against those valid for this model */
-        const char *const *valid = model == 0 ? keys_hm : model == 1 ? keys_lin : keys_ve;
+        const char *const *valid = model == 0 ? keys_hm : model == 1 ? keys_lin : model == 2 ? keys_ve
+                                 : model == 3 ? keys_sr : keys_none;
         {
             void *it2 = NULL;
             struct fy_node_pair *p;
@@ -648,6 +654,11 @@ static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
                     else if (model == 0)
                         hint = " (hertz_mindlin takes restitution and friction; stiffness comes "
                                "from the materials' young and poisson)";
+                    else if (model == 3)
+                        hint = " (short_range takes stiffness, or micromodulus, horizon, volume and "
+                               "factor; it has no damping or friction)";
+                    else if (model == 4)
+                        hint = " (none takes only materials: the pair never touches)";
                     else
                         hint = " (linear/viscoelastic laws take kn, ks, gn, gs, friction, tension)";
                     return sc_fail(s, FLOE_EPARSE, fy_node_pair_key(p),
@@ -704,6 +715,34 @@ static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
                                    "material '%s' needs young (Pa): the hertz_mindlin law %s "
                                    "(line %d) uses it", mt->m.name, what, sc_line(s, e));
             }
+        } else if (model == 3) {
+            /* Silling's short-range force: k = factor c V^2 / delta, or k given */
+            if (sc_has(&m, "stiffness")) {
+                if (sc_has(&m, "micromodulus") || sc_has(&m, "horizon") || sc_has(&m, "volume"))
+                    return sc_fail(s, FLOE_EINVAL, e, "%s: give stiffness, or micromodulus, horizon and volume, "
+                                   "not both", what);
+                FLOE_TRY(sc_num(s, &m, "stiffness", 1, 0, &L->kn));
+                if (!(L->kn > 0 && isfinite(L->kn))) return sc_range(s, &m, "stiffness", "> 0 (N/m)", L->kn);
+            } else {
+                double c, delta, vol, fac;
+                if (!sc_has(&m, "micromodulus"))
+                    return sc_fail(s, FLOE_EPARSE, e, "%s: short_range needs stiffness (N/m), or micromodulus "
+                                   "(N/m^6), horizon (m) and volume (m^3)", what);
+                FLOE_TRY(sc_num(s, &m, "micromodulus", 1, 0, &c));
+                if (!(c > 0)) return sc_range(s, &m, "micromodulus", "> 0 (N/m^6)", c);
+                FLOE_TRY(sc_num(s, &m, "horizon", 1, 0, &delta));
+                if (!(delta > 0)) return sc_range(s, &m, "horizon", "> 0 (m, the horizon length)", delta);
+                FLOE_TRY(sc_num(s, &m, "volume", 1, 0, &vol));
+                if (!(vol > 0)) return sc_range(s, &m, "volume", "> 0 (m^3, the points' volume)", vol);
+                FLOE_TRY(sc_num(s, &m, "factor", 0, 15.0, &fac));
+                if (!(fac > 0)) return sc_range(s, &m, "factor", "> 0 (c_s = factor x micromodulus)", fac);
+                L->kn = fac * c * vol * vol / delta;
+                if (!(L->kn > 0 && isfinite(L->kn)))
+                    return sc_fail(s, FLOE_EINVAL, e, "%s: factor x micromodulus x volume^2 / horizon = %g is not a "
+                                   "finite positive stiffness", what, L->kn);
+            }
+        } else if (model == 4) {
+            /* none: nothing to read */
         } else {
             FLOE_TRY(sc_num(s, &m, "kn", 1, 0, &L->kn));
             if (!(L->kn > 0)) return sc_range(s, &m, "kn", "> 0 (N/m)", L->kn);
@@ -729,6 +768,10 @@ static int sc_build_laws(sc *s)
         floe_contact_law *law;
         if (!strcmp(L->model, "hertz_mindlin")) {
             law = floe_hertz_mindlin_law_create(&s->mats[L->a].m, &s->mats[L->b].m, L->e, L->mu);
+        } else if (!strcmp(L->model, "short_range")) {
+            law = floe_short_range_law_create(L->kn);
+        } else if (!strcmp(L->model, "none")) {
+            law = floe_no_contact_law_create();
         } else {
             law = floe_linear_law_create(L->kn, L->ks, L->gn, L->gs, L->mu);
             if (law) ((floe_linear_law *)law)->tension = L->tension;
@@ -1623,13 +1666,162 @@ static double sc_pd_region_sdf(const double X[3], void *user)
     return floe_geometry_sdf(r->g, d);
 }
 
+/* Holes cut out of a PD region (`region: {..., remove: [{shape, position}, ...]}`, e.g. the
+ * elliptical hole of ParticLS §5.4 eq 36): a point is kept when it is in the region and in
+ * none of the holes. inner->g == NULL: the region is the lattice's box. */
+#define SC_PD_MAX_HOLES 16
+typedef struct sc_pd_cut { const sc_pd_sdf *inner; int n; sc_pd_sdf hole[SC_PD_MAX_HOLES]; } sc_pd_cut;
+static double sc_pd_cut_sdf(const double X[3], void *user)
+{
+    const sc_pd_cut *c = user;
+    double d = c->inner->g ? sc_pd_region_sdf(X, (void *)c->inner) : -INFINITY;
+    for (int k = 0; k < c->n; k++) d = fmax(d, -sc_pd_region_sdf(X, (void *)&c->hole[k]));
+    return d;
+}
+static void sc_pd_cut_free(sc_pd_cut *c)
+{
+    for (int k = 0; k < c->n; k++) floe_geometry_destroy(c->hole[k].g);
+    c->n = 0;
+}
+
+/* {shape, position} of a region or hole (position defaults to the origin) */
+static int sc_pd_shape_at(sc *s, struct fy_node *v, struct fy_node *k, const char *what, sc_pd_sdf *out)
+{
+    static const char *const keys[] = {"shape", "position", NULL};
+    sc_map m;
+    out->g = NULL;
+    FLOE_TRY(sc_map_open(s, v == k ? NULL : v, k, what, keys, &m));
+    struct fy_node *sk, *sv = sc_get(&m, "shape", &sk);
+    if (!sv) return sc_fail(s, FLOE_EPARSE, v == k ? k : v, "%s.shape is required", what);
+    char fs[96];
+    snprintf(fs, sizeof fs, "%s.shape", what);
+    FLOE_TRY(sc_build_shape(s, sv, sk, fs, 0, &out->g));
+    int rc = sc_vec(s, &m, "position", 0, NULL, out->x);
+    if (rc == FLOE_OK && !isfinite(floe_geometry_bounding_radius(out->g)))
+        rc = sc_fail(s, FLOE_EINVAL, sv, "%s: the shape must be bounded", fs);
+    if (rc) { floe_geometry_destroy(out->g); out->g = NULL; }
+    return rc;
+}
+
+/* region.remove: a list of {shape, position} holes */
+static int sc_pd_parse_remove(sc *s, const sc_map *rm, const char *fr, const sc_pd_sdf *inner, sc_pd_cut *cut,
+                              floe_pd_region *r)
+{
+    struct fy_node *k, *v = sc_get(rm, "remove", &k);
+    cut->inner = inner;
+    cut->n = 0;
+    if (!v) return FLOE_OK;
+    if (v == k || sc_is_missing(v) || !fy_node_is_sequence(v))
+        return sc_fail(s, FLOE_EPARSE, v == k ? k : v, "%s.remove must be a list of {shape, position}", fr);
+    void *it = NULL;
+    struct fy_node *e;
+    while ((e = fy_node_sequence_iterate(v, &it))) {
+        char fh[96];
+        snprintf(fh, sizeof fh, "%s.remove[%d]", fr, cut->n);
+        if (cut->n == SC_PD_MAX_HOLES) return sc_fail(s, FLOE_EINVAL, e, "%s: at most %d holes", fh, SC_PD_MAX_HOLES);
+        FLOE_TRY(sc_pd_shape_at(s, e, NULL, fh, &cut->hole[cut->n]));
+        cut->n++;
+    }
+    r->sdf = sc_pd_cut_sdf;
+    r->sdf_user = cut;
+    return FLOE_OK;
+}
+
+/* peridynamics[i].boundary: regions of the body (reference positions) that are fixed, move
+ * at a prescribed velocity or displacement, or carry a body force density (ParticLS eq 37),
+ * each with an optional ramp {linear: T} or {exp: T}; floe_world_pd_region does the work. */
+static int sc_pd_parse_boundary(sc *s, const sc_map *m, const char *what, int body)
+{
+    static const char *const keys[] = {"region", "fixed", "velocity", "displacement", "body_force", "ramp", "name", NULL};
+    static const char *const region_keys[] = {"box", "shape", "position", NULL};
+    static const char *const kinds[] = {"fixed", "velocity", "displacement", "body_force", NULL};
+    struct fy_node *k, *v = sc_get(m, "boundary", &k);
+    if (!v) return FLOE_OK;
+    if (v == k || sc_is_missing(v) || !fy_node_is_sequence(v))
+        return sc_fail(s, FLOE_EPARSE, v == k ? k : v,
+                       "%s.boundary must be a list of {region, fixed | velocity | displacement | body_force}", what);
+    void *it = NULL;
+    struct fy_node *e;
+    int idx = 0;
+    while ((e = fy_node_sequence_iterate(v, &it))) {
+        char fb[96];
+        snprintf(fb, sizeof fb, "%s.boundary[%d]", what, idx);
+        sc_map bm;
+        FLOE_TRY(sc_map_open(s, e, e, fb, keys, &bm));
+        floe_pd_bc bc = floe_default_pd_bc();
+        /* exactly one kind */
+        int nk = 0;
+        for (int q = 0; kinds[q]; q++)
+            if (sc_has(&bm, kinds[q])) { bc.kind = FLOE_PD_BC_FIXED + q; nk++; }
+        if (nk != 1)
+            return sc_fail(s, FLOE_EINVAL, e, "%s: give exactly one of fixed: true, velocity, displacement, body_force "
+                           "(got %d)", fb, nk);
+        if (bc.kind == FLOE_PD_BC_FIXED) {
+            int fixed;
+            FLOE_TRY(sc_bool(s, &bm, "fixed", 1, &fixed));
+            if (!fixed) return sc_fail(s, FLOE_EINVAL, e, "%s: fixed: false selects nothing to do (leave the entry out)", fb);
+        } else {
+            FLOE_TRY(sc_vec(s, &bm, kinds[bc.kind - 1], 1, NULL, bc.value));
+            FLOE_TRY(sc_check_planar(s, &bm, kinds[bc.kind - 1], bc.value));
+        }
+        /* ramp: {linear: T} or {exp: T} */
+        struct fy_node *rk, *rv = sc_get(&bm, "ramp", &rk);
+        if (rv) {
+            static const char *const ramp_keys[] = {"linear", "exp", NULL};
+            char fr[112];
+            snprintf(fr, sizeof fr, "%s.ramp", fb);
+            sc_map rm;
+            FLOE_TRY(sc_map_open(s, rv == rk ? NULL : rv, rk, fr, ramp_keys, &rm));
+            int lin = sc_has(&rm, "linear"), ex = sc_has(&rm, "exp");
+            if (lin + ex != 1) return sc_fail(s, FLOE_EINVAL, rv, "%s: give one of {linear: T} or {exp: T} (s)", fr);
+            bc.ramp = lin ? FLOE_PD_RAMP_LINEAR : FLOE_PD_RAMP_EXP;
+            FLOE_TRY(sc_num(s, &rm, lin ? "linear" : "exp", 1, 0, &bc.ramp_time));
+            if (!(bc.ramp_time > 0)) return sc_range(s, &rm, lin ? "linear" : "exp", "> 0 (s)", bc.ramp_time);
+            if (bc.kind == FLOE_PD_BC_FIXED) return sc_fail(s, FLOE_EINVAL, rv, "%s: a fixed region has no ramp", fr);
+        } else if (bc.kind == FLOE_PD_BC_DISPLACEMENT)
+            return sc_fail(s, FLOE_EINVAL, e, "%s: a displacement needs a ramp ({linear: T} or {exp: T}) over which "
+                           "it is applied", fb);
+        /* region: a box or a shape at a position, in reference coordinates */
+        struct fy_node *gk, *gv = sc_get(&bm, "region", &gk);
+        if (!gv) return sc_fail(s, FLOE_EPARSE, e, "%s.region is required ({box: {min, max}} or {shape, position})", fb);
+        char fg[112];
+        snprintf(fg, sizeof fg, "%s.region", fb);
+        sc_map gm;
+        FLOE_TRY(sc_map_open(s, gv == gk ? NULL : gv, gk, fg, region_keys, &gm));
+        sc_pd_sdf reg = {NULL, {0, 0, 0}};
+        struct fy_node *xk, *xv = sc_get(&gm, "box", &xk);
+        if (xv) {
+            static const char *const box_keys[] = {"min", "max", NULL};
+            char fx[128];
+            snprintf(fx, sizeof fx, "%s.box", fg);
+            sc_map xm;
+            FLOE_TRY(sc_map_open(s, xv == xk ? NULL : xv, xk, fx, box_keys, &xm));
+            FLOE_TRY(sc_vec(s, &xm, "min", 1, NULL, bc.lo));
+            FLOE_TRY(sc_vec(s, &xm, "max", 1, NULL, bc.hi));
+            for (int q = 0; q < s->dim; q++)
+                if (!(bc.lo[q] <= bc.hi[q])) return sc_fail(s, FLOE_EINVAL, xv, "%s: min must be <= max on every axis", fx);
+            if (s->dim == 2) { bc.lo[2] = -INFINITY; bc.hi[2] = INFINITY; }
+        } else {
+            if (!sc_has(&gm, "shape")) return sc_fail(s, FLOE_EPARSE, gv, "%s: give box or shape", fg);
+            FLOE_TRY(sc_pd_shape_at(s, gv, gk, fg, &reg));
+            bc.sdf = sc_pd_region_sdf;
+            bc.sdf_user = &reg;
+        }
+        int n = floe_world_pd_region(s->w, body, &bc);
+        floe_geometry_destroy(reg.g);
+        if (n <= 0) return sc_fail(s, -n, e, "%s: %s", fb, floe_world_last_error(s->w));
+        idx++;
+    }
+    return FLOE_OK;
+}
+
 static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
 {
     static const char *const keys[] = {"region", "spacing", "horizon", "material", "contact_material", "velocity",
-                                       "surface_correction", "thickness", "name", NULL};
-    static const char *const region_keys[] = {"box", "shape", "position", NULL};
+                                       "surface_correction", "thickness", "name", "boundary", NULL};
+    static const char *const region_keys[] = {"box", "shape", "position", "remove", NULL};
     static const char *const mat_keys[] = {"model", "density", "bulk_modulus", "shear_modulus", "young",
-                                           "critical_stretch", "fracture_energy", "influence", NULL};
+                                           "critical_stretch", "fracture_energy", "influence", "alpha", NULL};
     if (!seq) return FLOE_OK;
     if (sc_is_missing(seq) || !fy_node_is_sequence(seq))
         return sc_fail(s, FLOE_EPARSE, sc_is_missing(seq) ? key : seq,
@@ -1700,7 +1892,7 @@ static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
         static const char *const models[] = {"pmb", "lps", NULL};
         static const char *const infl[] = {"constant", "gaussian", NULL};
         int model = 0, inf = 0;
-        double rho = 0, K = 0, G = 0, E = 0, sc_ = 0, Gc = 0;
+        double rho = 0, K = 0, G = 0, E = 0, sc_ = 0, Gc = 0, alpha = 0;
         if (!rc) rc = sc_enum(s, &mm, "model", models, -1, &model);
         if (!rc) rc = sc_pos_num(s, &mm, "density", &rho);
         if (!rc) rc = sc_num(s, &mm, "bulk_modulus", 0, 0, &K);
@@ -1709,6 +1901,10 @@ static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
         if (!rc) rc = sc_num(s, &mm, "critical_stretch", 0, 0, &sc_);
         if (!rc) rc = sc_num(s, &mm, "fracture_energy", 0, 0, &Gc);
         if (!rc) rc = sc_enum(s, &mm, "influence", infl, 0, &inf);
+        /* PMB per-point critical stretch (LAMMPS peri/pmb): s0 = critical_stretch - alpha s_min */
+        if (!rc) rc = sc_num(s, &mm, "alpha", 0, 0, &alpha);
+        if (!rc && !(alpha >= 0 && alpha < 1e3)) rc = sc_range(s, &mm, "alpha", ">= 0", alpha);
+        if (!rc && alpha > 0 && model != 0) rc = sc_fail(s, FLOE_EINVAL, mv, "%s: alpha is a pmb option", fm);
         if (!rc && !(K > 0) && !(s->dim == 2 && model == 0 && E > 0))
             rc = sc_fail(s, FLOE_EINVAL, mv, "%s: bulk_modulus > 0 is required%s", fm,
                          s->dim == 2 ? " (2D PMB: or young)" : "");
@@ -1716,17 +1912,21 @@ static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
         if (!rc && (sc_ < 0 || Gc < 0)) rc = sc_fail(s, FLOE_EINVAL, mv, "%s: critical_stretch and fracture_energy must be >= 0", fm);
         if (!rc && sc_ > 0 && Gc > 0) rc = sc_fail(s, FLOE_EINVAL, mv, "%s: give critical_stretch or fracture_energy, not both", fm);
         floe_pd_body *b = NULL;
+        sc_pd_cut cut = {NULL, 0, {{NULL, {0, 0, 0}}}};
+        if (!rc) rc = sc_pd_parse_remove(s, &rm, fr, &reg, &cut, &r);
         if (!rc) {
             int c = floe_pd_body_create(&b, &r);
             if (c) rc = sc_fail(s, c, rv, "%s: could not discretise the region (%s)", fr, floe_strerror(c));
             else if (b->n < 2) rc = sc_fail(s, FLOE_EINVAL, rv, "%s: the region holds %d lattice points at spacing %g", fr, b->n, r.dx);
         }
         floe_geometry_destroy(reg.g);
+        sc_pd_cut_free(&cut);
         if (!rc) {
             floe_pd_material pm = model == 0 ? floe_pd_material_pmb(rho, K, sc_)
                                              : floe_pd_material_lps(rho, K, G, sc_, inf ? FLOE_PD_W_GAUSS : FLOE_PD_W_ONE);
             if (model == 0 && s->dim == 2 && E > 0) pm.E = E;
             pm.G_c = Gc;
+            pm.alpha = alpha;
             int c = floe_pd_set_material(b, &pm);
             if (c) rc = sc_fail(s, c, mv, "%s: %s", fm, c == FLOE_ENOTSUP ? "not available in 2D (lps is 3D only)" : "invalid values");
         }
@@ -1751,6 +1951,7 @@ static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
         int n = b->n, first;
         rc = floe_world_add_pd_body(s->w, b, cmat, v0, &first); /* owns b */
         if (rc) return sc_fail(s, rc, e, "%s: %s", what, floe_world_last_error(s->w));
+        FLOE_TRY(sc_pd_parse_boundary(s, &m, what, floe_world_pd_body_count(s->w) - 1));
         sc_mat *mt = &s->mats[cmat];
         if (!mt->body_user) { mt->body_user = cat; mt->body_entry = idx; }
         mt->nbody += n;
@@ -2059,6 +2260,10 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
         else if (!strcmp(L->model, "linear"))
             sc_cat(&b, "  %s-%s: linear elastic, kn %g N/m, ks %g N/m, friction %g%s\n", a, c,
                    L->kn, L->ks, L->mu, L->tension ? ", tension allowed" : "");
+        else if (!strcmp(L->model, "short_range"))
+            sc_cat(&b, "  %s-%s: PD short-range repulsion, k %g N/m\n", a, c, L->kn);
+        else if (!strcmp(L->model, "none"))
+            sc_cat(&b, "  %s-%s: none (never in contact)\n", a, c);
         else
             sc_cat(&b, "  %s-%s: linear viscoelastic, kn %g N/m, ks %g N/m, gn %g N s/m, "
                    "gs %g N s/m, friction %g%s\n", a, c, L->kn, L->ks, L->gn, L->gs, L->mu,
@@ -2078,13 +2283,25 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
     sc_cat(&b, "gravity:    (%g, %g, %g) m/s^2\n", w->def.gravity[0], w->def.gravity[1],
            w->def.gravity[2]);
     double dtc = floe_world_critical_dt(w), dt = floe_world_dt(w);
-    sc_cat(&b, "time step:  critical dt estimate %.4g s; dt %.4g s (%s)\n", dtc, dt,
+    floe_dt_estimates est;
+    floe_world_dt_estimates(w, &est);
+    sc_cat(&b, "time step:  critical dt estimate %.4g s (%s, particle %d); dt %.4g s (%s)\n", dtc,
+           est.limiting >= 0 ? floe_dt_kind_name(est.limiting) : "none", est.limiting_particle, dt,
            s->dt_auto ? "automatic" : "given");
     if (s->dt_auto) sc_cat(&b, "            = safety %g x critical\n", s->safety);
     else if (dt > dtc) sc_cat(&b, "            WARNING: dt is above the critical estimate "
                                "(allow_unstable_dt: true)\n");
+    sc_cat(&b, "integrator: %s", floe_integrator_name(w->def.integrator));
+    if (w->def.adaptive)
+        sc_cat(&b, ", adaptive steps in [%.4g, %.4g] s (velocity tolerance %g, penetration tolerance %g)",
+               w->dt_lo, w->dt_hi, w->def.adapt_velocity_tol, w->def.adapt_depth_tol);
+    if (w->def.pd_dem == FLOE_PD_DEM_STAGGERED && floe_world_pd_body_count(w) > 0)
+        sc_cat(&b, ", staggered PD-DEM: PD step %.4g s (%s %d)", w->pd_every > 1 ? w->pd_every * dt : dt / w->pd_sub,
+               w->pd_every > 1 ? "every" : "substeps", w->pd_every > 1 ? w->pd_every : w->pd_sub);
+    sc_cat(&b, "\n");
     double nsteps = dt > 0 ? ceil(s->duration / dt - 1e-9) : 0;
-    sc_cat(&b, "duration:   %g s = %.0f steps\n", s->duration, nsteps);
+    sc_cat(&b, "duration:   %g s = %s%.0f steps\n", s->duration, w->def.adaptive ? "at most " : "",
+           w->def.adaptive && w->dt_lo > 0 ? ceil(s->duration / w->dt_lo - 1e-9) : nsteps);
     if (s->nstates) {
         sc_cat(&b, "states:     %d growing radi%s (particle", s->nstates, s->nstates == 1 ? "us" : "i");
         for (int i = 0; i < s->ngrow_listed; i++) sc_cat(&b, "%s%d", i ? ", " : " ", s->grow_particle[i]);
@@ -2105,16 +2322,125 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
 }
 
 /* ------------------------------------------------------------------------------------ */
+/* Beam bonds (contact/floe_beam.h, issue #5): `bonds:` a list of bond sets, each bonding   */
+/* the particles within a radius (floe_world_add_beam_bonds)                              */
+
+static int sc_parse_bonds(sc *s, struct fy_node *seq, struct fy_node *key)
+{
+    static const char *const keys[] = {"young", "poisson", "radius_factor", "max_distance", "timoshenko",
+                                       "shear_coefficient", "area", "inertia", "polar", "section_modulus",
+                                       "radius_ratio", "thickness", "damping_ratio", "tensile_strength",
+                                       "tensile_sd", "shear_strength", "shear_sd", "seed", "group", NULL};
+    if (!seq) return FLOE_OK;
+    if (sc_is_missing(seq) || !fy_node_is_sequence(seq))
+        return sc_fail(s, FLOE_EPARSE, sc_is_missing(seq) ? key : seq,
+                       "bonds must be a list of {young, radius_factor, ...} (beam bonds)");
+    void *it = NULL;
+    struct fy_node *e;
+    for (int i = 0; (e = fy_node_sequence_iterate(seq, &it)); i++) {
+        char what[32];
+        snprintf(what, sizeof what, "bonds[%d]", i);
+        sc_map m;
+        FLOE_TRY(sc_map_open(s, e, e, what, keys, &m));
+        floe_beam_params bp = floe_default_beam_params();
+        double rf = 1.01;
+        long seed = 1, group = 0;
+        int has_group = sc_has(&m, "group");
+        FLOE_TRY(sc_num(s, &m, "young", 1, 0, &bp.young));
+        FLOE_TRY(sc_num(s, &m, "poisson", 0, bp.poisson, &bp.poisson));
+        FLOE_TRY(sc_num(s, &m, "radius_factor", 0, rf, &rf));
+        FLOE_TRY(sc_num(s, &m, "max_distance", 0, 0, &bp.max_distance));
+        FLOE_TRY(sc_bool(s, &m, "timoshenko", 0, &bp.timoshenko));
+        FLOE_TRY(sc_num(s, &m, "shear_coefficient", 0, 0, &bp.shear_coefficient));
+        FLOE_TRY(sc_num(s, &m, "area", 0, 0, &bp.area));
+        FLOE_TRY(sc_num(s, &m, "inertia", 0, 0, &bp.inertia));
+        FLOE_TRY(sc_num(s, &m, "polar", 0, 0, &bp.polar));
+        FLOE_TRY(sc_num(s, &m, "section_modulus", 0, 0, &bp.section_modulus));
+        FLOE_TRY(sc_num(s, &m, "radius_ratio", 0, bp.radius_ratio, &bp.radius_ratio));
+        FLOE_TRY(sc_num(s, &m, "thickness", 0, bp.thickness, &bp.thickness));
+        FLOE_TRY(sc_num(s, &m, "damping_ratio", 0, 0, &bp.damping_ratio));
+        FLOE_TRY(sc_num(s, &m, "tensile_strength", 0, 0, &bp.tensile_strength));
+        FLOE_TRY(sc_num(s, &m, "tensile_sd", 0, 0, &bp.tensile_sd));
+        FLOE_TRY(sc_num(s, &m, "shear_strength", 0, 0, &bp.shear_strength));
+        FLOE_TRY(sc_num(s, &m, "shear_sd", 0, 0, &bp.shear_sd));
+        FLOE_TRY(sc_long(s, &m, "seed", 0, 1, &seed));
+        FLOE_TRY(sc_long(s, &m, "group", 0, 0, &group));
+        if (seed < 0) return sc_range(s, &m, "seed", ">= 0", (double)seed);
+        bp.seed = (unsigned long long)seed;
+        bp.group = has_group ? (int)group : FLOE_BEAM_ALL_GROUPS;
+        if (!(rf > 0)) return sc_range(s, &m, "radius_factor", "> 0", rf);
+        int rc = floe_world_add_beam_bonds(s->w, rf, &bp);
+        if (rc < 0) return sc_fail(s, -rc, e, "%s: %s", what, floe_world_last_error(s->w));
+        if (rc == 0)
+            return sc_fail(s, FLOE_EINVAL, e, "%s: no pair of particles is within reach (radius_factor %g x (R_i + R_j)%s)",
+                           what, rf, bp.max_distance > 0 ? " or max_distance" : "");
+    }
+    return FLOE_OK;
+}
+
+/* ------------------------------------------------------------------------------------ */
 /* Loading                                                                               */
 
 static const char *const sc_root_keys[] = {"name", "description", "dimension", "time", "gravity",
                                            "neighbor", "contact_detection", "mass_2d", "materials", "laws",
-                                           "walls", "bodies", "peridynamics", "outputs", NULL};
+                                           "walls", "bodies", "peridynamics", "outputs", "bonds", NULL};
+
+/* time.integrator, time.adaptive, time.pd_dem (docs/scene-format.md, docs/integrators.md) */
+static int sc_time_integration(sc *s, const sc_map *tm, floe_world_def *def)
+{
+    static const char *const integ[] = {"velocity_verlet", "leapfrog", "rk2", NULL};
+    static const char *const schemes[] = {"monolithic", "staggered", NULL};
+    static const char *const ad_keys[] = {"dt_min", "dt_max", "velocity_tolerance", "penetration_tolerance", NULL};
+    static const char *const pd_keys[] = {"scheme", "substeps", "every", NULL};
+    FLOE_TRY(sc_enum(s, tm, "integrator", integ, FLOE_VELOCITY_VERLET, &def->integrator));
+    struct fy_node *ak, *av = sc_get(tm, "adaptive", &ak);
+    if (av && av != ak && fy_node_is_mapping(av)) {
+        sc_map am;
+        FLOE_TRY(sc_map_open(s, av, ak, "time.adaptive", ad_keys, &am));
+        def->adaptive = 1;
+        FLOE_TRY(sc_num(s, &am, "dt_min", 0, 0.0, &def->dt_min));
+        if (!(def->dt_min >= 0)) return sc_range(s, &am, "dt_min", ">= 0 s (0 = 1e-3 x dt_max)", def->dt_min);
+        FLOE_TRY(sc_num(s, &am, "dt_max", 0, 0.0, &def->dt_max));
+        if (!(def->dt_max >= 0)) return sc_range(s, &am, "dt_max", ">= 0 s (0 = the critical estimate)", def->dt_max);
+        if (def->dt_min > 0 && def->dt_max > 0 && def->dt_min > def->dt_max)
+            return sc_range(s, &am, "dt_min", "<= dt_max", def->dt_min);
+        FLOE_TRY(sc_num(s, &am, "velocity_tolerance", 0, def->adapt_velocity_tol, &def->adapt_velocity_tol));
+        if (!(def->adapt_velocity_tol > 0 && def->adapt_velocity_tol < 1))
+            return sc_range(s, &am, "velocity_tolerance", "in (0, 1)", def->adapt_velocity_tol);
+        FLOE_TRY(sc_num(s, &am, "penetration_tolerance", 0, def->adapt_depth_tol, &def->adapt_depth_tol));
+        if (!(def->adapt_depth_tol > 0 && def->adapt_depth_tol < 1))
+            return sc_range(s, &am, "penetration_tolerance", "in (0, 1)", def->adapt_depth_tol);
+    } else {
+        FLOE_TRY(sc_bool(s, tm, "adaptive", 0, &def->adaptive));
+    }
+    struct fy_node *pk, *pv = sc_get(tm, "pd_dem", &pk);
+    if (pv) {
+        sc_map pm;
+        FLOE_TRY(sc_map_open(s, pv == pk ? NULL : pv, pk, "time.pd_dem", pd_keys, &pm));
+        FLOE_TRY(sc_enum(s, &pm, "scheme", schemes, FLOE_PD_DEM_MONOLITHIC, &def->pd_dem));
+        struct fy_node *sk, *sv = sc_get(&pm, "substeps", &sk);
+        long sub = 1, every = 1;
+        if (sv && sv != sk && sc_text(sv) && !strcmp(sc_text(sv), "auto")) sub = 0;
+        else FLOE_TRY(sc_long(s, &pm, "substeps", 0, 1, &sub));
+        if (sub < 0 || sub > 100000) return sc_range(s, &pm, "substeps", "in [1, 100000] or auto", (double)sub);
+        FLOE_TRY(sc_long(s, &pm, "every", 0, 1, &every));
+        if (every < 1 || every > 100000) return sc_range(s, &pm, "every", "in [1, 100000]", (double)every);
+        if (sub != 1 && every > 1)
+            return sc_fail(s, FLOE_EINVAL, pv, "time.pd_dem: give substeps (PD sub-cycled, dt_PD = dt / m) or every "
+                           "(PD every k-th step, dt_PD = k dt), not both");
+        if ((sub != 1 || every > 1) && def->pd_dem != FLOE_PD_DEM_STAGGERED)
+            return sc_fail(s, FLOE_EINVAL, pv, "time.pd_dem: substeps and every need scheme: staggered");
+        def->pd_substeps = (int)sub;
+        def->pd_every = (int)every;
+    }
+    return FLOE_OK;
+}
 
 static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_outputs,
                     floe_scene_info *info)
 {
-    static const char *const time_keys[] = {"duration", "dt", "safety", "allow_unstable_dt", NULL};
+    static const char *const time_keys[] = {"duration", "dt", "safety", "allow_unstable_dt", "integrator",
+                                            "adaptive", "pd_dem", NULL};
     static const char *const nb_keys[] = {"skin", "leaf_size", NULL};
     static const char *const mass2d[] = {"volume", "area", NULL};
     sc_map r;
@@ -2160,6 +2486,7 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     FLOE_TRY(sc_bool(s, &tm, "allow_unstable_dt", 0, &def.allow_unstable_dt));
     def.dt = s->dt_given;
     def.dt_safety = s->safety;
+    FLOE_TRY(sc_time_integration(s, &tm, &def));
 
     double g[3];
     FLOE_TRY(sc_vec(s, &r, "gravity", 0, NULL, g));
@@ -2237,6 +2564,7 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     struct fy_node *wk;
     struct fy_node *wv = sc_get(&r, "walls", &wk);
     FLOE_TRY(sc_parse_walls(s, wv == wk ? NULL : wv, wk));
+    { struct fy_node *bok, *bov = sc_get(&r, "bonds", &bok); FLOE_TRY(sc_parse_bonds(s, bov == bok ? NULL : bov, bok)); } /* beam bonds */
     FLOE_TRY(sc_check_pairs(s));
     struct fy_node *ok;
     struct fy_node *ov = sc_get(&r, "outputs", &ok);

@@ -4,6 +4,7 @@
  * eqs 22-23), RK2 for generic state objects (eq 21), observers at their periods. */
 #include "world_internal.h"
 #include "floe_pd.h"
+#include "floe_beam.h"
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -40,6 +41,12 @@ floe_world_def floe_default_world_def(void) {
     d.dt = 0;
     d.dt_safety = 0.2;
     d.leaf_size = 16;
+    d.integrator = FLOE_VELOCITY_VERLET;
+    d.adapt_velocity_tol = 1e-3;
+    d.adapt_depth_tol = 1e-3;
+    d.pd_dem = FLOE_PD_DEM_MONOLITHIC;
+    d.pd_substeps = 1;
+    d.pd_every = 1;
     return d;
 }
 
@@ -50,6 +57,9 @@ floe_particle_def floe_default_particle_def(void) {
     d.motion = FLOE_FREE;
     return d;
 }
+
+typedef struct floe_snapshot floe_snapshot;
+static void snapshot_free(floe_snapshot *s);
 
 /* grow an array of n elements of size sz to hold at least need */
 static int grow(void **ptr, int *cap, int need, size_t sz) {
@@ -84,6 +94,7 @@ floe_world *floe_world_create(const floe_world_def *def, char *err, size_t errle
     floe_nl_init(&w->nl);
     w->nl.skin = def->skin;
     floe_admm_default_options(&w->det.admm);
+    w->dt_cap = INFINITY;
     return w;
 }
 
@@ -116,8 +127,14 @@ void floe_world_destroy(floe_world *w) {
     floe_nl_free(&w->nl);
     free(w->contacts);
     free(w->det.scratch);
+    free(w->dt_part);
+    free(w->ibuf);
+    snapshot_free(w->snap);
     for (int k = 0; k < w->npd; k++) floe_pd_body_destroy(w->pd[k]);
     free(w->pd); free(w->pd_first); free(w->pd_of); free(w->pd_fold); free(w->pd_fnew); free(w->pd_eold);
+    for (int k = 0; k < w->npd_bc; k++) { free(w->pd_bc[k]->pts); free(w->pd_bc[k]->fold); free(w->pd_bc[k]); }
+    free(w->pd_bc); free(w->pd_nbroken_seen);
+    floe_beam_set_destroy(w->beams);
     free(w);
 }
 
@@ -282,12 +299,79 @@ int floe_world_add_observer(floe_world *w, floe_observer *o) {
 
 /* ---- peridynamic bodies ---- */
 
+/* Contact exclusion of two points of the same PD body. A bonded pair gets no contact while
+ * its bond is intact (the bond is the interaction), nor when it is broken but still acts
+ * (a PMB bond with broken_tension_only pushes in compression, 003 eq 2 mu = 1). Other broken
+ * pairs meet by contact, except those whose contact spheres already overlap in the
+ * reference configuration (|xi| < R_i + R_j: the nearest lattice neighbours at 1 dx, with
+ * R = 0.62 dx): a contact there would push the faces of a fresh crack apart at once with
+ * the force of a 0.24 dx overlap. Across a crack the next pairs (sqrt 2 dx) are in contact
+ * range, so closing cracks still resist. */
 static int pd_exclude(const void *ctx, int i, int j) {
     const floe_world *w = ctx;
     int bi = w->pd_of[i];
     if (bi < 0 || bi != w->pd_of[j]) return 0;
     int f = w->pd_first[bi];
-    return floe_pd_bonded(w->pd[bi], i - f, j - f);
+    const floe_pd_body *b = w->pd[bi];
+    int64_t k = floe_pd_bond_index(b, i - f, j - f);
+    if (k < 0) return 0;
+    if (!b->broken[k]) return 1;
+    if (b->mat.model == FLOE_PD_PMB && b->mat.broken_tension_only) return 1;
+    return b->len[k] < w->p.radius[i] + w->p.radius[j];
+}
+
+/* 1 when broken pairs of body b can meet by contact (pd_exclude) */
+static int pd_broken_pairs_touch(const floe_pd_body *b) {
+    return !(b->mat.model == FLOE_PD_PMB && b->mat.broken_tension_only);
+}
+
+/* 1 when the neighbour list holds the pair (i, j), i < j (sorted by (i, j): a binary
+ * search; if the list were not sorted this only ever answers 0, i.e. rebuild) */
+static int nl_has_pair(const floe_neighbor_list *nl, int i, int j) {
+    int lo = 0, hi = nl->npairs;
+    while (lo < hi) {
+        int mid = lo + (hi - lo) / 2;
+        if (nl->pi[mid] < i || (nl->pi[mid] == i && nl->pj[mid] < j)) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo < nl->npairs && nl->pi[lo] == i && nl->pj[lo] == j;
+}
+
+int floe_pd_after_forces(floe_world *w) {
+    /* bonds broke this evaluation: a broken pair that may now touch (pd_exclude) and is
+     * within reach (R_i + R_j + skin) must be in the list before it can touch; the Verlet
+     * criterion does not see it (nothing moved), so rebuild now. Only bodies whose broken
+     * pairs can touch are scanned, and only at evaluations where their count changed. */
+    int rebuild = 0;
+    const floe_particles *p = &w->p;
+    for (int b = 0; b < w->npd; b++) {
+        floe_pd_body *pb = w->pd[b];
+        if ((long long)pb->nbroken == w->pd_nbroken_seen[b]) continue;
+        w->pd_nbroken_seen[b] = (long long)pb->nbroken;
+        if (rebuild || !pd_broken_pairs_touch(pb)) continue;
+        int f0 = w->pd_first[b];
+        double skin = w->nl.skin;
+        for (int i = 0; i < pb->n && !rebuild; i++)
+            for (int64_t k = pb->off[i]; k < pb->off[i + 1]; k++) {
+                if (!pb->broken[k]) continue;
+                int a = f0 + i, c = f0 + pb->partner[k];
+                double rr = p->radius[a] + p->radius[c];
+                if (pb->len[k] < rr) continue; /* excluded (overlap in the reference) */
+                if (p->motion[a] != FLOE_FREE && p->motion[c] != FLOE_FREE) continue;
+                double d[3];
+                floe_v3_sub(d, p->x + 3 * c, p->x + 3 * a);
+                if (floe_v3_dot(d, d) > (rr + skin) * (rr + skin)) continue;
+                if (!nl_has_pair(&w->nl, a, c)) { rebuild = 1; break; }
+            }
+    }
+    if (!rebuild) return FLOE_OK;
+    int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
+    return rc ? floe_world_error(w, rc, "neighbour list rebuild after bond breakage failed (out of memory)") : FLOE_OK;
+}
+
+/* the contact radius of a point of volume V */
+static double pd_contact_radius(const floe_pd_body *b, double V) {
+    return b->dim == 3 ? cbrt(3.0 * V / (4.0 * M_PI)) : sqrt(V / (M_PI * b->thickness));
 }
 
 int floe_world_add_pd_body(floe_world *w, struct floe_pd_body *body, int material, const double v0[3], int *first) {
@@ -302,55 +386,80 @@ int floe_world_add_pd_body(floe_world *w, struct floe_pd_body *body, int materia
         return floe_world_error(w, FLOE_EINVAL, "PD body: %s", bd != w->def.dim ? "its dimension differs from the world's"
                                                                                  : "no points or no material set");
     }
+    if (v0 && !(isfinite(v0[0]) && isfinite(v0[1]) && isfinite(v0[2]))) {
+        floe_pd_body_destroy(body);
+        return floe_world_error(w, FLOE_EINVAL, "PD body: the initial velocity must be finite");
+    }
     if (w->npd == w->pd_cap) {
         int nc = w->pd_cap ? 2 * w->pd_cap : 4;
         struct floe_pd_body **a = realloc(w->pd, (size_t)nc * sizeof *a);
         if (a) w->pd = a;
         int *b = a ? realloc(w->pd_first, (size_t)nc * sizeof *b) : NULL;
         if (b) w->pd_first = b;
-        if (!a || !b) { floe_pd_body_destroy(body); return floe_world_error(w, FLOE_ENOMEM, "out of memory"); }
+        long long *s = b ? realloc(w->pd_nbroken_seen, (size_t)nc * sizeof *s) : NULL;
+        if (s) w->pd_nbroken_seen = s;
+        if (!a || !b || !s) { floe_pd_body_destroy(body); return floe_world_error(w, FLOE_ENOMEM, "out of memory"); }
         w->pd_cap = nc;
     }
+    /* on any failure below, the particles and geometries added so far are removed again:
+     * a failed add leaves the world as it was */
+    const int ng0 = w->ngeoms, n0 = w->p.n, prepared0 = w->prepared;
+    int rc = FLOE_OK, r;
     /* one sphere geometry per point volume (lattice bodies: one) */
-    double V = body->V[0];
-    double R = body->dim == 3 ? cbrt(3.0 * V / (4.0 * M_PI)) : sqrt(V / (M_PI * body->thickness));
-    floe_geometry *g = floe_sphere_create(R);
-    if (!g) { floe_pd_body_destroy(body); return floe_world_error(w, FLOE_ENOMEM, "out of memory"); }
-    int gi = floe_world_add_geometry(w, g);
-    if (gi < 0) { floe_geometry_destroy(g); floe_pd_body_destroy(body); return -gi; }
-    int f0 = w->p.n;
-    for (int i = 0; i < body->n; i++) {
+    double Vg = 0;
+    int gi = -1;
+    for (int i = 0; i < body->n && rc == FLOE_OK; i++) {
+        if (gi < 0 || body->V[i] != Vg) {
+            Vg = body->V[i];
+            double R = pd_contact_radius(body, Vg);
+            floe_geometry *g = floe_sphere_create(R);
+            gi = g ? floe_world_add_geometry(w, g) : -FLOE_ENOMEM;
+            if (gi < 0) {
+                floe_geometry_destroy(g);
+                if (isfinite(R) && R > 0) rc = floe_world_error(w, FLOE_ENOMEM, "out of memory");
+                else rc = floe_world_error(w, FLOE_EINVAL, "PD body: point %d: volume %g gives no contact radius", i, Vg);
+                break;
+            }
+        }
         floe_particle_def d = floe_default_particle_def();
-        if (body->V[i] != V) { /* another volume: its own sphere */
-            double Ri = body->dim == 3 ? cbrt(3.0 * body->V[i] / (4.0 * M_PI)) : sqrt(body->V[i] / (M_PI * body->thickness));
-            floe_geometry *gx = floe_sphere_create(Ri);
-            int gx_i = gx ? floe_world_add_geometry(w, gx) : -FLOE_ENOMEM;
-            if (gx_i < 0 && gx) floe_geometry_destroy(gx);
-            if (gx_i < 0) { floe_pd_body_destroy(body); return floe_world_error(w, FLOE_ENOMEM, "out of memory"); }
-            d.geometry = gx_i;
-        } else d.geometry = gi;
+        d.geometry = gi;
         d.material = material;
         floe_v3_copy(d.x, body->X + 3 * i);
         if (v0) floe_v3_copy(d.v, v0);
         d.mass = body->mat.rho * body->V[i];
         d.group = -2 - w->npd; /* PD body k writes body = -2 - k in outputs */
-        int r = floe_world_add_particle(w, &d);
-        if (r < 0) { floe_pd_body_destroy(body); return -r; }
+        if ((r = floe_world_add_particle(w, &d)) < 0) {
+            char why[sizeof w->err];
+            memcpy(why, w->err, sizeof why);
+            rc = floe_world_error(w, -r, "PD body: point %d: %s", i, why);
+        }
     }
     /* body index of every particle (allocated with the first PD body) */
-    int *po = realloc(w->pd_of, (size_t)(w->p.cap > 0 ? w->p.cap : 1) * sizeof *po);
-    if (!po) { floe_pd_body_destroy(body); return floe_world_error(w, FLOE_ENOMEM, "out of memory"); }
-    for (int i = w->npd ? w->pd_npts_alloc : 0; i < w->p.n; i++) po[i] = -1;
-    w->pd_of = po;
-    for (int i = f0; i < w->p.n; i++) po[i] = w->npd;
+    int *po = NULL;
+    if (rc == FLOE_OK) {
+        po = realloc(w->pd_of, (size_t)(w->p.cap > 0 ? w->p.cap : 1) * sizeof *po);
+        if (po) w->pd_of = po;
+        else rc = floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
+    if (rc != FLOE_OK) {
+        for (int g = ng0; g < w->ngeoms; g++) floe_geometry_destroy(w->geoms[g]);
+        w->ngeoms = ng0;
+        w->p.n = n0;
+        w->prepared = prepared0;
+        floe_pd_body_destroy(body);
+        return rc;
+    }
+    for (int i = w->npd ? w->pd_npts_alloc : 0; i < n0; i++) po[i] = -1;
+    for (int i = n0; i < w->p.n; i++) po[i] = w->npd;
     w->pd_npts_alloc = w->p.n;
     w->pd[w->npd] = body;
-    w->pd_first[w->npd] = f0;
+    w->pd_first[w->npd] = n0;
+    w->pd_nbroken_seen[w->npd] = (long long)body->nbroken;
     w->npd++;
     w->pd_npts += body->n;
     w->nl.exclude = pd_exclude;
     w->nl.exclude_ctx = w;
-    if (first) *first = f0;
+    if (first) *first = n0;
     w->prepared = 0;
     return FLOE_OK;
 }
@@ -360,6 +469,178 @@ struct floe_pd_body *floe_world_pd_body(const floe_world *w, int k, int *first) 
     if (k < 0 || k >= w->npd) return NULL;
     if (first) *first = w->pd_first[k];
     return w->pd[k];
+}
+
+/* ---- PD boundary regions (ParticLS eq 37) ---- */
+
+floe_pd_bc floe_default_pd_bc(void) {
+    floe_pd_bc bc;
+    memset(&bc, 0, sizeof bc);
+    return bc;
+}
+
+int floe_world_pd_region_count(const floe_world *w) { return w->npd_bc; }
+int floe_world_pd_region_points(const floe_world *w, int r) {
+    return r >= 0 && r < w->npd_bc ? w->pd_bc[r]->n : -1;
+}
+
+/* ramp(t) and its derivative */
+static double pd_ramp(const floe_pd_bc *bc, double t, double *deriv) {
+    double T = bc->ramp_time;
+    if (t < 0) t = 0;
+    switch (bc->ramp) {
+    case FLOE_PD_RAMP_LINEAR:
+        if (deriv) *deriv = t < T ? 1.0 / T : 0.0;
+        return t < T ? t / T : 1.0;
+    case FLOE_PD_RAMP_EXP:
+        if (deriv) *deriv = exp(-t / T) / T;
+        return -expm1(-t / T);
+    default:
+        if (deriv) *deriv = 0.0;
+        return 1.0;
+    }
+}
+
+/* kinematic region points with a time-dependent velocity (floe_world_set_motion) */
+static void pd_bc_motion(double t, double v[3], double om[3], void *user) {
+    const floe_pd_bc_rec *r = user;
+    double dr, s = pd_ramp(&r->def, t, &dr);
+    double f = r->def.kind == FLOE_PD_BC_DISPLACEMENT ? dr : s;
+    for (int k = 0; k < 3; k++) { v[k] = f * r->def.value[k]; om[k] = 0; }
+}
+
+static void pd_bc_free(floe_pd_bc_rec *r) {
+    if (!r) return;
+    free(r->pts);
+    free(r->fold);
+    free(r);
+}
+
+int floe_world_pd_region(floe_world *w, int body, const floe_pd_bc *bc) {
+    if (!bc) return -floe_world_error(w, FLOE_EINVAL, "PD region: NULL definition");
+    if (body < 0 || body >= w->npd)
+        return -floe_world_error(w, FLOE_EINVAL, "PD region: body %d out of range (%d PD bodies)", body, w->npd);
+    const char *bad = NULL;
+    int kind = bc->kind;
+    if (kind < FLOE_PD_BC_FIXED || kind > FLOE_PD_BC_BODY_FORCE) bad = "kind must be fixed, velocity, displacement or body force";
+    else if (bc->ramp < FLOE_PD_RAMP_NONE || bc->ramp > FLOE_PD_RAMP_EXP) bad = "unknown ramp";
+    else if (bc->ramp != FLOE_PD_RAMP_NONE && !(bc->ramp_time > 0 && isfinite(bc->ramp_time)))
+        bad = "a ramp needs ramp_time > 0";
+    else if (kind == FLOE_PD_BC_DISPLACEMENT && bc->ramp == FLOE_PD_RAMP_NONE)
+        bad = "a prescribed displacement needs a ramp (linear or exp) over which it is applied";
+    else if (!isfinite(bc->value[0]) || !isfinite(bc->value[1]) || !isfinite(bc->value[2])) bad = "value must be finite";
+    else if (!bc->sdf)
+        for (int k = 0; k < 3 && !bad; k++)
+            if (!(bc->lo[k] <= bc->hi[k])) bad = "the box needs lo <= hi on every axis";
+    if (bad) return -floe_world_error(w, FLOE_EINVAL, "PD region %d: %s", w->npd_bc, bad);
+    const floe_pd_body *pb = w->pd[body];
+    const int f0 = w->pd_first[body];
+    floe_pd_bc_rec *r = calloc(1, sizeof *r);
+    if (!r) return -floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    r->def = *bc;
+    r->def.sdf = NULL; /* read here only: the caller's data need not outlive this call */
+    r->def.sdf_user = NULL;
+    r->body = body;
+    for (int pass = 0; pass < 2; pass++) {
+        int n = 0;
+        for (int i = 0; i < pb->n; i++) {
+            const double *X = pb->X + 3 * (size_t)i;
+            int in = bc->sdf ? bc->sdf(X, bc->sdf_user) <= 0
+                             : X[0] >= bc->lo[0] && X[0] <= bc->hi[0] && X[1] >= bc->lo[1] && X[1] <= bc->hi[1] &&
+                                   (w->def.dim == 2 || (X[2] >= bc->lo[2] && X[2] <= bc->hi[2]));
+            if (!in) continue;
+            if (pass == 1) r->pts[n] = f0 + i;
+            n++;
+        }
+        if (pass == 0) {
+            if (n == 0) {
+                pd_bc_free(r);
+                return -floe_world_error(w, FLOE_EINVAL, "PD region %d selects no point of PD body %d (%d points)",
+                                         w->npd_bc, body, pb->n);
+            }
+            r->n = n;
+            r->pts = malloc((size_t)n * sizeof *r->pts);
+            if (!r->pts) { pd_bc_free(r); return -floe_world_error(w, FLOE_ENOMEM, "out of memory"); }
+        }
+    }
+    const int moving = kind != FLOE_PD_BC_BODY_FORCE;
+    if (moving) /* one fixed/velocity/displacement region per point */
+        for (int q = 0; q < w->npd_bc; q++) {
+            const floe_pd_bc_rec *o = w->pd_bc[q];
+            if (o->body != body || o->def.kind == FLOE_PD_BC_BODY_FORCE) continue;
+            int shared = 0;
+            for (int a = 0, c = 0; a < r->n && c < o->n;) { /* both lists ascending */
+                if (r->pts[a] == o->pts[c]) { shared++; a++; c++; }
+                else if (r->pts[a] < o->pts[c]) a++;
+                else c++;
+            }
+            if (shared) {
+                pd_bc_free(r);
+                return -floe_world_error(w, FLOE_EINVAL, "PD region %d shares %d points with region %d: a point "
+                                         "may be in one fixed, velocity or displacement region only", w->npd_bc, shared, q);
+            }
+        }
+    if (kind == FLOE_PD_BC_BODY_FORCE) {
+        r->fold = calloc(3 * (size_t)r->n, sizeof *r->fold);
+        if (!r->fold) { pd_bc_free(r); return -floe_world_error(w, FLOE_ENOMEM, "out of memory"); }
+    }
+    if (grow((void **)&w->pd_bc, &w->pd_bc_cap, w->npd_bc + 1, sizeof *w->pd_bc)) {
+        pd_bc_free(r);
+        return -floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
+    /* the motion of the points: fixed, constant velocity (kinematic without a callback keeps
+     * its velocity), or a time-dependent velocity through a motion callback */
+    int timed = moving && kind != FLOE_PD_BC_FIXED && bc->ramp != FLOE_PD_RAMP_NONE;
+    if (timed && grow((void **)&w->motions, &w->motions_cap, w->nmotions + r->n, sizeof *w->motions)) {
+        pd_bc_free(r);
+        return -floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
+    w->pd_bc[w->npd_bc++] = r;
+    if (moving) {
+        floe_particles *p = &w->p;
+        double v[3], om[3];
+        pd_bc_motion(w->time, v, om, r);
+        for (int a = 0; a < r->n; a++) {
+            int i = r->pts[a];
+            p->motion[i] = kind == FLOE_PD_BC_FIXED ? FLOE_FIXED : FLOE_KINEMATIC;
+            p->inv_mass[i] = 0;
+            floe_v3_set(p->w + 3 * i, 0, 0, 0);
+            if (kind == FLOE_PD_BC_FIXED) floe_v3_set(p->v + 3 * i, 0, 0, 0);
+            else floe_v3_copy(p->v + 3 * i, v);
+            if (w->def.dim == 2) p->v[3 * i + 2] = 0;
+            if (timed) w->motions[w->nmotions++] = (floe_motion_cb){i, pd_bc_motion, r};
+        }
+        w->prepared = 0;
+    }
+    return r->n;
+}
+
+double floe_pd_bc_forces(floe_world *w) {
+    floe_particles *p = &w->p;
+    const double t = w->time, dt = w->dt;
+    double work = 0;
+    for (int q = 0; q < w->npd_bc; q++) {
+        floe_pd_bc_rec *r = w->pd_bc[q];
+        if (r->def.kind != FLOE_PD_BC_BODY_FORCE) continue;
+        const floe_pd_body *pb = w->pd[r->body];
+        const int f0 = w->pd_first[r->body];
+        double b[3], s = pd_ramp(&r->def, t, NULL);
+        for (int k = 0; k < 3; k++) b[k] = s * r->def.value[k];
+        for (int a = 0; a < r->n; a++) {
+            int i = r->pts[a];
+            double *old = r->fold + 3 * a;
+            if (p->motion[i] != FLOE_FREE) { floe_v3_set(old, 0, 0, 0); continue; }
+            double V = pb->V[i - f0], f[3];
+            if (r->def.force_fn) r->def.force_fn(t, pb->X + 3 * (size_t)(i - f0), b, r->def.force_user);
+            for (int k = 0; k < 3; k++) f[k] = b[k] * V;
+            if (w->def.dim == 2) f[2] = 0;
+            floe_v3_add(p->f + 3 * i, p->f + 3 * i, f);
+            /* velocities are at mid-step here (dx = v dt): work = (F_old + F_new)/2 . dx */
+            for (int k = 0; k < 3; k++) work += 0.5 * dt * (f[k] + old[k]) * p->v[3 * i + k];
+            floe_v3_copy(old, f);
+        }
+    }
+    return work;
 }
 
 double floe_world_dt(const floe_world *w) { return w->dt; }
@@ -502,10 +783,69 @@ static void pair_estimate(const floe_contact_law *law, double r_eff, double m_ef
     if (d < *dt) *dt = d;
 }
 
+/* Per-particle estimates of one (material, mass, radius, rotation factor), cached: most
+ * scenes have few distinct particles */
+typedef struct dt_cache_entry {
+    int mat;
+    double m, r, rot;
+    double packing, impact, sqrt_mk, hertz;
+} dt_cache_entry;
+#define DT_CACHE 1024
+
+static void particle_contact_estimates(const floe_world *w, dt_cache_entry *e, double vrel) {
+    const double C = w->def.dim == 3 ? 8.0 : 6.0, nc = w->def.dim == 3 ? 12.0 : 6.0;
+    const double m = e->m, R = e->r, rot = e->rot;
+    e->packing = e->impact = e->sqrt_mk = e->hertz = INFINITY;
+    for (int m2 = 0; m2 < w->nmats; m2++) {
+        const floe_contact_law *law = w->laws[e->mat * w->nmats + m2];
+        if (!law) continue;
+        /* partner of the same size (m* = m/2, R* = R/2) and a wall (m* = m, R* = R) */
+        /* a packing (all contacts of a close packing at a 2 % overlap) and an impact at
+         * the expected speed (one contact, C = 2, at the overlap of the collision) */
+        pair_estimate(law, 0.5 * R, 0.5 * m, m, rot, C, 0, &e->packing);
+        pair_estimate(law, R, m, m, rot, C, 0, &e->packing);
+        pair_estimate(law, 0.5 * R, 0.5 * m, m, rot, 2.0, vrel, &e->impact);
+        pair_estimate(law, R, m, m, rot, 2.0, vrel, &e->impact);
+        /* 000 eq 43: sqrt(m / k_bar), k_bar = the normal stiffnesses of the n_c contacts of
+         * a close packing at 2 % overlap (004 eq 28 takes 2 sqrt(m_ii / k_ii) of the same) */
+        for (int s = 0; s < 2; s++) {
+            double re = s ? R : 0.5 * R, me = s ? m : 0.5 * m, kn = 0, cn = 0;
+            law->klass->stiffness(law, re, me, 0.02 * re, &kn, &cn);
+            if (kn > 0 && sqrt(m / (nc * kn)) < e->sqrt_mk) e->sqrt_mk = sqrt(m / (nc * kn));
+            /* Hertz contact duration at the expected speed, 2.87 (m*^2 / (R* E*^2 v))^(1/5)
+             * (E* of the law: the force is 4/3 E* sqrt(R*) d^(3/2)) */
+            if (law->klass == &floe_hertz_mindlin_law_class && vrel > 0) {
+                double es = ((const floe_hertz_mindlin_law *)law)->e_star;
+                double th = 2.87 * pow(me * me / (re * es * es * vrel), 0.2);
+                if (th < e->hertz) e->hertz = th;
+            }
+        }
+    }
+}
+
+/* record dt for kind k at particle i when it is the smallest so far */
+static void dt_note(floe_dt_estimates *d, int k, double dt, int i) {
+    if (dt < d->dt[k]) { d->dt[k] = dt; d->particle[k] = i; }
+}
+
+const char *floe_dt_kind_name(int kind) {
+    static const char *const names[FLOE_DT_NKINDS] = {"contact_packing", "contact_impact", "motion", "pd_nodal",
+                                                      "pd_cfl", "dem_sqrt_m_k", "rayleigh", "hertz"};
+    return kind >= 0 && kind < FLOE_DT_NKINDS ? names[kind] : NULL;
+}
+
+/* Every estimate of floe_dt_estimates, per particle (w->dt_part: the smallest limiting
+ * kind of each particle) and global (w->dte, w->dt_crit). */
 static int estimate_dt(floe_world *w) {
     floe_particles *p = &w->p;
-    double C = w->def.dim == 3 ? 8.0 : 6.0;
-    double dt = INFINITY;
+    floe_dt_estimates *d = &w->dte;
+    memset(d, 0, sizeof *d);
+    for (int k = 0; k < FLOE_DT_NKINDS; k++) { d->dt[k] = INFINITY; d->particle[k] = -1; }
+    d->limits[FLOE_DT_CONTACT_PACKING] = d->limits[FLOE_DT_CONTACT_IMPACT] = 1;
+    d->limits[FLOE_DT_MOTION] = d->limits[FLOE_DT_PD_NODAL] = 1;
+    double *dp = realloc(w->dt_part, (size_t)(p->n ? p->n : 1) * sizeof *dp);
+    if (!dp) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    w->dt_part = dp;
     /* largest relative speed to expect: twice the fastest particle plus the free fall
      * over the extent of the scene along gravity */
     double vmax = 0, gmag = floe_v3_norm(w->def.gravity), lo = INFINITY, hi = -INFINITY;
@@ -520,50 +860,200 @@ static int estimate_dt(floe_world *w) {
         }
     }
     double vrel = 2 * vmax + (hi > lo ? sqrt(2 * gmag * (hi - lo)) : 0);
-    w->v_expected = vrel;
-    /* per material: smallest free particle (mass, radius) */
-    for (int m = 0; m < w->nmats; m++) {
-        double mmin = INFINITY, rmin = INFINITY, rot = 1;
-        for (int i = 0; i < p->n; i++)
-            if (p->material[i] == m && p->motion[i] == FLOE_FREE) {
-                if (p->mass[i] < mmin) mmin = p->mass[i];
-                if (p->radius[i] < rmin) rmin = p->radius[i];
-                /* 1 + m R^2 / I: 3.5 for a sphere (the largest over the material) */
-                const double *I = p->inertia + 3 * i;
-                double imin = w->def.dim == 2 ? I[2] : fmin(I[0], fmin(I[1], I[2]));
-                double rr = 1 + p->mass[i] * p->radius[i] * p->radius[i] / imin;
-                if (imin > 0 && rr > rot) rot = rr;
-            }
-        if (!isfinite(mmin)) continue;
-        for (int m2 = 0; m2 < w->nmats; m2++) {
-            const floe_contact_law *law = w->laws[m * w->nmats + m2];
-            if (!law) continue;
-            /* partner of the same size (m* = m/2, R* = R/2) and a wall (m* = m, R* = R) */
-            /* a packing (all contacts of a close packing at a 2 % overlap) and an impact at
-             * the expected speed (one contact, C = 2, at the overlap of the collision) */
-            pair_estimate(law, 0.5 * rmin, 0.5 * mmin, mmin, rot, C, 0, &dt);
-            pair_estimate(law, rmin, mmin, mmin, rot, C, 0, &dt);
-            pair_estimate(law, 0.5 * rmin, 0.5 * mmin, mmin, rot, 2.0, vrel, &dt);
-            pair_estimate(law, rmin, mmin, mmin, rot, 2.0, vrel, &dt);
+    w->v_expected = d->v_expected = vrel;
+    /* materials in a Hertz-Mindlin law: the Rayleigh step of their particles */
+    unsigned char *hertz_mat = calloc((size_t)(w->nmats ? w->nmats : 1), 1);
+    dt_cache_entry *cache = calloc(DT_CACHE, sizeof *cache);
+    if (!hertz_mat || !cache) {
+        free(hertz_mat);
+        free(cache);
+        return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
+    for (int a = 0; a < w->nmats; a++)
+        for (int b = 0; b < w->nmats; b++) {
+            const floe_contact_law *law = w->laws[a * w->nmats + b];
+            if (law && law->klass == &floe_hertz_mindlin_law_class) hertz_mat[a] = hertz_mat[b] = 1;
         }
+    for (int k = 0; k < DT_CACHE; k++) cache[k].mat = -1;
+    for (int i = 0; i < p->n; i++) {
+        dp[i] = INFINITY;
+        if (p->motion[i] != FLOE_FREE || !isfinite(p->radius[i])) continue;
+        /* 1 + m R^2 / I: 3.5 for a sphere */
+        const double *I = p->inertia + 3 * i;
+        double imin = w->def.dim == 2 ? I[2] : fmin(I[0], fmin(I[1], I[2]));
+        double rot = imin > 0 ? fmax(1.0, 1 + p->mass[i] * p->radius[i] * p->radius[i] / imin) : 1.0;
+        dt_cache_entry key = {p->material[i], p->mass[i], p->radius[i], rot, 0, 0, 0, 0};
+        unsigned long long hsh = (unsigned long long)key.mat * 0x9E3779B97F4A7C15ull;
+        const double vals[3] = {key.m, key.r, key.rot};
+        for (int k = 0; k < 3; k++) {
+            unsigned long long bits;
+            memcpy(&bits, &vals[k], sizeof bits);
+            hsh = (hsh ^ bits) * 0x100000001B3ull;
+        }
+        dt_cache_entry *e = &cache[(hsh >> 20) % DT_CACHE];
+        if (!(e->mat == key.mat && e->m == key.m && e->r == key.r && e->rot == key.rot)) {
+            *e = key;
+            particle_contact_estimates(w, e, vrel);
+        }
+        dt_note(d, FLOE_DT_CONTACT_PACKING, e->packing, i);
+        dt_note(d, FLOE_DT_CONTACT_IMPACT, e->impact, i);
+        dt_note(d, FLOE_DT_DEM_SQRT_MK, e->sqrt_mk, i);
+        dt_note(d, FLOE_DT_HERTZ, e->hertz, i);
+        double mine = fmin(e->packing, e->impact);
+        /* motion: no particle may move more than half its radius in a step (the stability
+         * check of the step stops the run past that) */
+        if (vrel > 0) {
+            double dm = 0.5 * p->radius[i] / vrel;
+            dt_note(d, FLOE_DT_MOTION, dm, i);
+            if (dm < mine) mine = dm;
+        }
+        if (hertz_mat[p->material[i]]) {
+            /* Rayleigh wave crossing the particle: pi R sqrt(rho / G) / (0.1631 nu + 0.8766) */
+            const floe_material *mt = &w->mats[p->material[i]];
+            double G = mt->young / (2 * (1 + mt->poisson));
+            double dr = M_PI * p->radius[i] * sqrt(mt->density / G) / (0.1631 * mt->poisson + 0.8766);
+            dt_note(d, FLOE_DT_RAYLEIGH, dr, i);
+        }
+        dp[i] = mine;
     }
-    /* motion: no particle may move more than half its radius in a step (the stability
-     * check of the step stops the run past that) */
-    if (vrel > 0)
-        for (int i = 0; i < p->n; i++)
-            if (p->motion[i] == FLOE_FREE && isfinite(p->radius[i]) && 0.5 * p->radius[i] / vrel < dt)
-                dt = 0.5 * p->radius[i] / vrel;
-    /* peridynamic bodies: the nodal estimate sqrt(2 rho / sum_j V_j c/|xi|) (Silling and
-     * Askari 2005; measured limits 2.1x (PMB) and 1.8x (LPS) of it, tests/test_pd.c) */
+    free(hertz_mat);
+    free(cache);
+    /* peridynamic bodies: the nodal estimate sqrt(2 rho / sum_j V_j c/|xi|) per point
+     * (Silling and Askari 2005; measured limits 2.1x (PMB) and 1.8x (LPS) of it,
+     * tests/test_pd.c), as floe_pd_dt_nodal; and the CFL step of 000 eqs 41-42 per body */
     for (int k = 0; k < w->npd; k++) {
-        double d = floe_pd_dt_nodal(w->pd[k]);
-        if (d > 0 && d < dt) dt = d;
+        const floe_pd_body *b = w->pd[k];
+        const int f0 = w->pd_first[k];
+        double *sum = calloc((size_t)b->n, sizeof *sum);
+        if (!sum) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        double c = b->ops->bond_micromodulus(b);
+        for (int i = 0; i < b->n; i++)
+            for (int64_t q = b->off[i]; q < b->off[i + 1]; q++) {
+                int j = b->partner[q];
+                double s = b->vfac[q] * (b->scorr ? b->scorr[q] : 1.0f) * c / b->len[q];
+                sum[i] += s * b->V[j];
+                sum[j] += s * b->V[i];
+            }
+        for (int i = 0; i < b->n; i++) {
+            if (!(sum[i] > 0) || p->motion[f0 + i] != FLOE_FREE) continue;
+            double dn = sqrt(2.0 * b->mat.rho / sum[i]);
+            dt_note(d, FLOE_DT_PD_NODAL, dn, f0 + i);
+            if (dn < dp[f0 + i]) dp[f0 + i] = dn;
+        }
+        free(sum);
+        double dc = floe_pd_dt_cfl(b);
+        if (dc > 0) dt_note(d, FLOE_DT_PD_CFL, dc, f0);
     }
-    w->dt_crit = dt;
+    d->critical = INFINITY;
+    d->limiting = d->limiting_particle = -1;
+    for (int k = 0; k < FLOE_DT_NKINDS; k++)
+        if (d->limits[k] && d->dt[k] < d->critical) {
+            d->critical = d->dt[k];
+            d->limiting = k;
+            d->limiting_particle = d->particle[k];
+        }
+    d->critical_contact = fmin(d->dt[FLOE_DT_CONTACT_PACKING], fmin(d->dt[FLOE_DT_CONTACT_IMPACT], d->dt[FLOE_DT_MOTION]));
+    d->critical_pd = d->dt[FLOE_DT_PD_NODAL];
+    w->dt_crit = d->critical;
+    if (w->beams) w->dt_crit = d->critical = fmin(d->critical, floe_beam_critical_dt(w)); /* beam bonds */
+    return FLOE_OK;
+}
+
+/* The step, the staggered ratios and the adaptive bounds, from the definition and the
+ * estimates. A given dt above the critical estimate is refused unless allowed; so is a PD
+ * step of the staggered scheme above the PD estimate. */
+static int choose_dt(floe_world *w) {
+    const floe_world_def *d = &w->def;
+    const floe_dt_estimates *e = &w->dte;
+    if (d->integrator < FLOE_VELOCITY_VERLET || d->integrator > FLOE_RK2)
+        return floe_world_error(w, FLOE_EINVAL, "integrator %d unknown (velocity_verlet, leapfrog or rk2)", d->integrator);
+    if (d->pd_dem != FLOE_PD_DEM_MONOLITHIC && d->pd_dem != FLOE_PD_DEM_STAGGERED)
+        return floe_world_error(w, FLOE_EINVAL, "pd_dem scheme %d unknown (monolithic or staggered)", d->pd_dem);
+    const int stag = d->pd_dem == FLOE_PD_DEM_STAGGERED;
+    if (stag && d->integrator != FLOE_VELOCITY_VERLET)
+        return floe_world_error(w, FLOE_EINVAL, "the staggered PD-DEM scheme kicks and drifts as velocity Verlet does "
+                                "(r-RESPA); use integrator velocity_verlet with it");
+    if (d->adaptive && d->integrator == FLOE_LEAPFROG)
+        return floe_world_error(w, FLOE_EINVAL, "adaptive steps need velocity_verlet or rk2 (leapfrog keeps half-step "
+                                "velocities, which a rejected step could not restore consistently)");
+    if (d->adaptive && stag)
+        return floe_world_error(w, FLOE_EINVAL, "adaptive steps and the staggered PD-DEM scheme cannot be combined yet");
+    if (d->pd_substeps < 0 || d->pd_every < 0 || (d->pd_substeps > 1 && d->pd_every > 1))
+        return floe_world_error(w, FLOE_EINVAL, "staggered PD-DEM: substeps (%d) and every (%d) must be >= 1 (substeps 0: "
+                                "automatic), and only one of them above 1", d->pd_substeps, d->pd_every);
+    if (d->adaptive) {
+        const char *bad = NULL;
+        if (!(d->adapt_velocity_tol > 0) || !isfinite(d->adapt_velocity_tol)) bad = "velocity tolerance must be > 0";
+        else if (!(d->adapt_depth_tol > 0) || !isfinite(d->adapt_depth_tol)) bad = "penetration tolerance must be > 0";
+        else if (!(d->dt_min >= 0) || !isfinite(d->dt_min)) bad = "dt_min must be >= 0 (0 = automatic)";
+        else if (!(d->dt_max >= 0) || !isfinite(d->dt_max)) bad = "dt_max must be >= 0 (0 = automatic)";
+        if (bad) return floe_world_error(w, FLOE_EINVAL, "adaptive steps: %s", bad);
+    }
+    const int st = stag && w->npd > 0;
+    double crit = st && isfinite(e->critical_contact) ? e->critical_contact : e->critical;
+    const char *what = st && isfinite(e->critical_contact) ? "the contact critical estimate" : "the critical estimate";
+    int lk = st && isfinite(e->critical_contact) ? (e->dt[FLOE_DT_CONTACT_PACKING] == crit ? FLOE_DT_CONTACT_PACKING
+                                                    : e->dt[FLOE_DT_CONTACT_IMPACT] == crit ? FLOE_DT_CONTACT_IMPACT
+                                                                                              : FLOE_DT_MOTION)
+                                                 : e->limiting;
+    if (d->dt > 0) {
+        w->dt = d->dt;
+        if (isfinite(crit) && w->dt > crit && !d->allow_unstable_dt)
+            return floe_world_error(w, FLOE_EUNSTABLE,
+                                    "time step %g s is above %s %g s (%s, particle %d); use a smaller dt, dt: auto "
+                                    "(automatic), or allow_unstable_dt: true",
+                                    w->dt, what, crit, lk >= 0 ? floe_dt_kind_name(lk) : "?",
+                                    lk >= 0 ? e->particle[lk] : -1);
+    } else {
+        if (!isfinite(crit))
+            return floe_world_error(w, FLOE_EINVAL, "automatic time step: no contact law to estimate it from; give dt");
+        w->dt = d->dt_safety * crit;
+    }
+    w->pd_sub = w->pd_every = 1;
+    if (st) {
+        const double pdc = e->critical_pd;
+        int sub = d->pd_substeps, every = d->pd_every > 0 ? d->pd_every : 1;
+        if (sub == 0) { /* automatic: the integer ratio of the two critical steps */
+            sub = 1;
+            if (isfinite(pdc) && every == 1) {
+                if (w->dt > d->dt_safety * pdc) sub = (int)ceil(w->dt / (d->dt_safety * pdc) - 1e-9);
+                else every = (int)fmax(1.0, floor(d->dt_safety * pdc / w->dt + 1e-9));
+            }
+        }
+        if (sub > 100000 || every > 100000)
+            return floe_world_error(w, FLOE_EINVAL, "staggered PD-DEM: ratio %d out of range (at most 100000)", sub > every ? sub : every);
+        double dpd = every > 1 ? every * w->dt : w->dt / sub;
+        if (isfinite(pdc) && dpd > pdc && !d->allow_unstable_dt)
+            return floe_world_error(w, FLOE_EUNSTABLE,
+                                    "staggered PD-DEM: the PD step %g s (dt %g s %s %d) is above the PD critical estimate "
+                                    "%g s (pd_nodal, particle %d); raise substeps, lower every or dt, or allow_unstable_dt: true",
+                                    dpd, w->dt, every > 1 ? "x" : "/", every > 1 ? every : sub, pdc,
+                                    e->particle[FLOE_DT_PD_NODAL]);
+        w->pd_sub = sub;
+        w->pd_every = every;
+    }
+    w->st.pd_substeps = w->pd_sub;
+    w->st.pd_every = w->pd_every;
+    if (d->adaptive) {
+        w->dt_hi = d->dt_max > 0 ? d->dt_max : crit;
+        if (!isfinite(w->dt_hi))
+            return floe_world_error(w, FLOE_EINVAL, "adaptive steps: no critical estimate to bound the step; give dt_max");
+        if (d->dt_max > 0 && isfinite(crit) && d->dt_max > crit && !d->allow_unstable_dt)
+            return floe_world_error(w, FLOE_EUNSTABLE,
+                                    "adaptive steps: dt_max %g s is above the critical estimate %g s; lower it, or "
+                                    "allow_unstable_dt: true", d->dt_max, crit);
+        w->dt_lo = d->dt_min > 0 ? d->dt_min : 1e-3 * w->dt_hi;
+        if (w->dt_lo > w->dt_hi)
+            return floe_world_error(w, FLOE_EINVAL, "adaptive steps: dt_min %g s is above dt_max %g s", w->dt_lo, w->dt_hi);
+        w->dt = fmin(w->dt_hi, fmax(w->dt_lo, w->dt));
+        w->dt_next = w->dt;
+    }
     return FLOE_OK;
 }
 
 static int observers_call(floe_world *w, int force_all);
+static int contacts_wanted(const floe_world *w);
+static int stag_split_forces(floe_world *w);
 
 int floe_world_prepare(floe_world *w) {
     if (w->prepared) return FLOE_OK;
@@ -673,18 +1163,8 @@ int floe_world_prepare(floe_world *w) {
         memset(w->pd_fold, 0, (size_t)3 * w->pd_npts * sizeof *fo);
     }
     FLOE_TRY(estimate_dt(w));
-    if (w->def.dt > 0) {
-        w->dt = w->def.dt;
-        if (isfinite(w->dt_crit) && w->dt > w->dt_crit && !w->def.allow_unstable_dt)
-            return floe_world_error(w, FLOE_EUNSTABLE,
-                                    "time step %g s is above the critical estimate %g s; use a smaller dt, dt: auto "
-                                    "(automatic), or allow_unstable_dt: true",
-                                    w->dt, w->dt_crit);
-    } else {
-        if (!isfinite(w->dt_crit))
-            return floe_world_error(w, FLOE_EINVAL, "automatic time step: no contact law to estimate it from; give dt");
-        w->dt = w->def.dt_safety * w->dt_crit;
-    }
+    FLOE_TRY(choose_dt(w));
+    if (w->step == 0) w->lf_dt_prev = 0; /* leapfrog: the velocities given are synchronised */
     int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
     if (rc) return floe_world_error(w, rc, "neighbour list build failed (out of memory)");
     {
@@ -696,7 +1176,7 @@ int floe_world_prepare(floe_world *w) {
     w->t0 = w->time;
     w->step0 = w->step;
     w->record_now = w->record_contacts || w->obs_need_contacts;
-    rc = floe_compute_forces(w);
+    rc = w->def.pd_dem == FLOE_PD_DEM_STAGGERED && w->npd ? stag_split_forces(w) : floe_compute_forces(w);
     if (rc) return rc;
     /* energy at start */
     floe_energy *e = &w->energy;
@@ -813,11 +1293,109 @@ static int check_particle(floe_world *w, int i, const double xold[3]) {
     return FLOE_OK;
 }
 
-int floe_world_step(floe_world *w) {
-    if (!w->prepared) FLOE_TRY(floe_world_prepare(w));
+/* largest squared distance of x from its position at the neighbour build, into *maxd2 */
+static inline void note_disp(const double *x, const double *xb, double *maxd2) {
+    double dx = x[0] - xb[0], dy = x[1] - xb[1], dz = x[2] - xb[2];
+    double d2 = dx * dx + dy * dy + dz * dz;
+    if (d2 > *maxd2) *maxd2 = d2;
+}
+
+/* omega of free particle i from its angular momentum */
+static inline void omega_update(floe_particles *p, int i) {
+    if (p->iso[i]) {
+        double inv = 1.0 / p->inertia[3 * i];
+        for (int k = 0; k < 3; k++) p->w[3 * i + k] = p->L[3 * i + k] * inv;
+    } else omega_from_L(p->q + 4 * i, p->inertia + 3 * i, p->L + 3 * i, p->w + 3 * i);
+}
+
+/* the orientation of free particle i over dt with its angular momentum L (eq 23 as the
+ * midpoint rule of step_verlet: the isotropic fast path, or two fixed-point passes) */
+static void rotate_drift(floe_particles *p, int i, double dt) {
+    double *q = p->q + 4 * i, *L = p->L + 3 * i, *om = p->w + 3 * i;
+    const double *I = p->inertia + 3 * i, h = 0.5 * dt;
+    if (p->iso[i]) {
+        double inv = 1.0 / I[0];
+        for (int k = 0; k < 3; k++) om[k] = L[k] * inv;
+        double th[3] = {h * om[0], h * om[1], h * om[2]}, t2 = floe_v3_dot(th, th);
+        if (t2 > 0) {
+            double c = 1 - 0.5 * t2, dq[4] = {c, th[0], th[1], th[2]}, qn[4];
+            floe_q_mul(qn, dq, q);
+            double s2 = qn[0] * qn[0] + qn[1] * qn[1] + qn[2] * qn[2] + qn[3] * qn[3];
+            double sc = 1.5 - 0.5 * s2;
+            for (int k = 0; k < 4; k++) q[k] = qn[k] * sc;
+        }
+    } else if (floe_v3_dot(L, L) > 0) {
+        double qm[4], omm[3], qn[4];
+        omega_from_L(q, I, L, omm);
+        q_advance(qm, q, omm, h);
+        for (int it = 0; it < 2; it++) {
+            omega_from_L(qm, I, L, omm);
+            q_advance(qm, q, omm, h);
+        }
+        omega_from_L(qm, I, L, omm);
+        q_advance(qn, q, omm, dt);
+        memcpy(q, qn, sizeof qn);
+        omega_from_L(q, I, L, om);
+    }
+}
+
+/* state objects over the step, RK2 midpoint (eq 21) */
+static int advance_states(floe_world *w, double dt) {
+    const double h = 0.5 * dt;
+    for (int s = 0; s < w->nstates; s++) {
+        floe_state *st = w->states[s];
+        size_t m = st->klass->size(st);
+        double buf[64];
+        double *y0 = m <= 16 ? buf : malloc(4 * m * sizeof(double));
+        if (!y0) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        double *k1 = y0 + m, *ym = y0 + 2 * m, *k2 = y0 + 3 * m;
+        st->klass->get(st, y0);
+        int rc = st->klass->rhs(st, w, w->time, y0, k1);
+        for (size_t a = 0; a < m && !rc; a++) ym[a] = y0[a] + h * k1[a];
+        if (!rc) rc = st->klass->rhs(st, w, w->time + h, ym, k2);
+        for (size_t a = 0; a < m && !rc; a++) ym[a] = y0[a] + dt * k2[a];
+        if (!rc) rc = st->klass->set(st, w, ym);
+        if (y0 != buf) free(y0);
+        if (rc) return floe_world_error(w, rc, "state object %s failed at step %ld", st->klass->name, w->step);
+    }
+    return FLOE_OK;
+}
+
+/* the integrators' scratch: at least nd doubles (contents kept when it grows) */
+static double *ibuf_reserve(floe_world *w, size_t nd) {
+    if (nd <= w->ibuf_cap) return w->ibuf;
+    double *b = realloc(w->ibuf, nd * sizeof *b);
+    if (!b) return NULL;
+    w->ibuf = b;
+    w->ibuf_cap = nd;
+    return b;
+}
+
+/* step counter and time after a step (no drift from repeated sums) */
+static void advance_clock(floe_world *w) {
+    w->step++;
+    w->time = w->t0 + (double)(w->step - w->step0) * w->dt;
+}
+
+static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb) {
+    if (floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0)) {
+        int rc = floe_nl_build(&w->nl, &w->p, w->def.dim, w->def.leaf_size);
+        if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
+    }
+    return FLOE_OK;
+}
+
+/* Velocity Verlet (ParticLS eq 22) and leapfrog (000 eq 44). Leapfrog keeps v_{n-1/2}:
+ * its one kick per step v_{n+1/2} = v_{n-1/2} + dt a_n is velocity Verlet's two half kicks
+ * merged, so both follow the same trajectory (to rounding); they differ in the velocity
+ * they store (leapfrog: half a step behind the positions, as in the paper). */
+static int step_verlet(floe_world *w) {
     floe_particles *p = &w->p;
     const double dt = w->dt, h = 0.5 * dt;
-    const int n = p->n;
+    const int n = p->n, leap = w->def.integrator == FLOE_LEAPFROG;
+    /* leapfrog: the kick spans the two half steps around t_n; the first step after the
+     * velocities were synchronised (start) spans half a step */
+    const double k1 = leap ? 0.5 * (w->lf_dt_prev + dt) : h, k2 = leap ? 0.0 : h;
     double wb = 0;    /* body-force work this step */
     double maxd2 = 0; /* largest squared displacement since the neighbour build */
     const double *xb = w->nl.x_build;
@@ -832,29 +1410,21 @@ int floe_world_step(floe_world *w) {
             memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
             kinematic_velocity(w, i, w->time + h);
             floe_v3_axpy(x, dt, v);
-            if (have_xb) {
-                double dx = x[0] - xb[3 * i], dy = x[1] - xb[3 * i + 1], dz = x[2] - xb[3 * i + 2];
-                double d2 = dx * dx + dy * dy + dz * dz;
-                if (d2 > maxd2) maxd2 = d2;
-            }
+            if (have_xb) note_disp(x, xb + 3 * i, &maxd2);
             double qn[4];
             q_advance(qn, q, p->w + 3 * i, dt);
             memcpy(q, qn, sizeof qn);
             continue;
         }
         double im = p->inv_mass[i];
-        for (int k = 0; k < 3; k++) v[k] += h * im * p->f[3 * i + k];
+        for (int k = 0; k < 3; k++) v[k] += k1 * im * p->f[3 * i + k];
         for (int k = 0; k < 3; k++) x[k] += dt * v[k];
-        if (have_xb) {
-            double dx = x[0] - xb[3 * i], dy = x[1] - xb[3 * i + 1], dz = x[2] - xb[3 * i + 2];
-            double d2 = dx * dx + dy * dy + dz * dz;
-            if (d2 > maxd2) maxd2 = d2;
-        }
+        if (have_xb) note_disp(x, xb + 3 * i, &maxd2);
         /* body-force work over the step uses the drift displacement (exact for gravity
          * when the second half adds the same force) */
         double *L = p->L + 3 * i, *om = p->w + 3 * i;
         const double *I = p->inertia + 3 * i;
-        floe_v3_axpy(L, h, p->t + 3 * i);
+        floe_v3_axpy(L, k1, p->t + 3 * i);
         if (p->iso[i]) {
             /* isotropic body (sphere): omega = L / I is frame-independent; the orientation
              * follows by q <- exp(dt omega / 2) q, here to third order without trig */
@@ -886,35 +1456,17 @@ int floe_world_step(floe_world *w) {
         wb += dt * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
     }
     /* 2. state objects, RK2 midpoint (eq 21) */
-    for (int s = 0; s < w->nstates; s++) {
-        floe_state *st = w->states[s];
-        size_t m = st->klass->size(st);
-        double buf[64];
-        double *y0 = m <= 16 ? buf : malloc(4 * m * sizeof(double));
-        if (!y0) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-        double *k1 = y0 + m, *ym = y0 + 2 * m, *k2 = y0 + 3 * m;
-        st->klass->get(st, y0);
-        int rc = st->klass->rhs(st, w, w->time, y0, k1);
-        for (size_t a = 0; a < m && !rc; a++) ym[a] = y0[a] + h * k1[a];
-        if (!rc) rc = st->klass->rhs(st, w, w->time + h, ym, k2);
-        for (size_t a = 0; a < m && !rc; a++) ym[a] = y0[a] + dt * k2[a];
-        if (!rc) rc = st->klass->set(st, w, ym);
-        if (y0 != buf) free(y0);
-        if (rc) return floe_world_error(w, rc, "state object %s failed at step %ld", st->klass->name, w->step);
-    }
-    w->step++;
-    w->time = w->t0 + (double)(w->step - w->step0) * dt; /* no drift from repeated sums */
+    FLOE_TRY(advance_states(w, dt));
+    advance_clock(w);
     /* 3. neighbours and forces at t + dt */
-    if (floe_nl_needs_rebuild_after_drift(&w->nl, p, maxd2, !have_xb || w->nstates > 0)) {
-        int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
-        if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
-    }
+    FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
     w->advancing = 1;
     w->record_now = contacts_wanted(w);
     int frc = floe_compute_forces(w);
     w->advancing = 0;
     if (frc) return frc;
-    /* 4. second half kick */
+    /* 4. second half kick (leapfrog: none; its kinetic energy is that of the synchronised
+     * velocity v_{n+1/2} + dt/2 a_{n+1}) */
     double kt = 0, kr = 0, wbound = 0;
     for (int i = 0; i < n; i++) {
         if (p->motion[i] != FLOE_FREE) {
@@ -933,42 +1485,654 @@ int floe_world_step(floe_world *w) {
         /* the drift of this step was dt * v_half: a particle that moved more than half its
          * radius, or whose state is not finite (NaN fails every comparison), is unstable */
         double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * dt * dt, lim = 0.5 * p->radius[i];
-        for (int k = 0; k < 3; k++) v[k] += h * im * p->f[3 * i + k];
-        floe_v3_axpy(L, h, p->t + 3 * i);
-        if (p->iso[i]) {
-            double inv = 1.0 / p->inertia[3 * i];
-            for (int k = 0; k < 3; k++) p->w[3 * i + k] = L[k] * inv;
-        } else omega_from_L(p->q + 4 * i, p->inertia + 3 * i, L, p->w + 3 * i);
-        double ke = 0.5 * p->mass[i] * floe_v3_dot(v, v), kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
+        double ke, kre;
+        if (!leap) {
+            for (int k = 0; k < 3; k++) v[k] += h * im * p->f[3 * i + k];
+            floe_v3_axpy(L, h, p->t + 3 * i);
+            if (p->iso[i]) {
+                double inv = 1.0 / p->inertia[3 * i];
+                for (int k = 0; k < 3; k++) p->w[3 * i + k] = L[k] * inv;
+            } else omega_from_L(p->q + 4 * i, p->inertia + 3 * i, L, p->w + 3 * i);
+            ke = 0.5 * p->mass[i] * floe_v3_dot(v, v);
+            kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
+        } else {
+            double vs[3], Ls[3], ws[3];
+            for (int k = 0; k < 3; k++) {
+                vs[k] = v[k] + h * im * p->f[3 * i + k];
+                Ls[k] = L[k] + h * p->t[3 * i + k];
+            }
+            if (p->iso[i]) {
+                double inv = 1.0 / p->inertia[3 * i];
+                for (int k = 0; k < 3; k++) ws[k] = Ls[k] * inv;
+            } else omega_from_L(p->q + 4 * i, p->inertia + 3 * i, Ls, ws);
+            ke = 0.5 * p->mass[i] * floe_v3_dot(vs, vs);
+            kre = 0.5 * floe_v3_dot(Ls, ws);
+        }
         kt += ke;
         kr += kre;
         if (!(d2 <= lim * lim) || !(ke + kre < INFINITY) || !(fabs(p->x[3 * i]) + fabs(p->x[3 * i + 1]) + fabs(p->x[3 * i + 2]) < INFINITY)) {
             double xold[3];
-            for (int k = 0; k < 3; k++) xold[k] = p->x[3 * i + k] - dt * (v[k] - h * im * p->f[3 * i + k]);
+            for (int k = 0; k < 3; k++) xold[k] = p->x[3 * i + k] - dt * (v[k] - k2 * im * p->f[3 * i + k]);
             int rc = check_particle(w, i, xold);
             if (rc) return rc;
+        }
+    }
+    if (leap) w->lf_dt_prev = dt;
+    w->energy.kinetic_trans = kt;
+    w->energy.kinetic_rot = kr;
+    w->energy.work_body += wb;
+    w->energy.work_boundary += wbound;
+    return FLOE_OK;
+}
+
+/* Forces at the RK2 midpoint: the contact history is advanced by dt/2 from the step's
+ * start (its midpoint value) and put back afterwards, the body-force and external-force
+ * memories of the energy ledger too; nothing is booked in the ledger, no contact recorded,
+ * and PD bonds do not break (their forces come from floe_pd_forces_nobreak). */
+static int rk2_midpoint_forces(floe_world *w, double h) {
+    floe_particles *p = &w->p;
+    floe_neighbor_list *nl = &w->nl;
+    const size_t np = (size_t)nl->npairs, nh = np * FLOE_MAX_HISTORY, nt = (np + 7) / 8;
+    const size_t nfb = w->body_force && w->fb_old ? 6 * (size_t)w->fb_n : 0;
+    size_t nbc = 0;
+    for (int q = 0; q < w->npd_bc; q++)
+        if (w->pd_bc[q]->fold) nbc += 3 * (size_t)w->pd_bc[q]->n;
+    /* after the RK2 state (16 n doubles) */
+    const size_t off = 16 * (size_t)p->n;
+    double *b = ibuf_reserve(w, off + nh + nt + nfb + nbc);
+    if (!b) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    double *hs = b + off, *fbs = hs + nh + nt, *bcs = fbs + nfb;
+    unsigned char *ts = (unsigned char *)(hs + nh);
+    if (np) {
+        memcpy(hs, nl->hist, nh * sizeof *hs);
+        memcpy(ts, nl->touching, np);
+    }
+    if (nfb) memcpy(fbs, w->fb_old, nfb * sizeof *fbs);
+    for (int q = 0, o = 0; q < w->npd_bc; q++)
+        if (w->pd_bc[q]->fold) {
+            memcpy(bcs + o, w->pd_bc[q]->fold, 3 * (size_t)w->pd_bc[q]->n * sizeof *bcs);
+            o += 3 * w->pd_bc[q]->n;
+        }
+    const int npd = w->npd;
+    const double ec = w->elastic_contact;
+    w->npd = 0; /* the bond forces below, without breakage */
+    w->peek_dt = h;
+    w->advancing = 0;
+    w->record_now = 0;
+    long rb = nl->rebuilds;
+    int rc = floe_compute_forces_part(w, FLOE_FORCES_CONTACT);
+    w->peek_dt = 0;
+    w->npd = npd;
+    w->elastic_contact = ec;
+    w->st.force_evaluations++;
+    if (rc) return rc;
+    if (nl->rebuilds != rb) return floe_world_error(w, FLOE_EINVAL, "internal: neighbour list rebuilt at the RK2 midpoint");
+    if (np) {
+        memcpy(nl->hist, hs, nh * sizeof *hs);
+        memcpy(nl->touching, ts, np);
+    }
+    if (nfb) memcpy(w->fb_old, fbs, nfb * sizeof *fbs);
+    for (int q = 0, o = 0; q < w->npd_bc; q++)
+        if (w->pd_bc[q]->fold) {
+            memcpy(w->pd_bc[q]->fold, bcs + o, 3 * (size_t)w->pd_bc[q]->n * sizeof *bcs);
+            o += 3 * w->pd_bc[q]->n;
+        }
+    for (int k = 0; k < npd; k++) {
+        int f0 = w->pd_first[k];
+        floe_pd_forces_nobreak(w->pd[k], p->x + 3 * (size_t)f0, p->f + 3 * (size_t)f0);
+        if (w->def.dim == 2)
+            for (int i = 0; i < w->pd[k]->n; i++) p->f[3 * (size_t)(f0 + i) + 2] = 0;
+    }
+    return FLOE_OK;
+}
+
+/* Explicit midpoint RK2 for the particles (ParticLS eq 21 with y = (x, v, q, L)):
+ *   y_mid = y_n + dt/2 f(y_n);  y_{n+1} = y_n + dt f(y_mid).
+ * The force at the end of the step, f(y_{n+1}), is evaluated with the midpoint velocities
+ * (the velocities of the drift x_{n+1} - x_n = dt v_mid), like velocity Verlet's forces:
+ * the contact history then grows by the tangential displacement of the step and the
+ * energy ledger's trapezoid work is that of the actual displacement; that force only
+ * enters the next step's midpoint, where an O(dt) error costs O(dt^3) locally. */
+static int step_rk2(floe_world *w) {
+    floe_particles *p = &w->p;
+    const int n = p->n;
+    const double dt = w->dt, h = 0.5 * dt, t_n = w->time;
+    double *b = ibuf_reserve(w, 16 * (size_t)(n ? n : 1));
+    if (!b) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    double *x0 = b, *v0 = b + 3 * (size_t)n, *L0 = b + 6 * (size_t)n, *q0 = b + 9 * (size_t)n;
+    memcpy(x0, p->x, 3 * (size_t)n * sizeof *x0);
+    memcpy(v0, p->v, 3 * (size_t)n * sizeof *v0);
+    memcpy(L0, p->L, 3 * (size_t)n * sizeof *L0);
+    memcpy(q0, p->q, 4 * (size_t)n * sizeof *q0);
+    /* 1. the midpoint state */
+    for (int i = 0; i < n; i++) {
+        double *x = p->x + 3 * i, *v = p->v + 3 * i, *q = p->q + 4 * i;
+        if (p->motion[i] == FLOE_FIXED) continue;
+        if (p->motion[i] == FLOE_KINEMATIC) {
+            memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
+            memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
+            kinematic_velocity(w, i, t_n + h);
+            floe_v3_axpy(x, h, v);
+        } else {
+            double im = p->inv_mass[i];
+            floe_v3_axpy(x, h, v);
+            for (int k = 0; k < 3; k++) v[k] += h * im * p->f[3 * i + k];
+            floe_v3_axpy(p->L + 3 * i, h, p->t + 3 * i);
+        }
+        double qn[4];
+        q_advance(qn, q, p->w + 3 * i, h);
+        memcpy(q, qn, sizeof qn);
+        if (p->motion[i] == FLOE_FREE) omega_update(p, i);
+    }
+    /* 2. forces at the midpoint */
+    w->time = t_n + h;
+    int rc = rk2_midpoint_forces(w, h);
+    w->time = t_n;
+    if (rc) return rc;
+    b = w->ibuf; /* the midpoint's scratch may have moved it */
+    x0 = b; v0 = b + 3 * (size_t)n; L0 = b + 6 * (size_t)n; q0 = b + 9 * (size_t)n;
+    double *fm = b + 13 * (size_t)n; /* F_mid */
+    memcpy(fm, p->f, 3 * (size_t)n * sizeof *fm);
+    /* 3. x_{n+1} = x_n + dt v_mid, q_{n+1} = exp(dt w_mid) q_n; v, w stay at the midpoint
+     * values for the forces at the end; v_{n+1}, L_{n+1} from the midpoint forces */
+    double wb = 0, maxd2 = 0;
+    const double *xb = w->nl.x_build;
+    const int have_xb = xb && w->nl.n_build == n;
+    for (int i = 0; i < n; i++) {
+        if (p->motion[i] == FLOE_FIXED) continue;
+        double *x = p->x + 3 * i;
+        for (int k = 0; k < 3; k++) x[k] = x0[3 * i + k] + dt * p->v[3 * i + k];
+        q_advance(p->q + 4 * i, q0 + 4 * i, p->w + 3 * i, dt);
+        if (have_xb) note_disp(x, xb + 3 * i, &maxd2);
+        if (p->motion[i] == FLOE_FREE) {
+            wb += dt * (p->mass[i] * floe_v3_dot(w->def.gravity, p->v + 3 * i));
+            for (int k = 0; k < 3; k++) L0[3 * i + k] += dt * p->t[3 * i + k]; /* L_{n+1} */
+        }
+    }
+    FLOE_TRY(advance_states(w, dt));
+    advance_clock(w);
+    FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
+    w->advancing = 1;
+    w->record_now = contacts_wanted(w);
+    int frc = floe_compute_forces(w);
+    w->advancing = 0;
+    if (frc) return frc;
+    /* 4. v_{n+1} = v_n + dt F_mid / m, L_{n+1} = L_n + dt T_mid */
+    double kt = 0, kr = 0, wbound = 0;
+    for (int i = 0; i < n; i++) {
+        if (p->motion[i] != FLOE_FREE) {
+            if (p->motion[i] == FLOE_KINEMATIC) {
+                const double *fo = w->kin_old + 6 * i;
+                for (int k = 0; k < 3; k++)
+                    wbound -= h * ((fo[k] + p->f[3 * i + k]) * p->v[3 * i + k] + (fo[3 + k] + p->t[3 * i + k]) * p->w[3 * i + k]);
+                kinematic_velocity(w, i, w->time);
+            }
+            continue;
+        }
+        double *v = p->v + 3 * i, *L = p->L + 3 * i, im = p->inv_mass[i];
+        double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * dt * dt, lim = 0.5 * p->radius[i];
+        for (int k = 0; k < 3; k++) {
+            v[k] = v0[3 * i + k] + dt * im * fm[3 * i + k];
+            L[k] = L0[3 * i + k];
+        }
+        omega_update(p, i);
+        double ke = 0.5 * p->mass[i] * floe_v3_dot(v, v), kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
+        kt += ke;
+        kr += kre;
+        if (!(d2 <= lim * lim) || !(ke + kre < INFINITY) || !(fabs(p->x[3 * i]) + fabs(p->x[3 * i + 1]) + fabs(p->x[3 * i + 2]) < INFINITY)) {
+            int rc2 = check_particle(w, i, x0 + 3 * i);
+            if (rc2) return rc2;
         }
     }
     w->energy.kinetic_trans = kt;
     w->energy.kinetic_rot = kr;
     w->energy.work_body += wb;
     w->energy.work_boundary += wbound;
+    return FLOE_OK;
+}
+
+/* ---- staggered PD-DEM (000 §3.2-3.3, Algorithm 2) ----
+ * Two force groups: the contact and body forces F_C (DEM and coupling forces, gravity and
+ * external forces, counted once as the paper requires) and the PD bond forces F_PD. With
+ * dt_PD = dt / m the PD points sub-cycle m velocity Verlet steps with F_PD inside each
+ * step, between two half kicks with F_C; with dt_PD = k dt, F_PD is applied as two half
+ * kicks of k dt / 2 around every k steps of velocity Verlet with F_C. This is the
+ * impulse form of multiple time stepping (r-RESPA, Tuckerman, Berne and Martyna 1992):
+ * symmetric, second order and symplectic, and with m = k = 1 it is velocity Verlet (the
+ * monolithic scheme) with the two groups evaluated separately. The scratch w->ibuf holds
+ * F_C, its torques and F_PD between steps (3n each), then the start positions and the
+ * true velocities of the PD points (3n each). */
+
+static void stag_zero_pd_forces(floe_world *w) {
+    for (int k = 0; k < w->npd; k++)
+        memset(w->p.f + 3 * (size_t)w->pd_first[k], 0, 3 * (size_t)w->pd[k]->n * sizeof(double));
+}
+
+/* evaluate F_C then F_PD at the present state (prepare), p->f = their sum */
+static int stag_split_forces(floe_world *w) {
+    floe_particles *p = &w->p;
+    const size_t n3 = 3 * (size_t)p->n;
+    double *b = ibuf_reserve(w, 5 * (n3 ? n3 : 3));
+    if (!b) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    double *fs = b, *ts = b + n3, *fpd = b + 2 * n3;
+    FLOE_TRY(floe_compute_forces_part(w, FLOE_FORCES_CONTACT));
+    memcpy(fs, p->f, n3 * sizeof *fs);
+    memcpy(ts, p->t, n3 * sizeof *ts);
+    memset(p->f, 0, n3 * sizeof *p->f);
+    FLOE_TRY(floe_compute_forces_part(w, FLOE_FORCES_PD));
+    memcpy(fpd, p->f, n3 * sizeof *fpd);
+    for (size_t a = 0; a < n3; a++) p->f[a] = fs[a] + fpd[a];
+    memcpy(p->t, ts, n3 * sizeof *ts);
+    return FLOE_OK;
+}
+
+/* PD bond forces at the present positions into fpd, with the PD points moving at their
+ * mean velocity (x - xs) / span for the ledger's trapezoid work over that span */
+static int stag_pd_forces(floe_world *w, double span, const double *xs, double *vt, double *fpd, int mean_velocity) {
+    floe_particles *p = &w->p;
+    const double dt = w->dt;
+    for (int k = 0; k < w->npd; k++)
+        for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++)
+            if (mean_velocity) {
+                memcpy(vt + 3 * i, p->v + 3 * i, 3 * sizeof(double));
+                for (int a = 0; a < 3; a++) p->v[3 * i + a] = (p->x[3 * i + a] - xs[3 * i + a]) / span;
+            }
+    stag_zero_pd_forces(w);
+    w->dt = span;
+    w->advancing = 1;
+    int rc = floe_compute_forces_part(w, FLOE_FORCES_PD);
+    w->advancing = 0;
+    w->dt = dt;
+    for (int k = 0; k < w->npd; k++) {
+        size_t f0 = 3 * (size_t)w->pd_first[k], m = 3 * (size_t)w->pd[k]->n;
+        memcpy(fpd + f0, p->f + f0, m * sizeof *fpd);
+        if (mean_velocity) memcpy(p->v + f0, vt + f0, m * sizeof *vt);
+    }
+    return rc;
+}
+
+static int step_staggered(floe_world *w) {
+    floe_particles *p = &w->p;
+    const int n = p->n, m = w->pd_sub, ke = w->pd_every;
+    const size_t n3 = 3 * (size_t)n;
+    const double dt = w->dt, h = 0.5 * dt, K = ke * dt;
+    double *b = ibuf_reserve(w, 5 * (n3 ? n3 : 3));
+    if (!b) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    double *fs = b, *ts = b + n3, *fpd = b + 2 * n3, *xs = b + 3 * n3, *vt = b + 4 * n3;
+    const long cyc = w->step - w->step0;
+    const int pd_start = ke > 1 && cyc % ke == 0, pd_end = ke > 1 && (cyc + 1) % ke == 0;
+    const int *pd_of = w->pd_of;
+    double wb = 0, maxd2 = 0;
+    /* PD every k-th step: the opening half kick of a PD cycle */
+    if (pd_start)
+        for (int k = 0; k < w->npd; k++)
+            for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++) {
+                memcpy(xs + 3 * i, p->x + 3 * i, 3 * sizeof(double));
+                if (p->motion[i] == FLOE_FREE) floe_v3_axpy(p->v + 3 * i, 0.5 * K * p->inv_mass[i], fpd + 3 * i);
+            }
+    /* 1. half kick with F_C; drift of everything except the PD points that sub-cycle */
+    for (int i = 0; i < n; i++) {
+        double *x = p->x + 3 * i, *v = p->v + 3 * i;
+        if (p->motion[i] == FLOE_FIXED) continue;
+        const int sub = ke == 1 && pd_of[i] >= 0;
+        if (sub) memcpy(xs + 3 * i, x, 3 * sizeof(double));
+        if (p->motion[i] == FLOE_KINEMATIC) {
+            memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
+            memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
+            kinematic_velocity(w, i, w->time + h);
+            if (!sub) floe_v3_axpy(x, dt, v);
+            double qn[4];
+            q_advance(qn, p->q + 4 * i, p->w + 3 * i, dt);
+            memcpy(p->q + 4 * i, qn, sizeof qn);
+            continue;
+        }
+        floe_v3_axpy(v, h * p->inv_mass[i], fs + 3 * i);
+        floe_v3_axpy(p->L + 3 * i, h, ts + 3 * i);
+        rotate_drift(p, i, dt);
+        if (!sub) {
+            floe_v3_axpy(x, dt, v);
+            wb += dt * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
+        }
+    }
+    /* 2. dt_PD = dt / m: m velocity Verlet sub-steps of the PD points with F_PD */
+    if (ke == 1) {
+        const double d = dt / m, hd = 0.5 * d;
+        for (int s = 0; s < m; s++) {
+            for (int k = 0; k < w->npd; k++)
+                for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++) {
+                    double *v = p->v + 3 * i;
+                    if (p->motion[i] == FLOE_FIXED) continue;
+                    if (p->motion[i] == FLOE_FREE) floe_v3_axpy(v, hd * p->inv_mass[i], fpd + 3 * i);
+                    floe_v3_axpy(p->x + 3 * i, d, v);
+                    if (p->motion[i] == FLOE_FREE) wb += d * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
+                }
+            FLOE_TRY(stag_pd_forces(w, d, xs, vt, fpd, 0));
+            if (s == m - 1) break; /* the last sub-step closes with the final kick below */
+            for (int k = 0; k < w->npd; k++)
+                for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++)
+                    if (p->motion[i] == FLOE_FREE) floe_v3_axpy(p->v + 3 * i, hd * p->inv_mass[i], fpd + 3 * i);
+        }
+    }
+    FLOE_TRY(advance_states(w, dt));
+    advance_clock(w);
+    const double *xb = w->nl.x_build;
+    const int have_xb = xb && w->nl.n_build == n;
+    if (have_xb)
+        for (int i = 0; i < n; i++)
+            if (p->motion[i] != FLOE_FIXED) note_disp(p->x + 3 * i, xb + 3 * i, &maxd2);
+    FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
+    /* 3. F_C at the new positions; sub-cycled PD points move at their mean velocity over
+     * the step for the contact laws (the tangential spring grows by the displacement) and
+     * the ledger */
+    if (ke == 1)
+        for (int k = 0; k < w->npd; k++)
+            for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++) {
+                memcpy(vt + 3 * i, p->v + 3 * i, 3 * sizeof(double));
+                for (int a = 0; a < 3; a++) p->v[3 * i + a] = (p->x[3 * i + a] - xs[3 * i + a]) / dt;
+            }
+    w->advancing = 1;
+    w->record_now = contacts_wanted(w);
+    int rc = floe_compute_forces_part(w, FLOE_FORCES_CONTACT);
+    w->advancing = 0;
+    if (ke == 1)
+        for (int k = 0; k < w->npd; k++)
+            memcpy(p->v + 3 * (size_t)w->pd_first[k], vt + 3 * (size_t)w->pd_first[k], 3 * (size_t)w->pd[k]->n * sizeof *vt);
+    if (rc) return rc;
+    memcpy(fs, p->f, n3 * sizeof *fs);
+    memcpy(ts, p->t, n3 * sizeof *ts);
+    /* PD every k-th step: the closing evaluation and half kick of the cycle */
+    if (pd_end) {
+        FLOE_TRY(stag_pd_forces(w, K, xs, vt, fpd, 1));
+        for (int k = 0; k < w->npd; k++)
+            for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++)
+                if (p->motion[i] == FLOE_FREE) floe_v3_axpy(p->v + 3 * i, 0.5 * K * p->inv_mass[i], fpd + 3 * i);
+    }
+    /* 4. closing half kick with F_C; p->f = F_C + F_PD for the observers */
+    for (size_t a = 0; a < n3; a++) p->f[a] = fs[a] + fpd[a];
+    double kt = 0, kr = 0, wbound = 0;
+    for (int i = 0; i < n; i++) {
+        if (p->motion[i] != FLOE_FREE) {
+            if (p->motion[i] == FLOE_KINEMATIC) {
+                const double *fo = w->kin_old + 6 * i;
+                for (int k = 0; k < 3; k++)
+                    wbound -= h * ((fo[k] + p->f[3 * i + k]) * p->v[3 * i + k] + (fo[3 + k] + p->t[3 * i + k]) * p->w[3 * i + k]);
+                kinematic_velocity(w, i, w->time);
+            }
+            continue;
+        }
+        double *v = p->v + 3 * i, *L = p->L + 3 * i, im = p->inv_mass[i];
+        double xold[3], d2;
+        if (ke == 1 && pd_of[i] >= 0) memcpy(xold, xs + 3 * i, sizeof xold);
+        else for (int k = 0; k < 3; k++) xold[k] = p->x[3 * i + k] - dt * v[k];
+        d2 = (p->x[3 * i] - xold[0]) * (p->x[3 * i] - xold[0]) + (p->x[3 * i + 1] - xold[1]) * (p->x[3 * i + 1] - xold[1]) +
+             (p->x[3 * i + 2] - xold[2]) * (p->x[3 * i + 2] - xold[2]);
+        if (ke == 1 && pd_of[i] >= 0) floe_v3_axpy(v, 0.5 * dt / m * im, fpd + 3 * i); /* last PD sub-step */
+        floe_v3_axpy(v, h * im, fs + 3 * i);
+        floe_v3_axpy(L, h, ts + 3 * i);
+        omega_update(p, i);
+        double kin = 0.5 * p->mass[i] * floe_v3_dot(v, v), kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
+        kt += kin;
+        kr += kre;
+        double lim = 0.5 * p->radius[i];
+        if (!(d2 <= lim * lim) || !(kin + kre < INFINITY)) {
+            int rc2 = check_particle(w, i, xold);
+            if (rc2) return rc2;
+        }
+    }
+    w->energy.kinetic_trans = kt;
+    w->energy.kinetic_rot = kr;
+    w->energy.work_body += wb;
+    w->energy.work_boundary += wbound;
+    return FLOE_OK;
+}
+
+/* ---- adaptive steps (003 §4.3) ----
+ * A trial step is taken from a saved state; it is accepted when
+ *   eta_v = max_i |v_i(t+dt) - v_i(t)| dt / R_i <= adapt_velocity_tol  and
+ *   eta_d = max_contacts |v_n| dt / min(R_i, R_j) <= adapt_depth_tol
+ * (the velocity change and the overlap change over the step relative to the particle
+ * size), else the state is restored and the step redone with a smaller dt (also when the
+ * trial went unstable); the next step grows by the same criterion, at most 2x, within
+ * [dt_min, dt_max]. A trial that rebuilt the neighbour list (the contact history changes
+ * its layout) cannot be undone and is accepted: the list is rebuilt before a trial whose
+ * drift could pass the skin. */
+
+typedef struct floe_snapshot {
+    double *d; size_t dcap;
+    unsigned char *c; size_t ccap;
+    floe_energy energy;
+    double elastic_contact, elastic_pd, time, t0;
+    long step, step0;
+} floe_snapshot;
+
+static void snapshot_free(floe_snapshot *s) {
+    if (!s) return;
+    free(s->d);
+    free(s->c);
+    free(s);
+}
+
+/* sizes of what a step changes: particle state (22 n), pair history, ledger memories,
+ * PD forces and broken flags, state objects */
+static void snapshot_sizes(const floe_world *w, size_t *nd, size_t *nc) {
+    size_t d = 22 * (size_t)w->p.n + FLOE_MAX_HISTORY * (size_t)w->nl.npairs, c = (size_t)w->nl.npairs;
+    if (w->body_force && w->fb_old) d += 6 * (size_t)w->fb_n;
+    for (int q = 0; q < w->npd_bc; q++)
+        if (w->pd_bc[q]->fold) d += 3 * (size_t)w->pd_bc[q]->n;
+    if (w->npd) d += 3 * (size_t)w->pd_npts + 3 * (size_t)w->npd;
+    for (int k = 0; k < w->npd; k++) c += (size_t)w->pd[k]->nbond;
+    for (int s = 0; s < w->nstates; s++) d += w->states[s]->klass->size(w->states[s]);
+    *nd = d;
+    *nc = c;
+}
+
+#define SNAP_COPY(save, a, b, nbytes) \
+    do { if ((nbytes) > 0) { if (save) memcpy((a), (b), (nbytes)); else memcpy((b), (a), (nbytes)); } } while (0)
+
+static int snapshot_io(floe_world *w, int save) {
+    floe_snapshot *s = w->snap;
+    floe_particles *p = &w->p;
+    if (save) {
+        size_t nd, nc;
+        snapshot_sizes(w, &nd, &nc);
+        if (nd > s->dcap) {
+            double *d = realloc(s->d, nd * sizeof *d);
+            if (!d) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+            s->d = d;
+            s->dcap = nd;
+        }
+        if (nc > s->ccap) {
+            unsigned char *c = realloc(s->c, nc ? nc : 1);
+            if (!c) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+            s->c = c;
+            s->ccap = nc;
+        }
+        s->energy = w->energy;
+        s->elastic_contact = w->elastic_contact;
+        s->elastic_pd = w->elastic_pd;
+        s->time = w->time;
+        s->t0 = w->t0;
+        s->step = w->step;
+        s->step0 = w->step0;
+    }
+    double *d = s->d;
+    unsigned char *c = s->c;
+    const size_t n = (size_t)p->n;
+    /* state objects first: set() may rescale a particle's mass, inertia and momentum,
+     * which are restored after */
+    for (int k = 0; k < w->nstates; k++) {
+        floe_state *st = w->states[k];
+        size_t m = st->klass->size(st);
+        if (save) st->klass->get(st, d);
+        else {
+            int rc = st->klass->set(st, w, d);
+            if (rc) return floe_world_error(w, rc, "state object %s could not be restored", st->klass->name);
+        }
+        d += m;
+    }
+    SNAP_COPY(save, d, p->x, 3 * n * sizeof *d); d += 3 * n;
+    SNAP_COPY(save, d, p->v, 3 * n * sizeof *d); d += 3 * n;
+    SNAP_COPY(save, d, p->q, 4 * n * sizeof *d); d += 4 * n;
+    SNAP_COPY(save, d, p->L, 3 * n * sizeof *d); d += 3 * n;
+    SNAP_COPY(save, d, p->w, 3 * n * sizeof *d); d += 3 * n;
+    SNAP_COPY(save, d, p->f, 3 * n * sizeof *d); d += 3 * n;
+    SNAP_COPY(save, d, p->t, 3 * n * sizeof *d); d += 3 * n;
+    size_t np = (size_t)w->nl.npairs;
+    SNAP_COPY(save, d, w->nl.hist, FLOE_MAX_HISTORY * np * sizeof *d); d += FLOE_MAX_HISTORY * np;
+    SNAP_COPY(save, c, w->nl.touching, np); c += np;
+    if (w->body_force && w->fb_old) { SNAP_COPY(save, d, w->fb_old, 6 * (size_t)w->fb_n * sizeof *d); d += 6 * (size_t)w->fb_n; }
+    for (int q = 0; q < w->npd_bc; q++)
+        if (w->pd_bc[q]->fold) {
+            size_t m = 3 * (size_t)w->pd_bc[q]->n;
+            SNAP_COPY(save, d, w->pd_bc[q]->fold, m * sizeof *d);
+            d += m;
+        }
+    if (w->npd) {
+        SNAP_COPY(save, d, w->pd_fold, 3 * (size_t)w->pd_npts * sizeof *d); d += 3 * (size_t)w->pd_npts;
+        for (int k = 0; k < w->npd; k++) {
+            floe_pd_body *b = w->pd[k];
+            if (save) { d[0] = w->pd_eold[k]; d[1] = (double)b->nbroken; d[2] = (double)w->pd_nbroken_seen[k]; }
+            else { w->pd_eold[k] = d[0]; b->nbroken = (int64_t)d[1]; w->pd_nbroken_seen[k] = (long long)d[2]; }
+            d += 3;
+            SNAP_COPY(save, c, b->broken, (size_t)b->nbond);
+            c += b->nbond;
+        }
+    }
+    if (!save) {
+        w->energy = s->energy;
+        w->elastic_contact = s->elastic_contact;
+        w->elastic_pd = s->elastic_pd;
+        w->time = s->time;
+        w->t0 = s->t0;
+        w->step = s->step;
+        w->step0 = s->step0;
+    }
+    return FLOE_OK;
+}
+
+static int step_once(floe_world *w) {
+    if (w->def.pd_dem == FLOE_PD_DEM_STAGGERED && w->npd) return step_staggered(w);
+    if (w->def.integrator == FLOE_RK2) return step_rk2(w);
+    return step_verlet(w);
+}
+
+/* the largest displacement from the neighbour build that the next drift of dt can reach
+ * (velocity Verlet and RK2 both move by dt (v + dt/2 F/m)) */
+static double predicted_disp2(const floe_world *w, double dt) {
+    const floe_particles *p = &w->p;
+    const double *xb = w->nl.x_build;
+    if (!xb || w->nl.n_build != p->n) return INFINITY;
+    double m2 = 0;
+    for (int i = 0; i < p->n; i++) {
+        if (p->motion[i] == FLOE_FIXED) continue;
+        double y[3];
+        for (int k = 0; k < 3; k++)
+            y[k] = p->x[3 * i + k] + dt * (p->v[3 * i + k] + 0.5 * dt * p->inv_mass[i] * p->f[3 * i + k]);
+        note_disp(y, xb + 3 * i, &m2);
+    }
+    return m2;
+}
+
+static int step_adaptive(floe_world *w) {
+    floe_particles *p = &w->p;
+    const double tv = w->def.adapt_velocity_tol, td = w->def.adapt_depth_tol;
+    if (!w->snap) {
+        w->snap = calloc(1, sizeof *w->snap);
+        if (!w->snap) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
+    for (;;) {
+        double dt = fmin(w->dt_next, w->dt_cap);
+        if (dt != w->dt) { /* the clock restarts from here at the new step */
+            w->t0 = w->time;
+            w->step0 = w->step;
+            w->dt = dt;
+        }
+        double lim = 0.5 * w->nl.skin;
+        if (predicted_disp2(w, dt) > lim * lim) {
+            int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
+            if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
+        }
+        FLOE_TRY(snapshot_io(w, 1));
+        const long rb = w->nl.rebuilds;
+        w->track_depth = 1;
+        int rc = step_once(w);
+        w->track_depth = 0;
+        const int undoable = w->nl.rebuilds == rb;
+        double eta_v = 0, eta_d = w->eta_depth;
+        if (!rc) {
+            const double *v0 = w->snap->d + 3 * (size_t)p->n; /* after x (states first) */
+            size_t so = 0;
+            for (int s = 0; s < w->nstates; s++) so += w->states[s]->klass->size(w->states[s]);
+            v0 += so;
+            for (int i = 0; i < p->n; i++) {
+                if (p->motion[i] != FLOE_FREE || !isfinite(p->radius[i])) continue;
+                double dv[3];
+                floe_v3_sub(dv, p->v + 3 * i, v0 + 3 * i);
+                double e = floe_v3_norm(dv) * dt / p->radius[i];
+                if (e > eta_v) eta_v = e;
+            }
+        }
+        /* step factor from the criterion: eta_v grows as dt^2 (a dt^2), eta_d as dt */
+        double fv = eta_v > 0 ? sqrt(tv / eta_v) : INFINITY, fd = eta_d > 0 ? td / eta_d : INFINITY;
+        double f = 0.9 * fmin(fv, fd);
+        const int at_min = dt <= w->dt_lo * (1 + 1e-9);
+        if ((rc == FLOE_EUNSTABLE || (rc == FLOE_OK && (eta_v > tv || eta_d > td))) && undoable && !at_min) {
+            FLOE_TRY(snapshot_io(w, 0));
+            w->st.rejected++;
+            f = rc ? 0.25 : fmax(0.1, fmin(0.9, f));
+            w->dt_next = fmax(w->dt_lo, dt * f);
+            w->err[0] = 0;
+            continue;
+        }
+        if (rc) return rc;
+        f = fmax(0.1, fmin(2.0, f));
+        if (!(dt < w->dt_next) || f < 1) w->dt_next = fmin(w->dt_hi, fmax(w->dt_lo, dt * f));
+        return FLOE_OK;
+    }
+}
+
+int floe_world_step(floe_world *w) {
+    if (!w->prepared) FLOE_TRY(floe_world_prepare(w));
+    int rc = w->def.adaptive ? step_adaptive(w) : step_once(w);
+    if (rc) return rc;
+    floe_step_stats *s = &w->st;
+    s->accepted++;
+    if (s->dt_min_used == 0 || w->dt < s->dt_min_used) s->dt_min_used = w->dt;
+    if (w->dt > s->dt_max_used) s->dt_max_used = w->dt;
     return observers_call(w, 0);
 }
 
 int floe_world_run(floe_world *w, double t_end, floe_progress_fn progress, void *user) {
     int rc = floe_world_prepare(w);
     if (rc) { floe_world_finish(w); return rc; }
-    long nsteps = (long)ceil((t_end - w->time) / w->dt - 1e-9);
-    if (nsteps < 0) nsteps = 0;
-    for (long s = 0; s < nsteps; s++) {
-        w->last_step_of_run = s == nsteps - 1;
-        rc = floe_world_step(w);
-        w->last_step_of_run = 0;
-        if (rc) break;
-        if (progress && progress(w, s + 1, nsteps, user)) {
-            rc = floe_world_error(w, FLOE_ESTOP, "stopped by the progress callback at step %ld", w->step);
-            break;
+    if (!w->def.adaptive) {
+        long nsteps = (long)ceil((t_end - w->time) / w->dt - 1e-9);
+        if (nsteps < 0) nsteps = 0;
+        for (long s = 0; s < nsteps; s++) {
+            w->last_step_of_run = s == nsteps - 1;
+            rc = floe_world_step(w);
+            w->last_step_of_run = 0;
+            if (rc) break;
+            if (progress && progress(w, s + 1, nsteps, user)) {
+                rc = floe_world_error(w, FLOE_ESTOP, "stopped by the progress callback at step %ld", w->step);
+                break;
+            }
+        }
+    } else {
+        /* adaptive: steps until t_end, the last one cut to end there */
+        const double eps = 1e-9 * w->dt_lo;
+        for (long s = 0; w->time < t_end - eps; s++) {
+            w->dt_cap = t_end - w->time;
+            w->last_step_of_run = w->dt_next >= w->dt_cap - eps;
+            rc = floe_world_step(w);
+            w->last_step_of_run = 0;
+            w->dt_cap = INFINITY;
+            if (rc) break;
+            long left = (long)ceil((t_end - w->time) / w->dt_next - 1e-9);
+            if (progress && progress(w, s + 1, s + 1 + (left > 0 ? left : 0), user)) {
+                rc = floe_world_error(w, FLOE_ESTOP, "stopped by the progress callback at step %ld", w->step);
+                break;
+            }
         }
     }
     if (rc && rc != FLOE_ESTOP) {
@@ -980,4 +2144,29 @@ int floe_world_run(floe_world *w, double t_end, floe_progress_fn progress, void 
     }
     int rc2 = floe_world_finish(w);
     return rc ? rc : rc2;
+}
+
+/* ---- integrator and estimate queries ---- */
+
+const char *floe_integrator_name(int integrator) {
+    static const char *const names[] = {"velocity_verlet", "leapfrog", "rk2"};
+    return integrator >= 0 && integrator <= FLOE_RK2 ? names[integrator] : NULL;
+}
+
+int floe_world_dt_estimates(floe_world *w, floe_dt_estimates *out) {
+    if (!w->prepared) FLOE_TRY(floe_world_prepare(w));
+    *out = w->dte;
+    return FLOE_OK;
+}
+
+double floe_world_particle_critical_dt(const floe_world *w, int i) {
+    if (i < 0 || i >= w->p.n) return -1;
+    return w->prepared && w->dt_part ? w->dt_part[i] : INFINITY;
+}
+
+int floe_world_step_stats(const floe_world *w, floe_step_stats *out) {
+    *out = w->st;
+    if (out->pd_substeps < 1) out->pd_substeps = 1;
+    if (out->pd_every < 1) out->pd_every = 1;
+    return FLOE_OK;
 }

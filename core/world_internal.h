@@ -128,7 +128,50 @@ struct floe_world {
     double *pd_eold;         /* npd: last PD elastic energy */
     int pd_npts;
     int pd_npts_alloc;       /* particles covered by pd_of */
+    /* PD boundary regions (floe_world_pd_region); none allocated without them */
+    struct floe_pd_bc_rec **pd_bc; int npd_bc, pd_bc_cap;
+    long long *pd_nbroken_seen; /* npd: broken bonds of each body when the contact list was
+                                   last checked for newly broken pairs (floe_pd_after_forces) */
+    /* time integration (core/world.c, issue #5): critical-step estimates, integrators,
+     * adaptive steps, staggered PD-DEM; scratch only when a scheme needs it */
+    floe_dt_estimates dte;    /* at prepare */
+    double *dt_part;          /* n: critical estimate of each particle (limiting kinds) */
+    double lf_dt_prev;        /* leapfrog: the previous step (0: velocities synchronised) */
+    double peek_dt;           /* history step of an evaluation that does not advance (RK2) */
+    double *ibuf; size_t ibuf_cap; /* integrator scratch (RK2 start state, staggered forces) */
+    struct floe_snapshot *snap; /* adaptive: the state at the start of the trial step */
+    int track_depth;          /* forces.c records eta_depth (adaptive) */
+    double eta_depth;         /* max over contacts of |v_n| dt / min(R_i, R_j) at the last evaluation */
+    double elastic_contact, elastic_pd; /* the two parts of energy.elastic */
+    int pd_sub, pd_every;     /* staggered: PD sub-steps per step, steps per PD step */
+    double dt_next;           /* adaptive: the step proposed for the next step */
+    double dt_lo, dt_hi;      /* adaptive: the bounds in use */
+    double dt_cap;            /* adaptive: the step may not pass this (floe_world_run's end) */
+    floe_step_stats st;
+    /* beam bonds (contact/floe_beam.h, issue #5); NULL without bonds */
+    struct floe_beam_set *beams;
 };
+
+/* force groups of the staggered scheme (core/forces.c): contact and body forces (the DEM
+ * and coupling forces, with gravity and external forces counted there once), PD bonds */
+enum { FLOE_FORCES_CONTACT = 1, FLOE_FORCES_PD = 2, FLOE_FORCES_ALL = 3 };
+int floe_compute_forces_part(floe_world *w, int part);
+
+/* one PD boundary region: its definition and the world indices of its points */
+typedef struct floe_pd_bc_rec {
+    floe_pd_bc def;
+    int body, n;
+    int *pts;                /* n particle indices */
+    double *fold;            /* BODY_FORCE: 3n last external force, for the trapezoid work */
+} floe_pd_bc_rec;
+
+/* PD boundary regions and breakage (core/world.c, next to floe_world_add_pd_body):
+ * add the body forces of every body-force region to p->f and return their work over the
+ * step (trapezoid, mid-step velocities; the caller books it when stepping); after the
+ * bond forces, rebuild the contact list when a newly broken bond lets a pair within reach
+ * meet by contact (pd_exclude). */
+double floe_pd_bc_forces(floe_world *w);
+int floe_pd_after_forces(floe_world *w);
 
 int floe_world_error(floe_world *w, int code, const char *fmt, ...)
 #if defined(__GNUC__)

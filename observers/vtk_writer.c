@@ -16,6 +16,9 @@
  *   velocity (Float64 x3, m/s), angular_velocity (Float64 x3, rad/s), force (Float64 x3, N),
  *   torque (Float64 x3, N m), orientation (Float64 x4, unit quaternion w, x, y, z,
  *   body -> world).
+ * Scenes with peridynamic bodies add, for their points (0 for other particles): damage
+ *   (Float64), von_mises (Float64, Pa), force_density (Float64 x3, force / point volume,
+ *   N/m^3) and strain (Float64 x9, Green-Lagrange, row-major).
  * Field data: TimeValue (Float64, s; ParaView reads it as the time of a single file) and
  * Step (Int64).
  *
@@ -54,7 +57,7 @@ static const floe_observer_class vtk_writer_class;
 enum { T_INT32, T_FLOAT64, T_INT64, T_UINT8 };
 enum {
     A_ID, A_BODY, A_MATERIAL, A_MOTION, A_RADIUS, A_VELOCITY, A_ANGVEL, A_FORCE, A_TORQUE,
-    A_ORIENT, A_DAMAGE, A_VONMISES, A_NPOINTDATA,
+    A_ORIENT, A_DAMAGE, A_VONMISES, A_FDENS, A_STRAIN, A_NPOINTDATA,
     A_POINTS = A_NPOINTDATA, A_CONN, A_OFFSETS, A_TYPES, A_COUNT
 };
 
@@ -67,6 +70,7 @@ static const array_desc arrays[A_COUNT] = {
     {"angular_velocity", T_FLOAT64, 3}, {"force", T_FLOAT64, 3},
     {"torque", T_FLOAT64, 3},    {"orientation", T_FLOAT64, 4},
     {"damage", T_FLOAT64, 1},    {"von_mises", T_FLOAT64, 1},
+    {"force_density", T_FLOAT64, 3}, {"strain", T_FLOAT64, 9},
     {"Points", T_FLOAT64, 3},    {"connectivity", T_INT64, 1},
     {"offsets", T_INT64, 1},     {"types", T_UINT8, 1},
 };
@@ -158,6 +162,30 @@ static void fill_array(const vtk_writer *v, const floe_world *w, int k, int m, v
                 if (i >= 0 && i < pb->n) f64[a] = vm[i];
             }
             free(vm);
+        }
+        return;
+    }
+    case A_FDENS: /* peridynamic points: total force / point volume (N/m^3, ParticLS Fig. 9) */
+    case A_STRAIN: { /* peridynamic points: Green-Lagrange strain (000 eq 28, row-major 3x3) */
+        for (int a = 0; a < m * nc; a++) f64[a] = 0.0;
+        for (int b = 0; b < w->npd; b++) {
+            const floe_pd_body *pb = w->pd[b];
+            int f0 = w->pd_first[b];
+            double *E = NULL;
+            if (k == A_STRAIN) {
+                E = malloc((size_t)pb->n * 9 * sizeof *E);
+                if (!E || floe_pd_correspondence(pb, p->x + 3 * (size_t)f0, 1.0, 1.0, NULL, E, NULL, NULL, NULL) != FLOE_OK) {
+                    free(E);
+                    continue;
+                }
+            }
+            for (int a = 0; a < m; a++) {
+                int i = v->idx[a] - f0;
+                if (i < 0 || i >= pb->n) continue;
+                for (int c = 0; c < nc; c++)
+                    f64[(size_t)a * nc + c] = k == A_STRAIN ? E[9 * (size_t)i + c] : p->f[3 * (size_t)v->idx[a] + c] / pb->V[i];
+            }
+            free(E);
         }
         return;
     }
@@ -264,7 +292,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
     int m = 0;
     for (int i = 0; i < p->n; i++)
         if (!is_wall(w, i)) v->idx[m++] = i;
-    size_t need = (size_t)(m > 0 ? m : 1) * 4 * sizeof(double);
+    size_t need = (size_t)(m > 0 ? m : 1) * 9 * sizeof(double); /* the widest array: strain */
     if (v->buf_cap < need) {
         unsigned char *nb = realloc(v->buf, need);
         if (!nb) return floe_world_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
@@ -310,7 +338,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
         if (k == 0) fputs("      <PointData Scalars=\"radius\" Vectors=\"velocity\">\n", f);
         if (k == A_POINTS) fputs("      </PointData>\n      <CellData>\n      </CellData>\n      <Points>\n", f);
         if (k == A_CONN) fputs("      </Points>\n      <Cells>\n", f);
-        if ((k == A_DAMAGE || k == A_VONMISES) && !w->npd) continue; /* only scenes with PD bodies */
+        if (k >= A_DAMAGE && k <= A_STRAIN && !w->npd) continue; /* only scenes with PD bodies */
         const array_desc *a = &arrays[k];
         fprintf(f, "        <DataArray type=\"%s\" Name=\"%s\"", type_name(a->type), a->name);
         if (a->ncomp > 1) fprintf(f, " NumberOfComponents=\"%d\"", a->ncomp);
@@ -328,7 +356,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
     if (!ascii) {
         fputs("  <AppendedData encoding=\"raw\">\n   _", f);
         for (int k = 0; k < A_COUNT; k++) {
-            if ((k == A_DAMAGE || k == A_VONMISES) && !w->npd) continue;
+            if (k >= A_DAMAGE && k <= A_STRAIN && !w->npd) continue;
             const array_desc *a = &arrays[k];
             uint64_t nbytes = (uint64_t)m * (uint64_t)a->ncomp * type_size(a->type);
             fill_array(v, w, k, m, v->buf);

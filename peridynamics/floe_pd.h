@@ -71,6 +71,11 @@ typedef struct floe_pd_material {
     int broken_tension_only; /* PMB: 1 (default via floe_pd_material_pmb): a broken bond
                          * still resists compression (003 eq 2: mu = 1 when s <= 0);
                          * 0: a broken bond carries nothing                                 */
+    double alpha;       /* PMB: per-point critical stretch of LAMMPS pair peri/pmb (Parks et
+                         * al. 2008): s0_i = s00 - alpha min_j s_ij over i's intact bonds at
+                         * the previous evaluation, s00 = s_c; a bond breaks when
+                         * s > min(s0_i, s0_j), after its force of that evaluation is applied
+                         * (LAMMPS' order). 0 (default): the constant s_c. >= 0             */
 } floe_pd_material;
 
 /* Convenience constructors (fill a floe_pd_material with defaults). */
@@ -113,6 +118,10 @@ struct floe_pd_body {
     double *wbond;             /* LPS Gaussian influence per bond (NULL for w = 1)          */
     double *acorr;             /* LPS per-point factor on alpha_i = 15G/m_i, NULL when off  */
     int64_t nbroken;           /* bonds broken so far                                       */
+    /* PMB with mat.alpha > 0 (pd_materials.c): 2n doubles, s0_i of the previous evaluation
+     * in [0, n) (DBL_MAX until the first evaluation) and the one being built in [n, 2n);
+     * NULL otherwise                                                                        */
+    double *s0;
 };
 
 /* Create the lattice points of the region, build the families (|xi| <= delta + 1e-9 dx)
@@ -174,6 +183,9 @@ void floe_pd_family_sizes(const floe_pd_body *b, int *cnt);
 
 /* 1 when i and j are bonded in the reference configuration (broken or not), else 0. */
 int floe_pd_bonded(const floe_pd_body *b, int i, int j);
+/* Index k of the bond (i, j) in the CSR arrays (broken or not), or -1 when the two points
+ * are not bonded in the reference configuration. */
+int64_t floe_pd_bond_index(const floe_pd_body *b, int i, int j);
 
 /* Correspondence output (000 eqs 26-30, peridynamics/pd_correspondence.c) for current
  * positions x (3n): per point the non-local deformation gradient F (9, row-major), the

@@ -57,6 +57,7 @@ void floe_pd_body_destroy(floe_pd_body *b)
     free(b->m);
     free(b->theta);
     free(b->wbond);
+    free(b->s0); /* PMB alpha state (pd_materials.c) */
     free(b);
 }
 
@@ -225,9 +226,9 @@ void floe_pd_family_sizes(const floe_pd_body *b, int *cnt)
     }
 }
 
-int floe_pd_bonded(const floe_pd_body *b, int i, int j)
+int64_t floe_pd_bond_index(const floe_pd_body *b, int i, int j)
 {
-    if (!b || i == j || i < 0 || j < 0 || i >= b->n || j >= b->n) return 0;
+    if (!b || i == j || i < 0 || j < 0 || i >= b->n || j >= b->n) return -1;
     if (i > j) { int t = i; i = j; j = t; }
     int64_t lo = b->off[i], hi = b->off[i + 1];
     while (lo < hi) {
@@ -235,7 +236,12 @@ int floe_pd_bonded(const floe_pd_body *b, int i, int j)
         if (b->partner[mid] < j) lo = mid + 1;
         else hi = mid;
     }
-    return lo < b->off[i + 1] && b->partner[lo] == j;
+    return lo < b->off[i + 1] && b->partner[lo] == j ? lo : -1;
+}
+
+int floe_pd_bonded(const floe_pd_body *b, int i, int j)
+{
+    return floe_pd_bond_index(b, i, j) >= 0;
 }
 
 int floe_pd_damage(const floe_pd_body *b, double *phi)
@@ -447,5 +453,6 @@ size_t floe_pd_body_bytes(const floe_pd_body *b)
     if (b->wbond) s += nb * sizeof(double);
     if (b->scorr) s += nb * sizeof(float);
     if (b->acorr) s += n * sizeof(double);
+    if (b->s0) s += 2 * n * sizeof(double); /* PMB alpha state */
     return s;
 }

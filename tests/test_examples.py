@@ -19,6 +19,10 @@ usage: python3 tests/test_examples.py <floe_cli_path> <tests_dir>
   `floe check` says the build lacks them), copied with a shorter duration: every grain stays
   inside the walled box and below its start height, no NaN, and the kinetic energy at the
   end is below its peak (the grains have landed and lose energy).
+- examples/plate-with-hole, brittle-cylinder-impact and rubber-cube (issue #4), shortened:
+  cracks at the top and bottom of the hole and not at its sides; damage under the impact
+  point of a 3 mm cylinder and none at its bottom rim; the spheres' indentation shows in the
+  strain (E_zz most compressive at a contact face) and von Mises arrays; energy balances.
 Prints "N passed, N failed".
 """
 import csv
@@ -146,6 +150,126 @@ def check_mesh_grains(cli, root, tmp, duration):
     print("  mesh-grains: t = %.3f s, KE end/peak %.2f" % (times[-1], ke[-1] / kmax))
 
 
+# ---- peridynamics examples (issue #4): plate-with-hole, brittle-cylinder-impact, rubber-cube ----
+
+def read_vtu_arrays(path):
+    """Point arrays of a floe .vtu (raw appended or ASCII) as {name: [tuple, ...]}."""
+    import struct
+    data = open(path, "rb").read()
+    cut = data.find(b"<AppendedData")
+    head = data[:cut if cut >= 0 else len(data)].decode("latin-1")
+    raw = data[data.index(b"_", cut) + 1:] if cut >= 0 else b""
+    fmt = {"Float64": ("d", 8), "Int32": ("i", 4), "Int64": ("q", 8), "UInt8": ("B", 1)}
+    bo = "<" if 'byte_order="LittleEndian"' in head else ">"
+    out = {}
+    for m in re.finditer(r'<DataArray([^>]*?)(/?)>', head):
+        attrs = dict(re.findall(r'(\w+)="([^"]*)"', m.group(1)))
+        nc = int(attrs.get("NumberOfComponents", "1"))
+        if attrs.get("format") == "appended":
+            off = int(attrs["offset"])
+            nbytes = struct.unpack(bo + "Q", raw[off:off + 8])[0]
+            code, size = fmt[attrs["type"]]
+            vals = struct.unpack(bo + code * (nbytes // size), raw[off + 8:off + 8 + nbytes])
+        elif attrs.get("format") == "ascii" and m.group(2) == "":
+            vals = [float(x) for x in head[m.end():head.index("</DataArray>", m.end())].split()]
+        else:
+            continue
+        out[attrs["Name"]] = [tuple(vals[i:i + nc]) for i in range(0, len(vals), nc)]
+    return out
+
+
+def pd_example(cli, root, tmp, name, duration, subs=()):
+    """Copy and shorten a PD example, apply (regex, replacement) edits, keep only the first
+    and last VTK frames, run it; returns (outdir, arrays of the last frame) or None."""
+    scene = copy_example(root, tmp, name, duration)
+    text = open(scene).read()
+    for pat, rep in subs:
+        text, n = re.subn(pat, rep, text)
+        check(n >= 1, "%s: '%s' found in the scene" % (name, pat))
+    text, n = re.subn(r"\{type: vtk, (every|interval): [0-9.eE+-]+\}", "{type: vtk, every: 100000000}", text)
+    check(n == 1, "%s: one vtk output" % name)
+    open(scene, "w").write(text)
+    out = os.path.join(tmp, name + "-out")
+    if not run_example(cli, scene, out, name):
+        return None
+    frames = sorted(glob.glob(os.path.join(out, "frame_*.vtu")))
+    check(len(frames) >= 2, "%s: first and last VTK frames written (%d)" % (name, len(frames)))
+    if len(frames) < 2:
+        return None
+    last = read_vtu_arrays(frames[-1])
+    check(abs(last["TimeValue"][0][0] - duration) < 0.01 * duration, "%s: ran to t = %g s" % (name, last["TimeValue"][0][0]))
+    erows = list(csv.DictReader(open(os.path.join(out, "energy.csv"))))
+    err = float(erows[-1]["balance_error"])
+    check(abs(err) < 1e-3, "%s: energy balance error %.2e < 1e-3" % (name, err))
+    return out, last
+
+
+def check_plate_with_hole(cli, root, tmp):
+    """ParticLS §5.4: cracks nucleate at the top and bottom of the hole, not at its sides."""
+    dx = 1.0 / 64
+    res = pd_example(cli, root, tmp, "plate-with-hole", 0.5)
+    if not res:
+        return
+    out, a = res
+    pts = list(zip(a["Points"], a["damage"]))
+    check(len(pts) > 3000, "plate-with-hole: %d points" % len(pts))
+
+    def near(cx, cy):
+        return [d[0] for p, d in pts if math.hypot(p[0] - cx, p[1] - cy) < 2.5 * dx]
+    # hole semi-axes 0.08 (x) and 0.16 (y) at (0.5, 0.5)
+    top, bottom = max(near(0.5, 0.66)), max(near(0.5, 0.34))
+    left, right = max(near(0.42, 0.5)), max(near(0.58, 0.5))
+    far = max(d[0] for p, d in pts if abs(p[1] - 0.5) < 0.1 and (p[0] < 0.3 or p[0] > 0.7))
+    check(top > 0.3 and bottom > 0.3, "plate-with-hole: damage at the hole's top %.2f and bottom %.2f > 0.3" % (top, bottom))
+    check(left < 0.05 and right < 0.05, "plate-with-hole: no damage at the hole's sides (%.3f, %.3f < 0.05)" % (left, right))
+    check(far < 0.05, "plate-with-hole: none in the ligaments left and right of the hole (%.3f)" % far)
+    check("force_density" in a and "strain" in a, "plate-with-hole: force_density and strain written")
+    print("  plate-with-hole: t = 0.5 s, damage top %.2f bottom %.2f, sides %.3f %.3f, ligaments %.3f"
+          % (top, bottom, left, right, far))
+
+
+def check_brittle_cylinder(cli, root, tmp):
+    """003 §4.3 at a tiny resolution: damage under the impact point, none at the far bottom."""
+    dx = 0.003
+    res = pd_example(cli, root, tmp, "brittle-cylinder-impact", 60e-6, [(r"spacing: 0\.002", "spacing: %g" % dx)])
+    if not res:
+        return
+    out, a = res
+    pts = [(p, d[0]) for p, d, b in zip(a["Points"], a["damage"], a["body"]) if b[0] == -2]
+    under = max(d for p, d in pts if math.hypot(p[0], p[1]) < 2 * dx and p[2] > 0.03 - 3 * dx)
+    rim = max(d for p, d in pts if math.hypot(p[0], p[1]) > 0.03 - 2 * dx and p[2] < 0.01)
+    nd = sum(1 for p, d in pts if d > 0.3)
+    outside = max(d for p, d in pts if math.hypot(p[0], p[1]) > 0.015)
+    check(under > 0.3, "brittle-cylinder: damage under the impact point %.2f > 0.3" % under)
+    check(rim < 0.1 and outside < 0.3, "brittle-cylinder: none at the bottom rim (%.3f < 0.1), below 0.3 beyond "
+          "r = 15 mm (%.3f)" % (rim, outside))
+    imp = list(csv.DictReader(open(os.path.join(out, "impactor.csv"))))
+    vz = float(imp[-1]["vz [m/s]"])
+    check(vz > -35 * 0.9, "brittle-cylinder: the impactor is slowed (vz %.1f m/s)" % vz)
+    print("  brittle-cylinder-impact: %d points at %g m, 60 us: damage under the impact %.2f, rim %.3f, %d points "
+          "> 0.3, impactor vz %.1f m/s" % (len(pts), dx, under, rim, nd, vz))
+
+
+def check_rubber_cube(cli, root, tmp):
+    """000 §5.2, shortened: the spheres indent the cube, strain and von Mises at the contacts."""
+    res = pd_example(cli, root, tmp, "rubber-cube", 0.1)
+    if not res:
+        return
+    out, a = res
+    cube = [i for i, b in enumerate(a["body"]) if b[0] == -2]
+    ezz = [a["strain"][i][8] for i in cube]
+    exx = [a["strain"][i][0] for i in cube]
+    vm = [a["von_mises"][i][0] for i in cube]
+    i = min(cube, key=lambda k: a["strain"][k][8])
+    z = a["Points"][i][2]
+    check(min(ezz) < -0.02, "rubber-cube: compressive E_zz under the spheres (min %.4f)" % min(ezz))
+    check(abs(z) > 0.1, "rubber-cube: E_zz is most compressive at a contact face (z = %.3f m)" % z)
+    check(max(exx) > 0, "rubber-cube: the nearly incompressible cube bulges sideways (max E_xx %.4f)" % max(exx))
+    check(max(vm) > 0, "rubber-cube: von Mises stress written (max %.3g Pa)" % max(vm))
+    print("  rubber-cube: t = 0.1 s, E_zz min %.4f at z = %.3f m, E_xx max %.4f, von Mises max %.3g Pa"
+          % (min(ezz), z, max(exx), max(vm)))
+
+
 def main():
     cli, tests = sys.argv[1], sys.argv[2]
     root = os.path.dirname(os.path.abspath(tests))
@@ -185,6 +309,9 @@ def main():
         check_polygons(cli, root, tmp, "polyhedra-3d", 3, duration=0.45)
         if have_mesh:
             check_mesh_grains(cli, root, tmp, duration=0.15)
+        check_plate_with_hole(cli, root, tmp)
+        check_brittle_cylinder(cli, root, tmp)
+        check_rubber_cube(cli, root, tmp)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     finish("test_examples")

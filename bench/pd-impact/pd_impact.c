@@ -9,12 +9,15 @@
  *        PD_SKIN      Verlet skin in m (default 0.0004, see below)
  *        PD_TENSION_ONLY  1 (default, floe's PMB default): a broken bond still resists
  *                     compression; 0: a broken bond carries nothing
+ *        PD_ALPHA     alpha of the per-point critical stretch (default 0.25, LAMMPS' value in
+ *                     in.lammps; 0: the constant s_c = s00)
  *
  * Set-up (the peer's): cylinder along y, radius R, y in [-H, 0], simple-cubic lattice
  * h = 0.5 mm on LAMMPS' lattice origin (points at integer multiples of h: floe puts points at
  * lo + (k + 1/2) h, so lo = -(m + 1/2) h), PMB c = 1.6863e22, delta = 0.0015001, rho = 2200,
- * V = h^3, dt = 1e-7 s. Constant critical stretch s_c = s00 = 0.0005 (LAMMPS: s0 = s00 -
- * alpha s_min per point, alpha = 0.25, min over both ends; floe has a constant s_c).
+ * V = h^3, dt = 1e-7 s. Critical stretch as in LAMMPS pair peri/pmb: s0_i = s00 - alpha s_min,i
+ * from the previous step, a bond breaking at min(s0_i, s0_j), s00 = 0.0005, alpha = 0.25
+ * (floe_pd_material.alpha; PD_ALPHA=0 gives the constant s_c = s00).
  *
  * Indenter (LAMMPS fix indent, K = 1e17, sphere radius Rs = 4 mm, centre y0 = 4.05 mm,
  * v = -100 m/s). LAMMPS PERI forces are force densities (N/m^3; the "mass" is the density),
@@ -34,12 +37,13 @@
  * the sphere whose centre follows y(t) = y0 + v t (evaluated at the force time t + dt, as
  * LAMMPS evaluates v_y at the current step).
  *
- * PD-PD contact: none. The PD material's self law is a zero-force law (the world needs a law
- * for every pair of materials that can meet); bonded family members are never listed, and
- * with 2 R_point + skin = 0.62 mm + skin below the smallest non-bonded distance (> delta =
- * 1.5 mm) no PD-PD pair enters the neighbour list unless fragments fly apart, so the law is
- * (almost) never called: the cheapest correct option. The skin trades list rebuilds (the
- * indenter moves 10 um per step: a rebuild every skin/20 um steps) against the query radius.
+ * PD-PD contact: none. The PD material's self law is the "none" law (the world needs a law
+ * for every pair of materials that can meet; "none" pairs are skipped before detection and
+ * never trip the overlap guard); bonded family members are never listed, and with
+ * 2 R_point + skin = 0.62 mm + skin below the smallest non-bonded distance (> delta =
+ * 1.5 mm) no PD-PD pair enters the neighbour list unless fragments fly apart. The skin
+ * trades list rebuilds (the indenter moves 10 um per step: a rebuild every skin/20 um
+ * steps) against the query radius.
  *
  * Prints one line of key=value figures; bonds are reported both as stored pairs (floe keeps
  * each pair once) and as the family-size sum 2 x pairs (LAMMPS' count), and bond-updates/s
@@ -99,21 +103,6 @@ static void indent_stiffness(const floe_contact_law *law, double r_eff, double m
 }
 static const floe_contact_law_class indent_class = {1, "indent-k-d2", 0, indent_force, indent_stiffness, NULL, NULL};
 
-/* no PD-PD contact */
-static int zero_force(const floe_contact_law *law, const floe_contact *c, double *history,
-                      floe_contact_result *out) {
-    (void)law; (void)c; (void)history;
-    memset(out, 0, sizeof *out);
-    return FLOE_OK;
-}
-static void zero_stiffness(const floe_contact_law *law, double r_eff, double m_eff, double depth,
-                           double *kn, double *cn) {
-    (void)law; (void)r_eff; (void)m_eff; (void)depth;
-    *kn = 0;
-    *cn = 0;
-}
-static const floe_contact_law_class zero_class = {1, "none", 0, zero_force, zero_stiffness, NULL, NULL};
-
 /* body-force mode: the same force from the analytic indenter position at time t */
 typedef struct { int first, n; double kv; } bf_user;
 static void indent_body_force(const floe_world *w, int i, double t, double f[3], double torque[3],
@@ -150,6 +139,7 @@ int main(int argc, char **argv) {
     int body_force_mode = strcmp(mode, "contact") != 0;
     double skin = getenv_d("PD_SKIN", 0.0004);
     int tension_only = (int)getenv_d("PD_TENSION_ONLY", 1);
+    double alpha = getenv_d("PD_ALPHA", 0.25);
 
     double t0 = now();
     /* lattice on LAMMPS' origin: points at integer multiples of h */
@@ -171,6 +161,7 @@ int main(int argc, char **argv) {
     floe_pd_material pm = floe_pd_material_pmb(RHO, 0, S00);
     pm.c = C_PMB;
     pm.broken_tension_only = tension_only;
+    pm.alpha = alpha;
     rc = floe_pd_set_material(b, &pm);
     if (rc) { fprintf(stderr, "floe_pd_set_material: %s\n", floe_strerror(rc)); return 1; }
     const int n = b->n;
@@ -187,10 +178,9 @@ int main(int argc, char **argv) {
     if (!w) { fprintf(stderr, "%s\n", err); return 1; }
     floe_material mpd = {"pd", RHO, 1.0e10, 0.25}, mind = {"indenter", 7800, 2e11, 0.3};
     int mat_pd = floe_world_add_material(w, &mpd), mat_ind = floe_world_add_material(w, &mind);
-    floe_contact_law *zl = malloc(sizeof *zl);
+    floe_contact_law *zl = floe_no_contact_law_create();
     indent_law *il = malloc(sizeof *il);
     if (!zl || !il) return 1;
-    zl->klass = &zero_class;
     il->base.klass = &indent_class;
     il->kv = K_IND * V;
     floe_world_set_law(w, mat_pd, mat_pd, zl);
@@ -237,11 +227,11 @@ int main(int argc, char **argv) {
     printf("floe pd-impact: mode=%s N=%d pairs=%lld family_sum=%lld steps=%ld dt=%g dt_crit=%.3g skin=%g "
            "setup_s=%.3f loop_s=%.3f particle_steps_per_s=%.4e bond_updates_per_s=%.4e pair_updates_per_s=%.4e "
            "broken_pairs=%lld damage_sum=%.1f damage_mean=%.4f bytes=%zu bytes_per_family_bond=%.2f "
-           "bytes_per_pair=%.2f tension_only=%d damage_hist=",
+           "bytes_per_pair=%.2f tension_only=%d alpha=%g damage_hist=",
            body_force_mode ? "force" : "contact", n, pairs, fam, steps, floe_world_dt(w), floe_world_critical_dt(w), skin,
            t_setup, loop, (double)n * steps / loop, (double)fam * steps / loop, (double)pairs * steps / loop,
            (long long)b->nbroken, dsum, dsum / n, bytes, (double)bytes / (double)fam, (double)bytes / (double)pairs,
-           tension_only);
+           tension_only, alpha);
     for (int k = 0; k < nh; k++) printf("%s%.1f", k ? "," : "", hist[k]);
     printf("\n");
     free(phi);

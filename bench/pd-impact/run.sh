@@ -4,7 +4,9 @@
 # against LAMMPS PERI (Debian package, /usr/bin/lmp), one thread each, interleaved.
 #   REPS=3 STEPS=500 bench/pd-impact/run.sh
 #   PD_R=0.006 PD_H=0.006 bench/pd-impact/run.sh     # smaller cylinder (5,733 points), quick
-#   ALPHA0=1 ...      also one untimed LAMMPS run with alpha = 0 (constant s0 = s00, floe's rule)
+#   ALPHA0=1 ...      also one untimed run of each with alpha = 0 (constant s0 = s00)
+#   PD_ALPHA=0 ...    floe with a constant critical stretch in the timed runs (default 0.25,
+#                     LAMMPS' value in in.lammps: s0 = s00 - alpha s_min per point)
 #   CONTACT=0 ...     skip the one-off run of floe's contact-law indenter (it stops at step ~37)
 # Prints each run, the medians of the loop times, bond-updates/s on the family-size basis
 # (bonds counted from both ends, LAMMPS' "total # of bonds"), the ratio and the damage.
@@ -43,7 +45,7 @@ EOF
 }
 : > "$work/floe.txt"; : > "$work/lmp.txt"
 for r in $(seq "$REPS"); do
-  fl=$(PD_R=$R PD_H=$H PD_INDENT=force "$bin" "$STEPS" 2>/dev/null)
+  fl=$(PD_R=$R PD_H=$H PD_INDENT=force PD_ALPHA=${PD_ALPHA:-0.25} "$bin" "$STEPS" 2>/dev/null)
   echo "$fl"
   echo "$fl" >> "$work/floe.txt"
   lammps "$here/in.lammps" "$work/lmp$r.log"
@@ -58,8 +60,9 @@ fi
 if [ "${ALPHA0:-0}" = 1 ]; then
   sed 's/^pair_coeff .*/pair_coeff      * * 1.6863e22 0.0015001 0.0005 0.0/' "$here/in.lammps" > "$work/in.alpha0"
   lammps "$work/in.alpha0" "$work/a0.log"
-  echo "LAMMPS with alpha = 0 (constant s0 = s00 as in floe), untimed: $(lammps_line "$work/a0.log" | sed 's/.*damage_sum/damage_sum/')"
+  echo "LAMMPS with alpha = 0 (constant s0 = s00), untimed: $(lammps_line "$work/a0.log" | sed 's/.*damage_sum/damage_sum/')"
   awk '/^ *Step +Atoms/{on=1; next} /^Loop time/{on=0} on{printf "  step %s damage_sum %s\n", $1, $6}' "$work/a0.log"
+  echo "floe with alpha = 0, untimed: $(PD_R=$R PD_H=$H PD_ALPHA=0 "$bin" "$STEPS" 2>/dev/null | sed 's/.*\(damage_sum=[^ ]*\).*\(damage_hist=.*\)/\1 \2/')"
 fi
 fl_loop=$(kv loop_s < "$work/floe.txt" | median)
 lm_loop=$(kv loop_s < "$work/lmp.txt" | median)
@@ -84,5 +87,6 @@ print(f"  damage at end   floe sum {float(f['damage_sum']):.1f} mean {float(f['d
       f"floe/LAMMPS {float(f['damage_sum'])/float(l['damage_sum']):.2f}")
 print(f"  floe memory     {int(f['bytes'])} B: {float(f['bytes_per_family_bond']):.2f} B per family bond, "
       f"{float(f['bytes_per_pair']):.2f} B per stored pair")
-print(f"  floe damage every 100 steps: {f['damage_hist']}")
+print(f"  floe damage every 100 steps: {f['damage_hist']} (alpha {f['alpha']})")
 EOF
+echo "  LAMMPS damage every 100 steps: $(awk '/^ *Step +Atoms/{on=1; next} /^Loop time/{on=0} on && $1 > 0 {print $6}' "$work/lmp$REPS.log" | paste -sd, -)"

@@ -1,0 +1,630 @@
+/* beam_bond.c - beam bonds between particles (ParticLS §5.5; 004 §2, eqs 7 and 11):
+ * set-up within a radius, the co-rotational bond law (force and torque), breakage by the
+ * stresses of eq 11 with per-bond strengths from a seeded normal distribution, the bonds'
+ * critical time step, and the exclusion of bonded pairs from contact. floe_beam.h has the
+ * equations. */
+#include "floe_beam.h"
+#include "world_internal.h"
+
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* index-returning calls give -error */
+#define TRY_NEG(expr) do { int rc_ = (expr); if (rc_) return -rc_; } while (0)
+
+typedef struct beam_bond {
+    int i, j;
+    floe_beam_section s;
+    double ci[3], cj[3];     /* bond direction at creation, in the body frames of i and j */
+    double ni[3], nj[3];     /* a normal to it at creation, body frames (twist reference) */
+    double xi;               /* damping ratio */
+    double damp;             /* 2 xi / omega_a (s), cached at prepare */
+    double sig_lim, tau_lim;
+    double sigma, tau;       /* last stresses */
+    double fold[9];          /* last force on i, torques on i and j (energy ledger) */
+    double energy;           /* last stored energy */
+    double t_broken;
+    int broken;
+} beam_bond;
+
+struct floe_beam_set {
+    beam_bond *b;
+    int n, cap, nbroken;
+    /* bonded partners of each particle (both directions), sorted: off[n_csr + 1] */
+    int *off, *adj, *adj_bond, n_csr;
+    int (*prev_exclude)(const void *ctx, int i, int j);
+    const void *prev_ctx;
+};
+
+/* ---- section, local stiffness, stresses ---- */
+
+void floe_beam_local_stiffness(const floe_beam_section *s, int dim, double *K) {
+    const int n = dim == 2 ? 6 : 12;
+    memset(K, 0, (size_t)n * n * sizeof *K);
+    const double l = s->l, ka = s->E * s->A / l, f = 1.0 / (1.0 + s->phi);
+    const double a = 12.0 * s->E * s->I / (l * l * l) * f, b = 6.0 * s->E * s->I / (l * l) * f;
+    const double c = (4.0 + s->phi) * s->E * s->I / l * f, d = (2.0 - s->phi) * s->E * s->I / l * f;
+#define KS(r, q, val) do { K[(r) * n + (q)] = (val); K[(q) * n + (r)] = (val); } while (0)
+    if (dim == 2) {
+        /* (u, v, theta) of end i, then of end j: 004 eq 7 */
+        KS(0, 0, ka); KS(3, 3, ka); KS(0, 3, -ka);
+        KS(1, 1, a); KS(1, 2, b); KS(1, 4, -a); KS(1, 5, b);
+        KS(2, 2, c); KS(2, 4, -b); KS(2, 5, d);
+        KS(4, 4, a); KS(4, 5, -b); KS(5, 5, c);
+    } else {
+        const double kt = s->G * s->J / l;
+        KS(0, 0, ka); KS(6, 6, ka); KS(0, 6, -ka);
+        KS(3, 3, kt); KS(9, 9, kt); KS(3, 9, -kt);
+        /* bending in the x-y plane: v with theta_z */
+        KS(1, 1, a); KS(1, 5, b); KS(1, 7, -a); KS(1, 11, b);
+        KS(5, 5, c); KS(5, 7, -b); KS(5, 11, d);
+        KS(7, 7, a); KS(7, 11, -b); KS(11, 11, c);
+        /* bending in the x-z plane: w with theta_y (opposite coupling signs) */
+        KS(2, 2, a); KS(2, 4, -b); KS(2, 8, -a); KS(2, 10, -b);
+        KS(4, 4, c); KS(4, 8, b); KS(4, 10, d);
+        KS(8, 8, a); KS(8, 10, b); KS(10, 10, c);
+    }
+#undef KS
+}
+
+void floe_beam_local_apply(const floe_beam_section *s, int dim, const double *u, double *f) {
+    const double l = s->l, ka = s->E * s->A / l, g = 1.0 / (1.0 + s->phi);
+    const double a = 12.0 * s->E * s->I / (l * l * l) * g, b = 6.0 * s->E * s->I / (l * l) * g;
+    const double c = (4.0 + s->phi) * s->E * s->I / l * g, d = (2.0 - s->phi) * s->E * s->I / l * g;
+    if (dim == 2) {
+        double n = ka * (u[0] - u[3]), dv = u[1] - u[4];
+        f[0] = n;
+        f[3] = -n;
+        f[1] = a * dv + b * (u[2] + u[5]);
+        f[4] = -f[1];
+        f[2] = b * dv + c * u[2] + d * u[5];
+        f[5] = b * dv + d * u[2] + c * u[5];
+    } else {
+        const double kt = s->G * s->J / l;
+        double n = ka * (u[0] - u[6]), t = kt * (u[3] - u[9]), dv = u[1] - u[7], dw = u[2] - u[8];
+        f[0] = n;
+        f[6] = -n;
+        f[3] = t;
+        f[9] = -t;
+        f[1] = a * dv + b * (u[5] + u[11]);
+        f[7] = -f[1];
+        f[5] = b * dv + c * u[5] + d * u[11];
+        f[11] = b * dv + d * u[5] + c * u[11];
+        f[2] = a * dw - b * (u[4] + u[10]);
+        f[8] = -f[2];
+        f[4] = -b * dw + c * u[4] + d * u[10];
+        f[10] = -b * dw + d * u[4] + c * u[10];
+    }
+}
+
+void floe_beam_block_norms(const floe_beam_section *s, int dim, double out[4]) {
+    const double l = s->l, g = 1.0 / (1.0 + s->phi), EI = s->E * s->I;
+    out[0] = fmax(s->E * s->A / l, 12.0 * EI / (l * l * l) * g);
+    out[1] = 6.0 * EI / (l * l) * g;
+    out[2] = (4.0 + s->phi) * EI / l * g;
+    out[3] = fabs(2.0 - s->phi) * EI / l * g;
+    if (dim == 3) {
+        double kt = s->G * s->J / l;
+        out[2] = fmax(out[2], kt);
+        out[3] = fmax(out[3], kt);
+    }
+}
+
+void floe_beam_stress(const floe_beam_section *s, int dim, const double *f, double *sigma, double *tau) {
+    /* f = K u is the internal force at the ends: tension pulls end j back (-x) */
+    if (dim == 2) {
+        double N = 0.5 * (f[3] - f[0]), M = fmax(fabs(f[2]), fabs(f[5])), V = 0.5 * (fabs(f[1]) + fabs(f[4]));
+        *sigma = N / s->A + M / s->W;
+        *tau = 1.5 * V / s->A;
+    } else {
+        double N = 0.5 * (f[6] - f[0]);
+        double M = fmax(hypot(f[4], f[5]), hypot(f[10], f[11]));
+        double V = 0.5 * (hypot(f[1], f[2]) + hypot(f[7], f[8]));
+        double T = 0.5 * (fabs(f[3]) + fabs(f[9]));
+        *sigma = N / s->A + M / s->W;
+        *tau = 1.5 * V / s->A + T / (2.0 * s->W);
+    }
+}
+
+double floe_beam_normal(unsigned long long *state) {
+    /* splitmix64 -> two uniforms in (0, 1] -> Box-Muller (one deviate used per call) */
+    double u[2];
+    for (int k = 0; k < 2; k++) {
+        uint64_t z = (*state += 0x9E3779B97F4A7C15ULL);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+        z ^= z >> 31;
+        u[k] = ((double)(z >> 11) + 1.0) * (1.0 / 9007199254740992.0);
+    }
+    return sqrt(-2.0 * log(u[0])) * cos(2.0 * M_PI * u[1]);
+}
+
+floe_beam_params floe_default_beam_params(void) {
+    floe_beam_params p;
+    memset(&p, 0, sizeof p);
+    p.poisson = 0.25;
+    p.radius_ratio = 1.0;
+    p.thickness = 1.0;
+    p.seed = 1;
+    p.group = FLOE_BEAM_ALL_GROUPS;
+    return p;
+}
+
+static int check_params(floe_world *w, const floe_beam_params *par) {
+    const char *bad = NULL;
+    if (!par) bad = "params is NULL";
+    else if (!(par->young > 0) || !isfinite(par->young)) bad = "young must be > 0";
+    else if (!(par->poisson > -1 && par->poisson < 0.5)) bad = "poisson must be in (-1, 0.5)";
+    else if (par->shear_coefficient < 0 || !isfinite(par->shear_coefficient)) bad = "shear_coefficient must be >= 0";
+    else if (par->area < 0 || !isfinite(par->area)) bad = "area must be >= 0 (0 = from radius_ratio)";
+    else if (par->area > 0 && (!(par->inertia > 0) || !isfinite(par->inertia))) bad = "inertia must be > 0 when area is given";
+    else if (par->polar < 0 || !isfinite(par->polar)) bad = "polar must be >= 0";
+    else if (par->section_modulus < 0 || !isfinite(par->section_modulus)) bad = "section_modulus must be >= 0";
+    else if (par->area == 0 && (!(par->radius_ratio > 0) || !isfinite(par->radius_ratio)))
+        bad = "radius_ratio must be > 0 (or give area and inertia)";
+    else if (par->thickness < 0 || !isfinite(par->thickness)) bad = "thickness must be >= 0";
+    else if (!(par->damping_ratio >= 0) || !isfinite(par->damping_ratio)) bad = "damping_ratio must be >= 0";
+    else if (!(par->tensile_strength >= 0 && par->tensile_sd >= 0) || !isfinite(par->tensile_strength + par->tensile_sd))
+        bad = "tensile_strength and tensile_sd must be >= 0";
+    else if (!(par->shear_strength >= 0 && par->shear_sd >= 0) || !isfinite(par->shear_strength + par->shear_sd))
+        bad = "shear_strength and shear_sd must be >= 0";
+    else if (!(par->max_distance >= 0) || !isfinite(par->max_distance)) bad = "max_distance must be >= 0";
+    if (bad) return floe_world_error(w, FLOE_EINVAL, "beam bonds: %s", bad);
+    return FLOE_OK;
+}
+
+static int set_get(floe_world *w, struct floe_beam_set **out) {
+    if (!w->beams) {
+        w->beams = calloc(1, sizeof *w->beams);
+        if (!w->beams) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
+    *out = w->beams;
+    return FLOE_OK;
+}
+
+void floe_beam_set_destroy(struct floe_beam_set *s) {
+    if (!s) return;
+    free(s->b);
+    free(s->off); free(s->adj); free(s->adj_bond);
+    free(s);
+}
+
+/* bond index of the pair (i, j), or -1 */
+static int find_bond(const struct floe_beam_set *s, int i, int j) {
+    if (i < 0 || i >= s->n_csr) return -1;
+    int lo = s->off[i], hi = s->off[i + 1];
+    while (lo < hi) {
+        int mid = lo + (hi - lo) / 2;
+        if (s->adj[mid] < j) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo < s->off[i + 1] && s->adj[lo] == j ? s->adj_bond[lo] : -1;
+}
+
+typedef struct { int partner, bond; } adj_entry;
+static int cmp_adj(const void *a, const void *b) {
+    const adj_entry *x = a, *y = b;
+    return (x->partner > y->partner) - (x->partner < y->partner);
+}
+
+/* CSR of bonded partners over the first n particles */
+static int build_csr(struct floe_beam_set *s, int n) {
+    int *off = calloc((size_t)n + 1, sizeof *off);
+    adj_entry *e = malloc((size_t)(2 * s->n + 1) * sizeof *e);
+    int *adj = malloc((size_t)(2 * s->n + 1) * sizeof *adj), *ab = malloc((size_t)(2 * s->n + 1) * sizeof *ab);
+    if (!off || !e || !adj || !ab) { free(off); free(e); free(adj); free(ab); return FLOE_ENOMEM; }
+    for (int k = 0; k < s->n; k++) { off[s->b[k].i + 1]++; off[s->b[k].j + 1]++; }
+    for (int i = 0; i < n; i++) off[i + 1] += off[i];
+    int *fill = malloc((size_t)(n + 1) * sizeof *fill);
+    if (!fill) { free(off); free(e); free(adj); free(ab); return FLOE_ENOMEM; }
+    memcpy(fill, off, (size_t)(n + 1) * sizeof *fill);
+    for (int k = 0; k < s->n; k++) {
+        e[fill[s->b[k].i]++] = (adj_entry){s->b[k].j, k};
+        e[fill[s->b[k].j]++] = (adj_entry){s->b[k].i, k};
+    }
+    free(fill);
+    for (int i = 0; i < n; i++) qsort(e + off[i], (size_t)(off[i + 1] - off[i]), sizeof *e, cmp_adj);
+    for (int a = 0; a < off[n]; a++) { adj[a] = e[a].partner; ab[a] = e[a].bond; }
+    free(e);
+    free(s->off); free(s->adj); free(s->adj_bond);
+    s->off = off; s->adj = adj; s->adj_bond = ab; s->n_csr = n;
+    return FLOE_OK;
+}
+
+/* intact bonded pairs never enter the contact list; then whatever was excluded before */
+static int beam_exclude(const void *ctx, int i, int j) {
+    const floe_world *w = ctx;
+    const struct floe_beam_set *s = w->beams;
+    int k = find_bond(s, i, j);
+    if (k >= 0 && !s->b[k].broken) return 1;
+    return s->prev_exclude ? s->prev_exclude(s->prev_ctx, i, j) : 0;
+}
+
+static void install_exclude(floe_world *w) {
+    struct floe_beam_set *s = w->beams;
+    if (w->nl.exclude == beam_exclude) return;
+    s->prev_exclude = w->nl.exclude;
+    s->prev_ctx = w->nl.exclude_ctx;
+    w->nl.exclude = beam_exclude;
+    w->nl.exclude_ctx = w;
+}
+
+/* a unit normal to e */
+static void any_normal(double nrm[3], const double e[3]) {
+    double ax[3] = {0, 0, 0};
+    int k = fabs(e[0]) <= fabs(e[1]) && fabs(e[0]) <= fabs(e[2]) ? 0 : fabs(e[1]) <= fabs(e[2]) ? 1 : 2;
+    ax[k] = 1;
+    floe_v3_cross(nrm, e, ax);
+    floe_v3_scale(nrm, 1.0 / floe_v3_norm(nrm));
+}
+
+static int push_bond(floe_world *w, struct floe_beam_set *s, int i, int j, const floe_beam_params *par,
+                     unsigned long long *rng) {
+    const floe_particles *p = &w->p;
+    double d[3];
+    floe_v3_sub(d, p->x + 3 * j, p->x + 3 * i);
+    double l = floe_v3_norm(d);
+    if (!(l > 0)) return floe_world_error(w, FLOE_EINVAL, "beam bond %d-%d: the particles are at the same place", i, j);
+    if (s->n == s->cap) {
+        int nc = s->cap ? 2 * s->cap : 64;
+        beam_bond *nb = realloc(s->b, (size_t)nc * sizeof *nb);
+        if (!nb) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        s->b = nb;
+        s->cap = nc;
+    }
+    beam_bond *b = &s->b[s->n];
+    memset(b, 0, sizeof *b);
+    b->i = i;
+    b->j = j;
+    floe_beam_section *sec = &b->s;
+    sec->l = l;
+    sec->E = par->young;
+    sec->G = par->young / (2.0 * (1.0 + par->poisson));
+    const int dim = w->def.dim;
+    if (par->area > 0) {
+        sec->A = par->area;
+        sec->I = par->inertia;
+        sec->J = par->polar > 0 ? par->polar : 2.0 * par->inertia;
+        sec->W = par->section_modulus > 0 ? par->section_modulus : par->inertia / sqrt(par->area / M_PI);
+    } else {
+        double r = par->radius_ratio * fmin(p->radius[i], p->radius[j]);
+        if (dim == 2) { /* rectangle 2r high, `thickness` wide */
+            double bw = par->thickness > 0 ? par->thickness : 1.0, h = 2.0 * r;
+            sec->A = bw * h;
+            sec->I = bw * h * h * h / 12.0;
+            sec->J = 2.0 * sec->I;
+            sec->W = bw * h * h / 6.0;
+        } else {
+            sec->A = M_PI * r * r;
+            sec->I = 0.25 * M_PI * r * r * r * r;
+            sec->J = 2.0 * sec->I;
+            sec->W = 0.25 * M_PI * r * r * r;
+        }
+    }
+    if (par->timoshenko) {
+        double kappa = par->shear_coefficient > 0 ? par->shear_coefficient : 5.0 / 6.0;
+        sec->phi = 12.0 * sec->E * sec->I / (kappa * sec->G * sec->A * l * l);
+    }
+    double e[3] = {d[0] / l, d[1] / l, d[2] / l}, nrm[3];
+    if (dim == 2) floe_v3_set(nrm, 0, 0, 1);
+    else any_normal(nrm, e);
+    floe_q_rotate_inv(b->ci, p->q + 4 * i, e);
+    floe_q_rotate_inv(b->cj, p->q + 4 * j, e);
+    floe_q_rotate_inv(b->ni, p->q + 4 * i, nrm);
+    floe_q_rotate_inv(b->nj, p->q + 4 * j, nrm);
+    b->xi = par->damping_ratio;
+    b->sig_lim = INFINITY;
+    b->tau_lim = INFINITY;
+    if (par->tensile_strength > 0) b->sig_lim = fmax(0.0, par->tensile_strength + par->tensile_sd * floe_beam_normal(rng));
+    if (par->shear_strength > 0) b->tau_lim = fmax(0.0, par->shear_strength + par->shear_sd * floe_beam_normal(rng));
+    b->t_broken = -1;
+    return s->n++;
+}
+
+static int group_ok(const floe_world *w, const floe_beam_params *par, int i) {
+    return par->group == FLOE_BEAM_ALL_GROUPS || w->p.group[i] == par->group;
+}
+
+int floe_world_add_beam_bond(floe_world *w, int i, int j, const floe_beam_params *par) {
+    TRY_NEG(check_params(w, par));
+    const floe_particles *p = &w->p;
+    if (i < 0 || j < 0 || i >= p->n || j >= p->n || i == j)
+        return -floe_world_error(w, FLOE_EINVAL, "beam bond: particles %d and %d must be two different indices < %d", i, j, p->n);
+    if (!isfinite(p->radius[i]) || !isfinite(p->radius[j]))
+        return -floe_world_error(w, FLOE_EINVAL, "beam bond %d-%d: walls cannot be bonded", i, j);
+    struct floe_beam_set *s = NULL;
+    TRY_NEG(set_get(w, &s));
+    if (find_bond(s, i, j) >= 0) return -floe_world_error(w, FLOE_EINVAL, "beam bond %d-%d: already bonded", i, j);
+    unsigned long long rng = par->seed;
+    int k = push_bond(w, s, i < j ? i : j, i < j ? j : i, par, &rng);
+    if (k < 0) return k;
+    if (build_csr(s, p->n)) return -floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    install_exclude(w);
+    w->prepared = 0;
+    return k;
+}
+
+typedef struct { int *idx; int n, cap, oom; } visit_buf;
+static void visit_push(int index, double d2, void *user) {
+    (void)d2;
+    visit_buf *v = user;
+    if (v->oom) return;
+    if (v->n == v->cap) {
+        int nc = v->cap ? 2 * v->cap : 64;
+        int *t = realloc(v->idx, (size_t)nc * sizeof *t);
+        if (!t) { v->oom = 1; return; }
+        v->idx = t;
+        v->cap = nc;
+    }
+    v->idx[v->n++] = index;
+}
+static int cmp_int(const void *a, const void *b) { return (*(const int *)a > *(const int *)b) - (*(const int *)a < *(const int *)b); }
+
+int floe_world_add_beam_bonds(floe_world *w, double radius_factor, const floe_beam_params *par) {
+    TRY_NEG(check_params(w, par));
+    if (par->max_distance == 0 && (!(radius_factor > 0) || !isfinite(radius_factor)))
+        return -floe_world_error(w, FLOE_EINVAL, "beam bonds: radius_factor must be > 0 (or set max_distance)");
+    const floe_particles *p = &w->p;
+    struct floe_beam_set *s = NULL;
+    TRY_NEG(set_get(w, &s));
+    /* candidates: finite particles of the group */
+    int *cand = malloc((size_t)(p->n ? p->n : 1) * sizeof *cand);
+    double *pts = malloc((size_t)(p->n ? p->n : 1) * 3 * sizeof *pts);
+    if (!cand || !pts) { free(cand); free(pts); return -floe_world_error(w, FLOE_ENOMEM, "out of memory"); }
+    int nc = 0;
+    double rmax = 0;
+    for (int i = 0; i < p->n; i++) {
+        if (!isfinite(p->radius[i]) || !group_ok(w, par, i)) continue;
+        memcpy(pts + 3 * nc, p->x + 3 * i, 3 * sizeof *pts);
+        cand[nc++] = i;
+        if (p->radius[i] > rmax) rmax = p->radius[i];
+    }
+    floe_kdtree *tree = nc ? floe_kdtree_build(pts, nc, w->def.dim, 16) : NULL;
+    free(pts);
+    if (nc && !tree) { free(cand); return -floe_world_error(w, FLOE_ENOMEM, "out of memory"); }
+    if (build_csr(s, p->n)) { floe_kdtree_destroy(tree); free(cand); return -floe_world_error(w, FLOE_ENOMEM, "out of memory"); }
+    unsigned long long rng = par->seed;
+    visit_buf vb = {NULL, 0, 0, 0};
+    int added = 0, rc = FLOE_OK;
+    const int n_before = s->n;
+    for (int a = 0; a < nc && !rc; a++) {
+        int i = cand[a];
+        double reach = par->max_distance > 0 ? par->max_distance : radius_factor * (p->radius[i] + rmax);
+        vb.n = 0;
+        floe_kdtree_radius_visit(tree, p->x + 3 * i, reach, visit_push, &vb);
+        if (vb.oom) { rc = floe_world_error(w, FLOE_ENOMEM, "out of memory"); break; }
+        for (int q = 0; q < vb.n; q++) vb.idx[q] = cand[vb.idx[q]];
+        qsort(vb.idx, (size_t)vb.n, sizeof *vb.idx, cmp_int); /* bond order independent of the tree */
+        for (int q = 0; q < vb.n; q++) {
+            int j = vb.idx[q];
+            if (j <= i) continue;
+            if (p->motion[i] != FLOE_FREE && p->motion[j] != FLOE_FREE) continue;
+            double d[3];
+            floe_v3_sub(d, p->x + 3 * j, p->x + 3 * i);
+            double dist = floe_v3_norm(d);
+            double lim = par->max_distance > 0 ? par->max_distance : radius_factor * (p->radius[i] + p->radius[j]);
+            if (dist > lim) continue;
+            if (find_bond(s, i, j) >= 0) continue; /* bonded by an earlier call */
+            int k = push_bond(w, s, i, j, par, &rng);
+            if (k < 0) { rc = -k; break; }
+            added++;
+        }
+    }
+    free(vb.idx);
+    free(cand);
+    floe_kdtree_destroy(tree);
+    if (rc) { s->n = n_before; build_csr(s, p->n); return -rc; }
+    if (build_csr(s, p->n)) return -floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    install_exclude(w);
+    w->prepared = 0;
+    return added;
+}
+
+int floe_world_beam_bond_count(const floe_world *w) { return w->beams ? w->beams->n : 0; }
+int floe_world_beam_broken_count(const floe_world *w) { return w->beams ? w->beams->nbroken : 0; }
+
+int floe_world_beam_bond(const floe_world *w, int k, floe_beam_bond_info *o) {
+    if (!w->beams || k < 0 || k >= w->beams->n) return FLOE_EINVAL;
+    const beam_bond *b = &w->beams->b[k];
+    o->i = b->i;
+    o->j = b->j;
+    o->broken = b->broken;
+    o->t_broken = b->t_broken;
+    o->sigma = b->sigma;
+    o->tau = b->tau;
+    o->sigma_lim = b->sig_lim;
+    o->tau_lim = b->tau_lim;
+    o->section = b->s;
+    return FLOE_OK;
+}
+
+int floe_world_write_beam_bonds_csv(floe_world *w, const char *path) {
+    FILE *f = fopen(path, "w");
+    if (!f) return floe_world_error(w, FLOE_EIO, "cannot write %s", path);
+    fprintf(f, "i,j,x [m],y [m],z [m],broken,t_broken [s],sigma [Pa],tau [Pa],sigma_lim [Pa]\n");
+    const struct floe_beam_set *s = w->beams;
+    for (int k = 0; s && k < s->n; k++) {
+        const beam_bond *b = &s->b[k];
+        const double *xi = w->p.x + 3 * b->i, *xj = w->p.x + 3 * b->j;
+        fprintf(f, "%d,%d,%.9g,%.9g,%.9g,%d,%.9g,%.9g,%.9g,%.9g\n", b->i, b->j, 0.5 * (xi[0] + xj[0]),
+                0.5 * (xi[1] + xj[1]), 0.5 * (xi[2] + xj[2]), b->broken, b->t_broken, b->sigma, b->tau, b->sig_lim);
+    }
+    int bad = ferror(f);
+    if (fclose(f) || bad) return floe_world_error(w, FLOE_EIO, "error writing %s", path);
+    return FLOE_OK;
+}
+
+/* ---- time step ---- */
+
+double floe_beam_critical_dt(floe_world *w) {
+    struct floe_beam_set *s = w->beams;
+    if (!s || s->n == 0) return INFINITY;
+    install_exclude(w);
+    const floe_particles *p = &w->p;
+    const int dim = w->def.dim, n = p->n;
+    /* rows of M^-1/2 K M^-1/2 by (particle, translation | rotation): sums of the spectral
+     * norms of the 3x3 blocks (a block Gershgorin bound on the largest eigenvalue; the norms
+     * do not depend on the bond's direction) */
+    double *row = calloc((size_t)(n ? n : 1) * 2, sizeof *row);
+    if (!row) return 0; /* refuses the run with a zero critical step rather than guessing */
+    double dmax = 0;
+    for (int k = 0; k < s->n; k++) {
+        beam_bond *b = &s->b[k];
+        const floe_beam_section *c = &b->s;
+        int i = b->i, j = b->j;
+        double inv = p->inv_mass[i] + p->inv_mass[j];
+        double mr = inv > 0 ? 1.0 / inv : INFINITY;
+        double ka = c->E * c->A / c->l, nrm[4];
+        b->damp = b->xi > 0 && isfinite(mr) ? 2.0 * b->xi * sqrt(mr / ka) : 0.0;
+        if (b->broken) continue;
+        if (b->damp > dmax) dmax = b->damp;
+        floe_beam_block_norms(c, dim, nrm);
+        const double ktt = nrm[0], ktr = nrm[1], krr_ii = nrm[2], krr_ij = nrm[3];
+        int ends[2] = {i, j};
+        for (int e = 0; e < 2; e++) {
+            int a = ends[e], o = ends[1 - e];
+            if (p->motion[a] != FLOE_FREE) continue;
+            const double *Ia = p->inertia + 3 * a, *Io = p->inertia + 3 * o;
+            double ma = p->mass[a], Ja = fmin(Ia[0], fmin(Ia[1], Ia[2]));
+            int ofree = p->motion[o] == FLOE_FREE;
+            double mo = p->mass[o], Jo = fmin(Io[0], fmin(Io[1], Io[2]));
+            row[2 * a] += ktt / ma + ktr / sqrt(ma * Ja);
+            row[2 * a + 1] += ktr / sqrt(ma * Ja) + krr_ii / Ja;
+            if (ofree) {
+                row[2 * a] += ktt / sqrt(ma * mo) + ktr / sqrt(ma * Jo);
+                row[2 * a + 1] += ktr / sqrt(Ja * mo) + krr_ij / sqrt(Ja * Jo);
+            }
+        }
+    }
+    double lmax = 0;
+    for (int a = 0; a < 2 * n; a++)
+        if (row[a] > lmax) lmax = row[a];
+    free(row);
+    if (!(lmax > 0)) return INFINITY;
+    double om = sqrt(lmax), zeta = 0.5 * dmax * om;
+    return 2.0 / om * (sqrt(1.0 + zeta * zeta) - zeta);
+}
+
+/* ---- forces ---- */
+
+int floe_beam_forces(floe_world *w, double *elastic, double *dissipated) {
+    struct floe_beam_set *s = w->beams;
+    if (!s) return FLOE_OK;
+    floe_particles *p = &w->p;
+    const int stepping = w->advancing, dim = w->def.dim;
+    const double dt = w->dt;
+    int nbreak = 0;
+    double el = 0, ds = 0;
+    if (w->nl.exclude != beam_exclude) { /* something replaced the exclusion since prepare */
+        install_exclude(w);
+        int rc = floe_nl_build(&w->nl, p, dim, w->def.leaf_size);
+        if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
+    }
+    for (int k = 0; k < s->n; k++) {
+        beam_bond *b = &s->b[k];
+        if (b->broken) continue;
+        const int i = b->i, j = b->j;
+        const floe_beam_section *c = &b->s;
+        const double *xi = p->x + 3 * i, *xj = p->x + 3 * j, *qi = p->q + 4 * i, *qj = p->q + 4 * j;
+        double d[3], e[3], ti[3], tj[3], thi[3], thj[3];
+        floe_v3_sub(d, xj, xi);
+        double L = floe_v3_norm(d);
+        for (int a = 0; a < 3; a++) e[a] = d[a] / L;
+        floe_q_rotate(ti, qi, b->ci);
+        floe_q_rotate(tj, qj, b->cj);
+        floe_v3_cross(thi, e, ti); /* end rotations relative to the chord */
+        floe_v3_cross(thj, e, tj);
+        double twist = 0;
+        if (dim == 3) {
+            double ni[3], nj[3], cr[3];
+            floe_q_rotate(ni, qi, b->ni);
+            floe_q_rotate(nj, qj, b->nj);
+            floe_v3_axpy(ni, -floe_v3_dot(ni, e), e);
+            floe_v3_axpy(nj, -floe_v3_dot(nj, e), e);
+            floe_v3_cross(cr, ni, nj);
+            twist = atan2(floe_v3_dot(cr, e), floe_v3_dot(ni, nj));
+        }
+        const double l0 = c->l, f = 1.0 / (1.0 + c->phi), ka = c->E * c->A / l0, kt = c->G * c->J / l0;
+        const double c1 = (4.0 + c->phi) * c->E * c->I / l0 * f, c2 = (2.0 - c->phi) * c->E * c->I / l0 * f;
+        double u = L - l0, N = ka * u, T = kt * twist, Mi[3], Mj[3];
+        for (int a = 0; a < 3; a++) {
+            Mi[a] = c1 * thi[a] + c2 * thj[a];
+            Mj[a] = c2 * thi[a] + c1 * thj[a];
+        }
+        double energy = 0.5 * (N * u + floe_v3_dot(thi, Mi) + floe_v3_dot(thj, Mj) + T * twist);
+        /* stresses of 004 eq 11 from the elastic forces */
+        double Ms[3];
+        floe_v3_add(Ms, Mi, Mj);
+        double sigma = N / c->A + fmax(floe_v3_norm(Mi), floe_v3_norm(Mj)) / c->W;
+        double tau = 1.5 * floe_v3_norm(Ms) / (L * c->A) + fabs(T) / (2.0 * c->W);
+        b->sigma = sigma;
+        b->tau = tau;
+        double Fi[3] = {0, 0, 0}, Ti[3] = {0, 0, 0}, Tj[3] = {0, 0, 0};
+        if (stepping && (sigma > b->sig_lim || tau > b->tau_lim)) {
+            b->broken = 1;
+            b->t_broken = w->time;
+            b->sigma = b->tau = 0;
+            s->nbroken++;
+            nbreak++;
+            energy = 0;
+        } else {
+            if (b->damp > 0) { /* stiffness-proportional damping on the deformation rates */
+                const double *vi = p->v + 3 * i, *vj = p->v + 3 * j, *wi = p->w + 3 * i, *wj = p->w + 3 * j;
+                double vr[3], wch[3], rdi[3], rdj[3];
+                floe_v3_sub(vr, vj, vi);
+                floe_v3_cross(wch, e, vr);
+                floe_v3_scale(wch, 1.0 / L);
+                double wie = floe_v3_dot(wi, e), wje = floe_v3_dot(wj, e);
+                for (int a = 0; a < 3; a++) {
+                    rdi[a] = wi[a] - wie * e[a] - wch[a];
+                    rdj[a] = wj[a] - wje * e[a] - wch[a];
+                }
+                if (dim == 2) rdi[0] = rdi[1] = rdj[0] = rdj[1] = 0;
+                const double h = b->damp;
+                N += h * ka * floe_v3_dot(e, vr);
+                T += dim == 3 ? h * kt * (wje - wie) : 0.0;
+                for (int a = 0; a < 3; a++) {
+                    Mi[a] += h * (c1 * rdi[a] + c2 * rdj[a]);
+                    Mj[a] += h * (c2 * rdi[a] + c1 * rdj[a]);
+                }
+                floe_v3_add(Ms, Mi, Mj);
+            }
+            /* force on j: -N e + ((M_i + M_j) x e) / L; torques -M_i + T e and -M_j - T e */
+            double Fj[3];
+            floe_v3_cross(Fj, Ms, e);
+            for (int a = 0; a < 3; a++) {
+                Fj[a] = Fj[a] / L - N * e[a];
+                Fi[a] = -Fj[a];
+                Ti[a] = -Mi[a] + T * e[a];
+                Tj[a] = -Mj[a] - T * e[a];
+                p->f[3 * i + a] += Fi[a];
+                p->f[3 * j + a] += Fj[a];
+                p->t[3 * i + a] += Ti[a];
+                p->t[3 * j + a] += Tj[a];
+            }
+        }
+        if (stepping) {
+            /* ledger: work of the bond forces over the step (trapezoid, mid-step velocities) */
+            const double *vi = p->v + 3 * i, *vj = p->v + 3 * j, *wi = p->w + 3 * i, *wj = p->w + 3 * j;
+            double wk = 0;
+            for (int a = 0; a < 3; a++)
+                wk += (Fi[a] + b->fold[a]) * (vi[a] - vj[a]) + (Ti[a] + b->fold[3 + a]) * wi[a] +
+                      (Tj[a] + b->fold[6 + a]) * wj[a];
+            ds += -0.5 * wk * dt - (energy - b->energy);
+        }
+        memcpy(b->fold, Fi, sizeof Fi);
+        memcpy(b->fold + 3, Ti, sizeof Ti);
+        memcpy(b->fold + 6, Tj, sizeof Tj);
+        b->energy = energy;
+        el += energy;
+    }
+    *elastic += el;
+    if (stepping) *dissipated += ds;
+    if (nbreak) { /* the broken pairs may now meet by contact: into the list */
+        int rc = floe_nl_build(&w->nl, p, dim, w->def.leaf_size);
+        if (rc) return floe_world_error(w, rc, "neighbour list rebuild after beam breakage failed (out of memory)");
+    }
+    return FLOE_OK;
+}

@@ -1,0 +1,1351 @@
+/* newmark.c - explicit and implicit Newmark-beta for bonded systems (004 §3-4, eqs 13-30):
+ * nodes + beam bonds (004 eq 7) + supports + loads; sparse K, C, M assembled in the bonds'
+ * local frames and factored by SuiteSparse CHOLMOD (implicit), block-diagonal node solves
+ * (explicit), incremental internal forces (eqs 19-20), stresses and breakage (eqs 10-11),
+ * step cuts by the line search of eqs 29-30. floe_newmark.h has the equations. */
+#include "floe_newmark.h"
+#include "world_internal.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#ifdef FLOE_HAVE_CHOLMOD
+#include <cholmod.h>
+#endif
+
+typedef struct nm_bond {
+    int i, j;
+    floe_beam_section s;
+    double R[9];             /* rows: the local axes (e, y', z') in global components */
+    double fl[12];           /* local internal forces at the ends (eq 10), incremental (eq 20) */
+    double dfl[12];          /* the trial step's increment */
+    double c[6];             /* eq 8 dampers on the local components of each end (3 + 3) */
+    double k[6];             /* EA/l, 12EI/(l^3(1+phi)), 6EI/(l^2(1+phi)), (4+phi)EI/(l(1+phi)),
+                                (2-phi)EI/(l(1+phi)), GJ/l: the entries of eq 7 */
+    double inv_a, inv_w;     /* 1/A, 1/W for eq 11 */
+    double sig_lim, tau_lim;
+    double sigma, tau;       /* stresses at the last accepted step */
+    double sig_tr, tau_tr;   /* at the trial step */
+    double t_broken;
+    int broken;
+} nm_bond;
+
+struct floe_newmark {
+    floe_newmark_def def;
+    char err[512];
+    int dim, nd;
+    int n, cap;
+    double *x, *mass, *inertia;
+    unsigned *fix;
+    double *F;               /* nd n load pattern */
+    double *u, *v, *a, *fint; /* nd n state */
+    double *du, *vnew, *anew, *kd, *an, *bn, *rhs, *cv0, *cv1; /* nd n scratch */
+    nm_bond *b;
+    int nb, bcap;
+    floe_newmark_load_fn lf;
+    void *lf_user;
+    int prepared;
+    double t;
+    int *eq;                 /* nd n: equation of each component, -1 if supported */
+    int neq;
+    double *cblk;            /* n nd^2: C block of each node (eq 8 + alpha M) */
+    double *ablk;            /* explicit: n nd^2: inverse of the free part of M + gamma dt C */
+    double ablk_dt;
+    long ablk_epoch;
+    long epoch;              /* bumped when bonds break: older factors are stale */
+    floe_newmark_stats st;
+    double energy_scale;     /* for the instability check */
+#ifdef FLOE_HAVE_CHOLMOD
+    cholmod_common cc;
+    int cc_started;
+    cholmod_sparse *A;
+    cholmod_factor *L[2];    /* [0]: for def.dt, [1]: for the last shortened step */
+    double Ldt[2];
+    long Lepoch[2];
+    int *bpos;               /* nb (2 nd)^2: positions in A->x of each bond's entries (-1: none) */
+    int *npos;               /* n nd^2: positions of each node's diagonal block */
+    int *pinv;               /* inverse of L[0]->Perm (downdates take permuted rows) */
+    long since_refactor[2];  /* downdates of L[k] since its factorization */
+    cholmod_dense *B, *X, *Y, *E;
+#endif
+};
+
+static int nm_error(floe_newmark *s, int code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+static int nm_error(floe_newmark *s, int code, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(s->err, sizeof s->err, fmt, ap);
+    va_end(ap);
+    return code;
+}
+
+static double now_s(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+floe_newmark_def floe_newmark_default_def(void) {
+    floe_newmark_def d;
+    memset(&d, 0, sizeof d);
+    d.dim = 2;
+    d.beta = 0.25;
+    d.gamma = 0.5;
+    d.line_search_eps = 0.01;
+    d.max_cuts = 8;
+    return d;
+}
+
+floe_newmark *floe_newmark_create(const floe_newmark_def *def, char *err, size_t errlen) {
+    const char *bad = NULL;
+    if (!def) bad = "definition is NULL";
+    else if (def->dim != 2 && def->dim != 3) bad = "dim must be 2 or 3";
+    else if (!(def->beta >= 0 && 2 * def->beta <= 1)) bad = "beta must satisfy 0 <= 2 beta <= 1 (eq 16)";
+    else if (!(def->gamma >= 0.5 && def->gamma <= 1)) bad = "gamma must be in [1/2, 1]";
+    else if (!(def->dt > 0) || !isfinite(def->dt)) bad = "dt must be > 0";
+    else if (!(def->damping_ratio >= 0) || !isfinite(def->damping_ratio)) bad = "damping_ratio must be >= 0";
+    else if (!(def->mass_damping >= 0) || !isfinite(def->mass_damping)) bad = "mass_damping must be >= 0";
+    else if (!isfinite(def->line_search_eps)) bad = "line_search_eps must be finite";
+    else if (def->max_cuts < 0) bad = "max_cuts must be >= 0";
+#ifndef FLOE_HAVE_CHOLMOD
+    else if (def->beta > 0) {
+        if (err && errlen)
+            snprintf(err, errlen, "implicit Newmark (beta > 0) needs SuiteSparse CHOLMOD: this build has "
+                                  "FLOE_WITH_CHOLMOD=OFF");
+        return NULL;
+    }
+#endif
+    if (bad) {
+        if (err && errlen) snprintf(err, errlen, "invalid Newmark definition: %s", bad);
+        return NULL;
+    }
+    floe_newmark *s = calloc(1, sizeof *s);
+    if (!s) {
+        if (err && errlen) snprintf(err, errlen, "out of memory");
+        return NULL;
+    }
+    s->def = *def;
+    s->dim = def->dim;
+    s->nd = def->dim == 2 ? 3 : 6;
+    s->st.t_first_break = -1;
+    s->ablk_epoch = -1;
+    return s;
+}
+
+static void free_arrays(floe_newmark *s) {
+    free(s->x); free(s->mass); free(s->inertia); free(s->fix); free(s->F);
+    free(s->u); free(s->v); free(s->a); free(s->fint);
+    free(s->du); free(s->vnew); free(s->anew); free(s->kd); free(s->an); free(s->bn); free(s->rhs);
+    free(s->cv0); free(s->cv1);
+}
+
+#ifdef FLOE_HAVE_CHOLMOD
+static void free_cholmod(floe_newmark *s) {
+    if (!s->cc_started) return;
+    cholmod_free_sparse(&s->A, &s->cc);
+    for (int k = 0; k < 2; k++) cholmod_free_factor(&s->L[k], &s->cc);
+    cholmod_free_dense(&s->B, &s->cc);
+    cholmod_free_dense(&s->X, &s->cc);
+    cholmod_free_dense(&s->Y, &s->cc);
+    cholmod_free_dense(&s->E, &s->cc);
+    cholmod_finish(&s->cc);
+    s->cc_started = 0;
+    free(s->bpos);
+    free(s->npos);
+    free(s->pinv);
+    s->bpos = s->npos = s->pinv = NULL;
+}
+#endif
+
+void floe_newmark_destroy(floe_newmark *s) {
+    if (!s) return;
+    free_arrays(s);
+    free(s->b);
+    free(s->eq);
+    free(s->cblk);
+    free(s->ablk);
+#ifdef FLOE_HAVE_CHOLMOD
+    free_cholmod(s);
+#endif
+    free(s);
+}
+
+const char *floe_newmark_last_error(const floe_newmark *s) { return s->err; }
+
+/* ---- set-up ---- */
+
+static int grow_nodes(floe_newmark *s, int need) {
+    if (need <= s->cap) return FLOE_OK;
+    int nc = s->cap ? 2 * s->cap : 64;
+    while (nc < need) nc *= 2;
+    const size_t nd = (size_t)s->nd;
+#define RE(f, k) do { void *t_ = realloc(s->f, (size_t)nc * (k) * sizeof *s->f); if (!t_) return FLOE_ENOMEM; s->f = t_; } while (0)
+    RE(x, 3); RE(mass, 1); RE(inertia, 1); RE(fix, 1); RE(F, nd);
+    RE(u, nd); RE(v, nd); RE(a, nd); RE(fint, nd);
+    RE(du, nd); RE(vnew, nd); RE(anew, nd); RE(kd, nd); RE(an, nd); RE(bn, nd); RE(rhs, nd); RE(cv0, nd); RE(cv1, nd);
+#undef RE
+    s->cap = nc;
+    return FLOE_OK;
+}
+
+int floe_newmark_add_node(floe_newmark *s, const double x[3], double mass, double inertia) {
+    if (!isfinite(x[0]) || !isfinite(x[1]) || !isfinite(x[2]))
+        return -nm_error(s, FLOE_EINVAL, "node: position must be finite");
+    if (!(mass > 0) || !isfinite(mass)) return -nm_error(s, FLOE_EINVAL, "node: mass must be > 0 (got %g)", mass);
+    if (!(inertia > 0) || !isfinite(inertia))
+        return -nm_error(s, FLOE_EINVAL, "node: rotational inertia must be > 0 (got %g)", inertia);
+    if (grow_nodes(s, s->n + 1)) return -nm_error(s, FLOE_ENOMEM, "out of memory");
+    int i = s->n++, nd = s->nd;
+    memcpy(s->x + 3 * i, x, 3 * sizeof *x);
+    if (s->dim == 2) s->x[3 * i + 2] = 0;
+    s->mass[i] = mass;
+    s->inertia[i] = inertia;
+    s->fix[i] = 0;
+    for (int k = 0; k < nd; k++) s->F[nd * i + k] = s->u[nd * i + k] = s->v[nd * i + k] = 0;
+    s->prepared = 0;
+    return i;
+}
+
+/* rows of R: e, then two normals (2D: e_perp in the plane; 3D: any right-handed pair) */
+static void bond_frame(int dim, const double e[3], double R[9]) {
+    R[0] = e[0]; R[1] = e[1]; R[2] = e[2];
+    if (dim == 2) {
+        R[3] = -e[1]; R[4] = e[0]; R[5] = 0;
+    } else {
+        double ax[3] = {0, 0, 0}, y[3];
+        int k = fabs(e[0]) <= fabs(e[1]) && fabs(e[0]) <= fabs(e[2]) ? 0 : fabs(e[1]) <= fabs(e[2]) ? 1 : 2;
+        ax[k] = 1;
+        floe_v3_cross(y, ax, e);
+        floe_v3_scale(y, 1.0 / floe_v3_norm(y));
+        R[3] = y[0]; R[4] = y[1]; R[5] = y[2];
+    }
+    floe_v3_cross(R + 6, R, R + 3);
+}
+
+int floe_newmark_add_bond(floe_newmark *s, int i, int j, const floe_beam_section *sec, double sigma_lim, double tau_lim) {
+    if (i < 0 || j < 0 || i >= s->n || j >= s->n || i == j)
+        return -nm_error(s, FLOE_EINVAL, "bond: nodes %d and %d must be two different indices < %d", i, j, s->n);
+    if (!sec || !(sec->E > 0) || !(sec->A > 0) || !(sec->I > 0) || !(sec->W > 0) || !(sec->phi >= 0) ||
+        (s->dim == 3 && !(sec->G > 0 && sec->J > 0)) || !isfinite(sec->E + sec->A + sec->I + sec->W + sec->phi))
+        return -nm_error(s, FLOE_EINVAL, "bond %d-%d: the section needs E, A, I, W > 0 (3D: G, J > 0) and phi >= 0", i, j);
+    if (!(sigma_lim >= 0) || !(tau_lim >= 0))
+        return -nm_error(s, FLOE_EINVAL, "bond %d-%d: strengths must be >= 0 (INFINITY: unbreakable)", i, j);
+    double d[3];
+    floe_v3_sub(d, s->x + 3 * j, s->x + 3 * i);
+    double l = floe_v3_norm(d);
+    if (!(l > 0)) return -nm_error(s, FLOE_EINVAL, "bond %d-%d: the nodes are at the same place", i, j);
+    if (s->nb == s->bcap) {
+        int nc = s->bcap ? 2 * s->bcap : 64;
+        nm_bond *nbp = realloc(s->b, (size_t)nc * sizeof *nbp);
+        if (!nbp) return -nm_error(s, FLOE_ENOMEM, "out of memory");
+        s->b = nbp;
+        s->bcap = nc;
+    }
+    nm_bond *b = &s->b[s->nb];
+    memset(b, 0, sizeof *b);
+    b->i = i;
+    b->j = j;
+    b->s = *sec;
+    b->s.l = l;
+    floe_v3_scale(d, 1.0 / l);
+    bond_frame(s->dim, d, b->R);
+    b->sig_lim = sigma_lim;
+    b->tau_lim = tau_lim;
+    b->t_broken = -1;
+    const floe_beam_section *c = &b->s;
+    double g = 1.0 / (1.0 + c->phi), EI = c->E * c->I;
+    b->k[0] = c->E * c->A / l;
+    b->k[1] = 12.0 * EI / (l * l * l) * g;
+    b->k[2] = 6.0 * EI / (l * l) * g;
+    b->k[3] = (4.0 + c->phi) * EI / l * g;
+    b->k[4] = (2.0 - c->phi) * EI / l * g;
+    b->k[5] = c->G * c->J / l;
+    b->inv_a = 1.0 / c->A;
+    b->inv_w = 1.0 / c->W;
+    s->prepared = 0;
+    return s->nb++;
+}
+
+int floe_newmark_fix(floe_newmark *s, int i, unsigned mask) {
+    if (i < 0 || i >= s->n) return nm_error(s, FLOE_EINVAL, "fix: node %d out of range", i);
+    s->fix[i] |= mask & FLOE_NM_ALL;
+    s->prepared = 0;
+    return FLOE_OK;
+}
+
+/* component k of node i in the dim's layout: 2D (ux, uy, rz), 3D (ux, uy, uz, rx, ry, rz) */
+static unsigned comp_mask(int dim, int k) {
+    static const unsigned m2[3] = {FLOE_NM_UX, FLOE_NM_UY, FLOE_NM_RZ};
+    return dim == 2 ? m2[k] : 1u << k;
+}
+
+int floe_newmark_set_load(floe_newmark *s, int i, const double f[3], const double m[3]) {
+    if (i < 0 || i >= s->n) return nm_error(s, FLOE_EINVAL, "load: node %d out of range", i);
+    double *F = s->F + s->nd * i;
+    for (int k = 0; k < 3; k++)
+        if (!isfinite(f ? f[k] : 0) || !isfinite(m ? m[k] : 0)) return nm_error(s, FLOE_EINVAL, "load: must be finite");
+    if (s->dim == 2) { F[0] = f ? f[0] : 0; F[1] = f ? f[1] : 0; F[2] = m ? m[2] : 0; }
+    else for (int k = 0; k < 3; k++) { F[k] = f ? f[k] : 0; F[3 + k] = m ? m[k] : 0; }
+    return FLOE_OK;
+}
+
+int floe_newmark_set_load_factor(floe_newmark *s, floe_newmark_load_fn fn, void *user) {
+    s->lf = fn;
+    s->lf_user = user;
+    return FLOE_OK;
+}
+
+int floe_newmark_set_initial(floe_newmark *s, int i, const double u[3], const double rot[3], const double v[3],
+                             const double w[3]) {
+    if (i < 0 || i >= s->n) return nm_error(s, FLOE_EINVAL, "initial: node %d out of range", i);
+    if (s->prepared || s->st.steps) return nm_error(s, FLOE_EINVAL, "initial: only before the first step");
+    double *U = s->u + s->nd * i, *V = s->v + s->nd * i;
+    const double z[3] = {0, 0, 0};
+    if (!u) u = z;
+    if (!rot) rot = z;
+    if (!v) v = z;
+    if (!w) w = z;
+    if (s->dim == 2) { U[0] = u[0]; U[1] = u[1]; U[2] = rot[2]; V[0] = v[0]; V[1] = v[1]; V[2] = w[2]; }
+    else for (int k = 0; k < 3; k++) { U[k] = u[k]; U[3 + k] = rot[k]; V[k] = v[k]; V[3 + k] = w[k]; }
+    return FLOE_OK;
+}
+
+/* ---- bond kernels ---- */
+
+/* local end components of the global vector g (2 nd) */
+static void to_local(const floe_newmark *s, const nm_bond *b, const double *g, double *ul) {
+    const int nd = s->nd;
+    const double *R = b->R;
+    const int ends[2] = {b->i, b->j};
+    for (int e = 0; e < 2; e++) {
+        const double *q = g + (size_t)nd * ends[e];
+        double *o = ul + nd * e;
+        if (nd == 3) {
+            o[0] = R[0] * q[0] + R[1] * q[1];
+            o[1] = R[3] * q[0] + R[4] * q[1];
+            o[2] = q[2];
+        } else {
+            for (int r = 0; r < 3; r++) {
+                o[r] = R[3 * r] * q[0] + R[3 * r + 1] * q[1] + R[3 * r + 2] * q[2];
+                o[3 + r] = R[3 * r] * q[3] + R[3 * r + 1] * q[4] + R[3 * r + 2] * q[5];
+            }
+        }
+    }
+}
+
+/* g += T fl (local end forces back to global components), scaled by sc */
+static void add_global(const floe_newmark *s, const nm_bond *b, const double *fl, double sc, double *g) {
+    const int nd = s->nd;
+    const double *R = b->R;
+    const int ends[2] = {b->i, b->j};
+    for (int e = 0; e < 2; e++) {
+        double *q = g + (size_t)nd * ends[e];
+        const double *f = fl + nd * e;
+        if (nd == 3) {
+            q[0] += sc * (R[0] * f[0] + R[3] * f[1]);
+            q[1] += sc * (R[1] * f[0] + R[4] * f[1]);
+            q[2] += sc * f[2];
+        } else {
+            for (int c = 0; c < 3; c++) {
+                q[c] += sc * (R[c] * f[0] + R[3 + c] * f[1] + R[6 + c] * f[2]);
+                q[3 + c] += sc * (R[c] * f[3] + R[3 + c] * f[4] + R[6 + c] * f[5]);
+            }
+        }
+    }
+}
+
+/* f = K_loc u (004 eq 7) from the cached entries: floe_beam_local_apply without divisions */
+static inline void local_apply(const nm_bond *b, int dim, const double *u, double *f) {
+    const double *k = b->k;
+    if (dim == 2) {
+        double n = k[0] * (u[0] - u[3]), dv = u[1] - u[4];
+        f[0] = n;
+        f[3] = -n;
+        f[1] = k[1] * dv + k[2] * (u[2] + u[5]);
+        f[4] = -f[1];
+        f[2] = k[2] * dv + k[3] * u[2] + k[4] * u[5];
+        f[5] = k[2] * dv + k[4] * u[2] + k[3] * u[5];
+    } else {
+        double n = k[0] * (u[0] - u[6]), t = k[5] * (u[3] - u[9]), dv = u[1] - u[7], dw = u[2] - u[8];
+        f[0] = n;
+        f[6] = -n;
+        f[3] = t;
+        f[9] = -t;
+        f[1] = k[1] * dv + k[2] * (u[5] + u[11]);
+        f[7] = -f[1];
+        f[5] = k[2] * dv + k[3] * u[5] + k[4] * u[11];
+        f[11] = k[2] * dv + k[4] * u[5] + k[3] * u[11];
+        f[2] = k[1] * dw - k[2] * (u[4] + u[10]);
+        f[8] = -f[2];
+        f[4] = -k[2] * dw + k[3] * u[4] + k[4] * u[10];
+        f[10] = -k[2] * dw + k[4] * u[4] + k[3] * u[10];
+    }
+}
+
+/* eq 11 from the local end forces (floe_beam_stress with the cached 1/A, 1/W) */
+static inline void local_stress(const nm_bond *b, int dim, const double *f, double *sigma, double *tau) {
+    if (dim == 2) {
+        *sigma = 0.5 * (f[3] - f[0]) * b->inv_a + fmax(fabs(f[2]), fabs(f[5])) * b->inv_w;
+        *tau = 0.75 * (fabs(f[1]) + fabs(f[4])) * b->inv_a;
+    } else floe_beam_stress(&b->s, dim, f, sigma, tau);
+}
+
+/* out = K g over the intact bonds */
+static void k_apply(floe_newmark *s, const double *g, double *out) {
+    memset(out, 0, (size_t)s->nd * s->n * sizeof *out);
+    double ul[12], fl[12];
+    for (int k = 0; k < s->nb; k++) {
+        nm_bond *b = &s->b[k];
+        if (b->broken) continue;
+        to_local(s, b, g, ul);
+        local_apply(b, s->dim, ul, fl);
+        add_global(s, b, fl, 1.0, out);
+    }
+}
+
+/* trial increments dfl = K_loc T^T du of every intact bond, their global sum into kd, the
+ * trial stresses, and the change of stored energy (returned) */
+static double bonds_trial(floe_newmark *s, const double *du, double *kd) {
+    double t0 = now_s();
+    memset(kd, 0, (size_t)s->nd * s->n * sizeof *kd);
+    const int n2 = 2 * s->nd;
+    double ul[12], f[12], de = 0;
+    for (int k = 0; k < s->nb; k++) {
+        nm_bond *b = &s->b[k];
+        if (b->broken) continue;
+        to_local(s, b, du, ul);
+        local_apply(b, s->dim, ul, b->dfl);
+        add_global(s, b, b->dfl, 1.0, kd);
+        for (int c = 0; c < n2; c++) {
+            f[c] = b->fl[c] + b->dfl[c];
+            de += (b->fl[c] + 0.5 * b->dfl[c]) * ul[c];
+        }
+        local_stress(b, s->dim, f, &b->sig_tr, &b->tau_tr);
+    }
+    s->st.seconds_bonds += now_s() - t0;
+    return de;
+}
+
+static double bond_ratio(const nm_bond *b, double sig, double tau) {
+    double r = 0;
+    if (isfinite(b->sig_lim)) r = b->sig_lim > 0 ? sig / b->sig_lim : (sig > 0 ? INFINITY : 0);
+    if (isfinite(b->tau_lim)) r = fmax(r, b->tau_lim > 0 ? tau / b->tau_lim : (tau > 0 ? INFINITY : 0));
+    return r;
+}
+
+/* ---- damping blocks (eq 8) ---- */
+
+static void bond_dampers(floe_newmark *s, nm_bond *b) {
+    const double xi = s->def.damping_ratio;
+    memset(b->c, 0, sizeof b->c);
+    if (!(xi > 0)) return;
+    double mi = s->mass[b->i], mj = s->mass[b->j], Ji = s->inertia[b->i], Jj = s->inertia[b->j];
+    double mr = mi * mj / (mi + mj), Jr = Ji * Jj / (Ji + Jj);
+    double K[144];
+    const int n2 = 2 * s->nd;
+    floe_beam_local_stiffness(&b->s, s->dim, K);
+    if (s->nd == 3) {
+        b->c[0] = 2 * xi * sqrt(K[0] * mr);
+        b->c[1] = 2 * xi * sqrt(K[1 * n2 + 1] * mr);
+        b->c[5] = 2 * xi * sqrt(K[2 * n2 + 2] * Jr);
+    } else
+        for (int r = 0; r < 3; r++) {
+            b->c[r] = 2 * xi * sqrt(K[r * n2 + r] * mr);
+            b->c[3 + r] = 2 * xi * sqrt(K[(3 + r) * n2 + 3 + r] * Jr);
+        }
+}
+
+/* the C block of every node: sum over its intact bonds of T^T diag(c) T, plus alpha M */
+static void build_cblk(floe_newmark *s) {
+    const int nd = s->nd, nn = nd * nd;
+    memset(s->cblk, 0, (size_t)s->n * nn * sizeof *s->cblk);
+    for (int i = 0; i < s->n; i++) {
+        double *C = s->cblk + (size_t)nn * i;
+        for (int k = 0; k < nd; k++) {
+            int rot = nd == 3 ? k == 2 : k >= 3;
+            C[k * nd + k] = s->def.mass_damping * (rot ? s->inertia[i] : s->mass[i]);
+        }
+    }
+    for (int k = 0; k < s->nb; k++) {
+        nm_bond *b = &s->b[k];
+        if (b->broken) continue;
+        const double *R = b->R;
+        const int ends[2] = {b->i, b->j};
+        for (int e = 0; e < 2; e++) {
+            double *C = s->cblk + (size_t)nn * ends[e];
+            if (nd == 3) {
+                for (int p = 0; p < 2; p++)
+                    for (int q = 0; q < 2; q++)
+                        C[p * 3 + q] += R[p] * b->c[0] * R[q] + R[3 + p] * b->c[1] * R[3 + q];
+                C[8] += b->c[5];
+            } else
+                for (int p = 0; p < 3; p++)
+                    for (int q = 0; q < 3; q++) {
+                        double ct = 0, cr = 0;
+                        for (int r = 0; r < 3; r++) {
+                            ct += R[3 * r + p] * b->c[r] * R[3 * r + q];
+                            cr += R[3 * r + p] * b->c[3 + r] * R[3 * r + q];
+                        }
+                        C[p * 6 + q] += ct;
+                        C[(3 + p) * 6 + 3 + q] += cr;
+                    }
+        }
+    }
+}
+
+/* out = C g (node blocks) */
+static void c_apply(const floe_newmark *s, const double *g, double *out) {
+    const int nd = s->nd, nn = nd * nd;
+    if (!(s->def.damping_ratio > 0) && !(s->def.mass_damping > 0)) {
+        memset(out, 0, (size_t)nd * s->n * sizeof *out);
+        return;
+    }
+    for (int i = 0; i < s->n; i++) {
+        const double *C = s->cblk + (size_t)nn * i, *q = g + (size_t)nd * i;
+        double *o = out + (size_t)nd * i;
+        for (int r = 0; r < nd; r++) {
+            double acc = 0;
+            for (int c = 0; c < nd; c++) acc += C[r * nd + c] * q[c];
+            o[r] = acc;
+        }
+    }
+}
+
+static double node_m(const floe_newmark *s, int i, int k) {
+    int rot = s->nd == 3 ? k == 2 : k >= 3;
+    return rot ? s->inertia[i] : s->mass[i];
+}
+
+/* explicit: inverse of the free part of M + gamma dt C for every node (Gauss-Jordan on at
+ * most 6 x 6, symmetric positive definite) */
+static int build_ablk(floe_newmark *s, double dt) {
+    const int nd = s->nd, nn = nd * nd;
+    for (int i = 0; i < s->n; i++) {
+        double A[36], Inv[36];
+        int fr[6], m = 0;
+        for (int k = 0; k < nd; k++)
+            if (s->eq[nd * i + k] >= 0) fr[m++] = k;
+        for (int p = 0; p < m; p++)
+            for (int q = 0; q < m; q++) {
+                A[p * m + q] = s->def.gamma * dt * s->cblk[(size_t)nn * i + fr[p] * nd + fr[q]];
+                Inv[p * m + q] = p == q;
+            }
+        for (int p = 0; p < m; p++) A[p * m + p] += node_m(s, i, fr[p]);
+        for (int c = 0; c < m; c++) {
+            double piv = A[c * m + c];
+            if (!(piv > 0)) return nm_error(s, FLOE_EUNSTABLE, "node %d: M + gamma dt C is not positive definite", i);
+            for (int q = 0; q < m; q++) { A[c * m + q] /= piv; Inv[c * m + q] /= piv; }
+            for (int r = 0; r < m; r++) {
+                if (r == c) continue;
+                double f = A[r * m + c];
+                if (f == 0) continue;
+                for (int q = 0; q < m; q++) { A[r * m + q] -= f * A[c * m + q]; Inv[r * m + q] -= f * Inv[c * m + q]; }
+            }
+        }
+        double *O = s->ablk + (size_t)nn * i;
+        memset(O, 0, (size_t)nn * sizeof *O);
+        for (int p = 0; p < m; p++)
+            for (int q = 0; q < m; q++) O[fr[p] * nd + fr[q]] = Inv[p * m + q];
+    }
+    s->ablk_dt = dt;
+    s->ablk_epoch = s->epoch;
+    return FLOE_OK;
+}
+
+/* ---- sparse matrix (implicit) ---- */
+
+#ifdef FLOE_HAVE_CHOLMOD
+typedef struct { int r, c; } rc_pair;
+static int cmp_rc(const void *a, const void *b) {
+    const rc_pair *x = a, *y = b;
+    if (x->c != y->c) return (x->c > y->c) - (x->c < y->c);
+    return (x->r > y->r) - (x->r < y->r);
+}
+
+static int find_pos(const cholmod_sparse *A, int r, int c) {
+    const int *Ap = A->p, *Ai = A->i;
+    int lo = Ap[c], hi = Ap[c + 1];
+    while (lo < hi) {
+        int mid = lo + (hi - lo) / 2;
+        if (Ai[mid] < r) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo < Ap[c + 1] && Ai[lo] == r ? lo : -1;
+}
+
+/* equation numbers of the 2 nd components of bond b's ends */
+static void bond_eqs(const floe_newmark *s, const nm_bond *b, int *e) {
+    for (int k = 0; k < s->nd; k++) {
+        e[k] = s->eq[s->nd * b->i + k];
+        e[s->nd + k] = s->eq[s->nd * b->j + k];
+    }
+}
+
+/* the pattern: every node's diagonal block and every bond's block, upper triangle */
+static int build_pattern(floe_newmark *s) {
+    const int nd = s->nd, n2 = 2 * nd;
+    size_t cap = (size_t)s->n * nd * nd + (size_t)s->nb * n2 * n2 + 1;
+    rc_pair *pr = malloc(cap * sizeof *pr);
+    if (!pr) return nm_error(s, FLOE_ENOMEM, "out of memory");
+    size_t m = 0;
+    for (int i = 0; i < s->n; i++)
+        for (int p = 0; p < nd; p++)
+            for (int q = 0; q < nd; q++) {
+                int r = s->eq[nd * i + p], c = s->eq[nd * i + q];
+                if (r >= 0 && c >= 0 && r <= c) pr[m++] = (rc_pair){r, c};
+            }
+    int e[12];
+    for (int k = 0; k < s->nb; k++) {
+        bond_eqs(s, &s->b[k], e);
+        for (int p = 0; p < n2; p++)
+            for (int q = 0; q < n2; q++)
+                if (e[p] >= 0 && e[q] >= 0 && e[p] <= e[q]) pr[m++] = (rc_pair){e[p], e[q]};
+    }
+    qsort(pr, m, sizeof *pr, cmp_rc);
+    size_t u = 0;
+    for (size_t k = 0; k < m; k++)
+        if (u == 0 || pr[k].r != pr[u - 1].r || pr[k].c != pr[u - 1].c) pr[u++] = pr[k];
+    s->A = cholmod_allocate_sparse((size_t)s->neq, (size_t)s->neq, u, 1, 1, 1, CHOLMOD_REAL, &s->cc);
+    if (!s->A) { free(pr); return nm_error(s, FLOE_ENOMEM, "CHOLMOD: out of memory for the matrix"); }
+    int *Ap = s->A->p, *Ai = s->A->i;
+    memset(Ap, 0, ((size_t)s->neq + 1) * sizeof *Ap);
+    for (size_t k = 0; k < u; k++) { Ap[pr[k].c + 1]++; Ai[k] = pr[k].r; }
+    for (int c = 0; c < s->neq; c++) Ap[c + 1] += Ap[c];
+    free(pr);
+    s->bpos = malloc(((size_t)s->nb * n2 * n2 + 1) * sizeof *s->bpos);
+    s->npos = malloc(((size_t)s->n * nd * nd + 1) * sizeof *s->npos);
+    if (!s->bpos || !s->npos) return nm_error(s, FLOE_ENOMEM, "out of memory");
+    for (int i = 0; i < s->n; i++)
+        for (int p = 0; p < nd; p++)
+            for (int q = 0; q < nd; q++) {
+                int r = s->eq[nd * i + p], c = s->eq[nd * i + q];
+                s->npos[(size_t)i * nd * nd + p * nd + q] = r >= 0 && c >= 0 && r <= c ? find_pos(s->A, r, c) : -1;
+            }
+    for (int k = 0; k < s->nb; k++) {
+        bond_eqs(s, &s->b[k], e);
+        for (int p = 0; p < n2; p++)
+            for (int q = 0; q < n2; q++)
+                s->bpos[(size_t)k * n2 * n2 + p * n2 + q] =
+                    e[p] >= 0 && e[q] >= 0 && e[p] <= e[q] ? find_pos(s->A, e[p], e[q]) : -1;
+    }
+    return FLOE_OK;
+}
+
+/* global stiffness of bond b: T^T K T (2 nd x 2 nd, row-major) */
+static void bond_global_k(const floe_newmark *s, const nm_bond *b, double *Kg) {
+    const int n2 = 2 * s->nd;
+    double K[144], col[12], fl[12];
+    floe_beam_local_stiffness(&b->s, s->dim, K);
+    /* column q of T^T K T = T^T K (T e_q): a unit global component through the kernels */
+    nm_bond tmp = *b;
+    double g[12];
+    for (int q = 0; q < n2; q++) {
+        memset(g, 0, sizeof g);
+        g[q] = 1;
+        /* to_local/add_global index nodes: use a two-node scratch layout (ends 0 and 1) */
+        tmp.i = 0;
+        tmp.j = 1;
+        to_local(s, &tmp, g, col);
+        for (int r = 0; r < n2; r++) {
+            double acc = 0;
+            for (int c = 0; c < n2; c++) acc += K[r * n2 + c] * col[c];
+            fl[r] = acc;
+        }
+        double out[12] = {0};
+        add_global(s, &tmp, fl, 1.0, out);
+        for (int r = 0; r < n2; r++) Kg[r * n2 + q] = out[r];
+    }
+}
+
+/* numeric values of K beta dt^2 + C gamma dt + M and the factor in slot k */
+static int factor(floe_newmark *s, int slot, double dt) {
+    double t0 = now_s();
+    const int nd = s->nd, nn = nd * nd, n2 = 2 * nd;
+    double *Ax = s->A->x;
+    memset(Ax, 0, s->A->nzmax * sizeof *Ax);
+    const double kb = s->def.beta * dt * dt, cg = s->def.gamma * dt;
+    for (int i = 0; i < s->n; i++) {
+        const int *pos = s->npos + (size_t)nn * i;
+        const double *C = s->cblk + (size_t)nn * i;
+        for (int p = 0; p < nd; p++)
+            for (int q = 0; q < nd; q++) {
+                int at = pos[p * nd + q];
+                if (at < 0) continue;
+                Ax[at] += cg * C[p * nd + q] + (p == q ? node_m(s, i, p) : 0.0);
+            }
+    }
+    double Kg[144];
+    for (int k = 0; k < s->nb; k++) {
+        const nm_bond *b = &s->b[k];
+        if (b->broken) continue;
+        bond_global_k(s, b, Kg);
+        const int *pos = s->bpos + (size_t)k * n2 * n2;
+        for (int p = 0; p < n2; p++)
+            for (int q = 0; q < n2; q++)
+                if (pos[p * n2 + q] >= 0) Ax[pos[p * n2 + q]] += kb * Kg[p * n2 + q];
+    }
+    if (!s->L[slot]) {
+        s->L[slot] = cholmod_analyze(s->A, &s->cc);
+        if (!s->L[slot]) return nm_error(s, FLOE_ENOMEM, "CHOLMOD analyze failed (status %d)", s->cc.status);
+    }
+    if (!cholmod_factorize(s->A, s->L[slot], &s->cc) || s->cc.status != CHOLMOD_OK)
+        return nm_error(s, s->cc.status == CHOLMOD_NOT_POSDEF ? FLOE_EUNSTABLE : FLOE_ENOMEM,
+                        "CHOLMOD factorize failed (status %d%s)", s->cc.status,
+                        s->cc.status == CHOLMOD_NOT_POSDEF ? ": the matrix is not positive definite" : "");
+    s->Ldt[slot] = dt;
+    s->Lepoch[slot] = s->epoch;
+    s->since_refactor[slot] = 0;
+    s->st.factorizations++;
+    s->st.seconds_factor += now_s() - t0;
+    return FLOE_OK;
+}
+
+/* x = A(dt)^-1 rhs over the free components (refactoring when needed) */
+static int solve_implicit(floe_newmark *s, double dt, const double *rhs, double *x) {
+    int slot = dt == s->def.dt ? 0 : 1;
+    if (!s->L[slot] || s->Ldt[slot] != dt || s->Lepoch[slot] != s->epoch) FLOE_TRY(factor(s, slot, dt));
+    double t0 = now_s();
+    double *Bx = s->B->x;
+    const int N = s->nd * s->n;
+    for (int k = 0; k < N; k++)
+        if (s->eq[k] >= 0) Bx[s->eq[k]] = rhs[k];
+    if (!cholmod_solve2(CHOLMOD_A, s->L[slot], s->B, NULL, &s->X, NULL, &s->Y, &s->E, &s->cc))
+        return nm_error(s, FLOE_ENOMEM, "CHOLMOD solve failed (status %d)", s->cc.status);
+    const double *Xx = s->X->x;
+    for (int k = 0; k < N; k++) x[k] = s->eq[k] >= 0 ? Xx[s->eq[k]] : 0.0;
+    s->st.seconds_solve += now_s() - t0;
+    return FLOE_OK;
+}
+#endif
+
+/* eigen-decomposition of a symmetric m x m matrix (m <= 12) by cyclic Jacobi: A is
+ * destroyed, its diagonal ends as the eigenvalues, V (row-major) holds the eigenvectors as
+ * columns */
+static void jacobi_eigen(double *A, int m, double *V) {
+    for (int p = 0; p < m; p++)
+        for (int q = 0; q < m; q++) V[p * m + q] = p == q;
+    for (int sweep = 0; sweep < 60; sweep++) {
+        double off = 0, dia = 0;
+        for (int p = 0; p < m; p++) {
+            dia += A[p * m + p] * A[p * m + p];
+            for (int q = p + 1; q < m; q++) off += A[p * m + q] * A[p * m + q];
+        }
+        if (off <= 1e-30 * dia) break;
+        for (int p = 0; p < m; p++)
+            for (int q = p + 1; q < m; q++) {
+                double apq = A[p * m + q];
+                if (apq == 0) continue;
+                double th = 0.5 * (A[q * m + q] - A[p * m + p]) / apq;
+                double t = (th >= 0 ? 1.0 : -1.0) / (fabs(th) + sqrt(th * th + 1.0));
+                double c = 1.0 / sqrt(t * t + 1.0), sn = t * c;
+                for (int k = 0; k < m; k++) { /* columns p, q */
+                    double akp = A[k * m + p], akq = A[k * m + q];
+                    A[k * m + p] = c * akp - sn * akq;
+                    A[k * m + q] = sn * akp + c * akq;
+                }
+                for (int k = 0; k < m; k++) { /* rows p, q */
+                    double apk = A[p * m + k], aqk = A[q * m + k];
+                    A[p * m + k] = c * apk - sn * aqk;
+                    A[q * m + k] = sn * apk + c * aqk;
+                }
+                for (int k = 0; k < m; k++) {
+                    double vkp = V[k * m + p], vkq = V[k * m + q];
+                    V[k * m + p] = c * vkp - sn * vkq;
+                    V[k * m + q] = sn * vkp + c * vkq;
+                }
+            }
+    }
+}
+
+/* the bond's term of K beta dt^2 + C gamma dt (2 nd x 2 nd): stiffness and its eq 8 dampers */
+static void bond_term(const floe_newmark *s, const nm_bond *b, double dt, double *Bm) {
+    const int nd = s->nd, n2 = 2 * nd;
+    bond_global_k(s, b, Bm);
+    for (int k = 0; k < n2 * n2; k++) Bm[k] *= s->def.beta * dt * dt;
+    const double *R = b->R, cg = s->def.gamma * dt;
+    for (int e = 0; e < 2; e++) {
+        int o = nd * e;
+        if (nd == 3) {
+            for (int p = 0; p < 2; p++)
+                for (int q = 0; q < 2; q++)
+                    Bm[(o + p) * n2 + o + q] += cg * (R[p] * b->c[0] * R[q] + R[3 + p] * b->c[1] * R[3 + q]);
+            Bm[(o + 2) * n2 + o + 2] += cg * b->c[5];
+        } else
+            for (int p = 0; p < 3; p++)
+                for (int q = 0; q < 3; q++) {
+                    double ct = 0, cr = 0;
+                    for (int r = 0; r < 3; r++) {
+                        ct += R[3 * r + p] * b->c[r] * R[3 * r + q];
+                        cr += R[3 * r + p] * b->c[3 + r] * R[3 * r + q];
+                    }
+                    Bm[(o + p) * n2 + o + q] += cg * ct;
+                    Bm[(o + 3 + p) * n2 + o + 3 + q] += cg * cr;
+                }
+    }
+}
+
+typedef struct { int row; double x; } nz_entry;
+static int cmp_nz(const void *a, const void *b) {
+    const nz_entry *x = a, *y = b;
+    return (x->row > y->row) - (x->row < y->row);
+}
+
+/* remove the bonds broken[0 .. nbr) from L[0] (factored for def.dt) by one multiple-rank
+ * downdate: each bond's PSD term split as sum_k (sqrt(lambda_k) v_k)(sqrt(lambda_k) v_k)^T */
+static int downdate_bonds(floe_newmark *s, int slot, const int *broken, int nbr) {
+    double t0 = now_s();
+    const int nd = s->nd, n2 = 2 * nd;
+    if (!s->pinv) { /* both slots share the ordering of the same pattern */
+        s->pinv = malloc(((size_t)s->neq + 1) * sizeof *s->pinv);
+        if (!s->pinv) return nm_error(s, FLOE_ENOMEM, "out of memory");
+        const int *P = s->L[slot]->Perm;
+        for (int k = 0; k < s->neq; k++) s->pinv[P[k]] = k;
+    }
+    cholmod_sparse *C = cholmod_allocate_sparse((size_t)s->neq, (size_t)nbr * n2, (size_t)nbr * n2 * n2, 1, 1, 0,
+                                                CHOLMOD_REAL, &s->cc);
+    if (!C) return nm_error(s, FLOE_ENOMEM, "CHOLMOD: out of memory for a downdate");
+    int *Cp = C->p, *Ci = C->i;
+    double *Cx = C->x;
+    int ncol = 0, nnz = 0;
+    Cp[0] = 0;
+    for (int q = 0; q < nbr; q++) {
+        const nm_bond *b = &s->b[broken[q]];
+        double Bm[144], A[144], V[144];
+        int e[12], fr[12], m = 0;
+        bond_eqs(s, b, e);
+        bond_term(s, b, s->Ldt[slot], Bm);
+        for (int p = 0; p < n2; p++)
+            if (e[p] >= 0) fr[m++] = p;
+        for (int p = 0; p < m; p++)
+            for (int r = 0; r < m; r++) A[p * m + r] = 0.5 * (Bm[fr[p] * n2 + fr[r]] + Bm[fr[r] * n2 + fr[p]]);
+        jacobi_eigen(A, m, V);
+        double lmax = 0;
+        for (int k = 0; k < m; k++) lmax = fmax(lmax, A[k * m + k]);
+        for (int k = 0; k < m; k++) {
+            double lam = A[k * m + k];
+            if (!(lam > 1e-13 * lmax)) continue; /* rigid modes of the bond (zero) */
+            nz_entry col[12];
+            int c = 0;
+            for (int p = 0; p < m; p++) {
+                double x = sqrt(lam) * V[p * m + k];
+                if (x != 0) col[c++] = (nz_entry){s->pinv[e[fr[p]]], x};
+            }
+            qsort(col, (size_t)c, sizeof *col, cmp_nz);
+            for (int p = 0; p < c; p++) { Ci[nnz] = col[p].row; Cx[nnz] = col[p].x; nnz++; }
+            Cp[++ncol] = nnz;
+        }
+    }
+    C->ncol = (size_t)ncol;
+    int ok = ncol == 0 || cholmod_updown(0, C, s->L[slot], &s->cc);
+    cholmod_free_sparse(&C, &s->cc);
+    s->st.seconds_factor += now_s() - t0;
+    if (!ok || s->cc.status != CHOLMOD_OK) return nm_error(s, FLOE_ENOMEM, "CHOLMOD downdate failed (status %d)", s->cc.status);
+    s->st.downdates += nbr;
+    s->since_refactor[slot] += nbr;
+    return FLOE_OK;
+}
+
+/* x = (M + gamma dt C)^-1 rhs, node by node (explicit) */
+static int solve_explicit(floe_newmark *s, double dt, const double *rhs, double *x) {
+    if (s->ablk_dt != dt || s->ablk_epoch != s->epoch) FLOE_TRY(build_ablk(s, dt));
+    double t0 = now_s();
+    const int nd = s->nd, nn = nd * nd;
+    for (int i = 0; i < s->n; i++) {
+        const double *O = s->ablk + (size_t)nn * i, *r = rhs + (size_t)nd * i;
+        double *o = x + (size_t)nd * i;
+        for (int p = 0; p < nd; p++) {
+            double acc = 0;
+            for (int q = 0; q < nd; q++) acc += O[p * nd + q] * r[q];
+            o[p] = acc;
+        }
+    }
+    s->st.seconds_solve += now_s() - t0;
+    return FLOE_OK;
+}
+
+/* ---- critical steps ---- */
+
+double floe_newmark_critical_dt(floe_newmark *s) {
+    const int nd = s->nd, n = s->n;
+    double *row = calloc((size_t)(n ? n : 1) * 2, sizeof *row);
+    double *crow = calloc((size_t)(n ? n : 1) * 2, sizeof *crow);
+    if (!row || !crow) { free(row); free(crow); return 0; }
+    /* a node's translation (rotation) group takes part when one of its components is free */
+    unsigned tmask = nd == 3 ? (FLOE_NM_UX | FLOE_NM_UY) : (FLOE_NM_UX | FLOE_NM_UY | FLOE_NM_UZ);
+    unsigned rmask = nd == 3 ? FLOE_NM_RZ : (FLOE_NM_RX | FLOE_NM_RY | FLOE_NM_RZ);
+    for (int k = 0; k < s->nb; k++) {
+        nm_bond *b = &s->b[k];
+        if (b->broken) continue;
+        bond_dampers(s, b);
+        double nrm[4];
+        floe_beam_block_norms(&b->s, s->dim, nrm);
+        int ends[2] = {b->i, b->j};
+        for (int e = 0; e < 2; e++) {
+            int a = ends[e], o = ends[1 - e];
+            int at = (s->fix[a] & tmask) != tmask, ar = (s->fix[a] & rmask) != rmask;
+            int ot = (s->fix[o] & tmask) != tmask, orr = (s->fix[o] & rmask) != rmask;
+            double ma = s->mass[a], Ja = s->inertia[a], mo = s->mass[o], Jo = s->inertia[o];
+            if (at) {
+                row[2 * a] += nrm[0] / ma + (ar ? nrm[1] / sqrt(ma * Ja) : 0) + (ot ? nrm[0] / sqrt(ma * mo) : 0) +
+                              (orr ? nrm[1] / sqrt(ma * Jo) : 0);
+                crow[2 * a] += fmax(b->c[0], fmax(b->c[1], b->c[2])) / ma;
+            }
+            if (ar) {
+                row[2 * a + 1] += nrm[2] / Ja + (at ? nrm[1] / sqrt(ma * Ja) : 0) + (ot ? nrm[1] / sqrt(Ja * mo) : 0) +
+                                  (orr ? nrm[3] / sqrt(Ja * Jo) : 0);
+                crow[2 * a + 1] += fmax(b->c[3], fmax(b->c[4], b->c[5])) / Ja;
+            }
+        }
+    }
+    double lmax = 0, cmax = 0;
+    for (int a = 0; a < 2 * n; a++) {
+        lmax = fmax(lmax, row[a]);
+        cmax = fmax(cmax, crow[a]);
+    }
+    free(row);
+    free(crow);
+    if (!(lmax > 0)) return INFINITY;
+    double om = sqrt(lmax), zeta = 0.5 * (cmax + s->def.mass_damping) / om;
+    return 2.0 / om * (sqrt(1.0 + zeta * zeta) - zeta);
+}
+
+double floe_newmark_critical_dt_diag(floe_newmark *s) {
+    const int nd = s->nd, N = nd * s->n, n2 = 2 * nd;
+    double *kd = calloc((size_t)(N ? N : 1), sizeof *kd);
+    if (!kd) return 0;
+    double K[144];
+    for (int k = 0; k < s->nb; k++) {
+        const nm_bond *b = &s->b[k];
+        if (b->broken) continue;
+        floe_beam_local_stiffness(&b->s, s->dim, K);
+        /* diagonal of T^T K T for each end component */
+        const int ends[2] = {b->i, b->j};
+        for (int e = 0; e < 2; e++)
+            for (int c = 0; c < nd; c++) {
+                double g[12] = {0}, ul[12], fl[12], out[12] = {0};
+                nm_bond tmp = *b;
+                tmp.i = 0;
+                tmp.j = 1;
+                g[nd * e + c] = 1;
+                to_local(s, &tmp, g, ul);
+                for (int r = 0; r < n2; r++) {
+                    double acc = 0;
+                    for (int q = 0; q < n2; q++) acc += K[r * n2 + q] * ul[q];
+                    fl[r] = acc;
+                }
+                add_global(s, &tmp, fl, 1.0, out);
+                kd[(size_t)nd * ends[e] + c] += out[nd * e + c];
+            }
+    }
+    double dt = INFINITY;
+    for (int i = 0; i < s->n; i++)
+        for (int c = 0; c < nd; c++)
+            if (!(s->fix[i] & comp_mask(s->dim, c)) && kd[nd * i + c] > 0)
+                dt = fmin(dt, 2.0 * sqrt(node_m(s, i, c) / kd[nd * i + c]));
+    free(kd);
+    return dt;
+}
+
+/* ---- prepare, step ---- */
+
+static double load_factor(const floe_newmark *s, double t) { return s->lf ? s->lf(t, s->lf_user) : 1.0; }
+
+static double kinetic(const floe_newmark *s, const double *v) {
+    double e = 0;
+    for (int i = 0; i < s->n; i++)
+        for (int k = 0; k < s->nd; k++) e += 0.5 * node_m(s, i, k) * v[s->nd * i + k] * v[s->nd * i + k];
+    return e;
+}
+
+int floe_newmark_prepare(floe_newmark *s) {
+    if (s->prepared) return FLOE_OK;
+    const int nd = s->nd, N = nd * s->n;
+    if (s->n == 0) return nm_error(s, FLOE_EINVAL, "the system has no nodes");
+    if (s->st.steps > 0)
+        return nm_error(s, FLOE_EINVAL, "the system was changed after its first step (set it up before stepping)");
+    int *eq = realloc(s->eq, (size_t)N * sizeof *eq);
+    double *cb = realloc(s->cblk, (size_t)s->n * nd * nd * sizeof *cb);
+    if (eq) s->eq = eq;
+    if (cb) s->cblk = cb;
+    if (!eq || !cb) return nm_error(s, FLOE_ENOMEM, "out of memory");
+    s->neq = 0;
+    for (int i = 0; i < s->n; i++)
+        for (int k = 0; k < nd; k++) s->eq[nd * i + k] = (s->fix[i] & comp_mask(s->dim, k)) ? -1 : s->neq++;
+    for (int k = 0; k < N; k++)
+        if (s->eq[k] < 0) { s->u[k] = 0; s->v[k] = 0; }
+    for (int k = 0; k < s->nb; k++) bond_dampers(s, &s->b[k]);
+    build_cblk(s);
+    if (s->def.beta == 0) {
+        double dtc = floe_newmark_critical_dt(s);
+        if (s->def.dt > dtc && !s->def.allow_unstable_dt)
+            return nm_error(s, FLOE_EUNSTABLE,
+                            "explicit Newmark: dt %g s is above the critical step %g s (block Gershgorin bound); use a "
+                            "smaller dt or allow_unstable_dt",
+                            s->def.dt, dtc);
+        double *ab = realloc(s->ablk, (size_t)s->n * nd * nd * sizeof *ab);
+        if (!ab) return nm_error(s, FLOE_ENOMEM, "out of memory");
+        s->ablk = ab;
+        s->ablk_epoch = -1;
+    } else {
+#ifdef FLOE_HAVE_CHOLMOD
+        free_cholmod(s);
+        cholmod_start(&s->cc);
+        s->cc_started = 1;
+        s->cc.print = 0;
+        /* simplicial LDL': with Debian's reference BLAS it factored the 45,000-unknown beam of
+         * bench/beam-newmark 1.4x faster than the supernodal method, and it is the form
+         * cholmod_updown works on (bond breaks are rank downdates, below) */
+        s->cc.supernodal = CHOLMOD_SIMPLICIAL;
+        FLOE_TRY(build_pattern(s));
+        s->B = cholmod_zeros((size_t)s->neq, 1, CHOLMOD_REAL, &s->cc);
+        if (!s->B) return nm_error(s, FLOE_ENOMEM, "out of memory");
+        FLOE_TRY(factor(s, 0, s->def.dt));
+#else
+        return nm_error(s, FLOE_ENOTSUP, "implicit Newmark needs CHOLMOD: this build has FLOE_WITH_CHOLMOD=OFF");
+#endif
+    }
+    /* initial internal forces f_int = K u0 and bond forces; a0 from eq 15 at t = 0 */
+    double e0 = bonds_trial(s, s->u, s->fint);
+    for (int k = 0; k < s->nb; k++) {
+        nm_bond *b = &s->b[k];
+        if (b->broken) continue;
+        memcpy(b->fl, b->dfl, sizeof b->fl);
+        b->sigma = b->sig_tr;
+        b->tau = b->tau_tr;
+    }
+    c_apply(s, s->v, s->cv0);
+    const double lam = load_factor(s, s->t);
+    for (int k = 0; k < N; k++) {
+        int i = k / nd;
+        s->a[k] = s->eq[k] < 0 ? 0.0 : (lam * s->F[k] - s->fint[k] - s->cv0[k]) / node_m(s, i, k % nd);
+    }
+    s->st.energy_elastic = e0; /* (f + df/2) . du from zero: K u0 . u0 / 2 */
+    s->st.energy_kinetic = kinetic(s, s->v);
+    s->st.energy_initial = s->st.energy_elastic + s->st.energy_kinetic;
+    s->st.work_external = 0;
+    s->st.dissipated = 0;
+    s->prepared = 1;
+    return FLOE_OK;
+}
+
+static int do_step(floe_newmark *s, double dt_full) {
+    const int nd = s->nd, N = nd * s->n;
+    const double beta = s->def.beta, gamma = s->def.gamma;
+    double dt = dt_full, de = 0, lo = 0, hi = 0, r_lo = 0, r_hi = 0, a_hi = 1;
+    int cuts = 0, final_trial = 0;
+    for (;;) {
+        for (int k = 0; k < N; k++) {
+            if (s->eq[k] < 0) { s->an[k] = s->bn[k] = 0; continue; }
+            s->an[k] = dt * s->v[k] + 0.5 * dt * dt * (1 - 2 * beta) * s->a[k];
+            s->bn[k] = s->v[k] + (1 - gamma) * dt * s->a[k];
+        }
+        const double lam = load_factor(s, s->t + dt);
+        c_apply(s, s->bn, s->rhs);
+        if (beta == 0) {
+            /* central difference: du = a_n, internal forces at n+1 first (eqs 19-20) */
+            memcpy(s->du, s->an, (size_t)N * sizeof *s->du);
+            de = bonds_trial(s, s->du, s->kd);
+            for (int k = 0; k < N; k++) s->rhs[k] = lam * s->F[k] - s->fint[k] - s->kd[k] - s->rhs[k];
+            FLOE_TRY(solve_explicit(s, dt, s->rhs, s->anew));
+            for (int k = 0; k < N; k++) s->vnew[k] = s->bn[k] + gamma * dt * s->anew[k];
+            break;
+        }
+#ifdef FLOE_HAVE_CHOLMOD
+        /* eq 26 */
+        double tb = now_s();
+        k_apply(s, s->an, s->kd);
+        s->st.seconds_bonds += now_s() - tb;
+        for (int k = 0; k < N; k++) s->rhs[k] = lam * s->F[k] - s->fint[k] - s->kd[k] - s->rhs[k];
+        FLOE_TRY(solve_implicit(s, dt, s->rhs, s->anew));
+        for (int k = 0; k < N; k++) {
+            s->du[k] = s->an[k] + beta * dt * dt * s->anew[k];
+            s->vnew[k] = s->bn[k] + gamma * dt * s->anew[k];
+        }
+        de = bonds_trial(s, s->du, s->kd);
+        /* line search (eqs 29-30): the fraction alpha of du at which the first bond reaches
+         * its strength, and the step redone with dt sqrt(alpha); then a search on log dt
+         * between the longest step known to stay below the strength and the shortest known
+         * to exceed it (floe_newmark.h) */
+        const double eps = s->def.line_search_eps, rtarget = 1 + 0.5 * fmax(eps, 0.0);
+        double rmax = 0, alpha = 1;
+        for (int k = 0; k < s->nb; k++) {
+            const nm_bond *b = &s->b[k];
+            if (b->broken) continue;
+            double r = bond_ratio(b, b->sig_tr, b->tau_tr);
+            if (r > rmax) rmax = r;
+            if (r > 1) {
+                double r0 = bond_ratio(b, b->sigma, b->tau);
+                double f = r > r0 ? (rtarget - r0) / (r - r0) : 0;
+                if (f < alpha) alpha = f;
+            }
+        }
+        if (eps < 0 || final_trial || (rmax <= 1 + eps && (rmax >= 1 || cuts == 0))) break;
+        if (rmax > 1 + eps) { hi = dt; r_hi = rmax; a_hi = alpha; }
+        else { lo = dt; r_lo = rmax; }
+        const double dt_min = 1e-3 * dt_full;
+        double dt_new;
+        if (cuts >= s->def.max_cuts || (lo > 0 && hi < 1.02 * lo) || (lo == 0 && hi <= dt_min)) {
+            /* no landing in [1, 1 + eps]: the shortest step that exceeds, its bonds break */
+            if (dt == hi) break;
+            dt_new = hi;
+            final_trial = 1;
+        } else if (lo == 0) {
+            /* eq 30 (du ~ dt^2) from the shortest exceeding step */
+            dt_new = fmax(hi * sqrt(fmin(fmax(a_hi, 0.0), 1.0)), dt_min);
+            if (dt_new >= hi) dt_new = 0.5 * hi;
+        } else {
+            /* log-linear interpolation of the stress ratio between the bracket, kept inside */
+            double f = (rtarget - r_lo) / (r_hi - r_lo);
+            f = fmin(fmax(f, 0.1), 0.9);
+            dt_new = exp(log(lo) + f * (log(hi) - log(lo)));
+        }
+        dt = dt_new;
+        cuts++;
+        s->st.cuts++;
+        continue;
+#else
+        return nm_error(s, FLOE_ENOTSUP, "implicit Newmark needs CHOLMOD (FLOE_WITH_CHOLMOD=OFF)");
+#endif
+    }
+    /* accept: work of the loads and of the dampers (trapezoid), then the state */
+    const double lam0 = load_factor(s, s->t), lam1 = load_factor(s, s->t + dt);
+    c_apply(s, s->v, s->cv0);
+    c_apply(s, s->vnew, s->cv1);
+    double wext = 0, wdamp = 0;
+    for (int k = 0; k < N; k++) {
+        if (s->eq[k] < 0) continue;
+        wext += 0.5 * (lam0 + lam1) * s->F[k] * s->du[k];
+        wdamp += 0.5 * (s->cv0[k] + s->cv1[k]) * s->du[k];
+    }
+    for (int k = 0; k < N; k++) {
+        s->u[k] += s->du[k];
+        s->v[k] = s->vnew[k];
+        s->a[k] = s->anew[k];
+        s->fint[k] += s->kd[k];
+    }
+    s->t += dt;
+    s->st.steps++;
+    s->st.work_external += wext;
+    s->st.dissipated += wdamp;
+    s->st.energy_elastic += de;
+    /* breakage (eq 11): bonds at or beyond their strength */
+    int broke = 0, *blist = NULL;
+    for (int k = 0; k < s->nb; k++) {
+        nm_bond *b = &s->b[k];
+        if (b->broken) continue;
+        for (int c = 0; c < 2 * nd; c++) b->fl[c] += b->dfl[c];
+        b->sigma = b->sig_tr;
+        b->tau = b->tau_tr;
+        if (bond_ratio(b, b->sigma, b->tau) >= 1) {
+            /* released: its internal force leaves f_int, its energy is dissipated */
+            add_global(s, b, b->fl, -1.0, s->fint);
+            double eb = 0, ul[12];
+            to_local(s, b, s->u, ul);
+            for (int c = 0; c < 2 * nd; c++) eb += 0.5 * b->fl[c] * ul[c];
+            /* the stored energy of a bond loaded from zero is f . u / 2 in its frame */
+            s->st.energy_elastic -= eb;
+            s->st.dissipated += eb;
+            memset(b->fl, 0, sizeof b->fl);
+            b->broken = 1;
+            b->t_broken = s->t;
+            s->st.broken++;
+            if (s->st.t_first_break < 0) s->st.t_first_break = s->t;
+            int *nl = realloc(blist, (size_t)(broke + 1) * sizeof *nl);
+            if (!nl) { free(blist); return nm_error(s, FLOE_ENOMEM, "out of memory"); }
+            blist = nl;
+            blist[broke++] = k;
+        }
+    }
+    if (broke) {
+        /* the factor for dt: a rank downdate keeps it (implicit), unless asked to refactor */
+        int keep[2] = {0, 0};
+#ifdef FLOE_HAVE_CHOLMOD
+        for (int slot = 0; slot < 2; slot++)
+            if (beta > 0 && !s->def.refactor_on_break && s->L[slot] && s->Lepoch[slot] == s->epoch &&
+                s->since_refactor[slot] + broke <= 256) {
+                int rc = downdate_bonds(s, slot, blist, broke);
+                if (rc) { free(blist); return rc; }
+                keep[slot] = 1;
+            }
+#endif
+        s->epoch++;
+#ifdef FLOE_HAVE_CHOLMOD
+        for (int slot = 0; slot < 2; slot++)
+            if (keep[slot]) s->Lepoch[slot] = s->epoch;
+#endif
+        build_cblk(s);
+    }
+    free(blist);
+    s->st.energy_kinetic = kinetic(s, s->v);
+    double e = s->st.energy_kinetic + s->st.energy_elastic;
+    /* what the energy may reach: what was put in, plus what the loads can give a free node
+     * in one step (the explicit scheme books the work one step after the velocity) */
+    double scale = fabs(s->st.energy_initial) + fabs(s->st.work_external) + fabs(s->st.dissipated);
+    for (int k = 0; k < N; k++)
+        if (s->eq[k] >= 0 && s->F[k] != 0) {
+            double fk = lam1 * s->F[k] * dt;
+            scale += fk * fk / (2.0 * node_m(s, k / nd, k % nd));
+        }
+    if (!isfinite(e) || e > 100.0 * scale + 1e-300) {
+        double dtc = floe_newmark_critical_dt(s);
+        return nm_error(s, FLOE_EUNSTABLE,
+                        "Newmark (beta %g) unstable at step %ld, t = %g s: energy %.3g J grew beyond 100 x the energy "
+                        "put in (%.3g J); dt %g s, critical step of the explicit scheme %g s",
+                        beta, s->st.steps, s->t, e, scale, dt, dtc);
+    }
+    return FLOE_OK;
+}
+
+int floe_newmark_step(floe_newmark *s) {
+    FLOE_TRY(floe_newmark_prepare(s));
+    return do_step(s, s->def.dt);
+}
+
+int floe_newmark_run(floe_newmark *s, double t_end) {
+    FLOE_TRY(floe_newmark_prepare(s));
+    while (s->t < t_end - 1e-9 * s->def.dt) {
+        double dt = fmin(s->def.dt, t_end - s->t);
+        if (dt > 0.999999 * s->def.dt) dt = s->def.dt;
+        FLOE_TRY(do_step(s, dt));
+    }
+    return FLOE_OK;
+}
+
+/* ---- queries, output ---- */
+
+double floe_newmark_time(const floe_newmark *s) { return s->t; }
+int floe_newmark_node_count(const floe_newmark *s) { return s->n; }
+int floe_newmark_bond_count(const floe_newmark *s) { return s->nb; }
+
+int floe_newmark_get(const floe_newmark *s, int i, double u[3], double rot[3], double v[3], double w[3]) {
+    if (i < 0 || i >= s->n) return FLOE_EINVAL;
+    const double *U = s->u + s->nd * i, *V = s->v + s->nd * i;
+    if (s->dim == 2) {
+        if (u) floe_v3_set(u, U[0], U[1], 0);
+        if (rot) floe_v3_set(rot, 0, 0, U[2]);
+        if (v) floe_v3_set(v, V[0], V[1], 0);
+        if (w) floe_v3_set(w, 0, 0, V[2]);
+    } else {
+        if (u) floe_v3_copy(u, U);
+        if (rot) floe_v3_copy(rot, U + 3);
+        if (v) floe_v3_copy(v, V);
+        if (w) floe_v3_copy(w, V + 3);
+    }
+    return FLOE_OK;
+}
+
+int floe_newmark_bond_state(const floe_newmark *s, int k, int *broken, double *t_broken, double *sigma, double *tau) {
+    if (k < 0 || k >= s->nb) return FLOE_EINVAL;
+    const nm_bond *b = &s->b[k];
+    if (broken) *broken = b->broken;
+    if (t_broken) *t_broken = b->t_broken;
+    if (sigma) *sigma = b->sigma;
+    if (tau) *tau = b->tau;
+    return FLOE_OK;
+}
+
+int floe_newmark_get_stats(const floe_newmark *s, floe_newmark_stats *out) {
+    *out = s->st;
+    return FLOE_OK;
+}
+
+int floe_newmark_write_vtu(floe_newmark *s, const char *path) {
+    FILE *f = fopen(path, "w");
+    if (!f) return nm_error(s, FLOE_EIO, "cannot write %s", path);
+    fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+               "<UnstructuredGrid>\n<Piece NumberOfPoints=\"%d\" NumberOfCells=\"%d\">\n<Points>\n"
+               "<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n", s->n, s->nb);
+    for (int i = 0; i < s->n; i++) {
+        double u[3];
+        floe_newmark_get(s, i, u, NULL, NULL, NULL);
+        fprintf(f, "%.9g %.9g %.9g\n", s->x[3 * i] + u[0], s->x[3 * i + 1] + u[1], s->x[3 * i + 2] + u[2]);
+    }
+    fprintf(f, "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n");
+    for (int k = 0; k < s->nb; k++) fprintf(f, "%d %d\n", s->b[k].i, s->b[k].j);
+    fprintf(f, "</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n");
+    for (int k = 0; k < s->nb; k++) fprintf(f, "%d\n", 2 * (k + 1));
+    fprintf(f, "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
+    for (int k = 0; k < s->nb; k++) fprintf(f, "3\n");
+    fprintf(f, "</DataArray>\n</Cells>\n<CellData Scalars=\"broken\">\n"
+               "<DataArray type=\"Int32\" Name=\"broken\" format=\"ascii\">\n");
+    for (int k = 0; k < s->nb; k++) fprintf(f, "%d\n", s->b[k].broken);
+    fprintf(f, "</DataArray>\n<DataArray type=\"Float64\" Name=\"t_broken\" format=\"ascii\">\n");
+    for (int k = 0; k < s->nb; k++) fprintf(f, "%.9g\n", s->b[k].t_broken);
+    fprintf(f, "</DataArray>\n<DataArray type=\"Float64\" Name=\"sigma\" format=\"ascii\">\n");
+    for (int k = 0; k < s->nb; k++) fprintf(f, "%.9g\n", s->b[k].sigma);
+    fprintf(f, "</DataArray>\n</CellData>\n<PointData Vectors=\"displacement\">\n"
+               "<DataArray type=\"Float64\" Name=\"displacement\" NumberOfComponents=\"3\" format=\"ascii\">\n");
+    for (int i = 0; i < s->n; i++) {
+        double u[3];
+        floe_newmark_get(s, i, u, NULL, NULL, NULL);
+        fprintf(f, "%.9g %.9g %.9g\n", u[0], u[1], u[2]);
+    }
+    fprintf(f, "</DataArray>\n</PointData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
+    int bad = ferror(f);
+    if (fclose(f) || bad) return nm_error(s, FLOE_EIO, "error writing %s", path);
+    return FLOE_OK;
+}
+
+int floe_newmark_write_bonds_csv(floe_newmark *s, const char *path) {
+    FILE *f = fopen(path, "w");
+    if (!f) return nm_error(s, FLOE_EIO, "cannot write %s", path);
+    fprintf(f, "i,j,x [m],y [m],z [m],broken,t_broken [s],sigma [Pa],tau [Pa],sigma_lim [Pa]\n");
+    for (int k = 0; k < s->nb; k++) {
+        const nm_bond *b = &s->b[k];
+        const double *xi = s->x + 3 * b->i, *xj = s->x + 3 * b->j;
+        fprintf(f, "%d,%d,%.9g,%.9g,%.9g,%d,%.9g,%.9g,%.9g,%.9g\n", b->i, b->j, 0.5 * (xi[0] + xj[0]),
+                0.5 * (xi[1] + xj[1]), 0.5 * (xi[2] + xj[2]), b->broken, b->t_broken, b->sigma, b->tau, b->sig_lim);
+    }
+    int bad = ferror(f);
+    if (fclose(f) || bad) return nm_error(s, FLOE_EIO, "error writing %s", path);
+    return FLOE_OK;
+}
+
+/* ---- from a world ---- */
+
+floe_newmark *floe_newmark_from_world(floe_world *w, const floe_newmark_def *def0, char *err, size_t errlen) {
+    int rc = floe_world_prepare(w);
+    if (rc) {
+        if (err && errlen) snprintf(err, errlen, "world prepare failed: %s", floe_world_last_error(w));
+        return NULL;
+    }
+    floe_newmark_def def = *def0;
+    def.dim = w->def.dim;
+    floe_newmark *s = floe_newmark_create(&def, err, errlen);
+    if (!s) return NULL;
+    const floe_particles *p = &w->p;
+    for (int i = 0; i < p->n && !rc; i++) {
+        int wall = !isfinite(p->radius[i]) || !isfinite(p->mass[i]);
+        const double *I = p->inertia + 3 * i;
+        double J = wall ? 1.0 : fmin(I[0], fmin(I[1], I[2]));
+        int k = floe_newmark_add_node(s, p->x + 3 * i, wall ? 1.0 : p->mass[i], J);
+        if (k < 0) { rc = -k; break; }
+        if (wall || p->motion[i] != FLOE_FREE) floe_newmark_fix(s, i, FLOE_NM_ALL);
+        else {
+            double f[3];
+            for (int a = 0; a < 3; a++) f[a] = p->mass[i] * w->def.gravity[a];
+            floe_newmark_set_load(s, i, f, NULL);
+            floe_newmark_set_initial(s, i, NULL, NULL, p->v + 3 * i, p->w + 3 * i);
+        }
+    }
+    for (int k = 0; k < floe_world_beam_bond_count(w) && !rc; k++) {
+        floe_beam_bond_info bi;
+        floe_world_beam_bond(w, k, &bi);
+        if (bi.broken) continue;
+        int r = floe_newmark_add_bond(s, bi.i, bi.j, &bi.section, bi.sigma_lim, bi.tau_lim);
+        if (r < 0) rc = -r;
+    }
+    if (rc) {
+        if (err && errlen) snprintf(err, errlen, "%s", s->err);
+        floe_newmark_destroy(s);
+        return NULL;
+    }
+    return s;
+}

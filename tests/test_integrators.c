@@ -1,0 +1,276 @@
+/* test_integrators.c - conformance of every particle integrator (velocity Verlet, leapfrog,
+ * RK2; the staggered PD-DEM scheme has its own, tests/test_staggered.c) on a harmonic
+ * oscillator, a sphere of mass m pulled by the body force -k x - c v (a callback), the same
+ * checks for each (GSL odeiv2 style):
+ *   1. order of convergence: the largest error over 1.2 periods falls 4x when dt halves
+ *      (undamped); with damping ratio 0.1 RK2 stays second order while velocity Verlet and
+ *      leapfrog are first order: their force at t + dt sees the velocity of t + dt/2
+ *      (-c v_{n+1/2}), a local velocity error c dt^2 a / 4 (the contact dashpots too);
+ *   2. energy: velocity Verlet and leapfrog keep the energy within the analytic bound
+ *      (w dt)^2 / (4 - (w dt)^2) and conserve their shadow energy
+ *      v^2 + w^2 x^2 (1 - (w dt)^2 / 4) to rounding over 2,000 periods (no drift); RK2
+ *      gains energy by the exact factor 1 + (w dt)^4 / 4 per step;
+ *   3. stability: 0.9x the integrator's critical step runs, 1.1x stops with FLOE_EUNSTABLE
+ *      and a message naming the particle (never NaN output). Critical steps (derived in
+ *      docs/integrators.md): spring w dt = 2 (Verlet, leapfrog), pure dashpot g dt = 2
+ *      (Verlet, leapfrog) and g dt = 1 (RK2; it has no stable step for an undamped spring);
+ *   4. a contact oscillator (a sphere pressed on a fixed sphere by a linear law with
+ *      gravity) runs at 0.9x 2/w and stops at 1.1x, and the world's estimate is below 2/w. */
+#include "check.h"
+#include "world_internal.h"
+
+#include <string.h>
+
+typedef struct osc {
+    double k, c; /* N/m, N s/m */
+} osc;
+
+static void osc_force(const floe_world *w, int i, double t, double f[3], double torque[3], void *user) {
+    const osc *o = user;
+    (void)t;
+    (void)torque;
+    for (int a = 0; a < 3; a++) f[a] = -o->k * w->p.x[3 * i + a] - o->c * w->p.v[3 * i + a];
+}
+
+/* one sphere (R = 1 m, m = 1 kg) at x = (A, 0, 0) at rest, force -k x - c v */
+static floe_world *osc_world(int integ, double dt, osc *o, double A) {
+    floe_world_def d = floe_default_world_def();
+    d.integrator = integ;
+    d.dt = dt;
+    d.allow_unstable_dt = 1;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material m = {"m", 1000, 1e7, 0.3};
+    floe_world_add_material(w, &m);
+    int g = floe_world_add_geometry(w, floe_sphere_create(1.0));
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = g;
+    p.mass = 1.0;
+    p.x[0] = A;
+    floe_world_add_particle(w, &p);
+    floe_world_set_body_force(w, osc_force, o);
+    return w;
+}
+
+/* exact damped oscillator x(t), v(t) from x(0) = A, v(0) = 0 (underdamped, m = 1) */
+static void exact(const osc *o, double A, double t, double *x, double *v) {
+    double w0 = sqrt(o->k), z = o->c / (2 * w0), wd = w0 * sqrt(1 - z * z), s = z * w0;
+    double e = exp(-s * t);
+    *x = A * e * (cos(wd * t) + s / wd * sin(wd * t));
+    *v = -A * e * (w0 * w0 / wd) * sin(wd * t);
+}
+
+static const char *name(int integ) { return floe_integrator_name(integ); }
+
+static void test_order(int integ, double zeta) {
+    osc o = {1.0, 2 * zeta};
+    const double A = 1e-3, T = 2.4 * M_PI; /* x and v both away from a turning point */
+    double ex[3], ev[3];
+    const int N[3] = {80, 160, 320};
+    for (int r = 0; r < 3; r++) {
+        double dt = T / N[r];
+        floe_world *w = osc_world(integ, dt, &o, A);
+        int rc = floe_world_prepare(w);
+        ex[r] = ev[r] = 0;
+        for (int s = 0; s < N[r] && !rc; s++) {
+            rc = floe_world_step(w);
+            double x, v;
+            exact(&o, A, floe_world_time(w), &x, &v);
+            ex[r] = fmax(ex[r], fabs(w->p.x[0] - x));
+            /* leapfrog stores v_{n-1/2}: compare it with the exact velocity half a step back */
+            exact(&o, A, floe_world_time(w) - (integ == FLOE_LEAPFROG ? 0.5 * dt : 0), &x, &v);
+            ev[r] = fmax(ev[r], fabs(w->p.v[0] - v));
+        }
+        CHECK(rc == FLOE_OK, "%s order run: %s", name(integ), floe_world_last_error(w));
+        floe_world_destroy(w);
+    }
+    double px1 = log2(ex[0] / ex[1]), px2 = log2(ex[1] / ex[2]);
+    double pv1 = log2(ev[0] / ev[1]), pv2 = log2(ev[1] / ev[2]);
+    printf("  %-16s zeta %.1f: error x %.3e %.3e %.3e (order %.3f %.3f), v %.3e %.3e %.3e (order %.3f %.3f)\n",
+           name(integ), zeta, ex[0], ex[1], ex[2], px1, px2, ev[0], ev[1], ev[2], pv1, pv2);
+    if (zeta > 0 && integ != FLOE_RK2) /* first order in x; v's first-order terms partly cancel */
+        CHECK(fabs(px2 - 1) < 0.1, "%s, zeta %.1f: first order in x (%.3f; want 1 +- 0.1)", name(integ), zeta, px2);
+    else
+        CHECK(fabs(px2 - 2) < 0.1 && fabs(pv2 - 2) < 0.1, "%s, zeta %.1f: second order (x %.3f, v %.3f; want 2 +- 0.1)",
+              name(integ), zeta, px2, pv2);
+}
+
+static void test_energy(int integ) {
+    osc o = {1.0, 0.0};
+    const long steps_per_period = 32, periods = integ == FLOE_RK2 ? 100 : 2000;
+    const double A = 1e-3, wdt = 2 * M_PI / steps_per_period, E0 = 0.5 * A * A;
+    floe_world *w = osc_world(integ, wdt, &o, A);
+    int rc = floe_world_prepare(w);
+    double maxdev = 0, first = 0, last = 0, shadow0 = 0, shadow = 0;
+    long nsteps = steps_per_period * periods;
+    for (long s = 0; s < nsteps && !rc; s++) {
+        rc = floe_world_step(w);
+        /* the world's kinetic energy (leapfrog: of the synchronised velocity) */
+        double E = w->energy.kinetic_trans + 0.5 * o.k * w->p.x[0] * w->p.x[0];
+        double dev = E / E0 - 1;
+        /* velocity Verlet's invariant for the harmonic oscillator (leapfrog: its
+         * synchronised velocity, from the kinetic energy) */
+        shadow = 2 * w->energy.kinetic_trans + o.k * w->p.x[0] * w->p.x[0] * (1 - wdt * wdt / 4);
+        if (s == 0) shadow0 = shadow;
+        if (fabs(dev) > maxdev) maxdev = fabs(dev);
+        /* means over 100 periods: the partial-period bias of the numerical frequency
+         * averages out */
+        if (s < 100 * steps_per_period) first += dev / (100.0 * steps_per_period);
+        if (s >= nsteps - 100 * steps_per_period) last += dev / (100.0 * steps_per_period);
+    }
+    CHECK(rc == FLOE_OK, "%s energy run: %s", name(integ), floe_world_last_error(w));
+    double E = w->energy.kinetic_trans + 0.5 * o.k * w->p.x[0] * w->p.x[0];
+    if (integ == FLOE_RK2) {
+        double expect = pow(1 + pow(wdt, 4) / 4, (double)nsteps);
+        printf("  %-16s energy after %ld steps: x%.6f, theory (1 + (w dt)^4/4)^n = x%.6f\n", name(integ), nsteps,
+               E / E0, expect);
+        CHECK_NEAR(E / E0, expect, 1e-6, "RK2 energy growth factor");
+    } else {
+        double bound = wdt * wdt / (4 - wdt * wdt);
+        printf("  %-16s energy: max deviation %.4e (bound (w dt)^2/(4 - (w dt)^2) = %.4e), mean deviation first "
+               "100 periods %.4e, last 100 (to period %ld) %.4e\n", name(integ), maxdev, bound, first, periods, last);
+        CHECK(maxdev <= 1.001 * bound && maxdev >= 0.5 * bound, "%s: energy deviation %.4e within the bound %.4e",
+              name(integ), maxdev, bound);
+        printf("  %-16s shadow energy v^2 + w^2 x^2 (1 - (w dt)^2/4): relative change %.2e over %ld steps\n",
+               name(integ), shadow / shadow0 - 1, nsteps);
+        CHECK(fabs(shadow / shadow0 - 1) < 1e-10, "%s: shadow energy conserved (%.2e)", name(integ), shadow / shadow0 - 1);
+        CHECK(fabs(last - first) < 1e-5, "%s: mean energy over the first and last 100 periods (%.2e)", name(integ),
+              last - first);
+    }
+    floe_world_destroy(w);
+}
+
+/* runs `steps` at dt; returns the status; *maxx the largest |x| */
+static int run_osc(int integ, osc *o, double dt, double A, long steps, double *maxx, char *msg, size_t len) {
+    floe_world *w = osc_world(integ, dt, o, A);
+    int rc = floe_world_prepare(w);
+    *maxx = 0;
+    for (long s = 0; s < steps && !rc; s++) {
+        rc = floe_world_step(w);
+        if (fabs(w->p.x[0]) > *maxx) *maxx = fabs(w->p.x[0]);
+    }
+    snprintf(msg, len, "%s", floe_world_last_error(w));
+    int finite = isfinite(w->p.x[0]) && isfinite(w->p.v[0]);
+    CHECK(finite || rc == FLOE_OK, "%s: state at the failure is finite", name(integ));
+    floe_world_destroy(w);
+    return rc;
+}
+
+static void test_stability(int integ) {
+    char msg[512];
+    double maxx;
+    const double A = 1e-3;
+    if (integ != FLOE_RK2) {
+        /* undamped spring: critical w dt = 2 */
+        osc o = {1.0, 0.0};
+        int rc = run_osc(integ, &o, 0.9 * 2.0, A, 2000, &maxx, msg, sizeof msg);
+        double bound = A / sqrt(1 - 0.81);
+        CHECK(rc == FLOE_OK && maxx <= 1.01 * bound, "%s: spring at 0.9x critical runs bounded (max |x| %.3g, bound %.3g): %s",
+              name(integ), maxx, bound, msg);
+        rc = run_osc(integ, &o, 1.1 * 2.0, A, 2000, &maxx, msg, sizeof msg);
+        printf("  %-16s spring 1.1x: %s\n", name(integ), msg);
+        CHECK(rc == FLOE_EUNSTABLE && strstr(msg, "particle 0"), "%s: spring at 1.1x critical detected (rc %d)", name(integ), rc);
+    }
+    /* pure dashpot (k = 0): g dt = 2 for Verlet and leapfrog, 1 for RK2 (its end-of-step
+     * force uses the midpoint velocity, docs/integrators.md) */
+    osc o = {0.0, 1.0};
+    double crit = integ == FLOE_RK2 ? 1.0 : 2.0;
+    floe_world *w = osc_world(integ, 0.9 * crit, &o, 0);
+    w->p.v[0] = 1e-3;
+    int rc = floe_world_prepare(w);
+    for (int s = 0; s < 2000 && !rc; s++) rc = floe_world_step(w);
+    double vend = fabs(w->p.v[0]);
+    CHECK(rc == FLOE_OK && vend < 1e-6, "%s: dashpot at 0.9x critical decays (|v| %.3g): %s", name(integ), vend,
+          floe_world_last_error(w));
+    floe_world_destroy(w);
+    w = osc_world(integ, 1.1 * crit, &o, 0);
+    w->p.v[0] = 1e-3;
+    rc = floe_world_prepare(w);
+    for (int s = 0; s < 2000 && !rc; s++) rc = floe_world_step(w);
+    printf("  %-16s dashpot 1.1x: %s\n", name(integ), floe_world_last_error(w));
+    CHECK(rc == FLOE_EUNSTABLE && strstr(floe_world_last_error(w), "particle 0") && isfinite(w->p.v[0]),
+          "%s: dashpot at 1.1x critical detected (rc %d)", name(integ), rc);
+    floe_world_destroy(w);
+    if (integ == FLOE_RK2) {
+        /* no stable step for an undamped spring, but the growth is slow at small w dt and
+         * detected at large: 1.1 x 2/w stops */
+        osc s = {1.0, 0.0};
+        rc = run_osc(integ, &s, 2.2, A, 2000, &maxx, msg, sizeof msg);
+        CHECK(rc == FLOE_EUNSTABLE && strstr(msg, "particle 0"), "rk2: spring at w dt = 2.2 detected (rc %d)", rc);
+    }
+}
+
+/* a sphere pressed on a fixed sphere by gravity, linear law: a contact oscillator of
+ * w = sqrt(kn/m) around the overlap m g / kn */
+static void test_contact_oscillator(int integ) {
+    const double kn = 1e4, R = 0.01, m = 0.01, g = 9.81;
+    const double w0 = sqrt(kn / m), dcrit = 2.0 / w0;
+    for (int pass = 0; pass < 2; pass++) {
+        double f = pass ? 1.1 : 0.9;
+        floe_world_def d = floe_default_world_def();
+        d.integrator = integ;
+        d.dt = f * dcrit;
+        d.allow_unstable_dt = 1;
+        floe_v3_set(d.gravity, 0, 0, -g);
+        floe_world *w = floe_world_create(&d, NULL, 0);
+        floe_material mt = {"m", 1000, 1e7, 0.3};
+        floe_world_add_material(w, &mt);
+        floe_world_set_law(w, 0, 0, floe_linear_law_create(kn, 0, 0, 0, 0));
+        int gi = floe_world_add_geometry(w, floe_sphere_create(R));
+        floe_particle_def a = floe_default_particle_def(), b = floe_default_particle_def();
+        a.geometry = b.geometry = gi;
+        a.mass = b.mass = m;
+        a.motion = FLOE_FIXED;
+        double deq = m * g / kn; /* 9.8e-6 m */
+        b.x[2] = 2 * R - deq - 0.5 * deq;
+        floe_world_add_particle(w, &a);
+        floe_world_add_particle(w, &b);
+        int rc = floe_world_prepare(w);
+        double est = floe_world_critical_dt(w);
+        double zmin = INFINITY, zmax = -INFINITY;
+        for (int s = 0; s < 3000 && !rc; s++) {
+            rc = floe_world_step(w);
+            if (w->p.x[5] < zmin) zmin = w->p.x[5];
+            if (w->p.x[5] > zmax) zmax = w->p.x[5];
+        }
+        if (!pass) {
+            printf("  %-16s contact oscillator: estimate %.4g s = %.3f x 2/w; at 0.9x: overlap %.3g .. %.3g m\n",
+                   name(integ), est, est / dcrit, 2 * R - zmax, 2 * R - zmin);
+            CHECK(est < dcrit, "%s: the world's estimate %.3g s is below the true limit %.3g s", name(integ), est, dcrit);
+            if (integ == FLOE_RK2) /* grows slowly (no stable step): runs, overlap grows */
+                CHECK(rc == FLOE_OK || rc == FLOE_EUNSTABLE, "rk2 contact oscillator at 0.9x: %s", floe_world_last_error(w));
+            else
+                CHECK(rc == FLOE_OK && 2 * R - zmin < 3 * deq && 2 * R - zmax > 0,
+                      "%s: contact oscillator at 0.9x stays in contact and bounded: %s", name(integ),
+                      floe_world_last_error(w));
+        } else {
+            printf("  %-16s contact oscillator 1.1x: %s\n", name(integ), floe_world_last_error(w));
+            CHECK(rc == FLOE_EUNSTABLE && strstr(floe_world_last_error(w), "particle"),
+                  "%s: contact oscillator at 1.1x detected (rc %d)", name(integ), rc);
+            CHECK(isfinite(w->p.x[5]) && isfinite(w->p.v[5]), "%s: finite state at the stop", name(integ));
+        }
+        floe_world_destroy(w);
+    }
+}
+
+int main(void) {
+    const int all[3] = {FLOE_VELOCITY_VERLET, FLOE_LEAPFROG, FLOE_RK2};
+    for (int k = 0; k < 3; k++) {
+        test_order(all[k], 0.0);
+        test_order(all[k], 0.1);
+        test_energy(all[k]);
+        test_stability(all[k]);
+        test_contact_oscillator(all[k]);
+    }
+    /* leapfrog and velocity Verlet follow the same trajectory */
+    osc o = {1.0, 0.1};
+    floe_world *a = osc_world(FLOE_VELOCITY_VERLET, 0.05, &o, 1e-3), *b = osc_world(FLOE_LEAPFROG, 0.05, &o, 1e-3);
+    floe_world_prepare(a);
+    floe_world_prepare(b);
+    for (int s = 0; s < 1000; s++) { floe_world_step(a); floe_world_step(b); }
+    double dx = fabs(a->p.x[0] - b->p.x[0]);
+    printf("  leapfrog vs velocity Verlet after 1000 steps: |dx| %.3g m\n", dx);
+    CHECK(dx < 1e-15, "leapfrog positions equal velocity Verlet's (%.3g)", dx);
+    floe_world_destroy(a);
+    floe_world_destroy(b);
+    return check_summary("test_integrators");
+}
