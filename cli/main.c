@@ -3,6 +3,7 @@
 #include "floe_scene.h"
 #include "world_internal.h"
 #include "floe_mesh.h"
+#include "floe_newmark.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -159,7 +160,7 @@ static void print_dt_estimates(floe_world *w)
         "caged particle, spring-dashpot limit (Gershgorin)", "one contact, impact at the expected speed",
         "no move over half a radius per step", "PD nodal sqrt(2 rho / sum V c/|xi|)", "PD CFL dx / c (000 eqs 41-42)",
         "sqrt(m/k) (000 eq 43; 004 eq 28 is 2x)", "Rayleigh wave (Hertz materials)",
-        "Hertz contact duration at the expected speed"};
+        "Hertz contact duration at the expected speed", "beam bonds, largest eigenvalue bound"};
     floe_dt_estimates e;
     if (floe_world_dt_estimates(w, &e) != FLOE_OK) return;
     printf("time-step estimates (expected relative speed %.3g m/s):\n", e.v_expected);
@@ -211,8 +212,9 @@ static int cmd_info(void)
     printf("compiler:    %s\n", __VERSION__);
 #endif
     int feat = floe_mesh_features();
-    printf("features:    CGAL: %s, assimp: %s, OpenMP: no\n", feat & FLOE_MESH_HAVE_CGAL ? "yes" : "no",
-           feat & FLOE_MESH_HAVE_ASSIMP ? "yes" : "no");
+    printf("features:    CGAL: %s, assimp: %s, CHOLMOD (implicit Newmark): %s, OpenMP: no\n",
+           feat & FLOE_MESH_HAVE_CGAL ? "yes" : "no", feat & FLOE_MESH_HAVE_ASSIMP ? "yes" : "no",
+           floe_newmark_implicit_available() ? "yes" : "no");
     printf("geometries:  sphere, box, polyhedron, polygon, prism, ellipsoid, cylinder, capsule, cone, "
            "rounded, compound, mesh (hull, decompose), plane (walls), user SDF callback\n");
     printf("contact laws: %s (scene models: linear, viscoelastic), %s (scene model: "

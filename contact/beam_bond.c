@@ -463,45 +463,40 @@ double floe_beam_critical_dt(floe_world *w) {
     if (!s || s->n == 0) return INFINITY;
     install_exclude(w);
     const floe_particles *p = &w->p;
-    const int dim = w->def.dim, n = p->n;
-    /* rows of M^-1/2 K M^-1/2 by (particle, translation | rotation): sums of the spectral
-     * norms of the 3x3 blocks (a block Gershgorin bound on the largest eigenvalue; the norms
-     * do not depend on the bond's direction) */
-    double *row = calloc((size_t)(n ? n : 1) * 2, sizeof *row);
-    if (!row) return 0; /* refuses the run with a zero critical step rather than guessing */
+    const int dim = w->def.dim;
     double dmax = 0;
-    for (int k = 0; k < s->n; k++) {
+    for (int k = 0; k < s->n; k++) { /* per-bond damping time, from the masses of prepare */
         beam_bond *b = &s->b[k];
-        const floe_beam_section *c = &b->s;
-        int i = b->i, j = b->j;
-        double inv = p->inv_mass[i] + p->inv_mass[j];
-        double mr = inv > 0 ? 1.0 / inv : INFINITY;
-        double ka = c->E * c->A / c->l, nrm[4];
+        double inv = p->inv_mass[b->i] + p->inv_mass[b->j], mr = inv > 0 ? 1.0 / inv : INFINITY;
+        double ka = b->s.E * b->s.A / b->s.l;
         b->damp = b->xi > 0 && isfinite(mr) ? 2.0 * b->xi * sqrt(mr / ka) : 0.0;
-        if (b->broken) continue;
-        if (b->damp > dmax) dmax = b->damp;
-        floe_beam_block_norms(c, dim, nrm);
-        const double ktt = nrm[0], ktr = nrm[1], krr_ii = nrm[2], krr_ij = nrm[3];
-        int ends[2] = {i, j};
-        for (int e = 0; e < 2; e++) {
-            int a = ends[e], o = ends[1 - e];
-            if (p->motion[a] != FLOE_FREE) continue;
-            const double *Ia = p->inertia + 3 * a, *Io = p->inertia + 3 * o;
-            double ma = p->mass[a], Ja = fmin(Ia[0], fmin(Ia[1], Ia[2]));
-            int ofree = p->motion[o] == FLOE_FREE;
-            double mo = p->mass[o], Jo = fmin(Io[0], fmin(Io[1], Io[2]));
-            row[2 * a] += ktt / ma + ktr / sqrt(ma * Ja);
-            row[2 * a + 1] += ktr / sqrt(ma * Ja) + krr_ii / Ja;
-            if (ofree) {
-                row[2 * a] += ktt / sqrt(ma * mo) + ktr / sqrt(ma * Jo);
-                row[2 * a + 1] += ktr / sqrt(Ja * mo) + krr_ij / sqrt(Ja * Jo);
+        if (!b->broken && b->damp > dmax) dmax = b->damp;
+    }
+    /* rows of M^-1/2 K M^-1/2 by (particle, translation | rotation): sums of the spectral
+     * norms of the 3x3 blocks over the particle's bonds (a block Gershgorin bound on the
+     * largest eigenvalue; the norms do not depend on the bond's direction) */
+    double lmax = 0;
+    for (int a = 0; a < s->n_csr; a++) {
+        if (p->motion[a] != FLOE_FREE || s->off[a] == s->off[a + 1]) continue;
+        const double *Ia = p->inertia + 3 * a;
+        double ma = p->mass[a], Ja = fmin(Ia[0], fmin(Ia[1], Ia[2])), rt = 0, rr = 0;
+        for (int q = s->off[a]; q < s->off[a + 1]; q++) {
+            const beam_bond *b = &s->b[s->adj_bond[q]];
+            if (b->broken) continue;
+            int o = s->adj[q];
+            double nrm[4];
+            floe_beam_block_norms(&b->s, dim, nrm);
+            rt += nrm[0] / ma + nrm[1] / sqrt(ma * Ja);
+            rr += nrm[1] / sqrt(ma * Ja) + nrm[2] / Ja;
+            if (p->motion[o] == FLOE_FREE) {
+                const double *Io = p->inertia + 3 * o;
+                double mo = p->mass[o], Jo = fmin(Io[0], fmin(Io[1], Io[2]));
+                rt += nrm[0] / sqrt(ma * mo) + nrm[1] / sqrt(ma * Jo);
+                rr += nrm[1] / sqrt(Ja * mo) + nrm[3] / sqrt(Ja * Jo);
             }
         }
+        lmax = fmax(lmax, fmax(rt, rr));
     }
-    double lmax = 0;
-    for (int a = 0; a < 2 * n; a++)
-        if (row[a] > lmax) lmax = row[a];
-    free(row);
     if (!(lmax > 0)) return INFINITY;
     double om = sqrt(lmax), zeta = 0.5 * dmax * om;
     return 2.0 / om * (sqrt(1.0 + zeta * zeta) - zeta);

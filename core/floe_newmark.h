@@ -33,15 +33,20 @@
  * Step control (004 eqs 29-30, implicit): when a trial step takes a bond's stress beyond
  * its strength by more than a fraction eps, the fraction alpha of du at which the first
  * bond reaches its strength is found (stresses are linear in du), and the step is redone
- * with dt sqrt(alpha) (eq 30, which assumes du ~ dt^2). When that lands off (right after
- * a break the stiff local modes pass the released load on within about their period, so
- * the excess is far from ~ dt^2), the step is searched on log dt between the longest
- * trial that stays below the strength and the shortest that exceeds it (log-linear
- * interpolation of the largest stress ratio, aiming at 1 + eps/2), down to 1e-3 dt and up
- * to max_cuts trials; without a landing in [1, 1 + eps] the shortest exceeding step is
- * taken (its bonds break: no step ends below the strength after a cut). Bonds at or
- * beyond their strength then break, and the next step goes back to dt. The explicit scheme breaks bonds at the
- * step where they exceed their strength.
+ * with dt sqrt(alpha) (eq 30, which assumes du ~ dt^2). The steps are taken from the
+ * levels dt 2^(-k/2), k = 0 .. 20 (down to 1e-3 dt), so that their factors are found
+ * again (NM_SLOTS = 4 are kept, least recently used replaced, each downdated when bonds
+ * break): eq 30 gives the first shorter level, then bisection between the longest level
+ * known to exceed the strength and the shortest known to stay below, and between two
+ * adjacent levels a log-linear interpolation of the largest stress ratio (steps off the
+ * ladder, factored for that trial), up to max_cuts trials; without a landing in
+ * [1, 1 + eps] (right after a break the stiff local modes pass the released load on within
+ * about their period, far from du ~ dt^2) the shortest step known to exceed is taken and
+ * its bonds break. Bonds at or
+ * beyond their strength then break. The next step keeps the level while bonds break and
+ * doubles the step after a step without breaks, back to dt (004 does not say how the
+ * step returns to dt). The explicit scheme breaks bonds at the step where they exceed
+ * their strength.
  *
  * Stability: the explicit step is checked against floe_newmark_critical_dt (a block
  * Gershgorin bound of the bonded system, damping included) unless allow_unstable_dt;
@@ -69,7 +74,7 @@ typedef struct floe_newmark_def {
     double mass_damping;      /* alpha of C += alpha M, 1/s (>= 0) */
     double line_search_eps;   /* eps of eqs 29-30 (implicit): tolerated relative excess of a
                                  stress over its strength before the step is cut; < 0: never cut */
-    int max_cuts;             /* cuts per step (8) */
+    int max_cuts;             /* trial steps redone per step (12) */
     int allow_unstable_dt;    /* 1: an explicit dt above the critical estimate is accepted */
     int refactor_on_break;    /* implicit: 1 = refactor when bonds break; 0 (default) = remove
                                  the broken bonds from the factor by a rank downdate
@@ -77,7 +82,7 @@ typedef struct floe_newmark_def {
 } floe_newmark_def;
 
 /* Implicit average acceleration (beta 1/4, gamma 1/2), dim 2, dt 0 (must be set), no
- * damping, eps 0.01, 8 cuts. */
+ * damping, eps 0.01, 12 cuts. */
 floe_newmark_def floe_newmark_default_def(void);
 
 /* Create an empty system; NULL on an invalid definition (message to err). The caller owns
@@ -161,5 +166,8 @@ int floe_newmark_get_stats(const floe_newmark *s, floe_newmark_stats *out);
  * broken, t_broken, sigma, tau). FLOE_EIO on write errors. */
 int floe_newmark_write_vtu(floe_newmark *s, const char *path);
 int floe_newmark_write_bonds_csv(floe_newmark *s, const char *path);
+
+/* 1 if this build has CHOLMOD (FLOE_WITH_CHOLMOD), so implicit Newmark (beta > 0) runs. */
+int floe_newmark_implicit_available(void);
 
 #endif

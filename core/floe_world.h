@@ -42,7 +42,7 @@ typedef struct floe_world_def {
     double adapt_velocity_tol; /* a step is accepted when max_i |v_i' - v_i| dt / R_i <= this
                                   (the velocity change over the step relative to the size, 1e-3) */
     double adapt_depth_tol;   /* ... and the overlap of every contact changed by at most this
-                                 fraction of the smaller radius (0.02) */
+                                 fraction of the smaller radius (1e-3) */
     int pd_dem;               /* floe_pd_dem_scheme (FLOE_PD_DEM_MONOLITHIC) */
     int pd_substeps;          /* staggered: PD sub-steps per step (dt_PD = dt / m), >= 1;
                                  0 = automatic (the integer ratio of the critical steps) */
@@ -130,6 +130,8 @@ typedef enum floe_dt_kind {
     FLOE_DT_RAYLEIGH,            /* Hertz-Mindlin materials: pi R sqrt(rho/G)/(0.1631 nu + 0.8766) */
     FLOE_DT_HERTZ,               /* Hertz contact duration 2.87 (m*^2/(R* E*^2 v))^(1/5) at the
                                     expected speed */
+    FLOE_DT_BEAM,                /* limits: beam bonds, 2/sqrt(lambda_max) of the bonded
+                                    particles' stiffness (block Gershgorin, contact/beam_bond.c) */
     FLOE_DT_NKINDS
 } floe_dt_kind;
 typedef struct floe_dt_estimates {

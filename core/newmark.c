@@ -16,6 +16,9 @@
 #include <cholmod.h>
 #endif
 
+#define NM_SLOTS 4      /* factors kept for different steps (implicit) */
+#define NM_LEVELS 20    /* shortest step of the step control: dt 2^(-20/2) ~ 1e-3 dt */
+
 typedef struct nm_bond {
     int i, j;
     floe_beam_section s;
@@ -56,19 +59,23 @@ struct floe_newmark {
     double ablk_dt;
     long ablk_epoch;
     long epoch;              /* bumped when bonds break: older factors are stale */
+    int level;               /* implicit step control: the step is dt 2^(-level/2) */
     floe_newmark_stats st;
     double energy_scale;     /* for the instability check */
 #ifdef FLOE_HAVE_CHOLMOD
     cholmod_common cc;
     int cc_started;
     cholmod_sparse *A;
-    cholmod_factor *L[2];    /* [0]: for def.dt, [1]: for the last shortened step */
-    double Ldt[2];
-    long Lepoch[2];
+    cholmod_factor *L[NM_SLOTS]; /* factors for the steps in use (the full step and the
+                                    shorter ones of the step control), least recently used
+                                    replaced */
+    double Ldt[NM_SLOTS];
+    long Lepoch[NM_SLOTS], Lused[NM_SLOTS], use_clock;
     int *bpos;               /* nb (2 nd)^2: positions in A->x of each bond's entries (-1: none) */
     int *npos;               /* n nd^2: positions of each node's diagonal block */
-    int *pinv;               /* inverse of L[0]->Perm (downdates take permuted rows) */
-    long since_refactor[2];  /* downdates of L[k] since its factorization */
+    int *pinv;               /* inverse of the fill-reducing permutation (the same in every
+                                slot: one pattern, one analysis), for downdates */
+    long since_refactor[NM_SLOTS]; /* downdates of L[k] since its factorization */
     cholmod_dense *B, *X, *Y, *E;
 #endif
 };
@@ -99,7 +106,7 @@ floe_newmark_def floe_newmark_default_def(void) {
     d.beta = 0.25;
     d.gamma = 0.5;
     d.line_search_eps = 0.01;
-    d.max_cuts = 8;
+    d.max_cuts = 12;
     return d;
 }
 
@@ -150,7 +157,7 @@ static void free_arrays(floe_newmark *s) {
 static void free_cholmod(floe_newmark *s) {
     if (!s->cc_started) return;
     cholmod_free_sparse(&s->A, &s->cc);
-    for (int k = 0; k < 2; k++) cholmod_free_factor(&s->L[k], &s->cc);
+    for (int k = 0; k < NM_SLOTS; k++) cholmod_free_factor(&s->L[k], &s->cc);
     cholmod_free_dense(&s->B, &s->cc);
     cholmod_free_dense(&s->X, &s->cc);
     cholmod_free_dense(&s->Y, &s->cc);
@@ -398,6 +405,9 @@ static inline void local_stress(const nm_bond *b, int dim, const double *f, doub
 }
 
 /* out = K g over the intact bonds */
+#if defined(__GNUC__)
+__attribute__((unused))
+#endif
 static void k_apply(floe_newmark *s, const double *g, double *out) {
     memset(out, 0, (size_t)s->nd * s->n * sizeof *out);
     double ul[12], fl[12];
@@ -709,8 +719,17 @@ static int factor(floe_newmark *s, int slot, double dt) {
 
 /* x = A(dt)^-1 rhs over the free components (refactoring when needed) */
 static int solve_implicit(floe_newmark *s, double dt, const double *rhs, double *x) {
-    int slot = dt == s->def.dt ? 0 : 1;
-    if (!s->L[slot] || s->Ldt[slot] != dt || s->Lepoch[slot] != s->epoch) FLOE_TRY(factor(s, slot, dt));
+    /* the slot factored for this step at the present bonds, else the least recently used */
+    int slot = -1;
+    for (int k = 0; k < NM_SLOTS && slot < 0; k++)
+        if (s->L[k] && s->Ldt[k] == dt && s->Lepoch[k] == s->epoch) slot = k;
+    if (slot < 0) {
+        slot = 0;
+        for (int k = 1; k < NM_SLOTS; k++)
+            if (!s->L[k] || (s->L[slot] && s->Lused[k] < s->Lused[slot])) slot = k;
+        FLOE_TRY(factor(s, slot, dt));
+    }
+    s->Lused[slot] = ++s->use_clock;
     double t0 = now_s();
     double *Bx = s->B->x;
     const int N = s->nd * s->n;
@@ -723,7 +742,6 @@ static int solve_implicit(floe_newmark *s, double dt, const double *rhs, double 
     s->st.seconds_solve += now_s() - t0;
     return FLOE_OK;
 }
-#endif
 
 /* eigen-decomposition of a symmetric m x m matrix (m <= 12) by cyclic Jacobi: A is
  * destroyed, its diagonal ends as the eigenvalues, V (row-major) holds the eigenvectors as
@@ -797,7 +815,7 @@ static int cmp_nz(const void *a, const void *b) {
     return (x->row > y->row) - (x->row < y->row);
 }
 
-/* remove the bonds broken[0 .. nbr) from L[0] (factored for def.dt) by one multiple-rank
+/* remove the bonds broken[0 .. nbr) from the factor in slot by one multiple-rank
  * downdate: each bond's PSD term split as sum_k (sqrt(lambda_k) v_k)(sqrt(lambda_k) v_k)^T */
 static int downdate_bonds(floe_newmark *s, int slot, const int *broken, int nbr) {
     double t0 = now_s();
@@ -851,6 +869,8 @@ static int downdate_bonds(floe_newmark *s, int slot, const int *broken, int nbr)
     s->since_refactor[slot] += nbr;
     return FLOE_OK;
 }
+
+#endif
 
 /* x = (M + gamma dt C)^-1 rhs, node by node (explicit) */
 static int solve_explicit(floe_newmark *s, double dt, const double *rhs, double *x) {
@@ -1035,10 +1055,16 @@ int floe_newmark_prepare(floe_newmark *s) {
     return FLOE_OK;
 }
 
+/* the step of level k: dt 2^(-k/2) (the same double every time: factors are found again) */
+static double level_dt(double dt_full, int k) { return k <= 0 ? dt_full : dt_full * pow(2.0, -0.5 * k); }
+
 static int do_step(floe_newmark *s, double dt_full) {
     const int nd = s->nd, N = nd * s->n;
     const double beta = s->def.beta, gamma = s->def.gamma;
-    double dt = dt_full, de = 0, lo = 0, hi = 0, r_lo = 0, r_hi = 0, a_hi = 1;
+    /* implicit step control: the step starts at the level the last step left (shorter
+     * steps while a crack runs, doubled back after a step without breaks) */
+    int level = beta > 0 && s->def.line_search_eps >= 0 ? s->level : 0, k_over = -1, k_under = -1;
+    double dt = level_dt(dt_full, level), de = 0, dt_lo = 0, dt_hi = 0, r_lo = 0, r_hi = 0;
     int cuts = 0, final_trial = 0;
     for (;;) {
         for (int k = 0; k < N; k++) {
@@ -1070,10 +1096,10 @@ static int do_step(floe_newmark *s, double dt_full) {
         }
         de = bonds_trial(s, s->du, s->kd);
         /* line search (eqs 29-30): the fraction alpha of du at which the first bond reaches
-         * its strength, and the step redone with dt sqrt(alpha); then a search on log dt
-         * between the longest step known to stay below the strength and the shortest known
-         * to exceed it (floe_newmark.h) */
-        const double eps = s->def.line_search_eps, rtarget = 1 + 0.5 * fmax(eps, 0.0);
+         * its strength, and the step redone with dt sqrt(alpha); the steps are the levels
+         * dt 2^(-k/2), searched by bisection between the longest step known to exceed the
+         * strength and the shortest known to stay below (floe_newmark.h) */
+        const double eps = s->def.line_search_eps;
         double rmax = 0, alpha = 1;
         for (int k = 0; k < s->nb; k++) {
             const nm_bond *b = &s->b[k];
@@ -1082,35 +1108,46 @@ static int do_step(floe_newmark *s, double dt_full) {
             if (r > rmax) rmax = r;
             if (r > 1) {
                 double r0 = bond_ratio(b, b->sigma, b->tau);
-                double f = r > r0 ? (rtarget - r0) / (r - r0) : 0;
+                double f = r > r0 ? (1 + 0.5 * fmax(eps, 0.0) - r0) / (r - r0) : 0;
                 if (f < alpha) alpha = f;
             }
         }
         if (eps < 0 || final_trial || (rmax <= 1 + eps && (rmax >= 1 || cuts == 0))) break;
-        if (rmax > 1 + eps) { hi = dt; r_hi = rmax; a_hi = alpha; }
-        else { lo = dt; r_lo = rmax; }
-        const double dt_min = 1e-3 * dt_full;
-        double dt_new;
-        if (cuts >= s->def.max_cuts || (lo > 0 && hi < 1.02 * lo) || (lo == 0 && hi <= dt_min)) {
-            /* no landing in [1, 1 + eps]: the shortest step that exceeds, its bonds break */
-            if (dt == hi) break;
-            dt_new = hi;
+        if (rmax > 1 + eps) { k_over = level; dt_hi = dt; r_hi = rmax; }
+        else { k_under = level; dt_lo = dt; r_lo = rmax; }
+        int next = -1;
+        double dt_next = 0;
+        if (k_under < 0 && k_over >= 0 && dt_hi == level_dt(dt_full, k_over) && level < NM_LEVELS) {
+            /* eq 30: dt sqrt(alpha), i.e. -log2(alpha) levels further (at least one) */
+            double a = fmin(fmax(alpha, 1e-12), 1.0);
+            next = level + (int)fmax(1.0, floor(-log2(a) + 0.5));
+            if (next > NM_LEVELS) next = NM_LEVELS;
+        } else if (k_under < 0) {
+            break; /* the shortest level exceeds: its bonds break */
+        } else if (cuts >= s->def.max_cuts || dt_hi < 1.02 * dt_lo) {
+            /* no landing in [1, 1 + eps]: the shortest step known to exceed, its bonds break */
+            if (dt == dt_hi) break;
+            dt_next = dt_hi;
             final_trial = 1;
-        } else if (lo == 0) {
-            /* eq 30 (du ~ dt^2) from the shortest exceeding step */
-            dt_new = fmax(hi * sqrt(fmin(fmax(a_hi, 0.0), 1.0)), dt_min);
-            if (dt_new >= hi) dt_new = 0.5 * hi;
+        } else if (k_under - k_over > 1 && dt_lo == level_dt(dt_full, k_under) && dt_hi == level_dt(dt_full, k_over)) {
+            next = (k_over + k_under) / 2; /* bisection on the levels (their factors are kept) */
         } else {
-            /* log-linear interpolation of the stress ratio between the bracket, kept inside */
-            double f = (rtarget - r_lo) / (r_hi - r_lo);
+            /* adjacent levels: log-linear interpolation of the stress ratio inside the bracket */
+            double f = (1 + 0.5 * fmax(eps, 0.0) - r_lo) / (r_hi - r_lo);
             f = fmin(fmax(f, 0.1), 0.9);
-            dt_new = exp(log(lo) + f * (log(hi) - log(lo)));
+            dt_next = exp(log(dt_lo) + f * (log(dt_hi) - log(dt_lo)));
         }
-        dt = dt_new;
+        if (next >= 0) {
+            level = next;
+            dt = level_dt(dt_full, level);
+        } else {
+            dt = dt_next;
+        }
         cuts++;
         s->st.cuts++;
         continue;
 #else
+        (void)k_over; (void)k_under; (void)dt_lo; (void)dt_hi; (void)r_lo; (void)r_hi; (void)cuts; (void)final_trial;
         return nm_error(s, FLOE_ENOTSUP, "implicit Newmark needs CHOLMOD (FLOE_WITH_CHOLMOD=OFF)");
 #endif
     }
@@ -1165,9 +1202,9 @@ static int do_step(floe_newmark *s, double dt_full) {
     }
     if (broke) {
         /* the factor for dt: a rank downdate keeps it (implicit), unless asked to refactor */
-        int keep[2] = {0, 0};
 #ifdef FLOE_HAVE_CHOLMOD
-        for (int slot = 0; slot < 2; slot++)
+        int keep[NM_SLOTS] = {0};
+        for (int slot = 0; slot < NM_SLOTS; slot++)
             if (beta > 0 && !s->def.refactor_on_break && s->L[slot] && s->Lepoch[slot] == s->epoch &&
                 s->since_refactor[slot] + broke <= 256) {
                 int rc = downdate_bonds(s, slot, blist, broke);
@@ -1177,12 +1214,15 @@ static int do_step(floe_newmark *s, double dt_full) {
 #endif
         s->epoch++;
 #ifdef FLOE_HAVE_CHOLMOD
-        for (int slot = 0; slot < 2; slot++)
+        for (int slot = 0; slot < NM_SLOTS; slot++)
             if (keep[slot]) s->Lepoch[slot] = s->epoch;
 #endif
         build_cblk(s);
     }
     free(blist);
+    /* the next step: the same level while bonds break, twice as long after a quiet step */
+    if (dt != level_dt(dt_full, level) && k_under >= 0) level = k_under; /* off the ladder: the level below */
+    s->level = broke ? level : (level >= 2 ? level - 2 : 0);
     s->st.energy_kinetic = kinetic(s, s->v);
     double e = s->st.energy_kinetic + s->st.energy_elastic;
     /* what the energy may reach: what was put in, plus what the loads can give a free node
@@ -1348,4 +1388,12 @@ floe_newmark *floe_newmark_from_world(floe_world *w, const floe_newmark_def *def
         return NULL;
     }
     return s;
+}
+
+int floe_newmark_implicit_available(void) {
+#ifdef FLOE_HAVE_CHOLMOD
+    return 1;
+#else
+    return 0;
+#endif
 }

@@ -718,9 +718,9 @@ static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
         } else if (model == 3) {
             /* Silling's short-range force: k = factor c V^2 / delta, or k given */
             if (sc_has(&m, "stiffness")) {
-                if (sc_has(&m, "micromodulus") || sc_has(&m, "horizon") || sc_has(&m, "volume"))
-                    return sc_fail(s, FLOE_EINVAL, e, "%s: give stiffness, or micromodulus, horizon and volume, "
-                                   "not both", what);
+                if (sc_has(&m, "micromodulus") || sc_has(&m, "horizon") || sc_has(&m, "volume") || sc_has(&m, "factor"))
+                    return sc_fail(s, FLOE_EINVAL, e, "%s: give stiffness, or micromodulus, horizon, volume "
+                                   "(and factor), not both", what);
                 FLOE_TRY(sc_num(s, &m, "stiffness", 1, 0, &L->kn));
                 if (!(L->kn > 0 && isfinite(L->kn))) return sc_range(s, &m, "stiffness", "> 0 (N/m)", L->kn);
             } else {
@@ -2242,6 +2242,9 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
                k, f0, f0 + pb->n - 1, -2 - k, pb->ops->name, (long long)pb->nbond, 2.0 * (double)pb->nbond / pb->n,
                pb->delta, pb->s_c, floe_pd_dt_nodal(pb));
     }
+    if (floe_world_beam_bond_count(w) > 0)
+        sc_cat(&b, "  beam bonds: %d (%d broken), critical dt %.3g s\n", floe_world_beam_bond_count(w),
+               floe_world_beam_broken_count(w), floe_beam_critical_dt(w));
     sc_cat(&b, "materials:\n");
     for (int i = 0; i < s->nmats && i < 16; i++) {
         const floe_material *m = &s->mats[i].m;

@@ -115,6 +115,7 @@ void floe_world_destroy(floe_world *w) {
     free(w->law_owned);
     free(w->laws);
     free(w->motions);
+    free(w->motion_idx);
     free(w->fb_old);
     free(w->kin_old);
     for (int i = 0; i < w->nstates; i++) {
@@ -272,6 +273,7 @@ int floe_world_set_motion(floe_world *w, int i, floe_motion_fn fn, void *user) {
 int floe_world_set_body_force(floe_world *w, floe_body_force_fn fn, void *user) {
     w->body_force = fn;
     w->body_force_user = user;
+    w->prepared = 0;   /* prepare sizes the per-particle callback force (adaptive snapshots) */
     return FLOE_OK;
 }
 
@@ -631,8 +633,9 @@ double floe_pd_bc_forces(floe_world *w) {
             double *old = r->fold + 3 * a;
             if (p->motion[i] != FLOE_FREE) { floe_v3_set(old, 0, 0, 0); continue; }
             double V = pb->V[i - f0], f[3];
-            if (r->def.force_fn) r->def.force_fn(t, pb->X + 3 * (size_t)(i - f0), b, r->def.force_user);
-            for (int k = 0; k < 3; k++) f[k] = b[k] * V;
+            double bi[3] = {b[0], b[1], b[2]}; /* each point's callback gets the ramped value */
+            if (r->def.force_fn) r->def.force_fn(t, pb->X + 3 * (size_t)(i - f0), bi, r->def.force_user);
+            for (int k = 0; k < 3; k++) f[k] = bi[k] * V;
             if (w->def.dim == 2) f[2] = 0;
             floe_v3_add(p->f + 3 * i, p->f + 3 * i, f);
             /* velocities are at mid-step here (dx = v dt): work = (F_old + F_new)/2 . dx */
@@ -830,7 +833,7 @@ static void dt_note(floe_dt_estimates *d, int k, double dt, int i) {
 
 const char *floe_dt_kind_name(int kind) {
     static const char *const names[FLOE_DT_NKINDS] = {"contact_packing", "contact_impact", "motion", "pd_nodal",
-                                                      "pd_cfl", "dem_sqrt_m_k", "rayleigh", "hertz"};
+                                                      "pd_cfl", "dem_sqrt_m_k", "rayleigh", "hertz", "beam_bond"};
     return kind >= 0 && kind < FLOE_DT_NKINDS ? names[kind] : NULL;
 }
 
@@ -944,6 +947,10 @@ static int estimate_dt(floe_world *w) {
         double dc = floe_pd_dt_cfl(b);
         if (dc > 0) dt_note(d, FLOE_DT_PD_CFL, dc, f0);
     }
+    if (w->beams) { /* beam bonds */
+        d->limits[FLOE_DT_BEAM] = 1;
+        d->dt[FLOE_DT_BEAM] = floe_beam_critical_dt(w);
+    }
     d->critical = INFINITY;
     d->limiting = d->limiting_particle = -1;
     for (int k = 0; k < FLOE_DT_NKINDS; k++)
@@ -955,7 +962,6 @@ static int estimate_dt(floe_world *w) {
     d->critical_contact = fmin(d->dt[FLOE_DT_CONTACT_PACKING], fmin(d->dt[FLOE_DT_CONTACT_IMPACT], d->dt[FLOE_DT_MOTION]));
     d->critical_pd = d->dt[FLOE_DT_PD_NODAL];
     w->dt_crit = d->critical;
-    if (w->beams) w->dt_crit = d->critical = fmin(d->critical, floe_beam_critical_dt(w)); /* beam bonds */
     return FLOE_OK;
 }
 
@@ -978,6 +984,9 @@ static int choose_dt(floe_world *w) {
                                 "velocities, which a rejected step could not restore consistently)");
     if (d->adaptive && stag)
         return floe_world_error(w, FLOE_EINVAL, "adaptive steps and the staggered PD-DEM scheme cannot be combined yet");
+    if (d->adaptive && w->beams)
+        return floe_world_error(w, FLOE_EINVAL, "adaptive steps and beam bonds cannot be combined yet (a bond broken in "
+                                "a rejected trial step would stay broken); use a fixed or automatic step");
     if (d->pd_substeps < 0 || d->pd_every < 0 || (d->pd_substeps > 1 && d->pd_every > 1))
         return floe_world_error(w, FLOE_EINVAL, "staggered PD-DEM: substeps (%d) and every (%d) must be >= 1 (substeps 0: "
                                 "automatic), and only one of them above 1", d->pd_substeps, d->pd_every);
@@ -1262,13 +1271,34 @@ int floe_world_finish(floe_world *w) {
 
 /* ---- the step ---- */
 
-static void kinematic_velocity(floe_world *w, int i, double t) {
-    for (int k = 0; k < w->nmotions; k++)
-        if (w->motions[k].particle == i) {
-            w->motions[k].fn(t, w->p.v + 3 * i, w->p.w + 3 * i, w->motions[k].user);
-            if (w->def.dim == 2) { w->p.v[3 * i + 2] = 0; w->p.w[3 * i] = w->p.w[3 * i + 1] = 0; }
-            return;
+/* motion callback of particle i: an index particle -> callback, rebuilt when callbacks or
+ * particles were added (a linear scan per particle would cost O(k^2) per step for k
+ * ramped PD boundary points); the first callback set for a particle wins */
+static int motion_of(floe_world *w, int i) {
+    if (w->motion_idx_n != w->p.n || w->motion_idx_cnt != w->nmotions) {
+        int *t = realloc(w->motion_idx, (size_t)(w->p.n > 0 ? w->p.n : 1) * sizeof *t);
+        if (!t) { /* out of memory: fall back to the scan */
+            for (int k = 0; k < w->nmotions; k++)
+                if (w->motions[k].particle == i) return k;
+            return -1;
         }
+        w->motion_idx = t;
+        for (int k = 0; k < w->p.n; k++) t[k] = -1;
+        for (int k = w->nmotions - 1; k >= 0; k--) {
+            int pi = w->motions[k].particle;
+            if (pi >= 0 && pi < w->p.n) t[pi] = k;
+        }
+        w->motion_idx_n = w->p.n;
+        w->motion_idx_cnt = w->nmotions;
+    }
+    return w->motion_idx[i];
+}
+
+static void kinematic_velocity(floe_world *w, int i, double t) {
+    int k = motion_of(w, i);
+    if (k < 0) return;
+    w->motions[k].fn(t, w->p.v + 3 * i, w->p.w + 3 * i, w->motions[k].user);
+    if (w->def.dim == 2) { w->p.v[3 * i + 2] = 0; w->p.w[3 * i] = w->p.w[3 * i + 1] = 0; }
 }
 
 static int check_particle(floe_world *w, int i, const double xold[3]) {
@@ -1773,9 +1803,9 @@ static int step_staggered(floe_world *w) {
     /* 1. half kick with F_C; drift of everything except the PD points that sub-cycle */
     for (int i = 0; i < n; i++) {
         double *x = p->x + 3 * i, *v = p->v + 3 * i;
-        if (p->motion[i] == FLOE_FIXED) continue;
         const int sub = ke == 1 && pd_of[i] >= 0;
-        if (sub) memcpy(xs + 3 * i, x, 3 * sizeof(double));
+        if (sub) memcpy(xs + 3 * i, x, 3 * sizeof(double)); /* fixed points too: step 3 reads it */
+        if (p->motion[i] == FLOE_FIXED) continue;
         if (p->motion[i] == FLOE_KINEMATIC) {
             memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
             memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
@@ -1920,7 +1950,10 @@ static void snapshot_sizes(const floe_world *w, size_t *nd, size_t *nc) {
     for (int q = 0; q < w->npd_bc; q++)
         if (w->pd_bc[q]->fold) d += 3 * (size_t)w->pd_bc[q]->n;
     if (w->npd) d += 3 * (size_t)w->pd_npts + 3 * (size_t)w->npd;
-    for (int k = 0; k < w->npd; k++) c += (size_t)w->pd[k]->nbond;
+    for (int k = 0; k < w->npd; k++) {
+        c += (size_t)w->pd[k]->nbond;
+        if (w->pd[k]->s0) d += 2 * (size_t)w->pd[k]->n; /* PMB alpha: per-point critical stretch */
+    }
     for (int s = 0; s < w->nstates; s++) d += w->states[s]->klass->size(w->states[s]);
     *nd = d;
     *nc = c;
@@ -1996,6 +2029,10 @@ static int snapshot_io(floe_world *w, int save) {
             d += 3;
             SNAP_COPY(save, c, b->broken, (size_t)b->nbond);
             c += b->nbond;
+            if (b->s0) {
+                SNAP_COPY(save, d, b->s0, 2 * (size_t)b->n * sizeof *d);
+                d += 2 * (size_t)b->n;
+            }
         }
     }
     if (!save) {

@@ -98,6 +98,7 @@ struct floe_world {
     floe_contact_law **laws;  /* nmats x nmats (symmetric, owned once via law_owned) */
     floe_contact_law **law_owned; int nlaws_owned, law_owned_cap;
     floe_motion_cb *motions; int nmotions, motions_cap;
+    int *motion_idx; int motion_idx_n, motion_idx_cnt; /* particle -> motion callback (world.c) */
     floe_body_force_fn body_force; void *body_force_user;
     double *fb_old; int fb_n;   /* last callback force and torque per particle (6n) */
     double *kin_old;            /* force and torque of kinematic particles at the step start (6n) */

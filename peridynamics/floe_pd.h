@@ -51,13 +51,14 @@ typedef struct floe_pd_region {
 
 enum { FLOE_PD_PMB = 1, FLOE_PD_LPS = 2 };
 enum { FLOE_PD_W_ONE = 0, FLOE_PD_W_GAUSS = 1 };              /* LPS influence function  */
-enum { FLOE_PD_PLANE_STRESS = 0, FLOE_PD_PLANE_STRAIN = 1 };  /* 2D PMB                   */
+enum { FLOE_PD_PLANE_STRESS = 0, FLOE_PD_PLANE_STRAIN = 1 };  /* 2D PMB and LPS           */
 
 typedef struct floe_pd_material {
     int model;          /* FLOE_PD_PMB or FLOE_PD_LPS                                       */
     double rho;         /* mass density                                                     */
     /* Elastic constants. PMB: give K (3D) or E (2D), or c directly; nu is fixed by the
-     * model (3D and 2D plane strain: 1/4, 2D plane stress: 1/3). LPS: K and G (3D).       */
+     * model (3D and 2D plane strain: 1/4, 2D plane stress: 1/3). LPS: K and G (the 3D
+                         * moduli, also in 2D: plane strain or plane stress of that solid). */
     double K, G, E;
     double c;           /* PMB micromodulus; 0: 3D c = 18K/(pi delta^4) (000 eq 10,
                          * 003 eq 3), 2D plane stress c = 9E/(pi h delta^3),
@@ -67,7 +68,7 @@ typedef struct floe_pd_material {
                          * 2D s_c = sqrt(4 G_c/(c h delta^4)) (same integral in 2D);
                          * for LPS the PMB c of the same K is used in this formula          */
     int influence;      /* LPS: FLOE_PD_W_ONE or FLOE_PD_W_GAUSS                            */
-    int plane;          /* 2D PMB: FLOE_PD_PLANE_STRESS or FLOE_PD_PLANE_STRAIN             */
+    int plane;          /* 2D PMB and LPS: FLOE_PD_PLANE_STRESS or FLOE_PD_PLANE_STRAIN     */
     int broken_tension_only; /* PMB: 1 (default via floe_pd_material_pmb): a broken bond
                          * still resists compression (003 eq 2: mu = 1 when s <= 0);
                          * 0: a broken bond carries nothing                                 */
@@ -117,6 +118,9 @@ struct floe_pd_body {
     double *m, *theta;
     double *wbond;             /* LPS Gaussian influence per bond (NULL for w = 1)          */
     double *acorr;             /* LPS per-point factor on alpha_i = 15G/m_i, NULL when off  */
+    double *dten;              /* LPS surface correction: 8n doubles, per point the
+                                * dilatation tensor A_i in [0, 6n) (xx yy zz xy xz yz), then
+                                * 2n scratch; NULL when off (pd_materials.c)                */
     int64_t nbroken;           /* bonds broken so far                                       */
     /* PMB with mat.alpha > 0 (pd_materials.c): 2n doubles, s0_i of the previous evaluation
      * in [0, n) (DBL_MAX until the first evaluation) and the one being built in [n, 2n);
@@ -137,8 +141,8 @@ int floe_pd_body_create_points(floe_pd_body **out, int dim, int n, const double 
 
 void floe_pd_body_destroy(floe_pd_body *b);
 
-/* Set the material (computes c, s_c, LPS weighted volumes). FLOE_EINVAL for bad values,
- * FLOE_ENOTSUP for 2D LPS (not implemented yet). Drops a surface correction. */
+/* Set the material (computes c, s_c, LPS weighted volumes). FLOE_EINVAL for bad values.
+ * Drops a surface correction. */
 int floe_pd_set_material(floe_pd_body *b, const floe_pd_material *m);
 
 /* PMB surface correction, energy method (Madenci & Oterkus 2014, ch. 4.2): for each
@@ -148,15 +152,27 @@ int floe_pd_set_material(floe_pd_body *b, const floe_pd_material *m);
  * g_i^d = W_inf/W_i^d; a bond gets G^d = (g_i^d + g_j^d)/2 and the factor
  * [sum_d (n_d/G^d)^2]^(-1/2) (ellipsoidal interpolation). Interior points of a lattice get
  * about 1 (the discretisation error of the lattice sum is corrected too).
- * LPS (3D): the dilatation is self-normalised by the discrete m_i (exact for an isotropic
- * expansion), so only the deviatoric part is calibrated, per point: under the uniaxial
- * strain eps along d, D_i^d = sum_j w beta V_j |xi|^2 (n_d^2 - thetahat_i^d/3)^2 with
- * thetahat_i^d = 3/m_i sum_j w |xi|^2 n_d^2 beta V_j, and the continuum deviatoric energy
- * 2/3 G eps^2 = alpha_i^d D_i^d eps^2/2 gives alpha_i^d = 4G/(3 D_i^d); alpha_i is their
- * mean over d (000 eq 25 uses alpha = 15G/m, the continuum value). In the interior of a
- * lattice this makes C11 and C12 exact (C44 keeps the cubic-lattice error).
+ * LPS (3D and 2D): see floe_pd_lps_surface_correction below.
  * Call after set_material (which drops the correction). */
 int floe_pd_surface_correction(floe_pd_body *b);
+
+/* The LPS branch of floe_pd_surface_correction (pd_materials.c), 3D and 2D (docs/models.md,
+ * "LPS surface correction"):
+ * 1. Dilatation, position-aware (after Mitchell, Silling & Littlewood 2015): theta_i =
+ *    sum_j omega_ij |xi| e beta V_j with omega_ij = w n^T A_i n, where the symmetric tensor
+ *    A_i solves C_i : A_i = I, C_i = sum_j w |xi|^2 beta V_j n n n n (the family's fourth
+ *    moment). Then theta_i = tr(H) exactly for EVERY uniform small strain H at every point
+ *    (the plain 3/m_i sum is exact only for an isotropic expansion: at a free surface it
+ *    turns the lateral contraction of a bar into spurious dilatation, and K theta^2/2 makes
+ *    the bar 7-9 % too stiff at nu = 0.3-0.45). In a full cubic-lattice family
+ *    A_i = dim/m_i I, the plain form. A point whose family does not span the space keeps it.
+ * 2. Deviatoric: alpha_i calibrated per point as before (uniaxial strain along each axis,
+ *    the deviatoric energy matched to the continuum, mean over the axes) with the new
+ *    dilatation.
+ * The force state follows from the energy (forces = -grad E exactly):
+ *    t_ij = (k theta_i - alpha_i q_i/dim) omega_ij |xi| + alpha_i w e^d_ij,
+ *    q_i = sum_j w |xi| e^d_ij beta V_j (0 for the plain form with an intact family). */
+int floe_pd_lps_surface_correction(floe_pd_body *b);
 
 /* Internal forces (000 eq 12 for PMB, eq 14 for LPS) for current positions x (3n), ADDED
  * to f (3n); breaks bonds whose stretch exceeds s_c (irreversibly); returns the elastic

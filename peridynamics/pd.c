@@ -58,6 +58,7 @@ void floe_pd_body_destroy(floe_pd_body *b)
     free(b->theta);
     free(b->wbond);
     free(b->s0); /* PMB alpha state (pd_materials.c) */
+    free(b->dten); /* LPS surface correction (pd_materials.c) */
     free(b);
 }
 
@@ -317,56 +318,10 @@ double floe_pd_forces_nobreak(floe_pd_body *b, const double *x, double *f)
     return forces_impl(b, x, f, 0);
 }
 
-static int lps_correction(floe_pd_body *b)
-{
-    size_t n = (size_t)(b->n > 0 ? b->n : 1);
-    double *th = calloc(3 * n, sizeof *th), *D = calloc(3 * n, sizeof *D);
-    double *ac = malloc(n * sizeof *ac);
-    if (!th || !D || !ac) { free(th); free(D); free(ac); return FLOE_ENOMEM; }
-    for (int pass = 0; pass < 2; pass++) {
-        for (int i = 0; i < b->n; i++)
-            for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
-                int j = b->partner[k];
-                double L = b->len[k], d[3];
-                floe_v3_sub(d, b->X + 3 * (size_t)j, b->X + 3 * (size_t)i);
-                double wb = (b->wbond ? b->wbond[k] : 1.0) * L * L * b->vfac[k];
-                for (int a = 0; a < 3; a++) {
-                    double na2 = d[a] * d[a] / (L * L);
-                    size_t ia = 3 * (size_t)i + a, ja = 3 * (size_t)j + a;
-                    if (pass == 0) {
-                        th[ia] += wb * na2 * b->V[j];
-                        th[ja] += wb * na2 * b->V[i];
-                    } else {
-                        double qi = na2 - th[ia] / 3.0, qj = na2 - th[ja] / 3.0;
-                        D[ia] += wb * qi * qi * b->V[j];
-                        D[ja] += wb * qj * qj * b->V[i];
-                    }
-                }
-            }
-        if (pass == 0)
-            for (int i = 0; i < b->n; i++)
-                for (int a = 0; a < 3; a++)
-                    th[3 * (size_t)i + a] = b->m[i] > 0 ? 3.0 * th[3 * (size_t)i + a] / b->m[i] : 0.0;
-    }
-    for (int i = 0; i < b->n; i++) {
-        /* alpha_i = mean_d 4G/(3 D_i^d), as a factor on 15G/m_i */
-        double s = 0;
-        int cnt = 0;
-        for (int a = 0; a < 3; a++)
-            if (D[3 * (size_t)i + a] > 0) { s += 4.0 / (3.0 * D[3 * (size_t)i + a]); cnt++; }
-        ac[i] = cnt > 0 && b->m[i] > 0 ? (s / cnt) / (15.0 / b->m[i]) : 1.0;
-    }
-    free(th);
-    free(D);
-    free(b->acorr);
-    b->acorr = ac;
-    return FLOE_OK;
-}
-
 int floe_pd_surface_correction(floe_pd_body *b)
 {
     if (!b || !b->ops) return FLOE_EINVAL;
-    if (b->mat.model == FLOE_PD_LPS) return lps_correction(b);
+    if (b->mat.model == FLOE_PD_LPS) return floe_pd_lps_surface_correction(b); /* pd_materials.c */
     if (b->mat.model != FLOE_PD_PMB) return FLOE_ENOTSUP;
     size_t n = (size_t)(b->n > 0 ? b->n : 1), nb = (size_t)(b->nbond > 0 ? b->nbond : 1);
     double *sum = calloc(3 * n, sizeof *sum);
@@ -454,5 +409,6 @@ size_t floe_pd_body_bytes(const floe_pd_body *b)
     if (b->scorr) s += nb * sizeof(float);
     if (b->acorr) s += n * sizeof(double);
     if (b->s0) s += 2 * n * sizeof(double); /* PMB alpha state */
+    if (b->dten) s += 11 * n * sizeof(double); /* LPS surface correction */
     return s;
 }

@@ -1,5 +1,6 @@
 /* pd_materials.c - PD material vtables: PMB bond-based (000 eqs 9-12, 003 eqs 2-5) and the
- * linear peridynamic solid (000 eqs 15-25, ParticLS eqs 30-35). One pass per bond (each bond
+ * linear peridynamic solid (000 eqs 15-25, ParticLS eqs 30-35; 2D: Le, Silling & Bobaru 2014)
+ * with its position-aware surface correction (floe_pd.h). One pass per bond (each bond
  * is stored once, i < j); forces are applied to both ends. */
 #include <float.h>
 #include <stdlib.h>
@@ -13,7 +14,8 @@ static void free_lps(floe_pd_body *b)
     free(b->m);
     free(b->theta);
     free(b->wbond);
-    b->m = b->theta = b->wbond = NULL;
+    free(b->dten); /* the LPS surface correction goes with the material */
+    b->m = b->theta = b->wbond = b->dten = NULL;
 }
 
 /* Micromodulus: 3D c = 18K/(pi delta^4) (000 eq 10; equals 003 eq 3 at nu = 1/4);
@@ -151,13 +153,15 @@ const floe_pd_material_ops floe_pd_pmb_ops = {"pmb", pmb_init, pmb_forces, pmb_c
 
 /* Weighted volume m_i = sum_j w |xi|^2 beta V_j (000 eq 19, ParticLS eq 31), fixed in the
  * reference configuration (broken bonds keep counting in m, as in Peridigm). Influence
- * w = 1 or exp(-|xi|^2/delta^2) (ParticLS eq 33). 3D only for now. */
+ * w = 1 or exp(-|xi|^2/delta^2) (ParticLS eq 33). 3D, or 2D plane stress / plane strain
+ * (Le, Silling & Bobaru 2014; docs/models.md). */
 static int lps_init(floe_pd_body *b)
 {
     const floe_pd_material *m = &b->mat;
-    if (b->dim != 3) return FLOE_ENOTSUP;
+    if (b->dim != 3 && b->dim != 2) return FLOE_ENOTSUP;
     if (!(m->K > 0) || !(m->G > 0) || m->alpha != 0) return FLOE_EINVAL;
     if (m->influence != FLOE_PD_W_ONE && m->influence != FLOE_PD_W_GAUSS) return FLOE_EINVAL;
+    if (b->dim == 2 && m->plane != FLOE_PD_PLANE_STRESS && m->plane != FLOE_PD_PLANE_STRAIN) return FLOE_EINVAL;
     size_t n = (size_t)(b->n > 0 ? b->n : 1), nb = (size_t)(b->nbond > 0 ? b->nbond : 1);
     double *mm = calloc(n, sizeof *mm), *th = calloc(n, sizeof *th), *w = NULL;
     if (m->influence == FLOE_PD_W_GAUSS) w = malloc(nb * sizeof *w);
@@ -182,33 +186,85 @@ static int lps_init(floe_pd_body *b)
     b->m = mm;
     b->theta = th;
     b->wbond = w;
-    /* the equivalent PMB c (for s_c from G_c and the time step) */
-    double Keq = (m->K + 4.0 / 3.0 * m->G) / 1.8;
+    /* the equivalent PMB c (for s_c from G_c and the time step): the PMB of the same P-wave
+     * modulus M = K + 4G/3 (3D: nu = 1/4, K_pmb = M/1.8; 2D plane strain PMB: E = M/1.2) */
+    double Mp = m->K + 4.0 / 3.0 * m->G;
     double d = b->delta;
-    b->c = 18.0 * Keq / (M_PI * d * d * d * d);
+    if (b->dim == 3) b->c = 18.0 * (Mp / 1.8) / (M_PI * d * d * d * d);
+    else b->c = 48.0 * (Mp / 1.2) / (5.0 * M_PI * b->thickness * d * d * d);
     return FLOE_OK;
 }
 
 static double lps_c(const floe_pd_body *b) { return b->c; }
 
-/* 000 eqs 18-25 / ParticLS eqs 30-35:
- *   e = |y| - |xi|, theta_i = 3/m_i sum_j w |xi| e beta V_j,
- *   e^d = e - theta_i |xi|/3, t_ij = 3 K theta_i w |xi| / m_i + alpha_i w e^d,
- *   alpha_i = 15 G / m_i, force on i: sum_j (t_ij + t_ji) beta V_i V_j M (000 eq 14);
- * energy sum_i V_i (K theta_i^2/2 + alpha_i/2 sum_j w (e^d_ij)^2 beta V_j) (000 eq 24).
- * Broken bonds (stretch e/|xi| > s_c, checked in the first pass) drop out of theta and t. */
-static double lps_forces(floe_pd_body *b, const double *x, double *f)
+/* The modulus of the dilatation term, W = k theta^2/2 + ...: 3D K; 2D the in-plane bulk
+ * modulus, plane strain lambda + G = K + G/3, plane stress E/(2(1 - nu)) = 9KG/(3K + 4G). */
+static double lps_kdil(const floe_pd_body *b)
 {
-    const int n = b->n;
-    const double K = b->mat.K, G = b->mat.G, s_c = b->s_c;
-    const double *V = b->V, *len = b->len, *wb = b->wbond, *m = b->m, *ac = b->acorr;
+    const double K = b->mat.K, G = b->mat.G;
+    if (b->dim == 3) return K;
+    return b->mat.plane == FLOE_PD_PLANE_STRAIN ? K + G / 3.0 : 9.0 * K * G / (3.0 * K + 4.0 * G);
+}
+
+/* alpha_i = a G/m_i: a = 15 in 3D (000 eq 25), 8 in 2D (Le et al. 2014), times the
+ * calibration factor acorr_i when the surface correction is on. */
+static double lps_alpha(const floe_pd_body *b, int i)
+{
+    double mi = b->m[i] > 0 ? b->m[i] : 1.0;
+    return (b->dim == 3 ? 15.0 : 8.0) * b->mat.G / mi * (b->acorr ? b->acorr[i] : 1.0);
+}
+
+/* n^T A n for the symmetric tensor A stored as (xx, yy, zz, xy, xz, yz) and the unit n */
+static inline double lps_quad(const double *A, const double n[3])
+{
+    return A[0] * n[0] * n[0] + A[1] * n[1] * n[1] + A[2] * n[2] * n[2] +
+           2.0 * (A[3] * n[0] * n[1] + A[4] * n[0] * n[2] + A[5] * n[1] * n[2]);
+}
+
+/* Weights of bond k = (i, j) at both ends: the dilatation weight omega/w and alpha. With
+ * the surface correction omega = n^T A n and alpha = n^T B n (n the reference direction,
+ * A and B of each end), else dim/m and a G/m (lps_alpha). */
+static inline void lps_weights(const floe_pd_body *b, int i, int j, int64_t k, double *oi, double *oj,
+                               double *ai, double *aj)
+{
+    if (b->dten) {
+        const size_t n6 = 6 * (size_t)b->n;
+        double n[3];
+        floe_v3_sub(n, b->X + 3 * (size_t)j, b->X + 3 * (size_t)i);
+        floe_v3_scale(n, 1.0 / b->len[k]);
+        *oi = lps_quad(b->dten + 6 * (size_t)i, n);
+        *oj = lps_quad(b->dten + 6 * (size_t)j, n);
+        const double *Bi = b->dten + n6 + 3 * (size_t)i, *Bj = b->dten + n6 + 3 * (size_t)j;
+        double n0 = n[0] * n[0], n1 = n[1] * n[1], n2 = n[2] * n[2];
+        *ai = Bi[0] * n0 + Bi[1] * n1 + Bi[2] * n2;
+        *aj = Bj[0] * n0 + Bj[1] * n1 + Bj[2] * n2;
+    } else {
+        *oi = b->m[i] > 0 ? b->dim / b->m[i] : 0.0;
+        *oj = b->m[j] > 0 ? b->dim / b->m[j] : 0.0;
+        *ai = lps_alpha(b, i);
+        *aj = lps_alpha(b, j);
+    }
+}
+
+/* Dilatation pass: theta_i = sum_j omega_ij |xi| e beta V_j over intact bonds (omega = w
+ * dim/m_i without the surface correction: 000 eq 18, ParticLS eq 32); with it also
+ * q_i = sum_j alpha_ij w |xi| e^d_ij beta V_j (into dten + 9n; zero for the plain form and an intact
+ * family, so the plain form leaves it out). Breaks bonds with e > s_c |xi| when s_c > 0;
+ * returns the number broken. */
+static int64_t lps_dilatation(floe_pd_body *b, const double *x)
+{
+    const int n = b->n, dim = b->dim;
+    const double s_c = b->s_c;
+    const double *V = b->V, *len = b->len, *wb = b->wbond;
     const float *vfac = b->vfac;
     const int32_t *part = b->partner;
     uint8_t *brk = b->broken;
     double *th = b->theta;
+    double *p = b->dten ? b->dten + 9 * (size_t)n : NULL, *mi = p ? p + n : NULL;
     int64_t nbroken = 0;
     for (int i = 0; i < n; i++) th[i] = 0;
-    /* pass 1: dilatation, breakage */
+    if (p)
+        for (int i = 0; i < n; i++) p[i] = mi[i] = 0;
     for (int i = 0; i < n; i++) {
         const double *xi = x + 3 * (size_t)i;
         double ti = 0;
@@ -224,36 +280,82 @@ static double lps_forces(floe_pd_body *b, const double *x, double *f)
                 nbroken++;
                 continue;
             }
-            double a = (wb ? wb[k] : 1.0) * L * e * (double)vfac[k];
-            ti += a * V[j];
-            th[j] += a * V[i];
+            double a = (wb ? wb[k] : 1.0) * L * (double)vfac[k];
+            if (p) {
+                double oi, oj, ai, aj;
+                lps_weights(b, i, j, k, &oi, &oj, &ai, &aj);
+                ti += a * oi * e * V[j];
+                th[j] += a * oj * e * V[i];
+                p[i] += ai * a * e * V[j];
+                p[j] += aj * a * e * V[i];
+                mi[i] += ai * a * L * V[j];
+                mi[j] += aj * a * L * V[i];
+            } else {
+                ti += a * e * V[j];
+                th[j] += a * e * V[i];
+            }
         }
         th[i] += ti;
     }
-    for (int i = 0; i < n; i++) th[i] = m[i] > 0 ? 3.0 * th[i] / m[i] : 0.0;
-    /* pass 2: forces and energy */
+    if (p)
+        for (int i = 0; i < n; i++) p[i] -= th[i] * mi[i] / dim; /* q_i */
+    else
+        for (int i = 0; i < n; i++) th[i] = b->m[i] > 0 ? dim * th[i] / b->m[i] : 0.0;
+    return nbroken;
+}
+
+/* Scalar force states of bond k at both ends (per unit beta V_i V_j), from the energy
+ * W_i = k theta_i^2/2 + 1/2 sum_j alpha_ij w (e^d_ij)^2 beta V_j, e^d = e - theta_i |xi|/dim:
+ *   t_ij = (k theta_i - q_i/dim) omega_ij |xi| + alpha_ij w e^d_ij
+ * (000 eq 22 / ParticLS eq 34 with omega = 3w/m_i and alpha_ij = 15G/m_i, where q_i = 0). Adds the deviatoric
+ * energy of the bond (both ends, per unit beta V_i V_j) to *en. */
+static inline void lps_bond_t(const floe_pd_body *b, double kd, int i, int j, int64_t k, double e,
+                              double *tij, double *tji, double *en)
+{
+    const double L = b->len[k], w = b->wbond ? b->wbond[k] : 1.0, dim = b->dim;
+    const double *th = b->theta;
+    double oi, oj, ai, aj;
+    lps_weights(b, i, j, k, &oi, &oj, &ai, &aj);
+    double edi = e - th[i] * L / dim, edj = e - th[j] * L / dim;
+    double qi = 0, qj = 0;
+    if (b->dten) {
+        qi = b->dten[9 * (size_t)b->n + i];
+        qj = b->dten[9 * (size_t)b->n + j];
+    }
+    *tij = (kd * th[i] - qi / dim) * w * oi * L + ai * w * edi;
+    *tji = (kd * th[j] - qj / dim) * w * oj * L + aj * w * edj;
+    *en += 0.5 * w * (ai * edi * edi + aj * edj * edj);
+}
+
+/* 000 eqs 18-25 / ParticLS eqs 30-35 (3D), Le et al. 2014 (2D):
+ *   e = |y| - |xi|, theta_i as above, force on i: sum_j (t_ij + t_ji) beta V_i V_j M
+ * (000 eq 14); energy sum_i V_i W_i (000 eq 24). Broken bonds (stretch e/|xi| > s_c,
+ * checked in the dilatation pass) drop out of theta and t. */
+static double lps_forces(floe_pd_body *b, const double *x, double *f)
+{
+    const int n = b->n;
+    const double kd = lps_kdil(b);
+    const double *V = b->V, *len = b->len;
+    const float *vfac = b->vfac;
+    const int32_t *part = b->partner;
+    const uint8_t *brk = b->broken;
+    const double *th = b->theta;
+    b->nbroken += lps_dilatation(b, x);
     double energy = 0.0;
     for (int i = 0; i < n; i++) {
         const double xi0 = x[3 * (size_t)i], xi1 = x[3 * (size_t)i + 1], xi2 = x[3 * (size_t)i + 2];
-        const double Vi = V[i], thi = th[i];
-        const double mi = m[i] > 0 ? m[i] : 1.0;
-        const double ki = 3.0 * K * thi / mi, ai = 15.0 * G / mi * (ac ? ac[i] : 1.0);
-        double fi0 = 0, fi1 = 0, fi2 = 0, ei = 0.5 * K * thi * thi * Vi;
+        const double Vi = V[i];
+        double fi0 = 0, fi1 = 0, fi2 = 0, ei = 0.5 * kd * th[i] * th[i] * Vi;
         for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
             if (brk[k]) continue;
             const int j = part[k];
             const double *xj = x + 3 * (size_t)j;
             double d0 = xj[0] - xi0, d1 = xj[1] - xi1, d2 = xj[2] - xi2;
             double r = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
-            double L = len[k], e = r - L;
-            double w = wb ? wb[k] : 1.0;
-            double mj = m[j] > 0 ? m[j] : 1.0;
-            double edi = e - thi * L / 3.0, edj = e - th[j] * L / 3.0;
-            double aj = 15.0 * G / mj * (ac ? ac[j] : 1.0);
-            double tij = ki * w * L + ai * w * edi;
-            double tji = 3.0 * K * th[j] / mj * w * L + aj * w * edj;
+            double tij, tji, eb = 0;
+            lps_bond_t(b, kd, i, j, k, r - len[k], &tij, &tji, &eb);
             double bv = (double)vfac[k] * Vi * V[j];
-            ei += 0.5 * w * bv * (ai * edi * edi + aj * edj * edj);
+            ei += eb * bv;
             if (!(r > 0)) continue;
             double fm = (tij + tji) * bv / r;
             double g0 = fm * d0, g1 = fm * d1, g2 = fm * d2;
@@ -264,35 +366,180 @@ static double lps_forces(floe_pd_body *b, const double *x, double *f)
         f[3 * (size_t)i] += fi0;
         f[3 * (size_t)i + 1] += fi1;
         f[3 * (size_t)i + 2] += fi2;
-        /* theta_j's K theta^2/2 V_j term is added when the loop reaches j */
+        /* theta_j's k theta^2/2 V_j term is added when the loop reaches j */
         energy += ei;
     }
-    b->nbroken += nbroken;
     return energy;
 }
 
 const floe_pd_material_ops floe_pd_lps_ops = {"lps", lps_init, lps_forces, lps_c};
+
+/* Solve the dense system M y = r (size s <= 6) by Gaussian elimination with partial
+ * pivoting; 0 on success, -1 when a pivot is below tol times the largest |M| entry. */
+static int lps_solve(int s, double M[6][6], double *r)
+{
+    double mx = 0;
+    for (int a = 0; a < s; a++)
+        for (int c = 0; c < s; c++) mx = fmax(mx, fabs(M[a][c]));
+    if (!(mx > 0)) return -1;
+    for (int c = 0; c < s; c++) {
+        int p = c;
+        for (int a = c + 1; a < s; a++)
+            if (fabs(M[a][c]) > fabs(M[p][c])) p = a;
+        if (!(fabs(M[p][c]) > 1e-10 * mx)) return -1;
+        if (p != c) {
+            for (int t = 0; t < s; t++) { double u = M[c][t]; M[c][t] = M[p][t]; M[p][t] = u; }
+            double u = r[c]; r[c] = r[p]; r[p] = u;
+        }
+        for (int a = c + 1; a < s; a++) {
+            double g = M[a][c] / M[c][c];
+            for (int t = c; t < s; t++) M[a][t] -= g * M[c][t];
+            r[a] -= g * r[c];
+        }
+    }
+    for (int c = s - 1; c >= 0; c--) {
+        double u = r[c];
+        for (int t = c + 1; t < s; t++) u -= M[c][t] * r[t];
+        r[c] = u / M[c][c];
+    }
+    return 0;
+}
+
+/* LPS surface correction (floe_pd.h). Components of a symmetric tensor: (xx, yy, zz, xy, xz,
+ * yz) in 3D, (xx, yy, xy) in 2D. */
+int floe_pd_lps_surface_correction(floe_pd_body *b)
+{
+    if (!b || !b->ops || b->mat.model != FLOE_PD_LPS || !b->m) return FLOE_EINVAL;
+    const int dim = b->dim, s = dim == 3 ? 6 : 3;
+    static const int ia3[6] = {0, 1, 2, 0, 0, 1}, ib3[6] = {0, 1, 2, 1, 2, 2};
+    static const int ia2[3] = {0, 1, 0}, ib2[3] = {0, 1, 1};
+    static const int slot2[3] = {0, 1, 3}; /* 2D component -> storage slot */
+    const int *ia = dim == 3 ? ia3 : ia2, *ib = dim == 3 ? ib3 : ib2;
+    size_t n = (size_t)(b->n > 0 ? b->n : 1);
+    double *C = calloc(n * 36, sizeof *C), *A = calloc(11 * n, sizeof *A);
+    double *D = calloc(3 * n, sizeof *D), *ac = malloc(n * sizeof *ac);
+    if (!C || !A || !D || !ac) { free(C); free(A); free(D); free(ac); return FLOE_ENOMEM; }
+    /* 1. per point the fourth moment C_abcd = sum_j w |xi|^2 beta V_j n_a n_b n_c n_d as the
+     * matrix of the map A -> C : A on the symmetric tensors */
+    for (int i = 0; i < b->n; i++)
+        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+            int j = b->partner[k];
+            double L = b->len[k], nv[3];
+            floe_v3_sub(nv, b->X + 3 * (size_t)j, b->X + 3 * (size_t)i);
+            floe_v3_scale(nv, 1.0 / L);
+            double wl = (b->wbond ? b->wbond[k] : 1.0) * L * L * b->vfac[k];
+            for (int p = 0; p < s; p++)
+                for (int q = 0; q < s; q++) {
+                    double t = wl * nv[ia[p]] * nv[ib[p]] * nv[ia[q]] * nv[ib[q]] * (ia[q] == ib[q] ? 1.0 : 2.0);
+                    C[36 * (size_t)i + 6 * p + q] += t * b->V[j];
+                    C[36 * (size_t)j + 6 * p + q] += t * b->V[i];
+                }
+        }
+    /* 2. A_i from C : A = I (the dilatation exact for every uniform strain); a point whose
+     * family does not span the space keeps the plain dim/m_i I */
+    int64_t plain = 0;
+    for (int i = 0; i < b->n; i++) {
+        double M[6][6], r[6];
+        for (int p = 0; p < s; p++) {
+            for (int q = 0; q < s; q++) M[p][q] = C[36 * (size_t)i + 6 * p + q];
+            r[p] = ia[p] == ib[p] ? 1.0 : 0.0;
+        }
+        double *Ai = A + 6 * (size_t)i;
+        if (lps_solve(s, M, r) == 0) {
+            for (int p = 0; p < s; p++) Ai[dim == 3 ? p : slot2[p]] = r[p];
+        } else {
+            plain++;
+            double a = b->m[i] > 0 ? dim / b->m[i] : 0.0;
+            for (int d = 0; d < dim; d++) Ai[d] = a;
+        }
+    }
+    free(C);
+    /* 3. alpha_ij = n^T B_i n with B_i = diag(c_1 .. c_dim): for the uniform uniaxial strain
+     * eps along each axis d the deviatoric energy 1/2 sum_j alpha_ij w (e^d_ij)^2 beta V_j =
+     * eps^2/2 sum_e c_e M_de, M_de = sum_j w |xi|^2 beta V_j n_e^2 (n_d^2 - thetahat_i^d/dim)^2,
+     * thetahat_i^d = sum_j omega_ij |xi|^2 n_d^2 beta V_j (= 1 when A_i was solved), equals
+     * the continuum G (1 - 1/dim) eps^2 for every d at once: M c = 2G(1 - 1/dim). Where that
+     * has no positive solution, c_e = mean_d 2G(1 - 1/dim)/sum_e M_de (a scalar alpha_i). */
+    double *TH = calloc(3 * n, sizeof *TH), *MM = calloc(9 * n, sizeof *MM);
+    if (!TH || !MM) { free(TH); free(MM); free(A); free(D); free(ac); return FLOE_ENOMEM; }
+    for (int pass = 0; pass < 2; pass++)
+        for (int i = 0; i < b->n; i++)
+            for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+                int j = b->partner[k];
+                double L = b->len[k], nv[3];
+                floe_v3_sub(nv, b->X + 3 * (size_t)j, b->X + 3 * (size_t)i);
+                floe_v3_scale(nv, 1.0 / L);
+                double w = b->wbond ? b->wbond[k] : 1.0, wl = w * L * L * b->vfac[k];
+                double oi = w * lps_quad(A + 6 * (size_t)i, nv), oj = w * lps_quad(A + 6 * (size_t)j, nv);
+                for (int a = 0; a < dim; a++) {
+                    double na2 = nv[a] * nv[a];
+                    size_t ix = 3 * (size_t)i + a, jx = 3 * (size_t)j + a;
+                    if (pass == 0) {
+                        TH[ix] += oi * L * L * b->vfac[k] * na2 * b->V[j];
+                        TH[jx] += oj * L * L * b->vfac[k] * na2 * b->V[i];
+                    } else {
+                        double qi = na2 - TH[ix] / dim, qj = na2 - TH[jx] / dim;
+                        for (int c = 0; c < dim; c++) {
+                            double nc2 = nv[c] * nv[c];
+                            MM[9 * (size_t)i + 3 * a + c] += wl * nc2 * qi * qi * b->V[j];
+                            MM[9 * (size_t)j + 3 * a + c] += wl * nc2 * qj * qj * b->V[i];
+                        }
+                    }
+                }
+            }
+    free(TH);
+    const double G = b->mat.G, rhs = 2.0 * G * (1.0 - 1.0 / dim);
+    int64_t scalar = 0;
+    for (int i = 0; i < b->n; i++) {
+        double M[6][6], c[6];
+        const double *Mi = MM + 9 * (size_t)i;
+        for (int a = 0; a < dim; a++) {
+            for (int t = 0; t < dim; t++) M[a][t] = Mi[3 * a + t];
+            c[a] = rhs;
+        }
+        int ok = lps_solve(dim, M, c) == 0;
+        for (int a = 0; ok && a < dim; a++) ok = c[a] > 0 && isfinite(c[a]);
+        if (!ok) {
+            double sum = 0;
+            int cnt = 0;
+            for (int a = 0; a < dim; a++) {
+                double Da = 0;
+                for (int t = 0; t < dim; t++) Da += Mi[3 * a + t];
+                if (Da > 0) { sum += rhs / Da; cnt++; }
+            }
+            double al = cnt > 0 ? sum / cnt : lps_alpha(b, i);
+            for (int a = 0; a < dim; a++) c[a] = al;
+            scalar++;
+        }
+        double *Bi = A + 6 * n + 3 * (size_t)i;
+        Bi[0] = Bi[1] = Bi[2] = 0;
+        for (int a = 0; a < dim; a++) Bi[a] = c[a];
+        ac[i] = 1.0;
+    }
+    free(MM);
+    free(D);
+    free(ac);
+    ac = NULL;
+    (void)plain;
+    (void)scalar;
+    free(b->acorr);
+    b->acorr = ac;
+    free(b->dten);
+    b->dten = A;
+    return FLOE_OK;
+}
 
 /* ------------------------------------------------------- bond visitor ---- */
 int floe_pd_bond_forces(floe_pd_body *b, const double *x, floe_pd_bond_visit_fn fn, void *user)
 {
     if (!b || !b->ops || !x || !fn) return FLOE_EINVAL;
     const int lps = b->mat.model == FLOE_PD_LPS;
-    double *th = b->theta;
-    if (lps) {
-        for (int i = 0; i < b->n; i++) th[i] = 0;
-        for (int i = 0; i < b->n; i++)
-            for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
-                if (b->broken[k]) continue;
-                int j = b->partner[k];
-                double d[3];
-                floe_v3_sub(d, x + 3 * (size_t)j, x + 3 * (size_t)i);
-                double L = b->len[k], e = floe_v3_norm(d) - L;
-                double a = (b->wbond ? b->wbond[k] : 1.0) * L * e * (double)b->vfac[k];
-                th[i] += a * b->V[j];
-                th[j] += a * b->V[i];
-            }
-        for (int i = 0; i < b->n; i++) th[i] = b->m[i] > 0 ? 3.0 * th[i] / b->m[i] : 0.0;
+    const double kd = lps ? lps_kdil(b) : 0.0;
+    if (lps) { /* a fresh dilatation pass, without breaking bonds */
+        double s_c = b->s_c;
+        b->s_c = 0;
+        lps_dilatation(b, x);
+        b->s_c = s_c;
     }
     for (int i = 0; i < b->n; i++)
         for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
@@ -306,12 +553,8 @@ int floe_pd_bond_forces(floe_pd_body *b, const double *x, floe_pd_bond_visit_fn 
             if (!lps) {
                 fm = b->c * s * bv * (b->scorr ? (double)b->scorr[k] : 1.0);
             } else {
-                double w = b->wbond ? b->wbond[k] : 1.0, e = r - L;
-                double mi = b->m[i] > 0 ? b->m[i] : 1.0, mj = b->m[j] > 0 ? b->m[j] : 1.0;
-                double ai = 15.0 * b->mat.G / mi * (b->acorr ? b->acorr[i] : 1.0);
-                double aj = 15.0 * b->mat.G / mj * (b->acorr ? b->acorr[j] : 1.0);
-                double tij = 3.0 * b->mat.K * th[i] / mi * w * L + ai * w * (e - th[i] * L / 3.0);
-                double tji = 3.0 * b->mat.K * th[j] / mj * w * L + aj * w * (e - th[j] * L / 3.0);
+                double tij, tji, en = 0;
+                lps_bond_t(b, kd, i, j, k, r - L, &tij, &tji, &en);
                 fm = (tij + tji) * bv;
             }
             double f[3] = {fm * d[0] / r, fm * d[1] / r, fm * d[2] / r};

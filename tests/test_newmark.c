@@ -372,6 +372,21 @@ static void test_errors(void) {
 }
 
 int main(void) {
+    /* a build without CHOLMOD (FLOE_WITH_CHOLMOD=OFF) refuses the implicit scheme with a
+     * message naming the option: then only the explicit parts run */
+    floe_newmark_def d = floe_newmark_default_def();
+    d.dt = 1e-3;
+    char err[256] = "";
+    floe_newmark *probe = floe_newmark_create(&d, err, sizeof err);
+    if (!probe) {
+        printf("  implicit Newmark unavailable: %s\n", err);
+        CHECK(strstr(err, "FLOE_WITH_CHOLMOD") != NULL, "the refusal names the build option");
+        long cuts;
+        double tb, r = bar_break(0.0, 2e-4, 0.01, &cuts, &tb);
+        CHECK(r >= 1 && r < 1.01, "explicit break at the strength");
+        return check_summary("test_newmark (explicit only)");
+    }
+    floe_newmark_destroy(probe);
     test_oscillator();
     test_static_cantilever();
     test_breakage();

@@ -146,8 +146,11 @@ static void test_families(void)
         CHECK(b->n == 144 && mx == 28, "2D: %d points, max family %d (want 144, 28)", b->n, mx);
         CHECK(fabs(b->V[0] - dx * dx * dx) < 1e-20, "2D volume dx^2 * thickness");
         floe_pd_material l2 = floe_pd_material_lps(1000, 1e9, 1e9, 0, FLOE_PD_W_ONE);
-        CHECK(floe_pd_set_material(b, &l2) == FLOE_ENOTSUP && b->ops == NULL,
-              "2D LPS not supported yet, body unchanged");
+        CHECK(floe_pd_set_material(b, &l2) == FLOE_OK && b->ops == &floe_pd_lps_ops,
+              "2D LPS accepted (tests/test_pd_lps.c)");
+        l2.plane = 7;
+        CHECK(floe_pd_set_material(b, &l2) == FLOE_EINVAL && b->mat.plane != 7,
+              "2D LPS with a bad plane refused, material unchanged");
         floe_pd_material bad = floe_pd_material_pmb(-1, 1e9, 0);
         CHECK(floe_pd_set_material(b, &bad) == FLOE_EINVAL, "negative density refused");
         free(c2);

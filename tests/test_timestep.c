@@ -113,7 +113,7 @@ static void test_pd_estimates(void) {
     double nodal = floe_pd_dt_nodal(b), cfl = floe_pd_dt_cfl(b);
     floe_world_def d = floe_default_world_def();
     floe_world *w = floe_world_create(&d, NULL, 0);
-    floe_material m = {"rock", 2200, 22.35e9, 0.25};
+    floe_material m = {"rock", 2200, 1e5, 0.25}; /* soft contact: the PD nodal step limits */
     floe_world_add_material(w, &m);
     floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.8, 0.3));
     floe_world_add_pd_body(w, b, 0, NULL, NULL);
@@ -126,10 +126,22 @@ static void test_pd_estimates(void) {
     printf("  PD block: nodal %.4g s, CFL %.4g s, contact %.4g s, limiting %s\n", nodal, cfl, e.critical_contact,
            floe_dt_kind_name(e.limiting));
     /* interior points have the full family: the corner point the smallest sum, the largest step */
-    int corner = 0;
-    CHECK(floe_world_particle_critical_dt(w, corner) >= e.dt[FLOE_DT_PD_NODAL] ||
-              floe_world_particle_critical_dt(w, corner) >= e.critical_contact,
-          "per-point estimates are >= the global one");
+    int first = -1, corner = -1, mid = -1;
+    const floe_pd_body *pb = floe_world_pd_body(w, 0, &first);
+    double dc = INFINITY, dm = INFINITY;
+    for (int i = 0; i < pb->n; i++) {
+        const double *X = pb->X + 3 * (size_t)i;
+        double c2 = X[0] * X[0] + X[1] * X[1] + X[2] * X[2];
+        double m2 = (X[0] - 3e-3) * (X[0] - 3e-3) + (X[1] - 2.5e-3) * (X[1] - 2.5e-3) + (X[2] - 2e-3) * (X[2] - 2e-3);
+        if (c2 < dc) { dc = c2; corner = i; }
+        if (m2 < dm) { dm = m2; mid = i; }
+    }
+    double t_corner = floe_world_particle_critical_dt(w, first + corner);
+    double t_mid = floe_world_particle_critical_dt(w, first + mid);
+    double t_global = e.critical_pd < e.critical_contact ? e.critical_pd : e.critical_contact;
+    printf("  per-point critical dt: corner %.4g s, interior %.4g s, global %.4g s\n", t_corner, t_mid, t_global);
+    CHECK(t_corner >= t_mid, "the corner point (fewest bonds) has a step >= an interior point's");
+    CHECK(t_mid >= t_global * (1 - 1e-12), "per-point estimates are >= the global one");
     floe_world_destroy(w);
 }
 
