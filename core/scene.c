@@ -1818,10 +1818,11 @@ static int sc_pd_parse_boundary(sc *s, const sc_map *m, const char *what, int bo
 static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
 {
     static const char *const keys[] = {"region", "spacing", "horizon", "material", "contact_material", "velocity",
-                                       "surface_correction", "thickness", "name", "boundary", NULL};
+                                       "surface_correction", "thickness", "name", "boundary", "lattice", NULL};
     static const char *const region_keys[] = {"box", "shape", "position", "remove", NULL};
     static const char *const mat_keys[] = {"model", "density", "bulk_modulus", "shear_modulus", "young",
-                                           "critical_stretch", "fracture_energy", "influence", "alpha", NULL};
+                                           "critical_stretch", "fracture_energy", "influence", "alpha",
+                                           "yield_compression", "yield_tension", "plane", NULL};
     if (!seq) return FLOE_OK;
     if (sc_is_missing(seq) || !fy_node_is_sequence(seq))
         return sc_fail(s, FLOE_EPARSE, sc_is_missing(seq) ? key : seq,
@@ -1841,6 +1842,10 @@ static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
         FLOE_TRY(sc_num(s, &m, "horizon", 0, 3.0, &r.horizon_factor));
         if (!(r.horizon_factor >= 1 && r.horizon_factor <= 10))
             return sc_range(s, &m, "horizon", "in [1, 10] (the horizon in lattice spacings)", r.horizon_factor);
+        /* lattice: cubic (square in 2D, the default) or hexagonal (2D triangular, 3D HCP);
+         * the order of the names is FLOE_PD_LATTICE_CUBIC, FLOE_PD_LATTICE_HEXAGONAL */
+        static const char *const lattices[] = {"cubic", "hexagonal", NULL};
+        FLOE_TRY(sc_enum(s, &m, "lattice", lattices, FLOE_PD_LATTICE_CUBIC, &r.lattice));
         if (s->dim == 2) FLOE_TRY(sc_num(s, &m, "thickness", 0, r.dx, &r.thickness));
         /* region: a box, or any shape placed at a position (its SDF selects the points) */
         struct fy_node *rk, *rv = sc_get(&m, "region", &rk);
@@ -1905,6 +1910,20 @@ static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
         if (!rc) rc = sc_num(s, &mm, "alpha", 0, 0, &alpha);
         if (!rc && !(alpha >= 0 && alpha < 1e3)) rc = sc_range(s, &mm, "alpha", ">= 0", alpha);
         if (!rc && alpha > 0 && model != 0) rc = sc_fail(s, FLOE_EINVAL, mv, "%s: alpha is a pmb option", fm);
+        /* PMB elastic-perfectly-plastic bonds (003 eq 6): yield stretches (magnitudes) */
+        double ycomp = 0, yten = 0;
+        int plane = 0;
+        static const char *const planes[] = {"stress", "strain", NULL};
+        if (!rc) rc = sc_num(s, &mm, "yield_compression", 0, 0, &ycomp);
+        if (!rc && !(ycomp >= 0 && isfinite(ycomp))) rc = sc_range(s, &mm, "yield_compression", ">= 0 (a stretch magnitude)", ycomp);
+        if (!rc) rc = sc_num(s, &mm, "yield_tension", 0, 0, &yten);
+        if (!rc && !(yten >= 0 && isfinite(yten))) rc = sc_range(s, &mm, "yield_tension", ">= 0 (a stretch)", yten);
+        if (!rc && (ycomp > 0 || yten > 0) && model != 0)
+            rc = sc_fail(s, FLOE_EINVAL, mv, "%s: yield_compression / yield_tension are pmb options", fm);
+        if (!rc && (ycomp > 0 || yten > 0) && alpha > 0)
+            rc = sc_fail(s, FLOE_EINVAL, mv, "%s: plastic bonds and alpha cannot be combined", fm);
+        if (!rc) rc = sc_enum(s, &mm, "plane", planes, 0, &plane);
+        if (!rc && plane != 0 && s->dim != 2) rc = sc_fail(s, FLOE_EINVAL, mv, "%s: plane is a 2D option", fm);
         if (!rc && !(K > 0) && !(s->dim == 2 && model == 0 && E > 0))
             rc = sc_fail(s, FLOE_EINVAL, mv, "%s: bulk_modulus > 0 is required%s", fm,
                          s->dim == 2 ? " (2D PMB: or young)" : "");
@@ -1927,8 +1946,11 @@ static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
             if (model == 0 && s->dim == 2 && E > 0) pm.E = E;
             pm.G_c = Gc;
             pm.alpha = alpha;
+            pm.yield_compression = ycomp;
+            pm.yield_tension = yten;
+            pm.plane = plane ? FLOE_PD_PLANE_STRAIN : FLOE_PD_PLANE_STRESS;
             int c = floe_pd_set_material(b, &pm);
-            if (c) rc = sc_fail(s, c, mv, "%s: %s", fm, c == FLOE_ENOTSUP ? "not available in 2D (lps is 3D only)" : "invalid values");
+            if (c) rc = sc_fail(s, c, mv, "%s: %s", fm, c == FLOE_ENOTSUP ? "not available in this dimension" : "invalid values");
         }
         int corr = 1;
         if (!rc) rc = sc_bool(s, &m, "surface_correction", 1, &corr);

@@ -1789,7 +1789,7 @@ static int step_staggered(floe_world *w) {
     double *b = ibuf_reserve(w, 5 * (n3 ? n3 : 3));
     if (!b) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     double *fs = b, *ts = b + n3, *fpd = b + 2 * n3, *xs = b + 3 * n3, *vt = b + 4 * n3;
-    const long cyc = w->step - w->step0;
+    const long cyc = ke > 1 ? w->pd_cycle % ke : 0;
     const int pd_start = ke > 1 && cyc % ke == 0, pd_end = ke > 1 && (cyc + 1) % ke == 0;
     const int *pd_of = w->pd_of;
     double wb = 0, maxd2 = 0;
@@ -1845,6 +1845,7 @@ static int step_staggered(floe_world *w) {
     }
     FLOE_TRY(advance_states(w, dt));
     advance_clock(w);
+    w->pd_cycle++;
     const double *xb = w->nl.x_build;
     const int have_xb = xb && w->nl.n_build == n;
     if (have_xb)
@@ -1953,6 +1954,7 @@ static void snapshot_sizes(const floe_world *w, size_t *nd, size_t *nc) {
     for (int k = 0; k < w->npd; k++) {
         c += (size_t)w->pd[k]->nbond;
         if (w->pd[k]->s0) d += 2 * (size_t)w->pd[k]->n; /* PMB alpha: per-point critical stretch */
+        if (w->pd[k]->splast) d += ((size_t)w->pd[k]->nbond * sizeof(float) + sizeof(double) - 1) / sizeof(double);
     }
     for (int s = 0; s < w->nstates; s++) d += w->states[s]->klass->size(w->states[s]);
     *nd = d;
@@ -2032,6 +2034,10 @@ static int snapshot_io(floe_world *w, int save) {
             if (b->s0) {
                 SNAP_COPY(save, d, b->s0, 2 * (size_t)b->n * sizeof *d);
                 d += 2 * (size_t)b->n;
+            }
+            if (b->splast) { /* PMB plastic stretches (floats, packed into the double store) */
+                SNAP_COPY(save, d, b->splast, (size_t)b->nbond * sizeof(float));
+                d += ((size_t)b->nbond * sizeof(float) + sizeof(double) - 1) / sizeof(double);
             }
         }
     }

@@ -145,6 +145,8 @@ struct floe_world {
     double eta_depth;         /* max over contacts of |v_n| dt / min(R_i, R_j) at the last evaluation */
     double elastic_contact, elastic_pd; /* the two parts of energy.elastic */
     int pd_sub, pd_every;     /* staggered: PD sub-steps per step, steps per PD step */
+    long pd_cycle;            /* staggered, every > 1: steps into the current PD cycle (kept across
+                                 re-prepares so an open cycle is closed, not reopened) */
     double dt_next;           /* adaptive: the step proposed for the next step */
     double dt_lo, dt_hi;      /* adaptive: the bounds in use */
     double dt_cap;            /* adaptive: the step may not pass this (floe_world_run's end) */

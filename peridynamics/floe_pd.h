@@ -37,14 +37,28 @@
 /* Signed distance of the region (negative inside). */
 typedef double (*floe_pd_sdf_fn)(const double X[3], void *user);
 
+/* Lattices (floe_pd_region.lattice). CUBIC (0, the default of a zeroed region): square in
+ * 2D, simple cubic in 3D, points at lo + (k + 1/2) dx, V = dx^2 h (2D) or dx^3.
+ * HEXAGONAL: 2D triangular (hexagonal close packed in the plane): rows along x of pitch
+ * dx, row pitch sqrt(3)/2 dx, x = lo + (i + 1/4 + (j odd)/2) dx, y = lo + (j + 1/2) sqrt(3)/2
+ * dx, V = sqrt(3)/2 dx^2 h (6 nearest neighbours at dx). 3D hexagonal close packing (HCP,
+ * ABAB stacking of those layers along z, layer pitch sqrt(2/3) dx, B layers shifted by
+ * (dx/2, dx/(2 sqrt 3)); A rows at y = lo + (j + 1/3) sqrt(3)/2 dx, B rows at (j + 2/3)),
+ * V = dx^3/sqrt(2) (12 nearest neighbours at dx). Both keep the lattice points inside the
+ * box [lo, hi] (and with sdf <= 0 when sdf is given); dx is the nearest distance. The
+ * hexagonal pitches do not divide a box: those positions are then shifted so that the
+ * in-box points are centred in the box (the same points, a symmetric body). */
+enum { FLOE_PD_LATTICE_CUBIC = 0, FLOE_PD_LATTICE_HEXAGONAL = 1 };
+
 typedef struct floe_pd_region {
-    int dim;                 /* 2 (square lattice in x-y, z = lo[2]) or 3 (simple cubic)    */
-    double dx;               /* lattice spacing                                            */
+    int dim;                 /* 2 (points in x-y, z = (lo[2] + hi[2])/2) or 3              */
+    double dx;               /* lattice spacing (nearest-neighbour distance)               */
     double horizon_factor;   /* m: delta = m dx; <= 0 selects 3                            */
-    double thickness;        /* 2D only: V = dx^2 * thickness; <= 0 selects dx             */
-    double lo[3], hi[3];     /* bounding box; lattice points at lo + (k + 1/2) dx           */
+    double thickness;        /* 2D only: V = dx^2 * thickness (cubic); <= 0 selects dx     */
+    double lo[3], hi[3];     /* bounding box; cubic lattice points at lo + (k + 1/2) dx     */
     floe_pd_sdf_fn sdf;      /* NULL: the whole box; else keep points with sdf(X) <= 0      */
     void *sdf_user;
+    int lattice;             /* FLOE_PD_LATTICE_CUBIC (0, default) or _HEXAGONAL (above)    */
 } floe_pd_region;
 
 /* ---- materials ---- */
@@ -77,6 +91,12 @@ typedef struct floe_pd_material {
                          * the previous evaluation, s00 = s_c; a bond breaks when
                          * s > min(s0_i, s0_j), after its force of that evaluation is applied
                          * (LAMMPS' order). 0 (default): the constant s_c. >= 0             */
+    double yield_compression; /* PMB elastic-perfectly-plastic bond (003 eq 6, Fig 2): > 0: a
+                         * bond yields when its elastic stretch s - s_p falls below -this
+                         * (f = c s_yc, s_yc = -yield_compression) and keeps the plastic
+                         * stretch s_p (unloads elastically). 0 (default): elastic          */
+    double yield_tension; /* the same in tension (> 0: yield at s - s_p > this); 0: none.
+                         * Breakage by s_c is on the total stretch s.                       */
 } floe_pd_material;
 
 /* Convenience constructors (fill a floe_pd_material with defaults). */
@@ -117,15 +137,20 @@ struct floe_pd_body {
     /* LPS per-point state (allocated by init of LPS): weighted volume, dilatation          */
     double *m, *theta;
     double *wbond;             /* LPS Gaussian influence per bond (NULL for w = 1)          */
-    double *acorr;             /* LPS per-point factor on alpha_i = 15G/m_i, NULL when off  */
-    double *dten;              /* LPS surface correction: 8n doubles, per point the
-                                * dilatation tensor A_i in [0, 6n) (xx yy zz xy xz yz), then
-                                * 2n scratch; NULL when off (pd_materials.c)                */
+    double *acorr;             /* LPS per-point factor on alpha_i = 15G/m_i, NULL when off
+                                * (the surface correction now keeps alpha in dten: NULL)   */
+    double *dten;              /* LPS surface correction, NULL when off (pd_materials.c):
+                                * 11n doubles, per point the dilatation tensor A_i in
+                                * [0, 6n) (xx yy zz xy xz yz), the diagonal B_i of
+                                * alpha_ij = n^T B_i n in [6n, 9n), 2n scratch              */
     int64_t nbroken;           /* bonds broken so far                                       */
     /* PMB with mat.alpha > 0 (pd_materials.c): 2n doubles, s0_i of the previous evaluation
      * in [0, n) (DBL_MAX until the first evaluation) and the one being built in [n, 2n);
      * NULL otherwise                                                                        */
     double *s0;
+    /* PMB plastic bonds (yield_compression / yield_tension > 0): nbond plastic stretches
+     * s_p (pd_materials.c); NULL otherwise                                                  */
+    float *splast;
 };
 
 /* Create the lattice points of the region, build the families (|xi| <= delta + 1e-9 dx)
@@ -166,12 +191,17 @@ int floe_pd_surface_correction(floe_pd_body *b);
  *    turns the lateral contraction of a bar into spurious dilatation, and K theta^2/2 makes
  *    the bar 7-9 % too stiff at nu = 0.3-0.45). In a full cubic-lattice family
  *    A_i = dim/m_i I, the plain form. A point whose family does not span the space keeps it.
- * 2. Deviatoric: alpha_i calibrated per point as before (uniaxial strain along each axis,
- *    the deviatoric energy matched to the continuum, mean over the axes) with the new
- *    dilatation.
- * The force state follows from the energy (forces = -grad E exactly):
- *    t_ij = (k theta_i - alpha_i q_i/dim) omega_ij |xi| + alpha_i w e^d_ij,
- *    q_i = sum_j w |xi| e^d_ij beta V_j (0 for the plain form with an intact family). */
+ * 2. Deviatoric: alpha_ij = n^T B_i n, B_i diagonal, fitted per point (a dim x dim solve)
+ *    so that the uniform uniaxial strain along EACH axis gives the continuum deviatoric
+ *    energy G (1 - 1/dim) eps^2 (with the new dilatation); a scalar alpha_i (the mean over
+ *    the axes, the previous calibration) where that has no positive solution. In a full
+ *    cubic-lattice family B_i is a multiple of I (C11, C12 exact; C44 keeps the lattice
+ *    error). Averaging one scalar alpha over the axes instead leaves a bar 5-6 % too stiff.
+ * The force state follows from W_i = k theta_i^2/2 + 1/2 sum_j alpha_ij w (e^d)^2 beta V_j
+ * (forces = -grad E exactly, broken bonds included):
+ *    t_ij = (k theta_i - q_i/dim) omega_ij |xi| + alpha_ij w e^d_ij,
+ *    q_i = sum_j alpha_ij w |xi| e^d_ij beta V_j (0 for the plain form with an intact family);
+ * k = K in 3D, K + G/3 (plane strain), 9KG/(3K + 4G) (plane stress). */
 int floe_pd_lps_surface_correction(floe_pd_body *b);
 
 /* Internal forces (000 eq 12 for PMB, eq 14 for LPS) for current positions x (3n), ADDED

@@ -58,6 +58,7 @@ void floe_pd_body_destroy(floe_pd_body *b)
     free(b->theta);
     free(b->wbond);
     free(b->s0); /* PMB alpha state (pd_materials.c) */
+    free(b->splast); /* PMB plastic stretches */
     free(b->dten); /* LPS surface correction (pd_materials.c) */
     free(b);
 }
@@ -171,12 +172,84 @@ int floe_pd_body_create_points(floe_pd_body **out, int dim, int n, const double 
     return FLOE_OK;
 }
 
+/* Hexagonal lattice (floe_pd.h, FLOE_PD_LATTICE_HEXAGONAL): 2D triangular, 3D HCP, nearest
+ * distance dx; the points inside the box [lo, hi] (1e-9 dx tolerance) with sdf <= 0. The
+ * row and layer pitches (sqrt(3)/2 dx, sqrt(2/3) dx) do not divide a box, so the lattice is
+ * centred in the box (pass -1 finds the extent of the in-box points; the shift keeps the
+ * same points in the box) and a symmetric box gives a symmetric body. */
+static int body_create_hex(floe_pd_body **out, const floe_pd_region *r, double m)
+{
+    const double dx = r->dx, dy = 0.5 * sqrt(3.0) * dx, dz = sqrt(2.0 / 3.0) * dx;
+    const double tol = 1e-9 * dx;
+    const double pitch[3] = {dx, dy, dz};
+    long nk[3] = {1, 1, 1};
+    for (int d = 0; d < r->dim; d++) {
+        double ext = (r->hi[d] - r->lo[d]) / pitch[d];
+        if (!(ext >= 1.0 - 1e-9) || ext > 1e7) return FLOE_EINVAL;
+        nk[d] = (long)floor(ext + 1e-9) + 1; /* candidates; the box test keeps the inside */
+    }
+    double total = (double)nk[0] * (double)nk[1] * (double)nk[2];
+    if (total > 2e9) return FLOE_EINVAL;
+    double h = r->dim == 2 ? (r->thickness > 0 ? r->thickness : dx) : 0;
+    double vol = r->dim == 3 ? dx * dx * dx / sqrt(2.0) : dy * dx * h;
+    size_t cap = 0, n = 0;
+    double *X = NULL, *V = NULL;
+    double shift[3] = {0, 0, 0}, pmin[3] = {INFINITY, INFINITY, INFINITY}, pmax[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int pass = -1; pass < 2; pass++) {
+        n = 0;
+        for (long k = 0; k < nk[2]; k++) {
+            int layer_b = r->dim == 3 && (k & 1); /* 3D: B layers of the ABAB stacking */
+            double yoff = r->dim == 3 ? (layer_b ? 2.0 / 3.0 : 1.0 / 3.0) : 0.5;
+            for (long j = 0; j < nk[1]; j++) {
+                double xoff = ((j + layer_b) & 1) ? 0.75 : 0.25;
+                for (long i = 0; i < nk[0]; i++) {
+                    double p[3] = {r->lo[0] + (i + xoff) * dx + shift[0], r->lo[1] + (j + yoff) * dy + shift[1],
+                                   r->dim == 3 ? r->lo[2] + (k + 0.5) * dz + shift[2] : 0.5 * (r->lo[2] + r->hi[2])};
+                    int in = 1;
+                    for (int d = 0; d < r->dim; d++)
+                        if (p[d] < r->lo[d] - tol || p[d] > r->hi[d] + tol) in = 0;
+                    if (!in) continue;
+                    if (pass < 0) {
+                        for (int d = 0; d < r->dim; d++) {
+                            pmin[d] = fmin(pmin[d], p[d]);
+                            pmax[d] = fmax(pmax[d], p[d]);
+                        }
+                        continue;
+                    }
+                    if (r->sdf && !(r->sdf(p, r->sdf_user) <= 0)) continue;
+                    if (pass == 1) {
+                        floe_v3_copy(X + 3 * n, p);
+                        V[n] = vol;
+                    }
+                    n++;
+                }
+            }
+        }
+        if (pass < 0) {
+            for (int d = 0; d < r->dim; d++)
+                if (pmax[d] >= pmin[d]) shift[d] = 0.5 * ((r->lo[d] + r->hi[d]) - (pmin[d] + pmax[d]));
+        } else if (pass == 0) {
+            if (n > (size_t)INT32_MAX) return FLOE_EINVAL;
+            cap = n > 0 ? n : 1;
+            X = malloc(3 * cap * sizeof *X);
+            V = malloc(cap * sizeof *V);
+            if (!X || !V) { free(X); free(V); return FLOE_ENOMEM; }
+        }
+    }
+    int rc = floe_pd_body_create_points(out, r->dim, (int)n, X, V, m * dx, dx, h);
+    free(X);
+    free(V);
+    return rc;
+}
+
 int floe_pd_body_create(floe_pd_body **out, const floe_pd_region *r)
 {
     if (!out) return FLOE_EINVAL;
     *out = NULL;
     if (!r || (r->dim != 2 && r->dim != 3) || !(r->dx > 0)) return FLOE_EINVAL;
     double m = r->horizon_factor > 0 ? r->horizon_factor : 3.0;
+    if (r->lattice == FLOE_PD_LATTICE_HEXAGONAL) return body_create_hex(out, r, m);
+    if (r->lattice != FLOE_PD_LATTICE_CUBIC) return FLOE_EINVAL;
     long nk[3] = {1, 1, 1};
     for (int d = 0; d < r->dim; d++) {
         double ext = (r->hi[d] - r->lo[d]) / r->dx;
@@ -409,6 +482,7 @@ size_t floe_pd_body_bytes(const floe_pd_body *b)
     if (b->scorr) s += nb * sizeof(float);
     if (b->acorr) s += n * sizeof(double);
     if (b->s0) s += 2 * n * sizeof(double); /* PMB alpha state */
+    if (b->splast) s += (size_t)b->nbond * sizeof(float); /* PMB plastic stretches */
     if (b->dten) s += 11 * n * sizeof(double); /* LPS surface correction */
     return s;
 }

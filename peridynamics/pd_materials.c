@@ -51,6 +51,20 @@ static int pmb_init(floe_pd_body *b)
         free(b->s0);
         b->s0 = NULL;
     }
+    /* elastic-perfectly-plastic bonds (003 eq 6): one plastic stretch per bond */
+    if (!(m->yield_compression >= 0) || !(m->yield_tension >= 0) || !isfinite(m->yield_compression) ||
+        !isfinite(m->yield_tension))
+        return FLOE_EINVAL;
+    if (m->yield_compression > 0 || m->yield_tension > 0) {
+        if (m->alpha > 0) return FLOE_EINVAL; /* one extension at a time */
+        if (!b->splast) {
+            b->splast = calloc((size_t)(b->nbond > 0 ? b->nbond : 1), sizeof *b->splast);
+            if (!b->splast) return FLOE_ENOMEM;
+        }
+    } else {
+        free(b->splast);
+        b->splast = NULL;
+    }
     b->c = c;
     free_lps(b);
     return FLOE_OK;
@@ -141,8 +155,58 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
     return energy;
 }
 
+/* Elastic-perfectly-plastic PMB bond (003 eq 6, Fig 2): the force follows the elastic
+ * stretch s_e = s - s_p, capped at -s_yc in compression (and +s_yt in tension when given);
+ * beyond the cap the plastic stretch s_p moves so that s_e stays on it, and the bond unloads
+ * elastically with the residual s_p. Breakage by s_c acts on the total stretch s, a broken
+ * bond pushes back in compression (broken_tension_only) with the capped elastic law. The
+ * returned energy is the stored elastic energy 1/2 c s_e^2 |xi| w; the plastic work is what
+ * the world's ledger books as dissipated (it books -work - dE). */
+static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
+{
+    const double c = b->c, s_c = b->s_c;
+    const double syc = b->mat.yield_compression, syt = b->mat.yield_tension;
+    const int comp = b->mat.broken_tension_only;
+    float *sp = b->splast;
+    double energy = 0.0;
+    int64_t nbroken = 0;
+    for (int i = 0; i < b->n; i++) {
+        const double *xi = x + 3 * (size_t)i;
+        double fi[3] = {0, 0, 0};
+        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+            const int j = b->partner[k];
+            const double *xj = x + 3 * (size_t)j;
+            double d[3] = {xj[0] - xi[0], xj[1] - xi[1], xj[2] - xi[2]};
+            double r = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            double L = b->len[k], s = (r - L) / L;
+            if (b->broken[k]) {
+                if (!comp || s >= 0) continue;
+            } else if (s_c > 0 && s > s_c) {
+                b->broken[k] = 1;
+                nbroken++;
+                if (!comp || s >= 0) continue;
+            }
+            double se = s - (double)sp[k];
+            if (syc > 0 && se < -syc) { sp[k] = (float)(s + syc); se = s - (double)sp[k]; }
+            if (syt > 0 && se > syt) { sp[k] = (float)(s - syt); se = s - (double)sp[k]; }
+            if (!(r > 0)) continue;
+            double w = (double)b->vfac[k] * (b->scorr ? (double)b->scorr[k] : 1.0) * b->V[i] * b->V[j];
+            double fm = c * se * w / r;
+            energy += 0.5 * c * se * se * L * w;
+            for (int a = 0; a < 3; a++) {
+                fi[a] += fm * d[a];
+                f[3 * (size_t)j + a] -= fm * d[a];
+            }
+        }
+        for (int a = 0; a < 3; a++) f[3 * (size_t)i + a] += fi[a];
+    }
+    b->nbroken += nbroken;
+    return energy;
+}
+
 static double pmb_forces(floe_pd_body *b, const double *x, double *f)
 {
+    if (b->splast) return pmb_forces_plastic(b, x, f);
     if (b->s0 && b->s_c > 0) return pmb_forces_impl(b, x, f, 1);
     return pmb_forces_impl(b, x, f, 0);
 }
@@ -416,11 +480,14 @@ int floe_pd_lps_surface_correction(floe_pd_body *b)
     static const int slot2[3] = {0, 1, 3}; /* 2D component -> storage slot */
     const int *ia = dim == 3 ? ia3 : ia2, *ib = dim == 3 ? ib3 : ib2;
     size_t n = (size_t)(b->n > 0 ? b->n : 1);
-    double *C = calloc(n * 36, sizeof *C), *A = calloc(11 * n, sizeof *A);
-    double *D = calloc(3 * n, sizeof *D), *ac = malloc(n * sizeof *ac);
-    if (!C || !A || !D || !ac) { free(C); free(A); free(D); free(ac); return FLOE_ENOMEM; }
-    /* 1. per point the fourth moment C_abcd = sum_j w |xi|^2 beta V_j n_a n_b n_c n_d as the
-     * matrix of the map A -> C : A on the symmetric tensors */
+    /* the 15 distinct components of a fully symmetric 4th-order tensor: n_x^ex n_y^ey n_z^ez,
+     * ex + ey + ez = 4, slot mi[ex][ey] */
+    int mi[5][5], nm = 0;
+    for (int ex = 0; ex <= 4; ex++)
+        for (int ey = 0; ey <= 4 - ex; ey++) mi[ex][ey] = nm++;
+    double *C = calloc(n * 15, sizeof *C), *A = calloc(11 * n, sizeof *A);
+    if (!C || !A) { free(C); free(A); return FLOE_ENOMEM; }
+    /* 1. per point the fourth moment C_abcd = sum_j w |xi|^2 beta V_j n_a n_b n_c n_d */
     for (int i = 0; i < b->n; i++)
         for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
             int j = b->partner[k];
@@ -428,27 +495,34 @@ int floe_pd_lps_surface_correction(floe_pd_body *b)
             floe_v3_sub(nv, b->X + 3 * (size_t)j, b->X + 3 * (size_t)i);
             floe_v3_scale(nv, 1.0 / L);
             double wl = (b->wbond ? b->wbond[k] : 1.0) * L * L * b->vfac[k];
-            for (int p = 0; p < s; p++)
-                for (int q = 0; q < s; q++) {
-                    double t = wl * nv[ia[p]] * nv[ib[p]] * nv[ia[q]] * nv[ib[q]] * (ia[q] == ib[q] ? 1.0 : 2.0);
-                    C[36 * (size_t)i + 6 * p + q] += t * b->V[j];
-                    C[36 * (size_t)j + 6 * p + q] += t * b->V[i];
+            double px[5] = {1, nv[0], nv[0] * nv[0], nv[0] * nv[0] * nv[0], 0}, py[5], pz[5];
+            px[4] = px[2] * px[2];
+            py[0] = pz[0] = 1;
+            for (int t = 1; t < 5; t++) { py[t] = py[t - 1] * nv[1]; pz[t] = pz[t - 1] * nv[2]; }
+            for (int ex = 0; ex <= 4; ex++)
+                for (int ey = 0; ey <= 4 - ex; ey++) {
+                    double t = wl * px[ex] * py[ey] * pz[4 - ex - ey];
+                    C[15 * (size_t)i + mi[ex][ey]] += t * b->V[j];
+                    C[15 * (size_t)j + mi[ex][ey]] += t * b->V[i];
                 }
         }
-    /* 2. A_i from C : A = I (the dilatation exact for every uniform strain); a point whose
-     * family does not span the space keeps the plain dim/m_i I */
-    int64_t plain = 0;
+    /* 2. A_i from C : A = I (the dilatation exact for every uniform strain), as the linear
+     * system on the independent components of A; a point whose family does not span the
+     * space keeps the plain dim/m_i I */
     for (int i = 0; i < b->n; i++) {
         double M[6][6], r[6];
         for (int p = 0; p < s; p++) {
-            for (int q = 0; q < s; q++) M[p][q] = C[36 * (size_t)i + 6 * p + q];
+            for (int q = 0; q < s; q++) {
+                int e[3] = {0, 0, 0};
+                e[ia[p]]++; e[ib[p]]++; e[ia[q]]++; e[ib[q]]++;
+                M[p][q] = C[15 * (size_t)i + mi[e[0]][e[1]]] * (ia[q] == ib[q] ? 1.0 : 2.0);
+            }
             r[p] = ia[p] == ib[p] ? 1.0 : 0.0;
         }
         double *Ai = A + 6 * (size_t)i;
         if (lps_solve(s, M, r) == 0) {
             for (int p = 0; p < s; p++) Ai[dim == 3 ? p : slot2[p]] = r[p];
         } else {
-            plain++;
             double a = b->m[i] > 0 ? dim / b->m[i] : 0.0;
             for (int d = 0; d < dim; d++) Ai[d] = a;
         }
@@ -461,7 +535,7 @@ int floe_pd_lps_surface_correction(floe_pd_body *b)
      * the continuum G (1 - 1/dim) eps^2 for every d at once: M c = 2G(1 - 1/dim). Where that
      * has no positive solution, c_e = mean_d 2G(1 - 1/dim)/sum_e M_de (a scalar alpha_i). */
     double *TH = calloc(3 * n, sizeof *TH), *MM = calloc(9 * n, sizeof *MM);
-    if (!TH || !MM) { free(TH); free(MM); free(A); free(D); free(ac); return FLOE_ENOMEM; }
+    if (!TH || !MM) { free(TH); free(MM); free(A); return FLOE_ENOMEM; }
     for (int pass = 0; pass < 2; pass++)
         for (int i = 0; i < b->n; i++)
             for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
@@ -489,7 +563,6 @@ int floe_pd_lps_surface_correction(floe_pd_body *b)
             }
     free(TH);
     const double G = b->mat.G, rhs = 2.0 * G * (1.0 - 1.0 / dim);
-    int64_t scalar = 0;
     for (int i = 0; i < b->n; i++) {
         double M[6][6], c[6];
         const double *Mi = MM + 9 * (size_t)i;
@@ -509,21 +582,14 @@ int floe_pd_lps_surface_correction(floe_pd_body *b)
             }
             double al = cnt > 0 ? sum / cnt : lps_alpha(b, i);
             for (int a = 0; a < dim; a++) c[a] = al;
-            scalar++;
         }
         double *Bi = A + 6 * n + 3 * (size_t)i;
         Bi[0] = Bi[1] = Bi[2] = 0;
         for (int a = 0; a < dim; a++) Bi[a] = c[a];
-        ac[i] = 1.0;
     }
     free(MM);
-    free(D);
-    free(ac);
-    ac = NULL;
-    (void)plain;
-    (void)scalar;
-    free(b->acorr);
-    b->acorr = ac;
+    free(b->acorr); /* alpha is in B_i */
+    b->acorr = NULL;
     free(b->dten);
     b->dten = A;
     return FLOE_OK;
