@@ -36,6 +36,9 @@ struct floe_beam_set {
     int *off, *adj, *adj_bond, n_csr;
     int (*prev_exclude)(const void *ctx, int i, int j);
     const void *prev_ctx;
+    unsigned long long rng;   /* strengths of single bonds: one stream per seed (rng_seed) */
+    unsigned long long rng_seed;
+    int rng_set;
 };
 
 /* ---- section, local stiffness, stresses ---- */
@@ -323,8 +326,12 @@ static int push_bond(floe_world *w, struct floe_beam_set *s, int i, int j, const
     return s->n++;
 }
 
+/* Particles a bond set may bond: those of par->group, or with FLOE_BEAM_ALL_GROUPS every
+ * particle except the points of peridynamic bodies (already bonded by their PD bonds;
+ * name their group to bond them anyway). */
 static int group_ok(const floe_world *w, const floe_beam_params *par, int i) {
-    return par->group == FLOE_BEAM_ALL_GROUPS || w->p.group[i] == par->group;
+    if (par->group == FLOE_BEAM_ALL_GROUPS) return !(w->pd_of && i < w->pd_npts_alloc && w->pd_of[i] >= 0);
+    return w->p.group[i] == par->group;
 }
 
 int floe_world_add_beam_bond(floe_world *w, int i, int j, const floe_beam_params *par) {
@@ -337,8 +344,13 @@ int floe_world_add_beam_bond(floe_world *w, int i, int j, const floe_beam_params
     struct floe_beam_set *s = NULL;
     TRY_NEG(set_get(w, &s));
     if (find_bond(s, i, j) >= 0) return -floe_world_error(w, FLOE_EINVAL, "beam bond %d-%d: already bonded", i, j);
-    unsigned long long rng = par->seed;
-    int k = push_bond(w, s, i < j ? i : j, i < j ? j : i, par, &rng);
+    /* bonds added one at a time continue one random stream per seed, so that their
+     * strengths are drawn from the distribution rather than all equal */
+    if (!s->rng_set || s->rng_seed != par->seed) {
+        s->rng = s->rng_seed = par->seed;
+        s->rng_set = 1;
+    }
+    int k = push_bond(w, s, i < j ? i : j, i < j ? j : i, par, &s->rng);
     if (k < 0) return k;
     if (build_csr(s, p->n)) return -floe_world_error(w, FLOE_ENOMEM, "out of memory");
     install_exclude(w);

@@ -617,7 +617,8 @@ int floe_pd_bond_forces(floe_pd_body *b, const double *x, floe_pd_bond_visit_fn 
             if (!(r > 0)) continue;
             double bv = (double)b->vfac[k] * b->V[i] * b->V[j], fm;
             if (!lps) {
-                fm = b->c * s * bv * (b->scorr ? (double)b->scorr[k] : 1.0);
+                double se = b->splast ? s - (double)b->splast[k] : s; /* plastic bonds: elastic part */
+                fm = b->c * se * bv * (b->scorr ? (double)b->scorr[k] : 1.0);
             } else {
                 double tij, tji, en = 0;
                 lps_bond_t(b, kd, i, j, k, r - L, &tij, &tji, &en);

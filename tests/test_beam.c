@@ -548,7 +548,54 @@ static void test_scene(void) {
     CHECK(rc != FLOE_OK && strstr(err, "no pair"), "a bond set that bonds nothing is an error");
 }
 
+/* review findings: PD points are not beam-bonded unless their group is named; rk2 with
+ * bonds is refused; single bonds draw different strengths from one seeded stream */
+static void test_defaults_and_refusals(void) {
+    int mat;
+    floe_world *w = new_world(3, 0, 0, 0, &mat);
+    floe_pd_region r;
+    memset(&r, 0, sizeof r);
+    r.dim = 3;
+    r.dx = 1e-3;
+    r.horizon_factor = 3;
+    floe_v3_set(r.hi, 6e-3, 4e-3, 4e-3);
+    floe_pd_body *pb = NULL;
+    floe_pd_body_create(&pb, &r);
+    floe_pd_material pm = floe_pd_material_pmb(2200, 14.9e9, 0);
+    floe_pd_set_material(pb, &pm);
+    CHECK(floe_world_add_pd_body(w, pb, mat, NULL, NULL) == FLOE_OK, "PD body");
+    for (int k = 0; k < 4; k++) {
+        double x[3] = {0.02 + k * 0.002, 0, 0};
+        add_sphere(w, mat, 0.001, x, 1e-5, FLOE_FREE);
+    }
+    floe_beam_params bp = floe_default_beam_params();
+    bp.young = 1e9;
+    int nb = floe_world_add_beam_bonds(w, 1.01, &bp);
+    CHECK(nb == 3, "bonds with group left out skip the PD points: %d bonds (want the chain's 3)", nb);
+    w->def.integrator = FLOE_RK2;
+    int rc = floe_world_prepare(w);
+    CHECK(rc == FLOE_EINVAL && strstr(floe_world_last_error(w), "rk2"), "rk2 with beam bonds refused: %s",
+          floe_world_last_error(w));
+    floe_world_destroy(w);
+
+    w = new_world(3, 0, 0, 0, &mat);
+    for (int k = 0; k < 5; k++) {
+        double x[3] = {k * 0.002, 0, 0};
+        add_sphere(w, mat, 0.001, x, 1e-5, FLOE_FREE);
+    }
+    bp.tensile_strength = 6e6;
+    bp.tensile_sd = 1e6;
+    for (int k = 0; k < 4; k++) CHECK(floe_world_add_beam_bond(w, k, k + 1, &bp) == k, "single bond %d", k);
+    floe_beam_bond_info a, b;
+    floe_world_beam_bond(w, 0, &a);
+    floe_world_beam_bond(w, 3, &b);
+    printf("  single bonds' tensile strengths: %.6g, %.6g Pa\n", a.sigma_lim, b.sigma_lim);
+    CHECK(a.sigma_lim != b.sigma_lim, "single bonds draw different strengths (%g, %g)", a.sigma_lim, b.sigma_lim);
+    floe_world_destroy(w);
+}
+
 int main(void) {
+    test_defaults_and_refusals();
     test_linearisation(2, 0);
     test_linearisation(2, 1);
     test_linearisation(3, 0);
