@@ -1478,37 +1478,10 @@ static int step_verlet(floe_world *w) {
         if (have_xb) note_disp(x, xb + 3 * i, &maxd2);
         /* body-force work over the step uses the drift displacement (exact for gravity
          * when the second half adds the same force) */
-        double *L = p->L + 3 * i, *om = p->w + 3 * i;
-        const double *I = p->inertia + 3 * i;
-        floe_v3_axpy(L, k1, p->t + 3 * i);
-        if (p->iso[i]) {
-            /* isotropic body (sphere): omega = L / I is frame-independent; the orientation
-             * follows by q <- exp(dt omega / 2) q, here to third order without trig */
-            double inv = 1.0 / I[0];
-            for (int k = 0; k < 3; k++) om[k] = L[k] * inv;
-            double th[3] = {h * om[0], h * om[1], h * om[2]}, t2 = floe_v3_dot(th, th);
-            if (t2 > 0) {
-                double c = 1 - 0.5 * t2, dq[4] = {c, th[0], th[1], th[2]}, qn[4];
-                floe_q_mul(qn, dq, q);
-                /* renormalise by one Newton step for 1/sqrt (|qn|^2 = 1 + O(t2^2)) */
-                double s2 = qn[0] * qn[0] + qn[1] * qn[1] + qn[2] * qn[2] + qn[3] * qn[3];
-                double sc = 1.5 - 0.5 * s2;
-                for (int k = 0; k < 4; k++) q[k] = qn[k] * sc;
-            }
-        } else if (floe_v3_dot(L, L) > 0) {
-            double qm[4], omm[3];
-            omega_from_L(q, I, L, omm);
-            q_advance(qm, q, omm, h);
-            for (int it = 0; it < 2; it++) {
-                omega_from_L(qm, I, L, omm);
-                q_advance(qm, q, omm, h);
-            }
-            omega_from_L(qm, I, L, omm);
-            double qn[4];
-            q_advance(qn, q, omm, dt);
-            memcpy(q, qn, sizeof qn);
-            omega_from_L(q, I, L, om);
-        }
+        /* rotation: L by the half kick, then the orientation over dt (rotate_drift: the
+         * isotropic fast path q <- exp(dt omega / 2) q without trig, or the midpoint rule) */
+        floe_v3_axpy(p->L + 3 * i, k1, p->t + 3 * i);
+        rotate_drift(p, i, dt);
         wb += dt * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
     }
     /* 2. state objects, RK2 midpoint (eq 21) */
