@@ -2264,6 +2264,20 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
                k, f0, f0 + pb->n - 1, -2 - k, pb->ops->name, (long long)pb->nbond, 2.0 * (double)pb->nbond / pb->n,
                pb->delta, pb->s_c, floe_pd_dt_nodal(pb));
     }
+    for (int q = 0; q < w->npd_bc; q++) { /* PD boundary regions */
+        static const char *const kinds[] = {"?", "fixed", "velocity", "displacement", "body force"};
+        static const char *const ramps[] = {"", ", linear ramp", ", exponential ramp"};
+        const floe_pd_bc_rec *r = w->pd_bc[q];
+        int k = r->def.kind >= 1 && r->def.kind <= 4 ? r->def.kind : 0;
+        int rp = r->def.ramp >= 0 && r->def.ramp <= 2 ? r->def.ramp : 0;
+        sc_cat(&b, "  boundary %d: peridynamics %d, %d points, %s", q, r->body, r->n, kinds[k]);
+        if (k >= 2 && !r->def.force_fn)
+            sc_cat(&b, " (%g, %g, %g)", r->def.value[0], r->def.value[1], r->def.value[2]);
+        if (k == 4 && r->def.force_fn) sc_cat(&b, " (callback)");
+        if (k >= 2) sc_cat(&b, "%s", ramps[rp]);
+        if (rp) sc_cat(&b, " over %g s", r->def.ramp_time);
+        sc_cat(&b, "\n");
+    }
     if (floe_world_beam_bond_count(w) > 0)
         sc_cat(&b, "  beam bonds: %d (%d broken), critical dt %.3g s\n", floe_world_beam_bond_count(w),
                floe_world_beam_broken_count(w), floe_beam_critical_dt(w));

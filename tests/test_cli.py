@@ -39,6 +39,14 @@ def main():
         check("particles:  74" in out, "check prints the particle count:\n" + out)
         check(not os.path.exists(os.path.join(tmp, "out")), "check must not create outputs")
 
+        # check lists PD boundary regions and every time-step estimate with the limiting one
+        hole = os.path.join(os.path.dirname(tests), "examples", "plate-with-hole", "scene.yaml")
+        rc, out, err = run([cli, "check", hole], cwd=tmp)
+        check(rc == 0, "check plate-with-hole: exit %d, stderr %s" % (rc, err))
+        check(re.search(r"boundary 0: peridynamics 0, \d+ points, body force \(-3, 0, 0\), exponential ramp over 0.1 s",
+                        out) is not None, "check lists the PD boundary regions:\n" + out)
+        check("<- limits" in out and "pd_nodal" in out, "check marks the limiting time-step estimate:\n" + out)
+
         # check: bad scenes -> exit 1 and file:line:col
         for name, loc, words in [("bad_key.yaml", "10:5", ["frition", "did you mean 'friction'"]),
                                  ("bad_unclosed.yaml", "11:15", ["never closed"]),
@@ -57,7 +65,7 @@ def main():
         rc, out, err = run([cli, "info"], cwd=tmp)
         check(rc == 0, "info: exit %d" % rc)
         check(re.search(r"floe \d+\.\d+\.\d+", out) is not None, "info prints the version:\n" + out)
-        for w in ("OpenMP", "CGAL", "hertz_mindlin", "sphere"):
+        for w in ("OpenMP", "CGAL", "CHOLMOD", "hertz_mindlin", "sphere"):
             check(w in out, "info lacks %r:\n%s" % (w, out))
 
         # usage errors
