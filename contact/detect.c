@@ -240,7 +240,7 @@ static void plane_to_frame(const double P[4], const shape_ref *from, const shape
 
 /* one half: a's point deepest in b, in world coordinates */
 static int lp_half(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm4, double x[3], double *s,
-                   double n[3], int *pivots) {
+                   double n[3], double *gnorm, int *pivots) {
     double ba[24], bb[24];
     int na = 0, nb = 0, nva = 0;
     const double *pa = body_planes(a->g, w->def.dim, &na, ba), *pb = body_planes(b->g, w->def.dim, &nb, bb);
@@ -263,96 +263,9 @@ static int lp_half(floe_world *w, const shape_ref *a, const shape_ref *b, double
     floe_v3_add(x, x, a->x);
     floe_q_rotate(n, a->q, r.normal); /* outward normal of b at x */
     *s = r.s;
+    *gnorm = r.gnorm;
     *pivots = r.pivots + 1;
     return FLOE_OK;
-}
-
-/* Flat contacts: where faces touch, the deepest points are not unique and the LP returns
- * a vertex of the optimal set (near an edge of the face) with a normal mixed from two
- * faces, which spins bodies that meet head-on and breaks the energy ledger. Among the
- * faces tight at the two optima, take the one with the least overlap along its normal
- * (separating-axis rule); depth = that overlap, point = midpoint of the two shapes'
- * vertex sets within a small band of the supporting planes (a face centre for aligned
- * faces). */
-static void extent(const shape_ref *s, const double n[3], double *lo, double *hi) {
-    int nv = 0;
-    const double *V = s->g->klass->vertices(s->g, &nv);
-    double nb[3];
-    floe_q_rotate_inv(nb, s->q, n);
-    double o = floe_v3_dot(s->x, n);
-    *lo = INFINITY; *hi = -INFINITY;
-    for (int v = 0; v < nv; v++) {
-        double d = floe_v3_dot(V + 3 * v, nb) + o;
-        if (d < *lo) *lo = d;
-        if (d > *hi) *hi = d;
-    }
-}
-static void band_centroid(const shape_ref *s, const double n[3], double level, double band, double out[3]) {
-    int nv = 0, cnt = 0;
-    const double *V = s->g->klass->vertices(s->g, &nv);
-    double nb[3], acc[3] = {0, 0, 0};
-    floe_q_rotate_inv(nb, s->q, n);
-    double o = floe_v3_dot(s->x, n);
-    for (int v = 0; v < nv; v++)
-        if (fabs(floe_v3_dot(V + 3 * v, nb) + o - level) <= band) {
-            floe_v3_add(acc, acc, V + 3 * v);
-            cnt++;
-        }
-    if (!cnt) return;
-    floe_v3_scale(acc, 1.0 / cnt);
-    floe_q_rotate(out, s->q, acc);
-    floe_v3_add(out, out, s->x);
-}
-static void face_contact(const shape_ref *a, const shape_ref *b, int dim, const double *warm, floe_contact *c) {
-    if (!warm) return;
-    double cand[8][3];
-    int nc = 0;
-    for (int h = 0; h < 2; h++) { /* half 0: rows of b (normals point out of b); half 1: rows of a */
-        const shape_ref *own = h ? a : b, *oth = h ? b : a;
-        double buf[24];
-        int np = 0, nrow_other = 0;
-        const double *pl = body_planes(own->g, dim, &np, buf);
-        double tmp[24];
-        body_planes(oth->g, dim, &nrow_other, tmp);
-        for (int k = 0; k < 4; k++) {
-            double r = warm[4 * h + k];
-            if (!isfinite(r)) continue;
-            int row = (int)r - nrow_other; /* the rows of the "b" side come after the other's */
-            if (row < 0 || row >= np) continue;
-            double nw[3];
-            floe_q_rotate(nw, own->q, pl + 4 * row);
-            if (h == 0) floe_v3_scale(nw, -1.0); /* normal from a to b */
-            if (nc < 8) floe_v3_copy(cand[nc++], nw);
-        }
-    }
-    double best = INFINITY, bn[3] = {0, 0, 0};
-    for (int k = 0; k < nc; k++) {
-        double alo, ahi, blo, bhi;
-        extent(a, cand[k], &alo, &ahi);
-        extent(b, cand[k], &blo, &bhi);
-        double ov = ahi - blo;
-        if (ov < best) { best = ov; floe_v3_copy(bn, cand[k]); }
-    }
-    if (!(best > 0) || !isfinite(best) || best > 2 * c->depth + 1e-12) return;
-    double alo, ahi, blo, bhi, pa[3], pb[3];
-    extent(a, bn, &alo, &ahi);
-    extent(b, bn, &blo, &bhi);
-    double band = 1e-3 * fmin(a->r, b->r) + best;
-    floe_v3_copy(pa, c->x1);
-    floe_v3_copy(pb, c->x2);
-    band_centroid(a, bn, ahi, band, pa);
-    band_centroid(b, bn, blo, band, pb);
-    /* the patch: between the two face centroids, each moved onto its supporting plane */
-    double mid[3];
-    for (int k = 0; k < 3; k++) mid[k] = 0.5 * (pa[k] + pb[k]);
-    double m = floe_v3_dot(mid, bn);
-    for (int k = 0; k < 3; k++) {
-        c->x1[k] = mid[k] + (ahi - m) * bn[k];
-        c->x2[k] = mid[k] + (blo - m) * bn[k];
-    }
-    floe_v3_copy(c->n, bn);
-    c->depth = best;
-    finish(c);
 }
 
 static void count_iterations(floe_world *w, int it) {
@@ -362,26 +275,35 @@ static void count_iterations(floe_world *w, int it) {
 }
 
 static int polytope_pair(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
-    double x1[3], x2[3], s1, s2, n1[3], n2[3];
+    double x1[3], x2[3], s1, s2, n1[3], n2[3], g1 = 1, g2 = 1;
     int p1 = 0, p2 = 0;
-    int rc = lp_half(w, a, b, warm, x1, &s1, n1, &p1);
+    int rc = lp_half(w, a, b, warm, x1, &s1, n1, &g1, &p1);
     if (rc) return -rc;
     w->det.lp_calls++;
     if (!(s1 < 0)) {
         count_iterations(w, p1);
         return 0;
     }
-    rc = lp_half(w, b, a, warm ? warm + 4 : NULL, x2, &s2, n2, &p2);
+    rc = lp_half(w, b, a, warm ? warm + 4 : NULL, x2, &s2, n2, &g2, &p2);
     if (rc) return -rc;
     count_iterations(w, p1 + p2);
     if (!(s2 < 0)) return 0;
     floe_v3_copy(c->x1, x1);
     floe_v3_copy(c->x2, x2);
-    if (-s1 >= -s2) { c->depth = -s1; floe_v3_set(c->n, -n1[0], -n1[1], -n1[2]); }
-    else { c->depth = -s2; floe_v3_copy(c->n, n2); }
+    /* the deeper half sets depth, normal and the point the force acts at (the deepest
+     * point itself: the force is then the gradient of the stored energy) */
+    if (-s1 >= -s2) {
+        c->depth = -s1;
+        floe_v3_set(c->n, -n1[0], -n1[1], -n1[2]);
+        floe_v3_copy(c->point, x1);
+        c->gscale = g1;
+    } else {
+        c->depth = -s2;
+        floe_v3_copy(c->n, n2);
+        floe_v3_copy(c->point, x2);
+        c->gscale = g2;
+    }
     c->r_eff = a->r * b->r / (a->r + b->r);
-    finish(c);
-    face_contact(a, b, w->def.dim, warm, c);
     return 1;
 }
 

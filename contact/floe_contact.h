@@ -36,6 +36,10 @@ typedef struct floe_contact {
     double r_eff;            /* effective radius R* = (1/Ri + 1/Rj)^-1 (walls: infinite) */
     double m_eff;            /* effective mass m* (fixed/kinematic partners: infinite) */
     double dt;               /* time step the history is advanced by */
+    double gscale;           /* |grad depth| (<= 1): where the deepest point is equidistant from
+                                two faces the depth grows at this rate along n only, and the
+                                world scales the law's force by it so that the force stays the
+                                gradient of the stored energy (1 otherwise; set by detection) */
 } floe_contact;
 
 typedef struct floe_contact_result {

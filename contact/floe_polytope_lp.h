@@ -19,7 +19,10 @@ typedef struct floe_lp_problem {
 typedef struct floe_lp_result {
     double x[3];        /* p's point deepest in p' (world) */
     double s;           /* phi'(x): negative when it penetrates */
-    double normal[3];   /* unit outward normal of p' at x (a subgradient of phi') */
+    double normal[3];   /* unit outward normal of p' at x (a subgradient of phi', normalised) */
+    double gnorm;       /* |sum of the multipliers x face normals| <= 1: the length of that
+                           subgradient before normalising (< 1 where x is equidistant from
+                           several faces of p') */
     double lambda[4];
     int pivots;         /* simplex pivots taken */
     int warm;           /* 1 if the given basis was feasible and used */

@@ -182,7 +182,20 @@ int floe_lp_deepest(const floe_lp_problem *P, int *basis, floe_lp_result *res) {
         for (int k = 0; k < dim; k++) g[k] += res->lambda[i] * c[k];
     }
     double gn = floe_v3_norm(g);
-    if (gn > 0) floe_v3_scale(g, 1.0 / gn);
+    if (gn > 1e-9) {
+        floe_v3_scale(g, 1.0 / gn);
+        res->gnorm = gn > 1 ? 1.0 : gn;
+    } else { /* the normals cancel (coincident shapes): the face of the largest multiplier */
+        int best = -1;
+        for (int i = 0; i < n; i++)
+            if (basis[i] >= P->na && (best < 0 || res->lambda[i] > res->lambda[best])) best = i;
+        floe_v3_set(g, 0, 0, 0);
+        if (best >= 0)
+            for (int k = 0; k < dim; k++) g[k] = P->b[4 * (basis[best] - P->na) + k];
+        double gb = floe_v3_norm(g);
+        if (gb > 0) floe_v3_scale(g, 1.0 / gb);
+        res->gnorm = 1.0;
+    }
     floe_v3_copy(res->normal, g);
     return FLOE_OK;
 }

@@ -86,6 +86,7 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         if (floe_contact_law_no_contact(w->laws[p->material[i] * nm + p->material[j]])) continue; /* law "none" */
         double *warm = nl->use_warm ? nl->warm + (size_t)k * FLOE_DETECT_WARM : NULL;
         floe_contact c;
+        c.gscale = 1.0;
         int r = 0;
         /* bounding spheres apart: no contact for any pair of shapes (most list pairs) */
         const double *xa = p->x + 3 * i, *xb = p->x + 3 * j;
@@ -177,6 +178,12 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         memset(&res, 0, sizeof res);
         int rc = law->klass->force(law, &c, hist, &res);
         if (rc) return floe_world_error(w, rc, "contact law %s failed for particles %d and %d", law->klass->name, i, j);
+        if (c.gscale != 1.0) { /* depth growing slower than along n (polytope ridges) */
+            floe_v3_scale(res.force, c.gscale);
+            floe_v3_scale(res.torque_i, c.gscale);
+            floe_v3_scale(res.torque_j, c.gscale);
+            res.fn *= c.gscale;
+        }
         double ti[3], tj[3];
         floe_v3_cross(ti, ri, res.force);
         floe_v3_cross(tj, rj, res.force);

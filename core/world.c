@@ -767,10 +767,15 @@ static double rep_depth(const floe_contact_law *law, double r_eff, double m_eff,
  * of a close packing in 3D, 6 for the 6 of a hexagonal packing in 2D); the dashpots add up
  * the same way (the peers' "8 gamma / m"). Spring-dashpot limit:
  * dt < (2/omega)(sqrt(1 + zeta^2) - zeta). */
-static void pair_estimate(const floe_contact_law *law, double r_eff, double m_eff, double m, double rot, double C,
-                          double v, double *dt) {
+static void pair_estimate(const floe_contact_law *law, double r_eff, double m_eff, double m, double rot, double rotn,
+                          double C, double v, double *dt) {
     double kn = 0, cn = 0, depth = rep_depth(law, r_eff, m_eff, v);
     law->klass->stiffness(law, r_eff, m_eff, depth, &kn, &cn);
+    /* the normal force on a non-spherical body need not pass through its centre (a corner
+     * of a polygon hit sideways): its contact point then moves as a mass m / rotn, which
+     * shortens the contact period by sqrt(rotn) (spheres: rotn = 1) */
+    kn *= rotn;
+    cn *= rotn;
     if (law->klass->tangential_stiffness) {
         /* tangential springs act at the surface: the contact point of a particle of mass m,
          * radius R and inertia I moves as a mass 1/(1/m + R^2/I) = m/rot */
@@ -791,13 +796,14 @@ static void pair_estimate(const floe_contact_law *law, double r_eff, double m_ef
 typedef struct dt_cache_entry {
     int mat;
     double m, r, rot;
+    double rotn;    /* rot for non-spherical bodies (normal forces off the centre), else 1 */
     double packing, impact, sqrt_mk, hertz;
 } dt_cache_entry;
 #define DT_CACHE 1024
 
 static void particle_contact_estimates(const floe_world *w, dt_cache_entry *e, double vrel) {
     const double C = w->def.dim == 3 ? 8.0 : 6.0, nc = w->def.dim == 3 ? 12.0 : 6.0;
-    const double m = e->m, R = e->r, rot = e->rot;
+    const double m = e->m, R = e->r, rot = e->rot, rotn = e->rotn;
     e->packing = e->impact = e->sqrt_mk = e->hertz = INFINITY;
     for (int m2 = 0; m2 < w->nmats; m2++) {
         const floe_contact_law *law = w->laws[e->mat * w->nmats + m2];
@@ -805,10 +811,10 @@ static void particle_contact_estimates(const floe_world *w, dt_cache_entry *e, d
         /* partner of the same size (m* = m/2, R* = R/2) and a wall (m* = m, R* = R) */
         /* a packing (all contacts of a close packing at a 2 % overlap) and an impact at
          * the expected speed (one contact, C = 2, at the overlap of the collision) */
-        pair_estimate(law, 0.5 * R, 0.5 * m, m, rot, C, 0, &e->packing);
-        pair_estimate(law, R, m, m, rot, C, 0, &e->packing);
-        pair_estimate(law, 0.5 * R, 0.5 * m, m, rot, 2.0, vrel, &e->impact);
-        pair_estimate(law, R, m, m, rot, 2.0, vrel, &e->impact);
+        pair_estimate(law, 0.5 * R, 0.5 * m, m, rot, rotn, C, 0, &e->packing);
+        pair_estimate(law, R, m, m, rot, rotn, C, 0, &e->packing);
+        pair_estimate(law, 0.5 * R, 0.5 * m, m, rot, rotn, 2.0, vrel, &e->impact);
+        pair_estimate(law, R, m, m, rot, rotn, 2.0, vrel, &e->impact);
         /* 000 eq 43: sqrt(m / k_bar), k_bar = the normal stiffnesses of the n_c contacts of
          * a close packing at 2 % overlap (004 eq 28 takes 2 sqrt(m_ii / k_ii) of the same) */
         for (int s = 0; s < 2; s++) {
@@ -885,16 +891,17 @@ static int estimate_dt(floe_world *w) {
         const double *I = p->inertia + 3 * i;
         double imin = w->def.dim == 2 ? I[2] : fmin(I[0], fmin(I[1], I[2]));
         double rot = imin > 0 ? fmax(1.0, 1 + p->mass[i] * p->radius[i] * p->radius[i] / imin) : 1.0;
-        dt_cache_entry key = {p->material[i], p->mass[i], p->radius[i], rot, 0, 0, 0, 0};
+        double rotn = p->kind[i] == FLOE_GEOM_SPHERE ? 1.0 : rot;
+        dt_cache_entry key = {p->material[i], p->mass[i], p->radius[i], rot, rotn, 0, 0, 0, 0};
         unsigned long long hsh = (unsigned long long)key.mat * 0x9E3779B97F4A7C15ull;
-        const double vals[3] = {key.m, key.r, key.rot};
-        for (int k = 0; k < 3; k++) {
+        const double vals[4] = {key.m, key.r, key.rot, key.rotn};
+        for (int k = 0; k < 4; k++) {
             unsigned long long bits;
             memcpy(&bits, &vals[k], sizeof bits);
             hsh = (hsh ^ bits) * 0x100000001B3ull;
         }
         dt_cache_entry *e = &cache[(hsh >> 20) % DT_CACHE];
-        if (!(e->mat == key.mat && e->m == key.m && e->r == key.r && e->rot == key.rot)) {
+        if (!(e->mat == key.mat && e->m == key.m && e->r == key.r && e->rot == key.rot && e->rotn == key.rotn)) {
             *e = key;
             particle_contact_estimates(w, e, vrel);
         }

@@ -1,0 +1,449 @@
+/* test_polytope_contact.c - contact between convex polytopes (2D polygons, boxes, prisms,
+ * tetrahedra, random polyhedra) through the world, as a user meets it:
+ *  1. the depth a world reports is the documented deepest-point depth
+ *     max(-phi_B(x1), -phi_A(x2)), checked against GLPK's simplex on random pairs at scales
+ *     1e-3 .. 1e3 m (>= 99 % within 1e-9 of the size);
+ *  2. frictionless, undamped collisions of random polygon pairs (2D, mass per area) and
+ *     polyhedron pairs (3D) at mm and km scale conserve kinetic + elastic energy within
+ *     1e-3 (relative, after separation) at 0.02 x critical and within 1e-2 at the default
+ *     step (the integrator's error there, ~1/(steps per collision)^2), in >= 97 % (95 % at
+ *     the default step) of the incidences (1-3 % outliers remain, up to 0.1: docs/models.md);
+ *  3. a stack of boxes and a pile of prisms (off-centre) at rest stays at rest:
+ *     after settling, every point of every body moves less than 1e-6 of its size over 10^5
+ *     steps. */
+#include "world_internal.h"
+#include "floe_contact.h"
+#include "floe_geometry.h"
+#include "check.h"
+#include <glpk.h>
+#include <stdlib.h>
+#include <string.h>
+
+static unsigned long long rng_s = 0x9E3779B97F4A7C15ULL;
+static double urand(void) {
+    rng_s ^= rng_s >> 12; rng_s ^= rng_s << 25; rng_s ^= rng_s >> 27;
+    return (double)((rng_s * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+}
+static double uni(double a, double b) { return a + (b - a) * urand(); }
+static void rand_unit(double u[3]) {
+    double z = 2 * urand() - 1, ph = 2 * M_PI * urand(), s = sqrt(1 - z * z);
+    floe_v3_set(u, s * cos(ph), s * sin(ph), z);
+}
+static void rand_quat(double q[4]) {
+    double u1 = urand(), u2 = urand(), u3 = urand();
+    q[0] = sqrt(1 - u1) * sin(2 * M_PI * u2); q[1] = sqrt(1 - u1) * cos(2 * M_PI * u2);
+    q[2] = sqrt(u1) * sin(2 * M_PI * u3); q[3] = sqrt(u1) * cos(2 * M_PI * u3);
+}
+static void quat_z(double q[4], double th) { q[0] = cos(th / 2); q[1] = q[2] = 0; q[3] = sin(th / 2); }
+
+/* ---- shapes ---- */
+static floe_geometry *rand_polygon(double r) {
+    double xy[2 * 12];
+    int n = 3 + (int)(urand() * 7);
+    double th0 = uni(0, 2 * M_PI);
+    for (int k = 0; k < n; k++) {
+        double th = th0 + 2 * M_PI * (k + uni(-0.3, 0.3)) / n, rr = r * uni(0.6, 1.0);
+        xy[2 * k] = rr * cos(th);
+        xy[2 * k + 1] = rr * sin(th);
+    }
+    char err[128];
+    floe_geometry *g = floe_polygon_create(xy, n, err, sizeof err);
+    return g ? g : rand_polygon(r);
+}
+static floe_geometry *rand_polyhedron(double r) {
+    double pl[4 * 24];
+    char err[128];
+    int kind = (int)(urand() * 4);
+    if (kind == 0) return floe_box_create(r * uni(0.5, 1.5), r * uni(0.5, 1.5), r * uni(0.5, 1.5));
+    if (kind == 1) { /* prism of a random polygon */
+        double xy[2 * 8];
+        int n = 3 + (int)(urand() * 5);
+        for (int k = 0; k < n; k++) {
+            double th = 2 * M_PI * (k + uni(-0.3, 0.3)) / n;
+            xy[2 * k] = r * cos(th);
+            xy[2 * k + 1] = r * sin(th);
+        }
+        floe_geometry *g = floe_prism_create(xy, n, r * uni(0.4, 1.5), err, sizeof err);
+        return g ? g : rand_polyhedron(r);
+    }
+    int n = kind == 2 ? 4 : 10 + (int)(urand() * 10); /* tetrahedron or a random hull */
+    for (;;) {
+        for (int i = 0; i < n; i++) {
+            rand_unit(pl + 4 * i);
+            pl[4 * i + 3] = r * uni(0.6, 1.0);
+        }
+        floe_geometry *g = floe_polyhedron_from_planes(pl, n, err, sizeof err);
+        if (g && floe_geometry_bounding_radius(g) <= 3 * r) return g;
+        if (g) floe_geometry_destroy(g);
+    }
+}
+
+/* world-frame face planes (n, d: n.x <= d inside) of particle i (box or polytope) */
+static int world_planes(const floe_world *w, int i, double *out) {
+    const floe_geometry *g = w->geoms[w->p.geom[i]];
+    double buf[24];
+    const double *P;
+    int np;
+    if (g->klass == &floe_box_class) {
+        const double *h = ((const floe_box *)g)->half;
+        for (int a = 0; a < 3; a++)
+            for (int s = 0; s < 2; s++) {
+                double *B = buf + 4 * (2 * a + s);
+                B[0] = B[1] = B[2] = 0;
+                B[a] = s ? 1.0 : -1.0;
+                B[3] = h[a];
+            }
+        P = buf;
+        np = w->def.dim == 2 ? 4 : 6;
+    } else {
+        const floe_polytope *p = (const floe_polytope *)g;
+        P = p->plane;
+        np = p->np;
+    }
+    const double *x = w->p.x + 3 * i, *q = w->p.q + 4 * i;
+    for (int k = 0; k < np; k++) {
+        double n[3];
+        floe_q_rotate(n, q, P + 4 * k);
+        floe_v3_copy(out + 4 * k, n);
+        out[4 * k + 3] = P[4 * k + 3] + floe_v3_dot(n, x);
+    }
+    return np;
+}
+
+/* GLPK: the largest depth of a point of A inside B, -min_{x in A} max_f (n_f.x - d_f) */
+static double glpk_depth(int dim, const double *A, int na, const double *B, int nb) {
+    glp_prob *lp = glp_create_prob();
+    glp_set_obj_dir(lp, GLP_MIN);
+    int nc = dim + 1;
+    glp_add_cols(lp, nc);
+    for (int j = 1; j <= nc; j++) glp_set_col_bnds(lp, j, GLP_FR, 0, 0);
+    glp_set_obj_coef(lp, nc, 1.0);
+    glp_add_rows(lp, na + nb);
+    int ind[5] = {0, 1, 2, 3, 4};
+    for (int i = 0; i < na + nb; i++) {
+        const double *P = i < na ? A + 4 * i : B + 4 * (i - na);
+        double val[5] = {0};
+        for (int k = 0; k < dim; k++) val[1 + k] = P[k];
+        val[nc] = i < na ? 0.0 : -1.0;
+        glp_set_mat_row(lp, i + 1, nc, ind, val);
+        glp_set_row_bnds(lp, i + 1, GLP_UP, 0, P[3]);
+    }
+    glp_smcp parm;
+    glp_init_smcp(&parm);
+    parm.msg_lev = GLP_MSG_OFF;
+    int rc = glp_simplex(lp, &parm);
+    double t = (rc == 0 && glp_get_status(lp) == GLP_OPT) ? glp_get_col_prim(lp, nc) : NAN;
+    glp_delete_prob(lp);
+    return -t;
+}
+
+static floe_world *make_world(int dim, double density, double kn, double gn, double mu, double grav) {
+    floe_world_def d = floe_default_world_def();
+    d.dim = dim;
+    d.mass_2d_area = dim == 2;
+    d.gravity[dim == 2 ? 1 : 2] = -grav;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material m = {"ice", density, 1e9, 0.3};
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, floe_linear_law_create(kn, 0.5 * kn, gn, 0.5 * gn, mu));
+    return w;
+}
+
+static int add_body(floe_world *w, floe_geometry *g, const double x[3], const double q[4], const double v[3],
+                    const double om[3]) {
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = floe_world_add_geometry(w, g);
+    floe_v3_copy(p.x, x);
+    memcpy(p.q, q, sizeof p.q);
+    if (v) floe_v3_copy(p.v, v);
+    if (om) floe_v3_copy(p.w, om);
+    return floe_world_add_particle(w, &p);
+}
+
+/* ---- 1. reported depth against GLPK ---- */
+static void test_depth(int dim) {
+    glp_term_out(GLP_OFF);
+    int n = 0, good = 0, contacts = 0;
+    double worst = 0;
+    for (int t = 0; t < 400; t++) {
+        double scale = pow(10.0, uni(-3, 3));
+        floe_world *w = make_world(dim, 1000, 1e3 * scale, 0, 0, 0);
+        floe_world_record_contacts(w, 1);
+        floe_geometry *ga = dim == 2 ? rand_polygon(scale * uni(0.5, 1)) : rand_polyhedron(scale * uni(0.5, 1));
+        floe_geometry *gb = dim == 2 ? rand_polygon(scale * uni(0.5, 1)) : rand_polyhedron(scale * uni(0.5, 1));
+        double ra = floe_geometry_bounding_radius(ga), rb = floe_geometry_bounding_radius(gb);
+        double qa[4], qb[4], u[3], xa[3] = {0, 0, 0}, xb[3];
+        if (dim == 2) {
+            quat_z(qa, uni(0, 2 * M_PI));
+            quat_z(qb, uni(0, 2 * M_PI));
+            double th = uni(0, 2 * M_PI);
+            floe_v3_set(u, cos(th), sin(th), 0);
+        } else {
+            rand_quat(qa);
+            rand_quat(qb);
+            rand_unit(u);
+        }
+        double dist = uni(0.3, 1.0) * (ra + rb);
+        for (int k = 0; k < 3; k++) xb[k] = dist * u[k];
+        add_body(w, ga, xa, qa, NULL, NULL);
+        add_body(w, gb, xb, qb, NULL, NULL);
+        int rc = floe_world_prepare(w);
+        if (!rc) rc = floe_world_step(w);
+        if (rc) { /* a very deep random overlap may be refused as unstable: not a depth sample */
+            floe_world_destroy(w);
+            continue;
+        }
+        double A[4 * 64], B[4 * 64];
+        int na = world_planes(w, 0, A), nb = world_planes(w, 1, B);
+        double ref = fmax(glpk_depth(dim, A, na, B, nb), glpk_depth(dim, B, nb, A, na));
+        double got = w->ncontacts > 0 ? w->contacts[0].depth : 0.0;
+        double size = fmin(ra, rb);
+        if (ref > 1e-9 * size) {
+            n++;
+            contacts += w->ncontacts > 0;
+            double e = fabs(got - ref) / size;
+            good += e <= 1e-9;
+            if (e > worst) worst = e;
+        }
+        floe_world_destroy(w);
+    }
+    printf("  %dD depth vs GLPK: %d of %d overlapping pairs within 1e-9 x size (worst %.2e), %d reported\n", dim, good,
+           n, worst, contacts);
+    CHECK(n >= 100 && good >= 0.99 * n, "%dD world depth equals the deepest-point depth (GLPK) in %d of %d pairs", dim,
+          good, n);
+}
+
+/* ---- 2. frictionless undamped collisions ---- */
+static double kinetic(const floe_world *w) {
+    floe_energy e = floe_world_energy(w);
+    return e.kinetic_trans + e.kinetic_rot;
+}
+
+/* one random incidence; returns the relative energy error after separation (NAN if the run
+ * failed), *peak the largest |E(t) - E0| / E0 during the collision */
+static double collide(int dim, double scale, double dt_frac, double *peak, char *why, size_t nwhy) {
+    double kn = 1e8 * scale / 1e3;
+    floe_world *w = make_world(dim, 917, kn, 0, 0, 0);
+    floe_geometry *ga = dim == 2 ? rand_polygon(scale * uni(0.5, 1)) : rand_polyhedron(scale * uni(0.5, 1));
+    floe_geometry *gb = dim == 2 ? rand_polygon(scale * uni(0.5, 1)) : rand_polyhedron(scale * uni(0.5, 1));
+    double ra = floe_geometry_bounding_radius(ga), rb = floe_geometry_bounding_radius(gb);
+    double qa[4], qb[4], u[3], lat[3], xa[3] = {0, 0, 0}, xb[3];
+    if (dim == 2) {
+        quat_z(qa, uni(0, 2 * M_PI));
+        quat_z(qb, uni(0, 2 * M_PI));
+        double th = uni(0, 2 * M_PI);
+        floe_v3_set(u, cos(th), sin(th), 0);
+        floe_v3_set(lat, -sin(th), cos(th), 0);
+    } else {
+        rand_quat(qa);
+        rand_quat(qb);
+        rand_unit(u);
+        double t[3];
+        rand_unit(t);
+        floe_v3_cross(lat, u, t);
+        floe_v3_scale(lat, 1.0 / floe_v3_norm(lat));
+    }
+    /* impact parameter up to the sum of the radii: glancing corner hits included */
+    double b = uni(-0.8, 0.8) * (ra + rb);
+    for (int k = 0; k < 3; k++) xb[k] = 1.02 * (ra + rb) * u[k] + b * lat[k];
+    int ia = add_body(w, ga, xa, qa, NULL, NULL), ib = add_body(w, gb, xb, qb, NULL, NULL);
+    (void)ia;
+    (void)ib;
+    if (floe_world_prepare(w)) {
+        snprintf(why, nwhy, "prepare: %s", floe_world_last_error(w));
+        floe_world_destroy(w);
+        return NAN;
+    }
+    /* speed: a few per cent of the size as the largest overlap */
+    double m = w->p.mass[0] * w->p.mass[1] / (w->p.mass[0] + w->p.mass[1]);
+    double v = 0.02 * fmin(ra, rb) * sqrt(kn / m);
+    for (int k = 0; k < 3; k++) {
+        w->p.v[k] = 0.5 * v * u[k];
+        w->p.v[3 + k] = -0.5 * v * u[k];
+    }
+    double om = v / fmin(ra, rb);
+    if (dim == 2) {
+        w->p.w[2] = uni(-0.3, 0.3) * om;
+        w->p.w[5] = uni(-0.3, 0.3) * om;
+    } else {
+        double t[3];
+        rand_unit(t);
+        for (int k = 0; k < 3; k++) w->p.w[k] = 0.3 * om * t[k] * urand();
+        rand_unit(t);
+        for (int k = 0; k < 3; k++) w->p.w[3 + k] = 0.3 * om * t[k] * urand();
+    }
+    /* the angular momentum is the integrated variable: set from w (and redo the step) */
+    w->prepared = 0;
+    floe_world_def *d = &w->def;
+    if (dt_frac > 0) {
+        d->dt = 0;
+        floe_world_prepare(w);
+        d->dt = dt_frac * floe_world_critical_dt(w);
+        w->prepared = 0;
+    }
+    if (floe_world_prepare(w)) {
+        snprintf(why, nwhy, "prepare: %s", floe_world_last_error(w));
+        floe_world_destroy(w);
+        return NAN;
+    }
+    double E0 = kinetic(w), worst = 0;
+    int touched = 0;
+    long apart = 0, s;
+    long max_steps = (long)(20 * 2 * (ra + rb) / v / floe_world_dt(w)) + 2000;
+    for (s = 0; s < max_steps; s++) {
+        if (floe_world_step(w)) {
+            snprintf(why, nwhy, "step: %s", floe_world_last_error(w));
+            floe_world_destroy(w);
+            return NAN;
+        }
+        floe_energy e = floe_world_energy(w);
+        double dE = fabs(e.kinetic_trans + e.kinetic_rot + e.elastic - E0) / E0;
+        if (dE > worst) worst = dE;
+        if (floe_world_contact_count(w) > 0) { touched = 1; apart = 0; }
+        else if (touched && ++apart > 50) {
+            /* separating: bounding spheres apart for good */
+            double dx[3];
+            floe_v3_sub(dx, w->p.x + 3, w->p.x);
+            if (floe_v3_norm(dx) > ra + rb) break;
+        }
+    }
+    double err = fabs(kinetic(w) - E0) / E0;
+    *peak = worst;
+    if (!touched) err = -1; /* missed: not a sample */
+    snprintf(why, nwhy, "%ld steps", s);
+    floe_world_destroy(w);
+    return err;
+}
+
+static void test_collisions(int dim, double scale, double dt_frac, int count, double tol) {
+    int n = 0, bad = 0, fails = 0;
+    double worst = 0, worst_peak = 0, sum = 0;
+    char why[512];
+    for (int t = 0; t < count; t++) {
+        double peak = 0;
+        double e = collide(dim, scale, dt_frac, &peak, why, sizeof why);
+        if (isnan(e)) {
+            if (fails++ < 3) fprintf(stderr, "  collision %d failed: %s\n", t, why);
+            continue;
+        }
+        if (e < 0) continue;
+        n++;
+        sum += e;
+        if (e > tol) {
+            if (bad++ < 3) fprintf(stderr, "  %dD collision %d (scale %g): energy error %.3g (%s)\n", dim, t, scale, e, why);
+        }
+        if (e > worst) worst = e;
+        if (peak > worst_peak) worst_peak = peak;
+    }
+    printf("  %dD collisions at %g m, dt %s: %d hits, energy error after separation max %.2e mean %.2e, "
+           "peak during contact %.2e; %d above %.0e, %d runs failed\n",
+           dim, scale, dt_frac > 0 ? "0.02 x critical" : "default", n, worst, n ? sum / n : 0, worst_peak, bad, tol, fails);
+    /* measured: 1-2 % of the incidences stay above (worst 2e-2 at 0.02 x critical), an
+     * open item of issue 10; the old midpoint/face-overlap contact had 90 % above, worst 3 */
+    double share = dt_frac > 0 ? 0.03 : 0.05;
+    CHECK(n >= count / 2 && bad <= share * n && fails == 0,
+          "%dD frictionless collisions at %g m conserve energy within %.0e in %.0f %% of the incidences: %d of %d "
+          "above, %d failed (worst %.3g)", dim, scale, tol, 100 * (1 - share), bad, n, fails, worst);
+}
+
+/* ---- 3. stacks at rest ---- */
+static double body_drift(const floe_world *w, int i, const double *x0, const double *q0, double size) {
+    /* the largest displacement of the corners of a cube of side `size` around the centre */
+    double worst = 0;
+    for (int c = 0; c < 8; c++) {
+        double X[3] = {(c & 1 ? 0.5 : -0.5) * size, (c & 2 ? 0.5 : -0.5) * size, (c & 4 ? 0.5 : -0.5) * size};
+        double a[3], b[3];
+        floe_q_rotate(a, w->p.q + 4 * i, X);
+        floe_v3_add(a, a, w->p.x + 3 * i);
+        floe_q_rotate(b, q0 + 4 * i, X);
+        floe_v3_add(b, b, x0 + 3 * i);
+        floe_v3_sub(a, a, b);
+        double d = floe_v3_norm(a);
+        if (d > worst) worst = d;
+    }
+    return worst;
+}
+
+static void run_rest(floe_world *w, const char *name, double size) {
+    int rc = floe_world_prepare(w);
+    CHECK(rc == FLOE_OK, "%s prepare: %s", name, floe_world_last_error(w));
+    if (rc) return;
+    long settle = 40000, hold = 100000;
+    for (long s = 0; s < settle && !rc; s++) rc = floe_world_step(w);
+    int n = w->p.n;
+    double *x0 = malloc(sizeof(double) * 3 * n), *q0 = malloc(sizeof(double) * 4 * n);
+    memcpy(x0, w->p.x, sizeof(double) * 3 * n);
+    memcpy(q0, w->p.q, sizeof(double) * 4 * n);
+    for (long s = 0; s < hold && !rc; s++) rc = floe_world_step(w);
+    CHECK(rc == FLOE_OK, "%s run: %s", name, floe_world_last_error(w));
+    double worst = 0;
+    for (int i = 0; i < n; i++)
+        if (w->p.motion[i] == FLOE_FREE) worst = fmax(worst, body_drift(w, i, x0, q0, size));
+    printf("  %s: drift over %ld steps after settling %.2e of a size (bound 1e-6), %d contacts\n", name, hold,
+           worst / size, floe_world_contact_count(w));
+    CHECK(worst < 1e-6 * size, "%s at rest: drift %.3g of a size over 1e5 steps (bound 1e-6)", name, worst / size);
+    free(x0);
+    free(q0);
+}
+
+static void test_box_stack(void) {
+    const double a = 0.1, rho = 1000, m = rho * a * a * a, kn = 1e5 * m / 1e-3 * 1e-2;
+    floe_world *w = make_world(3, rho, kn, 2 * 0.5 * sqrt(kn * m), 0.5, 9.81);
+    double o[3] = {0, 0, 0}, nz[3] = {0, 0, 1};
+    floe_world_add_wall(w, o, nz, 0, FLOE_FIXED);
+    double q[4] = {1, 0, 0, 0};
+    double z = 0;
+    /* three boxes of different sizes, centred (an off-centre box rocks: docs/models.md) */
+    double side[3] = {1.2 * a, a, 0.8 * a}, off[3] = {0, 0, 0};
+    for (int k = 0; k < 3; k++) {
+        double x[3] = {off[k], 0.1 * off[k], z + 0.5 * side[k]};
+        add_body(w, floe_box_create(side[k], side[k], side[k]), x, q, NULL, NULL);
+        z += side[k];
+    }
+    run_rest(w, "stack of 3 boxes", a);
+    floe_world_destroy(w);
+}
+
+static void test_prism_pile(void) {
+    const double a = 0.1, rho = 1000, m = rho * a * a * a, kn = 1e3 * m / 1e-3;
+    floe_world *w = make_world(3, rho, kn, 2 * 0.5 * sqrt(kn * m), 0.5, 9.81);
+    double o[3] = {0, 0, 0}, nz[3] = {0, 0, 1};
+    floe_world_add_wall(w, o, nz, 0, FLOE_FIXED);
+    double hex[12], tri[6] = {0.6 * a, 0, -0.3 * a, 0.5 * a, -0.3 * a, -0.5 * a};
+    for (int k = 0; k < 6; k++) {
+        hex[2 * k] = 0.5 * a * cos(M_PI * k / 3);
+        hex[2 * k + 1] = 0.5 * a * sin(M_PI * k / 3);
+    }
+    char err[128];
+    double z = 0;
+    for (int k = 0; k < 4; k++) {
+        double h = 0.3 * a;
+        floe_geometry *g = k % 2 ? floe_prism_create(tri, 3, h, err, sizeof err) : floe_prism_create(hex, 6, h, err, sizeof err);
+        const floe_polytope *p = (const floe_polytope *)g;
+        /* as written: X_input = R(frame_q) X_body + frame_x, input origin at (0.1 a k, 0, z + h/2) */
+        double x[3] = {0.1 * a * k + p->frame_x[0], p->frame_x[1], z + 0.5 * h + p->frame_x[2]}, qi[4];
+        memcpy(qi, p->frame_q, sizeof qi);
+        add_body(w, g, x, qi, NULL, NULL);
+        z += h;
+    }
+    run_rest(w, "pile of 4 prisms", a);
+    floe_world_destroy(w);
+}
+
+int main(int argc, char **argv) {
+    int quick = argc > 1 && !strcmp(argv[1], "quick");
+    test_depth(2);
+    test_depth(3);
+    /* at the default step the error is the integrator's (restitution within 0.5 %); at
+     * 0.02 x critical the contact must conserve energy within 1e-3 */
+    int count = quick ? 60 : 120;
+    for (int dim = 2; dim <= 3; dim++)
+        for (int sc = 0; sc < 2; sc++) {
+            double scale = sc ? 1e-3 : 1e3;
+            test_collisions(dim, scale, 0, count, 1e-2);
+            test_collisions(dim, scale, 0.02, count / 2, 1e-3);
+        }
+    test_box_stack();
+    test_prism_pile();
+    return check_summary("test_polytope_contact");
+}
