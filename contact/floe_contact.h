@@ -40,6 +40,13 @@ typedef struct floe_contact {
                                 two faces the depth grows at this rate along n only, and the
                                 world scales the law's force by it so that the force stays the
                                 gradient of the stored energy (1 otherwise; set by detection) */
+    /* set only for the overlap-area law (2D polygon pairs, floe_overlap_law_class): */
+    double area;             /* overlap area of the two polygons, m^2 */
+    double area_force[3];    /* the elastic force on i per unit stiffness, -dI/dx_i: its length
+                                equals the overlap area where one edge of each body bounds it */
+    double area_energy;      /* I = (int_{A∩B} -phi_B dA + int_{A∩B} -phi_A dA) / 2, m^3: the stored
+                                energy per unit stiffness */
+    double wr[3];            /* relative angular velocity w_i - w_j (set by the world) */
 } floe_contact;
 
 typedef struct floe_contact_result {
@@ -157,6 +164,26 @@ floe_contact_law *floe_short_range_law_create_pd(double c, double delta, double 
 /* "none": the pair of materials never interacts by contact: the world skips its pairs before
  * detection (no force, no history, no interpenetration guard). */
 floe_contact_law *floe_no_contact_law_create(void);
+
+/* ---- overlap-area law for 2D polygons (contact/overlap_law.c) ----
+ * Elastic normal force = ka x (the conservative overlap resultant, of length the overlap
+ * area A: F = ka A where one edge of each polygon bounds the overlap, as SubZero's floe
+ * contact), stored energy ka I (floe_contact.area_energy), a Winkler foundation of modulus ka:
+ * flat edges in contact carry a linear pressure and rest without rocking. Dashpot gn (N s/m)
+ * on the normal velocity at the resultant's point, Coulomb friction with a shear spring ks
+ * (N/m) and dashpot gs as the linear law. ka in N/m^3 (N per m^2 of overlap and per m of
+ * depth ... per metre of thickness when masses are per area). */
+typedef struct floe_overlap_law {
+    floe_contact_law base;
+    double ka, ks, gn, gs, mu;
+} floe_overlap_law;
+extern const floe_contact_law_class floe_overlap_law_class;
+floe_contact_law *floe_overlap_law_create(double ka, double ks, double gn, double gs, double mu);
+/* Coulomb friction with a shear spring, shared by the linear and overlap laws: updates the
+ * spring s (history[0..2]) by c->vt dt, returns the tangential force in Ft and adds the
+ * dissipated energy to *diss (ParticLS eqs 17-18, LAMMPS gran/hooke/history reset) */
+void floe_contact_coulomb(const floe_contact *c, double ks, double gs, double mu, double Fn, double *s,
+                          double Ft[3], double *diss);
 /* 1 when the world must keep the pair out of contact (the "none" law), else 0 (NULL: 0). */
 static inline int floe_contact_law_no_contact(const floe_contact_law *law) {
     return law && law->klass == &floe_no_contact_law_class;

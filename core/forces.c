@@ -123,6 +123,15 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         } else if (warm) {
             warm[0] = NAN; /* apart: the next approach starts cold */
         }
+        const floe_contact_law *law = w->laws[p->material[i] * nm + p->material[j]];
+        if (r == 1 && law->klass == &floe_overlap_law_class) {
+            r = floe_detect_overlap(w, i, j, sub, &c);
+            if (r == -FLOE_ENOTSUP)
+                return floe_world_error(w, FLOE_ENOTSUP,
+                                        "contact law %s needs two polygons in a 2D world; particles %d and %d are %s-%s",
+                                        law->klass->name, i, j, w->geoms[p->geom[i]]->klass->name,
+                                        w->geoms[p->geom[j]]->klass->name);
+        }
         if (r < 0 && r != -FLOE_ENOTSUP)
             return floe_world_error(w, -r, "contact detection failed for particles %d and %d (%s-%s): %s", i, j,
                                     w->geoms[p->geom[i]]->klass->name, w->geoms[p->geom[j]]->klass->name,
@@ -163,6 +172,7 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         floe_v3_cross(uj, p->w + 3 * j, rj);
         for (int a = 0; a < 3; a++) c.vr[a] = (p->v[3 * i + a] + ui[a]) - (p->v[3 * j + a] + uj[a]);
         c.vn = floe_v3_dot(c.vr, c.n);
+        floe_v3_sub(c.wr, p->w + 3 * i, p->w + 3 * j);
         if (track) { /* adaptive steps: overlap change over the step relative to the size */
             double e = fabs(c.vn) * w->dt / fmin(rad_i, rad_j);
             if (e > eta_d) eta_d = e;
@@ -173,7 +183,6 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         /* prepare evaluates forces without advancing history; the RK2 midpoint advances it
          * by peek_dt and the caller restores it */
         c.dt = stepping ? w->dt : w->peek_dt;
-        const floe_contact_law *law = w->laws[p->material[i] * nm + p->material[j]];
         floe_contact_result res;
         memset(&res, 0, sizeof res);
         int rc = law->klass->force(law, &c, hist, &res);
@@ -201,6 +210,8 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
             double fav[3];
             for (int a = 0; a < 3; a++) fav[a] = 0.5 * (res.force[a] + hist[FLOE_FORCE_SLOT + a]);
             double wc = -floe_v3_dot(fav, c.vr) * c.dt;
+            /* couples of the law (rocking dashpots): their work over the step */
+            wc -= (floe_v3_dot(res.torque_i, p->w + 3 * i) + floe_v3_dot(res.torque_j, p->w + 3 * j)) * c.dt;
             /* surfaces that grow (state objects) move towards each other at rdot_i + rdot_j:
              * that work enters the contact from outside the particle system */
             double grow = any_growth ? p->rdot[i] + p->rdot[j] : 0.0;

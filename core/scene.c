@@ -604,7 +604,8 @@ static int sc_parse_materials(sc *s, struct fy_node *seq, struct fy_node *key)
     return FLOE_OK;
 }
 
-static const char *const sc_models[] = {"hertz_mindlin", "linear", "viscoelastic", "short_range", "none", NULL};
+static const char *const sc_models[] = {"hertz_mindlin", "linear", "viscoelastic", "short_range", "none",
+                                        "overlap_area", NULL};
 
 static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
 {
@@ -616,6 +617,7 @@ static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
     static const char *const keys_sr[] = {"materials", "model", "stiffness", "micromodulus", "horizon",
                                           "volume", "factor", NULL};
     static const char *const keys_none[] = {"materials", "model", NULL};
+    static const char *const keys_ov[] = {"materials", "model", "stiffness", "ks", "gn", "gs", "friction", NULL};
     static const char *const keys_any[] = {"materials", "model", "restitution", "friction", "kn",
                                            "ks", "gn", "gs", "tension", "stiffness", "micromodulus",
                                            "horizon", "volume", "factor", NULL};
@@ -639,7 +641,7 @@ static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
         FLOE_TRY(sc_enum(s, &m, "model", sc_models, -1, &model));
         /* re-check the keys against those valid for this model */
         const char *const *valid = model == 0 ? keys_hm : model == 1 ? keys_lin : model == 2 ? keys_ve
-                                 : model == 3 ? keys_sr : keys_none;
+                                 : model == 3 ? keys_sr : model == 5 ? keys_ov : keys_none;
         {
             void *it2 = NULL;
             struct fy_node_pair *p;
@@ -659,6 +661,8 @@ static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
                                "factor; it has no damping or friction)";
                     else if (model == 4)
                         hint = " (none takes only materials: the pair never touches)";
+                    else if (model == 5)
+                        hint = " (overlap_area takes stiffness (N/m^3), ks, gn, gs, friction)";
                     else
                         hint = " (linear/viscoelastic laws take kn, ks, gn, gs, friction, tension)";
                     return sc_fail(s, FLOE_EPARSE, fy_node_pair_key(p),
@@ -743,6 +747,17 @@ static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
             }
         } else if (model == 4) {
             /* none: nothing to read */
+        } else if (model == 5) {
+            /* overlap area (2D polygons): stiffness per overlap area and depth */
+            FLOE_TRY(sc_num(s, &m, "stiffness", 1, 0, &L->kn));
+            if (!(L->kn > 0 && isfinite(L->kn)))
+                return sc_range(s, &m, "stiffness", "> 0 (N/m^3: force per m^2 of overlap and m of depth)", L->kn);
+            FLOE_TRY(sc_num(s, &m, "ks", 0, 0, &L->ks));
+            if (!(L->ks >= 0)) return sc_range(s, &m, "ks", ">= 0 (N/m)", L->ks);
+            FLOE_TRY(sc_num(s, &m, "gn", 0, 0, &L->gn));
+            if (!(L->gn >= 0)) return sc_range(s, &m, "gn", ">= 0 (N s/m)", L->gn);
+            FLOE_TRY(sc_num(s, &m, "gs", 0, 0, &L->gs));
+            if (!(L->gs >= 0)) return sc_range(s, &m, "gs", ">= 0 (N s/m)", L->gs);
         } else {
             FLOE_TRY(sc_num(s, &m, "kn", 1, 0, &L->kn));
             if (!(L->kn > 0)) return sc_range(s, &m, "kn", "> 0 (N/m)", L->kn);
@@ -772,6 +787,8 @@ static int sc_build_laws(sc *s)
             law = floe_short_range_law_create(L->kn);
         } else if (!strcmp(L->model, "none")) {
             law = floe_no_contact_law_create();
+        } else if (!strcmp(L->model, "overlap_area")) {
+            law = floe_overlap_law_create(L->kn, L->ks, L->gn, L->gs, L->mu);
         } else {
             law = floe_linear_law_create(L->kn, L->ks, L->gn, L->gs, L->mu);
             if (law) ((floe_linear_law *)law)->tension = L->tension;

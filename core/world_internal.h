@@ -195,6 +195,10 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
 /* contact detection (contact/detect.c): fills c (x1, x2, n, depth, point, r_eff) for the
  * pair; returns 1 if penetrating, 0 if not, < 0 on error. */
 int floe_detect(floe_world *w, int i, int j, int sub, double *warm, floe_contact *c);
+/* overlap area, its energy integral and conservative resultant for a 2D polygon pair (the
+ * overlap-area law): fills area, area_force, area_energy, and moves point and n onto the
+ * resultant; 1 if they overlap, 0 if not, -FLOE_ENOTSUP for other pairs */
+int floe_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact *c);
 /* 1 if a detector exists for the two geometries (every piece pair of compounds) */
 int floe_detect_supported(const floe_geometry *a, const floe_geometry *b);
 /* 1 if some piece pair goes through ADMM or the polytope LP (needs warm-start storage) */

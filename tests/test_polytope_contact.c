@@ -137,6 +137,9 @@ static double glpk_depth(int dim, const double *A, int na, const double *B, int 
     return -t;
 }
 
+static int use_overlap = 0; /* 1: the overlap-area law (2D), ka = kn / size */
+static double overlap_size = 1;
+
 static floe_world *make_world(int dim, double density, double kn, double gn, double mu, double grav) {
     floe_world_def d = floe_default_world_def();
     d.dim = dim;
@@ -145,7 +148,10 @@ static floe_world *make_world(int dim, double density, double kn, double gn, dou
     floe_world *w = floe_world_create(&d, NULL, 0);
     floe_material m = {"ice", density, 1e9, 0.3};
     floe_world_add_material(w, &m);
-    floe_world_set_law(w, 0, 0, floe_linear_law_create(kn, 0.5 * kn, gn, 0.5 * gn, mu));
+    if (use_overlap)
+        floe_world_set_law(w, 0, 0, floe_overlap_law_create(kn / overlap_size, 0.5 * kn, gn, 0.5 * gn, mu));
+    else
+        floe_world_set_law(w, 0, 0, floe_linear_law_create(kn, 0.5 * kn, gn, 0.5 * gn, mu));
     return w;
 }
 
@@ -223,6 +229,7 @@ static double kinetic(const floe_world *w) {
  * failed), *peak the largest |E(t) - E0| / E0 during the collision */
 static double collide(int dim, double scale, double dt_frac, double *peak, char *why, size_t nwhy) {
     double kn = 1e8 * scale / 1e3;
+    overlap_size = scale;
     floe_world *w = make_world(dim, 917, kn, 0, 0, 0);
     floe_geometry *ga = dim == 2 ? rand_polygon(scale * uni(0.5, 1)) : rand_polyhedron(scale * uni(0.5, 1));
     floe_geometry *gb = dim == 2 ? rand_polygon(scale * uni(0.5, 1)) : rand_polyhedron(scale * uni(0.5, 1));
@@ -335,12 +342,13 @@ static void test_collisions(int dim, double scale, double dt_frac, int count, do
         if (e > worst) worst = e;
         if (peak > worst_peak) worst_peak = peak;
     }
-    printf("  %dD collisions at %g m, dt %s: %d hits, energy error after separation max %.2e mean %.2e, "
+    printf("  %s%dD collisions at %g m, dt %s: %d hits, energy error after separation max %.2e mean %.2e, "
            "peak during contact %.2e; %d above %.0e, %d runs failed\n",
-           dim, scale, dt_frac > 0 ? "0.02 x critical" : "default", n, worst, n ? sum / n : 0, worst_peak, bad, tol, fails);
+           use_overlap ? "overlap-area law, " : "", dim, scale, dt_frac > 0 ? "0.02 x critical" : "default", n, worst, n ? sum / n : 0, worst_peak, bad, tol, fails);
     /* measured: 1-2 % of the incidences stay above (worst 2e-2 at 0.02 x critical), an
      * open item of issue 10; the old midpoint/face-overlap contact had 90 % above, worst 3 */
-    double share = dt_frac > 0 ? 0.03 : 0.05;
+    /* the overlap-area law's energy is smooth: every incidence within the tolerance */
+    double share = use_overlap ? 0.0 : dt_frac > 0 ? 0.03 : 0.05;
     CHECK(n >= count / 2 && bad <= share * n && fails == 0,
           "%dD frictionless collisions at %g m conserve energy within %.0e in %.0f %% of the incidences: %d of %d "
           "above, %d failed (worst %.3g)", dim, scale, tol, 100 * (1 - share), bad, n, fails, worst);
@@ -364,11 +372,11 @@ static double body_drift(const floe_world *w, int i, const double *x0, const dou
     return worst;
 }
 
-static void run_rest(floe_world *w, const char *name, double size) {
+static void run_rest(floe_world *w, const char *name, double size, long settle) {
     int rc = floe_world_prepare(w);
     CHECK(rc == FLOE_OK, "%s prepare: %s", name, floe_world_last_error(w));
     if (rc) return;
-    long settle = 40000, hold = 100000;
+    long hold = 100000;
     for (long s = 0; s < settle && !rc; s++) rc = floe_world_step(w);
     int n = w->p.n;
     double *x0 = malloc(sizeof(double) * 3 * n), *q0 = malloc(sizeof(double) * 4 * n);
@@ -400,7 +408,7 @@ static void test_box_stack(void) {
         add_body(w, floe_box_create(side[k], side[k], side[k]), x, q, NULL, NULL);
         z += side[k];
     }
-    run_rest(w, "stack of 3 boxes", a);
+    run_rest(w, "stack of 3 boxes", a, 40000);
     floe_world_destroy(w);
 }
 
@@ -426,8 +434,119 @@ static void test_prism_pile(void) {
         add_body(w, g, x, qi, NULL, NULL);
         z += h;
     }
-    run_rest(w, "pile of 4 prisms", a);
+    run_rest(w, "pile of 4 prisms", a, 40000);
     floe_world_destroy(w);
+}
+
+/* ---- 4. the overlap-area law: exact gradient, flat edges, rest ---- */
+static void test_overlap_gradient(void) {
+    int n = 0, bad = 0, flat_ok = 0;
+    double worst = 0;
+    for (int t = 0; t < 200; t++) {
+        double scale = pow(10.0, uni(-3, 3));
+        floe_world *w = make_world(2, 917, 1, 0, 0, 0);
+        floe_geometry *ga = rand_polygon(scale), *gb = rand_polygon(scale);
+        double qa[4], qb[4], xa[3] = {0, 0, 0}, xb[3];
+        quat_z(qa, uni(0, 2 * M_PI));
+        quat_z(qb, uni(0, 2 * M_PI));
+        double th = uni(0, 2 * M_PI), dist = uni(0.5, 1.6) * scale;
+        floe_v3_set(xb, dist * cos(th), dist * sin(th), 0);
+        add_body(w, ga, xa, qa, NULL, NULL);
+        add_body(w, gb, xb, qb, NULL, NULL);
+        floe_contact c;
+        memset(&c, 0, sizeof c);
+        if (floe_detect(w, 0, 1, 0, NULL, &c) != 1 || floe_detect_overlap(w, 0, 1, 0, &c) != 1) {
+            floe_world_destroy(w);
+            continue;
+        }
+        n++;
+        /* central differences of I in x, y and the rotation of body 0 about its centre */
+        double h = 1e-6 * scale, g[3], F[3], Mz;
+        floe_contact c2;
+        for (int k = 0; k < 3; k++) {
+            double Ip = 0, Im = 0;
+            for (int sgn = -1; sgn <= 1; sgn += 2) {
+                double x0[3], q0[4];
+                memcpy(x0, w->p.x, sizeof x0);
+                memcpy(q0, w->p.q, sizeof q0);
+                if (k < 2) w->p.x[k] += sgn * h;
+                else {
+                    double dq[4], qn[4];
+                    quat_z(dq, sgn * h / scale);
+                    floe_q_mul(qn, dq, q0);
+                    memcpy(w->p.q, qn, sizeof qn);
+                }
+                memset(&c2, 0, sizeof c2);
+                floe_detect(w, 0, 1, 0, NULL, &c2);
+                floe_detect_overlap(w, 0, 1, 0, &c2);
+                if (sgn < 0) Im = c2.area_energy; else Ip = c2.area_energy;
+                memcpy(w->p.x, x0, sizeof x0);
+                memcpy(w->p.q, q0, sizeof q0);
+            }
+            g[k] = -(Ip - Im) / (2 * h) * (k < 2 ? 1 : scale);
+        }
+        floe_v3_copy(F, c.area_force);
+        Mz = (c.point[0] - w->p.x[0]) * F[1] - (c.point[1] - w->p.x[1]) * F[0];
+        double ref = fmax(fabs(F[0]) + fabs(F[1]), c.area);
+        double e = fmax(fmax(fabs(g[0] - F[0]), fabs(g[1] - F[1])), fabs(g[2] - Mz) / scale) / ref;
+        if (e > worst) worst = e;
+        if (e > 1e-5) bad++;
+        floe_world_destroy(w);
+    }
+    /* two aligned squares, one moved by (0.3, -0.2) of a side into the other: the force is
+     * the overlap area, along the axis */
+    {
+        floe_world *w = make_world(2, 917, 1, 0, 0, 0);
+        double sq[8] = {-0.5, -0.5, 0.5, -0.5, 0.5, 0.5, -0.5, 0.5}, q[4] = {1, 0, 0, 0};
+        char err[64];
+        double xa[3] = {0, 0, 0}, xb[3] = {0.3, 0.98, 0};
+        add_body(w, floe_polygon_create(sq, 4, err, sizeof err), xa, q, NULL, NULL);
+        add_body(w, floe_polygon_create(sq, 4, err, sizeof err), xb, q, NULL, NULL);
+        floe_contact c;
+        memset(&c, 0, sizeof c);
+        if (floe_detect(w, 0, 1, 0, NULL, &c) == 1 && floe_detect_overlap(w, 0, 1, 0, &c) == 1) {
+            double A = 0.7 * 0.02;
+            printf("  overlap law, flat edges: area %.6g (exact %.6g), force (%.3g, %.6g), energy %.6g (exact %.6g)\n",
+                   c.area, A, c.area_force[0], c.area_force[1], c.area_energy, 0.7 * 0.02 * 0.02 / 2);
+            /* the corners of the overlap are nearer the side edges: corrections of order d / L */
+            flat_ok = fabs(c.area - A) < 1e-12 && fabs(c.area_force[1] / A + 1) < 0.03 &&
+                      fabs(c.area_force[0]) < 0.03 * A && fabs(c.area_energy / (A * 0.02 / 2) - 1) < 0.03;
+        }
+        floe_world_destroy(w);
+    }
+    printf("  overlap law: gradient of I vs force and moment on %d random polygon pairs: worst %.2e of the area\n", n,
+           worst);
+    CHECK(n >= 100 && bad == 0, "overlap-area force is the gradient of its energy (%d of %d beyond 1e-5, worst %.3g)", bad,
+          n, worst);
+    CHECK(flat_ok, "overlap law on aligned squares: force = overlap area along the edge normal, energy = A d / 2 "
+                   "(within d / L = 2 %%)");
+}
+
+static void test_overlap_rest(void) {
+    /* 2D: three boxes of 1 m stacked on a wall, the middle one off-centre by 0.2 m, under
+     * gravity: a Winkler foundation holds them at rest */
+    use_overlap = 1;
+    const double a = 1, rho = 917, m = rho * a * a, kn = 1e3 * m * 9.81 / a;
+    overlap_size = a;
+    double q[4] = {1, 0, 0, 0};
+    /* walls are not polygons (the law needs polygon pairs): a fixed polygon floor */
+    floe_world *w = make_world(2, rho, kn, 2 * 0.5 * sqrt(kn * m), 0.5, 9.81);
+    char err[64];
+    double floor_xy[8] = {-3, -0.5, 3, -0.5, 3, 0.5, -3, 0.5}, sq[8] = {-0.5, -0.5, 0.5, -0.5, 0.5, 0.5, -0.5, 0.5};
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = floe_world_add_geometry(w, floe_polygon_create(floor_xy, 4, err, sizeof err));
+    p.motion = FLOE_FIXED;
+    floe_v3_set(p.x, 0, -0.5, 0);
+    floe_world_add_particle(w, &p);
+    double off[3] = {0, 0.2, -0.1};
+    for (int k = 0; k < 3; k++) {
+        double x[3] = {off[k] * a, (0.5 + k) * a, 0};
+        add_body(w, floe_polygon_create(sq, 4, err, sizeof err), x, q, NULL, NULL);
+    }
+    /* the off-centre stack tilts and slides into place slowly: 60 s of settling */
+    run_rest(w, "overlap-area law: 2D stack of 3 boxes, off-centre by 0.2 and 0.1", a, 400000);
+    floe_world_destroy(w);
+    use_overlap = 0;
 }
 
 int main(int argc, char **argv) {
@@ -445,5 +564,13 @@ int main(int argc, char **argv) {
         }
     test_box_stack();
     test_prism_pile();
+    test_overlap_gradient();
+    test_overlap_rest();
+    use_overlap = 1;
+    for (int sc = 0; sc < 2; sc++) {
+        test_collisions(2, sc ? 1e-3 : 1e3, 0, count, 1e-2);
+        test_collisions(2, sc ? 1e-3 : 1e3, 0.02, count / 2, 1e-3);
+    }
+    use_overlap = 0;
     return check_summary("test_polytope_contact");
 }

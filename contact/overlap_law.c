@@ -1,0 +1,107 @@
+/* overlap_law.c - overlap-area contact for 2D polygons (floe_contact.h).
+ *
+ * The geometry (contact/detect.c, floe_detect_overlap) gives the overlap area A, the
+ * integral I = (∫_{A∩B} -φ_B dA + ∫_{A∩B} -φ_A dA)/2 and its exact gradient, the resultant
+ * -dI/dx_i, at a point on its line of action. With stored energy ka I the elastic force is
+ * ka times that resultant: a conservative Winkler foundation (pressure ka x local depth on
+ * the boundary of each body inside the other), whose normal force is ka A wherever one
+ * edge of each polygon bounds the overlap (SubZero's "force proportional to the overlap
+ * area", here as the gradient of an energy, so collisions conserve energy and flat edges
+ * rest without rocking).
+ * Normal:      Fn = ka |g| + gn vn, clamped at >= 0 (g = area_force);
+ * Tangential:  the linear law's Coulomb spring (floe_contact_coulomb).
+ * Output:      force on i = ka g - gn vn n + Ft (n = -g/|g|), energy ka I + ks |s|^2 / 2. */
+#include <stdlib.h>
+
+#include "floe_contact.h"
+
+void floe_contact_coulomb(const floe_contact *c, double ks, double gs, double mu, double Fn, double *s,
+                          double Ft[3], double *diss)
+{
+    const double dt = c->dt;
+    floe_contact_rotate_history(s, c->n);
+    floe_v3_axpy(s, dt, c->vt);
+    floe_v3_set(Ft, 0.0, 0.0, 0.0);
+    floe_v3_axpy(Ft, -ks, s);
+    floe_v3_axpy(Ft, -gs, c->vt);
+    const double vt2 = floe_v3_dot(c->vt, c->vt), limit = mu * fabs(Fn), ft2 = floe_v3_dot(Ft, Ft);
+    if (ft2 > limit * limit) {
+        const double ratio = limit / sqrt(ft2);
+        floe_v3_scale(Ft, ratio);
+        if (ks > 0.0) {
+            const double e_before = 0.5 * ks * floe_v3_dot(s, s), minus_inv_ks = -1.0 / ks;
+            for (int k = 0; k < 3; ++k) s[k] = (Ft[k] + gs * c->vt[k]) * minus_inv_ks;
+            *diss += gs * vt2 * dt + (e_before - 0.5 * ks * floe_v3_dot(s, s));
+        } else {
+            floe_v3_set(s, 0.0, 0.0, 0.0);
+            *diss += ratio * gs * vt2 * dt;
+        }
+    } else {
+        *diss += gs * vt2 * dt;
+    }
+}
+
+static int overlap_force(const floe_contact_law *law_, const floe_contact *c, double *hist, floe_contact_result *out)
+{
+    const floe_overlap_law *L = (const floe_overlap_law *)law_;
+    const double fel = L->ka * floe_v3_norm(c->area_force), vn = c->vn;
+    double Fn = fel + L->gn * vn;
+    if (Fn < 0.0) Fn = 0.0;
+    double diss = (Fn - fel) * vn * c->dt;
+    double Ft[3];
+    floe_contact_coulomb(c, L->ks, L->gs, L->mu, Fn, hist, Ft, &diss);
+    /* the dashpot acts at the resultant's point; distributed over a contact of length l
+     * (l = A^2 / 2I, exact for flat edges) it also resists rocking: couple gn l^2/12 (w_i - w_j) */
+    double l = c->area_energy > 0 ? c->area * c->area / (2.0 * c->area_energy) : 0.0;
+    double cr = L->gn * l * l / 12.0;
+    for (int k = 0; k < 3; ++k) {
+        /* elastic part along the exact gradient; the dashpot along n = -g/|g| */
+        out->force[k] = L->ka * c->area_force[k] - (Fn - fel) * c->n[k] + Ft[k];
+        out->torque_i[k] = -cr * c->wr[k];
+        out->torque_j[k] = cr * c->wr[k];
+    }
+    diss += cr * floe_v3_dot(c->wr, c->wr) * c->dt;
+    out->energy = L->ka * c->area_energy + 0.5 * L->ks * floe_v3_dot(hist, hist);
+    out->dissipation = diss;
+    out->fn = Fn;
+    return FLOE_OK;
+}
+
+/* for the critical step: a flat contact of the representative size, stiffness ka x length
+ * (2D: the overlap grows by the contact length per unit depth, at most the
+ * diameter: 4 r_eff for two equal bodies) */
+static void overlap_stiffness(const floe_contact_law *law_, double r_eff, double m_eff, double depth, double *kn,
+                              double *cn)
+{
+    const floe_overlap_law *L = (const floe_overlap_law *)law_;
+    (void)m_eff; (void)depth;
+    if (kn) *kn = L->ka * 4.0 * r_eff;
+    if (cn) *cn = L->gn;
+}
+
+static void overlap_tangential(const floe_contact_law *law_, double r_eff, double m_eff, double depth, double *kt,
+                               double *ct)
+{
+    const floe_overlap_law *L = (const floe_overlap_law *)law_;
+    (void)r_eff; (void)m_eff; (void)depth;
+    if (kt) *kt = L->ks;
+    if (ct) *ct = L->gs;
+}
+
+static void overlap_destroy(floe_contact_law *law) { free(law); }
+
+const floe_contact_law_class floe_overlap_law_class = {
+    1, "overlap_area", 3, overlap_force, overlap_stiffness, overlap_destroy, overlap_tangential
+};
+
+floe_contact_law *floe_overlap_law_create(double ka, double ks, double gn, double gs, double mu)
+{
+    if (!(ka > 0.0) || !(ks >= 0.0) || !(gn >= 0.0) || !(gs >= 0.0) || !(mu >= 0.0) || !isfinite(ka) ||
+        !isfinite(ks) || !isfinite(gn) || !isfinite(gs) || isnan(mu))
+        return NULL;
+    floe_overlap_law *L = calloc(1, sizeof *L);
+    if (!L) return NULL;
+    L->base.klass = &floe_overlap_law_class;
+    L->ka = ka; L->ks = ks; L->gn = gn; L->gs = gs; L->mu = mu;
+    return &L->base;
+}
