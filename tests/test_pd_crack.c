@@ -534,6 +534,138 @@ static void test_faces_contact(void) {
     floe_world_destroy(w);
 }
 
+
+/* run a loaded scene for nsteps; returns its world (NULL on failure) */
+static floe_world *run_scene(const char *text, int nsteps, const char *what) {
+    char err[1024] = "";
+    floe_scene_info info;
+    floe_world *w = load(text, &info, err, sizeof err);
+    CHECK(w != NULL, "%s loads: %s", what, err);
+    if (!w) return NULL;
+    int rc = 0;
+    for (int s = 0; s < nsteps && !rc; s++) rc = floe_world_step(w);
+    CHECK(rc == FLOE_OK, "%s runs: %s", what, floe_world_last_error(w));
+    return w;
+}
+
+/* 8. mode I: a 40 x 40 mm plate (dx = 1 mm) pulled apart by its top and bottom strips to a
+ * far-field strain of about 0.5 s_c over 100 us (12 wave crossings, quasi-static). With a
+ * central pre-crack of 12 mm the bonds break at the crack tips and the crack grows along
+ * its line; its faces open. The same plate without the crack breaks nothing. */
+static const char *tension_scene =
+    "  - region: {box: {min: [0, 0], max: [0.04, 0.04]}}\n"
+    "    spacing: 0.001\n"
+    "    material: {model: pmb, density: 8000, young: 190e9, critical_stretch: 0.002}\n"
+    "    contact_material: steel\n"
+    "    boundary:\n"
+    "      - {region: {box: {min: [-1, -1], max: [1, 0.003]}}, displacement: [0, -1.7e-5], ramp: {linear: 1e-4}}\n"
+    "      - {region: {box: {min: [-1, 0.037], max: [1, 1]}}, displacement: [0, 1.7e-5], ramp: {linear: 1e-4}}\n";
+static void test_mode_one(void) {
+    static char text[8192];
+    double res[2][4]; /* broken bonds, max damage beyond the tips, max damage off the crack line, opening */
+    for (int cracked = 0; cracked < 2; cracked++) {
+        snprintf(text, sizeof text, "%s%s%s", scene_head, tension_scene,
+                 cracked ? "    cracks: [{points: [[0.014, 0.02], [0.026, 0.02]]}]\n" : "");
+        const char *what = cracked ? "pre-cracked plate" : "plate without crack";
+        floe_world *w = run_scene(text, 2750, what); /* dt 4e-8 s: 110 us */
+        if (!w) return;
+        int f0;
+        const floe_pd_body *b = floe_world_pd_body(w, 0, &f0);
+        double *phi = malloc((size_t)b->n * sizeof *phi);
+        floe_pd_damage(b, phi);
+        double tips = 0, off = 0, up = 0, dn = 0;
+        for (int i = 0; i < b->n; i++) {
+            const double *X = b->X + 3 * i;
+            double ey = fabs(X[1] - 0.02), ex = fabs(X[0] - 0.02);
+            if (ey < 0.003 && ex > 0.006) tips = fmax(tips, phi[i]);
+            if (ey > 0.004) off = fmax(off, phi[i]);
+            if (ex < 0.001 && fabs(X[1] - 0.0205) < 1e-9) up = w->p.x[3 * (f0 + i) + 1] - X[1];
+            if (ex < 0.001 && fabs(X[1] - 0.0195) < 1e-9) dn = w->p.x[3 * (f0 + i) + 1] - X[1];
+        }
+        res[cracked][0] = (double)b->nbroken;
+        res[cracked][1] = tips;
+        res[cracked][2] = off;
+        res[cracked][3] = up - dn;
+        printf("  %s at t = %.3g s: %lld bonds broken, damage beyond the tips %.3f, off the crack line %.3f, "
+               "opening at the centre %.3g um\n", what, floe_world_time(w), (long long)b->nbroken, tips, off, (up - dn) * 1e6);
+        free(phi);
+        floe_world_destroy(w);
+    }
+    CHECK(res[0][0] == 0, "without the crack nothing breaks (%g bonds)", res[0][0]);
+    CHECK(res[1][0] > 50 && res[1][1] > 0.3, "with it the crack grows from its tips (%g bonds, damage %.2f > 0.3 beyond "
+          "the tips)", res[1][0], res[1][1]);
+    CHECK(res[1][2] < 0.1, "only along the crack line (damage %.3f < 0.1 elsewhere)", res[1][2]);
+    CHECK(res[1][3] > 5 * res[0][3] && res[1][3] > 0, "the crack faces open (%.3g um, uncracked %.3g um)", res[1][3] * 1e6,
+          res[0][3] * 1e6);
+}
+
+/* 9. Kalthoff-Winkler (Kalthoff & Winkler 1988; PD: Silling 2003): a 100 x 200 mm maraging
+ * steel plate with two 50 mm edge notches 50 mm apart, the strip between them struck at
+ * 16.5 m/s (half the 32 m/s projectile speed, the usual velocity condition); the cracks
+ * leave the notch tips at about 70 degrees to the notch in the experiment. Here at dx = 2 mm
+ * (5,000 points, 90 us). The notches as cracks (between two rows of points) give a crack at
+ * more than 50 degrees (measured 55.8); the notches as one row of points removed
+ * (region.remove: bonds bridge them) give a shallow one (measured 36.0; the issue's 27 at its
+ * resolution). Angle: the median over the points with damage > 0.35 at 12-45 mm from the
+ * notch tip on the far side of the notch, of their direction from the tip (reference
+ * positions), both notches mirrored onto one. */
+static const char *kw_scene =
+    "  - region:\n"
+    "      box: {min: [0, -0.1], max: [0.1, 0.1]}\n"
+    "%s"
+    "    spacing: 0.002\n"
+    "    material: {model: pmb, density: 8000, young: 190e9, fracture_energy: 22170}\n"
+    "    contact_material: steel\n"
+    "%s"
+    "    boundary:\n"
+    "      - {region: {box: {min: [-1, -0.024], max: [0.006, 0.024]}}, velocity: [16.5, 0]}\n";
+static double kw_angle(int cracks, double *maxd) {
+    static char text[8192];
+    snprintf(text, sizeof text, "%s", scene_head);
+    size_t L = strlen(text);
+    if (cracks)
+        snprintf(text + L, sizeof text - L, kw_scene, "",
+                 "    cracks:\n      - {points: [[0, 0.024], [0.05, 0.024]]}\n      - {points: [[0, -0.024], [0.05, -0.024]]}\n");
+    else
+        snprintf(text + L, sizeof text - L, kw_scene,
+                 "      remove:\n"
+                 "        - {shape: {box: {size: [0.05, 0.001, 1]}}, position: [0.025, 0.025, 0]}\n"
+                 "        - {shape: {box: {size: [0.05, 0.001, 1]}}, position: [0.025, -0.025, 0]}\n",
+                 "");
+    floe_world *w = run_scene(text, 1126, cracks ? "Kalthoff-Winkler, notches as cracks" : "Kalthoff-Winkler, notches removed");
+    if (!w) return NAN;
+    const floe_pd_body *b = floe_world_pd_body(w, 0, NULL);
+    double *phi = malloc((size_t)b->n * sizeof *phi), ang[2000];
+    floe_pd_damage(b, phi);
+    int na = 0;
+    *maxd = 0;
+    for (int i = 0; i < b->n; i++) {
+        const double *X = b->X + 3 * i;
+        double y = fabs(X[1]), dxt = X[0] - 0.05, dyt = y - 0.025, r = hypot(dxt, dyt);
+        *maxd = fmax(*maxd, phi[i]);
+        if (phi[i] > 0.35 && dyt > 0 && r > 0.012 && r < 0.045 && na < 2000) ang[na++] = atan2(dyt, dxt) * 180 / M_PI;
+    }
+    for (int i = 1; i < na; i++) /* insertion sort for the median */
+        for (int j = i; j > 0 && ang[j] < ang[j - 1]; j--) { double t = ang[j]; ang[j] = ang[j - 1]; ang[j - 1] = t; }
+    double med = na ? ang[na / 2] : NAN;
+    printf("  Kalthoff-Winkler, notches %s: t = %.3g s, %lld bonds cut at set-up, %lld broken, %lld bridging the notches; "
+           "%d damaged points 12-45 mm from the tips, median angle %.1f deg\n",
+           cracks ? "as cracks" : "as one removed row", floe_world_time(w), (long long)b->ncut, (long long)b->nbroken,
+           (long long)b->nbridge, na, med);
+    CHECK(na >= 10, "a crack runs from the notch tips (%d damaged points)", na);
+    CHECK(cracks ? b->nbridge == 0 : b->nbridge > 0, "bridging bonds: %lld", (long long)b->nbridge);
+    free(phi);
+    floe_world_destroy(w);
+    return med;
+}
+static void test_kalthoff_winkler(void) {
+    double m1, m0;
+    double a1 = kw_angle(1, &m1), a0 = kw_angle(0, &m0);
+    CHECK(a1 > 50 && a1 < 80, "notches as cracks: crack angle %.1f deg in (50, 80) (experiment: about 70)", a1);
+    CHECK(a0 < 45, "notches as one removed row: %.1f deg < 45 (the bonds across the notch make it no notch)", a0);
+    CHECK(a1 - a0 > 15, "the cracks turn %.1f deg more", a1 - a0);
+}
+
 int main(void) {
     test_cut_brute_force();
     test_crack_check();
@@ -542,5 +674,7 @@ int main(void) {
     test_scene_cracks();
     test_polygon_region();
     test_faces_contact();
+    test_mode_one();
+    test_kalthoff_winkler();
     return check_summary("test_pd_crack");
 }
