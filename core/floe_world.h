@@ -199,7 +199,8 @@ int floe_world_contact_count(const floe_world *w);
  * of the world (spheres of the contact radius R = (3V/4 pi)^(1/3) in 3D, (V/(pi h))^(1/2) in
  * 2D, mass rho V, contact material `material`), all moving at v0, and their bond forces are
  * added every step. Family members never get a contact force (they are bonded); other
- * points of the same body (fragments after fracture) and every other particle do. The
+ * points of the same body (fragments after fracture, the faces of a pre-crack: except pairs
+ * whose contact spheres overlap in the reference configuration) and every other particle do. The
  * world takes ownership of body (also on failure). *first receives the index of the first
  * point (points keep the body's order). */
 struct floe_pd_body;

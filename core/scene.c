@@ -1674,13 +1674,25 @@ static int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key)
 /* ------------------------------------------------------------------------------------ */
 /* Peridynamic bodies                                                                    */
 
-typedef struct sc_pd_sdf { floe_geometry *g; double x[3]; } sc_pd_sdf;
+/* A region or hole: shape g placed as a body is (docs/scene-format.md, "Shapes"): its centre
+ * of mass at x, turned as it is written. Polytopes and compounds keep their SDF in their
+ * principal frame, turned by q (sc_geom_frame) from the written coordinates: X_body =
+ * R(q)^T (X - x); q is the identity for the primitives. */
+typedef struct sc_pd_sdf { floe_geometry *g; double x[3]; double q[4]; } sc_pd_sdf;
 static double sc_pd_region_sdf(const double X[3], void *user)
 {
     const sc_pd_sdf *r = user;
-    double d[3];
+    double d[3], e[3];
     floe_v3_sub(d, X, r->x);
-    return floe_geometry_sdf(r->g, d);
+    floe_q_rotate_inv(e, r->q, d);
+    return floe_geometry_sdf(r->g, e);
+}
+/* the body frame of the region's shape (sc_geom_frame; the centroid offset is not used:
+ * the centre of mass goes to position, as for bodies) */
+static void sc_pd_frame(sc_pd_sdf *r)
+{
+    double fx[3];
+    sc_geom_frame(r->g, fx, r->q);
 }
 
 /* Holes cut out of a PD region (`region: {..., remove: [{shape, position}, ...]}`, e.g. the
@@ -1713,6 +1725,7 @@ static int sc_pd_shape_at(sc *s, struct fy_node *v, struct fy_node *k, const cha
     char fs[96];
     snprintf(fs, sizeof fs, "%s.shape", what);
     FLOE_TRY(sc_build_shape(s, sv, sk, fs, 0, &out->g));
+    sc_pd_frame(out);
     int rc = sc_vec(s, &m, "position", 0, NULL, out->x);
     if (rc == FLOE_OK && !isfinite(floe_geometry_bounding_radius(out->g)))
         rc = sc_fail(s, FLOE_EINVAL, sv, "%s: the shape must be bounded", fs);
@@ -1805,7 +1818,7 @@ static int sc_pd_parse_boundary(sc *s, const sc_map *m, const char *what, int bo
         snprintf(fg, sizeof fg, "%s.region", fb);
         sc_map gm;
         FLOE_TRY(sc_map_open(s, gv == gk ? NULL : gv, gk, fg, region_keys, &gm));
-        sc_pd_sdf reg = {NULL, {0, 0, 0}};
+        sc_pd_sdf reg = {NULL, {0, 0, 0}, {1, 0, 0, 0}};
         struct fy_node *xk, *xv = sc_get(&gm, "box", &xk);
         if (xv) {
             static const char *const box_keys[] = {"min", "max", NULL};
@@ -1832,10 +1845,103 @@ static int sc_pd_parse_boundary(sc *s, const sc_map *m, const char *what, int bo
     return FLOE_OK;
 }
 
+/* peridynamics[i].cracks: pre-cracks that remove the bonds crossing them (floe_pd_add_crack):
+ * {points: [[x, y], ...]} a polyline in 2D, a convex planar polygon in 3D;
+ * {rectangle: {corner | center, edges: [e1, e2]}} in 3D. */
+static int sc_pd_parse_cracks(sc *s, const sc_map *m, const char *what, floe_pd_body *b)
+{
+    static const char *const keys[] = {"points", "rectangle", "name", NULL};
+    static const char *const rect_keys[] = {"corner", "center", "edges", NULL};
+    struct fy_node *k, *v = sc_get(m, "cracks", &k);
+    if (!v) return FLOE_OK;
+    if (v == k || sc_is_missing(v) || !fy_node_is_sequence(v))
+        return sc_fail(s, FLOE_EPARSE, v == k ? k : v, "%s.cracks must be a list of {points} or {rectangle}", what);
+    void *it = NULL;
+    struct fy_node *e;
+    int idx = 0;
+    while ((e = fy_node_sequence_iterate(v, &it))) {
+        char fc[96];
+        snprintf(fc, sizeof fc, "%s.cracks[%d]", what, idx);
+        sc_map cm;
+        FLOE_TRY(sc_map_open(s, e, e, fc, keys, &cm));
+        floe_pd_crack c;
+        memset(&c, 0, sizeof c);
+        struct fy_node *pk, *pv = sc_get(&cm, "points", &pk), *rk, *rv = sc_get(&cm, "rectangle", &rk);
+        if (!pv == !rv)
+            return sc_fail(s, FLOE_EPARSE, e, "%s: give points (%s) or rectangle ({corner | center, edges: [e1, e2]}, 3D)",
+                           fc, s->dim == 2 ? "a polyline [[x, y], ...]" : "a convex planar polygon [[x, y, z], ...]");
+        if (pv) {
+            char fp[112];
+            snprintf(fp, sizeof fp, "%s.points", fc);
+            if (pv == pk || !fy_node_is_sequence(pv))
+                return sc_fail(s, FLOE_EPARSE, pv == pk ? pk : pv, "%s must be a list of points", fp);
+            int cnt = fy_node_sequence_item_count(pv);
+            if (cnt < s->dim || cnt > FLOE_PD_CRACK_MAX_POINTS)
+                return sc_fail(s, FLOE_EINVAL, pv, "%s: give %d to %d points (got %d)", fp, s->dim,
+                               FLOE_PD_CRACK_MAX_POINTS, cnt);
+            for (int q = 0; q < cnt; q++) {
+                char f2[128];
+                snprintf(f2, sizeof f2, "%s[%d]", fp, q);
+                int got;
+                FLOE_TRY(sc_node_list(s, fy_node_sequence_get_by_index(pv, q), NULL, f2, 3, s->dim == 2 ? 2 : 0,
+                                      c.p[q], &got));
+            }
+            c.n = cnt;
+        } else {
+            char fr[112];
+            snprintf(fr, sizeof fr, "%s.rectangle", fc);
+            if (s->dim != 3) return sc_fail(s, FLOE_EINVAL, rv, "%s: a rectangle is a 3D crack (2D: points)", fr);
+            sc_map rm;
+            FLOE_TRY(sc_map_open(s, rv == rk ? NULL : rv, rk, fr, rect_keys, &rm));
+            int hc = sc_has(&rm, "corner"), hm = sc_has(&rm, "center");
+            if (hc == hm) return sc_fail(s, FLOE_EPARSE, rv, "%s: give corner or center", fr);
+            double o[3], ed[2][3];
+            FLOE_TRY(sc_vec(s, &rm, hc ? "corner" : "center", 1, NULL, o));
+            struct fy_node *ek, *ev = sc_get(&rm, "edges", &ek);
+            char fe[128];
+            snprintf(fe, sizeof fe, "%s.edges", fr);
+            if (!ev || ev == ek || !fy_node_is_sequence(ev) || fy_node_sequence_item_count(ev) != 2)
+                return sc_fail(s, FLOE_EPARSE, ev && ev != ek ? ev : rv, "%s: give two edge vectors [e1, e2]", fe);
+            for (int q = 0; q < 2; q++) {
+                char f2[144];
+                snprintf(f2, sizeof f2, "%s[%d]", fe, q);
+                int got;
+                FLOE_TRY(sc_node_list(s, fy_node_sequence_get_by_index(ev, q), NULL, f2, 3, 0, ed[q], &got));
+            }
+            if (hm)
+                for (int d = 0; d < 3; d++) o[d] -= 0.5 * (ed[0][d] + ed[1][d]);
+            c = floe_pd_crack_rectangle(o, ed[0], ed[1]);
+        }
+        if (floe_pd_crack_check(&c, s->dim) != FLOE_OK)
+            return sc_fail(s, FLOE_EINVAL, e, "%s: %s", fc,
+                           s->dim == 2 ? "the points must be finite and consecutive points distinct"
+                                       : "not a convex planar polygon of non-zero area (vertices in order around it)");
+        int64_t n = floe_pd_add_crack(b, &c);
+        if (n < 0) return sc_fail(s, (int)-n, e, "%s: %s", fc, floe_strerror((int)-n));
+        idx++;
+    }
+    return FLOE_OK;
+}
+
+/* region.remove holes narrower than the horizon: bonds that bridge them (floe_pd_bonds_across)
+ * are counted on the body (nbridge, bridge_at) for the summary's warning */
+static int sc_pd_check_holes(sc *s, const sc_pd_cut *cut, struct fy_node *at, const char *fr, floe_pd_body *b)
+{
+    for (int k = 0; k < cut->n; k++) {
+        double where[3];
+        int64_t n = floe_pd_bonds_across(b, sc_pd_region_sdf, (void *)&cut->hole[k], where);
+        if (n < 0) return sc_fail(s, (int)-n, at, "%s.remove[%d]: %s", fr, k, floe_strerror((int)-n));
+        if (n > 0 && b->nbridge == 0) floe_v3_copy(b->bridge_at, where);
+        b->nbridge += n;
+    }
+    return FLOE_OK;
+}
+
 static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
 {
     static const char *const keys[] = {"region", "spacing", "horizon", "material", "contact_material", "velocity",
-                                       "surface_correction", "thickness", "name", "boundary", "lattice", NULL};
+                                       "surface_correction", "thickness", "name", "boundary", "lattice", "cracks",
+                                       NULL};
     static const char *const region_keys[] = {"box", "shape", "position", "remove", NULL};
     static const char *const mat_keys[] = {"model", "density", "bulk_modulus", "shear_modulus", "young",
                                            "critical_stretch", "fracture_energy", "influence", "alpha",
@@ -1871,7 +1977,7 @@ static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
         snprintf(fr, sizeof fr, "%s.region", what);
         sc_map rm;
         FLOE_TRY(sc_map_open(s, rv == rk ? NULL : rv, rk, fr, region_keys, &rm));
-        sc_pd_sdf reg = {NULL, {0, 0, 0}};
+        sc_pd_sdf reg = {NULL, {0, 0, 0}, {1, 0, 0, 0}};
         struct fy_node *bk, *bv = sc_get(&rm, "box", &bk);
         if (bv) {
             static const char *const box_keys[] = {"min", "max", NULL};
@@ -1892,6 +1998,7 @@ static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
             char fs[80];
             snprintf(fs, sizeof fs, "%s.shape", fr);
             FLOE_TRY(sc_build_shape(s, sv2, sk2, fs, 0, &reg.g));
+            sc_pd_frame(&reg);
             int rc = sc_vec(s, &rm, "position", 0, NULL, reg.x);
             double rb = floe_geometry_bounding_radius(reg.g);
             if (rc == FLOE_OK && !isfinite(rb)) rc = sc_fail(s, FLOE_EINVAL, sv2, "%s: the region must be bounded", fs);
@@ -1948,13 +2055,15 @@ static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
         if (!rc && (sc_ < 0 || Gc < 0)) rc = sc_fail(s, FLOE_EINVAL, mv, "%s: critical_stretch and fracture_energy must be >= 0", fm);
         if (!rc && sc_ > 0 && Gc > 0) rc = sc_fail(s, FLOE_EINVAL, mv, "%s: give critical_stretch or fracture_energy, not both", fm);
         floe_pd_body *b = NULL;
-        sc_pd_cut cut = {NULL, 0, {{NULL, {0, 0, 0}}}};
+        sc_pd_cut cut = {NULL, 0, {{NULL, {0, 0, 0}, {1, 0, 0, 0}}}};
         if (!rc) rc = sc_pd_parse_remove(s, &rm, fr, &reg, &cut, &r);
         if (!rc) {
             int c = floe_pd_body_create(&b, &r);
             if (c) rc = sc_fail(s, c, rv, "%s: could not discretise the region (%s)", fr, floe_strerror(c));
             else if (b->n < 2) rc = sc_fail(s, FLOE_EINVAL, rv, "%s: the region holds %d lattice points at spacing %g", fr, b->n, r.dx);
         }
+        if (!rc) rc = sc_pd_parse_cracks(s, &m, what, b);
+        if (!rc) rc = sc_pd_check_holes(s, &cut, rv, fr, b);
         floe_geometry_destroy(reg.g);
         sc_pd_cut_free(&cut);
         if (!rc) {
@@ -2280,6 +2389,11 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
                "horizon %g m, critical stretch %g, nodal dt %.3g s\n",
                k, f0, f0 + pb->n - 1, -2 - k, pb->ops->name, (long long)pb->nbond, 2.0 * (double)pb->nbond / pb->n,
                pb->delta, pb->s_c, floe_pd_dt_nodal(pb));
+        if (pb->ncut > 0) sc_cat(&b, "    cracks cut %lld bonds\n", (long long)pb->ncut);
+        if (pb->nbridge > 0)
+            sc_cat(&b, "    WARNING: %lld bonds bridge a removed region (region.remove narrower than the horizon "
+                   "%g m, e.g. at (%g, %g, %g)): it does not separate the material; cut them with cracks\n",
+                   (long long)pb->nbridge, pb->delta, pb->bridge_at[0], pb->bridge_at[1], pb->bridge_at[2]);
     }
     for (int q = 0; q < w->npd_bc; q++) { /* PD boundary regions */
         static const char *const kinds[] = {"?", "fixed", "velocity", "displacement", "body force"};

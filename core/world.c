@@ -301,7 +301,10 @@ int floe_world_add_observer(floe_world *w, floe_observer *o) {
 
 /* ---- peridynamic bodies ---- */
 
-/* Contact exclusion of two points of the same PD body. A bonded pair gets no contact while
+/* Contact exclusion of two points of the same PD body. An unbonded pair (beyond the
+ * horizon, or across a pre-crack: floe_pd_add_crack removes those bonds) meets by contact
+ * unless its contact spheres overlap in the reference configuration, as a broken pair
+ * below (only a pre-crack makes such pairs on a lattice). A bonded pair gets no contact while
  * its bond is intact (the bond is the interaction), nor when it is broken but still acts
  * (a PMB bond with broken_tension_only pushes in compression, 003 eq 2 mu = 1). Other broken
  * pairs meet by contact, except those whose contact spheres already overlap in the
@@ -316,7 +319,11 @@ static int pd_exclude(const void *ctx, int i, int j) {
     int f = w->pd_first[bi];
     const floe_pd_body *b = w->pd[bi];
     int64_t k = floe_pd_bond_index(b, i - f, j - f);
-    if (k < 0) return 0;
+    if (k < 0) { /* not bonded (a pre-crack's faces, floe_pd_add_crack): as a broken pair */
+        double d[3];
+        floe_v3_sub(d, b->X + 3 * (size_t)(j - f), b->X + 3 * (size_t)(i - f));
+        return floe_v3_norm(d) < w->p.radius[i] + w->p.radius[j];
+    }
     if (!b->broken[k]) return 1;
     if (b->mat.model == FLOE_PD_PMB && b->mat.broken_tension_only) return 1;
     return b->len[k] < w->p.radius[i] + w->p.radius[j];

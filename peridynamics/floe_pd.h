@@ -151,6 +151,12 @@ struct floe_pd_body {
     /* PMB plastic bonds (yield_compression / yield_tension > 0): nbond plastic stretches
      * s_p (pd_materials.c); NULL otherwise                                                  */
     float *splast;
+    /* pre-cracks (pd_crack.c): bonds removed from the families by floe_pd_add_crack, and
+     * the bonds found by floe_pd_bonds_across for the holes the scene loader left out
+     * (region.remove), with the midpoint of one of them (for its warning)                   */
+    int64_t ncut;
+    int64_t nbridge;
+    double bridge_at[3];
 };
 
 /* Create the lattice points of the region, build the families (|xi| <= delta + 1e-9 dx)
@@ -241,6 +247,55 @@ int64_t floe_pd_bond_index(const floe_pd_body *b, int i, int j);
  * stress; their number goes to *singular (may be NULL). */
 int floe_pd_correspondence(const floe_pd_body *b, const double *x, double G, double lambda, double *F, double *E,
                            double *sigma, double *von_mises, int *singular);
+
+/* ---- pre-cracks (pd_crack.c) ----
+ * A crack is a line (2D) or a planar patch (3D) in the reference configuration that cuts
+ * every bond crossing it at set-up: bond (i, j) is cut when the segment X_i X_j meets the
+ * crack. A point exactly on the crack counts as lying on its positive side (2D: the left
+ * of each segment a -> b, cross(b - a, X - a) >= 0; 3D: the side the polygon's normal
+ * points to, counter-clockwise vertices seen from there), so a crack through a row of
+ * points cuts the bonds of that row with the other side only. A cut bond is REMOVED from
+ * the family (the bond filters of Peridigm): it carries no force (not even in compression),
+ * does not count in the LPS weighted volume m_i nor in the damage phi_i (a point next to
+ * the crack starts with phi = 0; the faces are free surfaces for the surface correction),
+ * and its two points meet by contact like any unbonded pair of the body (floe_world_add_pd_body:
+ * except a pair whose contact spheres overlap in the reference configuration). */
+#define FLOE_PD_CRACK_MAX_POINTS 16
+typedef struct floe_pd_crack {
+    int n;                 /* 2D: 2.. points of a polyline (z ignored); 3D: 3.. vertices of a
+                            * planar convex polygon, in order around it                      */
+    double p[FLOE_PD_CRACK_MAX_POINTS][3];
+} floe_pd_crack;
+
+/* A segment a-b; a rectangle corner, corner + e1, corner + e1 + e2, corner + e2 (3D). */
+floe_pd_crack floe_pd_crack_segment(const double a[3], const double b[3]);
+floe_pd_crack floe_pd_crack_rectangle(const double corner[3], const double e1[3], const double e2[3]);
+
+/* FLOE_OK when c is a valid crack in dimension dim (2D: 2..MAX finite points, consecutive
+ * ones distinct; 3D: 3..MAX finite points of a convex planar polygon of non-zero area, the
+ * vertices within 1e-9 of its size from its plane), else FLOE_EINVAL. */
+int floe_pd_crack_check(const floe_pd_crack *c, int dim);
+
+/* 1 when the crack cuts the bond between the reference points xi and xj, else 0 (c must
+ * have passed floe_pd_crack_check). */
+int floe_pd_crack_cuts(const floe_pd_crack *c, int dim, const double xi[3], const double xj[3]);
+
+/* Remove every bond of b that the crack cuts from the families (see above). Call it before
+ * the body goes into a world; it may come before or after floe_pd_set_material (the
+ * material state is rebuilt, a surface correction in place is recomputed, bonds broken so
+ * far stay broken). Returns the number of bonds removed (>= 0, also added to b->ncut), or
+ * -FLOE_EINVAL for an invalid crack, -FLOE_ENOMEM. */
+int64_t floe_pd_add_crack(floe_pd_body *b, const floe_pd_crack *c);
+
+/* Bonds of b that bridge a hole left out of its lattice (sdf < 0 inside the hole, e.g.
+ * region.remove of a scene): bonds whose segment enters the hole and leaves it through a
+ * facing side (the hole's outward normals at entry and exit more than 120 degrees apart,
+ * so chords that clip a hole wider than the horizon do not count). Such bonds mean the
+ * hole is narrower than the horizon there and does not separate the material on its two
+ * sides: a one-row notch is no notch. Cut them with floe_pd_add_crack. Returns the number
+ * (>= 0) and the midpoint of one of them in at (may be NULL), or -FLOE_EINVAL,
+ * -FLOE_ENOMEM. */
+int64_t floe_pd_bonds_across(const floe_pd_body *b, floe_pd_sdf_fn sdf, void *user, double at[3]);
 
 /* Stable time step estimates:
  *   nodal (Silling & Askari 2005): min_i sqrt(2 rho / sum_j beta V_j c/|xi|);

@@ -23,6 +23,8 @@ usage: python3 tests/test_examples.py <floe_cli_path> <tests_dir>
   cracks at the top and bottom of the hole and not at its sides; damage under the impact
   point of a 3 mm cylinder and none at its bottom rim; the spheres' indentation shows in the
   strain (E_zz most compressive at a contact face) and von Mises arrays; energy balances.
+- examples/kalthoff-winkler (issue #10) at dx = 2 mm: the cracks leave the pre-cracked
+  notches at a median angle in (50, 80) degrees (measured 55.8); energy balances.
 Prints "N passed, N failed".
 """
 import csv
@@ -250,6 +252,30 @@ def check_brittle_cylinder(cli, root, tmp):
           "> 0.3, impactor vz %.1f m/s" % (len(pts), dx, under, rim, nd, vz))
 
 
+def check_kalthoff_winkler(cli, root, tmp):
+    """Issue #10: the notches as pre-cracks; at dx = 2 mm (the notches moved to y = +-24 mm,
+    between two rows of points) the cracks leave the notch tips at more than 50 degrees."""
+    subs = [(r"spacing: 0\.001", "spacing: 0.002"), (r"0\.025\], \[0\.05, 0\.025\]", "0.024], [0.05, 0.024]"),
+            (r"-0\.025\], \[0\.05, -0\.025\]", "-0.024], [0.05, -0.024]"),
+            (r"min: \[-1, -0\.025\], max: \[0\.003, 0\.025\]", "min: [-1, -0.024], max: [0.006, 0.024]")]
+    res = pd_example(cli, root, tmp, "kalthoff-winkler", 90e-6, subs)
+    if not res:
+        return
+    out, a = res
+    first = read_vtu_arrays(sorted(glob.glob(os.path.join(out, "frame_*.vtu")))[0])
+    ang = []
+    for X, d in zip(first["Points"], a["damage"]):
+        dxt, dyt = X[0] - 0.05, abs(X[1]) - 0.025
+        if d[0] > 0.35 and dyt > 0 and 0.012 < math.hypot(dxt, dyt) < 0.045:
+            ang.append(math.degrees(math.atan2(dyt, dxt)))
+    ang.sort()
+    med = ang[len(ang) // 2] if ang else float("nan")
+    check(len(ang) >= 10 and 50 < med < 80, "kalthoff-winkler: crack angle %.1f deg in (50, 80) over %d damaged points"
+          % (med, len(ang)))
+    print("  kalthoff-winkler: dx = 2 mm, 90 us: median crack angle %.1f deg (%d points 12-45 mm from the tips)"
+          % (med, len(ang)))
+
+
 def check_rubber_cube(cli, root, tmp):
     """000 §5.2, shortened: the spheres indent the cube, strain and von Mises at the contacts."""
     res = pd_example(cli, root, tmp, "rubber-cube", 0.1)
@@ -312,6 +338,7 @@ def main():
         check_plate_with_hole(cli, root, tmp)
         check_brittle_cylinder(cli, root, tmp)
         check_rubber_cube(cli, root, tmp)
+        check_kalthoff_winkler(cli, root, tmp)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     finish("test_examples")
