@@ -284,22 +284,45 @@ int floe_sdf_half(const floe_pose *a, const floe_pose *b, const floe_admm_option
     }
     double d = dist_b(gb, &f, y, n);
     const double eps = 1e-9 * size;
-    int it, conv = 0;
+    int it, conv = 0, moved = 0, halved = 0;
+    double sprev[3] = {0, 0, 0}, nprev[3] = {0, 0, 0};
     for (it = 1; it <= o->max_iter; it++) {
         double p[3], yt[3], nt[3], e[3];
+        if (moved) { /* Barzilai-Borwein length from the last move (spectral projected gradient) */
+            double dn[3], ss = floe_v3_dot(sprev, sprev), sy;
+            floe_v3_sub(dn, n, nprev); /* the ascent direction is -n: its change is -(n - nprev) */
+            sy = floe_v3_dot(sprev, dn);
+            if (sy > 0) alpha = fmin(ss / sy, 4 * size);
+            moved = 0;
+        }
         floe_v3_copy(p, y);
         floe_v3_axpy(p, -alpha, n); /* ascent of -dist_b: against b's outward normal */
         proj_a(ga, p, yt);
+        if (!(floe_geometry_sdf(ga, yt) <= 1e-6 * size)) { /* the projection failed: shorter step */
+            halved = 1;
+            alpha *= 0.5;
+            if (alpha < 1e-9 * size) break;
+            continue;
+        }
         floe_v3_sub(e, yt, y);
         double step = floe_v3_norm(e);
-        if (step <= eps) { conv = 1; break; } /* a fixed point: y is the deepest point */
+        if (step <= eps) { /* a fixed point: y is the deepest point; unless the step was short */
+            if (alpha >= size || halved) { conv = 1; break; }
+            alpha = size;
+            continue;
+        }
         double dt = dist_b(gb, &f, yt, nt);
         if (dt < d) {
+            floe_v3_copy(sprev, e);
+            floe_v3_copy(nprev, n);
             floe_v3_copy(y, yt);
             floe_v3_copy(n, nt);
             d = dt;
-            alpha = fmin(2 * alpha, 1e3 * size);
+            moved = 1;
+            halved = 0;
+            alpha = fmin(2 * alpha, 4 * size);
         } else {
+            halved = 1;
             alpha *= 0.5;
             if (alpha < 1e-9 * size) { conv = 1; break; } /* no ascent left at any step */
         }

@@ -75,7 +75,14 @@ static int newton_surface(const floe_geometry *g, const double X[3], double R, d
  * the answer and the loop costs one gradient. */
 static void project_numeric(const floe_geometry *g, const double X[3], double out[3]) {
     double R = size_of(g), y[3], yt[3], r[3], n[3];
-    newton_surface(g, X, R, y);
+    if (!newton_surface(g, X, R, y)) {
+        /* far away (Newton steps are capped at R) or a flat spot of a bound: start again
+         * from X pulled to 2R from the body origin; the descent below does the rest */
+        double Xs[3], m = floe_v3_norm(X);
+        floe_v3_copy(Xs, X);
+        if (m > 2 * R) floe_v3_scale(Xs, 2 * R / m);
+        if (!newton_surface(g, Xs, R, y)) floe_v3_set(y, 0, 0, 0), newton_surface(g, y, R, y);
+    }
     floe_v3_sub(r, X, y);
     double dy = floe_v3_norm(r), alpha = 1.0;
     for (int it = 0; it < 100; it++) {
@@ -124,11 +131,13 @@ double floe_geometry_distance(const floe_geometry *g, const double X[3], double 
 }
 
 /* The point of the shape farthest along the unit direction d from the SDF alone: start at
- * the Newton foot of 2R d, then climb d.y along the surface (the tangential part of d,
- * pulled back by Newton; the step doubles after a success and halves after a failure)
- * until the normal is d to 1e-9 rad. */
+ * the Newton foot of 2R d, then climb d.y along the surface: a step along the tangential
+ * part t of d, pulled back onto the surface by Newton, of the Barzilai-Borwein length
+ * |s|^2 / -(s . (t' - t)) (s the last move; it follows the curvature, so long thin ridges
+ * such as the rounded edges of a p = 10 superellipsoid do not zig-zag), halved until d.y
+ * rises; stops when the normal is d to 1e-9 rad or no step rises. */
 static void support_numeric(const floe_geometry *g, const double d[3], double out[3]) {
-    double R = size_of(g), y[3], yt[3], p[3], n[3];
+    double R = size_of(g), y[3], yt[3], p[3], n[3], tprev[3] = {0, 0, 0}, sprev[3] = {0, 0, 0};
     for (int k = 0; k < 3; k++) p[k] = 2 * R * d[k];
     newton_surface(g, p, R, y);
     double alpha = R, fy = floe_v3_dot(d, y);
@@ -138,18 +147,27 @@ static void support_numeric(const floe_geometry *g, const double d[3], double ou
         for (int k = 0; k < 3; k++) dt[k] = d[k] - dn * n[k];
         double nd = floe_v3_norm(dt);
         if (nd < 1e-9) break;
-        int ok = 0;
+        if (it > 0) {
+            double dy[3], ss = floe_v3_dot(sprev, sprev), sy;
+            floe_v3_sub(dy, dt, tprev);
+            sy = -floe_v3_dot(sprev, dy);
+            if (sy > 0) alpha = ss / sy;
+            else alpha *= 2;
+        }
         alpha = fmin(alpha, 2 * R / nd); /* no step longer than the diameter */
+        int ok = 0;
         while (!ok && alpha * nd > 1e-13 * R) {
             floe_v3_copy(p, y);
             floe_v3_axpy(p, alpha, dt);
             int on = newton_surface(g, p, R, yt);
             double ft = floe_v3_dot(d, yt);
-            if (on && ft > fy) { ok = 1; fy = ft; floe_v3_copy(y, yt); }
+            if (on && ft > fy) { ok = 1; fy = ft; }
             else alpha *= 0.5;
         }
         if (!ok) break;
-        alpha *= 2;
+        floe_v3_sub(sprev, yt, y);
+        floe_v3_copy(tprev, dt);
+        floe_v3_copy(y, yt);
     }
     floe_v3_copy(out, y);
 }
