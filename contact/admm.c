@@ -283,7 +283,9 @@ int floe_sdf_half(const floe_pose *a, const floe_pose *b, const floe_admm_option
         proj_a(ga, cb, y);
     }
     double d = dist_b(gb, &f, y, n);
-    const double eps = 1e-9 * size;
+    /* a step of at least size that moves less than eps: the normals match to eps / size rad
+     * and the depth is off by about (eps / size)^2 size / 2 */
+    const double eps = 1e-7 * size;
     int it, conv = 0, moved = 0, halved = 0;
     double sprev[3] = {0, 0, 0}, nprev[3] = {0, 0, 0};
     for (it = 1; it <= o->max_iter; it++) {

@@ -84,13 +84,22 @@ static void project_numeric(const floe_geometry *g, const double X[3], double ou
         if (!newton_surface(g, Xs, R, y)) floe_v3_set(y, 0, 0, 0), newton_surface(g, y, R, y);
     }
     floe_v3_sub(r, X, y);
-    double dy = floe_v3_norm(r), alpha = 1.0;
+    double dy = floe_v3_norm(r), alpha = 1.0, sprev[3] = {0, 0, 0}, tprev[3] = {0, 0, 0};
     for (int it = 0; it < 100; it++) {
         floe_geometry_gradient(g, y, n);
         floe_v3_sub(r, X, y);
         double rn = floe_v3_dot(r, n), rt[3];
         for (int k = 0; k < 3; k++) rt[k] = r[k] - rn * n[k];
-        if (floe_v3_norm(rt) <= 1e-10 * R) break;
+        double nt = floe_v3_norm(rt);
+        if (nt <= 1e-10 * R) break;
+        if (it > 0) { /* Barzilai-Borwein length (the tangent step is exact on a flat face: 1) */
+            double dr[3];
+            floe_v3_sub(dr, rt, tprev);
+            double sy = -floe_v3_dot(sprev, dr);
+            if (sy > 0) alpha = floe_v3_dot(sprev, sprev) / sy;
+            else alpha = fmin(1.0, 2 * alpha);
+        }
+        alpha = fmin(alpha, 2 * R / nt);
         int ok = 0;
         for (int k = 0; k < 40 && !ok; k++) {
             double p[3], e[3];
@@ -99,11 +108,13 @@ static void project_numeric(const floe_geometry *g, const double X[3], double ou
             int on = newton_surface(g, p, R, yt);
             floe_v3_sub(e, X, yt);
             double dt = floe_v3_norm(e);
-            if (on && dt < dy) { ok = 1; dy = dt; floe_v3_copy(y, yt); }
+            if (on && dt < dy) { ok = 1; dy = dt; }
             else alpha *= 0.5;
         }
         if (!ok) break;
-        alpha = fmin(1.0, 2 * alpha);
+        floe_v3_sub(sprev, yt, y);
+        floe_v3_copy(tprev, rt);
+        floe_v3_copy(y, yt);
     }
     floe_v3_copy(out, y);
 }
