@@ -21,9 +21,11 @@
 #include <string.h>
 
 typedef struct shape {
-    int kind;        /* 0 superellipsoid, 1 smooth union of two spheres, 2 Lipschitz-2 sphere */
+    int kind;        /* 0 superellipsoid, 1 smooth union of two spheres, 2 Lipschitz-2 sphere,
+                        3 rounded box (exact SDF, for the cost comparison) */
     double a[3], p;  /* superellipsoid semi-axes and exponent */
-    double r, s, k;  /* union: sphere radius, centres at +-s along x, blend width k */
+    double r, s, k;  /* union: sphere radius, centres at +-s along x, blend width k; rounded
+                        box: half extents a, rounding r */
     long evals;      /* SDF evaluations (the counting wrapper) */
 } shape;
 
@@ -44,6 +46,15 @@ static double shape_sdf(const double X[3], void *user) {
         double d1 = sqrt((X[0] - S->s) * (X[0] - S->s) + X[1] * X[1] + X[2] * X[2]) - S->r;
         double d2 = sqrt((X[0] + S->s) * (X[0] + S->s) + X[1] * X[1] + X[2] * X[2]) - S->r;
         return smin(d1, d2, S->k);
+    }
+    if (S->kind == 3) {
+        double q[3], out = 0, in = -INFINITY;
+        for (int k = 0; k < 3; k++) {
+            q[k] = fabs(X[k]) - S->a[k];
+            if (q[k] > 0) out += q[k] * q[k];
+            if (q[k] > in) in = q[k];
+        }
+        return sqrt(out) + fmin(in, 0.0) - S->r;
     }
     return 2 * (floe_v3_norm(X) - S->r);
 }
@@ -70,6 +81,7 @@ static double support_ref(shape *S, const double d[3]) {
         for (int i = 0; i < 3; i++) t += pow(fabs(S->a[i] * d[i]), q);
         return pow(t, 1.0 / q);
     }
+    if (S->kind == 3) return S->a[0] * fabs(d[0]) + S->a[1] * fabs(d[1]) + S->a[2] * fabs(d[2]) + S->r;
     double best = -INFINITY, bt = 0, bp = 0, u[3], y[3];
     for (int i = 0; i <= 60; i++)
         for (int j = 0; j < 120; j++) {
@@ -98,6 +110,8 @@ static void normal_ref(shape *S, const double y[3], double n[3]) {
         double N = se_norm(S, y);
         for (int i = 0; i < 3; i++)
             n[i] = copysign(pow(fabs(y[i]) / S->a[i] / N, S->p - 1) / S->a[i], y[i]);
+    } else if (S->kind == 3) { /* from the nearest point of the inner box */
+        for (int i = 0; i < 3; i++) n[i] = y[i] - fmin(fmax(y[i], -S->a[i]), S->a[i]);
     } else {
         double c1[3] = {y[0] - S->s, y[1], y[2]}, c2[3] = {y[0] + S->s, y[1], y[2]};
         double d1 = floe_v3_norm(c1) - S->r, d2 = floe_v3_norm(c2) - S->r;
@@ -123,15 +137,16 @@ static int cmp_long(const void *a, const void *b) {
 static void report_cost(const char *what, long *v, int n, long *p99_out) {
     qsort(v, (size_t)n, sizeof *v, cmp_long);
     long med = n ? v[n / 2] : 0, p99 = n ? v[(int)(0.99 * (n - 1))] : 0;
-    printf("  cost %-44s %5d contacts: SDF evaluations median %ld, p99 %ld, max %ld\n", what, n, med, p99,
+    printf("  cost %-48s %5d contacts: SDF evaluations median %ld, p99 %ld, max %ld\n", what, n, med, p99,
            n ? v[n - 1] : 0);
     *p99_out = p99;
 }
 
-#define NSHAPE 4
+#define NSHAPE 5
+#define NBOUND 4 /* the first four are bounds, the last exact */
 static shape shapes[NSHAPE];
 static const char *names[NSHAPE] = {"superellipsoid p=2.5", "superellipsoid p=4", "superellipsoid p=10",
-                                    "smooth union of two spheres"};
+                                    "smooth union of two spheres", "rounded box (exact)"};
 static void make_shapes(void) {
     const double ps[3] = {2.5, 4, 10};
     for (int k = 0; k < 3; k++) {
@@ -143,13 +158,17 @@ static void make_shapes(void) {
     memset(&shapes[3], 0, sizeof shapes[3]);
     shapes[3].kind = 1;
     shapes[3].r = 0.004; shapes[3].s = 0.0015; shapes[3].k = 0.003;
+    memset(&shapes[4], 0, sizeof shapes[4]);
+    shapes[4].kind = 3;
+    floe_v3_set(shapes[4].a, 0.004, 0.003, 0.0025);
+    shapes[4].r = 0.001;
 }
 static double bound_radius(const shape *S) {
-    return S->kind == 0 ? floe_v3_norm(S->a) : S->s + S->r;
+    return S->kind == 0 ? floe_v3_norm(S->a) : S->kind == 3 ? floe_v3_norm(S->a) + S->r : S->s + S->r;
 }
 
 /* ---- 1. walls and 2. spheres ---- */
-static void test_walls_spheres(long *cost_wall, int *nw, long *cost_sphere, int *ns) {
+static void test_walls_spheres(long *cost_wall[2], int nw[2], long *cost_sphere[2], int ns[2]) {
     const double overlap = 1e-4, tol = 1e-5 * overlap;
     for (int si = 0; si < NSHAPE; si++) {
         shape *S = &shapes[si];
@@ -179,7 +198,8 @@ static void test_walls_spheres(long *cost_wall, int *nw, long *cost_sphere, int 
             floe_contact c;
             long e0 = S->evals;
             int r = floe_detect(w, i, wall, 0, NULL, &c);
-            cost_wall[(*nw)++] = S->evals - e0;
+            int grp = si >= NBOUND;
+            cost_wall[grp][nw[grp]++] = S->evals - e0;
             if (r != 1) { missed++; continue; }
             worst = fmax(worst, fabs(c.depth - overlap));
         }
@@ -206,7 +226,8 @@ static void test_walls_spheres(long *cost_wall, int *nw, long *cost_sphere, int 
             floe_contact c;
             long e0 = S->evals;
             int r = floe_detect(w, sp, gi, 0, NULL, &c);
-            cost_sphere[(*ns)++] = S->evals - e0;
+            int grp = si >= NBOUND;
+            cost_sphere[grp][ns[grp]++] = S->evals - e0;
             if (r != 1) { missed++; continue; }
             worst = fmax(worst, fabs(c.depth - overlap));
         }
@@ -219,7 +240,7 @@ static void test_walls_spheres(long *cost_wall, int *nw, long *cost_sphere, int 
 }
 
 /* ---- 3. frictionless undamped grain-grain collisions ---- */
-static void test_collisions(long *cost, int *nc, int cap) {
+static void test_collisions(long *cost[2], int nc[2], int cap) {
     for (int si = 0; si < NSHAPE; si++) {
         shape *S = &shapes[si];
         for (int trial = 0; trial < 2; trial++) {
@@ -264,7 +285,8 @@ static void test_collisions(long *cost, int *nc, int cap) {
                 long ev = S->evals;
                 floe_world_step(w);
                 int nct = floe_world_contact_count(w);
-                if (nct > 0 && *nc < cap) cost[(*nc)++] = S->evals - ev;
+                int grp = si >= NBOUND;
+                if (nct > 0 && nc[grp] < cap) cost[grp][nc[grp]++] = S->evals - ev;
                 if (nct > 0) contact_steps++;
                 else if (contact_steps > 0) after++;
             }
@@ -314,18 +336,31 @@ static void test_lipschitz(void) {
 int main(void) {
     make_shapes();
     enum { CAP = 400000 };
-    long *cw = malloc(sizeof(long) * 256), *cs = malloc(sizeof(long) * 256), *cc = malloc(sizeof(long) * CAP);
-    int nw = 0, ns = 0, nc = 0;
+    long *cw[2], *cs[2], *cc[2];
+    int nw[2] = {0, 0}, ns[2] = {0, 0}, nc[2] = {0, 0};
+    for (int k = 0; k < 2; k++) {
+        cw[k] = malloc(sizeof(long) * 256);
+        cs[k] = malloc(sizeof(long) * 256);
+        cc[k] = malloc(sizeof(long) * CAP);
+    }
     test_lipschitz();
-    test_walls_spheres(cw, &nw, cs, &ns);
-    test_collisions(cc, &nc, CAP);
-    long p99w, p99s, p99c;
-    report_cost("wall (support climb)", cw, nw, &p99w);
-    report_cost("sphere (true distance)", cs, ns, &p99s);
-    report_cost("grain pair, per step in contact", cc, nc, &p99c);
-    /* regression bounds, about 4x the measured p99 (docs/models.md: 1088, 245, 6856) */
-    CHECK(p99w < 5000 && p99s < 1000 && p99c < 30000, "SDF evaluations per contact: p99 wall %ld, sphere %ld, pair %ld",
-          p99w, p99s, p99c);
-    free(cw); free(cs); free(cc);
+    test_walls_spheres(cw, nw, cs, ns);
+    test_collisions(cc, nc, CAP);
+    long p99[2][3];
+    for (int k = 0; k < 2; k++) {
+        const char *kind = k ? "exact" : "bound";
+        char what[96];
+        snprintf(what, sizeof what, "%s SDFs, wall (support climb)", kind);
+        report_cost(what, cw[k], nw[k], &p99[k][0]);
+        snprintf(what, sizeof what, "%s SDFs, sphere (true distance)", kind);
+        report_cost(what, cs[k], ns[k], &p99[k][1]);
+        snprintf(what, sizeof what, "%s SDFs, grain pair per step in contact", kind);
+        report_cost(what, cc[k], nc[k], &p99[k][2]);
+    }
+    /* regression bounds, about 4x the measured p99 of the bound SDFs (docs/models.md) */
+    for (int k = 0; k < 2; k++)
+        CHECK(p99[k][0] < 5000 && p99[k][1] < 1000 && p99[k][2] < 30000,
+              "SDF evaluations per contact: p99 wall %ld, sphere %ld, pair %ld", p99[k][0], p99[k][1], p99[k][2]);
+    for (int k = 0; k < 2; k++) { free(cw[k]); free(cs[k]); free(cc[k]); }
     return check_summary("test_sdf_bound");
 }
