@@ -290,6 +290,15 @@ int floe_sdf_half(const floe_pose *a, const floe_pose *b, const floe_admm_option
     double sprev[3] = {0, 0, 0}, nprev[3] = {0, 0, 0};
     for (it = 1; it <= o->max_iter; it++) {
         double p[3], yt[3], nt[3], e[3];
+        if (d > 0 && it % 16 == 0) {
+            /* apart so far and slow (parallel faces creep): -dist_b is concave, so over a it
+             * is at most -d + (-n).(s - y) with s a's support point along -n; below 0 the
+             * shapes are apart and the exact closest point does not matter */
+            double m[3] = {-n[0], -n[1], -n[2]}, sp[3], r[3];
+            floe_geometry_support(ga, m, sp);
+            floe_v3_sub(r, sp, y);
+            if (-d + floe_v3_dot(m, r) < 0) { conv = 1; break; }
+        }
         if (moved) { /* Barzilai-Borwein length from the last move (spectral projected gradient) */
             double dn[3], ss = floe_v3_dot(sprev, sprev), sy;
             floe_v3_sub(dn, n, nprev); /* the ascent direction is -n: its change is -(n - nprev) */
@@ -315,6 +324,8 @@ int floe_sdf_half(const floe_pose *a, const floe_pose *b, const floe_admm_option
         }
         double dt = dist_b(gb, &f, yt, nt);
         if (dt < d) {
+            /* a gain below 1e-12 size: flat on flat, where every point is as deep */
+            int flat = d - dt <= 1e-12 * size;
             floe_v3_copy(sprev, e);
             floe_v3_copy(nprev, n);
             floe_v3_copy(y, yt);
@@ -323,6 +334,7 @@ int floe_sdf_half(const floe_pose *a, const floe_pose *b, const floe_admm_option
             moved = 1;
             halved = 0;
             alpha = fmin(2 * alpha, 4 * size);
+            if (flat) { conv = 1; break; }
         } else {
             halved = 1;
             alpha *= 0.5;
