@@ -313,7 +313,8 @@ static void test_lipschitz(void) {
     shape bad = {2, {0, 0, 0}, 0, 0.005, 0, 0, 0};
     floe_world_def d = floe_default_world_def();
     floe_world *w = floe_world_create(&d, NULL, 0);
-    int g = floe_world_add_geometry(w, floe_user_shape_create_named(shape_sdf, &bad, 0.006, "doubled_sphere"));
+    floe_geometry *dbl = floe_user_shape_create_named(shape_sdf, &bad, 0.006, "doubled_sphere");
+    int g = floe_world_add_geometry(w, dbl);
     const char *msg = floe_world_last_error(w);
     CHECK(g == -FLOE_EINVAL, "an SDF with Lipschitz constant 2 must be refused (got %d)", g);
     CHECK(strstr(msg, "doubled_sphere") && strstr(msg, "Lipschitz"), "the message must name the shape: %s", msg);
@@ -323,6 +324,8 @@ static void test_lipschitz(void) {
           u ? ((floe_user_shape *)u)->lipschitz : NAN);
     g = floe_world_add_geometry(w, u); /* unnamed: the default name */
     CHECK(g < 0 && strstr(floe_world_last_error(w), "user_sdf"), "unnamed shape: %s", floe_world_last_error(w));
+    floe_geometry_destroy(dbl); /* refused geometries stay the caller's */
+    floe_geometry_destroy(u);
     for (int si = 0; si < NSHAPE; si++) {
         floe_geometry *s = floe_user_shape_create_named(shape_sdf, &shapes[si], bound_radius(&shapes[si]), names[si]);
         double L = ((floe_user_shape *)s)->lipschitz;
