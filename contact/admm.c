@@ -324,8 +324,9 @@ int floe_sdf_half(const floe_pose *a, const floe_pose *b, const floe_admm_option
         }
         double dt = dist_b(gb, &f, yt, nt);
         if (dt < d) {
-            /* a gain below 1e-12 size: flat on flat, where every point is as deep */
-            int flat = d - dt <= 1e-12 * size;
+            /* a step of at least size gaining below 1e-12 size: flat on flat, where every
+             * point is as deep */
+            int flat = d - dt <= 1e-12 * size && alpha >= size;
             floe_v3_copy(sprev, e);
             floe_v3_copy(nprev, n);
             floe_v3_copy(y, yt);

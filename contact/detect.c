@@ -35,11 +35,7 @@ static void finish(floe_contact *c) {
  * envelope theorem makes the force k(d) along B's normal at x, applied at x, the gradient
  * of the stored energy; at the midpoint of the two halves' points the lever arm is off by
  * half the depth along the normal and a spinning pair gains energy */
-static void finish_at(floe_contact *c, const double x[3]) {
-    double p[3];
-    floe_v3_copy(p, x);
-    floe_v3_copy(c->point, p);
-}
+static void finish_at(floe_contact *c, const double x[3]) { floe_v3_copy(c->point, x); }
 
 static void to_body(const shape_ref *s, const double x[3], double X[3]) {
     double d[3];
