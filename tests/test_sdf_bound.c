@@ -14,7 +14,8 @@
  *     halves' points the cylinders (flat caps) lost 1.6e-2 and 2.1e-3; at the deeper
  *     half's point 1.3e-6 and 1.8e-6.
  *  4. A user SDF with Lipschitz constant 2 is refused by floe_world_add_geometry with
- *     FLOE_EINVAL and a message that names the shape; the exact and bound shapes above pass.
+ *     FLOE_EINVAL and a message that names the shape; so is a custom class without
+ *     `project` whose SDF has constant 3; the exact and bound shapes above pass.
  *  5. Cost: SDF evaluations per contact evaluation (a counting SDF wrapper), median and p99
  *     printed for walls, spheres and grain pairs (docs/models.md quotes them); p99 bounded. */
 #include "check.h"
@@ -358,6 +359,12 @@ static void test_admm_collision(void) {
     }
 }
 
+/* a custom class with only sdf and bounding_radius (no project): sampled when added */
+static double steep_sdf(const floe_geometry *g, const double X[3]) { (void)g; return 3 * (floe_v3_norm(X) - 0.004); }
+static double steep_radius(const floe_geometry *g) { (void)g; return 0.005; }
+static const floe_geometry_class steep_class = {1, "steep_custom", FLOE_GEOM_USER, steep_sdf, NULL, NULL,
+                                                steep_radius, NULL, NULL, NULL, NULL, NULL};
+
 /* ---- 4. the Lipschitz check ---- */
 static void test_lipschitz(void) {
     shape bad = {2, {0, 0, 0}, 0, 0.005, 0, 0, 0};
@@ -375,6 +382,12 @@ static void test_lipschitz(void) {
     g = floe_world_add_geometry(w, u); /* unnamed: the default name */
     CHECK(g < 0 && strstr(floe_world_last_error(w), "user_sdf"), "unnamed shape: %s", floe_world_last_error(w));
     floe_geometry_destroy(dbl); /* refused geometries stay the caller's */
+    floe_geometry *steep = malloc(sizeof *steep);
+    steep->klass = &steep_class;
+    g = floe_world_add_geometry(w, steep);
+    CHECK(g == -FLOE_EINVAL && strstr(floe_world_last_error(w), "steep_custom"),
+          "a custom class without project and Lipschitz constant 3 must be refused: %d %s", g, floe_world_last_error(w));
+    floe_geometry_destroy(steep);
     floe_geometry_destroy(u);
     for (int si = 0; si < NSHAPE; si++) {
         floe_geometry *s = floe_user_shape_create_named(shape_sdf, &shapes[si], bound_radius(&shapes[si]), names[si]);
