@@ -252,3 +252,108 @@ int floe_admm_contact(const floe_pose *a, const floe_pose *b, const floe_admm_op
     }
     return FLOE_OK;
 }
+
+/* ---- shapes that only give an SDF: projected gradient ascent (floe_admm.h) ---- */
+static double dist_b(const floe_geometry *gb, const rel_frame *f, const double y[3], double grad_a[3]) {
+    double yb[3], nb[3];
+    to_b(f, y, yb);
+    double d = floe_geometry_distance(gb, yb, nb);
+    dir_to_a(f, nb, grad_a);
+    return d;
+}
+
+int floe_sdf_half(const floe_pose *a, const floe_pose *b, const floe_admm_options *o, double *warm4,
+                  double x_body[3], double *dist, double nw[3]) {
+    floe_admm_options def;
+    if (!o) { floe_admm_default_options(&def); o = &def; }
+    rel_frame f;
+    make_rel(&f, a, b);
+    const floe_geometry *ga = a->g, *gb = b->g;
+    double size = size_of(a, b), y[3], n[3], alpha = size;
+    int cold = !warm4 || !isfinite(warm4[0] + warm4[1] + warm4[2]);
+    if (!cold) {
+        floe_v3_copy(y, warm4);
+        if (warm4[3] > 0 && isfinite(warm4[3])) alpha = warm4[3] * size;
+        double yp[3];
+        proj_a(ga, y, yp); /* the kept point, back onto a (it is in a's frame: it moved with a) */
+        floe_v3_copy(y, yp);
+    } else {
+        double cb[3], ob[3] = {0, 0, 0};
+        to_a(&f, ob, cb);
+        proj_a(ga, cb, y);
+    }
+    double d = dist_b(gb, &f, y, n);
+    /* a step of at least size that moves less than eps: the normals match to eps / size rad
+     * and the depth is off by about (eps / size)^2 size / 2 */
+    const double eps = 1e-7 * size;
+    int it, conv = 0, moved = 0, halved = 0;
+    double sprev[3] = {0, 0, 0}, nprev[3] = {0, 0, 0};
+    for (it = 1; it <= o->max_iter; it++) {
+        double p[3], yt[3], nt[3], e[3];
+        if (d > 0 && it % 16 == 0) {
+            /* apart so far and slow (parallel faces creep): -dist_b is concave, so over a it
+             * is at most -d + (-n).(s - y) with s a's support point along -n; below 0 the
+             * shapes are apart and the exact closest point does not matter */
+            double m[3] = {-n[0], -n[1], -n[2]}, sp[3], r[3];
+            floe_geometry_support(ga, m, sp);
+            floe_v3_sub(r, sp, y);
+            if (-d + floe_v3_dot(m, r) < 0) { conv = 1; break; }
+        }
+        if (moved) { /* Barzilai-Borwein length from the last move (spectral projected gradient) */
+            double dn[3], ss = floe_v3_dot(sprev, sprev), sy;
+            floe_v3_sub(dn, n, nprev); /* the ascent direction is -n: its change is -(n - nprev) */
+            sy = floe_v3_dot(sprev, dn);
+            if (sy > 0) alpha = fmin(ss / sy, 4 * size);
+            moved = 0;
+        }
+        floe_v3_copy(p, y);
+        floe_v3_axpy(p, -alpha, n); /* ascent of -dist_b: against b's outward normal */
+        proj_a(ga, p, yt);
+        if (!(floe_geometry_sdf(ga, yt) <= 1e-6 * size)) { /* the projection failed: shorter step */
+            halved = 1;
+            alpha *= 0.5;
+            if (alpha < 1e-9 * size) break;
+            continue;
+        }
+        floe_v3_sub(e, yt, y);
+        double step = floe_v3_norm(e);
+        if (step <= eps) { /* a fixed point: y is the deepest point; unless the step was short */
+            if (alpha >= size || halved) { conv = 1; break; }
+            alpha = size;
+            continue;
+        }
+        double dt = dist_b(gb, &f, yt, nt);
+        if (dt < d) {
+            /* a step of at least size gaining below 1e-12 size: flat on flat, where every
+             * point is as deep */
+            int flat = d - dt <= 1e-12 * size && alpha >= size;
+            floe_v3_copy(sprev, e);
+            floe_v3_copy(nprev, n);
+            floe_v3_copy(y, yt);
+            floe_v3_copy(n, nt);
+            d = dt;
+            moved = 1;
+            halved = 0;
+            alpha = fmin(2 * alpha, 4 * size);
+            if (flat) { conv = 1; break; }
+        } else {
+            halved = 1;
+            alpha *= 0.5;
+            if (alpha < 1e-9 * size) { conv = 1; break; } /* no ascent left at any step */
+        }
+    }
+    if (!isfinite(y[0] + y[1] + y[2] + d)) { floe_v3_set(y, 0, 0, 0); d = INFINITY; conv = 0; }
+    floe_v3_copy(x_body, y);
+    *dist = d;
+    double nb[3];
+    for (int k = 0; k < 3; k++) nb[k] = n[k];
+    floe_q_rotate(nw, a->q, nb); /* n is in a's frame */
+    double m = floe_v3_norm(nw);
+    if (m > 0) floe_v3_scale(nw, 1.0 / m);
+    if (warm4) {
+        floe_v3_copy(warm4, y);
+        warm4[3] = alpha / size;
+        if (!isfinite(y[0] + y[1] + y[2])) warm4[0] = NAN;
+    }
+    return conv ? it : -o->max_iter;
+}

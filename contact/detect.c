@@ -33,6 +33,12 @@ static void finish(floe_contact *c) {
     for (int k = 0; k < 3; k++) c->point[k] = 0.5 * (c->x1[k] + c->x2[k]);
 }
 
+/* contact point = the deepest point x itself: with d = max over x in A of -phi_B(x), the
+ * envelope theorem makes the force k(d) along B's normal at x, applied at x, the gradient
+ * of the stored energy; at the midpoint of the two halves' points the lever arm is off by
+ * half the depth along the normal and a spinning pair gains energy */
+static void finish_at(floe_contact *c, const double x[3]) { floe_v3_copy(c->point, x); }
+
 static void to_body(const shape_ref *s, const double x[3], double X[3]) {
     double d[3];
     floe_v3_sub(d, x, s->x);
@@ -81,14 +87,18 @@ static int sphere_plane(floe_world *w, const shape_ref *a, const shape_ref *b, d
     return 1;
 }
 
-/* sphere a against any shape b with an SDF: distance of the sphere centre */
+/* sphere a against any shape b with an SDF: distance of the sphere centre. The SDF never
+ * overestimates the distance (|grad| <= 1, docs/models.md), so phi >= r means apart; below,
+ * the true distance and unit normal (floe_geometry_distance: measured by projection for a
+ * shape that only gives an SDF, whose value outside may be a bound) */
 static int sphere_sdf(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     (void)w; (void)warm;
     double X[3], g[3], gw[3];
     to_body(b, a->x, X);
     double phi = floe_geometry_sdf(b->g, X);
     if (phi >= a->r) return 0;
-    floe_geometry_gradient(b->g, X, g);
+    phi = floe_geometry_distance(b->g, X, g);
+    if (phi >= a->r) return 0;
     floe_q_rotate(gw, b->q, g);
     floe_v3_set(c->n, -gw[0], -gw[1], -gw[2]);
     c->depth = a->r - phi;
@@ -147,9 +157,8 @@ static int vertices_plane(floe_world *w, const shape_ref *a, const shape_ref *b,
 }
 
 /* convex shape a against plane b: the support point in direction -n (the shape's own
- * `support`, or the fixed point of X <- project(X - s n) with s doubling from 2R to 1e3 R:
- * on a flat face tilted by a from the plane each pass moves about s*a along it; measured on
- * a tilted cube (test_detect): depth within 0.3 % for tilts 1e-1 .. 1e-5 rad). */
+ * `support`, or floe_geometry_support's climb along the zero level set, which needs only
+ * the SDF, exact or a bound: test_sdf_bound). */
 static int convex_plane(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     (void)w; (void)warm;
     const floe_geometry *g = a->g;
@@ -160,22 +169,8 @@ static int convex_plane(floe_world *w, const shape_ref *a, const shape_ref *b, d
     double R = a->r;
     if (floe_v3_dot(rel, nw) >= R) return 0;
     floe_q_rotate_inv(nb, a->q, nw);
-    if (g->klass->support) {
-        double d[3] = {-nb[0], -nb[1], -nb[2]};
-        g->klass->support(g, d, X);
-    } else {
-        double step = 2 * R, Y[3];
-        for (int it = 0; it < 80; it++) {
-            double prev[3];
-            floe_v3_copy(prev, X);
-            floe_v3_copy(Y, X);
-            floe_v3_axpy(Y, -step, nb);
-            floe_geometry_project(g, Y, X);
-            floe_v3_sub(prev, prev, X);
-            if (step >= 1e3 * R && floe_v3_norm(prev) < 1e-12 * R) break;
-            if (step < 1e3 * R) step *= 2;
-        }
-    }
+    double d[3] = {-nb[0], -nb[1], -nb[2]};
+    floe_geometry_support(g, d, X);
     double xw[3];
     floe_q_rotate(xw, a->q, X);
     floe_v3_add(xw, xw, a->x);
@@ -187,7 +182,8 @@ static int convex_plane(floe_world *w, const shape_ref *a, const shape_ref *b, d
     floe_v3_copy(c->x1, xw);
     for (int k = 0; k < 3; k++) c->x2[k] = xw[k] - s * nw[k];
     c->r_eff = R;
-    finish(c);
+    finish_at(c, c->x1); /* the force acts at the support point (it is the gradient of the
+                            stored energy, d = -min n.x over the shape) */
     return 1;
 }
 
@@ -517,6 +513,64 @@ static int separated_on_centre_line(const shape_ref *a, const shape_ref *b) {
     return -floe_v3_dot(xa, d) + floe_v3_dot(xb, d) < n ? 1 : 0;
 }
 
+static void note_nonconverged(floe_world *w) {
+    w->det.nonconverged++;
+    if (w->det.nonconverged == 1) {
+        w->det.first_bad_i = w->det.cur_i;
+        w->det.first_bad_j = w->det.cur_j;
+        w->det.first_bad_step = w->step;
+    }
+}
+
+/* a shape that only gives an SDF: the library derives its projection (user SDFs) */
+static int sdf_only(const floe_geometry *g) { return !g->klass->project; }
+
+/* a pair with a shape that only gives an SDF (exact, or a Lipschitz-1 bound outside):
+ * projected gradient ascent on the true distance (floe_sdf_half), one half per shape the
+ * other can be deepest in (a polytope partner: only its point deepest in the curved shape,
+ * as for ADMM); depth = the deeper half, force along the normal of the shape it is deepest
+ * in, applied at the deepest point (finish_at). */
+static int sdf_pair(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+    floe_pose pa = {a->g, {a->x[0], a->x[1], a->x[2]}, {a->q[0], a->q[1], a->q[2], a->q[3]}};
+    floe_pose pb = {b->g, {b->x[0], b->x[1], b->x[2]}, {b->q[0], b->q[1], b->q[2], b->q[3]}};
+    int half1 = !is_polytope(b->g), half2 = !is_polytope(a->g);
+    double X1[3], X2[3], d1 = INFINITY, d2 = INFINITY, n1[3] = {0, 0, 1}, n2[3] = {0, 0, 1};
+    int its = 0, bad = 0;
+    if (half1) {
+        int it = floe_sdf_half(&pa, &pb, &w->det.admm, warm, X1, &d1, n1);
+        its += it < 0 ? -it : it;
+        bad |= it < 0;
+    }
+    if (half2 && (!half1 || d1 < 0)) { /* half 1 apart: no contact, half 2 not needed */
+        int it = floe_sdf_half(&pb, &pa, &w->det.admm, warm ? warm + 8 : NULL, X2, &d2, n2);
+        its += it < 0 ? -it : it;
+        bad |= it < 0;
+    }
+    count_iterations(w, its);
+    w->det.admm_calls++;
+    if (bad) note_nonconverged(w);
+    if (!(d1 < 0 || d2 < 0) || (half1 && !(d1 < 0))) return 0;
+    double x[3];
+    if (d1 <= d2) { /* a's point x deepest in b; n1: b's outward normal, towards a */
+        floe_q_rotate(x, a->q, X1);
+        floe_v3_add(x, x, a->x);
+        floe_v3_copy(c->x1, x);
+        for (int k = 0; k < 3; k++) c->x2[k] = x[k] - d1 * n1[k];
+        floe_v3_set(c->n, -n1[0], -n1[1], -n1[2]);
+        c->depth = -d1;
+    } else { /* b's point deepest in a; n2: a's outward normal, towards b */
+        floe_q_rotate(x, b->q, X2);
+        floe_v3_add(x, x, b->x);
+        floe_v3_copy(c->x2, x);
+        for (int k = 0; k < 3; k++) c->x1[k] = x[k] - d2 * n2[k];
+        floe_v3_copy(c->n, n2);
+        c->depth = -d2;
+    }
+    c->r_eff = a->r * b->r / (a->r + b->r);
+    finish_at(c, x);
+    return 1;
+}
+
 /* ---- any other convex pair: ADMM ---- */
 static int admm_pair(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     if (separated_on_centre_line(a, b)) {
@@ -526,6 +580,7 @@ static int admm_pair(floe_world *w, const shape_ref *a, const shape_ref *b, doub
         return 0;
     }
     if (is_polytope(a->g) && is_polytope(b->g)) return polytope_pair(w, a, b, warm, c);
+    if (sdf_only(a->g) || sdf_only(b->g)) return sdf_pair(w, a, b, warm, c);
     floe_pose pa = {a->g, {a->x[0], a->x[1], a->x[2]}, {a->q[0], a->q[1], a->q[2], a->q[3]}};
     floe_pose pb = {b->g, {b->x[0], b->x[1], b->x[2]}, {b->q[0], b->q[1], b->q[2], b->q[3]}};
     floe_admm_result r;
@@ -540,14 +595,7 @@ static int admm_pair(floe_world *w, const shape_ref *a, const shape_ref *b, doub
         int it = floe_admm_half(P, S, &w->det.admm, warm, X, &phi);
         count_iterations(w, it < 0 ? -it : it);
         w->det.admm_calls++;
-        if (it < 0) {
-            w->det.nonconverged++;
-            if (w->det.nonconverged == 1) {
-                w->det.first_bad_i = w->det.cur_i;
-                w->det.first_bad_j = w->det.cur_j;
-                w->det.first_bad_step = w->step;
-            }
-        }
+        if (it < 0) note_nonconverged(w);
         if (!(phi < 0)) return 0;
         floe_q_rotate(xw, P->q, X);
         floe_v3_add(xw, xw, P->x);
@@ -568,27 +616,21 @@ static int admm_pair(floe_world *w, const shape_ref *a, const shape_ref *b, doub
         }
         c->depth = -phi;
         c->r_eff = a->r * b->r / (a->r + b->r);
-        finish(c);
+        finish_at(c, xw); /* the polytope's point deepest in S */
         return 1;
     }
     floe_admm_contact(&pa, &pb, &w->det.admm, warm, &r);
     count_iterations(w, r.iters);
     w->det.admm_calls++;
-    if (!r.converged) {
-        w->det.nonconverged++;
-        if (w->det.nonconverged == 1) {
-            w->det.first_bad_i = w->det.cur_i;
-            w->det.first_bad_j = w->det.cur_j;
-            w->det.first_bad_step = w->step;
-        }
-    }
+    if (!r.converged) note_nonconverged(w);
     if (!r.penetrating) return 0;
     floe_v3_copy(c->x1, r.x1);
     floe_v3_copy(c->x2, r.x2);
     floe_v3_copy(c->n, r.n);
     c->depth = r.depth;
     c->r_eff = a->r * b->r / (a->r + b->r);
-    finish(c);
+    /* the deeper half's point (r.depth and r.n come from it) */
+    finish_at(c, -r.phi1 >= -r.phi2 ? r.x1 : r.x2);
     return 1;
 }
 

@@ -58,4 +58,18 @@ int floe_admm_contact(const floe_pose *a, const floe_pose *b, const floe_admm_op
 int floe_admm_half(const floe_pose *a, const floe_pose *b, const floe_admm_options *o, double *warm8,
                    double x_body[3], double *phi);
 
+/* One half for shapes that only give an SDF (no class `project`: user SDFs, exact or a
+ * Lipschitz-1 bound): the point of a deepest inside b by projected gradient ascent of
+ * -dist_b over a,  y <- Pi_a(y + alpha n),  with dist_b the true signed distance
+ * (floe_geometry_distance: b's SDF if b is exact, measured by projection if it is a bound),
+ * n = -grad dist_b, Pi_a the Euclidean projection onto a (floe_geometry_project), alpha
+ * doubled after an ascent and halved otherwise. The depth it maximises is a true distance
+ * (|grad| = 1), so a force k(d) along b's normal at the point is the gradient of the
+ * stored energy whatever the SDF is inside. warm4[4]: y in a's frame and alpha / size
+ * (warm4[0] NaN = cold: y = Pi_a(centre of b)). Returns the iterations (negative: not
+ * converged); x_body: the point (a's frame), *dist: its signed distance to b (negative
+ * inside), nw: b's outward unit normal there (world). */
+int floe_sdf_half(const floe_pose *a, const floe_pose *b, const floe_admm_options *o, double *warm4,
+                  double x_body[3], double *dist, double nw[3]);
+
 #endif

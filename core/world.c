@@ -179,6 +179,9 @@ int floe_world_add_geometry(floe_world *w, floe_geometry *g) {
     if (!g) return -floe_world_error(w, FLOE_EINVAL, "geometry is NULL (invalid shape parameters?)");
     if (!g->klass || !g->klass->sdf || !g->klass->bounding_radius)
         return -floe_world_error(w, FLOE_EINVAL, "geometry class must provide sdf and bounding_radius");
+    char gerr[400] = "";
+    int grc = floe_geometry_check(g, gerr, sizeof gerr); /* a user SDF's Lipschitz bound */
+    if (grc) return -floe_world_error(w, grc, "%s", gerr); /* the caller keeps g, as on every failure */
     if (grow((void **)&w->geoms, &w->geoms_cap, w->ngeoms + 1, sizeof *w->geoms)) return -FLOE_ENOMEM;
     w->geoms[w->ngeoms] = g;
     return w->ngeoms++;

@@ -65,7 +65,13 @@ typedef struct floe_sphere { floe_geometry base; double radius; } floe_sphere;
 typedef struct floe_box { floe_geometry base; double half[3]; double vert[24]; } floe_box; /* half extents, corners */
 typedef struct floe_plane { floe_geometry base; } floe_plane;
 
-/* User SDF callback shape: f(X, user) in the body frame, with a bounding radius. */
+/* User SDF callback shape: f(X, user) in the body frame, with a bounding radius.
+ * Contract (docs/models.md, "What a user SDF must satisfy"): f < 0 inside, 0 on the surface,
+ * and f never overestimates the distance to the surface: |f(a) - f(b)| <= |a - b| (an exact
+ * SDF, or one exact inside and a lower bound outside, as most SDFs in the literature are).
+ * The constructor measures the Lipschitz constant on FLOE_SDF_LIPSCHITZ_PAIRS random pairs
+ * of points in and around the bounding cube; floe_world_add_geometry refuses the shape,
+ * naming it, when the constant is above FLOE_SDF_LIPSCHITZ_MAX. */
 typedef double (*floe_sdf_fn)(const double X[3], void *user);
 typedef struct floe_user_shape {
     floe_geometry base;
@@ -74,7 +80,12 @@ typedef struct floe_user_shape {
     double radius;        /* bounding radius about the body origin */
     double h;             /* finite-difference step for the gradient (default 1e-6 radius) */
     int quad_cells;       /* cells per axis of the mass quadrature (default 64) */
+    char name[64];        /* for messages (default "user_sdf") */
+    double lipschitz;     /* measured at creation: largest |f(a) - f(b)| / |a - b| */
+    double lip_a[3], lip_b[3]; /* the pair that gave it */
 } floe_user_shape;
+#define FLOE_SDF_LIPSCHITZ_MAX 1.05
+#define FLOE_SDF_LIPSCHITZ_PAIRS 2000
 
 extern const floe_geometry_class floe_sphere_class;
 extern const floe_geometry_class floe_box_class;
@@ -87,12 +98,31 @@ floe_geometry *floe_sphere_create(double radius);
 floe_geometry *floe_box_create(double lx, double ly, double lz); /* full side lengths */
 floe_geometry *floe_plane_create(void);
 floe_geometry *floe_user_shape_create(floe_sdf_fn fn, void *user, double bounding_radius);
+/* the same with a name for messages (NULL: "user_sdf"; at most 63 characters kept) */
+floe_geometry *floe_user_shape_create_named(floe_sdf_fn fn, void *user, double bounding_radius, const char *name);
 void floe_geometry_destroy(floe_geometry *g);
 
 /* Dispatch with numerical defaults. */
 double floe_geometry_sdf(const floe_geometry *g, const double X[3]);
 void floe_geometry_gradient(const floe_geometry *g, const double X[3], double n[3]);
+/* the closest point of the surface (Euclidean); without a class `project`, Newton steps on
+ * phi / |grad phi| onto the zero level set, then descent of the distance along the surface:
+ * exact for any SDF with the right zero set and |grad| <= 1, not only exact ones */
 void floe_geometry_project(const floe_geometry *g, const double X[3], double on_surface[3]);
+/* exact signed distance and unit outward normal n: the SDF and its gradient for a class with
+ * its own `project`, else measured through floe_geometry_project (so a bound SDF gives the
+ * true distance) */
+double floe_geometry_distance(const floe_geometry *g, const double X[3], double n[3]);
+/* the point farthest along the unit direction d: the class's `support`, else a climb of d.y
+ * along the zero level set (normal equal to d within 1e-9 rad) */
+void floe_geometry_support(const floe_geometry *g, const double d[3], double out[3]);
+/* largest |phi(a) - phi(b)| / |a - b| over `pairs` pseudo-random pairs (fixed seed) in and
+ * around the bounding cube; a_out/b_out (optional) get the worst pair */
+double floe_geometry_lipschitz(const floe_geometry *g, int pairs, double a_out[3], double b_out[3]);
+/* FLOE_OK, or FLOE_EINVAL with a message naming the shape when a shape whose projection the
+ * library derives (no class `project`: user SDFs) has a Lipschitz constant above
+ * FLOE_SDF_LIPSCHITZ_MAX (user shapes: the constant measured at creation) */
+int floe_geometry_check(const floe_geometry *g, char *err, size_t errlen);
 double floe_geometry_bounding_radius(const floe_geometry *g);
 int floe_geometry_mass_properties(const floe_geometry *g, int dim, double density, floe_mass_properties *out);
 /* Numerical mass properties on a grid of n^dim cells with 2^dim-point sub-sampling on

@@ -11,36 +11,237 @@ double floe_geometry_sdf(const floe_geometry *g, const double X[3]) { return g->
 
 double floe_geometry_bounding_radius(const floe_geometry *g) { return g->klass->bounding_radius(g); }
 
-void floe_geometry_gradient(const floe_geometry *g, const double X[3], double n[3]) {
-    if (g->klass->gradient) { g->klass->gradient(g, X, n); return; }
-    /* central differences with a step relative to the shape size */
+static double fd_step(const floe_geometry *g) {
     double r = g->klass->bounding_radius(g);
     double h = (isfinite(r) && r > 0 ? r : 1.0) * 1e-6;
     if (g->klass == &floe_user_shape_class) {
         const floe_user_shape *u = (const floe_user_shape *)g;
         if (u->h > 0) h = u->h;
     }
+    return h;
+}
+
+static double size_of(const floe_geometry *g) {
+    double r = g->klass->bounding_radius(g);
+    return isfinite(r) && r > 0 ? r : 1.0;
+}
+
+/* the gradient as it is: the class's, or central differences (not normalised: a bound
+ * SDF has |grad| < 1 outside, and the Newton step below needs the true magnitude) */
+static void grad_raw(const floe_geometry *g, const double X[3], double n[3]) {
+    if (g->klass->gradient) { g->klass->gradient(g, X, n); return; }
+    double h = fd_step(g);
     for (int k = 0; k < 3; k++) {
         double a[3] = {X[0], X[1], X[2]}, b[3] = {X[0], X[1], X[2]};
         a[k] += h; b[k] -= h;
         n[k] = (g->klass->sdf(g, a) - g->klass->sdf(g, b)) / (2 * h);
     }
+}
+
+void floe_geometry_gradient(const floe_geometry *g, const double X[3], double n[3]) {
+    if (g->klass->gradient) { g->klass->gradient(g, X, n); return; }
+    grad_raw(g, X, n); /* central differences, normalised (a unit normal) */
     double m = floe_v3_norm(n);
     if (m > 0) floe_v3_scale(n, 1.0 / m);
     else floe_v3_set(n, 0, 0, 1);
 }
 
+/* Newton's method on phi along its gradient, y <- y - phi grad / |grad|^2: onto the zero
+ * level set of any SDF whose gradient does not vanish near it. One step for an exact SDF
+ * (|grad| = 1); for a Lipschitz-1 bound outside (|grad| < 1) a plain step of phi along the
+ * unit normal falls short by the factor |grad|, Newton does not. Steps are capped at the
+ * shape size (a bound can be flat far away). */
+static int newton_surface(const floe_geometry *g, const double X[3], double R, double y[3]) {
+    const double tol = 1e-12 * R;
+    floe_v3_copy(y, X);
+    for (int it = 0; it < 60; it++) {
+        double phi = g->klass->sdf(g, y), gr[3];
+        if (fabs(phi) <= tol) return 1;
+        if (!isfinite(phi)) return 0;
+        grad_raw(g, y, gr);
+        double gg = floe_v3_dot(gr, gr);
+        if (!(gg > 1e-24)) return 0;
+        double s = phi / gg, len = fabs(s) * sqrt(gg);
+        if (len > R) s *= R / len;
+        floe_v3_axpy(y, -s, gr);
+    }
+    return fabs(g->klass->sdf(g, y)) <= 1e-9 * R;
+}
+
+/* Euclidean projection onto the zero level set from the SDF alone: the Newton foot point,
+ * then the closest point by descent of |X - y| along the surface (tangential part of
+ * X - y, pulled back onto the surface by Newton, halved until the distance falls). Exact
+ * for any SDF with the right zero set; for an exact SDF the first Newton step is already
+ * the answer and the loop costs one gradient. */
+static void project_numeric(const floe_geometry *g, const double X[3], double out[3]) {
+    double R = size_of(g), y[3], yt[3], r[3], n[3];
+    if (!newton_surface(g, X, R, y)) {
+        /* far away (Newton steps are capped at R) or a flat spot of a bound: start again
+         * from X pulled to 2R from the body origin; the descent below does the rest */
+        double Xs[3], m = floe_v3_norm(X);
+        floe_v3_copy(Xs, X);
+        if (m > 2 * R) floe_v3_scale(Xs, 2 * R / m);
+        if (!newton_surface(g, Xs, R, y)) floe_v3_set(y, 0, 0, 0), newton_surface(g, y, R, y);
+    }
+    floe_v3_sub(r, X, y);
+    double dy = floe_v3_norm(r), alpha = 1.0, sprev[3] = {0, 0, 0}, tprev[3] = {0, 0, 0};
+    for (int it = 0; it < 100; it++) {
+        floe_geometry_gradient(g, y, n);
+        floe_v3_sub(r, X, y);
+        double rn = floe_v3_dot(r, n), rt[3];
+        for (int k = 0; k < 3; k++) rt[k] = r[k] - rn * n[k];
+        double nt = floe_v3_norm(rt);
+        if (nt <= 1e-10 * R) break;
+        if (it > 0) { /* Barzilai-Borwein length (the tangent step is exact on a flat face: 1) */
+            double dr[3];
+            floe_v3_sub(dr, rt, tprev);
+            double sy = -floe_v3_dot(sprev, dr);
+            if (sy > 0) alpha = floe_v3_dot(sprev, sprev) / sy;
+            else alpha = fmin(1.0, 2 * alpha);
+        }
+        alpha = fmin(alpha, 2 * R / nt);
+        int ok = 0;
+        for (int k = 0; k < 40 && !ok; k++) {
+            double p[3], e[3];
+            floe_v3_copy(p, y);
+            floe_v3_axpy(p, alpha, rt);
+            int on = newton_surface(g, p, R, yt);
+            floe_v3_sub(e, X, yt);
+            double dt = floe_v3_norm(e);
+            if (on && dt < dy) { ok = 1; dy = dt; }
+            else alpha *= 0.5;
+        }
+        if (!ok) break;
+        floe_v3_sub(sprev, yt, y);
+        floe_v3_copy(tprev, rt);
+        floe_v3_copy(y, yt);
+    }
+    floe_v3_copy(out, y);
+}
+
 void floe_geometry_project(const floe_geometry *g, const double X[3], double out[3]) {
     if (g->klass->project) { g->klass->project(g, X, out); return; }
-    /* exact for a true SDF: step back along the gradient by the distance; two
-     * corrections make it robust to mild non-exactness */
-    floe_v3_copy(out, X);
-    for (int it = 0; it < 3; it++) {
-        double n[3];
-        double d = g->klass->sdf(g, out);
-        floe_geometry_gradient(g, out, n);
-        floe_v3_axpy(out, -d, n);
+    project_numeric(g, X, out);
+}
+
+double floe_geometry_distance(const floe_geometry *g, const double X[3], double n[3]) {
+    double phi = g->klass->sdf(g, X);
+    if (g->klass->project) { /* a class with its own projection gives an exact SDF */
+        floe_geometry_gradient(g, X, n);
+        return phi;
     }
+    double y[3], v[3];
+    project_numeric(g, X, y);
+    floe_v3_sub(v, X, y);
+    double d = floe_v3_norm(v);
+    if (d > 1e-9 * size_of(g)) {
+        floe_v3_scale(v, (phi < 0 ? -1.0 : 1.0) / d);
+        floe_v3_copy(n, v);
+    } else floe_geometry_gradient(g, y, n);
+    return phi < 0 ? -d : d;
+}
+
+/* The point of the shape farthest along the unit direction d from the SDF alone: start at
+ * the Newton foot of 2R d, then climb d.y along the surface: a step along the tangential
+ * part t of d, pulled back onto the surface by Newton, of the Barzilai-Borwein length
+ * |s|^2 / -(s . (t' - t)) (s the last move; it follows the curvature, so long thin ridges
+ * such as the rounded edges of a p = 10 superellipsoid do not zig-zag), halved until d.y
+ * rises; stops when the normal is d to 1e-9 rad or no step rises. */
+static void support_numeric(const floe_geometry *g, const double d[3], double out[3]) {
+    double R = size_of(g), y[3], yt[3], p[3], n[3], tprev[3] = {0, 0, 0}, sprev[3] = {0, 0, 0};
+    for (int k = 0; k < 3; k++) p[k] = 2 * R * d[k];
+    newton_surface(g, p, R, y);
+    double alpha = R, fy = floe_v3_dot(d, y);
+    for (int it = 0; it < 300; it++) {
+        floe_geometry_gradient(g, y, n);
+        double dn = floe_v3_dot(d, n), dt[3];
+        for (int k = 0; k < 3; k++) dt[k] = d[k] - dn * n[k];
+        double nd = floe_v3_norm(dt);
+        if (nd < 1e-9) break;
+        if (it > 0) {
+            double dy[3], ss = floe_v3_dot(sprev, sprev), sy;
+            floe_v3_sub(dy, dt, tprev);
+            sy = -floe_v3_dot(sprev, dy);
+            if (sy > 0) alpha = ss / sy;
+            else alpha *= 2;
+        }
+        alpha = fmin(alpha, 2 * R / nd); /* no step longer than the diameter */
+        int ok = 0;
+        while (!ok && alpha * nd > 1e-13 * R) {
+            floe_v3_copy(p, y);
+            floe_v3_axpy(p, alpha, dt);
+            int on = newton_surface(g, p, R, yt);
+            double ft = floe_v3_dot(d, yt);
+            if (on && ft > fy) { ok = 1; fy = ft; }
+            else alpha *= 0.5;
+        }
+        if (!ok) break;
+        floe_v3_sub(sprev, yt, y);
+        floe_v3_copy(tprev, dt);
+        floe_v3_copy(y, yt);
+    }
+    floe_v3_copy(out, y);
+}
+
+void floe_geometry_support(const floe_geometry *g, const double d[3], double out[3]) {
+    if (g->klass->support) { g->klass->support(g, d, out); return; }
+    support_numeric(g, d, out);
+}
+
+/* xorshift64*: the sampling of the Lipschitz check is the same at every run */
+static double rand_unit(unsigned long long *s) {
+    *s ^= *s >> 12; *s ^= *s << 25; *s ^= *s >> 27;
+    return (double)((*s * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+double floe_geometry_lipschitz(const floe_geometry *g, int pairs, double a_out[3], double b_out[3]) {
+    double R = size_of(g), worst = 0;
+    unsigned long long s = 0x9E3779B97F4A7C15ULL;
+    if (a_out) floe_v3_set(a_out, 0, 0, 0);
+    if (b_out) floe_v3_set(b_out, 0, 0, 0);
+    for (int k = 0; k < pairs; k++) {
+        /* a in the cube of side 3R about the body origin; b at a distance log-uniform in
+         * [1e-4 R, R] (short pairs see the local gradient, long ones the bound) */
+        double a[3], b[3], u[3], len = R * pow(10.0, -4.0 + 4.0 * rand_unit(&s));
+        for (int i = 0; i < 3; i++) a[i] = R * (3 * rand_unit(&s) - 1.5);
+        double un;
+        do {
+            for (int i = 0; i < 3; i++) u[i] = 2 * rand_unit(&s) - 1;
+            un = floe_v3_norm(u);
+        } while (!(un > 0.1 && un <= 1));
+        for (int i = 0; i < 3; i++) b[i] = a[i] + len * u[i] / un;
+        double fa = g->klass->sdf(g, a), fb = g->klass->sdf(g, b), d[3];
+        floe_v3_sub(d, a, b);
+        double L = fabs(fa - fb) / floe_v3_norm(d);
+        if (!isfinite(fa) || !isfinite(fb)) L = INFINITY;
+        if (L > worst) {
+            worst = L;
+            if (a_out) floe_v3_copy(a_out, a);
+            if (b_out) floe_v3_copy(b_out, b);
+        }
+        if (!isfinite(L)) break;
+    }
+    return worst;
+}
+
+int floe_geometry_check(const floe_geometry *g, char *err, size_t errlen) {
+    if (g->klass->project) return FLOE_OK; /* its own projection: the SDF is the class's business */
+    double L, a[3], b[3];
+    const char *name = g->klass->name ? g->klass->name : "custom";
+    if (g->klass == &floe_user_shape_class) {
+        const floe_user_shape *u = (const floe_user_shape *)g;
+        L = u->lipschitz;
+        floe_v3_copy(a, u->lip_a);
+        floe_v3_copy(b, u->lip_b);
+        name = u->name;
+    } else L = floe_geometry_lipschitz(g, FLOE_SDF_LIPSCHITZ_PAIRS, a, b);
+    if (L <= FLOE_SDF_LIPSCHITZ_MAX) return FLOE_OK;
+    floe_set_err(err, errlen,
+                 "shape '%s': its SDF changes by %.3g x the distance between (%.3g, %.3g, %.3g) and "
+                 "(%.3g, %.3g, %.3g) (Lipschitz constant above %.2f): a user SDF must never overestimate the "
+                 "distance to its surface, |grad phi| <= 1 (exact, or a lower bound) (docs/models.md, \"What a user SDF must satisfy\")",
+                 name, L, a[0], a[1], a[2], b[0], b[1], b[2], FLOE_SDF_LIPSCHITZ_MAX);
+    return FLOE_EINVAL;
 }
 
 int floe_geometry_mass_properties(const floe_geometry *g, int dim, double density,

@@ -1,6 +1,7 @@
 /* shapes.c - built-in shapes: sphere (ParticLS eq 25), box (eq 26), half-space plane and
  * the user SDF callback shape. Mass properties are analytic for the built-ins. */
 #include "floe_geometry.h"
+#include <stdio.h>
 #include <stdlib.h>
 
 /* ---- sphere, eq 25: phi = |X| - R ---- */
@@ -171,7 +172,7 @@ static double user_radius(const floe_geometry *g) { return ((const floe_user_sha
 const floe_geometry_class floe_user_shape_class = {1, "user_sdf", FLOE_GEOM_USER, user_sdf, NULL, NULL,
                                                    user_radius, NULL, NULL, NULL, NULL, NULL};
 
-floe_geometry *floe_user_shape_create(floe_sdf_fn fn, void *user, double bounding_radius) {
+floe_geometry *floe_user_shape_create_named(floe_sdf_fn fn, void *user, double bounding_radius, const char *name) {
     if (!fn || !(bounding_radius > 0) || !isfinite(bounding_radius)) return NULL;
     floe_user_shape *u = malloc(sizeof *u);
     if (!u) return NULL;
@@ -179,5 +180,12 @@ floe_geometry *floe_user_shape_create(floe_sdf_fn fn, void *user, double boundin
     u->fn = fn; u->user = user; u->radius = bounding_radius;
     u->h = 1e-6 * bounding_radius;
     u->quad_cells = 64;
+    snprintf(u->name, sizeof u->name, "%s", name ? name : "user_sdf");
+    /* the contract |grad| <= 1, measured now (refused when added to a world) */
+    u->lipschitz = floe_geometry_lipschitz(&u->base, FLOE_SDF_LIPSCHITZ_PAIRS, u->lip_a, u->lip_b);
     return &u->base;
+}
+
+floe_geometry *floe_user_shape_create(floe_sdf_fn fn, void *user, double bounding_radius) {
+    return floe_user_shape_create_named(fn, user, bounding_radius, NULL);
 }
