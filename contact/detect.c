@@ -15,6 +15,7 @@
 #include "world_internal.h"
 #include "floe_admm.h"
 #include "floe_polytope_lp.h"
+#include "floe_overlap.h"
 #include <stdlib.h>
 #include <string.h>
 
@@ -266,13 +267,8 @@ static int lp_half(floe_world *w, const shape_ref *a, const shape_ref *b, double
     return FLOE_OK;
 }
 
-/* ---- 2D overlap integrals (the overlap-area law) ----
- * For polygons X, Y (world frame, CCW corners; Y as lines n.x <= h) the term
- * I_XY = ∫_{X∩Y} -φ_Y dA and its gradient: moving X by a rigid motion changes X∩Y only on
- * ∂X, where the integrand is the depth d_Y(x) = min_f (h_f - n_f.x), so -dI_XY/dx_X is the
- * line load -d_Y n_X on ∂X ∩ Y (exact: d_Y is linear between the points where the nearest
- * line of Y changes, and those are found on each edge). */
-#define OV_MAX 64
+/* ---- overlap integrals (the overlap-area law, contact/overlap.c): world-frame inputs ---- */
+#define OV_MAX FLOE_OVERLAP_MAX
 
 static int ov_polygon(const shape_ref *s, double (*P)[2]) {
     int nv = 0, k = 0;
@@ -313,144 +309,105 @@ static int ov_lines(const shape_ref *s, double (*Lh)[3]) {
     return np < OV_MAX ? np : OV_MAX;
 }
 
-/* Sutherland-Hodgman: P (n corners) ∩ {a.x <= b} */
-static int ov_clip(double (*P)[2], int n, double ax, double ay, double b) {
-    double Q[OV_MAX][2];
-    int m = 0;
-    for (int i = 0; i < n && m < OV_MAX - 1; i++) {
-        const double *p = P[i], *q = P[(i + 1) % n];
-        double dp = ax * p[0] + ay * p[1] - b, dq = ax * q[0] + ay * q[1] - b;
-        if (dp <= 0) { Q[m][0] = p[0]; Q[m][1] = p[1]; m++; }
-        if ((dp < 0 && dq > 0) || (dp > 0 && dq < 0)) {
-            double t = dp / (dp - dq);
-            Q[m][0] = p[0] + t * (q[0] - p[0]);
-            Q[m][1] = p[1] + t * (q[1] - p[1]);
-            m++;
-        }
+/* world-frame planes (n, h) and corners of a box or polytope */
+static int ov_planes3(const shape_ref *s, double *pl, double *V, int *nv) {
+    double buf[24];
+    int np = 0, n = 0;
+    const double *bp = body_planes(s->g, 3, &np, buf), *bv = s->g->klass->vertices(s->g, &n);
+    if (np > FLOE_POLY3_FACES || n > 4 * FLOE_POLY3_FACES * FLOE_POLY3_CORNERS) return -1;
+    for (int k = 0; k < np; k++) {
+        floe_q_rotate(pl + 4 * k, s->q, bp + 4 * k);
+        pl[4 * k + 3] = bp[4 * k + 3] + floe_v3_dot(pl + 4 * k, s->x);
     }
-    memcpy(P, Q, sizeof(double) * 2 * (size_t)m);
-    return m;
+    for (int v = 0; v < n; v++) {
+        floe_q_rotate(V + 3 * v, s->q, bv + 3 * v);
+        floe_v3_add(V + 3 * v, V + 3 * v, s->x);
+    }
+    *nv = n;
+    return np;
 }
 
-static double ov_area(double (*P)[2], int n, double c[2]) {
-    double a = 0, cx = 0, cy = 0;
-    for (int i = 0; i < n; i++) {
-        const double *p = P[i], *q = P[(i + 1) % n];
-        double cr = p[0] * q[1] - q[0] * p[1];
-        a += cr;
-        cx += (p[0] + q[0]) * cr;
-        cy += (p[1] + q[1]) * cr;
-    }
-    a *= 0.5;
-    if (c) {
-        c[0] = a != 0 ? cx / (6 * a) : 0;
-        c[1] = a != 0 ? cy / (6 * a) : 0;
-    }
-    return a;
-}
-
-/* one term: the load on X (force f, moment m about the origin, per unit stiffness) and
- * I_XY; also the overlap polygon's area and centroid */
-static double ov_term(double (*X)[2], int nx, double (*Y)[3], int ny, double f[2], double *m, double *area,
-                      double cen[2]) {
-    f[0] = f[1] = *m = 0;
-    for (int e = 0; e < nx; e++) {
-        const double *p = X[e], *q = X[(e + 1) % nx];
-        double dx = q[0] - p[0], dy = q[1] - p[1], len = sqrt(dx * dx + dy * dy);
-        if (!(len > 0)) continue;
-        double nxe = dy / len, nye = -dx / len; /* outward normal of a CCW polygon */
-        /* the part of the edge inside Y: t in [t0, t1] */
-        double t0 = 0, t1 = 1;
-        for (int k = 0; k < ny && t0 < t1; k++) {
-            double v0 = Y[k][2] - Y[k][0] * p[0] - Y[k][1] * p[1], sl = -(Y[k][0] * dx + Y[k][1] * dy);
-            /* v0 + sl t >= 0 inside */
-            if (sl == 0) { if (v0 < 0) t1 = t0; continue; }
-            double tc = -v0 / sl;
-            if (sl > 0) { if (tc > t0) t0 = tc; }
-            else if (tc < t1) t1 = tc;
+static int overlap3(const shape_ref *a, const shape_ref *b, double F[3], double M[3], double *meas, double *I,
+                    double cen[3], double *patch) {
+    enum { NV = 4 * FLOE_POLY3_FACES * FLOE_POLY3_CORNERS };
+    double pa[4 * FLOE_POLY3_FACES], pb[4 * FLOE_POLY3_FACES];
+    double *Va = malloc(sizeof(double) * 3 * NV * 2);
+    floe_poly3 *X = malloc(sizeof *X * 2);
+    if (!Va || !X) { free(Va); free(X); return -FLOE_ENOMEM; }
+    double *Vb = Va + 3 * NV;
+    int nva = 0, nvb = 0, npa = ov_planes3(a, pa, Va, &nva), npb = ov_planes3(b, pb, Vb, &nvb);
+    double tol = 1e-9 * fmin(a->r, b->r);
+    int rc = FLOE_OK;
+    if (npa < 0 || npb < 0 || floe_poly3_from_planes(pa, npa, Va, nva, tol, &X[0]) ||
+        floe_poly3_from_planes(pb, npb, Vb, nvb, tol, &X[1]))
+        rc = -FLOE_ENOTSUP;
+    else {
+        double f1[3], f2[3], m1[3], m2[3], v1, v2, c1[3], c2[3], s1, s2;
+        double I1 = floe_overlap_term3(&X[0], pb, npb, tol, f1, m1, &v1, c1, &s1);
+        double I2 = floe_overlap_term3(&X[1], pa, npa, tol, f2, m2, &v2, c2, &s2);
+        for (int k = 0; k < 3; k++) {
+            F[k] = 0.5 * (f1[k] - f2[k]);
+            M[k] = 0.5 * (m1[k] - m2[k]);
         }
-        if (!(t1 > t0)) continue;
-        /* d_Y along the piece: the lower envelope of the lines' depth, walked piece by piece */
-        double t = t0;
-        for (int guard = 0; guard <= ny && t < t1; guard++) {
-            int fb = -1;
-            double vb = INFINITY, sb = 0;
-            for (int k = 0; k < ny; k++) {
-                double v = Y[k][2] - Y[k][0] * (p[0] + t * dx) - Y[k][1] * (p[1] + t * dy);
-                double sl = -(Y[k][0] * dx + Y[k][1] * dy);
-                if (v < vb - 1e-15 * len || (v <= vb + 1e-15 * len && sl < sb)) { vb = v; sb = sl; fb = k; }
-            }
-            double tn = t1;
-            for (int k = 0; k < ny; k++) {
-                if (k == fb) continue;
-                double v = Y[k][2] - Y[k][0] * (p[0] + t * dx) - Y[k][1] * (p[1] + t * dy);
-                double sl = -(Y[k][0] * dx + Y[k][1] * dy);
-                if (sl < sb) {
-                    double tc = t + (v - vb) / (sb - sl);
-                    if (tc > t && tc < tn) tn = tc;
-                }
-            }
-            double da = vb, db = vb + sb * (tn - t), L = (tn - t) * len;
-            if (da < 0) da = 0;
-            if (db < 0) db = 0;
-            double ax = p[0] + t * dx, ay = p[1] + t * dy, bx = p[0] + tn * dx, by = p[1] + tn * dy;
-            double s0 = 0.5 * L * (da + db);                        /* ∫ d ds */
-            double mx = L * (da * (2 * ax + bx) + db * (ax + 2 * bx)) / 6; /* ∫ x d ds */
-            double my = L * (da * (2 * ay + by) + db * (ay + 2 * by)) / 6;
-            f[0] -= s0 * nxe;
-            f[1] -= s0 * nye;
-            *m -= mx * nye - my * nxe; /* ∫ x × (-d n) */
-            t = tn;
-        }
+        *meas = 0.5 * (v1 + v2);
+        *I = 0.5 * (I1 + I2);
+        floe_v3_copy(cen, c1);
+        *patch = 0.5 * (s1 + s2);
     }
-    /* I_XY: the overlap split into the regions nearest to each line of Y */
-    double O[OV_MAX][2];
-    memcpy(O, X, sizeof(double) * 2 * (size_t)nx);
-    int no = nx;
-    for (int k = 0; k < ny && no > 0; k++) no = ov_clip(O, no, Y[k][0], Y[k][1], Y[k][2]);
-    *area = no > 2 ? ov_area(O, no, cen) : 0;
-    double I = 0;
-    for (int fk = 0; fk < ny && no > 2; fk++) {
-        double R[OV_MAX][2], c[2];
-        memcpy(R, O, sizeof(double) * 2 * (size_t)no);
-        int nr = no;
-        for (int g = 0; g < ny && nr > 2; g++) {
-            if (g == fk) continue; /* h_f - n_f.x <= h_g - n_g.x */
-            nr = ov_clip(R, nr, Y[g][0] - Y[fk][0], Y[g][1] - Y[fk][1], Y[g][2] - Y[fk][2]);
-        }
-        if (nr < 3) continue;
-        double a = ov_area(R, nr, c);
-        I += a * (Y[fk][2] - Y[fk][0] * c[0] - Y[fk][1] * c[1]);
-    }
-    return I;
+    free(Va);
+    free(X);
+    return rc;
 }
 
 int floe_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact *c) {
     shape_ref a, b;
     make_ref(w, i, FLOE_SUB_A(sub), &a);
     make_ref(w, j, FLOE_SUB_B(sub), &b);
-    if (w->def.dim != 2 || !is_polytope(a.g) || !is_polytope(b.g)) return -FLOE_ENOTSUP;
-    double PA[OV_MAX][2], PB[OV_MAX][2], LA[OV_MAX][3], LB[OV_MAX][3];
-    int na = ov_polygon(&a, PA), nb = ov_polygon(&b, PB), la = ov_lines(&a, LA), lb = ov_lines(&b, LB);
-    double f1[2], f2[2], m1, m2, ar1, ar2, c1[2], c2[2];
-    double I1 = ov_term(PA, na, LB, lb, f1, &m1, &ar1, c1); /* load on A from A's boundary in B */
-    double I2 = ov_term(PB, nb, LA, la, f2, &m2, &ar2, c2); /* load on B from B's boundary in A */
-    /* on A: half of each term, the second by action and reaction */
-    double F[3] = {0.5 * (f1[0] - f2[0]), 0.5 * (f1[1] - f2[1]), 0}, M = 0.5 * (m1 - m2);
-    double F2 = F[0] * F[0] + F[1] * F[1];
+    if (!is_polytope(a.g) || !is_polytope(b.g)) return -FLOE_ENOTSUP;
+    double F[3] = {0, 0, 0}, M[3] = {0, 0, 0}, cen[3], meas, I, l2;
+    if (w->def.dim == 2) {
+        double PA[OV_MAX][2], PB[OV_MAX][2], LA[OV_MAX][3], LB[OV_MAX][3];
+        int na = ov_polygon(&a, PA), nb = ov_polygon(&b, PB), la = ov_lines(&a, LA), lb = ov_lines(&b, LB);
+        double f1[2], f2[2], m1, m2, ar1, ar2, c1[2], c2[2];
+        double I1 = floe_overlap_term2(PA, na, LB, lb, f1, &m1, &ar1, c1); /* on A, from its boundary in B */
+        double I2 = floe_overlap_term2(PB, nb, LA, la, f2, &m2, &ar2, c2); /* on B, from its boundary in A */
+        /* on A: half of each term, the second by action and reaction */
+        F[0] = 0.5 * (f1[0] - f2[0]);
+        F[1] = 0.5 * (f1[1] - f2[1]);
+        M[2] = 0.5 * (m1 - m2);
+        meas = 0.5 * (ar1 + ar2);
+        I = 0.5 * (I1 + I2);
+        cen[0] = ar1 > 0 ? c1[0] : c->point[0];
+        cen[1] = ar1 > 0 ? c1[1] : c->point[1];
+        cen[2] = 0.5 * (a.x[2] + b.x[2]);
+        l2 = I > 0 ? meas * meas / (2 * I) : 0; /* contact length A^2 / 2I (flat: exact) */
+        l2 *= l2;
+    } else {
+        double patch;
+        int rc = overlap3(&a, &b, F, M, &meas, &I, cen, &patch);
+        if (rc) return rc;
+        l2 = patch; /* the mean area of each body's boundary inside the other (flat: the patch) */
+    }
+    double F2 = floe_v3_dot(F, F);
     floe_v3_copy(c->area_force, F);
-    c->area = 0.5 * (ar1 + ar2);
-    c->area_energy = 0.5 * (I1 + I2);
+    c->area = meas;
+    c->area_energy = I;
+    c->area_l2 = l2;
+    floe_v3_set(c->area_couple, 0, 0, 0);
     if (!(F2 > 0)) return 0; /* touching, no overlap */
-    /* the point: on the line of action (p x F = M), nearest the overlap's centroid */
-    double fl = sqrt(F2), u[2] = {F[0] / fl, F[1] / fl};
-    double p[2] = {M * F[1] / F2, -M * F[0] / F2};
-    double cen[2] = {ar1 > 0 ? c1[0] : c->point[0], ar1 > 0 ? c1[1] : c->point[1]};
-    double s = (cen[0] - p[0]) * u[0] + (cen[1] - p[1]) * u[1];
-    c->point[0] = p[0] + s * u[0];
-    c->point[1] = p[1] + s * u[1];
-    c->point[2] = 0.5 * (a.x[2] + b.x[2]);
-    floe_v3_set(c->n, -u[0], -u[1], 0); /* from i to j: the force on i pushes it back */
+    /* the central axis of the wrench: p = F x M / |F|^2 (then M = p x F + the couple along F),
+     * moved along F to the point nearest the overlap's centroid */
+    double p[3], u[3], fl = sqrt(F2);
+    floe_v3_cross(p, F, M);
+    floe_v3_scale(p, 1.0 / F2);
+    for (int k = 0; k < 3; k++) u[k] = F[k] / fl;
+    double mpar = floe_v3_dot(M, u), d[3];
+    for (int k = 0; k < 3; k++) c->area_couple[k] = mpar * u[k];
+    floe_v3_sub(d, cen, p);
+    double s = floe_v3_dot(d, u);
+    for (int k = 0; k < 3; k++) c->point[k] = p[k] + s * u[k];
+    if (w->def.dim == 2) c->point[2] = cen[2];
+    floe_v3_set(c->n, -u[0], -u[1], -u[2]); /* from i to j: the force on i pushes it back */
     c->gscale = 1.0;
     return 1;
 }

@@ -40,12 +40,16 @@ typedef struct floe_contact {
                                 two faces the depth grows at this rate along n only, and the
                                 world scales the law's force by it so that the force stays the
                                 gradient of the stored energy (1 otherwise; set by detection) */
-    /* set only for the overlap-area law (2D polygon pairs, floe_overlap_law_class): */
-    double area;             /* overlap area of the two polygons, m^2 */
+    /* set only for the overlap-area law (polytope pairs, floe_overlap_law_class): */
+    double area;             /* overlap area (2D, m^2) or volume (3D, m^3) */
     double area_force[3];    /* the elastic force on i per unit stiffness, -dI/dx_i: its length
-                                equals the overlap area where one edge of each body bounds it */
-    double area_energy;      /* I = (int_{A∩B} -phi_B dA + int_{A∩B} -phi_A dA) / 2, m^3: the stored
-                                energy per unit stiffness */
+                                equals the overlap area (volume) where one face of each body
+                                bounds it */
+    double area_couple[3];   /* 3D: the part of -dI/dθ_i not carried by area_force at point (a
+                                couple on i, minus it on j) */
+    double area_energy;      /* I = (int_{A∩B} -phi_B + int_{A∩B} -phi_A) / 2, m^3 (2D) or m^4
+                                (3D): the stored energy per unit stiffness */
+    double area_l2;          /* squared size of the touching patch (rocking dashpot), m^2 */
     double wr[3];            /* relative angular velocity w_i - w_j (set by the world) */
 } floe_contact;
 
@@ -165,14 +169,14 @@ floe_contact_law *floe_short_range_law_create_pd(double c, double delta, double 
  * detection (no force, no history, no interpenetration guard). */
 floe_contact_law *floe_no_contact_law_create(void);
 
-/* ---- overlap-area law for 2D polygons (contact/overlap_law.c) ----
- * Elastic normal force = ka x (the conservative overlap resultant, of length the overlap
- * area A: F = ka A where one edge of each polygon bounds the overlap, as SubZero's floe
- * contact), stored energy ka I (floe_contact.area_energy), a Winkler foundation of modulus ka:
- * flat edges in contact carry a linear pressure and rest without rocking. Dashpot gn (N s/m)
- * on the normal velocity at the resultant's point, Coulomb friction with a shear spring ks
- * (N/m) and dashpot gs as the linear law. ka in N/m^3 (N per m^2 of overlap and per m of
- * depth ... per metre of thickness when masses are per area). */
+/* ---- overlap law for polytopes (contact/overlap_law.c, contact/overlap.c) ----
+ * Elastic force = ka x the conservative overlap resultant (length: the overlap area A in
+ * 2D, volume V in 3D, where one edge/face of each body bounds the overlap: F = ka A as
+ * SubZero's floe contact), stored energy ka I (floe_contact.area_energy): a Winkler
+ * foundation of modulus ka (N/m^3), so flat faces carry a linear pressure and rest without
+ * rocking. Dashpot gn (N s/m) on the normal velocity at the resultant's point and as a
+ * couple gn l^2/12 against rocking, Coulomb friction with a shear spring ks (N/m) and
+ * dashpot gs as the linear law. 2D forces are per metre of thickness with masses per area. */
 typedef struct floe_overlap_law {
     floe_contact_law base;
     double ka, ks, gn, gs, mu;

@@ -50,15 +50,14 @@ static int overlap_force(const floe_contact_law *law_, const floe_contact *c, do
     double diss = (Fn - fel) * vn * c->dt;
     double Ft[3];
     floe_contact_coulomb(c, L->ks, L->gs, L->mu, Fn, hist, Ft, &diss);
-    /* the dashpot acts at the resultant's point; distributed over a contact of length l
-     * (l = A^2 / 2I, exact for flat edges) it also resists rocking: couple gn l^2/12 (w_i - w_j) */
-    double l = c->area_energy > 0 ? c->area * c->area / (2.0 * c->area_energy) : 0.0;
-    double cr = L->gn * l * l / 12.0;
+    /* the dashpot acts at the resultant's point; distributed over a patch of size l it also
+     * resists rocking: couple gn l^2/12 (w_i - w_j) */
+    double cr = L->gn * c->area_l2 / 12.0;
     for (int k = 0; k < 3; ++k) {
-        /* elastic part along the exact gradient; the dashpot along n = -g/|g| */
+        /* elastic part along the exact gradient (and its couple); the dashpot along n */
         out->force[k] = L->ka * c->area_force[k] - (Fn - fel) * c->n[k] + Ft[k];
-        out->torque_i[k] = -cr * c->wr[k];
-        out->torque_j[k] = cr * c->wr[k];
+        out->torque_i[k] = L->ka * c->area_couple[k] - cr * c->wr[k];
+        out->torque_j[k] = -L->ka * c->area_couple[k] + cr * c->wr[k];
     }
     diss += cr * floe_v3_dot(c->wr, c->wr) * c->dt;
     out->energy = L->ka * c->area_energy + 0.5 * L->ks * floe_v3_dot(hist, hist);

@@ -128,7 +128,7 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
             r = floe_detect_overlap(w, i, j, sub, &c);
             if (r == -FLOE_ENOTSUP)
                 return floe_world_error(w, FLOE_ENOTSUP,
-                                        "contact law %s needs two polygons in a 2D world; particles %d and %d are %s-%s",
+                                        "contact law %s needs two polytopes (polygons, boxes, prisms, polyhedra); particles %d and %d are %s-%s",
                                         law->klass->name, i, j, w->geoms[p->geom[i]]->klass->name,
                                         w->geoms[p->geom[j]]->klass->name);
         }

@@ -54,7 +54,7 @@ bodies:
     r = subprocess.run([cli, "run", "-q", bad, "-o", out], capture_output=True, text=True)
     msg = r.stdout + r.stderr
     print("  spheres under overlap_area:", msg.strip().splitlines()[-1] if msg.strip() else "(no message)")
-    check(r.returncode != 0 and "overlap_area" in msg and "polygons" in msg and "particles 0 and 1" in msg,
+    check(r.returncode != 0 and "overlap_area" in msg and "polytopes" in msg and "particles 0 and 1" in msg,
           "overlap_area on spheres refused naming the law and the particles")
 
 print("%d passed, %d failed" % (passed, failed))
