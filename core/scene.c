@@ -30,6 +30,11 @@
 #endif
 
 #define SC_MAX_PARTICLES_PER_ENTRY 100000000L
+/* a run of more steps than this would never end (and the step count must fit a long) */
+#define SC_MAX_STEPS 1.0e12
+/* random packing: placement stops after this many tries in a row without a placement */
+#define SC_MAX_FAILED_TRIES 10000000L
+#define SC_MAX_TRIES 1000000000L
 
 /* ------------------------------------------------------------------------------------ */
 /* Loader context                                                                        */
@@ -1325,11 +1330,16 @@ static int sc_parse_region(sc *s, const sc_map *m, double lo[3], double hi[3])
     FLOE_TRY(sc_map_open(s, v == k ? NULL : v, k, f, keys, &rm));
     FLOE_TRY(sc_vec(s, &rm, "min", 1, NULL, lo));
     FLOE_TRY(sc_vec(s, &rm, "max", 1, NULL, hi));
-    for (int a = 0; a < s->dim; a++)
+    for (int a = 0; a < s->dim; a++) {
         if (!(hi[a] > lo[a]))
             return sc_fail(s, FLOE_EINVAL, sc_get(&rm, "max", NULL),
                            "%s: max must exceed min on every axis (axis %c: %g <= %g)", f, "xyz"[a],
                            hi[a], lo[a]);
+        if (!(hi[a] - lo[a] <= 1e12))
+            return sc_fail(s, FLOE_EINVAL, sc_get(&rm, "max", NULL),
+                           "%s: the region is %g m long along %c, beyond 1e12 m", f, hi[a] - lo[a],
+                           "xyz"[a]);
+    }
     if (s->dim == 2) { lo[2] = hi[2] = 0; }
     return FLOE_OK;
 }
@@ -1427,14 +1437,16 @@ static int sc_lattice(sc *s, const sc_map *m, int hex, sc_points *pts, const sc_
         floe_v3_copy(origin, lo);
         /* counts large enough to cover the region; sites beyond max are skipped */
         double step[3] = {d, hex ? d * sqrt(3.0) / 2.0 : d, hex ? d * sqrt(2.0 / 3.0) : d};
-        double total = 1;
+        double total = 1, cd[3];
         for (int a = 0; a < 3; a++) {
-            cnt[a] = a < s->dim ? (long)floor((hi[a] - lo[a]) / step[a]) + 2 : 1;
-            total *= (double)cnt[a];
+            cd[a] = a < s->dim ? floor((hi[a] - lo[a]) / step[a]) + 2 : 1;
+            total *= cd[a];
         }
-        if (total > 4.0 * (double)SC_MAX_PARTICLES_PER_ENTRY)
+        if (!(total <= 4.0 * (double)SC_MAX_PARTICLES_PER_ENTRY))
             return sc_fail(s, FLOE_EINVAL, sc_get(m, "region", NULL),
-                           "%s.region holds too many lattice sites", m->what);
+                           "%s.region holds too many lattice sites (%.3g at spacing %g; at most 1e8 "
+                           "particles per entry)", m->what, total, d);
+        for (int a = 0; a < 3; a++) cnt[a] = (long)cd[a];
     }
     sc_rng rng = {(uint64_t)seed};
     for (long k = 0; k < cnt[2]; k++)
@@ -1469,10 +1481,11 @@ static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
     long count, seed, max_tries;
     FLOE_TRY(sc_long(s, m, "count", 1, 0, &count));
     if (count < 1 || count > SC_MAX_PARTICLES_PER_ENTRY)
-        return sc_range(s, m, "count", ">= 1", (double)count);
+        return sc_range(s, m, "count", "in [1, 1e8] (particles per entry)", (double)count);
     FLOE_TRY(sc_long(s, m, "seed", 0, 1, &seed));
     FLOE_TRY(sc_long(s, m, "max_tries", 0, 100000, &max_tries));
-    if (max_tries < 1) return sc_range(s, m, "max_tries", ">= 1", (double)max_tries);
+    if (max_tries < 1 || max_tries > SC_MAX_TRIES)
+        return sc_range(s, m, "max_tries", "in [1, 1e9]", (double)max_tries);
     if (max_tries < count) max_tries = count;
     double rb = c->shape.rb;
     double a0[3], a1[3];
@@ -1488,17 +1501,30 @@ static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
             a0[a] = a1[a] = lo[a];
         }
     }
-    /* cell grid: cells at least one diameter wide, at most ~4M cells */
+    /* the bounding spheres of count particles cannot fill more than the region */
+    {
+        double vreg = 1, vone = s->dim == 3 ? 4.0 / 3.0 * M_PI * rb * rb * rb : M_PI * rb * rb;
+        for (int a = 0; a < s->dim; a++) vreg *= hi[a] - lo[a];
+        if ((double)count * vone > vreg)
+            return sc_fail(s, FLOE_EINVAL, sc_get(m, "count", NULL),
+                           "%s: %ld particles (bounding volume %g each) cannot fit in the region "
+                           "(volume %g): enlarge region or lower count", m->what, count, vone, vreg);
+    }
+    /* cell grid: cells at least one diameter wide, at most ~4M cells (the counts are
+     * computed in double: a huge region would overflow a long) */
     double cell = 2.0 * rb;
     long nc[3];
     for (;;) {
-        double total = 1;
+        double total = 1, ncd[3];
         for (int a = 0; a < 3; a++) {
-            nc[a] = a < s->dim ? (long)floor((a1[a] - a0[a]) / cell) + 1 : 1;
-            total *= (double)nc[a];
+            ncd[a] = a < s->dim ? floor((a1[a] - a0[a]) / cell) + 1 : 1;
+            total *= ncd[a];
         }
-        if (total <= 4.0e6) break;
-        cell *= 1.5;
+        if (total <= 4.0e6) {
+            for (int a = 0; a < 3; a++) nc[a] = (long)ncd[a];
+            break;
+        }
+        cell *= total > 1e12 ? 2.0 * cbrt(total / 4.0e6) : 1.5;
     }
     long ncells = nc[0] * nc[1] * nc[2];
     long *head = malloc((size_t)ncells * sizeof *head);
@@ -1510,10 +1536,11 @@ static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
     }
     for (long i = 0; i < ncells; i++) head[i] = -1;
     sc_rng rng = {(uint64_t)seed};
-    long placed = 0, tries = 0;
+    long placed = 0, tries = 0, failed = 0;
     double d2min = 4.0 * rb * rb;
-    while (placed < count && tries < max_tries) {
+    while (placed < count && tries < max_tries && failed < SC_MAX_FAILED_TRIES) {
         tries++;
+        failed++;
         double x[3];
         long ci[3];
         for (int a = 0; a < 3; a++) {
@@ -1535,6 +1562,7 @@ static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
                     }
                 }
         if (!ok) continue;
+        failed = 0;
         if (sc_points_push(pts, x)) {
             free(head);
             free(next);
@@ -1547,6 +1575,11 @@ static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
     }
     free(head);
     free(next);
+    if (placed < count && failed >= SC_MAX_FAILED_TRIES)
+        return sc_fail(s, FLOE_EINVAL, sc_get(m, "count", NULL),
+                       "%s: could only place %ld of %ld particles without overlap in the region: "
+                       "%ld tries in a row found no room (the region is jammed; enlarge region or "
+                       "lower count)", m->what, placed, count, failed);
     if (placed < count)
         return sc_fail(s, FLOE_EINVAL, sc_get(m, "count", NULL),
                        "%s: could only place %ld of %ld particles without overlap in the region "
@@ -2104,6 +2137,12 @@ static int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, con
         FLOE_TRY(sc_num(s, &m, "interval", 0, 0.0, &o->interval));
         if (sc_has(&m, "interval")) {
             if (!(o->interval > 0)) return sc_range(s, &m, "interval", "> 0 (s)", o->interval);
+            /* the world steps next_time by interval until it passes t: an interval below the
+             * time resolution would never get there */
+            if (!(o->interval >= 1e-9 * s->duration))
+                return sc_fail(s, FLOE_EINVAL, sc_get(&m, "interval", NULL),
+                               "%s.interval %g s is below the time resolution of this run (1e-9 x "
+                               "time.duration = %g s)", what, o->interval, 1e-9 * s->duration);
             o->every = 0;
         } else if (o->every < 1) {
             return sc_range(s, &m, "every", ">= 1 (steps)", (double)o->every);
@@ -2475,6 +2514,17 @@ static int sc_time_integration(sc *s, const sc_map *tm, floe_world_def *def)
     return FLOE_OK;
 }
 
+/* duration / dt must be a step count a run can reach (1e30 s would overflow the count) */
+static int sc_check_steps(sc *s, const sc_map *tm, double dt, const char *which)
+{
+    double n = s->duration / dt;
+    if (dt > 0 && !(n <= SC_MAX_STEPS))
+        return sc_fail(s, FLOE_EINVAL, sc_get(tm, "duration", NULL),
+                       "time.duration %g s is %.3g steps of %g s (%s): more than 1e12 steps", s->duration,
+                       n, dt, which);
+    return FLOE_OK;
+}
+
 static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_outputs,
                     floe_scene_info *info)
 {
@@ -2526,6 +2576,8 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     def.dt = s->dt_given;
     def.dt_safety = s->safety;
     FLOE_TRY(sc_time_integration(s, &tm, &def));
+    FLOE_TRY(sc_check_steps(s, &tm, def.adaptive ? def.dt_min : s->dt_given,
+                            def.adaptive ? "time.adaptive.dt_min" : "time.dt"));
 
     double g[3];
     FLOE_TRY(sc_vec(s, &r, "gravity", 0, NULL, g));
@@ -2613,6 +2665,14 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     if (rc != FLOE_OK)
         return sc_fail(s, rc, rc == FLOE_EUNSTABLE && !s->dt_auto ? sc_get(&tm, "dt", NULL) : NULL,
                        "%s", floe_world_last_error(s->w));
+    FLOE_TRY(sc_check_steps(s, &tm, s->w->def.adaptive ? s->w->dt_lo : s->w->dt,
+                            s->w->def.adaptive ? "the smallest adaptive step" : "the time step"));
+    /* an output interval not longer than a fixed step writes every step: say so to the
+     * world, which then need not count intervals one by one */
+    for (int k = 0; k < s->w->nobs && !s->w->def.adaptive; k++) {
+        floe_observer *o = s->w->obs[k];
+        if (o->period_steps <= 0 && o->period_time > 0 && o->period_time <= s->w->dt) o->period_steps = 1;
+    }
 
     info->duration = s->duration;
     info->nparticles = s->nparticles;

@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #ifdef FLOE_HAVE_ASSIMP
 #include <assimp/cimport.h>
@@ -121,6 +122,17 @@ int floe_mesh_load(const char *path, double scale, floe_mesh *out, char *err, si
     if (!(scale > 0) || !isfinite(scale)) {
         floe_set_err(err, errlen, "mesh file '%s': scale %g must be positive and finite", path, scale);
         return FLOE_EINVAL;
+    }
+    /* a FIFO, device or directory would block or never end: only regular files */
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        floe_set_err(err, errlen, "cannot read mesh file '%s': %s", path, strerror(errno));
+        return FLOE_EIO;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        floe_set_err(err, errlen, "mesh file '%s' is not a regular file (%s)", path,
+                     S_ISDIR(st.st_mode) ? "a directory" : S_ISFIFO(st.st_mode) ? "a FIFO" : "a device or socket");
+        return FLOE_EIO;
     }
     FILE *f = fopen(path, "rb");
     if (!f) {
