@@ -30,6 +30,8 @@
 #endif
 
 #define SC_MAX_PARTICLES_PER_ENTRY 100000000L
+/* scene text: 64 MiB at most */
+#define SC_MAX_TEXT ((size_t)64 << 20)
 /* a run of more steps than this would never end (and the step count must fit a long) */
 #define SC_MAX_STEPS 1.0e12
 /* random packing: placement stops after this many tries in a row without a placement */
@@ -62,6 +64,8 @@ typedef struct sc_output {
     char target[512];
     long every;
     double interval;
+    struct fy_node *name_at;      /* file / prefix value (NULL: the default), for messages */
+    char file[520];               /* the file it writes (vtk: its .pvd), to refuse two writers of one file */
 } sc_output;
 
 typedef struct sc {
@@ -97,6 +101,31 @@ static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
 #endif
     ;
 
+static int sc_loc_pos(const sc *s, long pos, int *line, int *col);
+static int sc_fail_pos(sc *s, int code, long pos, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
+/* the same at a byte offset of the text (-1: no position) */
+static int sc_fail_pos(sc *s, int code, long pos, const char *fmt, ...)
+{
+    char msg[768];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    int line, col;
+    if (s->err && s->errlen) {
+        if (sc_loc_pos(s, pos, &line, &col))
+            snprintf(s->err, s->errlen, "%s:%d:%d: %s", s->path, line, col, msg);
+        else
+            snprintf(s->err, s->errlen, "%s: %s", s->path, msg);
+    }
+    return code ? code : FLOE_EINVAL;
+}
+
 static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
 {
     char msg[768];
@@ -121,7 +150,65 @@ static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
  * opening quote of a quoted scalar), flow collections from their bracket (found by
  * scanning back from the first entry), block collections from their first entry.
  * Returns -1 when unknown (empty block collection, NULL). */
+static long sc_pos_direct(const sc *s, struct fy_node *n);
+
+static int sc_blank(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; }
+
+/* A node with no token of its own (an empty key `: 3`, an empty collection `[]` or `{}`):
+ * found from its neighbours in the parent. An empty key is at the ':' before its value; an
+ * empty value is the first character after its key's ':'; an empty entry of a sequence is
+ * after the ',' that follows the previous entry. Otherwise the parent's position. */
+static long sc_pos_fallback(const sc *s, struct fy_node *n, int depth)
+{
+    struct fy_node *par = fy_node_get_parent(n);
+    if (!par || depth > 64) return -1;
+    if (fy_node_is_mapping(par)) {
+        void *it = NULL;
+        struct fy_node_pair *p;
+        while ((p = fy_node_mapping_iterate(par, &it))) {
+            struct fy_node *k = fy_node_pair_key(p), *v = fy_node_pair_value(p);
+            if (k == n && v && v != n) {
+                long q = sc_pos_direct(s, v);
+                if (q < 0) break;
+                for (q--; q > 0 && sc_blank(s->text[q]); q--) {}
+                return q >= 0 ? q : 0;
+            }
+            if (v == n && k && k != n) {
+                struct fy_token *t = fy_node_is_scalar(k) ? fy_node_get_scalar_token(k) : NULL;
+                const struct fy_mark *e = t ? fy_token_end_mark(t) : NULL;
+                long q = e ? (long)e->input_pos : -1;
+                if (q < 0 || q > s->textlen) break;
+                while (q < s->textlen && (s->text[q] == ' ' || s->text[q] == '\t' || s->text[q] == '"' ||
+                                          s->text[q] == '\''))
+                    q++;
+                if (q < s->textlen && s->text[q] == ':') q++;
+                while (q < s->textlen && sc_blank(s->text[q])) q++;
+                return q;
+            }
+        }
+    } else if (fy_node_is_sequence(par)) {
+        void *it = NULL;
+        struct fy_node *c, *prev = NULL;
+        while ((c = fy_node_sequence_iterate(par, &it)) && c != n) prev = c;
+        long q = prev ? sc_pos_direct(s, prev) : -1;
+        if (q >= 0 && fy_node_get_style(par) == FYNS_FLOW) {
+            while (q < s->textlen && s->text[q] != ',' && s->text[q] != '\n') q++;
+            if (q < s->textlen && s->text[q] == ',') q++;
+            while (q < s->textlen && sc_blank(s->text[q])) q++;
+            return q;
+        }
+    }
+    long q = sc_pos_direct(s, par);
+    return q >= 0 ? q : sc_pos_fallback(s, par, depth + 1);
+}
+
 static long sc_pos(const sc *s, struct fy_node *n)
+{
+    long q = sc_pos_direct(s, n);
+    return q >= 0 || !n ? q : sc_pos_fallback(s, n, 0);
+}
+
+static long sc_pos_direct(const sc *s, struct fy_node *n)
 {
     if (!n) return -1;
     switch (fy_node_get_type(n)) {
@@ -142,10 +229,10 @@ static long sc_pos(const sc *s, struct fy_node *n)
         long pos = -1;
         if (fy_node_is_mapping(n)) {
             struct fy_node_pair *p = fy_node_mapping_iterate(n, &it);
-            if (p) pos = sc_pos(s, fy_node_pair_key(p));
+            if (p) pos = sc_pos_direct(s, fy_node_pair_key(p));
         } else {
             struct fy_node *c = fy_node_sequence_iterate(n, &it);
-            if (c) pos = sc_pos(s, c);
+            if (c) pos = sc_pos_direct(s, c);
         }
         if (pos > 0 && pos <= s->textlen && fy_node_get_style(n) == FYNS_FLOW) {
             char open = fy_node_is_mapping(n) ? '{' : '[';
@@ -169,7 +256,11 @@ static long sc_pos(const sc *s, struct fy_node *n)
 /* 1-based line and column of a node (0 if unknown). */
 static int sc_loc(const sc *s, struct fy_node *n, int *line, int *col)
 {
-    long pos = sc_pos(s, n);
+    return sc_loc_pos(s, sc_pos(s, n), line, col);
+}
+
+static int sc_loc_pos(const sc *s, long pos, int *line, int *col)
+{
     if (pos < 0 || pos > s->textlen) return 0;
     int l = 1, c = 1;
     for (long i = 0; i < pos; i++) {
@@ -291,6 +382,16 @@ static int sc_map_open(sc *s, struct fy_node *node, struct fy_node *at, const ch
         if (!ks)
             return sc_fail(s, FLOE_EPARSE, k ? k : node, "%s: keys must be plain names",
                            what[0] ? what : "scene");
+        if (!*ks) {
+            /* an empty key has no token: it sits at the ':' before its value */
+            long q = sc_pos_direct(s, k);
+            struct fy_node *v = fy_node_pair_value(p);
+            if (q < 0 && v && (q = sc_pos(s, v)) >= 0)
+                for (q--; q > 0 && sc_blank(s->text[q]); q--) {}
+            if (q < 0) q = sc_pos(s, node);
+            return sc_fail_pos(s, FLOE_EPARSE, q, "empty key in %s (a ':' with no name before it)",
+                               what[0] ? what : "the scene");
+        }
         int found = 0;
         for (int i = 0; i < nkeys && !found; i++) found = !strcmp(ks, keys[i]);
         if (!found) {
@@ -2157,6 +2258,25 @@ static int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, con
             snprintf(o->target, sizeof o->target, "%s/%s", outdir, name);
         else
             snprintf(o->target, sizeof o->target, "%s", name);
+        /* two writers of one file would interleave and corrupt it */
+        {
+            const char *nm = name;
+            while (nm[0] == '.' && nm[1] == '/') nm += 2;
+            if (type == 0 || nm[0] != '/') snprintf(o->file, sizeof o->file, "%s/%s%s", outdir, nm, type == 0 ? ".pvd" : "");
+            else snprintf(o->file, sizeof o->file, "%s", nm);
+            o->name_at = name_at;
+            for (int j = 0; j < i; j++) {
+                if (strcmp(s->outs[j].file, o->file) != 0) continue;
+                int l = 0, c = 0;
+                struct fy_node *prev = s->outs[j].name_at ? s->outs[j].name_at
+                                                          : fy_node_sequence_get_by_index(seq, j);
+                sc_loc(s, prev, &l, &c);
+                return sc_fail(s, FLOE_EINVAL, name_at ? name_at : e,
+                               "%s writes %s, which outputs[%d] (line %d, column %d) writes too: give "
+                               "each output its own %s", what, o->file, j, l, c,
+                               type == 0 ? "prefix" : "file");
+            }
+        }
 
         long group = -1;
         double volume = 0;
@@ -2770,6 +2890,37 @@ static int sc_parse_error(sc *s, struct fy_diag *diag, const char *text)
     return FLOE_EPARSE;
 }
 
+/* Offset of the first byte that is not part of well-formed UTF-8 (RFC 3629: no overlong
+ * forms, no surrogates, at most U+10FFFF), -1 if the text is valid. */
+static long sc_bad_utf8(const char *text, long len)
+{
+    const unsigned char *u = (const unsigned char *)text;
+    long i = 0;
+    while (i < len) {
+        unsigned c = u[i];
+        if (c < 0x80) { i++; continue; }
+        int n;
+        unsigned lo = 0x80, hi = 0xBF;
+        if (c >= 0xC2 && c <= 0xDF) n = 1;
+        else if (c >= 0xE0 && c <= 0xEF) {
+            n = 2;
+            if (c == 0xE0) lo = 0xA0;
+            if (c == 0xED) hi = 0x9F;
+        } else if (c >= 0xF0 && c <= 0xF4) {
+            n = 3;
+            if (c == 0xF0) lo = 0x90;
+            if (c == 0xF4) hi = 0x8F;
+        } else return i;
+        for (int k = 1; k <= n; k++) {
+            if (i + k >= len) return i;
+            unsigned d = u[i + k];
+            if (d < (k == 1 ? lo : 0x80) || d > (k == 1 ? hi : 0xBF)) return i;
+        }
+        i += n + 1;
+    }
+    return -1;
+}
+
 static void sc_diag_discard(struct fy_diag *diag, void *user, const char *buf, size_t len)
 {
     (void)diag;
@@ -2811,6 +2962,13 @@ int floe_scene_load_ex(const char *path, const char *text, const char *outdir, i
             size_t k = fread(owned + n, 1, cap - n - 1, f);
             n += k;
             if (k == 0) break;
+            if (n > SC_MAX_TEXT) {
+                fclose(f);
+                free(owned);
+                snprintf(err, errlen, "%s: the scene file is larger than %zu MiB (a scene lists "
+                         "packings, not particles; meshes are separate files)", path, SC_MAX_TEXT >> 20);
+                return FLOE_EINVAL;
+            }
             if (n + 1 == cap) {
                 char *p = realloc(owned, cap * 2);
                 if (!p) { free(owned); owned = NULL; break; }
@@ -2827,6 +2985,32 @@ int floe_scene_load_ex(const char *path, const char *text, const char *outdir, i
         }
         owned[n] = '\0';
         text = owned;
+        s.text = text;
+        s.textlen = (long)n;
+        const char *nul = memchr(text, '\0', n);
+        if (nul) {
+            s.textlen = (long)(nul - text);
+            int rc = sc_fail_pos(&s, FLOE_EPARSE, (long)(nul - text), "a NUL byte (byte %ld of %zu): a scene is "
+                                 "UTF-8 text", (long)(nul - text), n);
+            free(owned);
+            return rc;
+        }
+    }
+    if (strlen(text) > SC_MAX_TEXT) {
+        free(owned);
+        snprintf(err, errlen, "%s: the scene text is larger than %zu MiB", path, SC_MAX_TEXT >> 20);
+        return FLOE_EINVAL;
+    }
+    {
+        s.text = text;
+        s.textlen = (long)strlen(text);
+        long bad = sc_bad_utf8(text, s.textlen);
+        if (bad >= 0) {
+            int rc = sc_fail_pos(&s, FLOE_EPARSE, bad, "invalid UTF-8 (byte 0x%02x): a scene is UTF-8 text",
+                                 (unsigned)(unsigned char)text[bad]);
+            free(owned);
+            return rc;
+        }
     }
 
     struct fy_diag_cfg dcfg;

@@ -184,9 +184,99 @@ static void test_mesh_fifo(void)
     rmdir(dir);
 }
 
+/* expect the file (written with len bytes of text) to fail with "path:at: " + needles */
+static void expect_file_fail(const char *what, const char *text, size_t len, const char *at, const char *n1)
+{
+    char path[] = "/tmp/floe_limits_XXXXXX";
+    int fd = mkstemp(path);
+    CHECK(fd >= 0, "mkstemp");
+    if (fd < 0) return;
+    CHECK(write(fd, text, len) == (ssize_t)len, "write %s", path);
+    close(fd);
+    char err[1024] = "";
+    floe_world *w = NULL;
+    int rc = floe_scene_load_ex(path, NULL, NULL, 0, &w, NULL, err, sizeof err);
+    CHECK(rc != FLOE_OK && w == NULL, "%s: loaded but should fail", what);
+    char pre[128];
+    snprintf(pre, sizeof pre, "%s:%s: ", path, at);
+    CHECK(!strncmp(err, pre, strlen(pre)), "%s: message '%s' does not start with '%s'", what, err, pre);
+    CHECK(strstr(err, n1) != NULL, "%s: message '%s' lacks '%s'", what, err, n1);
+    printf("  %-28s %s\n", what, err);
+    remove(path);
+}
+
+static void test_text(void)
+{
+    printf("scene text\n");
+    static const char good[] = BASE_MATS ONE_BODY;
+    char buf[sizeof good];
+    memcpy(buf, good, sizeof good);
+    char *p = strstr(buf, "0.01");
+    p[1] = '\0'; /* "time: {duration: 0\0.01..." */
+    {
+        char at[32];
+        int l, c;
+        sscanf(loc_of(good, "0.01"), "%d:%d", &l, &c);
+        snprintf(at, sizeof at, "%d:%d", l, c + 1);
+        expect_file_fail("NUL byte", buf, sizeof good - 1, at, "NUL byte");
+    }
+    memcpy(buf, good, sizeof good);
+    p = strstr(buf, "glass");
+    p[2] = (char)0xff;
+    {
+        /* line:col of the bad byte = that of "glass" + 2 columns */
+        char at[32];
+        int l, c;
+        sscanf(loc_of(good, "glass"), "%d:%d", &l, &c);
+        snprintf(at, sizeof at, "%d:%d", l, c + 2);
+        expect_file_fail("invalid UTF-8 0xff", buf, sizeof good - 1, at, "invalid UTF-8 (byte 0xff)");
+        memcpy(buf, good, sizeof good);
+        p[0] = (char)0xc0; /* overlong encoding of '/' */
+        p[1] = (char)0xaf;
+        snprintf(at, sizeof at, "%d:%d", l, c);
+        expect_file_fail("overlong UTF-8", buf, sizeof good - 1, at, "invalid UTF-8 (byte 0xc0)");
+        memcpy(buf, good, sizeof good);
+        p[0] = (char)0xe2; /* truncated 3-byte sequence */
+        p[1] = (char)0x82;
+        expect_file_fail("truncated UTF-8", buf, sizeof good - 1, at, "invalid UTF-8 (byte 0xe2)");
+    }
+    /* valid UTF-8 (names with accents, a 4-byte emoji in a comment) still loads */
+    const char *t = BASE_MATS "# \xf0\x9f\x98\x80 caf\xc3\xa9\n" ONE_BODY;
+    floe_world *w = NULL;
+    char err[1024];
+    int rc = floe_scene_load_ex("t.yaml", t, NULL, 0, &w, NULL, err, sizeof err);
+    CHECK(rc == FLOE_OK, "valid UTF-8 loads: %s", rc ? err : "");
+    floe_world_destroy(w);
+
+    t = BASE_MATS ": 37\n" ONE_BODY;
+    expect_fail("empty root key", t, loc_of(t, ": 37"), "empty key in the scene", NULL);
+    t = BASE_MATS "bodies:\n  - {shape: {sphere: {radius: 0.001}}, material: glass, : 4, position: [0, 0, 0]}\n";
+    expect_fail("empty key in a body", t, loc_of(t, ": 4"), "empty key in bodies[0]", NULL);
+    t = BASE_MATS "bodies:\n  - {shape: {sphere: {radius: 0.001}}, material: glass, position: []}\n";
+    expect_fail("empty position list", t, loc_of(t, "[]"), "position", "got 0");
+    t = BASE_MATS "bodies:\n  - {shape: {sphere: {radius: 0.001}}, material: glass, position: {}}\n";
+    expect_fail("empty position map", t, loc_of(t, "{}"), "position", NULL);
+    t = "dimension: 3\ntime: {duration: 0.01}\nmaterials:\n  - {name: glass, density: 2500}\n"
+        "laws:\n  - {materials: [], model: linear, kn: 1e3}\n" ONE_BODY;
+    expect_fail("empty law materials", t, loc_of(t, "[]"), "laws[0].materials", NULL);
+    t = BASE_MATS ONE_BODY "outputs:\n  - {type: tracker, particles: []}\n";
+    expect_fail("empty tracker list", t, loc_of(t, "[]"), "particles", NULL);
+    t = BASE_MATS "bodies:\n  - {}\n";
+    expect_fail("empty body", t, loc_of(t, "- {}"), "bodies[0].shape is required", NULL);
+
+    /* two outputs writing one file */
+    t = BASE_MATS ONE_BODY "outputs:\n  - {type: csv, file: a.csv}\n  - {type: energy, every: 5, file: ./a.csv}\n";
+    expect_fail("two writers of a.csv", t, loc_of(t, "./a.csv"), "outputs[0] (line 10, column 23)", "a.csv");
+    t = BASE_MATS ONE_BODY "outputs:\n  - {type: csv}\n  - {type: tracker, particles: [0], file: particles.csv}\n";
+    expect_fail("default file taken", t, loc_of(t, "particles.csv"), "outputs[0] (line 10, column 5)", "particles.csv");
+    t = BASE_MATS ONE_BODY "outputs:\n  - {type: vtk, prefix: f}\n  - {type: vtk, prefix: f, every: 7}\n";
+    expect_fail("two vtk prefixes", t, loc_of(t, "f, every"), "outputs[0]", "f.pvd");
+}
+
 int main(void)
 {
     alarm(120); /* a hang is a failure */
+    test_text();
     test_steps();
     test_packings();
     test_intervals();
