@@ -1277,6 +1277,7 @@ typedef struct sc_common {
     int grow;            /* 1: one particle grows */
     long grow_index;
     double grow_rate;
+    struct fy_node *grow_at;     /* the rate's node, for messages */
     int grow_update_mass;
 } sc_common;
 
@@ -1359,6 +1360,7 @@ static int sc_parse_common(sc *s, const sc_map *m, int entry, int packing, sc_co
                            "%s: grow_rate is for single bodies; for a packing use "
                            "grow: {index: I, rate: R}", m->what);
         FLOE_TRY(sc_num(s, m, "grow_rate", 1, 0, &c->grow_rate));
+        c->grow_at = sc_get(m, "grow_rate", NULL);
         c->grow = 1;
     } else if (gv) {
         char fg[128];
@@ -1367,6 +1369,7 @@ static int sc_parse_common(sc *s, const sc_map *m, int entry, int packing, sc_co
         FLOE_TRY(sc_map_open(s, gv == gk ? NULL : gv, gk, fg,
                              packing ? grow_keys_packing : grow_keys_single, &gm));
         FLOE_TRY(sc_num(s, &gm, "rate", 1, 0, &c->grow_rate));
+        c->grow_at = sc_get(&gm, "rate", NULL);
         if (packing) {
             FLOE_TRY(sc_long(s, &gm, "index", 1, 0, &c->grow_index));
             if (c->grow_index < 0) return sc_range(s, &gm, "index", ">= 0", (double)c->grow_index);
@@ -1406,6 +1409,13 @@ static int sc_add_one(sc *s, const sc_common *c, int gi, const double x[3], int 
 static int sc_add_growth(sc *s, const sc_common *c, int particle, struct fy_node *at,
                          const char *what)
 {
+    /* a shrinking sphere must keep a positive radius to the end of the run */
+    double r0 = s->w->p.radius[particle], r1 = r0 + c->grow_rate * s->duration;
+    if (!(r1 > 0))
+        return sc_fail(s, FLOE_EINVAL, c->grow_at ? c->grow_at : at,
+                       "%s: growth rate %g m/s shrinks the radius %g m of particle %d to zero at t = %g s, "
+                       "before the end of the run (time.duration %g s)", what, c->grow_rate, r0, particle,
+                       -r0 / c->grow_rate, s->duration);
     floe_state *st = floe_growing_radius_create(s->w, particle, c->grow_rate, c->grow_update_mass);
     if (!st)
         return sc_fail(s, FLOE_EINVAL, at, "%s: could not create the growing radius of particle %d",
@@ -2634,6 +2644,34 @@ static int sc_time_integration(sc *s, const sc_map *tm, floe_world_def *def)
     return FLOE_OK;
 }
 
+/* Every free particle needs a normal positive mass and inertia whose inverses are finite: a
+ * density of 1e-300 gives a subnormal mass, an infinite inverse and NaN at the first step. */
+static int sc_check_masses(sc *s)
+{
+    const floe_particles *p = &s->w->p;
+    for (int i = 0; i < p->n; i++) {
+        if (p->motion[i] != FLOE_FREE || !isfinite(p->radius[i])) continue;
+        double m = p->mass[i];
+        int bad = !(m > 0) || !isnormal(m) || !isfinite(1.0 / m) || !isfinite(m);
+        for (int a = 0; a < 3 && !bad; a++) {
+            double I = p->inertia[3 * i + a];
+            bad = !(I > 0) || !isnormal(I) || !isfinite(1.0 / I) || !isfinite(I);
+        }
+        if (!bad) continue;
+        int mat = p->material[i], entry = -1;
+        for (int e = 0; e < s->nbody_entries && entry < 0; e++)
+            if (i >= s->entry_first[e] && i < s->entry_first[e] + s->entry_count[e]) entry = e;
+        char where[64] = "";
+        if (entry >= 0) snprintf(where, sizeof where, " (bodies[%d])", entry);
+        return sc_fail(s, FLOE_EINVAL, mat >= 0 && mat < s->nmats ? s->mats[mat].at : NULL,
+                       "particle %d%s of material '%s' (density %g kg/m^3) has mass %g kg and inertia "
+                       "(%g, %g, %g) kg m^2: not a usable number (its inverse is not finite); check "
+                       "the density and the size", i, where, mat >= 0 && mat < s->nmats ? s->mats[mat].m.name : "?", mat >= 0 && mat < s->nmats ? s->mats[mat].m.density : 0.0,
+                       m, p->inertia[3 * i], p->inertia[3 * i + 1], p->inertia[3 * i + 2]);
+    }
+    return FLOE_OK;
+}
+
 /* duration / dt must be a step count a run can reach (1e30 s would overflow the count) */
 static int sc_check_steps(sc *s, const sc_map *tm, double dt, const char *which)
 {
@@ -2787,6 +2825,7 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
                        "%s", floe_world_last_error(s->w));
     FLOE_TRY(sc_check_steps(s, &tm, s->w->def.adaptive ? s->w->dt_lo : s->w->dt,
                             s->w->def.adaptive ? "the smallest adaptive step" : "the time step"));
+    FLOE_TRY(sc_check_masses(s));
     /* an output interval not longer than a fixed step writes every step: say so to the
      * world, which then need not count intervals one by one */
     for (int k = 0; k < s->w->nobs && !s->w->def.adaptive; k++) {

@@ -1405,6 +1405,7 @@ static int advance_states(floe_world *w, double dt) {
         double *y0 = m <= 16 ? buf : malloc(4 * m * sizeof(double));
         if (!y0) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
         double *k1 = y0 + m, *ym = y0 + 2 * m, *k2 = y0 + 3 * m;
+        w->err[0] = 0;
         st->klass->get(st, y0);
         int rc = st->klass->rhs(st, w, w->time, y0, k1);
         for (size_t a = 0; a < m && !rc; a++) ym[a] = y0[a] + h * k1[a];
@@ -1412,7 +1413,12 @@ static int advance_states(floe_world *w, double dt) {
         for (size_t a = 0; a < m && !rc; a++) ym[a] = y0[a] + dt * k2[a];
         if (!rc) rc = st->klass->set(st, w, ym);
         if (y0 != buf) free(y0);
-        if (rc) return floe_world_error(w, rc, "state object %s failed at step %ld", st->klass->name, w->step);
+        if (rc) { /* keep the state's own reason */
+            char why[sizeof w->err];
+            memcpy(why, w->err, sizeof why);
+            return floe_world_error(w, rc, "state object %s failed at step %ld: %s", st->klass->name, w->step,
+                                    why[0] ? why : floe_strerror(rc));
+        }
     }
     return FLOE_OK;
 }
