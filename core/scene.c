@@ -30,8 +30,8 @@
 #endif
 
 #define SC_MAX_PARTICLES_PER_ENTRY 100000000L
-/* scene text: 64 MiB at most */
-#define SC_MAX_TEXT ((size_t)64 << 20)
+/* scene text: 16 MiB at most */
+#define SC_MAX_TEXT ((size_t)16 << 20)
 /* a run of more steps than this would never end (and the step count must fit a long) */
 #define SC_MAX_STEPS 1.0e12
 /* random packing: placement stops after this many tries in a row without a placement */
@@ -221,6 +221,7 @@ static long sc_pos_direct(const sc *s, struct fy_node *n)
         if ((st == FYNS_SINGLE_QUOTED || st == FYNS_DOUBLE_QUOTED) && pos > 0 && pos <= s->textlen &&
             (s->text[pos - 1] == '"' || s->text[pos - 1] == '\''))
             pos--;
+        if (st == FYNS_ALIAS && pos > 0 && pos <= s->textlen && s->text[pos - 1] == '*') pos--;
         return pos;
     }
     case FYNT_MAPPING:
@@ -2960,6 +2961,64 @@ static long sc_bad_utf8(const char *text, long len)
     return -1;
 }
 
+/* Nodes of the document once its aliases are expanded, counted without expanding them: a
+ * 1 KB "billion laughs" alias bomb would otherwise take gigabytes. The walk stops as soon as
+ * the count passes limit (so it costs at most limit visits) or aliases nest deeper than
+ * SC_MAX_ALIAS_DEPTH. *bad receives the alias where it stopped. Returns the count (> limit:
+ * too large; -1: too deep or an unresolvable alias). */
+#define SC_MAX_NODES 2000000L
+#define SC_MAX_ALIAS_DEPTH 64
+static long sc_count_nodes(struct fy_node *n, long count, long limit, int alias_depth, struct fy_node **bad)
+{
+    if (!n || count > limit) return count;
+    if (fy_node_is_alias(n)) {
+        if (alias_depth >= SC_MAX_ALIAS_DEPTH) { *bad = n; return -1; }
+        struct fy_node *t = fy_node_resolve_alias(n);
+        if (!t) { *bad = n; return -1; }
+        long c = sc_count_nodes(t, count, limit, alias_depth + 1, bad);
+        if (c > limit) *bad = n; /* the outermost alias on the way */
+        return c;
+    }
+    count++;
+    void *it = NULL;
+    if (fy_node_is_mapping(n)) {
+        struct fy_node_pair *p;
+        while ((p = fy_node_mapping_iterate(n, &it)) && count >= 0 && count <= limit) {
+            count = sc_count_nodes(fy_node_pair_key(p), count, limit, alias_depth, bad);
+            if (count >= 0) count = sc_count_nodes(fy_node_pair_value(p), count, limit, alias_depth, bad);
+        }
+    } else if (fy_node_is_sequence(n)) {
+        struct fy_node *c;
+        while ((c = fy_node_sequence_iterate(n, &it)) && count >= 0 && count <= limit)
+            count = sc_count_nodes(c, count, limit, alias_depth, bad);
+    }
+    return count;
+}
+
+/* Nodes written in the text (aliases not expanded), counted from the parser's events before
+ * a document is built: a 16 MiB list of numbers would take gigabytes as a document. Stops
+ * past limit; a syntax error ends the count (the document build reports it). */
+static long sc_count_events(const char *text, size_t len, long limit, struct fy_diag *diag)
+{
+    struct fy_parse_cfg cfg;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.flags = FYPCF_QUIET;
+    cfg.diag = diag;
+    struct fy_parser *fyp = fy_parser_create(&cfg);
+    if (!fyp) return 0;
+    long n = 0;
+    if (fy_parser_set_string(fyp, text, len) == 0) {
+        struct fy_event *ev;
+        while (n <= limit && (ev = fy_parser_parse(fyp))) {
+            enum fy_event_type t = ev->type;
+            n += t == FYET_SCALAR || t == FYET_ALIAS || t == FYET_MAPPING_START || t == FYET_SEQUENCE_START;
+            fy_parser_event_free(fyp, ev);
+        }
+    }
+    fy_parser_destroy(fyp);
+    return n;
+}
+
 static void sc_diag_discard(struct fy_diag *diag, void *user, const char *buf, size_t len)
 {
     (void)diag;
@@ -3066,14 +3125,38 @@ int floe_scene_load_ex(const char *path, const char *text, const char *outdir, i
     fy_diag_set_collect_errors(diag, true);
     struct fy_parse_cfg pcfg;
     memset(&pcfg, 0, sizeof pcfg);
-    pcfg.flags = FYPCF_QUIET | FYPCF_RESOLVE_DOCUMENT;
+    pcfg.flags = FYPCF_QUIET; /* aliases are resolved below, once their expansion is counted */
     pcfg.diag = diag;
     s.text = text;
     s.textlen = (long)strlen(text);
+    struct fy_diag *diag2 = fy_diag_create(&dcfg); /* the count's own diagnostics, discarded */
+    long written = diag2 ? sc_count_events(text, strlen(text), SC_MAX_NODES, diag2) : 0;
+    if (diag2) fy_diag_destroy(diag2);
+    if (written > SC_MAX_NODES) {
+        fy_diag_destroy(diag);
+        free(owned);
+        return sc_fail(&s, FLOE_EPARSE, NULL, "the scene has more than %ld YAML nodes: refused (list "
+                       "packings, not particles)", SC_MAX_NODES);
+    }
     struct fy_document *doc = fy_document_build_from_string(&pcfg, text, strlen(text));
     int rc = FLOE_OK;
     if (!doc || fy_diag_got_error(diag)) {
         rc = sc_parse_error(&s, diag, text);
+    } else {
+        struct fy_node *bad = NULL;
+        long nodes = sc_count_nodes(fy_document_root(doc), 0, SC_MAX_NODES, 0, &bad);
+        if (nodes < 0) {
+            const char *an = bad && fy_node_is_scalar(bad) ? fy_node_get_scalar0(bad) : NULL;
+            rc = sc_fail(&s, FLOE_EPARSE, bad, "alias *%s: no anchor &%s before it, or aliases that nest deeper "
+                         "than %d or refer to themselves", an ? an : "?", an ? an : "?", SC_MAX_ALIAS_DEPTH);
+        }
+        else if (nodes > SC_MAX_NODES)
+            rc = sc_fail(&s, FLOE_EPARSE, bad, "the scene expands to more than %ld YAML nodes%s: refused (an "
+                         "alias bomb?)", SC_MAX_NODES, bad ? " through this alias" : "");
+        else if (fy_document_resolve(doc) != 0 || fy_diag_got_error(diag))
+            rc = sc_parse_error(&s, diag, text);
+    }
+    if (rc != FLOE_OK) {
     } else {
         struct fy_node *root = fy_document_root(doc);
         if (!root || sc_is_missing(root))

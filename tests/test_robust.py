@@ -81,6 +81,33 @@ outputs:
     print("  %s: exit %d, %d frames, %r" % (name, p.returncode, rows // 4096, err.strip()))
 
 
+def peak_rss_mb(args, cwd):
+    """run args, return (rc, stdout, stderr, seconds, peak RSS of the child in MB)"""
+    import resource
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    t0 = time.time()
+    p = subprocess.run(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=cwd, timeout=120,
+                       universal_newlines=True)
+    el = time.time() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    return p.returncode, p.stdout, p.stderr, el, max(after, before) / 1024.0
+
+
+def test_alias_bomb(cli, tmp):
+    """a 1.2 KB billion-laughs scene: refused in seconds, small memory, message names the file"""
+    lines = ["a0: &a0 [lol, lol, lol, lol, lol, lol, lol, lol, lol, lol]"]
+    for i in range(1, 12):
+        lines.append("a%d: &a%d [%s]" % (i, i, ", ".join(["*a%d" % (i - 1)] * 10)))
+    bomb = write(tmp, "bomb.yaml", "\n".join(lines) + "\n")
+    size = os.path.getsize(bomb)
+    rc, out, err, el, mb = peak_rss_mb([cli, "check", bomb], tmp)
+    check(rc == 1, "alias bomb: exit %d, expected 1" % rc)
+    check(bomb in err and "YAML nodes" in err, "alias bomb: message %r" % err)
+    check(el < 10, "alias bomb: %.1f s (limit 10 s)" % el)
+    check(mb < 200, "alias bomb: peak RSS %.0f MB (limit 200 MB)" % mb)
+    print("  alias bomb (%d bytes): exit %d in %.2f s, peak RSS <= %.0f MB, %r" % (size, rc, el, mb, err.strip()))
+
+
 def main():
     if len(sys.argv) != 3:
         print("usage: test_robust.py <floe_cli_path> <tests_dir>", file=sys.stderr)
@@ -88,6 +115,7 @@ def main():
     cli = os.path.abspath(sys.argv[1])
     tmp = tempfile.mkdtemp(prefix="floe_test_robust_")
     try:
+        test_alias_bomb(cli, tmp)
         test_signal(cli, tmp, signal.SIGTERM)
         test_signal(cli, tmp, signal.SIGINT)
     finally:

@@ -377,10 +377,56 @@ static void test_nonfinite(void)
     CHECK(system(cmd) == 0, "%s", cmd);
 }
 
+static void test_yaml_size(void)
+{
+    printf("alias bombs and huge texts\n");
+    /* "billion laughs": 10^9 scalars from ~500 bytes */
+    char bomb[2048];
+    int n = snprintf(bomb, sizeof bomb, "a0: &a0 [x, x, x, x, x, x, x, x, x, x]\n");
+    for (int i = 1; i < 9; i++) {
+        n += snprintf(bomb + n, sizeof bomb - (size_t)n, "a%d: &a%d [", i, i);
+        for (int k = 0; k < 10; k++) n += snprintf(bomb + n, sizeof bomb - (size_t)n, "*a%d%s", i - 1, k < 9 ? ", " : "]\n");
+    }
+    expect_fail_n("alias bomb (10^9 nodes)", bomb, NULL, "more than 2000000 YAML nodes", "alias bomb", 3.0);
+    expect_fail("alias cycle", "a: &a [1, *a]\n", "1:11", "alias *a", "refer to themselves");
+    const char *t = BASE_MATS "bodies:\n  - {shape: {sphere: {radius: 0.001}}, material: glass, position: *p}\n";
+    expect_fail("undefined alias", t, loc_of(t, "*p"), "alias *p: no anchor &p", NULL);
+    /* aliases and merge keys within bounds still work */
+    t = BASE_MATS "bodies:\n  - &b {shape: {sphere: {radius: 0.001}}, material: glass, position: [0, 0, 0]}\n"
+                  "  - {<<: *b, position: [0, 0, 1]}\n";
+    floe_world *w = NULL;
+    char err[1024];
+    int rc = floe_scene_load_ex("t.yaml", t, NULL, 0, &w, NULL, err, sizeof err);
+    CHECK(rc == FLOE_OK && w && w->p.n == 2 && w->p.x[5] == 1.0, "aliases and a merge key: %s", rc ? err : "");
+    floe_world_destroy(w);
+    /* 3 million numbers written out: refused from the parser's events, before a document */
+    size_t len = 6u * 1000000u + 16;
+    char *big = malloc(len);
+    if (big) {
+        size_t k = (size_t)sprintf(big, "a: [");
+        for (int i = 0; i < 3000000; i++) { big[k++] = '0'; big[k++] = ','; }
+        big[k - 1] = ']';
+        big[k++] = '\n';
+        big[k] = 0;
+        expect_fail_n("3e6 numbers", big, NULL, "more than 2000000 YAML nodes", NULL, 3.0);
+        free(big);
+    }
+    /* a text over 16 MiB is refused before parsing */
+    len = (17u << 20);
+    big = malloc(len + 1);
+    if (big) {
+        memset(big, '#', len);
+        big[len] = 0;
+        expect_fail_n("17 MiB text", big, NULL, "larger than 16 MiB", NULL, 1.0);
+        free(big);
+    }
+}
+
 int main(void)
 {
     alarm(120); /* a hang is a failure */
     test_text();
+    test_yaml_size();
     test_nonfinite();
     test_steps();
     test_packings();
