@@ -22,6 +22,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/types.h>
+#include <unistd.h>
 
 /* Field names in messages ("bodies[3].shape.compound.pieces[1]...") are built in fixed
  * buffers; a name that long is cut, which only shortens the message. */
@@ -1430,6 +1431,41 @@ static int sc_add_growth(sc *s, const sc_common *c, int particle, struct fy_node
     return FLOE_OK;
 }
 
+/* Memory a scene needs, estimated before its particles are made (measured: 64k and 256k
+ * touching spheres, check and run, ~550 B per particle; brittle-cylinder-impact ~35 B per
+ * PD bond): a scene beyond the machine's memory is refused instead of dying part-way. */
+#define SC_BYTES_BASE 16.0e6
+#define SC_BYTES_PER_PARTICLE 700.0
+#define SC_BYTES_PER_BOND 40.0
+
+static double sc_phys_mem(void)
+{
+    long pages = sysconf(_SC_PHYS_PAGES), ps = sysconf(_SC_PAGE_SIZE);
+    return pages > 0 && ps > 0 ? (double)pages * (double)ps : INFINITY;
+}
+
+static double sc_mem_estimate(const sc *s, double more_particles)
+{
+    double bonds = 0;
+    for (int b = 0; s->w && b < s->w->npd; b++) bonds += (double)s->w->pd[b]->nbond;
+    double n = (s->w ? (double)s->w->p.n : 0.0) + more_particles;
+    return SC_BYTES_BASE + n * SC_BYTES_PER_PARTICLE + bonds * SC_BYTES_PER_BOND;
+}
+
+/* refuse `more` particles (or the scene so far, more = 0) beyond the machine's memory */
+static int sc_check_memory(sc *s, struct fy_node *at, const char *what, double more)
+{
+    double need = sc_mem_estimate(s, more), have = sc_phys_mem();
+    if (need <= have) return FLOE_OK;
+    if (more > 0)
+        return sc_fail(s, FLOE_ENOMEM, at, "%s: %.4g particles: the scene would need about %.3g GB (estimate, "
+                       "%.0f bytes per particle), more than this machine's memory (%.3g GB)", what, more,
+                       need / 1e9, SC_BYTES_PER_PARTICLE, have / 1e9);
+    return sc_fail(s, FLOE_ENOMEM, at, "%s needs about %.3g GB (estimate: %d particles, %.0f bytes each, and "
+                   "%.0f bytes per PD bond), more than this machine's memory (%.3g GB)", what, need / 1e9,
+                   s->w ? s->w->p.n : 0, SC_BYTES_PER_PARTICLE, SC_BYTES_PER_BOND, have / 1e9);
+}
+
 /* Region {min: [...], max: [...]} with min < max on the active axes. */
 static int sc_parse_region(sc *s, const sc_map *m, double lo[3], double hi[3])
 {
@@ -1560,6 +1596,8 @@ static int sc_lattice(sc *s, const sc_map *m, int hex, sc_points *pts, const sc_
                            "particles per entry)", m->what, total, d);
         for (int a = 0; a < 3; a++) cnt[a] = (long)cd[a];
     }
+    FLOE_TRY(sc_check_memory(s, has_counts ? sc_get(m, "counts", NULL) : sc_get(m, "region", NULL), m->what,
+                             (double)cnt[0] * (double)cnt[1] * (double)cnt[2]));
     sc_rng rng = {(uint64_t)seed};
     for (long k = 0; k < cnt[2]; k++)
         for (long j = 0; j < cnt[1]; j++)
@@ -1638,6 +1676,7 @@ static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
         }
         cell *= total > 1e12 ? 2.0 * cbrt(total / 4.0e6) : 1.5;
     }
+    FLOE_TRY(sc_check_memory(s, sc_get(m, "count", NULL), m->what, (double)count));
     long ncells = nc[0] * nc[1] * nc[2];
     long *head = malloc((size_t)ncells * sizeof *head);
     long *next = malloc((size_t)count * sizeof *next);
@@ -2511,6 +2550,8 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
     double nsteps = dt > 0 ? ceil(s->duration / dt - 1e-9) : 0;
     sc_cat(&b, "duration:   %g s = %s%.0f steps\n", s->duration, w->def.adaptive ? "at most " : "",
            w->def.adaptive && w->dt_lo > 0 ? ceil(s->duration / w->dt_lo - 1e-9) : nsteps);
+    sc_cat(&b, "memory:     about %.3g MB (estimate; this machine has %.3g GB)\n", sc_mem_estimate(s, 0) / 1e6,
+           sc_phys_mem() / 1e9);
     if (s->nstates) {
         sc_cat(&b, "states:     %d growing radi%s (particle", s->nstates, s->nstates == 1 ? "us" : "i");
         for (int i = 0; i < s->ngrow_listed; i++) sc_cat(&b, "%s%d", i ? ", " : " ", s->grow_particle[i]);
@@ -2816,6 +2857,7 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     FLOE_TRY(sc_parse_walls(s, wv == wk ? NULL : wv, wk));
     { struct fy_node *bok, *bov = sc_get(&r, "bonds", &bok); FLOE_TRY(sc_parse_bonds(s, bov == bok ? NULL : bov, bok)); } /* beam bonds */
     FLOE_TRY(sc_check_pairs(s));
+    FLOE_TRY(sc_check_memory(s, NULL, "the scene", 0));
     struct fy_node *ok;
     struct fy_node *ov = sc_get(&r, "outputs", &ok);
     FLOE_TRY(sc_parse_outputs(s, ov == ok ? NULL : ov, ok, outdir, with_outputs));

@@ -108,6 +108,34 @@ def test_alias_bomb(cli, tmp):
     print("  alias bomb (%d bytes): exit %d in %.2f s, peak RSS <= %.0f MB, %r" % (size, rc, el, mb, err.strip()))
 
 
+def test_memory_estimate(cli, tmp):
+    """floe check prints a memory estimate; it covers the peak RSS of a short run of 64,000
+    touching spheres, and is within a factor 2 of it"""
+    scene = write(tmp, "mem.yaml", HEAD % "2.0e-6" + """bodies:
+  - {packing: lattice, shape: {sphere: {radius: 0.001}}, material: glass,
+     origin: [0, 0, 0], counts: [40, 40, 40], spacing: 0.002}
+outputs:
+  - {type: vtk, every: 1, prefix: f}
+""")
+    rc, out, err = run([cli, "check", scene], cwd=tmp)
+    m = re.search(r"memory:\s+about ([0-9.e+]+) MB \(estimate; this machine has ([0-9.e+]+) GB\)", out)
+    if not check(rc == 0 and m is not None, "check prints the memory estimate: exit %d\n%s%s" % (rc, out, err)):
+        return
+    est = float(m.group(1))
+    with open(cli, "rb") as fh:
+        if b"__asan_init" in fh.read():
+            print("  memory: estimate %.1f MB (sanitizer build: RSS not comparable, skipped)" % est)
+            return
+    # a fresh child: its peak RSS alone (RUSAGE_CHILDREN is the largest child so far)
+    code = ("import resource, subprocess, sys; subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL); "
+            "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)")
+    rc2, out2, err2 = run([sys.executable, "-c", code, cli, "run", scene, "-q", "-o", os.path.join(tmp, "mem")], cwd=tmp)
+    rss = float(out2.strip()) / 1024.0 if rc2 == 0 and out2.strip() else -1
+    check(rss > 0 and rss <= est <= 2.0 * rss,
+          "memory estimate %.1f MB vs peak RSS %.1f MB of the run (expected RSS <= estimate <= 2 RSS)" % (est, rss))
+    print("  memory: estimate %.1f MB, peak RSS of the run %.1f MB" % (est, rss))
+
+
 def main():
     if len(sys.argv) != 3:
         print("usage: test_robust.py <floe_cli_path> <tests_dir>", file=sys.stderr)
@@ -116,6 +144,7 @@ def main():
     tmp = tempfile.mkdtemp(prefix="floe_test_robust_")
     try:
         test_alias_bomb(cli, tmp)
+        test_memory_estimate(cli, tmp)
         test_signal(cli, tmp, signal.SIGTERM)
         test_signal(cli, tmp, signal.SIGINT)
     finally:

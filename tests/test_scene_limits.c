@@ -422,12 +422,30 @@ static void test_yaml_size(void)
     }
 }
 
+static void test_memory(void)
+{
+    printf("memory estimate\n");
+    double have = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGE_SIZE);
+    if (have > 60e9) {
+        printf("  (this machine has %.3g GB: 1e8 particles might fit, skipped)\n", have / 1e9);
+        return;
+    }
+    const char *t = BASE_MATS "bodies:\n  - {packing: lattice, shape: {sphere: {radius: 0.001}}, material: glass,\n"
+                              "     origin: [0, 0, 0], counts: [1000, 1000, 100], spacing: 0.002}\n";
+    expect_fail_n("1e8 particles", t, loc_of(t, "[1000"), "bodies[0]: 1e+08 particles", "more than this machine's memory",
+                  2.0);
+    t = BASE_MATS "bodies:\n  - {packing: random, shape: {sphere: {radius: 0.001}}, material: glass,\n"
+                  "     region: {min: [0, 0, 0], max: [100, 100, 100]}, count: 100000000}\n";
+    expect_fail_n("random 1e8", t, loc_of(t, "100000000"), "1e+08 particles", "GB", 2.0);
+}
+
 int main(void)
 {
     alarm(120); /* a hang is a failure */
     test_text();
     test_yaml_size();
     test_nonfinite();
+    test_memory();
     test_steps();
     test_packings();
     test_intervals();
