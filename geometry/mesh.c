@@ -403,19 +403,21 @@ floe_geometry *floe_mesh_shape(const char *path, const char *mode, double scale,
     if (floe_mesh_load(path, scale, &m, err, errlen) != FLOE_OK) return NULL;
     char pre[300];
     snprintf(pre, sizeof pre, "mesh file '%s': ", path);
-    if (hull) {
-        floe_geometry *g = floe_polyhedron_from_points(m.v, m.nv, err, errlen);
-        floe_mesh_free(&m);
-        if (!g) prefix_err(err, errlen, pre);
-        return g;
-    }
-    /* decompose: an inward-facing closed mesh is the same solid: turn it outward */
+    /* both modes: an inward-facing closed mesh is the same solid: turn it outward; open,
+     * self-intersecting or degenerate meshes are refused (a hull of an open mesh would
+     * silently close it) */
     if (m.nt > 0 && volume6(&m) < 0) flip(&m);
     char name[300];
     snprintf(name, sizeof name, "mesh file '%s'", path);
     if (floe_mesh_validate(&m, name, err, errlen) != FLOE_OK) {
         floe_mesh_free(&m);
         return NULL;
+    }
+    if (hull) {
+        floe_geometry *g = floe_polyhedron_from_points(m.v, m.nv, err, errlen);
+        floe_mesh_free(&m);
+        if (!g) prefix_err(err, errlen, pre);
+        return g;
     }
     floe_mesh *pc = NULL;
     int np = 0;
