@@ -1260,15 +1260,19 @@ static int observers_call(floe_world *w, int force_all) {
 
 int floe_world_finish(floe_world *w) {
     int rc = FLOE_OK;
+    char first[sizeof w->err]; /* the first failure's message is the one reported (a full disk
+                                  fails every writer: the first names the cause) */
+    first[0] = 0;
     for (int k = 0; k < w->nobs; k++) {
         floe_observer *o = w->obs[k];
         if (o->ended) continue;
         o->ended = 1;
         if (o->klass->end) {
             int r = o->klass->end(o, w);
-            if (r && !rc) rc = r;
+            if (r && !rc) { rc = r; memcpy(first, w->err, sizeof first); }
         }
     }
+    if (rc) memcpy(w->err, first, sizeof first);
     w->finished = 1;
     return rc;
 }
@@ -2165,7 +2169,10 @@ int floe_world_run(floe_world *w, double t_end, floe_progress_fn progress, void 
         observers_call(w, 1);
         memcpy(w->err, keep, sizeof keep);
     }
+    char keep[sizeof w->err];
+    memcpy(keep, w->err, sizeof keep);
     int rc2 = floe_world_finish(w);
+    if (rc) memcpy(w->err, keep, sizeof keep); /* the run's first error, not a writer's at the end */
     return rc ? rc : rc2;
 }
 

@@ -439,6 +439,70 @@ static void test_memory(void)
     expect_fail_n("random 1e8", t, loc_of(t, "100000000"), "1e+08 particles", "GB", 2.0);
 }
 
+/* observers that fail like writers on a full disk: A at step 3 (first), B and C at the end */
+typedef struct failing_obs { floe_observer base; const char *name; int fail_observe_at; } failing_obs;
+
+static int fo_observe(floe_observer *o, floe_world *w)
+{
+    failing_obs *f = (failing_obs *)o;
+    if (f->fail_observe_at >= 0 && w->step >= f->fail_observe_at)
+        return floe_world_error(w, FLOE_EIO, "%s: write failed: No space left on device", f->name);
+    return FLOE_OK;
+}
+
+static int fo_end(floe_observer *o, floe_world *w)
+{
+    failing_obs *f = (failing_obs *)o;
+    return floe_world_error(w, FLOE_EIO, "%s: closing failed: No space left on device", f->name);
+}
+
+static const floe_observer_class failing_class = {1, "failing", NULL, fo_observe, fo_end, NULL, 0};
+
+static void test_first_error(void)
+{
+    printf("the first writer error is reported\n");
+    floe_world *w = NULL;
+    char err[1024];
+    int rc = floe_scene_load_ex("t.yaml", BASE_MATS ONE_BODY, NULL, 0, &w, NULL, err, sizeof err);
+    CHECK(rc == FLOE_OK, "load: %s", rc ? err : "");
+    if (rc != FLOE_OK) return;
+    static const char *const names[3] = {"writer A", "writer B", "writer C"};
+    for (int k = 0; k < 3; k++) {
+        failing_obs *f = calloc(1, sizeof *f);
+        f->base.klass = &failing_class;
+        f->base.period_steps = 1;
+        f->name = names[k];
+        f->fail_observe_at = k == 0 ? 3 : -1;
+        CHECK(floe_world_add_observer(w, &f->base) == FLOE_OK, "add observer %d", k);
+    }
+    w->prepared = 0; /* observers added after the load: prepare again */
+    rc = floe_world_run(w, 1e-4, NULL, NULL);
+    const char *msg = floe_world_last_error(w);
+    CHECK(rc == FLOE_EIO && strstr(msg, "writer A: write failed") && strstr(msg, "at step 3"),
+          "run: rc %d, message '%s' should name writer A at step 3", rc, msg);
+    printf("  %-28s %s\n", "run", msg);
+    floe_world_destroy(w);
+
+    /* floe_world_finish alone: the first failing end() is reported */
+    rc = floe_scene_load_ex("t.yaml", BASE_MATS ONE_BODY, NULL, 0, &w, NULL, err, sizeof err);
+    if (rc != FLOE_OK) return;
+    for (int k = 1; k < 3; k++) {
+        failing_obs *f = calloc(1, sizeof *f);
+        f->base.klass = &failing_class;
+        f->base.period_steps = 1;
+        f->name = names[k];
+        f->fail_observe_at = -1;
+        floe_world_add_observer(w, &f->base);
+    }
+    w->prepared = 0;
+    rc = floe_world_run(w, 1e-4, NULL, NULL);
+    msg = floe_world_last_error(w);
+    CHECK(rc == FLOE_EIO && strstr(msg, "writer B: closing failed"), "finish: rc %d, message '%s' should name writer B",
+          rc, msg);
+    printf("  %-28s %s\n", "finish", msg);
+    floe_world_destroy(w);
+}
+
 int main(void)
 {
     alarm(120); /* a hang is a failure */
@@ -446,6 +510,7 @@ int main(void)
     test_yaml_size();
     test_nonfinite();
     test_memory();
+    test_first_error();
     test_steps();
     test_packings();
     test_intervals();
