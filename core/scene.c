@@ -1441,7 +1441,11 @@ static int sc_add_growth(sc *s, const sc_common *c, int particle, struct fy_node
 static double sc_phys_mem(void)
 {
     long pages = sysconf(_SC_PHYS_PAGES), ps = sysconf(_SC_PAGE_SIZE);
-    return pages > 0 && ps > 0 ? (double)pages * (double)ps : INFINITY;
+    double have = pages > 0 && ps > 0 ? (double)pages * (double)ps : INFINITY;
+#ifdef FLOE_SCENE_MEMORY_CAP
+    have = fmin(have, FLOE_SCENE_MEMORY_CAP); /* the fuzzing build (-DFLOE_FUZZ=ON) */
+#endif
+    return have;
 }
 
 static double sc_mem_estimate(const sc *s, double more_particles)
@@ -2117,6 +2121,16 @@ static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
         floe_pd_body *b = NULL;
         sc_pd_cut cut = {NULL, 0, {{NULL, {0, 0, 0}}}};
         if (!rc) rc = sc_pd_parse_remove(s, &rm, fr, &reg, &cut, &r);
+        if (!rc) { /* the box's lattice points and their bonds bound what the body needs */
+            double pts = 1, mh = r.horizon_factor > 0 ? r.horizon_factor : 3;
+            for (int a = 0; a < s->dim; a++) pts *= floor((r.hi[a] - r.lo[a]) / r.dx) + 1;
+            double bonds = pts * (s->dim == 3 ? 4.0 / 3.0 * M_PI * mh * mh * mh : M_PI * mh * mh);
+            double need = sc_mem_estimate(s, pts) + bonds * SC_BYTES_PER_BOND, have = sc_phys_mem();
+            if (!(need <= have))
+                rc = sc_fail(s, FLOE_ENOMEM, rv, "%s: up to %.4g points and %.4g bonds at spacing %g: the scene would "
+                             "need about %.3g GB (estimate), more than this machine's memory (%.3g GB)", fr, pts, bonds,
+                             r.dx, need / 1e9, have / 1e9);
+        }
         if (!rc) {
             int c = floe_pd_body_create(&b, &r);
             if (c) rc = sc_fail(s, c, rv, "%s: could not discretise the region (%s)", fr, floe_strerror(c));
