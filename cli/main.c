@@ -26,6 +26,8 @@ static void usage(FILE *f)
             "  -o OUTDIR   directory for the scene's outputs (default ./out)\n"
             "  -q          quiet: no summary and no progress line, only errors\n"
             "\n"
+            "Ctrl-C (SIGINT) or SIGTERM stops a run after the current step with every output\n"
+            "complete (exit 130 / 143); a second signal kills at once.\n"
             "Scene files are YAML, described in docs/scene-format.md.\n",
             prog, prog, prog, prog);
 }
