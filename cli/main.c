@@ -6,6 +6,7 @@
 #include "floe_newmark.h"
 
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -25,6 +26,8 @@ static void usage(FILE *f)
             "  -o OUTDIR   directory for the scene's outputs (default ./out)\n"
             "  -q          quiet: no summary and no progress line, only errors\n"
             "\n"
+            "Ctrl-C (SIGINT) or SIGTERM stops a run after the current step with every output\n"
+            "complete (exit 130 / 143); a second signal kills at once.\n"
             "Scene files are YAML, described in docs/scene-format.md.\n",
             prog, prog, prog, prog);
 }
@@ -44,6 +47,24 @@ static void fmt_duration(char *buf, size_t len, double s)
     else snprintf(buf, len, "%ld:%02ld", t / 60, t % 60);
 }
 
+/* SIGINT / SIGTERM during a run: the handler only records the signal; the progress callback
+ * (called after every step) sees it and stops the run cleanly, so the observers finish the
+ * frame they are writing and close their files. A second signal kills at once (SA_RESETHAND). */
+static volatile sig_atomic_t stop_signal = 0;
+
+static void on_stop_signal(int sig) { stop_signal = sig; }
+
+static void install_stop_handlers(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = SA_RESETHAND | SA_RESTART;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+}
+
 typedef struct progress {
     int show;
     double t0, last;
@@ -55,6 +76,7 @@ static int on_progress(const floe_world *w, long step, long nsteps, void *user)
 {
     progress *p = user;
     (void)w;
+    if (stop_signal) return 1;
     if (!p->show) return 0;
     /* clock_gettime is cheap, but skip it on most steps of large runs anyway */
     if (step != nsteps && (step & 7)) return 0;
@@ -98,10 +120,21 @@ static int cmd_run(const char *scene, const char *outdir, int quiet)
     long step0 = floe_world_step_count(w);
     double t_start = now_s();
     pr.t0 = pr.last = t_start;
+    install_stop_handlers();
     rc = floe_world_run(w, info.duration, on_progress, &pr);
     double wall = now_s() - t_start;
     if (pr.printed) fprintf(stderr, "\r%*s\r", 100, "");
     long steps = floe_world_step_count(w) - step0;
+    if (stop_signal && rc != FLOE_OK) { /* a signal after the last step: the run is complete */
+        int sig = (int)stop_signal;
+        fprintf(stderr, "%s: %s: stopped by %s at t = %g s, step %ld%s%s\n", prog, label,
+                sig == SIGINT ? "SIGINT" : "SIGTERM", floe_world_time(w), floe_world_step_count(w),
+                rc != FLOE_OK && rc != FLOE_ESTOP ? ": " : "",
+                rc != FLOE_OK && rc != FLOE_ESTOP ? floe_world_last_error(w) : "");
+        fprintf(stderr, "%s: outputs written so far are complete and in %s\n", prog, outdir);
+        floe_world_destroy(w);
+        return 128 + sig;
+    }
     if (rc != FLOE_OK) {
         fprintf(stderr, "%s: error: %s: %s (t = %g s, step %ld)\n", prog, label,
                 floe_world_last_error(w), floe_world_time(w), floe_world_step_count(w));

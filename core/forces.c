@@ -186,7 +186,10 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         floe_contact_result res;
         memset(&res, 0, sizeof res);
         int rc = law->klass->force(law, &c, hist, &res);
-        if (rc) return floe_world_error(w, rc, "contact law %s failed for particles %d and %d", law->klass->name, i, j);
+        if (rc) /* the law has no message of its own: name its inputs */
+            return floe_world_error(w, rc, "contact law %s failed for particles %d and %d: %s (effective mass %g kg, "
+                                    "effective radius %g m, overlap %g m)", law->klass->name, i, j, floe_strerror(rc),
+                                    c.m_eff, c.r_eff, c.depth);
         if (c.gscale != 1.0) { /* depth growing slower than along n (polytope ridges) */
             floe_v3_scale(res.force, c.gscale);
             floe_v3_scale(res.torque_i, c.gscale);

@@ -22,6 +22,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/types.h>
+#include <unistd.h>
 
 /* Field names in messages ("bodies[3].shape.compound.pieces[1]...") are built in fixed
  * buffers; a name that long is cut, which only shortens the message. */
@@ -30,6 +31,13 @@
 #endif
 
 #define SC_MAX_PARTICLES_PER_ENTRY 100000000L
+/* scene text: 16 MiB at most */
+#define SC_MAX_TEXT ((size_t)16 << 20)
+/* a run of more steps than this would never end (and the step count must fit a long) */
+#define SC_MAX_STEPS 1.0e12
+/* random packing: placement stops after this many tries in a row without a placement */
+#define SC_MAX_FAILED_TRIES 10000000L
+#define SC_MAX_TRIES 1000000000L
 
 /* ------------------------------------------------------------------------------------ */
 /* Loader context                                                                        */
@@ -57,6 +65,8 @@ typedef struct sc_output {
     char target[512];
     long every;
     double interval;
+    struct fy_node *name_at;      /* file / prefix value (NULL: the default), for messages */
+    char file[520];               /* the file it writes (vtk: its .pvd), to refuse two writers of one file */
 } sc_output;
 
 typedef struct sc {
@@ -92,6 +102,31 @@ static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
 #endif
     ;
 
+static int sc_loc_pos(const sc *s, long pos, int *line, int *col);
+static int sc_fail_pos(sc *s, int code, long pos, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
+/* the same at a byte offset of the text (-1: no position) */
+static int sc_fail_pos(sc *s, int code, long pos, const char *fmt, ...)
+{
+    char msg[768];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    int line, col;
+    if (s->err && s->errlen) {
+        if (sc_loc_pos(s, pos, &line, &col))
+            snprintf(s->err, s->errlen, "%s:%d:%d: %s", s->path, line, col, msg);
+        else
+            snprintf(s->err, s->errlen, "%s: %s", s->path, msg);
+    }
+    return code ? code : FLOE_EINVAL;
+}
+
 static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
 {
     char msg[768];
@@ -116,7 +151,65 @@ static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
  * opening quote of a quoted scalar), flow collections from their bracket (found by
  * scanning back from the first entry), block collections from their first entry.
  * Returns -1 when unknown (empty block collection, NULL). */
+static long sc_pos_direct(const sc *s, struct fy_node *n);
+
+static int sc_blank(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; }
+
+/* A node with no token of its own (an empty key `: 3`, an empty collection `[]` or `{}`):
+ * found from its neighbours in the parent. An empty key is at the ':' before its value; an
+ * empty value is the first character after its key's ':'; an empty entry of a sequence is
+ * after the ',' that follows the previous entry. Otherwise the parent's position. */
+static long sc_pos_fallback(const sc *s, struct fy_node *n, int depth)
+{
+    struct fy_node *par = fy_node_get_parent(n);
+    if (!par || depth > 64) return -1;
+    if (fy_node_is_mapping(par)) {
+        void *it = NULL;
+        struct fy_node_pair *p;
+        while ((p = fy_node_mapping_iterate(par, &it))) {
+            struct fy_node *k = fy_node_pair_key(p), *v = fy_node_pair_value(p);
+            if (k == n && v && v != n) {
+                long q = sc_pos_direct(s, v);
+                if (q < 0) break;
+                for (q--; q > 0 && sc_blank(s->text[q]); q--) {}
+                return q >= 0 ? q : 0;
+            }
+            if (v == n && k && k != n) {
+                struct fy_token *t = fy_node_is_scalar(k) ? fy_node_get_scalar_token(k) : NULL;
+                const struct fy_mark *e = t ? fy_token_end_mark(t) : NULL;
+                long q = e ? (long)e->input_pos : -1;
+                if (q < 0 || q > s->textlen) break;
+                while (q < s->textlen && (s->text[q] == ' ' || s->text[q] == '\t' || s->text[q] == '"' ||
+                                          s->text[q] == '\''))
+                    q++;
+                if (q < s->textlen && s->text[q] == ':') q++;
+                while (q < s->textlen && sc_blank(s->text[q])) q++;
+                return q;
+            }
+        }
+    } else if (fy_node_is_sequence(par)) {
+        void *it = NULL;
+        struct fy_node *c, *prev = NULL;
+        while ((c = fy_node_sequence_iterate(par, &it)) && c != n) prev = c;
+        long q = prev ? sc_pos_direct(s, prev) : -1;
+        if (q >= 0 && fy_node_get_style(par) == FYNS_FLOW) {
+            while (q < s->textlen && s->text[q] != ',' && s->text[q] != '\n') q++;
+            if (q < s->textlen && s->text[q] == ',') q++;
+            while (q < s->textlen && sc_blank(s->text[q])) q++;
+            return q;
+        }
+    }
+    long q = sc_pos_direct(s, par);
+    return q >= 0 ? q : sc_pos_fallback(s, par, depth + 1);
+}
+
 static long sc_pos(const sc *s, struct fy_node *n)
+{
+    long q = sc_pos_direct(s, n);
+    return q >= 0 || !n ? q : sc_pos_fallback(s, n, 0);
+}
+
+static long sc_pos_direct(const sc *s, struct fy_node *n)
 {
     if (!n) return -1;
     switch (fy_node_get_type(n)) {
@@ -129,6 +222,7 @@ static long sc_pos(const sc *s, struct fy_node *n)
         if ((st == FYNS_SINGLE_QUOTED || st == FYNS_DOUBLE_QUOTED) && pos > 0 && pos <= s->textlen &&
             (s->text[pos - 1] == '"' || s->text[pos - 1] == '\''))
             pos--;
+        if (st == FYNS_ALIAS && pos > 0 && pos <= s->textlen && s->text[pos - 1] == '*') pos--;
         return pos;
     }
     case FYNT_MAPPING:
@@ -137,10 +231,10 @@ static long sc_pos(const sc *s, struct fy_node *n)
         long pos = -1;
         if (fy_node_is_mapping(n)) {
             struct fy_node_pair *p = fy_node_mapping_iterate(n, &it);
-            if (p) pos = sc_pos(s, fy_node_pair_key(p));
+            if (p) pos = sc_pos_direct(s, fy_node_pair_key(p));
         } else {
             struct fy_node *c = fy_node_sequence_iterate(n, &it);
-            if (c) pos = sc_pos(s, c);
+            if (c) pos = sc_pos_direct(s, c);
         }
         if (pos > 0 && pos <= s->textlen && fy_node_get_style(n) == FYNS_FLOW) {
             char open = fy_node_is_mapping(n) ? '{' : '[';
@@ -164,7 +258,11 @@ static long sc_pos(const sc *s, struct fy_node *n)
 /* 1-based line and column of a node (0 if unknown). */
 static int sc_loc(const sc *s, struct fy_node *n, int *line, int *col)
 {
-    long pos = sc_pos(s, n);
+    return sc_loc_pos(s, sc_pos(s, n), line, col);
+}
+
+static int sc_loc_pos(const sc *s, long pos, int *line, int *col)
+{
     if (pos < 0 || pos > s->textlen) return 0;
     int l = 1, c = 1;
     for (long i = 0; i < pos; i++) {
@@ -286,6 +384,16 @@ static int sc_map_open(sc *s, struct fy_node *node, struct fy_node *at, const ch
         if (!ks)
             return sc_fail(s, FLOE_EPARSE, k ? k : node, "%s: keys must be plain names",
                            what[0] ? what : "scene");
+        if (!*ks) {
+            /* an empty key has no token: it sits at the ':' before its value */
+            long q = sc_pos_direct(s, k);
+            struct fy_node *v = fy_node_pair_value(p);
+            if (q < 0 && v && (q = sc_pos(s, v)) >= 0)
+                for (q--; q > 0 && sc_blank(s->text[q]); q--) {}
+            if (q < 0) q = sc_pos(s, node);
+            return sc_fail_pos(s, FLOE_EPARSE, q, "empty key in %s (a ':' with no name before it)",
+                               what[0] ? what : "the scene");
+        }
         int found = 0;
         for (int i = 0; i < nkeys && !found; i++) found = !strcmp(ks, keys[i]);
         if (!found) {
@@ -1188,6 +1296,7 @@ typedef struct sc_common {
     int grow;            /* 1: one particle grows */
     long grow_index;
     double grow_rate;
+    struct fy_node *grow_at;     /* the rate's node, for messages */
     int grow_update_mass;
 } sc_common;
 
@@ -1270,6 +1379,7 @@ static int sc_parse_common(sc *s, const sc_map *m, int entry, int packing, sc_co
                            "%s: grow_rate is for single bodies; for a packing use "
                            "grow: {index: I, rate: R}", m->what);
         FLOE_TRY(sc_num(s, m, "grow_rate", 1, 0, &c->grow_rate));
+        c->grow_at = sc_get(m, "grow_rate", NULL);
         c->grow = 1;
     } else if (gv) {
         char fg[128];
@@ -1278,6 +1388,7 @@ static int sc_parse_common(sc *s, const sc_map *m, int entry, int packing, sc_co
         FLOE_TRY(sc_map_open(s, gv == gk ? NULL : gv, gk, fg,
                              packing ? grow_keys_packing : grow_keys_single, &gm));
         FLOE_TRY(sc_num(s, &gm, "rate", 1, 0, &c->grow_rate));
+        c->grow_at = sc_get(&gm, "rate", NULL);
         if (packing) {
             FLOE_TRY(sc_long(s, &gm, "index", 1, 0, &c->grow_index));
             if (c->grow_index < 0) return sc_range(s, &gm, "index", ">= 0", (double)c->grow_index);
@@ -1317,6 +1428,13 @@ static int sc_add_one(sc *s, const sc_common *c, int gi, const double x[3], int 
 static int sc_add_growth(sc *s, const sc_common *c, int particle, struct fy_node *at,
                          const char *what)
 {
+    /* a shrinking sphere must keep a positive radius to the end of the run */
+    double r0 = s->w->p.radius[particle], r1 = r0 + c->grow_rate * s->duration;
+    if (!(r1 > 0))
+        return sc_fail(s, FLOE_EINVAL, c->grow_at ? c->grow_at : at,
+                       "%s: growth rate %g m/s shrinks the radius %g m of particle %d to zero at t = %g s, "
+                       "before the end of the run (time.duration %g s)", what, c->grow_rate, r0, particle,
+                       -r0 / c->grow_rate, s->duration);
     floe_state *st = floe_growing_radius_create(s->w, particle, c->grow_rate, c->grow_update_mass);
     if (!st)
         return sc_fail(s, FLOE_EINVAL, at, "%s: could not create the growing radius of particle %d",
@@ -1328,6 +1446,45 @@ static int sc_add_growth(sc *s, const sc_common *c, int particle, struct fy_node
         s->grow_particle[s->ngrow_listed++] = particle;
     s->nstates++;
     return FLOE_OK;
+}
+
+/* Memory a scene needs, estimated before its particles are made (measured: 64k and 256k
+ * touching spheres, check and run, ~550 B per particle; brittle-cylinder-impact ~35 B per
+ * PD bond): a scene beyond the machine's memory is refused instead of dying part-way. */
+#define SC_BYTES_BASE 16.0e6
+#define SC_BYTES_PER_PARTICLE 700.0
+#define SC_BYTES_PER_BOND 40.0
+
+static double sc_phys_mem(void)
+{
+    long pages = sysconf(_SC_PHYS_PAGES), ps = sysconf(_SC_PAGE_SIZE);
+    double have = pages > 0 && ps > 0 ? (double)pages * (double)ps : INFINITY;
+#ifdef FLOE_SCENE_MEMORY_CAP
+    have = fmin(have, FLOE_SCENE_MEMORY_CAP); /* the fuzzing build (-DFLOE_FUZZ=ON) */
+#endif
+    return have;
+}
+
+static double sc_mem_estimate(const sc *s, double more_particles)
+{
+    double bonds = 0;
+    for (int b = 0; s->w && b < s->w->npd; b++) bonds += (double)s->w->pd[b]->nbond;
+    double n = (s->w ? (double)s->w->p.n : 0.0) + more_particles;
+    return SC_BYTES_BASE + n * SC_BYTES_PER_PARTICLE + bonds * SC_BYTES_PER_BOND;
+}
+
+/* refuse `more` particles (or the scene so far, more = 0) beyond the machine's memory */
+static int sc_check_memory(sc *s, struct fy_node *at, const char *what, double more)
+{
+    double need = sc_mem_estimate(s, more), have = sc_phys_mem();
+    if (need <= have) return FLOE_OK;
+    if (more > 0)
+        return sc_fail(s, FLOE_ENOMEM, at, "%s: %.4g particles: the scene would need about %.3g GB (estimate, "
+                       "%.0f bytes per particle), more than this machine's memory (%.3g GB)", what, more,
+                       need / 1e9, SC_BYTES_PER_PARTICLE, have / 1e9);
+    return sc_fail(s, FLOE_ENOMEM, at, "%s needs about %.3g GB (estimate: %d particles, %.0f bytes each, and "
+                   "%.0f bytes per PD bond), more than this machine's memory (%.3g GB)", what, need / 1e9,
+                   s->w ? s->w->p.n : 0, SC_BYTES_PER_PARTICLE, SC_BYTES_PER_BOND, have / 1e9);
 }
 
 /* Region {min: [...], max: [...]} with min < max on the active axes. */
@@ -1342,11 +1499,16 @@ static int sc_parse_region(sc *s, const sc_map *m, double lo[3], double hi[3])
     FLOE_TRY(sc_map_open(s, v == k ? NULL : v, k, f, keys, &rm));
     FLOE_TRY(sc_vec(s, &rm, "min", 1, NULL, lo));
     FLOE_TRY(sc_vec(s, &rm, "max", 1, NULL, hi));
-    for (int a = 0; a < s->dim; a++)
+    for (int a = 0; a < s->dim; a++) {
         if (!(hi[a] > lo[a]))
             return sc_fail(s, FLOE_EINVAL, sc_get(&rm, "max", NULL),
                            "%s: max must exceed min on every axis (axis %c: %g <= %g)", f, "xyz"[a],
                            hi[a], lo[a]);
+        if (!(hi[a] - lo[a] <= 1e12))
+            return sc_fail(s, FLOE_EINVAL, sc_get(&rm, "max", NULL),
+                           "%s: the region is %g m long along %c, beyond 1e12 m", f, hi[a] - lo[a],
+                           "xyz"[a]);
+    }
     if (s->dim == 2) { lo[2] = hi[2] = 0; }
     return FLOE_OK;
 }
@@ -1444,15 +1606,19 @@ static int sc_lattice(sc *s, const sc_map *m, int hex, sc_points *pts, const sc_
         floe_v3_copy(origin, lo);
         /* counts large enough to cover the region; sites beyond max are skipped */
         double step[3] = {d, hex ? d * sqrt(3.0) / 2.0 : d, hex ? d * sqrt(2.0 / 3.0) : d};
-        double total = 1;
+        double total = 1, cd[3];
         for (int a = 0; a < 3; a++) {
-            cnt[a] = a < s->dim ? (long)floor((hi[a] - lo[a]) / step[a]) + 2 : 1;
-            total *= (double)cnt[a];
+            cd[a] = a < s->dim ? floor((hi[a] - lo[a]) / step[a]) + 2 : 1;
+            total *= cd[a];
         }
-        if (total > 4.0 * (double)SC_MAX_PARTICLES_PER_ENTRY)
+        if (!(total <= 4.0 * (double)SC_MAX_PARTICLES_PER_ENTRY))
             return sc_fail(s, FLOE_EINVAL, sc_get(m, "region", NULL),
-                           "%s.region holds too many lattice sites", m->what);
+                           "%s.region holds too many lattice sites (%.3g at spacing %g; at most 1e8 "
+                           "particles per entry)", m->what, total, d);
+        for (int a = 0; a < 3; a++) cnt[a] = (long)cd[a];
     }
+    FLOE_TRY(sc_check_memory(s, has_counts ? sc_get(m, "counts", NULL) : sc_get(m, "region", NULL), m->what,
+                             (double)cnt[0] * (double)cnt[1] * (double)cnt[2]));
     sc_rng rng = {(uint64_t)seed};
     for (long k = 0; k < cnt[2]; k++)
         for (long j = 0; j < cnt[1]; j++)
@@ -1486,10 +1652,11 @@ static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
     long count, seed, max_tries;
     FLOE_TRY(sc_long(s, m, "count", 1, 0, &count));
     if (count < 1 || count > SC_MAX_PARTICLES_PER_ENTRY)
-        return sc_range(s, m, "count", ">= 1", (double)count);
+        return sc_range(s, m, "count", "in [1, 1e8] (particles per entry)", (double)count);
     FLOE_TRY(sc_long(s, m, "seed", 0, 1, &seed));
     FLOE_TRY(sc_long(s, m, "max_tries", 0, 100000, &max_tries));
-    if (max_tries < 1) return sc_range(s, m, "max_tries", ">= 1", (double)max_tries);
+    if (max_tries < 1 || max_tries > SC_MAX_TRIES)
+        return sc_range(s, m, "max_tries", "in [1, 1e9]", (double)max_tries);
     if (max_tries < count) max_tries = count;
     double rb = c->shape.rb;
     double a0[3], a1[3];
@@ -1505,18 +1672,32 @@ static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
             a0[a] = a1[a] = lo[a];
         }
     }
-    /* cell grid: cells at least one diameter wide, at most ~4M cells */
+    /* the bounding spheres of count particles cannot fill more than the region */
+    {
+        double vreg = 1, vone = s->dim == 3 ? 4.0 / 3.0 * M_PI * rb * rb * rb : M_PI * rb * rb;
+        for (int a = 0; a < s->dim; a++) vreg *= hi[a] - lo[a];
+        if ((double)count * vone > vreg)
+            return sc_fail(s, FLOE_EINVAL, sc_get(m, "count", NULL),
+                           "%s: %ld particles (bounding volume %g each) cannot fit in the region "
+                           "(volume %g): enlarge region or lower count", m->what, count, vone, vreg);
+    }
+    /* cell grid: cells at least one diameter wide, at most ~4M cells (the counts are
+     * computed in double: a huge region would overflow a long) */
     double cell = 2.0 * rb;
     long nc[3];
     for (;;) {
-        double total = 1;
+        double total = 1, ncd[3];
         for (int a = 0; a < 3; a++) {
-            nc[a] = a < s->dim ? (long)floor((a1[a] - a0[a]) / cell) + 1 : 1;
-            total *= (double)nc[a];
+            ncd[a] = a < s->dim ? floor((a1[a] - a0[a]) / cell) + 1 : 1;
+            total *= ncd[a];
         }
-        if (total <= 4.0e6) break;
-        cell *= 1.5;
+        if (total <= 4.0e6) {
+            for (int a = 0; a < 3; a++) nc[a] = (long)ncd[a];
+            break;
+        }
+        cell *= total > 1e12 ? 2.0 * cbrt(total / 4.0e6) : 1.5;
     }
+    FLOE_TRY(sc_check_memory(s, sc_get(m, "count", NULL), m->what, (double)count));
     long ncells = nc[0] * nc[1] * nc[2];
     long *head = malloc((size_t)ncells * sizeof *head);
     long *next = malloc((size_t)count * sizeof *next);
@@ -1527,10 +1708,11 @@ static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
     }
     for (long i = 0; i < ncells; i++) head[i] = -1;
     sc_rng rng = {(uint64_t)seed};
-    long placed = 0, tries = 0;
+    long placed = 0, tries = 0, failed = 0;
     double d2min = 4.0 * rb * rb;
-    while (placed < count && tries < max_tries) {
+    while (placed < count && tries < max_tries && failed < SC_MAX_FAILED_TRIES) {
         tries++;
+        failed++;
         double x[3];
         long ci[3];
         for (int a = 0; a < 3; a++) {
@@ -1552,6 +1734,7 @@ static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
                     }
                 }
         if (!ok) continue;
+        failed = 0;
         if (sc_points_push(pts, x)) {
             free(head);
             free(next);
@@ -1564,6 +1747,11 @@ static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
     }
     free(head);
     free(next);
+    if (placed < count && failed >= SC_MAX_FAILED_TRIES)
+        return sc_fail(s, FLOE_EINVAL, sc_get(m, "count", NULL),
+                       "%s: could only place %ld of %ld particles without overlap in the region: "
+                       "%ld tries in a row found no room (the region is jammed; enlarge region or "
+                       "lower count)", m->what, placed, count, failed);
     if (placed < count)
         return sc_fail(s, FLOE_EINVAL, sc_get(m, "count", NULL),
                        "%s: could only place %ld of %ld particles without overlap in the region "
@@ -2057,6 +2245,16 @@ static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
         floe_pd_body *b = NULL;
         sc_pd_cut cut = {NULL, 0, {{NULL, {0, 0, 0}, {1, 0, 0, 0}}}};
         if (!rc) rc = sc_pd_parse_remove(s, &rm, fr, &reg, &cut, &r);
+        if (!rc) { /* the box's lattice points and their bonds bound what the body needs */
+            double pts = 1, mh = r.horizon_factor > 0 ? r.horizon_factor : 3;
+            for (int a = 0; a < s->dim; a++) pts *= floor((r.hi[a] - r.lo[a]) / r.dx) + 1;
+            double bonds = pts * (s->dim == 3 ? 4.0 / 3.0 * M_PI * mh * mh * mh : M_PI * mh * mh);
+            double need = sc_mem_estimate(s, pts) + bonds * SC_BYTES_PER_BOND, have = sc_phys_mem();
+            if (!(need <= have))
+                rc = sc_fail(s, FLOE_ENOMEM, rv, "%s: up to %.4g points and %.4g bonds at spacing %g: the scene would "
+                             "need about %.3g GB (estimate), more than this machine's memory (%.3g GB)", fr, pts, bonds,
+                             r.dx, need / 1e9, have / 1e9);
+        }
         if (!rc) {
             int c = floe_pd_body_create(&b, &r);
             if (c) rc = sc_fail(s, c, rv, "%s: could not discretise the region (%s)", fr, floe_strerror(c));
@@ -2230,6 +2428,12 @@ static int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, con
         FLOE_TRY(sc_num(s, &m, "interval", 0, 0.0, &o->interval));
         if (sc_has(&m, "interval")) {
             if (!(o->interval > 0)) return sc_range(s, &m, "interval", "> 0 (s)", o->interval);
+            /* the world steps next_time by interval until it passes t: an interval below the
+             * time resolution would never get there */
+            if (!(o->interval >= 1e-9 * s->duration))
+                return sc_fail(s, FLOE_EINVAL, sc_get(&m, "interval", NULL),
+                               "%s.interval %g s is below the time resolution of this run (1e-9 x "
+                               "time.duration = %g s)", what, o->interval, 1e-9 * s->duration);
             o->every = 0;
         } else if (o->every < 1) {
             return sc_range(s, &m, "every", ">= 1 (steps)", (double)o->every);
@@ -2244,6 +2448,25 @@ static int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, con
             snprintf(o->target, sizeof o->target, "%s/%s", outdir, name);
         else
             snprintf(o->target, sizeof o->target, "%s", name);
+        /* two writers of one file would interleave and corrupt it */
+        {
+            const char *nm = name;
+            while (nm[0] == '.' && nm[1] == '/') nm += 2;
+            if (type == 0 || nm[0] != '/') snprintf(o->file, sizeof o->file, "%s/%s%s", outdir, nm, type == 0 ? ".pvd" : "");
+            else snprintf(o->file, sizeof o->file, "%s", nm);
+            o->name_at = name_at;
+            for (int j = 0; j < i; j++) {
+                if (strcmp(s->outs[j].file, o->file) != 0) continue;
+                int l = 0, c = 0;
+                struct fy_node *prev = s->outs[j].name_at ? s->outs[j].name_at
+                                                          : fy_node_sequence_get_by_index(seq, j);
+                sc_loc(s, prev, &l, &c);
+                return sc_fail(s, FLOE_EINVAL, name_at ? name_at : e,
+                               "%s writes %s, which outputs[%d] (line %d, column %d) writes too: give "
+                               "each output its own %s", what, o->file, j, l, c,
+                               type == 0 ? "prefix" : "file");
+            }
+        }
 
         long group = -1;
         double volume = 0;
@@ -2472,6 +2695,8 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
     double nsteps = dt > 0 ? ceil(s->duration / dt - 1e-9) : 0;
     sc_cat(&b, "duration:   %g s = %s%.0f steps\n", s->duration, w->def.adaptive ? "at most " : "",
            w->def.adaptive && w->dt_lo > 0 ? ceil(s->duration / w->dt_lo - 1e-9) : nsteps);
+    sc_cat(&b, "memory:     about %.3g MB (estimate; this machine has %.3g GB)\n", sc_mem_estimate(s, 0) / 1e6,
+           sc_phys_mem() / 1e9);
     if (s->nstates) {
         sc_cat(&b, "states:     %d growing radi%s (particle", s->nstates, s->nstates == 1 ? "us" : "i");
         for (int i = 0; i < s->ngrow_listed; i++) sc_cat(&b, "%s%d", i ? ", " : " ", s->grow_particle[i]);
@@ -2606,6 +2831,45 @@ static int sc_time_integration(sc *s, const sc_map *tm, floe_world_def *def)
     return FLOE_OK;
 }
 
+/* Every free particle needs a normal positive mass and inertia whose inverses are finite: a
+ * density of 1e-300 gives a subnormal mass, an infinite inverse and NaN at the first step. */
+static int sc_check_masses(sc *s)
+{
+    const floe_particles *p = &s->w->p;
+    for (int i = 0; i < p->n; i++) {
+        if (p->motion[i] != FLOE_FREE || !isfinite(p->radius[i])) continue;
+        double m = p->mass[i];
+        int bad = !(m > 0) || !isnormal(m) || !isfinite(1.0 / m) || !isfinite(m);
+        for (int a = 0; a < 3 && !bad; a++) {
+            double I = p->inertia[3 * i + a];
+            bad = !(I > 0) || !isnormal(I) || !isfinite(1.0 / I) || !isfinite(I);
+        }
+        if (!bad) continue;
+        int mat = p->material[i], entry = -1;
+        for (int e = 0; e < s->nbody_entries && entry < 0; e++)
+            if (i >= s->entry_first[e] && i < s->entry_first[e] + s->entry_count[e]) entry = e;
+        char where[64] = "";
+        if (entry >= 0) snprintf(where, sizeof where, " (bodies[%d])", entry);
+        return sc_fail(s, FLOE_EINVAL, mat >= 0 && mat < s->nmats ? s->mats[mat].at : NULL,
+                       "particle %d%s of material '%s' (density %g kg/m^3) has mass %g kg and inertia "
+                       "(%g, %g, %g) kg m^2: not a usable number (its inverse is not finite); check "
+                       "the density and the size", i, where, mat >= 0 && mat < s->nmats ? s->mats[mat].m.name : "?", mat >= 0 && mat < s->nmats ? s->mats[mat].m.density : 0.0,
+                       m, p->inertia[3 * i], p->inertia[3 * i + 1], p->inertia[3 * i + 2]);
+    }
+    return FLOE_OK;
+}
+
+/* duration / dt must be a step count a run can reach (1e30 s would overflow the count) */
+static int sc_check_steps(sc *s, const sc_map *tm, double dt, const char *which)
+{
+    double n = s->duration / dt;
+    if (dt > 0 && !(n <= SC_MAX_STEPS))
+        return sc_fail(s, FLOE_EINVAL, sc_get(tm, "duration", NULL),
+                       "time.duration %g s is %.3g steps of %g s (%s): more than 1e12 steps", s->duration,
+                       n, dt, which);
+    return FLOE_OK;
+}
+
 static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_outputs,
                     floe_scene_info *info)
 {
@@ -2657,6 +2921,8 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     def.dt = s->dt_given;
     def.dt_safety = s->safety;
     FLOE_TRY(sc_time_integration(s, &tm, &def));
+    FLOE_TRY(sc_check_steps(s, &tm, def.adaptive ? def.dt_min : s->dt_given,
+                            def.adaptive ? "time.adaptive.dt_min" : "time.dt"));
 
     double g[3];
     FLOE_TRY(sc_vec(s, &r, "gravity", 0, NULL, g));
@@ -2736,6 +3002,7 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     FLOE_TRY(sc_parse_walls(s, wv == wk ? NULL : wv, wk));
     { struct fy_node *bok, *bov = sc_get(&r, "bonds", &bok); FLOE_TRY(sc_parse_bonds(s, bov == bok ? NULL : bov, bok)); } /* beam bonds */
     FLOE_TRY(sc_check_pairs(s));
+    FLOE_TRY(sc_check_memory(s, NULL, "the scene", 0));
     struct fy_node *ok;
     struct fy_node *ov = sc_get(&r, "outputs", &ok);
     FLOE_TRY(sc_parse_outputs(s, ov == ok ? NULL : ov, ok, outdir, with_outputs));
@@ -2744,6 +3011,15 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     if (rc != FLOE_OK)
         return sc_fail(s, rc, rc == FLOE_EUNSTABLE && !s->dt_auto ? sc_get(&tm, "dt", NULL) : NULL,
                        "%s", floe_world_last_error(s->w));
+    FLOE_TRY(sc_check_steps(s, &tm, s->w->def.adaptive ? s->w->dt_lo : s->w->dt,
+                            s->w->def.adaptive ? "the smallest adaptive step" : "the time step"));
+    FLOE_TRY(sc_check_masses(s));
+    /* an output interval not longer than a fixed step writes every step: say so to the
+     * world, which then need not count intervals one by one */
+    for (int k = 0; k < s->w->nobs && !s->w->def.adaptive; k++) {
+        floe_observer *o = s->w->obs[k];
+        if (o->period_steps <= 0 && o->period_time > 0 && o->period_time <= s->w->dt) o->period_steps = 1;
+    }
 
     info->duration = s->duration;
     info->nparticles = s->nparticles;
@@ -2841,6 +3117,95 @@ static int sc_parse_error(sc *s, struct fy_diag *diag, const char *text)
     return FLOE_EPARSE;
 }
 
+/* Offset of the first byte that is not part of well-formed UTF-8 (RFC 3629: no overlong
+ * forms, no surrogates, at most U+10FFFF), -1 if the text is valid. */
+static long sc_bad_utf8(const char *text, long len)
+{
+    const unsigned char *u = (const unsigned char *)text;
+    long i = 0;
+    while (i < len) {
+        unsigned c = u[i];
+        if (c < 0x80) { i++; continue; }
+        int n;
+        unsigned lo = 0x80, hi = 0xBF;
+        if (c >= 0xC2 && c <= 0xDF) n = 1;
+        else if (c >= 0xE0 && c <= 0xEF) {
+            n = 2;
+            if (c == 0xE0) lo = 0xA0;
+            if (c == 0xED) hi = 0x9F;
+        } else if (c >= 0xF0 && c <= 0xF4) {
+            n = 3;
+            if (c == 0xF0) lo = 0x90;
+            if (c == 0xF4) hi = 0x8F;
+        } else return i;
+        for (int k = 1; k <= n; k++) {
+            if (i + k >= len) return i;
+            unsigned d = u[i + k];
+            if (d < (k == 1 ? lo : 0x80) || d > (k == 1 ? hi : 0xBF)) return i;
+        }
+        i += n + 1;
+    }
+    return -1;
+}
+
+/* Nodes of the document once its aliases are expanded, counted without expanding them: a
+ * 1 KB "billion laughs" alias bomb would otherwise take gigabytes. The walk stops as soon as
+ * the count passes limit (so it costs at most limit visits) or aliases nest deeper than
+ * SC_MAX_ALIAS_DEPTH. *bad receives the alias where it stopped. Returns the count (> limit:
+ * too large; -1: too deep or an unresolvable alias). */
+#define SC_MAX_NODES 2000000L
+#define SC_MAX_ALIAS_DEPTH 64
+static long sc_count_nodes(struct fy_node *n, long count, long limit, int alias_depth, struct fy_node **bad)
+{
+    if (!n || count > limit) return count;
+    if (fy_node_is_alias(n)) {
+        if (alias_depth >= SC_MAX_ALIAS_DEPTH) { *bad = n; return -1; }
+        struct fy_node *t = fy_node_resolve_alias(n);
+        if (!t) { *bad = n; return -1; }
+        long c = sc_count_nodes(t, count, limit, alias_depth + 1, bad);
+        if (c > limit) *bad = n; /* the outermost alias on the way */
+        return c;
+    }
+    count++;
+    void *it = NULL;
+    if (fy_node_is_mapping(n)) {
+        struct fy_node_pair *p;
+        while ((p = fy_node_mapping_iterate(n, &it)) && count >= 0 && count <= limit) {
+            count = sc_count_nodes(fy_node_pair_key(p), count, limit, alias_depth, bad);
+            if (count >= 0) count = sc_count_nodes(fy_node_pair_value(p), count, limit, alias_depth, bad);
+        }
+    } else if (fy_node_is_sequence(n)) {
+        struct fy_node *c;
+        while ((c = fy_node_sequence_iterate(n, &it)) && count >= 0 && count <= limit)
+            count = sc_count_nodes(c, count, limit, alias_depth, bad);
+    }
+    return count;
+}
+
+/* Nodes written in the text (aliases not expanded), counted from the parser's events before
+ * a document is built: a 16 MiB list of numbers would take gigabytes as a document. Stops
+ * past limit; a syntax error ends the count (the document build reports it). */
+static long sc_count_events(const char *text, size_t len, long limit, struct fy_diag *diag)
+{
+    struct fy_parse_cfg cfg;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.flags = FYPCF_QUIET;
+    cfg.diag = diag;
+    struct fy_parser *fyp = fy_parser_create(&cfg);
+    if (!fyp) return 0;
+    long n = 0;
+    if (fy_parser_set_string(fyp, text, len) == 0) {
+        struct fy_event *ev;
+        while (n <= limit && (ev = fy_parser_parse(fyp))) {
+            enum fy_event_type t = ev->type;
+            n += t == FYET_SCALAR || t == FYET_ALIAS || t == FYET_MAPPING_START || t == FYET_SEQUENCE_START;
+            fy_parser_event_free(fyp, ev);
+        }
+    }
+    fy_parser_destroy(fyp);
+    return n;
+}
+
 static void sc_diag_discard(struct fy_diag *diag, void *user, const char *buf, size_t len)
 {
     (void)diag;
@@ -2882,6 +3247,13 @@ int floe_scene_load_ex(const char *path, const char *text, const char *outdir, i
             size_t k = fread(owned + n, 1, cap - n - 1, f);
             n += k;
             if (k == 0) break;
+            if (n > SC_MAX_TEXT) {
+                fclose(f);
+                free(owned);
+                snprintf(err, errlen, "%s: the scene file is larger than %zu MiB (a scene lists "
+                         "packings, not particles; meshes are separate files)", path, SC_MAX_TEXT >> 20);
+                return FLOE_EINVAL;
+            }
             if (n + 1 == cap) {
                 char *p = realloc(owned, cap * 2);
                 if (!p) { free(owned); owned = NULL; break; }
@@ -2898,6 +3270,32 @@ int floe_scene_load_ex(const char *path, const char *text, const char *outdir, i
         }
         owned[n] = '\0';
         text = owned;
+        s.text = text;
+        s.textlen = (long)n;
+        const char *nul = memchr(text, '\0', n);
+        if (nul) {
+            s.textlen = (long)(nul - text);
+            int rc = sc_fail_pos(&s, FLOE_EPARSE, (long)(nul - text), "a NUL byte (byte %ld of %zu): a scene is "
+                                 "UTF-8 text", (long)(nul - text), n);
+            free(owned);
+            return rc;
+        }
+    }
+    if (strlen(text) > SC_MAX_TEXT) {
+        free(owned);
+        snprintf(err, errlen, "%s: the scene text is larger than %zu MiB", path, SC_MAX_TEXT >> 20);
+        return FLOE_EINVAL;
+    }
+    {
+        s.text = text;
+        s.textlen = (long)strlen(text);
+        long bad = sc_bad_utf8(text, s.textlen);
+        if (bad >= 0) {
+            int rc = sc_fail_pos(&s, FLOE_EPARSE, bad, "invalid UTF-8 (byte 0x%02x): a scene is UTF-8 text",
+                                 (unsigned)(unsigned char)text[bad]);
+            free(owned);
+            return rc;
+        }
     }
 
     struct fy_diag_cfg dcfg;
@@ -2914,14 +3312,38 @@ int floe_scene_load_ex(const char *path, const char *text, const char *outdir, i
     fy_diag_set_collect_errors(diag, true);
     struct fy_parse_cfg pcfg;
     memset(&pcfg, 0, sizeof pcfg);
-    pcfg.flags = FYPCF_QUIET | FYPCF_RESOLVE_DOCUMENT;
+    pcfg.flags = FYPCF_QUIET; /* aliases are resolved below, once their expansion is counted */
     pcfg.diag = diag;
     s.text = text;
     s.textlen = (long)strlen(text);
+    struct fy_diag *diag2 = fy_diag_create(&dcfg); /* the count's own diagnostics, discarded */
+    long written = diag2 ? sc_count_events(text, strlen(text), SC_MAX_NODES, diag2) : 0;
+    if (diag2) fy_diag_destroy(diag2);
+    if (written > SC_MAX_NODES) {
+        fy_diag_destroy(diag);
+        free(owned);
+        return sc_fail(&s, FLOE_EPARSE, NULL, "the scene has more than %ld YAML nodes: refused (list "
+                       "packings, not particles)", SC_MAX_NODES);
+    }
     struct fy_document *doc = fy_document_build_from_string(&pcfg, text, strlen(text));
     int rc = FLOE_OK;
     if (!doc || fy_diag_got_error(diag)) {
         rc = sc_parse_error(&s, diag, text);
+    } else {
+        struct fy_node *bad = NULL;
+        long nodes = sc_count_nodes(fy_document_root(doc), 0, SC_MAX_NODES, 0, &bad);
+        if (nodes < 0) {
+            const char *an = bad && fy_node_is_scalar(bad) ? fy_node_get_scalar0(bad) : NULL;
+            rc = sc_fail(&s, FLOE_EPARSE, bad, "alias *%s: no anchor &%s before it, or aliases that nest deeper "
+                         "than %d or refer to themselves", an ? an : "?", an ? an : "?", SC_MAX_ALIAS_DEPTH);
+        }
+        else if (nodes > SC_MAX_NODES)
+            rc = sc_fail(&s, FLOE_EPARSE, bad, "the scene expands to more than %ld YAML nodes%s: refused (an "
+                         "alias bomb?)", SC_MAX_NODES, bad ? " through this alias" : "");
+        else if (fy_document_resolve(doc) != 0 || fy_diag_got_error(diag))
+            rc = sc_parse_error(&s, diag, text);
+    }
+    if (rc != FLOE_OK) {
     } else {
         struct fy_node *root = fy_document_root(doc);
         if (!root || sc_is_missing(root))

@@ -1277,15 +1277,19 @@ static int observers_call(floe_world *w, int force_all) {
 
 int floe_world_finish(floe_world *w) {
     int rc = FLOE_OK;
+    char first[sizeof w->err]; /* the first failure's message is the one reported (a full disk
+                                  fails every writer: the first names the cause) */
+    first[0] = 0;
     for (int k = 0; k < w->nobs; k++) {
         floe_observer *o = w->obs[k];
         if (o->ended) continue;
         o->ended = 1;
         if (o->klass->end) {
             int r = o->klass->end(o, w);
-            if (r && !rc) rc = r;
+            if (r && !rc) { rc = r; memcpy(first, w->err, sizeof first); }
         }
     }
+    if (rc) memcpy(w->err, first, sizeof first);
     w->finished = 1;
     return rc;
 }
@@ -1422,6 +1426,7 @@ static int advance_states(floe_world *w, double dt) {
         double *y0 = m <= 16 ? buf : malloc(4 * m * sizeof(double));
         if (!y0) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
         double *k1 = y0 + m, *ym = y0 + 2 * m, *k2 = y0 + 3 * m;
+        w->err[0] = 0;
         st->klass->get(st, y0);
         int rc = st->klass->rhs(st, w, w->time, y0, k1);
         for (size_t a = 0; a < m && !rc; a++) ym[a] = y0[a] + h * k1[a];
@@ -1429,7 +1434,12 @@ static int advance_states(floe_world *w, double dt) {
         for (size_t a = 0; a < m && !rc; a++) ym[a] = y0[a] + dt * k2[a];
         if (!rc) rc = st->klass->set(st, w, ym);
         if (y0 != buf) free(y0);
-        if (rc) return floe_world_error(w, rc, "state object %s failed at step %ld", st->klass->name, w->step);
+        if (rc) { /* keep the state's own reason */
+            char why[sizeof w->err];
+            memcpy(why, w->err, sizeof why);
+            return floe_world_error(w, rc, "state object %s failed at step %ld: %s", st->klass->name, w->step,
+                                    why[0] ? why : floe_strerror(rc));
+        }
     }
     return FLOE_OK;
 }
@@ -2176,7 +2186,10 @@ int floe_world_run(floe_world *w, double t_end, floe_progress_fn progress, void 
         observers_call(w, 1);
         memcpy(w->err, keep, sizeof keep);
     }
+    char keep[sizeof w->err];
+    memcpy(keep, w->err, sizeof keep);
     int rc2 = floe_world_finish(w);
+    if (rc) memcpy(w->err, keep, sizeof keep); /* the run's first error, not a writer's at the end */
     return rc ? rc : rc2;
 }
 

@@ -39,8 +39,16 @@ int floe_mesh_hull(const double *pts, int n, floe_mesh *hull, char *err, size_t 
 int floe_mesh_decompose(const floe_mesh *m, const char *name, floe_mesh **pieces, int *npieces, char *err,
                         size_t errlen);
 
-/* Convex polyhedron from points: the hull (CGAL), then floe_polyhedron_from_mesh. */
+/* Convex polyhedron from points: the hull (CGAL convex_hull_3, O(n log n)), its coplanar
+ * neighbouring triangles merged into faces (O(n log n), memory linear in n), then
+ * floe_polyhedron_from_faces. */
 floe_geometry *floe_polyhedron_from_points(const double *pts, int n, char *err, size_t errlen);
+
+/* Convex polyhedron from its faces (geometry/polytope.c): vertices v (nv), face f is the
+ * convex polygon fv[fstart[f] .. fstart[f+1]) counter-clockwise seen from outside with the
+ * unit outward plane planes[4f .. 4f+3] (n, d: n.X <= d inside). Linear in the size. */
+floe_geometry *floe_polyhedron_from_faces(const double *v, int nv, const int *fstart, const int *fv, int nf,
+                                          const double *planes, char *err, size_t errlen);
 
 /* A shape from a mesh file: mode "hull" (one convex polyhedron) or "decompose" (a compound
  * of convex polyhedra; a convex mesh gives one piece). dim is the world dimension (3). */

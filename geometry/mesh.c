@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #ifdef FLOE_HAVE_ASSIMP
 #include <assimp/cimport.h>
@@ -121,6 +122,17 @@ int floe_mesh_load(const char *path, double scale, floe_mesh *out, char *err, si
     if (!(scale > 0) || !isfinite(scale)) {
         floe_set_err(err, errlen, "mesh file '%s': scale %g must be positive and finite", path, scale);
         return FLOE_EINVAL;
+    }
+    /* a FIFO, device or directory would block or never end: only regular files */
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        floe_set_err(err, errlen, "cannot read mesh file '%s': %s", path, strerror(errno));
+        return FLOE_EIO;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        floe_set_err(err, errlen, "mesh file '%s' is not a regular file (%s)", path,
+                     S_ISDIR(st.st_mode) ? "a directory" : S_ISFIFO(st.st_mode) ? "a FIFO" : "a device or socket");
+        return FLOE_EIO;
     }
     FILE *f = fopen(path, "rb");
     if (!f) {
@@ -360,10 +372,150 @@ int floe_mesh_distances(const floe_mesh *m, const double *pts, int n, double *di
 
 /* ---- shapes ---- */
 
+/* directed edge a -> b of triangle t (sorted by (a, b) to find the opposite b -> a) */
+typedef struct hedge { int a, b, t; } hedge;
+
+static int hedge_cmp(const void *x, const void *y) {
+    const hedge *p = x, *q = y;
+    if (p->a != q->a) return (p->a > q->a) - (p->a < q->a);
+    return (p->b > q->b) - (p->b < q->b);
+}
+
+static const hedge *hedge_find(const hedge *e, size_t ne, int a, int b) {
+    hedge key = {a, b, 0};
+    return bsearch(&key, e, ne, sizeof *e, hedge_cmp);
+}
+
+static void tri_normal(const floe_mesh *h, int t, double n[3]) {
+    const double *a = h->v + 3 * h->tri[3 * t], *b = h->v + 3 * h->tri[3 * t + 1], *c = h->v + 3 * h->tri[3 * t + 2];
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    n[0] = u[1] * w[2] - u[2] * w[1];
+    n[1] = u[2] * w[0] - u[0] * w[2];
+    n[2] = u[0] * w[1] - u[1] * w[0];
+    double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int k = 0; k < 3; k++) n[k] = l > 0 ? n[k] / l : 0;
+}
+
+/* Faces of a closed, outward triangle mesh of a convex hull: neighbouring triangles in the
+ * plane of a seed triangle (normals within 1e-12, vertices within 1e-12 of the size) are
+ * grown into one face, whose boundary loop (the group's edges whose opposite lies outside it)
+ * is the face polygon. A group whose boundary is not one simple loop is split back into its
+ * triangles. O(n log n) time, linear memory. */
+static floe_geometry *hull_polyhedron(const floe_mesh *h, char *err, size_t errlen) {
+    int nt = h->nt, nv = h->nv;
+    size_t ne = 3 * (size_t)nt;
+    hedge *e = malloc(ne * sizeof *e);
+    int *grp = malloc((size_t)nt * sizeof *grp), *stack = malloc((size_t)nt * sizeof *stack);
+    int *fstart = malloc(((size_t)nt + 1) * sizeof *fstart), *fv = malloc(ne * sizeof *fv);
+    int *next = malloc((size_t)nv * sizeof *next), *members = malloc((size_t)nt * sizeof *members);
+    double *planes = malloc((size_t)nt * 4 * sizeof *planes);
+    floe_geometry *g = NULL;
+    if (!e || !grp || !stack || !fstart || !fv || !next || !members || !planes) {
+        floe_set_err(err, errlen, "convex hull: out of memory");
+        goto done;
+    }
+    for (int t = 0; t < nt; t++)
+        for (int k = 0; k < 3; k++) {
+            hedge *d = &e[3 * (size_t)t + (size_t)k];
+            d->a = h->tri[3 * t + k];
+            d->b = h->tri[3 * t + (k + 1) % 3];
+            d->t = t;
+        }
+    qsort(e, ne, sizeof *e, hedge_cmp);
+    double L = bbox_diag(h), tol = 1e-12 * L;
+    for (int t = 0; t < nt; t++) grp[t] = -1;
+    for (int i = 0; i < nv; i++) next[i] = -1;
+    int nf = 0, nfv = 0;
+    fstart[0] = 0;
+    for (int seed = 0; seed < nt; seed++) {
+        if (grp[seed] >= 0) continue;
+        double n[3];
+        tri_normal(h, seed, n);
+        const double *p0 = h->v + 3 * h->tri[3 * seed];
+        double d = n[0] * p0[0] + n[1] * p0[1] + n[2] * p0[2];
+        /* grow the group over edges */
+        int sp = 0, nm = 0;
+        stack[sp++] = seed;
+        grp[seed] = nf;
+        while (sp > 0) {
+            int t = stack[--sp];
+            members[nm++] = t;
+            for (int k = 0; k < 3; k++) {
+                const hedge *o = hedge_find(e, ne, h->tri[3 * t + (k + 1) % 3], h->tri[3 * t + k]);
+                if (!o || grp[o->t] >= 0) continue;
+                double m[3];
+                tri_normal(h, o->t, m);
+                if (n[0] * m[0] + n[1] * m[1] + n[2] * m[2] < 1 - 1e-12) continue;
+                int on = 1;
+                for (int q = 0; q < 3 && on; q++) {
+                    const double *x = h->v + 3 * h->tri[3 * o->t + q];
+                    on = fabs(n[0] * x[0] + n[1] * x[1] + n[2] * x[2] - d) <= tol;
+                }
+                if (!on) continue;
+                grp[o->t] = nf;
+                stack[sp++] = o->t;
+            }
+        }
+        /* boundary loop: the members' edges whose opposite triangle is in another group */
+        int nb = 0, start = -1, ok = 1;
+        for (int j = 0; j < nm && ok; j++)
+            for (int k = 0; k < 3; k++) {
+                int t = members[j], a = h->tri[3 * t + k], b = h->tri[3 * t + (k + 1) % 3];
+                const hedge *o = hedge_find(e, ne, b, a);
+                if (o && grp[o->t] == nf) continue;
+                if (next[a] >= 0) { ok = 0; break; } /* a vertex twice on the boundary */
+                next[a] = b;
+                start = a;
+                nb++;
+            }
+        int cnt = 0;
+        if (ok && start >= 0) {
+            int a = start;
+            do {
+                fv[nfv + cnt++] = a;
+                a = next[a];
+            } while (a >= 0 && a != start && cnt <= nb);
+            ok = a == start && cnt == nb;
+        }
+        for (int j = 0; j < nm; j++) /* clear the marks */
+            for (int k = 0; k < 3; k++) next[h->tri[3 * members[j] + k]] = -1;
+        if (ok && nm > 1) {
+            double *P = planes + 4 * nf;
+            P[0] = n[0], P[1] = n[1], P[2] = n[2];
+            double dm = -INFINITY;
+            for (int q = 0; q < cnt; q++) {
+                const double *x = h->v + 3 * fv[nfv + q];
+                dm = fmax(dm, n[0] * x[0] + n[1] * x[1] + n[2] * x[2]);
+            }
+            P[3] = dm;
+            nfv += cnt;
+            fstart[++nf] = nfv;
+            continue;
+        }
+        /* one face per triangle */
+        for (int j = 0; j < nm; j++) {
+            int t = members[j];
+            double m[3];
+            tri_normal(h, t, m);
+            const double *x = h->v + 3 * h->tri[3 * t];
+            double *P = planes + 4 * nf;
+            P[0] = m[0], P[1] = m[1], P[2] = m[2];
+            P[3] = m[0] * x[0] + m[1] * x[1] + m[2] * x[2];
+            for (int k = 0; k < 3; k++) fv[nfv++] = h->tri[3 * t + k];
+            grp[t] = nf;
+            fstart[++nf] = nfv;
+        }
+    }
+    g = floe_polyhedron_from_faces(h->v, nv, fstart, fv, nf, planes, err, errlen);
+done:
+    free(e), free(grp), free(stack), free(fstart), free(fv), free(next), free(members), free(planes);
+    return g;
+}
+
 floe_geometry *floe_polyhedron_from_points(const double *pts, int n, char *err, size_t errlen) {
     floe_mesh h;
     if (floe_mesh_hull(pts, n, &h, err, errlen) != FLOE_OK) return NULL;
-    floe_geometry *g = floe_polyhedron_from_mesh(h.v, h.nv, h.tri, h.nt, err, errlen);
+    floe_geometry *g = hull_polyhedron(&h, err, errlen);
     floe_mesh_free(&h);
     return g;
 }
@@ -391,19 +543,21 @@ floe_geometry *floe_mesh_shape(const char *path, const char *mode, double scale,
     if (floe_mesh_load(path, scale, &m, err, errlen) != FLOE_OK) return NULL;
     char pre[300];
     snprintf(pre, sizeof pre, "mesh file '%s': ", path);
-    if (hull) {
-        floe_geometry *g = floe_polyhedron_from_points(m.v, m.nv, err, errlen);
-        floe_mesh_free(&m);
-        if (!g) prefix_err(err, errlen, pre);
-        return g;
-    }
-    /* decompose: an inward-facing closed mesh is the same solid: turn it outward */
+    /* both modes: an inward-facing closed mesh is the same solid: turn it outward; open,
+     * self-intersecting or degenerate meshes are refused (a hull of an open mesh would
+     * silently close it) */
     if (m.nt > 0 && volume6(&m) < 0) flip(&m);
     char name[300];
     snprintf(name, sizeof name, "mesh file '%s'", path);
     if (floe_mesh_validate(&m, name, err, errlen) != FLOE_OK) {
         floe_mesh_free(&m);
         return NULL;
+    }
+    if (hull) {
+        floe_geometry *g = floe_polyhedron_from_points(m.v, m.nv, err, errlen);
+        floe_mesh_free(&m);
+        if (!g) prefix_err(err, errlen, pre);
+        return g;
     }
     floe_mesh *pc = NULL;
     int np = 0;

@@ -372,6 +372,99 @@ static int check_closed(const int *tri, int nt, int nv) {
     return ok;
 }
 
+/* Assemble from vertices V0 (nv, welded), unit outward face planes P (nf) and the face
+ * vertex lists fv[fn[f] .. fn[f+1]) (counter-clockwise seen from outside): the used vertices
+ * renumbered, the faces fan-triangulated, the closedness check, the exact mass and the move
+ * to the principal frame. Linear in the size (the check sorts the edges). Takes nothing over;
+ * L is the size for the zero-volume test. */
+static floe_geometry *assemble_polyhedron(const double *V0, int nv, const double *P, int nf, const int *fv, const int *fn,
+                                          double L, const char *what, const char *open_msg, char *err, size_t errlen) {
+    floe_geometry *result = NULL;
+    double *V = NULL;
+    int *used = NULL, *tri = NULL, *fstart = NULL;
+    poly_priv *pp = NULL;
+    int nfv = fn[nf];
+    /* keep the vertices used by faces, renumbered */
+    used = malloc((size_t)nv * sizeof *used);
+    if (!used) goto oom;
+    for (int j = 0; j < nv; j++) used[j] = -1;
+    int nu = 0;
+    for (int k = 0; k < nfv; k++)
+        if (used[fv[k]] < 0) used[fv[k]] = nu++;
+    int nt = nfv - 2 * nf;
+    tri = malloc((size_t)nt * 3 * sizeof *tri);
+    fstart = malloc(((size_t)nf + 1) * sizeof *fstart);
+    if (!tri || !fstart) goto oom;
+    int t = 0;
+    for (int f = 0; f < nf; f++) {
+        fstart[f] = t;
+        const int *F = fv + fn[f];
+        for (int k = 1; k + 1 < fn[f + 1] - fn[f]; k++, t++) {
+            tri[3 * t] = used[F[0]]; tri[3 * t + 1] = used[F[k]]; tri[3 * t + 2] = used[F[k + 1]];
+        }
+    }
+    fstart[nf] = t;
+    V = malloc((size_t)nu * 3 * sizeof *V);
+    if (!V) goto oom;
+    for (int j = 0; j < nv; j++)
+        if (used[j] >= 0) floe_v3_copy(V + 3 * used[j], V0 + 3 * j);
+    int closed = check_closed(tri, nt, nu);
+    if (closed < 0) goto oom;
+    if (!closed) { floe_set_err(err, errlen, "%s: %s", what, open_msg); goto fail; }
+    /* mass from a reference point (the vertex mean) for accuracy */
+    double ref[3] = {0, 0, 0}, m[10], c[3], C[3][3], I[3][3], l[3], R[3][3];
+    for (int j = 0; j < nu; j++) floe_v3_axpy(ref, 1.0 / nu, V + 3 * j);
+    for (int j = 0; j < nu; j++) floe_v3_sub(V + 3 * j, V + 3 * j, ref);
+    poly3_moments(V, tri, nt, m);
+    if (!(m[0] > 1e-12 * L * L * L)) { floe_set_err(err, errlen, "%s: zero volume (%.3g)", what, m[0]); goto fail; }
+    moments_central(m, c, C);
+    inertia_from_cov(C, 1.0, I);
+    floe_sym3_eigen(I, l, R);
+    /* X_input = R X_body + (ref + c) */
+    pp = calloc(1, sizeof *pp);
+    if (!pp) goto oom;
+    floe_polytope *p = &pp->p;
+    p->base.klass = &floe_polytope_class;
+    p->dim = 3; p->nv = nu; p->np = nf; p->nt = nt;
+    p->v = V; p->tri = tri; pp->face_start = fstart;
+    V = NULL; tri = NULL; fstart = NULL;
+    p->plane = malloc((size_t)nf * 4 * sizeof(double));
+    if (!p->plane) goto oom;
+    p->radius = 0;
+    for (int j = 0; j < nu; j++) {
+        double x[3], y[3];
+        floe_v3_sub(x, p->v + 3 * j, c);
+        for (int k = 0; k < 3; k++) y[k] = R[0][k] * x[0] + R[1][k] * x[1] + R[2][k] * x[2];
+        floe_v3_copy(p->v + 3 * j, y);
+        p->radius = fmax(p->radius, floe_v3_norm(y));
+    }
+    double cx[3];
+    floe_v3_add(cx, ref, c);
+    for (int f = 0; f < nf; f++) {
+        const double *q = P + 4 * f;
+        double *o = p->plane + 4 * f;
+        for (int k = 0; k < 3; k++) o[k] = R[0][k] * q[0] + R[1][k] * q[1] + R[2][k] * q[2];
+        /* the offset from the face vertices (consistent with the stored vertices) */
+        const int *F = fv + fn[f];
+        double s = 0;
+        int cnt = fn[f + 1] - fn[f];
+        for (int k = 0; k < cnt; k++) s += floe_v3_dot(o, p->v + 3 * used[F[k]]);
+        o[3] = s / cnt;
+    }
+    floe_v3_copy(p->frame_x, cx);
+    floe_q_from_matrix(p->frame_q, R);
+    result = &p->base;
+    pp = NULL;
+    goto done;
+oom:
+    floe_set_err(err, errlen, "%s: out of memory", what);
+fail:
+done:
+    if (pp) poly_destroy(&pp->p.base);
+    free(V); free(used); free(tri); free(fstart);
+    return result;
+}
+
 /* Build from candidate vertices (all on the boundary of the convex region or inside it) and
  * unit outward planes: each plane's vertices (within tol) form a face, ordered as their 2D
  * convex hull in the plane; planes with fewer than 3 non-collinear vertices are redundant and
@@ -381,8 +474,7 @@ static floe_geometry *build_polyhedron(const double *cand, int nc, const double 
                                        const char *open_msg, char *err, size_t errlen) {
     floe_geometry *result = NULL;
     double *V = NULL, *P = NULL, *uv = NULL;
-    int *vid = NULL, *used = NULL, *fv = NULL, *fn = NULL, *hidx = NULL, *tri = NULL, *fstart = NULL;
-    poly_priv *pp = NULL;
+    int *vid = NULL, *fv = NULL, *fn = NULL, *hidx = NULL;
     if (nc < 4) { floe_set_err(err, errlen, "%s: %s", what, nc == 0 ? open_msg : "zero volume (fewer than 4 vertices)"); return NULL; }
     /* weld the candidates */
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -459,86 +551,39 @@ static floe_geometry *build_polyhedron(const double *cand, int nc, const double 
         fn[++nf] = nfv;
     }
     if (nf < 4) { floe_set_err(err, errlen, "%s: %s", what, open_msg); goto fail; }
-    /* keep the vertices used by faces, renumbered */
-    used = malloc((size_t)nv * sizeof *used);
-    if (!used) goto oom;
-    for (int j = 0; j < nv; j++) used[j] = -1;
-    int nu = 0;
-    for (int k = 0; k < nfv; k++)
-        if (used[fv[k]] < 0) used[fv[k]] = nu++;
-    int nt = nfv - 2 * nf;
-    tri = malloc((size_t)nt * 3 * sizeof *tri);
-    fstart = malloc(((size_t)nf + 1) * sizeof *fstart);
-    if (!tri || !fstart) goto oom;
-    int t = 0;
-    for (int f = 0; f < nf; f++) {
-        fstart[f] = t;
-        const int *F = fv + fn[f];
-        for (int k = 1; k + 1 < fn[f + 1] - fn[f]; k++, t++) {
-            tri[3 * t] = used[F[0]]; tri[3 * t + 1] = used[F[k]]; tri[3 * t + 2] = used[F[k + 1]];
-        }
-    }
-    fstart[nf] = t;
-    double *W = malloc((size_t)nu * 3 * sizeof *W);
-    if (!W) goto oom;
-    for (int j = 0; j < nv; j++)
-        if (used[j] >= 0) floe_v3_copy(W + 3 * used[j], V + 3 * j);
-    free(V); V = W;
-    int closed = check_closed(tri, nt, nu);
-    if (closed < 0) goto oom;
-    if (!closed) { floe_set_err(err, errlen, "%s: %s", what, open_msg); goto fail; }
-    /* mass from a reference point (the vertex mean) for accuracy */
-    double ref[3] = {0, 0, 0}, m[10], c[3], C[3][3], I[3][3], l[3], R[3][3];
-    for (int j = 0; j < nu; j++) floe_v3_axpy(ref, 1.0 / nu, V + 3 * j);
-    for (int j = 0; j < nu; j++) floe_v3_sub(V + 3 * j, V + 3 * j, ref);
-    poly3_moments(V, tri, nt, m);
-    if (!(m[0] > 1e-12 * L * L * L)) { floe_set_err(err, errlen, "%s: zero volume (%.3g)", what, m[0]); goto fail; }
-    moments_central(m, c, C);
-    inertia_from_cov(C, 1.0, I);
-    floe_sym3_eigen(I, l, R);
-    /* X_input = R X_body + (ref + c) */
-    pp = calloc(1, sizeof *pp);
-    if (!pp) goto oom;
-    floe_polytope *p = &pp->p;
-    p->base.klass = &floe_polytope_class;
-    p->dim = 3; p->nv = nu; p->np = nf; p->nt = nt;
-    p->v = V; p->tri = tri; pp->face_start = fstart;
-    V = NULL; tri = NULL; fstart = NULL;
-    p->plane = malloc((size_t)nf * 4 * sizeof(double));
-    if (!p->plane) goto oom;
-    p->radius = 0;
-    for (int j = 0; j < nu; j++) {
-        double x[3], y[3];
-        floe_v3_sub(x, p->v + 3 * j, c);
-        for (int k = 0; k < 3; k++) y[k] = R[0][k] * x[0] + R[1][k] * x[1] + R[2][k] * x[2];
-        floe_v3_copy(p->v + 3 * j, y);
-        p->radius = fmax(p->radius, floe_v3_norm(y));
-    }
-    double cx[3];
-    floe_v3_add(cx, ref, c);
-    for (int f = 0; f < nf; f++) {
-        const double *q = P + 4 * f;
-        double *o = p->plane + 4 * f;
-        for (int k = 0; k < 3; k++) o[k] = R[0][k] * q[0] + R[1][k] * q[1] + R[2][k] * q[2];
-        /* the offset from the face vertices (consistent with the stored vertices) */
-        const int *F = fv + fn[f];
-        double s = 0;
-        int cnt = fn[f + 1] - fn[f];
-        for (int k = 0; k < cnt; k++) s += floe_v3_dot(o, p->v + 3 * used[F[k]]);
-        o[3] = s / cnt;
-    }
-    floe_v3_copy(p->frame_x, cx);
-    floe_q_from_matrix(p->frame_q, R);
-    result = &p->base;
-    pp = NULL;
+    result = assemble_polyhedron(V, nv, P, nf, fv, fn, L, what, open_msg, err, errlen);
     goto done;
 oom:
     floe_set_err(err, errlen, "%s: out of memory", what);
 fail:
 done:
-    if (pp) poly_destroy(&pp->p.base);
-    free(V); free(P); free(uv); free(vid); free(used); free(fv); free(fn); free(hidx); free(tri); free(fstart);
+    free(V); free(P); free(uv); free(vid); free(fv); free(fn); free(hidx);
     return result;
+}
+
+/* Faces given (e.g. a convex hull with coplanar triangles merged): no searching, linear in
+ * the size; the faces must be convex polygons, counter-clockwise seen from outside, with
+ * unit outward planes. */
+floe_geometry *floe_polyhedron_from_faces(const double *v, int nv, const int *fstart, const int *fv, int nf,
+                                          const double *planes, char *err, size_t errlen) {
+    const char *what = "polyhedron from faces";
+    if (!v || !fstart || !fv || !planes || nv < 4 || nf < 4) {
+        floe_set_err(err, errlen, "%s: need at least 4 vertices and 4 faces", what);
+        return NULL;
+    }
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int i = 0; i < nv; i++)
+        for (int k = 0; k < 3; k++) {
+            if (!isfinite(v[3 * i + k])) { floe_set_err(err, errlen, "%s: vertex %d is not finite", what, i); return NULL; }
+            lo[k] = fmin(lo[k], v[3 * i + k]);
+            hi[k] = fmax(hi[k], v[3 * i + k]);
+        }
+    for (int f = 0; f < nf; f++)
+        if (fstart[f + 1] - fstart[f] < 3) { floe_set_err(err, errlen, "%s: face %d has fewer than 3 vertices", what, f); return NULL; }
+    for (int k = 0; k < fstart[nf]; k++)
+        if (fv[k] < 0 || fv[k] >= nv) { floe_set_err(err, errlen, "%s: a face vertex index is out of range", what); return NULL; }
+    double ext[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+    return assemble_polyhedron(v, nv, planes, nf, fv, fstart, floe_v3_norm(ext), what, "not closed", err, errlen);
 }
 
 floe_geometry *floe_polyhedron_from_planes(const double *planes, int np, char *err, size_t errlen) {

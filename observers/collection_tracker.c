@@ -177,6 +177,16 @@ static int ct_write(collection_tracker *t, floe_world *w) {
                                     t->path, strerror(errno));
     }
     const floe_collection_stats *st = &t->last;
+    {
+        /* a NaN or infinity is never written: the row is refused, naming the value */
+        static const char *const what[] = {"sxx", "syy", "szz", "sxy", "sxz", "syz", "coordination", "volume"};
+        const double val[] = {st->sigma[0], st->sigma[1], st->sigma[2], st->sigma[3], st->sigma[4],
+                              st->sigma[5], st->coordination, st->volume};
+        for (int q = 0; q < 8; q++)
+            if (!isfinite(val[q]))
+                return floe_world_error(w, FLOE_EUNSTABLE, "collection tracker: %s is %g at t = %g s (step %ld): "
+                                        "not written to %s", what[q], val[q], w->time, w->step, t->path);
+    }
     fprintf(t->f, "%.17g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%d,%d,%.16g\n", st->time,
             st->sigma[0], st->sigma[1], st->sigma[2], st->sigma[3], st->sigma[4], st->sigma[5],
             st->coordination, st->contacts, st->wall_contacts, st->volume);

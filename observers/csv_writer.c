@@ -32,6 +32,16 @@ static int cw_write(csv_writer *t, floe_world *w) {
                                     strerror(errno));
     }
     const floe_particles *p = &w->p;
+    /* a NaN or infinity is never written: the frame is refused, naming the value */
+    for (int i = 0; i < p->n; i++) {
+        static const char *const what[4] = {"position", "velocity", "angular velocity", "force"};
+        const double *src[4] = {p->x + 3 * i, p->v + 3 * i, p->w + 3 * i, p->f + 3 * i};
+        for (int q = 0; q < 4; q++)
+            if (!isfinite(src[q][0]) || !isfinite(src[q][1]) || !isfinite(src[q][2]))
+                return floe_world_error(w, FLOE_EUNSTABLE, "csv writer: particle %d has a non-finite %s "
+                                        "(%g, %g, %g) at t = %g s (step %ld): frame not written to %s", i,
+                                        what[q], src[q][0], src[q][1], src[q][2], w->time, w->step, t->path);
+    }
     for (int i = 0; i < p->n; i++) {
         const double *x = p->x + 3 * i, *v = p->v + 3 * i, *om = p->w + 3 * i, *f = p->f + 3 * i;
         double r = isfinite(p->radius[i]) ? p->radius[i] : 0.0;

@@ -32,6 +32,17 @@ static int et_write(energy_tracker *t, floe_world *w) {
     }
     floe_energy e = floe_world_energy(w);
     double err = floe_world_energy_balance_error(w);
+    {
+        /* a NaN or infinity is never written: the row is refused, naming the value */
+        static const char *const what[] = {"kinetic_trans", "kinetic_rot", "elastic", "work_body",
+                                           "work_boundary", "dissipated", "initial", "balance_error"};
+        const double val[] = {e.kinetic_trans, e.kinetic_rot, e.elastic, e.work_body, e.work_boundary,
+                              e.dissipated, e.initial, err};
+        for (int q = 0; q < 8; q++)
+            if (!isfinite(val[q]))
+                return floe_world_error(w, FLOE_EUNSTABLE, "energy tracker: %s is %g at t = %g s (step %ld): "
+                                        "not written to %s", what[q], val[q], w->time, w->step, t->path);
+    }
     fprintf(t->f, "%.17g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g\n", w->time,
             e.kinetic_trans, e.kinetic_rot, e.elastic, e.work_body, e.work_boundary,
             e.dissipated, e.initial, err);

@@ -54,6 +54,19 @@ static int pt_write(particle_tracker *t, floe_world *w) {
     FLOE_TRY(pt_check_ids(t, w));
     FLOE_TRY(pt_reopen(t, w));
     const floe_particles *p = &w->p;
+    /* a NaN or infinity is never written: the row is refused, naming the value */
+    for (int k = 0; k < t->n; k++) {
+        static const char *const what[] = {"position", "velocity", "angular velocity", "orientation", "force"};
+        static const int len[] = {3, 3, 3, 4, 3};
+        int i = t->ids[k];
+        const double *src[] = {p->x + 3 * i, p->v + 3 * i, p->w + 3 * i, p->q + 4 * i, p->f + 3 * i};
+        for (int q = 0; q < 5; q++)
+            for (int c = 0; c < len[q]; c++)
+                if (!isfinite(src[q][c]))
+                    return floe_world_error(w, FLOE_EUNSTABLE, "particle tracker: particle %d has a non-finite "
+                                            "%s (component %d = %g) at t = %g s (step %ld): not written to %s",
+                                            i, what[q], c, src[q][c], w->time, w->step, t->path);
+    }
     for (int k = 0; k < t->n; k++) {
         int i = t->ids[k];
         const double *x = p->x + 3 * i, *v = p->v + 3 * i, *om = p->w + 3 * i;

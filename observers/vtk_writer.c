@@ -197,6 +197,22 @@ static void fill_array(const vtk_writer *v, const floe_world *w, int k, int m, v
             f64[(size_t)a * nc + c] = src ? src[(size_t)v->idx[a] * nc + c] : 0.0;
 }
 
+/* First non-finite value of a Float64 array filled by fill_array: its point (index into
+ * v->idx) or -1. A NaN or infinity is never written: the frame is refused instead. */
+static int first_non_finite(int k, int m, const void *buf) {
+    if (arrays[k].type != T_FLOAT64) return -1;
+    const double *f64 = buf;
+    size_t n = (size_t)m * (size_t)arrays[k].ncomp;
+    for (size_t e = 0; e < n; e++)
+        if (!isfinite(f64[e])) return (int)(e / (size_t)arrays[k].ncomp);
+    return -1;
+}
+
+static int non_finite_error(floe_world *w, const vtk_writer *v, int k, int a) {
+    return floe_world_error(w, FLOE_EUNSTABLE, "vtk writer: particle %d has a non-finite %s at t = %g s "
+                            "(step %ld): frame not written", v->idx[a], arrays[k].name, w->time, w->step);
+}
+
 static void write_ascii_values(FILE *f, int type, int ncomp, int m, const void *buf) {
     const int32_t *i32 = buf;
     const int64_t *i64 = buf;
@@ -307,6 +323,15 @@ static int vw_write(vtk_writer *v, floe_world *w) {
         v->times_cap = nc;
     }
 
+    /* the state arrays are checked before a file is opened (the derived PD arrays as they
+     * are computed) */
+    static const int state_arrays[] = {A_RADIUS, A_VELOCITY, A_ANGVEL, A_FORCE, A_TORQUE, A_ORIENT, A_POINTS};
+    for (size_t q = 0; q < sizeof state_arrays / sizeof *state_arrays; q++) {
+        fill_array(v, w, state_arrays[q], m, v->buf);
+        int a = first_non_finite(state_arrays[q], m, v->buf);
+        if (a >= 0) return non_finite_error(w, v, state_arrays[q], a);
+    }
+
     int ascii = v->ascii || m == 0;
     char *path = make_path(v, 1, v->frames, ".vtu"), *tmp = make_path(v, 1, v->frames, ".vtu.tmp");
     if (!path || !tmp) {
@@ -345,6 +370,14 @@ static int vw_write(vtk_writer *v, floe_world *w) {
         if (ascii) {
             fputs(" format=\"ascii\">\n", f);
             fill_array(v, w, k, m, v->buf);
+            int bad = first_non_finite(k, m, v->buf);
+            if (bad >= 0) {
+                fclose(f);
+                remove(tmp);
+                free(path);
+                free(tmp);
+                return non_finite_error(w, v, k, bad);
+            }
             write_ascii_values(f, a->type, a->ncomp, m, v->buf);
             fputs("        </DataArray>\n", f);
         } else {
@@ -360,6 +393,14 @@ static int vw_write(vtk_writer *v, floe_world *w) {
             const array_desc *a = &arrays[k];
             uint64_t nbytes = (uint64_t)m * (uint64_t)a->ncomp * type_size(a->type);
             fill_array(v, w, k, m, v->buf);
+            int bad = first_non_finite(k, m, v->buf);
+            if (bad >= 0) {
+                fclose(f);
+                remove(tmp);
+                free(path);
+                free(tmp);
+                return non_finite_error(w, v, k, bad);
+            }
             fwrite(&nbytes, sizeof nbytes, 1, f);
             fwrite(v->buf, 1, (size_t)nbytes, f);
         }

@@ -398,6 +398,7 @@ static void test_bad(void) {
     t.nt -= 2; /* the last side face gone */
     const char *open = write_stl("open_cube.stl", &t);
     expect_bad(open, "decompose", "open", "not closed");
+    expect_bad(open, "hull", "open", "not closed"); /* hull mode refuses open meshes too (docs/scene-format.md) */
 
     tmesh x = {0};
     const double t1[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
@@ -419,7 +420,7 @@ static void test_bad(void) {
     addt(&z, p0, p1, p2), addt(&z, p1, p2, p3), addt(&z, p0, p2, p3);
     const char *zf = write_obj("zero_area.obj", &z);
     expect_bad(zf, "decompose", "degenerate", "zero area");
-    expect_bad(zf, "hull", "zero volume", "collinear");
+    expect_bad(zf, "hull", "zero volume", "zero area");
 
     const char *empty = write_raw("empty.stl", "", 0);
     expect_bad(empty, "hull", "empty", "no triangles");

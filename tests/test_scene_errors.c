@@ -282,7 +282,9 @@ static void test_packing_errors(void)
     expect_error("overlapping lattice", t, loc_of(t, "0.0015", 0), "spacing", "overlap");
     t = BASE_MATS "bodies:\n  - {packing: random, shape: {sphere: {radius: 0.001}}, material: glass, "
                   "region: {min: [0, 0, 0], max: [0.01, 0.01, 0.01]}, count: 1000, max_tries: 20000}\n";
-    expect_error("random cannot fit", t, loc_of(t, "1000", 0), "could only place", NULL);
+    expect_error("random cannot fit", t, loc_of(t, "1000", 0), "cannot fit", NULL);
+    t = edit(t, "count: 1000", "count: 100");
+    expect_error("random runs out of tries", t, loc_of(t, "100,", 0), "could only place", "raise max_tries");
     t = BASE_MATS "bodies:\n  - {packing: random, shape: {sphere: {radius: 0.001}}, material: glass, "
                   "region: {min: [0, 0, 0], max: [0.01, 0.0, 0.01]}, count: 10}\n";
     expect_error("empty region", t, NULL, "max must exceed min", NULL);
