@@ -2422,7 +2422,23 @@ static int sc_parse_bonds(sc *s, struct fy_node *seq, struct fy_node *key)
 
 static const char *const sc_root_keys[] = {"name", "description", "dimension", "time", "gravity",
                                            "neighbor", "contact_detection", "mass_2d", "materials", "laws",
-                                           "walls", "bodies", "peridynamics", "outputs", "bonds", NULL};
+                                           "walls", "bodies", "peridynamics", "outputs", "bonds", "checks", NULL};
+
+/* checks: {energy: stop | warn | off, energy_tolerance} (the energy watchdog, floe_world.h) */
+static int sc_checks(sc *s, const sc_map *r, floe_world_def *def)
+{
+    static const char *const ck_keys[] = {"energy", "energy_tolerance", NULL};
+    static const char *const modes[] = {"stop", "warn", "off", NULL};
+    struct fy_node *ck, *cv = sc_get(r, "checks", &ck);
+    if (!cv) return FLOE_OK;
+    sc_map cm;
+    FLOE_TRY(sc_map_open(s, cv == ck ? NULL : cv, ck, "checks", ck_keys, &cm));
+    FLOE_TRY(sc_enum(s, &cm, "energy", modes, FLOE_CHECK_STOP, &def->energy_check));
+    FLOE_TRY(sc_num(s, &cm, "energy_tolerance", 0, def->energy_check_tol, &def->energy_check_tol));
+    if (!(def->energy_check_tol > 0 && def->energy_check_tol < 1))
+        return sc_range(s, &cm, "energy_tolerance", "in (0, 1) (fraction of the energy scale)", def->energy_check_tol);
+    return FLOE_OK;
+}
 
 /* time.integrator, time.adaptive, time.pd_dem (docs/scene-format.md, docs/integrators.md) */
 static int sc_time_integration(sc *s, const sc_map *tm, floe_world_def *def)
@@ -2544,6 +2560,7 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
         if (leaf < 1 || leaf > 1024) return sc_range(s, &nm, "leaf_size", "in [1, 1024]", (double)leaf);
         def.leaf_size = (int)leaf;
     }
+    FLOE_TRY(sc_checks(s, &r, &def));
     if (sc_has(&r, "mass_2d")) {
         if (s->dim != 2)
             return sc_fail(s, FLOE_EINVAL, sc_get(&r, "mass_2d", NULL),
