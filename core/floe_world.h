@@ -50,6 +50,10 @@ typedef struct floe_world_def {
     /* energy watchdog (floe_world_set_energy_check below) */
     int energy_check;         /* floe_energy_check_mode (FLOE_CHECK_STOP) */
     double energy_check_tol;  /* fraction of the energy scale that may be created (0 = 0.05) */
+    /* accuracy target (issue 10 C): relative error of the coefficient of restitution of a
+     * collision; > 0 caps the automatic step so that the error model of the contact laws
+     * (floe_dt_estimates.predicted_error) stays below it; 0 = off */
+    double accuracy;
 } floe_world_def;
 
 /* What the energy watchdog does when energy is created beyond the tolerance: a contact or
@@ -163,6 +167,13 @@ typedef struct floe_dt_estimates {
     double critical_contact;      /* contact + motion kinds: the DEM step of a staggered scheme */
     double critical_pd;           /* PD nodal: the PD step of a staggered scheme */
     double v_expected;            /* relative speed used by the impact, motion and Hertz kinds, m/s */
+    /* restitution error model (docs/models.md, "Accuracy target"): the relative error of e
+     * of a collision is at most A(e) / N^2 for the linear laws (N = damped collision time /
+     * dt) and A(e) / N for Hertz-Mindlin (N = Hertz time / dt); over every law and particle
+     * the worst is predicted_error(dt) = max(err1 dt, err2 dt^2) */
+    double err1, err2;            /* 1/s and 1/s^2 (0: no damped law) */
+    double accuracy_dt;           /* the largest step that meets def.accuracy (INFINITY: none) */
+    double predicted_error;       /* at the chosen step */
 } floe_dt_estimates;
 /* Fill *out (prepares the world if needed). */
 int floe_world_dt_estimates(floe_world *w, floe_dt_estimates *out);

@@ -2327,7 +2327,13 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
     sc_cat(&b, "time step:  critical dt estimate %.4g s (%s, particle %d); dt %.4g s (%s)\n", dtc,
            est.limiting >= 0 ? floe_dt_kind_name(est.limiting) : "none", est.limiting_particle, dt,
            s->dt_auto ? "automatic" : "given");
-    if (s->dt_auto) sc_cat(&b, "            = safety %g x critical\n", s->safety);
+    if (s->dt_auto && w->def.accuracy > 0 && est.accuracy_dt <= dt)
+        sc_cat(&b, "            = the step for time.accuracy %g (safety %g x critical would be %.4g s)\n",
+               w->def.accuracy, s->safety, s->safety * dtc);
+    else if (s->dt_auto) sc_cat(&b, "            = safety %g x critical\n", s->safety);
+    if (est.err1 > 0 || est.err2 > 0)
+        sc_cat(&b, "            predicted restitution error %.2g (relative, the laws' error model)%s\n",
+               est.predicted_error, w->def.accuracy > 0 ? "" : "; time.accuracy sets a target");
     else if (dt > dtc) sc_cat(&b, "            WARNING: dt is above the critical estimate "
                                "(allow_unstable_dt: true)\n");
     sc_cat(&b, "integrator: %s", floe_integrator_name(w->def.integrator));
@@ -2495,7 +2501,7 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
                     floe_scene_info *info)
 {
     static const char *const time_keys[] = {"duration", "dt", "safety", "allow_unstable_dt", "integrator",
-                                            "adaptive", "pd_dem", NULL};
+                                            "adaptive", "pd_dem", "accuracy", NULL};
     static const char *const nb_keys[] = {"skin", "leaf_size", NULL};
     static const char *const mass2d[] = {"volume", "area", NULL};
     sc_map r;
@@ -2539,6 +2545,9 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     FLOE_TRY(sc_num(s, &tm, "safety", 0, def.dt_safety > 0 ? def.dt_safety : 0.2, &s->safety));
     if (!(s->safety > 0 && s->safety <= 1)) return sc_range(s, &tm, "safety", "in (0, 1]", s->safety);
     FLOE_TRY(sc_bool(s, &tm, "allow_unstable_dt", 0, &def.allow_unstable_dt));
+    FLOE_TRY(sc_num(s, &tm, "accuracy", 0, 0.0, &def.accuracy));
+    if (sc_has(&tm, "accuracy") && !(def.accuracy > 0 && def.accuracy < 0.5))
+        return sc_range(s, &tm, "accuracy", "in (0, 0.5) (relative error of the restitution)", def.accuracy);
     def.dt = s->dt_given;
     def.dt_safety = s->safety;
     FLOE_TRY(sc_time_integration(s, &tm, &def));

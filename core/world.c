@@ -84,6 +84,7 @@ floe_world *floe_world_create(const floe_world_def *def, char *err, size_t errle
     else if (!isfinite(def->gravity[0] + def->gravity[1] + def->gravity[2])) bad = "gravity must be finite";
     else if (!floe_energy_check_name(def->energy_check)) bad = "energy_check must be stop, warn or off";
     else if (!(def->energy_check_tol >= 0 && def->energy_check_tol < 1)) bad = "energy_check_tol must be in [0, 1)";
+    else if (!(def->accuracy >= 0 && def->accuracy < 1)) bad = "accuracy must be in [0, 1) (0 = off)";
     if (bad) {
         if (err && errlen) snprintf(err, errlen, "invalid world definition: %s", bad);
         return NULL;
@@ -798,6 +799,7 @@ typedef struct dt_cache_entry {
     int mat;
     double m, r, rot;
     double packing, impact, sqrt_mk, hertz;
+    double err1, err2;        /* restitution error model (floe_dt_estimates) */
 } dt_cache_entry;
 #define DT_CACHE 1024
 
@@ -805,6 +807,7 @@ static void particle_contact_estimates(const floe_world *w, dt_cache_entry *e, d
     const double C = w->def.dim == 3 ? 8.0 : 6.0, nc = w->def.dim == 3 ? 12.0 : 6.0;
     const double m = e->m, R = e->r, rot = e->rot;
     e->packing = e->impact = e->sqrt_mk = e->hertz = INFINITY;
+    e->err1 = e->err2 = 0;
     for (int m2 = 0; m2 < w->nmats; m2++) {
         const floe_contact_law *law = w->laws[e->mat * w->nmats + m2];
         if (!law) continue;
@@ -827,6 +830,22 @@ static void particle_contact_estimates(const floe_world *w, dt_cache_entry *e, d
                 double es = ((const floe_hertz_mindlin_law *)law)->e_star;
                 double th = 2.87 * pow(me * me / (re * es * es * vrel), 0.2);
                 if (th < e->hertz) e->hertz = th;
+                /* restitution error ~ A(e) / N, N = th / dt (first order: the damping grows
+                 * as d^(1/4) from the onset; tests/test_restitution_onset.c) */
+                double er = ((const floe_hertz_mindlin_law *)law)->restitution;
+                double A = 3.5 * pow(1 - er, 1.5) + 0.02;
+                if (A / th > e->err1) e->err1 = A / th;
+            }
+            if (law->klass == &floe_linear_law_class) {
+                /* ~ A(e) / N^2, N = pi / w_d / dt (the dashpot's onset and release treated in
+                 * contact/linear_law.c) */
+                const floe_linear_law *ll = (const floe_linear_law *)law;
+                double kk = ll->kn, z = ll->gn / (2 * sqrt(kk * me));
+                if (kk > 0 && z < 1) {
+                    double tc = M_PI / (sqrt(kk / me) * sqrt(1 - z * z));
+                    double er = floe_linear_restitution(kk, ll->gn, me), A = 3 + 12 * (1 - er) * (1 - er);
+                    if (A / (tc * tc) > e->err2) e->err2 = A / (tc * tc);
+                }
             }
         }
     }
@@ -891,7 +910,7 @@ static int estimate_dt(floe_world *w) {
         const double *I = p->inertia + 3 * i;
         double imin = w->def.dim == 2 ? I[2] : fmin(I[0], fmin(I[1], I[2]));
         double rot = imin > 0 ? fmax(1.0, 1 + p->mass[i] * p->radius[i] * p->radius[i] / imin) : 1.0;
-        dt_cache_entry key = {p->material[i], p->mass[i], p->radius[i], rot, 0, 0, 0, 0};
+        dt_cache_entry key = {p->material[i], p->mass[i], p->radius[i], rot, 0, 0, 0, 0, 0, 0};
         unsigned long long hsh = (unsigned long long)key.mat * 0x9E3779B97F4A7C15ull;
         const double vals[3] = {key.m, key.r, key.rot};
         for (int k = 0; k < 3; k++) {
@@ -908,6 +927,8 @@ static int estimate_dt(floe_world *w) {
         dt_note(d, FLOE_DT_CONTACT_IMPACT, e->impact, i);
         dt_note(d, FLOE_DT_DEM_SQRT_MK, e->sqrt_mk, i);
         dt_note(d, FLOE_DT_HERTZ, e->hertz, i);
+        if (e->err1 > d->err1) d->err1 = e->err1;
+        if (e->err2 > d->err2) d->err2 = e->err2;
         double mine = fmin(e->packing, e->impact);
         /* motion: no particle may move more than half its radius in a step (the stability
          * check of the step stops the run past that) */
@@ -967,6 +988,12 @@ static int estimate_dt(floe_world *w) {
         }
     d->critical_contact = fmin(d->dt[FLOE_DT_CONTACT_PACKING], fmin(d->dt[FLOE_DT_CONTACT_IMPACT], d->dt[FLOE_DT_MOTION]));
     d->critical_pd = d->dt[FLOE_DT_PD_NODAL];
+    d->accuracy_dt = INFINITY;
+    if (w->def.accuracy > 0) {
+        const double a = w->def.accuracy;
+        if (d->err1 > 0) d->accuracy_dt = a / d->err1;
+        if (d->err2 > 0) d->accuracy_dt = fmin(d->accuracy_dt, sqrt(a / d->err2));
+    }
     w->dt_crit = d->critical;
     return FLOE_OK;
 }
@@ -1027,7 +1054,9 @@ static int choose_dt(floe_world *w) {
         if (!isfinite(crit))
             return floe_world_error(w, FLOE_EINVAL, "automatic time step: no contact law to estimate it from; give dt");
         w->dt = d->dt_safety * crit;
+        if (d->accuracy > 0 && e->accuracy_dt < w->dt) w->dt = e->accuracy_dt; /* time.accuracy */
     }
+    w->dte.predicted_error = fmax(e->err1 * w->dt, e->err2 * w->dt * w->dt);
     w->pd_sub = w->pd_every = 1;
     if (st) {
         const double pdc = e->critical_pd;
