@@ -2331,11 +2331,11 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
         sc_cat(&b, "            = the step for time.accuracy %g (safety %g x critical would be %.4g s)\n",
                w->def.accuracy, s->safety, s->safety * dtc);
     else if (s->dt_auto) sc_cat(&b, "            = safety %g x critical\n", s->safety);
+    else if (dt > dtc) sc_cat(&b, "            WARNING: dt is above the critical estimate "
+                               "(allow_unstable_dt: true)\n");
     if (est.err1 > 0 || est.err2 > 0)
         sc_cat(&b, "            predicted restitution error %.2g (relative, the laws' error model)%s\n",
                est.predicted_error, w->def.accuracy > 0 ? "" : "; time.accuracy sets a target");
-    else if (dt > dtc) sc_cat(&b, "            WARNING: dt is above the critical estimate "
-                               "(allow_unstable_dt: true)\n");
     sc_cat(&b, "integrator: %s", floe_integrator_name(w->def.integrator));
     if (w->def.adaptive)
         sc_cat(&b, ", adaptive steps in [%.4g, %.4g] s (velocity tolerance %g, penetration tolerance %g)",

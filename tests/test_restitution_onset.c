@@ -153,6 +153,13 @@ static void test_accuracy_key(void) {
               "the check summary gives the step's reason and the predicted error:\n%s", info.summary);
         floe_world_destroy(w);
     }
+    /* a given step above the critical estimate: the warning and the predicted error both */
+    snprintf(text, sizeof text, scene, "0.1, dt: 1e-5, allow_unstable_dt: true");
+    rc = floe_scene_load_ex("<accuracy>", text, NULL, 0, &w, &info, err, sizeof err);
+    CHECK(rc == FLOE_OK && strstr(info.summary, "WARNING: dt is above") &&
+              strstr(info.summary, "predicted restitution error"),
+          "a given dt above critical: warning and predicted error in the summary (%s)", rc ? err : info.summary);
+    if (rc == FLOE_OK) floe_world_destroy(w);
     snprintf(text, sizeof text, scene, "0.7");
     rc = floe_scene_load_ex("<accuracy>", text, NULL, 0, &w, &info, err, sizeof err);
     printf("  %s\n", err);
