@@ -180,6 +180,16 @@ static int cmd_run(const char *scene, const char *outdir, int quiet)
                    ds.evaluations, ds.lp, ds.admm, ds.iterations_median, ds.iterations_p99,
                    ds.iterations_p99 >= FLOE_DETECT_HIST - 1 ? "+" : "");
         printf("  energy balance err: %.3g (relative)\n", floe_world_energy_balance_error(w));
+        floe_dt_estimates dte;
+        if (floe_world_dt_estimates(w, &dte) == FLOE_OK && (dte.err1 > 0 || dte.err2 > 0))
+            printf("  restitution error:  %.2g predicted at dt %.4g s%s\n", dte.predicted_error, floe_world_dt(w),
+                   w->def.accuracy > 0 ? " (time.accuracy)" : "");
+        floe_energy_check_state ec;
+        floe_world_energy_check(w, &ec);
+        if (ec.mode == FLOE_CHECK_OFF) printf("  energy watchdog:    off\n");
+        else printf("  energy watchdog:    %s (tolerance %.3g of the energy scale), largest creation %.2g%s\n",
+                    floe_energy_check_name(ec.mode), ec.tolerance, ec.created,
+                    ec.tripped_step >= 0 ? ", TRIPPED (warning above)" : "");
         printf("  outputs in:         %s\n", outdir);
     }
     floe_world_destroy(w);

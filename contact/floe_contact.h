@@ -8,12 +8,14 @@
 
 #include "floe_base.h"
 
-#define FLOE_MAX_HISTORY 8   /* doubles of per-contact state kept per pair */
+#define FLOE_MAX_HISTORY 9   /* doubles of per-contact state kept per pair */
 #define FLOE_LAW_HISTORY 4   /* of which a law may use history[0 .. 3]; the world keeps the
-                                previous force (slots 4-6) and stored energy (slot 7) there
-                                for its energy ledger */
+                                previous force (slots 4-6), stored energy (slot 7) and the
+                                energy dissipated since the contact began (slot 8) there for
+                                its energy ledger and watchdog */
 #define FLOE_FORCE_SLOT 4
 #define FLOE_ENERGY_SLOT 7
+#define FLOE_DISS_SLOT 8
 
 typedef struct floe_material {
     char name[64];

@@ -47,7 +47,30 @@ typedef struct floe_world_def {
     int pd_substeps;          /* staggered: PD sub-steps per step (dt_PD = dt / m), >= 1;
                                  0 = automatic (the integer ratio of the critical steps) */
     int pd_every;             /* staggered: PD updated every k-th step (dt_PD = k dt), >= 1 */
+    /* energy watchdog (floe_world_set_energy_check below) */
+    int energy_check;         /* floe_energy_check_mode (FLOE_CHECK_STOP) */
+    double energy_check_tol;  /* fraction of the energy scale that may be created (0 = 0.05) */
+    /* accuracy target (issue 10 C): relative error of the coefficient of restitution of a
+     * collision; > 0 caps the automatic step so that the error model of the contact laws
+     * (floe_dt_estimates.predicted_error) stays below it; 0 = off */
+    double accuracy;
 } floe_world_def;
+
+/* What the energy watchdog does when energy is created beyond the tolerance: a contact or
+ * a PD body whose dissipation since it began is negative by more than tol x the energy
+ * scale, the ledger's total dissipation below -tol x scale, or the balance error (current
+ * + dissipated - initial - work) above +tol x scale, checked after every step; the scale is
+ * the largest kinetic + elastic + |work_body| + |work_boundary| seen so far.
+ * STOP: floe_world_step fails with FLOE_EUNSTABLE and a message naming the step, the pair
+ * or PD body and the likely cause (floe_world_run flushes the observers first); WARN: the
+ * message goes to stderr once and the run goes on; OFF: nothing is checked. */
+typedef enum floe_energy_check_mode {
+    FLOE_CHECK_STOP = 0,
+    FLOE_CHECK_WARN = 1,
+    FLOE_CHECK_OFF = 2
+} floe_energy_check_mode;
+/* "stop", "warn", "off" (NULL out of range) */
+const char *floe_energy_check_name(int mode);
 
 /* Time integrators for the particles (docs/integrators.md). All are explicit and second
  * order; state objects always use RK2. */
@@ -144,6 +167,13 @@ typedef struct floe_dt_estimates {
     double critical_contact;      /* contact + motion kinds: the DEM step of a staggered scheme */
     double critical_pd;           /* PD nodal: the PD step of a staggered scheme */
     double v_expected;            /* relative speed used by the impact, motion and Hertz kinds, m/s */
+    /* restitution error model (docs/models.md, "Accuracy target"): the relative error of e
+     * of a collision is at most A(e) / N^2 for the linear laws (N = damped collision time /
+     * dt) and A(e) / N for Hertz-Mindlin (N = Hertz time / dt); over every law and particle
+     * the worst is predicted_error(dt) = max(err1 dt, err2 dt^2) */
+    double err1, err2;            /* 1/s and 1/s^2 (0: no damped law) */
+    double accuracy_dt;           /* the largest step that meets def.accuracy (INFINITY: none) */
+    double predicted_error;       /* at the chosen step */
 } floe_dt_estimates;
 /* Fill *out (prepares the world if needed). */
 int floe_world_dt_estimates(floe_world *w, floe_dt_estimates *out);
@@ -273,5 +303,18 @@ typedef struct floe_energy {
 floe_energy floe_world_energy(const floe_world *w);
 /* Relative error of the balance initial + work = current + dissipated. */
 double floe_world_energy_balance_error(const floe_world *w);
+
+/* Energy watchdog (floe_energy_check_mode above): set the mode and tolerance (tol 0 = the
+ * default 0.05; FLOE_EINVAL for a mode out of range or tol not in [0, 1)), and its state. */
+int floe_world_set_energy_check(floe_world *w, int mode, double tol);
+typedef struct floe_energy_check_state {
+    int mode;                 /* floe_energy_check_mode */
+    double tolerance;         /* fraction of the scale */
+    double scale;             /* the energy scale, J */
+    double created;           /* largest fraction of the scale found created so far (>= 0) */
+    long tripped_step;        /* the step at which the tolerance was first passed (-1: never) */
+    const char *message;      /* the diagnosis at that step ("" when none) */
+} floe_energy_check_state;
+int floe_world_energy_check(const floe_world *w, floe_energy_check_state *out);
 
 #endif

@@ -27,6 +27,14 @@ static int push_contact(floe_world *w, const floe_contact *c, const floe_contact
     return FLOE_OK;
 }
 
+/* Energy watchdog: a contact (i, j) that received the work d (J) since it began (its
+ * dissipation plus its stored energy); the most negative of this evaluation and of the run
+ * are kept for core/world.c energy_watchdog. */
+static void life_dissipation(floe_world *w, int i, int j, double d) {
+    if (d < w->wd_pair_min) { w->wd_pair_min = d; w->wd_pair_i = i; w->wd_pair_j = j; }
+    if (d < w->wd_worst) { w->wd_worst = d; w->wd_worst_i = i; w->wd_worst_j = j; }
+}
+
 /* Contact and body forces (the DEM and coupling forces of 000 eq 40 with the body forces
  * m b): gravity, external forces, the body-force callback, every contact of the list.
  * Zeroes p->f and p->t first. */
@@ -74,6 +82,7 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         if (stepping) w->energy.work_body += wb;
     }
     w->ncontacts = 0;
+    if (stepping) w->wd_pair_min = 0; /* the watchdog's worst contact of this evaluation */
     double elastic = 0, diss = 0, wgrow = 0;
     const int any_growth = w->nstates > 0; /* only state objects set rdot */
     floe_neighbor_list *nl = &w->nl;
@@ -146,7 +155,9 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
                 if (stepping) {
                     double vr[3];
                     floe_v3_sub(vr, p->v + 3 * i, p->v + 3 * j);
-                    diss += hist[FLOE_ENERGY_SLOT] - 0.5 * floe_v3_dot(hist + FLOE_FORCE_SLOT, vr) * w->dt;
+                    double dk = hist[FLOE_ENERGY_SLOT] - 0.5 * floe_v3_dot(hist + FLOE_FORCE_SLOT, vr) * w->dt;
+                    diss += dk;
+                    life_dissipation(w, i, j, hist[FLOE_DISS_SLOT] + dk);
                 }
                 memset(hist, 0, FLOE_MAX_HISTORY * sizeof(double));
                 nl->touching[k] = 0;
@@ -223,7 +234,14 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
                 wc += wg;
                 wgrow += wg;
             }
-            diss += wc - (res.energy - hist[FLOE_ENERGY_SLOT]);
+            double dk = wc - (res.energy - hist[FLOE_ENERGY_SLOT]);
+            diss += dk;
+            hist[FLOE_DISS_SLOT] += dk;
+            /* the watchdog reads the work done on the contact since it began, dissipation +
+             * stored energy: negative when it gave back more than it took (robust to a law
+             * whose stored energy is not the potential of its force) */
+            double wk = hist[FLOE_DISS_SLOT] + res.energy;
+            if (wk < w->wd_pair_min) life_dissipation(w, i, j, wk);
         }
         hist[FLOE_ENERGY_SLOT] = res.energy;
         memcpy(hist + FLOE_FORCE_SLOT, res.force, 3 * sizeof(double));
@@ -259,7 +277,11 @@ static int pd_bond_forces(floe_world *w, double *elastic_out, double *diss_out) 
                 p->f[3 * (size_t)(f0 + i) + a] += fa;
                 wk += (fa + fold[3 * i + a]) * p->v[3 * (size_t)(f0 + i) + a];
             }
-        if (stepping) diss += -0.5 * wk * w->dt - (e - w->pd_eold[b]);
+        if (stepping) {
+            double db = -0.5 * wk * w->dt - (e - w->pd_eold[b]);
+            diss += db;
+            if (b < w->pd_diss_n) w->pd_diss[b] += db; /* per body, for the energy watchdog */
+        }
         w->pd_eold[b] = e;
         elastic += e;
         off += np;

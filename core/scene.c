@@ -2681,9 +2681,15 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
     sc_cat(&b, "time step:  critical dt estimate %.4g s (%s, particle %d); dt %.4g s (%s)\n", dtc,
            est.limiting >= 0 ? floe_dt_kind_name(est.limiting) : "none", est.limiting_particle, dt,
            s->dt_auto ? "automatic" : "given");
-    if (s->dt_auto) sc_cat(&b, "            = safety %g x critical\n", s->safety);
+    if (s->dt_auto && w->def.accuracy > 0 && est.accuracy_dt <= dt)
+        sc_cat(&b, "            = the step for time.accuracy %g (safety %g x critical would be %.4g s)\n",
+               w->def.accuracy, s->safety, s->safety * dtc);
+    else if (s->dt_auto) sc_cat(&b, "            = safety %g x critical\n", s->safety);
     else if (dt > dtc) sc_cat(&b, "            WARNING: dt is above the critical estimate "
                                "(allow_unstable_dt: true)\n");
+    if (est.err1 > 0 || est.err2 > 0)
+        sc_cat(&b, "            predicted restitution error %.2g (relative, the laws' error model)%s\n",
+               est.predicted_error, w->def.accuracy > 0 ? "" : "; time.accuracy sets a target");
     sc_cat(&b, "integrator: %s", floe_integrator_name(w->def.integrator));
     if (w->def.adaptive)
         sc_cat(&b, ", adaptive steps in [%.4g, %.4g] s (velocity tolerance %g, penetration tolerance %g)",
@@ -2778,7 +2784,23 @@ static int sc_parse_bonds(sc *s, struct fy_node *seq, struct fy_node *key)
 
 static const char *const sc_root_keys[] = {"name", "description", "dimension", "time", "gravity",
                                            "neighbor", "contact_detection", "mass_2d", "materials", "laws",
-                                           "walls", "bodies", "peridynamics", "outputs", "bonds", NULL};
+                                           "walls", "bodies", "peridynamics", "outputs", "bonds", "checks", NULL};
+
+/* checks: {energy: stop | warn | off, energy_tolerance} (the energy watchdog, floe_world.h) */
+static int sc_checks(sc *s, const sc_map *r, floe_world_def *def)
+{
+    static const char *const ck_keys[] = {"energy", "energy_tolerance", NULL};
+    static const char *const modes[] = {"stop", "warn", "off", NULL};
+    struct fy_node *ck, *cv = sc_get(r, "checks", &ck);
+    if (!cv) return FLOE_OK;
+    sc_map cm;
+    FLOE_TRY(sc_map_open(s, cv == ck ? NULL : cv, ck, "checks", ck_keys, &cm));
+    FLOE_TRY(sc_enum(s, &cm, "energy", modes, FLOE_CHECK_STOP, &def->energy_check));
+    FLOE_TRY(sc_num(s, &cm, "energy_tolerance", 0, def->energy_check_tol, &def->energy_check_tol));
+    if (!(def->energy_check_tol > 0 && def->energy_check_tol < 1))
+        return sc_range(s, &cm, "energy_tolerance", "in (0, 1) (fraction of the energy scale)", def->energy_check_tol);
+    return FLOE_OK;
+}
 
 /* time.integrator, time.adaptive, time.pd_dem (docs/scene-format.md, docs/integrators.md) */
 static int sc_time_integration(sc *s, const sc_map *tm, floe_world_def *def)
@@ -2874,7 +2896,7 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
                     floe_scene_info *info)
 {
     static const char *const time_keys[] = {"duration", "dt", "safety", "allow_unstable_dt", "integrator",
-                                            "adaptive", "pd_dem", NULL};
+                                            "adaptive", "pd_dem", "accuracy", NULL};
     static const char *const nb_keys[] = {"skin", "leaf_size", NULL};
     static const char *const mass2d[] = {"volume", "area", NULL};
     sc_map r;
@@ -2918,6 +2940,9 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     FLOE_TRY(sc_num(s, &tm, "safety", 0, def.dt_safety > 0 ? def.dt_safety : 0.2, &s->safety));
     if (!(s->safety > 0 && s->safety <= 1)) return sc_range(s, &tm, "safety", "in (0, 1]", s->safety);
     FLOE_TRY(sc_bool(s, &tm, "allow_unstable_dt", 0, &def.allow_unstable_dt));
+    FLOE_TRY(sc_num(s, &tm, "accuracy", 0, 0.0, &def.accuracy));
+    if (sc_has(&tm, "accuracy") && !(def.accuracy > 0 && def.accuracy < 0.5))
+        return sc_range(s, &tm, "accuracy", "in (0, 0.5) (relative error of the restitution)", def.accuracy);
     def.dt = s->dt_given;
     def.dt_safety = s->safety;
     FLOE_TRY(sc_time_integration(s, &tm, &def));
@@ -2941,6 +2966,7 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
         if (leaf < 1 || leaf > 1024) return sc_range(s, &nm, "leaf_size", "in [1, 1024]", (double)leaf);
         def.leaf_size = (int)leaf;
     }
+    FLOE_TRY(sc_checks(s, &r, &def));
     if (sc_has(&r, "mass_2d")) {
         if (s->dim != 2)
             return sc_fail(s, FLOE_EINVAL, sc_get(&r, "mass_2d", NULL),

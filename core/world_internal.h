@@ -151,6 +151,19 @@ struct floe_world {
     double dt_lo, dt_hi;      /* adaptive: the bounds in use */
     double dt_cap;            /* adaptive: the step may not pass this (floe_world_run's end) */
     floe_step_stats st;
+    /* energy watchdog (core/world.c energy_watchdog): the dissipation of each PD body's
+     * bonds since it was added (npd), the contact with the most negative dissipation over
+     * its life at the last advancing evaluation (forces.c, reset there) and over the run */
+    double *pd_diss; int pd_diss_n;
+    double wd_pair_min; int wd_pair_i, wd_pair_j;
+    double wd_worst; int wd_worst_i, wd_worst_j;
+    double wd_scale;          /* the energy scale: largest K + elastic + |work| seen */
+    double wd_gscale;         /* its floor: sum of m |g| R over the free particles (prepare) */
+    double wd_shadow, wd_shadow0; /* energy of the last closing half kick, now and at prepare
+                                 (core/world.c shadow_term; 0 for RK2) */
+    double wd_created;        /* largest created fraction of the scale seen */
+    long wd_step;             /* step at which the tolerance was passed (-1: not yet) */
+    char wd_msg[512];
     /* beam bonds (contact/floe_beam.h, issue #5); NULL without bonds */
     struct floe_beam_set *beams;
 };

@@ -81,7 +81,7 @@ def main():
         rc, out, err = run([cli, "run", os.path.join(scenes, "tiny_run.yaml"), "-o", outdir], cwd=tmp)
         check(rc == 0, "run tiny: exit %d\n%s\n%s" % (rc, out, err))
         for w in ("steps:", "simulated time:", "wall time:", "particle-steps/s:", "contacts",
-                  "neighbour rebuilds:", "energy balance"):
+                  "neighbour rebuilds:", "energy balance", "energy watchdog:    stop (tolerance 0.05"):
             check(w in out, "run summary lacks %r:\n%s" % (w, out))
         m = re.search(r"steps:\s+(\d+)", out.split("run finished")[-1])
         check(m is not None and int(m.group(1)) == 500, "run: 500 steps expected:\n" + out)

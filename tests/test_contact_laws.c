@@ -276,12 +276,15 @@ int main(void)
             CHECK_NEAR(-floe_v3_dot(res.force, n), res.fn, 1e-12, "  normal component = Fn");
             CHECK(res.dissipation > 0.0, "slip should dissipate");
             /* the reset spring reproduces the capped force: a zero-length step with the same
-             * velocity gives the same force again */
+             * velocity gives the same tangential force again (the linear law's normal
+             * dashpot acts at the velocity of the step's end, so its Fn depends on dt and
+             * is larger at dt = 0: linear_law.c; the spring alone gives the capped force) */
             c.dt = 0.0;
             floe_contact_result res2;
             CHECK(law->klass->force(law, &c, hist, &res2) == FLOE_OK, "rc");
-            CHECK(vdiff(res2.force, res.force) <= 1e-12 * floe_v3_norm(res.force),
-                  "spring not consistent with the capped force");
+            double ft2[3];
+            tangential_part(ft2, res2.force, n);
+            CHECK(vdiff(ft2, ft) <= 1e-12 * floe_v3_norm(ft), "spring not consistent with the capped force");
             printf("  %s: Fn = %.6g, |Ft| = %.6g, slip step dissipation = %.3g J\n",
                    law->klass->name, res.fn, floe_v3_norm(ft), res.dissipation);
             /* below the cap: Ft = -ks s - gs vt (linear) */

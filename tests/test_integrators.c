@@ -99,6 +99,9 @@ static void test_energy(int integ) {
     const long steps_per_period = 32, periods = integ == FLOE_RK2 ? 100 : 2000;
     const double A = 1e-3, wdt = 2 * M_PI / steps_per_period, E0 = 0.5 * A * A;
     floe_world *w = osc_world(integ, wdt, &o, A);
+    /* RK2 creates energy here (that is what is measured): the energy watchdog would stop
+     * it once 5 % of the scale appeared; velocity Verlet and leapfrog run with it on */
+    if (integ == FLOE_RK2) floe_world_set_energy_check(w, FLOE_CHECK_OFF, 0);
     int rc = floe_world_prepare(w);
     double maxdev = 0, first = 0, last = 0, shadow0 = 0, shadow = 0;
     long nsteps = steps_per_period * periods;

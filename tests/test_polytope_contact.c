@@ -253,6 +253,9 @@ static double collide(int dim, double scale, double dt_frac, double *peak, char 
     /* impact parameter up to the sum of the radii: glancing corner hits included */
     double b = uni(-0.8, 0.8) * (ra + rb);
     for (int k = 0; k < 3; k++) xb[k] = 1.02 * (ra + rb) * u[k] + b * lat[k];
+    /* this test measures the energy error itself (the watchdog would stop the 1-3 % of
+     * deepest-point incidences that create more than 5 % at the default step) */
+    floe_world_set_energy_check(w, FLOE_CHECK_OFF, 0);
     int ia = add_body(w, ga, xa, qa, NULL, NULL), ib = add_body(w, gb, xb, qb, NULL, NULL);
     (void)ia;
     (void)ib;
