@@ -89,30 +89,8 @@ static int linear_force(const floe_contact_law *law_, const floe_contact *c, dou
     double diss = (Fn - fel) * vn * dt; /* damping force actually applied times vn dt */
 
     /* tangential */
-    double *s = hist;
-    floe_contact_rotate_history(s, c->n);
-    floe_v3_axpy(s, dt, c->vt);
-    double Ft[3] = {0.0, 0.0, 0.0};
-    floe_v3_axpy(Ft, -L->ks, s);
-    floe_v3_axpy(Ft, -L->gs, c->vt);
-    const double vt2 = floe_v3_dot(c->vt, c->vt);
-    const double limit = L->mu * fabs(Fn);
-    const double ft2 = floe_v3_dot(Ft, Ft);
-    if (ft2 > limit * limit) {
-        const double ratio = limit / sqrt(ft2);
-        floe_v3_scale(Ft, ratio);
-        if (L->ks > 0.0) {
-            const double e_before = 0.5 * L->ks * floe_v3_dot(s, s), minus_inv_ks = -1.0 / L->ks;
-            for (int k = 0; k < 3; ++k) s[k] = (Ft[k] + L->gs * c->vt[k]) * minus_inv_ks;
-            diss += L->gs * vt2 * dt + (e_before - 0.5 * L->ks * floe_v3_dot(s, s));
-        } else {
-            /* pure dashpot: only a fraction of it is applied */
-            floe_v3_set(s, 0.0, 0.0, 0.0);
-            diss += ratio * L->gs * vt2 * dt;
-        }
-    } else {
-        diss += L->gs * vt2 * dt;
-    }
+    double *s = hist, Ft[3];
+    floe_contact_coulomb(c, L->ks, L->gs, L->mu, Fn, s, Ft, &diss);
 
     for (int k = 0; k < 3; ++k) {
         out->force[k] = -Fn * c->n[k] + Ft[k];

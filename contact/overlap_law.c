@@ -15,32 +15,6 @@
 
 #include "floe_contact.h"
 
-void floe_contact_coulomb(const floe_contact *c, double ks, double gs, double mu, double Fn, double *s,
-                          double Ft[3], double *diss)
-{
-    const double dt = c->dt;
-    floe_contact_rotate_history(s, c->n);
-    floe_v3_axpy(s, dt, c->vt);
-    floe_v3_set(Ft, 0.0, 0.0, 0.0);
-    floe_v3_axpy(Ft, -ks, s);
-    floe_v3_axpy(Ft, -gs, c->vt);
-    const double vt2 = floe_v3_dot(c->vt, c->vt), limit = mu * fabs(Fn), ft2 = floe_v3_dot(Ft, Ft);
-    if (ft2 > limit * limit) {
-        const double ratio = limit / sqrt(ft2);
-        floe_v3_scale(Ft, ratio);
-        if (ks > 0.0) {
-            const double e_before = 0.5 * ks * floe_v3_dot(s, s), minus_inv_ks = -1.0 / ks;
-            for (int k = 0; k < 3; ++k) s[k] = (Ft[k] + gs * c->vt[k]) * minus_inv_ks;
-            *diss += gs * vt2 * dt + (e_before - 0.5 * ks * floe_v3_dot(s, s));
-        } else {
-            floe_v3_set(s, 0.0, 0.0, 0.0);
-            *diss += ratio * gs * vt2 * dt;
-        }
-    } else {
-        *diss += gs * vt2 * dt;
-    }
-}
-
 static int overlap_force(const floe_contact_law *law_, const floe_contact *c, double *hist, floe_contact_result *out)
 {
     const floe_overlap_law *L = (const floe_overlap_law *)law_;
