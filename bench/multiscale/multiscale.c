@@ -61,6 +61,9 @@ int main(int argc, char **argv) {
         fprintf(stderr, "unknown scheme %s\n", scheme);
         return 2;
     }
+    /* the bench measures the staggered schemes' error and cost, including the substep ratios
+     * that resonate (m >= 4): the energy watchdog would stop those runs (issue 10) */
+    d.energy_check = FLOE_CHECK_OFF;
     floe_world *w = floe_world_create(&d, NULL, 0);
     floe_material m = {"rubber", rho, E, nu};
     int mat = floe_world_add_material(w, &m);
