@@ -10,10 +10,45 @@
  * rest without rocking).
  * Normal:      Fn = ka |g| + gn vn, clamped at >= 0 (g = area_force);
  * Tangential:  the linear law's Coulomb spring (floe_contact_coulomb).
- * Output:      force on i = ka g - gn vn n + Ft (n = -g/|g|), energy ka I + ks |s|^2 / 2. */
+ * Couples:     rocking dashpot gn l^2/12 across n; twist about n (3D) by a torsion spring and
+ *              dashpot with a Coulomb limit (twist_couple).
+ * Output:      force on i = ka g - gn vn n + Ft (n = -g/|g|), energy ka I + ks |s|^2 / 2 + the
+ *              torsion spring's. */
 #include <stdlib.h>
 
 #include "floe_contact.h"
+
+/* Twist about the normal. One friction point cannot resist it; a contact patch can: its
+ * shear springs and dashpots (ks, gs per contact, spread over a square patch of area A =
+ * area_l2 in 3D) act on the relative twist angle theta (history slot) as a torsion spring
+ * ks A/6 and dashpot gs A/6 (polar moment A^2/6 of the square, per area), the couple limited
+ * by Coulomb friction over a disc of that area, mu Fn (2/3) sqrt(A/pi). Returns the couple on
+ * i about n in *Mt, the spring's energy in *et; adds its dissipation to *diss. */
+static void twist_couple(const floe_overlap_law *L, const floe_contact *c, double Fn, double wn, double *theta,
+                         double *Mt, double *et, double *diss)
+{
+    const double A = c->area_l2;
+    if (!(Fn > 0.0) || !(A > 0.0) || wn == 0.0) {
+        if (!(Fn > 0.0) && *theta != 0.0) { /* unloaded: the spring lets go */
+            *diss += 0.5 * L->ks * A / 6.0 * *theta * *theta;
+            *theta = 0.0;
+        }
+        if (*theta == 0.0) return;
+    }
+    const double kt = L->ks * A / 6.0, gt = L->gs * A / 6.0;
+    const double limit = L->mu * Fn * (2.0 / 3.0) * sqrt(A / M_PI);
+    *theta += wn * c->dt;
+    double m = -kt * *theta - gt * wn;
+    if (fabs(m) > limit) { /* slipping: the spring keeps what Coulomb allows */
+        const double e_before = 0.5 * kt * *theta * *theta;
+        m = m > 0 ? limit : -limit;
+        *theta = kt > 0.0 ? -(m + gt * wn) / kt : 0.0;
+        *diss += e_before - 0.5 * kt * *theta * *theta;
+    }
+    *diss += gt * wn * wn * c->dt;
+    *Mt = m;
+    *et = 0.5 * kt * *theta * *theta;
+}
 
 static int overlap_force(const floe_contact_law *law_, const floe_contact *c, double *hist, floe_contact_result *out)
 {
@@ -25,16 +60,21 @@ static int overlap_force(const floe_contact_law *law_, const floe_contact *c, do
     double Ft[3];
     floe_contact_coulomb(c, L->ks, L->gs, L->mu, Fn, hist, Ft, &diss);
     /* the dashpot acts at the resultant's point; distributed over a patch of size l it also
-     * resists rocking: couple gn l^2/12 (w_i - w_j) */
-    double cr = L->gn * c->area_l2 / 12.0;
+     * resists rocking: couple gn l^2/12 times the part of w_i - w_j across n */
+    const double wn = floe_v3_dot(c->wr, c->n), cr = L->gn * c->area_l2 / 12.0;
+    double wrock[3];
+    for (int k = 0; k < 3; ++k) wrock[k] = c->wr[k] - wn * c->n[k];
+    diss += cr * floe_v3_dot(wrock, wrock) * c->dt;
+    /* twist about n (3D; 0 in 2D, where w is normal to n): */
+    double Mt = 0.0, et = 0.0;
+    twist_couple(L, c, Fn, wn, hist + 3, &Mt, &et, &diss);
     for (int k = 0; k < 3; ++k) {
         /* elastic part along the exact gradient (and its couple); the dashpot along n */
         out->force[k] = L->ka * c->area_force[k] - (Fn - fel) * c->n[k] + Ft[k];
-        out->torque_i[k] = L->ka * c->area_couple[k] - cr * c->wr[k];
-        out->torque_j[k] = -L->ka * c->area_couple[k] + cr * c->wr[k];
+        out->torque_i[k] = L->ka * c->area_couple[k] - cr * wrock[k] + Mt * c->n[k];
+        out->torque_j[k] = -L->ka * c->area_couple[k] + cr * wrock[k] - Mt * c->n[k];
     }
-    diss += cr * floe_v3_dot(c->wr, c->wr) * c->dt;
-    out->energy = L->ka * c->area_energy + 0.5 * L->ks * floe_v3_dot(hist, hist);
+    out->energy = L->ka * c->area_energy + 0.5 * L->ks * floe_v3_dot(hist, hist) + et;
     out->dissipation = diss;
     out->fn = Fn;
     return FLOE_OK;
