@@ -5,7 +5,7 @@
  * per piece pair):
  *   sphere-sphere, sphere-plane, sphere-anything (the other shape's SDF and gradient at
  *   the sphere centre: exact for exact SDFs; spheres never enter ADMM);
- *   polytope-plane (per-vertex springs lumped into one contact), convex-plane (support
+ *   polytope-plane (the deepest vertex and a manifold of the next ones), convex-plane (support
  *   point: the shape's `support` or iterated projection);
  *   polytope-polytope (boxes, polyhedra, polygons): the exact deepest-point LP
  *   (contact/polytope_lp.c), warm-started from the previous basis;
@@ -118,15 +118,23 @@ static int sphere_sdf(floe_world *w, const shape_ref *a, const shape_ref *b, dou
  * moment sum d_v x_v), so the contact is conservative and a face resting on the plane gets
  * a central point and rests without rocking. For Hertz it is an approximation (a flat face
  * has no Hertz radius; R* = the bounding radius). */
+static void mf_insert2(double (*best)[4], int *nb, int cap, double d, const double x[3]);
+
+/* polytope a against plane b: the contact manifold of the vertices below the plane (as for
+ * polytope pairs, detect.c manifold): the deepest vertex is the contact point, the 2nd ..
+ * K-th deepest (K = 2 in 2D, 4 in 3D) carry elastic springs of the same law, so the stored
+ * energy is the sum of the law's energy over those vertices and the force its gradient */
 static int vertices_plane(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     (void)warm;
     int nv = 0;
     const double *V = a->g->klass->vertices(a->g, &nv);
-    double nw[3], rel[3], wsum = 0, acc[3] = {0, 0, 0};
+    double nw[3], rel[3];
     plane_normal(b, nw);
     floe_v3_sub(rel, a->x, b->x);
     if (floe_v3_dot(rel, nw) >= a->r) return 0;
-    const int is_box = a->kind == FLOE_GEOM_BOX;
+    const int is_box = a->kind == FLOE_GEOM_BOX, K = w->def.dim == 2 ? 2 : 4;
+    double best[4][4]; /* depth, x */
+    int nb = 0;
     for (int v = 0; v < nv; v++) {
         double X[3] = {V[3 * v], V[3 * v + 1], V[3 * v + 2]}, xw[3];
         if (w->def.dim == 2 && is_box) {
@@ -137,24 +145,35 @@ static int vertices_plane(floe_world *w, const shape_ref *a, const shape_ref *b,
         floe_v3_add(xw, xw, a->x);
         floe_v3_sub(rel, xw, b->x);
         double s = floe_v3_dot(rel, nw);
-        if (s < 0) {
-            wsum += -s;
-            floe_v3_axpy(acc, -s, xw);
-        }
+        if (s < 0) mf_insert2(best, &nb, K, -s, xw);
     }
-    if (wsum <= 0) return 0;
-    double pc[3] = {acc[0] / wsum, acc[1] / wsum, acc[2] / wsum};
-    floe_v3_sub(rel, pc, b->x);
-    double s = floe_v3_dot(rel, nw);
+    if (nb == 0) return 0;
     floe_v3_set(c->n, -nw[0], -nw[1], -nw[2]);
-    c->depth = wsum;
+    c->depth = best[0][0];
     for (int k = 0; k < 3; k++) {
-        c->x2[k] = pc[k] - s * nw[k];
-        c->x1[k] = pc[k];
+        c->x1[k] = best[0][1 + k];
+        c->x2[k] = best[0][1 + k] + c->depth * nw[k];
     }
     c->r_eff = a->r;
-    finish(c);
+    finish_at(c, c->x1); /* the force acts at the vertex: the gradient of its energy */
+    c->nextra = 0;
+    for (int k = 1; k < nb; k++) {
+        int e = c->nextra++;
+        c->extra_depth[e] = best[k][0];
+        floe_v3_copy(c->extra_point[e], best[k] + 1);
+        floe_v3_copy(c->extra_n[e], c->n);
+    }
     return 1;
+}
+
+static void mf_insert2(double (*best)[4], int *nb, int cap, double d, const double x[3]) {
+    int k;
+    if (*nb < cap) k = (*nb)++;
+    else if (d > best[cap - 1][0]) k = cap - 1;
+    else return;
+    while (k > 0 && best[k - 1][0] < d) { memcpy(best[k], best[k - 1], sizeof best[k]); k--; }
+    best[k][0] = d;
+    floe_v3_copy(best[k] + 1, x);
 }
 
 /* convex shape a against plane b: the support point in direction -n (the shape's own
@@ -364,6 +383,7 @@ int floe_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact *c) {
     make_ref(w, i, FLOE_SUB_A(sub), &a);
     make_ref(w, j, FLOE_SUB_B(sub), &b);
     if (!is_polytope(a.g) || !is_polytope(b.g)) return -FLOE_ENOTSUP;
+    c->nextra = 0; /* the overlap law has its own patch */
     double F[3] = {0, 0, 0}, M[3] = {0, 0, 0}, cen[3], meas, I, l2;
     if (w->def.dim == 2) {
         double PA[OV_MAX][2], PB[OV_MAX][2], LA[OV_MAX][3], LB[OV_MAX][3];
@@ -418,6 +438,80 @@ static void count_iterations(floe_world *w, int it) {
     w->det.hist[it < FLOE_DETECT_HIST - 1 ? it : FLOE_DETECT_HIST - 1]++;
 }
 
+/* The contact manifold of a polytope pair (docs/models.md, "Contact manifold"). The stored
+ * energy of a point law on two polytopes is
+ *     E = e(d) + sum over the K deepest vertices v of e(d_v) - e(max_v d_v),
+ * d the deepest-point depth (the LP), d_v = -phi_other(v) for each vertex of either body
+ * inside the other, e the law's elastic energy, K = 2 (2D) or 4 (3D). Every term is
+ * continuous (a vertex enters at d_v = 0; the sum of the K largest is continuous), and
+ * where the deepest point is a vertex the kinks of d and of max_v d_v cancel: two faces
+ * passing through parallel no longer move the force from one end of the patch to the
+ * other, and a flat face rests on two (2D) or up to four (3D) springs. The gradient of
+ * e(d_v) is the law's force at v along the nearest face's normal (exact: the vertex moves
+ * with its body, the face with the other). This finds the 2nd .. K-th deepest vertices. */
+typedef struct mf_vertex { double d, x[3], n[3]; } mf_vertex;
+
+static void mf_insert(mf_vertex *best, int *nb, int cap, const mf_vertex *v) {
+    int k;
+    if (*nb < cap) k = (*nb)++;
+    else if (v->d > best[cap - 1].d) k = cap - 1;
+    else return;
+    while (k > 0 && best[k - 1].d < v->d) { best[k] = best[k - 1]; k--; }
+    best[k] = *v;
+}
+
+/* the vertices of a inside b, sign: +1 when a is particle i (the normal from i to j is then
+ * minus b's outward face normal), -1 when a is j */
+static void mf_vertices(const floe_world *w, const shape_ref *a, const shape_ref *b, double sign, mf_vertex *best,
+                        int *nb, int cap) {
+    int nv = 0, np = 0;
+    double buf[24];
+    const double *V = a->g->klass->vertices(a->g, &nv), *P = body_planes(b->g, w->def.dim, &np, buf);
+    if (!V || !P) return;
+    const int flat_box = w->def.dim == 2 && a->g->klass == &floe_box_class;
+    for (int v = 0; v < nv; v++) {
+        double X[3] = {V[3 * v], V[3 * v + 1], V[3 * v + 2]}, xw[3], rel[3], Xb[3];
+        if (flat_box) { /* 2D: one face of the box (its z = -h corners) */
+            if (X[2] > 0) continue;
+            X[2] = 0;
+        }
+        floe_q_rotate(xw, a->q, X);
+        floe_v3_add(xw, xw, a->x);
+        floe_v3_sub(rel, xw, b->x);
+        if (floe_v3_dot(rel, rel) >= b->r * b->r) continue;
+        floe_q_rotate_inv(Xb, b->q, rel);
+        if (w->def.dim == 2) Xb[2] = 0;
+        double d = INFINITY;
+        int f = -1;
+        for (int k = 0; k < np; k++) {
+            double s = P[4 * k + 3] - floe_v3_dot(P + 4 * k, Xb);
+            if (s < d) { d = s; f = k; }
+        }
+        if (!(d > 0) || f < 0) continue;
+        mf_vertex m;
+        m.d = d;
+        floe_v3_copy(m.x, xw);
+        floe_q_rotate(m.n, b->q, P + 4 * f);
+        floe_v3_scale(m.n, -sign);
+        mf_insert(best, nb, cap, &m);
+    }
+}
+
+static void manifold(const floe_world *w, const shape_ref *a, const shape_ref *b, floe_contact *c) {
+    const int K = w->def.dim == 2 ? 2 : 4;
+    mf_vertex best[4];
+    int nb = 0;
+    mf_vertices(w, a, b, 1.0, best, &nb, K);
+    mf_vertices(w, b, a, -1.0, best, &nb, K);
+    c->nextra = 0;
+    for (int k = 1; k < nb; k++) { /* the deepest vertex is the deepest point's share */
+        int e = c->nextra++;
+        c->extra_depth[e] = best[k].d;
+        floe_v3_copy(c->extra_point[e], best[k].x);
+        floe_v3_copy(c->extra_n[e], best[k].n);
+    }
+}
+
 static int polytope_pair(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     double x1[3], x2[3], s1, s2, n1[3], n2[3], g1 = 1, g2 = 1;
     int p1 = 0, p2 = 0;
@@ -448,6 +542,7 @@ static int polytope_pair(floe_world *w, const shape_ref *a, const shape_ref *b, 
         c->gscale = g2;
     }
     c->r_eff = a->r * b->r / (a->r + b->r);
+    manifold(w, a, b, c);
     return 1;
 }
 
@@ -685,5 +780,6 @@ int floe_detect(floe_world *w, int i, int j, int sub, double *warm, floe_contact
     double t[3];
     floe_v3_copy(t, c->x1); floe_v3_copy(c->x1, c->x2); floe_v3_copy(c->x2, t);
     floe_v3_scale(c->n, -1.0);
+    for (int e = 0; e < c->nextra; e++) floe_v3_scale(c->extra_n[e], -1.0);
     return r;
 }

@@ -8,7 +8,7 @@
 
 #include "floe_base.h"
 
-#define FLOE_MAX_HISTORY 9   /* doubles of per-contact state kept per pair */
+#define FLOE_MAX_HISTORY 10  /* doubles of per-contact state kept per pair */
 #define FLOE_LAW_HISTORY 4   /* of which a law may use history[0 .. 3]; the world keeps the
                                 previous force (slots 4-6), stored energy (slot 7) and the
                                 energy dissipated since the contact began (slot 8) there for
@@ -16,6 +16,7 @@
 #define FLOE_FORCE_SLOT 4
 #define FLOE_ENERGY_SLOT 7
 #define FLOE_DISS_SLOT 8
+#define FLOE_TWIST_SLOT 9    /* the relative twist angle of a contact manifold (3D polytopes) */
 
 typedef struct floe_material {
     char name[64];
@@ -53,7 +54,19 @@ typedef struct floe_contact {
                                 (3D): the stored energy per unit stiffness */
     double area_l2;          /* squared size of the touching patch (rocking dashpot), m^2 */
     double wr[3];            /* relative angular velocity w_i - w_j (set by the world) */
+    /* polytope pairs under a point law (not overlap_area): the contact manifold. Besides the
+     * deepest point (depth, point, n above) the 2nd .. K-th deepest vertices of either body
+     * inside the other (K = 2 in 2D, 4 in 3D) carry elastic springs of the same law, each
+     * at its own depth -phi (docs/models.md, "Contact manifold"): */
+    int nextra;                          /* 0 .. FLOE_MANIFOLD_EXTRA */
+    double extra_point[3][3];            /* the vertex */
+    double extra_n[3][3];                /* unit normal from i to j (the nearest face's) */
+    double extra_depth[3];               /* -phi of the other body at the vertex, m */
+    double fn_extra;                     /* their elastic normal load, N (set by the world before
+                                            the law is called): laws add it to the Coulomb
+                                            limit, so the patch's friction is mu x the total */
 } floe_contact;
+#define FLOE_MANIFOLD_EXTRA 3
 
 typedef struct floe_contact_result {
     double force[3];         /* force on i, N */
@@ -89,6 +102,8 @@ typedef struct floe_contact_law_class {
 
 struct floe_contact_law {
     const floe_contact_law_class *klass;
+    double friction;         /* its Coulomb coefficient (0: none); the world uses it for the
+                                twist friction of a contact manifold (core/forces.c) */
 };
 
 /* Linear elastic with Coulomb friction, ParticLS eqs 16-18 (gn = gs = 0), and linear

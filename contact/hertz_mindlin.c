@@ -162,7 +162,7 @@ static int hm_force(const floe_contact_law *law_, const floe_contact *c, double 
     double Ft[3];
     for (int k = 0; k < 3; ++k) Ft[k] = Fs[k] - gt * c->vt[k];
     const double vt2 = floe_v3_dot(c->vt, c->vt);
-    const double limit = H->mu * Fn;
+    const double limit = H->mu * (Fn + c->fn_extra); /* + the manifold's other springs */
     const double ft2 = floe_v3_dot(Ft, Ft);
     diss += gt * vt2 * dt;
     const double half_inv_kt = 0.5 / kt;
@@ -234,6 +234,7 @@ floe_contact_law *floe_hertz_mindlin_law_create(const floe_material *ma, const f
     H->tangent_damping_ratio = sqrt(4.0 * H->g_star / H->e_star);
     H->restitution = restitution;
     H->mu = mu;
+    H->base.friction = mu;
     H->damping_ratio = beta;
     return &H->base;
 }

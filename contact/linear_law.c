@@ -90,7 +90,7 @@ static int linear_force(const floe_contact_law *law_, const floe_contact *c, dou
 
     /* tangential */
     double *s = hist, Ft[3];
-    floe_contact_coulomb(c, L->ks, L->gs, L->mu, Fn, s, Ft, &diss);
+    floe_contact_coulomb(c, L->ks, L->gs, L->mu, fabs(Fn) + c->fn_extra, s, Ft, &diss);
 
     for (int k = 0; k < 3; ++k) {
         out->force[k] = -Fn * c->n[k] + Ft[k];
@@ -136,6 +136,7 @@ floe_contact_law *floe_linear_law_create(double kn, double ks, double gn, double
     if (!L) return NULL;
     L->base.klass = &floe_linear_law_class;
     L->kn = kn; L->ks = ks; L->gn = gn; L->gs = gs; L->mu = mu;
+    L->base.friction = mu;
     L->tension = 0;
     return &L->base;
 }

@@ -35,6 +35,117 @@ static void life_dissipation(floe_world *w, int i, int j, double d) {
     if (d < w->wd_worst) { w->wd_worst = d; w->wd_worst_i = i; w->wd_worst_j = j; }
 }
 
+/* The springs of a contact manifold's extra vertices (floe_contact.h): the law's elastic
+ * force and energy at each vertex's depth (a call with no relative motion and no history),
+ * summed as a force on i (fx) with its torques about the centres (tx_i, tx_j), and their
+ * energy (ex); their loads in fe and their sum in c->fn_extra. Also the deepest point's
+ * elastic load f0 and the load centre of all the points (centre). */
+static int manifold_springs(floe_world *w, const floe_contact_law *law, floe_contact *c, const double *xa,
+                            const double *xb, double *fe, double *f0, double centre[3], double fx[3], double tx_i[3],
+                            double tx_j[3], double *ex) {
+    double ftot = 0.0;
+    floe_v3_set(centre, 0, 0, 0);
+    for (int e = -1; e < c->nextra; e++) {
+        floe_contact ce = *c;
+        double he[FLOE_MAX_HISTORY] = {0}, arm[3], t[3];
+        if (e >= 0) {
+            ce.depth = c->extra_depth[e];
+            floe_v3_copy(ce.n, c->extra_n[e]);
+            floe_v3_copy(ce.point, c->extra_point[e]);
+        }
+        ce.vn = 0.0;
+        floe_v3_set(ce.vr, 0, 0, 0);
+        floe_v3_set(ce.vt, 0, 0, 0);
+        floe_v3_set(ce.wr, 0, 0, 0);
+        ce.nextra = 0;
+        ce.fn_extra = 0.0;
+        floe_contact_result re;
+        memset(&re, 0, sizeof re);
+        int rc = law->klass->force(law, &ce, he, &re);
+        if (rc)
+            return floe_world_error(w, rc, "contact law %s failed for particles %d and %d at a manifold vertex: %s",
+                                    law->klass->name, c->i, c->j, floe_strerror(rc));
+        const double fn = fmax(re.fn, 0.0);
+        ftot += fn;
+        floe_v3_axpy(centre, fn, ce.point);
+        if (e < 0) { /* the deepest point: its load only (the law applies its force) */
+            *f0 = fn;
+            continue;
+        }
+        floe_v3_sub(arm, ce.point, xa);
+        floe_v3_add(fx, fx, re.force);
+        floe_v3_cross(t, arm, re.force);
+        floe_v3_add(tx_i, tx_i, t);
+        floe_v3_sub(arm, ce.point, xb);
+        floe_v3_cross(t, arm, re.force);
+        floe_v3_sub(tx_j, tx_j, t);
+        *ex += re.energy;
+        fe[e] = re.fn;
+        c->fn_extra += re.fn;
+    }
+    if (ftot > 0.0) floe_v3_scale(centre, 1.0 / ftot);
+    else floe_v3_copy(centre, c->point);
+    return FLOE_OK;
+}
+
+/* Couples of a contact manifold (polytope pairs and polytope-plane contacts under a point
+ * law): the law's dashpot and friction act at the manifold's load centre, which resists
+ * neither rocking nor twisting; over the points k (the deepest point and the extra
+ * vertices, loads f_k, at rho_k from the load centre across n):
+ *  - rocking: the law's normal dashpot cn_k at every point, the couple
+ *    -sum cn_k ((w x rho_k) . n) (rho_k x n), w = w_i - w_j;
+ *  - twist about n (3D): the law's tangential springs and dashpots give a torsion spring
+ *    sum kt_k rho_k^2 and dashpot sum ct_k rho_k^2 on the relative twist angle theta
+ *    (history), and Coulomb at every point caps the couple at mu sum f_k rho_k.
+ * fe: the extras' loads, centre: the load centre. Adds the couples (on i, minus them on j)
+ * and the torsion spring's energy to res. */
+static void manifold_couples(const floe_contact_law *law, const floe_contact *c, int dim, double fn0,
+                             const double *fe, const double centre[3], double *theta, floe_contact_result *res) {
+    const int np = c->nextra + 1;
+    double rho[FLOE_MANIFOLD_EXTRA + 1][3], f[FLOE_MANIFOLD_EXTRA + 1], d[FLOE_MANIFOLD_EXTRA + 1];
+    for (int k = 0; k < np; k++) {
+        floe_v3_sub(rho[k], k ? c->extra_point[k - 1] : c->point, centre);
+        floe_v3_axpy(rho[k], -floe_v3_dot(rho[k], c->n), c->n);
+        d[k] = k ? c->extra_depth[k - 1] : c->depth;
+        f[k] = fmax(k ? fe[k - 1] : fn0, 0.0);
+    }
+    /* rocking */
+    for (int k = 0; k < np; k++) {
+        double kn = 0.0, cn = 0.0, u[3], m[3];
+        law->klass->stiffness(law, c->r_eff, c->m_eff, d[k], &kn, &cn);
+        if (!(cn > 0.0)) continue;
+        floe_v3_cross(u, c->wr, rho[k]);
+        floe_v3_cross(m, rho[k], c->n);
+        const double s = -cn * floe_v3_dot(u, c->n);
+        floe_v3_axpy(res->torque_i, s, m);
+        floe_v3_axpy(res->torque_j, -s, m);
+    }
+    /* twist */
+    if (dim != 3 || !law->klass->tangential_stiffness || !(law->friction > 0.0)) {
+        *theta = 0.0;
+        return;
+    }
+    double kt = 0.0, ct = 0.0, lim = 0.0;
+    for (int k = 0; k < np; k++) {
+        double kk = 0.0, cc = 0.0;
+        const double rho2 = floe_v3_dot(rho[k], rho[k]);
+        law->klass->tangential_stiffness(law, c->r_eff, c->m_eff, d[k], &kk, &cc);
+        kt += kk * rho2;
+        ct += cc * rho2;
+        lim += law->friction * f[k] * sqrt(rho2);
+    }
+    const double wn = floe_v3_dot(c->wr, c->n);
+    *theta += wn * c->dt;
+    double m = -kt * *theta - ct * wn;
+    if (fabs(m) > lim) { /* slipping: the spring keeps what Coulomb allows */
+        m = m > 0 ? lim : -lim;
+        *theta = kt > 0.0 ? -(m + ct * wn) / kt : 0.0;
+    }
+    floe_v3_axpy(res->torque_i, m, c->n);
+    floe_v3_axpy(res->torque_j, -m, c->n);
+    res->energy += 0.5 * kt * *theta * *theta;
+}
+
 /* Contact and body forces (the DEM and coupling forces of 000 eq 40 with the body forces
  * m b): gravity, external forces, the body-force callback, every contact of the list.
  * Zeroes p->f and p->t first. */
@@ -96,6 +207,8 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         double *warm = nl->use_warm ? nl->warm + (size_t)k * FLOE_DETECT_WARM : NULL;
         floe_contact c;
         c.gscale = 1.0;
+        c.nextra = 0;
+        c.fn_extra = 0.0;
         int r = 0;
         /* bounding spheres apart: no contact for any pair of shapes (most list pairs) */
         const double *xa = p->x + 3 * i, *xb = p->x + 3 * j;
@@ -194,6 +307,24 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         /* prepare evaluates forces without advancing history; the RK2 midpoint advances it
          * by peek_dt and the caller restores it */
         c.dt = stepping ? w->dt : w->peek_dt;
+        /* the manifold's other vertices (polytope pairs, floe_contact.h): elastic springs of
+         * the same law, evaluated first so that the law's friction sees their load; the law's
+         * dashpot and friction then act at the manifold's load centre */
+        double fx[3] = {0, 0, 0}, tx_i[3] = {0, 0, 0}, tx_j[3] = {0, 0, 0}, ex = 0, fe[FLOE_MANIFOLD_EXTRA];
+        double f0 = 0, centre[3] = {0, 0, 0}, vr_point[3] = {0, 0, 0};
+        if (c.nextra > 0) {
+            FLOE_TRY(manifold_springs(w, law, &c, xa, xb, fe, &f0, centre, fx, tx_i, tx_j, &ex));
+            /* the law sees the relative velocity at the load centre */
+            double rc_i[3], rc_j[3], uc_i[3], uc_j[3];
+            floe_v3_copy(vr_point, c.vr);
+            floe_v3_sub(rc_i, centre, xa);
+            floe_v3_sub(rc_j, centre, xb);
+            floe_v3_cross(uc_i, p->w + 3 * i, rc_i);
+            floe_v3_cross(uc_j, p->w + 3 * j, rc_j);
+            for (int a = 0; a < 3; a++) c.vr[a] = (p->v[3 * i + a] + uc_i[a]) - (p->v[3 * j + a] + uc_j[a]);
+            c.vn = floe_v3_dot(c.vr, c.n);
+            for (int a = 0; a < 3; a++) c.vt[a] = c.vr[a] - c.vn * c.n[a];
+        }
         floe_contact_result res;
         memset(&res, 0, sizeof res);
         int rc = law->klass->force(law, &c, hist, &res);
@@ -207,6 +338,20 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
             floe_v3_scale(res.torque_j, c.gscale);
             res.fn *= c.gscale;
         }
+        if (c.nextra > 0) {
+            /* the deepest point keeps its elastic force; the law's dashpot and friction act
+             * at the load centre: moved there by a couple */
+            double rest[3], T[3];
+            for (int a = 0; a < 3; a++) rest[a] = res.force[a] + f0 * c.gscale * c.n[a];
+            floe_v3_sub(T, centre, c.point);
+            floe_v3_cross(T, T, rest);
+            floe_v3_add(res.torque_i, res.torque_i, T);
+            floe_v3_sub(res.torque_j, res.torque_j, T);
+            floe_v3_copy(c.vr, vr_point); /* the ledger: the work of res.force at the point */
+            manifold_couples(law, &c, w->def.dim, res.fn, fe, centre, hist + FLOE_TWIST_SLOT, &res);
+        } else {
+            hist[FLOE_TWIST_SLOT] = 0.0;
+        }
         double ti[3], tj[3];
         floe_v3_cross(ti, ri, res.force);
         floe_v3_cross(tj, rj, res.force);
@@ -215,8 +360,15 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
             p->f[3 * j + a] -= res.force[a];
             p->t[3 * i + a] += ti[a] + res.torque_i[a];
             p->t[3 * j + a] += -tj[a] + res.torque_j[a];
+            /* the manifold's springs: conservative, their energy is stored, nothing dissipated
+             * (their work over a step is the change of their energy up to the integrator's
+             * error, which the balance shows) */
+            p->f[3 * i + a] += fx[a];
+            p->f[3 * j + a] -= fx[a];
+            p->t[3 * i + a] += tx_i[a];
+            p->t[3 * j + a] += tx_j[a];
         }
-        elastic += res.energy;
+        elastic += res.energy + ex;
         /* dissipation ledger: work done on the contact by the relative motion over the step
          * (mid-step velocities) minus the change of its stored energy */
         if (stepping) {
@@ -246,7 +398,15 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         hist[FLOE_ENERGY_SLOT] = res.energy;
         memcpy(hist + FLOE_FORCE_SLOT, res.force, 3 * sizeof(double));
         if (!w->record_now) w->ncontacts++;
-        else if (push_contact(w, &c, &res)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        else {
+            /* one record per pair: the manifold's springs in its force (the stress observer's
+             * branch vector between centres needs the total only) */
+            floe_contact_result rec = res;
+            floe_v3_add(rec.force, rec.force, fx);
+            rec.fn += c.fn_extra;
+            rec.energy += ex;
+            if (push_contact(w, &c, &rec)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        }
     }
     w->eta_depth = eta_d;
     *elastic_out = elastic;
