@@ -23,8 +23,9 @@ usage: python3 tests/test_examples.py <floe_cli_path> <tests_dir>
   cracks at the top and bottom of the hole and not at its sides; damage under the impact
   point of a 3 mm cylinder and none at its bottom rim; the spheres' indentation shows in the
   strain (E_zz most compressive at a contact face) and von Mises arrays; energy balances.
-- examples/kalthoff-winkler (issue #10) at dx = 2 mm: the cracks leave the pre-cracked
-  notches at a median angle in (50, 80) degrees (measured 55.8); energy balances.
+- examples/kalthoff-winkler (issue #10) at dx = 2 mm: each crack is a straight path from its
+  pre-cracked notch at 61.5-70 degrees (line fit through the tip, measured 64.0; 59.2
+  without the PMB's alpha = 0.25, which the scene now has); energy balances.
 Prints "N passed, N failed".
 """
 import csv
@@ -252,9 +253,38 @@ def check_brittle_cylinder(cli, root, tmp):
           "> 0.3, impactor vz %.1f m/s" % (len(pts), dx, under, rim, nd, vz))
 
 
+def kw_branch_fit(X, dmg, tip, sgn, rmin=0.005, rmax=0.06):
+    """Kalthoff-Winkler crack path angle of one branch: the line through the notch tip fitted
+    (least squares, perpendicular distances) to the points with damage > 0.35 on the outer
+    side of the notch (sgn: +1 upper, -1 lower notch, mirrored), 5-60 mm from the tip and more
+    than 30 degrees from the notch direction (the damage arcs from the plate's mid-line reach
+    above the notch line near x = 75 mm at 10-20 degrees). Reference positions. Returns
+    (angle in degrees from the notch direction, rms distance of the points from the line in m,
+    count)."""
+    pts = []
+    for p, d in zip(X, dmg):
+        u, v = p[0] - tip[0], sgn * (p[1] - tip[1])
+        if d[0] > 0.35 and v > 0 and math.atan2(v, u) > math.radians(30) and rmin <= math.hypot(u, v) < rmax:
+            pts.append((u, v))
+    if len(pts) < 3:
+        return float("nan"), float("nan"), len(pts)
+    suu = sum(u * u for u, v in pts)
+    svv = sum(v * v for u, v in pts)
+    suv = sum(u * v for u, v in pts)
+    th = 0.5 * math.atan2(2 * suv, suu - svv)
+    c, s = math.cos(th), math.sin(th)
+    rms = math.sqrt(sum((c * v - s * u) ** 2 for u, v in pts) / len(pts))
+    return math.degrees(th), rms, len(pts)
+
+
 def check_kalthoff_winkler(cli, root, tmp):
-    """Issue #10: the notches as pre-cracks; at dx = 2 mm (the notches moved to y = +-24 mm,
-    between two rows of points) the cracks leave the notch tips at more than 50 degrees."""
+    """Issue #10 and the crack-angle study (examples/kalthoff-winkler/README.md): at dx = 2 mm
+    (the notches moved to y = +-24 mm, between two rows of points) each crack is a straight
+    path from its notch tip (line fit through the tip, rms distance < 2.5 mm) at 61.5-70 deg
+    (measured 64.0; Silling 2003: about 68 deg, experiment about 70). The scene's PMB has
+    Silling & Askari's compression term alpha = 0.25; with a constant critical stretch
+    (alpha = 0) the same plate gives 59.2 deg and fails here. The two branches mirror each
+    other to 0.5 deg."""
     subs = [(r"spacing: 0\.001", "spacing: 0.002"), (r"0\.025\], \[0\.05, 0\.025\]", "0.024], [0.05, 0.024]"),
             (r"-0\.025\], \[0\.05, -0\.025\]", "-0.024], [0.05, -0.024]"),
             (r"min: \[-1, -0\.025\], max: \[0\.003, 0\.025\]", "min: [-1, -0.024], max: [0.006, 0.024]")]
@@ -263,17 +293,16 @@ def check_kalthoff_winkler(cli, root, tmp):
         return
     out, a = res
     first = read_vtu_arrays(sorted(glob.glob(os.path.join(out, "frame_*.vtu")))[0])
-    ang = []
-    for X, d in zip(first["Points"], a["damage"]):
-        dxt, dyt = X[0] - 0.05, abs(X[1]) - 0.025
-        if d[0] > 0.35 and dyt > 0 and 0.012 < math.hypot(dxt, dyt) < 0.045:
-            ang.append(math.degrees(math.atan2(dyt, dxt)))
-    ang.sort()
-    med = ang[len(ang) // 2] if ang else float("nan")
-    check(len(ang) >= 10 and 50 < med < 80, "kalthoff-winkler: crack angle %.1f deg in (50, 80) over %d damaged points"
-          % (med, len(ang)))
-    print("  kalthoff-winkler: dx = 2 mm, 90 us: median crack angle %.1f deg (%d points 12-45 mm from the tips)"
-          % (med, len(ang)))
+    up = kw_branch_fit(first["Points"], a["damage"], (0.05, 0.024), 1)
+    lo = kw_branch_fit(first["Points"], a["damage"], (0.05, -0.024), -1)
+    for name, (ang, rms, n) in (("upper", up), ("lower", lo)):
+        check(n >= 30 and 61.5 < ang < 70, "kalthoff-winkler: %s crack at %.1f deg in (61.5, 70) over %d damaged points"
+              % (name, ang, n))
+        check(rms < 2.5e-3, "kalthoff-winkler: %s crack is a straight path (rms %.2f mm < 2.5 mm from the line)"
+              % (name, rms * 1e3))
+    check(abs(up[0] - lo[0]) < 0.5, "kalthoff-winkler: branches mirror each other (%.1f vs %.1f deg)" % (up[0], lo[0]))
+    print("  kalthoff-winkler: dx = 2 mm, 90 us: crack path angles %.1f / %.1f deg (line fit through the tips, "
+          "rms %.1f / %.1f mm, %d / %d points)" % (up[0], lo[0], up[1] * 1e3, lo[1] * 1e3, up[2], lo[2]))
 
 
 def check_rubber_cube(cli, root, tmp):
