@@ -94,16 +94,12 @@ typedef struct sc {
     int ngrow_listed;
 } sc;
 
-static int sc_loc(const sc *s, struct fy_node *n, int *line, int *col);
-
-static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 4, 5)))
-#endif
-    ;
-
+static long sc_pos(const sc *s, struct fy_node *n);
 static int sc_loc_pos(const sc *s, long pos, int *line, int *col);
-static int sc_fail_pos(sc *s, int code, long pos, const char *fmt, ...)
+
+/* Errors: "path:line:col: message" (or "path: message" when the position is unknown) into
+ * the caller's buffer; they return code (FLOE_EINVAL for 0). At a node: */
+static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 4, 5)))
 #endif
@@ -111,12 +107,15 @@ static int sc_fail_pos(sc *s, int code, long pos, const char *fmt, ...)
 
 /* the same at a byte offset of the text (-1: no position) */
 static int sc_fail_pos(sc *s, int code, long pos, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
+static int sc_vfail_pos(sc *s, int code, long pos, const char *fmt, va_list ap)
 {
     char msg[768];
-    va_list ap;
-    va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
     int line, col;
     if (s->err && s->errlen) {
         if (sc_loc_pos(s, pos, &line, &col))
@@ -127,21 +126,22 @@ static int sc_fail_pos(sc *s, int code, long pos, const char *fmt, ...)
     return code ? code : FLOE_EINVAL;
 }
 
-static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
+static int sc_fail_pos(sc *s, int code, long pos, const char *fmt, ...)
 {
-    char msg[768];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    int rc = sc_vfail_pos(s, code, pos, fmt, ap);
     va_end(ap);
-    int line, col;
-    if (s->err && s->errlen) {
-        if (sc_loc(s, at, &line, &col))
-            snprintf(s->err, s->errlen, "%s:%d:%d: %s", s->path, line, col, msg);
-        else
-            snprintf(s->err, s->errlen, "%s: %s", s->path, msg);
-    }
-    return code ? code : FLOE_EINVAL;
+    return rc;
+}
+
+static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int rc = sc_vfail_pos(s, code, sc_pos(s, at), fmt, ap);
+    va_end(ap);
+    return rc;
 }
 
 /* ------------------------------------------------------------------------------------ */
