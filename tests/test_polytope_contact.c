@@ -438,6 +438,18 @@ static int detect_overlap(floe_world *w, floe_contact *c) {
     return floe_detect_overlap(w, 0, 1, 0, c) == 1 && touch;
 }
 
+/* adds ga at the origin (orientation qa) and gb at xb (qb) to the empty world w, their
+ * overlap contact into c: 1, or 0 (w destroyed) when they do not touch */
+static int add_overlap_pair(floe_world *w, floe_geometry *ga, const double qa[4], floe_geometry *gb,
+                            const double xb[3], const double qb[4], floe_contact *c) {
+    const double xa[3] = {0, 0, 0};
+    add_body(w, ga, xa, qa, NULL, NULL);
+    add_body(w, gb, xb, qb, NULL, NULL);
+    if (detect_overlap(w, c)) return 1;
+    floe_world_destroy(w);
+    return 0;
+}
+
 /* -dI/dq of the overlap energy I by central differences, q the translations of body 0 and
  * its rotations about its centre (2D: x, y, about z; 3D: x, y, z, about x, y, z), a rotation
  * as the arc length at `scale` (so g holds the force, then the moment / scale) */
@@ -478,18 +490,13 @@ static void test_overlap_gradient(void) {
         double scale = pow(10.0, uni(-3, 3));
         floe_world *w = make_world(2, 917, 1, 0, 0, 0);
         floe_geometry *ga = rand_polygon(scale), *gb = rand_polygon(scale);
-        double qa[4], qb[4], xa[3] = {0, 0, 0}, xb[3];
+        double qa[4], qb[4], xb[3];
         quat_z(qa, uni(0, 2 * M_PI));
         quat_z(qb, uni(0, 2 * M_PI));
         double th = uni(0, 2 * M_PI), dist = uni(0.5, 1.6) * scale;
         floe_v3_set(xb, dist * cos(th), dist * sin(th), 0);
-        add_body(w, ga, xa, qa, NULL, NULL);
-        add_body(w, gb, xb, qb, NULL, NULL);
         floe_contact c;
-        if (!detect_overlap(w, &c)) {
-            floe_world_destroy(w);
-            continue;
-        }
+        if (!add_overlap_pair(w, ga, qa, gb, xb, qb, &c)) continue;
         n++;
         double g[3], F[3], Mz;
         overlap_gradient(w, 2, scale, g);
@@ -537,19 +544,14 @@ static void test_overlap_gradient3(void) {
         double scale = pow(10.0, uni(-3, 3));
         floe_world *w = make_world(3, 917, 1, 0, 0, 0);
         floe_geometry *ga = rand_polyhedron(scale * 0.7), *gb = rand_polyhedron(scale * 0.7);
-        double qa[4], qb[4], xa[3] = {0, 0, 0}, xb[3], u[3];
+        double qa[4], qb[4], xb[3], u[3];
         rand_quat(qa);
         rand_quat(qb);
         rand_unit(u);
         double dist = uni(0.5, 1.2) * scale;
         for (int k = 0; k < 3; k++) xb[k] = dist * u[k];
-        add_body(w, ga, xa, qa, NULL, NULL);
-        add_body(w, gb, xb, qb, NULL, NULL);
         floe_contact c;
-        if (!detect_overlap(w, &c)) {
-            floe_world_destroy(w);
-            continue;
-        }
+        if (!add_overlap_pair(w, ga, qa, gb, xb, qb, &c)) continue;
         n++;
         double g[6], M[3], r[3];
         overlap_gradient(w, 3, scale, g);
