@@ -472,6 +472,29 @@ static void bond_dampers(floe_newmark *s, nm_bond *b) {
         }
 }
 
+/* the dampers of bond b at either end in the node's nd dofs, T^T diag(c) T (nd x nd,
+ * row-major; 2D: the x, y dampers in the bond's axes and the rotational one) */
+static void bond_damper_block(int nd, const nm_bond *b, double *D) {
+    const double *R = b->R;
+    memset(D, 0, (size_t)(nd * nd) * sizeof *D);
+    if (nd == 3) {
+        for (int p = 0; p < 2; p++)
+            for (int q = 0; q < 2; q++)
+                D[p * 3 + q] = R[p] * b->c[0] * R[q] + R[3 + p] * b->c[1] * R[3 + q];
+        D[8] = b->c[5];
+    } else
+        for (int p = 0; p < 3; p++)
+            for (int q = 0; q < 3; q++) {
+                double ct = 0, cr = 0;
+                for (int r = 0; r < 3; r++) {
+                    ct += R[3 * r + p] * b->c[r] * R[3 * r + q];
+                    cr += R[3 * r + p] * b->c[3 + r] * R[3 * r + q];
+                }
+                D[p * 6 + q] = ct;
+                D[(3 + p) * 6 + 3 + q] = cr;
+            }
+}
+
 /* the C block of every node: sum over its intact bonds of T^T diag(c) T, plus alpha M */
 static void build_cblk(floe_newmark *s) {
     const int nd = s->nd, nn = nd * nd;
@@ -486,26 +509,12 @@ static void build_cblk(floe_newmark *s) {
     for (int k = 0; k < s->nb; k++) {
         nm_bond *b = &s->b[k];
         if (b->broken) continue;
-        const double *R = b->R;
+        double D[36];
+        bond_damper_block(nd, b, D);
         const int ends[2] = {b->i, b->j};
         for (int e = 0; e < 2; e++) {
             double *C = s->cblk + (size_t)nn * ends[e];
-            if (nd == 3) {
-                for (int p = 0; p < 2; p++)
-                    for (int q = 0; q < 2; q++)
-                        C[p * 3 + q] += R[p] * b->c[0] * R[q] + R[3 + p] * b->c[1] * R[3 + q];
-                C[8] += b->c[5];
-            } else
-                for (int p = 0; p < 3; p++)
-                    for (int q = 0; q < 3; q++) {
-                        double ct = 0, cr = 0;
-                        for (int r = 0; r < 3; r++) {
-                            ct += R[3 * r + p] * b->c[r] * R[3 * r + q];
-                            cr += R[3 * r + p] * b->c[3 + r] * R[3 * r + q];
-                        }
-                        C[p * 6 + q] += ct;
-                        C[(3 + p) * 6 + 3 + q] += cr;
-                    }
+            for (int q = 0; q < nn; q++) C[q] += D[q];
         }
     }
 }
@@ -787,25 +796,13 @@ static void bond_term(const floe_newmark *s, const nm_bond *b, double dt, double
     const int nd = s->nd, n2 = 2 * nd;
     bond_global_k(s, b, Bm);
     for (int k = 0; k < n2 * n2; k++) Bm[k] *= s->def.beta * dt * dt;
-    const double *R = b->R, cg = s->def.gamma * dt;
+    const double cg = s->def.gamma * dt;
+    double D[36];
+    bond_damper_block(nd, b, D);
     for (int e = 0; e < 2; e++) {
         int o = nd * e;
-        if (nd == 3) {
-            for (int p = 0; p < 2; p++)
-                for (int q = 0; q < 2; q++)
-                    Bm[(o + p) * n2 + o + q] += cg * (R[p] * b->c[0] * R[q] + R[3 + p] * b->c[1] * R[3 + q]);
-            Bm[(o + 2) * n2 + o + 2] += cg * b->c[5];
-        } else
-            for (int p = 0; p < 3; p++)
-                for (int q = 0; q < 3; q++) {
-                    double ct = 0, cr = 0;
-                    for (int r = 0; r < 3; r++) {
-                        ct += R[3 * r + p] * b->c[r] * R[3 * r + q];
-                        cr += R[3 * r + p] * b->c[3 + r] * R[3 * r + q];
-                    }
-                    Bm[(o + p) * n2 + o + q] += cg * ct;
-                    Bm[(o + 3 + p) * n2 + o + 3 + q] += cg * cr;
-                }
+        for (int p = 0; p < nd; p++)
+            for (int q = 0; q < nd; q++) Bm[(o + p) * n2 + o + q] += cg * D[p * nd + q];
     }
 }
 

@@ -94,16 +94,12 @@ typedef struct sc {
     int ngrow_listed;
 } sc;
 
-static int sc_loc(const sc *s, struct fy_node *n, int *line, int *col);
-
-static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 4, 5)))
-#endif
-    ;
-
+static long sc_pos(const sc *s, struct fy_node *n);
 static int sc_loc_pos(const sc *s, long pos, int *line, int *col);
-static int sc_fail_pos(sc *s, int code, long pos, const char *fmt, ...)
+
+/* Errors: "path:line:col: message" (or "path: message" when the position is unknown) into
+ * the caller's buffer; they return code (FLOE_EINVAL for 0). At a node: */
+static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 4, 5)))
 #endif
@@ -111,12 +107,15 @@ static int sc_fail_pos(sc *s, int code, long pos, const char *fmt, ...)
 
 /* the same at a byte offset of the text (-1: no position) */
 static int sc_fail_pos(sc *s, int code, long pos, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
+static int sc_vfail_pos(sc *s, int code, long pos, const char *fmt, va_list ap)
 {
     char msg[768];
-    va_list ap;
-    va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
     int line, col;
     if (s->err && s->errlen) {
         if (sc_loc_pos(s, pos, &line, &col))
@@ -127,21 +126,22 @@ static int sc_fail_pos(sc *s, int code, long pos, const char *fmt, ...)
     return code ? code : FLOE_EINVAL;
 }
 
-static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
+static int sc_fail_pos(sc *s, int code, long pos, const char *fmt, ...)
 {
-    char msg[768];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    int rc = sc_vfail_pos(s, code, pos, fmt, ap);
     va_end(ap);
-    int line, col;
-    if (s->err && s->errlen) {
-        if (sc_loc(s, at, &line, &col))
-            snprintf(s->err, s->errlen, "%s:%d:%d: %s", s->path, line, col, msg);
-        else
-            snprintf(s->err, s->errlen, "%s: %s", s->path, msg);
-    }
-    return code ? code : FLOE_EINVAL;
+    return rc;
+}
+
+static int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int rc = sc_vfail_pos(s, code, sc_pos(s, at), fmt, ap);
+    va_end(ap);
+    return rc;
 }
 
 /* ------------------------------------------------------------------------------------ */
@@ -1901,6 +1901,23 @@ static void sc_pd_cut_free(sc_pd_cut *c)
     c->n = 0;
 }
 
+/* the shape (node sv, key sk) and the position (default the origin) of map m into out; the
+ * shape must be bounded ("<what>.shape: the <noun> must be bounded"); out->g is NULL on error */
+static int sc_pd_shape_in(sc *s, const sc_map *m, struct fy_node *sv, struct fy_node *sk, const char *what,
+                          const char *noun, sc_pd_sdf *out)
+{
+    char fs[96];
+    snprintf(fs, sizeof fs, "%s.shape", what);
+    out->g = NULL;
+    FLOE_TRY(sc_build_shape(s, sv, sk, fs, 0, &out->g));
+    sc_pd_frame(out);
+    int rc = sc_vec(s, m, "position", 0, NULL, out->x);
+    if (rc == FLOE_OK && !isfinite(floe_geometry_bounding_radius(out->g)))
+        rc = sc_fail(s, FLOE_EINVAL, sv, "%s: the %s must be bounded", fs, noun);
+    if (rc) { floe_geometry_destroy(out->g); out->g = NULL; }
+    return rc;
+}
+
 /* {shape, position} of a region or hole (position defaults to the origin) */
 static int sc_pd_shape_at(sc *s, struct fy_node *v, struct fy_node *k, const char *what, sc_pd_sdf *out)
 {
@@ -1910,15 +1927,7 @@ static int sc_pd_shape_at(sc *s, struct fy_node *v, struct fy_node *k, const cha
     FLOE_TRY(sc_map_open(s, v == k ? NULL : v, k, what, keys, &m));
     struct fy_node *sk, *sv = sc_get(&m, "shape", &sk);
     if (!sv) return sc_fail(s, FLOE_EPARSE, v == k ? k : v, "%s.shape is required", what);
-    char fs[96];
-    snprintf(fs, sizeof fs, "%s.shape", what);
-    FLOE_TRY(sc_build_shape(s, sv, sk, fs, 0, &out->g));
-    sc_pd_frame(out);
-    int rc = sc_vec(s, &m, "position", 0, NULL, out->x);
-    if (rc == FLOE_OK && !isfinite(floe_geometry_bounding_radius(out->g)))
-        rc = sc_fail(s, FLOE_EINVAL, sv, "%s: the shape must be bounded", fs);
-    if (rc) { floe_geometry_destroy(out->g); out->g = NULL; }
-    return rc;
+    return sc_pd_shape_in(s, &m, sv, sk, what, "shape", out);
 }
 
 /* region.remove: a list of {shape, position} holes */
@@ -2183,14 +2192,8 @@ static int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
         } else {
             struct fy_node *sk2, *sv2 = sc_get(&rm, "shape", &sk2);
             if (!sv2) return sc_fail(s, FLOE_EPARSE, rv, "%s: give box or shape", fr);
-            char fs[80];
-            snprintf(fs, sizeof fs, "%s.shape", fr);
-            FLOE_TRY(sc_build_shape(s, sv2, sk2, fs, 0, &reg.g));
-            sc_pd_frame(&reg);
-            int rc = sc_vec(s, &rm, "position", 0, NULL, reg.x);
+            FLOE_TRY(sc_pd_shape_in(s, &rm, sv2, sk2, fr, "region", &reg));
             double rb = floe_geometry_bounding_radius(reg.g);
-            if (rc == FLOE_OK && !isfinite(rb)) rc = sc_fail(s, FLOE_EINVAL, sv2, "%s: the region must be bounded", fs);
-            if (rc) { floe_geometry_destroy(reg.g); return rc; }
             for (int k = 0; k < 3; k++) { r.lo[k] = reg.x[k] - rb; r.hi[k] = reg.x[k] + rb; }
             if (s->dim == 2) { r.lo[2] = -0.5 * r.dx; r.hi[2] = 0.5 * r.dx; }
             r.sdf = sc_pd_region_sdf;

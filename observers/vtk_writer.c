@@ -213,6 +213,22 @@ static int non_finite_error(floe_world *w, const vtk_writer *v, int k, int a) {
                             "(step %ld): frame not written", v->idx[a], arrays[k].name, w->time, w->step);
 }
 
+/* Fills array k of the m points into v->buf: FLOE_OK, or FLOE_EUNSTABLE (reported) when a
+ * value is not finite */
+static int fill_finite(const vtk_writer *v, floe_world *w, int k, int m) {
+    fill_array(v, w, k, m, v->buf);
+    int a = first_non_finite(k, m, v->buf);
+    return a >= 0 ? non_finite_error(w, v, k, a) : FLOE_OK;
+}
+
+/* a frame refused half-written: its temporary file is closed and removed */
+static void abandon_file(FILE *f, char *tmp, char *path) {
+    fclose(f);
+    remove(tmp);
+    free(path);
+    free(tmp);
+}
+
 static void write_ascii_values(FILE *f, int type, int ncomp, int m, const void *buf) {
     const int32_t *i32 = buf;
     const int64_t *i64 = buf;
@@ -327,9 +343,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
      * are computed) */
     static const int state_arrays[] = {A_RADIUS, A_VELOCITY, A_ANGVEL, A_FORCE, A_TORQUE, A_ORIENT, A_POINTS};
     for (size_t q = 0; q < sizeof state_arrays / sizeof *state_arrays; q++) {
-        fill_array(v, w, state_arrays[q], m, v->buf);
-        int a = first_non_finite(state_arrays[q], m, v->buf);
-        if (a >= 0) return non_finite_error(w, v, state_arrays[q], a);
+        FLOE_TRY(fill_finite(v, w, state_arrays[q], m));
     }
 
     int ascii = v->ascii || m == 0;
@@ -369,14 +383,10 @@ static int vw_write(vtk_writer *v, floe_world *w) {
         if (a->ncomp > 1) fprintf(f, " NumberOfComponents=\"%d\"", a->ncomp);
         if (ascii) {
             fputs(" format=\"ascii\">\n", f);
-            fill_array(v, w, k, m, v->buf);
-            int bad = first_non_finite(k, m, v->buf);
-            if (bad >= 0) {
-                fclose(f);
-                remove(tmp);
-                free(path);
-                free(tmp);
-                return non_finite_error(w, v, k, bad);
+            int bad = fill_finite(v, w, k, m);
+            if (bad != FLOE_OK) {
+                abandon_file(f, tmp, path);
+                return bad;
             }
             write_ascii_values(f, a->type, a->ncomp, m, v->buf);
             fputs("        </DataArray>\n", f);
@@ -392,14 +402,10 @@ static int vw_write(vtk_writer *v, floe_world *w) {
             if (k >= A_DAMAGE && k <= A_STRAIN && !w->npd) continue;
             const array_desc *a = &arrays[k];
             uint64_t nbytes = (uint64_t)m * (uint64_t)a->ncomp * type_size(a->type);
-            fill_array(v, w, k, m, v->buf);
-            int bad = first_non_finite(k, m, v->buf);
-            if (bad >= 0) {
-                fclose(f);
-                remove(tmp);
-                free(path);
-                free(tmp);
-                return non_finite_error(w, v, k, bad);
+            int bad = fill_finite(v, w, k, m);
+            if (bad != FLOE_OK) {
+                abandon_file(f, tmp, path);
+                return bad;
             }
             fwrite(&nbytes, sizeof nbytes, 1, f);
             fwrite(v->buf, 1, (size_t)nbytes, f);

@@ -24,22 +24,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* ---- deterministic random numbers (xorshift64*) ---- */
-static unsigned long long rng_s = 0x2545F4914F6CDD1DULL;
-static double urand(void) {
-    rng_s ^= rng_s >> 12; rng_s ^= rng_s << 25; rng_s ^= rng_s >> 27;
-    return (double)((rng_s * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
-}
-static double uni(double a, double b) { return a + (b - a) * urand(); }
-static void rand_unit(double u[3]) {
-    double z = 2 * urand() - 1, ph = 2 * M_PI * urand(), s = sqrt(1 - z * z);
-    floe_v3_set(u, s * cos(ph), s * sin(ph), z);
-}
-static void rand_quat(double q[4]) {
-    double u1 = urand(), u2 = urand(), u3 = urand();
-    q[0] = sqrt(1 - u1) * sin(2 * M_PI * u2); q[1] = sqrt(1 - u1) * cos(2 * M_PI * u2);
-    q[2] = sqrt(u1) * sin(2 * M_PI * u3); q[3] = sqrt(u1) * cos(2 * M_PI * u3);
-}
+#define TEST_RNG_SEED 0x2545F4914F6CDD1DULL
+#include "test_rng.h"
 
 static int cmpd(const void *a, const void *b) {
     double x = *(const double *)a, y = *(const double *)b;

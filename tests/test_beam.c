@@ -376,6 +376,21 @@ static void test_breakage(void) {
 
 /* ---- 4. exclusion chained with a PD body's ---- */
 
+/* a 6 x 4 x 4 mm PMB block (dx 1 mm, horizon 3 dx) */
+static floe_pd_body *pd_block(void) {
+    floe_pd_region r;
+    memset(&r, 0, sizeof r);
+    r.dim = 3;
+    r.dx = 1e-3;
+    r.horizon_factor = 3;
+    floe_v3_set(r.hi, 6e-3, 4e-3, 4e-3);
+    floe_pd_body *pb = NULL;
+    floe_pd_body_create(&pb, &r);
+    floe_pd_material pm = floe_pd_material_pmb(2200, 14.9e9, 0);
+    floe_pd_set_material(pb, &pm);
+    return pb;
+}
+
 static void test_exclusion_with_pd(void) {
     int mat;
     floe_world *w = new_world(3, 0, 0, 0, &mat);
@@ -383,16 +398,7 @@ static void test_exclusion_with_pd(void) {
      * other way round must both keep both exclusions) */
     for (int order = 0; order < 2; order++) {
         if (order == 1) { floe_world_destroy(w); w = new_world(3, 0, 0, 0, &mat); }
-        floe_pd_region r;
-        memset(&r, 0, sizeof r);
-        r.dim = 3;
-        r.dx = 1e-3;
-        r.horizon_factor = 3;
-        floe_v3_set(r.hi, 6e-3, 4e-3, 4e-3);
-        floe_pd_body *pb = NULL;
-        floe_pd_body_create(&pb, &r);
-        floe_pd_material pm = floe_pd_material_pmb(2200, 14.9e9, 0);
-        floe_pd_set_material(pb, &pm);
+        floe_pd_body *pb = pd_block();
         int first = -1, nchain = 8;
         if (order == 1) CHECK(floe_world_add_pd_body(w, pb, mat, NULL, &first) == FLOE_OK, "PD body");
         int c0 = w->p.n;
@@ -553,16 +559,7 @@ static void test_scene(void) {
 static void test_defaults_and_refusals(void) {
     int mat;
     floe_world *w = new_world(3, 0, 0, 0, &mat);
-    floe_pd_region r;
-    memset(&r, 0, sizeof r);
-    r.dim = 3;
-    r.dx = 1e-3;
-    r.horizon_factor = 3;
-    floe_v3_set(r.hi, 6e-3, 4e-3, 4e-3);
-    floe_pd_body *pb = NULL;
-    floe_pd_body_create(&pb, &r);
-    floe_pd_material pm = floe_pd_material_pmb(2200, 14.9e9, 0);
-    floe_pd_set_material(pb, &pm);
+    floe_pd_body *pb = pd_block();
     CHECK(floe_world_add_pd_body(w, pb, mat, NULL, NULL) == FLOE_OK, "PD body");
     for (int k = 0; k < 4; k++) {
         double x[3] = {0.02 + k * 0.002, 0, 0};

@@ -7,32 +7,13 @@
 #include "floe.h"
 #include "world_internal.h"
 #include "check.h"
+#include "head_on.h"
 #include <string.h>
 
 static void collide(double E, double v0, double ratio) {
-    floe_world_def d = floe_default_world_def();
-    d.dt_safety = 0.1;
-    floe_world *w = floe_world_create(&d, NULL, 0);
-    floe_material m = {"m", 2500, E, 0.3}, heavy = {"h", 2500 * ratio, E, 0.3};
-    floe_world_add_material(w, &m);
-    floe_world_add_material(w, &heavy);
-    floe_world_set_law(w, 0, 1, floe_hertz_mindlin_law_create(&m, &heavy, 0.5, 0.0));
-    int g = floe_world_add_geometry(w, floe_sphere_create(0.01));
-    floe_particle_def a = floe_default_particle_def(), b = floe_default_particle_def();
-    a.geometry = b.geometry = g;
-    b.material = 1;
-    floe_v3_set(a.v, v0, 0, 0);
-    floe_v3_set(b.x, 0.02, 0, 0); /* touching: the collision starts at once */
-    floe_world_add_particle(w, &a);
-    floe_world_add_particle(w, &b);
-    int rc = floe_world_prepare(w);
-    long steps = 0, in_contact = 0;
-    while (rc == FLOE_OK && steps < 2000000) {
-        rc = floe_world_step(w);
-        steps++;
-        if (w->ncontacts) in_contact++;
-        if (in_contact && !w->ncontacts) break;
-    }
+    int rc;
+    long in_contact;
+    floe_world *w = head_on_collision(floe_default_world_def(), E, v0, ratio, &rc, &in_contact);
     char what[128];
     snprintf(what, sizeof what, "E=%.0e v=%.0e mass ratio %.0e", E, v0, ratio);
     if (rc) {

@@ -5,6 +5,7 @@
  * restitutes e = 0.5 within 5 % (PD: keeps momentum and a finite state) or stops with a
  * message naming the particles; no state and no output line is ever NaN or infinite. */
 #include "check.h"
+#include "head_on.h"
 #include "floe_pd.h"
 #include "world_internal.h"
 
@@ -21,30 +22,11 @@ static int finite_state(const floe_world *w) {
 
 static void collide(int integ, int adaptive, double E, double v0, double ratio) {
     floe_world_def d = floe_default_world_def();
-    d.dt_safety = 0.1;
     d.integrator = integ;
     d.adaptive = adaptive;
-    floe_world *w = floe_world_create(&d, NULL, 0);
-    floe_material m = {"m", 2500, E, 0.3}, heavy = {"h", 2500 * ratio, E, 0.3};
-    floe_world_add_material(w, &m);
-    floe_world_add_material(w, &heavy);
-    floe_world_set_law(w, 0, 1, floe_hertz_mindlin_law_create(&m, &heavy, 0.5, 0.0));
-    int g = floe_world_add_geometry(w, floe_sphere_create(0.01));
-    floe_particle_def a = floe_default_particle_def(), b = floe_default_particle_def();
-    a.geometry = b.geometry = g;
-    b.material = 1;
-    floe_v3_set(a.v, v0, 0, 0);
-    floe_v3_set(b.x, 0.02, 0, 0);
-    floe_world_add_particle(w, &a);
-    floe_world_add_particle(w, &b);
-    int rc = floe_world_prepare(w);
-    long steps = 0, in_contact = 0;
-    while (rc == FLOE_OK && steps < 2000000) {
-        rc = floe_world_step(w);
-        steps++;
-        if (w->ncontacts) in_contact++;
-        if (in_contact && !w->ncontacts) break;
-    }
+    int rc;
+    long in_contact;
+    floe_world *w = head_on_collision(d, E, v0, ratio, &rc, &in_contact);
     char what[160];
     snprintf(what, sizeof what, "%s%s E=%.0e v=%.0e ratio %.0e", adaptive ? "adaptive " : "", floe_integrator_name(integ),
              E, v0, ratio);

@@ -24,21 +24,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-static unsigned long long rng_s = 0x9E3779B97F4A7C15ULL;
-static double urand(void) {
-    rng_s ^= rng_s >> 12; rng_s ^= rng_s << 25; rng_s ^= rng_s >> 27;
-    return (double)((rng_s * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
-}
-static double uni(double a, double b) { return a + (b - a) * urand(); }
-static void rand_unit(double u[3]) {
-    double z = 2 * urand() - 1, ph = 2 * M_PI * urand(), s = sqrt(1 - z * z);
-    floe_v3_set(u, s * cos(ph), s * sin(ph), z);
-}
-static void rand_quat(double q[4]) {
-    double u1 = urand(), u2 = urand(), u3 = urand();
-    q[0] = sqrt(1 - u1) * sin(2 * M_PI * u2); q[1] = sqrt(1 - u1) * cos(2 * M_PI * u2);
-    q[2] = sqrt(u1) * sin(2 * M_PI * u3); q[3] = sqrt(u1) * cos(2 * M_PI * u3);
-}
+#define TEST_RNG_SEED 0x9E3779B97F4A7C15ULL
+#include "test_rng.h"
 static void quat_z(double q[4], double th) { q[0] = cos(th / 2); q[1] = q[2] = 0; q[3] = sin(th / 2); }
 
 /* ---- shapes ---- */
@@ -496,6 +483,60 @@ static void test_prism_pile(void) {
 }
 
 /* ---- 4. the overlap-area law: exact gradient, flat edges, rest ---- */
+
+/* the contact and overlap of bodies 0 and 1 into c (both always computed: the overlap
+ * energy is defined where the detection misses): 1 when both find a contact */
+static int detect_overlap(floe_world *w, floe_contact *c) {
+    memset(c, 0, sizeof *c);
+    int touch = floe_detect(w, 0, 1, 0, NULL, c) == 1;
+    return floe_detect_overlap(w, 0, 1, 0, c) == 1 && touch;
+}
+
+/* adds ga at the origin (orientation qa) and gb at xb (qb) to the empty world w, their
+ * overlap contact into c: 1, or 0 (w destroyed) when they do not touch */
+static int add_overlap_pair(floe_world *w, floe_geometry *ga, const double qa[4], floe_geometry *gb,
+                            const double xb[3], const double qb[4], floe_contact *c) {
+    const double xa[3] = {0, 0, 0};
+    add_body(w, ga, xa, qa, NULL, NULL);
+    add_body(w, gb, xb, qb, NULL, NULL);
+    if (detect_overlap(w, c)) return 1;
+    floe_world_destroy(w);
+    return 0;
+}
+
+/* -dI/dq of the overlap energy I by central differences, q the translations of body 0 and
+ * its rotations about its centre (2D: x, y, about z; 3D: x, y, z, about x, y, z), a rotation
+ * as the arc length at `scale` (so g holds the force, then the moment / scale) */
+static void overlap_gradient(floe_world *w, int dim, double scale, double *g) {
+    const int nt = dim, nq = dim == 2 ? 3 : 6;
+    double h = 1e-6 * scale;
+    for (int k = 0; k < nq; k++) {
+        double Ip = 0, Im = 0;
+        for (int sgn = -1; sgn <= 1; sgn += 2) {
+            double x0[3], q0[4];
+            memcpy(x0, w->p.x, sizeof x0);
+            memcpy(q0, w->p.q, sizeof q0);
+            if (k < nt) w->p.x[k] += sgn * h;
+            else {
+                double th[3] = {0, 0, 0}, dq[4], qn[4];
+                if (dim == 2) quat_z(dq, sgn * h / scale);
+                else {
+                    th[k - nt] = sgn * h / scale;
+                    floe_q_from_rotvec(dq, th);
+                }
+                floe_q_mul(qn, dq, q0);
+                memcpy(w->p.q, qn, sizeof qn);
+            }
+            floe_contact c2;
+            detect_overlap(w, &c2);
+            if (sgn < 0) Im = c2.area_energy; else Ip = c2.area_energy;
+            memcpy(w->p.x, x0, sizeof x0);
+            memcpy(w->p.q, q0, sizeof q0);
+        }
+        g[k] = -(Ip - Im) / (2 * h) * (k < nt ? 1 : scale);
+    }
+}
+
 static void test_overlap_gradient(void) {
     int n = 0, bad = 0, flat_ok = 0;
     double worst = 0;
@@ -503,45 +544,16 @@ static void test_overlap_gradient(void) {
         double scale = pow(10.0, uni(-3, 3));
         floe_world *w = make_world(2, 917, 1, 0, 0, 0);
         floe_geometry *ga = rand_polygon(scale), *gb = rand_polygon(scale);
-        double qa[4], qb[4], xa[3] = {0, 0, 0}, xb[3];
+        double qa[4], qb[4], xb[3];
         quat_z(qa, uni(0, 2 * M_PI));
         quat_z(qb, uni(0, 2 * M_PI));
         double th = uni(0, 2 * M_PI), dist = uni(0.5, 1.6) * scale;
         floe_v3_set(xb, dist * cos(th), dist * sin(th), 0);
-        add_body(w, ga, xa, qa, NULL, NULL);
-        add_body(w, gb, xb, qb, NULL, NULL);
         floe_contact c;
-        memset(&c, 0, sizeof c);
-        if (floe_detect(w, 0, 1, 0, NULL, &c) != 1 || floe_detect_overlap(w, 0, 1, 0, &c) != 1) {
-            floe_world_destroy(w);
-            continue;
-        }
+        if (!add_overlap_pair(w, ga, qa, gb, xb, qb, &c)) continue;
         n++;
-        /* central differences of I in x, y and the rotation of body 0 about its centre */
-        double h = 1e-6 * scale, g[3], F[3], Mz;
-        floe_contact c2;
-        for (int k = 0; k < 3; k++) {
-            double Ip = 0, Im = 0;
-            for (int sgn = -1; sgn <= 1; sgn += 2) {
-                double x0[3], q0[4];
-                memcpy(x0, w->p.x, sizeof x0);
-                memcpy(q0, w->p.q, sizeof q0);
-                if (k < 2) w->p.x[k] += sgn * h;
-                else {
-                    double dq[4], qn[4];
-                    quat_z(dq, sgn * h / scale);
-                    floe_q_mul(qn, dq, q0);
-                    memcpy(w->p.q, qn, sizeof qn);
-                }
-                memset(&c2, 0, sizeof c2);
-                floe_detect(w, 0, 1, 0, NULL, &c2);
-                floe_detect_overlap(w, 0, 1, 0, &c2);
-                if (sgn < 0) Im = c2.area_energy; else Ip = c2.area_energy;
-                memcpy(w->p.x, x0, sizeof x0);
-                memcpy(w->p.q, q0, sizeof q0);
-            }
-            g[k] = -(Ip - Im) / (2 * h) * (k < 2 ? 1 : scale);
-        }
+        double g[3], F[3], Mz;
+        overlap_gradient(w, 2, scale, g);
         floe_v3_copy(F, c.area_force);
         Mz = (c.point[0] - w->p.x[0]) * F[1] - (c.point[1] - w->p.x[1]) * F[0];
         double ref = fmax(fabs(F[0]) + fabs(F[1]), c.area);
@@ -560,8 +572,7 @@ static void test_overlap_gradient(void) {
         add_body(w, floe_polygon_create(sq, 4, err, sizeof err), xa, q, NULL, NULL);
         add_body(w, floe_polygon_create(sq, 4, err, sizeof err), xb, q, NULL, NULL);
         floe_contact c;
-        memset(&c, 0, sizeof c);
-        if (floe_detect(w, 0, 1, 0, NULL, &c) == 1 && floe_detect_overlap(w, 0, 1, 0, &c) == 1) {
+        if (detect_overlap(w, &c)) {
             double A = 0.7 * 0.02;
             printf("  overlap law, flat edges: area %.6g (exact %.6g), force (%.3g, %.6g), energy %.6g (exact %.6g)\n",
                    c.area, A, c.area_force[0], c.area_force[1], c.area_energy, 0.7 * 0.02 * 0.02 / 2);
@@ -587,46 +598,17 @@ static void test_overlap_gradient3(void) {
         double scale = pow(10.0, uni(-3, 3));
         floe_world *w = make_world(3, 917, 1, 0, 0, 0);
         floe_geometry *ga = rand_polyhedron(scale * 0.7), *gb = rand_polyhedron(scale * 0.7);
-        double qa[4], qb[4], xa[3] = {0, 0, 0}, xb[3], u[3];
+        double qa[4], qb[4], xb[3], u[3];
         rand_quat(qa);
         rand_quat(qb);
         rand_unit(u);
         double dist = uni(0.5, 1.2) * scale;
         for (int k = 0; k < 3; k++) xb[k] = dist * u[k];
-        add_body(w, ga, xa, qa, NULL, NULL);
-        add_body(w, gb, xb, qb, NULL, NULL);
         floe_contact c;
-        memset(&c, 0, sizeof c);
-        if (floe_detect(w, 0, 1, 0, NULL, &c) != 1 || floe_detect_overlap(w, 0, 1, 0, &c) != 1) {
-            floe_world_destroy(w);
-            continue;
-        }
+        if (!add_overlap_pair(w, ga, qa, gb, xb, qb, &c)) continue;
         n++;
-        double h = 1e-6 * scale, g[6], M[3], r[3];
-        for (int k = 0; k < 6; k++) {
-            double Ip = 0, Im = 0;
-            for (int sgn = -1; sgn <= 1; sgn += 2) {
-                double x0[3], q0[4];
-                memcpy(x0, w->p.x, sizeof x0);
-                memcpy(q0, w->p.q, sizeof q0);
-                if (k < 3) w->p.x[k] += sgn * h;
-                else {
-                    double th[3] = {0, 0, 0}, dq[4], qn[4];
-                    th[k - 3] = sgn * h / scale;
-                    floe_q_from_rotvec(dq, th);
-                    floe_q_mul(qn, dq, q0);
-                    memcpy(w->p.q, qn, sizeof qn);
-                }
-                floe_contact c2;
-                memset(&c2, 0, sizeof c2);
-                floe_detect(w, 0, 1, 0, NULL, &c2);
-                floe_detect_overlap(w, 0, 1, 0, &c2);
-                if (sgn < 0) Im = c2.area_energy; else Ip = c2.area_energy;
-                memcpy(w->p.x, x0, sizeof x0);
-                memcpy(w->p.q, q0, sizeof q0);
-            }
-            g[k] = -(Ip - Im) / (2 * h) * (k < 3 ? 1 : scale);
-        }
+        double g[6], M[3], r[3];
+        overlap_gradient(w, 3, scale, g);
         /* moment on A about its centre: (point - x) x F + couple */
         floe_v3_sub(r, c.point, w->p.x);
         floe_v3_cross(M, r, c.area_force);

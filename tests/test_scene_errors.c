@@ -2,6 +2,7 @@
  * names the file, line and column and the offending field; valid scenes build the right
  * particles (lattice, hexagonal 2D/3D, random, region-filled HCP of the RVE example). */
 #include "check.h"
+#include "scene_loc.h"
 #include "floe_scene.h"
 #include "world_internal.h"
 
@@ -17,27 +18,6 @@
     "laws:\n"                                                                          \
     "  - {materials: [glass, glass], model: hertz_mindlin, restitution: 0.5, friction: 0.5}\n"
 #define ONE_BODY "bodies:\n  - {shape: {sphere: {radius: 0.001}}, material: glass, position: [0, 0, 0]}\n"
-
-/* "LINE:COL" (1-based) of the n-th (0-based) occurrence of needle in text */
-static const char *loc_of(const char *text, const char *needle, int nth)
-{
-    static char buf[4][32];
-    static int slot = 0;
-    const char *p = text;
-    for (int k = 0; p && k <= nth; k++) {
-        p = strstr(p, needle);
-        if (p && k < nth) p++;
-    }
-    char *b = buf[slot++ % 4];
-    if (!p) { snprintf(b, 32, "?:?"); return b; }
-    int line = 1, col = 1;
-    for (const char *q = text; q < p; q++) {
-        if (*q == '\n') { line++; col = 1; }
-        else col++;
-    }
-    snprintf(b, 32, "%d:%d", line, col);
-    return b;
-}
 
 /* Replace the first occurrence of `from` in base by `to` (static buffer). */
 static const char *edit(const char *base, const char *from, const char *to)

@@ -4,6 +4,7 @@
  * intervals below the time resolution, non-regular mesh files. An alarm turns a hang into a
  * failure. */
 #include "check.h"
+#include "scene_loc.h"
 #include "floe_scene.h"
 #include "floe_observer.h"
 #include "floe_mesh.h"
@@ -31,23 +32,6 @@ static double now_s(void)
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* "LINE:COL" (1-based) of the first occurrence of needle in text */
-static const char *loc_of(const char *text, const char *needle)
-{
-    static char buf[4][32];
-    static int slot = 0;
-    const char *p = strstr(text, needle);
-    char *b = buf[slot++ % 4];
-    if (!p) { snprintf(b, 32, "?:?"); return b; }
-    int line = 1, col = 1;
-    for (const char *q = text; q < p; q++) {
-        if (*q == '\n') { line++; col = 1; }
-        else col++;
-    }
-    snprintf(b, 32, "%d:%d", line, col);
-    return b;
 }
 
 /* The scene (text of length len, may hold NUL bytes) must fail within max_s seconds; the
@@ -80,11 +64,11 @@ static void test_steps(void)
     const char *t = "dimension: 3\ntime: {duration: 1e30, dt: 1.0e-5}\n"
                     "materials:\n  - {name: glass, density: 2500, young: 1.0e7, poisson: 0.3}\n"
                     "laws:\n  - {materials: [glass, glass], model: hertz_mindlin, restitution: 0.5, friction: 0.5}\n" ONE_BODY;
-    expect_fail("duration 1e30", t, loc_of(t, "1e30"), "time.duration", "1e12 steps");
+    expect_fail("duration 1e30", t, loc_of(t, "1e30", 0), "time.duration", "1e12 steps");
     t = "dimension: 3\ntime: {duration: 1e30}\n"
         "materials:\n  - {name: glass, density: 2500, young: 1.0e7, poisson: 0.3}\n"
         "laws:\n  - {materials: [glass, glass], model: hertz_mindlin, restitution: 0.5, friction: 0.5}\n" ONE_BODY;
-    expect_fail("duration 1e30, auto dt", t, loc_of(t, "1e30"), "time.duration", "steps of");
+    expect_fail("duration 1e30, auto dt", t, loc_of(t, "1e30", 0), "time.duration", "steps of");
 }
 
 static void test_packings(void)
@@ -92,7 +76,7 @@ static void test_packings(void)
     printf("packings\n");
     const char *t = BASE_MATS "bodies:\n  - {packing: random, shape: {sphere: {radius: 0.001}}, material: glass,\n"
                               "     region: {min: [0, 0, 0], max: [1e19, 1, 1]}, count: 10}\n";
-    expect_fail("random region 1e19 m", t, loc_of(t, "[1e19"), "region", "beyond 1e12 m");
+    expect_fail("random region 1e19 m", t, loc_of(t, "[1e19", 0), "region", "beyond 1e12 m");
     t = BASE_MATS "bodies:\n  - {packing: random, shape: {sphere: {radius: 0.001}}, material: glass,\n"
                   "     region: {min: [0, 0, 0], max: [1e11, 1e11, 1e11]}, count: 10}\n";
     {
@@ -106,33 +90,33 @@ static void test_packings(void)
     }
     t = BASE_MATS "bodies:\n  - {packing: random, shape: {sphere: {radius: 0.001}}, material: glass,\n"
                   "     region: {min: [0, 0, 0], max: [0.01, 0.01, 0.01]}, count: 1000, max_tries: 1000000000}\n";
-    expect_fail("random cannot fit", t, loc_of(t, "1000,"), "cannot fit", "1000 particles");
+    expect_fail("random cannot fit", t, loc_of(t, "1000,", 0), "cannot fit", "1000 particles");
     /* fits by volume (fraction 0.52) but beyond random sequential jamming (0.38) */
     t = BASE_MATS "bodies:\n  - {packing: random, shape: {sphere: {radius: 0.001}}, material: glass,\n"
                   "     region: {min: [0, 0, 0], max: [0.01, 0.01, 0.01]}, count: 125, max_tries: 1000000000}\n";
-    expect_fail_n("random jammed", t, loc_of(t, "125,"), "jammed", "tries in a row", 20.0);
+    expect_fail_n("random jammed", t, loc_of(t, "125,", 0), "jammed", "tries in a row", 20.0);
     t = BASE_MATS "bodies:\n  - {packing: random, shape: {sphere: {radius: 0.001}}, material: glass,\n"
                   "     region: {min: [0, 0, 0], max: [0.01, 0.01, 0.01]}, count: 10, max_tries: 5000000000}\n";
-    expect_fail("max_tries 5e9", t, loc_of(t, "5000000000"), "max_tries", "1e9");
+    expect_fail("max_tries 5e9", t, loc_of(t, "5000000000", 0), "max_tries", "1e9");
     t = BASE_MATS "bodies:\n  - {packing: random, shape: {sphere: {radius: 0.001}}, material: glass,\n"
                   "     region: {min: [0, 0, 0], max: [1, 1, 1]}, count: 1000000000000}\n";
-    expect_fail("random count 1e12", t, loc_of(t, "1000000000000"), "count must be in [1, 1e8]", NULL);
+    expect_fail("random count 1e12", t, loc_of(t, "1000000000000", 0), "count must be in [1, 1e8]", NULL);
     t = BASE_MATS "bodies:\n  - {packing: lattice, shape: {sphere: {radius: 0.001}}, material: glass,\n"
                   "     spacing: 0.003, region: {min: [0, 0, 0], max: [1e9, 1e9, 1e9]}}\n";
-    expect_fail("lattice region 1e9 m", t, loc_of(t, "{min"), "too many lattice sites", NULL);
+    expect_fail("lattice region 1e9 m", t, loc_of(t, "{min", 0), "too many lattice sites", NULL);
     t = BASE_MATS "bodies:\n  - {packing: lattice, shape: {sphere: {radius: 0.001}}, material: glass,\n"
                   "     spacing: 0.003, region: {min: [0, 0, 0], max: [1e11, 1e11, 1e11]}}\n";
-    expect_fail("lattice region 1e11 m", t, loc_of(t, "{min"), "too many lattice sites", NULL);
+    expect_fail("lattice region 1e11 m", t, loc_of(t, "{min", 0), "too many lattice sites", NULL);
     t = BASE_MATS "bodies:\n  - {packing: lattice, shape: {sphere: {radius: 0.001}}, material: glass,\n"
                   "     spacing: 0.003, region: {min: [0, 0, 0], max: [1e19, 1, 1]}}\n";
-    expect_fail("lattice region 1e19 m", t, loc_of(t, "[1e19"), "region", "beyond 1e12 m");
+    expect_fail("lattice region 1e19 m", t, loc_of(t, "[1e19", 0), "region", "beyond 1e12 m");
 }
 
 static void test_intervals(void)
 {
     printf("output intervals\n");
     const char *t = BASE_MATS ONE_BODY "outputs:\n  - {type: energy, interval: 1e-300, file: e.csv}\n";
-    expect_fail("interval 1e-300", t, loc_of(t, "1e-300"), "outputs[0].interval", "time resolution");
+    expect_fail("interval 1e-300", t, loc_of(t, "1e-300", 0), "outputs[0].interval", "time resolution");
     /* an interval shorter than the step writes every step (and the world does not count the
      * intervals one by one) */
     char dir[] = "/tmp/floe_limits_XXXXXX";
@@ -176,10 +160,10 @@ static void test_mesh_fifo(void)
     char t[2048];
     snprintf(t, sizeof t, BASE_MATS "bodies:\n  - {shape: {mesh: {file: %s}}, material: glass, position: [0, 0, 0]}\n",
              fifo);
-    expect_fail("FIFO as mesh file", t, loc_of(t, fifo), "not a regular file", "FIFO");
+    expect_fail("FIFO as mesh file", t, loc_of(t, fifo, 0), "not a regular file", "FIFO");
     snprintf(t, sizeof t, BASE_MATS "bodies:\n  - {shape: {mesh: {file: %s}}, material: glass, position: [0, 0, 0]}\n",
              dir);
-    expect_fail("directory as mesh file", t, loc_of(t, dir), "not a regular file", "directory");
+    expect_fail("directory as mesh file", t, loc_of(t, dir, 0), "not a regular file", "directory");
     remove(fifo);
     rmdir(dir);
 }
@@ -216,7 +200,7 @@ static void test_text(void)
     {
         char at[32];
         int l, c;
-        sscanf(loc_of(good, "0.01"), "%d:%d", &l, &c);
+        sscanf(loc_of(good, "0.01", 0), "%d:%d", &l, &c);
         snprintf(at, sizeof at, "%d:%d", l, c + 1);
         expect_file_fail("NUL byte", buf, sizeof good - 1, at, "NUL byte");
     }
@@ -227,7 +211,7 @@ static void test_text(void)
         /* line:col of the bad byte = that of "glass" + 2 columns */
         char at[32];
         int l, c;
-        sscanf(loc_of(good, "glass"), "%d:%d", &l, &c);
+        sscanf(loc_of(good, "glass", 0), "%d:%d", &l, &c);
         snprintf(at, sizeof at, "%d:%d", l, c + 2);
         expect_file_fail("invalid UTF-8 0xff", buf, sizeof good - 1, at, "invalid UTF-8 (byte 0xff)");
         memcpy(buf, good, sizeof good);
@@ -249,28 +233,28 @@ static void test_text(void)
     floe_world_destroy(w);
 
     t = BASE_MATS ": 37\n" ONE_BODY;
-    expect_fail("empty root key", t, loc_of(t, ": 37"), "empty key in the scene", NULL);
+    expect_fail("empty root key", t, loc_of(t, ": 37", 0), "empty key in the scene", NULL);
     t = BASE_MATS "bodies:\n  - {shape: {sphere: {radius: 0.001}}, material: glass, : 4, position: [0, 0, 0]}\n";
-    expect_fail("empty key in a body", t, loc_of(t, ": 4"), "empty key in bodies[0]", NULL);
+    expect_fail("empty key in a body", t, loc_of(t, ": 4", 0), "empty key in bodies[0]", NULL);
     t = BASE_MATS "bodies:\n  - {shape: {sphere: {radius: 0.001}}, material: glass, position: []}\n";
-    expect_fail("empty position list", t, loc_of(t, "[]"), "position", "got 0");
+    expect_fail("empty position list", t, loc_of(t, "[]", 0), "position", "got 0");
     t = BASE_MATS "bodies:\n  - {shape: {sphere: {radius: 0.001}}, material: glass, position: {}}\n";
-    expect_fail("empty position map", t, loc_of(t, "{}"), "position", NULL);
+    expect_fail("empty position map", t, loc_of(t, "{}", 0), "position", NULL);
     t = "dimension: 3\ntime: {duration: 0.01}\nmaterials:\n  - {name: glass, density: 2500}\n"
         "laws:\n  - {materials: [], model: linear, kn: 1e3}\n" ONE_BODY;
-    expect_fail("empty law materials", t, loc_of(t, "[]"), "laws[0].materials", NULL);
+    expect_fail("empty law materials", t, loc_of(t, "[]", 0), "laws[0].materials", NULL);
     t = BASE_MATS ONE_BODY "outputs:\n  - {type: tracker, particles: []}\n";
-    expect_fail("empty tracker list", t, loc_of(t, "[]"), "particles", NULL);
+    expect_fail("empty tracker list", t, loc_of(t, "[]", 0), "particles", NULL);
     t = BASE_MATS "bodies:\n  - {}\n";
-    expect_fail("empty body", t, loc_of(t, "- {}"), "bodies[0].shape is required", NULL);
+    expect_fail("empty body", t, loc_of(t, "- {}", 0), "bodies[0].shape is required", NULL);
 
     /* two outputs writing one file */
     t = BASE_MATS ONE_BODY "outputs:\n  - {type: csv, file: a.csv}\n  - {type: energy, every: 5, file: ./a.csv}\n";
-    expect_fail("two writers of a.csv", t, loc_of(t, "./a.csv"), "outputs[0] (line 10, column 23)", "a.csv");
+    expect_fail("two writers of a.csv", t, loc_of(t, "./a.csv", 0), "outputs[0] (line 10, column 23)", "a.csv");
     t = BASE_MATS ONE_BODY "outputs:\n  - {type: csv}\n  - {type: tracker, particles: [0], file: particles.csv}\n";
-    expect_fail("default file taken", t, loc_of(t, "particles.csv"), "outputs[0] (line 10, column 5)", "particles.csv");
+    expect_fail("default file taken", t, loc_of(t, "particles.csv", 0), "outputs[0] (line 10, column 5)", "particles.csv");
     t = BASE_MATS ONE_BODY "outputs:\n  - {type: vtk, prefix: f}\n  - {type: vtk, prefix: f, every: 7}\n";
-    expect_fail("two vtk prefixes", t, loc_of(t, "f, every"), "outputs[0]", "f.pvd");
+    expect_fail("two vtk prefixes", t, loc_of(t, "f, every", 0), "outputs[0]", "f.pvd");
 }
 
 /* whole file as a string (caller frees), NULL if missing */
@@ -300,13 +284,13 @@ static void test_nonfinite(void)
                     "materials:\n  - {name: glass, density: 1e-300, young: 1.0e7, poisson: 0.3}\n"
                     "laws:\n  - {materials: [glass, glass], model: hertz_mindlin, restitution: 0.5, friction: 0.5}\n"
                     ONE_BODY;
-    expect_fail("density 1e-300", t, loc_of(t, "{name"), "particle 0 (bodies[0]) of material 'glass'",
+    expect_fail("density 1e-300", t, loc_of(t, "{name", 0), "particle 0 (bodies[0]) of material 'glass'",
                 "mass 4.18879e-309 kg");
     t = BASE_MATS "bodies:\n  - {shape: {sphere: {radius: 0.001}}, material: glass, position: [0, 0, 0], grow_rate: -1}\n";
-    expect_fail("shrinking to zero", t, loc_of(t, "-1}"), "growth rate -1 m/s", "to zero at t = 0.001 s");
+    expect_fail("shrinking to zero", t, loc_of(t, "-1}", 0), "growth rate -1 m/s", "to zero at t = 0.001 s");
     t = BASE_MATS "bodies:\n  - {packing: lattice, shape: {sphere: {radius: 0.001}}, material: glass, origin: [0, 0, 0],\n"
                   "     counts: [2, 1, 1], spacing: 0.003, grow: {index: 1, rate: -0.5}}\n";
-    expect_fail("packing shrinking to zero", t, loc_of(t, "-0.5"), "growth rate -0.5 m/s", "particle 1");
+    expect_fail("packing shrinking to zero", t, loc_of(t, "-0.5", 0), "growth rate -0.5 m/s", "particle 1");
 
     /* a sphere that shrinks slowly is fine for the scene's duration; run past it, the state
      * object stops the run and the message says why */
@@ -390,7 +374,7 @@ static void test_yaml_size(void)
     expect_fail_n("alias bomb (10^9 nodes)", bomb, NULL, "more than 2000000 YAML nodes", "alias bomb", 10.0);
     expect_fail("alias cycle", "a: &a [1, *a]\n", "1:11", "alias *a", "refer to themselves");
     const char *t = BASE_MATS "bodies:\n  - {shape: {sphere: {radius: 0.001}}, material: glass, position: *p}\n";
-    expect_fail("undefined alias", t, loc_of(t, "*p"), "alias *p: no anchor &p", NULL);
+    expect_fail("undefined alias", t, loc_of(t, "*p", 0), "alias *p: no anchor &p", NULL);
     /* aliases and merge keys within bounds still work */
     t = BASE_MATS "bodies:\n  - &b {shape: {sphere: {radius: 0.001}}, material: glass, position: [0, 0, 0]}\n"
                   "  - {<<: *b, position: [0, 0, 1]}\n";
@@ -432,11 +416,11 @@ static void test_memory(void)
     }
     const char *t = BASE_MATS "bodies:\n  - {packing: lattice, shape: {sphere: {radius: 0.001}}, material: glass,\n"
                               "     origin: [0, 0, 0], counts: [1000, 1000, 100], spacing: 0.002}\n";
-    expect_fail_n("1e8 particles", t, loc_of(t, "[1000"), "bodies[0]: 1e+08 particles", "more than this machine's memory",
+    expect_fail_n("1e8 particles", t, loc_of(t, "[1000", 0), "bodies[0]: 1e+08 particles", "more than this machine's memory",
                   2.0);
     t = BASE_MATS "bodies:\n  - {packing: random, shape: {sphere: {radius: 0.001}}, material: glass,\n"
                   "     region: {min: [0, 0, 0], max: [100, 100, 100]}, count: 100000000}\n";
-    expect_fail_n("random 1e8", t, loc_of(t, "100000000"), "1e+08 particles", "GB", 2.0);
+    expect_fail_n("random 1e8", t, loc_of(t, "100000000", 0), "1e+08 particles", "GB", 2.0);
 }
 
 /* observers that fail like writers on a full disk: A at step 3 (first), B and C at the end */

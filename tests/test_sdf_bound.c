@@ -172,6 +172,19 @@ static double bound_radius(const shape *S) {
 }
 
 /* ---- 1. walls and 2. spheres ---- */
+
+/* detects the contact of i and j: the SDF evaluations it cost go to cost[(*n)++], a miss
+ * to *missed, its depth error against the exact overlap to *worst */
+static void depth_sample(floe_world *w, shape *S, int i, int j, double overlap, long *cost, int *n, int *missed,
+                         double *worst) {
+    floe_contact c;
+    long e0 = S->evals;
+    int r = floe_detect(w, i, j, 0, NULL, &c);
+    cost[(*n)++] = S->evals - e0;
+    if (r != 1) (*missed)++;
+    else *worst = fmax(*worst, fabs(c.depth - overlap));
+}
+
 static void test_walls_spheres(long *cost_wall[2], int nw[2], long *cost_sphere[2], int ns[2]) {
     const double overlap = 1e-4, tol = 1e-5 * overlap;
     for (int si = 0; si < NSHAPE; si++) {
@@ -199,13 +212,8 @@ static void test_walls_spheres(long *cost_wall[2], int nw[2], long *cost_sphere[
             double h = support_ref(S, db);
             floe_v3_set(p.x, 0.01 * t, 0, h - overlap);
             int i = floe_world_add_particle(w, &p);
-            floe_contact c;
-            long e0 = S->evals;
-            int r = floe_detect(w, i, wall, 0, NULL, &c);
             int grp = si >= NBOUND;
-            cost_wall[grp][nw[grp]++] = S->evals - e0;
-            if (r != 1) { missed++; continue; }
-            worst = fmax(worst, fabs(c.depth - overlap));
+            depth_sample(w, S, i, wall, overlap, cost_wall[grp], &nw[grp], &missed, &worst);
         }
         CHECK(missed == 0, "%s against a wall: %d of 32 orientations missed at 0.1 mm overlap", names[si], missed);
         CHECK(worst <= tol, "%s against a wall: depth error %.3g m > %.3g m", names[si], worst, tol);
@@ -227,13 +235,8 @@ static void test_walls_spheres(long *cost_wall[2], int nw[2], long *cost_sphere[
             q.geometry = g;
             floe_v3_set(q.x, 0.5, 0, 0);
             int gi = floe_world_add_particle(w, &q);
-            floe_contact c;
-            long e0 = S->evals;
-            int r = floe_detect(w, sp, gi, 0, NULL, &c);
             int grp = si >= NBOUND;
-            cost_sphere[grp][ns[grp]++] = S->evals - e0;
-            if (r != 1) { missed++; continue; }
-            worst = fmax(worst, fabs(c.depth - overlap));
+            depth_sample(w, S, sp, gi, overlap, cost_sphere[grp], &ns[grp], &missed, &worst);
         }
         CHECK(missed == 0, "%s against spheres: %d of 32 missed", names[si], missed);
         CHECK(worst <= tol, "%s against spheres: depth error %.3g m > %.3g m", names[si], worst, tol);

@@ -123,11 +123,9 @@ static void print(const char *name, const result *r, double dt) {
            r->lp, 1e9 * r->loop / r->pairs, 1e9 * r->loop / r->contacts, r->lp > 0 ? 1e9 * r->loop / r->lp : 0.0, r->ke);
 }
 
-int main(int argc, char **argv) {
-    long nsteps = argc > 1 ? atol(argv[1]) : 20000;
-    int n = argc > 2 ? atoi(argv[2]) : 5000;
-    floe_geometry *shapes[NSHAPES];
-    double req[NSHAPES];
+/* the NSHAPES grain shapes, the same on every call (the stream restarts at 777): 0, or 1
+ * with a message */
+static int make_grains(floe_geometry *shapes[NSHAPES]) {
     rng_state = 777;
     for (int s = 0; s < NSHAPES; s++) {
         double pl[4 * NPLANES];
@@ -141,6 +139,17 @@ int main(int argc, char **argv) {
         char err[256];
         shapes[s] = floe_polyhedron_from_planes(pl, NPLANES, err, sizeof err);
         if (!shapes[s]) { fprintf(stderr, "shape %d: %s\n", s, err); return 1; }
+    }
+    return 0;
+}
+
+int main(int argc, char **argv) {
+    long nsteps = argc > 1 ? atol(argv[1]) : 20000;
+    int n = argc > 2 ? atoi(argv[2]) : 5000;
+    floe_geometry *shapes[NSHAPES];
+    double req[NSHAPES];
+    if (make_grains(shapes)) return 1;
+    for (int s = 0; s < NSHAPES; s++) {
         floe_mass_properties mp;
         floe_geometry_mass_properties(shapes[s], 3, 1.0, &mp);
         req[s] = cbrt(3 * mp.mass / (4 * M_PI));
@@ -152,17 +161,7 @@ int main(int argc, char **argv) {
     floe_world *wp = build(1, n, 0, shapes, req);
     double dtp = floe_world_dt(wp);
     floe_world_destroy(wp); /* owns the shapes: rebuild them below */
-    rng_state = 777;
-    for (int s = 0; s < NSHAPES; s++) {
-        double pl[4 * NPLANES];
-        for (int k = 0; k < NPLANES; k++) {
-            double *q = pl + 4 * k;
-            if (k < 6) { q[0] = q[1] = q[2] = 0; q[k / 2] = k % 2 ? -1 : 1; }
-            else unit_vec(q);
-            q[3] = R * (1 + 0.15 * (2 * urand() - 1));
-        }
-        shapes[s] = floe_polyhedron_from_planes(pl, NPLANES, NULL, 0);
-    }
+    if (make_grains(shapes)) return 1;
     floe_world *ws = build(0, n, 0, NULL, req);
     double dt = fmin(dtp, floe_world_dt(ws));
     floe_world_destroy(ws);
