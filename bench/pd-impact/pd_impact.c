@@ -179,7 +179,7 @@ int main(int argc, char **argv) {
     floe_material mpd = {"pd", RHO, 1.0e10, 0.25}, mind = {"indenter", 7800, 2e11, 0.3};
     int mat_pd = floe_world_add_material(w, &mpd), mat_ind = floe_world_add_material(w, &mind);
     floe_contact_law *zl = floe_no_contact_law_create();
-    indent_law *il = malloc(sizeof *il);
+    indent_law *il = calloc(1, sizeof *il);
     if (!zl || !il) return 1;
     il->base.klass = &indent_class;
     il->kv = K_IND * V;

@@ -43,7 +43,7 @@ int main(void) {
 
     floe_material rubber = {"rubber", 1100, 1e6, 0.45};
     int mat2 = floe_world_add_material(w, &rubber);
-    spring_law *sl = malloc(sizeof *sl);
+    spring_law *sl = calloc(1, sizeof *sl); /* zeroed: base.friction = 0 */
     sl->base.klass = &spring_class;
     sl->k = 500;
     floe_world_set_law(w, mat2, mat2, &sl->base);           /* the world frees it (free()) */
