@@ -36,7 +36,8 @@ static void life_dissipation(floe_world *w, int i, int j, double d) {
 }
 
 /* The springs of a contact manifold's extra vertices (floe_contact.h): the law's elastic
- * force and energy at each vertex's depth (a call with no relative motion and no history),
+ * force and energy at each vertex's depth (a call with no relative motion, no history and
+ * a zero step),
  * summed as a force on i (fx) with its torques about the centres (tx_i, tx_j), and their
  * energy (ex); their loads in fe and their sum in c->fn_extra. Also the deepest point's
  * elastic load f0 and the load centre of all the points (centre). */
@@ -59,6 +60,7 @@ static int manifold_springs(floe_world *w, const floe_contact_law *law, floe_con
         floe_v3_set(ce.wr, 0, 0, 0);
         ce.nextra = 0;
         ce.fn_extra = 0.0;
+        ce.dt = 0.0; /* elastic only: no implicit dashpot factor, no history advanced */
         floe_contact_result re;
         memset(&re, 0, sizeof re);
         int rc = law->klass->force(law, &ce, he, &re);
