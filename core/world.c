@@ -2361,7 +2361,7 @@ static int energy_watchdog(floe_world *w) {
     /* (NaN passes no test: the particle checks report it) */
     if (!(c_pair > tol || c_pd > tol || c_led > tol || c_bal > tol_bal)) return FLOE_OK;
     if (w->wd_step >= 0 && w->def.energy_check == FLOE_CHECK_WARN) return FLOE_OK; /* warned once */
-    char what[256], cause[320], name[96];
+    char what[256], cause[512], name[96];
     const floe_particles *p = &w->p;
     stag_cause(w, cause, sizeof cause);
     if (c_pair > tol || (c_led > tol && c_pd <= tol && w->wd_worst < 0)) {
@@ -2409,9 +2409,15 @@ static int energy_watchdog(floe_world *w) {
                 if (w->pd_of && w->pd_of[bi] >= 0) pd_body_name(w, w->pd_of[bi], name, sizeof name);
                 else snprintf(name, sizeof name, "particle %d (body %d)", bi, p->group[bi]);
             }
-            if (!cause[0])
+            if (!cause[0]) {
+                const floe_geometry_class *gk = bi >= 0 ? w->geoms[p->geom[bi]]->klass : NULL;
+                const int poly = gk == &floe_box_class || gk == &floe_polytope_class || gk == &floe_compound_class;
                 snprintf(cause, sizeof cause, "the integration created it: the step %g s is too large for the "
-                         "stiffness, or a force is not conservative (a body-force callback); lower dt or safety", w->dt);
+                         "stiffness, or a force is not conservative (a body-force callback)%s; lower dt or safety",
+                         w->dt, poly ? ", or a polytope contact under a point law (linear, Hertz) crossed a kink of "
+                         "the deepest-point depth (an edge lying on a face: docs/models.md, \"Contact manifold\"; "
+                         "model: overlap_area has none)" : "");
+            }
         }
         snprintf(what, sizeof what, "the energy grew %.3g J beyond the ledger (balance error), most of it in %s",
                  c_bal * S, bi >= 0 || kb >= 0 ? name : "?");

@@ -91,7 +91,7 @@ typedef struct floe_detect_state {
 
 struct floe_world {
     floe_world_def def;
-    char err[512];
+    char err[1024];
     floe_particles p;
     floe_geometry **geoms; int ngeoms, geoms_cap;
     floe_material *mats; int nmats, mats_cap;
@@ -163,7 +163,7 @@ struct floe_world {
                                  (core/world.c shadow_term; 0 for RK2) */
     double wd_created;        /* largest created fraction of the scale seen */
     long wd_step;             /* step at which the tolerance was passed (-1: not yet) */
-    char wd_msg[512];
+    char wd_msg[1024];
     /* beam bonds (contact/floe_beam.h, issue #5); NULL without bonds */
     struct floe_beam_set *beams;
 };
