@@ -410,24 +410,30 @@ static void test_box_stack(void) {
     floe_world_destroy(w);
 }
 
-static void test_box_stack2(void) {
-    /* 2D, linear law: three 1 m squares on a fixed polygon slab, off-centre by 0.2 and 0.1:
-     * the manifold's two springs per flat contact hold them (a single deepest point rocked) */
-    const double a = 1, rho = 917, m = rho * a * a, kn = 1e3 * m * 9.81 / a;
-    floe_world *w = make_world(2, rho, kn, 2 * 0.5 * sqrt(kn * m), 0.5, 9.81);
+/* 2D: a fixed 6 x 1 polygon slab under y = 0 and three 1 m squares on it, the middle one
+ * off-centre by 0.2, the top one by -0.1 (walls are not polygons: the overlap law needs
+ * polygon pairs) */
+static void add_square_stack(floe_world *w) {
     char err[64];
     double floor_xy[8] = {-3, -0.5, 3, -0.5, 3, 0.5, -3, 0.5}, sq[8] = {-0.5, -0.5, 0.5, -0.5, 0.5, 0.5, -0.5, 0.5};
-    double q[4] = {1, 0, 0, 0};
+    double q[4] = {1, 0, 0, 0}, off[3] = {0, 0.2, -0.1};
     floe_particle_def p = floe_default_particle_def();
     p.geometry = floe_world_add_geometry(w, floe_polygon_create(floor_xy, 4, err, sizeof err));
     p.motion = FLOE_FIXED;
     floe_v3_set(p.x, 0, -0.5, 0);
     floe_world_add_particle(w, &p);
-    double off[3] = {0, 0.2, -0.1};
     for (int k = 0; k < 3; k++) {
-        double x[3] = {off[k] * a, (0.5 + k) * a, 0};
+        double x[3] = {off[k], 0.5 + k, 0};
         add_body(w, floe_polygon_create(sq, 4, err, sizeof err), x, q, NULL, NULL);
     }
+}
+
+static void test_box_stack2(void) {
+    /* 2D, linear law: three 1 m squares on a fixed polygon slab, off-centre by 0.2 and 0.1:
+     * the manifold's two springs per flat contact hold them (a single deepest point rocked) */
+    const double a = 1, rho = 917, m = rho * a * a, kn = 1e3 * m * 9.81 / a;
+    floe_world *w = make_world(2, rho, kn, 2 * 0.5 * sqrt(kn * m), 0.5, 9.81);
+    add_square_stack(w);
     run_rest(w, "linear law: 2D stack of 3 squares, off-centre by 0.2 and 0.1", a, 40000);
     floe_world_destroy(w);
 }
@@ -633,21 +639,8 @@ static void test_overlap_rest(void) {
     use_overlap = 1;
     const double a = 1, rho = 917, m = rho * a * a, kn = 1e3 * m * 9.81 / a;
     overlap_size = a;
-    double q[4] = {1, 0, 0, 0};
-    /* walls are not polygons (the law needs polygon pairs): a fixed polygon floor */
     floe_world *w = make_world(2, rho, kn, 2 * 0.5 * sqrt(kn * m), 0.5, 9.81);
-    char err[64];
-    double floor_xy[8] = {-3, -0.5, 3, -0.5, 3, 0.5, -3, 0.5}, sq[8] = {-0.5, -0.5, 0.5, -0.5, 0.5, 0.5, -0.5, 0.5};
-    floe_particle_def p = floe_default_particle_def();
-    p.geometry = floe_world_add_geometry(w, floe_polygon_create(floor_xy, 4, err, sizeof err));
-    p.motion = FLOE_FIXED;
-    floe_v3_set(p.x, 0, -0.5, 0);
-    floe_world_add_particle(w, &p);
-    double off[3] = {0, 0.2, -0.1};
-    for (int k = 0; k < 3; k++) {
-        double x[3] = {off[k] * a, (0.5 + k) * a, 0};
-        add_body(w, floe_polygon_create(sq, 4, err, sizeof err), x, q, NULL, NULL);
-    }
+    add_square_stack(w);
     /* the off-centre stack tilts and slides into place slowly: 60 s of settling */
     run_rest(w, "overlap-area law: 2D stack of 3 boxes, off-centre by 0.2 and 0.1", a, 400000);
     floe_world_destroy(w);
