@@ -934,13 +934,11 @@ static int estimate_dt(floe_world *w) {
         double imin = w->def.dim == 2 ? I[2] : fmin(I[0], fmin(I[1], I[2]));
         double rot = imin > 0 ? fmax(1.0, 1 + p->mass[i] * p->radius[i] * p->radius[i] / imin) : 1.0;
         double rotn = p->kind[i] == FLOE_GEOM_SPHERE ? 1.0 : rot;
-        /* polytopes touch through a contact manifold (up to 2 corner springs in 2D, 4 in 3D):
-         * stiffer in rocking than one point at the bounding radius. Worst case, a thin plate
-         * flat on a face: 2D 2 k (a/2)^2 / (m a^2/12) = 6 k/m against rot = 4; 3D
-         * 4 k (a/2)^2 / (m a^2/12) = 12 k/m against rot = 7: the factors 1.5 and 1.75 */
-        const floe_geometry_class *gk = w->geoms[p->geom[i]]->klass;
-        if (gk == &floe_box_class || gk == &floe_polytope_class || gk == &floe_compound_class)
-            rotn *= w->def.dim == 2 ? 1.5 : 1.75;
+        /* polytopes touch through a contact manifold (up to 2 corner springs in 2D, 4 in 3D),
+         * which can be stiffer in rocking than one point at the bounding radius (a thin
+         * square plate flat on a face: 12 k/m against 1 + m R^2/I_min = 7): the larger */
+        if (p->kind[i] != FLOE_GEOM_SPHERE)
+            rotn = fmax(rotn, floe_polytope_manifold_factor(w->geoms[p->geom[i]], w->def.dim, I, p->mass[i]));
         dt_cache_entry key = {p->material[i], p->mass[i], p->radius[i], rot, rotn, 0, 0, 0, 0, 0, 0};
         unsigned long long hsh = (unsigned long long)key.mat * 0x9E3779B97F4A7C15ull;
         const double vals[4] = {key.m, key.r, key.rot, key.rotn};

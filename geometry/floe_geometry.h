@@ -205,6 +205,16 @@ extern const floe_geometry_class floe_compound_class;
 floe_geometry *floe_compound_create(floe_geometry **pieces, const double *x, const double *q, int n, int dim,
                                     char *err, size_t errlen);
 
+/* Stiffness multiplier of a polytope's contact manifold (docs/models.md, "Contact
+ * manifold"): resting on any one face with K = 2 (2D) or 4 (3D) springs of stiffness k at
+ * that face's corners (all of them, scaled by K/corners, if it has more), the body's highest
+ * frequency is about sqrt(r k / m) with r = the largest over faces of max(K, max over
+ * rocking axes e of m sum (rho . (n x e))^2 / I_e) (translation and rocking taken apart;
+ * rho from the face's centre, I_e from the principal moments `inertia` of a body of mass
+ * `mass`). For boxes and polytopes; 0 for any other shape. A thin square plate: 12, a cube:
+ * 6 (one spring at the bounding radius: 1 + m R^2 / I_min = 7 and 5.5). */
+double floe_polytope_manifold_factor(const floe_geometry *g, int dim, const double inertia[3], double mass);
+
 /* Symmetric 3x3 eigen-decomposition (cyclic Jacobi): A = V diag(l) V^T, columns of V are the
  * eigenvectors (right-handed), l ascending. For the principal frames. */
 void floe_sym3_eigen(const double A[3][3], double l[3], double V[3][3]);

@@ -369,3 +369,79 @@ void floe_set_err(char *err, size_t errlen, const char *fmt, ...) {
     vsnprintf(err, errlen, fmt, ap);
     va_end(ap);
 }
+
+/* floe_polytope_manifold_factor (floe_geometry.h): one face's corners V (nc of them), its
+ * outward normal n */
+static double face_factor(const double *V, int nc, const double n[3], int dim, const double I[3], double m) {
+    const int K = dim == 2 ? 2 : 4;
+    const double w = nc > K ? (double)K / nc : 1.0;
+    double c[3] = {0, 0, 0}, best = nc < K ? nc : K;
+    for (int k = 0; k < nc; k++) floe_v3_axpy(c, 1.0 / nc, V + 3 * k);
+    /* rocking axes e in the face's plane (2D: z only) */
+    double t1[3], t2[3], z[3] = {0, 0, 1};
+    floe_v3_cross(t1, n, z);
+    if (floe_v3_dot(t1, t1) < 1e-12) { double x[3] = {1, 0, 0}; floe_v3_cross(t1, n, x); }
+    floe_v3_scale(t1, 1.0 / floe_v3_norm(t1));
+    floe_v3_cross(t2, n, t1);
+    const int na = dim == 2 ? 1 : 36;
+    for (int a = 0; a < na; a++) {
+        double e[3], ep[3];
+        if (dim == 2) floe_v3_copy(e, z);
+        else {
+            const double th = M_PI * a / na;
+            for (int k = 0; k < 3; k++) e[k] = cos(th) * t1[k] + sin(th) * t2[k];
+        }
+        floe_v3_cross(ep, n, e);
+        double S = 0, Ie = I[0] * e[0] * e[0] + I[1] * e[1] * e[1] + I[2] * e[2] * e[2];
+        for (int k = 0; k < nc; k++) {
+            double r[3];
+            floe_v3_sub(r, V + 3 * k, c);
+            double s = floe_v3_dot(r, ep);
+            S += w * s * s;
+        }
+        if (Ie > 0 && m * S / Ie > best) best = m * S / Ie;
+    }
+    return best;
+}
+
+double floe_polytope_manifold_factor(const floe_geometry *g, int dim, const double inertia[3], double mass) {
+    double Vb[24], Pb[24], Vf[3 * 64];
+    const double *V = NULL, *P = NULL;
+    int nv = 0, np = 0;
+    if (g->klass == &floe_box_class) {
+        const double *h = ((const floe_box *)g)->half;
+        for (int k = 0; k < 8; k++) {
+            Vb[3 * k] = k & 1 ? h[0] : -h[0];
+            Vb[3 * k + 1] = k & 2 ? h[1] : -h[1];
+            Vb[3 * k + 2] = dim == 2 ? 0.0 : (k & 4 ? h[2] : -h[2]);
+        }
+        for (int a = 0; a < 3; a++)
+            for (int s = 0; s < 2; s++) {
+                double *Q = Pb + 4 * (2 * a + s);
+                Q[0] = Q[1] = Q[2] = 0;
+                Q[a] = s ? 1.0 : -1.0;
+                Q[3] = h[a];
+            }
+        V = Vb; nv = dim == 2 ? 4 : 8; P = Pb; np = dim == 2 ? 4 : 6;
+    } else if (g->klass == &floe_polytope_class) {
+        const floe_polytope *p = (const floe_polytope *)g;
+        V = p->v; nv = p->nv; P = p->plane; np = p->np;
+    } else {
+        return 0.0;
+    }
+    const double R = g->klass->bounding_radius(g), tol = 1e-9 * R;
+    double best = 0.0;
+    for (int f = 0; f < np; f++) {
+        int nc = 0;
+        for (int k = 0; k < nv && nc < 64; k++)
+            if (fabs(floe_v3_dot(P + 4 * f, V + 3 * k) - P[4 * f + 3]) <= tol) {
+                floe_v3_copy(Vf + 3 * nc, V + 3 * k);
+                if (dim == 2) Vf[3 * nc + 2] = 0.0;
+                nc++;
+            }
+        if (nc < 1) continue;
+        double r = face_factor(Vf, nc, P + 4 * f, dim, inertia, mass);
+        if (r > best) best = r;
+    }
+    return best;
+}

@@ -58,6 +58,50 @@ static void test_closed_forms(void) {
     floe_world_destroy(w);
 }
 
+/* polytopes: the contact manifold's corner springs (docs/models.md, "Contact manifold"):
+ * the stiffness multiplier against closed forms, and the impact estimate of a thin plate */
+static void test_manifold_factor(void) {
+    const double a = 1.0, h = 0.01, m = 1.0;
+    double Icube[3] = {m * a * a / 6, m * a * a / 6, m * a * a / 6};
+    double Iplate[3] = {m * (a * a + h * h) / 12, m * (a * a + h * h) / 12, m * a * a / 6};
+    floe_geometry *cube = floe_box_create(a, a, a), *plate = floe_box_create(a, a, h), *rect = floe_box_create(a, h, h);
+    /* cube: 4 corners at (+-a/2, +-a/2): rocking sum (a/2)^2 x 4 = a^2 over m a^2/6 */
+    CHECK_NEAR(floe_polytope_manifold_factor(cube, 3, Icube, m), 6.0, 1e-12, "cube: manifold factor 6");
+    CHECK_NEAR(floe_polytope_manifold_factor(plate, 3, Iplate, m), 12.0 / (1 + h * h / (a * a)), 1e-12,
+               "thin plate: 12 a^2 / (a^2 + h^2)");
+    /* 2D: a square's edge, two corners at +-a/2 about z: (a^2/2) / (m a^2/6) = 3; a thin
+     * rectangle's long edge: (a^2/2) / (m (a^2 + h^2)/12) */
+    double Isq[3] = {0, 0, m * a * a / 6}, Irect[3] = {0, 0, m * (a * a + h * h) / 12};
+    CHECK_NEAR(floe_polytope_manifold_factor(cube, 2, Isq, m), 3.0, 1e-12, "2D square: manifold factor 3");
+    CHECK_NEAR(floe_polytope_manifold_factor(rect, 2, Irect, m), 6.0 / (1 + h * h / (a * a)), 1e-12,
+               "2D thin rectangle: 6 a^2 / (a^2 + h^2)");
+    floe_geometry *sph = floe_sphere_create(1.0);
+    CHECK(floe_polytope_manifold_factor(sph, 3, Icube, m) == 0.0, "a sphere has no manifold");
+    floe_geometry_destroy(cube); floe_geometry_destroy(rect); floe_geometry_destroy(sph);
+    /* through the world: a free thin plate over a wall, linear law (no tangential spring):
+     * impact estimate 2 / sqrt(2 kn r / m), r = the plate's factor (the bounding-radius
+     * estimate 1 + m R^2 / I_min = 7 is lower) */
+    floe_world_def d = floe_default_world_def();
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material mat = {"m", 1000, 1e7, 0.3};
+    floe_world_add_material(w, &mat);
+    const double kn = 1e4;
+    floe_world_set_law(w, 0, 0, floe_linear_law_create(kn, 0, 0, 0, 0.5));
+    double o[3] = {0, 0, 0}, nz[3] = {0, 0, 1};
+    floe_world_add_wall(w, o, nz, 0, FLOE_FIXED);
+    floe_particle_def pd = floe_default_particle_def();
+    pd.geometry = floe_world_add_geometry(w, plate);
+    pd.x[2] = 1.0;
+    int i = floe_world_add_particle(w, &pd);
+    CHECK(floe_world_prepare(w) == FLOE_OK, "plate prepare: %s", floe_world_last_error(w));
+    floe_dt_estimates e;
+    floe_world_dt_estimates(w, &e);
+    const double mp = w->p.mass[i], r = 12.0 / (1 + h * h / (a * a));
+    CHECK_NEAR(e.dt[FLOE_DT_CONTACT_IMPACT], 2 / sqrt(2 * kn * r / mp), 1e-9,
+               "thin plate: impact estimate 2 / sqrt(2 kn x 12 / m)");
+    floe_world_destroy(w);
+}
+
 /* Hertz: the Rayleigh step from its formula and the Hertz contact duration against a
  * measured undamped head-on collision at the expected relative speed */
 static void test_hertz(void) {
@@ -334,6 +378,7 @@ static void test_scene_keys(void) {
 }
 
 int main(void) {
+    test_manifold_factor();
     test_closed_forms();
     test_hertz();
     test_pd_estimates();
