@@ -118,7 +118,29 @@ static int sphere_sdf(floe_world *w, const shape_ref *a, const shape_ref *b, dou
  * moment sum d_v x_v), so the contact is conservative and a face resting on the plane gets
  * a central point and rests without rocking. For Hertz it is an approximation (a flat face
  * has no Hertz radius; R* = the bounding radius). */
-static void mf_insert2(double (*best)[4], int *nb, int cap, double d, const double x[3]);
+/* the contact manifold's vertices (detect.c manifold): the K deepest, deepest first */
+typedef struct mf_vertex { double d, x[3], n[3]; } mf_vertex;
+
+static void mf_insert(mf_vertex *best, int *nb, int cap, const mf_vertex *v) {
+    int k;
+    if (*nb < cap) k = (*nb)++;
+    else if (v->d > best[cap - 1].d) k = cap - 1;
+    else return;
+    while (k > 0 && best[k - 1].d < v->d) { best[k] = best[k - 1]; k--; }
+    best[k] = *v;
+}
+
+/* the 2nd .. nb-th of them as the contact's extra springs (the deepest is the contact point) */
+static void mf_set_extras(floe_contact *c, const mf_vertex *best, int nb) {
+    c->nextra = 0;
+    for (int k = 1; k < nb; k++) {
+        int e = c->nextra++;
+        c->extra_depth[e] = best[k].d;
+        floe_v3_copy(c->extra_point[e], best[k].x);
+        floe_v3_copy(c->extra_n[e], best[k].n);
+    }
+}
+
 
 /* polytope a against plane b: the contact manifold of the vertices below the plane (as for
  * polytope pairs, detect.c manifold): the deepest vertex is the contact point, the 2nd ..
@@ -133,7 +155,7 @@ static int vertices_plane(floe_world *w, const shape_ref *a, const shape_ref *b,
     floe_v3_sub(rel, a->x, b->x);
     if (floe_v3_dot(rel, nw) >= a->r) return 0;
     const int is_box = a->kind == FLOE_GEOM_BOX, K = w->def.dim == 2 ? 2 : 4;
-    double best[4][4]; /* depth, x */
+    mf_vertex best[4];
     int nb = 0;
     for (int v = 0; v < nv; v++) {
         double X[3] = {V[3 * v], V[3 * v + 1], V[3 * v + 2]}, xw[3];
@@ -145,35 +167,22 @@ static int vertices_plane(floe_world *w, const shape_ref *a, const shape_ref *b,
         floe_v3_add(xw, xw, a->x);
         floe_v3_sub(rel, xw, b->x);
         double s = floe_v3_dot(rel, nw);
-        if (s < 0) mf_insert2(best, &nb, K, -s, xw);
+        if (s < 0) {
+            mf_vertex m = {-s, {xw[0], xw[1], xw[2]}, {-nw[0], -nw[1], -nw[2]}};
+            mf_insert(best, &nb, K, &m);
+        }
     }
     if (nb == 0) return 0;
     floe_v3_set(c->n, -nw[0], -nw[1], -nw[2]);
-    c->depth = best[0][0];
+    c->depth = best[0].d;
     for (int k = 0; k < 3; k++) {
-        c->x1[k] = best[0][1 + k];
-        c->x2[k] = best[0][1 + k] + c->depth * nw[k];
+        c->x1[k] = best[0].x[k];
+        c->x2[k] = best[0].x[k] + c->depth * nw[k];
     }
     c->r_eff = a->r;
     finish_at(c, c->x1); /* the force acts at the vertex: the gradient of its energy */
-    c->nextra = 0;
-    for (int k = 1; k < nb; k++) {
-        int e = c->nextra++;
-        c->extra_depth[e] = best[k][0];
-        floe_v3_copy(c->extra_point[e], best[k] + 1);
-        floe_v3_copy(c->extra_n[e], c->n);
-    }
+    mf_set_extras(c, best, nb);
     return 1;
-}
-
-static void mf_insert2(double (*best)[4], int *nb, int cap, double d, const double x[3]) {
-    int k;
-    if (*nb < cap) k = (*nb)++;
-    else if (d > best[cap - 1][0]) k = cap - 1;
-    else return;
-    while (k > 0 && best[k - 1][0] < d) { memcpy(best[k], best[k - 1], sizeof best[k]); k--; }
-    best[k][0] = d;
-    floe_v3_copy(best[k] + 1, x);
 }
 
 /* convex shape a against plane b: the support point in direction -n (the shape's own
@@ -438,28 +447,6 @@ static void count_iterations(floe_world *w, int it) {
     w->det.hist[it < FLOE_DETECT_HIST - 1 ? it : FLOE_DETECT_HIST - 1]++;
 }
 
-/* The contact manifold of a polytope pair (docs/models.md, "Contact manifold"). The stored
- * energy of a point law on two polytopes is
- *     E = e(d) + sum over the K deepest vertices v of e(d_v) - e(max_v d_v),
- * d the deepest-point depth (the LP), d_v = -phi_other(v) for each vertex of either body
- * inside the other, e the law's elastic energy, K = 2 (2D) or 4 (3D). Every term is
- * continuous (a vertex enters at d_v = 0; the sum of the K largest is continuous), and
- * where the deepest point is a vertex the kinks of d and of max_v d_v cancel: two faces
- * passing through parallel no longer move the force from one end of the patch to the
- * other, and a flat face rests on two (2D) or up to four (3D) springs. The gradient of
- * e(d_v) is the law's force at v along the nearest face's normal (exact: the vertex moves
- * with its body, the face with the other). This finds the 2nd .. K-th deepest vertices. */
-typedef struct mf_vertex { double d, x[3], n[3]; } mf_vertex;
-
-static void mf_insert(mf_vertex *best, int *nb, int cap, const mf_vertex *v) {
-    int k;
-    if (*nb < cap) k = (*nb)++;
-    else if (v->d > best[cap - 1].d) k = cap - 1;
-    else return;
-    while (k > 0 && best[k - 1].d < v->d) { best[k] = best[k - 1]; k--; }
-    best[k] = *v;
-}
-
 /* the vertices of a inside b, sign: +1 when a is particle i (the normal from i to j is then
  * minus b's outward face normal), -1 when a is j */
 static void mf_vertices(const floe_world *w, const shape_ref *a, const shape_ref *b, double sign, mf_vertex *best,
@@ -497,19 +484,24 @@ static void mf_vertices(const floe_world *w, const shape_ref *a, const shape_ref
     }
 }
 
+/* The contact manifold of a polytope pair (docs/models.md, "Contact manifold"). The stored
+ * energy of a point law on two polytopes is
+ *     E = e(d) + sum over the K deepest vertices v of e(d_v) - e(max_v d_v),
+ * d the deepest-point depth (the LP), d_v = -phi_other(v) for each vertex of either body
+ * inside the other, e the law's elastic energy, K = 2 (2D) or 4 (3D). Every term is
+ * continuous (a vertex enters at d_v = 0; the sum of the K largest is continuous), and
+ * where the deepest point is a vertex the kinks of d and of max_v d_v cancel: two faces
+ * passing through parallel no longer move the force from one end of the patch to the
+ * other, and a flat face rests on two (2D) or up to four (3D) springs. The gradient of
+ * e(d_v) is the law's force at v along the nearest face's normal (exact: the vertex moves
+ * with its body, the face with the other). This finds the 2nd .. K-th deepest vertices. */
 static void manifold(const floe_world *w, const shape_ref *a, const shape_ref *b, floe_contact *c) {
     const int K = w->def.dim == 2 ? 2 : 4;
     mf_vertex best[4];
     int nb = 0;
     mf_vertices(w, a, b, 1.0, best, &nb, K);
     mf_vertices(w, b, a, -1.0, best, &nb, K);
-    c->nextra = 0;
-    for (int k = 1; k < nb; k++) { /* the deepest vertex is the deepest point's share */
-        int e = c->nextra++;
-        c->extra_depth[e] = best[k].d;
-        floe_v3_copy(c->extra_point[e], best[k].x);
-        floe_v3_copy(c->extra_n[e], best[k].n);
-    }
+    mf_set_extras(c, best, nb); /* the deepest vertex is the deepest point's share */
 }
 
 static int polytope_pair(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {

@@ -926,6 +926,9 @@ static int estimate_dt(floe_world *w) {
             if (law && law->klass == &floe_hertz_mindlin_law_class) hertz_mat[a] = hertz_mat[b] = 1;
         }
     for (int k = 0; k < DT_CACHE; k++) cache[k].mat = -1;
+    double *mfac = malloc((size_t)(w->ngeoms > 0 ? w->ngeoms : 1) * sizeof *mfac); /* NULL: computed each time */
+    if (mfac)
+        for (int k = 0; k < w->ngeoms; k++) mfac[k] = -1.0;
     for (int i = 0; i < p->n; i++) {
         dp[i] = INFINITY;
         if (p->motion[i] != FLOE_FREE || !isfinite(p->radius[i])) continue;
@@ -937,8 +940,13 @@ static int estimate_dt(floe_world *w) {
         /* polytopes touch through a contact manifold (up to 2 corner springs in 2D, 4 in 3D),
          * which can be stiffer in rocking than one point at the bounding radius (a thin
          * square plate flat on a face: 12 k/m against 1 + m R^2/I_min = 7): the larger */
-        if (p->kind[i] != FLOE_GEOM_SPHERE)
+        if (p->kind[i] != FLOE_GEOM_SPHERE && mfac) { /* per shape (it depends on I/m only) */
+            double *f = mfac + p->geom[i];
+            if (*f < 0) *f = floe_polytope_manifold_factor(w->geoms[p->geom[i]], w->def.dim, I, p->mass[i]);
+            rotn = fmax(rotn, *f);
+        } else if (p->kind[i] != FLOE_GEOM_SPHERE) {
             rotn = fmax(rotn, floe_polytope_manifold_factor(w->geoms[p->geom[i]], w->def.dim, I, p->mass[i]));
+        }
         dt_cache_entry key = {p->material[i], p->mass[i], p->radius[i], rot, rotn, 0, 0, 0, 0, 0, 0};
         unsigned long long hsh = (unsigned long long)key.mat * 0x9E3779B97F4A7C15ull;
         const double vals[4] = {key.m, key.r, key.rot, key.rotn};
@@ -977,6 +985,7 @@ static int estimate_dt(floe_world *w) {
     }
     free(hertz_mat);
     free(cache);
+    free(mfac);
     /* peridynamic bodies: the nodal estimate sqrt(2 rho / sum_j V_j c/|xi|) per point
      * (Silling and Askari 2005; measured limits 2.1x (PMB) and 1.8x (LPS) of it,
      * tests/test_pd.c), as floe_pd_dt_nodal; and the CFL step of 000 eqs 41-42 per body */
