@@ -218,28 +218,9 @@ static int convex_plane(floe_world *w, const shape_ref *a, const shape_ref *b, d
 
 /* ---- polytope-polytope: exact LP ---- */
 
-/* body-frame face planes of a box or polytope (NULL otherwise) */
-/* dim 2: a box's z faces are left out (its motion is in the xy plane; as LP rows they
- * would cap the depth at the half thickness with a zero in-plane normal) */
+/* body-frame face planes of a box or polytope (NULL otherwise; floe_geometry.h) */
 static const double *body_planes(const floe_geometry *g, int dim, int *np, double buf[24]) {
-    if (g->klass == &floe_box_class) {
-        const double *h = ((const floe_box *)g)->half;
-        for (int a = 0; a < 3; a++)
-            for (int s = 0; s < 2; s++) {
-                double *P = buf + 4 * (2 * a + s);
-                P[0] = P[1] = P[2] = 0;
-                P[a] = s ? 1.0 : -1.0;
-                P[3] = h[a];
-            }
-        *np = dim == 2 ? 4 : 6;
-        return buf;
-    }
-    if (g->klass == &floe_polytope_class) {
-        const floe_polytope *p = (const floe_polytope *)g;
-        *np = p->np;
-        return p->plane;
-    }
-    return NULL;
+    return floe_polytope_planes(g, dim, np, buf);
 }
 
 static int is_polytope(const floe_geometry *g) {

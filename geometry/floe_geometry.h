@@ -205,6 +205,11 @@ extern const floe_geometry_class floe_compound_class;
 floe_geometry *floe_compound_create(floe_geometry **pieces, const double *x, const double *q, int n, int dim,
                                     char *err, size_t errlen);
 
+/* Body-frame face planes (n, d: inside n.X <= d) of a box or polytope, NULL for any other
+ * shape; a box's in buf (dim 2: its four x and y faces only: its z faces would cap the
+ * depth at the half thickness with a zero in-plane normal). */
+const double *floe_polytope_planes(const floe_geometry *g, int dim, int *np, double buf[24]);
+
 /* Stiffness multiplier of a polytope's contact manifold (docs/models.md, "Contact
  * manifold"): resting on any one face with K = 2 (2D) or 4 (3D) springs of stiffness k at
  * that face's corners (all of them, scaled by K/corners, if it has more), the body's highest

@@ -370,6 +370,27 @@ void floe_set_err(char *err, size_t errlen, const char *fmt, ...) {
     va_end(ap);
 }
 
+const double *floe_polytope_planes(const floe_geometry *g, int dim, int *np, double buf[24]) {
+    if (g->klass == &floe_box_class) {
+        const double *h = ((const floe_box *)g)->half;
+        for (int a = 0; a < 3; a++)
+            for (int s = 0; s < 2; s++) {
+                double *P = buf + 4 * (2 * a + s);
+                P[0] = P[1] = P[2] = 0;
+                P[a] = s ? 1.0 : -1.0;
+                P[3] = h[a];
+            }
+        *np = dim == 2 ? 4 : 6;
+        return buf;
+    }
+    if (g->klass == &floe_polytope_class) {
+        const floe_polytope *p = (const floe_polytope *)g;
+        *np = p->np;
+        return p->plane;
+    }
+    return NULL;
+}
+
 /* floe_polytope_manifold_factor (floe_geometry.h): one face's corners V (nc of them), its
  * outward normal n */
 static double face_factor(const double *V, int nc, const double n[3], int dim, const double I[3], double m) {
@@ -408,6 +429,7 @@ double floe_polytope_manifold_factor(const floe_geometry *g, int dim, const doub
     double Vb[24], Pb[24], Vf[3 * 64];
     const double *V = NULL, *P = NULL;
     int nv = 0, np = 0;
+    if (!(P = floe_polytope_planes(g, dim, &np, Pb))) return 0.0;
     if (g->klass == &floe_box_class) {
         const double *h = ((const floe_box *)g)->half;
         for (int k = 0; k < 8; k++) {
@@ -415,19 +437,10 @@ double floe_polytope_manifold_factor(const floe_geometry *g, int dim, const doub
             Vb[3 * k + 1] = k & 2 ? h[1] : -h[1];
             Vb[3 * k + 2] = dim == 2 ? 0.0 : (k & 4 ? h[2] : -h[2]);
         }
-        for (int a = 0; a < 3; a++)
-            for (int s = 0; s < 2; s++) {
-                double *Q = Pb + 4 * (2 * a + s);
-                Q[0] = Q[1] = Q[2] = 0;
-                Q[a] = s ? 1.0 : -1.0;
-                Q[3] = h[a];
-            }
-        V = Vb; nv = dim == 2 ? 4 : 8; P = Pb; np = dim == 2 ? 4 : 6;
-    } else if (g->klass == &floe_polytope_class) {
-        const floe_polytope *p = (const floe_polytope *)g;
-        V = p->v; nv = p->nv; P = p->plane; np = p->np;
+        V = Vb; nv = dim == 2 ? 4 : 8;
     } else {
-        return 0.0;
+        const floe_polytope *p = (const floe_polytope *)g;
+        V = p->v; nv = p->nv;
     }
     const double R = g->klass->bounding_radius(g), tol = 1e-9 * R;
     double best = 0.0;
