@@ -396,17 +396,16 @@ static void test_box_stack(void) {
     floe_world_add_wall(w, o, nz, 0, FLOE_FIXED);
     double q[4] = {1, 0, 0, 0};
     double z = 0;
-    /* three boxes of different sizes, off-centre, each on the face of the one below: the
-     * manifold's corner springs hold them (a single deepest point rocked). A box that
-     * overhangs the edge of the one below still rocks under a point law (its support is
-     * two corners and a point of the lower box's edge): docs/models.md */
-    double side[3] = {1.2 * a, a, 0.8 * a}, off[3] = {0, 0.05 * a, -0.02 * a};
+    /* three boxes of different sizes, off-centre, the middle one overhanging the edge of the
+     * bottom one: the manifold (corner springs, friction and dashpot at its load centre,
+     * rocking and twist couples) holds them; a single deepest point rocked */
+    double side[3] = {1.2 * a, a, 0.8 * a}, off[3] = {0, 0.2 * a, -0.1 * a};
     for (int k = 0; k < 3; k++) {
         double x[3] = {off[k], 0.1 * off[k], z + 0.5 * side[k]};
         add_body(w, floe_box_create(side[k], side[k], side[k]), x, q, NULL, NULL);
         z += side[k];
     }
-    run_rest(w, "stack of 3 boxes, off-centre by 0.05 and 0.02 (no overhang)", a, 40000);
+    run_rest(w, "stack of 3 boxes, off-centre by 0.2 and 0.1 (overhanging)", a, 40000);
     floe_world_destroy(w);
 }
 
