@@ -9,4 +9,6 @@
 #include "floe_kdtree.h"
 #include "floe_observer.h"
 #include "floe_scene.h"
+#include "floe_world_beams.h"
+#include "floe_view.h"
 #endif

@@ -1,4 +1,4 @@
-/* fuzz_scene.c - libFuzzer harness over the scene loader (core/scene.c): every input is a
+/* fuzz_scene.c - libFuzzer harness over the scene loader (core/scene/scene.c): every input is a
  * scene text; floe_scene_load_ex must return (an error with a message, or a prepared world)
  * without crashing, leaking, hanging or invoking undefined behaviour. Outputs are validated
  * but not created (with_outputs = 0), so no file is written. Built by scripts/fuzz.sh

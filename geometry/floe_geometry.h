@@ -15,7 +15,7 @@ typedef enum floe_geometry_kind {
     FLOE_GEOM_BOX = 1,
     FLOE_GEOM_PLANE = 2,   /* half-space z <= 0 in the body frame: outward normal +z */
     FLOE_GEOM_USER = 3,    /* any other convex shape with an SDF (user callback, polyhedron,
-                              ellipsoid, ...): contact by ADMM (contact/admm.c) */
+                              ellipsoid, ...): contact by ADMM (contact/detect/admm.c) */
     FLOE_GEOM_COMPOUND = 4,/* union of convex pieces (one rigid body): one contact per piece pair */
     FLOE_GEOM_KIND_COUNT = 5
 } floe_geometry_kind;

@@ -4,27 +4,8 @@
 #ifndef FLOE_OBSERVER_H
 #define FLOE_OBSERVER_H
 
-#include "floe_world.h"
+#include "floe_observer_base.h"
 #include <stdio.h>
-
-typedef struct floe_observer_class {
-    int version; /* 1 */
-    const char *name;
-    int (*begin)(floe_observer *o, floe_world *w);      /* optional */
-    int (*observe)(floe_observer *o, floe_world *w);    /* required */
-    int (*end)(floe_observer *o, floe_world *w);        /* optional: flush, close */
-    void (*destroy)(floe_observer *o);                  /* optional */
-    int needs_contacts;   /* 1: reads w->contacts, so the world records every contact */
-} floe_observer_class;
-
-struct floe_observer {
-    const floe_observer_class *klass;
-    long period_steps;      /* > 0: every n steps */
-    double period_time;     /* > 0: every this many seconds (used when period_steps = 0) */
-    double next_time;       /* bookkeeping of the world */
-    int ended;
-    int begun;
-};
 
 /* All writers take an output path; the directory must exist. Returns NULL and writes a
  * message to err on failure. */
@@ -45,8 +26,6 @@ floe_observer *floe_energy_tracker_create(const char *path, char *err, size_t er
 floe_observer *floe_vtk_writer_create(const char *dir, const char *prefix, char *err, size_t errlen);
 /* CSV snapshot of all particles per frame (one file, "t,id,..." rows). */
 floe_observer *floe_csv_writer_create(const char *path, char *err, size_t errlen);
-
-void floe_observer_destroy(floe_observer *o);
 
 /* ---- additions: stress evaluation, accessors, VTK options ---- */
 

@@ -4,6 +4,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
+# the layers first (seconds): no folder includes from a folder above it
+python3 scripts/check_layers.py
 if [[ "${FLOE_SANITIZE:-0}" == 1 ]]; then
   dir=build-asan; flags=(-DFLOE_SANITIZE=ON -DFLOE_BUILD_BENCH=OFF)
 else

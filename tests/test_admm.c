@@ -125,7 +125,7 @@ static void test_admm_spheres(void) {
 
 /* ---- 2. polytope LP against GLPK ---- */
 
-/* body-frame planes of a box or polyhedron (as contact/detect.c) */
+/* body-frame planes of a box or polyhedron (as contact/detect/detect.c) */
 static const double *body_planes(const floe_geometry *g, int *np, double buf[24]) {
     if (g->klass == &floe_box_class) {
         const double *h = ((const floe_box *)g)->half;
@@ -598,7 +598,7 @@ static void test_degenerate(void) {
             memset(&c, 0, sizeof c);
             double warm[FLOE_DETECT_WARM];
             for (int j = 0; j < FLOE_DETECT_WARM; j++) warm[j] = NAN;
-            int r = floe_detect(w, id[2 * k], id[2 * k + 1], 0, warm, &c);
+            int r = floe_world_detect(w, id[2 * k], id[2 * k + 1], 0, warm, &c);
             printf("  coincident centres through floe_detect, identical %s: rc %d depth %.6g n (%.3f %.3f %.3f)\n",
                    k ? "ellipsoids" : "boxes", r, c.depth, c.n[0], c.n[1], c.n[2]);
             CHECK(r == 1 && isfinite(c.depth) && c.depth > 0 && finite3(c.n) && fabs(floe_v3_norm(c.n) - 1) < 1e-9,
@@ -667,7 +667,7 @@ static void test_2d_thin_boxes(void) {
     floe_contact c;
     double warm[FLOE_DETECT_WARM];
     for (int k = 0; k < FLOE_DETECT_WARM; k++) warm[k] = NAN;
-    int r = floe_detect(w, 0, 1, 0, warm, &c);
+    int r = floe_world_detect(w, 0, 1, 0, warm, &c);
     printf("  2D thin boxes overlapping by 0.2: r %d depth %.6g n (%.3f %.3f %.3f)\n", r, c.depth, c.n[0], c.n[1], c.n[2]);
     CHECK(r == 1 && fabs(c.depth - 0.2) < 1e-12 && fabs(c.n[0] - 1) < 1e-12, "2D box contact: depth 0.2 along +x");
     floe_world_destroy(w);

@@ -1,4 +1,4 @@
-/* test_beam.c - beam bonds in the world (contact/floe_beam.h; ParticLS §5.5, 004 §2):
+/* test_beam.c - beam bonds in the world (contact/bonds/floe_beam.h; ParticLS §5.5, 004 §2):
  * the linearised bond law against the matrix of 004 eq 7 (2D and 3D), rigid motions give
  * no force, the 2D cantilever of ParticLS eq 38 (11 points within 2 %, convergence table),
  * Timoshenko shear deflection, 3D cantilevers with nearest-neighbour and fixed-radius bonds,

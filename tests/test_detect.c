@@ -62,7 +62,7 @@ int main(void) {
         floe_v3_set(p.x, 0, 0, low - 1e-4);
         int i = floe_world_add_particle(w, &p);
         floe_contact c;
-        int r = floe_detect(w, i, wall, 0, NULL, &c);
+        int r = floe_world_detect(w, i, wall, 0, NULL, &c);
         char what[96];
         snprintf(what, sizeof what, "user cube tilted %.0e rad: depth vs exact 1e-4 m (tol 1%%)", tilt);
         CHECK(r == 1, "%s: not detected", what);

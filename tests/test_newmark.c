@@ -1,4 +1,4 @@
-/* test_newmark.c - Newmark-beta for bonded systems (core/floe_newmark.h, 004 §3-4):
+/* test_newmark.c - Newmark-beta for bonded systems (core/integrators/floe_newmark.h, 004 §3-4):
  * conformance on a harmonic oscillator for the explicit (beta 0) and implicit average
  * acceleration (beta 1/4) schemes (second order, energy, stability at 0.9x and detection
  * at 1.1x the critical step omega dt = 2), the static deflection of a cantilever recovered

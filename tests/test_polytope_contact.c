@@ -493,8 +493,8 @@ static void test_prism_pile(void) {
  * energy is defined where the detection misses): 1 when both find a contact */
 static int detect_overlap(floe_world *w, floe_contact *c) {
     memset(c, 0, sizeof *c);
-    int touch = floe_detect(w, 0, 1, 0, NULL, c) == 1;
-    return floe_detect_overlap(w, 0, 1, 0, c) == 1 && touch;
+    int touch = floe_world_detect(w, 0, 1, 0, NULL, c) == 1;
+    return floe_world_detect_overlap(w, 0, 1, 0, c) == 1 && touch;
 }
 
 /* adds ga at the origin (orientation qa) and gb at xb (qb) to the empty world w, their

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""test_robust.py - a run never lies and never hangs (cli/main.c, core/scene.c, observers).
+"""test_robust.py - a run never lies and never hangs (cli/main.c, core/scene/scene.c, observers).
 
 usage: python3 tests/test_robust.py <floe_cli_path> <tests_dir>
 

@@ -1,4 +1,4 @@
-/* test_scene_errors.c - scene files (core/scene.c, docs/scene-format.md): every error
+/* test_scene_errors.c - scene files (core/scene/scene.c, docs/scene-format.md): every error
  * names the file, line and column and the offending field; valid scenes build the right
  * particles (lattice, hexagonal 2D/3D, random, region-filled HCP of the RVE example). */
 #include "check.h"

@@ -1,5 +1,5 @@
 /* test_scene_limits.c - hostile or absurd scene files are refused quickly, each with a
- * message naming the file, the position and the field (core/scene.c, issue 10 "a run never
+ * message naming the file, the position and the field (core/scene/scene.c, issue 10 "a run never
  * lies and never hangs"): step counts that overflow, huge or jammed packings, output
  * intervals below the time resolution, non-regular mesh files. An alarm turns a hang into a
  * failure. */

@@ -179,7 +179,7 @@ static void depth_sample(floe_world *w, shape *S, int i, int j, double overlap, 
                          double *worst) {
     floe_contact c;
     long e0 = S->evals;
-    int r = floe_detect(w, i, j, 0, NULL, &c);
+    int r = floe_world_detect(w, i, j, 0, NULL, &c);
     cost[(*n)++] = S->evals - e0;
     if (r != 1) (*missed)++;
     else *worst = fmax(*worst, fabs(c.depth - overlap));

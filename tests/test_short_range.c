@@ -1,5 +1,5 @@
 /* test_short_range.c - the PD short-range repulsive force law and the "none" law
- * (contact/short_range.c): the law against its formula (Silling & Askari 2005 eq 20,
+ * (contact/laws/short_range.c): the law against its formula (Silling & Askari 2005 eq 20,
  * F = 15 c V_i V_j (d_s - |y|)/delta with d_s = R_i + R_j), the same force through the
  * world's law table, an undamped collision against the linear-spring solution, two PD
  * blocks that meet through the law, the "none" law letting two spheres pass through each

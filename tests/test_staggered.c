@@ -1,5 +1,5 @@
 /* test_staggered.c - the staggered multi-scale PD-DEM scheme (000 §3.2-3.3, Algorithm 2;
- * core/world.c step_staggered):
+ * core/world/world.c step_staggered):
  *   1. a PD block on a fixed wall pressed by four kinematic DEM spheres (a small 000 §4.2):
  *      the wall force of staggered m = 1 equals the monolithic one to rounding, and the
  *      multi-scale m = 2 (PD sub-cycled) and k = 2 (PD every other step) runs agree with

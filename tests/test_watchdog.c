@@ -1,4 +1,4 @@
-/* test_watchdog.c - the energy watchdog (core/world.c energy_watchdog, issue 10 A):
+/* test_watchdog.c - the energy watchdog (core/world/world.c energy_watchdog, issue 10 A):
  *   1. staggered PD-DEM that blows up: a rigid sphere at 1 m/s into an LPS block with
  *      pd_dem {scheme: staggered, substeps: m}, the PD step held at 0.5 x the PD nodal
  *      estimate and the DEM step m times that (as bench/multiscale does); with checks off

@@ -2,7 +2,7 @@
  * cross-section 1 x 0.5 m, E = 30 GPa, nu = 0.25, uniform load 230 kN/m, bond strengths
  * N(6 MPa, 0.05 MPa)) discretised by a square lattice of nodes joined by Timoshenko beam
  * bonds, run to t = 0.5 s by explicit Newmark (20 % of the critical step of eq 28) and by
- * implicit average acceleration (1 % of the total time), core/floe_newmark.h. Prints the
+ * implicit average acceleration (1 % of the total time), core/integrators/floe_newmark.h. Prints the
  * per-step times before and after the first crack (medians), totals, the crack location,
  * and writes the crack pattern (VTU for ParaView and CSV).
  *

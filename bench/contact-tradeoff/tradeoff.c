@@ -261,7 +261,7 @@ static double dp_reference(const body *a, const body *b, double n[3], int *defin
     return -s2;
 }
 
-/* ---- floe LP pair (as contact/detect.c polytope_pair): planes of b into a's frame ---- */
+/* ---- floe LP pair (as contact/detect/detect.c polytope_pair): planes of b into a's frame ---- */
 static double lp_scratch[4 * 80];
 static int lp_half(const body *a, const body *b, int *basis, double *s, double n[3]) {
     for (int k = 0; k < b->np; k++) plane_to(b->plane + 4 * k, &b->pose, &a->pose, lp_scratch + 4 * k);

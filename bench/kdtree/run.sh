@@ -4,7 +4,7 @@
 # result lines and the ratios floe/nanoflann (time ratios: below 1 means floe is faster).
 # Environment: BUILD (CMake build dir for floe, default build-bench), REPS (default 3),
 # NS (default "100000 1000000"), LEAVES (default "10 20"), FLOE_DIRECT=1 to compile
-# core/kdtree.c directly with gcc instead of building the floe library with CMake.
+# core/base/kdtree.c directly with gcc instead of building the floe library with CMake.
 set -eu
 cd "$(dirname "$0")/../.."
 BUILD=${BUILD:-build-bench}
@@ -28,7 +28,7 @@ if [ "${FLOE_DIRECT:-0}" != 1 ]; then
 fi
 if [ -z "$FLOE" ]; then
   FLOE="$BUILD/kdtree/kdtree_bench"
-  gcc -O3 -march=native -std=c11 -Icore -o "$FLOE" bench/kdtree/kdtree_bench.c core/kdtree.c -lm
+  gcc -O3 -march=native -std=c11 -Icore/base -o "$FLOE" bench/kdtree/kdtree_bench.c core/base/kdtree.c -lm
 fi
 
 LOG="$BUILD/kdtree/results.txt"

@@ -28,7 +28,7 @@
  * is given the radius Rs - R_point so that this depth is exactly LAMMPS' Rs - r (the overlap
  * of the indenter sphere with the point's centre), and the law returns K V depth^2.
  * This mode cannot run the benchmark: the world stops any contact whose overlap exceeds the
- * smaller radius (core/forces.c, "interpenetration beyond recovery"), i.e. here any point
+ * smaller radius (core/world/forces.c, "interpenetration beyond recovery"), i.e. here any point
  * deeper than R_point = 0.31 mm inside the indenter, while LAMMPS' K = 1e17 indenter is soft
  * enough to sink 3.86 mm into the target (min point-centre distance 0.14 mm at step 500, with
  * compute reduce min in a diagnostic run). No choice of the two radii keeps both the contact

@@ -17,7 +17,7 @@
  *     aim=centre|point      impact at the plate centre (default) or over the top point
  *                           nearest it
  *     law=hm|sr|both        Hertz-Mindlin (hybrid PD-DEM, default), Silling's short-range
- *                           force (PD-SRRFM, contact/short_range.c), or both one after the
+ *                           force (PD-SRRFM, contact/laws/short_range.c), or both one after the
  *                           other with the difference printed as 003 Table 1 does
  *     nu=0.28               Poisson ratio of the contact material (the PMB body keeps 1/4)
  *     horizon=3             delta in spacings

@@ -8,11 +8,11 @@
  *   polytope-plane (the deepest vertex and a manifold of the next ones), convex-plane (support
  *   point: the shape's `support` or iterated projection);
  *   polytope-polytope (boxes, polyhedra, polygons): the exact deepest-point LP
- *   (contact/polytope_lp.c), warm-started from the previous basis;
- *   any other convex pair: ADMM on the two SDFs (contact/admm.c), warm-started.
+ *   (contact/detect/polytope_lp.c), warm-started from the previous basis;
+ *   any other convex pair: ADMM on the two SDFs (contact/detect/admm.c), warm-started.
  * Warm-start state lives in the neighbour list (FLOE_DETECT_WARM doubles per entry) and is
  * allocated only when a scene has such pairs. */
-#include "world_internal.h"
+#include "floe_detect.h"
 #include "floe_admm.h"
 #include "floe_polytope_lp.h"
 #include "floe_overlap.h"
@@ -26,9 +26,9 @@ typedef struct shape_ref {
     int kind;
 } shape_ref;
 
-static void make_ref(const floe_world *w, int i, int piece, shape_ref *s);
+static void make_ref(const floe_body_ref *body, int piece, shape_ref *s);
 
-typedef int (*pair_fn)(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c);
+typedef int (*pair_fn)(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c);
 
 static void finish(floe_contact *c) {
     for (int k = 0; k < 3; k++) c->point[k] = 0.5 * (c->x1[k] + c->x2[k]);
@@ -46,7 +46,7 @@ static void to_body(const shape_ref *s, const double x[3], double X[3]) {
     floe_q_rotate_inv(X, s->q, d);
 }
 
-static int sphere_sphere(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+static int sphere_sphere(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     (void)w; (void)warm;
     double d[3];
     floe_v3_sub(d, b->x, a->x);
@@ -70,7 +70,7 @@ static void plane_normal(const shape_ref *s, double nw[3]) {
     floe_q_rotate(nw, s->q, ez);
 }
 
-static int sphere_plane(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+static int sphere_plane(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     (void)w; (void)warm;
     double nw[3], d[3];
     plane_normal(b, nw);
@@ -92,7 +92,7 @@ static int sphere_plane(floe_world *w, const shape_ref *a, const shape_ref *b, d
  * overestimates the distance (|grad| <= 1, docs/models.md), so phi >= r means apart; below,
  * the true distance and unit normal (floe_geometry_distance: measured by projection for a
  * shape that only gives an SDF, whose value outside may be a bound) */
-static int sphere_sdf(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+static int sphere_sdf(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     (void)w; (void)warm;
     double X[3], g[3], gw[3];
     to_body(b, a->x, X);
@@ -146,7 +146,7 @@ static void mf_set_extras(floe_contact *c, const mf_vertex *best, int nb) {
  * polytope pairs, detect.c manifold): the deepest vertex is the contact point, the 2nd ..
  * K-th deepest (K = 2 in 2D, 4 in 3D) carry elastic springs of the same law, so the stored
  * energy is the sum of the law's energy over those vertices and the force its gradient */
-static int vertices_plane(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+static int vertices_plane(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     (void)warm;
     int nv = 0;
     const double *V = a->g->klass->vertices(a->g, &nv);
@@ -154,12 +154,12 @@ static int vertices_plane(floe_world *w, const shape_ref *a, const shape_ref *b,
     plane_normal(b, nw);
     floe_v3_sub(rel, a->x, b->x);
     if (floe_v3_dot(rel, nw) >= a->r) return 0;
-    const int is_box = a->kind == FLOE_GEOM_BOX, K = w->def.dim == 2 ? 2 : 4;
+    const int is_box = a->kind == FLOE_GEOM_BOX, K = w->dim == 2 ? 2 : 4;
     mf_vertex best[4];
     int nb = 0;
     for (int v = 0; v < nv; v++) {
         double X[3] = {V[3 * v], V[3 * v + 1], V[3 * v + 2]}, xw[3];
-        if (w->def.dim == 2 && is_box) {
+        if (w->dim == 2 && is_box) {
             if (X[2] > 0) continue; /* 2D: one face of the box (the z = -h corners) */
             X[2] = 0;
         }
@@ -188,7 +188,7 @@ static int vertices_plane(floe_world *w, const shape_ref *a, const shape_ref *b,
 /* convex shape a against plane b: the support point in direction -n (the shape's own
  * `support`, or floe_geometry_support's climb along the zero level set, which needs only
  * the SDF, exact or a bound: test_sdf_bound). */
-static int convex_plane(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+static int convex_plane(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     (void)w; (void)warm;
     const floe_geometry *g = a->g;
     if (g->klass->vertices && g->klass->kind != FLOE_GEOM_COMPOUND) return vertices_plane(w, a, b, warm, c);
@@ -228,12 +228,12 @@ static int is_polytope(const floe_geometry *g) {
 }
 
 /* planes and vertices of b expressed in a's body frame (scratch owned by the world) */
-static int lp_scratch(floe_world *w, int need) {
-    if (w->det.scratch_cap >= need) return FLOE_OK;
-    double *s = realloc(w->det.scratch, (size_t)need * sizeof(double));
+static int lp_scratch(floe_detect_ctx *w, int need) {
+    if (w->det->scratch_cap >= need) return FLOE_OK;
+    double *s = realloc(w->det->scratch, (size_t)need * sizeof(double));
     if (!s) return FLOE_ENOMEM;
-    w->det.scratch = s;
-    w->det.scratch_cap = need;
+    w->det->scratch = s;
+    w->det->scratch_cap = need;
     return FLOE_OK;
 }
 
@@ -247,16 +247,16 @@ static void plane_to_frame(const double P[4], const shape_ref *from, const shape
 }
 
 /* one half: a's point deepest in b, in world coordinates */
-static int lp_half(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm4, double x[3], double *s,
+static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm4, double x[3], double *s,
                    double n[3], double *gnorm, int *pivots) {
     double ba[24], bb[24];
     int na = 0, nb = 0, nva = 0;
-    const double *pa = body_planes(a->g, w->def.dim, &na, ba), *pb = body_planes(b->g, w->def.dim, &nb, bb);
+    const double *pa = body_planes(a->g, w->dim, &na, ba), *pb = body_planes(b->g, w->dim, &nb, bb);
     const double *va = a->g->klass->vertices(a->g, &nva);
     if (lp_scratch(w, 4 * nb)) return FLOE_ENOMEM;
-    double *tb = w->det.scratch;
+    double *tb = w->det->scratch;
     for (int k = 0; k < nb; k++) plane_to_frame(pb + 4 * k, b, a, tb + 4 * k);
-    floe_lp_problem P = {w->def.dim, pa, na, tb, nb, va, nva, fmin(a->r, b->r)};
+    floe_lp_problem P = {w->dim, pa, na, tb, nb, va, nva, fmin(a->r, b->r)};
     int basis[4];
     for (int k = 0; k < 4; k++) basis[k] = warm4 && isfinite(warm4[k]) ? (int)warm4[k] : -1;
     floe_lp_result r;
@@ -266,7 +266,7 @@ static int lp_half(floe_world *w, const shape_ref *a, const shape_ref *b, double
         return rc;
     }
     if (warm4)
-        for (int k = 0; k < 4; k++) warm4[k] = k <= w->def.dim ? basis[k] : NAN;
+        for (int k = 0; k < 4; k++) warm4[k] = k <= w->dim ? basis[k] : NAN;
     floe_q_rotate(x, a->q, r.x);
     floe_v3_add(x, x, a->x);
     floe_q_rotate(n, a->q, r.normal); /* outward normal of b at x */
@@ -276,7 +276,7 @@ static int lp_half(floe_world *w, const shape_ref *a, const shape_ref *b, double
     return FLOE_OK;
 }
 
-/* ---- overlap integrals (the overlap-area law, contact/overlap.c): world-frame inputs ---- */
+/* ---- overlap integrals (the overlap-area law, contact/detect/overlap.c): world-frame inputs ---- */
 #define OV_MAX FLOE_OVERLAP_MAX
 
 static int ov_polygon(const shape_ref *s, double (*P)[2]) {
@@ -368,14 +368,15 @@ static int overlap3(const shape_ref *a, const shape_ref *b, double F[3], double 
     return rc;
 }
 
-int floe_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact *c) {
+int floe_detect_overlap(const floe_detect_ctx *w, const floe_body_ref *bi, const floe_body_ref *bj, int sub,
+                        floe_contact *c) {
     shape_ref a, b;
-    make_ref(w, i, FLOE_SUB_A(sub), &a);
-    make_ref(w, j, FLOE_SUB_B(sub), &b);
+    make_ref(bi, FLOE_SUB_A(sub), &a);
+    make_ref(bj, FLOE_SUB_B(sub), &b);
     if (!is_polytope(a.g) || !is_polytope(b.g)) return -FLOE_ENOTSUP;
     c->nextra = 0; /* the overlap law has its own patch */
     double F[3] = {0, 0, 0}, M[3] = {0, 0, 0}, cen[3], meas, I, l2;
-    if (w->def.dim == 2) {
+    if (w->dim == 2) {
         double PA[OV_MAX][2], PB[OV_MAX][2], LA[OV_MAX][3], LB[OV_MAX][3];
         int na = ov_polygon(&a, PA), nb = ov_polygon(&b, PB), la = ov_lines(&a, LA), lb = ov_lines(&b, LB);
         double f1[2], f2[2], m1, m2, ar1, ar2, c1[2], c2[2];
@@ -416,27 +417,27 @@ int floe_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact *c) {
     floe_v3_sub(d, cen, p);
     double s = floe_v3_dot(d, u);
     for (int k = 0; k < 3; k++) c->point[k] = p[k] + s * u[k];
-    if (w->def.dim == 2) c->point[2] = cen[2];
+    if (w->dim == 2) c->point[2] = cen[2];
     floe_v3_set(c->n, -u[0], -u[1], -u[2]); /* from i to j: the force on i pushes it back */
     c->gscale = 1.0;
     return 1;
 }
 
-static void count_iterations(floe_world *w, int it) {
-    w->det.calls++;
-    w->det.iterations += it;
-    w->det.hist[it < FLOE_DETECT_HIST - 1 ? it : FLOE_DETECT_HIST - 1]++;
+static void count_iterations(floe_detect_ctx *w, int it) {
+    w->det->calls++;
+    w->det->iterations += it;
+    w->det->hist[it < FLOE_DETECT_HIST - 1 ? it : FLOE_DETECT_HIST - 1]++;
 }
 
 /* the vertices of a inside b, sign: +1 when a is particle i (the normal from i to j is then
  * minus b's outward face normal), -1 when a is j */
-static void mf_vertices(const floe_world *w, const shape_ref *a, const shape_ref *b, double sign, mf_vertex *best,
+static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double sign, mf_vertex *best,
                         int *nb, int cap) {
     int nv = 0, np = 0;
     double buf[24];
-    const double *V = a->g->klass->vertices(a->g, &nv), *P = body_planes(b->g, w->def.dim, &np, buf);
+    const double *V = a->g->klass->vertices(a->g, &nv), *P = body_planes(b->g, w->dim, &np, buf);
     if (!V || !P) return;
-    const int flat_box = w->def.dim == 2 && a->g->klass == &floe_box_class;
+    const int flat_box = w->dim == 2 && a->g->klass == &floe_box_class;
     for (int v = 0; v < nv; v++) {
         double X[3] = {V[3 * v], V[3 * v + 1], V[3 * v + 2]}, xw[3], rel[3], Xb[3];
         if (flat_box) { /* 2D: one face of the box (its z = -h corners) */
@@ -448,7 +449,7 @@ static void mf_vertices(const floe_world *w, const shape_ref *a, const shape_ref
         floe_v3_sub(rel, xw, b->x);
         if (floe_v3_dot(rel, rel) >= b->r * b->r) continue;
         floe_q_rotate_inv(Xb, b->q, rel);
-        if (w->def.dim == 2) Xb[2] = 0;
+        if (w->dim == 2) Xb[2] = 0;
         double d = INFINITY;
         int f = -1;
         for (int k = 0; k < np; k++) {
@@ -476,8 +477,8 @@ static void mf_vertices(const floe_world *w, const shape_ref *a, const shape_ref
  * other, and a flat face rests on two (2D) or up to four (3D) springs. The gradient of
  * e(d_v) is the law's force at v along the nearest face's normal (exact: the vertex moves
  * with its body, the face with the other). This finds the 2nd .. K-th deepest vertices. */
-static void manifold(const floe_world *w, const shape_ref *a, const shape_ref *b, floe_contact *c) {
-    const int K = w->def.dim == 2 ? 2 : 4;
+static void manifold(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, floe_contact *c) {
+    const int K = w->dim == 2 ? 2 : 4;
     mf_vertex best[4];
     int nb = 0;
     mf_vertices(w, a, b, 1.0, best, &nb, K);
@@ -485,12 +486,12 @@ static void manifold(const floe_world *w, const shape_ref *a, const shape_ref *b
     mf_set_extras(c, best, nb); /* the deepest vertex is the deepest point's share */
 }
 
-static int polytope_pair(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     double x1[3], x2[3], s1, s2, n1[3], n2[3], g1 = 1, g2 = 1;
     int p1 = 0, p2 = 0;
     int rc = lp_half(w, a, b, warm, x1, &s1, n1, &g1, &p1);
     if (rc) return -rc;
-    w->det.lp_calls++;
+    w->det->lp_calls++;
     if (!(s1 < 0)) {
         count_iterations(w, p1);
         return 0;
@@ -538,12 +539,12 @@ static int separated_on_centre_line(const shape_ref *a, const shape_ref *b) {
     return -floe_v3_dot(xa, d) + floe_v3_dot(xb, d) < n ? 1 : 0;
 }
 
-static void note_nonconverged(floe_world *w) {
-    w->det.nonconverged++;
-    if (w->det.nonconverged == 1) {
-        w->det.first_bad_i = w->det.cur_i;
-        w->det.first_bad_j = w->det.cur_j;
-        w->det.first_bad_step = w->step;
+static void note_nonconverged(floe_detect_ctx *w) {
+    w->det->nonconverged++;
+    if (w->det->nonconverged == 1) {
+        w->det->first_bad_i = w->det->cur_i;
+        w->det->first_bad_j = w->det->cur_j;
+        w->det->first_bad_step = w->step;
     }
 }
 
@@ -555,24 +556,24 @@ static int sdf_only(const floe_geometry *g) { return !g->klass->project; }
  * other can be deepest in (a polytope partner: only its point deepest in the curved shape,
  * as for ADMM); depth = the deeper half, force along the normal of the shape it is deepest
  * in, applied at the deepest point (finish_at). */
-static int sdf_pair(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+static int sdf_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     floe_pose pa = {a->g, {a->x[0], a->x[1], a->x[2]}, {a->q[0], a->q[1], a->q[2], a->q[3]}};
     floe_pose pb = {b->g, {b->x[0], b->x[1], b->x[2]}, {b->q[0], b->q[1], b->q[2], b->q[3]}};
     int half1 = !is_polytope(b->g), half2 = !is_polytope(a->g);
     double X1[3], X2[3], d1 = INFINITY, d2 = INFINITY, n1[3] = {0, 0, 1}, n2[3] = {0, 0, 1};
     int its = 0, bad = 0;
     if (half1) {
-        int it = floe_sdf_half(&pa, &pb, &w->det.admm, warm, X1, &d1, n1);
+        int it = floe_sdf_half(&pa, &pb, &w->det->admm, warm, X1, &d1, n1);
         its += it < 0 ? -it : it;
         bad |= it < 0;
     }
     if (half2 && (!half1 || d1 < 0)) { /* half 1 apart: no contact, half 2 not needed */
-        int it = floe_sdf_half(&pb, &pa, &w->det.admm, warm ? warm + 8 : NULL, X2, &d2, n2);
+        int it = floe_sdf_half(&pb, &pa, &w->det->admm, warm ? warm + 8 : NULL, X2, &d2, n2);
         its += it < 0 ? -it : it;
         bad |= it < 0;
     }
     count_iterations(w, its);
-    w->det.admm_calls++;
+    w->det->admm_calls++;
     if (bad) note_nonconverged(w);
     if (!(d1 < 0 || d2 < 0) || (half1 && !(d1 < 0))) return 0;
     double x[3];
@@ -597,11 +598,11 @@ static int sdf_pair(floe_world *w, const shape_ref *a, const shape_ref *b, doubl
 }
 
 /* ---- any other convex pair: ADMM ---- */
-static int admm_pair(floe_world *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+static int admm_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     if (separated_on_centre_line(a, b)) {
         /* most list pairs of non-spherical grains: bounding spheres overlap, shapes apart */
         if (warm) warm[0] = warm[8] = NAN;
-        w->det.separated++;
+        w->det->separated++;
         return 0;
     }
     if (is_polytope(a->g) && is_polytope(b->g)) return polytope_pair(w, a, b, warm, c);
@@ -617,9 +618,9 @@ static int admm_pair(floe_world *w, const shape_ref *a, const shape_ref *b, doub
          * curved half alone gives the depth and the normal of the curved surface. */
         const floe_pose *P = pa_poly ? &pa : &pb, *S = pa_poly ? &pb : &pa;
         double X[3], phi, xw[3], g[3], gw[3], Xs[3], d[3];
-        int it = floe_admm_half(P, S, &w->det.admm, warm, X, &phi);
+        int it = floe_admm_half(P, S, &w->det->admm, warm, X, &phi);
         count_iterations(w, it < 0 ? -it : it);
-        w->det.admm_calls++;
+        w->det->admm_calls++;
         if (it < 0) note_nonconverged(w);
         if (!(phi < 0)) return 0;
         floe_q_rotate(xw, P->q, X);
@@ -644,9 +645,9 @@ static int admm_pair(floe_world *w, const shape_ref *a, const shape_ref *b, doub
         finish_at(c, xw); /* the polytope's point deepest in S */
         return 1;
     }
-    floe_admm_contact(&pa, &pb, &w->det.admm, warm, &r);
+    floe_admm_contact(&pa, &pb, &w->det->admm, warm, &r);
     count_iterations(w, r.iters);
-    w->det.admm_calls++;
+    w->det->admm_calls++;
     if (!r.converged) note_nonconverged(w);
     if (!r.penetrating) return 0;
     floe_v3_copy(c->x1, r.x1);
@@ -707,10 +708,9 @@ int floe_piece_count(const floe_geometry *g) {
     return g->klass == &floe_compound_class ? ((const floe_compound *)g)->n : 1;
 }
 
-static void make_ref(const floe_world *w, int i, int piece, shape_ref *s) {
-    const floe_particles *p = &w->p;
-    const floe_geometry *g = w->geoms[p->geom[i]];
-    const double *x = p->x + 3 * i, *q = p->q + 4 * i;
+static void make_ref(const floe_body_ref *body, int piece, shape_ref *s) {
+    const floe_geometry *g = body->g;
+    const double *x = body->x, *q = body->q;
     if (g->klass == &floe_compound_class) {
         const floe_compound *cg = (const floe_compound *)g;
         double off[3];
@@ -723,27 +723,29 @@ static void make_ref(const floe_world *w, int i, int piece, shape_ref *s) {
         floe_v3_copy(s->x, x);
         memcpy(s->q, q, sizeof s->q);
         s->g = g;
-        s->r = p->radius[i];
+        s->r = body->radius;
     }
     s->kind = s->g->klass->kind;
 }
 
-void floe_piece_centre(const floe_world *w, int i, int piece, double c[3], double *r) {
+void floe_piece_centre(const floe_body_ref *body, int piece, double c[3], double *r) {
     shape_ref s;
-    make_ref(w, i, piece, &s);
+    make_ref(body, piece, &s);
     floe_v3_copy(c, s.x);
     *r = s.r;
 }
 
-int floe_detect(floe_world *w, int i, int j, int sub, double *warm, floe_contact *c) {
+int floe_detect(floe_detect_ctx *w, const floe_body_ref *bi, const floe_body_ref *bj, int sub, double *warm,
+                floe_contact *c) {
     shape_ref a, b;
-    make_ref(w, i, FLOE_SUB_A(sub), &a);
-    make_ref(w, j, FLOE_SUB_B(sub), &b);
+    const int i = bi->id, j = bj->id;
+    make_ref(bi, FLOE_SUB_A(sub), &a);
+    make_ref(bj, FLOE_SUB_B(sub), &b);
     int swap;
     pair_fn fn = lookup(a.kind, b.kind, &swap);
     if (!fn) return -FLOE_ENOTSUP;
-    w->det.cur_i = i;
-    w->det.cur_j = j;
+    w->det->cur_i = i;
+    w->det->cur_j = j;
     c->i = i;
     c->j = j;
     if (!swap) return fn(w, &a, &b, warm, c);

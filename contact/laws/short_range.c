@@ -17,7 +17,7 @@
  * bonded family members never enter contact in floe.)
  *
  * "none": the world never evaluates a contact between the two materials
- * (floe_contact_law_no_contact(), checked in core/forces.c before detection), so such a pair
+ * (floe_contact_law_no_contact(), checked in core/world/forces.c before detection), so such a pair
  * never gets a force and never trips the interpenetration guard. */
 #include <stdlib.h>
 #include <string.h>

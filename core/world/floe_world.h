@@ -11,12 +11,6 @@
 typedef struct floe_world floe_world;
 typedef struct floe_observer floe_observer;
 
-typedef enum floe_motion {
-    FLOE_FREE = 0,        /* integrated from forces */
-    FLOE_FIXED = 1,       /* never moves */
-    FLOE_KINEMATIC = 2    /* prescribed velocity / angular velocity */
-} floe_motion;
-
 /* Prescribed motion of a kinematic particle: fills v and w at time t. */
 typedef void (*floe_motion_fn)(double t, double v[3], double w[3], void *user);
 /* Extra body force on particle i (added to f, torque). */
@@ -126,7 +120,7 @@ int floe_world_set_body_force(floe_world *w, floe_body_force_fn fn, void *user);
 /* State objects evolved by RK2 (ParticLS eq 21), see floe_state.h. World takes ownership. */
 typedef struct floe_state floe_state;
 int floe_world_add_state(floe_world *w, floe_state *s);
-/* Observers (floe_observer.h). World takes ownership. */
+/* Observers (floe_observer_base.h, built-ins in floe_observer.h). World takes ownership. */
 int floe_world_add_observer(floe_world *w, floe_observer *o);
 
 /* Prepare: masses, neighbour structures, time step (dt = 0 -> automatic). Called by
@@ -154,7 +148,7 @@ typedef enum floe_dt_kind {
     FLOE_DT_HERTZ,               /* Hertz contact duration 2.87 (m*^2/(R* E*^2 v))^(1/5) at the
                                     expected speed */
     FLOE_DT_BEAM,                /* limits: beam bonds, 2/sqrt(lambda_max) of the bonded
-                                    particles' stiffness (block Gershgorin, contact/beam_bond.c) */
+                                    particles' stiffness (block Gershgorin, contact/bonds/beam_bond.c) */
     FLOE_DT_NKINDS
 } floe_dt_kind;
 typedef struct floe_dt_estimates {

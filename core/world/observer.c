@@ -1,5 +1,5 @@
 /* observer.c - observer lifetime helpers shared by all observer classes. */
-#include "floe_observer.h"
+#include "floe_observer_base.h"
 
 #include <stdlib.h>
 

@@ -1,5 +1,5 @@
 /* floe_overlap.h - overlap integrals of two convex polytopes for the overlap-area law
- * (contact/overlap.c; docs/models.md "Overlap-area law"). Internal to the contact layer. */
+ * (contact/detect/overlap.c; docs/models.md "Overlap-area law"). Internal to the contact layer. */
 #ifndef FLOE_OVERLAP_H
 #define FLOE_OVERLAP_H
 

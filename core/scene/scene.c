@@ -2637,7 +2637,7 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
     }
     if (floe_world_beam_bond_count(w) > 0)
         sc_cat(&b, "  beam bonds: %d (%d broken), critical dt %.3g s\n", floe_world_beam_bond_count(w),
-               floe_world_beam_broken_count(w), floe_beam_critical_dt(w));
+               floe_world_beam_broken_count(w), floe_world_beam_critical_dt(w));
     sc_cat(&b, "materials:\n");
     for (int i = 0; i < s->nmats && i < 16; i++) {
         const floe_material *m = &s->mats[i].m;
@@ -2726,7 +2726,7 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
 }
 
 /* ------------------------------------------------------------------------------------ */
-/* Beam bonds (contact/floe_beam.h, issue #5): `bonds:` a list of bond sets, each bonding   */
+/* Beam bonds (contact/bonds/floe_beam.h, issue #5): `bonds:` a list of bond sets, each bonding   */
 /* the particles within a radius (floe_world_add_beam_bonds)                              */
 
 static int sc_parse_bonds(sc *s, struct fy_node *seq, struct fy_node *key)

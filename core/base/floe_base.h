@@ -84,4 +84,11 @@ static inline void floe_q_from_rotvec(double q[4], const double th[3]) {
     q[0] = cos(0.5 * a); q[1] = th[0] * s; q[2] = th[1] * s; q[3] = th[2] * s;
 }
 
+/* How a particle moves (floe_world_add_particle and the particle store). */
+typedef enum floe_motion {
+    FLOE_FREE = 0,        /* integrated from forces */
+    FLOE_FIXED = 1,       /* never moves */
+    FLOE_KINEMATIC = 2    /* prescribed velocity / angular velocity */
+} floe_motion;
+
 #endif

@@ -3,8 +3,7 @@
  * stresses of eq 11 with per-bond strengths from a seeded normal distribution, the bonds'
  * critical time step, and the exclusion of bonded pairs from contact. floe_beam.h has the
  * equations. */
-#include "floe_beam.h"
-#include "world_internal.h"
+#include "beam_set.h"
 
 #include <stdint.h>
 #include <stdio.h>
@@ -34,8 +33,6 @@ struct floe_beam_set {
     int n, cap, nbroken;
     /* bonded partners of each particle (both directions), sorted: off[n_csr + 1] */
     int *off, *adj, *adj_bond, n_csr;
-    int (*prev_exclude)(const void *ctx, int i, int j);
-    const void *prev_ctx;
     unsigned long long rng;   /* strengths of single bonds: one stream per seed (rng_seed) */
     unsigned long long rng_seed;
     int rng_set;
@@ -155,7 +152,7 @@ floe_beam_params floe_default_beam_params(void) {
     return p;
 }
 
-static int check_params(floe_world *w, const floe_beam_params *par) {
+int floe_beam_check_params(const floe_beam_params *par, char *err, size_t errlen) {
     const char *bad = NULL;
     if (!par) bad = "params is NULL";
     else if (!(par->young > 0) || !isfinite(par->young)) bad = "young must be > 0";
@@ -174,20 +171,16 @@ static int check_params(floe_world *w, const floe_beam_params *par) {
     else if (!(par->shear_strength >= 0 && par->shear_sd >= 0) || !isfinite(par->shear_strength + par->shear_sd))
         bad = "shear_strength and shear_sd must be >= 0";
     else if (!(par->max_distance >= 0) || !isfinite(par->max_distance)) bad = "max_distance must be >= 0";
-    if (bad) return floe_world_error(w, FLOE_EINVAL, "beam bonds: %s", bad);
-    return FLOE_OK;
-}
-
-static int set_get(floe_world *w, struct floe_beam_set **out) {
-    if (!w->beams) {
-        w->beams = calloc(1, sizeof *w->beams);
-        if (!w->beams) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    if (bad) {
+        if (err && errlen) snprintf(err, errlen, "beam bonds: %s", bad);
+        return FLOE_EINVAL;
     }
-    *out = w->beams;
     return FLOE_OK;
 }
 
-void floe_beam_set_destroy(struct floe_beam_set *s) {
+floe_beam_set *floe_beam_set_create(void) { return calloc(1, sizeof(floe_beam_set)); }
+
+void floe_beam_set_destroy(floe_beam_set *s) {
     if (!s) return;
     free(s->b);
     free(s->off); free(s->adj); free(s->adj_bond);
@@ -195,7 +188,7 @@ void floe_beam_set_destroy(struct floe_beam_set *s) {
 }
 
 /* bond index of the pair (i, j), or -1 */
-static int find_bond(const struct floe_beam_set *s, int i, int j) {
+int floe_beam_set_find(const floe_beam_set *s, int i, int j) {
     if (i < 0 || i >= s->n_csr) return -1;
     int lo = s->off[i], hi = s->off[i + 1];
     while (lo < hi) {
@@ -213,7 +206,7 @@ static int cmp_adj(const void *a, const void *b) {
 }
 
 /* CSR of bonded partners over the first n particles */
-static int build_csr(struct floe_beam_set *s, int n) {
+int floe_beam_set_index(floe_beam_set *s, int n) {
     int *off = calloc((size_t)n + 1, sizeof *off);
     adj_entry *e = malloc((size_t)(2 * s->n + 1) * sizeof *e);
     int *adj = malloc((size_t)(2 * s->n + 1) * sizeof *adj), *ab = malloc((size_t)(2 * s->n + 1) * sizeof *ab);
@@ -236,22 +229,9 @@ static int build_csr(struct floe_beam_set *s, int n) {
     return FLOE_OK;
 }
 
-/* intact bonded pairs never enter the contact list; then whatever was excluded before */
-static int beam_exclude(const void *ctx, int i, int j) {
-    const floe_world *w = ctx;
-    const struct floe_beam_set *s = w->beams;
-    int k = find_bond(s, i, j);
-    if (k >= 0 && !s->b[k].broken) return 1;
-    return s->prev_exclude ? s->prev_exclude(s->prev_ctx, i, j) : 0;
-}
-
-static void install_exclude(floe_world *w) {
-    struct floe_beam_set *s = w->beams;
-    if (w->nl.exclude == beam_exclude) return;
-    s->prev_exclude = w->nl.exclude;
-    s->prev_ctx = w->nl.exclude_ctx;
-    w->nl.exclude = beam_exclude;
-    w->nl.exclude_ctx = w;
+int floe_beam_set_excludes(const floe_beam_set *s, int i, int j) {
+    int k = floe_beam_set_find(s, i, j);
+    return k >= 0 && !s->b[k].broken;
 }
 
 /* a unit normal to e */
@@ -263,17 +243,22 @@ static void any_normal(double nrm[3], const double e[3]) {
     floe_v3_scale(nrm, 1.0 / floe_v3_norm(nrm));
 }
 
-static int push_bond(floe_world *w, struct floe_beam_set *s, int i, int j, const floe_beam_params *par,
-                     unsigned long long *rng) {
-    const floe_particles *p = &w->p;
+int floe_beam_set_push(floe_beam_set *s, const floe_particles *p, int dim, int i, int j,
+                       const floe_beam_params *par, unsigned long long *rng, char *err, size_t errlen) {
     double d[3];
     floe_v3_sub(d, p->x + 3 * j, p->x + 3 * i);
     double l = floe_v3_norm(d);
-    if (!(l > 0)) return floe_world_error(w, FLOE_EINVAL, "beam bond %d-%d: the particles are at the same place", i, j);
+    if (!(l > 0)) {
+        if (err && errlen) snprintf(err, errlen, "beam bond %d-%d: the particles are at the same place", i, j);
+        return -FLOE_EINVAL;
+    }
     if (s->n == s->cap) {
         int nc = s->cap ? 2 * s->cap : 64;
         beam_bond *nb = realloc(s->b, (size_t)nc * sizeof *nb);
-        if (!nb) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        if (!nb) {
+            if (err && errlen) snprintf(err, errlen, "out of memory");
+            return -FLOE_ENOMEM;
+        }
         s->b = nb;
         s->cap = nc;
     }
@@ -285,7 +270,6 @@ static int push_bond(floe_world *w, struct floe_beam_set *s, int i, int j, const
     sec->l = l;
     sec->E = par->young;
     sec->G = par->young / (2.0 * (1.0 + par->poisson));
-    const int dim = w->def.dim;
     if (par->area > 0) {
         sec->A = par->area;
         sec->I = par->inertia;
@@ -326,120 +310,24 @@ static int push_bond(floe_world *w, struct floe_beam_set *s, int i, int j, const
     return s->n++;
 }
 
-/* Particles a bond set may bond: those of par->group, or with FLOE_BEAM_ALL_GROUPS every
- * particle except the points of peridynamic bodies (already bonded by their PD bonds;
- * name their group to bond them anyway). */
-static int group_ok(const floe_world *w, const floe_beam_params *par, int i) {
-    if (par->group == FLOE_BEAM_ALL_GROUPS) return !(w->pd_of && i < w->pd_npts_alloc && w->pd_of[i] >= 0);
-    return w->p.group[i] == par->group;
-}
-
-int floe_world_add_beam_bond(floe_world *w, int i, int j, const floe_beam_params *par) {
-    TRY_NEG(check_params(w, par));
-    const floe_particles *p = &w->p;
-    if (i < 0 || j < 0 || i >= p->n || j >= p->n || i == j)
-        return -floe_world_error(w, FLOE_EINVAL, "beam bond: particles %d and %d must be two different indices < %d", i, j, p->n);
-    if (!isfinite(p->radius[i]) || !isfinite(p->radius[j]))
-        return -floe_world_error(w, FLOE_EINVAL, "beam bond %d-%d: walls cannot be bonded", i, j);
-    struct floe_beam_set *s = NULL;
-    TRY_NEG(set_get(w, &s));
-    if (find_bond(s, i, j) >= 0) return -floe_world_error(w, FLOE_EINVAL, "beam bond %d-%d: already bonded", i, j);
-    /* bonds added one at a time continue one random stream per seed, so that their
-     * strengths are drawn from the distribution rather than all equal */
-    if (!s->rng_set || s->rng_seed != par->seed) {
-        s->rng = s->rng_seed = par->seed;
+unsigned long long *floe_beam_set_rng(floe_beam_set *s, unsigned long long seed) {
+    if (!s->rng_set || s->rng_seed != seed) {
+        s->rng = s->rng_seed = seed;
         s->rng_set = 1;
     }
-    int k = push_bond(w, s, i < j ? i : j, i < j ? j : i, par, &s->rng);
-    if (k < 0) return k;
-    if (build_csr(s, p->n)) return -floe_world_error(w, FLOE_ENOMEM, "out of memory");
-    install_exclude(w);
-    w->prepared = 0;
-    return k;
+    return &s->rng;
 }
 
-typedef struct { int *idx; int n, cap, oom; } visit_buf;
-static void visit_push(int index, double d2, void *user) {
-    (void)d2;
-    visit_buf *v = user;
-    if (v->oom) return;
-    if (v->n == v->cap) {
-        int nc = v->cap ? 2 * v->cap : 64;
-        int *t = realloc(v->idx, (size_t)nc * sizeof *t);
-        if (!t) { v->oom = 1; return; }
-        v->idx = t;
-        v->cap = nc;
-    }
-    v->idx[v->n++] = index;
-}
-static int cmp_int(const void *a, const void *b) { return (*(const int *)a > *(const int *)b) - (*(const int *)a < *(const int *)b); }
-
-int floe_world_add_beam_bonds(floe_world *w, double radius_factor, const floe_beam_params *par) {
-    TRY_NEG(check_params(w, par));
-    if (par->max_distance == 0 && (!(radius_factor > 0) || !isfinite(radius_factor)))
-        return -floe_world_error(w, FLOE_EINVAL, "beam bonds: radius_factor must be > 0 (or set max_distance)");
-    const floe_particles *p = &w->p;
-    struct floe_beam_set *s = NULL;
-    TRY_NEG(set_get(w, &s));
-    /* candidates: finite particles of the group */
-    int *cand = malloc((size_t)(p->n ? p->n : 1) * sizeof *cand);
-    double *pts = malloc((size_t)(p->n ? p->n : 1) * 3 * sizeof *pts);
-    if (!cand || !pts) { free(cand); free(pts); return -floe_world_error(w, FLOE_ENOMEM, "out of memory"); }
-    int nc = 0;
-    double rmax = 0;
-    for (int i = 0; i < p->n; i++) {
-        if (!isfinite(p->radius[i]) || !group_ok(w, par, i)) continue;
-        memcpy(pts + 3 * nc, p->x + 3 * i, 3 * sizeof *pts);
-        cand[nc++] = i;
-        if (p->radius[i] > rmax) rmax = p->radius[i];
-    }
-    floe_kdtree *tree = nc ? floe_kdtree_build(pts, nc, w->def.dim, 16) : NULL;
-    free(pts);
-    if (nc && !tree) { free(cand); return -floe_world_error(w, FLOE_ENOMEM, "out of memory"); }
-    if (build_csr(s, p->n)) { floe_kdtree_destroy(tree); free(cand); return -floe_world_error(w, FLOE_ENOMEM, "out of memory"); }
-    unsigned long long rng = par->seed;
-    visit_buf vb = {NULL, 0, 0, 0};
-    int added = 0, rc = FLOE_OK;
-    const int n_before = s->n;
-    for (int a = 0; a < nc && !rc; a++) {
-        int i = cand[a];
-        double reach = par->max_distance > 0 ? par->max_distance : radius_factor * (p->radius[i] + rmax);
-        vb.n = 0;
-        floe_kdtree_radius_visit(tree, p->x + 3 * i, reach, visit_push, &vb);
-        if (vb.oom) { rc = floe_world_error(w, FLOE_ENOMEM, "out of memory"); break; }
-        for (int q = 0; q < vb.n; q++) vb.idx[q] = cand[vb.idx[q]];
-        qsort(vb.idx, (size_t)vb.n, sizeof *vb.idx, cmp_int); /* bond order independent of the tree */
-        for (int q = 0; q < vb.n; q++) {
-            int j = vb.idx[q];
-            if (j <= i) continue;
-            if (p->motion[i] != FLOE_FREE && p->motion[j] != FLOE_FREE) continue;
-            double d[3];
-            floe_v3_sub(d, p->x + 3 * j, p->x + 3 * i);
-            double dist = floe_v3_norm(d);
-            double lim = par->max_distance > 0 ? par->max_distance : radius_factor * (p->radius[i] + p->radius[j]);
-            if (dist > lim) continue;
-            if (find_bond(s, i, j) >= 0) continue; /* bonded by an earlier call */
-            int k = push_bond(w, s, i, j, par, &rng);
-            if (k < 0) { rc = -k; break; }
-            added++;
-        }
-    }
-    free(vb.idx);
-    free(cand);
-    floe_kdtree_destroy(tree);
-    if (rc) { s->n = n_before; build_csr(s, p->n); return -rc; }
-    if (build_csr(s, p->n)) return -floe_world_error(w, FLOE_ENOMEM, "out of memory");
-    install_exclude(w);
-    w->prepared = 0;
-    return added;
+void floe_beam_set_truncate(floe_beam_set *s, int n) {
+    if (n >= 0 && n < s->n) s->n = n;
 }
 
-int floe_world_beam_bond_count(const floe_world *w) { return w->beams ? w->beams->n : 0; }
-int floe_world_beam_broken_count(const floe_world *w) { return w->beams ? w->beams->nbroken : 0; }
+int floe_beam_set_count(const floe_beam_set *s) { return s ? s->n : 0; }
+int floe_beam_set_broken(const floe_beam_set *s) { return s ? s->nbroken : 0; }
 
-int floe_world_beam_bond(const floe_world *w, int k, floe_beam_bond_info *o) {
-    if (!w->beams || k < 0 || k >= w->beams->n) return FLOE_EINVAL;
-    const beam_bond *b = &w->beams->b[k];
+int floe_beam_set_info(const floe_beam_set *s, int k, floe_beam_bond_info *o) {
+    if (!s || k < 0 || k >= s->n) return FLOE_EINVAL;
+    const beam_bond *b = &s->b[k];
     o->i = b->i;
     o->j = b->j;
     o->broken = b->broken;
@@ -452,30 +340,25 @@ int floe_world_beam_bond(const floe_world *w, int k, floe_beam_bond_info *o) {
     return FLOE_OK;
 }
 
-int floe_world_write_beam_bonds_csv(floe_world *w, const char *path) {
+int floe_beam_set_write_csv(const floe_beam_set *s, const floe_particles *p, const char *path) {
     FILE *f = fopen(path, "w");
-    if (!f) return floe_world_error(w, FLOE_EIO, "cannot write %s", path);
+    if (!f) return FLOE_EIO;
     fprintf(f, "i,j,x [m],y [m],z [m],broken,t_broken [s],sigma [Pa],tau [Pa],sigma_lim [Pa]\n");
-    const struct floe_beam_set *s = w->beams;
     for (int k = 0; s && k < s->n; k++) {
         const beam_bond *b = &s->b[k];
-        const double *xi = w->p.x + 3 * b->i, *xj = w->p.x + 3 * b->j;
+        const double *xi = p->x + 3 * b->i, *xj = p->x + 3 * b->j;
         fprintf(f, "%d,%d,%.9g,%.9g,%.9g,%d,%.9g,%.9g,%.9g,%.9g\n", b->i, b->j, 0.5 * (xi[0] + xj[0]),
                 0.5 * (xi[1] + xj[1]), 0.5 * (xi[2] + xj[2]), b->broken, b->t_broken, b->sigma, b->tau, b->sig_lim);
     }
     int bad = ferror(f);
-    if (fclose(f) || bad) return floe_world_error(w, FLOE_EIO, "error writing %s", path);
+    if (fclose(f) || bad) return FLOE_EIO;
     return FLOE_OK;
 }
 
 /* ---- time step ---- */
 
-double floe_beam_critical_dt(floe_world *w) {
-    struct floe_beam_set *s = w->beams;
+double floe_beam_set_critical_dt(floe_beam_set *s, const floe_particles *p, int dim) {
     if (!s || s->n == 0) return INFINITY;
-    install_exclude(w);
-    const floe_particles *p = &w->p;
-    const int dim = w->def.dim;
     double dmax = 0;
     for (int k = 0; k < s->n; k++) { /* per-bond damping time, from the masses of prepare */
         beam_bond *b = &s->b[k];
@@ -516,19 +399,13 @@ double floe_beam_critical_dt(floe_world *w) {
 
 /* ---- forces ---- */
 
-int floe_beam_forces(floe_world *w, double *elastic, double *dissipated) {
-    struct floe_beam_set *s = w->beams;
-    if (!s) return FLOE_OK;
-    floe_particles *p = &w->p;
-    const int stepping = w->advancing, dim = w->def.dim;
-    const double dt = w->dt;
+int floe_beam_set_forces(floe_beam_set *s, const floe_step_ctx *ctx, double *elastic, double *dissipated) {
+    if (!s) return 0;
+    floe_particles *p = ctx->p;
+    const int stepping = ctx->stepping, dim = ctx->dim;
+    const double dt = ctx->dt;
     int nbreak = 0;
     double el = 0, ds = 0;
-    if (w->nl.exclude != beam_exclude) { /* something replaced the exclusion since prepare */
-        install_exclude(w);
-        int rc = floe_nl_build(&w->nl, p, dim, w->def.leaf_size);
-        if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
-    }
     for (int k = 0; k < s->n; k++) {
         beam_bond *b = &s->b[k];
         if (b->broken) continue;
@@ -571,7 +448,7 @@ int floe_beam_forces(floe_world *w, double *elastic, double *dissipated) {
         double Fi[3] = {0, 0, 0}, Ti[3] = {0, 0, 0}, Tj[3] = {0, 0, 0};
         if (stepping && (sigma > b->sig_lim || tau > b->tau_lim)) {
             b->broken = 1;
-            b->t_broken = w->time;
+            b->t_broken = ctx->time;
             b->sigma = b->tau = 0;
             s->nbroken++;
             nbreak++;
@@ -629,9 +506,5 @@ int floe_beam_forces(floe_world *w, double *elastic, double *dissipated) {
     }
     *elastic += el;
     if (stepping) *dissipated += ds;
-    if (nbreak) { /* the broken pairs may now meet by contact: into the list */
-        int rc = floe_nl_build(&w->nl, p, dim, w->def.leaf_size);
-        if (rc) return floe_world_error(w, rc, "neighbour list rebuild after beam breakage failed (out of memory)");
-    }
-    return FLOE_OK;
+    return nbreak;
 }

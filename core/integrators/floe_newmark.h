@@ -1,7 +1,7 @@
 /* floe_newmark.h - Newmark-beta time integration of a bonded system (004 §3-4): explicit
  * (beta = 0, gamma = 1/2, central difference) and implicit average acceleration
  * (beta = 1/4, gamma = 1/2), for nodes (particles with mass and rotational inertia) joined
- * by beam bonds (contact/floe_beam.h, 004 eq 7), with supports (eq 3), loads and bond
+ * by beam bonds (contact/bonds/floe_beam.h, 004 eq 7), with supports (eq 3), loads and bond
  * breakage (eq 11).
  *
  * This is a self-contained solver over nodes + bonds + supports + loads (a "bonded
@@ -61,7 +61,7 @@
 #define FLOE_NEWMARK_H
 
 #include "floe_base.h"
-#include "floe_beam.h"
+#include "floe_world_beams.h"
 
 typedef struct floe_newmark floe_newmark;
 

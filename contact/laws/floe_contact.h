@@ -103,7 +103,7 @@ typedef struct floe_contact_law_class {
 struct floe_contact_law {
     const floe_contact_law_class *klass;
     double friction;         /* its Coulomb coefficient (0: none); the world uses it for the
-                                twist friction of a contact manifold (core/forces.c) */
+                                twist friction of a contact manifold (core/world/forces.c) */
 };
 
 /* Linear elastic with Coulomb friction, ParticLS eqs 16-18 (gn = gs = 0), and linear
@@ -162,7 +162,7 @@ double floe_hertz_damping_for_restitution(double e);
  * (force allowed to become attractive: e = exp(-pi zeta / sqrt(1 - zeta^2))). */
 double floe_linear_restitution(double k, double c, double m);
 
-/* ---- short-range PD contact force and the "none" law (contact/short_range.c) ---- */
+/* ---- short-range PD contact force and the "none" law (contact/laws/short_range.c) ---- */
 
 /* Silling's short-range repulsive force between PD nodes (Silling & Askari 2005 eq 20,
  * c_s = factor c with factor 15 as in EMU and LAMMPS pair peri/pmb), with the short-range
@@ -186,7 +186,7 @@ floe_contact_law *floe_short_range_law_create_pd(double c, double delta, double 
  * detection (no force, no history, no interpenetration guard). */
 floe_contact_law *floe_no_contact_law_create(void);
 
-/* ---- overlap law for polytopes (contact/overlap_law.c, contact/overlap.c) ----
+/* ---- overlap law for polytopes (contact/laws/overlap_law.c, contact/detect/overlap.c) ----
  * Elastic force = ka x the conservative overlap resultant (length: the overlap area A in
  * 2D, volume V in 3D, where one edge/face of each body bounds the overlap: F = ka A as
  * SubZero's floe contact), stored energy ka I (floe_contact.area_energy): a Winkler

@@ -1,6 +1,6 @@
 /* overlap_law.c - overlap-area contact for 2D polygons (floe_contact.h).
  *
- * The geometry (contact/detect.c, floe_detect_overlap) gives the overlap area A, the
+ * The geometry (contact/detect/detect.c, floe_detect_overlap) gives the overlap area A, the
  * integral I = (∫_{A∩B} -φ_B dA + ∫_{A∩B} -φ_A dA)/2 and its exact gradient, the resultant
  * -dI/dx_i, at a point on its line of action. With stored energy ka I the elastic force is
  * ka times that resultant: a conservative Winkler foundation (pressure ka x local depth on

@@ -4,45 +4,19 @@
 #define FLOE_WORLD_INTERNAL_H
 
 #include "floe_world.h"
+#include "floe_view.h"
 #include "floe_state.h"
 #include "floe_kdtree.h"
-#include "floe_observer.h"
-#include "floe_admm.h"
+#include "floe_observer_base.h"
+#include "floe_detect.h"
+#include "particle_store.h"
+#include "floe_world_beams.h"
 
-/* Particle store: structure of arrays, index = particle id. */
-typedef struct floe_particles {
-    int n, cap;
-    double *x;        /* 3n centre of mass */
-    double *v;        /* 3n velocity */
-    double *q;        /* 4n orientation body -> world */
-    double *w;        /* 3n angular velocity, world frame */
-    double *L;        /* 3n angular momentum, world frame (integrated variable) */
-    double *f;        /* 3n force */
-    double *t;        /* 3n torque */
-    double *mass;     /* n */
-    double *inv_mass; /* n (0 for fixed/kinematic) */
-    double *inertia;  /* 3n principal moments, body frame */
-    double *radius;   /* n bounding radius (infinite for walls) */
-    int *geom;        /* n geometry index */
-    int *material;    /* n */
-    int *group;       /* n user tag ("body" in outputs) */
-    unsigned char *motion; /* n floe_motion */
-    unsigned char *kind;   /* n geometry kind (cached) */
-    unsigned char *iso;    /* n 1 = isotropic inertia (spheres; every body in 2D) */
-    double *rdot;          /* n outward surface speed set by state objects (growing radius), m/s */
-    int *pieces;           /* n convex pieces of the geometry (compound bodies > 1) */
-} floe_particles;
 
 typedef struct floe_motion_cb { int particle; floe_motion_fn fn; void *user; } floe_motion_cb;
 
-/* One active contact of the current step (for observers). */
-typedef struct floe_contact_rec {
-    int i, j;
-    double point[3], n[3], depth;
-    double force[3];   /* on i */
-    double fn;
-    double energy;
-} floe_contact_rec;
+/* One active contact of the current step (the public floe_contact_info, floe_view.h). */
+typedef floe_contact_info floe_contact_rec;
 
 /* Neighbour list with Verlet skin and per-pair history kept across rebuilds. */
 typedef struct floe_neighbor_list {
@@ -68,26 +42,6 @@ typedef struct floe_neighbor_list {
     int (*exclude)(const void *ctx, int i, int j);
     const void *exclude_ctx;
 } floe_neighbor_list;
-
-/* piece pair of a neighbour-list entry (compound bodies: one entry per piece pair) */
-#define FLOE_SUB(a, b) ((a) << 16 | (b))
-#define FLOE_SUB_A(s) ((s) >> 16)
-#define FLOE_SUB_B(s) ((s) & 0xffff)
-#define FLOE_DETECT_WARM FLOE_ADMM_WARM
-#define FLOE_DETECT_HIST 64
-
-/* detector options, scratch and statistics (contact/detect.c) */
-typedef struct floe_detect_state {
-    floe_admm_options admm;
-    double *scratch; int scratch_cap;
-    long calls, iterations;      /* ADMM/LP pair evaluations and their iterations (pivots + 1) */
-    long admm_calls, lp_calls;
-    long separated;              /* pairs found apart by the support test before LP/ADMM */
-    long nonconverged;           /* ADMM evaluations that hit max_iter (a counted warning) */
-    long hist[FLOE_DETECT_HIST]; /* iterations per evaluation (last bin: that many or more) */
-    int cur_i, cur_j;
-    int first_bad_i, first_bad_j; long first_bad_step;
-} floe_detect_state;
 
 struct floe_world {
     floe_world_def def;
@@ -119,7 +73,7 @@ struct floe_world {
     int last_step_of_run;     /* floe_world_run's final step: record for the end() flush */
     int finished;
     floe_energy energy;
-    floe_detect_state det;
+    floe_detect_state det;     /* detect.c's statistics and scratch (floe_detect_ctx.det) */
     /* peridynamic bodies (peridynamics/floe_pd.h): body k's points are the particles
      * pd_first[k] .. pd_first[k] + n - 1; nothing is allocated without PD bodies */
     struct floe_pd_body **pd; int *pd_first; int npd, pd_cap;
@@ -133,7 +87,7 @@ struct floe_world {
     struct floe_pd_bc_rec **pd_bc; int npd_bc, pd_bc_cap;
     long long *pd_nbroken_seen; /* npd: broken bonds of each body when the contact list was
                                    last checked for newly broken pairs (floe_pd_after_forces) */
-    /* time integration (core/world.c, issue #5): critical-step estimates, integrators,
+    /* time integration (core/world/world.c, issue #5): critical-step estimates, integrators,
      * adaptive steps, staggered PD-DEM; scratch only when a scheme needs it */
     floe_dt_estimates dte;    /* at prepare */
     double *dt_part;          /* n: critical estimate of each particle (limiting kinds) */
@@ -151,7 +105,7 @@ struct floe_world {
     double dt_lo, dt_hi;      /* adaptive: the bounds in use */
     double dt_cap;            /* adaptive: the step may not pass this (floe_world_run's end) */
     floe_step_stats st;
-    /* energy watchdog (core/world.c energy_watchdog): the dissipation of each PD body's
+    /* energy watchdog (core/world/world.c energy_watchdog): the dissipation of each PD body's
      * bonds since it was added (npd), the contact with the most negative dissipation over
      * its life at the last advancing evaluation (forces.c, reset there) and over the run */
     double *pd_diss; int pd_diss_n;
@@ -160,15 +114,15 @@ struct floe_world {
     double wd_scale;          /* the energy scale: largest K + elastic + |work| seen */
     double wd_gscale;         /* its floor: sum of m |g| R over the free particles (prepare) */
     double wd_shadow, wd_shadow0; /* energy of the last closing half kick, now and at prepare
-                                 (core/world.c shadow_term; 0 for RK2) */
+                                 (core/world/world.c shadow_term; 0 for RK2) */
     double wd_created;        /* largest created fraction of the scale seen */
     long wd_step;             /* step at which the tolerance was passed (-1: not yet) */
     char wd_msg[1024];
-    /* beam bonds (contact/floe_beam.h, issue #5); NULL without bonds */
-    struct floe_beam_set *beams;
+    /* beam bonds (contact/bonds/floe_beam.h, issue #5); NULL without bonds */
+    struct floe_beam_set *beams; /* contact/bonds/beam_set.h */
 };
 
-/* force groups of the staggered scheme (core/forces.c): contact and body forces (the DEM
+/* force groups of the staggered scheme (core/world/forces.c): contact and body forces (the DEM
  * and coupling forces, with gravity and external forces counted there once), PD bonds */
 enum { FLOE_FORCES_CONTACT = 1, FLOE_FORCES_PD = 2, FLOE_FORCES_ALL = 3 };
 int floe_compute_forces_part(floe_world *w, int part);
@@ -181,7 +135,7 @@ typedef struct floe_pd_bc_rec {
     double *fold;            /* BODY_FORCE: 3n last external force, for the trapezoid work */
 } floe_pd_bc_rec;
 
-/* PD boundary regions and breakage (core/world.c, next to floe_world_add_pd_body):
+/* PD boundary regions and breakage (core/world/world.c, next to floe_world_add_pd_body):
  * add the body forces of every body-force region to p->f and return their work over the
  * step (trapezoid, mid-step velocities; the caller books it when stepping); after the
  * bond forces, rebuild the contact list when a newly broken bond lets a pair within reach
@@ -189,13 +143,17 @@ typedef struct floe_pd_bc_rec {
 double floe_pd_bc_forces(floe_world *w);
 int floe_pd_after_forces(floe_world *w);
 
+/* the contact list's exclusion of bonded pairs (PD families, beam bonds), installed when
+ * either is added (core/world/world.c) */
+void floe_world_install_exclusion(floe_world *w);
+
 int floe_world_error(floe_world *w, int code, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
 
-/* neighbour list (core/neighbor.c) */
+/* neighbour list (core/world/neighbor.c) */
 int floe_nl_init(floe_neighbor_list *nl);
 void floe_nl_free(floe_neighbor_list *nl);
 int floe_nl_needs_rebuild(const floe_neighbor_list *nl, const floe_particles *p);
@@ -205,22 +163,12 @@ int floe_nl_needs_rebuild_after_drift(const floe_neighbor_list *nl, const floe_p
                                       int growth);
 int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int leaf_size);
 
-/* contact detection (contact/detect.c): fills c (x1, x2, n, depth, point, r_eff) for the
- * pair; returns 1 if penetrating, 0 if not, < 0 on error. */
-int floe_detect(floe_world *w, int i, int j, int sub, double *warm, floe_contact *c);
-/* overlap area, its energy integral and conservative resultant for a 2D polygon pair (the
- * overlap-area law): fills area, area_force, area_energy, and moves point and n onto the
- * resultant; 1 if they overlap, 0 if not, -FLOE_ENOTSUP for other pairs */
-int floe_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact *c);
-/* 1 if a detector exists for the two geometries (every piece pair of compounds) */
-int floe_detect_supported(const floe_geometry *a, const floe_geometry *b);
-/* 1 if some piece pair goes through ADMM or the polytope LP (needs warm-start storage) */
-int floe_detect_needs_warm(const floe_geometry *a, const floe_geometry *b);
-int floe_piece_count(const floe_geometry *g);
-/* world centre and bounding radius of piece `piece` of particle i */
-void floe_piece_centre(const floe_world *w, int i, int piece, double c[3], double *r);
+/* detection of the pair (i, j), piece pair sub, at the particles' current poses
+ * (contact/detect/floe_detect.h); for tests and diagnostics */
+int floe_world_detect(floe_world *w, int i, int j, int sub, double *warm, floe_contact *c);
+int floe_world_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact *c);
 
-/* forces (core/forces.c) */
+/* forces (core/world/forces.c) */
 int floe_compute_forces(floe_world *w);
 
 #endif

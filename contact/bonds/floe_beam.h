@@ -26,7 +26,7 @@
  * Damping: stiffness-proportional, the same matrix applied to the rates of the local
  * deformation scaled by 2 xi / omega_a (omega_a = sqrt(E A / (l0 m_r))): it damps no rigid
  * motion. (004 eq 8 damps the absolute end velocities instead; the Newmark solver,
- * core/floe_newmark.h, follows eq 8.)
+ * core/integrators/floe_newmark.h, follows eq 8.)
  *
  * Units are SI. */
 #ifndef FLOE_BEAM_H
@@ -35,7 +35,6 @@
 #include <limits.h>
 
 #include "floe_base.h"
-#include "floe_world.h"
 
 /* Cross-section and stiffness of one bond (one beam). */
 typedef struct floe_beam_section {
@@ -101,20 +100,7 @@ typedef struct floe_beam_params {
  * unbreakable, seed 1, all groups. */
 floe_beam_params floe_default_beam_params(void);
 
-/* Bond every pair of particles (walls excluded, not both fixed/kinematic) whose centres are
- * within radius_factor (R_i + R_j) (R the bounding radii; 1.01 on a touching lattice gives
- * the nearest neighbours), or within par->max_distance when that is > 0. Pairs already
- * bonded are skipped. The bond frame is taken from the present positions and orientations.
- * Returns the number of new bonds (>= 0) or -error (FLOE_EINVAL with a message naming the
- * field, FLOE_ENOMEM). Call before the run; the world owns the bonds. */
-int floe_world_add_beam_bonds(floe_world *w, double radius_factor, const floe_beam_params *par);
-/* One bond between particles i and j; returns its index or -error. */
-int floe_world_add_beam_bond(floe_world *w, int i, int j, const floe_beam_params *par);
-
-/* Bonds and broken bonds so far. */
-int floe_world_beam_bond_count(const floe_world *w);
-int floe_world_beam_broken_count(const floe_world *w);
-
+/* One bond as the world reports it (floe_world_beam_bond). */
 typedef struct floe_beam_bond_info {
     int i, j;
     int broken;              /* 1 once broken */
@@ -123,28 +109,5 @@ typedef struct floe_beam_bond_info {
     double sigma_lim, tau_lim; /* strengths (INFINITY: unbreakable by that stress), Pa */
     floe_beam_section section;
 } floe_beam_bond_info;
-/* Bond k (0 <= k < count); FLOE_EINVAL out of range. */
-int floe_world_beam_bond(const floe_world *w, int k, floe_beam_bond_info *out);
-
-/* The bonds as CSV (crack pattern): i, j, midpoint x y z, broken, t_broken, sigma, tau,
- * sigma_lim. FLOE_EIO with a message if the file cannot be written. */
-int floe_world_write_beam_bonds_csv(floe_world *w, const char *path);
-
-/* ---- for the world (core/forces.c, core/world.c) ---- */
-
-struct floe_beam_set;
-/* Add the bond forces and torques to p->f, p->t; add the bonds' stored energy to *elastic
- * and, when stepping, their dissipation over the step (work of the bond forces minus the
- * change of stored energy: damping and the energy of breaking bonds) to *dissipated. Bonds
- * whose stress exceeds the strength break (only when stepping); the contact list is then
- * rebuilt so that the pair can meet by contact. */
-int floe_beam_forces(floe_world *w, double *elastic, double *dissipated);
-/* Critical time step of the bonds (s, INFINITY without bonds), called by the time-step
- * estimate at prepare: a block Gershgorin bound on the highest frequency of the bonded
- * particles' translations and rotations, damping included. It also caches the per-bond
- * damping and installs the contact exclusion of bonded pairs, chained with any other
- * (peridynamic families). */
-double floe_beam_critical_dt(floe_world *w);
-void floe_beam_set_destroy(struct floe_beam_set *s);
 
 #endif

@@ -4,7 +4,7 @@
  * energy, dissipation). In 2D the out-of-plane components are removed. */
 #include "world_internal.h"
 #include "floe_pd.h"
-#include "floe_beam.h"
+#include "beam_set.h"
 #include <stdlib.h>
 #include <string.h>
 
@@ -29,7 +29,7 @@ static int push_contact(floe_world *w, const floe_contact *c, const floe_contact
 
 /* Energy watchdog: a contact (i, j) that received the work d (J) since it began (its
  * dissipation plus its stored energy); the most negative of this evaluation and of the run
- * are kept for core/world.c energy_watchdog. */
+ * are kept for core/world/world.c energy_watchdog. */
 static void life_dissipation(floe_world *w, int i, int j, double d) {
     if (d < w->wd_pair_min) { w->wd_pair_min = d; w->wd_pair_i = i; w->wd_pair_j = j; }
     if (d < w->wd_worst) { w->wd_worst = d; w->wd_worst_i = i; w->wd_worst_j = j; }
@@ -148,6 +148,30 @@ static void manifold_couples(const floe_contact_law *law, const floe_contact *c,
     res->energy += 0.5 * kt * *theta * *theta;
 }
 
+/* the pose of particle i as detection sees it */
+static inline floe_body_ref body_ref(const floe_world *w, int i) {
+    const floe_particles *p = &w->p;
+    floe_body_ref b = {w->geoms[p->geom[i]], p->x + 3 * i, p->q + 4 * i, p->radius[i], i};
+    return b;
+}
+
+static int detect_pair(const floe_world *w, floe_detect_ctx *ctx, int i, int j, int sub, double *warm,
+                       floe_contact *c) {
+    floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
+    return floe_detect(ctx, &bi, &bj, sub, warm, c);
+}
+
+int floe_world_detect(floe_world *w, int i, int j, int sub, double *warm, floe_contact *c) {
+    floe_detect_ctx ctx = {w->def.dim, w->step, &w->det};
+    return detect_pair(w, &ctx, i, j, sub, warm, c);
+}
+
+int floe_world_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact *c) {
+    floe_detect_ctx ctx = {w->def.dim, w->step, &w->det};
+    floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
+    return floe_detect_overlap(&ctx, &bi, &bj, sub, c);
+}
+
 /* Contact and body forces (the DEM and coupling forces of 000 eq 40 with the body forces
  * m b): gravity, external forces, the body-force callback, every contact of the list.
  * Zeroes p->f and p->t first. */
@@ -166,7 +190,7 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         for (int k = 0; k < 3; k++) p->f[3 * i + k] = p->mass[i] * w->def.gravity[k];
     }
     /* PD boundary regions: the external force b V of body-force regions (ParticLS eq 37),
-     * its work booked like the body-force callback's (core/world.c floe_pd_bc_forces) */
+     * its work booked like the body-force callback's (core/world/world.c floe_pd_bc_forces) */
     if (w->npd_bc) {
         double wbc = floe_pd_bc_forces(w);
         if (stepping) w->energy.work_body += wbc;
@@ -200,9 +224,17 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
     const int any_growth = w->nstates > 0; /* only state objects set rdot */
     floe_neighbor_list *nl = &w->nl;
     const int nm = w->nmats;
-    /* beam bonds (contact/beam_bond.c): force, torque, energy and breakage; a pair whose
+    /* beam bonds (contact/bonds/beam_bond.c): force, torque, energy and breakage; a pair whose
      * bond broke enters the contact list before the loop below */
-    if (w->beams) FLOE_TRY(floe_beam_forces(w, &elastic, &diss));
+    if (w->beams) {
+        floe_step_ctx sc = {p, w->def.dim, stepping, w->time, w->dt};
+        int nbreak = floe_beam_set_forces(w->beams, &sc, &elastic, &diss);
+        if (nbreak > 0) { /* the broken pairs may now meet by contact: into the list */
+            int rc = floe_nl_build(nl, p, w->def.dim, w->def.leaf_size);
+            if (rc) return floe_world_error(w, rc, "neighbour list rebuild after beam breakage failed (out of memory)");
+        }
+    }
+    floe_detect_ctx dctx = {w->def.dim, w->step, &w->det};
     for (int k = 0; k < nl->npairs; k++) {
         int i = nl->pi[k], j = nl->pj[k], sub = nl->sub[k];
         if (floe_contact_law_no_contact(w->laws[p->material[i] * nm + p->material[j]])) continue; /* law "none" */
@@ -219,8 +251,9 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         if (p->pieces[i] > 1 || p->pieces[j] > 1) {
             /* compound bodies: the bounding spheres of this entry's two pieces */
             double ca[3], cb[3];
-            floe_piece_centre(w, i, FLOE_SUB_A(sub), ca, &rad_i);
-            floe_piece_centre(w, j, FLOE_SUB_B(sub), cb, &rad_j);
+            floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
+            floe_piece_centre(&bi, FLOE_SUB_A(sub), ca, &rad_i);
+            floe_piece_centre(&bj, FLOE_SUB_B(sub), cb, &rad_j);
             dx = cb[0] - ca[0]; dy = cb[1] - ca[1]; dz = cb[2] - ca[2];
             rs = rad_i + rad_j;
         }
@@ -241,15 +274,16 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
                     c.point[a] = 0.5 * (c.x1[a] + c.x2[a]);
                 }
                 r = 1;
-            } else r = floe_detect(w, i, j, sub, warm, &c);
+            } else r = detect_pair(w, &dctx, i, j, sub, warm, &c);
         } else if (!(rs < INFINITY)) {
-            r = floe_detect(w, i, j, sub, warm, &c);
+            r = detect_pair(w, &dctx, i, j, sub, warm, &c);
         } else if (warm) {
             warm[0] = NAN; /* apart: the next approach starts cold */
         }
         const floe_contact_law *law = w->laws[p->material[i] * nm + p->material[j]];
         if (r == 1 && law->klass == &floe_overlap_law_class) {
-            r = floe_detect_overlap(w, i, j, sub, &c);
+            floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
+            r = floe_detect_overlap(&dctx, &bi, &bj, sub, &c);
             if (r == -FLOE_ENOTSUP)
                 return floe_world_error(w, FLOE_ENOTSUP,
                                         "contact law %s needs two polytopes (polygons, boxes, prisms, polyhedra); particles %d and %d are %s-%s",

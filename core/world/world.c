@@ -4,7 +4,7 @@
  * eqs 22-23), RK2 for generic state objects (eq 21), observers at their periods. */
 #include "world_internal.h"
 #include "floe_pd.h"
-#include "floe_beam.h"
+#include "beam_set.h"
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -339,6 +339,19 @@ static int pd_exclude(const void *ctx, int i, int j) {
     return b->len[k] < w->p.radius[i] + w->p.radius[j];
 }
 
+/* the pairs that never enter the contact list: bonded PD family members (pd_exclude) and
+ * particles held by an intact beam bond */
+static int world_exclude(const void *ctx, int i, int j) {
+    const floe_world *w = ctx;
+    if (w->npd && pd_exclude(w, i, j)) return 1;
+    return w->beams && floe_beam_set_excludes(w->beams, i, j);
+}
+
+void floe_world_install_exclusion(floe_world *w) {
+    w->nl.exclude = world_exclude;
+    w->nl.exclude_ctx = w;
+}
+
 /* 1 when broken pairs of body b can meet by contact (pd_exclude) */
 static int pd_broken_pairs_touch(const floe_pd_body *b) {
     return !(b->mat.model == FLOE_PD_PMB && b->mat.broken_tension_only);
@@ -476,8 +489,7 @@ int floe_world_add_pd_body(floe_world *w, struct floe_pd_body *body, int materia
     w->pd_nbroken_seen[w->npd] = (long long)body->nbroken;
     w->npd++;
     w->pd_npts += body->n;
-    w->nl.exclude = pd_exclude;
-    w->nl.exclude_ctx = w;
+    floe_world_install_exclusion(w);
     if (first) *first = n0;
     w->prepared = 0;
     return FLOE_OK;
@@ -861,7 +873,7 @@ static void particle_contact_estimates(const floe_world *w, dt_cache_entry *e, d
             }
             if (law->klass == &floe_linear_law_class) {
                 /* ~ A(e) / N^2, N = pi / w_d / dt (the dashpot's onset and release treated in
-                 * contact/linear_law.c) */
+                 * contact/laws/linear_law.c) */
                 const floe_linear_law *ll = (const floe_linear_law *)law;
                 double kk = ll->kn, z = ll->gn / (2 * sqrt(kk * me));
                 if (kk > 0 && z < 1) {
@@ -1014,7 +1026,7 @@ static int estimate_dt(floe_world *w) {
     }
     if (w->beams) { /* beam bonds */
         d->limits[FLOE_DT_BEAM] = 1;
-        d->dt[FLOE_DT_BEAM] = floe_beam_critical_dt(w);
+        d->dt[FLOE_DT_BEAM] = floe_world_beam_critical_dt(w);
     }
     d->critical = INFINITY;
     d->limiting = d->limiting_particle = -1;

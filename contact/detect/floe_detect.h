@@ -1,0 +1,64 @@
+/* floe_detect.h - contact detection (contact/detect/detect.c): two bodies' poses and a
+ * small context in, the contact summary of ParticLS eq 15 out. Nothing here knows the
+ * world: the caller (the world's contact provider) hands the poses of each listed pair. */
+#ifndef FLOE_DETECT_H
+#define FLOE_DETECT_H
+
+#include "floe_admm.h"
+#include "floe_contact.h"
+
+/* piece pair of a neighbour-list entry (compound bodies: one entry per piece pair) */
+#define FLOE_SUB(a, b) ((a) << 16 | (b))
+#define FLOE_SUB_A(s) ((s) >> 16)
+#define FLOE_SUB_B(s) ((s) & 0xffff)
+#define FLOE_DETECT_WARM FLOE_ADMM_WARM
+#define FLOE_DETECT_HIST 64
+
+/* detector options, scratch and statistics (contact/detect.c) */
+typedef struct floe_detect_state {
+    floe_admm_options admm;
+    double *scratch; int scratch_cap;
+    long calls, iterations;      /* ADMM/LP pair evaluations and their iterations (pivots + 1) */
+    long admm_calls, lp_calls;
+    long separated;              /* pairs found apart by the support test before LP/ADMM */
+    long nonconverged;           /* ADMM evaluations that hit max_iter (a counted warning) */
+    long hist[FLOE_DETECT_HIST]; /* iterations per evaluation (last bin: that many or more) */
+    int cur_i, cur_j;
+    int first_bad_i, first_bad_j; long first_bad_step;
+} floe_detect_state;
+
+/* one body as detection sees it: its geometry, centre and orientation (body -> world), its
+ * current bounding radius (a sphere's radius; for compounds, of the whole body) and its id */
+typedef struct floe_body_ref {
+    const floe_geometry *g;
+    const double *x, *q;
+    double radius;
+    int id;
+} floe_body_ref;
+
+/* what a detection call needs besides the two bodies: the dimension (2 or 3), the step
+ * (for the first non-converged ADMM call's report), the options, scratch and statistics */
+typedef struct floe_detect_ctx {
+    int dim;
+    long step;
+    floe_detect_state *det;
+} floe_detect_ctx;
+
+/* fills c (x1, x2, n, depth, point, r_eff, i, j) for piece pair `sub` (FLOE_SUB) of the two
+ * bodies; returns 1 if penetrating, 0 if not, < 0 on error (-FLOE_ENOTSUP: no detector). */
+int floe_detect(floe_detect_ctx *ctx, const floe_body_ref *a, const floe_body_ref *b, int sub, double *warm,
+                floe_contact *c);
+/* overlap area, its energy integral and conservative resultant for a polytope pair (the
+ * overlap-area law): fills area, area_force, area_energy, and moves point and n onto the
+ * resultant; 1 if they overlap, 0 if not, -FLOE_ENOTSUP for other pairs */
+int floe_detect_overlap(const floe_detect_ctx *ctx, const floe_body_ref *a, const floe_body_ref *b, int sub,
+                        floe_contact *c);
+/* 1 if a detector exists for the two geometries (every piece pair of compounds) */
+int floe_detect_supported(const floe_geometry *a, const floe_geometry *b);
+/* 1 if some piece pair goes through ADMM or the polytope LP (needs warm-start storage) */
+int floe_detect_needs_warm(const floe_geometry *a, const floe_geometry *b);
+int floe_piece_count(const floe_geometry *g);
+/* world centre and bounding radius of piece `piece` of a body */
+void floe_piece_centre(const floe_body_ref *body, int piece, double c[3], double *r);
+
+#endif

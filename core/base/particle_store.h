@@ -1,0 +1,45 @@
+/* particle_store.h - the particle store (structure of arrays, index = particle id) and the
+ * per-step context that force providers receive. Internal: the layout may change; users
+ * read particles through the world's accessors (floe_world.h). It sits in the base layer
+ * so that providers below the world (beam bonds) take the arrays, not the world. */
+#ifndef FLOE_PARTICLE_STORE_H
+#define FLOE_PARTICLE_STORE_H
+
+#include "floe_base.h"
+
+/* Particle store: structure of arrays, index = particle id. */
+typedef struct floe_particles {
+    int n, cap;
+    double *x;        /* 3n centre of mass */
+    double *v;        /* 3n velocity */
+    double *q;        /* 4n orientation body -> world */
+    double *w;        /* 3n angular velocity, world frame */
+    double *L;        /* 3n angular momentum, world frame (integrated variable) */
+    double *f;        /* 3n force */
+    double *t;        /* 3n torque */
+    double *mass;     /* n */
+    double *inv_mass; /* n (0 for fixed/kinematic) */
+    double *inertia;  /* 3n principal moments, body frame */
+    double *radius;   /* n bounding radius (infinite for walls) */
+    int *geom;        /* n geometry index */
+    int *material;    /* n */
+    int *group;       /* n user tag ("body" in outputs) */
+    unsigned char *motion; /* n floe_motion */
+    unsigned char *kind;   /* n geometry kind (cached) */
+    unsigned char *iso;    /* n 1 = isotropic inertia (spheres; every body in 2D) */
+    double *rdot;          /* n outward surface speed set by state objects (growing radius), m/s */
+    int *pieces;           /* n convex pieces of the geometry (compound bodies > 1) */
+} floe_particles;
+
+/* What a force provider is handed for one evaluation: the store (forces f and torques t are
+ * accumulated into it), the dimension, the time at the evaluation, the step over which it
+ * advances and whether it does (stepping = 0: a probe, e.g. at prepare or RK2's first stage:
+ * no history, breakage or ledger advance). */
+typedef struct floe_step_ctx {
+    floe_particles *p;
+    int dim;
+    int stepping;
+    double time, dt;
+} floe_step_ctx;
+
+#endif

@@ -1,0 +1,70 @@
+/* floe_view.h - a read-only view of a world, for observers, examples, benches and users:
+ * the particle arrays (zero-copy), the contacts of the last force evaluation with their
+ * points, normals and forces, the geometries, peridynamic bodies, neighbour-list and
+ * detection counters, and the definition in use. Nothing here changes the world.
+ *
+ * Pointers in a view stay valid until the next call that adds particles (add_*), prepares
+ * or steps the world; take a new view after those. Arrays are indexed by particle id
+ * (walls included: a wall is a particle with an unbounded geometry, radius INFINITY). */
+#ifndef FLOE_VIEW_H
+#define FLOE_VIEW_H
+
+#include "floe_world.h"
+
+typedef struct floe_particles_view {
+    int n;                          /* particles, walls included */
+    int dim;                        /* 2 or 3 */
+    const double *x, *v;            /* 3n: centre of mass (m), velocity (m/s) */
+    const double *q;                /* 4n: orientation body -> world (w, x, y, z) */
+    const double *w;                /* 3n: angular velocity, world frame (rad/s) */
+    const double *f, *t;            /* 3n: force (N) and torque (N m) of the last evaluation */
+    const double *mass;             /* n: kg (walls: their nominal mass) */
+    const double *inertia;          /* 3n: principal moments, body frame (kg m^2) */
+    const double *radius;           /* n: bounding radius (m), INFINITY for walls */
+    const int *geometry;            /* n: index into floe_world_geometry_at */
+    const int *material, *group;    /* n */
+    const unsigned char *motion;    /* n: floe_motion */
+} floe_particles_view;
+
+/* Fills out; FLOE_EINVAL when w or out is NULL. */
+int floe_world_particles(const floe_world *w, floe_particles_view *out);
+
+/* One contact of the last force evaluation. force acts on i (-force on j); n points from i
+ * to j; depth is the documented deepest-point depth (m); fn the normal force magnitude (N);
+ * energy the stored elastic energy of the contact (J). */
+typedef struct floe_contact_info {
+    int i, j;
+    double point[3], n[3], depth;
+    double force[3];
+    double fn;
+    double energy;
+} floe_contact_info;
+
+/* The contacts of the last force evaluation: sets *out and returns their number (>= 0), or
+ * -FLOE_EINVAL when they were not recorded at that evaluation (call
+ * floe_world_record_contacts(w, 1) before stepping; observers that need contacts switch it
+ * on when they are due). The count alone is floe_world_contact_count. */
+int floe_world_contacts(const floe_world *w, const floe_contact_info **out);
+
+/* The world's geometries: how many, and geometry k (NULL out of range). A particle's is
+ * floe_world_geometry_at(w, view.geometry[i]); floe_world_particle_geometry does both. */
+int floe_world_geometry_count(const floe_world *w);
+const floe_geometry *floe_world_geometry_at(const floe_world *w, int k);
+const floe_geometry *floe_world_particle_geometry(const floe_world *w, int i);
+
+/* The definition in use (after floe_world_create's defaults; read-only). */
+const floe_world_def *floe_world_definition(const floe_world *w);
+int floe_world_dim(const floe_world *w);
+
+/* The peridynamic body of particle i (-1 for none) */
+int floe_world_pd_body_of(const floe_world *w, int i);
+
+/* Neighbour-list counters: candidate pairs now and rebuilds so far. */
+typedef struct floe_neighbor_stats {
+    int pairs;
+    long rebuilds;
+    double skin;                    /* m */
+} floe_neighbor_stats;
+int floe_world_neighbor_stats(const floe_world *w, floe_neighbor_stats *out);
+
+#endif
