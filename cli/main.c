@@ -1,6 +1,7 @@
 /* main.c - the `floe` command: run a scene file (or the built-in demo), check a scene,
  * print build information. Scene format: docs/scene-format.md. */
 #include "floe_scene.h"
+#include "floe_registry.h"
 #include "world_internal.h"
 #include "floe_mesh.h"
 #include "floe_newmark.h"
@@ -20,16 +21,21 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: %s run [SCENE] [-o OUTDIR] [-q]   run a scene (no SCENE: the built-in demo)\n"
             "       %s check SCENE                   load and prepare a scene, print its summary\n"
-            "       %s info                          version, build and available models\n"
+            "       %s info                          version, build and the registered components\n"
+            "       %s help [KIND [NAME]]            the components of a kind (shape, law, output) and\n"
+            "                                        the parameters of one, e.g. help law hertz_mindlin\n"
+            "       %s help --markdown               the reference of every component (docs/reference.md)\n"
             "       %s --help\n"
             "\n"
             "  -o OUTDIR   directory for the scene's outputs (default ./out)\n"
             "  -q          quiet: no summary and no progress line, only errors\n"
+            "  --plugin F  load the plugin F (a shared library registering shapes, laws or outputs)\n"
+            "              before the command; repeatable; scenes can list theirs under plugins:\n"
             "\n"
             "Ctrl-C (SIGINT) or SIGTERM stops a run after the current step with every output\n"
             "complete (exit 130 / 143); a second signal kills at once.\n"
             "Scene files are YAML, described in docs/scene-format.md.\n",
-            prog, prog, prog, prog);
+            prog, prog, prog, prog, prog, prog);
 }
 
 static double now_s(void)
@@ -258,12 +264,23 @@ static int cmd_info(void)
     printf("features:    CGAL: %s, assimp: %s, CHOLMOD (implicit Newmark): %s, OpenMP: no\n",
            feat & FLOE_MESH_HAVE_CGAL ? "yes" : "no", feat & FLOE_MESH_HAVE_ASSIMP ? "yes" : "no",
            floe_newmark_implicit_available() ? "yes" : "no");
-    printf("geometries:  sphere, box, polyhedron, polygon, prism, ellipsoid, cylinder, capsule, cone, "
-           "rounded, compound, mesh (hull, decompose), plane (walls), user SDF callback\n");
-    printf("contact laws: %s (scene models: linear, viscoelastic), %s (scene model: "
-           "hertz_mindlin)\n", floe_linear_law_class.name, floe_hertz_mindlin_law_class.name);
-    printf("packings:    lattice, hexagonal, random\n");
-    printf("outputs:     vtk, csv, energy, stress, tracker\n");
+    char err[512];
+    if (floe_register_builtins(err, sizeof err) != FLOE_OK) {
+        fprintf(stderr, "%s: error: %s\n", prog, err);
+        return 1;
+    }
+    static const char *const kinds[][2] = {{"shape", "shapes:      "}, {"law", "contact laws:"}, {"output", "outputs:     "}};
+    for (int q = 0; q < 3; q++) {
+        printf("%s", kinds[q][1]);
+        for (int k = 0; k < floe_registry_count(kinds[q][0]); k++) {
+            const floe_registry_entry *e = floe_registry_at(kinds[q][0], k);
+            printf("%s%s%s", k ? ", " : " ", e->name, strcmp(e->origin, FLOE_ORIGIN_BUILTIN) ? " (plugin)" : "");
+        }
+        printf("\n");
+    }
+    printf("also:        plane (walls), user SDF callback (C API); packings lattice, hexagonal, random\n");
+    for (int k = 0; k < floe_plugin_count(); k++) printf("plugin:      %s\n", floe_plugin_path(k));
+    printf("help:        floe help KIND [NAME] (kinds: shape, law, output)\n");
     return 0;
 }
 
@@ -273,9 +290,57 @@ int main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
+    /* --plugin F (anywhere, repeatable): load before the command, then drop from argv */
+    {
+        int o = 1;
+        for (int i = 1; i < argc; i++) {
+            const char *a = argv[i], *file = NULL;
+            if (!strcmp(a, "--plugin")) {
+                if (i + 1 >= argc) {
+                    fprintf(stderr, "%s: --plugin needs a shared-library path\n", prog);
+                    return 2;
+                }
+                file = argv[++i];
+            } else if (!strncmp(a, "--plugin=", 9)) {
+                file = a + 9;
+            }
+            if (!file) {
+                argv[o++] = argv[i];
+                continue;
+            }
+            char path[1024], err[1024];
+            snprintf(path, sizeof path, "%s%s", strchr(file, '/') ? "" : "./", file);
+            if (floe_plugin_load(path, err, sizeof err) != FLOE_OK) {
+                fprintf(stderr, "%s: error: %s\n", prog, err);
+                return 1;
+            }
+        }
+        argc = o;
+        argv[argc] = NULL;
+    }
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
     const char *cmd = argv[1];
-    if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
+    if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || (!strcmp(cmd, "help") && argc == 2)) {
         usage(stdout);
+        return 0;
+    }
+    if (!strcmp(cmd, "help")) {
+        char err[512];
+        int md = argc == 3 && !strcmp(argv[2], "--markdown");
+        if (!md && (argc > 4 || argv[2][0] == '-')) {
+            fprintf(stderr, "%s: help takes KIND [NAME], or --markdown\n", prog);
+            usage(stderr);
+            return 2;
+        }
+        int rc = floe_reference_write(stdout, md ? NULL : argv[2], !md && argc == 4 ? argv[3] : NULL, md, err,
+                                      sizeof err);
+        if (rc != FLOE_OK) {
+            fprintf(stderr, "%s: %s\n", prog, err);
+            return 2;
+        }
         return 0;
     }
     if (!strcmp(cmd, "--version")) {

@@ -8,6 +8,7 @@
 #define FLOE_GEOMETRY_H
 
 #include "floe_base.h"
+#include "floe_registry.h"
 
 /* Built-in kinds, used for the analytic contact fast paths (Box2D-style pair table). */
 typedef enum floe_geometry_kind {
@@ -225,5 +226,14 @@ double floe_polytope_manifold_factor(const floe_geometry *g, int dim, const doub
 void floe_sym3_eigen(const double A[3][3], double l[3], double V[3][3]);
 /* Quaternion (w, x, y, z) of a rotation matrix */
 void floe_q_from_matrix(double q[4], const double R[3][3]);
+
+/* ---- shapes as registered components (floe_registry.h, kind FLOE_KIND_SHAPE) ----
+ * A registered shape gives a parameter schema and this constructor: params is its parameter
+ * struct (filled from the scene by the schema), dim the scene's dimension. It returns the
+ * geometry (the world owns it once added) or NULL with a message in err. A scene names it
+ * as `shape: {<name>: {<its parameters>}}`. */
+typedef floe_geometry *(*floe_shape_create_fn)(const void *params, int dim, char *err, size_t errlen);
+/* Registers the built-in shapes (idempotent); FLOE_OK or the registry's error. */
+int floe_register_builtin_shapes(char *err, size_t errlen);
 
 #endif

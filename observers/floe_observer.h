@@ -54,4 +54,8 @@ int floe_collection_tracker_last(const floe_observer *o, double sigma[6], double
  * slower, human-readable). Returns FLOE_EINVAL if o is not a VTK writer. */
 int floe_vtk_writer_set_ascii(floe_observer *o, int ascii);
 
+/* Registers the built-in outputs (vtk, csv, energy, stress, tracker) for the registry's
+ * documentation and help (the scene loader builds them itself); idempotent. */
+int floe_register_builtin_outputs(char *err, size_t errlen);
+
 #endif

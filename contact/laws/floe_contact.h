@@ -7,6 +7,7 @@
 #define FLOE_CONTACT_H
 
 #include "floe_base.h"
+#include "floe_registry.h"
 
 #define FLOE_MAX_HISTORY 10  /* doubles of per-contact state kept per pair */
 #define FLOE_LAW_HISTORY 4   /* of which a law may use history[0 .. 3]; the world keeps the
@@ -209,5 +210,18 @@ void floe_contact_coulomb(const floe_contact *c, double ks, double gs, double mu
 static inline int floe_contact_law_no_contact(const floe_contact_law *law) {
     return law && law->klass == &floe_no_contact_law_class;
 }
+
+/* ---- contact laws as registered components (floe_registry.h, kind FLOE_KIND_LAW) ----
+ * A registered law gives a parameter schema and this constructor: params is its parameter
+ * struct (filled from the scene by the schema), a and b the materials of the pair. It
+ * returns the law (calloc'd, the world owns it after floe_world_set_law), or NULL with a
+ * message in err (the loader prefixes the scene position). A scene names it with
+ * `laws: [{materials: [a, b], model: <name>, <its parameters>}]`. */
+typedef floe_contact_law *(*floe_law_create_fn)(const void *params, const floe_material *a,
+                                                const floe_material *b, char *err, size_t errlen);
+/* entry flag: the law needs the materials' young and poisson (Hertz-type stiffness) */
+#define FLOE_LAW_NEEDS_YOUNG 256
+/* Registers the built-in laws (idempotent); FLOE_OK or the registry's error. */
+int floe_register_builtin_laws(char *err, size_t errlen);
 
 #endif

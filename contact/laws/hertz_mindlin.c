@@ -41,6 +41,8 @@
  * Walls / fixed partners: the law expects finite, positive c->m_eff and c->r_eff. The caller
  * sets m_eff to the free particle's mass when the partner is fixed or kinematic, and r_eff
  * to the sphere's radius for a sphere on a plane. Non-finite values return FLOE_EINVAL. */
+#include <stddef.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 #include "floe_contact.h"
@@ -238,3 +240,34 @@ floe_contact_law *floe_hertz_mindlin_law_create(const floe_material *ma, const f
     H->damping_ratio = beta;
     return &H->base;
 }
+
+/* ---- registry entry (floe_registry.h) ---- */
+
+typedef struct hm_params {
+    floe_params_head head;
+    double restitution, friction;
+} hm_params;
+
+static const floe_param hm_schema[] = {
+    {.key = "restitution", .type = FLOE_PARAM_REAL, .flags = FLOE_PARAM_REQUIRED | FLOE_PARAM_MIN_OPEN, .unit = "",
+     .min = 0, .max = 1, .doc = "coefficient of restitution e of a head-on collision (the damping is calibrated to it)",
+     .offset = offsetof(hm_params, restitution)},
+    {.key = "friction", .type = FLOE_PARAM_REAL, .unit = "", .min = 0, .max = INFINITY,
+     .doc = "Coulomb friction coefficient mu", .offset = offsetof(hm_params, friction)},
+};
+
+static floe_contact_law *hm_create(const void *params, const floe_material *a, const floe_material *b, char *err,
+                                   size_t errlen) {
+    const hm_params *P = params;
+    floe_contact_law *law = floe_hertz_mindlin_law_create(a, b, P->restitution, P->friction);
+    if (!law) snprintf(err, errlen, "could not create the law (the materials need young > 0 and poisson in (-1, 0.5))");
+    return law;
+}
+
+const floe_registry_entry floe_law_entry_hertz_mindlin = {
+    .kind = FLOE_KIND_LAW, .name = "hertz_mindlin", .title = "Hertz-Mindlin",
+    .doc = "Hertz normal force and Mindlin tangential spring with Coulomb limit, damped to a given restitution; "
+           "stiffness from the materials' young and poisson.",
+    .source = "000 §2.3, 003 eqs 9-14; docs/models.md",
+    .params = hm_schema, .nparams = (int)(sizeof hm_schema / sizeof *hm_schema), .params_size = sizeof(hm_params),
+    .create = (floe_fn)hm_create, .flags = FLOE_LAW_NEEDS_YOUNG};

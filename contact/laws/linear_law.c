@@ -25,6 +25,8 @@
  * active (Fn = 0) this is -kn d vn dt >= 0. The slip loss can be negative in the rare case
  * where the dashpot alone exceeds the Coulomb limit (the reset spring then grows); it is
  * reported as is, so that the sum of energy changes balances. */
+#include <stddef.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 #include "floe_contact.h"
@@ -149,3 +151,58 @@ double floe_linear_restitution(double k, double c, double m)
     if (zeta >= 1.0) return 0.0;
     return exp(-linear_pi * zeta / sqrt(1.0 - zeta * zeta));
 }
+
+/* ---- registry entries: linear and viscoelastic (floe_registry.h) ---- */
+
+typedef struct linear_params {
+    floe_params_head head;
+    double kn, ks, gn, gs, friction;
+    int tension;
+} linear_params;
+
+#define LIN_KN {.key = "kn", .type = FLOE_PARAM_REAL, .flags = FLOE_PARAM_REQUIRED | FLOE_PARAM_MIN_OPEN, .unit = "N/m", \
+                .min = 0, .max = INFINITY, .doc = "normal stiffness", .offset = offsetof(linear_params, kn)}
+#define LIN_KS {.key = "ks", .type = FLOE_PARAM_REAL, .flags = FLOE_PARAM_REQUIRED, .unit = "N/m", .min = 0, \
+                .max = INFINITY, .doc = "tangential (shear) spring stiffness", .offset = offsetof(linear_params, ks)}
+#define LIN_MU {.key = "friction", .type = FLOE_PARAM_REAL, .unit = "", .min = 0, .max = INFINITY, \
+                .doc = "Coulomb friction coefficient mu", .offset = offsetof(linear_params, friction)}
+#define LIN_TENSION {.key = "tension", .type = FLOE_PARAM_BOOL, .unit = "", \
+                     .doc = "true: the total normal force may become attractive (the paper's form); false: clamped at 0", \
+                     .offset = offsetof(linear_params, tension)}
+
+static const floe_param linear_schema[] = {LIN_KN, LIN_KS, LIN_MU, LIN_TENSION};
+static const floe_param viscoelastic_schema[] = {
+    LIN_KN, LIN_KS,
+    {.key = "gn", .type = FLOE_PARAM_REAL, .flags = FLOE_PARAM_REQUIRED, .unit = "N s/m", .min = 0, .max = INFINITY,
+     .doc = "normal dashpot", .offset = offsetof(linear_params, gn)},
+    {.key = "gs", .type = FLOE_PARAM_REAL, .flags = FLOE_PARAM_REQUIRED, .unit = "N s/m", .min = 0, .max = INFINITY,
+     .doc = "tangential dashpot", .offset = offsetof(linear_params, gs)},
+    LIN_MU, LIN_TENSION};
+
+static floe_contact_law *linear_create(const void *params, const floe_material *a, const floe_material *b, char *err,
+                                       size_t errlen) {
+    (void)a;
+    (void)b;
+    const linear_params *P = params;
+    floe_contact_law *law = floe_linear_law_create(P->kn, P->ks, P->gn, P->gs, P->friction);
+    if (!law) {
+        snprintf(err, errlen, "out of memory");
+        return NULL;
+    }
+    ((floe_linear_law *)law)->tension = P->tension;
+    return law;
+}
+
+const floe_registry_entry floe_law_entry_linear = {
+    .kind = FLOE_KIND_LAW, .name = "linear", .title = "linear elastic",
+    .doc = "Linear spring normal force with a Coulomb-limited tangential spring (no damping).",
+    .source = "ParticLS eqs 16-18 with gn = gs = 0; docs/models.md",
+    .params = linear_schema, .nparams = (int)(sizeof linear_schema / sizeof *linear_schema),
+    .params_size = sizeof(linear_params), .create = (floe_fn)linear_create};
+
+const floe_registry_entry floe_law_entry_viscoelastic = {
+    .kind = FLOE_KIND_LAW, .name = "viscoelastic", .title = "linear viscoelastic",
+    .doc = "Linear spring-dashpot (Kelvin-Voigt) normal force with a Coulomb-limited tangential spring-dashpot.",
+    .source = "ParticLS eqs 16-20; docs/models.md",
+    .params = viscoelastic_schema, .nparams = (int)(sizeof viscoelastic_schema / sizeof *viscoelastic_schema),
+    .params_size = sizeof(linear_params), .create = (floe_fn)linear_create};

@@ -14,6 +14,8 @@
  *              dashpot with a Coulomb limit (twist_couple).
  * Output:      force on i = ka g - gn vn n + Ft (n = -g/|g|), energy ka I + ks |s|^2 / 2 + the
  *              torsion spring's. */
+#include <stddef.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 #include "floe_contact.h"
@@ -118,3 +120,42 @@ floe_contact_law *floe_overlap_law_create(double ka, double ks, double gn, doubl
     L->ka = ka; L->ks = ks; L->gn = gn; L->gs = gs; L->mu = mu;
     return &L->base;
 }
+
+/* ---- registry entry (floe_registry.h) ---- */
+
+typedef struct ov_params {
+    floe_params_head head;
+    double stiffness, ks, gn, gs, friction;
+} ov_params;
+
+static const floe_param ov_schema[] = {
+    {.key = "stiffness", .type = FLOE_PARAM_REAL, .flags = FLOE_PARAM_REQUIRED | FLOE_PARAM_MIN_OPEN, .unit = "N/m^3",
+     .min = 0, .max = INFINITY, .doc = "force per m^2 of overlap and m of depth (2D: per m^3 of overlap area)",
+     .offset = offsetof(ov_params, stiffness)},
+    {.key = "ks", .type = FLOE_PARAM_REAL, .unit = "N/m", .min = 0, .max = INFINITY,
+     .doc = "tangential spring stiffness", .offset = offsetof(ov_params, ks)},
+    {.key = "gn", .type = FLOE_PARAM_REAL, .unit = "N s/m", .min = 0, .max = INFINITY, .doc = "normal dashpot",
+     .offset = offsetof(ov_params, gn)},
+    {.key = "gs", .type = FLOE_PARAM_REAL, .unit = "N s/m", .min = 0, .max = INFINITY, .doc = "tangential dashpot",
+     .offset = offsetof(ov_params, gs)},
+    {.key = "friction", .type = FLOE_PARAM_REAL, .unit = "", .min = 0, .max = INFINITY,
+     .doc = "Coulomb friction coefficient mu", .offset = offsetof(ov_params, friction)},
+};
+
+static floe_contact_law *ov_create(const void *params, const floe_material *a, const floe_material *b, char *err,
+                                   size_t errlen) {
+    (void)a;
+    (void)b;
+    const ov_params *P = params;
+    floe_contact_law *law = floe_overlap_law_create(P->stiffness, P->ks, P->gn, P->gs, P->friction);
+    if (!law) snprintf(err, errlen, "out of memory");
+    return law;
+}
+
+const floe_registry_entry floe_law_entry_overlap_area = {
+    .kind = FLOE_KIND_LAW, .name = "overlap_area", .title = "overlap area",
+    .doc = "Polytope pairs: elastic force from the overlap area (2D) or volume (3D) and its energy integral "
+           "(Winkler foundation), with tangential spring, dashpots and Coulomb friction (SubZero-style).",
+    .source = "docs/models.md, \"Overlap-area law\"",
+    .params = ov_schema, .nparams = (int)(sizeof ov_schema / sizeof *ov_schema), .params_size = sizeof(ov_params),
+    .create = (floe_fn)ov_create};

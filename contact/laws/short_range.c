@@ -19,6 +19,8 @@
  * "none": the world never evaluates a contact between the two materials
  * (floe_contact_law_no_contact(), checked in core/world/forces.c before detection), so such a pair
  * never gets a force and never trips the interpenetration guard. */
+#include <stddef.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -114,3 +116,84 @@ floe_contact_law *floe_no_contact_law_create(void)
     L->klass = &floe_no_contact_law_class;
     return L;
 }
+
+/* ---- registry entries: short_range and none (floe_registry.h) ---- */
+
+extern const floe_registry_entry floe_law_entry_short_range;
+
+typedef struct sr_params {
+    floe_params_head head;
+    double stiffness, micromodulus, horizon, volume, factor;
+} sr_params;
+
+static const floe_param sr_schema[] = {
+    {.key = "stiffness", .type = FLOE_PARAM_REAL, .flags = FLOE_PARAM_MIN_OPEN, .unit = "N/m", .min = 0,
+     .max = INFINITY, .doc = "spring stiffness k (or give micromodulus, horizon and volume)",
+     .offset = offsetof(sr_params, stiffness)},
+    {.key = "micromodulus", .type = FLOE_PARAM_REAL, .flags = FLOE_PARAM_MIN_OPEN, .unit = "N/m^6", .min = 0,
+     .max = INFINITY, .doc = "PD micromodulus c: k = factor c volume^2 / horizon",
+     .offset = offsetof(sr_params, micromodulus)},
+    {.key = "horizon", .type = FLOE_PARAM_REAL, .flags = FLOE_PARAM_MIN_OPEN, .unit = "m", .min = 0, .max = INFINITY,
+     .doc = "PD horizon delta (with micromodulus)", .offset = offsetof(sr_params, horizon)},
+    {.key = "volume", .type = FLOE_PARAM_REAL, .flags = FLOE_PARAM_MIN_OPEN, .unit = "m^3", .min = 0, .max = INFINITY,
+     .doc = "the points' volume V (with micromodulus)", .offset = offsetof(sr_params, volume)},
+    {.key = "factor", .type = FLOE_PARAM_REAL, .flags = FLOE_PARAM_MIN_OPEN, .unit = "", .min = 0, .max = INFINITY,
+     .def = 15.0, .doc = "c_s = factor x micromodulus (LAMMPS and EMU use 15)", .offset = offsetof(sr_params, factor)},
+};
+
+static floe_contact_law *sr_create(const void *params, const floe_material *a, const floe_material *b, char *err,
+                                   size_t errlen) {
+    (void)a;
+    (void)b;
+    const sr_params *P = params;
+    const floe_registry_entry *e = &floe_law_entry_short_range;
+    double k = P->stiffness;
+    if (floe_params_given(e, P, "stiffness")) {
+        if (floe_params_given(e, P, "micromodulus") || floe_params_given(e, P, "horizon") ||
+            floe_params_given(e, P, "volume") || floe_params_given(e, P, "factor")) {
+            snprintf(err, errlen, "give stiffness, or micromodulus, horizon, volume (and factor), not both");
+            return NULL;
+        }
+    } else {
+        if (!floe_params_given(e, P, "micromodulus")) {
+            snprintf(err, errlen, "short_range needs stiffness (N/m), or micromodulus (N/m^6), horizon (m) and volume (m^3)");
+            return NULL;
+        }
+        if (!floe_params_given(e, P, "horizon") || !floe_params_given(e, P, "volume")) {
+            snprintf(err, errlen, "short_range with micromodulus needs horizon (m) and volume (m^3)");
+            return NULL;
+        }
+        k = P->factor * P->micromodulus * P->volume * P->volume / P->horizon;
+        if (!(k > 0 && isfinite(k))) {
+            snprintf(err, errlen, "factor x micromodulus x volume^2 / horizon = %g is not a finite positive stiffness", k);
+            return NULL;
+        }
+    }
+    floe_contact_law *law = floe_short_range_law_create(k);
+    if (!law) snprintf(err, errlen, "out of memory");
+    return law;
+}
+
+const floe_registry_entry floe_law_entry_short_range = {
+    .kind = FLOE_KIND_LAW, .name = "short_range", .title = "PD short-range repulsion",
+    .doc = "Silling's short-range repulsive force between PD points: a linear spring on the overlap of their "
+           "contact spheres, no damping or friction.",
+    .source = "Silling & Askari 2005; LAMMPS pair peri; docs/models.md",
+    .params = sr_schema, .nparams = (int)(sizeof sr_schema / sizeof *sr_schema), .params_size = sizeof(sr_params),
+    .create = (floe_fn)sr_create};
+
+static floe_contact_law *none_create(const void *params, const floe_material *a, const floe_material *b, char *err,
+                                     size_t errlen) {
+    (void)params;
+    (void)a;
+    (void)b;
+    floe_contact_law *law = floe_no_contact_law_create();
+    if (!law) snprintf(err, errlen, "out of memory");
+    return law;
+}
+
+const floe_registry_entry floe_law_entry_none = {
+    .kind = FLOE_KIND_LAW, .name = "none", .title = "none (never in contact)",
+    .doc = "The pair never touches: no detection, no force (e.g. PD points of one body against each other).",
+    .source = "docs/models.md", .params = NULL, .nparams = 0, .params_size = sizeof(floe_params_head),
+    .create = (floe_fn)none_create};

@@ -6,6 +6,7 @@
  * 1-based line and column. Packings (lattice, hexagonal, random) are expanded here; the
  * world does the physics. ParticLS §5.2 (growing radius) and §5.3 (RVE) are the examples. */
 #include "floe_scene.h"
+#include "floe_registry.h"
 #include "floe_state.h"
 #include "world_internal.h"
 #include "floe_observer.h"
@@ -55,13 +56,15 @@ typedef struct sc_mat {
 
 typedef struct sc_law {
     int a, b;
-    char model[32];
-    double kn, ks, gn, gs, mu, e;
-    int tension;
+    const floe_registry_entry *ent;  /* the registered law (floe_registry.h) */
+    void *params;                    /* its parameter struct, read by its schema */
+    struct fy_node *node;            /* the entry (messages) */
 } sc_law;
 
 typedef struct sc_output {
-    char type[16];
+    char type[64];
+    const floe_registry_entry *ent; /* the registered output */
+    void *uparams;                  /* a plugin output's parameters (its schema) */
     char target[512];
     long every;
     double interval;
@@ -628,6 +631,119 @@ static int sc_range(sc *s, const sc_map *m, const char *key, const char *cond, d
 }
 
 /* ------------------------------------------------------------------------------------ */
+/* Parameters read from a registered component's schema (floe_registry.h)               */
+
+/* 1 when key is one of the '|'-separated words of list */
+static int sc_in_list(const char *list, const char *key)
+{
+    size_t n = strlen(key);
+    for (const char *p = list; p && *p;) {
+        const char *e = strchr(p, '|');
+        size_t l = e ? (size_t)(e - p) : strlen(p);
+        if (l == n && !strncmp(p, key, n)) return 1;
+        p = e ? e + 1 : NULL;
+    }
+    return 0;
+}
+
+/* Fills params (ent->params_size bytes) from the mapping m by the schema of ent: unknown
+ * keys (besides ent->keys_extra, which the caller reads) get the closest key or the list,
+ * absent required keys and values out of range are reported at their position. `label`
+ * names the component in messages ("model 'linear'"); loader_keys ("a|b") are the keys
+ * the kind's loader reads itself. */
+static int sc_read_schema(sc *s, const sc_map *m, const floe_registry_entry *ent, const char *label,
+                          const char *loader_keys, void *params)
+{
+    floe_params_defaults(ent, params);
+    floe_params_head *head = params;
+    const char *names[FLOE_PARAMS_MAX];
+    for (int k = 0; k < ent->nparams; k++) names[k] = ent->params[k].key;
+    void *it = NULL;
+    struct fy_node_pair *pr;
+    while ((pr = fy_node_mapping_iterate(m->node, &it))) {
+        const char *ks = sc_text(fy_node_pair_key(pr));
+        if (!ks || sc_in_list(loader_keys, ks) || sc_in_list(ent->keys_extra, ks) || floe_schema_index(ent, ks) >= 0)
+            continue;
+        char sug[512] = "";
+        if (ent->nparams) sc_suggest(sug, sizeof sug, ks, names, ent->nparams);
+        else snprintf(sug, sizeof sug, " (it takes no parameters)");
+        return sc_fail(s, FLOE_EPARSE, fy_node_pair_key(pr), "unknown key '%s' in %s: not valid for %s%s", ks, m->what, label,
+                       sug);
+    }
+    for (int k = 0; k < ent->nparams; k++) {
+        const floe_param *p = &ent->params[k];
+        char *at = (char *)params + p->offset;
+        struct fy_node *kn, *v = sc_get(m, p->key, &kn);
+        char f[160];
+        sc_field(f, sizeof f, m, p->key);
+        if (!v) {
+            if (p->flags & FLOE_PARAM_REQUIRED)
+                return sc_fail(s, FLOE_EPARSE, m->at, "%s is required for %s (%s%s%s)", f, label, p->doc,
+                               p->unit && p->unit[0] ? ", " : "", p->unit ? p->unit : "");
+            continue;
+        }
+        head->given |= 1ull << k;
+        double x = 0, vec[3] = {0, 0, 0};
+        int iv = 0, got = 0;
+        switch (p->type) {
+        case FLOE_PARAM_REAL:
+        case FLOE_PARAM_INT:
+            FLOE_TRY(sc_node_num(s, v, kn, f, &x));
+            break;
+        case FLOE_PARAM_BOOL:
+            FLOE_TRY(sc_bool(s, m, p->key, 0, &iv));
+            memcpy(at, &iv, sizeof iv);
+            continue;
+        case FLOE_PARAM_STRING: {
+            const char *t;
+            FLOE_TRY(sc_str(s, m, p->key, 1, NULL, &t, NULL));
+            if (strlen(t) >= FLOE_PARAM_STRING_MAX)
+                return sc_fail(s, FLOE_EINVAL, v, "%s: longer than %d characters", f, FLOE_PARAM_STRING_MAX - 1);
+            snprintf(at, FLOE_PARAM_STRING_MAX, "%s", t);
+            continue;
+        }
+        case FLOE_PARAM_CHOICE: {
+            const char *t, *words[64];
+            char buf[512];
+            snprintf(buf, sizeof buf, "%s", p->choices);
+            int nw = 0;
+            for (char *w = strtok(buf, "|"); w && nw < 64; w = strtok(NULL, "|")) words[nw++] = w;
+            FLOE_TRY(sc_str(s, m, p->key, 1, NULL, &t, NULL));
+            for (iv = 0; iv < nw && strcmp(words[iv], t); iv++) {}
+            if (iv == nw) {
+                char sug[512];
+                sc_suggest(sug, sizeof sug, t, words, nw);
+                return sc_fail(s, FLOE_EINVAL, v, "%s: unknown value '%s'%s", f, t, sug);
+            }
+            memcpy(at, &iv, sizeof iv);
+            continue;
+        }
+        case FLOE_PARAM_POINTS:
+        case FLOE_PARAM_NODE:
+            return sc_fail(s, FLOE_ENOTSUP, kn, "%s: %s reads this key itself (a point list or nested value)", f, label);
+        case FLOE_PARAM_VEC3:
+            FLOE_TRY(sc_node_list(s, v, kn, f, 3, s->dim == 2 && !(p->flags & FLOE_PARAM_XYZ) ? 2 : 0, vec, &got));
+            for (int c = 0; c < 3; c++) {
+                char why[160];
+                if (floe_param_check(p, vec[c], why, sizeof why))
+                    return sc_fail(s, FLOE_EINVAL, v, "%s[%d] %s (got %g)", f, c, why, vec[c]);
+            }
+            memcpy(at, vec, sizeof vec);
+            continue;
+        }
+        char why[160];
+        if (floe_param_check(p, x, why, sizeof why)) return sc_fail(s, FLOE_EINVAL, v, "%s %s (got %g)", f, why, x);
+        if (p->type == FLOE_PARAM_REAL) memcpy(at, &x, sizeof x);
+        else {
+            if (!(fabs(x) < 2e9)) return sc_fail(s, FLOE_EINVAL, v, "%s: %g is out of the integer range", f, x);
+            iv = (int)x;
+            memcpy(at, &iv, sizeof iv);
+        }
+    }
+    return FLOE_OK;
+}
+
+/* ------------------------------------------------------------------------------------ */
 /* Random numbers: splitmix64 (deterministic per seed, platform independent)            */
 
 typedef struct sc_rng { uint64_t s; } sc_rng;
@@ -712,23 +828,17 @@ static int sc_parse_materials(sc *s, struct fy_node *seq, struct fy_node *key)
     return FLOE_OK;
 }
 
-static const char *const sc_models[] = {"hertz_mindlin", "linear", "viscoelastic", "short_range", "none",
-                                        "overlap_area", NULL};
+/* The names of the registered laws (for the `model` key's suggestions). */
+static int sc_law_names(const char **names, int max)
+{
+    int n = 0;
+    for (int k = 0; k < floe_registry_count(FLOE_KIND_LAW) && n < max; k++)
+        names[n++] = floe_registry_at(FLOE_KIND_LAW, k)->name;
+    return n;
+}
 
 static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
 {
-    static const char *const keys_hm[] = {"materials", "model", "restitution", "friction", NULL};
-    static const char *const keys_lin[] = {"materials", "model", "kn", "ks", "friction", "tension",
-                                           NULL};
-    static const char *const keys_ve[] = {"materials", "model", "kn", "ks", "gn", "gs", "friction",
-                                          "tension", NULL};
-    static const char *const keys_sr[] = {"materials", "model", "stiffness", "micromodulus", "horizon",
-                                          "volume", "factor", NULL};
-    static const char *const keys_none[] = {"materials", "model", NULL};
-    static const char *const keys_ov[] = {"materials", "model", "stiffness", "ks", "gn", "gs", "friction", NULL};
-    static const char *const keys_any[] = {"materials", "model", "restitution", "friction", "kn",
-                                           "ks", "gn", "gs", "tension", "stiffness", "micromodulus",
-                                           "horizon", "volume", "factor", NULL};
     if (!seq) return FLOE_OK;
     if (sc_is_missing(seq) || !fy_node_is_sequence(seq))
         return sc_fail(s, FLOE_EPARSE, sc_is_missing(seq) ? key : seq,
@@ -743,44 +853,28 @@ static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
     while ((e = fy_node_sequence_iterate(seq, &it))) {
         char what[32];
         snprintf(what, sizeof what, "laws[%d]", i);
-        sc_map m;
-        FLOE_TRY(sc_map_open(s, e, e, what, keys_any, &m));
-        int model;
-        FLOE_TRY(sc_enum(s, &m, "model", sc_models, -1, &model));
-        /* re-check the keys against those valid for this model */
-        const char *const *valid = model == 0 ? keys_hm : model == 1 ? keys_lin : model == 2 ? keys_ve
-                                 : model == 3 ? keys_sr : model == 5 ? keys_ov : keys_none;
-        {
-            void *it2 = NULL;
-            struct fy_node_pair *p;
-            while ((p = fy_node_mapping_iterate(e, &it2))) {
-                const char *ks = sc_text(fy_node_pair_key(p));
-                int ok = 0;
-                for (int j = 0; valid[j] && !ok; j++) ok = !strcmp(ks, valid[j]);
-                if (!ok) {
-                    const char *hint = "";
-                    if (model == 1 && (!strcmp(ks, "gn") || !strcmp(ks, "gs")))
-                        hint = " (damping needs model: viscoelastic)";
-                    else if (model == 0)
-                        hint = " (hertz_mindlin takes restitution and friction; stiffness comes "
-                               "from the materials' young and poisson)";
-                    else if (model == 3)
-                        hint = " (short_range takes stiffness, or micromodulus, horizon, volume and "
-                               "factor; it has no damping or friction)";
-                    else if (model == 4)
-                        hint = " (none takes only materials: the pair never touches)";
-                    else if (model == 5)
-                        hint = " (overlap_area takes stiffness (N/m^3), ks, gn, gs, friction)";
-                    else
-                        hint = " (linear/viscoelastic laws take kn, ks, gn, gs, friction, tension)";
-                    return sc_fail(s, FLOE_EPARSE, fy_node_pair_key(p),
-                                   "%s: key '%s' is not valid for model '%s'%s", what, ks,
-                                   sc_models[model], hint);
-                }
-            }
+        sc_map m = {e, e, ""};
+        snprintf(m.what, sizeof m.what, "%s", what);
+        if (!fy_node_is_mapping(e))
+            return sc_fail(s, FLOE_EPARSE, e, "%s must be a mapping ({materials: [a, b], model: ..., ...}), got %s",
+                           what, sc_is_missing(e) ? "nothing" : sc_type_name(e));
+        /* model: the name of a registered law */
+        const char *model;
+        struct fy_node *mat;
+        FLOE_TRY(sc_str(s, &m, "model", 1, NULL, &model, &mat));
+        const floe_registry_entry *ent = floe_registry_find(FLOE_KIND_LAW, model);
+        if (!ent) {
+            const char *names[128];
+            char sug[1024];
+            sc_suggest(sug, sizeof sug, model, names, sc_law_names(names, 128));
+            return sc_fail(s, FLOE_EINVAL, mat, "%s.model: unknown value '%s'%s", what, model, sug);
         }
         sc_law *L = &s->laws[i];
-        snprintf(L->model, sizeof L->model, "%s", sc_models[model]);
+        L->ent = ent;
+        L->node = e;
+        L->params = calloc(1, ent->params_size);
+        if (!L->params) return sc_fail(s, FLOE_ENOMEM, e, "out of memory");
+        s->nlaws = i + 1; /* freed with the loader from here on */
         /* materials: [a, b] */
         struct fy_node *mk;
         struct fy_node *mv = sc_get(&m, "materials", &mk);
@@ -814,72 +908,24 @@ static int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
                            s->mats[L->a].m.name, s->mats[L->b].m.name, sc_line(s, *slot));
         *slot = mv;
         s->law_at[L->b * s->nmats + L->a] = mv;
-        FLOE_TRY(sc_num(s, &m, "friction", 0, 0.0, &L->mu));
-        if (!(L->mu >= 0)) return sc_range(s, &m, "friction", ">= 0", L->mu);
-        if (model == 0) {
-            FLOE_TRY(sc_num(s, &m, "restitution", 1, 0, &L->e));
-            if (!(L->e > 0 && L->e <= 1))
-                return sc_range(s, &m, "restitution", "in (0, 1]", L->e);
+        char label[96];
+        snprintf(label, sizeof label, "model '%s'", ent->name);
+        FLOE_TRY(sc_read_schema(s, &m, ent, label, "materials|model", L->params));
+        if (ent->flags & FLOE_LAW_NEEDS_YOUNG)
             for (int j = 0; j < 2; j++) {
                 const sc_mat *mt = &s->mats[ab[j]];
                 if (!mt->has_young)
                     return sc_fail(s, FLOE_EINVAL, mt->at,
-                                   "material '%s' needs young (Pa): the hertz_mindlin law %s "
-                                   "(line %d) uses it", mt->m.name, what, sc_line(s, e));
+                                   "material '%s' needs young (Pa): the %s law %s "
+                                   "(line %d) uses it", mt->m.name, ent->name, what, sc_line(s, e));
             }
-        } else if (model == 3) {
-            /* Silling's short-range force: k = factor c V^2 / delta, or k given */
-            if (sc_has(&m, "stiffness")) {
-                if (sc_has(&m, "micromodulus") || sc_has(&m, "horizon") || sc_has(&m, "volume") || sc_has(&m, "factor"))
-                    return sc_fail(s, FLOE_EINVAL, e, "%s: give stiffness, or micromodulus, horizon, volume "
-                                   "(and factor), not both", what);
-                FLOE_TRY(sc_num(s, &m, "stiffness", 1, 0, &L->kn));
-                if (!(L->kn > 0 && isfinite(L->kn))) return sc_range(s, &m, "stiffness", "> 0 (N/m)", L->kn);
-            } else {
-                double c, delta, vol, fac;
-                if (!sc_has(&m, "micromodulus"))
-                    return sc_fail(s, FLOE_EPARSE, e, "%s: short_range needs stiffness (N/m), or micromodulus "
-                                   "(N/m^6), horizon (m) and volume (m^3)", what);
-                FLOE_TRY(sc_num(s, &m, "micromodulus", 1, 0, &c));
-                if (!(c > 0)) return sc_range(s, &m, "micromodulus", "> 0 (N/m^6)", c);
-                FLOE_TRY(sc_num(s, &m, "horizon", 1, 0, &delta));
-                if (!(delta > 0)) return sc_range(s, &m, "horizon", "> 0 (m, the horizon length)", delta);
-                FLOE_TRY(sc_num(s, &m, "volume", 1, 0, &vol));
-                if (!(vol > 0)) return sc_range(s, &m, "volume", "> 0 (m^3, the points' volume)", vol);
-                FLOE_TRY(sc_num(s, &m, "factor", 0, 15.0, &fac));
-                if (!(fac > 0)) return sc_range(s, &m, "factor", "> 0 (c_s = factor x micromodulus)", fac);
-                L->kn = fac * c * vol * vol / delta;
-                if (!(L->kn > 0 && isfinite(L->kn)))
-                    return sc_fail(s, FLOE_EINVAL, e, "%s: factor x micromodulus x volume^2 / horizon = %g is not a "
-                                   "finite positive stiffness", what, L->kn);
-            }
-        } else if (model == 4) {
-            /* none: nothing to read */
-        } else if (model == 5) {
-            /* overlap area (2D polygons): stiffness per overlap area and depth */
-            FLOE_TRY(sc_num(s, &m, "stiffness", 1, 0, &L->kn));
-            if (!(L->kn > 0 && isfinite(L->kn)))
-                return sc_range(s, &m, "stiffness", "> 0 (N/m^3: force per m^2 of overlap and m of depth)", L->kn);
-            FLOE_TRY(sc_num(s, &m, "ks", 0, 0, &L->ks));
-            if (!(L->ks >= 0)) return sc_range(s, &m, "ks", ">= 0 (N/m)", L->ks);
-            FLOE_TRY(sc_num(s, &m, "gn", 0, 0, &L->gn));
-            if (!(L->gn >= 0)) return sc_range(s, &m, "gn", ">= 0 (N s/m)", L->gn);
-            FLOE_TRY(sc_num(s, &m, "gs", 0, 0, &L->gs));
-            if (!(L->gs >= 0)) return sc_range(s, &m, "gs", ">= 0 (N s/m)", L->gs);
-        } else {
-            FLOE_TRY(sc_num(s, &m, "kn", 1, 0, &L->kn));
-            if (!(L->kn > 0)) return sc_range(s, &m, "kn", "> 0 (N/m)", L->kn);
-            FLOE_TRY(sc_num(s, &m, "ks", 1, 0, &L->ks));
-            if (!(L->ks >= 0)) return sc_range(s, &m, "ks", ">= 0 (N/m)", L->ks);
-            FLOE_TRY(sc_bool(s, &m, "tension", 0, &L->tension));
-            if (model == 2) {
-                FLOE_TRY(sc_num(s, &m, "gn", 1, 0, &L->gn));
-                if (!(L->gn >= 0)) return sc_range(s, &m, "gn", ">= 0 (N s/m)", L->gn);
-                FLOE_TRY(sc_num(s, &m, "gs", 1, 0, &L->gs));
-                if (!(L->gs >= 0)) return sc_range(s, &m, "gs", ">= 0 (N s/m)", L->gs);
-            }
-        }
-        s->nlaws = ++i;
+        /* the constructor's own checks (alternatives, combinations), reported at the entry */
+        char err[512] = "";
+        floe_contact_law *probe = ((floe_law_create_fn)ent->create)(L->params, &s->mats[L->a].m, &s->mats[L->b].m,
+                                                                    err, sizeof err);
+        if (!probe) return sc_fail(s, FLOE_EINVAL, e, "%s: %s", what, err[0] ? err : "could not create the law");
+        floe_contact_law_destroy(probe);
+        i++;
     }
     return FLOE_OK;
 }
@@ -888,22 +934,13 @@ static int sc_build_laws(sc *s)
 {
     for (int i = 0; i < s->nlaws; i++) {
         const sc_law *L = &s->laws[i];
-        floe_contact_law *law;
-        if (!strcmp(L->model, "hertz_mindlin")) {
-            law = floe_hertz_mindlin_law_create(&s->mats[L->a].m, &s->mats[L->b].m, L->e, L->mu);
-        } else if (!strcmp(L->model, "short_range")) {
-            law = floe_short_range_law_create(L->kn);
-        } else if (!strcmp(L->model, "none")) {
-            law = floe_no_contact_law_create();
-        } else if (!strcmp(L->model, "overlap_area")) {
-            law = floe_overlap_law_create(L->kn, L->ks, L->gn, L->gs, L->mu);
-        } else {
-            law = floe_linear_law_create(L->kn, L->ks, L->gn, L->gs, L->mu);
-            if (law) ((floe_linear_law *)law)->tension = L->tension;
-        }
+        char err[512] = "";
+        floe_contact_law *law = ((floe_law_create_fn)L->ent->create)(L->params, &s->mats[L->a].m,
+                                                                     &s->mats[L->b].m, err, sizeof err);
         struct fy_node *at = s->law_at[L->a * s->nmats + L->b];
         if (!law)
-            return sc_fail(s, FLOE_EINVAL, at, "laws[%d]: could not create the %s law", i, L->model);
+            return sc_fail(s, FLOE_EINVAL, at, "laws[%d]: could not create the %s law%s%s", i, L->ent->name,
+                           err[0] ? ": " : "", err);
         int rc = floe_world_set_law(s->w, L->a, L->b, law);
         if (rc != FLOE_OK)
             return sc_fail(s, rc, at, "laws[%d]: %s", i, floe_world_last_error(s->w));
@@ -981,10 +1018,6 @@ typedef struct sc_shape {
     char field[160];
 } sc_shape;
 
-static const char *const sc_shape_kinds[] = {"sphere", "box", "polyhedron", "polygon", "prism", "ellipsoid",
-                                             "cylinder", "capsule", "cone", "rounded", "compound", "mesh",
-                                             NULL};
-
 /* body frame of a shape in its input coordinates (polytopes, compounds: centroid and
  * principal axes; primitives: identity) */
 static void sc_geom_frame(const floe_geometry *g, double fx[3], double fq[4])
@@ -1041,11 +1074,20 @@ static int sc_build_shape(sc *s, struct fy_node *v, struct fy_node *k, const cha
     *out = NULL;
     if (depth > 8) return sc_fail(s, FLOE_EPARSE, v, "%s: shapes nested too deep", f);
     sc_map m;
-    FLOE_TRY(sc_map_open(s, v == k ? NULL : v, k, f, sc_shape_kinds, &m));
-    if (fy_node_mapping_item_count(v) != 1)
-        return sc_fail(s, FLOE_EPARSE, v, "%s: give exactly one shape (%s)", f,
-                       "sphere, box, polyhedron, polygon, prism, ellipsoid, cylinder, capsule, cone, rounded, "
-                       "compound or mesh");
+    const char *kinds[128];
+    int nk = 0;
+    for (; nk < floe_registry_count(FLOE_KIND_SHAPE) && nk < 127; nk++)
+        kinds[nk] = floe_registry_at(FLOE_KIND_SHAPE, nk)->name;
+    kinds[nk] = NULL;
+    FLOE_TRY(sc_map_open(s, v == k ? NULL : v, k, f, kinds, &m));
+    if (fy_node_mapping_item_count(v) != 1) {
+        char list[1024];
+        size_t L = 0;
+        list[0] = 0;
+        for (int q = 0; q < nk && L < sizeof list; q++)
+            L += (size_t)snprintf(list + L, sizeof list - L, "%s%s", q ? (q == nk - 1 ? " or " : ", ") : "", kinds[q]);
+        return sc_fail(s, FLOE_EPARSE, v, "%s: give exactly one shape (%s)", f, list);
+    }
     struct fy_node_pair *pr = fy_node_mapping_get_by_index(v, 0);
     struct fy_node *sk = fy_node_pair_key(pr), *sv = fy_node_pair_value(pr);
     const char *kind = sc_text(sk);
@@ -1056,25 +1098,27 @@ static int sc_build_shape(sc *s, struct fy_node *v, struct fy_node *k, const cha
     sc_map sm;
 #define OPEN(...) do { static const char *const keys_[] = {__VA_ARGS__, NULL}; \
         FLOE_TRY(sc_map_open(s, sv == sk ? NULL : sv, sk, f2, keys_, &sm)); } while (0)
-    if (!strcmp(kind, "sphere")) {
-        double r;
-        OPEN("radius");
-        FLOE_TRY(sc_pos_num(s, &sm, "radius", &r));
-        g = floe_sphere_create(r);
-    } else if (!strcmp(kind, "box")) {
-        OPEN("size");
-        struct fy_node *zk, *zv = sc_get(&sm, "size", &zk);
-        if (!zv) return sc_fail(s, FLOE_EPARSE, sk, "%s.size is required ([lx, ly, lz])", f2);
-        double sz[3];
-        int got;
-        char f3[192];
-        snprintf(f3, sizeof f3, "%s.size", f2);
-        FLOE_TRY(sc_node_list(s, zv, zk, f3, 3, 0, sz, &got));
-        for (int i = 0; i < 3; i++)
-            if (!(sz[i] > 0))
-                return sc_fail(s, FLOE_EINVAL, fy_node_sequence_get_by_index(zv, i), "%s[%d] must be > 0 (m) (got %g)",
-                               f3, i, sz[i]);
-        g = floe_box_create(sz[0], sz[1], sz[2]);
+    const floe_registry_entry *ent = floe_registry_find(FLOE_KIND_SHAPE, kind);
+    if (!(ent->flags & FLOE_ENTRY_LOADER_PARSES)) {
+        /* a shape read by its schema (sphere, box, ellipsoid, ..., and plugins' shapes) */
+        static const char *const none_[] = {NULL};
+        char label[96];
+        snprintf(label, sizeof label, "shape '%s'", ent->name);
+        void *params = calloc(1, ent->params_size);
+        if (!params) return sc_fail(s, FLOE_ENOMEM, sk, "out of memory");
+        int rc = sv == sk || !fy_node_is_mapping(sv) ? sc_map_open(s, sv == sk ? NULL : sv, sk, f2, none_, &sm) : FLOE_OK;
+        if (!rc) {
+            sm.node = sv;
+            sm.at = sk;
+            snprintf(sm.what, sizeof sm.what, "%s", f2);
+            rc = sc_read_schema(s, &sm, ent, label, NULL, params);
+        }
+        if (!rc) {
+            g = ((floe_shape_create_fn)ent->create)(params, s->dim, err, sizeof err);
+            if (!g) rc = sc_fail(s, FLOE_EINVAL, sk, "%s: %s", f2, err[0] ? err : "could not create the shape");
+        }
+        free(params);
+        FLOE_TRY(rc);
     } else if (!strcmp(kind, "polyhedron")) {
         OPEN("vertices", "planes");
         struct fy_node *vk, *vv = sc_get(&sm, "vertices", &vk), *pk, *pv = sc_get(&sm, "planes", &pk);
@@ -1111,31 +1155,6 @@ static int sc_build_shape(sc *s, struct fy_node *v, struct fy_node *k, const cha
         g = prism ? floe_prism_create(pts, n, h, err, sizeof err) : floe_polygon_create(pts, n, err, sizeof err);
         free(pts);
         if (!g) return sc_fail(s, FLOE_EINVAL, vv, "%s: %s", f3, err);
-    } else if (!strcmp(kind, "ellipsoid")) {
-        OPEN("semi_axes");
-        struct fy_node *ak, *av = sc_get(&sm, "semi_axes", &ak);
-        if (!av) return sc_fail(s, FLOE_EPARSE, sk, "%s.semi_axes is required ([a, b, c])", f2);
-        double a3[3];
-        int got;
-        char f3[192];
-        snprintf(f3, sizeof f3, "%s.semi_axes", f2);
-        FLOE_TRY(sc_node_list(s, av, ak, f3, 3, 0, a3, &got));
-        for (int i = 0; i < 3; i++)
-            if (!(a3[i] > 0)) return sc_fail(s, FLOE_EINVAL, av, "%s[%d] must be > 0 (m) (got %g)", f3, i, a3[i]);
-        g = floe_ellipsoid_create(a3[0], a3[1], a3[2]);
-    } else if (!strcmp(kind, "cylinder") || !strcmp(kind, "cone")) {
-        double r, h;
-        OPEN("radius", "height");
-        FLOE_TRY(sc_pos_num(s, &sm, "radius", &r));
-        FLOE_TRY(sc_pos_num(s, &sm, "height", &h));
-        g = kind[1] == 'y' ? floe_cylinder_create(r, h) : floe_cone_create(r, h);
-    } else if (!strcmp(kind, "capsule")) {
-        double r, l;
-        OPEN("radius", "length");
-        FLOE_TRY(sc_pos_num(s, &sm, "radius", &r));
-        FLOE_TRY(sc_num(s, &sm, "length", 1, 0, &l));
-        if (!(l >= 0)) return sc_range(s, &sm, "length", ">= 0 (m, the straight part)", l);
-        g = floe_capsule_create(r, l);
     } else if (!strcmp(kind, "rounded")) {
         double r;
         OPEN("radius", "shape");
@@ -2400,11 +2419,38 @@ static int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, con
     while ((e = fy_node_sequence_iterate(seq, &it))) {
         char what[32];
         snprintf(what, sizeof what, "outputs[%d]", i);
-        sc_map m;
-        FLOE_TRY(sc_map_open(s, e, e, what, keys_all, &m));
-        int type;
-        FLOE_TRY(sc_enum(s, &m, "type", sc_output_types, -1, &type));
-        {
+        sc_map m = {e, e, ""};
+        snprintf(m.what, sizeof m.what, "%s", what);
+        if (!fy_node_is_mapping(e))
+            return sc_fail(s, FLOE_EPARSE, e, "%s must be a mapping ({type: ..., every: N, ...}), got %s", what,
+                           sc_is_missing(e) ? "nothing" : sc_type_name(e));
+        /* type: a built-in output or one registered by a plugin (read by its schema) */
+        int type = -1;
+        const char *tname;
+        struct fy_node *tat;
+        FLOE_TRY(sc_str(s, &m, "type", 1, NULL, &tname, &tat));
+        for (int q = 0; sc_output_types[q]; q++)
+            if (!strcmp(tname, sc_output_types[q])) type = q;
+        const floe_registry_entry *ent = floe_registry_find(FLOE_KIND_OBSERVER, tname);
+        if (!ent) {
+            const char *names[128];
+            int nn = 0;
+            for (; nn < floe_registry_count(FLOE_KIND_OBSERVER) && nn < 128; nn++)
+                names[nn] = floe_registry_at(FLOE_KIND_OBSERVER, nn)->name;
+            char sug[1024];
+            sc_suggest(sug, sizeof sug, tname, names, nn);
+            return sc_fail(s, FLOE_EINVAL, tat, "%s.type: unknown value '%s'%s", what, tname, sug);
+        }
+        void *uparams = NULL; /* a registered output's parameters */
+        if (type < 0) {
+            char label[96];
+            snprintf(label, sizeof label, "type %s", ent->name);
+            uparams = calloc(1, ent->params_size);
+            if (!uparams) return sc_fail(s, FLOE_ENOMEM, e, "out of memory");
+            int rc = sc_read_schema(s, &m, ent, label, "type|every|interval|file", uparams);
+            if (rc) { free(uparams); return rc; }
+        } else {
+            FLOE_TRY(sc_map_open(s, e, e, what, keys_all, &m));
             int nv = 0;
             while (keys_by_type[type][nv]) nv++;
             void *it2 = NULL;
@@ -2423,7 +2469,11 @@ static int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, con
             }
         }
         sc_output *o = &s->outs[i];
-        snprintf(o->type, sizeof o->type, "%s", sc_output_types[type]);
+        snprintf(o->type, sizeof o->type, "%s", tname);
+        o->uparams = uparams; /* freed with the loader */
+        o->ent = ent;
+        char udefault[160];
+        snprintf(udefault, sizeof udefault, "%s.csv", tname);
         if (sc_has(&m, "every") && sc_has(&m, "interval"))
             return sc_fail(s, FLOE_EPARSE, sc_get(&m, "interval", NULL),
                            "%s: give either every (steps) or interval (seconds), not both", what);
@@ -2443,7 +2493,7 @@ static int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, con
         }
         const char *name;
         struct fy_node *name_at;
-        FLOE_TRY(sc_str(s, &m, type == 0 ? "prefix" : "file", 0, defaults[type], &name, &name_at));
+        FLOE_TRY(sc_str(s, &m, type == 0 ? "prefix" : "file", 0, type < 0 ? udefault : defaults[type], &name, &name_at));
         if (!*name || (type == 0 && strchr(name, '/')))
             return sc_fail(s, FLOE_EINVAL, name_at, "%s.%s: '%s' is not a valid %s", what,
                            type == 0 ? "prefix" : "file", name, type == 0 ? "prefix" : "file name");
@@ -2530,6 +2580,10 @@ static int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, con
         if (with_outputs) {
             char oerr[512] = "";
             floe_observer *obs = NULL;
+            if (type < 0) {
+                floe_output_ctx octx = {outdir, o->target, s->w, s->dim};
+                obs = ((floe_output_create_fn)ent->create)(uparams, &octx, oerr, sizeof oerr);
+            }
             switch (type) {
             case 0:
                 obs = floe_vtk_writer_create(outdir, name, oerr, sizeof oerr);
@@ -2586,6 +2640,41 @@ static void sc_cat(sc_buf *b, const char *fmt, ...)
     if (b->n >= b->len) {
         b->n = b->len - 1;
         if (b->len > 5) memcpy(b->p + b->len - 5, "...\n", 5);
+    }
+}
+
+/* "key value unit, ..." of a component's parameters (given ones and defaults) */
+static void sc_params_text(char *buf, size_t len, const floe_registry_entry *ent, const void *params)
+{
+    size_t k = 0;
+    buf[0] = 0;
+    for (int q = 0; q < ent->nparams && k < len; q++) {
+        const floe_param *p = &ent->params[q];
+        const char *at = (const char *)params + p->offset;
+        if ((p->flags & FLOE_PARAM_REQUIRED) == 0 && !floe_params_given(ent, params, p->key) &&
+            p->type != FLOE_PARAM_REAL)
+            continue; /* defaults of flags and names are not news */
+        if (!floe_params_given(ent, params, p->key) && p->type == FLOE_PARAM_REAL && p->def == 0) continue;
+        const char *sep = k ? ", " : "", *u = p->unit && p->unit[0] ? " " : "", *un = p->unit ? p->unit : "";
+        int iv;
+        double x, v3[3];
+        switch (p->type) {
+        case FLOE_PARAM_REAL:
+            memcpy(&x, at, sizeof x);
+            k += (size_t)snprintf(buf + k, len - k, "%s%s %g%s%s", sep, p->key, x, u, un);
+            break;
+        case FLOE_PARAM_VEC3:
+            memcpy(v3, at, sizeof v3);
+            k += (size_t)snprintf(buf + k, len - k, "%s%s [%g, %g, %g]%s%s", sep, p->key, v3[0], v3[1], v3[2], u, un);
+            break;
+        case FLOE_PARAM_STRING:
+            k += (size_t)snprintf(buf + k, len - k, "%s%s %s", sep, p->key, at);
+            break;
+        default:
+            memcpy(&iv, at, sizeof iv);
+            if (p->type == FLOE_PARAM_BOOL) k += (size_t)snprintf(buf + k, len - k, "%s%s %s", sep, p->key, iv ? "true" : "false");
+            else k += (size_t)snprintf(buf + k, len - k, "%s%s %d%s%s", sep, p->key, iv, u, un);
+        }
     }
 }
 
@@ -2650,20 +2739,10 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
     sc_cat(&b, "laws:\n");
     for (int i = 0; i < s->nlaws && i < 32; i++) {
         const sc_law *L = &s->laws[i];
-        const char *a = s->mats[L->a].m.name, *c = s->mats[L->b].m.name;
-        if (!strcmp(L->model, "hertz_mindlin"))
-            sc_cat(&b, "  %s-%s: Hertz-Mindlin, restitution %g, friction %g\n", a, c, L->e, L->mu);
-        else if (!strcmp(L->model, "linear"))
-            sc_cat(&b, "  %s-%s: linear elastic, kn %g N/m, ks %g N/m, friction %g%s\n", a, c,
-                   L->kn, L->ks, L->mu, L->tension ? ", tension allowed" : "");
-        else if (!strcmp(L->model, "short_range"))
-            sc_cat(&b, "  %s-%s: PD short-range repulsion, k %g N/m\n", a, c, L->kn);
-        else if (!strcmp(L->model, "none"))
-            sc_cat(&b, "  %s-%s: none (never in contact)\n", a, c);
-        else
-            sc_cat(&b, "  %s-%s: linear viscoelastic, kn %g N/m, ks %g N/m, gn %g N s/m, "
-                   "gs %g N s/m, friction %g%s\n", a, c, L->kn, L->ks, L->gn, L->gs, L->mu,
-                   L->tension ? ", tension allowed" : "");
+        char line[512];
+        sc_params_text(line, sizeof line, L->ent, L->params);
+        sc_cat(&b, "  %s-%s: %s%s%s\n", s->mats[L->a].m.name, s->mats[L->b].m.name,
+               L->ent->title ? L->ent->title : L->ent->name, line[0] ? ", " : "", line);
     }
     sc_cat(&b, "detectors:  ");
     int first = 1;
@@ -2787,7 +2866,8 @@ static int sc_parse_bonds(sc *s, struct fy_node *seq, struct fy_node *key)
 
 static const char *const sc_root_keys[] = {"name", "description", "dimension", "time", "gravity",
                                            "neighbor", "contact_detection", "mass_2d", "materials", "laws",
-                                           "walls", "bodies", "peridynamics", "outputs", "bonds", "checks", NULL};
+                                           "walls", "bodies", "peridynamics", "outputs", "bonds", "checks", "plugins",
+                                           NULL};
 
 /* checks: {energy: stop | warn | off, energy_tolerance} (the energy watchdog, floe_world.h) */
 static int sc_checks(sc *s, const sc_map *r, floe_world_def *def)
@@ -2895,6 +2975,42 @@ static int sc_check_steps(sc *s, const sc_map *tm, double dt, const char *which)
     return FLOE_OK;
 }
 
+/* plugins: [path.so, ...] (relative to the scene file): shared libraries whose init
+ * registers shapes, laws or outputs that the rest of the scene names (core/scene/plugin.c) */
+static int sc_parse_plugins(sc *s, const sc_map *r)
+{
+    struct fy_node *pk, *pv = sc_get(r, "plugins", &pk);
+    if (!pv) return FLOE_OK;
+    if (pv == pk || !fy_node_is_sequence(pv))
+        return sc_fail(s, FLOE_EPARSE, pv == pk ? pk : pv, "plugins must be a list of shared-library paths "
+                       "([./my_plugin.so, ...]), got %s", pv == pk ? "nothing" : sc_type_name(pv));
+#if defined(FLOE_SCENE_NO_PLUGINS)
+    /* the fuzzer's build: a scene must not make the loader run code from arbitrary files */
+    return sc_fail(s, FLOE_ENOTSUP, pk, "plugins are disabled in this build (FLOE_SCENE_NO_PLUGINS)");
+#endif
+    void *it = NULL;
+    struct fy_node *e;
+    int i = 0;
+    while ((e = fy_node_sequence_iterate(pv, &it))) {
+        const char *file = sc_text(e);
+        if (!file || !file[0] || !fy_node_is_scalar(e))
+            return sc_fail(s, FLOE_EPARSE, e, "plugins[%d]: expected a path to a shared library", i);
+        char path[1024];
+        const char *slash = s->path ? strrchr(s->path, '/') : NULL;
+        if (file[0] != '/' && slash)
+            snprintf(path, sizeof path, "%.*s/%s", (int)(slash - s->path), s->path, file);
+        else if (file[0] != '/' && !strchr(file, '/'))
+            snprintf(path, sizeof path, "./%s", file); /* dlopen searches the library path otherwise */
+        else
+            snprintf(path, sizeof path, "%s", file);
+        char err[768];
+        int rc = floe_plugin_load(path, err, sizeof err);
+        if (rc) return sc_fail(s, rc, e, "plugins[%d]: %s", i, err);
+        i++;
+    }
+    return FLOE_OK;
+}
+
 static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_outputs,
                     floe_scene_info *info)
 {
@@ -2904,6 +3020,7 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     static const char *const mass2d[] = {"volume", "area", NULL};
     sc_map r;
     FLOE_TRY(sc_map_open(s, root, root, "", sc_root_keys, &r));
+    FLOE_TRY(sc_parse_plugins(s, &r));
 
     const char *name;
     FLOE_TRY(sc_str(s, &r, "name", 0, "", &name, NULL));
@@ -3256,6 +3373,14 @@ int floe_scene_load_ex(const char *path, const char *text, const char *outdir, i
     if (!path) path = "<scene>";
     if (!outdir) outdir = "out";
 
+    {
+        char rerr[256];
+        int rc = floe_register_builtins(rerr, sizeof rerr);
+        if (rc) {
+            snprintf(err, errlen, "%s: %s", path, rerr);
+            return rc;
+        }
+    }
     sc s;
     memset(&s, 0, sizeof s);
     s.path = path;
@@ -3386,10 +3511,12 @@ int floe_scene_load_ex(const char *path, const char *text, const char *outdir, i
     free(owned);
 
     free(s.mats);
+    for (int i = 0; i < s.nlaws; i++) free(s.laws[i].params);
     free(s.laws);
     free(s.law_at);
     free(s.entry_first);
     free(s.entry_count);
+    for (int i = 0; i < s.nouts; i++) free(s.outs[i].uparams);
     free(s.outs);
     if (rc != FLOE_OK) {
         if (s.w) floe_world_destroy(s.w);

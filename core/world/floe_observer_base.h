@@ -6,6 +6,7 @@
 #define FLOE_OBSERVER_BASE_H
 
 #include "floe_world.h"
+#include "floe_registry.h"
 
 typedef struct floe_observer_class {
     int version; /* 1 */
@@ -28,5 +29,20 @@ struct floe_observer {
 
 /* Destroys an observer the world does not own (the world destroys those added to it). */
 void floe_observer_destroy(floe_observer *o);
+
+/* ---- outputs as registered components (floe_registry.h, kind FLOE_KIND_OBSERVER,
+ * "output") ----
+ * A registered output gives a parameter schema and this constructor. A scene names it as
+ * `outputs: [{type: <name>, every: N | interval: T, file: F, <its parameters>}]`; `every`,
+ * `interval` and `file` are read by the loader (file defaults to <name>.csv, relative to the
+ * output directory). The world owns the observer once the loader adds it. */
+typedef struct floe_output_ctx {
+    const char *outdir;      /* the run's output directory (exists when with_outputs) */
+    const char *path;        /* outdir/file, or file when absolute */
+    const floe_world *world; /* the world being built (its particles are all added) */
+    int dim;
+} floe_output_ctx;
+typedef floe_observer *(*floe_output_create_fn)(const void *params, const floe_output_ctx *ctx, char *err,
+                                                size_t errlen);
 
 #endif

@@ -1,0 +1,24 @@
+/* builtin_laws.c - the built-in contact laws, one line each: a new law is one file (its
+ * class, parameter struct, schema and registry entry) plus one line here, or a plugin
+ * calling floe_register (docs/extending.md). */
+#include "floe_contact.h"
+
+extern const floe_registry_entry floe_law_entry_hertz_mindlin, floe_law_entry_linear, floe_law_entry_viscoelastic,
+    floe_law_entry_short_range, floe_law_entry_none, floe_law_entry_overlap_area;
+
+static const floe_registry_entry *const builtin[] = {
+    &floe_law_entry_hertz_mindlin,
+    &floe_law_entry_linear,
+    &floe_law_entry_viscoelastic,
+    &floe_law_entry_short_range,
+    &floe_law_entry_none,
+    &floe_law_entry_overlap_area,
+};
+
+int floe_register_builtin_laws(char *err, size_t errlen) {
+    for (size_t k = 0; k < sizeof builtin / sizeof *builtin; k++) {
+        if (floe_registry_find(builtin[k]->kind, builtin[k]->name)) continue;
+        FLOE_TRY(floe_register(builtin[k], err, errlen));
+    }
+    return FLOE_OK;
+}

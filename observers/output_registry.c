@@ -1,0 +1,57 @@
+/* output_registry.c - the built-in outputs in the registry (floe_registry.h). The scene
+ * loader reads their keys itself (group: 'all' or an index; particle and wall lists), so
+ * the entries document them; a plugin's output is read by its schema alone. */
+#include "floe_observer.h"
+
+#include <stdio.h>
+
+static floe_observer *loader_builds(const void *p, const floe_output_ctx *ctx, char *err, size_t errlen) {
+    (void)p;
+    (void)ctx;
+    snprintf(err, errlen, "this output is built by the scene loader");
+    return NULL;
+}
+
+#define COUNT(a) ((int)(sizeof a / sizeof *a))
+#define FILE_KEY(d) {.key = "file", .type = FLOE_PARAM_STRING, .unit = "", .def_text = d, \
+                     .doc = "CSV file, relative to the output directory (or absolute)"}
+
+static const floe_param vtk_schema[] = {
+    {.key = "prefix", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "frame",
+     .doc = "files prefix_NNNNNN.vtu and prefix.pvd in the output directory"},
+    {.key = "ascii", .type = FLOE_PARAM_BOOL, .unit = "", .doc = "ASCII instead of raw binary appended data"}};
+static const floe_param csv_schema[] = {FILE_KEY("particles.csv")};
+static const floe_param energy_schema[] = {FILE_KEY("energy.csv")};
+static const floe_param stress_schema[] = {
+    FILE_KEY("stress.csv"),
+    {.key = "group", .type = FLOE_PARAM_NODE, .unit = "", .doc = "'all' (default) or a body entry index"},
+    {.key = "volume", .type = FLOE_PARAM_REAL, .unit = "m^3", .min = 0, .max = INFINITY,
+     .doc = "the sample volume (0: the bounding box of the collection)"}};
+static const floe_param tracker_schema[] = {
+    FILE_KEY("track.csv"),
+    {.key = "particles", .type = FLOE_PARAM_NODE, .unit = "", .doc = "list of particle ids"},
+    {.key = "walls", .type = FLOE_PARAM_NODE, .unit = "", .doc = "list of wall indices"}};
+
+#define OUT(n, t, d, src, sch) {.kind = FLOE_KIND_OBSERVER, .name = n, .title = t, .doc = d, .source = src, \
+    .params = sch, .nparams = COUNT(sch), .params_size = sizeof(floe_params_head), .create = (floe_fn)loader_builds, \
+    .flags = FLOE_ENTRY_LOADER_PARSES}
+
+static const floe_registry_entry builtin[] = {
+    OUT("vtk", "VTK frames", "ParaView frames: one .vtu per frame and a .pvd series (particles, walls, PD fields).",
+        "docs/scene-format.md", vtk_schema),
+    OUT("csv", "particle CSV", "Every particle's state per frame in one CSV file.", "docs/scene-format.md", csv_schema),
+    OUT("energy", "energy ledger", "Kinetic, elastic, work and dissipated energy and the balance error.",
+        "docs/models.md, \"Energy ledger\"", energy_schema),
+    OUT("stress", "homogenised stress", "Homogenised Cauchy stress of a collection, coordination number, contacts.",
+        "ParticLS eq 24", stress_schema),
+    OUT("tracker", "particle tracker", "The state of chosen particles and walls over time.", "ParticLS §4.3",
+        tracker_schema),
+};
+
+int floe_register_builtin_outputs(char *err, size_t errlen) {
+    for (int k = 0; k < COUNT(builtin); k++) {
+        if (floe_registry_find(builtin[k].kind, builtin[k].name)) continue;
+        FLOE_TRY(floe_register(&builtin[k], err, errlen));
+    }
+    return FLOE_OK;
+}
