@@ -31,15 +31,23 @@ typedef struct floe_particles {
     int *pieces;           /* n convex pieces of the geometry (compound bodies > 1) */
 } floe_particles;
 
-/* What a force provider is handed for one evaluation: the store (forces f and torques t are
- * accumulated into it), the dimension, the time at the evaluation, the step over which it
- * advances and whether it does (stepping = 0: a probe, e.g. at prepare or RK2's first stage:
- * no history, breakage or ledger advance). */
+/* What a force provider is handed for one evaluation (core/world/floe_provider.h): the store
+ * (forces f and torques t are accumulated into it), the dimension, the time at the
+ * evaluation, the step, and what kind of evaluation it is:
+ *   stepping = 1: the forces at the end of a step; history, breakage and the energy ledger
+ *                 advance by dt;
+ *   stepping = 0: an evaluation that advances nothing: at prepare (hist_dt = 0), or a
+ *                 probe (probe = 1, RK2's midpoint: history advanced by hist_dt and restored
+ *                 by the caller through the providers' save/restore; no breakage). */
 typedef struct floe_step_ctx {
     floe_particles *p;
     int dim;
     int stepping;
     double time, dt;
+    double hist_dt;   /* the step contact history advances by (dt when stepping) */
+    int probe;        /* RK2 midpoint: no breakage; state restored afterwards */
+    int record;       /* keep a record of every contact (observers, floe_world_contacts) */
+    int track_depth;  /* adaptive steps: measure the overlap change over the step */
 } floe_step_ctx;
 
 #endif

@@ -5,6 +5,7 @@
 #include "world_internal.h"
 #include "floe_pd.h"
 #include "beam_set.h"
+#include "floe_provider.h"
 #include <stdlib.h>
 #include <string.h>
 
@@ -172,19 +173,14 @@ int floe_world_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact
     return floe_detect_overlap(&ctx, &bi, &bj, sub, c);
 }
 
-/* Contact and body forces (the DEM and coupling forces of 000 eq 40 with the body forces
- * m b): gravity, external forces, the body-force callback, every contact of the list.
- * Zeroes p->f and p->t first. */
-static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, double *wgrow_out) {
-    floe_particles *p = &w->p;
+/* ---- provider "body": gravity, PD body-force regions, the body-force callback (the
+ * body forces m b of 000 eq 40, counted once) ---- */
+static int body_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, floe_provider_out *out) {
+    (void)pv;
+    (void)out;
+    floe_particles *p = ctx->p;
     const int n = p->n;
-    const int stepping = w->advancing; /* 0 at prepare: no history advance, no work booked */
-    const int track = w->track_depth;
-    double eta_d = 0;
-    if (n > 0) {
-        memset(p->f, 0, (size_t)n * 3 * sizeof(double));
-        memset(p->t, 0, (size_t)n * 3 * sizeof(double));
-    }
+    const int stepping = ctx->stepping;
     for (int i = 0; i < n; i++) {
         if (p->motion[i] != FLOE_FREE) continue;
         for (int k = 0; k < 3; k++) p->f[3 * i + k] = p->mass[i] * w->def.gravity[k];
@@ -207,33 +203,100 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         for (int i = 0; i < n; i++) {
             if (p->motion[i] != FLOE_FREE) continue;
             double f[3] = {0, 0, 0}, t[3] = {0, 0, 0}, *old = w->fb_old + 6 * i;
-            w->body_force(w, i, w->time, f, t, w->body_force_user);
+            w->body_force(w, i, ctx->time, f, t, w->body_force_user);
             floe_v3_add(p->f + 3 * i, p->f + 3 * i, f);
             floe_v3_add(p->t + 3 * i, p->t + 3 * i, t);
             /* velocities are at mid-step here (dx = v dt): work = (F_old + F_new)/2 . dx */
             for (int a = 0; a < 3; a++)
-                wb += 0.5 * w->dt * ((f[a] + old[a]) * p->v[3 * i + a] + (t[a] + old[3 + a]) * p->w[3 * i + a]);
+                wb += 0.5 * ctx->dt * ((f[a] + old[a]) * p->v[3 * i + a] + (t[a] + old[3 + a]) * p->w[3 * i + a]);
             memcpy(old, f, sizeof f);
             memcpy(old + 3, t, sizeof t);
         }
         if (stepping) w->energy.work_body += wb;
     }
+    return FLOE_OK;
+}
+
+/* its state: the callback's and the body-force regions' last forces (trapezoid work) */
+static size_t body_state_size(const floe_provider *pv, const floe_world *w) {
+    (void)pv;
+    size_t n = w->body_force && w->fb_old ? 6 * (size_t)w->fb_n : 0;
+    for (int q = 0; q < w->npd_bc; q++)
+        if (w->pd_bc[q]->fold) n += 3 * (size_t)w->pd_bc[q]->n;
+    return n * sizeof(double);
+}
+
+static void body_state_io(const floe_world *w, unsigned char *buf, int save) {
+    size_t o = 0;
+    if (w->body_force && w->fb_old) {
+        size_t m = 6 * (size_t)w->fb_n * sizeof(double);
+        if (save) memcpy(buf, w->fb_old, m);
+        else memcpy(w->fb_old, buf, m);
+        o += m;
+    }
+    for (int q = 0; q < w->npd_bc; q++)
+        if (w->pd_bc[q]->fold) {
+            size_t m = 3 * (size_t)w->pd_bc[q]->n * sizeof(double);
+            if (save) memcpy(buf + o, w->pd_bc[q]->fold, m);
+            else memcpy(w->pd_bc[q]->fold, buf + o, m);
+            o += m;
+        }
+}
+static void body_save(const floe_provider *pv, const floe_world *w, unsigned char *buf) {
+    (void)pv;
+    body_state_io(w, buf, 1);
+}
+static void body_restore(floe_provider *pv, floe_world *w, const unsigned char *buf) {
+    (void)pv;
+    body_state_io(w, (unsigned char *)buf, 0);
+}
+
+const floe_provider_class floe_body_provider_class = {
+    .version = 1, .name = "body_forces", .group = FLOE_GROUP_DEM, .forces = body_stage,
+    .state_size = body_state_size, .save = body_save, .restore = body_restore};
+
+/* ---- provider "beam_bonds" (contact/bonds/beam_bond.c): force, torque, energy and
+ * breakage; a broken bond's pair enters the contact list before the contact stage ---- */
+static int beam_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, floe_provider_out *out) {
+    (void)pv;
+    if (!w->beams) return FLOE_OK;
+    floe_step_ctx bc = *ctx;
+    bc.stepping = ctx->stepping && !ctx->probe;
+    int nbreak = floe_beam_set_forces(w->beams, &bc, &out->elastic, &out->dissipated);
+    if (nbreak > 0) out->rebuild = 1;
+    return FLOE_OK;
+}
+static double beam_critical(floe_provider *pv, floe_world *w) {
+    (void)pv;
+    return floe_world_beam_critical_dt(w);
+}
+static int beam_excludes(const floe_provider *pv, const floe_world *w, int i, int j) {
+    (void)pv;
+    return w->beams && floe_beam_set_excludes(w->beams, i, j);
+}
+/* the bonds' last forces and broken flags are not saved yet: adaptive steps refuse them */
+static int beam_can_save(const floe_provider *pv, const floe_world *w) {
+    (void)pv;
+    return !w->beams;
+}
+const floe_provider_class floe_beam_provider_class = {
+    .version = 1, .name = "beam_bonds", .group = FLOE_GROUP_DEM, .forces = beam_stage,
+    .critical_dt = beam_critical, .excludes = beam_excludes, .can_save = beam_can_save};
+
+/* ---- provider "contacts": every pair of the neighbour list through detection and the
+ * law of its materials (ParticLS eqs 15-20; the manifold of polytope pairs) ---- */
+static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, floe_provider_out *out) {
+    (void)pv;
+    floe_particles *p = ctx->p;
+    const int stepping = ctx->stepping; /* 0 at prepare and at the RK2 probe: no work booked */
+    const int track = ctx->track_depth;
+    double eta_d = 0;
     w->ncontacts = 0;
     if (stepping) w->wd_pair_min = 0; /* the watchdog's worst contact of this evaluation */
-    double elastic = 0, diss = 0, wgrow = 0;
+    double elastic = out->elastic, diss = out->dissipated, wgrow = out->work_boundary;
     const int any_growth = w->nstates > 0; /* only state objects set rdot */
     floe_neighbor_list *nl = &w->nl;
     const int nm = w->nmats;
-    /* beam bonds (contact/bonds/beam_bond.c): force, torque, energy and breakage; a pair whose
-     * bond broke enters the contact list before the loop below */
-    if (w->beams) {
-        floe_step_ctx sc = {p, w->def.dim, stepping, w->time, w->dt};
-        int nbreak = floe_beam_set_forces(w->beams, &sc, &elastic, &diss);
-        if (nbreak > 0) { /* the broken pairs may now meet by contact: into the list */
-            int rc = floe_nl_build(nl, p, w->def.dim, w->def.leaf_size);
-            if (rc) return floe_world_error(w, rc, "neighbour list rebuild after beam breakage failed (out of memory)");
-        }
-    }
     floe_detect_ctx dctx = {w->def.dim, w->step, &w->det};
     for (int k = 0; k < nl->npairs; k++) {
         int i = nl->pi[k], j = nl->pj[k], sub = nl->sub[k];
@@ -341,8 +404,8 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         /* inverse masses are 0 for fixed and kinematic particles: m* = the free one's mass */
         c.m_eff = 1.0 / (p->inv_mass[i] + p->inv_mass[j]);
         /* prepare evaluates forces without advancing history; the RK2 midpoint advances it
-         * by peek_dt and the caller restores it */
-        c.dt = stepping ? w->dt : w->peek_dt;
+         * by hist_dt and restores it (the providers' save/restore) */
+        c.dt = stepping ? ctx->dt : ctx->hist_dt;
         /* the manifold's other vertices (polytope pairs, floe_contact.h): elastic springs of
          * the same law, evaluated first so that the law's friction sees their load; the law's
          * dashpot and friction then act at the manifold's load centre */
@@ -433,7 +496,7 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         }
         hist[FLOE_ENERGY_SLOT] = res.energy;
         memcpy(hist + FLOE_FORCE_SLOT, res.force, 3 * sizeof(double));
-        if (!w->record_now) w->ncontacts++;
+        if (!ctx->record) w->ncontacts++;
         else {
             /* one record per pair: the manifold's springs in its force (the stress observer's
              * branch vector between centres needs the total only) */
@@ -445,21 +508,51 @@ static int contact_forces(floe_world *w, double *elastic_out, double *diss_out, 
         }
     }
     w->eta_depth = eta_d;
-    *elastic_out = elastic;
-    *diss_out = diss;
-    *wgrow_out = wgrow;
+    out->elastic = elastic;
+    out->dissipated = diss;
+    out->work_boundary = wgrow;
     return FLOE_OK;
 }
 
-/* PD bond forces added to p->f, with their ledger (energy and dissipation out). */
-static int pd_bond_forces(floe_world *w, double *elastic_out, double *diss_out) {
-    floe_particles *p = &w->p;
-    const int stepping = w->advancing;
-    double elastic = 0, diss = 0;
-    /* peridynamic bond forces. Ledger: the work of the bond forces over the step
-     * (trapezoid, as for contacts) minus the change of the stored energy is dissipated;
-     * for intact bonds it is the integration error only, a breaking bond releases its
-     * energy there. */
+/* its state: the pairs' history and touching flags (the list itself is the world's) */
+static size_t contact_state_size(const floe_provider *pv, const floe_world *w) {
+    (void)pv;
+    return (size_t)w->nl.npairs * (FLOE_MAX_HISTORY * sizeof(double) + 1);
+}
+static void contact_save(const floe_provider *pv, const floe_world *w, unsigned char *buf) {
+    (void)pv;
+    const size_t np = (size_t)w->nl.npairs, nh = np * FLOE_MAX_HISTORY * sizeof(double);
+    if (!np) return;
+    memcpy(buf, w->nl.hist, nh);
+    memcpy(buf + nh, w->nl.touching, np);
+}
+static void contact_restore(floe_provider *pv, floe_world *w, const unsigned char *buf) {
+    (void)pv;
+    const size_t np = (size_t)w->nl.npairs, nh = np * FLOE_MAX_HISTORY * sizeof(double);
+    if (!np) return;
+    memcpy(w->nl.hist, buf, nh);
+    memcpy(w->nl.touching, buf + nh, np);
+}
+const floe_provider_class floe_contact_provider_class = {
+    .version = 1, .name = "contacts", .group = FLOE_GROUP_DEM, .forces = contact_stage,
+    .state_size = contact_state_size, .save = contact_save, .restore = contact_restore};
+
+/* ---- provider "pd_bonds": the bond forces of every PD body, with their ledger ---- */
+static int pd_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, floe_provider_out *out) {
+    (void)pv;
+    floe_particles *p = ctx->p;
+    if (ctx->probe) { /* RK2 midpoint: the bond forces without breakage, nothing booked */
+        for (int k = 0; k < w->npd; k++) {
+            int f0 = w->pd_first[k];
+            floe_pd_forces_nobreak(w->pd[k], p->x + 3 * (size_t)f0, p->f + 3 * (size_t)f0);
+        }
+        return FLOE_OK;
+    }
+    const int stepping = ctx->stepping;
+    double elastic = out->elastic, diss = out->dissipated;
+    /* Ledger: the work of the bond forces over the step (trapezoid, as for contacts) minus
+     * the change of the stored energy is dissipated; for intact bonds it is the integration
+     * error only, a breaking bond releases its energy there. */
     for (int b = 0, off = 0; b < w->npd; b++) {
         floe_pd_body *pb = w->pd[b];
         int f0 = w->pd_first[b], np = pb->n;
@@ -474,7 +567,7 @@ static int pd_bond_forces(floe_world *w, double *elastic_out, double *diss_out) 
                 wk += (fa + fold[3 * i + a]) * p->v[3 * (size_t)(f0 + i) + a];
             }
         if (stepping) {
-            double db = -0.5 * wk * w->dt - (e - w->pd_eold[b]);
+            double db = -0.5 * wk * ctx->dt - (e - w->pd_eold[b]);
             diss += db;
             if (b < w->pd_diss_n) w->pd_diss[b] += db; /* per body, for the energy watchdog */
         }
@@ -486,42 +579,118 @@ static int pd_bond_forces(floe_world *w, double *elastic_out, double *diss_out) 
         double *t = w->pd_fold;
         w->pd_fold = w->pd_fnew;
         w->pd_fnew = t;
-        /* bonds that broke may let their pairs meet by contact: into the list now */
-        FLOE_TRY(floe_pd_after_forces(w));
+        /* bonds that broke may let their pairs meet by contact: the list is rebuilt next */
+        if (floe_pd_broken_pairs_reachable(w)) out->rebuild = 1;
     }
-    *elastic_out = elastic;
-    *diss_out = diss;
+    out->elastic = elastic;
+    out->dissipated = diss;
     return FLOE_OK;
 }
 
-int floe_compute_forces(floe_world *w) { return floe_compute_forces_part(w, FLOE_FORCES_ALL); }
+static int pd_excludes(const floe_provider *pv, const floe_world *w, int i, int j) {
+    (void)pv;
+    return floe_pd_pair_excluded(w, i, j);
+}
 
-/* One or both force groups. The contact group zeroes p->f and p->t and writes its forces;
- * the PD group adds the bond forces to p->f (the staggered scheme zeroes the PD points'
- * forces before a PD-only evaluation). The energy ledger keeps each group's stored energy
- * from its last evaluation. */
-int floe_compute_forces_part(floe_world *w, int part) {
+/* its state: last forces and energies, broken counts and flags, per-point critical
+ * stretches (LAMMPS alpha) and plastic stretches: everything a step of the bonds changes */
+static size_t pd_state_size(const floe_provider *pv, const floe_world *w) {
+    (void)pv;
+    size_t n = 3 * (size_t)w->pd_npts * sizeof(double) + 4 * (size_t)w->npd * sizeof(double);
+    for (int k = 0; k < w->npd; k++) {
+        const floe_pd_body *b = w->pd[k];
+        n += (size_t)b->nbond;
+        if (b->s0) n += 2 * (size_t)b->n * sizeof(double);
+        if (b->splast) n += (size_t)b->nbond * sizeof(float);
+    }
+    return n;
+}
+
+static void pd_state_io(floe_world *w, unsigned char *buf, int save) {
+#define IO(ptr, nbytes) do { if (save) memcpy(buf, (ptr), (nbytes)); else memcpy((ptr), buf, (nbytes)); buf += (nbytes); } while (0)
+    IO(w->pd_fold, 3 * (size_t)w->pd_npts * sizeof(double));
+    for (int k = 0; k < w->npd; k++) {
+        floe_pd_body *b = w->pd[k];
+        double d[4];
+        if (save) {
+            d[0] = w->pd_eold[k]; d[1] = (double)b->nbroken; d[2] = (double)w->pd_nbroken_seen[k];
+            d[3] = k < w->pd_diss_n ? w->pd_diss[k] : 0;
+        }
+        IO(d, sizeof d);
+        if (!save) {
+            w->pd_eold[k] = d[0]; b->nbroken = (int64_t)d[1]; w->pd_nbroken_seen[k] = (long long)d[2];
+            if (k < w->pd_diss_n) w->pd_diss[k] = d[3];
+        }
+        IO(b->broken, (size_t)b->nbond);
+        if (b->s0) IO(b->s0, 2 * (size_t)b->n * sizeof(double));
+        if (b->splast) IO(b->splast, (size_t)b->nbond * sizeof(float));
+    }
+#undef IO
+}
+static void pd_save(const floe_provider *pv, const floe_world *w, unsigned char *buf) {
+    (void)pv;
+    pd_state_io((floe_world *)w, buf, 1); /* reads only */
+}
+static void pd_restore(floe_provider *pv, floe_world *w, const unsigned char *buf) {
+    (void)pv;
+    pd_state_io(w, (unsigned char *)buf, 0); /* reads only from buf */
+}
+const floe_provider_class floe_pd_provider_class = {
+    .version = 1, .name = "pd_bonds", .group = FLOE_GROUP_PD, .forces = pd_stage, .excludes = pd_excludes,
+    .state_size = pd_state_size, .save = pd_save, .restore = pd_restore};
+
+/* ---- the staged evaluation ---- */
+
+int floe_world_forces(floe_world *w, const floe_step_ctx *ctx, int groups) {
     floe_particles *p = &w->p;
     const int n = p->n;
-    const int stepping = w->advancing;
-    double ec = 0, dc = 0, wgrow = 0, ep = 0, dp = 0;
-    if (part & FLOE_FORCES_CONTACT) {
-        FLOE_TRY(contact_forces(w, &ec, &dc, &wgrow));
-        w->elastic_contact = ec;
-        w->contacts_valid = w->record_now;
+    const int stepping = ctx->stepping;
+    floe_provider_out od = {0, 0, 0, 0}, op = {0, 0, 0, 0};
+    if (groups & FLOE_GROUP_DEM) {
+        if (n > 0) {
+            memset(p->f, 0, (size_t)n * 3 * sizeof(double));
+            memset(p->t, 0, (size_t)n * 3 * sizeof(double));
+        }
+        w->ncontacts = 0;
+    }
+    for (int k = 0; k < w->nprov; k++) {
+        floe_provider *pv = w->prov[k];
+        if (!(pv->klass->group & groups)) continue;
+        floe_provider_out *o = pv->klass->group == FLOE_GROUP_PD ? &op : &od;
+        o->rebuild = 0;
+        FLOE_TRY(pv->klass->forces(pv, w, ctx, o));
+        if (o->rebuild) { /* between stages, never inside one */
+            if (ctx->probe) return floe_world_error(w, FLOE_EINVAL, "internal: %s changed pairs at a probe", pv->klass->name);
+            int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
+            if (rc) return floe_world_error(w, rc, "neighbour list rebuild after %s changed pairs failed (out of memory)",
+                                            pv->klass->name);
+        }
+    }
+    if (ctx->probe) { /* nothing booked: the caller restores the providers' state */
+        if (w->def.dim == 2)
+            for (int i = 0; i < n; i++) { p->f[3 * i + 2] = 0; p->t[3 * i] = p->t[3 * i + 1] = 0; }
+        return FLOE_OK;
+    }
+    if (groups & FLOE_GROUP_DEM) {
+        w->elastic_contact = od.elastic;
+        w->contacts_valid = ctx->record;
         w->st.force_evaluations += stepping;
     }
-    if ((part & FLOE_FORCES_PD) && w->npd) {
-        FLOE_TRY(pd_bond_forces(w, &ep, &dp));
-        w->elastic_pd = ep;
+    if ((groups & FLOE_GROUP_PD) && w->npd) {
+        w->elastic_pd = op.elastic;
         w->st.pd_evaluations += stepping;
     }
     if (w->def.dim == 2)
         for (int i = 0; i < n; i++) { p->f[3 * i + 2] = 0; p->t[3 * i] = p->t[3 * i + 1] = 0; }
     w->energy.elastic = w->elastic_contact + w->elastic_pd;
     if (stepping) {
-        w->energy.dissipated += dc + dp;
-        w->energy.work_boundary += wgrow;
+        w->energy.dissipated += od.dissipated + op.dissipated;
+        w->energy.work_boundary += od.work_boundary;
     }
     return FLOE_OK;
+}
+
+int floe_compute_forces(floe_world *w) {
+    floe_step_ctx c = {&w->p, w->def.dim, 0, w->time, w->dt, 0.0, 0, w->record_contacts || w->obs_need_contacts, 0};
+    return floe_world_forces(w, &c, FLOE_GROUP_ALL);
 }

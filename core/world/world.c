@@ -5,6 +5,7 @@
 #include "world_internal.h"
 #include "floe_pd.h"
 #include "beam_set.h"
+#include "floe_provider.h"
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -143,6 +144,9 @@ void floe_world_destroy(floe_world *w) {
     for (int k = 0; k < w->npd_bc; k++) { free(w->pd_bc[k]->pts); free(w->pd_bc[k]->fold); free(w->pd_bc[k]); }
     free(w->pd_bc); free(w->pd_nbroken_seen);
     floe_beam_set_destroy(w->beams);
+    for (int k = 0; k < w->nprov; k++) free(w->prov[k]);
+    free(w->prov);
+    free(w->pbuf);
     free(w);
 }
 
@@ -322,8 +326,7 @@ int floe_world_add_observer(floe_world *w, floe_observer *o) {
  * R = 0.62 dx): a contact there would push the faces of a fresh crack apart at once with
  * the force of a 0.24 dx overlap. Across a crack the next pairs (sqrt 2 dx) are in contact
  * range, so closing cracks still resist. */
-static int pd_exclude(const void *ctx, int i, int j) {
-    const floe_world *w = ctx;
+int floe_pd_pair_excluded(const floe_world *w, int i, int j) {
     int bi = w->pd_of[i];
     if (bi < 0 || bi != w->pd_of[j]) return 0;
     int f = w->pd_first[bi];
@@ -343,7 +346,14 @@ static int pd_exclude(const void *ctx, int i, int j) {
  * particles held by an intact beam bond */
 static int world_exclude(const void *ctx, int i, int j) {
     const floe_world *w = ctx;
-    if (w->npd && pd_exclude(w, i, j)) return 1;
+    if (w->nprov) { /* the providers that hold pairs (PD families, beam bonds, ...) */
+        for (int k = 0; k < w->nprov; k++) {
+            const floe_provider *pv = w->prov[k];
+            if (pv->klass->excludes && pv->klass->excludes(pv, w, i, j)) return 1;
+        }
+        return 0;
+    }
+    if (w->npd && floe_pd_pair_excluded(w, i, j)) return 1; /* before the first prepare */
     return w->beams && floe_beam_set_excludes(w->beams, i, j);
 }
 
@@ -369,7 +379,7 @@ static int nl_has_pair(const floe_neighbor_list *nl, int i, int j) {
     return lo < nl->npairs && nl->pi[lo] == i && nl->pj[lo] == j;
 }
 
-int floe_pd_after_forces(floe_world *w) {
+int floe_pd_broken_pairs_reachable(floe_world *w) {
     /* bonds broke this evaluation: a broken pair that may now touch (pd_exclude) and is
      * within reach (R_i + R_j + skin) must be in the list before it can touch; the Verlet
      * criterion does not see it (nothing moved), so rebuild now. Only bodies whose broken
@@ -396,9 +406,7 @@ int floe_pd_after_forces(floe_world *w) {
                 if (!nl_has_pair(&w->nl, a, c)) { rebuild = 1; break; }
             }
     }
-    if (!rebuild) return FLOE_OK;
-    int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
-    return rc ? floe_world_error(w, rc, "neighbour list rebuild after bond breakage failed (out of memory)") : FLOE_OK;
+    return rebuild;
 }
 
 /* the contact radius of a point of volume V */
@@ -1151,13 +1159,67 @@ static int choose_dt(floe_world *w) {
 
 static int observers_call(floe_world *w, int force_all);
 static int contacts_wanted(const floe_world *w);
-static int stag_split_forces(floe_world *w);
+static int stag_split_forces(floe_world *w, const floe_step_ctx *ctx);
 static double shadow_energy(const floe_world *w, const double *fs, const double *ts, const double *fpd);
+
+extern const floe_provider_class floe_body_provider_class, floe_beam_provider_class, floe_contact_provider_class,
+    floe_pd_provider_class;
+
+/* The providers of this scene, in evaluation order: body forces, beam bonds (when there are
+ * bonds), contacts, PD bonds (when there are PD bodies). Model only what the scene holds. */
+static int build_providers(floe_world *w) {
+    const floe_provider_class *want[4];
+    int n = 0;
+    want[n++] = &floe_body_provider_class;
+    if (w->beams) want[n++] = &floe_beam_provider_class;
+    want[n++] = &floe_contact_provider_class;
+    if (w->npd) want[n++] = &floe_pd_provider_class;
+    for (int k = 0; k < w->nprov; k++) free(w->prov[k]);
+    w->nprov = 0;
+    if (grow((void **)&w->prov, &w->prov_cap, n, sizeof *w->prov)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    for (int k = 0; k < n; k++) {
+        floe_provider *pv = malloc(sizeof *pv);
+        if (!pv) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        pv->klass = want[k];
+        w->prov[w->nprov++] = pv;
+    }
+    return FLOE_OK;
+}
+
+int floe_world_provider_count(const floe_world *w) { return w ? w->nprov : 0; }
+const floe_provider *floe_world_provider(const floe_world *w, int k) {
+    return w && k >= 0 && k < w->nprov ? w->prov[k] : NULL;
+}
+
+/* the context of an evaluation at the end of a step (history and ledger advance) */
+static floe_step_ctx ctx_step(floe_world *w, int record) {
+    floe_step_ctx c = {&w->p, w->def.dim, 1, w->time, w->dt, w->dt, 0, record, w->track_depth};
+    return c;
+}
+
+/* bytes of every provider's state; save = 1 writes them into buf, 0 reads them back */
+static size_t providers_state_size(const floe_world *w) {
+    size_t n = 0;
+    for (int k = 0; k < w->nprov; k++)
+        if (w->prov[k]->klass->state_size) n += w->prov[k]->klass->state_size(w->prov[k], w);
+    return n;
+}
+static void providers_state_io(floe_world *w, unsigned char *buf, int save) {
+    for (int k = 0; k < w->nprov; k++) {
+        floe_provider *pv = w->prov[k];
+        if (!pv->klass->state_size) continue;
+        size_t m = pv->klass->state_size(pv, w);
+        if (save) pv->klass->save(pv, w, buf);
+        else pv->klass->restore(pv, w, buf);
+        buf += m;
+    }
+}
 
 int floe_world_prepare(floe_world *w) {
     if (w->prepared) return FLOE_OK;
     floe_particles *p = &w->p;
     w->err[0] = 0;
+    FLOE_TRY(build_providers(w));
     /* masses and inertia */
     for (int i = 0; i < p->n; i++) {
         const floe_geometry *g = w->geoms[p->geom[i]];
@@ -1290,8 +1352,11 @@ int floe_world_prepare(floe_world *w) {
     w->prepared = 1;
     w->t0 = w->time;
     w->step0 = w->step;
-    w->record_now = w->record_contacts || w->obs_need_contacts;
-    rc = w->def.pd_dem == FLOE_PD_DEM_STAGGERED && w->npd ? stag_split_forces(w) : floe_compute_forces(w);
+    {
+        floe_step_ctx c0 = {&w->p, w->def.dim, 0, w->time, w->dt, 0.0, 0, w->record_contacts || w->obs_need_contacts, 0};
+        rc = w->def.pd_dem == FLOE_PD_DEM_STAGGERED && w->npd ? stag_split_forces(w, &c0)
+                                                               : floe_world_forces(w, &c0, FLOE_GROUP_ALL);
+    }
     if (rc) return rc;
     /* energy at start */
     floe_energy *e = &w->energy;
@@ -1471,10 +1536,8 @@ static double kinematic_close(floe_world *w, int i, double h) {
 
 /* forces at the end of a step, with the history and the ledger advancing */
 static int forces_advancing(floe_world *w) {
-    w->advancing = 1;
-    w->record_now = contacts_wanted(w);
-    int rc = floe_compute_forces(w);
-    w->advancing = 0;
+    floe_step_ctx c = ctx_step(w, contacts_wanted(w));
+    int rc = floe_world_forces(w, &c, FLOE_GROUP_ALL);
     return rc;
 }
 
@@ -1712,59 +1775,25 @@ static int step_verlet(floe_world *w) {
  * memories of the energy ledger too; nothing is booked in the ledger, no contact recorded,
  * and PD bonds do not break (their forces come from floe_pd_forces_nobreak). */
 static int rk2_midpoint_forces(floe_world *w, double h) {
-    floe_particles *p = &w->p;
     floe_neighbor_list *nl = &w->nl;
-    const size_t np = (size_t)nl->npairs, nh = np * FLOE_MAX_HISTORY, nt = (np + 7) / 8;
-    const size_t nfb = w->body_force && w->fb_old ? 6 * (size_t)w->fb_n : 0;
-    size_t nbc = 0;
-    for (int q = 0; q < w->npd_bc; q++)
-        if (w->pd_bc[q]->fold) nbc += 3 * (size_t)w->pd_bc[q]->n;
-    /* after the RK2 state (16 n doubles) */
-    const size_t off = 16 * (size_t)p->n;
-    double *b = ibuf_reserve(w, off + nh + nt + nfb + nbc);
-    if (!b) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-    double *hs = b + off, *fbs = hs + nh + nt, *bcs = fbs + nfb;
-    unsigned char *ts = (unsigned char *)(hs + nh);
-    if (np) {
-        memcpy(hs, nl->hist, nh * sizeof *hs);
-        memcpy(ts, nl->touching, np);
+    /* a probe: every provider's state (contact history, the callbacks' last forces, ...)
+     * saved, the forces evaluated with the history advanced by h and no breakage, the
+     * state restored: the step itself advances it at its end */
+    const size_t nb = providers_state_size(w);
+    if (nb > w->pbuf_cap) {
+        unsigned char *t = realloc(w->pbuf, nb);
+        if (!t) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        w->pbuf = t;
+        w->pbuf_cap = nb;
     }
-    if (nfb) memcpy(fbs, w->fb_old, nfb * sizeof *fbs);
-    for (int q = 0, o = 0; q < w->npd_bc; q++)
-        if (w->pd_bc[q]->fold) {
-            memcpy(bcs + o, w->pd_bc[q]->fold, 3 * (size_t)w->pd_bc[q]->n * sizeof *bcs);
-            o += 3 * w->pd_bc[q]->n;
-        }
-    const int npd = w->npd;
-    const double ec = w->elastic_contact;
-    w->npd = 0; /* the bond forces below, without breakage */
-    w->peek_dt = h;
-    w->advancing = 0;
-    w->record_now = 0;
+    providers_state_io(w, w->pbuf, 1);
+    floe_step_ctx c = {&w->p, w->def.dim, 0, w->time, w->dt, h, 1, 0, 0};
     long rb = nl->rebuilds;
-    int rc = floe_compute_forces_part(w, FLOE_FORCES_CONTACT);
-    w->peek_dt = 0;
-    w->npd = npd;
-    w->elastic_contact = ec;
+    int rc = floe_world_forces(w, &c, FLOE_GROUP_ALL);
     w->st.force_evaluations++;
     if (rc) return rc;
     if (nl->rebuilds != rb) return floe_world_error(w, FLOE_EINVAL, "internal: neighbour list rebuilt at the RK2 midpoint");
-    if (np) {
-        memcpy(nl->hist, hs, nh * sizeof *hs);
-        memcpy(nl->touching, ts, np);
-    }
-    if (nfb) memcpy(w->fb_old, fbs, nfb * sizeof *fbs);
-    for (int q = 0, o = 0; q < w->npd_bc; q++)
-        if (w->pd_bc[q]->fold) {
-            memcpy(w->pd_bc[q]->fold, bcs + o, 3 * (size_t)w->pd_bc[q]->n * sizeof *bcs);
-            o += 3 * w->pd_bc[q]->n;
-        }
-    for (int k = 0; k < npd; k++) {
-        int f0 = w->pd_first[k];
-        floe_pd_forces_nobreak(w->pd[k], p->x + 3 * (size_t)f0, p->f + 3 * (size_t)f0);
-        if (w->def.dim == 2)
-            for (int i = 0; i < w->pd[k]->n; i++) p->f[3 * (size_t)(f0 + i) + 2] = 0;
-    }
+    providers_state_io(w, w->pbuf, 0);
     return FLOE_OK;
 }
 
@@ -1882,17 +1911,17 @@ static void stag_zero_pd_forces(floe_world *w) {
 }
 
 /* evaluate F_C then F_PD at the present state (prepare), p->f = their sum */
-static int stag_split_forces(floe_world *w) {
+static int stag_split_forces(floe_world *w, const floe_step_ctx *ctx) {
     floe_particles *p = &w->p;
     const size_t n3 = 3 * (size_t)p->n;
     double *b = ibuf_reserve(w, 5 * (n3 ? n3 : 3));
     if (!b) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     double *fs = b, *ts = b + n3, *fpd = b + 2 * n3;
-    FLOE_TRY(floe_compute_forces_part(w, FLOE_FORCES_CONTACT));
+    FLOE_TRY(floe_world_forces(w, ctx, FLOE_GROUP_DEM));
     memcpy(fs, p->f, n3 * sizeof *fs);
     memcpy(ts, p->t, n3 * sizeof *ts);
     memset(p->f, 0, n3 * sizeof *p->f);
-    FLOE_TRY(floe_compute_forces_part(w, FLOE_FORCES_PD));
+    FLOE_TRY(floe_world_forces(w, ctx, FLOE_GROUP_PD));
     memcpy(fpd, p->f, n3 * sizeof *fpd);
     for (size_t a = 0; a < n3; a++) p->f[a] = fs[a] + fpd[a];
     memcpy(p->t, ts, n3 * sizeof *ts);
@@ -1903,7 +1932,6 @@ static int stag_split_forces(floe_world *w) {
  * mean velocity (x - xs) / span for the ledger's trapezoid work over that span */
 static int stag_pd_forces(floe_world *w, double span, const double *xs, double *vt, double *fpd, int mean_velocity) {
     floe_particles *p = &w->p;
-    const double dt = w->dt;
     for (int k = 0; k < w->npd; k++)
         for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++)
             if (mean_velocity) {
@@ -1911,11 +1939,9 @@ static int stag_pd_forces(floe_world *w, double span, const double *xs, double *
                 for (int a = 0; a < 3; a++) p->v[3 * i + a] = (p->x[3 * i + a] - xs[3 * i + a]) / span;
             }
     stag_zero_pd_forces(w);
-    w->dt = span;
-    w->advancing = 1;
-    int rc = floe_compute_forces_part(w, FLOE_FORCES_PD);
-    w->advancing = 0;
-    w->dt = dt;
+    floe_step_ctx c = ctx_step(w, 0);
+    c.dt = c.hist_dt = span; /* the PD step spans the cycle */
+    int rc = floe_world_forces(w, &c, FLOE_GROUP_PD);
     for (int k = 0; k < w->npd; k++) {
         size_t f0 = 3 * (size_t)w->pd_first[k], m = 3 * (size_t)w->pd[k]->n;
         memcpy(fpd + f0, p->f + f0, m * sizeof *fpd);
@@ -2004,10 +2030,8 @@ static int step_staggered(floe_world *w) {
                 memcpy(vt + 3 * i, p->v + 3 * i, 3 * sizeof(double));
                 for (int a = 0; a < 3; a++) p->v[3 * i + a] = (p->x[3 * i + a] - xs[3 * i + a]) / dt;
             }
-    w->advancing = 1;
-    w->record_now = contacts_wanted(w);
-    int rc = floe_compute_forces_part(w, FLOE_FORCES_CONTACT);
-    w->advancing = 0;
+    floe_step_ctx c = ctx_step(w, contacts_wanted(w));
+    int rc = floe_world_forces(w, &c, FLOE_GROUP_DEM);
     if (ke == 1)
         for (int k = 0; k < w->npd; k++)
             memcpy(p->v + 3 * (size_t)w->pd_first[k], vt + 3 * (size_t)w->pd_first[k], 3 * (size_t)w->pd[k]->n * sizeof *vt);
@@ -2095,19 +2119,10 @@ static void snapshot_free(floe_snapshot *s) {
 /* sizes of what a step changes: particle state (22 n), pair history, ledger memories,
  * PD forces and broken flags, state objects */
 static void snapshot_sizes(const floe_world *w, size_t *nd, size_t *nc) {
-    size_t d = 22 * (size_t)w->p.n + FLOE_MAX_HISTORY * (size_t)w->nl.npairs, c = (size_t)w->nl.npairs;
-    if (w->body_force && w->fb_old) d += 6 * (size_t)w->fb_n;
-    for (int q = 0; q < w->npd_bc; q++)
-        if (w->pd_bc[q]->fold) d += 3 * (size_t)w->pd_bc[q]->n;
-    if (w->npd) d += 3 * (size_t)w->pd_npts + 4 * (size_t)w->npd;
-    for (int k = 0; k < w->npd; k++) {
-        c += (size_t)w->pd[k]->nbond;
-        if (w->pd[k]->s0) d += 2 * (size_t)w->pd[k]->n; /* PMB alpha: per-point critical stretch */
-        if (w->pd[k]->splast) d += ((size_t)w->pd[k]->nbond * sizeof(float) + sizeof(double) - 1) / sizeof(double);
-    }
+    size_t d = 22 * (size_t)w->p.n;
     for (int s = 0; s < w->nstates; s++) d += w->states[s]->klass->size(w->states[s]);
     *nd = d;
-    *nc = c;
+    *nc = providers_state_size(w); /* contact history, bonds, the callbacks' last forces */
 }
 
 #define SNAP_COPY(save, a, b, nbytes) \
@@ -2163,40 +2178,8 @@ static int snapshot_io(floe_world *w, int save) {
     SNAP_COPY(save, d, p->w, 3 * n * sizeof *d); d += 3 * n;
     SNAP_COPY(save, d, p->f, 3 * n * sizeof *d); d += 3 * n;
     SNAP_COPY(save, d, p->t, 3 * n * sizeof *d); d += 3 * n;
-    size_t np = (size_t)w->nl.npairs;
-    SNAP_COPY(save, d, w->nl.hist, FLOE_MAX_HISTORY * np * sizeof *d); d += FLOE_MAX_HISTORY * np;
-    SNAP_COPY(save, c, w->nl.touching, np); c += np;
-    if (w->body_force && w->fb_old) { SNAP_COPY(save, d, w->fb_old, 6 * (size_t)w->fb_n * sizeof *d); d += 6 * (size_t)w->fb_n; }
-    for (int q = 0; q < w->npd_bc; q++)
-        if (w->pd_bc[q]->fold) {
-            size_t m = 3 * (size_t)w->pd_bc[q]->n;
-            SNAP_COPY(save, d, w->pd_bc[q]->fold, m * sizeof *d);
-            d += m;
-        }
-    if (w->npd) {
-        SNAP_COPY(save, d, w->pd_fold, 3 * (size_t)w->pd_npts * sizeof *d); d += 3 * (size_t)w->pd_npts;
-        for (int k = 0; k < w->npd; k++) {
-            floe_pd_body *b = w->pd[k];
-            if (save) {
-                d[0] = w->pd_eold[k]; d[1] = (double)b->nbroken; d[2] = (double)w->pd_nbroken_seen[k];
-                d[3] = k < w->pd_diss_n ? w->pd_diss[k] : 0;
-            } else {
-                w->pd_eold[k] = d[0]; b->nbroken = (int64_t)d[1]; w->pd_nbroken_seen[k] = (long long)d[2];
-                if (k < w->pd_diss_n) w->pd_diss[k] = d[3];
-            }
-            d += 4;
-            SNAP_COPY(save, c, b->broken, (size_t)b->nbond);
-            c += b->nbond;
-            if (b->s0) {
-                SNAP_COPY(save, d, b->s0, 2 * (size_t)b->n * sizeof *d);
-                d += 2 * (size_t)b->n;
-            }
-            if (b->splast) { /* PMB plastic stretches (floats, packed into the double store) */
-                SNAP_COPY(save, d, b->splast, (size_t)b->nbond * sizeof(float));
-                d += ((size_t)b->nbond * sizeof(float) + sizeof(double) - 1) / sizeof(double);
-            }
-        }
-    }
+    /* the providers' own state (floe_provider.h): what a step of each changes */
+    providers_state_io(w, c, save);
     if (!save) {
         w->energy = s->energy;
         w->elastic_contact = s->elastic_contact;

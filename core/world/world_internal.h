@@ -65,10 +65,8 @@ struct floe_world {
     long step;
     double t0; long step0;   /* time and step at prepare: time = t0 + (step - step0) dt */
     int prepared;
-    int advancing;            /* forces evaluated inside a step (history and ledger advance) */
     int record_contacts;      /* the user asked to keep w->contacts every step */
     int obs_need_contacts;    /* some observer reads w->contacts when it is due */
-    int record_now;           /* record at the next force evaluation */
     int contacts_valid;       /* w->contacts holds every contact of the last evaluation */
     int last_step_of_run;     /* floe_world_run's final step: record for the end() flush */
     int finished;
@@ -92,7 +90,6 @@ struct floe_world {
     floe_dt_estimates dte;    /* at prepare */
     double *dt_part;          /* n: critical estimate of each particle (limiting kinds) */
     double lf_dt_prev;        /* leapfrog: the previous step (0: velocities synchronised) */
-    double peek_dt;           /* history step of an evaluation that does not advance (RK2) */
     double *ibuf; size_t ibuf_cap; /* integrator scratch (RK2 start state, staggered forces) */
     struct floe_snapshot *snap; /* adaptive: the state at the start of the trial step */
     int track_depth;          /* forces.c records eta_depth (adaptive) */
@@ -120,12 +117,19 @@ struct floe_world {
     char wd_msg[1024];
     /* beam bonds (contact/bonds/floe_beam.h, issue #5); NULL without bonds */
     struct floe_beam_set *beams; /* contact/bonds/beam_set.h */
+    /* the force providers of the staged step (floe_provider.h), built at prepare, and the
+     * byte buffer of their state for RK2's midpoint probe */
+    struct floe_provider **prov; int nprov, prov_cap;
+    unsigned char *pbuf; size_t pbuf_cap;
 };
 
-/* force groups of the staggered scheme (core/world/forces.c): contact and body forces (the DEM
- * and coupling forces, with gravity and external forces counted there once), PD bonds */
-enum { FLOE_FORCES_CONTACT = 1, FLOE_FORCES_PD = 2, FLOE_FORCES_ALL = 3 };
-int floe_compute_forces_part(floe_world *w, int part);
+/* The staged force evaluation (core/world/forces.c, floe_provider.h): the providers of the
+ * groups (FLOE_GROUP_DEM: body forces, beam bonds, contacts; FLOE_GROUP_PD: PD bonds) in
+ * order, the neighbour list rebuilt between stages when one asks, the ledger booked from
+ * their accumulators. The DEM group zeroes p->f and p->t first; the PD group adds. */
+int floe_world_forces(floe_world *w, const floe_step_ctx *ctx, int groups);
+/* the forces at the present state, advancing nothing (as at prepare; for tests) */
+int floe_compute_forces(floe_world *w);
 
 /* one PD boundary region: its definition and the world indices of its points */
 typedef struct floe_pd_bc_rec {
@@ -138,10 +142,12 @@ typedef struct floe_pd_bc_rec {
 /* PD boundary regions and breakage (core/world/world.c, next to floe_world_add_pd_body):
  * add the body forces of every body-force region to p->f and return their work over the
  * step (trapezoid, mid-step velocities; the caller books it when stepping); after the
- * bond forces, rebuild the contact list when a newly broken bond lets a pair within reach
- * meet by contact (pd_exclude). */
+ * bond forces, 1 when a newly broken bond lets a pair within reach meet by contact and the
+ * list lacks it (the world then rebuilds the list); the pairs of a PD body that never
+ * enter the contact list (bonded family members; floe_world_add_pd_body). */
 double floe_pd_bc_forces(floe_world *w);
-int floe_pd_after_forces(floe_world *w);
+int floe_pd_broken_pairs_reachable(floe_world *w);
+int floe_pd_pair_excluded(const floe_world *w, int i, int j);
 
 /* the contact list's exclusion of bonded pairs (PD families, beam bonds), installed when
  * either is added (core/world/world.c) */
@@ -168,7 +174,5 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
 int floe_world_detect(floe_world *w, int i, int j, int sub, double *warm, floe_contact *c);
 int floe_world_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact *c);
 
-/* forces (core/world/forces.c) */
-int floe_compute_forces(floe_world *w);
 
 #endif

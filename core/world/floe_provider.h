@@ -1,0 +1,72 @@
+/* floe_provider.h - force providers and the staged step (issue #11, docs/architecture.md).
+ *
+ * Everything that puts forces on particles is a provider: body forces (gravity, PD
+ * body-force regions, the body-force callback), beam bonds, contacts, PD bonds (later:
+ * drag fields, periodic cells). The world evaluates them in a fixed order through a
+ * per-step context (particle_store.h floe_step_ctx: stepping, probe, history step, record),
+ * never through flags on the world, and rebuilds the neighbour list between stages when a
+ * provider asks (a bond broke and its pair may now touch), never inside one.
+ *
+ * Each provider declares what the world needs around the step:
+ *   critical_dt   its stability limit (the world takes the smallest);
+ *   excludes      pairs it holds, that must never enter the contact list (bonded pairs);
+ *   state         bytes of its own state that a step changes (contact history, a bond's
+ *                 last force, broken flags), saved and restored by the adaptive controller
+ *                 when it rejects a trial step, and by RK2 around its midpoint probe; a
+ *                 component that changes state without declaring it here would make a
+ *                 rejected step silently wrong, which is why there is no other way;
+ *   group         FLOE_GROUP_DEM or FLOE_GROUP_PD: the staggered PD-DEM scheme evaluates
+ *                 the groups at their own rates.
+ * A provider splits its work over threads or subdomains by itself (later): the world only
+ * calls forces() once per stage. */
+#ifndef FLOE_PROVIDER_H
+#define FLOE_PROVIDER_H
+
+#include "floe_world.h"
+
+typedef struct floe_provider floe_provider;
+struct floe_step_ctx; /* particle_store.h (internal): the store and the evaluation's kind */
+
+enum { FLOE_GROUP_DEM = 1, FLOE_GROUP_PD = 2, FLOE_GROUP_ALL = 3 };
+
+/* What one evaluation adds to the ledger. The world passes one accumulator to every
+ * provider of a group, in order: each adds its own part. */
+typedef struct floe_provider_out {
+    double elastic;        /* stored energy after the evaluation, J */
+    double dissipated;     /* when stepping: dissipated over the step (work - stored change), J */
+    double work_boundary;  /* when stepping: work of moving boundaries and growing surfaces, J */
+    int rebuild;           /* set to 1: pairs changed, rebuild the neighbour list before the
+                              next stage */
+} floe_provider_out;
+
+typedef struct floe_provider_class {
+    int version;           /* 1 */
+    const char *name;
+    int group;             /* FLOE_GROUP_DEM or FLOE_GROUP_PD */
+    /* required: add forces and torques to ctx->p->f and ->t (zeroed by the world before the
+     * DEM group), and the ledger terms to out */
+    int (*forces)(floe_provider *pv, floe_world *w, const struct floe_step_ctx *ctx, floe_provider_out *out);
+    /* optional: the provider's critical time step (s; INFINITY: no limit), at prepare */
+    double (*critical_dt)(floe_provider *pv, floe_world *w);
+    /* optional: 1 when the pair (i, j) must never enter the contact list */
+    int (*excludes)(const floe_provider *pv, const floe_world *w, int i, int j);
+    /* optional: the bytes of state a step changes; save writes them, restore reads them */
+    size_t (*state_size)(const floe_provider *pv, const floe_world *w);
+    void (*save)(const floe_provider *pv, const floe_world *w, unsigned char *buf);
+    void (*restore)(floe_provider *pv, floe_world *w, const unsigned char *buf);
+    /* optional: 1 when the provider can save its state (NULL with state_size set: always);
+     * 0 makes the adaptive controller refuse the scene, naming the provider */
+    int (*can_save)(const floe_provider *pv, const floe_world *w);
+    void (*destroy)(floe_provider *pv);
+} floe_provider_class;
+
+struct floe_provider {
+    const floe_provider_class *klass;
+};
+
+/* The world's providers in evaluation order (built at prepare from what the scene holds:
+ * a scene without bonds or PD has no such stage). */
+int floe_world_provider_count(const floe_world *w);
+const floe_provider *floe_world_provider(const floe_world *w, int k);
+
+#endif
