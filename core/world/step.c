@@ -1,0 +1,836 @@
+/* step.c - the steps: velocity Verlet, leapfrog, RK2, staggered PD-DEM (000 §3.2) and the
+ * adaptive controller (003 §4.3); the rotation helpers. */
+#include "world_parts.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+/* ---- rotation helpers ---- */
+
+/* omega = R I^-1 R^T L (world frame) */
+static void omega_from_L(const double q[4], const double I[3], const double L[3], double om[3]) {
+    double Lb[3];
+    floe_q_rotate_inv(Lb, q, L);
+    for (int k = 0; k < 3; k++) Lb[k] = I[k] > 0 && isfinite(I[k]) ? Lb[k] / I[k] : 0;
+    floe_q_rotate(om, q, Lb);
+}
+void L_from_omega(const double q[4], const double I[3], const double om[3], double L[3]) {
+    double ob[3];
+    floe_q_rotate_inv(ob, q, om);
+    for (int k = 0; k < 3; k++) ob[k] *= I[k];
+    floe_q_rotate(L, q, ob);
+}
+/* q <- exp(h omega / 2) q, i.e. rotate by the vector h*omega */
+static void q_advance(double out[4], const double q[4], const double om[3], double h) {
+    double th[3] = {h * om[0], h * om[1], h * om[2]}, dq[4];
+    double a2 = floe_v3_dot(th, th);
+    if (a2 < 1e-4) {
+        /* small turn (every stable step): the series of cos(a/2) and sin(a/2)/a to a^4,
+         * truncation below 1e-16 here, no trigonometry (profile of 5,000 polyhedra: sincos
+         * was 3 % and this function 6 % of the run) */
+        double c = 1.0 - a2 * (0.125 - a2 * (1.0 / 384.0)), s = 0.5 - a2 * (1.0 / 48.0 - a2 * (1.0 / 3840.0));
+        dq[0] = c; dq[1] = s * th[0]; dq[2] = s * th[1]; dq[3] = s * th[2];
+        floe_q_mul(out, dq, q);
+        /* |out| = 1 + O(round-off): one Newton step for 1/sqrt keeps it unit */
+        double n2 = out[0] * out[0] + out[1] * out[1] + out[2] * out[2] + out[3] * out[3];
+        double sc = 1.5 - 0.5 * n2;
+        for (int k = 0; k < 4; k++) out[k] *= sc;
+        return;
+    }
+    floe_q_from_rotvec(dq, th);
+    floe_q_mul(out, dq, q);
+    floe_q_normalize(out);
+}
+
+/* ---- the step ---- */
+
+/* motion callback of particle i: an index particle -> callback, rebuilt when callbacks or
+ * particles were added (a linear scan per particle would cost O(k^2) per step for k
+ * ramped PD boundary points); the first callback set for a particle wins */
+static int motion_of(floe_world *w, int i) {
+    if (w->motion_idx_n != w->p.n || w->motion_idx_cnt != w->nmotions) {
+        int *t = realloc(w->motion_idx, (size_t)(w->p.n > 0 ? w->p.n : 1) * sizeof *t);
+        if (!t) { /* out of memory: fall back to the scan */
+            for (int k = 0; k < w->nmotions; k++)
+                if (w->motions[k].particle == i) return k;
+            return -1;
+        }
+        w->motion_idx = t;
+        for (int k = 0; k < w->p.n; k++) t[k] = -1;
+        for (int k = w->nmotions - 1; k >= 0; k--) {
+            int pi = w->motions[k].particle;
+            if (pi >= 0 && pi < w->p.n) t[pi] = k;
+        }
+        w->motion_idx_n = w->p.n;
+        w->motion_idx_cnt = w->nmotions;
+    }
+    return w->motion_idx[i];
+}
+
+static void kinematic_velocity(floe_world *w, int i, double t) {
+    int k = motion_of(w, i);
+    if (k < 0) return;
+    w->motions[k].fn(t, w->p.v + 3 * i, w->p.w + 3 * i, w->motions[k].user);
+    if (w->def.dim == 2) { w->p.v[3 * i + 2] = 0; w->p.w[3 * i] = w->p.w[3 * i + 1] = 0; }
+}
+
+/* End of a step for kinematic particle i: the work it did on the others over the step,
+ * -(F_old + F_new)/2 . v_half dt (the trapezoid rule of velocity Verlet, as for the
+ * contacts; h = dt/2), then its prescribed velocity at the new time. */
+static double kinematic_close(floe_world *w, int i, double h) {
+    const floe_particles *p = &w->p;
+    const double *fo = w->kin_old + 6 * i;
+    double wb = 0;
+    for (int k = 0; k < 3; k++)
+        wb -= h * ((fo[k] + p->f[3 * i + k]) * p->v[3 * i + k] + (fo[3 + k] + p->t[3 * i + k]) * p->w[3 * i + k]);
+    kinematic_velocity(w, i, w->time);
+    return wb;
+}
+
+/* forces at the end of a step, with the history and the ledger advancing */
+static int forces_advancing(floe_world *w) {
+    floe_step_ctx c = ctx_step(w, contacts_wanted(w));
+    int rc = floe_world_forces(w, &c, FLOE_GROUP_ALL);
+    return rc;
+}
+
+static int check_particle(floe_world *w, int i, const double xold[3]) {
+    floe_particles *p = &w->p;
+    const double *x = p->x + 3 * i, *v = p->v + 3 * i, *om = p->w + 3 * i;
+    for (int k = 0; k < 3; k++)
+        if (!isfinite(x[k]) || !isfinite(v[k]) || !isfinite(om[k]))
+            return floe_world_error(w, FLOE_EUNSTABLE,
+                                    "unstable: particle %d (body %d) has a non-finite %s at step %ld, t = %g s "
+                                    "(force %g %g %g N)",
+                                    i, p->group[i], !isfinite(x[k]) ? "position" : !isfinite(v[k]) ? "velocity" : "angular velocity",
+                                    w->step, w->time, p->f[3 * i], p->f[3 * i + 1], p->f[3 * i + 2]);
+    double d[3];
+    floe_v3_sub(d, x, xold);
+    double moved = floe_v3_norm(d);
+    if (moved > 0.5 * p->radius[i])
+        return floe_world_error(w, FLOE_EUNSTABLE,
+                                "unstable: particle %d (body %d) moved %.3g of its radius in one step at step %ld, "
+                                "t = %g s (speed %g m/s): the time step %g s is too large for the contact stiffness "
+                                "or the velocities",
+                                i, p->group[i], moved / p->radius[i], w->step, w->time, floe_v3_norm(v), w->dt);
+    return FLOE_OK;
+}
+
+/* largest squared distance of x from its position at the neighbour build, into *maxd2 */
+static inline void note_disp(const double *x, const double *xb, double *maxd2) {
+    double dx = x[0] - xb[0], dy = x[1] - xb[1], dz = x[2] - xb[2];
+    double d2 = dx * dx + dy * dy + dz * dz;
+    if (d2 > *maxd2) *maxd2 = d2;
+}
+
+/* omega of free particle i from its angular momentum */
+static inline void omega_update(floe_particles *p, int i) {
+    if (p->iso[i]) {
+        double inv = 1.0 / p->inertia[3 * i];
+        for (int k = 0; k < 3; k++) p->w[3 * i + k] = p->L[3 * i + k] * inv;
+    } else omega_from_L(p->q + 4 * i, p->inertia + 3 * i, p->L + 3 * i, p->w + 3 * i);
+}
+
+/* the orientation of free particle i over dt with its angular momentum L (eq 23 as the
+ * midpoint rule of step_verlet: the isotropic fast path, or two fixed-point passes) */
+static void rotate_drift(floe_particles *p, int i, double dt) {
+    double *q = p->q + 4 * i, *L = p->L + 3 * i, *om = p->w + 3 * i;
+    const double *I = p->inertia + 3 * i, h = 0.5 * dt;
+    if (p->iso[i]) {
+        double inv = 1.0 / I[0];
+        for (int k = 0; k < 3; k++) om[k] = L[k] * inv;
+        double th[3] = {h * om[0], h * om[1], h * om[2]}, t2 = floe_v3_dot(th, th);
+        if (t2 > 0) {
+            double c = 1 - 0.5 * t2, dq[4] = {c, th[0], th[1], th[2]}, qn[4];
+            floe_q_mul(qn, dq, q);
+            double s2 = qn[0] * qn[0] + qn[1] * qn[1] + qn[2] * qn[2] + qn[3] * qn[3];
+            double sc = 1.5 - 0.5 * s2;
+            for (int k = 0; k < 4; k++) q[k] = qn[k] * sc;
+        }
+    } else if (floe_v3_dot(L, L) > 0) {
+        double qm[4], omm[3], qn[4];
+        omega_from_L(q, I, L, omm);
+        q_advance(qm, q, omm, h);
+        for (int it = 0; it < 2; it++) {
+            omega_from_L(qm, I, L, omm);
+            q_advance(qm, q, omm, h);
+        }
+        omega_from_L(qm, I, L, omm);
+        q_advance(qn, q, omm, dt);
+        memcpy(q, qn, sizeof qn);
+        omega_from_L(q, I, L, om);
+    }
+}
+
+/* state objects over the step, RK2 midpoint (eq 21) */
+static int advance_states(floe_world *w, double dt) {
+    const double h = 0.5 * dt;
+    for (int s = 0; s < w->nstates; s++) {
+        floe_state *st = w->states[s];
+        size_t m = st->klass->size(st);
+        double buf[64];
+        double *y0 = m <= 16 ? buf : malloc(4 * m * sizeof(double));
+        if (!y0) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        double *k1 = y0 + m, *ym = y0 + 2 * m, *k2 = y0 + 3 * m;
+        w->err[0] = 0;
+        st->klass->get(st, y0);
+        int rc = st->klass->rhs(st, w, w->time, y0, k1);
+        for (size_t a = 0; a < m && !rc; a++) ym[a] = y0[a] + h * k1[a];
+        if (!rc) rc = st->klass->rhs(st, w, w->time + h, ym, k2);
+        for (size_t a = 0; a < m && !rc; a++) ym[a] = y0[a] + dt * k2[a];
+        if (!rc) rc = st->klass->set(st, w, ym);
+        if (y0 != buf) free(y0);
+        if (rc) { /* keep the state's own reason */
+            char why[sizeof w->err];
+            memcpy(why, w->err, sizeof why);
+            return floe_world_error(w, rc, "state object %s failed at step %ld: %s", st->klass->name, w->step,
+                                    why[0] ? why : floe_strerror(rc));
+        }
+    }
+    return FLOE_OK;
+}
+
+/* the integrators' scratch: at least nd doubles (contents kept when it grows) */
+static double *ibuf_reserve(floe_world *w, size_t nd) {
+    if (nd <= w->ibuf_cap) return w->ibuf;
+    double *b = realloc(w->ibuf, nd * sizeof *b);
+    if (!b) return NULL;
+    w->ibuf = b;
+    w->ibuf_cap = nd;
+    return b;
+}
+
+/* step counter and time after a step (no drift from repeated sums) */
+static void advance_clock(floe_world *w) {
+    w->step++;
+    w->time = w->t0 + (double)(w->step - w->step0) * w->dt;
+}
+
+static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb) {
+    if (floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0)) {
+        int rc = floe_nl_build(&w->nl, &w->p, w->def.dim, w->def.leaf_size);
+        if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
+    }
+    return FLOE_OK;
+}
+
+/* Velocity Verlet (ParticLS eq 22) and leapfrog (000 eq 44). Leapfrog keeps v_{n-1/2}:
+ * its one kick per step v_{n+1/2} = v_{n-1/2} + dt a_n is velocity Verlet's two half kicks
+ * merged, so both follow the same trajectory (to rounding); they differ in the velocity
+ * they store (leapfrog: half a step behind the positions, as in the paper). */
+static int step_verlet(floe_world *w) {
+    floe_particles *p = &w->p;
+    const double dt = w->dt, h = 0.5 * dt;
+    const int n = p->n, leap = w->def.integrator == FLOE_LEAPFROG;
+    /* leapfrog: the kick spans the two half steps around t_n; the first step after the
+     * velocities were synchronised (start) spans half a step */
+    const double k1 = leap ? 0.5 * (w->lf_dt_prev + dt) : h, k2 = leap ? 0.0 : h;
+    double wb = 0;    /* body-force work this step */
+    double maxd2 = 0; /* largest squared displacement since the neighbour build */
+    const double *xb = w->nl.x_build;
+    const int have_xb = xb && w->nl.n_build == n;
+    /* 1. first half kick + drift (eq 22), rotation by the midpoint rule (eq 23) */
+    for (int i = 0; i < n; i++) {
+        double *x = p->x + 3 * i, *v = p->v + 3 * i, *q = p->q + 4 * i;
+        if (p->motion[i] == FLOE_FIXED) continue;
+        if (p->motion[i] == FLOE_KINEMATIC) {
+            /* keep the force of the step's start for the trapezoid work of the boundary */
+            memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
+            memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
+            kinematic_velocity(w, i, w->time + h);
+            floe_v3_axpy(x, dt, v);
+            if (have_xb) note_disp(x, xb + 3 * i, &maxd2);
+            double qn[4];
+            q_advance(qn, q, p->w + 3 * i, dt);
+            memcpy(q, qn, sizeof qn);
+            continue;
+        }
+        double im = p->inv_mass[i];
+        for (int k = 0; k < 3; k++) v[k] += k1 * im * p->f[3 * i + k];
+        for (int k = 0; k < 3; k++) x[k] += dt * v[k];
+        if (have_xb) note_disp(x, xb + 3 * i, &maxd2);
+        /* body-force work over the step uses the drift displacement (exact for gravity
+         * when the second half adds the same force) */
+        /* rotation: L by the half kick, then the orientation over dt (rotate_drift: the
+         * isotropic fast path q <- exp(dt omega / 2) q without trig, or the midpoint rule) */
+        floe_v3_axpy(p->L + 3 * i, k1, p->t + 3 * i);
+        rotate_drift(p, i, dt);
+        wb += dt * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
+    }
+    /* 2. state objects, RK2 midpoint (eq 21) */
+    FLOE_TRY(advance_states(w, dt));
+    advance_clock(w);
+    /* 3. neighbours and forces at t + dt */
+    FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
+    FLOE_TRY(forces_advancing(w));
+    /* 4. second half kick (leapfrog: none; its kinetic energy is that of the synchronised
+     * velocity v_{n+1/2} + dt/2 a_{n+1}) */
+    double kt = 0, kr = 0, wbound = 0, sh = 0;
+    const int shadow = w->def.energy_check != FLOE_CHECK_OFF;
+    for (int i = 0; i < n; i++) {
+        if (p->motion[i] != FLOE_FREE) {
+            if (p->motion[i] == FLOE_KINEMATIC) wbound += kinematic_close(w, i, h);
+            continue;
+        }
+        double *v = p->v + 3 * i, *L = p->L + 3 * i;
+        double im = p->inv_mass[i];
+        if (shadow) {
+            double dv[3], dL[3];
+            for (int k = 0; k < 3; k++) { dv[k] = h * im * p->f[3 * i + k]; dL[k] = h * p->t[3 * i + k]; }
+            sh += shadow_term(p, i, dv, dL);
+        }
+        /* the drift of this step was dt * v_half: a particle that moved more than half its
+         * radius, or whose state is not finite (NaN fails every comparison), is unstable */
+        double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * dt * dt, lim = 0.5 * p->radius[i];
+        double ke, kre;
+        if (!leap) {
+            for (int k = 0; k < 3; k++) v[k] += h * im * p->f[3 * i + k];
+            floe_v3_axpy(L, h, p->t + 3 * i);
+            if (p->iso[i]) {
+                double inv = 1.0 / p->inertia[3 * i];
+                for (int k = 0; k < 3; k++) p->w[3 * i + k] = L[k] * inv;
+            } else omega_from_L(p->q + 4 * i, p->inertia + 3 * i, L, p->w + 3 * i);
+            ke = 0.5 * p->mass[i] * floe_v3_dot(v, v);
+            kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
+        } else {
+            double vs[3], Ls[3], ws[3];
+            for (int k = 0; k < 3; k++) {
+                vs[k] = v[k] + h * im * p->f[3 * i + k];
+                Ls[k] = L[k] + h * p->t[3 * i + k];
+            }
+            if (p->iso[i]) {
+                double inv = 1.0 / p->inertia[3 * i];
+                for (int k = 0; k < 3; k++) ws[k] = Ls[k] * inv;
+            } else omega_from_L(p->q + 4 * i, p->inertia + 3 * i, Ls, ws);
+            ke = 0.5 * p->mass[i] * floe_v3_dot(vs, vs);
+            kre = 0.5 * floe_v3_dot(Ls, ws);
+        }
+        kt += ke;
+        kr += kre;
+        if (!(d2 <= lim * lim) || !(ke + kre < INFINITY) || !(fabs(p->x[3 * i]) + fabs(p->x[3 * i + 1]) + fabs(p->x[3 * i + 2]) < INFINITY)) {
+            double xold[3];
+            for (int k = 0; k < 3; k++) xold[k] = p->x[3 * i + k] - dt * (v[k] - k2 * im * p->f[3 * i + k]);
+            int rc = check_particle(w, i, xold);
+            if (rc) return rc;
+        }
+    }
+    if (leap) w->lf_dt_prev = dt;
+    w->wd_shadow = sh;
+    w->energy.kinetic_trans = kt;
+    w->energy.kinetic_rot = kr;
+    w->energy.work_body += wb;
+    w->energy.work_boundary += wbound;
+    return FLOE_OK;
+}
+
+/* Forces at the RK2 midpoint: the contact history is advanced by dt/2 from the step's
+ * start (its midpoint value) and put back afterwards, the body-force and external-force
+ * memories of the energy ledger too; nothing is booked in the ledger, no contact recorded,
+ * and PD bonds do not break (their forces come from floe_pd_forces_nobreak). */
+static int rk2_midpoint_forces(floe_world *w, double h) {
+    floe_neighbor_list *nl = &w->nl;
+    /* a probe: every provider's state (contact history, the callbacks' last forces, ...)
+     * saved, the forces evaluated with the history advanced by h and no breakage, the
+     * state restored: the step itself advances it at its end */
+    const size_t nb = providers_state_size(w);
+    if (nb > w->pbuf_cap) {
+        unsigned char *t = realloc(w->pbuf, nb);
+        if (!t) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        w->pbuf = t;
+        w->pbuf_cap = nb;
+    }
+    providers_state_io(w, w->pbuf, 1);
+    floe_step_ctx c = {&w->p, w->def.dim, 0, w->time, w->dt, h, 1, 0, 0};
+    long rb = nl->rebuilds;
+    int rc = floe_world_forces(w, &c, FLOE_GROUP_ALL);
+    w->st.force_evaluations++;
+    if (rc) return rc;
+    if (nl->rebuilds != rb) return floe_world_error(w, FLOE_EINVAL, "internal: neighbour list rebuilt at the RK2 midpoint");
+    providers_state_io(w, w->pbuf, 0);
+    return FLOE_OK;
+}
+
+/* Explicit midpoint RK2 for the particles (ParticLS eq 21 with y = (x, v, q, L)):
+ *   y_mid = y_n + dt/2 f(y_n);  y_{n+1} = y_n + dt f(y_mid).
+ * The force at the end of the step, f(y_{n+1}), is evaluated with the midpoint velocities
+ * (the velocities of the drift x_{n+1} - x_n = dt v_mid), like velocity Verlet's forces:
+ * the contact history then grows by the tangential displacement of the step and the
+ * energy ledger's trapezoid work is that of the actual displacement; that force only
+ * enters the next step's midpoint, where an O(dt) error costs O(dt^3) locally. */
+static int step_rk2(floe_world *w) {
+    floe_particles *p = &w->p;
+    const int n = p->n;
+    const double dt = w->dt, h = 0.5 * dt, t_n = w->time;
+    double *b = ibuf_reserve(w, 16 * (size_t)(n ? n : 1));
+    if (!b) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    double *x0 = b, *v0 = b + 3 * (size_t)n, *L0 = b + 6 * (size_t)n, *q0 = b + 9 * (size_t)n;
+    memcpy(x0, p->x, 3 * (size_t)n * sizeof *x0);
+    memcpy(v0, p->v, 3 * (size_t)n * sizeof *v0);
+    memcpy(L0, p->L, 3 * (size_t)n * sizeof *L0);
+    memcpy(q0, p->q, 4 * (size_t)n * sizeof *q0);
+    /* 1. the midpoint state */
+    for (int i = 0; i < n; i++) {
+        double *x = p->x + 3 * i, *v = p->v + 3 * i, *q = p->q + 4 * i;
+        if (p->motion[i] == FLOE_FIXED) continue;
+        if (p->motion[i] == FLOE_KINEMATIC) {
+            memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
+            memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
+            kinematic_velocity(w, i, t_n + h);
+            floe_v3_axpy(x, h, v);
+        } else {
+            double im = p->inv_mass[i];
+            floe_v3_axpy(x, h, v);
+            for (int k = 0; k < 3; k++) v[k] += h * im * p->f[3 * i + k];
+            floe_v3_axpy(p->L + 3 * i, h, p->t + 3 * i);
+        }
+        double qn[4];
+        q_advance(qn, q, p->w + 3 * i, h);
+        memcpy(q, qn, sizeof qn);
+        if (p->motion[i] == FLOE_FREE) omega_update(p, i);
+    }
+    /* 2. forces at the midpoint */
+    w->time = t_n + h;
+    int rc = rk2_midpoint_forces(w, h);
+    w->time = t_n;
+    if (rc) return rc;
+    b = w->ibuf; /* the midpoint's scratch may have moved it */
+    x0 = b; v0 = b + 3 * (size_t)n; L0 = b + 6 * (size_t)n; q0 = b + 9 * (size_t)n;
+    double *fm = b + 13 * (size_t)n; /* F_mid */
+    memcpy(fm, p->f, 3 * (size_t)n * sizeof *fm);
+    /* 3. x_{n+1} = x_n + dt v_mid, q_{n+1} = exp(dt w_mid) q_n; v, w stay at the midpoint
+     * values for the forces at the end; v_{n+1}, L_{n+1} from the midpoint forces */
+    double wb = 0, maxd2 = 0;
+    const double *xb = w->nl.x_build;
+    const int have_xb = xb && w->nl.n_build == n;
+    for (int i = 0; i < n; i++) {
+        if (p->motion[i] == FLOE_FIXED) continue;
+        double *x = p->x + 3 * i;
+        for (int k = 0; k < 3; k++) x[k] = x0[3 * i + k] + dt * p->v[3 * i + k];
+        q_advance(p->q + 4 * i, q0 + 4 * i, p->w + 3 * i, dt);
+        if (have_xb) note_disp(x, xb + 3 * i, &maxd2);
+        if (p->motion[i] == FLOE_FREE) {
+            wb += dt * (p->mass[i] * floe_v3_dot(w->def.gravity, p->v + 3 * i));
+            for (int k = 0; k < 3; k++) L0[3 * i + k] += dt * p->t[3 * i + k]; /* L_{n+1} */
+        }
+    }
+    FLOE_TRY(advance_states(w, dt));
+    advance_clock(w);
+    FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
+    FLOE_TRY(forces_advancing(w));
+    /* 4. v_{n+1} = v_n + dt F_mid / m, L_{n+1} = L_n + dt T_mid */
+    double kt = 0, kr = 0, wbound = 0;
+    for (int i = 0; i < n; i++) {
+        if (p->motion[i] != FLOE_FREE) {
+            if (p->motion[i] == FLOE_KINEMATIC) wbound += kinematic_close(w, i, h);
+            continue;
+        }
+        double *v = p->v + 3 * i, *L = p->L + 3 * i, im = p->inv_mass[i];
+        double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * dt * dt, lim = 0.5 * p->radius[i];
+        for (int k = 0; k < 3; k++) {
+            v[k] = v0[3 * i + k] + dt * im * fm[3 * i + k];
+            L[k] = L0[3 * i + k];
+        }
+        omega_update(p, i);
+        double ke = 0.5 * p->mass[i] * floe_v3_dot(v, v), kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
+        kt += ke;
+        kr += kre;
+        if (!(d2 <= lim * lim) || !(ke + kre < INFINITY) || !(fabs(p->x[3 * i]) + fabs(p->x[3 * i + 1]) + fabs(p->x[3 * i + 2]) < INFINITY)) {
+            int rc2 = check_particle(w, i, x0 + 3 * i);
+            if (rc2) return rc2;
+        }
+    }
+    w->energy.kinetic_trans = kt;
+    w->energy.kinetic_rot = kr;
+    w->energy.work_body += wb;
+    w->energy.work_boundary += wbound;
+    return FLOE_OK;
+}
+
+/* ---- staggered PD-DEM (000 §3.2-3.3, Algorithm 2) ----
+ * Two force groups: the contact and body forces F_C (DEM and coupling forces, gravity and
+ * external forces, counted once as the paper requires) and the PD bond forces F_PD. With
+ * dt_PD = dt / m the PD points sub-cycle m velocity Verlet steps with F_PD inside each
+ * step, between two half kicks with F_C; with dt_PD = k dt, F_PD is applied as two half
+ * kicks of k dt / 2 around every k steps of velocity Verlet with F_C. This is the
+ * impulse form of multiple time stepping (r-RESPA, Tuckerman, Berne and Martyna 1992):
+ * symmetric, second order and symplectic, and with m = k = 1 it is velocity Verlet (the
+ * monolithic scheme) with the two groups evaluated separately. The scratch w->ibuf holds
+ * F_C, its torques and F_PD between steps (3n each), then the start positions and the
+ * true velocities of the PD points (3n each). */
+
+static void stag_zero_pd_forces(floe_world *w) {
+    for (int k = 0; k < w->npd; k++)
+        memset(w->p.f + 3 * (size_t)w->pd_first[k], 0, 3 * (size_t)w->pd[k]->n * sizeof(double));
+}
+
+/* evaluate F_C then F_PD at the present state (prepare), p->f = their sum */
+int stag_split_forces(floe_world *w, const floe_step_ctx *ctx) {
+    floe_particles *p = &w->p;
+    const size_t n3 = 3 * (size_t)p->n;
+    double *b = ibuf_reserve(w, 5 * (n3 ? n3 : 3));
+    if (!b) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    double *fs = b, *ts = b + n3, *fpd = b + 2 * n3;
+    FLOE_TRY(floe_world_forces(w, ctx, FLOE_GROUP_DEM));
+    memcpy(fs, p->f, n3 * sizeof *fs);
+    memcpy(ts, p->t, n3 * sizeof *ts);
+    memset(p->f, 0, n3 * sizeof *p->f);
+    FLOE_TRY(floe_world_forces(w, ctx, FLOE_GROUP_PD));
+    memcpy(fpd, p->f, n3 * sizeof *fpd);
+    for (size_t a = 0; a < n3; a++) p->f[a] = fs[a] + fpd[a];
+    memcpy(p->t, ts, n3 * sizeof *ts);
+    return FLOE_OK;
+}
+
+/* PD bond forces at the present positions into fpd, with the PD points moving at their
+ * mean velocity (x - xs) / span for the ledger's trapezoid work over that span */
+static int stag_pd_forces(floe_world *w, double span, const double *xs, double *vt, double *fpd, int mean_velocity) {
+    floe_particles *p = &w->p;
+    for (int k = 0; k < w->npd; k++)
+        for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++)
+            if (mean_velocity) {
+                memcpy(vt + 3 * i, p->v + 3 * i, 3 * sizeof(double));
+                for (int a = 0; a < 3; a++) p->v[3 * i + a] = (p->x[3 * i + a] - xs[3 * i + a]) / span;
+            }
+    stag_zero_pd_forces(w);
+    floe_step_ctx c = ctx_step(w, 0);
+    c.dt = c.hist_dt = span; /* the PD step spans the cycle */
+    int rc = floe_world_forces(w, &c, FLOE_GROUP_PD);
+    for (int k = 0; k < w->npd; k++) {
+        size_t f0 = 3 * (size_t)w->pd_first[k], m = 3 * (size_t)w->pd[k]->n;
+        memcpy(fpd + f0, p->f + f0, m * sizeof *fpd);
+        if (mean_velocity) memcpy(p->v + f0, vt + f0, m * sizeof *vt);
+    }
+    return rc;
+}
+
+static int step_staggered(floe_world *w) {
+    floe_particles *p = &w->p;
+    const int n = p->n, m = w->pd_sub, ke = w->pd_every;
+    const size_t n3 = 3 * (size_t)n;
+    const double dt = w->dt, h = 0.5 * dt, K = ke * dt;
+    double *b = ibuf_reserve(w, 5 * (n3 ? n3 : 3));
+    if (!b) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    double *fs = b, *ts = b + n3, *fpd = b + 2 * n3, *xs = b + 3 * n3, *vt = b + 4 * n3;
+    const long cyc = ke > 1 ? w->pd_cycle % ke : 0;
+    const int pd_start = ke > 1 && cyc % ke == 0, pd_end = ke > 1 && (cyc + 1) % ke == 0;
+    const int *pd_of = w->pd_of;
+    double wb = 0, maxd2 = 0;
+    /* PD every k-th step: the opening half kick of a PD cycle */
+    if (pd_start)
+        for (int k = 0; k < w->npd; k++)
+            for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++) {
+                memcpy(xs + 3 * i, p->x + 3 * i, 3 * sizeof(double));
+                if (p->motion[i] == FLOE_FREE) floe_v3_axpy(p->v + 3 * i, 0.5 * K * p->inv_mass[i], fpd + 3 * i);
+            }
+    /* 1. half kick with F_C; drift of everything except the PD points that sub-cycle */
+    for (int i = 0; i < n; i++) {
+        double *x = p->x + 3 * i, *v = p->v + 3 * i;
+        const int sub = ke == 1 && pd_of[i] >= 0;
+        if (sub) memcpy(xs + 3 * i, x, 3 * sizeof(double)); /* fixed points too: step 3 reads it */
+        if (p->motion[i] == FLOE_FIXED) continue;
+        if (p->motion[i] == FLOE_KINEMATIC) {
+            memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
+            memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
+            kinematic_velocity(w, i, w->time + h);
+            if (!sub) floe_v3_axpy(x, dt, v);
+            double qn[4];
+            q_advance(qn, p->q + 4 * i, p->w + 3 * i, dt);
+            memcpy(p->q + 4 * i, qn, sizeof qn);
+            continue;
+        }
+        floe_v3_axpy(v, h * p->inv_mass[i], fs + 3 * i);
+        floe_v3_axpy(p->L + 3 * i, h, ts + 3 * i);
+        rotate_drift(p, i, dt);
+        if (!sub) {
+            floe_v3_axpy(x, dt, v);
+            wb += dt * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
+        }
+    }
+    /* 2. dt_PD = dt / m: m velocity Verlet sub-steps of the PD points with F_PD */
+    if (ke == 1) {
+        const double d = dt / m, hd = 0.5 * d;
+        for (int s = 0; s < m; s++) {
+            for (int k = 0; k < w->npd; k++)
+                for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++) {
+                    double *v = p->v + 3 * i;
+                    if (p->motion[i] == FLOE_FIXED) continue;
+                    if (p->motion[i] == FLOE_FREE) floe_v3_axpy(v, hd * p->inv_mass[i], fpd + 3 * i);
+                    floe_v3_axpy(p->x + 3 * i, d, v);
+                    if (p->motion[i] == FLOE_FREE) wb += d * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
+                }
+            FLOE_TRY(stag_pd_forces(w, d, xs, vt, fpd, 0));
+            if (s == m - 1) break; /* the last sub-step closes with the final kick below */
+            for (int k = 0; k < w->npd; k++)
+                for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++)
+                    if (p->motion[i] == FLOE_FREE) floe_v3_axpy(p->v + 3 * i, hd * p->inv_mass[i], fpd + 3 * i);
+        }
+    }
+    FLOE_TRY(advance_states(w, dt));
+    advance_clock(w);
+    w->pd_cycle++;
+    const double *xb = w->nl.x_build;
+    const int have_xb = xb && w->nl.n_build == n;
+    if (have_xb)
+        for (int i = 0; i < n; i++)
+            if (p->motion[i] != FLOE_FIXED) note_disp(p->x + 3 * i, xb + 3 * i, &maxd2);
+    FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
+    /* 3. F_C at the new positions; sub-cycled PD points move at their mean velocity over
+     * the step for the contact laws (the tangential spring grows by the displacement) and
+     * the ledger */
+    if (ke == 1)
+        for (int k = 0; k < w->npd; k++)
+            for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++) {
+                memcpy(vt + 3 * i, p->v + 3 * i, 3 * sizeof(double));
+                for (int a = 0; a < 3; a++) p->v[3 * i + a] = (p->x[3 * i + a] - xs[3 * i + a]) / dt;
+            }
+    floe_step_ctx c = ctx_step(w, contacts_wanted(w));
+    int rc = floe_world_forces(w, &c, FLOE_GROUP_DEM);
+    if (ke == 1)
+        for (int k = 0; k < w->npd; k++)
+            memcpy(p->v + 3 * (size_t)w->pd_first[k], vt + 3 * (size_t)w->pd_first[k], 3 * (size_t)w->pd[k]->n * sizeof *vt);
+    if (rc) return rc;
+    memcpy(fs, p->f, n3 * sizeof *fs);
+    memcpy(ts, p->t, n3 * sizeof *ts);
+    /* PD every k-th step: the closing evaluation and half kick of the cycle */
+    if (pd_end) {
+        FLOE_TRY(stag_pd_forces(w, K, xs, vt, fpd, 1));
+        for (int k = 0; k < w->npd; k++)
+            for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++)
+                if (p->motion[i] == FLOE_FREE) floe_v3_axpy(p->v + 3 * i, 0.5 * K * p->inv_mass[i], fpd + 3 * i);
+    }
+    /* 4. closing half kick with F_C; p->f = F_C + F_PD for the observers */
+    for (size_t a = 0; a < n3; a++) p->f[a] = fs[a] + fpd[a];
+    double kt = 0, kr = 0, wbound = 0, sh = 0;
+    const int shadow = w->def.energy_check != FLOE_CHECK_OFF;
+    for (int i = 0; i < n; i++) {
+        if (p->motion[i] != FLOE_FREE) {
+            if (p->motion[i] == FLOE_KINEMATIC) wbound += kinematic_close(w, i, h);
+            continue;
+        }
+        double *v = p->v + 3 * i, *L = p->L + 3 * i, im = p->inv_mass[i];
+        if (shadow) { /* the closing kicks: the last PD sub-step's and F_C's */
+            double dv[3], dL[3];
+            for (int k = 0; k < 3; k++) {
+                dv[k] = h * im * fs[3 * i + k] + (ke == 1 && pd_of[i] >= 0 ? 0.5 * dt / m * im * fpd[3 * i + k] : 0);
+                dL[k] = h * ts[3 * i + k];
+            }
+            sh += shadow_term(p, i, dv, dL);
+        }
+        double xold[3], d2;
+        if (ke == 1 && pd_of[i] >= 0) memcpy(xold, xs + 3 * i, sizeof xold);
+        else for (int k = 0; k < 3; k++) xold[k] = p->x[3 * i + k] - dt * v[k];
+        d2 = (p->x[3 * i] - xold[0]) * (p->x[3 * i] - xold[0]) + (p->x[3 * i + 1] - xold[1]) * (p->x[3 * i + 1] - xold[1]) +
+             (p->x[3 * i + 2] - xold[2]) * (p->x[3 * i + 2] - xold[2]);
+        if (ke == 1 && pd_of[i] >= 0) floe_v3_axpy(v, 0.5 * dt / m * im, fpd + 3 * i); /* last PD sub-step */
+        floe_v3_axpy(v, h * im, fs + 3 * i);
+        floe_v3_axpy(L, h, ts + 3 * i);
+        omega_update(p, i);
+        double kin = 0.5 * p->mass[i] * floe_v3_dot(v, v), kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
+        kt += kin;
+        kr += kre;
+        double lim = 0.5 * p->radius[i];
+        if (!(d2 <= lim * lim) || !(kin + kre < INFINITY)) {
+            int rc2 = check_particle(w, i, xold);
+            if (rc2) return rc2;
+        }
+    }
+    w->wd_shadow = sh;
+    w->energy.kinetic_trans = kt;
+    w->energy.kinetic_rot = kr;
+    w->energy.work_body += wb;
+    w->energy.work_boundary += wbound;
+    return FLOE_OK;
+}
+
+/* ---- adaptive steps (003 §4.3) ----
+ * A trial step is taken from a saved state; it is accepted when
+ *   eta_v = max_i |v_i(t+dt) - v_i(t)| dt / R_i <= adapt_velocity_tol  and
+ *   eta_d = max_contacts |v_n| dt / min(R_i, R_j) <= adapt_depth_tol
+ * (the velocity change and the overlap change over the step relative to the particle
+ * size), else the state is restored and the step redone with a smaller dt (also when the
+ * trial went unstable); the next step grows by the same criterion, at most 2x, within
+ * [dt_min, dt_max]. A trial that rebuilt the neighbour list (the contact history changes
+ * its layout) cannot be undone and is accepted: the list is rebuilt before a trial whose
+ * drift could pass the skin. */
+
+typedef struct floe_snapshot {
+    double *d; size_t dcap;
+    unsigned char *c; size_t ccap;
+    floe_energy energy;
+    double elastic_contact, elastic_pd, time, t0;
+    double wd_shadow, wd_shadow0;
+    long step, step0;
+} floe_snapshot;
+
+void snapshot_free(floe_snapshot *s) {
+    if (!s) return;
+    free(s->d);
+    free(s->c);
+    free(s);
+}
+
+/* sizes of what a step changes: particle state (22 n), pair history, ledger memories,
+ * PD forces and broken flags, state objects */
+static void snapshot_sizes(const floe_world *w, size_t *nd, size_t *nc) {
+    size_t d = 22 * (size_t)w->p.n;
+    for (int s = 0; s < w->nstates; s++) d += w->states[s]->klass->size(w->states[s]);
+    *nd = d;
+    *nc = providers_state_size(w); /* contact history, bonds, the callbacks' last forces */
+}
+
+#define SNAP_COPY(save, a, b, nbytes) \
+    do { if ((nbytes) > 0) { if (save) memcpy((a), (b), (nbytes)); else memcpy((b), (a), (nbytes)); } } while (0)
+
+static int snapshot_io(floe_world *w, int save) {
+    floe_snapshot *s = w->snap;
+    floe_particles *p = &w->p;
+    if (save) {
+        size_t nd, nc;
+        snapshot_sizes(w, &nd, &nc);
+        if (nd > s->dcap) {
+            double *d = realloc(s->d, nd * sizeof *d);
+            if (!d) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+            s->d = d;
+            s->dcap = nd;
+        }
+        if (nc > s->ccap) {
+            unsigned char *c = realloc(s->c, nc ? nc : 1);
+            if (!c) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+            s->c = c;
+            s->ccap = nc;
+        }
+        s->energy = w->energy;
+        s->elastic_contact = w->elastic_contact;
+        s->elastic_pd = w->elastic_pd;
+        s->wd_shadow = w->wd_shadow;
+        s->wd_shadow0 = w->wd_shadow0;
+        s->time = w->time;
+        s->t0 = w->t0;
+        s->step = w->step;
+        s->step0 = w->step0;
+    }
+    double *d = s->d;
+    unsigned char *c = s->c;
+    const size_t n = (size_t)p->n;
+    /* state objects first: set() may rescale a particle's mass, inertia and momentum,
+     * which are restored after */
+    for (int k = 0; k < w->nstates; k++) {
+        floe_state *st = w->states[k];
+        size_t m = st->klass->size(st);
+        if (save) st->klass->get(st, d);
+        else {
+            int rc = st->klass->set(st, w, d);
+            if (rc) return floe_world_error(w, rc, "state object %s could not be restored", st->klass->name);
+        }
+        d += m;
+    }
+    SNAP_COPY(save, d, p->x, 3 * n * sizeof *d); d += 3 * n;
+    SNAP_COPY(save, d, p->v, 3 * n * sizeof *d); d += 3 * n;
+    SNAP_COPY(save, d, p->q, 4 * n * sizeof *d); d += 4 * n;
+    SNAP_COPY(save, d, p->L, 3 * n * sizeof *d); d += 3 * n;
+    SNAP_COPY(save, d, p->w, 3 * n * sizeof *d); d += 3 * n;
+    SNAP_COPY(save, d, p->f, 3 * n * sizeof *d); d += 3 * n;
+    SNAP_COPY(save, d, p->t, 3 * n * sizeof *d); d += 3 * n;
+    /* the providers' own state (floe_provider.h): what a step of each changes */
+    providers_state_io(w, c, save);
+    if (!save) {
+        w->energy = s->energy;
+        w->elastic_contact = s->elastic_contact;
+        w->elastic_pd = s->elastic_pd;
+        w->wd_shadow = s->wd_shadow;
+        w->wd_shadow0 = s->wd_shadow0;
+        w->time = s->time;
+        w->t0 = s->t0;
+        w->step = s->step;
+        w->step0 = s->step0;
+    }
+    return FLOE_OK;
+}
+
+int step_once(floe_world *w) {
+    if (w->def.pd_dem == FLOE_PD_DEM_STAGGERED && w->npd) return step_staggered(w);
+    if (w->def.integrator == FLOE_RK2) return step_rk2(w);
+    return step_verlet(w);
+}
+
+/* the largest displacement from the neighbour build that the next drift of dt can reach
+ * (velocity Verlet and RK2 both move by dt (v + dt/2 F/m)) */
+static double predicted_disp2(const floe_world *w, double dt) {
+    const floe_particles *p = &w->p;
+    const double *xb = w->nl.x_build;
+    if (!xb || w->nl.n_build != p->n) return INFINITY;
+    double m2 = 0;
+    for (int i = 0; i < p->n; i++) {
+        if (p->motion[i] == FLOE_FIXED) continue;
+        double y[3];
+        for (int k = 0; k < 3; k++)
+            y[k] = p->x[3 * i + k] + dt * (p->v[3 * i + k] + 0.5 * dt * p->inv_mass[i] * p->f[3 * i + k]);
+        note_disp(y, xb + 3 * i, &m2);
+    }
+    return m2;
+}
+
+int step_adaptive(floe_world *w) {
+    floe_particles *p = &w->p;
+    const double tv = w->def.adapt_velocity_tol, td = w->def.adapt_depth_tol;
+    if (!w->snap) {
+        w->snap = calloc(1, sizeof *w->snap);
+        if (!w->snap) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
+    for (;;) {
+        double dt = fmin(w->dt_next, w->dt_cap);
+        if (dt != w->dt) { /* the clock restarts from here at the new step */
+            w->t0 = w->time;
+            w->step0 = w->step;
+            /* the watchdog's conserved form at the new step (the half kick grows as dt):
+             * the same state, so its balance goes on continuously */
+            double r2 = (dt / w->dt) * (dt / w->dt);
+            w->wd_shadow0 += w->wd_shadow * (r2 - 1);
+            w->wd_shadow *= r2;
+            w->dt = dt;
+        }
+        double lim = 0.5 * w->nl.skin;
+        if (predicted_disp2(w, dt) > lim * lim) {
+            int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
+            if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
+        }
+        FLOE_TRY(snapshot_io(w, 1));
+        const long rb = w->nl.rebuilds;
+        w->track_depth = 1;
+        int rc = step_once(w);
+        w->track_depth = 0;
+        const int undoable = w->nl.rebuilds == rb;
+        double eta_v = 0, eta_d = w->eta_depth;
+        if (!rc) {
+            const double *v0 = w->snap->d + 3 * (size_t)p->n; /* after x (states first) */
+            size_t so = 0;
+            for (int s = 0; s < w->nstates; s++) so += w->states[s]->klass->size(w->states[s]);
+            v0 += so;
+            for (int i = 0; i < p->n; i++) {
+                if (p->motion[i] != FLOE_FREE || !isfinite(p->radius[i])) continue;
+                double dv[3];
+                floe_v3_sub(dv, p->v + 3 * i, v0 + 3 * i);
+                double e = floe_v3_norm(dv) * dt / p->radius[i];
+                if (e > eta_v) eta_v = e;
+            }
+        }
+        /* step factor from the criterion: eta_v grows as dt^2 (a dt^2), eta_d as dt */
+        double fv = eta_v > 0 ? sqrt(tv / eta_v) : INFINITY, fd = eta_d > 0 ? td / eta_d : INFINITY;
+        double f = 0.9 * fmin(fv, fd);
+        const int at_min = dt <= w->dt_lo * (1 + 1e-9);
+        if ((rc == FLOE_EUNSTABLE || (rc == FLOE_OK && (eta_v > tv || eta_d > td))) && undoable && !at_min) {
+            FLOE_TRY(snapshot_io(w, 0));
+            w->st.rejected++;
+            f = rc ? 0.25 : fmax(0.1, fmin(0.9, f));
+            w->dt_next = fmax(w->dt_lo, dt * f);
+            w->err[0] = 0;
+            continue;
+        }
+        if (rc) return rc;
+        f = fmax(0.1, fmin(2.0, f));
+        if (!(dt < w->dt_next) || f < 1) w->dt_next = fmin(w->dt_hi, fmax(w->dt_lo, dt * f));
+        return FLOE_OK;
+    }
+}
