@@ -3,89 +3,9 @@
  * local frames and factored by SuiteSparse CHOLMOD (implicit), block-diagonal node solves
  * (explicit), incremental internal forces (eqs 19-20), stresses and breakage (eqs 10-11),
  * step cuts by the line search of eqs 29-30. floe_newmark.h has the equations. */
-#include "floe_newmark.h"
-#include "world_internal.h"
+#include "newmark_internal.h"
 
-#include <stdarg.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <time.h>
-
-#ifdef FLOE_HAVE_CHOLMOD
-#include <cholmod.h>
-#endif
-
-#define NM_SLOTS 4      /* factors kept for different steps (implicit) */
-#define NM_LEVELS 20    /* shortest step of the step control: dt 2^(-20/2) ~ 1e-3 dt */
-
-typedef struct nm_bond {
-    int i, j;
-    floe_beam_section s;
-    double R[9];             /* rows: the local axes (e, y', z') in global components */
-    double fl[12];           /* local internal forces at the ends (eq 10), incremental (eq 20) */
-    double dfl[12];          /* the trial step's increment */
-    double c[6];             /* eq 8 dampers on the local components of each end (3 + 3) */
-    double k[6];             /* EA/l, 12EI/(l^3(1+phi)), 6EI/(l^2(1+phi)), (4+phi)EI/(l(1+phi)),
-                                (2-phi)EI/(l(1+phi)), GJ/l: the entries of eq 7 */
-    double inv_a, inv_w;     /* 1/A, 1/W for eq 11 */
-    double sig_lim, tau_lim;
-    double sigma, tau;       /* stresses at the last accepted step */
-    double sig_tr, tau_tr;   /* at the trial step */
-    double t_broken;
-    int broken;
-} nm_bond;
-
-struct floe_newmark {
-    floe_newmark_def def;
-    char err[512];
-    int dim, nd;
-    int n, cap;
-    double *x, *mass, *inertia;
-    unsigned *fix;
-    double *F;               /* nd n load pattern */
-    double *u, *v, *a, *fint; /* nd n state */
-    double *du, *vnew, *anew, *kd, *an, *bn, *rhs, *cv0, *cv1; /* nd n scratch */
-    nm_bond *b;
-    int nb, bcap;
-    floe_newmark_load_fn lf;
-    void *lf_user;
-    int prepared;
-    double t;
-    int *eq;                 /* nd n: equation of each component, -1 if supported */
-    int neq;
-    double *cblk;            /* n nd^2: C block of each node (eq 8 + alpha M) */
-    double *ablk;            /* explicit: n nd^2: inverse of the free part of M + gamma dt C */
-    double ablk_dt;
-    long ablk_epoch;
-    long epoch;              /* bumped when bonds break: older factors are stale */
-    int level;               /* implicit step control: the step is dt 2^(-level/2) */
-    floe_newmark_stats st;
-    double energy_scale;     /* for the instability check */
-#ifdef FLOE_HAVE_CHOLMOD
-    cholmod_common cc;
-    int cc_started;
-    cholmod_sparse *A;
-    cholmod_factor *L[NM_SLOTS]; /* factors for the steps in use (the full step and the
-                                    shorter ones of the step control), least recently used
-                                    replaced */
-    double Ldt[NM_SLOTS];
-    long Lepoch[NM_SLOTS], Lused[NM_SLOTS], use_clock;
-    int *bpos;               /* nb (2 nd)^2: positions in A->x of each bond's entries (-1: none) */
-    int *npos;               /* n nd^2: positions of each node's diagonal block */
-    int *pinv;               /* inverse of the fill-reducing permutation (the same in every
-                                slot: one pattern, one analysis), for downdates */
-    long since_refactor[NM_SLOTS]; /* downdates of L[k] since its factorization */
-    cholmod_dense *B, *X, *Y, *E;
-#endif
-};
-
-static int nm_error(floe_newmark *s, int code, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 3, 4)))
-#endif
-    ;
-static int nm_error(floe_newmark *s, int code, const char *fmt, ...) {
+int nm_error(floe_newmark *s, int code, const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(s->err, sizeof s->err, fmt, ap);
@@ -93,7 +13,7 @@ static int nm_error(floe_newmark *s, int code, const char *fmt, ...) {
     return code;
 }
 
-static double now_s(void) {
+double now_s(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
@@ -327,7 +247,7 @@ int floe_newmark_set_initial(floe_newmark *s, int i, const double u[3], const do
 /* ---- bond kernels ---- */
 
 /* local end components of the global vector g (2 nd) */
-static void to_local(const floe_newmark *s, const nm_bond *b, const double *g, double *ul) {
+void to_local(const floe_newmark *s, const nm_bond *b, const double *g, double *ul) {
     const int nd = s->nd;
     const double *R = b->R;
     const int ends[2] = {b->i, b->j};
@@ -348,7 +268,7 @@ static void to_local(const floe_newmark *s, const nm_bond *b, const double *g, d
 }
 
 /* g += T fl (local end forces back to global components), scaled by sc */
-static void add_global(const floe_newmark *s, const nm_bond *b, const double *fl, double sc, double *g) {
+void add_global(const floe_newmark *s, const nm_bond *b, const double *fl, double sc, double *g) {
     const int nd = s->nd;
     const double *R = b->R;
     const int ends[2] = {b->i, b->j};
@@ -474,7 +394,7 @@ static void bond_dampers(floe_newmark *s, nm_bond *b) {
 
 /* the dampers of bond b at either end in the node's nd dofs, T^T diag(c) T (nd x nd,
  * row-major; 2D: the x, y dampers in the bond's axes and the rotational one) */
-static void bond_damper_block(int nd, const nm_bond *b, double *D) {
+void bond_damper_block(int nd, const nm_bond *b, double *D) {
     const double *R = b->R;
     memset(D, 0, (size_t)(nd * nd) * sizeof *D);
     if (nd == 3) {
@@ -537,14 +457,14 @@ static void c_apply(const floe_newmark *s, const double *g, double *out) {
     }
 }
 
-static double node_m(const floe_newmark *s, int i, int k) {
+double node_m(const floe_newmark *s, int i, int k) {
     int rot = s->nd == 3 ? k == 2 : k >= 3;
     return rot ? s->inertia[i] : s->mass[i];
 }
 
 /* explicit: inverse of the free part of M + gamma dt C for every node (Gauss-Jordan on at
  * most 6 x 6, symmetric positive definite) */
-static int build_ablk(floe_newmark *s, double dt) {
+int build_ablk(floe_newmark *s, double dt) {
     const int nd = s->nd, nn = nd * nd;
     for (int i = 0; i < s->n; i++) {
         double A[36], Inv[36];
@@ -575,315 +495,6 @@ static int build_ablk(floe_newmark *s, double dt) {
     }
     s->ablk_dt = dt;
     s->ablk_epoch = s->epoch;
-    return FLOE_OK;
-}
-
-/* ---- sparse matrix (implicit) ---- */
-
-#ifdef FLOE_HAVE_CHOLMOD
-typedef struct { int r, c; } rc_pair;
-static int cmp_rc(const void *a, const void *b) {
-    const rc_pair *x = a, *y = b;
-    if (x->c != y->c) return (x->c > y->c) - (x->c < y->c);
-    return (x->r > y->r) - (x->r < y->r);
-}
-
-static int find_pos(const cholmod_sparse *A, int r, int c) {
-    const int *Ap = A->p, *Ai = A->i;
-    int lo = Ap[c], hi = Ap[c + 1];
-    while (lo < hi) {
-        int mid = lo + (hi - lo) / 2;
-        if (Ai[mid] < r) lo = mid + 1;
-        else hi = mid;
-    }
-    return lo < Ap[c + 1] && Ai[lo] == r ? lo : -1;
-}
-
-/* equation numbers of the 2 nd components of bond b's ends */
-static void bond_eqs(const floe_newmark *s, const nm_bond *b, int *e) {
-    for (int k = 0; k < s->nd; k++) {
-        e[k] = s->eq[s->nd * b->i + k];
-        e[s->nd + k] = s->eq[s->nd * b->j + k];
-    }
-}
-
-/* the pattern: every node's diagonal block and every bond's block, upper triangle */
-static int build_pattern(floe_newmark *s) {
-    const int nd = s->nd, n2 = 2 * nd;
-    size_t cap = (size_t)s->n * nd * nd + (size_t)s->nb * n2 * n2 + 1;
-    rc_pair *pr = malloc(cap * sizeof *pr);
-    if (!pr) return nm_error(s, FLOE_ENOMEM, "out of memory");
-    size_t m = 0;
-    for (int i = 0; i < s->n; i++)
-        for (int p = 0; p < nd; p++)
-            for (int q = 0; q < nd; q++) {
-                int r = s->eq[nd * i + p], c = s->eq[nd * i + q];
-                if (r >= 0 && c >= 0 && r <= c) pr[m++] = (rc_pair){r, c};
-            }
-    int e[12];
-    for (int k = 0; k < s->nb; k++) {
-        bond_eqs(s, &s->b[k], e);
-        for (int p = 0; p < n2; p++)
-            for (int q = 0; q < n2; q++)
-                if (e[p] >= 0 && e[q] >= 0 && e[p] <= e[q]) pr[m++] = (rc_pair){e[p], e[q]};
-    }
-    qsort(pr, m, sizeof *pr, cmp_rc);
-    size_t u = 0;
-    for (size_t k = 0; k < m; k++)
-        if (u == 0 || pr[k].r != pr[u - 1].r || pr[k].c != pr[u - 1].c) pr[u++] = pr[k];
-    s->A = cholmod_allocate_sparse((size_t)s->neq, (size_t)s->neq, u, 1, 1, 1, CHOLMOD_REAL, &s->cc);
-    if (!s->A) { free(pr); return nm_error(s, FLOE_ENOMEM, "CHOLMOD: out of memory for the matrix"); }
-    int *Ap = s->A->p, *Ai = s->A->i;
-    memset(Ap, 0, ((size_t)s->neq + 1) * sizeof *Ap);
-    for (size_t k = 0; k < u; k++) { Ap[pr[k].c + 1]++; Ai[k] = pr[k].r; }
-    for (int c = 0; c < s->neq; c++) Ap[c + 1] += Ap[c];
-    free(pr);
-    s->bpos = malloc(((size_t)s->nb * n2 * n2 + 1) * sizeof *s->bpos);
-    s->npos = malloc(((size_t)s->n * nd * nd + 1) * sizeof *s->npos);
-    if (!s->bpos || !s->npos) return nm_error(s, FLOE_ENOMEM, "out of memory");
-    for (int i = 0; i < s->n; i++)
-        for (int p = 0; p < nd; p++)
-            for (int q = 0; q < nd; q++) {
-                int r = s->eq[nd * i + p], c = s->eq[nd * i + q];
-                s->npos[(size_t)i * nd * nd + p * nd + q] = r >= 0 && c >= 0 && r <= c ? find_pos(s->A, r, c) : -1;
-            }
-    for (int k = 0; k < s->nb; k++) {
-        bond_eqs(s, &s->b[k], e);
-        for (int p = 0; p < n2; p++)
-            for (int q = 0; q < n2; q++)
-                s->bpos[(size_t)k * n2 * n2 + p * n2 + q] =
-                    e[p] >= 0 && e[q] >= 0 && e[p] <= e[q] ? find_pos(s->A, e[p], e[q]) : -1;
-    }
-    return FLOE_OK;
-}
-
-/* global stiffness of bond b: T^T K T (2 nd x 2 nd, row-major) */
-static void bond_global_k(const floe_newmark *s, const nm_bond *b, double *Kg) {
-    const int n2 = 2 * s->nd;
-    double K[144], col[12], fl[12];
-    floe_beam_local_stiffness(&b->s, s->dim, K);
-    /* column q of T^T K T = T^T K (T e_q): a unit global component through the kernels */
-    nm_bond tmp = *b;
-    double g[12];
-    for (int q = 0; q < n2; q++) {
-        memset(g, 0, sizeof g);
-        g[q] = 1;
-        /* to_local/add_global index nodes: use a two-node scratch layout (ends 0 and 1) */
-        tmp.i = 0;
-        tmp.j = 1;
-        to_local(s, &tmp, g, col);
-        for (int r = 0; r < n2; r++) {
-            double acc = 0;
-            for (int c = 0; c < n2; c++) acc += K[r * n2 + c] * col[c];
-            fl[r] = acc;
-        }
-        double out[12] = {0};
-        add_global(s, &tmp, fl, 1.0, out);
-        for (int r = 0; r < n2; r++) Kg[r * n2 + q] = out[r];
-    }
-}
-
-/* numeric values of K beta dt^2 + C gamma dt + M and the factor in slot k */
-static int factor(floe_newmark *s, int slot, double dt) {
-    double t0 = now_s();
-    const int nd = s->nd, nn = nd * nd, n2 = 2 * nd;
-    double *Ax = s->A->x;
-    memset(Ax, 0, s->A->nzmax * sizeof *Ax);
-    const double kb = s->def.beta * dt * dt, cg = s->def.gamma * dt;
-    for (int i = 0; i < s->n; i++) {
-        const int *pos = s->npos + (size_t)nn * i;
-        const double *C = s->cblk + (size_t)nn * i;
-        for (int p = 0; p < nd; p++)
-            for (int q = 0; q < nd; q++) {
-                int at = pos[p * nd + q];
-                if (at < 0) continue;
-                Ax[at] += cg * C[p * nd + q] + (p == q ? node_m(s, i, p) : 0.0);
-            }
-    }
-    double Kg[144];
-    for (int k = 0; k < s->nb; k++) {
-        const nm_bond *b = &s->b[k];
-        if (b->broken) continue;
-        bond_global_k(s, b, Kg);
-        const int *pos = s->bpos + (size_t)k * n2 * n2;
-        for (int p = 0; p < n2; p++)
-            for (int q = 0; q < n2; q++)
-                if (pos[p * n2 + q] >= 0) Ax[pos[p * n2 + q]] += kb * Kg[p * n2 + q];
-    }
-    if (!s->L[slot]) {
-        s->L[slot] = cholmod_analyze(s->A, &s->cc);
-        if (!s->L[slot]) return nm_error(s, FLOE_ENOMEM, "CHOLMOD analyze failed (status %d)", s->cc.status);
-    }
-    if (!cholmod_factorize(s->A, s->L[slot], &s->cc) || s->cc.status != CHOLMOD_OK)
-        return nm_error(s, s->cc.status == CHOLMOD_NOT_POSDEF ? FLOE_EUNSTABLE : FLOE_ENOMEM,
-                        "CHOLMOD factorize failed (status %d%s)", s->cc.status,
-                        s->cc.status == CHOLMOD_NOT_POSDEF ? ": the matrix is not positive definite" : "");
-    s->Ldt[slot] = dt;
-    s->Lepoch[slot] = s->epoch;
-    s->since_refactor[slot] = 0;
-    s->st.factorizations++;
-    s->st.seconds_factor += now_s() - t0;
-    return FLOE_OK;
-}
-
-/* x = A(dt)^-1 rhs over the free components (refactoring when needed) */
-static int solve_implicit(floe_newmark *s, double dt, const double *rhs, double *x) {
-    /* the slot factored for this step at the present bonds, else the least recently used */
-    int slot = -1;
-    for (int k = 0; k < NM_SLOTS && slot < 0; k++)
-        if (s->L[k] && s->Ldt[k] == dt && s->Lepoch[k] == s->epoch) slot = k;
-    if (slot < 0) {
-        slot = 0;
-        for (int k = 1; k < NM_SLOTS; k++)
-            if (!s->L[k] || (s->L[slot] && s->Lused[k] < s->Lused[slot])) slot = k;
-        FLOE_TRY(factor(s, slot, dt));
-    }
-    s->Lused[slot] = ++s->use_clock;
-    double t0 = now_s();
-    double *Bx = s->B->x;
-    const int N = s->nd * s->n;
-    for (int k = 0; k < N; k++)
-        if (s->eq[k] >= 0) Bx[s->eq[k]] = rhs[k];
-    if (!cholmod_solve2(CHOLMOD_A, s->L[slot], s->B, NULL, &s->X, NULL, &s->Y, &s->E, &s->cc))
-        return nm_error(s, FLOE_ENOMEM, "CHOLMOD solve failed (status %d)", s->cc.status);
-    const double *Xx = s->X->x;
-    for (int k = 0; k < N; k++) x[k] = s->eq[k] >= 0 ? Xx[s->eq[k]] : 0.0;
-    s->st.seconds_solve += now_s() - t0;
-    return FLOE_OK;
-}
-
-/* eigen-decomposition of a symmetric m x m matrix (m <= 12) by cyclic Jacobi: A is
- * destroyed, its diagonal ends as the eigenvalues, V (row-major) holds the eigenvectors as
- * columns */
-static void jacobi_eigen(double *A, int m, double *V) {
-    for (int p = 0; p < m; p++)
-        for (int q = 0; q < m; q++) V[p * m + q] = p == q;
-    for (int sweep = 0; sweep < 60; sweep++) {
-        double off = 0, dia = 0;
-        for (int p = 0; p < m; p++) {
-            dia += A[p * m + p] * A[p * m + p];
-            for (int q = p + 1; q < m; q++) off += A[p * m + q] * A[p * m + q];
-        }
-        if (off <= 1e-30 * dia) break;
-        for (int p = 0; p < m; p++)
-            for (int q = p + 1; q < m; q++) {
-                double apq = A[p * m + q];
-                if (apq == 0) continue;
-                double th = 0.5 * (A[q * m + q] - A[p * m + p]) / apq;
-                double t = (th >= 0 ? 1.0 : -1.0) / (fabs(th) + sqrt(th * th + 1.0));
-                double c = 1.0 / sqrt(t * t + 1.0), sn = t * c;
-                for (int k = 0; k < m; k++) { /* columns p, q */
-                    double akp = A[k * m + p], akq = A[k * m + q];
-                    A[k * m + p] = c * akp - sn * akq;
-                    A[k * m + q] = sn * akp + c * akq;
-                }
-                for (int k = 0; k < m; k++) { /* rows p, q */
-                    double apk = A[p * m + k], aqk = A[q * m + k];
-                    A[p * m + k] = c * apk - sn * aqk;
-                    A[q * m + k] = sn * apk + c * aqk;
-                }
-                for (int k = 0; k < m; k++) {
-                    double vkp = V[k * m + p], vkq = V[k * m + q];
-                    V[k * m + p] = c * vkp - sn * vkq;
-                    V[k * m + q] = sn * vkp + c * vkq;
-                }
-            }
-    }
-}
-
-/* the bond's term of K beta dt^2 + C gamma dt (2 nd x 2 nd): stiffness and its eq 8 dampers */
-static void bond_term(const floe_newmark *s, const nm_bond *b, double dt, double *Bm) {
-    const int nd = s->nd, n2 = 2 * nd;
-    bond_global_k(s, b, Bm);
-    for (int k = 0; k < n2 * n2; k++) Bm[k] *= s->def.beta * dt * dt;
-    const double cg = s->def.gamma * dt;
-    double D[36];
-    bond_damper_block(nd, b, D);
-    for (int e = 0; e < 2; e++) {
-        int o = nd * e;
-        for (int p = 0; p < nd; p++)
-            for (int q = 0; q < nd; q++) Bm[(o + p) * n2 + o + q] += cg * D[p * nd + q];
-    }
-}
-
-typedef struct { int row; double x; } nz_entry;
-static int cmp_nz(const void *a, const void *b) {
-    const nz_entry *x = a, *y = b;
-    return (x->row > y->row) - (x->row < y->row);
-}
-
-/* remove the bonds broken[0 .. nbr) from the factor in slot by one multiple-rank
- * downdate: each bond's PSD term split as sum_k (sqrt(lambda_k) v_k)(sqrt(lambda_k) v_k)^T */
-static int downdate_bonds(floe_newmark *s, int slot, const int *broken, int nbr) {
-    double t0 = now_s();
-    const int nd = s->nd, n2 = 2 * nd;
-    if (!s->pinv) { /* both slots share the ordering of the same pattern */
-        s->pinv = malloc(((size_t)s->neq + 1) * sizeof *s->pinv);
-        if (!s->pinv) return nm_error(s, FLOE_ENOMEM, "out of memory");
-        const int *P = s->L[slot]->Perm;
-        for (int k = 0; k < s->neq; k++) s->pinv[P[k]] = k;
-    }
-    cholmod_sparse *C = cholmod_allocate_sparse((size_t)s->neq, (size_t)nbr * n2, (size_t)nbr * n2 * n2, 1, 1, 0,
-                                                CHOLMOD_REAL, &s->cc);
-    if (!C) return nm_error(s, FLOE_ENOMEM, "CHOLMOD: out of memory for a downdate");
-    int *Cp = C->p, *Ci = C->i;
-    double *Cx = C->x;
-    int ncol = 0, nnz = 0;
-    Cp[0] = 0;
-    for (int q = 0; q < nbr; q++) {
-        const nm_bond *b = &s->b[broken[q]];
-        double Bm[144], A[144], V[144];
-        int e[12], fr[12], m = 0;
-        bond_eqs(s, b, e);
-        bond_term(s, b, s->Ldt[slot], Bm);
-        for (int p = 0; p < n2; p++)
-            if (e[p] >= 0) fr[m++] = p;
-        for (int p = 0; p < m; p++)
-            for (int r = 0; r < m; r++) A[p * m + r] = 0.5 * (Bm[fr[p] * n2 + fr[r]] + Bm[fr[r] * n2 + fr[p]]);
-        jacobi_eigen(A, m, V);
-        double lmax = 0;
-        for (int k = 0; k < m; k++) lmax = fmax(lmax, A[k * m + k]);
-        for (int k = 0; k < m; k++) {
-            double lam = A[k * m + k];
-            if (!(lam > 1e-13 * lmax)) continue; /* rigid modes of the bond (zero) */
-            nz_entry col[12];
-            int c = 0;
-            for (int p = 0; p < m; p++) {
-                double x = sqrt(lam) * V[p * m + k];
-                if (x != 0) col[c++] = (nz_entry){s->pinv[e[fr[p]]], x};
-            }
-            qsort(col, (size_t)c, sizeof *col, cmp_nz);
-            for (int p = 0; p < c; p++) { Ci[nnz] = col[p].row; Cx[nnz] = col[p].x; nnz++; }
-            Cp[++ncol] = nnz;
-        }
-    }
-    C->ncol = (size_t)ncol;
-    int ok = ncol == 0 || cholmod_updown(0, C, s->L[slot], &s->cc);
-    cholmod_free_sparse(&C, &s->cc);
-    s->st.seconds_factor += now_s() - t0;
-    if (!ok || s->cc.status != CHOLMOD_OK) return nm_error(s, FLOE_ENOMEM, "CHOLMOD downdate failed (status %d)", s->cc.status);
-    s->st.downdates += nbr;
-    s->since_refactor[slot] += nbr;
-    return FLOE_OK;
-}
-
-#endif
-
-/* x = (M + gamma dt C)^-1 rhs, node by node (explicit) */
-static int solve_explicit(floe_newmark *s, double dt, const double *rhs, double *x) {
-    if (s->ablk_dt != dt || s->ablk_epoch != s->epoch) FLOE_TRY(build_ablk(s, dt));
-    double t0 = now_s();
-    const int nd = s->nd, nn = nd * nd;
-    for (int i = 0; i < s->n; i++) {
-        const double *O = s->ablk + (size_t)nn * i, *r = rhs + (size_t)nd * i;
-        double *o = x + (size_t)nd * i;
-        for (int p = 0; p < nd; p++) {
-            double acc = 0;
-            for (int q = 0; q < nd; q++) acc += O[p * nd + q] * r[q];
-            o[p] = acc;
-        }
-    }
-    s->st.seconds_solve += now_s() - t0;
     return FLOE_OK;
 }
 
@@ -1253,144 +864,4 @@ int floe_newmark_run(floe_newmark *s, double t_end) {
         FLOE_TRY(do_step(s, dt));
     }
     return FLOE_OK;
-}
-
-/* ---- queries, output ---- */
-
-double floe_newmark_time(const floe_newmark *s) { return s->t; }
-int floe_newmark_node_count(const floe_newmark *s) { return s->n; }
-int floe_newmark_bond_count(const floe_newmark *s) { return s->nb; }
-
-int floe_newmark_get(const floe_newmark *s, int i, double u[3], double rot[3], double v[3], double w[3]) {
-    if (i < 0 || i >= s->n) return FLOE_EINVAL;
-    const double *U = s->u + s->nd * i, *V = s->v + s->nd * i;
-    if (s->dim == 2) {
-        if (u) floe_v3_set(u, U[0], U[1], 0);
-        if (rot) floe_v3_set(rot, 0, 0, U[2]);
-        if (v) floe_v3_set(v, V[0], V[1], 0);
-        if (w) floe_v3_set(w, 0, 0, V[2]);
-    } else {
-        if (u) floe_v3_copy(u, U);
-        if (rot) floe_v3_copy(rot, U + 3);
-        if (v) floe_v3_copy(v, V);
-        if (w) floe_v3_copy(w, V + 3);
-    }
-    return FLOE_OK;
-}
-
-int floe_newmark_bond_state(const floe_newmark *s, int k, int *broken, double *t_broken, double *sigma, double *tau) {
-    if (k < 0 || k >= s->nb) return FLOE_EINVAL;
-    const nm_bond *b = &s->b[k];
-    if (broken) *broken = b->broken;
-    if (t_broken) *t_broken = b->t_broken;
-    if (sigma) *sigma = b->sigma;
-    if (tau) *tau = b->tau;
-    return FLOE_OK;
-}
-
-int floe_newmark_get_stats(const floe_newmark *s, floe_newmark_stats *out) {
-    *out = s->st;
-    return FLOE_OK;
-}
-
-int floe_newmark_write_vtu(floe_newmark *s, const char *path) {
-    FILE *f = fopen(path, "w");
-    if (!f) return nm_error(s, FLOE_EIO, "cannot write %s", path);
-    fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-               "<UnstructuredGrid>\n<Piece NumberOfPoints=\"%d\" NumberOfCells=\"%d\">\n<Points>\n"
-               "<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n", s->n, s->nb);
-    for (int i = 0; i < s->n; i++) {
-        double u[3];
-        floe_newmark_get(s, i, u, NULL, NULL, NULL);
-        fprintf(f, "%.9g %.9g %.9g\n", s->x[3 * i] + u[0], s->x[3 * i + 1] + u[1], s->x[3 * i + 2] + u[2]);
-    }
-    fprintf(f, "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n");
-    for (int k = 0; k < s->nb; k++) fprintf(f, "%d %d\n", s->b[k].i, s->b[k].j);
-    fprintf(f, "</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n");
-    for (int k = 0; k < s->nb; k++) fprintf(f, "%d\n", 2 * (k + 1));
-    fprintf(f, "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
-    for (int k = 0; k < s->nb; k++) fprintf(f, "3\n");
-    fprintf(f, "</DataArray>\n</Cells>\n<CellData Scalars=\"broken\">\n"
-               "<DataArray type=\"Int32\" Name=\"broken\" format=\"ascii\">\n");
-    for (int k = 0; k < s->nb; k++) fprintf(f, "%d\n", s->b[k].broken);
-    fprintf(f, "</DataArray>\n<DataArray type=\"Float64\" Name=\"t_broken\" format=\"ascii\">\n");
-    for (int k = 0; k < s->nb; k++) fprintf(f, "%.9g\n", s->b[k].t_broken);
-    fprintf(f, "</DataArray>\n<DataArray type=\"Float64\" Name=\"sigma\" format=\"ascii\">\n");
-    for (int k = 0; k < s->nb; k++) fprintf(f, "%.9g\n", s->b[k].sigma);
-    fprintf(f, "</DataArray>\n</CellData>\n<PointData Vectors=\"displacement\">\n"
-               "<DataArray type=\"Float64\" Name=\"displacement\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-    for (int i = 0; i < s->n; i++) {
-        double u[3];
-        floe_newmark_get(s, i, u, NULL, NULL, NULL);
-        fprintf(f, "%.9g %.9g %.9g\n", u[0], u[1], u[2]);
-    }
-    fprintf(f, "</DataArray>\n</PointData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
-    int bad = ferror(f);
-    if (fclose(f) || bad) return nm_error(s, FLOE_EIO, "error writing %s", path);
-    return FLOE_OK;
-}
-
-int floe_newmark_write_bonds_csv(floe_newmark *s, const char *path) {
-    FILE *f = fopen(path, "w");
-    if (!f) return nm_error(s, FLOE_EIO, "cannot write %s", path);
-    fprintf(f, "i,j,x [m],y [m],z [m],broken,t_broken [s],sigma [Pa],tau [Pa],sigma_lim [Pa]\n");
-    for (int k = 0; k < s->nb; k++) {
-        const nm_bond *b = &s->b[k];
-        const double *xi = s->x + 3 * b->i, *xj = s->x + 3 * b->j;
-        fprintf(f, "%d,%d,%.9g,%.9g,%.9g,%d,%.9g,%.9g,%.9g,%.9g\n", b->i, b->j, 0.5 * (xi[0] + xj[0]),
-                0.5 * (xi[1] + xj[1]), 0.5 * (xi[2] + xj[2]), b->broken, b->t_broken, b->sigma, b->tau, b->sig_lim);
-    }
-    int bad = ferror(f);
-    if (fclose(f) || bad) return nm_error(s, FLOE_EIO, "error writing %s", path);
-    return FLOE_OK;
-}
-
-/* ---- from a world ---- */
-
-floe_newmark *floe_newmark_from_world(floe_world *w, const floe_newmark_def *def0, char *err, size_t errlen) {
-    int rc = floe_world_prepare(w);
-    if (rc) {
-        if (err && errlen) snprintf(err, errlen, "world prepare failed: %s", floe_world_last_error(w));
-        return NULL;
-    }
-    floe_newmark_def def = *def0;
-    def.dim = w->def.dim;
-    floe_newmark *s = floe_newmark_create(&def, err, errlen);
-    if (!s) return NULL;
-    const floe_particles *p = &w->p;
-    for (int i = 0; i < p->n && !rc; i++) {
-        int wall = !isfinite(p->radius[i]) || !isfinite(p->mass[i]);
-        const double *I = p->inertia + 3 * i;
-        double J = wall ? 1.0 : fmin(I[0], fmin(I[1], I[2]));
-        int k = floe_newmark_add_node(s, p->x + 3 * i, wall ? 1.0 : p->mass[i], J);
-        if (k < 0) { rc = -k; break; }
-        if (wall || p->motion[i] != FLOE_FREE) floe_newmark_fix(s, i, FLOE_NM_ALL);
-        else {
-            double f[3];
-            for (int a = 0; a < 3; a++) f[a] = p->mass[i] * w->def.gravity[a];
-            floe_newmark_set_load(s, i, f, NULL);
-            floe_newmark_set_initial(s, i, NULL, NULL, p->v + 3 * i, p->w + 3 * i);
-        }
-    }
-    for (int k = 0; k < floe_world_beam_bond_count(w) && !rc; k++) {
-        floe_beam_bond_info bi;
-        floe_world_beam_bond(w, k, &bi);
-        if (bi.broken) continue;
-        int r = floe_newmark_add_bond(s, bi.i, bi.j, &bi.section, bi.sigma_lim, bi.tau_lim);
-        if (r < 0) rc = -r;
-    }
-    if (rc) {
-        if (err && errlen) snprintf(err, errlen, "%s", s->err);
-        floe_newmark_destroy(s);
-        return NULL;
-    }
-    return s;
-}
-
-int floe_newmark_implicit_available(void) {
-#ifdef FLOE_HAVE_CHOLMOD
-    return 1;
-#else
-    return 0;
-#endif
 }

@@ -1,0 +1,112 @@
+/* newmark_internal.h - the Newmark-beta solver's data and the helpers its files share
+ * (core/integrators: newmark.c, newmark_solve.c, newmark_io.c). Internal: not installed. */
+#ifndef FLOE_NEWMARK_INTERNAL_H
+#define FLOE_NEWMARK_INTERNAL_H
+#include "floe_newmark.h"
+#include "world_internal.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#ifdef FLOE_HAVE_CHOLMOD
+#include <cholmod.h>
+#endif
+
+#define NM_SLOTS 4      /* factors kept for different steps (implicit) */
+#define NM_LEVELS 20    /* shortest step of the step control: dt 2^(-20/2) ~ 1e-3 dt */
+
+typedef struct nm_bond {
+    int i, j;
+    floe_beam_section s;
+    double R[9];             /* rows: the local axes (e, y', z') in global components */
+    double fl[12];           /* local internal forces at the ends (eq 10), incremental (eq 20) */
+    double dfl[12];          /* the trial step's increment */
+    double c[6];             /* eq 8 dampers on the local components of each end (3 + 3) */
+    double k[6];             /* EA/l, 12EI/(l^3(1+phi)), 6EI/(l^2(1+phi)), (4+phi)EI/(l(1+phi)),
+                                (2-phi)EI/(l(1+phi)), GJ/l: the entries of eq 7 */
+    double inv_a, inv_w;     /* 1/A, 1/W for eq 11 */
+    double sig_lim, tau_lim;
+    double sigma, tau;       /* stresses at the last accepted step */
+    double sig_tr, tau_tr;   /* at the trial step */
+    double t_broken;
+    int broken;
+} nm_bond;
+
+struct floe_newmark {
+    floe_newmark_def def;
+    char err[512];
+    int dim, nd;
+    int n, cap;
+    double *x, *mass, *inertia;
+    unsigned *fix;
+    double *F;               /* nd n load pattern */
+    double *u, *v, *a, *fint; /* nd n state */
+    double *du, *vnew, *anew, *kd, *an, *bn, *rhs, *cv0, *cv1; /* nd n scratch */
+    nm_bond *b;
+    int nb, bcap;
+    floe_newmark_load_fn lf;
+    void *lf_user;
+    int prepared;
+    double t;
+    int *eq;                 /* nd n: equation of each component, -1 if supported */
+    int neq;
+    double *cblk;            /* n nd^2: C block of each node (eq 8 + alpha M) */
+    double *ablk;            /* explicit: n nd^2: inverse of the free part of M + gamma dt C */
+    double ablk_dt;
+    long ablk_epoch;
+    long epoch;              /* bumped when bonds break: older factors are stale */
+    int level;               /* implicit step control: the step is dt 2^(-level/2) */
+    floe_newmark_stats st;
+    double energy_scale;     /* for the instability check */
+#ifdef FLOE_HAVE_CHOLMOD
+    cholmod_common cc;
+    int cc_started;
+    cholmod_sparse *A;
+    cholmod_factor *L[NM_SLOTS]; /* factors for the steps in use (the full step and the
+                                    shorter ones of the step control), least recently used
+                                    replaced */
+    double Ldt[NM_SLOTS];
+    long Lepoch[NM_SLOTS], Lused[NM_SLOTS], use_clock;
+    int *bpos;               /* nb (2 nd)^2: positions in A->x of each bond's entries (-1: none) */
+    int *npos;               /* n nd^2: positions of each node's diagonal block */
+    int *pinv;               /* inverse of the fill-reducing permutation (the same in every
+                                slot: one pattern, one analysis), for downdates */
+    long since_refactor[NM_SLOTS]; /* downdates of L[k] since its factorization */
+    cholmod_dense *B, *X, *Y, *E;
+#endif
+};
+
+#define add_global floe_nm_add_global
+#define bond_damper_block floe_nm_bond_damper_block
+#define build_ablk floe_nm_build_ablk
+#define build_pattern floe_nm_build_pattern
+#define downdate_bonds floe_nm_downdate_bonds
+#define factor floe_nm_factor
+#define nm_error floe_nm_nm_error
+#define node_m floe_nm_node_m
+#define now_s floe_nm_now_s
+#define solve_explicit floe_nm_solve_explicit
+#define solve_implicit floe_nm_solve_implicit
+#define to_local floe_nm_to_local
+
+void add_global(const floe_newmark *s, const nm_bond *b, const double *fl, double sc, double *g);
+void bond_damper_block(int nd, const nm_bond *b, double *D);
+int build_ablk(floe_newmark *s, double dt);
+int build_pattern(floe_newmark *s);
+int downdate_bonds(floe_newmark *s, int slot, const int *broken, int nbr);
+int factor(floe_newmark *s, int slot, double dt);
+double node_m(const floe_newmark *s, int i, int k);
+double now_s(void);
+int solve_explicit(floe_newmark *s, double dt, const double *rhs, double *x);
+int solve_implicit(floe_newmark *s, double dt, const double *rhs, double *x);
+void to_local(const floe_newmark *s, const nm_bond *b, const double *g, double *ul);
+int nm_error(floe_newmark *s, int code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+#endif
