@@ -44,8 +44,10 @@
  * CSV columns:
  *   t [s],sxx [Pa],syy [Pa],szz [Pa],sxy [Pa],sxz [Pa],syz [Pa],coordination,contacts,
  *   wall_contacts,volume [m^3]
- * The file is created by floe_collection_tracker_create; each row is written whole with one
- * write (observers/file_writer.h: a killed run leaves no partial row); end() writes the final state if this step was not observed yet and closes the file. */
+ * The file is created by floe_collection_tracker_create; each row is formatted whole and
+ * written at the end of the observation (observers/file_writer.h: a killed run leaves no
+ * partial row); end() writes the final state if this step was not observed yet and closes
+ * the file. */
 #include "floe_observer.h"
 #include "file_writer.h"
 

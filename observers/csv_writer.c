@@ -8,7 +8,7 @@
  * reference point as x, y, z, so that rows can be filtered with radius > 0.
  *
  * The file is created by floe_csv_writer_create; each frame is formatted whole and written
- * with one write (observers/file_writer.h: a killed run leaves no partial row);
+ * at its end (observers/file_writer.h: a killed run leaves no partial row);
  * end() writes the final state if this step was not written yet and closes the file. */
 #include "floe_observer.h"
 #include "file_writer.h"

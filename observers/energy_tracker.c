@@ -6,8 +6,9 @@
  *   work_boundary [J], dissipated [J], initial [J], balance_error
  * balance_error is the relative error of initial + work = current + dissipated (no unit).
  *
- * The file is created by floe_energy_tracker_create; each row is written whole with one
- * write (observers/file_writer.h: a killed run leaves no partial row);
+ * The file is created by floe_energy_tracker_create; each row is formatted whole and
+ * written at the end of the observation (observers/file_writer.h: a killed run leaves no
+ * partial row);
  * end() writes the final state if this step was not observed yet and closes the file. */
 #include "floe_observer.h"
 #include "file_writer.h"

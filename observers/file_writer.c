@@ -1,5 +1,6 @@
-/* file_writer.c - the observers' file writer (file_writer.h): CSV rows written whole, one
- * write() per observation; whole files through a temporary name and rename. */
+/* file_writer.c - the observers' file writer (file_writer.h): CSV rows formatted whole and
+ * written at the end of the observation in writes that never cut a row at a page boundary;
+ * whole files through a temporary name and rename. */
 #include "file_writer.h"
 
 #include <errno.h>
@@ -10,6 +11,10 @@
 #include <unistd.h>
 
 enum { FW_INITIAL_CAP = 4096 };
+/* Linux copies a write() into the page cache one page (folio) at a time and stops between
+ * two when the process is killed; a write that stays inside one page is all or nothing.
+ * Every folio boundary is a multiple of 4096 bytes. */
+#define FW_PAGE ((size_t)4096)
 
 static char *dup_str(const char *s) {
     char *d = malloc(strlen(s) + 1);
@@ -49,8 +54,10 @@ int floe_fw_open(floe_file_writer *fw, const char *who, const char *path, const 
         return FLOE_ENOMEM;
     }
     fw->fd = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    fw->offset = (long long)strlen(header);
     if (fw->fd < 0 || write_all(fw->fd, header, strlen(header)) != 0) {
-        if (err && errlen) snprintf(err, errlen, "%s: cannot open %s: %s", who, path, strerror(errno));
+        if (err && errlen)
+            snprintf(err, errlen, "%s: cannot %s %s: %s", who, fw->fd < 0 ? "open" : "write", path, strerror(errno));
         floe_fw_free(fw);
         return FLOE_EIO;
     }
@@ -90,6 +97,19 @@ void floe_fw_discard(floe_file_writer *fw) {
     fw->nomem = 0;
 }
 
+/* The length of the next write of the n pending bytes at p, at file offset off: all of them
+ * when they end inside the page of off; otherwise the whole rows that end inside it, or,
+ * when the first row crosses the page boundary, that row alone. */
+static size_t next_write(const char *p, size_t n, long long off) {
+    size_t room = FW_PAGE - (size_t)(off % FW_PAGE);
+    if (n <= room) return n;
+    size_t k = room;
+    while (k > 0 && p[k - 1] != '\n') k--;
+    if (k > 0) return k;
+    const char *nl = memchr(p, '\n', n);
+    return nl ? (size_t)(nl - p) + 1 : n;
+}
+
 int floe_fw_flush(floe_file_writer *fw, floe_world *w) {
     if (fw->nomem) {
         floe_fw_discard(fw);
@@ -99,13 +119,27 @@ int floe_fw_flush(floe_file_writer *fw, floe_world *w) {
     if (fw->len == 0) return FLOE_OK;
     if (fw->fd < 0) {
         fw->fd = open(fw->path, O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0666);
-        if (fw->fd < 0) {
+        off_t end = fw->fd >= 0 ? lseek(fw->fd, 0, SEEK_END) : -1;
+        if (end < 0) {
+            int e = errno;
+            if (fw->fd >= 0) close(fw->fd);
+            fw->fd = -1;
             floe_fw_discard(fw);
             return floe_world_report_error(w, FLOE_EIO, "%s: cannot reopen %s: %s", fw->who, fw->path,
-                                           strerror(errno));
+                                           strerror(e));
         }
+        fw->offset = (long long)end;
     }
-    int bad = write_all(fw->fd, fw->buf, fw->len);
+    const char *p = fw->buf;
+    size_t left = fw->len;
+    int bad = 0;
+    while (left > 0 && !bad) {
+        size_t n = next_write(p, left, fw->offset);
+        bad = write_all(fw->fd, p, n);
+        p += n;
+        left -= n;
+        fw->offset += (long long)n;
+    }
     floe_fw_discard(fw);
     if (bad)
         return floe_world_report_error(w, FLOE_EIO, "%s: write to %s failed: %s", fw->who, fw->path,

@@ -7,9 +7,9 @@
  * id is the world's particle index; q = (w, x, y, z) is the body -> world orientation.
  *
  * The file is created (truncated) by floe_particle_tracker_create; each observation's rows
- * are written whole with one write (observers/file_writer.h: a killed run leaves no partial
- * row). end() writes the final state if this step was not observed yet, then closes the
- * file; a later observation (a run continued after finish) appends to it. */
+ * are formatted whole and written at its end (observers/file_writer.h: a killed run leaves
+ * no partial row). end() writes the final state if this step was not observed yet, then
+ * closes the file; a later observation (a run continued after finish) appends to it. */
 #include "floe_observer.h"
 #include "file_writer.h"
 
