@@ -97,10 +97,7 @@ void floe_fw_discard(floe_file_writer *fw) {
     fw->nomem = 0;
 }
 
-/* The length of the next write of the n pending bytes at p, at file offset off: all of them
- * when they end inside the page of off; otherwise the whole rows that end inside it, or,
- * when the first row crosses the page boundary, that row alone. */
-static size_t next_write(const char *p, size_t n, long long off) {
+size_t floe_fw_next_write(const char *p, size_t n, long long off) {
     size_t room = FW_PAGE - (size_t)(off % FW_PAGE);
     if (n <= room) return n;
     size_t k = room;
@@ -134,7 +131,7 @@ int floe_fw_flush(floe_file_writer *fw, floe_world *w) {
     size_t left = fw->len;
     int bad = 0;
     while (left > 0 && !bad) {
-        size_t n = next_write(p, left, fw->offset);
+        size_t n = floe_fw_next_write(p, left, fw->offset);
         bad = write_all(fw->fd, p, n);
         p += n;
         left -= n;

@@ -62,6 +62,10 @@ int floe_fw_flush(floe_file_writer *fw, floe_world *w);
 int floe_fw_close(floe_file_writer *fw, floe_world *w);
 /* Frees everything (closes without reporting). */
 void floe_fw_free(floe_file_writer *fw);
+/* The length of the next write of the n pending bytes at p (whole rows), at file offset
+ * off: all of them when they end inside the 4096-byte page of off; otherwise the whole rows
+ * that end inside it or, when the first row crosses the page boundary, that row alone. */
+size_t floe_fw_next_write(const char *p, size_t n, long long off);
 
 /* A whole file written under a temporary name and renamed into place. */
 typedef struct floe_fw_replace {

@@ -18,7 +18,8 @@ frames. After each kill:
   - every .pvd parses as XML and lists only .vtu files that exist and are complete (ASCII
     frames parse as XML with every array of the declared size; binary frames have the XML
     header and the appended blocks of the declared sizes).
-The old observers (stdio buffers of 4096 bytes, flushed once per observation) left a CSV
+Also checked: no file of observers/ includes world_internal.h (observers read the public
+view). The old observers (stdio buffers of 4096 bytes, flushed once per observation) left a CSV
 ending inside a row in about half of the kills on this scene (the test fails unless all
 eight kills miss). Prints "N passed, N failed".
 """
@@ -233,8 +234,23 @@ def kill_run(cli, tmp, scene, after):
     return outdir
 
 
+def check_public_api(tests_dir):
+    """observers read the world through its public API (floe_view.h, floe_world.h) only"""
+    obs = os.path.join(os.path.dirname(os.path.abspath(tests_dir)), "observers")
+    if not check(os.path.isdir(obs), "no observers/ beside %s" % tests_dir):
+        return
+    bad = []
+    for name in sorted(os.listdir(obs)):
+        if name.endswith((".c", ".h")):
+            with open(os.path.join(obs, name)) as fh:
+                if "world_internal.h" in fh.read():
+                    bad.append(name)
+    check(not bad, "observers that include world_internal.h: %s" % bad)
+
+
 def main():
     cli = os.path.abspath(sys.argv[1])
+    check_public_api(sys.argv[2])
     tmp = tempfile.mkdtemp(prefix="floe_kill_")
     try:
         scene = os.path.join(tmp, "kill.yaml")
