@@ -327,6 +327,11 @@ static void test_particle_tracker(void) {
     int bad[1] = {17};
     o = floe_particle_tracker_create(OUTDIR "/track_bad.csv", bad, 1, err, sizeof err);
     CHECK(o && o->klass->begin && o->klass->begin(o, &h->w) == FLOE_EINVAL, "out-of-range id");
+    CHECK(strstr(floe_world_last_error(&h->w), "particle id 17 out of range (3 particles)") != NULL,
+          "reported through floe_world_report_error: %s", floe_world_last_error(&h->w));
+    CHECK(floe_world_particle_kind(&h->w, 2) == FLOE_GEOM_PLANE && floe_world_particle_kind(&h->w, 0) == FLOE_GEOM_SPHERE &&
+              floe_world_particle_kind(&h->w, 3) == -1 && floe_world_particle_kind(&h->w, -1) == -1,
+          "floe_world_particle_kind: wall, sphere, out of range");
     floe_observer_destroy(o);
     CHECK(floe_particle_tracker_create(OUTDIR "/no/such/dir/x.csv", ids, 2, err, sizeof err) == NULL &&
               err[0] != '\0', "missing directory -> NULL + message");
