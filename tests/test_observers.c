@@ -329,7 +329,8 @@ static void test_particle_tracker(void) {
     CHECK(o && o->klass->begin && o->klass->begin(o, &h->w) == FLOE_EINVAL, "out-of-range id");
     CHECK(strstr(floe_world_last_error(&h->w), "particle id 17 out of range (3 particles)") != NULL,
           "reported through floe_world_report_error: %s", floe_world_last_error(&h->w));
-    CHECK(floe_world_particle_kind(&h->w, 2) == FLOE_GEOM_PLANE && floe_world_particle_kind(&h->w, 0) == FLOE_GEOM_SPHERE &&
+    CHECK(floe_world_particle_kind(&h->w, 2) == FLOE_GEOM_PLANE &&
+              floe_world_particle_kind(&h->w, 0) == FLOE_GEOM_SPHERE &&
               floe_world_particle_kind(&h->w, 3) == -1 && floe_world_particle_kind(&h->w, -1) == -1,
           "floe_world_particle_kind: wall, sphere, out of range");
     floe_observer_destroy(o);
