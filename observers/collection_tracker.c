@@ -38,25 +38,26 @@
  * contacts only; member-non-member contacts are in the separate wall_contacts column (the
  * coordination including them is (2 contacts + wall_contacts) / members).
  *
- * The contacts used are those of the world's current step (w->contacts). An empty
+ * The contacts used are those of the world's current step (floe_world_contacts). An empty
  * collection writes zero stress, zero coordination and zero volume.
  *
  * CSV columns:
  *   t [s],sxx [Pa],syy [Pa],szz [Pa],sxy [Pa],sxz [Pa],syz [Pa],coordination,contacts,
  *   wall_contacts,volume [m^3]
- * The file is created by floe_collection_tracker_create, flushed after every observation;
- * end() writes the final state if this step was not observed yet and closes the file. */
+ * The file is created by floe_collection_tracker_create; each row is formatted whole and
+ * written at the end of the observation (observers/file_writer.h: a killed run leaves no
+ * partial row); end() writes the final state if this step was not observed yet and closes
+ * the file. */
 #include "floe_observer.h"
-#include "world_internal.h"
+#include "file_writer.h"
 
-#include <errno.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 typedef struct collection_tracker {
     floe_observer base;
-    char *path;
-    FILE *f;
+    floe_file_writer out;
     int group;
     double volume;
     unsigned char *member;
@@ -68,32 +69,26 @@ typedef struct collection_tracker {
 
 static const floe_observer_class collection_tracker_class;
 
-static int is_wall(const floe_world *w, int i) {
-    if (!isfinite(w->p.radius[i])) return 1;
-    if (w->p.kind) return w->p.kind[i] == FLOE_GEOM_PLANE;
-    if (w->geoms && w->p.geom) {
-        const floe_geometry *g = w->geoms[w->p.geom[i]];
-        return g && g->klass && g->klass->kind == FLOE_GEOM_PLANE;
-    }
-    return 0;
+static int is_wall(const floe_world *w, const floe_particles_view *p, int i) {
+    if (!isfinite(p->radius[i])) return 1;
+    return floe_world_particle_kind(w, i) == FLOE_GEOM_PLANE;
 }
 
-static int is_member(const floe_world *w, int group, int i) {
-    if (is_wall(w, i)) return 0;
-    if (group < 0) return !w->p.motion || w->p.motion[i] == FLOE_FREE;
-    return w->p.group && w->p.group[i] == group;
+static int is_member(const floe_world *w, const floe_particles_view *p, int group, int i) {
+    if (is_wall(w, p, i)) return 0;
+    if (group < 0) return !p->motion || p->motion[i] == FLOE_FREE;
+    return p->group && p->group[i] == group;
 }
 
-/* member: scratch of w->p.n bytes */
-static void stress_eval(const floe_world *w, int group, double volume, unsigned char *member,
-                        floe_collection_stats *out) {
-    const floe_particles *p = &w->p;
-    int n = p->n, dim = w->def.dim;
+/* member: scratch of p->n bytes; contacts: the world's nc contacts of this step */
+static void stress_eval(const floe_world *w, const floe_particles_view *p, const floe_contact_info *contacts,
+                        int nc, int group, double volume, unsigned char *member, floe_collection_stats *out) {
+    int n = p->n, dim = p->dim;
     memset(out, 0, sizeof *out);
-    out->time = w->time;
+    out->time = floe_world_time(w);
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int i = 0; i < n; i++) {
-        member[i] = (unsigned char)is_member(w, group, i);
+        member[i] = (unsigned char)is_member(w, p, group, i);
         if (!member[i]) continue;
         out->particles++;
         double r = p->radius[i];
@@ -115,8 +110,8 @@ static void stress_eval(const floe_world *w, int group, double volume, unsigned 
     out->volume = V;
 
     double s[3][3] = {{0}};
-    for (int c = 0; c < w->ncontacts; c++) {
-        const floe_contact_rec *rc = &w->contacts[c];
+    for (int c = 0; c < nc; c++) {
+        const floe_contact_info *rc = &contacts[c];
         int i = rc->i, j = rc->j;
         if (i < 0 || j < 0 || i >= n || j >= n) continue;
         int mi = member[i], mj = member[j];
@@ -154,28 +149,34 @@ static void stress_eval(const floe_world *w, int group, double volume, unsigned 
 int floe_collection_stress(const floe_world *w, int group, double volume,
                            floe_collection_stats *out) {
     if (!w || !out) return FLOE_EINVAL;
-    if (!w->contacts_valid) return FLOE_EINVAL; /* floe_world_record_contacts(w, 1) first */
-    unsigned char *member = malloc(w->p.n > 0 ? (size_t)w->p.n : 1);
+    const floe_contact_info *contacts;
+    int nc = floe_world_contacts(w, &contacts);
+    if (nc < 0) return FLOE_EINVAL; /* floe_world_record_contacts(w, 1) first */
+    floe_particles_view p;
+    FLOE_TRY(floe_world_particles(w, &p));
+    unsigned char *member = malloc(p.n > 0 ? (size_t)p.n : 1);
     if (!member) return FLOE_ENOMEM;
-    stress_eval(w, group, volume, member, out);
+    stress_eval(w, &p, contacts, nc, group, volume, member, out);
     free(member);
     return FLOE_OK;
 }
 
+/* contacts recorded at this step (a flush after a failure may have none) */
+static int has_contacts(const floe_world *w) { return floe_world_contacts(w, NULL) >= 0; }
+
 static int ct_write(collection_tracker *t, floe_world *w) {
-    if (t->member_cap < w->p.n) {
-        unsigned char *m = realloc(t->member, (size_t)w->p.n);
-        if (!m) return floe_world_error(w, FLOE_ENOMEM, "collection tracker: out of memory");
+    floe_particles_view p;
+    FLOE_TRY(floe_world_particles(w, &p));
+    const floe_contact_info *contacts;
+    int nc = floe_world_contacts(w, &contacts);
+    if (nc < 0) return FLOE_OK;
+    if (t->member_cap < p.n) {
+        unsigned char *m = realloc(t->member, (size_t)p.n);
+        if (!m) return floe_world_report_error(w, FLOE_ENOMEM, "collection tracker: out of memory");
         t->member = m;
-        t->member_cap = w->p.n;
+        t->member_cap = p.n;
     }
-    stress_eval(w, t->group, t->volume, t->member, &t->last);
-    if (!t->f) {
-        t->f = fopen(t->path, "a");
-        if (!t->f)
-            return floe_world_error(w, FLOE_EIO, "collection tracker: cannot reopen %s: %s",
-                                    t->path, strerror(errno));
-    }
+    stress_eval(w, &p, contacts, nc, t->group, t->volume, t->member, &t->last);
     const floe_collection_stats *st = &t->last;
     {
         /* a NaN or infinity is never written: the row is refused, naming the value */
@@ -184,44 +185,37 @@ static int ct_write(collection_tracker *t, floe_world *w) {
                               st->sigma[5], st->coordination, st->volume};
         for (int q = 0; q < 8; q++)
             if (!isfinite(val[q]))
-                return floe_world_error(w, FLOE_EUNSTABLE, "collection tracker: %s is %g at t = %g s (step %ld): "
-                                        "not written to %s", what[q], val[q], w->time, w->step, t->path);
+                return floe_world_report_error(w, FLOE_EUNSTABLE, "collection tracker: %s is %g at t = %g s "
+                                               "(step %ld): not written to %s", what[q], val[q], st->time,
+                                               floe_world_step_count(w), t->out.path);
     }
-    fprintf(t->f, "%.17g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%d,%d,%.16g\n", st->time,
-            st->sigma[0], st->sigma[1], st->sigma[2], st->sigma[3], st->sigma[4], st->sigma[5],
-            st->coordination, st->contacts, st->wall_contacts, st->volume);
-    t->last_step = w->step;
+    floe_fw_row(&t->out, "%.17g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%d,%d,%.16g\n", st->time,
+                st->sigma[0], st->sigma[1], st->sigma[2], st->sigma[3], st->sigma[4], st->sigma[5],
+                st->coordination, st->contacts, st->wall_contacts, st->volume);
+    t->last_step = floe_world_step_count(w);
     t->observed = 1;
-    if (fflush(t->f) != 0 || ferror(t->f))
-        return floe_world_error(w, FLOE_EIO, "collection tracker: write to %s failed: %s",
-                                t->path, strerror(errno));
-    return FLOE_OK;
+    return floe_fw_flush(&t->out, w);
 }
 
 static int ct_observe(floe_observer *o, floe_world *w) {
     collection_tracker *t = (collection_tracker *)o;
-    if (t->observed && t->last_step == w->step) return FLOE_OK;
-    if (!w->contacts_valid) return FLOE_OK; /* a flush without contact records (after a failure) */
+    if (t->observed && t->last_step == floe_world_step_count(w)) return FLOE_OK;
+    if (!has_contacts(w)) return FLOE_OK; /* a flush without contact records (after a failure) */
     return ct_write(t, w);
 }
 
 static int ct_end(floe_observer *o, floe_world *w) {
     collection_tracker *t = (collection_tracker *)o;
     int rc = FLOE_OK;
-    if ((!t->observed || t->last_step != w->step) && w->contacts_valid) rc = ct_write(t, w);
-    if (t->f) {
-        if (fclose(t->f) != 0 && rc == FLOE_OK)
-            rc = floe_world_error(w, FLOE_EIO, "collection tracker: closing %s failed", t->path);
-        t->f = NULL;
-    }
-    return rc;
+    if ((!t->observed || t->last_step != floe_world_step_count(w)) && has_contacts(w)) rc = ct_write(t, w);
+    int rc2 = floe_fw_close(&t->out, w);
+    return rc != FLOE_OK ? rc : rc2;
 }
 
 static void ct_destroy(floe_observer *o) {
     collection_tracker *t = (collection_tracker *)o;
-    if (t->f) fclose(t->f);
+    floe_fw_free(&t->out);
     free(t->member);
-    free(t->path);
     free(t);
 }
 
@@ -246,25 +240,18 @@ floe_observer *floe_collection_tracker_create(const char *path, int group, doubl
         return NULL;
     }
     collection_tracker *t = calloc(1, sizeof *t);
-    if (t) t->path = malloc(strlen(path) + 1);
-    if (!t || !t->path) {
+    if (!t) {
         if (err && errlen) snprintf(err, errlen, "collection tracker: out of memory");
+        return NULL;
+    }
+    t->group = group;
+    t->volume = volume;
+    if (floe_fw_open(&t->out, "collection tracker", path,
+                     "t [s],sxx [Pa],syy [Pa],szz [Pa],sxy [Pa],sxz [Pa],syz [Pa],coordination,contacts,"
+                     "wall_contacts,volume [m^3]\n", err, errlen) != FLOE_OK) {
         free(t);
         return NULL;
     }
-    strcpy(t->path, path);
-    t->group = group;
-    t->volume = volume;
-    t->f = fopen(path, "w");
-    if (!t->f) {
-        if (err && errlen)
-            snprintf(err, errlen, "collection tracker: cannot open %s: %s", path, strerror(errno));
-        ct_destroy(&t->base);
-        return NULL;
-    }
-    fputs("t [s],sxx [Pa],syy [Pa],szz [Pa],sxy [Pa],sxz [Pa],syz [Pa],coordination,contacts,"
-          "wall_contacts,volume [m^3]\n", t->f);
-    fflush(t->f);
     t->base.klass = &collection_tracker_class;
     t->base.period_steps = 1;
     return &t->base;

@@ -6,20 +6,20 @@
  *   wx [rad/s], wy [rad/s], wz [rad/s], q0, q1, q2, q3, fx [N], fy [N], fz [N]
  * id is the world's particle index; q = (w, x, y, z) is the body -> world orientation.
  *
- * The file is created (truncated) by floe_particle_tracker_create and flushed after every
- * observation. end() writes the final state if this step was not observed yet, then closes
- * the file; a later observation (a run continued after finish) appends to it. */
+ * The file is created (truncated) by floe_particle_tracker_create; each observation's rows
+ * are formatted whole and written at its end (observers/file_writer.h: a killed run leaves
+ * no partial row). end() writes the final state if this step was not observed yet, then
+ * closes the file; a later observation (a run continued after finish) appends to it. */
 #include "floe_observer.h"
-#include "world_internal.h"
+#include "file_writer.h"
 
-#include <errno.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 typedef struct particle_tracker {
     floe_observer base;
-    char *path;
-    FILE *f;
+    floe_file_writer out;
     int *ids;
     int n;
     long last_step;
@@ -28,21 +28,13 @@ typedef struct particle_tracker {
 
 static const floe_observer_class particle_tracker_class;
 
-static int pt_reopen(particle_tracker *t, floe_world *w) {
-    if (t->f) return FLOE_OK;
-    t->f = fopen(t->path, "a");
-    if (!t->f)
-        return floe_world_error(w, FLOE_EIO, "particle tracker: cannot reopen %s: %s", t->path,
-                                strerror(errno));
-    return FLOE_OK;
-}
-
 static int pt_check_ids(particle_tracker *t, floe_world *w) {
+    int np = floe_world_particle_count(w);
     for (int k = 0; k < t->n; k++)
-        if (t->ids[k] >= w->p.n)
-            return floe_world_error(w, FLOE_EINVAL,
-                                    "particle tracker %s: particle id %d out of range (%d particles)",
-                                    t->path, t->ids[k], w->p.n);
+        if (t->ids[k] >= np)
+            return floe_world_report_error(w, FLOE_EINVAL,
+                                           "particle tracker %s: particle id %d out of range (%d particles)",
+                                           t->out.path, t->ids[k], np);
     return FLOE_OK;
 }
 
@@ -52,61 +44,55 @@ static int pt_begin(floe_observer *o, floe_world *w) {
 
 static int pt_write(particle_tracker *t, floe_world *w) {
     FLOE_TRY(pt_check_ids(t, w));
-    FLOE_TRY(pt_reopen(t, w));
-    const floe_particles *p = &w->p;
+    floe_particles_view p;
+    FLOE_TRY(floe_world_particles(w, &p));
+    double time = floe_world_time(w);
+    long step = floe_world_step_count(w);
     /* a NaN or infinity is never written: the row is refused, naming the value */
     for (int k = 0; k < t->n; k++) {
         static const char *const what[] = {"position", "velocity", "angular velocity", "orientation", "force"};
         static const int len[] = {3, 3, 3, 4, 3};
         int i = t->ids[k];
-        const double *src[] = {p->x + 3 * i, p->v + 3 * i, p->w + 3 * i, p->q + 4 * i, p->f + 3 * i};
+        const double *src[] = {p.x + 3 * i, p.v + 3 * i, p.w + 3 * i, p.q + 4 * i, p.f + 3 * i};
         for (int q = 0; q < 5; q++)
             for (int c = 0; c < len[q]; c++)
                 if (!isfinite(src[q][c]))
-                    return floe_world_error(w, FLOE_EUNSTABLE, "particle tracker: particle %d has a non-finite "
-                                            "%s (component %d = %g) at t = %g s (step %ld): not written to %s",
-                                            i, what[q], c, src[q][c], w->time, w->step, t->path);
+                    return floe_world_report_error(w, FLOE_EUNSTABLE, "particle tracker: particle %d has a non-finite "
+                                                   "%s (component %d = %g) at t = %g s (step %ld): not written to %s",
+                                                   i, what[q], c, src[q][c], time, step, t->out.path);
     }
     for (int k = 0; k < t->n; k++) {
         int i = t->ids[k];
-        const double *x = p->x + 3 * i, *v = p->v + 3 * i, *om = p->w + 3 * i;
-        const double *q = p->q + 4 * i, *f = p->f + 3 * i;
-        fprintf(t->f,
-                "%.17g,%d,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,"
-                "%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g\n",
-                w->time, i, x[0], x[1], x[2], v[0], v[1], v[2], om[0], om[1], om[2],
-                q[0], q[1], q[2], q[3], f[0], f[1], f[2]);
+        const double *x = p.x + 3 * i, *v = p.v + 3 * i, *om = p.w + 3 * i;
+        const double *q = p.q + 4 * i, *f = p.f + 3 * i;
+        floe_fw_row(&t->out,
+                    "%.17g,%d,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,"
+                    "%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g\n",
+                    time, i, x[0], x[1], x[2], v[0], v[1], v[2], om[0], om[1], om[2],
+                    q[0], q[1], q[2], q[3], f[0], f[1], f[2]);
     }
-    t->last_step = w->step;
+    t->last_step = step;
     t->observed = 1;
-    if (fflush(t->f) != 0 || ferror(t->f))
-        return floe_world_error(w, FLOE_EIO, "particle tracker: write to %s failed: %s", t->path,
-                                strerror(errno));
-    return FLOE_OK;
+    return floe_fw_flush(&t->out, w);
 }
 
 static int pt_observe(floe_observer *o, floe_world *w) {
     particle_tracker *t = (particle_tracker *)o;
-    if (t->observed && t->last_step == w->step) return FLOE_OK; /* already written */
+    if (t->observed && t->last_step == floe_world_step_count(w)) return FLOE_OK; /* already written */
     return pt_write(t, w);
 }
 
 static int pt_end(floe_observer *o, floe_world *w) {
     particle_tracker *t = (particle_tracker *)o;
     int rc = FLOE_OK;
-    if (!t->observed || t->last_step != w->step) rc = pt_write(t, w);
-    if (t->f) {
-        if (fclose(t->f) != 0 && rc == FLOE_OK)
-            rc = floe_world_error(w, FLOE_EIO, "particle tracker: closing %s failed", t->path);
-        t->f = NULL;
-    }
-    return rc;
+    if (!t->observed || t->last_step != floe_world_step_count(w)) rc = pt_write(t, w);
+    int rc2 = floe_fw_close(&t->out, w);
+    return rc != FLOE_OK ? rc : rc2;
 }
 
 static void pt_destroy(floe_observer *o) {
     particle_tracker *t = (particle_tracker *)o;
-    if (t->f) fclose(t->f);
-    free(t->path);
+    floe_fw_free(&t->out);
     free(t->ids);
     free(t);
 }
@@ -127,27 +113,23 @@ floe_observer *floe_particle_tracker_create(const char *path, const int *ids, in
             return NULL;
         }
     particle_tracker *t = calloc(1, sizeof *t);
-    if (!t) goto nomem;
-    t->path = malloc(strlen(path) + 1);
-    t->ids = malloc((size_t)n * sizeof *t->ids);
-    if (!t->path || !t->ids) goto nomem;
-    strcpy(t->path, path);
-    memcpy(t->ids, ids, (size_t)n * sizeof *ids);
-    t->n = n;
-    t->f = fopen(path, "w");
-    if (!t->f) {
-        if (err && errlen) snprintf(err, errlen, "particle tracker: cannot open %s: %s", path, strerror(errno));
-        pt_destroy(&t->base);
+    if (t) t->ids = malloc((size_t)n * sizeof *t->ids);
+    if (!t || !t->ids) {
+        if (err && errlen) snprintf(err, errlen, "particle tracker: out of memory");
+        if (t) free(t->ids);
+        free(t);
         return NULL;
     }
-    fputs("t [s],id,x [m],y [m],z [m],vx [m/s],vy [m/s],vz [m/s],wx [rad/s],wy [rad/s],"
-          "wz [rad/s],q0,q1,q2,q3,fx [N],fy [N],fz [N]\n", t->f);
-    fflush(t->f);
+    memcpy(t->ids, ids, (size_t)n * sizeof *ids);
+    t->n = n;
+    if (floe_fw_open(&t->out, "particle tracker", path,
+                     "t [s],id,x [m],y [m],z [m],vx [m/s],vy [m/s],vz [m/s],wx [rad/s],wy [rad/s],"
+                     "wz [rad/s],q0,q1,q2,q3,fx [N],fy [N],fz [N]\n", err, errlen) != FLOE_OK) {
+        free(t->ids);
+        free(t);
+        return NULL;
+    }
     t->base.klass = &particle_tracker_class;
     t->base.period_steps = 1;
     return &t->base;
-nomem:
-    if (err && errlen) snprintf(err, errlen, "particle tracker: out of memory");
-    if (t) { free(t->path); free(t->ids); free(t); }
-    return NULL;
 }

@@ -28,10 +28,11 @@
  *
  * end() writes the final state if this step was not written yet. */
 #include "floe_observer.h"
-#include "world_internal.h"
+#include "file_writer.h"
 #include "floe_pd.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -99,15 +100,17 @@ static int host_little_endian(void) {
     return c == 1;
 }
 
-static int is_wall(const floe_world *w, int i) {
-    if (!isfinite(w->p.radius[i])) return 1;
-    if (w->p.kind) return w->p.kind[i] == FLOE_GEOM_PLANE;
-    return 0;
+static int is_wall(const floe_world *w, const floe_particles_view *p, int i) {
+    if (!isfinite(p->radius[i])) return 1;
+    return floe_world_particle_kind(w, i) == FLOE_GEOM_PLANE;
 }
 
 /* Fill buf with array k for the m points listed in v->idx. */
 static void fill_array(const vtk_writer *v, const floe_world *w, int k, int m, void *buf) {
-    const floe_particles *p = &w->p;
+    floe_particles_view view;
+    const floe_particles_view *p = &view;
+    if (floe_world_particles(w, &view) != FLOE_OK) return;
+    int npd = floe_world_pd_body_count(w);
     int32_t *i32 = buf;
     int64_t *i64 = buf;
     double *f64 = buf;
@@ -130,11 +133,12 @@ static void fill_array(const vtk_writer *v, const floe_world *w, int k, int m, v
     case A_ORIENT: src = p->q; break;
     case A_DAMAGE: { /* peridynamic points: local damage (003 eq 7); other particles 0 */
         for (int a = 0; a < m; a++) f64[a] = 0.0;
-        for (int b = 0; b < w->npd; b++) {
-            const floe_pd_body *pb = w->pd[b];
+        for (int b = 0; b < npd; b++) {
+            int f0 = 0;
+            const floe_pd_body *pb = floe_world_pd_body(w, b, &f0);
+            if (!pb) continue;
             double *phi = malloc((size_t)pb->n * sizeof *phi);
             if (!phi || floe_pd_damage(pb, phi) != FLOE_OK) { free(phi); continue; }
-            int f0 = w->pd_first[b];
             for (int a = 0; a < m; a++) {
                 int i = v->idx[a] - f0;
                 if (i >= 0 && i < pb->n) f64[a] = phi[i];
@@ -146,12 +150,13 @@ static void fill_array(const vtk_writer *v, const floe_world *w, int k, int m, v
     case A_VONMISES: { /* peridynamic points: correspondence von Mises stress (000 eqs 26-30)
                         * with the body's G and lambda (PMB: nu = 1/4, G = lambda = 0.6 K) */
         for (int a = 0; a < m; a++) f64[a] = 0.0;
-        for (int b = 0; b < w->npd; b++) {
-            const floe_pd_body *pb = w->pd[b];
+        for (int b = 0; b < npd; b++) {
+            int f0 = 0;
+            const floe_pd_body *pb = floe_world_pd_body(w, b, &f0);
+            if (!pb) continue;
             double K = pb->mat.K, G = pb->mat.model == FLOE_PD_LPS ? pb->mat.G : 0.6 * K;
             if (pb->mat.model != FLOE_PD_LPS && !(K > 0) && pb->mat.E > 0) G = 0.4 * pb->mat.E; /* 2D PMB */
             double lam = pb->mat.model == FLOE_PD_LPS ? K - 2.0 * G / 3.0 : G;
-            int f0 = w->pd_first[b];
             double *vm = malloc((size_t)pb->n * sizeof *vm);
             if (!vm || floe_pd_correspondence(pb, p->x + 3 * (size_t)f0, G, lam, NULL, NULL, NULL, vm, NULL) != FLOE_OK) {
                 free(vm);
@@ -168,9 +173,10 @@ static void fill_array(const vtk_writer *v, const floe_world *w, int k, int m, v
     case A_FDENS: /* peridynamic points: total force / point volume (N/m^3, ParticLS Fig. 9) */
     case A_STRAIN: { /* peridynamic points: Green-Lagrange strain (000 eq 28, row-major 3x3) */
         for (int a = 0; a < m * nc; a++) f64[a] = 0.0;
-        for (int b = 0; b < w->npd; b++) {
-            const floe_pd_body *pb = w->pd[b];
-            int f0 = w->pd_first[b];
+        for (int b = 0; b < npd; b++) {
+            int f0 = 0;
+            const floe_pd_body *pb = floe_world_pd_body(w, b, &f0);
+            if (!pb) continue;
             double *E = NULL;
             if (k == A_STRAIN) {
                 E = malloc((size_t)pb->n * 9 * sizeof *E);
@@ -209,8 +215,9 @@ static int first_non_finite(int k, int m, const void *buf) {
 }
 
 static int non_finite_error(floe_world *w, const vtk_writer *v, int k, int a) {
-    return floe_world_error(w, FLOE_EUNSTABLE, "vtk writer: particle %d has a non-finite %s at t = %g s "
-                            "(step %ld): frame not written", v->idx[a], arrays[k].name, w->time, w->step);
+    return floe_world_report_error(w, FLOE_EUNSTABLE, "vtk writer: particle %d has a non-finite %s at t = %g s "
+                                   "(step %ld): frame not written", v->idx[a], arrays[k].name, floe_world_time(w),
+                                   floe_world_step_count(w));
 }
 
 /* Fills array k of the m points into v->buf: FLOE_OK, or FLOE_EUNSTABLE (reported) when a
@@ -219,14 +226,6 @@ static int fill_finite(const vtk_writer *v, floe_world *w, int k, int m) {
     fill_array(v, w, k, m, v->buf);
     int a = first_non_finite(k, m, v->buf);
     return a >= 0 ? non_finite_error(w, v, k, a) : FLOE_OK;
-}
-
-/* a frame refused half-written: its temporary file is closed and removed */
-static void abandon_file(FILE *f, char *tmp, char *path) {
-    fclose(f);
-    remove(tmp);
-    free(path);
-    free(tmp);
 }
 
 static void write_ascii_values(FILE *f, int type, int ncomp, int m, const void *buf) {
@@ -277,64 +276,62 @@ static char *make_path(const vtk_writer *v, int with_dir, int frame, const char 
     return s;
 }
 
-static int finish_file(FILE *f, const char *tmp, const char *path) {
-    int bad = ferror(f);
-    if (fclose(f) != 0) bad = 1;
-    if (bad) { remove(tmp); return FLOE_EIO; }
-    if (rename(tmp, path) != 0) { remove(tmp); return FLOE_EIO; }
-    return FLOE_OK;
-}
-
+/* the collection, through a temporary file renamed into place: at every instant the .pvd
+ * on disk is complete and lists only frames whose .vtu is complete */
 static int write_pvd(const vtk_writer *v) {
-    char *path = make_path(v, 1, -1, ".pvd"), *tmp = make_path(v, 1, -1, ".pvd.tmp");
-    int rc = FLOE_ENOMEM;
-    FILE *f = NULL;
-    if (!path || !tmp) goto out;
-    rc = FLOE_EIO;
-    f = fopen(tmp, "w");
-    if (!f) goto out;
+    char *path = make_path(v, 1, -1, ".pvd");
+    if (!path) return FLOE_ENOMEM;
+    floe_fw_replace r;
+    int rc = floe_fw_replace_begin(&r, path);
+    free(path);
+    if (rc != FLOE_OK) return rc;
+    FILE *f = r.f;
     fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" "
                "byte_order=\"%s\">\n  <Collection>\n",
             host_little_endian() ? "LittleEndian" : "BigEndian");
     for (int k = 0; k < v->frames; k++) {
         char *name = make_path(v, 0, k, ".vtu");
-        if (!name) { fclose(f); remove(tmp); rc = FLOE_ENOMEM; goto out; }
+        if (!name) {
+            floe_fw_replace_abandon(&r);
+            return FLOE_ENOMEM;
+        }
         fprintf(f, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"0\" file=\"", v->times[k]);
         write_xml_attr(f, name);
         fputs("\"/>\n", f);
         free(name);
     }
     fputs("  </Collection>\n</VTKFile>\n", f);
-    rc = finish_file(f, tmp, path);
-out:
-    free(path);
-    free(tmp);
-    return rc;
+    return floe_fw_replace_commit(&r);
 }
 
 static int vw_write(vtk_writer *v, floe_world *w) {
-    const floe_particles *p = &w->p;
+    floe_particles_view view;
+    const floe_particles_view *p = &view;
+    FLOE_TRY(floe_world_particles(w, &view));
+    double time = floe_world_time(w);
+    long step = floe_world_step_count(w);
+    int npd = floe_world_pd_body_count(w);
     /* points to write */
     if (v->idx_cap < p->n) {
         int *ni = realloc(v->idx, (size_t)p->n * sizeof *ni);
-        if (!ni) return floe_world_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
+        if (!ni) return floe_world_report_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
         v->idx = ni;
         v->idx_cap = p->n;
     }
     int m = 0;
     for (int i = 0; i < p->n; i++)
-        if (!is_wall(w, i)) v->idx[m++] = i;
+        if (!is_wall(w, p, i)) v->idx[m++] = i;
     size_t need = (size_t)(m > 0 ? m : 1) * 9 * sizeof(double); /* the widest array: strain */
     if (v->buf_cap < need) {
         unsigned char *nb = realloc(v->buf, need);
-        if (!nb) return floe_world_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
+        if (!nb) return floe_world_report_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
         v->buf = nb;
         v->buf_cap = need;
     }
     if (v->frames == v->times_cap) {
         int nc = v->times_cap ? 2 * v->times_cap : 64;
         double *nt = realloc(v->times, (size_t)nc * sizeof *nt);
-        if (!nt) return floe_world_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
+        if (!nt) return floe_world_report_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
         v->times = nt;
         v->times_cap = nc;
     }
@@ -347,19 +344,17 @@ static int vw_write(vtk_writer *v, floe_world *w) {
     }
 
     int ascii = v->ascii || m == 0;
-    char *path = make_path(v, 1, v->frames, ".vtu"), *tmp = make_path(v, 1, v->frames, ".vtu.tmp");
-    if (!path || !tmp) {
+    /* the frame goes to PREFIX_NNNNNN.vtu.tmp, renamed into place when complete */
+    char *path = make_path(v, 1, v->frames, ".vtu");
+    if (!path) return floe_world_report_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
+    floe_fw_replace r;
+    int rc = floe_fw_replace_begin(&r, path);
+    if (rc != FLOE_OK) {
+        rc = floe_world_report_error(w, rc, "vtk writer: cannot open %s.tmp: %s", path, strerror(errno));
         free(path);
-        free(tmp);
-        return floe_world_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
-    }
-    FILE *f = fopen(tmp, "wb");
-    if (!f) {
-        int rc = floe_world_error(w, FLOE_EIO, "vtk writer: cannot open %s: %s", tmp, strerror(errno));
-        free(path);
-        free(tmp);
         return rc;
     }
+    FILE *f = r.f;
 
     fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
                "byte_order=\"%s\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n",
@@ -369,7 +364,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
                "format=\"ascii\">%.17g</DataArray>\n"
                "      <DataArray type=\"Int64\" Name=\"Step\" NumberOfTuples=\"1\" "
                "format=\"ascii\">%ld</DataArray>\n    </FieldData>\n",
-            w->time, w->step);
+            time, step);
     fprintf(f, "    <Piece NumberOfPoints=\"%d\" NumberOfCells=\"%d\">\n", m, m);
 
     uint64_t offset = 0;
@@ -377,7 +372,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
         if (k == 0) fputs("      <PointData Scalars=\"radius\" Vectors=\"velocity\">\n", f);
         if (k == A_POINTS) fputs("      </PointData>\n      <CellData>\n      </CellData>\n      <Points>\n", f);
         if (k == A_CONN) fputs("      </Points>\n      <Cells>\n", f);
-        if (k >= A_DAMAGE && k <= A_STRAIN && !w->npd) continue; /* only scenes with PD bodies */
+        if (k >= A_DAMAGE && k <= A_STRAIN && !npd) continue; /* only scenes with PD bodies */
         const array_desc *a = &arrays[k];
         fprintf(f, "        <DataArray type=\"%s\" Name=\"%s\"", type_name(a->type), a->name);
         if (a->ncomp > 1) fprintf(f, " NumberOfComponents=\"%d\"", a->ncomp);
@@ -385,7 +380,8 @@ static int vw_write(vtk_writer *v, floe_world *w) {
             fputs(" format=\"ascii\">\n", f);
             int bad = fill_finite(v, w, k, m);
             if (bad != FLOE_OK) {
-                abandon_file(f, tmp, path);
+                floe_fw_replace_abandon(&r);
+                free(path);
                 return bad;
             }
             write_ascii_values(f, a->type, a->ncomp, m, v->buf);
@@ -399,12 +395,13 @@ static int vw_write(vtk_writer *v, floe_world *w) {
     if (!ascii) {
         fputs("  <AppendedData encoding=\"raw\">\n   _", f);
         for (int k = 0; k < A_COUNT; k++) {
-            if (k >= A_DAMAGE && k <= A_STRAIN && !w->npd) continue;
+            if (k >= A_DAMAGE && k <= A_STRAIN && !npd) continue;
             const array_desc *a = &arrays[k];
             uint64_t nbytes = (uint64_t)m * (uint64_t)a->ncomp * type_size(a->type);
             int bad = fill_finite(v, w, k, m);
             if (bad != FLOE_OK) {
-                abandon_file(f, tmp, path);
+                floe_fw_replace_abandon(&r);
+                free(path);
                 return bad;
             }
             fwrite(&nbytes, sizeof nbytes, 1, f);
@@ -413,31 +410,31 @@ static int vw_write(vtk_writer *v, floe_world *w) {
         fputs("\n  </AppendedData>\n", f);
     }
     fputs("</VTKFile>\n", f);
-    int rc = finish_file(f, tmp, path);
+    rc = floe_fw_replace_commit(&r);
     if (rc != FLOE_OK)
-        rc = floe_world_error(w, rc, "vtk writer: writing %s failed: %s", path, strerror(errno));
+        rc = floe_world_report_error(w, rc, "vtk writer: writing %s failed: %s", path, strerror(errno));
     free(path);
-    free(tmp);
     if (rc != FLOE_OK) return rc;
 
-    v->times[v->frames++] = w->time;
-    v->last_step = w->step;
+    v->times[v->frames++] = time;
+    v->last_step = step;
     v->observed = 1;
     rc = write_pvd(v);
     if (rc != FLOE_OK)
-        return floe_world_error(w, rc, "vtk writer: writing %s/%s.pvd failed", v->dir, v->prefix);
+        return floe_world_report_error(w, rc, "vtk writer: writing %s/%s.pvd failed: %s", v->dir, v->prefix,
+                                rc == FLOE_ENOMEM ? "out of memory" : strerror(errno));
     return FLOE_OK;
 }
 
 static int vw_observe(floe_observer *o, floe_world *w) {
     vtk_writer *v = (vtk_writer *)o;
-    if (v->observed && v->last_step == w->step) return FLOE_OK;
+    if (v->observed && v->last_step == floe_world_step_count(w)) return FLOE_OK;
     return vw_write(v, w);
 }
 
 static int vw_end(floe_observer *o, floe_world *w) {
     vtk_writer *v = (vtk_writer *)o;
-    if (!v->observed || v->last_step != w->step) return vw_write(v, w);
+    if (!v->observed || v->last_step != floe_world_step_count(w)) return vw_write(v, w);
     return FLOE_OK;
 }
 

@@ -3,12 +3,14 @@
  * VTK writers' files. */
 #include "check.h"
 #include "floe_observer.h"
+#include "file_writer.h"
 #include "world_internal.h"
 
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #define OUTDIR "test_observers_out"
 #define MAXP 8
@@ -325,6 +327,12 @@ static void test_particle_tracker(void) {
     int bad[1] = {17};
     o = floe_particle_tracker_create(OUTDIR "/track_bad.csv", bad, 1, err, sizeof err);
     CHECK(o && o->klass->begin && o->klass->begin(o, &h->w) == FLOE_EINVAL, "out-of-range id");
+    CHECK(strstr(floe_world_last_error(&h->w), "particle id 17 out of range (3 particles)") != NULL,
+          "reported through floe_world_report_error: %s", floe_world_last_error(&h->w));
+    CHECK(floe_world_particle_kind(&h->w, 2) == FLOE_GEOM_PLANE &&
+              floe_world_particle_kind(&h->w, 0) == FLOE_GEOM_SPHERE &&
+              floe_world_particle_kind(&h->w, 3) == -1 && floe_world_particle_kind(&h->w, -1) == -1,
+          "floe_world_particle_kind: wall, sphere, out of range");
     floe_observer_destroy(o);
     CHECK(floe_particle_tracker_create(OUTDIR "/no/such/dir/x.csv", ids, 2, err, sizeof err) == NULL &&
               err[0] != '\0', "missing directory -> NULL + message");
@@ -424,6 +432,108 @@ static void test_vtk(int ascii) {
     free(h);
 }
 
+/* The file writer (observers/file_writer.c): many frames of the CSV writer cross many page
+ * boundaries of the file, written in pieces that stay inside a page; the file must be
+ * exactly the header and every row, each formatted as the writer formats it (%.17g time,
+ * %.16g values), with nothing lost or doubled at a boundary. */
+static void test_file_writer_pages(void) {
+    printf("file writer: rows across page boundaries, byte-exact\n");
+    hand_world *h = three_particle_world();
+    char err[256];
+    floe_observer *c = floe_csv_writer_create(OUTDIR "/pages.csv", err, sizeof err);
+    CHECK(c != NULL, "create: %s", err);
+    if (!c) { free(h); return; }
+    static const char header[] = "t [s],id,body,material,x [m],y [m],z [m],vx [m/s],vy [m/s],vz [m/s],"
+                                 "wx [rad/s],wy [rad/s],wz [rad/s],fx [N],fy [N],fz [N],radius [m]\n";
+    size_t cap = 1 << 20, len = 0;
+    char *want = malloc(cap);
+    if (!want) { floe_observer_destroy(c); free(h); return; }
+    len += (size_t)snprintf(want, cap, "%s", header);
+    int ok = 1;
+    for (int k = 0; k < 400 && ok; k++) {
+        h->w.step = k;
+        h->w.time = 1e-5 * k + (k % 7) * 1e-9;           /* varying row lengths */
+        h->x[0] = 0.1 * k / 3.0;
+        h->v[4] = -1.0 / (k + 1);
+        h->f[8] = k % 3 ? 1e-300 * k : 12345.678;
+        ok = c->klass->observe(c, &h->w) == FLOE_OK;
+        for (int i = 0; i < h->w.p.n && len + 1024 < cap; i++) {
+            const double *x = h->x + 3 * i, *v = h->v + 3 * i, *om = h->om + 3 * i, *f = h->f + 3 * i;
+            double r = isfinite(h->radius[i]) ? h->radius[i] : 0.0;
+            len += (size_t)snprintf(want + len, cap - len,
+                                    "%.17g,%d,%d,%d,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,%.16g,"
+                                    "%.16g,%.16g,%.16g,%.16g\n",
+                                    h->w.time, i, h->group[i], h->material[i], x[0], x[1], x[2], v[0], v[1],
+                                    v[2], om[0], om[1], om[2], f[0], f[1], f[2], r);
+        }
+    }
+    CHECK(ok, "400 frames observed");
+    CHECK(c->klass->end(c, &h->w) == FLOE_OK, "end");
+    floe_observer_destroy(c);
+    char *s = slurp(OUTDIR "/pages.csv");
+    CHECK(len > 20 * 4096, "the file spans %zu bytes, more than 20 pages", len);
+    CHECK(s && strlen(s) == len && memcmp(s, want, len) == 0, "pages.csv is byte-exact (%zu bytes, expected %zu)",
+          s ? strlen(s) : 0, len);
+    free(s);
+    free(want);
+    free(h);
+}
+
+/* The pieces the file writer cuts pending rows into: each stays inside one 4096-byte page
+ * of the file and ends at a row end, or is exactly one row (one that crosses a page
+ * boundary); together they are the rows. Rows of 1 to 700 bytes from offsets near page
+ * boundaries. */
+static void test_file_writer_pieces(void) {
+    printf("file writer: pieces inside pages\n");
+    char buf[20000];
+    unsigned seed = 12345;
+    int bad = 0, pieces = 0, crossing = 0;
+    for (int trial = 0; trial < 200; trial++) {
+        size_t n = 0;
+        while (n < sizeof buf - 800) {
+            seed = seed * 1103515245u + 12345u;
+            size_t len = 1 + (seed >> 16) % 700;
+            memset(buf + n, 'x', len - 1);
+            buf[n + len - 1] = '\n';
+            n += len;
+        }
+        seed = seed * 1103515245u + 12345u;
+        long long off = 4096LL * (trial % 5) + (trial % 3 == 0 ? 0 : (long long)((seed >> 16) % 4096));
+        size_t done = 0;
+        while (done < n) {
+            size_t k = floe_fw_next_write(buf + done, n - done, off);
+            pieces++;
+            int ends_row = k > 0 && buf[done + k - 1] == '\n';
+            int in_page = off / 4096 == (off + (long long)k - 1) / 4096;
+            const char *nl = memchr(buf + done, '\n', n - done);
+            int one_row = nl && (size_t)(nl - (buf + done)) + 1 == k;
+            if (!ends_row || !(in_page || one_row) || k > n - done) bad++;
+            crossing += !in_page;
+            done += k ? k : n - done;
+            off += (long long)k;
+        }
+    }
+    CHECK(bad == 0, "%d of %d pieces cross a page boundary with more than one row or end inside a row", bad, pieces);
+    CHECK(crossing > 100, "the trials include rows that cross a page boundary (%d)", crossing);
+}
+
+/* Open errors name the path and the errno text; no temporary file is left by the VTK writer. */
+static void test_file_writer_errors(void) {
+    printf("file writer: errors and temporary files\n");
+    char err[256];
+    CHECK(floe_energy_tracker_create(OUTDIR "/no/such/dir/e.csv", err, sizeof err) == NULL, "missing directory");
+    CHECK(strstr(err, "energy tracker: cannot open " OUTDIR "/no/such/dir/e.csv: ") && strstr(err, strerror(ENOENT)),
+          "message names the path and the errno text: %s", err);
+    if (access("/dev/full", W_OK) == 0) {
+        CHECK(floe_csv_writer_create("/dev/full", err, sizeof err) == NULL, "/dev/full refused");
+        CHECK(strstr(err, "csv writer: cannot write /dev/full: ") && strstr(err, strerror(ENOSPC)),
+              "header write error names the path and ENOSPC: %s", err);
+    }
+    CHECK(access(OUTDIR "/bin.pvd", F_OK) == 0 && access(OUTDIR "/bin.pvd.tmp", F_OK) != 0 &&
+              access(OUTDIR "/bin_000001.vtu.tmp", F_OK) != 0 && access(OUTDIR "/asc_000000.vtu.tmp", F_OK) != 0,
+          "the VTK writer left its collection and no temporary file");
+}
+
 int main(void) {
     if (mkdir(OUTDIR, 0755) != 0 && errno != EEXIST) {
         fprintf(stderr, "cannot create %s\n", OUTDIR);
@@ -437,5 +547,8 @@ int main(void) {
     test_energy_and_csv();
     test_vtk(1);
     test_vtk(0);
+    test_file_writer_pages();
+    test_file_writer_pieces();
+    test_file_writer_errors();
     return check_summary("test_observers");
 }

@@ -15,7 +15,7 @@ typedef struct floe_observer_class {
     int (*observe)(floe_observer *o, floe_world *w);    /* required */
     int (*end)(floe_observer *o, floe_world *w);        /* optional: flush, close */
     void (*destroy)(floe_observer *o);                  /* optional */
-    int needs_contacts;   /* 1: reads w->contacts, so the world records every contact */
+    int needs_contacts;   /* 1: reads floe_world_contacts, so the world records every contact */
 } floe_observer_class;
 
 struct floe_observer {

@@ -67,4 +67,17 @@ typedef struct floe_neighbor_stats {
 } floe_neighbor_stats;
 int floe_world_neighbor_stats(const floe_world *w, floe_neighbor_stats *out);
 
+/* observers (wt-obs) */
+/* The geometry kind of particle i (floe_geometry_kind; -1 out of range). */
+int floe_world_particle_kind(const floe_world *w, int i);
+/* Sets the world's last error (floe_world_last_error) to the formatted message and returns
+ * code: how an observer (or other code outside the world) reports a failure,
+ * `return floe_world_report_error(w, FLOE_EIO, "...: %s", strerror(errno));`. The one
+ * call of this header that writes to the world: its error message only. */
+int floe_world_report_error(floe_world *w, int code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
 #endif

@@ -58,3 +58,23 @@ int floe_world_neighbor_stats(const floe_world *w, floe_neighbor_stats *o) {
     o->skin = w->nl.skin;
     return FLOE_OK;
 }
+
+/* observers (wt-obs) */
+#include <stdarg.h>
+#include <stdio.h>
+
+int floe_world_particle_kind(const floe_world *w, int i) {
+    if (!w || i < 0 || i >= w->p.n) return -1;
+    if (w->p.kind) return w->p.kind[i];
+    const floe_geometry *g = w->geoms && w->p.geom ? w->geoms[w->p.geom[i]] : NULL;
+    return g && g->klass ? (int)g->klass->kind : -1;
+}
+
+int floe_world_report_error(floe_world *w, int code, const char *fmt, ...) {
+    if (!w) return code;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(w->err, sizeof w->err, fmt, ap);
+    va_end(ap);
+    return code;
+}
