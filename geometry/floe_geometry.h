@@ -9,6 +9,7 @@
 
 #include "floe_base.h"
 #include "floe_registry.h"
+#include "floe_linalg.h"
 
 /* Built-in kinds, used for the analytic contact fast paths (Box2D-style pair table). */
 typedef enum floe_geometry_kind {
@@ -221,11 +222,7 @@ const double *floe_polytope_planes(const floe_geometry *g, int dim, int *np, dou
  * 6 (one spring at the bounding radius: 1 + m R^2 / I_min = 7 and 5.5). */
 double floe_polytope_manifold_factor(const floe_geometry *g, int dim, const double inertia[3], double mass);
 
-/* Symmetric 3x3 eigen-decomposition (cyclic Jacobi): A = V diag(l) V^T, columns of V are the
- * eigenvectors (right-handed), l ascending. For the principal frames. */
-void floe_sym3_eigen(const double A[3][3], double l[3], double V[3][3]);
-/* Quaternion (w, x, y, z) of a rotation matrix */
-void floe_q_from_matrix(double q[4], const double R[3][3]);
+/* floe_sym3_eigen, floe_q_from_matrix: core/base/floe_linalg.h */
 
 /* ---- shapes as registered components (floe_registry.h, kind FLOE_KIND_SHAPE) ----
  * A registered shape gives a parameter schema and this constructor: params is its parameter

@@ -1,6 +1,7 @@
 /* geometry.c - dispatch of the geometry vtable with numerical defaults (SUNDIALS-style
  * optional operations), and numerical mass properties for shapes that only give an SDF. */
 #include "floe_geometry.h"
+#include "floe_rng.h"
 #include "geometry_internal.h"
 #include <stdarg.h>
 #include <stdio.h>
@@ -188,11 +189,8 @@ void floe_geometry_support(const floe_geometry *g, const double d[3], double out
     support_numeric(g, d, out);
 }
 
-/* xorshift64*: the sampling of the Lipschitz check is the same at every run */
-static double rand_unit(unsigned long long *s) {
-    *s ^= *s >> 12; *s ^= *s << 25; *s ^= *s >> 27;
-    return (double)((*s * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
-}
+/* the sampling of the Lipschitz check is the same at every run (floe_rng.h) */
+static double rand_unit(unsigned long long *s) { return floe_rng_uniform(s); }
 
 double floe_geometry_lipschitz(const floe_geometry *g, int pairs, double a_out[3], double b_out[3]) {
     double R = size_of(g), worst = 0;

@@ -4,6 +4,7 @@
  * critical time step, and the exclusion of bonded pairs from contact. floe_beam.h has the
  * equations. */
 #include "beam_set.h"
+#include "floe_rng.h"
 
 #include <stdint.h>
 #include <stdio.h>
@@ -128,18 +129,7 @@ void floe_beam_stress(const floe_beam_section *s, int dim, const double *f, doub
     }
 }
 
-double floe_beam_normal(unsigned long long *state) {
-    /* splitmix64 -> two uniforms in (0, 1] -> Box-Muller (one deviate used per call) */
-    double u[2];
-    for (int k = 0; k < 2; k++) {
-        uint64_t z = (*state += 0x9E3779B97F4A7C15ULL);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-        z ^= z >> 31;
-        u[k] = ((double)(z >> 11) + 1.0) * (1.0 / 9007199254740992.0);
-    }
-    return sqrt(-2.0 * log(u[0])) * cos(2.0 * M_PI * u[1]);
-}
+double floe_beam_normal(unsigned long long *state) { return floe_rng_normal(state); }
 
 floe_beam_params floe_default_beam_params(void) {
     floe_beam_params p;

@@ -177,44 +177,6 @@ int solve_implicit(floe_newmark *s, double dt, const double *rhs, double *x) {
     return FLOE_OK;
 }
 
-/* eigen-decomposition of a symmetric m x m matrix (m <= 12) by cyclic Jacobi: A is
- * destroyed, its diagonal ends as the eigenvalues, V (row-major) holds the eigenvectors as
- * columns */
-static void jacobi_eigen(double *A, int m, double *V) {
-    for (int p = 0; p < m; p++)
-        for (int q = 0; q < m; q++) V[p * m + q] = p == q;
-    for (int sweep = 0; sweep < 60; sweep++) {
-        double off = 0, dia = 0;
-        for (int p = 0; p < m; p++) {
-            dia += A[p * m + p] * A[p * m + p];
-            for (int q = p + 1; q < m; q++) off += A[p * m + q] * A[p * m + q];
-        }
-        if (off <= 1e-30 * dia) break;
-        for (int p = 0; p < m; p++)
-            for (int q = p + 1; q < m; q++) {
-                double apq = A[p * m + q];
-                if (apq == 0) continue;
-                double th = 0.5 * (A[q * m + q] - A[p * m + p]) / apq;
-                double t = (th >= 0 ? 1.0 : -1.0) / (fabs(th) + sqrt(th * th + 1.0));
-                double c = 1.0 / sqrt(t * t + 1.0), sn = t * c;
-                for (int k = 0; k < m; k++) { /* columns p, q */
-                    double akp = A[k * m + p], akq = A[k * m + q];
-                    A[k * m + p] = c * akp - sn * akq;
-                    A[k * m + q] = sn * akp + c * akq;
-                }
-                for (int k = 0; k < m; k++) { /* rows p, q */
-                    double apk = A[p * m + k], aqk = A[q * m + k];
-                    A[p * m + k] = c * apk - sn * aqk;
-                    A[q * m + k] = sn * apk + c * aqk;
-                }
-                for (int k = 0; k < m; k++) {
-                    double vkp = V[k * m + p], vkq = V[k * m + q];
-                    V[k * m + p] = c * vkp - sn * vkq;
-                    V[k * m + q] = sn * vkp + c * vkq;
-                }
-            }
-    }
-}
 
 /* the bond's term of K beta dt^2 + C gamma dt (2 nd x 2 nd): stiffness and its eq 8 dampers */
 static void bond_term(const floe_newmark *s, const nm_bond *b, double dt, double *Bm) {
@@ -265,7 +227,7 @@ int downdate_bonds(floe_newmark *s, int slot, const int *broken, int nbr) {
             if (e[p] >= 0) fr[m++] = p;
         for (int p = 0; p < m; p++)
             for (int r = 0; r < m; r++) A[p * m + r] = 0.5 * (Bm[fr[p] * n2 + fr[r]] + Bm[fr[r] * n2 + fr[p]]);
-        jacobi_eigen(A, m, V);
+        floe_sym_eigen(A, m, V); /* core/base/floe_linalg.h */
         double lmax = 0;
         for (int k = 0; k < m; k++) lmax = fmax(lmax, A[k * m + k]);
         for (int k = 0; k < m; k++) {

@@ -7,6 +7,7 @@
 #define FLOE_SCENE_INTERNAL_H
 #include "floe_scene.h"
 #include "floe_registry.h"
+#include "floe_rng.h"
 #include "floe_state.h"
 #include "world_internal.h"
 #include "floe_observer.h"
@@ -111,7 +112,7 @@ typedef struct sc_map {
     char what[96];
 } sc_map;
 
-typedef struct sc_rng { uint64_t s; } sc_rng;
+typedef struct sc_rng { unsigned long long s; } sc_rng; /* floe_rng.h */
 
 /* the helpers shared by the section files (names kept short here, prefixed in the library) */
 #define sc_bool floe_sc_bool

@@ -646,12 +646,4 @@ int sc_read_schema(sc *s, const sc_map *m, const floe_registry_entry *ent, const
 /* Random numbers: splitmix64 (deterministic per seed, platform independent)            */
 
 
-static uint64_t sc_rng_next(sc_rng *r)
-{
-    uint64_t z = (r->s += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-
-double sc_rng_uniform(sc_rng *r) { return (double)(sc_rng_next(r) >> 11) * 0x1.0p-53; }
+double sc_rng_uniform(sc_rng *r) { return floe_rng_uniform(&r->s); }

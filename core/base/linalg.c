@@ -1,48 +1,65 @@
-/* linalg.c - small dense linear algebra for the principal frames of inertia: symmetric 3x3
- * eigen-decomposition (cyclic Jacobi) and the quaternion of a rotation matrix (Shepperd). */
-#include "floe_geometry.h"
+/* linalg.c - small dense linear algebra (floe_linalg.h): the one symmetric eigen-solver
+ * (cyclic Jacobi) used for principal frames of inertia (3 x 3) and the modes of a bonded
+ * pair in the Newmark-beta solver (up to 12 x 12), and the quaternion of a rotation matrix
+ * (Shepperd). */
+#include "floe_linalg.h"
+#include "floe_base.h"
+
+#include <math.h>
 
 /* Cyclic Jacobi: A' = J^T A J for each pair (p, q), with the rotation chosen to zero A'_pq
  * (Numerical Recipes' stable form, t = sgn(theta) / (|theta| + sqrt(theta^2 + 1))). Converges
- * quadratically; 50 sweeps is far more than a 3x3 ever needs. */
-void floe_sym3_eigen(const double A0[3][3], double l[3], double V[3][3]) {
-    double A[3][3];
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++) {
-            A[i][j] = 0.5 * (A0[i][j] + A0[j][i]);
-            V[i][j] = i == j ? 1.0 : 0.0;
-        }
+ * quadratically; 50 sweeps is far more than these sizes ever need. */
+void floe_sym_eigen(double *A, int m, double *V) {
+    for (int p = 0; p < m; p++)
+        for (int q = 0; q < m; q++) V[p * m + q] = p == q;
     for (int sweep = 0; sweep < 50; sweep++) {
-        double off = A[0][1] * A[0][1] + A[0][2] * A[0][2] + A[1][2] * A[1][2];
-        double diag = A[0][0] * A[0][0] + A[1][1] * A[1][1] + A[2][2] * A[2][2];
+        double off = 0, diag = 0;
+        for (int p = 0; p < m; p++) {
+            diag += A[p * m + p] * A[p * m + p];
+            for (int q = p + 1; q < m; q++) off += A[p * m + q] * A[p * m + q];
+        }
         if (off == 0 || off <= 1e-36 * diag) break;
-        for (int p = 0; p < 2; p++)
-            for (int q = p + 1; q < 3; q++) {
-                double apq = A[p][q];
+        for (int p = 0; p < m - 1; p++)
+            for (int q = p + 1; q < m; q++) {
+                double apq = A[p * m + q];
                 if (apq == 0) continue;
-                if (fabs(apq) <= 1e-20 * (fabs(A[p][p]) + fabs(A[q][q]))) {
-                    A[p][q] = A[q][p] = 0;
+                if (fabs(apq) <= 1e-20 * (fabs(A[p * m + p]) + fabs(A[q * m + q]))) {
+                    A[p * m + q] = A[q * m + p] = 0;
                     continue;
                 }
-                double th = 0.5 * (A[q][q] - A[p][p]) / apq;
+                double th = 0.5 * (A[q * m + q] - A[p * m + p]) / apq;
                 double t = (th >= 0 ? 1.0 : -1.0) / (fabs(th) + sqrt(th * th + 1));
                 double c = 1 / sqrt(t * t + 1), s = t * c;
-                for (int k = 0; k < 3; k++) { /* A J */
-                    double akp = A[k][p], akq = A[k][q];
-                    A[k][p] = c * akp - s * akq; A[k][q] = s * akp + c * akq;
+                for (int k = 0; k < m; k++) { /* A J */
+                    double akp = A[k * m + p], akq = A[k * m + q];
+                    A[k * m + p] = c * akp - s * akq;
+                    A[k * m + q] = s * akp + c * akq;
                 }
-                for (int k = 0; k < 3; k++) { /* J^T (A J) */
-                    double apk = A[p][k], aqk = A[q][k];
-                    A[p][k] = c * apk - s * aqk; A[q][k] = s * apk + c * aqk;
+                for (int k = 0; k < m; k++) { /* J^T (A J) */
+                    double apk = A[p * m + k], aqk = A[q * m + k];
+                    A[p * m + k] = c * apk - s * aqk;
+                    A[q * m + k] = s * apk + c * aqk;
                 }
-                A[p][q] = A[q][p] = 0;
-                for (int k = 0; k < 3; k++) {
-                    double vkp = V[k][p], vkq = V[k][q];
-                    V[k][p] = c * vkp - s * vkq; V[k][q] = s * vkp + c * vkq;
+                A[p * m + q] = A[q * m + p] = 0;
+                for (int k = 0; k < m; k++) {
+                    double vkp = V[k * m + p], vkq = V[k * m + q];
+                    V[k * m + p] = c * vkp - s * vkq;
+                    V[k * m + q] = s * vkp + c * vkq;
                 }
             }
     }
-    for (int k = 0; k < 3; k++) l[k] = A[k][k];
+}
+
+void floe_sym3_eigen(const double A0[3][3], double l[3], double V[3][3]) {
+    double A[9], W[9];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) A[3 * i + j] = 0.5 * (A0[i][j] + A0[j][i]);
+    floe_sym_eigen(A, 3, W);
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) V[i][j] = W[3 * i + j];
+        l[i] = A[4 * i];
+    }
     /* ascending order (selection sort on 3 entries, columns follow) */
     for (int i = 0; i < 2; i++) {
         int m = i;
