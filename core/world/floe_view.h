@@ -10,6 +10,7 @@
 #define FLOE_VIEW_H
 
 #include "floe_world.h"
+#include "floe_admm.h"
 
 typedef struct floe_particles_view {
     int n;                          /* particles, walls included */
@@ -24,6 +25,7 @@ typedef struct floe_particles_view {
     const int *geometry;            /* n: index into floe_world_geometry_at */
     const int *material, *group;    /* n */
     const unsigned char *motion;    /* n: floe_motion */
+    const int *pieces;              /* n: convex pieces of the geometry (compounds > 1, else 1) */
 } floe_particles_view;
 
 /* Fills out; FLOE_EINVAL when w or out is NULL. */
@@ -66,5 +68,32 @@ typedef struct floe_neighbor_stats {
     double skin;                    /* m */
 } floe_neighbor_stats;
 int floe_world_neighbor_stats(const floe_world *w, floe_neighbor_stats *out);
+/* The candidate pairs of the neighbour list (i < j, walls included; pairs excluded by bonds,
+ * PD families and beam bonds, are never listed): sets *pi and *pj to arrays of the returned
+ * count (either may be NULL). Valid until the next step or prepare. -FLOE_EINVAL for w NULL. */
+int floe_world_neighbor_pairs(const floe_world *w, const int **pi, const int **pj);
+
+/* 1 when the world is prepared (masses, time step, neighbour list in place), 0 when the next
+ * step or run prepares it again (after an add_*, set_motion, set_dt ... or before the first). */
+int floe_world_is_prepared(const floe_world *w);
+
+/* Materials: how many, and material k (NULL out of range). The contact law of the material
+ * pair (a, b) (symmetric; NULL when none was set or an index is out of range). */
+int floe_world_material_count(const floe_world *w);
+const floe_material *floe_world_material_at(const floe_world *w, int k);
+const floe_contact_law *floe_world_law(const floe_world *w, int a, int b);
+
+/* The ADMM options of convex-pair detection in use (floe_admm.h; the scene's
+ * contact_detection block). FLOE_EINVAL when w or out is NULL. */
+int floe_world_admm_options(const floe_world *w, floe_admm_options *out);
+
+/* Memory held by the world's main arrays, in bytes (allocated capacity, not only what is in
+ * use): the particle store, the neighbour list with its per-pair history and warm starts,
+ * the contact records; and the capacities behind them. */
+typedef struct floe_memory_stats {
+    size_t particles, neighbor_list, contacts;   /* bytes */
+    int particle_capacity, pair_capacity, contact_capacity;
+} floe_memory_stats;
+int floe_world_memory(const floe_world *w, floe_memory_stats *out);
 
 #endif
