@@ -3,7 +3,7 @@
  * VTK writers' files. */
 #include "check.h"
 #include "floe_observer.h"
-#include "world_internal.h"
+#include "world_internal.h" /* internal: unit test of the observers on a hand-made world (its contacts, time and particles set directly) */
 
 #include <errno.h>
 #include <stdlib.h>

@@ -18,6 +18,8 @@ typedef struct floe_particles_view {
     const double *x, *v;            /* 3n: centre of mass (m), velocity (m/s) */
     const double *q;                /* 4n: orientation body -> world (w, x, y, z) */
     const double *w;                /* 3n: angular velocity, world frame (rad/s) */
+    const double *L;                /* 3n: angular momentum, world frame (kg m^2/s; the
+                                       integrated variable, set from w at prepare) */
     const double *f, *t;            /* 3n: force (N) and torque (N m) of the last evaluation */
     const double *mass;             /* n: kg (walls: their nominal mass) */
     const double *inertia;          /* 3n: principal moments, body frame (kg m^2) */
@@ -86,6 +88,20 @@ const floe_contact_law *floe_world_law(const floe_world *w, int a, int b);
 /* The ADMM options of convex-pair detection in use (floe_admm.h; the scene's
  * contact_detection block). FLOE_EINVAL when w or out is NULL. */
 int floe_world_admm_options(const floe_world *w, floe_admm_options *out);
+
+/* The bounds of the adaptive step in use (def.dt_min and dt_max, or their defaults:
+ * dt_max = the critical estimate, dt_min = 1e-3 dt_max), s, as the last prepare set them
+ * (0 before the first, and without adaptive steps). FLOE_EINVAL when w is NULL. */
+int floe_world_adaptive_bounds(const floe_world *w, double *dt_min, double *dt_max);
+
+/* Contact detection of the pair (i, j) at the particles' present poses, as a step does it
+ * (piece pair sub = FLOE_SUB(a, b) of compound bodies, floe_detect.h, 0 otherwise; no warm
+ * start): fills *c (floe_contact.h) and returns 1 in contact, 0 apart, or -error
+ * (-FLOE_EINVAL for an index out of range). A diagnostic: nothing changes but the detection
+ * statistics (floe_world_detect_stats). floe_world_probe_overlap does the same with the
+ * overlap-area/volume detector of the overlap laws. */
+int floe_world_probe_contact(floe_world *w, int i, int j, int sub, floe_contact *c);
+int floe_world_probe_overlap(floe_world *w, int i, int j, int sub, floe_contact *c);
 
 /* Memory held by the world's main arrays, in bytes (allocated capacity, not only what is in
  * use): the particle store, the neighbour list with its per-pair history and warm starts,

@@ -224,6 +224,15 @@ int floe_world_get_particle(const floe_world *w, int i, floe_particle_state *out
  * velocity off the plane (v_z, omega_x, omega_y not 0). */
 int floe_world_set_velocity(floe_world *w, int i, const double v[3], const double omega[3]);
 
+/* Move particle i to the pose (x: centre of mass, m; q: orientation body -> world, made a
+ * unit quaternion; either may be NULL: kept), e.g. to place bodies or probe detection at
+ * nearby poses (floe_world_probe_contact). Its velocities are kept; forces are those of the
+ * last evaluation until the next step; the neighbour list is rebuilt when the move needs
+ * it. After prepare the energy ledger does not book the move. FLOE_EINVAL (message in
+ * last_error) for an index out of range, a wall, a non-finite value, a zero quaternion, or
+ * in 2D a pose off the plane (x_z, or a rotation about another axis than z). */
+int floe_world_set_pose(floe_world *w, int i, const double x[3], const double q[4]);
+
 /* Give particle i another geometry (an index from floe_world_add_geometry, bounded: not a
  * wall's plane), e.g. a contact sphere of another radius for the points of a PD body. The
  * bounding radius follows; the mass is kept (given, or computed at the last prepare) and

@@ -10,6 +10,7 @@ int floe_world_particles(const floe_world *w, floe_particles_view *o) {
     o->v = p->v;
     o->q = p->q;
     o->w = p->w;
+    o->L = p->L;
     o->f = p->f;
     o->t = p->t;
     o->mass = p->mass;
@@ -103,5 +104,27 @@ int floe_world_memory(const floe_world *w, floe_memory_stats *o) {
     o->neighbor_list = (size_t)nl->cap * per_pair + (size_t)nl->n_build * 4 * sizeof(double) +
                        (size_t)nl->nwalls * (sizeof(int) + 4 * sizeof(double)) + (size_t)nl->scratch_cap * sizeof(int);
     o->contacts = (size_t)w->contacts_cap * sizeof(floe_contact_info);
+    return FLOE_OK;
+}
+
+static int probe_ok(const floe_world *w, int i, int j, const floe_contact *c) {
+    return w && c && i >= 0 && j >= 0 && i < w->p.n && j < w->p.n && i != j;
+}
+
+int floe_world_probe_contact(floe_world *w, int i, int j, int sub, floe_contact *c) {
+    if (!probe_ok(w, i, j, c)) return -FLOE_EINVAL;
+    return floe_world_detect(w, i, j, sub, NULL, c);
+}
+
+int floe_world_probe_overlap(floe_world *w, int i, int j, int sub, floe_contact *c) {
+    if (!probe_ok(w, i, j, c)) return -FLOE_EINVAL;
+    return floe_world_detect_overlap(w, i, j, sub, c);
+}
+
+int floe_world_adaptive_bounds(const floe_world *w, double *lo, double *hi) {
+    if (!w) return FLOE_EINVAL;
+    const int on = w->def.adaptive;
+    if (lo) *lo = on ? w->dt_lo : 0;
+    if (hi) *hi = on ? w->dt_hi : 0;
     return FLOE_OK;
 }

@@ -752,6 +752,29 @@ int floe_world_set_velocity(floe_world *w, int i, const double v[3], const doubl
     return FLOE_OK;
 }
 
+int floe_world_set_pose(floe_world *w, int i, const double x[3], const double q[4]) {
+    floe_particles *p = &w->p;
+    if (i < 0 || i >= p->n) return floe_world_error(w, FLOE_EINVAL, "set_pose: particle %d out of range", i);
+    if (!isfinite(p->radius[i])) return floe_world_error(w, FLOE_EINVAL, "set_pose: particle %d is a wall", i);
+    double qn = 1;
+    if (x && !(isfinite(x[0]) && isfinite(x[1]) && isfinite(x[2])))
+        return floe_world_error(w, FLOE_EINVAL, "set_pose: particle %d: the position must be finite", i);
+    if (q) {
+        qn = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+        if (!(qn > 0) || !isfinite(qn))
+            return floe_world_error(w, FLOE_EINVAL, "set_pose: particle %d: the quaternion must be non-zero and finite", i);
+        if (fabs(qn - 1) <= 1e-12) qn = 1; /* a unit quaternion is kept as given */
+    }
+    if (w->def.dim == 2 && ((x && x[2] != 0) || (q && (q[1] != 0 || q[2] != 0))))
+        return floe_world_error(w, FLOE_EINVAL, "set_pose: particle %d: in 2D z and rotations off the z axis must be 0", i);
+    if (x) memcpy(p->x + 3 * i, x, 3 * sizeof *x);
+    if (q)
+        for (int k = 0; k < 4; k++) p->q[4 * i + k] = q[k] / qn;
+    /* the angular velocity is kept: the angular momentum follows the new orientation */
+    if (q && w->prepared && p->motion[i] == FLOE_FREE) L_from_omega(p->q + 4 * i, p->inertia + 3 * i, p->w + 3 * i, p->L + 3 * i);
+    return FLOE_OK;
+}
+
 int floe_world_set_particle_geometry(floe_world *w, int i, int geometry) {
     floe_particles *p = &w->p;
     if (i < 0 || i >= p->n) return floe_world_error(w, FLOE_EINVAL, "set_particle_geometry: particle %d out of range", i);
