@@ -1,7 +1,7 @@
 /* main.c - the `floe` command: run a scene file (or the built-in demo), check a scene,
  * print build information. Scene format: docs/scene-format.md. */
 #include "floe_scene.h"
-#include "floe.h"
+#include "floe_view.h"
 #include "floe_detect.h"
 #include "floe_mesh.h"
 #include "floe_newmark.h"
