@@ -1,10 +1,12 @@
 /* floe_view.h - a read-only view of a world, for observers, examples, benches and users:
  * the particle arrays (zero-copy), the contacts of the last force evaluation with their
  * points, normals and forces, the geometries, peridynamic bodies, neighbour-list and
- * detection counters, and the definition in use. Nothing here changes the world.
+ * detection counters, and the definition in use. Nothing here changes the world (the
+ * detection probes only count in the detection statistics); the setters are in
+ * floe_world.h (floe_world_set_velocity, _set_pose, _set_particle_geometry, _set_dt).
  *
- * Pointers in a view stay valid until the next call that adds particles (add_*), prepares
- * or steps the world; take a new view after those. Arrays are indexed by particle id
+ * Pointers in a view stay valid until the next call that adds to the world (add_*, set_*),
+ * prepares or steps it; take a new view after those (docs/api.md, "Reading a world"). Arrays are indexed by particle id
  * (walls included: a wall is a particle with an unbounded geometry, radius INFINITY). */
 #ifndef FLOE_VIEW_H
 #define FLOE_VIEW_H
