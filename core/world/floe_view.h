@@ -6,8 +6,9 @@
  * floe_world.h (floe_world_set_velocity, _set_pose, _set_particle_geometry, _set_dt).
  *
  * Pointers in a view stay valid until the next call that adds to the world (add_*, set_*),
- * prepares or steps it; take a new view after those (docs/api.md, "Reading a world"). Arrays are indexed by particle id
- * (walls included: a wall is a particle with an unbounded geometry, radius INFINITY). */
+ * prepares or steps it; take a new view after those (docs/api.md, "Reading a world").
+ * Arrays are indexed by particle id (walls included: a wall is a particle with an unbounded
+ * geometry, radius INFINITY). */
 #ifndef FLOE_VIEW_H
 #define FLOE_VIEW_H
 
@@ -65,18 +66,6 @@ int floe_world_dim(const floe_world *w);
 /* The peridynamic body of particle i (-1 for none) */
 int floe_world_pd_body_of(const floe_world *w, int i);
 
-/* Neighbour-list counters: candidate pairs now and rebuilds so far. */
-typedef struct floe_neighbor_stats {
-    int pairs;
-    long rebuilds;
-    double skin;                    /* m */
-} floe_neighbor_stats;
-int floe_world_neighbor_stats(const floe_world *w, floe_neighbor_stats *out);
-/* The candidate pairs of the neighbour list (i < j, walls included; pairs excluded by bonds,
- * PD families and beam bonds, are never listed): sets *pi and *pj to arrays of the returned
- * count (either may be NULL). Valid until the next step or prepare. -FLOE_EINVAL for w NULL. */
-int floe_world_neighbor_pairs(const floe_world *w, const int **pi, const int **pj);
-
 /* 1 when the world is prepared (masses, time step, neighbour list in place), 0 when the next
  * step or run prepares it again (after an add_*, set_motion, set_dt ... or before the first). */
 int floe_world_is_prepared(const floe_world *w);
@@ -113,5 +102,19 @@ typedef struct floe_memory_stats {
     int particle_capacity, pair_capacity, contact_capacity;
 } floe_memory_stats;
 int floe_world_memory(const floe_world *w, floe_memory_stats *out);
+
+/* The candidate pairs of the neighbour list (i < j, walls included; pairs excluded by bonds,
+ * PD families and beam bonds, are never listed): sets *pi and *pj to arrays of the returned
+ * count (either may be NULL). Valid until the next step or prepare. -FLOE_EINVAL for w NULL.
+ * Their number and the rebuilds: floe_world_neighbor_stats below. */
+int floe_world_neighbor_pairs(const floe_world *w, const int **pi, const int **pj);
+
+/* Neighbour-list counters: candidate pairs now and rebuilds so far. */
+typedef struct floe_neighbor_stats {
+    int pairs;
+    long rebuilds;
+    double skin;                    /* m */
+} floe_neighbor_stats;
+int floe_world_neighbor_stats(const floe_world *w, floe_neighbor_stats *out);
 
 #endif

@@ -53,14 +53,6 @@ int floe_world_pd_body_of(const floe_world *w, int i) {
     return w->pd_of[i];
 }
 
-int floe_world_neighbor_stats(const floe_world *w, floe_neighbor_stats *o) {
-    if (!w || !o) return FLOE_EINVAL;
-    o->pairs = w->nl.npairs;
-    o->rebuilds = w->nl.rebuilds;
-    o->skin = w->nl.skin;
-    return FLOE_OK;
-}
-
 int floe_world_neighbor_pairs(const floe_world *w, const int **pi, const int **pj) {
     if (!w) return -FLOE_EINVAL;
     if (pi) *pi = w->nl.pi;
@@ -126,5 +118,13 @@ int floe_world_adaptive_bounds(const floe_world *w, double *lo, double *hi) {
     const int on = w->def.adaptive;
     if (lo) *lo = on ? w->dt_lo : 0;
     if (hi) *hi = on ? w->dt_hi : 0;
+    return FLOE_OK;
+}
+
+int floe_world_neighbor_stats(const floe_world *w, floe_neighbor_stats *o) {
+    if (!w || !o) return FLOE_EINVAL;
+    o->pairs = w->nl.npairs;
+    o->rebuilds = w->nl.rebuilds;
+    o->skin = w->nl.skin;
     return FLOE_OK;
 }
