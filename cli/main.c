@@ -2,7 +2,8 @@
  * print build information. Scene format: docs/scene-format.md. */
 #include "floe_scene.h"
 #include "floe_registry.h"
-#include "world_internal.h"
+#include "floe_view.h"
+#include "floe_detect.h"
 #include "floe_mesh.h"
 #include "floe_newmark.h"
 
@@ -164,20 +165,23 @@ static int cmd_run(const char *scene, const char *outdir, int quiet)
         printf("\nrun finished\n");
         floe_step_stats st;
         floe_world_step_stats(w, &st);
-        if (w->def.adaptive)
+        const floe_world_def *def = floe_world_definition(w);
+        if (def->adaptive)
             printf("  steps:              %ld accepted, %ld rejected (dt %.4g ... %.4g s)\n", st.accepted,
                    st.rejected, st.dt_min_used, st.dt_max_used);
         else printf("  steps:              %ld (dt %.4g s, %s)\n", steps, floe_world_dt(w),
-                    floe_integrator_name(w->def.integrator));
-        if (w->def.pd_dem == FLOE_PD_DEM_STAGGERED && floe_world_pd_body_count(w) > 0)
+                    floe_integrator_name(def->integrator));
+        if (def->pd_dem == FLOE_PD_DEM_STAGGERED && floe_world_pd_body_count(w) > 0)
             printf("  staggered PD-DEM:   %ld contact and %ld PD force evaluations (PD %s %d)\n",
                    st.force_evaluations, st.pd_evaluations, st.pd_every > 1 ? "every" : "substeps",
                    st.pd_every > 1 ? st.pd_every : st.pd_substeps);
         printf("  simulated time:     %.6g s\n", floe_world_time(w));
         printf("  wall time:          %.3f s\n", wall);
         printf("  particle-steps/s:   %.3g (%d particles)\n", ps, n);
-        printf("  contacts (current): %d\n", w->ncontacts);
-        printf("  neighbour rebuilds: %ld\n", w->nl.rebuilds);
+        floe_neighbor_stats ns;
+        floe_world_neighbor_stats(w, &ns);
+        printf("  contacts (current): %d\n", floe_world_contact_count(w));
+        printf("  neighbour rebuilds: %ld\n", ns.rebuilds);
         floe_detect_stats ds;
         floe_world_detect_stats(w, &ds);
         if (ds.evaluations > 0)
@@ -189,7 +193,7 @@ static int cmd_run(const char *scene, const char *outdir, int quiet)
         floe_dt_estimates dte;
         if (floe_world_dt_estimates(w, &dte) == FLOE_OK && (dte.err1 > 0 || dte.err2 > 0))
             printf("  restitution error:  %.2g predicted at dt %.4g s%s\n", dte.predicted_error, floe_world_dt(w),
-                   w->def.accuracy > 0 ? " (time.accuracy)" : "");
+                   def->accuracy > 0 ? " (time.accuracy)" : "");
         floe_energy_check_state ec;
         floe_world_energy_check(w, &ec);
         if (ec.mode == FLOE_CHECK_OFF) printf("  energy watchdog:    off\n");

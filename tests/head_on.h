@@ -7,7 +7,8 @@
 #ifndef FLOE_TEST_HEAD_ON_H
 #define FLOE_TEST_HEAD_ON_H
 #include "floe.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 
 static floe_world *head_on_collision(floe_world_def d, double E, double v0, double ratio, int *rc, long *in_contact) {
     d.dt_safety = 0.1;
@@ -30,8 +31,8 @@ static floe_world *head_on_collision(floe_world_def d, double E, double v0, doub
     while (*rc == FLOE_OK && steps < 2000000) {
         *rc = floe_world_step(w);
         steps++;
-        if (w->ncontacts) (*in_contact)++;
-        if (*in_contact && !w->ncontacts) break;
+        if (floe_world_contact_count(w)) (*in_contact)++;
+        if (*in_contact && !floe_world_contact_count(w)) break;
     }
     return w;
 }

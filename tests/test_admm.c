@@ -16,7 +16,7 @@
  *  4. A non-convex L-shaped compound of two boxes resting on a wall: two contacts, at rest.
  *  5. Degenerate input: coincident centres, ADMM with max_iter = 1, a flat polyhedron. */
 #include "floe.h"
-#include "world_internal.h"
+#include "world_internal.h" /* internal: unit test of detection in the world: floe_world_detect with warm starts, the iteration histogram */
 #include "floe_admm.h"
 #include "floe_polytope_lp.h"
 #include "check.h"

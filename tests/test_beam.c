@@ -8,7 +8,7 @@
 #include "floe_beam.h"
 #include "floe_scene.h"
 #include "floe_pd.h"
-#include "world_internal.h"
+#include "world_internal.h" /* internal: unit test of the beam-bond forces: floe_compute_forces at displaced poses, the exclusion list */
 
 #include <stdlib.h>
 #include <string.h>

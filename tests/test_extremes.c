@@ -5,7 +5,8 @@
  * for the speed (E = 1e3 Pa at 1 m/s: the spheres would pass through each other) must
  * stop with a message, not bounce backwards. */
 #include "floe.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 #include "check.h"
 #include "head_on.h"
 #include <string.h>
@@ -21,7 +22,7 @@ static void collide(double E, double v0, double ratio) {
               floe_world_last_error(w));
         printf("  %s: stopped: %s\n", what, floe_world_last_error(w));
     } else {
-        double va = w->p.v[0], vb = w->p.v[3];
+        double va = pview(w).v[0], vb = pview(w).v[3];
         double e = (vb - va) / v0;
         CHECK(isfinite(va) && isfinite(vb), "%s: non-finite velocities", what);
         char w2[320];

@@ -7,7 +7,8 @@
 #include "check.h"
 #include "head_on.h"
 #include "floe_pd.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -15,8 +16,8 @@
 #include <unistd.h>
 
 static int finite_state(const floe_world *w) {
-    for (int i = 0; i < 3 * w->p.n; i++)
-        if (!isfinite(w->p.x[i]) || !isfinite(w->p.v[i])) return 0;
+    for (int i = 0; i < 3 * pview(w).n; i++)
+        if (!isfinite(pview(w).x[i]) || !isfinite(pview(w).v[i])) return 0;
     return 1;
 }
 
@@ -37,7 +38,7 @@ static void collide(int integ, int adaptive, double E, double v0, double ratio) 
     } else {
         /* leapfrog's stored velocities are those of half a step back: after the contact
          * they are the outgoing ones */
-        double e = (w->p.v[3] - w->p.v[0]) / v0;
+        double e = (pview(w).v[3] - pview(w).v[0]) / v0;
         char w2[256];
         snprintf(w2, sizeof w2, "%s: restitution", what);
         CHECK_NEAR(e, 0.5, 0.05, w2);
@@ -66,11 +67,11 @@ static void pd_stiffness(double K) {
     floe_world_add_pd_body(w, b, 0, NULL, &f0);
     double P0 = 0;
     for (int i = 0; i < b->n; i++)
-        if (b->X[3 * i] < 1e-3) { w->p.v[3 * (f0 + i)] = 1.0; P0 += w->p.mass[f0 + i]; }
+        if (b->X[3 * i] < 1e-3) { set_vel(w, f0 + i, 0, 1.0); P0 += pview(w).mass[f0 + i]; }
     int rc = floe_world_prepare(w);
     for (int s = 0; s < 400 && !rc; s++) rc = floe_world_step(w);
     double P = 0;
-    for (int i = 0; i < w->p.n; i++) P += w->p.mass[i] * w->p.v[3 * i];
+    for (int i = 0; i < pview(w).n; i++) P += pview(w).mass[i] * pview(w).v[3 * i];
     printf("  PD K = %.0e Pa: dt %.3g s (nodal %.3g s), %s, momentum %.6g of %.6g\n", K, floe_world_dt(w),
            floe_pd_dt_nodal(b), rc ? floe_world_last_error(w) : "400 steps", P, P0 * 1.0);
     CHECK(rc == FLOE_OK && finite_state(w), "PD K = %.0e: stable with the automatic step: %s", K, floe_world_last_error(w));

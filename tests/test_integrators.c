@@ -17,7 +17,8 @@
  *   4. a contact oscillator (a sphere pressed on a fixed sphere by a linear law with
  *      gravity) runs at 0.9x 2/w and stops at 1.1x, and the world's estimate is below 2/w. */
 #include "check.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 
 #include <string.h>
 
@@ -29,7 +30,7 @@ static void osc_force(const floe_world *w, int i, double t, double f[3], double 
     const osc *o = user;
     (void)t;
     (void)torque;
-    for (int a = 0; a < 3; a++) f[a] = -o->k * w->p.x[3 * i + a] - o->c * w->p.v[3 * i + a];
+    for (int a = 0; a < 3; a++) f[a] = -o->k * pview(w).x[3 * i + a] - o->c * pview(w).v[3 * i + a];
 }
 
 /* one sphere (R = 1 m, m = 1 kg) at x = (A, 0, 0) at rest, force -k x - c v */
@@ -75,10 +76,10 @@ static void test_order(int integ, double zeta) {
             rc = floe_world_step(w);
             double x, v;
             exact(&o, A, floe_world_time(w), &x, &v);
-            ex[r] = fmax(ex[r], fabs(w->p.x[0] - x));
+            ex[r] = fmax(ex[r], fabs(pview(w).x[0] - x));
             /* leapfrog stores v_{n-1/2}: compare it with the exact velocity half a step back */
             exact(&o, A, floe_world_time(w) - (integ == FLOE_LEAPFROG ? 0.5 * dt : 0), &x, &v);
-            ev[r] = fmax(ev[r], fabs(w->p.v[0] - v));
+            ev[r] = fmax(ev[r], fabs(pview(w).v[0] - v));
         }
         CHECK(rc == FLOE_OK, "%s order run: %s", name(integ), floe_world_last_error(w));
         floe_world_destroy(w);
@@ -108,11 +109,11 @@ static void test_energy(int integ) {
     for (long s = 0; s < nsteps && !rc; s++) {
         rc = floe_world_step(w);
         /* the world's kinetic energy (leapfrog: of the synchronised velocity) */
-        double E = w->energy.kinetic_trans + 0.5 * o.k * w->p.x[0] * w->p.x[0];
+        double E = floe_world_energy(w).kinetic_trans + 0.5 * o.k * pview(w).x[0] * pview(w).x[0];
         double dev = E / E0 - 1;
         /* velocity Verlet's invariant for the harmonic oscillator (leapfrog: its
          * synchronised velocity, from the kinetic energy) */
-        shadow = 2 * w->energy.kinetic_trans + o.k * w->p.x[0] * w->p.x[0] * (1 - wdt * wdt / 4);
+        shadow = 2 * floe_world_energy(w).kinetic_trans + o.k * pview(w).x[0] * pview(w).x[0] * (1 - wdt * wdt / 4);
         if (s == 0) shadow0 = shadow;
         if (fabs(dev) > maxdev) maxdev = fabs(dev);
         /* means over 100 periods: the partial-period bias of the numerical frequency
@@ -121,7 +122,7 @@ static void test_energy(int integ) {
         if (s >= nsteps - 100 * steps_per_period) last += dev / (100.0 * steps_per_period);
     }
     CHECK(rc == FLOE_OK, "%s energy run: %s", name(integ), floe_world_last_error(w));
-    double E = w->energy.kinetic_trans + 0.5 * o.k * w->p.x[0] * w->p.x[0];
+    double E = floe_world_energy(w).kinetic_trans + 0.5 * o.k * pview(w).x[0] * pview(w).x[0];
     if (integ == FLOE_RK2) {
         double expect = pow(1 + pow(wdt, 4) / 4, (double)nsteps);
         printf("  %-16s energy after %ld steps: x%.6f, theory (1 + (w dt)^4/4)^n = x%.6f\n", name(integ), nsteps,
@@ -149,10 +150,10 @@ static int run_osc(int integ, osc *o, double dt, double A, long steps, double *m
     *maxx = 0;
     for (long s = 0; s < steps && !rc; s++) {
         rc = floe_world_step(w);
-        if (fabs(w->p.x[0]) > *maxx) *maxx = fabs(w->p.x[0]);
+        if (fabs(pview(w).x[0]) > *maxx) *maxx = fabs(pview(w).x[0]);
     }
     snprintf(msg, len, "%s", floe_world_last_error(w));
-    int finite = isfinite(w->p.x[0]) && isfinite(w->p.v[0]);
+    int finite = isfinite(pview(w).x[0]) && isfinite(pview(w).v[0]);
     CHECK(finite || rc == FLOE_OK, "%s: state at the failure is finite", name(integ));
     floe_world_destroy(w);
     return rc;
@@ -178,19 +179,19 @@ static void test_stability(int integ) {
     osc o = {0.0, 1.0};
     double crit = integ == FLOE_RK2 ? 1.0 : 2.0;
     floe_world *w = osc_world(integ, 0.9 * crit, &o, 0);
-    w->p.v[0] = 1e-3;
+    set_vel(w, 0, 0, 1e-3);
     int rc = floe_world_prepare(w);
     for (int s = 0; s < 2000 && !rc; s++) rc = floe_world_step(w);
-    double vend = fabs(w->p.v[0]);
+    double vend = fabs(pview(w).v[0]);
     CHECK(rc == FLOE_OK && vend < 1e-6, "%s: dashpot at 0.9x critical decays (|v| %.3g): %s", name(integ), vend,
           floe_world_last_error(w));
     floe_world_destroy(w);
     w = osc_world(integ, 1.1 * crit, &o, 0);
-    w->p.v[0] = 1e-3;
+    set_vel(w, 0, 0, 1e-3);
     rc = floe_world_prepare(w);
     for (int s = 0; s < 2000 && !rc; s++) rc = floe_world_step(w);
     printf("  %-16s dashpot 1.1x: %s\n", name(integ), floe_world_last_error(w));
-    CHECK(rc == FLOE_EUNSTABLE && strstr(floe_world_last_error(w), "particle 0") && isfinite(w->p.v[0]),
+    CHECK(rc == FLOE_EUNSTABLE && strstr(floe_world_last_error(w), "particle 0") && isfinite(pview(w).v[0]),
           "%s: dashpot at 1.1x critical detected (rc %d)", name(integ), rc);
     floe_world_destroy(w);
     if (integ == FLOE_RK2) {
@@ -232,8 +233,8 @@ static void test_contact_oscillator(int integ) {
         double zmin = INFINITY, zmax = -INFINITY;
         for (int s = 0; s < 3000 && !rc; s++) {
             rc = floe_world_step(w);
-            if (w->p.x[5] < zmin) zmin = w->p.x[5];
-            if (w->p.x[5] > zmax) zmax = w->p.x[5];
+            if (pview(w).x[5] < zmin) zmin = pview(w).x[5];
+            if (pview(w).x[5] > zmax) zmax = pview(w).x[5];
         }
         if (!pass) {
             printf("  %-16s contact oscillator: estimate %.4g s = %.3f x 2/w; at 0.9x: overlap %.3g .. %.3g m\n",
@@ -249,7 +250,7 @@ static void test_contact_oscillator(int integ) {
             printf("  %-16s contact oscillator 1.1x: %s\n", name(integ), floe_world_last_error(w));
             CHECK(rc == FLOE_EUNSTABLE && strstr(floe_world_last_error(w), "particle"),
                   "%s: contact oscillator at 1.1x detected (rc %d)", name(integ), rc);
-            CHECK(isfinite(w->p.x[5]) && isfinite(w->p.v[5]), "%s: finite state at the stop", name(integ));
+            CHECK(isfinite(pview(w).x[5]) && isfinite(pview(w).v[5]), "%s: finite state at the stop", name(integ));
         }
         floe_world_destroy(w);
     }
@@ -270,7 +271,7 @@ int main(void) {
     floe_world_prepare(a);
     floe_world_prepare(b);
     for (int s = 0; s < 1000; s++) { floe_world_step(a); floe_world_step(b); }
-    double dx = fabs(a->p.x[0] - b->p.x[0]);
+    double dx = fabs(pview(a).x[0] - pview(b).x[0]);
     printf("  leapfrog vs velocity Verlet after 1000 steps: |dx| %.3g m\n", dx);
     CHECK(dx < 1e-15, "leapfrog positions equal velocity Verlet's (%.3g)", dx);
     floe_world_destroy(a);

@@ -4,7 +4,8 @@
  * shape's volume matches the closed mesh's own (1e-6: assimp reads floats) and the sphere's (0.1 %). */
 #include "check.h"
 #include "floe_mesh.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 
 #include <math.h>
 #include <stdlib.h>

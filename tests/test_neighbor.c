@@ -3,7 +3,7 @@
  * huge (1e3 m, offset 1e6 m) domains; the shear history of touching pairs survives a
  * rebuild; a moving wall does work that the energy ledger books. */
 #include "floe.h"
-#include "world_internal.h"
+#include "world_internal.h" /* internal: unit test of the neighbour list (core/world/neighbor.c: floe_nl_*, the Verlet skin) */
 #include "check.h"
 #include <stdlib.h>
 #include <string.h>

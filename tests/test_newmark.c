@@ -6,7 +6,8 @@
  * damping, breakage with and without the line search of eqs 29-30, bad input. */
 #include "check.h"
 #include "floe_newmark.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -3,8 +3,8 @@
  * VTK writers' files. */
 #include "check.h"
 #include "floe_observer.h"
-#include "file_writer.h"
-#include "world_internal.h"
+#include "file_writer.h" /* internal: unit test of the observers' file writer */
+#include "world_internal.h" /* internal: unit test of the observers on a hand-made world (its contacts, time and particles set directly) */
 
 #include <errno.h>
 #include <stdlib.h>

@@ -22,7 +22,8 @@
 #include "check.h"
 #include "floe_pd.h"
 #include "floe_scene.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -65,7 +66,7 @@ static double section_u(const floe_world *w, const floe_pd_body *b, int f0, doub
     int n = 0;
     for (int i = 0; i < b->n; i++)
         if (fabs(b->X[3 * i] - xc) < 0.25 * b->dx) {
-            s += w->p.x[3 * (f0 + i)] - b->X[3 * i];
+            s += pview(w).x[3 * (f0 + i)] - b->X[3 * i];
             n++;
         }
     return n ? s / n : NAN;
@@ -117,7 +118,7 @@ static void test_bar_static(void) {
     CHECK_NEAR(mean, eps, 0.05, model == FLOE_PD_PMB ? "PMB bar static strain vs F/(A E)" : "LPS bar static strain vs F/(A E)");
     CHECK(floe_world_energy_balance_error(w) < 1e-3, "energy ledger closes with the body force (%.2e)",
           floe_world_energy_balance_error(w));
-    CHECK(w->energy.work_body > 0, "the body force did work (%.3g J)", w->energy.work_body);
+    CHECK(floe_world_energy(w).work_body > 0, "the body force did work (%.3g J)", floe_world_energy(w).work_body);
     floe_world_destroy(w);
 }
 
@@ -153,7 +154,7 @@ static void test_kinematic(void) {
     CHECK(rc == FLOE_OK, "run: %s", floe_world_last_error(w));
     double t = floe_world_time(w), ev = 0, evel = 0, ef = 0, ed = 0, emid = 0;
     for (int i = 0; i < b->n; i++) {
-        const double *X = b->X + 3 * i, *x = w->p.x + 3 * (f0 + i), *vi = w->p.v + 3 * (f0 + i);
+        const double *X = b->X + 3 * i, *x = pview(w).x + 3 * (f0 + i), *vi = pview(w).v + 3 * (f0 + i);
         for (int k = 0; k < 3; k++) {
             if (X[0] < 2 * dx) {
                 ev = fmax(ev, fabs(x[k] - (X[k] + v[k] * t)));
@@ -237,7 +238,7 @@ static void test_body_force_values(void) {
     /* at rest in the reference configuration the bond forces vanish: f is the body force */
     double err = 0, big = 0;
     for (int i = 0; i < b->n; i++) {
-        const double *X = b->X + 3 * i, *f = w->p.f + 3 * (f0 + i);
+        const double *X = b->X + 3 * i, *f = pview(w).f + 3 * (f0 + i);
         double want[3] = {0, 0, 0};
         if (X[0] > 1e-3 && X[0] < 3e-3) floe_v3_set(want, scale[0] * X[0] * b->V[i], scale[1] * b->V[i], 0);
         for (int k = 0; k < 3; k++) {
@@ -287,7 +288,7 @@ static void test_broken_contact(void) {
                 }
         int f0;
         CHECK(floe_world_add_pd_body(w, b, mat, NULL, &f0) == FLOE_OK, "add: %s", floe_world_last_error(w));
-        for (int i = 0; i < b->n; i++) w->p.v[3 * (f0 + i)] = i < 64 ? vx : -vx;
+        for (int i = 0; i < b->n; i++) set_vel(w, f0 + i, 0, i < 64 ? vx : -vx);
         int rc = floe_world_prepare(w), maxc = 0;
         double gap_min = INFINITY, va = 0;
         long steps = (long)(4 * dx / vx / floe_world_dt(w));
@@ -296,14 +297,14 @@ static void test_broken_contact(void) {
             if (floe_world_contact_count(w) > maxc) maxc = floe_world_contact_count(w);
             double xa = -INFINITY, xb = INFINITY; /* facing planes: mean x of the inner layers */
             for (int i = 0; i < b->n; i++) {
-                if (i < 64 && b->X[3 * i] > 2.5 * dx) xa = fmax(xa, w->p.x[3 * (f0 + i)]);
-                if (i >= 64 && b->X[3 * i] < 5.5 * dx) xb = fmin(xb, w->p.x[3 * (f0 + i)]);
+                if (i < 64 && b->X[3 * i] > 2.5 * dx) xa = fmax(xa, pview(w).x[3 * (f0 + i)]);
+                if (i >= 64 && b->X[3 * i] < 5.5 * dx) xb = fmin(xb, pview(w).x[3 * (f0 + i)]);
             }
             gap_min = fmin(gap_min, xb - xa);
         }
         CHECK(rc == FLOE_OK, "run: %s", floe_world_last_error(w));
         va = 0;
-        for (int i = 0; i < 64; i++) va += w->p.v[3 * (f0 + i)] / 64;
+        for (int i = 0; i < 64; i++) va += pview(w).v[3 * (f0 + i)] / 64;
         printf("  %s (%d bonds across): %ld steps, max contacts %d, closest approach of the faces %.3g dx, "
                "half A ends at vx %.3g m/s (started %.3g)\n", variant ? "connecting bonds broken" : "intact body",
                across, steps, maxc, gap_min / dx, va, vx);
@@ -338,27 +339,28 @@ static void test_broken_joins_list(void) {
         int64_t k = floe_pd_bond_index(b, 0, 5), k1 = floe_pd_bond_index(b, 0, 1);
         CHECK(k >= 0 && fabs(b->len[k] - sqrt(2) * dx) < 1e-12 && k1 >= 0, "diagonal bond found");
         int listed0 = 0, listed1 = 0, near0 = 0, near1 = 0;
-        for (int q = 0; q < w->nl.npairs; q++) {
-            listed0 |= w->nl.pi[q] == f0 && w->nl.pj[q] == f0 + 5;
-            near0 |= w->nl.pi[q] == f0 && w->nl.pj[q] == f0 + 1;
+        const int *pi, *pj;
+        for (int q = 0, np = floe_world_neighbor_pairs(w, &pi, &pj); q < np; q++) {
+            listed0 |= pi[q] == f0 && pj[q] == f0 + 5;
+            near0 |= pi[q] == f0 && pj[q] == f0 + 1;
         }
         b->broken[k] = 1; /* as the material would break them */
         b->broken[k1] = 1;
         b->nbroken += 2;
-        long rb = w->nl.rebuilds;
+        long rb = nstats(w).rebuilds;
         CHECK(floe_world_step(w) == FLOE_OK, "step after the breakage");
-        for (int q = 0; q < w->nl.npairs; q++) {
-            listed1 |= w->nl.pi[q] == f0 && w->nl.pj[q] == f0 + 5;
-            near1 |= w->nl.pi[q] == f0 && w->nl.pj[q] == f0 + 1;
+        for (int q = 0, np = floe_world_neighbor_pairs(w, &pi, &pj); q < np; q++) {
+            listed1 |= pi[q] == f0 && pj[q] == f0 + 5;
+            near1 |= pi[q] == f0 && pj[q] == f0 + 1;
         }
         printf("  broken_tension_only %d: diagonal pair listed %d -> %d, nearest pair %d -> %d, rebuilds +%ld\n",
-               tension_only, listed0, listed1, near0, near1, w->nl.rebuilds - rb);
+               tension_only, listed0, listed1, near0, near1, nstats(w).rebuilds - rb);
         CHECK(!listed0 && !near0, "bonded pairs are not in the contact list");
         if (!tension_only) {
-            CHECK(listed1 && w->nl.rebuilds == rb + 1, "the broken diagonal pair enters the list at once");
+            CHECK(listed1 && nstats(w).rebuilds == rb + 1, "the broken diagonal pair enters the list at once");
             CHECK(!near1, "the broken nearest pair (overlapping in the reference) stays out");
         } else {
-            CHECK(!listed1 && w->nl.rebuilds == rb, "a broken PMB bond that still pushes keeps its pair out, no rebuild");
+            CHECK(!listed1 && nstats(w).rebuilds == rb, "a broken PMB bond that still pushes keeps its pair out, no rebuild");
         }
         floe_world_destroy(w);
     }
@@ -372,7 +374,7 @@ static void test_rollback(void) {
     floe_pd_body *b = box_body(4, 4, 4, 1e-3, &pm);
     CHECK(b && floe_world_add_pd_body(w, b, mat, NULL, NULL) == FLOE_OK, "first body");
     CHECK(floe_world_prepare(w) == FLOE_OK && floe_world_step(w) == FLOE_OK, "runs");
-    int n0 = floe_world_particle_count(w), g0 = w->ngeoms, pd0 = w->npd, prep0 = w->prepared;
+    int n0 = floe_world_particle_count(w), g0 = floe_world_geometry_count(w), pd0 = floe_world_pd_body_count(w), prep0 = floe_world_is_prepared(w);
     /* a body whose point 5 has an infinite volume: points 0-4 are added, then it fails */
     double X[3 * 8], V[8];
     for (int i = 0; i < 8; i++) {
@@ -385,9 +387,9 @@ static void test_rollback(void) {
     int rc = floe_world_add_pd_body(w, bad, mat, NULL, NULL);
     printf("  failed add: '%s'\n", floe_world_last_error(w));
     CHECK(rc == FLOE_EINVAL && strstr(floe_world_last_error(w), "point 5"), "the add fails at point 5 (%d)", rc);
-    CHECK(floe_world_particle_count(w) == n0 && w->ngeoms == g0 && w->npd == pd0 && w->prepared == prep0,
+    CHECK(floe_world_particle_count(w) == n0 && floe_world_geometry_count(w) == g0 && floe_world_pd_body_count(w) == pd0 && floe_world_is_prepared(w) == prep0,
           "the world is unchanged (particles %d/%d, geometries %d/%d, bodies %d/%d)", floe_world_particle_count(w), n0,
-          w->ngeoms, g0, w->npd, pd0);
+          floe_world_geometry_count(w), g0, floe_world_pd_body_count(w), pd0);
     CHECK(floe_world_step(w) == FLOE_OK, "and still runs: %s", floe_world_last_error(w));
     floe_pd_body *bad2 = box_body(2, 2, 2, 1e-3, &pm);
     double vnan[3] = {NAN, 0, 0};
@@ -427,7 +429,7 @@ static void test_scene(void) {
               "three regions (%d points fixed, %d pushed, %d moving)", floe_world_pd_region_points(w, 0),
               floe_world_pd_region_points(w, 1), floe_world_pd_region_points(w, 2));
         CHECK(floe_world_run(w, 2e-6, NULL, NULL) == FLOE_OK, "runs: %s", floe_world_last_error(w));
-        CHECK(w->energy.work_body > 0, "the body force works (%.3g J)", w->energy.work_body);
+        CHECK(floe_world_energy(w).work_body > 0, "the body force works (%.3g J)", floe_world_energy(w).work_body);
         floe_world_destroy(w);
         w = NULL;
     }

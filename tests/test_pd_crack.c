@@ -6,7 +6,8 @@
 #include "check.h"
 #include "floe_pd.h"
 #include "floe_scene.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -505,7 +506,7 @@ static void test_faces_contact(void) {
         maxc = maxc > floe_world_contact_count(w) ? maxc : floe_world_contact_count(w);
     }
     double vmax = 0;
-    for (int i = 0; i < b->n; i++) vmax = fmax(vmax, floe_v3_norm(w->p.v + 3 * (f0 + i)));
+    for (int i = 0; i < b->n; i++) vmax = fmax(vmax, floe_v3_norm(pview(w).v + 3 * (f0 + i)));
     printf("  split plate at rest: %d contacts, max speed %g m/s after 20 steps\n", maxc, vmax);
     CHECK(maxc == 0 && vmax == 0, "at rest: no contact across the crack (%d) and no motion (%g m/s)", maxc, vmax);
     /* push the halves together: the upper half moves down at 20 m/s (1.2 dx in 1500 steps
@@ -513,7 +514,7 @@ static void test_faces_contact(void) {
      * reach R_i + R_j = 1.13 dx) */
     printf("  dt %.3g s\n", floe_world_dt(w));
     for (int i = 0; i < b->n; i++)
-        if (b->X[3 * i + 1] > 0.01) w->p.v[3 * (f0 + i) + 1] = -20.0;
+        if (b->X[3 * i + 1] > 0.01) set_vel(w, f0 + i, 1, -20.0);
     double gap_min = INFINITY;
     maxc = 0;
     for (int s = 0; s < 1500; s++) {
@@ -523,7 +524,7 @@ static void test_faces_contact(void) {
         for (int i = 0; i < b->n; i++) {
             if (fabs(b->X[3 * i + 1] - 0.0105) > 1e-9) continue;
             int j = i - 20; /* the point below across the crack (20 per row) */
-            double g = w->p.x[3 * (f0 + i) + 1] - w->p.x[3 * (f0 + j) + 1];
+            double g = pview(w).x[3 * (f0 + i) + 1] - pview(w).x[3 * (f0 + j) + 1];
             gap_min = fmin(gap_min, g);
         }
     }
@@ -579,8 +580,8 @@ static void test_mode_one(void) {
             double ey = fabs(X[1] - 0.02), ex = fabs(X[0] - 0.02);
             if (ey < 0.003 && ex > 0.006) tips = fmax(tips, phi[i]);
             if (ey > 0.004) off = fmax(off, phi[i]);
-            if (ex < 0.001 && fabs(X[1] - 0.0205) < 1e-9) up = w->p.x[3 * (f0 + i) + 1] - X[1];
-            if (ex < 0.001 && fabs(X[1] - 0.0195) < 1e-9) dn = w->p.x[3 * (f0 + i) + 1] - X[1];
+            if (ex < 0.001 && fabs(X[1] - 0.0205) < 1e-9) up = pview(w).x[3 * (f0 + i) + 1] - X[1];
+            if (ex < 0.001 && fabs(X[1] - 0.0195) < 1e-9) dn = pview(w).x[3 * (f0 + i) + 1] - X[1];
         }
         res[cracked][0] = (double)b->nbroken;
         res[cracked][1] = tips;

@@ -33,7 +33,8 @@
 #include "check.h"
 #include "floe.h"
 #include "floe_pd.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -57,7 +58,7 @@ static void damp(const floe_world *w, int i, double t, double f[3], double torqu
     (void)t; (void)torque;
     const damping *d = user;
     if (i < d->first || i >= d->first + d->n) return;
-    for (int a = 0; a < 3; a++) f[a] -= d->c * w->p.mass[i] * w->p.v[3 * i + a];
+    for (int a = 0; a < 3; a++) f[a] -= d->c * pview(w).mass[i] * pview(w).v[3 * i + a];
 }
 
 /* runs one material; returns the fitted exponent, *ratio1 = F/F_Hertz at 1 cm */
@@ -105,7 +106,7 @@ static double run(int model, double dx, double *ratio1)
     CHECK(floe_world_add_pd_body(w, b, mat, NULL, &first) == FLOE_OK, "add body: %s", floe_world_last_error(w));
     int nheld = 0;
     for (int i = 0; i < n; i++)
-        if (w->pd[0]->X[3 * i + 2] < zmin + 0.5 * dx) { floe_world_set_motion(w, first + i, hold, NULL); nheld++; }
+        if (floe_world_pd_body(w, 0, NULL)->X[3 * i + 2] < zmin + 0.5 * dx) { floe_world_set_motion(w, first + i, hold, NULL); nheld++; }
     /* the sphere, 0.2 mm above first contact, over the centre (CENTRED) or the top point */
     const double gap = 2e-4;
     int gs = floe_world_add_geometry(w, floe_sphere_create(RS));
@@ -134,16 +135,16 @@ static double run(int model, double dx, double *ratio1)
     int ns = 0;
     for (long k = 0; k < steps && ns < NS; k++) {
         if (floe_world_step(w) != FLOE_OK) { CHECK(0, "step: %s", floe_world_last_error(w)); break; }
-        double d = z0 - w->p.x[3 * sp + 2];
+        double d = z0 - pview(w).x[3 * sp + 2];
         if (d >= 0.0005 * (ns + 1) - 1e-12) {
             ds[ns] = d;
-            Fs[ns] = w->p.f[3 * sp + 2]; /* the contact force on the sphere (no other load) */
+            Fs[ns] = pview(w).f[3 * sp + 2]; /* the contact force on the sphere (no other load) */
             ns++;
         }
     }
     const double Estar = E / (1 - NU * NU);
     printf("%s: %d points (dx %.3g cm, %lld bonds), %d held, dt %.3g s, %ld steps, damping %.0f 1/s\n",
-           model == FLOE_PD_PMB ? "PMB" : "LPS", n, dx * 100, (long long)w->pd[0]->nbond, nheld, dt, steps, dm.c);
+           model == FLOE_PD_PMB ? "PMB" : "LPS", n, dx * 100, (long long)floe_world_pd_body(w, 0, NULL)->nbond, nheld, dt, steps, dm.c);
     printf("  %8s %12s %12s %8s\n", "d [cm]", "F [N]", "F_Hertz [N]", "ratio");
     double sx = 0, sy = 0, sxx = 0, sxy = 0;
     int nf = 0;

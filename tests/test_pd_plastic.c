@@ -9,7 +9,8 @@
 #include "check.h"
 #include "floe_pd.h"
 #include "floe_scene.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -3,7 +3,8 @@
  * particles, the energy ledger across bond breakage, momentum. */
 #include "check.h"
 #include "floe_pd.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -25,8 +26,8 @@ static floe_pd_body *bar(int nx, int ny, int nz, double dx, double s_c) {
 
 static void momentum(const floe_world *w, double P[3]) {
     floe_v3_set(P, 0, 0, 0);
-    for (int i = 0; i < w->p.n; i++)
-        if (w->p.motion[i] == FLOE_FREE) floe_v3_axpy(P, w->p.mass[i], w->p.v + 3 * i);
+    for (int i = 0; i < pview(w).n; i++)
+        if (pview(w).motion[i] == FLOE_FREE) floe_v3_axpy(P, pview(w).mass[i], pview(w).v + 3 * i);
 }
 
 static floe_world *new_world(int *mat) {
@@ -50,7 +51,7 @@ static void test_pulse(void) {
     int first = -1;
     CHECK(floe_world_add_pd_body(w, b, mat, NULL, &first) == FLOE_OK, "add PD body: %s", floe_world_last_error(w));
     for (int i = 0; i < b->n; i++) /* the first three layers move at 0.1 m/s */
-        if (b->X[3 * i] < 3e-3) w->p.v[3 * (first + i)] = 0.1;
+        if (b->X[3 * i] < 3e-3) set_vel(w, first + i, 0, 0.1);
     CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
     double P0[3], P1[3];
     momentum(w, P0);
@@ -107,7 +108,7 @@ static void test_impact(void) {
     }
     CHECK(rc == FLOE_OK, "impact run: %s", floe_world_last_error(w));
     momentum(w, P1);
-    double vz = w->p.v[3 * sp + 2], err = floe_world_energy_balance_error(w);
+    double vz = pview(w).v[3 * sp + 2], err = floe_world_energy_balance_error(w);
     printf("  impact: %ld steps of %.3g s, sphere vz -1 -> %.4f m/s, max contacts %d, momentum z %.6e -> %.6e, "
            "balance error %.2e\n", steps, floe_world_dt(w), vz, maxc, P0[2], P1[2], err);
     CHECK(maxc > 0, "the sphere touches the plate's points");
@@ -125,7 +126,7 @@ static void test_fracture(void) {
     floe_pd_body *b = bar(30, 3, 3, 1e-3, 2e-3);
     int first = -1;
     CHECK(b && floe_world_add_pd_body(w, b, mat, NULL, &first) == FLOE_OK, "add bar");
-    for (int i = 0; i < b->n; i++) w->p.v[3 * (first + i)] = b->X[3 * i] < 15e-3 ? -20.0 : 20.0;
+    for (int i = 0; i < b->n; i++) set_vel(w, first + i, 0, b->X[3 * i] < 15e-3 ? -20.0 : 20.0);
     CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
     int rc = 0;
     long steps = (long)(20e-6 / floe_world_dt(w));
@@ -139,8 +140,8 @@ static void test_fracture(void) {
     double vl = 0, vr = 0;
     int nl = 0, nr = 0;
     for (int i = 0; i < b->n; i++) {
-        if (b->X[3 * i] < 15e-3) { vl += w->p.v[3 * (first + i)]; nl++; }
-        else { vr += w->p.v[3 * (first + i)]; nr++; }
+        if (b->X[3 * i] < 15e-3) { vl += pview(w).v[3 * (first + i)]; nl++; }
+        else { vr += pview(w).v[3 * (first + i)]; nr++; }
     }
     gap = vr / nr - vl / nl;
     floe_energy e = floe_world_energy(w);

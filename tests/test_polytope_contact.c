@@ -16,7 +16,8 @@
  *     gradient of its energy; flat faces; off-centre stacks at rest in 2D and 3D (the 3D
  *     one needs the patch's twist friction); a box spinning on a floor slows at the
  *     Coulomb rate of its patch (1 %); collisions conserve energy. */
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 #include "floe_contact.h"
 #include "floe_geometry.h"
 #include "check.h"
@@ -72,7 +73,7 @@ static floe_geometry *rand_polyhedron(double r) {
 
 /* world-frame face planes (n, d: n.x <= d inside) of particle i (box or polytope) */
 static int world_planes(const floe_world *w, int i, double *out) {
-    const floe_geometry *g = w->geoms[w->p.geom[i]];
+    const floe_geometry *g = floe_world_particle_geometry(w, i);
     double buf[24];
     const double *P;
     int np;
@@ -86,13 +87,13 @@ static int world_planes(const floe_world *w, int i, double *out) {
                 B[3] = h[a];
             }
         P = buf;
-        np = w->def.dim == 2 ? 4 : 6;
+        np = floe_world_definition(w)->dim == 2 ? 4 : 6;
     } else {
         const floe_polytope *p = (const floe_polytope *)g;
         P = p->plane;
         np = p->np;
     }
-    const double *x = w->p.x + 3 * i, *q = w->p.q + 4 * i;
+    const double *x = pview(w).x + 3 * i, *q = pview(w).q + 4 * i;
     for (int k = 0; k < np; k++) {
         double n[3];
         floe_q_rotate(n, q, P + 4 * k);
@@ -194,11 +195,12 @@ static void test_depth(int dim) {
         double A[4 * 64], B[4 * 64];
         int na = world_planes(w, 0, A), nb = world_planes(w, 1, B);
         double ref = fmax(glpk_depth(dim, A, na, B, nb), glpk_depth(dim, B, nb, A, na));
-        double got = w->ncontacts > 0 ? w->contacts[0].depth : 0.0;
+        const floe_contact_info *ci = NULL;
+        double got = floe_world_contacts(w, &ci) > 0 ? ci[0].depth : 0.0;
         double size = fmin(ra, rb);
         if (ref > 1e-9 * size) {
             n++;
-            contacts += w->ncontacts > 0;
+            contacts += floe_world_contact_count(w) > 0;
             double e = fabs(got - ref) / size;
             good += e <= 1e-9;
             if (e > worst) worst = e;
@@ -257,31 +259,31 @@ static double collide(int dim, double scale, double dt_frac, double *peak, char 
         return NAN;
     }
     /* speed: a few per cent of the size as the largest overlap */
-    double m = w->p.mass[0] * w->p.mass[1] / (w->p.mass[0] + w->p.mass[1]);
+    double m = pview(w).mass[0] * pview(w).mass[1] / (pview(w).mass[0] + pview(w).mass[1]);
     double v = 0.02 * fmin(ra, rb) * sqrt(kn / m);
+    double vel[2][3], omg[2][3] = {{0, 0, 0}, {0, 0, 0}};
     for (int k = 0; k < 3; k++) {
-        w->p.v[k] = 0.5 * v * u[k];
-        w->p.v[3 + k] = -0.5 * v * u[k];
+        vel[0][k] = 0.5 * v * u[k];
+        vel[1][k] = -0.5 * v * u[k];
     }
     double om = v / fmin(ra, rb);
     if (dim == 2) {
-        w->p.w[2] = uni(-0.3, 0.3) * om;
-        w->p.w[5] = uni(-0.3, 0.3) * om;
+        omg[0][2] = uni(-0.3, 0.3) * om;
+        omg[1][2] = uni(-0.3, 0.3) * om;
     } else {
         double t[3];
         rand_unit(t);
-        for (int k = 0; k < 3; k++) w->p.w[k] = 0.3 * om * t[k] * urand();
+        for (int k = 0; k < 3; k++) omg[0][k] = 0.3 * om * t[k] * urand();
         rand_unit(t);
-        for (int k = 0; k < 3; k++) w->p.w[3 + k] = 0.3 * om * t[k] * urand();
+        for (int k = 0; k < 3; k++) omg[1][k] = 0.3 * om * t[k] * urand();
     }
-    /* the angular momentum is the integrated variable: set from w (and redo the step) */
-    w->prepared = 0;
-    floe_world_def *d = &w->def;
+    for (int i = 0; i < 2; i++) floe_world_set_velocity(w, i, vel[i], omg[i]);
+    /* redo the step for these velocities (automatic, or dt_frac x critical) */
+    const int allow = floe_world_definition(w)->allow_unstable_dt;
+    floe_world_set_dt(w, 0, allow);
     if (dt_frac > 0) {
-        d->dt = 0;
         floe_world_prepare(w);
-        d->dt = dt_frac * floe_world_critical_dt(w);
-        w->prepared = 0;
+        floe_world_set_dt(w, dt_frac * floe_world_critical_dt(w), allow);
     }
     if (floe_world_prepare(w)) {
         snprintf(why, nwhy, "prepare: %s", floe_world_last_error(w));
@@ -305,7 +307,7 @@ static double collide(int dim, double scale, double dt_frac, double *peak, char 
         else if (touched && ++apart > 50) {
             /* separating: bounding spheres apart for good */
             double dx[3];
-            floe_v3_sub(dx, w->p.x + 3, w->p.x);
+            floe_v3_sub(dx, pview(w).x + 3, pview(w).x);
             if (floe_v3_norm(dx) > ra + rb) break;
         }
     }
@@ -356,8 +358,8 @@ static double body_drift(const floe_world *w, int i, const double *x0, const dou
     for (int c = 0; c < 8; c++) {
         double X[3] = {(c & 1 ? 0.5 : -0.5) * size, (c & 2 ? 0.5 : -0.5) * size, (c & 4 ? 0.5 : -0.5) * size};
         double a[3], b[3];
-        floe_q_rotate(a, w->p.q + 4 * i, X);
-        floe_v3_add(a, a, w->p.x + 3 * i);
+        floe_q_rotate(a, pview(w).q + 4 * i, X);
+        floe_v3_add(a, a, pview(w).x + 3 * i);
         floe_q_rotate(b, q0 + 4 * i, X);
         floe_v3_add(b, b, x0 + 3 * i);
         floe_v3_sub(a, a, b);
@@ -373,15 +375,15 @@ static void run_rest(floe_world *w, const char *name, double size, long settle) 
     if (rc) return;
     long hold = 100000;
     for (long s = 0; s < settle && !rc; s++) rc = floe_world_step(w);
-    int n = w->p.n;
+    int n = pview(w).n;
     double *x0 = malloc(sizeof(double) * 3 * n), *q0 = malloc(sizeof(double) * 4 * n);
-    memcpy(x0, w->p.x, sizeof(double) * 3 * n);
-    memcpy(q0, w->p.q, sizeof(double) * 4 * n);
+    memcpy(x0, pview(w).x, sizeof(double) * 3 * n);
+    memcpy(q0, pview(w).q, sizeof(double) * 4 * n);
     for (long s = 0; s < hold && !rc; s++) rc = floe_world_step(w);
     CHECK(rc == FLOE_OK, "%s run: %s", name, floe_world_last_error(w));
     double worst = 0;
     for (int i = 0; i < n; i++)
-        if (w->p.motion[i] == FLOE_FREE) worst = fmax(worst, body_drift(w, i, x0, q0, size));
+        if (pview(w).motion[i] == FLOE_FREE) worst = fmax(worst, body_drift(w, i, x0, q0, size));
     printf("  %s: drift over %ld steps after settling %.2e of a size (bound 1e-6), %d contacts\n", name, hold,
            worst / size, floe_world_contact_count(w));
     CHECK(worst < 1e-6 * size, "%s at rest: drift %.3g of a size over 1e5 steps (bound 1e-6)", name, worst / size);
@@ -450,10 +452,10 @@ static void test_manifold_twist(void) {
     int b = add_body(w, floe_box_create(a, a, h), x, q, NULL, om);
     CHECK(floe_world_prepare(w) == FLOE_OK, "manifold twist prepare: %s", floe_world_last_error(w));
     double t1 = 0.01, t2 = 0.05, w1 = NAN, w2;
-    while (w->time < t2 && floe_world_step(w) == FLOE_OK)
-        if (isnan(w1) && w->time >= t1) w1 = w->p.w[3 * b + 2], t1 = w->time;
-    w2 = w->p.w[3 * b + 2];
-    t2 = w->time;
+    while (floe_world_time(w) < t2 && floe_world_step(w) == FLOE_OK)
+        if (isnan(w1) && floe_world_time(w) >= t1) w1 = pview(w).w[3 * b + 2], t1 = floe_world_time(w);
+    w2 = pview(w).w[3 * b + 2];
+    t2 = floe_world_time(w);
     double alpha = (w1 - w2) / (t2 - t1), ref = mu * m * g * (a / sqrt(2.0)) / (m * a * a / 6);
     printf("  3D box spinning on a wall (linear law, manifold): d(omega)/dt %.5g rad/s^2, Coulomb at the corners "
            "%.5g (rel %.2e)\n", alpha, ref, fabs(alpha / ref - 1));
@@ -493,8 +495,8 @@ static void test_prism_pile(void) {
  * energy is defined where the detection misses): 1 when both find a contact */
 static int detect_overlap(floe_world *w, floe_contact *c) {
     memset(c, 0, sizeof *c);
-    int touch = floe_world_detect(w, 0, 1, 0, NULL, c) == 1;
-    return floe_world_detect_overlap(w, 0, 1, 0, c) == 1 && touch;
+    int touch = floe_world_probe_contact(w, 0, 1, 0, c) == 1;
+    return floe_world_probe_overlap(w, 0, 1, 0, c) == 1 && touch;
 }
 
 /* adds ga at the origin (orientation qa) and gb at xb (qb) to the empty world w, their
@@ -519,10 +521,13 @@ static void overlap_gradient(floe_world *w, int dim, double scale, double *g) {
         double Ip = 0, Im = 0;
         for (int sgn = -1; sgn <= 1; sgn += 2) {
             double x0[3], q0[4];
-            memcpy(x0, w->p.x, sizeof x0);
-            memcpy(q0, w->p.q, sizeof q0);
-            if (k < nt) w->p.x[k] += sgn * h;
-            else {
+            memcpy(x0, pview(w).x, sizeof x0);
+            memcpy(q0, pview(w).q, sizeof q0);
+            if (k < nt) {
+                double x1[3] = {x0[0], x0[1], x0[2]};
+                x1[k] += sgn * h;
+                floe_world_set_pose(w, 0, x1, NULL);
+            } else {
                 double th[3] = {0, 0, 0}, dq[4], qn[4];
                 if (dim == 2) quat_z(dq, sgn * h / scale);
                 else {
@@ -530,13 +535,12 @@ static void overlap_gradient(floe_world *w, int dim, double scale, double *g) {
                     floe_q_from_rotvec(dq, th);
                 }
                 floe_q_mul(qn, dq, q0);
-                memcpy(w->p.q, qn, sizeof qn);
+                floe_world_set_pose(w, 0, NULL, qn);
             }
             floe_contact c2;
             detect_overlap(w, &c2);
             if (sgn < 0) Im = c2.area_energy; else Ip = c2.area_energy;
-            memcpy(w->p.x, x0, sizeof x0);
-            memcpy(w->p.q, q0, sizeof q0);
+            floe_world_set_pose(w, 0, x0, q0);
         }
         g[k] = -(Ip - Im) / (2 * h) * (k < nt ? 1 : scale);
     }
@@ -560,7 +564,7 @@ static void test_overlap_gradient(void) {
         double g[3], F[3], Mz;
         overlap_gradient(w, 2, scale, g);
         floe_v3_copy(F, c.area_force);
-        Mz = (c.point[0] - w->p.x[0]) * F[1] - (c.point[1] - w->p.x[1]) * F[0];
+        Mz = (c.point[0] - pview(w).x[0]) * F[1] - (c.point[1] - pview(w).x[1]) * F[0];
         double ref = fmax(fabs(F[0]) + fabs(F[1]), c.area);
         double e = fmax(fmax(fabs(g[0] - F[0]), fabs(g[1] - F[1])), fabs(g[2] - Mz) / scale) / ref;
         if (e > worst) worst = e;
@@ -615,7 +619,7 @@ static void test_overlap_gradient3(void) {
         double g[6], M[3], r[3];
         overlap_gradient(w, 3, scale, g);
         /* moment on A about its centre: (point - x) x F + couple */
-        floe_v3_sub(r, c.point, w->p.x);
+        floe_v3_sub(r, c.point, pview(w).x);
         floe_v3_cross(M, r, c.area_force);
         floe_v3_add(M, M, c.area_couple);
         double ref = fmax(floe_v3_norm(c.area_force), c.area / scale), e = 0;
@@ -687,10 +691,10 @@ static void test_overlap_twist(void) {
     int b = add_body(w, floe_box_create(a, a, a), x, q, NULL, om);
     CHECK(floe_world_prepare(w) == FLOE_OK, "twist prepare: %s", floe_world_last_error(w));
     double t1 = 0.02, t2 = 0.06, w1 = NAN, w2 = NAN;
-    while (w->time < t2 && floe_world_step(w) == FLOE_OK)
-        if (isnan(w1) && w->time >= t1) w1 = w->p.w[3 * b + 2], t1 = w->time;
-    w2 = w->p.w[3 * b + 2];
-    t2 = w->time;
+    while (floe_world_time(w) < t2 && floe_world_step(w) == FLOE_OK)
+        if (isnan(w1) && floe_world_time(w) >= t1) w1 = pview(w).w[3 * b + 2], t1 = floe_world_time(w);
+    w2 = pview(w).w[3 * b + 2];
+    t2 = floe_world_time(w);
     double alpha = (w1 - w2) / (t2 - t1), ref = 4 * mu * g / (a * sqrt(M_PI));
     printf("  3D box spinning on a floor (overlap law): d(omega)/dt %.5g rad/s^2, Coulomb over the patch %.5g "
            "(rel %.2e)\n", alpha, ref, fabs(alpha / ref - 1));

@@ -14,7 +14,8 @@
 #include "check.h"
 #include "floe.h"
 #include "floe_scene.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -92,10 +93,10 @@ static double bounce(int law, double e, double phi, long *steps_in_contact, doub
     long nc = 0;
     for (long s = 0; s < 1000000; s++) {
         if (floe_world_step(w)) { printf("step: %s\n", floe_world_last_error(w)); break; }
-        nc += w->ncontacts > 0;
-        if (nc > 0 && w->ncontacts == 0 && w->p.v[2] > 0) break;
+        nc += floe_world_contact_count(w) > 0;
+        if (nc > 0 && floe_world_contact_count(w) == 0 && pview(w).v[2] > 0) break;
     }
-    double er = w->p.v[2] / V0;
+    double er = pview(w).v[2] / V0;
     *steps_in_contact = nc;
     *dt_out = floe_world_dt(w);
     floe_world_destroy(w);
@@ -145,7 +146,7 @@ static void test_accuracy_key(void) {
     if (rc == FLOE_OK) {
         floe_dt_estimates est;
         floe_world_dt_estimates(w, &est);
-        CHECK(w->def.accuracy == 1e-3 && fabs(est.predicted_error - 1e-3) < 1e-12 &&
+        CHECK(floe_world_definition(w)->accuracy == 1e-3 && fabs(est.predicted_error - 1e-3) < 1e-12 &&
                   fabs(floe_world_dt(w) - est.accuracy_dt) <= 1e-12 * est.accuracy_dt,
               "time.accuracy 1e-3 sets the step (dt %g, accuracy dt %g, predicted %g)", floe_world_dt(w),
               est.accuracy_dt, est.predicted_error);

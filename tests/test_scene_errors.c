@@ -4,7 +4,8 @@
 #include "check.h"
 #include "scene_loc.h"
 #include "floe_scene.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -77,7 +78,7 @@ static void expect_file_error(const char *file, const char *at, const char *n1, 
 static int count_group(const floe_world *w, int g)
 {
     int n = 0;
-    for (int i = 0; i < w->p.n; i++) n += w->p.group[i] == g;
+    for (int i = 0; i < pview(w).n; i++) n += pview(w).group[i] == g;
     return n;
 }
 
@@ -318,14 +319,14 @@ static void test_valid(void)
               "automatic dt %g vs critical %g", floe_world_dt(w), floe_world_critical_dt(w));
         /* HCP: body 1 starts at (0.02, 0, 0.002); second layer shifted by (d/2, d sqrt(3)/6, d sqrt(2/3)) */
         int first = -1;
-        for (int i = 0; i < w->p.n && first < 0; i++) if (w->p.group[i] == 1) first = i;
+        for (int i = 0; i < pview(w).n && first < 0; i++) if (pview(w).group[i] == 1) first = i;
         const double d = 0.002;
-        const double *x0 = w->p.x + 3 * first;
+        const double *x0 = pview(w).x + 3 * first;
         CHECK_NEAR(x0[0], 0.02, 1e-12, "hcp site 0 x");
-        const double *x4 = w->p.x + 3 * (first + 4);   /* row 1, i = 0: offset d/2 */
+        const double *x4 = pview(w).x + 3 * (first + 4);   /* row 1, i = 0: offset d/2 */
         CHECK_NEAR(x4[0] - x0[0], 0.5 * d, 1e-9, "hcp row 1 x offset d/2");
         CHECK_NEAR(x4[1] - x0[1], d * sqrt(3.0) / 2, 1e-9, "hcp row spacing d sqrt(3)/2");
-        const double *x12 = w->p.x + 3 * (first + 12); /* layer 1 */
+        const double *x12 = pview(w).x + 3 * (first + 12); /* layer 1 */
         CHECK_NEAR(x12[2] - x0[2], d * sqrt(2.0 / 3.0), 1e-9, "hcp layer spacing d sqrt(2/3)");
         CHECK_NEAR(x12[0] - x0[0], 0.5 * d, 1e-9, "hcp layer B x shift d/2");
         CHECK_NEAR(x12[1] - x0[1], d * sqrt(3.0) / 6, 1e-9, "hcp layer B y shift d sqrt(3)/6");
@@ -334,22 +335,22 @@ static void test_valid(void)
         for (int i = first; i < first + 24; i++)
             for (int j = i + 1; j < first + 24; j++) {
                 double r[3];
-                floe_v3_sub(r, w->p.x + 3 * i, w->p.x + 3 * j);
+                floe_v3_sub(r, pview(w).x + 3 * i, pview(w).x + 3 * j);
                 if (floe_v3_norm(r) < dmin) dmin = floe_v3_norm(r);
             }
         CHECK_NEAR(dmin, d, 1e-9, "hcp nearest neighbour distance");
         /* random: inside the region, no overlaps */
         int ok_in = 1, ok_sep = 1;
-        for (int i = 0; i < w->p.n; i++) {
-            if (w->p.group[i] != 2) continue;
-            const double *x = w->p.x + 3 * i;
+        for (int i = 0; i < pview(w).n; i++) {
+            if (pview(w).group[i] != 2) continue;
+            const double *x = pview(w).x + 3 * i;
             if (x[0] < 0.001 || x[0] > 0.019 || x[1] < 0.021 || x[1] > 0.039 || x[2] < 0.002 ||
                 x[2] > 0.019)
                 ok_in = 0;
-            for (int j = i + 1; j < w->p.n; j++) {
-                if (w->p.group[j] != 2) continue;
+            for (int j = i + 1; j < pview(w).n; j++) {
+                if (pview(w).group[j] != 2) continue;
                 double r[3];
-                floe_v3_sub(r, x, w->p.x + 3 * j);
+                floe_v3_sub(r, x, pview(w).x + 3 * j);
                 if (floe_v3_norm(r) < 0.002) ok_sep = 0;
             }
         }
@@ -367,13 +368,13 @@ static void test_valid(void)
               info.nparticles, info.nstates);
         CHECK(count_group(w, 0) == 25 && count_group(w, 1) == 8, "2D groups %d %d", count_group(w, 0),
               count_group(w, 1));
-        const double *x12 = w->p.x + 3 * 12, *x5 = w->p.x + 3 * 5;
+        const double *x12 = pview(w).x + 3 * 12, *x5 = pview(w).x + 3 * 5;
         CHECK_NEAR(x12[0], 0.4, 1e-12, "2D hex middle x (row 2 not offset)");
         CHECK_NEAR(x12[1], 0.4 * sqrt(3.0) / 2, 1e-12, "2D hex middle y = 2 d sqrt(3)/2");
         CHECK_NEAR(x5[0], 0.1, 1e-12, "2D hex row 1 offset by d/2");
         CHECK(x12[2] == 0, "2D z = 0");
-        CHECK(w->p.geom[12] != w->p.geom[11], "the growing sphere has its own geometry");
-        CHECK(w->p.geom[11] == w->p.geom[13], "the others share one geometry");
+        CHECK(pview(w).geometry[12] != pview(w).geometry[11], "the growing sphere has its own geometry");
+        CHECK(pview(w).geometry[11] == pview(w).geometry[13], "the others share one geometry");
         floe_world_destroy(w);
     }
 
@@ -411,13 +412,13 @@ static void test_valid(void)
               info.nparticles);
         double gap = 1e9, top = 0;
         const double L[3] = {0.85, 0.85, 1.0};
-        for (int i = 0; i < w->p.n; i++) {
-            if (w->p.group[i] != 0) continue;
+        for (int i = 0; i < pview(w).n; i++) {
+            if (pview(w).group[i] != 0) continue;
             for (int k = 0; k < 3; k++) {
-                double g = fmin(w->p.x[3 * i + k], L[k] - w->p.x[3 * i + k]);
+                double g = fmin(pview(w).x[3 * i + k], L[k] - pview(w).x[3 * i + k]);
                 if (g < gap) gap = g;
             }
-            if (w->p.x[3 * i + 2] > top) top = w->p.x[3 * i + 2];
+            if (pview(w).x[3 * i + 2] > top) top = pview(w).x[3 * i + 2];
         }
         CHECK(gap >= 0.019 + 1e-4 - 1e-12, "RVE: a centre is %g from a wall (< R + 1e-4)", gap);
         CHECK_NEAR(top + 0.019, 0.969, 1e-3, "RVE top of the packing (peers: 0.969)");
@@ -486,14 +487,16 @@ static void test_shapes(void)
     int rc = load(t, &w, &info, err, sizeof err);
     CHECK(rc == FLOE_OK, "all convex shapes load: %s", rc ? err : "");
     if (rc == FLOE_OK) {
-        CHECK(w->p.n == 9, "9 bodies (got %d)", w->p.n);
-        CHECK(w->det.admm.tol == 1.0e-8 && w->det.admm.max_iter == 50, "contact_detection options reach the world");
-        CHECK(w->p.pieces[8] == 2, "the compound has 2 pieces (got %d)", w->p.pieces[8]);
+        CHECK(pview(w).n == 9, "9 bodies (got %d)", pview(w).n);
+        floe_admm_options ao;
+        floe_world_admm_options(w, &ao);
+        CHECK(ao.tol == 1.0e-8 && ao.max_iter == 50, "contact_detection options reach the world");
+        CHECK(pview(w).pieces[8] == 2, "the compound has 2 pieces (got %d)", pview(w).pieces[8]);
         /* the 2 x 4 x 6 polyhedron: principal axes are a permutation, the orientation maps
          * them back onto the input axes, so its world extent along y is 4 */
-        const floe_geometry *g = w->geoms[w->p.geom[1]];
+        const floe_geometry *g = floe_world_particle_geometry(w, 1);
         double ey[3] = {0, 1, 0}, eb[3], X[3];
-        floe_q_rotate_inv(eb, w->p.q + 4, ey);
+        floe_q_rotate_inv(eb, pview(w).q + 4, ey);
         g->klass->support(g, eb, X);
         CHECK(fabs(floe_v3_dot(X, eb) - 2.0) < 1e-12, "polyhedron keeps its input orientation (half extent along y %g)",
               floe_v3_dot(X, eb));
@@ -516,9 +519,9 @@ static void test_pd_scene(void)
     int rc = load(base, &w, &info, err, sizeof err);
     CHECK(rc == FLOE_OK, "a PD-only scene loads: %s", rc ? err : "");
     if (rc == FLOE_OK) {
-        CHECK(w->npd == 1 && w->p.n == 10 * 10 * 4, "one PD body of 400 points (got %d bodies, %d particles)", w->npd,
-              w->p.n);
-        CHECK(w->p.group[0] == -2, "PD points are body -2 in outputs");
+        CHECK(floe_world_pd_body_count(w) == 1 && pview(w).n == 10 * 10 * 4, "one PD body of 400 points (got %d bodies, %d particles)", floe_world_pd_body_count(w),
+              pview(w).n);
+        CHECK(pview(w).group[0] == -2, "PD points are body -2 in outputs");
         floe_world_destroy(w);
     }
     const char *t;

@@ -8,7 +8,7 @@
 #include "floe_scene.h"
 #include "floe_observer.h"
 #include "floe_mesh.h"
-#include "world_internal.h"
+#include "world_internal.h" /* internal: unit test of the observers' NaN guards: injects a NaN state and calls an observer directly */
 
 #include <math.h>
 #include <signal.h>

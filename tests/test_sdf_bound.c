@@ -20,7 +20,8 @@
  *     printed for walls, spheres and grain pairs (docs/models.md quotes them); p99 bounded. */
 #include "check.h"
 #include "floe.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 #include <stdlib.h>
 #include <string.h>
 
@@ -179,7 +180,7 @@ static void depth_sample(floe_world *w, shape *S, int i, int j, double overlap, 
                          double *worst) {
     floe_contact c;
     long e0 = S->evals;
-    int r = floe_world_detect(w, i, j, 0, NULL, &c);
+    int r = floe_world_probe_contact(w, i, j, 0, &c);
     cost[(*n)++] = S->evals - e0;
     if (r != 1) (*missed)++;
     else *worst = fmax(*worst, fabs(c.depth - overlap));

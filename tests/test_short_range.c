@@ -8,7 +8,8 @@
 #include "floe.h"
 #include "floe_pd.h"
 #include "floe_scene.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -125,7 +126,7 @@ static void test_none(void)
 {
     int a, b;
     floe_world *w = two_spheres(floe_no_contact_law_create(), 1e-4, 2.0, 0.2, &a, &b);
-    CHECK(floe_contact_law_no_contact(w->laws[0]), "none flagged");
+    CHECK(floe_contact_law_no_contact(floe_world_law(w, 0, 0)), "none flagged");
     int rc = floe_world_prepare(w);
     CHECK(rc == FLOE_OK, "prepare: %s", floe_world_last_error(w));
     double dt = floe_world_dt(w);
@@ -218,7 +219,7 @@ static void test_scene(void)
     int rc = floe_scene_load_ex("t.yaml", scene_sr, NULL, 0, &w, &info, err, sizeof err);
     CHECK(rc == FLOE_OK, "scene: %s", err);
     if (rc) return;
-    const floe_contact_law *aa = w->laws[0], *ab = w->laws[1], *bb = w->laws[3];
+    const floe_contact_law *aa = floe_world_law(w, 0, 0), *ab = floe_world_law(w, 0, 1), *bb = floe_world_law(w, 1, 1);
     CHECK(aa->klass == &floe_short_range_law_class, "a-a short_range");
     CHECK_NEAR(((const floe_short_range_law *)aa)->k, 15.0 * 1e18 * 1e-18 / 0.003, 1e-12, "scene k from c, delta, V");
     CHECK(floe_contact_law_no_contact(ab), "a-b none");

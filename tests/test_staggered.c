@@ -16,7 +16,8 @@
  *      measured 2e-3 (m = 2) and 5e-4 (k = 2), bounded at 5e-3. */
 #include "check.h"
 #include "floe_pd.h"
-#include "world_internal.h"
+#include "world_internal.h" /* internal: unit test of the staggered integrator: poisons its scratch (w->ibuf) */
+#include "world_read.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -87,7 +88,7 @@ static press_result press(int scheme, int sub, int every, double dt, double t_en
     while (!rc && floe_world_time(w) < t_end - 1e-12) {
         rc = floe_world_step(w);
         if (floe_world_time(w) >= next - 1e-12 && res.n < ns) {
-            res.f[res.n++] = w->p.f[3 * wall + 2];
+            res.f[res.n++] = pview(w).f[3 * wall + 2];
             next += sample;
         }
     }
@@ -160,7 +161,7 @@ static void test_gravity_once(void) {
         int rc = floe_world_prepare(w);
         for (int s = 0; s < 300 && !rc; s++) rc = floe_world_step(w);
         double v = 0, t = floe_world_time(w);
-        for (int i = 0; i < w->p.n; i++) v += w->p.v[3 * i + 2] / w->p.n;
+        for (int i = 0; i < pview(w).n; i++) v += pview(w).v[3 * i + 2] / pview(w).n;
         printf("  free fall, staggered %s 3: v_cm %.12e m/s, -g t = %.12e m/s\n", mode ? "k =" : "m =", v, -9.81 * t);
         CHECK(rc == FLOE_OK, "free fall: %s", floe_world_last_error(w));
         CHECK(fabs(v + 9.81 * t) < 1e-12 * 9.81 * t, "gravity counted once (%s 3): rel. error %.2e", mode ? "k" : "m",
@@ -176,7 +177,7 @@ static void spring_force(const floe_world *w, int i, double t, double f[3], doub
     const spring *s = user;
     (void)t;
     (void)torque;
-    for (int a = 0; a < 3; a++) f[a] = -s->ks * (w->p.x[3 * i + a] - s->X[3 * (i - s->f0) + a]);
+    for (int a = 0; a < 3; a++) f[a] = -s->ks * (pview(w).x[3 * i + a] - s->X[3 * (i - s->f0) + a]);
 }
 
 static void bar_run(int scheme, int sub, double dt, double T, double *xout, int *n) {
@@ -199,17 +200,16 @@ static void bar_run(int scheme, int sub, double dt, double T, double *xout, int 
     double mass = 1100 * 0.02 * 0.02 * 0.02;
     sp.ks = mass * pow(2 * M_PI / (40 * 6e-5), 2);
     floe_world_set_body_force(w, spring_force, &sp);
-    for (int i = 0; i < w->p.n; i++) { /* a smooth velocity field */
+    for (int i = 0; i < pview(w).n; i++) { /* a smooth velocity field */
         double xr = X[3 * i] / 0.16;
-        w->p.v[3 * i] = 0.05 * sin(M_PI * xr);
-        w->p.v[3 * i + 2] = 0.05 * cos(M_PI * xr);
+        floe_world_set_velocity(w, i, (const double[3]){0.05 * sin(M_PI * xr), 0, 0.05 * cos(M_PI * xr)}, NULL);
     }
     int rc = floe_world_prepare(w);
     long steps = (long)(T / dt + 0.5);
     for (long s = 0; s < steps && !rc; s++) rc = floe_world_step(w);
     CHECK(rc == FLOE_OK, "bar run: %s", floe_world_last_error(w));
-    memcpy(xout, w->p.x, 3 * (size_t)w->p.n * sizeof *xout);
-    *n = w->p.n;
+    memcpy(xout, pview(w).x, 3 * (size_t)pview(w).n * sizeof *xout);
+    *n = pview(w).n;
     floe_world_destroy(w);
     free(X);
 }
@@ -265,16 +265,16 @@ static void test_substep_stability(void) {
         floe_world_add_material(w, &mt);
         floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&mt, &mt, 1.0, 0.0));
         floe_world_add_pd_body(w, b, 0, NULL, NULL);
-        w->p.v[0] = -1e-4; /* stretch the bond */
-        w->p.v[3] = 1e-4;
+        set_vel(w, 0, 0, -1e-4); /* stretch the bond */
+        set_vel(w, 1, 0, 1e-4);
         int rc = floe_world_prepare(w);
         for (int s = 0; s < 3000 && !rc; s++) rc = floe_world_step(w);
         if (!pass)
-            CHECK(rc == FLOE_OK && fabs(w->p.x[3] - w->p.x[0] - dx) < 1e-3 * dx,
+            CHECK(rc == FLOE_OK && fabs(pview(w).x[3] - pview(w).x[0] - dx) < 1e-3 * dx,
                   "PD sub-step 0.9 x 2/w (m = 4, DEM step 3.6 x 2/w) runs bounded: %s", floe_world_last_error(w));
         else {
             printf("  PD sub-step 1.1 x 2/w: %s\n", floe_world_last_error(w));
-            CHECK(rc == FLOE_EUNSTABLE && strstr(floe_world_last_error(w), "particle") && isfinite(w->p.x[0]),
+            CHECK(rc == FLOE_EUNSTABLE && strstr(floe_world_last_error(w), "particle") && isfinite(pview(w).x[0]),
                   "PD sub-step 1.1 x 2/w detected (rc %d)", rc);
         }
         floe_world_destroy(w);
@@ -326,10 +326,10 @@ static double fixed_touch(int scheme) {
     int rc = floe_world_prepare(w);
     CHECK(rc == FLOE_OK, "fixed-touch prepare: %s", floe_world_last_error(w));
     if (w->ibuf) /* the step-start positions and mean velocities (not the carried forces) */
-        for (size_t k = 9 * (size_t)w->p.n; k < w->ibuf_cap; k++) w->ibuf[k] = 1e3;
+        for (size_t k = 9 * (size_t)pview(w).n; k < w->ibuf_cap; k++) w->ibuf[k] = 1e3;
     rc = floe_world_step(w);
     CHECK(rc == FLOE_OK, "fixed-touch step: %s", floe_world_last_error(w));
-    double fz = w->p.f[3 * si + 2];
+    double fz = pview(w).f[3 * si + 2];
     floe_world_destroy(w);
     return fz;
 }

@@ -6,7 +6,8 @@
  * equal -(force on the walls normal to the axis)/(wall area) within 2 %, with V = the box
  * volume (contact points sit inside the walls by half the overlap: about 0.5 % offset). */
 #include "floe.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 #include "check.h"
 #include <string.h>
 
@@ -55,7 +56,7 @@ int main(void) {
     CHECK(floe_collection_stress(w, -1, L * L * L, &cs) == FLOE_OK, "collection stress");
     for (int k = 0; k < 3; k++) {
         /* total force the particles exert on the two walls normal to axis k */
-        double f0 = -w->p.f[3 * walls[2 * k] + k], f1 = w->p.f[3 * walls[2 * k + 1] + k];
+        double f0 = -pview(w).f[3 * walls[2 * k] + k], f1 = pview(w).f[3 * walls[2 * k + 1] + k];
         double wall = 0.5 * (f0 + f1) / (L * L);
         char what[80];
         snprintf(what, sizeof what, "sigma_%c%c vs -(wall force)/(wall area) (tol 2%%)", "xyz"[k], "xyz"[k]);

@@ -6,9 +6,17 @@
 #include "check.h"
 #include "floe_scene.h"
 #include "floe_pd.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 
 #include <string.h>
+
+/* the adaptive step's bounds in use: 0 lower, 1 upper */
+static double adapt_bound(const floe_world *w, int upper) {
+    double lo = 0, hi = 0;
+    floe_world_adaptive_bounds(w, &lo, &hi);
+    return upper ? hi : lo;
+}
 
 static floe_world *linear_pair(double kn, double ks, double r1, double r2, int *small) {
     floe_world_def d = floe_default_world_def();
@@ -96,7 +104,7 @@ static void test_manifold_factor(void) {
     CHECK(floe_world_prepare(w) == FLOE_OK, "plate prepare: %s", floe_world_last_error(w));
     floe_dt_estimates e;
     floe_world_dt_estimates(w, &e);
-    const double mp = w->p.mass[i], r = 12.0 / (1 + h * h / (a * a));
+    const double mp = pview(w).mass[i], r = 12.0 / (1 + h * h / (a * a));
     CHECK_NEAR(e.dt[FLOE_DT_CONTACT_IMPACT], 2 / sqrt(2 * kn * r / mp), 1e-9,
                "thin plate: impact estimate 2 / sqrt(2 kn x 12 / m)");
     floe_world_destroy(w);
@@ -131,7 +139,7 @@ static void test_hertz(void) {
     while (rc == FLOE_OK && steps < 1000000) {
         rc = floe_world_step(w);
         steps++;
-        if (w->ncontacts) in++;
+        if (floe_world_contact_count(w)) in++;
         else if (in) break;
     }
     CHECK(rc == FLOE_OK, "collision: %s", floe_world_last_error(w));
@@ -197,8 +205,7 @@ static void test_refusal(void) {
     floe_world_destroy(w);
     for (int allow = 0; allow < 2; allow++) {
         w = linear_pair(1e3, 0, 1e-3, 1e-3, &small);
-        w->def.dt = 1.01 * crit;
-        w->def.allow_unstable_dt = allow;
+        floe_world_set_dt(w, 1.01 * crit, allow);
         int rc = floe_world_prepare(w);
         if (!allow) {
             printf("  refused: %s\n", floe_world_last_error(w));
@@ -234,26 +241,28 @@ static void test_adaptive(void) {
     /* fixed small step: the reference */
     floe_world *w = collision(0, 0.05);
     CHECK(floe_world_run(w, 0.006, NULL, NULL) == FLOE_OK, "fixed run: %s", floe_world_last_error(w));
-    double e_fixed = (w->p.v[3] - w->p.v[0]) / 2;
+    double e_fixed = (pview(w).v[3] - pview(w).v[0]) / 2;
     long n_fixed = floe_world_step_count(w);
     floe_world_destroy(w);
     /* adaptive, stepped by hand to check the criterion on every accepted step */
     w = collision(1, 0.2);
     int rc = floe_world_prepare(w);
-    const double tv = w->def.adapt_velocity_tol;
+    const double tv = floe_world_definition(w)->adapt_velocity_tol;
     double worst = 0, dtmin = INFINITY, dtmax = 0;
     int violations = 0;
+    double dt_lo = 0;
+    floe_world_adaptive_bounds(w, &dt_lo, NULL);
     while (!rc && floe_world_time(w) < 0.006) {
         double v0[6];
-        memcpy(v0, w->p.v, sizeof v0);
+        memcpy(v0, pview(w).v, sizeof v0);
         rc = floe_world_step(w);
         double dt = floe_world_dt(w);
         for (int i = 0; i < 2; i++) {
             double dv[3];
-            floe_v3_sub(dv, w->p.v + 3 * i, v0 + 3 * i);
+            floe_v3_sub(dv, pview(w).v + 3 * i, v0 + 3 * i);
             double eta = floe_v3_norm(dv) * dt / 0.01;
             if (eta > worst) worst = eta;
-            if (eta > tv && dt > w->dt_lo * (1 + 1e-9)) violations++;
+            if (eta > tv && dt > dt_lo * (1 + 1e-9)) violations++;
         }
         dtmin = fmin(dtmin, dt);
         dtmax = fmax(dtmax, dt);
@@ -261,7 +270,7 @@ static void test_adaptive(void) {
     CHECK(rc == FLOE_OK, "adaptive run: %s", floe_world_last_error(w));
     floe_step_stats st;
     floe_world_step_stats(w, &st);
-    double e_ad = (w->p.v[3] - w->p.v[0]) / 2, bal = floe_world_energy_balance_error(w);
+    double e_ad = (pview(w).v[3] - pview(w).v[0]) / 2, bal = floe_world_energy_balance_error(w);
     printf("  adaptive collision: %ld accepted, %ld rejected, dt %.3g .. %.3g s (critical %.3g s); restitution %.4f "
            "(fixed 0.05 x critical, %ld steps: %.4f); worst |dv| dt / R %.2e (tol %.0e); balance error %.2e\n",
            st.accepted, st.rejected, dtmin, dtmax, floe_world_critical_dt(w), e_ad, n_fixed, e_fixed, worst, tv, bal);
@@ -308,11 +317,11 @@ static void test_adaptive_rescue(void) {
         floe_world_step_stats(w, &st);
         printf("  dt_max = 3 x 2/w, %s: %s (%ld accepted, %ld rejected, dt %.3g .. %.3g s), rest height %.4g m\n",
                adaptive ? "adaptive" : "fixed", rc ? floe_world_last_error(w) : "ran", st.accepted, st.rejected,
-               st.dt_min_used, st.dt_max_used, w->p.x[5]);
+               st.dt_min_used, st.dt_max_used, pview(w).x[5]);
         if (!adaptive) CHECK(rc == FLOE_EUNSTABLE, "fixed 3x above the critical step fails (rc %d)", rc);
         else {
             CHECK(rc == FLOE_OK && st.rejected > 0, "adaptive: rejections rescue the run: %s", floe_world_last_error(w));
-            CHECK(fabs(w->p.x[5] - 2 * R) < 0.002, "the sphere ends on the fixed one (z %.4g)", w->p.x[5]);
+            CHECK(fabs(pview(w).x[5] - 2 * R) < 0.002, "the sphere ends on the fixed one (z %.4g)", pview(w).x[5]);
         }
         floe_world_destroy(w);
     }
@@ -340,12 +349,12 @@ static void test_scene_keys(void) {
     char err[1024];
     floe_world *w = NULL;
     int rc = scene("{duration: 0.01, integrator: leapfrog}", err, sizeof err, &w);
-    CHECK(rc == FLOE_OK && w && w->def.integrator == FLOE_LEAPFROG, "integrator: leapfrog (%s)", rc ? err : "");
+    CHECK(rc == FLOE_OK && w && floe_world_definition(w)->integrator == FLOE_LEAPFROG, "integrator: leapfrog (%s)", rc ? err : "");
     floe_world_destroy(w);
     rc = scene("{duration: 0.01, integrator: rk2, adaptive: {dt_min: 1e-8, dt_max: 1e-6, velocity_tolerance: 1e-4, "
                "penetration_tolerance: 0.01}}", err, sizeof err, &w);
-    CHECK(rc == FLOE_OK && w && w->def.integrator == FLOE_RK2 && w->def.adaptive && w->dt_lo == 1e-8 &&
-              w->dt_hi == 1e-6 && w->def.adapt_velocity_tol == 1e-4 && w->def.adapt_depth_tol == 0.01,
+    CHECK(rc == FLOE_OK && w && floe_world_definition(w)->integrator == FLOE_RK2 && floe_world_definition(w)->adaptive && adapt_bound(w, 0) == 1e-8 &&
+              adapt_bound(w, 1) == 1e-6 && floe_world_definition(w)->adapt_velocity_tol == 1e-4 && floe_world_definition(w)->adapt_depth_tol == 0.01,
           "adaptive mapping (%s)", rc ? err : "");
     if (w) {
         rc = floe_world_run(w, 1e-4, NULL, NULL);
@@ -353,7 +362,7 @@ static void test_scene_keys(void) {
     }
     floe_world_destroy(w);
     rc = scene("{duration: 0.01, adaptive: true}", err, sizeof err, &w);
-    CHECK(rc == FLOE_OK && w && w->def.adaptive && w->dt_hi == floe_world_critical_dt(w), "adaptive: true (%s)",
+    CHECK(rc == FLOE_OK && w && floe_world_definition(w)->adaptive && adapt_bound(w, 1) == floe_world_critical_dt(w), "adaptive: true (%s)",
           rc ? err : "");
     floe_world_destroy(w);
     rc = scene("{duration: 0.01, integrator: verlet}", err, sizeof err, NULL);
@@ -372,7 +381,7 @@ static void test_scene_keys(void) {
     rc = scene("{duration: 0.01, pd_dem: {substeps: 2}}", err, sizeof err, NULL);
     CHECK(rc != FLOE_OK && strstr(err, "scheme: staggered"), "substeps without staggered refused: %s", err);
     rc = scene("{duration: 0.01, pd_dem: {scheme: staggered, substeps: auto}}", err, sizeof err, &w);
-    CHECK(rc == FLOE_OK && w && w->def.pd_dem == FLOE_PD_DEM_STAGGERED && w->def.pd_substeps == 0,
+    CHECK(rc == FLOE_OK && w && floe_world_definition(w)->pd_dem == FLOE_PD_DEM_STAGGERED && floe_world_definition(w)->pd_substeps == 0,
           "pd_dem staggered, substeps auto (no PD body: monolithic) (%s)", rc ? err : "");
     floe_world_destroy(w);
 }

@@ -19,7 +19,8 @@
 #include "floe.h"
 #include "floe_pd.h"
 #include "floe_scene.h"
-#include "world_internal.h"
+#include "floe.h"
+#include "world_read.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -250,7 +251,7 @@ static void test_creating_law(void) {
 static void spring_force(const floe_world *w, int i, double t, double f[3], double tq[3], void *user) {
     (void)t;
     (void)tq;
-    f[0] = -*(const double *)user * w->p.x[3 * i];
+    f[0] = -*(const double *)user * pview(w).x[3 * i];
 }
 
 static void test_legit(void) {
@@ -285,7 +286,7 @@ static void test_legit(void) {
     for (int s = 0; s < 2000 && !rc; s++) {
         rc = floe_world_step(w);
         floe_energy e = floe_world_energy(w);
-        emax = fmax(emax, e.kinetic_trans + 0.5 * k * w->p.x[0] * w->p.x[0]);
+        emax = fmax(emax, e.kinetic_trans + 0.5 * k * pview(w).x[0] * pview(w).x[0]);
     }
     floe_world_energy_check(w, &st);
     printf("  spring at 0.95 x 2/w: measured K + U up to %.2fx the initial, rc %d, largest creation %.2e\n", emax / e0,

@@ -3,8 +3,14 @@
  * 0.9 at dt = safety x critical; prints the steps per collision and the restitution error
  * for each safety factor (the cost of a run is proportional to 1/safety). */
 #include "floe.h"
-#include "world_internal.h"
 #include <stdio.h>
+
+/* particle i's velocity (public view; read after each step) */
+static const double *vel_of(const floe_world *w, int i) {
+    floe_particles_view pv;
+    floe_world_particles(w, &pv);
+    return pv.v + 3 * i;
+}
 
 static double run(double e_in, double safety, long *steps_in_contact) {
     floe_world_def d = floe_default_world_def();
@@ -25,10 +31,10 @@ static double run(double e_in, double safety, long *steps_in_contact) {
     long in = 0;
     for (int s = 0; s < 1000000; s++) {
         floe_world_step(w);
-        in += w->ncontacts > 0;
-        if (w->p.v[0] < 0 && w->ncontacts == 0) break;
+        in += floe_world_contact_count(w) > 0;
+        if (vel_of(w, 0)[0] < 0 && floe_world_contact_count(w) == 0) break;
     }
-    double e = (w->p.v[3] - w->p.v[0]) / 0.2;
+    double e = (vel_of(w, 1)[0] - vel_of(w, 0)[0]) / 0.2;
     *steps_in_contact = in;
     floe_world_destroy(w);
     return e;

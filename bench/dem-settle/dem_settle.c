@@ -4,7 +4,6 @@
  * time, particle-steps/s, contacts, neighbour rebuilds and memory per particle.
  *   dem_settle settle.data [NSTEPS] */
 #include "floe.h"
-#include "world_internal.h"
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -67,7 +66,7 @@ int main(int argc, char **argv) {
         }
     }
     fclose(f);
-    for (int i = 0; i < n; i++) memcpy(w->p.v + 3 * (i + 6), vel[i], sizeof vel[i]);
+    for (int i = 0; i < n; i++) floe_world_set_velocity(w, i + 6, vel[i], NULL);
     free(vel);
     if (floe_world_prepare(w)) { fprintf(stderr, "%s\n", floe_world_last_error(w)); return 1; }
     double t0 = now();
@@ -76,9 +75,11 @@ int main(int argc, char **argv) {
     double loop = now() - t0;
     size_t rss1 = rss_bytes();
     floe_energy e = floe_world_energy(w);
+    floe_neighbor_stats ns;
+    floe_world_neighbor_stats(w, &ns);
     printf("floe dem-settle: N=%d steps=%ld dt=%g loop_s=%.3f particle_steps_per_s=%.3e contacts=%d "
            "rebuilds=%ld ke=%.4e rss_per_particle=%.0f B\n",
-           n, nsteps, floe_world_dt(w), loop, (double)n * nsteps / loop, w->ncontacts, w->nl.rebuilds,
+           n, nsteps, floe_world_dt(w), loop, (double)n * nsteps / loop, floe_world_contact_count(w), ns.rebuilds,
            e.kinetic_trans, (double)(rss1 - rss0) / n);
     floe_world_destroy(w);
     return 0;

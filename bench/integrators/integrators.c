@@ -16,7 +16,6 @@
  *   bench_integrators [REPEATS]   prints csv,scene,integrator,factor,steps,cpu_s,error */
 #include "floe.h"
 #include "floe_pd.h"
-#include "world_internal.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -69,7 +68,7 @@ static floe_world *pd_scene(const floe_world_def *d0) {
     int f0;
     floe_world_add_pd_body(w, b, 0, NULL, &f0);
     for (int i = 0; i < b->n; i++)
-        if (b->X[3 * i] < 3e-3) w->p.v[3 * (f0 + i)] = 0.1;
+        if (b->X[3 * i] < 3e-3) floe_world_set_velocity(w, f0 + i, (const double[3]){0.1, 0, 0}, NULL);
     return w;
 }
 
@@ -96,8 +95,10 @@ static double run(scene_fn sc, int integ, int adaptive, double factor, double t_
     floe_step_stats st;
     floe_world_step_stats(w, &st);
     *steps = st.accepted;
-    *n = w->p.n;
-    memcpy(x, w->p.x, 3 * (size_t)w->p.n * sizeof *x);
+    floe_particles_view pv;
+    floe_world_particles(w, &pv);
+    *n = pv.n;
+    memcpy(x, pv.x, 3 * (size_t)pv.n * sizeof *x);
     *rc_out = rc;
     floe_world_destroy(w);
     return c;

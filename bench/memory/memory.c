@@ -4,7 +4,6 @@
  * particle and the part of it that the particle store, neighbour list and contact
  * records account for.   bench_memory [N]   (default 1000000) */
 #include "floe.h"
-#include "world_internal.h"
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -37,12 +36,14 @@ int main(int argc, char **argv) {
     if (floe_world_prepare(w)) { fprintf(stderr, "%s\n", floe_world_last_error(w)); return 1; }
     for (int s = 0; s < 10; s++) floe_world_step(w);
     size_t r1 = rss();
-    double store = (double)w->p.cap * (3 * 8 * 8 + 4 * 8 + 3 * 8 + 2 * 8 + 8 + 4 * 3 + 3) / n;
-    double nl = (double)w->nl.cap * (2 * 4 + FLOE_MAX_HISTORY * 8 + 1) / n + 4.0 * 8;
-    double cont = (double)w->contacts_cap * sizeof(floe_contact_rec) / n;
+    floe_memory_stats ms;
+    floe_neighbor_stats ns;
+    floe_world_memory(w, &ms);
+    floe_world_neighbor_stats(w, &ns);
+    double store = (double)ms.particles / n, nl = (double)ms.neighbor_list / n, cont = (double)ms.contacts / n;
     printf("memory: N=%ld spheres, %d candidate pairs, %d contacts: RSS %.0f B/particle "
            "(particle store %.0f, neighbour list + history %.0f, contact records %.0f)\n",
-           n, w->nl.npairs, w->ncontacts, (double)(r1 - r0) / n, store, nl, cont);
+           n, ns.pairs, floe_world_contact_count(w), (double)(r1 - r0) / n, store, nl, cont);
     floe_world_destroy(w);
     return 0;
 }

@@ -15,7 +15,6 @@
  * put to within the lateral Poisson expansion. */
 #include "floe.h"
 #include "floe_pd.h"
-#include "world_internal.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -24,6 +23,12 @@
 
 /* CPU time of the process: on a shared machine the wall clock also counts the time the
  * process waited for a core */
+/* the z force on particle i at the last evaluation */
+static double wall_fz(const floe_world *w, int i) {
+    floe_particle_state st;
+    return floe_world_get_particle(w, i, &st) == FLOE_OK ? st.f[2] : NAN;
+}
+
 static double now(void) {
     struct timespec ts;
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
@@ -88,7 +93,9 @@ int main(int argc, char **argv) {
         return 1;
     }
     double ztop = 0;
-    for (int i = 0; i < np; i++) ztop = fmax(ztop, w->p.x[3 * (f0 + i) + 2]);
+    floe_particles_view pv;
+    floe_world_particles(w, &pv);
+    for (int i = 0; i < np; i++) ztop = fmax(ztop, pv.x[3 * (f0 + i) + 2]);
     /* 9 x 9 spheres at a 4.4 cm pitch, touching the top layer, moving down at 1 cm/s */
     int gs = floe_world_add_geometry(w, floe_sphere_create(R));
     for (int a = 0; a < 9; a++)
@@ -117,7 +124,7 @@ int main(int argc, char **argv) {
     while (rc == FLOE_OK && floe_world_time(w) < t_end - 1e-12) {
         rc = floe_world_step(w);
         if (f && floe_world_time(w) >= next - 1e-12) {
-            fprintf(f, "%.6g,%.6g,%.6g\n", floe_world_time(w), v * floe_world_time(w), -w->p.f[3 * wall + 2]);
+            fprintf(f, "%.6g,%.6g,%.6g\n", floe_world_time(w), v * floe_world_time(w), -wall_fz(w, wall));
             next += sample;
         }
     }
@@ -129,7 +136,7 @@ int main(int argc, char **argv) {
            "final wall force %.4g N, balance %.2e; estimates: contact %.3g s, PD nodal %.3g s, PD CFL %.3g s; %d points\n",
            scheme, M, floe_world_dt(w), !strcmp(scheme, "mono") ? d.dt : !strcmp(scheme, "stag") ? dtpd : dtpd,
            rc ? floe_world_last_error(w) : "ok", st.accepted, st.force_evaluations, st.pd_evaluations, wall_s,
-           -w->p.f[3 * wall + 2], floe_world_energy_balance_error(w), e.critical_contact, e.critical_pd,
+           -wall_fz(w, wall), floe_world_energy_balance_error(w), e.critical_contact, e.critical_pd,
            e.dt[FLOE_DT_PD_CFL], np);
     printf("csv,%s,%d,%.6g,%.6f,%d\n", scheme, M, dtpd, wall_s, rc);
     floe_world_destroy(w);

@@ -14,7 +14,6 @@
  * ns per step divided by either (whole-step cost attributed to pairs); then the ratios.
  *   polyhedra_settle [NSTEPS] [N] */
 #include "floe.h"
-#include "world_internal.h"
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -100,16 +99,21 @@ static floe_world *build(int poly, int n, double dt, floe_geometry **shapes, dou
 static result run(floe_world *w, int n, long nsteps) {
     result r = {0};
     r.n = n; r.steps = nsteps;
-    long lp0 = w->det.calls;
+    floe_detect_stats ds;
+    floe_neighbor_stats ns;
+    floe_world_detect_stats(w, &ds);
+    long lp0 = ds.evaluations;
     double t0 = now();
     for (long s = 0; s < nsteps; s++) {
         if (floe_world_step(w)) { fprintf(stderr, "%s\n", floe_world_last_error(w)); exit(1); }
-        r.pairs += w->nl.npairs;
-        r.contacts += w->ncontacts;
+        floe_world_neighbor_stats(w, &ns);
+        r.pairs += ns.pairs;
+        r.contacts += floe_world_contact_count(w);
     }
     r.loop = now() - t0;
-    r.lp = (double)(w->det.calls - lp0);
-    r.ncont_end = w->ncontacts;
+    floe_world_detect_stats(w, &ds);
+    r.lp = (double)(ds.evaluations - lp0);
+    r.ncont_end = floe_world_contact_count(w);
     floe_energy e = floe_world_energy(w);
     r.ke = e.kinetic_trans + e.kinetic_rot;
     return r;

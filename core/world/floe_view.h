@@ -1,15 +1,19 @@
 /* floe_view.h - a read-only view of a world, for observers, examples, benches and users:
  * the particle arrays (zero-copy), the contacts of the last force evaluation with their
  * points, normals and forces, the geometries, peridynamic bodies, neighbour-list and
- * detection counters, and the definition in use. Nothing here changes the world.
+ * detection counters, and the definition in use. Nothing here changes the world (the
+ * detection probes only count in the detection statistics); the setters are in
+ * floe_world.h (floe_world_set_velocity, _set_pose, _set_particle_geometry, _set_dt).
  *
- * Pointers in a view stay valid until the next call that adds particles (add_*), prepares
- * or steps the world; take a new view after those. Arrays are indexed by particle id
- * (walls included: a wall is a particle with an unbounded geometry, radius INFINITY). */
+ * Pointers in a view stay valid until the next call that adds to the world (add_*, set_*),
+ * prepares or steps it; take a new view after those (docs/api.md, "Reading a world").
+ * Arrays are indexed by particle id (walls included: a wall is a particle with an unbounded
+ * geometry, radius INFINITY). */
 #ifndef FLOE_VIEW_H
 #define FLOE_VIEW_H
 
 #include "floe_world.h"
+#include "floe_admm.h"
 
 typedef struct floe_particles_view {
     int n;                          /* particles, walls included */
@@ -17,6 +21,8 @@ typedef struct floe_particles_view {
     const double *x, *v;            /* 3n: centre of mass (m), velocity (m/s) */
     const double *q;                /* 4n: orientation body -> world (w, x, y, z) */
     const double *w;                /* 3n: angular velocity, world frame (rad/s) */
+    const double *L;                /* 3n: angular momentum, world frame (kg m^2/s; the
+                                       integrated variable, set from w at prepare) */
     const double *f, *t;            /* 3n: force (N) and torque (N m) of the last evaluation */
     const double *mass;             /* n: kg (walls: their nominal mass) */
     const double *inertia;          /* 3n: principal moments, body frame (kg m^2) */
@@ -24,6 +30,7 @@ typedef struct floe_particles_view {
     const int *geometry;            /* n: index into floe_world_geometry_at */
     const int *material, *group;    /* n */
     const unsigned char *motion;    /* n: floe_motion */
+    const int *pieces;              /* n: convex pieces of the geometry (compounds > 1, else 1) */
 } floe_particles_view;
 
 /* Fills out; FLOE_EINVAL when w or out is NULL. */
@@ -58,6 +65,49 @@ int floe_world_dim(const floe_world *w);
 
 /* The peridynamic body of particle i (-1 for none) */
 int floe_world_pd_body_of(const floe_world *w, int i);
+
+/* 1 when the world is prepared (masses, time step, neighbour list in place), 0 when the next
+ * step or run prepares it again (after an add_*, set_motion, set_dt ... or before the first). */
+int floe_world_is_prepared(const floe_world *w);
+
+/* Materials: how many, and material k (NULL out of range). The contact law of the material
+ * pair (a, b) (symmetric; NULL when none was set or an index is out of range). */
+int floe_world_material_count(const floe_world *w);
+const floe_material *floe_world_material_at(const floe_world *w, int k);
+const floe_contact_law *floe_world_law(const floe_world *w, int a, int b);
+
+/* The ADMM options of convex-pair detection in use (floe_admm.h; the scene's
+ * contact_detection block). FLOE_EINVAL when w or out is NULL. */
+int floe_world_admm_options(const floe_world *w, floe_admm_options *out);
+
+/* The bounds of the adaptive step in use (def.dt_min and dt_max, or their defaults:
+ * dt_max = the critical estimate, dt_min = 1e-3 dt_max), s, as the last prepare set them
+ * (0 before the first, and without adaptive steps). FLOE_EINVAL when w is NULL. */
+int floe_world_adaptive_bounds(const floe_world *w, double *dt_min, double *dt_max);
+
+/* Contact detection of the pair (i, j) at the particles' present poses, as a step does it
+ * (piece pair sub = FLOE_SUB(a, b) of compound bodies, floe_detect.h, 0 otherwise; no warm
+ * start): fills *c (floe_contact.h) and returns 1 in contact, 0 apart, or -error
+ * (-FLOE_EINVAL for an index out of range). A diagnostic: nothing changes but the detection
+ * statistics (floe_world_detect_stats). floe_world_probe_overlap does the same with the
+ * overlap-area/volume detector of the overlap laws. */
+int floe_world_probe_contact(floe_world *w, int i, int j, int sub, floe_contact *c);
+int floe_world_probe_overlap(floe_world *w, int i, int j, int sub, floe_contact *c);
+
+/* Memory held by the world's main arrays, in bytes (allocated capacity, not only what is in
+ * use): the particle store, the neighbour list with its per-pair history and warm starts,
+ * the contact records; and the capacities behind them. */
+typedef struct floe_memory_stats {
+    size_t particles, neighbor_list, contacts;   /* bytes */
+    int particle_capacity, pair_capacity, contact_capacity;
+} floe_memory_stats;
+int floe_world_memory(const floe_world *w, floe_memory_stats *out);
+
+/* The candidate pairs of the neighbour list (i < j, walls included; pairs excluded by bonds,
+ * PD families and beam bonds, are never listed): sets *pi and *pj to arrays of the returned
+ * count (either may be NULL). Valid until the next step or prepare. -FLOE_EINVAL for w NULL.
+ * Their number and the rebuilds: floe_world_neighbor_stats below. */
+int floe_world_neighbor_pairs(const floe_world *w, const int **pi, const int **pj);
 
 /* Neighbour-list counters: candidate pairs now and rebuilds so far. */
 typedef struct floe_neighbor_stats {

@@ -213,6 +213,40 @@ typedef struct floe_particle_state {
 } floe_particle_state;
 int floe_world_get_particle(const floe_world *w, int i, floe_particle_state *out);
 
+/* Set the velocity v (m/s) and/or the angular velocity omega (rad/s, world frame) of
+ * particle i; either may be NULL (kept). For a free particle, or a kinematic one without a
+ * motion callback (whose prescribed velocity this is; with a callback the callback's
+ * velocity wins at the next step). Before the world is prepared this is the initial
+ * condition. After, it is an impulse at the present time: the angular momentum follows
+ * omega, the time step is kept, and the change of kinetic energy is booked as external work
+ * (energy.work_body) so the energy balance still closes. FLOE_EINVAL (message in
+ * last_error) for an index out of range, a fixed particle, a non-finite value, or in 2D a
+ * velocity off the plane (v_z, omega_x, omega_y not 0). */
+int floe_world_set_velocity(floe_world *w, int i, const double v[3], const double omega[3]);
+
+/* Move particle i to the pose (x: centre of mass, m; q: orientation body -> world, made a
+ * unit quaternion; either may be NULL: kept), e.g. to place bodies or probe detection at
+ * nearby poses (floe_world_probe_contact). Its velocities are kept; forces are those of the
+ * last evaluation until the next step; the neighbour list is rebuilt when the move needs
+ * it. After prepare the energy ledger does not book the move. FLOE_EINVAL (message in
+ * last_error) for an index out of range, a wall, a non-finite value, a zero quaternion, or
+ * in 2D a pose off the plane (x_z, or a rotation about another axis than z). */
+int floe_world_set_pose(floe_world *w, int i, const double x[3], const double q[4]);
+
+/* Give particle i another geometry (an index from floe_world_add_geometry, bounded: not a
+ * wall's plane), e.g. a contact sphere of another radius for the points of a PD body. The
+ * bounding radius follows; the mass is kept (given, or computed at the last prepare) and
+ * the inertia follows the new shape at the next prepare, which the next step does.
+ * FLOE_EINVAL (message in last_error) for an index out of range, a wall, or an unbounded
+ * geometry. */
+int floe_world_set_particle_geometry(floe_world *w, int i, int geometry);
+
+/* Set the time step of the definition (dt > 0 fixed, 0 = automatic: dt_safety x critical)
+ * and whether a step above the critical estimate is allowed (allow_unstable_dt); the world
+ * is prepared again before its next step (the step chosen and checked then). FLOE_EINVAL
+ * for dt negative or not finite. */
+int floe_world_set_dt(floe_world *w, double dt, int allow_unstable);
+
 /* Keep a record of every contact of the last step (point, normal, force), as stress
  * observers need; switched on automatically when such an observer is added. */
 int floe_world_record_contacts(floe_world *w, int on);

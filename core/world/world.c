@@ -360,6 +360,87 @@ int floe_world_get_particle(const floe_world *w, int i, floe_particle_state *o) 
     return FLOE_OK;
 }
 
+
+int floe_world_set_velocity(floe_world *w, int i, const double v[3], const double omega[3]) {
+    floe_particles *p = &w->p;
+    if (i < 0 || i >= p->n) return floe_world_error(w, FLOE_EINVAL, "set_velocity: particle %d out of range", i);
+    if (p->motion[i] == FLOE_FIXED)
+        return floe_world_error(w, FLOE_EINVAL, "set_velocity: particle %d is fixed (it never moves)", i);
+    for (int k = 0; k < 3; k++)
+        if ((v && !isfinite(v[k])) || (omega && !isfinite(omega[k])))
+            return floe_world_error(w, FLOE_EINVAL, "set_velocity: particle %d: the velocities must be finite", i);
+    if (w->def.dim == 2 && ((v && v[2] != 0) || (omega && (omega[0] != 0 || omega[1] != 0))))
+        return floe_world_error(w, FLOE_EINVAL, "set_velocity: particle %d: in 2D v_z, omega_x and omega_y must be 0", i);
+    const int book = w->prepared && p->motion[i] == FLOE_FREE;
+    double *vi = p->v + 3 * i, *wi = p->w + 3 * i, *Li = p->L + 3 * i;
+    const double kt0 = 0.5 * p->mass[i] * floe_v3_dot(vi, vi), kr0 = 0.5 * floe_v3_dot(Li, wi);
+    if (v) memcpy(vi, v, 3 * sizeof *vi);
+    if (omega) {
+        memcpy(wi, omega, 3 * sizeof *wi);
+        /* the angular momentum is the integrated variable (set from omega at prepare) */
+        if (w->prepared && p->motion[i] == FLOE_FREE) L_from_omega(p->q + 4 * i, p->inertia + 3 * i, wi, Li);
+    }
+    if (book) {
+        const double dkt = 0.5 * p->mass[i] * floe_v3_dot(vi, vi) - kt0, dkr = 0.5 * floe_v3_dot(Li, wi) - kr0;
+        w->energy.kinetic_trans += dkt;
+        w->energy.kinetic_rot += dkr;
+        w->energy.work_body += dkt + dkr;
+    }
+    return FLOE_OK;
+}
+
+int floe_world_set_pose(floe_world *w, int i, const double x[3], const double q[4]) {
+    floe_particles *p = &w->p;
+    if (i < 0 || i >= p->n) return floe_world_error(w, FLOE_EINVAL, "set_pose: particle %d out of range", i);
+    if (!isfinite(p->radius[i])) return floe_world_error(w, FLOE_EINVAL, "set_pose: particle %d is a wall", i);
+    double qn = 1;
+    if (x && !(isfinite(x[0]) && isfinite(x[1]) && isfinite(x[2])))
+        return floe_world_error(w, FLOE_EINVAL, "set_pose: particle %d: the position must be finite", i);
+    if (q) {
+        qn = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+        if (!(qn > 0) || !isfinite(qn))
+            return floe_world_error(w, FLOE_EINVAL, "set_pose: particle %d: the quaternion must be non-zero and finite", i);
+        if (fabs(qn - 1) <= 1e-12) qn = 1; /* a unit quaternion is kept as given */
+    }
+    if (w->def.dim == 2 && ((x && x[2] != 0) || (q && (q[1] != 0 || q[2] != 0))))
+        return floe_world_error(w, FLOE_EINVAL, "set_pose: particle %d: in 2D z and rotations off the z axis must be 0", i);
+    if (x) memcpy(p->x + 3 * i, x, 3 * sizeof *x);
+    if (q)
+        for (int k = 0; k < 4; k++) p->q[4 * i + k] = q[k] / qn;
+    /* the angular velocity is kept: the angular momentum follows the new orientation */
+    if (q && w->prepared && p->motion[i] == FLOE_FREE) L_from_omega(p->q + 4 * i, p->inertia + 3 * i, p->w + 3 * i, p->L + 3 * i);
+    return FLOE_OK;
+}
+
+int floe_world_set_particle_geometry(floe_world *w, int i, int geometry) {
+    floe_particles *p = &w->p;
+    if (i < 0 || i >= p->n) return floe_world_error(w, FLOE_EINVAL, "set_particle_geometry: particle %d out of range", i);
+    if (geometry < 0 || geometry >= w->ngeoms)
+        return floe_world_error(w, FLOE_EINVAL, "set_particle_geometry: geometry index %d out of range", geometry);
+    if (!isfinite(p->radius[i]))
+        return floe_world_error(w, FLOE_EINVAL, "set_particle_geometry: particle %d is a wall", i);
+    const floe_geometry *g = w->geoms[geometry];
+    double r = floe_geometry_bounding_radius(g);
+    if (!(r > 0) || !isfinite(r))
+        return floe_world_error(w, FLOE_EINVAL, "set_particle_geometry: geometry %d is not bounded (a wall's plane)",
+                                geometry);
+    p->geom[i] = geometry;
+    p->kind[i] = (unsigned char)g->klass->kind;
+    p->pieces[i] = floe_piece_count(g);
+    p->radius[i] = r;
+    w->prepared = 0;
+    return FLOE_OK;
+}
+
+int floe_world_set_dt(floe_world *w, double dt, int allow_unstable) {
+    if (!(dt >= 0) || !isfinite(dt))
+        return floe_world_error(w, FLOE_EINVAL, "set_dt: the time step must be >= 0 and finite (0 = automatic), got %g", dt);
+    w->def.dt = dt;
+    w->def.allow_unstable_dt = allow_unstable != 0;
+    w->prepared = 0;
+    return FLOE_OK;
+}
+
 double floe_world_energy_balance_error(const floe_world *w) {
     const floe_energy *e = &w->energy;
     double in = e->initial + e->work_body + e->work_boundary;

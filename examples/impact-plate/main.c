@@ -31,7 +31,6 @@
  * when there was no contact, no rebound or the energy balance is off by more than 1e-3. */
 #include "floe.h"
 #include "floe_pd.h"
-#include "world_internal.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -98,17 +97,18 @@ static int run(const options *o, int law_sr, figures *fg) {
     int first = 0, npts = b->n;
     fg->nbond = (long long)b->nbond;
     if (floe_world_add_pd_body(w, b, mat, NULL, &first)) { fprintf(stderr, "%s\n", floe_world_last_error(w)); return 1; }
-    b = w->pd[0];
+    b = floe_world_pd_body(w, 0, NULL);
     /* the paper's point radius: half the spacing (touching spheres), instead of the world's
      * (3V/4 pi)^(1/3); the points keep their mass rho V */
     double Rp = cbrt(3 * V / (4 * M_PI));
     if (o->radius_paper) {
         Rp = 0.5 * dx;
         int g = floe_world_add_geometry(w, floe_sphere_create(Rp));
-        for (int i = 0; i < npts; i++) {
-            w->p.geom[first + i] = g;
-            w->p.radius[first + i] = Rp;
-        }
+        for (int i = 0; i < npts; i++)
+            if (floe_world_set_particle_geometry(w, first + i, g)) {
+                fprintf(stderr, "%s\n", floe_world_last_error(w));
+                return 1;
+            }
     }
     /* simple support: bottom-layer points within one spacing of an edge are held */
     int nheld = 0, centre = -1;
@@ -145,24 +145,27 @@ static int run(const options *o, int law_sr, figures *fg) {
     int sp = floe_world_add_particle(w, &s);
     if (sp < 0 || floe_world_prepare(w)) { fprintf(stderr, "%s\n", floe_world_last_error(w)); return 1; }
     long steps = (long)(o->dur / floe_world_dt(w));
-    double z0 = w->p.x[3 * sp + 2], zc0 = w->p.x[3 * (first + centre) + 2];
+    floe_particles_view pv; /* the particle arrays: valid until the next step */
+    floe_world_particles(w, &pv);
+    double z0 = pv.x[3 * sp + 2], zc0 = pv.x[3 * (first + centre) + 2];
     double fmax = 0, dmax = 0, pmax = 0, vmax = -INFINITY, t_in = -1, t_out = -1, t_pmax = 0, p_rel = NAN;
     int touched = 0;
     for (long k = 0; k < steps; k++) {
         if (floe_world_step(w)) { fprintf(stderr, "step: %s\n", floe_world_last_error(w)); return 1; }
+        floe_world_particles(w, &pv);
         /* contact force on the sphere: its total force (no gravity, no other load) */
-        double fz = w->p.f[3 * sp + 2];
+        double fz = pv.f[3 * sp + 2];
         if (fz > 0 && !touched) { touched = 1; t_in = floe_world_time(w); }
         if (touched && fz <= 0 && t_out < 0) {
             t_out = floe_world_time(w);
-            p_rel = zc0 - w->p.x[3 * (first + centre) + 2];
+            p_rel = zc0 - pv.x[3 * (first + centre) + 2];
         }
         fmax = fmax < fz ? fz : fmax;
-        double dz = z0 - w->p.x[3 * sp + 2];
+        double dz = z0 - pv.x[3 * sp + 2];
         if (dz > dmax) dmax = dz;
-        double pz = zc0 - w->p.x[3 * (first + centre) + 2];
+        double pz = zc0 - pv.x[3 * (first + centre) + 2];
         if (pz > pmax) { pmax = pz; t_pmax = floe_world_time(w); }
-        if (touched && w->p.v[3 * sp + 2] > vmax) vmax = w->p.v[3 * sp + 2];
+        if (touched && pv.v[3 * sp + 2] > vmax) vmax = pv.v[3 * sp + 2];
     }
     fg->fmax = fmax;
     fg->dmax = dmax;
