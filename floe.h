@@ -11,4 +11,7 @@
 #include "floe_scene.h"
 #include "floe_world_beams.h"
 #include "floe_view.h"
+#include "floe_registry.h"
+#include "floe_provider.h"
+#include "floe_integrator.h"
 #endif

@@ -1,6 +1,7 @@
 /* step.c - the steps: velocity Verlet, leapfrog, RK2, staggered PD-DEM (000 §3.2) and the
  * adaptive controller (003 §4.3); the rotation helpers. */
 #include "world_parts.h"
+#include "floe_integrator.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -749,10 +750,31 @@ static int snapshot_io(floe_world *w, int save) {
     return FLOE_OK;
 }
 
+/* ---- the integrator classes (floe_integrator.h) ---- */
+
+static const floe_integrator_class integrators[] = {
+    {.version = 1, .name = "velocity_verlet", .id = FLOE_VELOCITY_VERLET,
+     .flags = FLOE_INTEGRATOR_RESTORES | FLOE_INTEGRATOR_KICK_DRIFT | FLOE_INTEGRATOR_UNDAMPED_BONDS,
+     .step = step_verlet},
+    {.version = 1, .name = "leapfrog", .id = FLOE_LEAPFROG, .flags = FLOE_INTEGRATOR_UNDAMPED_BONDS,
+     .step = step_verlet, /* the same kicks, with the velocities kept at half steps */
+     .why_not_restores = "leapfrog keeps half-step velocities, which a rejected step could not restore consistently",
+     .why_not_kick_drift = "leapfrog's velocities live at half steps"},
+    {.version = 1, .name = "rk2", .id = FLOE_RK2, .flags = FLOE_INTEGRATOR_RESTORES, .step = step_rk2,
+     .why_not_kick_drift = "RK2 evaluates forces at its midpoint",
+     .why_not_bonds = "RK2 has no stable step for undamped bonds (energy grows by 1 + (w dt)^4/4 per step) and its "
+                      "midpoint evaluation would book the bonds' energy twice"},
+};
+
+const floe_integrator_class *floe_integrator_class_of(int integrator) {
+    for (size_t k = 0; k < sizeof integrators / sizeof *integrators; k++)
+        if (integrators[k].id == integrator) return &integrators[k];
+    return NULL;
+}
+
 int step_once(floe_world *w) {
     if (w->def.pd_dem == FLOE_PD_DEM_STAGGERED && w->npd) return step_staggered(w);
-    if (w->def.integrator == FLOE_RK2) return step_rk2(w);
-    return step_verlet(w);
+    return floe_integrator_class_of(w->def.integrator)->step(w);
 }
 
 /* the largest displacement from the neighbour build that the next drift of dt can reach

@@ -1,6 +1,7 @@
 /* timestep.c - critical time-step estimates (contact, Rayleigh, Hertz, PD, beam bonds) and
  * the choice of the step (docs/integrators.md). */
 #include "world_parts.h"
+#include "floe_integrator.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -293,26 +294,32 @@ int estimate_dt(floe_world *w) {
 int choose_dt(floe_world *w) {
     const floe_world_def *d = &w->def;
     const floe_dt_estimates *e = &w->dte;
-    if (d->integrator < FLOE_VELOCITY_VERLET || d->integrator > FLOE_RK2)
+    const floe_integrator_class *ic = floe_integrator_class_of(d->integrator);
+    if (!ic)
         return floe_world_error(w, FLOE_EINVAL, "integrator %d unknown (velocity_verlet, leapfrog or rk2)", d->integrator);
     if (d->pd_dem != FLOE_PD_DEM_MONOLITHIC && d->pd_dem != FLOE_PD_DEM_STAGGERED)
         return floe_world_error(w, FLOE_EINVAL, "pd_dem scheme %d unknown (monolithic or staggered)", d->pd_dem);
     const int stag = d->pd_dem == FLOE_PD_DEM_STAGGERED;
-    if (stag && d->integrator != FLOE_VELOCITY_VERLET)
+    /* compatibility from the capability flags (floe_integrator.h) and the providers */
+    if (stag && !(ic->flags & FLOE_INTEGRATOR_KICK_DRIFT))
         return floe_world_error(w, FLOE_EINVAL, "the staggered PD-DEM scheme kicks and drifts as velocity Verlet does "
-                                "(r-RESPA); use integrator velocity_verlet with it");
-    if (d->adaptive && d->integrator == FLOE_LEAPFROG)
-        return floe_world_error(w, FLOE_EINVAL, "adaptive steps need velocity_verlet or rk2 (leapfrog keeps half-step "
-                                "velocities, which a rejected step could not restore consistently)");
+                                "(r-RESPA), and %s; use integrator velocity_verlet with it", ic->why_not_kick_drift);
+    if (d->adaptive && !(ic->flags & FLOE_INTEGRATOR_RESTORES))
+        return floe_world_error(w, FLOE_EINVAL, "adaptive steps need an integrator whose trial step can be undone "
+                                "(velocity_verlet or rk2): %s", ic->why_not_restores);
     if (d->adaptive && stag)
         return floe_world_error(w, FLOE_EINVAL, "adaptive steps and the staggered PD-DEM scheme cannot be combined yet");
-    if (d->integrator == FLOE_RK2 && w->beams)
-        return floe_world_error(w, FLOE_EINVAL, "the rk2 integrator and beam bonds cannot be combined: RK2 has no stable "
-                                "step for undamped bonds (energy grows by 1 + (w dt)^4/4 per step) and its midpoint "
-                                "evaluation would book the bonds' energy twice; use velocity_verlet or leapfrog");
-    if (d->adaptive && w->beams)
-        return floe_world_error(w, FLOE_EINVAL, "adaptive steps and beam bonds cannot be combined yet (a bond broken in "
-                                "a rejected trial step would stay broken); use a fixed or automatic step");
+    if (w->beams && !(ic->flags & FLOE_INTEGRATOR_UNDAMPED_BONDS))
+        return floe_world_error(w, FLOE_EINVAL, "the %s integrator and beam bonds cannot be combined: %s; use "
+                                "velocity_verlet or leapfrog", ic->name, ic->why_not_bonds);
+    if (d->adaptive)
+        for (int k = 0; k < w->nprov; k++) {
+            const floe_provider *pv = w->prov[k];
+            if (pv->klass->can_save && !pv->klass->can_save(pv, w))
+                return floe_world_error(w, FLOE_EINVAL, "adaptive steps and %s cannot be combined yet: their state "
+                                        "cannot be restored after a rejected trial step (a bond broken in it would "
+                                        "stay broken); use a fixed or automatic step", pv->klass->name);
+        }
     if (d->pd_substeps < 0 || d->pd_every < 0 || (d->pd_substeps > 1 && d->pd_every > 1))
         return floe_world_error(w, FLOE_EINVAL, "staggered PD-DEM: substeps (%d) and every (%d) must be >= 1 (substeps 0: "
                                 "automatic), and only one of them above 1", d->pd_substeps, d->pd_every);

@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "world_parts.h"
+#include "floe_integrator.h"
 
 const char *floe_strerror(int code) {
     switch (code) {
@@ -453,8 +454,8 @@ double floe_world_energy_balance_error(const floe_world *w) {
 /* ---- integrator and estimate queries ---- */
 
 const char *floe_integrator_name(int integrator) {
-    static const char *const names[] = {"velocity_verlet", "leapfrog", "rk2"};
-    return integrator >= 0 && integrator <= FLOE_RK2 ? names[integrator] : NULL;
+    const floe_integrator_class *c = floe_integrator_class_of(integrator);
+    return c ? c->name : NULL;
 }
 
 int floe_world_dt_estimates(floe_world *w, floe_dt_estimates *out) {
