@@ -100,6 +100,9 @@ int floe_registry_count(const char *kind);
 const floe_registry_entry *floe_registry_at(const char *kind, int k);
 /* The closest registered name of a kind to `name` (edit distance <= 2 + len/4), or NULL. */
 const char *floe_registry_closest(const char *kind, const char *name);
+/* Optimal-string-alignment edit distance (a transposition is one edit; 99 for names over
+ * 63 characters): the closest-name hints of the registries and the scene loader. */
+int floe_edit_distance(const char *a, const char *b);
 /* Index of key in the schema, or -1. */
 int floe_schema_index(const floe_registry_entry *e, const char *key);
 /* 1 when parameter `key` was given in the scene (floe_params_head.given) */

@@ -114,8 +114,7 @@ const floe_registry_entry *floe_registry_at(const char *kind, int idx) {
     return NULL;
 }
 
-/* optimal-string-alignment distance (a transposition is one edit) */
-static int edit_distance(const char *a, const char *b) {
+int floe_edit_distance(const char *a, const char *b) {
     int la = (int)strlen(a), lb = (int)strlen(b);
     if (la > 63 || lb > 63) return 99;
     int d[64][64];
@@ -139,7 +138,7 @@ const char *floe_registry_closest(const char *kind, const char *name) {
     int bd = 3 + (int)strlen(name) / 4;
     for (int k = 0; k < reg.n; k++) {
         if (strcmp(reg.e[k].kind, kind)) continue;
-        int d = edit_distance(name, reg.e[k].name);
+        int d = floe_edit_distance(name, reg.e[k].name);
         if (d < bd) { bd = d; best = reg.e[k].name; }
     }
     return best;

@@ -5,21 +5,6 @@
 static long sc_pos(const sc *s, struct fy_node *n);
 static int sc_loc_pos(const sc *s, long pos, int *line, int *col);
 
-/* Errors: "path:line:col: message" (or "path: message" when the position is unknown) into
- * the caller's buffer; they return code (FLOE_EINVAL for 0). At a node: */
-int sc_fail(sc *s, int code, struct fy_node *at, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 4, 5)))
-#endif
-    ;
-
-/* the same at a byte offset of the text (-1: no position) */
-int sc_fail_pos(sc *s, int code, long pos, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 4, 5)))
-#endif
-    ;
-
 static int sc_vfail_pos(sc *s, int code, long pos, const char *fmt, va_list ap)
 {
     char msg[768];
@@ -216,27 +201,8 @@ const char *sc_type_name(struct fy_node *n)
     return "something else";
 }
 
-/* Optimal-string-alignment edit distance (a transposition counts as one edit). */
-static int sc_edit_distance(const char *a, const char *b)
-{
-    int la = (int)strlen(a), lb = (int)strlen(b);
-    if (la > 63 || lb > 63) return 99;
-    int d[64][64];
-    for (int i = 0; i <= la; i++) d[i][0] = i;
-    for (int j = 0; j <= lb; j++) d[0][j] = j;
-    for (int i = 1; i <= la; i++)
-        for (int j = 1; j <= lb; j++) {
-            int cost = a[i - 1] != b[j - 1];
-            int v = d[i - 1][j] + 1;
-            if (d[i][j - 1] + 1 < v) v = d[i][j - 1] + 1;
-            if (d[i - 1][j - 1] + cost < v) v = d[i - 1][j - 1] + cost;
-            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] &&
-                d[i - 2][j - 2] + 1 < v)
-                v = d[i - 2][j - 2] + 1;
-            d[i][j] = v;
-        }
-    return d[la][lb];
-}
+/* the edit distance of the registries (floe_registry.h): one implementation */
+static int sc_edit_distance(const char *a, const char *b) { return floe_edit_distance(a, b); }
 
 /* " (did you mean 'x'?)" for the closest of names[0..n), or a list of the valid names. */
 void sc_suggest(char *buf, size_t len, const char *word, const char *const *names, int n)
