@@ -298,9 +298,15 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     floe_neighbor_list *nl = &w->nl;
     const int nm = w->nmats;
     floe_detect_ctx dctx = {w->def.dim, w->step, &w->det};
+    /* pairs under the law "none" are skipped; most scenes have none, and then the law of a
+     * pair is looked up only when it touches (a load per pair saved on the sphere path) */
+    int any_none = 0;
+    for (int k = 0; k < nm * nm; k++) any_none |= floe_contact_law_no_contact(w->laws[k]);
+    int any_pieces = 0; /* compound bodies: their pairs are per piece */
+    for (int g = 0; g < w->ngeoms; g++) any_pieces |= floe_piece_count(w->geoms[g]) > 1;
     for (int k = 0; k < nl->npairs; k++) {
         int i = nl->pi[k], j = nl->pj[k], sub = nl->sub[k];
-        if (floe_contact_law_no_contact(w->laws[p->material[i] * nm + p->material[j]])) continue; /* law "none" */
+        if (any_none && floe_contact_law_no_contact(w->laws[p->material[i] * nm + p->material[j]])) continue;
         double *warm = nl->use_warm ? nl->warm + (size_t)k * FLOE_DETECT_WARM : NULL;
         floe_contact c;
         c.gscale = 1.0;
@@ -311,7 +317,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
         const double *xa = p->x + 3 * i, *xb = p->x + 3 * j;
         double rad_i = p->radius[i], rad_j = p->radius[j];
         double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2], rs = rad_i + rad_j;
-        if (p->pieces[i] > 1 || p->pieces[j] > 1) {
+        if (any_pieces && (p->pieces[i] > 1 || p->pieces[j] > 1)) {
             /* compound bodies: the bounding spheres of this entry's two pieces */
             double ca[3], cb[3];
             floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
@@ -343,7 +349,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
         } else if (warm) {
             warm[0] = NAN; /* apart: the next approach starts cold */
         }
-        const floe_contact_law *law = w->laws[p->material[i] * nm + p->material[j]];
+        const floe_contact_law *law = r > 0 ? w->laws[p->material[i] * nm + p->material[j]] : NULL;
         if (r == 1 && law->klass == &floe_overlap_law_class) {
             floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
             r = floe_detect_overlap(&dctx, &bi, &bj, sub, &c);
