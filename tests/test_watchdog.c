@@ -161,7 +161,7 @@ static void pump_stiffness(const floe_contact_law *law, double r, double m, doub
     *cn = 0;
 }
 static void pump_destroy(floe_contact_law *law) { free(law); }
-static const floe_contact_law_class pump_class = {1, "pump (test)", 0, pump_force, pump_stiffness, pump_destroy, NULL};
+static const floe_contact_law_class pump_class = {1, "pump (test)", 0, pump_force, pump_stiffness, pump_destroy, NULL, NULL};
 
 /* a sphere (R 0.1 m, steel-like) dropped at 1 m/s onto a wall with law l; returns rc */
 static int bounce(floe_contact_law *law, int mode, floe_world **out) {

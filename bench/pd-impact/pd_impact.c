@@ -101,7 +101,7 @@ static void indent_stiffness(const floe_contact_law *law, double r_eff, double m
     *kn = 2.0 * ((const indent_law *)law)->kv * depth;
     *cn = 0;
 }
-static const floe_contact_law_class indent_class = {1, "indent-k-d2", 0, indent_force, indent_stiffness, NULL, NULL};
+static const floe_contact_law_class indent_class = {1, "indent-k-d2", 0, indent_force, indent_stiffness, NULL, NULL, NULL};
 
 /* body-force mode: the same force from the analytic indenter position at time t */
 typedef struct { int first, n; double kv; } bf_user;

@@ -1,7 +1,16 @@
 /* contact_law.c - generic contact-law helpers. */
+#include <math.h>
 #include <stdlib.h>
 
 #include "floe_contact.h"
+
+floe_law_info floe_contact_law_info(const floe_contact_law *law)
+{
+    floe_law_info info = {0};
+    info.restitution = NAN;
+    if (law && law->klass && law->klass->info) law->klass->info(law, &info);
+    return info;
+}
 
 void floe_contact_law_destroy(floe_contact_law *law)
 {

@@ -82,6 +82,19 @@ typedef struct floe_contact_result {
 
 typedef struct floe_contact_law floe_contact_law;
 
+/* What the world's time-step estimates may know of a law beyond its stiffness (the
+ * optional info method of the class; a composed law forwards its normal part's). */
+typedef struct floe_law_info {
+    double hertz_e_star;     /* > 0: the normal force is 4/3 E* sqrt(R*) d^(3/2) with this E*
+                                (Pa): the Hertz contact duration and Rayleigh step apply */
+    double restitution;      /* head-on restitution the law is calibrated to (NAN: unknown) */
+    double linear_kn, linear_gn; /* > 0: a linear spring (N/m) and dashpot (N s/m) normal force */
+    int needs_overlap;       /* 1: the law reads the overlap area/volume (floe_contact.area):
+                                detection must fill it (polytope pairs only) */
+    int spreads_load;        /* 1: the law's stiffness already counts the contact length (the
+                                critical step does not add the contact manifold's factor) */
+} floe_law_info;
+
 typedef struct floe_contact_law_class {
     int version;             /* 1 */
     const char *name;
@@ -99,7 +112,12 @@ typedef struct floe_contact_law_class {
      * contact, for the rotational modes in the critical time step (NULL = none) */
     void (*tangential_stiffness)(const floe_contact_law *law, double r_eff, double m_eff, double depth,
                                  double *kt, double *ct);
+    /* optional: what the time-step estimates may know (NULL: nothing beyond stiffness) */
+    void (*info)(const floe_contact_law *law, floe_law_info *info);
 } floe_contact_law_class;
+
+/* The law's info (zeros, restitution NAN, when the class has no info method). */
+floe_law_info floe_contact_law_info(const floe_contact_law *law);
 
 struct floe_contact_law {
     const floe_contact_law_class *klass;
@@ -210,6 +228,83 @@ void floe_contact_coulomb(const floe_contact *c, double ks, double gs, double mu
 static inline int floe_contact_law_no_contact(const floe_contact_law *law) {
     return law && law->klass == &floe_no_contact_law_class;
 }
+
+/* ---- laws composed of a normal part and a tangential part (contact/laws/composed_law.c) ----
+ * As MercuryDPM composes a contact law of a normal force and a friction force: the normal
+ * part gives the normal force (and its elastic part, stiffness and dashpot, which some
+ * tangential parts scale with), the tangential part the friction force limited by
+ * mu (Fn + the manifold's other springs). History: the normal part owns history[3], the
+ * tangential part history[0..2]. A scene composes them with
+ *   laws: [{materials: [a, b], normal: {model: hertz, ...}, tangential: {model: mindlin, ...}}]
+ * (kinds "normal" and "tangential" in the registry); hertz + mindlin is the hertz_mindlin
+ * law and hooke + coulomb the viscoelastic one, to rounding (tests/test_composed_law.c). */
+#define FLOE_KIND_NORMAL "normal"
+#define FLOE_KIND_TANGENTIAL "tangential"
+
+typedef struct floe_normal_force {
+    double fn;               /* normal force magnitude on the pair, N (repulsive > 0) */
+    double fel;              /* its elastic part, N */
+    double energy;           /* stored elastic energy, J */
+    double kn;               /* elastic stiffness dFel/d(depth) at this depth, N/m */
+    double gn;               /* dashpot coefficient in use, N s/m */
+    double diss;             /* dissipated over the step by the dashpot, J */
+} floe_normal_force;
+
+typedef struct floe_normal_part floe_normal_part;
+typedef struct floe_tangential_part floe_tangential_part;
+
+typedef struct floe_normal_part_class {
+    int version;             /* 1 */
+    const char *name;
+    /* normal force for a contact with depth > 0; history[3] is the part's own */
+    int (*force)(const floe_normal_part *np, const floe_contact *c, double *history, floe_normal_force *out);
+    /* linearised stiffness and damping at a representative contact (critical step) */
+    void (*stiffness)(const floe_normal_part *np, double r_eff, double m_eff, double depth, double *kn, double *cn);
+    void (*info)(const floe_normal_part *np, floe_law_info *info); /* optional */
+    void (*destroy)(floe_normal_part *np);                          /* optional (NULL: free) */
+} floe_normal_part_class;
+struct floe_normal_part {
+    const floe_normal_part_class *klass;
+};
+
+typedef struct floe_tangential_part_class {
+    int version;             /* 1 */
+    const char *name;
+    /* tangential force ft on i for a contact with depth > 0, given the normal force nf;
+     * history[0..2] are the part's own; adds the stored energy to *energy and the
+     * dissipation of the step to *diss */
+    int (*force)(const floe_tangential_part *tp, const floe_contact *c, const floe_normal_force *nf,
+                 double *history, double ft[3], double *energy, double *diss);
+    /* tangential stiffness and damping at a representative contact whose normal part has
+     * stiffness kn and damping cn (critical step); optional */
+    void (*stiffness)(const floe_tangential_part *tp, double r_eff, double m_eff, double depth, double kn,
+                      double cn, double *kt, double *ct);
+    void (*destroy)(floe_tangential_part *tp); /* optional (NULL: free) */
+} floe_tangential_part_class;
+struct floe_tangential_part {
+    const floe_tangential_part_class *klass;
+    double friction;         /* its Coulomb coefficient (0: none) */
+};
+
+/* Constructors of registered parts (the params struct of the entry's schema). */
+typedef floe_normal_part *(*floe_normal_create_fn)(const void *params, const floe_material *a,
+                                                   const floe_material *b, char *err, size_t errlen);
+typedef floe_tangential_part *(*floe_tangential_create_fn)(const void *params, const floe_material *a,
+                                                           const floe_material *b, char *err, size_t errlen);
+/* The law of a normal part and a tangential part (NULL: frictionless); it owns both after
+ * success (on failure it destroys them and returns NULL). */
+floe_contact_law *floe_composed_law_create(floe_normal_part *np, floe_tangential_part *tp);
+extern const floe_contact_law_class floe_composed_law_class;
+/* The built-in parts (NULL on bad input): hooke kn (N/m) > 0, gn (N s/m) >= 0, tension
+ * 0/1; hertz from two materials (young, poisson) and a restitution in (0, 1]; coulomb mu,
+ * ks > 0, gs >= 0; mindlin from two materials and mu. */
+floe_normal_part *floe_hooke_part_create(double kn, double gn, int tension);
+floe_normal_part *floe_hertz_part_create(const floe_material *a, const floe_material *b, double restitution);
+floe_tangential_part *floe_coulomb_part_create(double mu, double ks, double gs);
+floe_tangential_part *floe_mindlin_part_create(const floe_material *a, const floe_material *b, double mu);
+/* Destroy a part (its class's destroy, or free). */
+void floe_normal_part_destroy(floe_normal_part *np);
+void floe_tangential_part_destroy(floe_tangential_part *tp);
 
 /* ---- contact laws as registered components (floe_registry.h, kind FLOE_KIND_LAW) ----
  * A registered law gives a parameter schema and this constructor: params is its parameter

@@ -46,8 +46,8 @@
 #include <stdlib.h>
 
 #include "floe_contact.h"
+#include "law_parts.h"
 
-#define HM_DAMP_PREF 1.8257418583505538 /* 2 sqrt(5/6) */
 #define HM_SQRT5 2.2360679774997897
 
 /* ---- calibration: dimensionless collision ODE ---- */
@@ -139,7 +139,7 @@ static int hm_force(const floe_contact_law *law_, const floe_contact *c, double 
                     floe_contact_result *out)
 {
     const floe_hertz_mindlin_law *H = (const floe_hertz_mindlin_law *)law_;
-    const double d = c->depth, vn = c->vn, dt = c->dt, m = c->m_eff, R = c->r_eff;
+    const double d = c->depth, m = c->m_eff, R = c->r_eff;
     for (int k = 0; k < 3; ++k) out->force[k] = out->torque_i[k] = out->torque_j[k] = 0.0;
     out->energy = out->dissipation = out->fn = 0.0;
     if (!(m > 0.0) || !isfinite(m) || !(R > 0.0) || !isfinite(R)) return FLOE_EINVAL;
@@ -147,39 +147,15 @@ static int hm_force(const floe_contact_law *law_, const floe_contact *c, double 
         floe_v3_set(hist, 0.0, 0.0, 0.0);
         return FLOE_OK;
     }
-
-    const double a = sqrt(R * d);
-    const double Sn = 2.0 * H->e_star * a;
-    const double fel = (2.0 / 3.0) * Sn * d; /* 4/3 E* sqrt(R* d) d */
-    const double gn = HM_DAMP_PREF * H->damping_ratio * sqrt(Sn * m);
-    double Fn = fel + gn * vn;
-    if (Fn < 0.0) Fn = 0.0;
-    double diss = (Fn - fel) * vn * dt;
-
-    const double kt = 8.0 * H->g_star * a;
-    const double gt = gn * H->tangent_damping_ratio; /* sqrt(kt m) = sqrt(Sn m) sqrt(4 G* / E*) */
-    double *Fs = hist;
-    floe_contact_rotate_history(Fs, c->n);
-    floe_v3_axpy(Fs, -kt * dt, c->vt);
-    double Ft[3];
-    for (int k = 0; k < 3; ++k) Ft[k] = Fs[k] - gt * c->vt[k];
-    const double vt2 = floe_v3_dot(c->vt, c->vt);
-    const double limit = H->mu * (Fn + c->fn_extra); /* + the manifold's other springs */
-    const double ft2 = floe_v3_dot(Ft, Ft);
-    diss += gt * vt2 * dt;
-    const double half_inv_kt = 0.5 / kt;
-    if (ft2 > limit * limit) {
-        const double ftmag = sqrt(ft2);
-        const double e_before = floe_v3_dot(Fs, Fs) * half_inv_kt;
-        floe_v3_scale(Ft, limit / ftmag);
-        for (int k = 0; k < 3; ++k) Fs[k] = Ft[k] + gt * c->vt[k];
-        diss += e_before - floe_v3_dot(Fs, Fs) * half_inv_kt;
-    }
-
-    for (int k = 0; k < 3; ++k) out->force[k] = -Fn * c->n[k] + Ft[k];
-    out->energy = 0.4 * fel * d + floe_v3_dot(Fs, Fs) * half_inv_kt;
+    /* the normal and tangential parts of the composed law, fused (law_parts.h) */
+    floe_normal_force nf;
+    floe_hertz_normal(H->e_star, H->damping_ratio, c, &nf);
+    double Ft[3], energy = nf.energy, diss = nf.diss;
+    floe_mindlin_tangential(H->g_star, H->tangent_damping_ratio, H->mu, c, &nf, hist, Ft, &energy, &diss);
+    for (int k = 0; k < 3; ++k) out->force[k] = -nf.fn * c->n[k] + Ft[k];
+    out->energy = energy;
     out->dissipation = diss;
-    out->fn = Fn;
+    out->fn = nf.fn;
     return FLOE_OK;
 }
 
@@ -190,7 +166,7 @@ static void hm_stiffness(const floe_contact_law *law_, double r_eff, double m_ef
     double k = 0.0, g = 0.0;
     if (depth > 0.0 && r_eff > 0.0) {
         k = 2.0 * H->e_star * sqrt(r_eff * depth);
-        if (m_eff > 0.0) g = HM_DAMP_PREF * H->damping_ratio * sqrt(k * m_eff);
+        if (m_eff > 0.0) g = FLOE_HM_DAMP_PREF * H->damping_ratio * sqrt(k * m_eff);
     }
     if (kn) *kn = k;
     if (cn) *cn = g;
@@ -210,13 +186,31 @@ static void hm_tangential(const floe_contact_law *law_, double r_eff, double m_e
 
 static void hm_destroy(floe_contact_law *law) { free(law); }
 
+static void hm_info(const floe_contact_law *law_, floe_law_info *info)
+{
+    const floe_hertz_mindlin_law *H = (const floe_hertz_mindlin_law *)law_;
+    info->hertz_e_star = H->e_star;
+    info->restitution = H->restitution;
+}
+
 const floe_contact_law_class floe_hertz_mindlin_law_class = {
-    1, "hertz_mindlin", 3, hm_force, hm_stiffness, hm_destroy, hm_tangential
+    1, "hertz_mindlin", 3, hm_force, hm_stiffness, hm_destroy, hm_tangential, hm_info
 };
 
 static int hm_material_ok(const floe_material *m)
 {
     return m && m->young > 0.0 && isfinite(m->young) && m->poisson > -1.0 && m->poisson <= 0.5;
+}
+
+int floe_hertz_moduli(const floe_material *ma, const floe_material *mb, double *e_star, double *g_star, double *tdr)
+{
+    if (!hm_material_ok(ma) || !hm_material_ok(mb)) return 0;
+    const double Ea = ma->young, Eb = mb->young, na = ma->poisson, nb = mb->poisson;
+    const double Ga = Ea / (2.0 * (1.0 + na)), Gb = Eb / (2.0 * (1.0 + nb));
+    *e_star = 1.0 / ((1.0 - na * na) / Ea + (1.0 - nb * nb) / Eb);
+    *g_star = 1.0 / ((2.0 - na) / Ga + (2.0 - nb) / Gb);
+    *tdr = sqrt(4.0 * *g_star / *e_star);
+    return 1;
 }
 
 floe_contact_law *floe_hertz_mindlin_law_create(const floe_material *ma, const floe_material *mb,
@@ -228,12 +222,8 @@ floe_contact_law *floe_hertz_mindlin_law_create(const floe_material *ma, const f
     if (!isfinite(beta)) return NULL;
     floe_hertz_mindlin_law *H = calloc(1, sizeof *H);
     if (!H) return NULL;
-    const double Ea = ma->young, Eb = mb->young, na = ma->poisson, nb = mb->poisson;
-    const double Ga = Ea / (2.0 * (1.0 + na)), Gb = Eb / (2.0 * (1.0 + nb));
     H->base.klass = &floe_hertz_mindlin_law_class;
-    H->e_star = 1.0 / ((1.0 - na * na) / Ea + (1.0 - nb * nb) / Eb);
-    H->g_star = 1.0 / ((2.0 - na) / Ga + (2.0 - nb) / Gb);
-    H->tangent_damping_ratio = sqrt(4.0 * H->g_star / H->e_star);
+    floe_hertz_moduli(ma, mb, &H->e_star, &H->g_star, &H->tangent_damping_ratio);
     H->restitution = restitution;
     H->mu = mu;
     H->base.friction = mu;

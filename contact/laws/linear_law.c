@@ -30,6 +30,7 @@
 #include <stdlib.h>
 
 #include "floe_contact.h"
+#include "law_parts.h"
 
 static const double linear_pi = 3.14159265358979323846;
 
@@ -51,7 +52,7 @@ static const double linear_pi = 3.14159265358979323846;
  * dashpot takes the velocity at t_{n+1} instead, v_{n+1/2} - (dt/2) Fn / m*, solved with
  * the force: Fn = (kn d + gn vn) / (1 + gn dt / (2 m*)), exact for the pair's normal
  * motion under velocity Verlet. */
-static double linear_dashpot_phase(const floe_linear_law *L, const floe_contact *c, double *hist, double hm)
+static double linear_dashpot_phase(double kn, double gn, int tension, const floe_contact *c, double *hist, double hm)
 {
     const double d = c->depth, vn = c->vn, dt = c->dt;
     if (!(dt > 0.0)) return 1.0; /* prepare: nothing advances */
@@ -64,9 +65,9 @@ static double linear_dashpot_phase(const floe_linear_law *L, const floe_contact 
     const double covered = hist[3] - 1.0;
     double f = 1.0;
     hist[3] = 1.0;
-    if (L->tension && vn < 0.0) {
+    if (tension && vn < 0.0) {
         /* the overlap's rate over the next drift: v_{n+3/2} = v_{n+1/2} - dt Fn / m* */
-        const double fn = (L->kn * d + L->gn * vn) / (1.0 + L->gn * hm), vnext = vn - 2.0 * hm * fn;
+        const double fn = (kn * d + gn * vn) / (1.0 + gn * hm), vnext = vn - 2.0 * hm * fn;
         if (vnext < 0.0 && d < -vnext * dt) {
             f = 0.5 + d / (-vnext * dt);
             hist[3] = 1.0 + fmax(f - 1.0, 0.0);
@@ -75,20 +76,31 @@ static double linear_dashpot_phase(const floe_linear_law *L, const floe_contact 
     return fmax(f - covered, 0.0);
 }
 
+void floe_linear_normal(double kn, double gn, int tension, const floe_contact *c, double *hist, floe_normal_force *o)
+{
+    const double d = c->depth, vn = c->vn, dt = c->dt;
+    const double fel = kn * d;
+    /* the dashpot at the velocity of the step's end (linear_dashpot_phase) */
+    const double hm = c->m_eff > 0.0 && isfinite(c->m_eff) ? 0.5 * dt / c->m_eff : 0.0;
+    const double gph = gn * linear_dashpot_phase(kn, gn, tension, c, hist, hm);
+    double Fn = (fel + gph * vn) / (1.0 + gph * hm);
+    if (!tension && Fn < 0.0) Fn = 0.0;
+    o->fn = Fn;
+    o->fel = fel;
+    o->kn = kn;
+    o->gn = gn;
+    o->diss = (Fn - fel) * vn * dt; /* damping force actually applied times vn dt */
+    o->energy = 0.5 * kn * d * d;
+}
+
 static int linear_force(const floe_contact_law *law_, const floe_contact *c, double *hist,
                         floe_contact_result *out)
 {
     const floe_linear_law *L = (const floe_linear_law *)law_;
-    const double d = c->depth, vn = c->vn, dt = c->dt;
-
-    /* normal */
-    const double fel = L->kn * d;
-    /* the dashpot at the velocity of the step's end (linear_dashpot_phase) */
-    const double hm = c->m_eff > 0.0 && isfinite(c->m_eff) ? 0.5 * dt / c->m_eff : 0.0;
-    const double gph = L->gn * linear_dashpot_phase(L, c, hist, hm);
-    double Fn = (fel + gph * vn) / (1.0 + gph * hm);
-    if (!L->tension && Fn < 0.0) Fn = 0.0;
-    double diss = (Fn - fel) * vn * dt; /* damping force actually applied times vn dt */
+    floe_normal_force nf;
+    floe_linear_normal(L->kn, L->gn, L->tension, c, hist, &nf);
+    const double Fn = nf.fn;
+    double diss = nf.diss;
 
     /* tangential */
     double *s = hist, Ft[3];
@@ -99,7 +111,7 @@ static int linear_force(const floe_contact_law *law_, const floe_contact *c, dou
         out->torque_i[k] = 0.0;
         out->torque_j[k] = 0.0;
     }
-    out->energy = 0.5 * L->kn * d * d + 0.5 * L->ks * floe_v3_dot(s, s);
+    out->energy = nf.energy + 0.5 * L->ks * floe_v3_dot(s, s);
     out->dissipation = diss;
     out->fn = Fn;
     return FLOE_OK;
@@ -125,8 +137,15 @@ static void linear_tangential(const floe_contact_law *law_, double r_eff, double
 
 static void linear_destroy(floe_contact_law *law) { free(law); }
 
+static void linear_info(const floe_contact_law *law_, floe_law_info *info)
+{
+    const floe_linear_law *L = (const floe_linear_law *)law_;
+    info->linear_kn = L->kn;
+    info->linear_gn = L->gn;
+}
+
 const floe_contact_law_class floe_linear_law_class = {
-    1, "linear", 4, linear_force, linear_stiffness, linear_destroy, linear_tangential
+    1, "linear", 4, linear_force, linear_stiffness, linear_destroy, linear_tangential, linear_info
 };
 
 floe_contact_law *floe_linear_law_create(double kn, double ks, double gn, double gs, double mu)

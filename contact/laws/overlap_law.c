@@ -105,8 +105,15 @@ static void overlap_tangential(const floe_contact_law *law_, double r_eff, doubl
 
 static void overlap_destroy(floe_contact_law *law) { free(law); }
 
+static void overlap_info(const floe_contact_law *law, floe_law_info *info)
+{
+    (void)law;
+    info->needs_overlap = 1; /* reads floe_contact.area* */
+    info->spreads_load = 1;  /* its stiffness counts the contact length */
+}
+
 const floe_contact_law_class floe_overlap_law_class = {
-    1, "overlap_area", 3, overlap_force, overlap_stiffness, overlap_destroy, overlap_tangential
+    1, "overlap_area", 3, overlap_force, overlap_stiffness, overlap_destroy, overlap_tangential, overlap_info
 };
 
 floe_contact_law *floe_overlap_law_create(double ka, double ks, double gn, double gs, double mu)

@@ -57,7 +57,7 @@ static void sr_stiffness(const floe_contact_law *law_, double r_eff, double m_ef
 static void sr_destroy(floe_contact_law *law) { free(law); }
 
 const floe_contact_law_class floe_short_range_law_class = {
-    1, "short_range", 0, sr_force, sr_stiffness, sr_destroy, NULL
+    1, "short_range", 0, sr_force, sr_stiffness, sr_destroy, NULL, NULL
 };
 
 floe_contact_law *floe_short_range_law_create(double k)
@@ -106,7 +106,7 @@ static void none_stiffness(const floe_contact_law *law, double r_eff, double m_e
 static void none_destroy(floe_contact_law *law) { free(law); }
 
 const floe_contact_law_class floe_no_contact_law_class = {
-    1, "none", 0, none_force, none_stiffness, none_destroy, NULL
+    1, "none", 0, none_force, none_stiffness, none_destroy, NULL, NULL
 };
 
 floe_contact_law *floe_no_contact_law_create(void)

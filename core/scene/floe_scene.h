@@ -44,6 +44,9 @@ const char *floe_plugin_path(int k);
  * docs/reference.md (built-ins only). FLOE_EINVAL with a message for an unknown kind or
  * name. */
 int floe_reference_write(FILE *f, const char *kind, const char *name, int markdown, char *err, size_t errlen);
+/* The kinds floe help lists (shape, law, normal, tangential, output, ...): count and k-th. */
+int floe_help_kind_count(void);
+const char *floe_help_kind(int k);
 
 /* The built-in default demo scene (YAML text). */
 const char *floe_scene_default_demo(void);

@@ -40,15 +40,27 @@ static void default_text(const floe_param *p, char *buf, size_t len) {
     }
 }
 
-static const char *kind_intro(const char *kind) {
-    if (!strcmp(kind, FLOE_KIND_LAW))
-        return "Contact laws, named in `laws: [{materials: [a, b], model: NAME, ...}]`.";
-    if (!strcmp(kind, FLOE_KIND_SHAPE)) return "Shapes, named in `shape: {NAME: {...}}` of bodies and PD regions.";
-    if (!strcmp(kind, FLOE_KIND_OBSERVER))
-        return "Outputs, named in `outputs: [{type: NAME, every: N | interval: T, ...}]` (every: steps, default 100; "
-               "interval: seconds of simulated time).";
-    return "";
-}
+/* The kinds `floe help` and docs/reference.md list, in order: kind, heading, where a scene
+ * names them. A new kind is one line here. */
+static const struct help_kind {
+    const char *kind, *heading, *intro;
+} help_kinds[] = {
+    {FLOE_KIND_SHAPE, "Shapes", "Shapes, named in `shape: {NAME: {...}}` of bodies and PD regions."},
+    {FLOE_KIND_LAW, "Contact laws", "Contact laws, named in `laws: [{materials: [a, b], model: NAME, ...}]`."},
+    {FLOE_KIND_NORMAL, "Normal parts of composed contact laws",
+     "Normal parts, composed with a tangential part in `laws: [{materials: [a, b], normal: {model: NAME, ...}, "
+     "tangential: {model: NAME, ...}}]`."},
+    {FLOE_KIND_TANGENTIAL, "Tangential parts of composed contact laws",
+     "Tangential (friction) parts of a composed law: `tangential: {model: NAME, ...}` beside its `normal:` "
+     "(none: frictionless)."},
+    {FLOE_KIND_OBSERVER, "Outputs",
+     "Outputs, named in `outputs: [{type: NAME, every: N | interval: T, ...}]` (every: steps, default 100; "
+     "interval: seconds of simulated time)."},
+};
+#define NKINDS ((int)(sizeof help_kinds / sizeof *help_kinds))
+
+int floe_help_kind_count(void) { return NKINDS; }
+const char *floe_help_kind(int k) { return k >= 0 && k < NKINDS ? help_kinds[k].kind : NULL; }
 
 static void write_entry(FILE *f, const floe_registry_entry *e, int md) {
     if (md) {
@@ -85,8 +97,6 @@ static void write_entry(FILE *f, const floe_registry_entry *e, int md) {
     fprintf(f, "\n");
 }
 
-static const char *const kinds[] = {FLOE_KIND_SHAPE, FLOE_KIND_LAW, FLOE_KIND_OBSERVER};
-
 int floe_reference_write(FILE *f, const char *kind, const char *name, int markdown, char *err, size_t errlen) {
     FLOE_TRY(floe_register_builtins(err, errlen));
     if (markdown) {
@@ -95,16 +105,15 @@ int floe_reference_write(FILE *f, const char *kind, const char *name, int markdo
                    "CI regenerates it and fails when this file differs. Do not edit by hand.\n\n");
     }
     int found = 0;
-    for (size_t q = 0; q < sizeof kinds / sizeof *kinds; q++) {
-        if (kind && strcmp(kind, kinds[q])) continue;
+    for (int q = 0; q < NKINDS; q++) {
+        const char *kq = help_kinds[q].kind;
+        if (kind && strcmp(kind, kq)) continue;
         found = 1;
-        if (markdown) fprintf(f, "## %s\n\n%s\n\n", !strcmp(kinds[q], "law") ? "Contact laws"
-                                                   : !strcmp(kinds[q], "shape") ? "Shapes" : "Outputs",
-                              kind_intro(kinds[q]));
-        else if (!name) fprintf(f, "%s\n", kind_intro(kinds[q]));
-        int n = floe_registry_count(kinds[q]), shown = 0;
+        if (markdown) fprintf(f, "## %s\n\n%s\n\n", help_kinds[q].heading, help_kinds[q].intro);
+        else if (!name) fprintf(f, "%s\n", help_kinds[q].intro);
+        int n = floe_registry_count(kq), shown = 0;
         for (int k = 0; k < n; k++) {
-            const floe_registry_entry *e = floe_registry_at(kinds[q], k);
+            const floe_registry_entry *e = floe_registry_at(kq, k);
             if (name && strcmp(e->name, name)) continue;
             if (markdown && strcmp(e->origin, FLOE_ORIGIN_BUILTIN)) continue; /* plugins: not in the docs */
             shown++;
@@ -114,14 +123,19 @@ int floe_reference_write(FILE *f, const char *kind, const char *name, int markdo
                          strcmp(e->origin, FLOE_ORIGIN_BUILTIN) ? e->origin : "");
         }
         if (name && !shown) {
-            const char *near = floe_registry_closest(kinds[q], name);
-            snprintf(err, errlen, "no %s named '%s'%s%s%s (floe help %s lists them)", kinds[q], name,
-                     near ? " (did you mean '" : "", near ? near : "", near ? "'?)" : "", kinds[q]);
+            const char *near = floe_registry_closest(kq, name);
+            snprintf(err, errlen, "no %s named '%s'%s%s%s (floe help %s lists them)", kq, name,
+                     near ? " (did you mean '" : "", near ? near : "", near ? "'?)" : "", kq);
             return FLOE_EINVAL;
         }
     }
     if (!found) {
-        snprintf(err, errlen, "unknown kind '%s' (kinds: shape, law, output)", kind);
+        char list[256] = "";
+        for (int q = 0; q < NKINDS; q++) {
+            size_t l = strlen(list);
+            snprintf(list + l, sizeof list - l, "%s%s", q ? ", " : "", help_kinds[q].kind);
+        }
+        snprintf(err, errlen, "unknown kind '%s' (kinds: %s)", kind, list);
         return FLOE_EINVAL;
     }
     return FLOE_OK;

@@ -131,8 +131,14 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
         const sc_law *L = &s->laws[i];
         char line[512];
         sc_params_text(line, sizeof line, L->ent, L->params);
-        sc_cat(&b, "  %s-%s: %s%s%s\n", s->mats[L->a].m.name, s->mats[L->b].m.name,
+        sc_cat(&b, "  %s-%s: %s%s%s%s", s->mats[L->a].m.name, s->mats[L->b].m.name, L->composed ? "normal " : "",
                L->ent->title ? L->ent->title : L->ent->name, line[0] ? ", " : "", line);
+        if (L->composed && L->ent_t) {
+            sc_params_text(line, sizeof line, L->ent_t, L->params_t);
+            sc_cat(&b, "; tangential %s%s%s", L->ent_t->title ? L->ent_t->title : L->ent_t->name,
+                   line[0] ? ", " : "", line);
+        } else if (L->composed) sc_cat(&b, "; frictionless");
+        sc_cat(&b, "\n");
     }
     sc_cat(&b, "detectors:  ");
     int first = 1;
@@ -844,7 +850,10 @@ int floe_scene_load_ex(const char *path, const char *text, const char *outdir, i
     free(owned);
 
     free(s.mats);
-    for (int i = 0; i < s.nlaws; i++) free(s.laws[i].params);
+    for (int i = 0; i < s.nlaws; i++) {
+        free(s.laws[i].params);
+        free(s.laws[i].params_t);
+    }
     free(s.laws);
     free(s.law_at);
     free(s.entry_first);

@@ -67,6 +67,11 @@ typedef struct sc_law {
     const floe_registry_entry *ent;  /* the registered law (floe_registry.h) */
     void *params;                    /* its parameter struct, read by its schema */
     struct fy_node *node;            /* the entry (messages) */
+    /* a composed law (normal: {...}, tangential: {...}): ent/params are the normal part's,
+     * ent_t/params_t the tangential part's (NULL: frictionless) */
+    int composed;
+    const floe_registry_entry *ent_t;
+    void *params_t;
 } sc_law;
 
 typedef struct sc_output {

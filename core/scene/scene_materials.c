@@ -81,6 +81,59 @@ static int sc_law_names(const char **names, int max)
     return n;
 }
 
+/* One part of a composed law: KEY: {model: NAME, <its parameters>} of kind `kind`. */
+static int sc_read_part(sc *s, const sc_map *m, const char *key, const char *kind, const floe_registry_entry **ent,
+                        void **params)
+{
+    struct fy_node *k, *v = sc_get(m, key, &k);
+    *ent = NULL;
+    *params = NULL;
+    if (!v) return FLOE_OK;
+    char f[160];
+    sc_field(f, sizeof f, m, key);
+    if (v == k || sc_is_missing(v) || !fy_node_is_mapping(v))
+        return sc_fail(s, FLOE_EPARSE, v == k || sc_is_missing(v) ? k : v,
+                       "%s must be a mapping ({model: NAME, ...}; floe help %s lists the models), got %s", f, kind,
+                       v == k || sc_is_missing(v) ? "nothing" : sc_type_name(v));
+    sc_map pm = {v, v, ""};
+    snprintf(pm.what, sizeof pm.what, "%s", f);
+    const char *model;
+    struct fy_node *at;
+    FLOE_TRY(sc_str(s, &pm, "model", 1, NULL, &model, &at));
+    const floe_registry_entry *e = floe_registry_find(kind, model);
+    if (!e) {
+        const char *names[128];
+        int n = 0;
+        for (int q = 0; q < floe_registry_count(kind) && n < 128; q++) names[n++] = floe_registry_at(kind, q)->name;
+        char sug[1024];
+        sc_suggest(sug, sizeof sug, model, names, n);
+        return sc_fail(s, FLOE_EINVAL, at, "%s.model: unknown %s part '%s'%s", f, kind, model, sug);
+    }
+    *params = calloc(1, e->params_size ? e->params_size : 1);
+    if (!*params) return sc_fail(s, FLOE_ENOMEM, v, "out of memory");
+    *ent = e;
+    char label[96];
+    snprintf(label, sizeof label, "%s model '%s'", kind, e->name);
+    return sc_read_schema(s, &pm, e, label, "model", *params);
+}
+
+/* Create the law of entry L (a registered law, or a composed one); NULL with err. */
+static floe_contact_law *sc_law_create(const sc *s, const sc_law *L, char *err, size_t errlen)
+{
+    const floe_material *ma = &s->mats[L->a].m, *mb = &s->mats[L->b].m;
+    if (!L->composed) return ((floe_law_create_fn)L->ent->create)(L->params, ma, mb, err, errlen);
+    floe_normal_part *np = ((floe_normal_create_fn)L->ent->create)(L->params, ma, mb, err, errlen);
+    if (!np) return NULL;
+    floe_tangential_part *tp = NULL;
+    if (L->ent_t) {
+        tp = ((floe_tangential_create_fn)L->ent_t->create)(L->params_t, ma, mb, err, errlen);
+        if (!tp) { floe_normal_part_destroy(np); return NULL; }
+    }
+    floe_contact_law *law = floe_composed_law_create(np, tp);
+    if (!law) snprintf(err, errlen, "out of memory");
+    return law;
+}
+
 int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
 {
     if (!seq) return FLOE_OK;
@@ -102,23 +155,42 @@ int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
         if (!fy_node_is_mapping(e))
             return sc_fail(s, FLOE_EPARSE, e, "%s must be a mapping ({materials: [a, b], model: ..., ...}), got %s",
                            what, sc_is_missing(e) ? "nothing" : sc_type_name(e));
-        /* model: the name of a registered law */
-        const char *model;
-        struct fy_node *mat;
-        FLOE_TRY(sc_str(s, &m, "model", 1, NULL, &model, &mat));
-        const floe_registry_entry *ent = floe_registry_find(FLOE_KIND_LAW, model);
-        if (!ent) {
+        /* model: the name of a registered law, or normal: + tangential: parts */
+        const int composed = !sc_has(&m, "model") && (sc_has(&m, "normal") || sc_has(&m, "tangential"));
+        if (!composed && !sc_has(&m, "model"))
+            return sc_fail(s, FLOE_EPARSE, e,
+                           "%s: give model: NAME (floe help law) or normal: {model: NAME, ...} with an optional "
+                           "tangential: {model: NAME, ...} (floe help normal, floe help tangential)", what);
+        if (composed) {
+            static const char *const ckeys[] = {"materials", "normal", "tangential", NULL};
+            FLOE_TRY(sc_map_open(s, e, e, what, ckeys, &m));
+            if (!sc_has(&m, "normal"))
+                return sc_fail(s, FLOE_EPARSE, e, "%s: a tangential part needs a normal part (normal: {model: "
+                                                  "NAME, ...}; floe help normal)", what);
+        }
+        const char *model = NULL;
+        struct fy_node *mat = NULL;
+        if (!composed) FLOE_TRY(sc_str(s, &m, "model", 1, NULL, &model, &mat));
+        const floe_registry_entry *ent = composed ? NULL : floe_registry_find(FLOE_KIND_LAW, model);
+        if (!composed && !ent) {
             const char *names[128];
             char sug[1024];
             sc_suggest(sug, sizeof sug, model, names, sc_law_names(names, 128));
             return sc_fail(s, FLOE_EINVAL, mat, "%s.model: unknown value '%s'%s", what, model, sug);
         }
         sc_law *L = &s->laws[i];
-        L->ent = ent;
         L->node = e;
-        L->params = calloc(1, ent->params_size);
-        if (!L->params) return sc_fail(s, FLOE_ENOMEM, e, "out of memory");
         s->nlaws = i + 1; /* freed with the loader from here on */
+        if (composed) {
+            L->composed = 1;
+            FLOE_TRY(sc_read_part(s, &m, "normal", FLOE_KIND_NORMAL, &L->ent, &L->params));
+            FLOE_TRY(sc_read_part(s, &m, "tangential", FLOE_KIND_TANGENTIAL, &L->ent_t, &L->params_t));
+            ent = L->ent;
+        } else {
+            L->ent = ent;
+            L->params = calloc(1, ent->params_size);
+            if (!L->params) return sc_fail(s, FLOE_ENOMEM, e, "out of memory");
+        }
         /* materials: [a, b] */
         struct fy_node *mk;
         struct fy_node *mv = sc_get(&m, "materials", &mk);
@@ -154,19 +226,20 @@ int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key)
         s->law_at[L->b * s->nmats + L->a] = mv;
         char label[96];
         snprintf(label, sizeof label, "model '%s'", ent->name);
-        FLOE_TRY(sc_read_schema(s, &m, ent, label, "materials|model", L->params));
-        if (ent->flags & FLOE_LAW_NEEDS_YOUNG)
+        if (!composed) FLOE_TRY(sc_read_schema(s, &m, ent, label, "materials|model", L->params));
+        if ((ent->flags | (L->ent_t ? L->ent_t->flags : 0)) & FLOE_LAW_NEEDS_YOUNG)
             for (int j = 0; j < 2; j++) {
                 const sc_mat *mt = &s->mats[ab[j]];
                 if (!mt->has_young)
                     return sc_fail(s, FLOE_EINVAL, mt->at,
                                    "material '%s' needs young (Pa): the %s law %s "
-                                   "(line %d) uses it", mt->m.name, ent->name, what, sc_line(s, e));
+                                   "(line %d) uses it", mt->m.name,
+                                   (ent->flags & FLOE_LAW_NEEDS_YOUNG) || !L->ent_t ? ent->name : L->ent_t->name,
+                                   what, sc_line(s, e));
             }
         /* the constructor's own checks (alternatives, combinations), reported at the entry */
         char err[512] = "";
-        floe_contact_law *probe = ((floe_law_create_fn)ent->create)(L->params, &s->mats[L->a].m, &s->mats[L->b].m,
-                                                                    err, sizeof err);
+        floe_contact_law *probe = sc_law_create(s, L, err, sizeof err);
         if (!probe) return sc_fail(s, FLOE_EINVAL, e, "%s: %s", what, err[0] ? err : "could not create the law");
         floe_contact_law_destroy(probe);
         i++;
@@ -179,8 +252,7 @@ int sc_build_laws(sc *s)
     for (int i = 0; i < s->nlaws; i++) {
         const sc_law *L = &s->laws[i];
         char err[512] = "";
-        floe_contact_law *law = ((floe_law_create_fn)L->ent->create)(L->params, &s->mats[L->a].m,
-                                                                     &s->mats[L->b].m, err, sizeof err);
+        floe_contact_law *law = sc_law_create(s, L, err, sizeof err);
         struct fy_node *at = s->law_at[L->a * s->nmats + L->b];
         if (!law)
             return sc_fail(s, FLOE_EINVAL, at, "laws[%d]: could not create the %s law%s%s", i, L->ent->name,

@@ -301,7 +301,11 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     /* pairs under the law "none" are skipped; most scenes have none, and then the law of a
      * pair is looked up only when it touches (a load per pair saved on the sphere path) */
     int any_none = 0;
-    for (int k = 0; k < nm * nm; k++) any_none |= floe_contact_law_no_contact(w->laws[k]);
+    int any_overlap = 0; /* laws that read the overlap area (floe_law_info.needs_overlap) */
+    for (int k = 0; k < nm * nm; k++) {
+        any_none |= floe_contact_law_no_contact(w->laws[k]);
+        if (w->laws[k]) any_overlap |= floe_contact_law_info(w->laws[k]).needs_overlap;
+    }
     int any_pieces = 0; /* compound bodies: their pairs are per piece */
     for (int g = 0; g < w->ngeoms; g++) any_pieces |= floe_piece_count(w->geoms[g]) > 1;
     for (int k = 0; k < nl->npairs; k++) {
@@ -350,7 +354,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
             warm[0] = NAN; /* apart: the next approach starts cold */
         }
         const floe_contact_law *law = r > 0 ? w->laws[p->material[i] * nm + p->material[j]] : NULL;
-        if (r == 1 && law->klass == &floe_overlap_law_class) {
+        if (r == 1 && any_overlap && floe_contact_law_info(law).needs_overlap) {
             floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
             r = floe_detect_overlap(&dctx, &bi, &bj, sub, &c);
             if (r == -FLOE_ENOTSUP)

@@ -48,7 +48,7 @@ static void pair_estimate(const floe_contact_law *law, double r_eff, double m_ef
     /* polytopes under a point law touch through a contact manifold (rotn includes its
      * factor, floe_dt_estimates); the overlap law spreads its load instead (its own
      * stiffness counts the contact length) */
-    if (law->klass == &floe_overlap_law_class && rotn > rot) {
+    if (rotn > rot && floe_contact_law_info(law).spreads_load) {
         kn *= rot / rotn;
         cn *= rot / rotn;
     }
@@ -101,24 +101,24 @@ static void particle_contact_estimates(const floe_world *w, dt_cache_entry *e, d
             if (kn > 0 && sqrt(m / (nc * kn)) < e->sqrt_mk) e->sqrt_mk = sqrt(m / (nc * kn));
             /* Hertz contact duration at the expected speed, 2.87 (m*^2 / (R* E*^2 v))^(1/5)
              * (E* of the law: the force is 4/3 E* sqrt(R*) d^(3/2)) */
-            if (law->klass == &floe_hertz_mindlin_law_class && vrel > 0) {
-                double es = ((const floe_hertz_mindlin_law *)law)->e_star;
+            const floe_law_info info = floe_contact_law_info(law);
+            if (info.hertz_e_star > 0 && vrel > 0) {
+                double es = info.hertz_e_star;
                 double th = 2.87 * pow(me * me / (re * es * es * vrel), 0.2);
                 if (th < e->hertz) e->hertz = th;
                 /* restitution error ~ A(e) / N, N = th / dt (first order: the damping grows
                  * as d^(1/4) from the onset; tests/test_restitution_onset.c) */
-                double er = ((const floe_hertz_mindlin_law *)law)->restitution;
+                double er = isnan(info.restitution) ? 1.0 : info.restitution;
                 double A = 3.5 * pow(1 - er, 1.5) + 0.02;
                 if (A / th > e->err1) e->err1 = A / th;
             }
-            if (law->klass == &floe_linear_law_class) {
+            if (info.linear_kn > 0) {
                 /* ~ A(e) / N^2, N = pi / w_d / dt (the dashpot's onset and release treated in
                  * contact/laws/linear_law.c) */
-                const floe_linear_law *ll = (const floe_linear_law *)law;
-                double kk = ll->kn, z = ll->gn / (2 * sqrt(kk * me));
+                double kk = info.linear_kn, z = info.linear_gn / (2 * sqrt(kk * me));
                 if (kk > 0 && z < 1) {
                     double tc = M_PI / (sqrt(kk / me) * sqrt(1 - z * z));
-                    double er = floe_linear_restitution(kk, ll->gn, me), A = 3 + 12 * (1 - er) * (1 - er);
+                    double er = floe_linear_restitution(kk, info.linear_gn, me), A = 3 + 12 * (1 - er) * (1 - er);
                     if (A / (tc * tc) > e->err2) e->err2 = A / (tc * tc);
                 }
             }
@@ -175,7 +175,7 @@ int estimate_dt(floe_world *w) {
     for (int a = 0; a < w->nmats; a++)
         for (int b = 0; b < w->nmats; b++) {
             const floe_contact_law *law = w->laws[a * w->nmats + b];
-            if (law && law->klass == &floe_hertz_mindlin_law_class) hertz_mat[a] = hertz_mat[b] = 1;
+            if (law && floe_contact_law_info(law).hertz_e_star > 0) hertz_mat[a] = hertz_mat[b] = 1;
         }
     for (int k = 0; k < DT_CACHE; k++) cache[k].mat = -1;
     double *mfac = malloc((size_t)(w->ngeoms > 0 ? w->ngeoms : 1) * sizeof *mfac); /* NULL: computed each time */

@@ -27,7 +27,7 @@ static void spring_stiffness(const floe_contact_law *law, double r_eff, double m
     *kn = ((const spring_law *)law)->k;
     *cn = 0;
 }
-static const floe_contact_law_class spring_class = {1, "spring", 0, spring_force, spring_stiffness, NULL, NULL};
+static const floe_contact_law_class spring_class = {1, "spring", 0, spring_force, spring_stiffness, NULL, NULL, NULL};
 
 int main(void) {
     char err[256];
