@@ -23,7 +23,8 @@ static void usage(FILE *f)
             "usage: %s run [SCENE] [-o OUTDIR] [-q]   run a scene (no SCENE: the built-in demo)\n"
             "       %s check SCENE                   load and prepare a scene, print its summary\n"
             "       %s info                          version, build and the registered components\n"
-            "       %s help [KIND [NAME]]            the components of a kind (shape, law, output) and\n"
+            "       %s help [KIND [NAME]]            the components of a kind (shape, law, output,\n"
+            "                                        pd_material, provider, packing) and\n"
             "                                        the parameters of one, e.g. help law hertz_mindlin\n"
             "       %s help --markdown               the reference of every component (docs/reference.md)\n"
             "       %s --help\n"
@@ -273,8 +274,10 @@ static int cmd_info(void)
         fprintf(stderr, "%s: error: %s\n", prog, err);
         return 1;
     }
-    static const char *const kinds[][2] = {{"shape", "shapes:      "}, {"law", "contact laws:"}, {"output", "outputs:     "}};
-    for (int q = 0; q < 3; q++) {
+    static const char *const kinds[][2] = {{"shape", "shapes:      "}, {"law", "contact laws:"}, {"output", "outputs:     "},
+                                           {"pd_material", "PD materials:"}, {"provider", "forces:      "},
+                                           {"packing", "packings:    "}};
+    for (int q = 0; q < 6; q++) {
         printf("%s", kinds[q][1]);
         for (int k = 0; k < floe_registry_count(kinds[q][0]); k++) {
             const floe_registry_entry *e = floe_registry_at(kinds[q][0], k);
@@ -282,9 +285,9 @@ static int cmd_info(void)
         }
         printf("\n");
     }
-    printf("also:        plane (walls), user SDF callback (C API); packings lattice, hexagonal, random\n");
+    printf("also:        plane (walls), user SDF callback (C API)\n");
     for (int k = 0; k < floe_plugin_count(); k++) printf("plugin:      %s\n", floe_plugin_path(k));
-    printf("help:        floe help KIND [NAME] (kinds: shape, law, output)\n");
+    printf("help:        floe help KIND [NAME] (kinds: shape, law, output, pd_material, provider, packing)\n");
     return 0;
 }
 

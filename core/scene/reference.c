@@ -47,7 +47,24 @@ static const char *kind_intro(const char *kind) {
     if (!strcmp(kind, FLOE_KIND_OBSERVER))
         return "Outputs, named in `outputs: [{type: NAME, every: N | interval: T, ...}]` (every: steps, default 100; "
                "interval: seconds of simulated time).";
+    if (!strcmp(kind, FLOE_KIND_PD_MATERIAL))
+        return "PD materials, named in `peridynamics: [{material: {model: NAME, ...}, ...}]`.";
+    if (!strcmp(kind, FLOE_KIND_PROVIDER))
+        return "Force providers, named in `forces: [{type: NAME, ...}]`; they act on every free particle after gravity.";
+    if (!strcmp(kind, FLOE_KIND_PACKING))
+        return "Packings, named in `bodies: [{packing: NAME, shape, material, ...}]` (no packing: one body at "
+               "`position`).";
     return "";
+}
+
+static const char *kind_title(const char *kind) {
+    if (!strcmp(kind, FLOE_KIND_LAW)) return "Contact laws";
+    if (!strcmp(kind, FLOE_KIND_SHAPE)) return "Shapes";
+    if (!strcmp(kind, FLOE_KIND_OBSERVER)) return "Outputs";
+    if (!strcmp(kind, FLOE_KIND_PD_MATERIAL)) return "PD materials";
+    if (!strcmp(kind, FLOE_KIND_PROVIDER)) return "Force providers";
+    if (!strcmp(kind, FLOE_KIND_PACKING)) return "Packings";
+    return kind;
 }
 
 static void write_entry(FILE *f, const floe_registry_entry *e, int md) {
@@ -85,7 +102,8 @@ static void write_entry(FILE *f, const floe_registry_entry *e, int md) {
     fprintf(f, "\n");
 }
 
-static const char *const kinds[] = {FLOE_KIND_SHAPE, FLOE_KIND_LAW, FLOE_KIND_OBSERVER};
+static const char *const kinds[] = {FLOE_KIND_SHAPE, FLOE_KIND_LAW, FLOE_KIND_OBSERVER, FLOE_KIND_PD_MATERIAL,
+                                    FLOE_KIND_PROVIDER, FLOE_KIND_PACKING};
 
 int floe_reference_write(FILE *f, const char *kind, const char *name, int markdown, char *err, size_t errlen) {
     FLOE_TRY(floe_register_builtins(err, errlen));
@@ -98,9 +116,7 @@ int floe_reference_write(FILE *f, const char *kind, const char *name, int markdo
     for (size_t q = 0; q < sizeof kinds / sizeof *kinds; q++) {
         if (kind && strcmp(kind, kinds[q])) continue;
         found = 1;
-        if (markdown) fprintf(f, "## %s\n\n%s\n\n", !strcmp(kinds[q], "law") ? "Contact laws"
-                                                   : !strcmp(kinds[q], "shape") ? "Shapes" : "Outputs",
-                              kind_intro(kinds[q]));
+        if (markdown) fprintf(f, "## %s\n\n%s\n\n", kind_title(kinds[q]), kind_intro(kinds[q]));
         else if (!name) fprintf(f, "%s\n", kind_intro(kinds[q]));
         int n = floe_registry_count(kinds[q]), shown = 0;
         for (int k = 0; k < n; k++) {
@@ -121,7 +137,7 @@ int floe_reference_write(FILE *f, const char *kind, const char *name, int markdo
         }
     }
     if (!found) {
-        snprintf(err, errlen, "unknown kind '%s' (kinds: shape, law, output)", kind);
+        snprintf(err, errlen, "unknown kind '%s' (kinds: shape, law, output, pd_material, provider, packing)", kind);
         return FLOE_EINVAL;
     }
     return FLOE_OK;
