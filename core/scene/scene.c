@@ -170,6 +170,9 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
         sc_cat(&b, ", staggered PD-DEM: PD step %.4g s (%s %d)", w->pd_every > 1 ? w->pd_every * dt : dt / w->pd_sub,
                w->pd_every > 1 ? "every" : "substeps", w->pd_every > 1 ? w->pd_every : w->pd_sub);
     sc_cat(&b, "\n");
+    for (int k = 0; k < w->nuprov; k++) /* registered force providers (forces:) */
+        sc_cat(&b, "%s%s", k ? ", " : "forces:     ", w->uprov[k]->klass->name);
+    if (w->nuprov) sc_cat(&b, "\n");
     double nsteps = dt > 0 ? ceil(s->duration / dt - 1e-9) : 0;
     sc_cat(&b, "duration:   %g s = %s%.0f steps\n", s->duration, w->def.adaptive ? "at most " : "",
            w->def.adaptive && w->dt_lo > 0 ? ceil(s->duration / w->dt_lo - 1e-9) : nsteps);
