@@ -22,9 +22,9 @@ static int loader_reads(const void *params, int dim, double rb, double **x, long
 static const floe_param lattice_schema[] = {
     {.key = "spacing", .type = FLOE_PARAM_REAL, .flags = FLOE_PARAM_REQUIRED | FLOE_PARAM_MIN_OPEN, .unit = "m",
      .min = 0, .max = INFINITY, .doc = "distance between neighbouring sites (>= a sphere's diameter)"},
-    {.key = "counts", .type = FLOE_PARAM_VEC3, .unit = "", .doc = "sites along x, y (, z), integers >= 1 (with "
-     "origin; or region)"},
-    {.key = "origin", .type = FLOE_PARAM_VEC3, .unit = "m", .doc = "the first site (with counts)"},
+    {.key = "counts", .type = FLOE_PARAM_NODE, .unit = "", .doc = "[nx, ny(, nz)]: sites along each axis, integers "
+     ">= 1 (with origin; or region)"},
+    {.key = "origin", .type = FLOE_PARAM_NODE, .unit = "m", .doc = "[x, y(, z)]: the first site (with counts)"},
     {.key = "region", .type = FLOE_PARAM_NODE, .unit = "m", .doc = "{min, max}: fill this box from min (instead of "
      "counts)"},
     {.key = "jitter", .type = FLOE_PARAM_REAL, .unit = "m", .min = 0, .max = INFINITY, .def = 0,
@@ -47,21 +47,21 @@ static const floe_param random_schema[] = {
 const floe_registry_entry floe_packing_entry_lattice = {
     .kind = FLOE_KIND_PACKING, .name = "lattice", .title = "simple cubic lattice",
     .doc = "Particles on a simple cubic (2D: square) lattice: counts from an origin, or every site of a region.",
-    .source = "docs/scene-format.md, \"Packings\"",
+    .source = "docs/scene-format.md, \"bodies\"",
     .params = lattice_schema, .nparams = 6, .params_size = sizeof(packing_doc), .create = (floe_fn)loader_reads,
     .flags = FLOE_ENTRY_LOADER_PARSES};
 const floe_registry_entry floe_packing_entry_hexagonal = {
     .kind = FLOE_KIND_PACKING, .name = "hexagonal", .title = "hexagonal close packing",
     .doc = "Particles on a 2D triangular lattice or a 3D HCP (ABAB layers): counts from an origin, or every site of a "
            "region; spacing is the nearest-neighbour distance.",
-    .source = "docs/scene-format.md, \"Packings\"",
+    .source = "docs/scene-format.md, \"bodies\"",
     .params = lattice_schema, .nparams = 6, .params_size = sizeof(packing_doc), .create = (floe_fn)loader_reads,
     .flags = FLOE_ENTRY_LOADER_PARSES};
 const floe_registry_entry floe_packing_entry_random = {
     .kind = FLOE_KIND_PACKING, .name = "random", .title = "random sequential placement",
     .doc = "count particles placed at random inside the region without overlap of their bounding spheres (random "
            "sequential addition; fails with a message when the region is jammed).",
-    .source = "docs/scene-format.md, \"Packings\"",
+    .source = "docs/scene-format.md, \"bodies\"",
     .params = random_schema, .nparams = 4, .params_size = sizeof(packing_doc), .create = (floe_fn)loader_reads,
     .flags = FLOE_ENTRY_LOADER_PARSES};
 

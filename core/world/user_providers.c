@@ -183,7 +183,7 @@ const floe_registry_entry floe_provider_entry_linear_drag = {
     .doc = "A linear (Stokes-like) drag on every free particle: F = -c m v and T = -c_r I w, so a lone particle's "
            "velocity decays as v0 exp(-c t) and its angular momentum as L0 exp(-c_r t). The work it does is booked "
            "as dissipated energy.",
-    .source = "docs/scene-format.md, \"Forces\"",
+    .source = "docs/scene-format.md, \"forces\"",
     .params = drag_schema, .nparams = 2, .params_size = sizeof(drag_params), .create = (floe_fn)drag_create};
 
 static const floe_registry_entry *const builtin[] = {&floe_provider_entry_linear_drag};
