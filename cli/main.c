@@ -284,8 +284,8 @@ static int cmd_info(void)
         }
         printf("\n");
     }
-    printf("also:         plane (walls), user SDF callback (C API); packings lattice, hexagonal, random\n");
-    for (int k = 0; k < floe_plugin_count(); k++) printf("plugin:      %s\n", floe_plugin_path(k));
+    printf("also:         plane (walls), user SDF callback (C API)\n");
+    for (int k = 0; k < floe_plugin_count(); k++) printf("plugin:       %s\n", floe_plugin_path(k));
     printf("help:         floe help KIND [NAME] (kinds:");
     for (int q = 0; q < floe_help_kind_count(); q++) printf("%s%s", q ? ", " : " ", floe_help_kind(q));
     printf(")\n");

@@ -63,7 +63,8 @@ typedef struct floe_pd_region {
 
 /* ---- materials ---- */
 
-enum { FLOE_PD_PMB = 1, FLOE_PD_LPS = 2 };
+/* FLOE_PD_USER: a material of its own (a plugin's), its vtable in floe_pd_material.ops */
+enum { FLOE_PD_PMB = 1, FLOE_PD_LPS = 2, FLOE_PD_USER = 3 };
 enum { FLOE_PD_W_ONE = 0, FLOE_PD_W_GAUSS = 1 };              /* LPS influence function  */
 enum { FLOE_PD_PLANE_STRESS = 0, FLOE_PD_PLANE_STRAIN = 1 };  /* 2D PMB and LPS           */
 
@@ -97,6 +98,11 @@ typedef struct floe_pd_material {
                          * stretch s_p (unloads elastically). 0 (default): elastic          */
     double yield_tension; /* the same in tension (> 0: yield at s - s_p > this); 0: none.
                          * Breakage by s_c is on the total stretch s.                       */
+    /* FLOE_PD_USER (docs/extending.md, "A PD material"): the material's vtable, and its own
+     * parameters (the others above still count: rho for the masses, K (and G) for the CFL
+     * estimate, s_c / G_c for breakage). NULL / unused for PMB and LPS.                    */
+    const struct floe_pd_material_ops *ops;
+    double param[8];
 } floe_pd_material;
 
 /* Convenience constructors (fill a floe_pd_material with defaults). */
@@ -112,7 +118,25 @@ typedef struct floe_pd_material_ops {
     int (*init)(floe_pd_body *b);                     /* derived constants, scratch        */
     double (*forces)(floe_pd_body *b, const double *x, double *f);
     double (*bond_micromodulus)(const floe_pd_body *b); /* equivalent PMB c for dt / s_c   */
+    /* optional (a user material, FLOE_PD_USER): */
+    int (*surface_correction)(floe_pd_body *b);       /* NULL: none (FLOE_ENOTSUP)          */
+    /* the bytes of b->mstate (or other state) that a step changes, saved and restored by
+     * the world around a rejected adaptive step (floe_provider.h "pd_bonds"); a material
+     * whose forces change state must declare it here (NULL: no state) */
+    size_t (*state_size)(const floe_pd_body *b);
+    void (*save)(const floe_pd_body *b, unsigned char *buf);
+    void (*restore)(floe_pd_body *b, const unsigned char *buf);
+    void (*release)(floe_pd_body *b);                 /* frees b->mstate (init allocates it) */
 } floe_pd_material_ops;
+
+/* The constructor of a registered PD material (floe_registry.h, kind FLOE_KIND_PD_MATERIAL,
+ * named by `material: {model: NAME, ...}` of a scene's peridynamics): its parameter struct
+ * read by the schema and the scene's dimension; it fills *out (floe_pd_material_pmb, or
+ * model FLOE_PD_USER with ops) and returns FLOE_OK, or an error code with a message. */
+typedef int (*floe_pd_material_create_fn)(const void *params, int dim, floe_pd_material *out, char *err,
+                                          size_t errlen);
+/* Registers the built-in PD materials (pmb, lps); floe_register_builtins calls it. */
+int floe_register_builtin_pd_materials(char *err, size_t errlen);
 
 /* ---- the body ---- */
 
@@ -157,6 +181,8 @@ struct floe_pd_body {
     int64_t ncut;
     int64_t nbridge;
     double bridge_at[3];
+    /* a user material's own state (FLOE_PD_USER: its ops->init allocates, ->release frees) */
+    void *mstate;
 };
 
 /* Create the lattice points of the region, build the families (|xi| <= delta + 1e-9 dx)

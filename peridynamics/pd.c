@@ -60,6 +60,7 @@ void floe_pd_body_destroy(floe_pd_body *b)
     free(b->s0); /* PMB alpha state (pd_materials.c) */
     free(b->splast); /* PMB plastic stretches */
     free(b->dten); /* LPS surface correction (pd_materials.c) */
+    if (b->ops && b->ops->release) b->ops->release(b); /* a user material's state */
     free(b);
 }
 
@@ -345,15 +346,22 @@ int floe_pd_set_material(floe_pd_body *b, const floe_pd_material *m)
     const floe_pd_material_ops *ops;
     if (m->model == FLOE_PD_PMB) ops = &floe_pd_pmb_ops;
     else if (m->model == FLOE_PD_LPS) ops = &floe_pd_lps_ops;
+    else if (m->model == FLOE_PD_USER && m->ops && m->ops->init && m->ops->forces && m->ops->bond_micromodulus &&
+             (!m->ops->state_size || (m->ops->save && m->ops->restore)))
+        ops = m->ops;
     else return FLOE_EINVAL;
     floe_pd_material save = b->mat;
     const floe_pd_material_ops *save_ops = b->ops;
+    /* a user material's state goes with it (its init allocates it anew) */
+    if (save_ops && save_ops->release) save_ops->release(b);
     b->mat = *m;
     b->ops = ops;
     int rc = ops->init(b);
     if (rc != FLOE_OK) {
+        if (ops->release) ops->release(b);
         b->mat = save;
         b->ops = save_ops;
+        if (save_ops && save_ops->release) save_ops->init(b); /* its state back (fresh) */
         return rc;
     }
     free(b->scorr);
@@ -395,6 +403,7 @@ int floe_pd_surface_correction(floe_pd_body *b)
 {
     if (!b || !b->ops) return FLOE_EINVAL;
     if (b->mat.model == FLOE_PD_LPS) return floe_pd_lps_surface_correction(b); /* pd_materials.c */
+    if (b->mat.model == FLOE_PD_USER) return b->ops->surface_correction ? b->ops->surface_correction(b) : FLOE_ENOTSUP;
     if (b->mat.model != FLOE_PD_PMB) return FLOE_ENOTSUP;
     size_t n = (size_t)(b->n > 0 ? b->n : 1), nb = (size_t)(b->nbond > 0 ? b->nbond : 1);
     double *sum = calloc(3 * n, sizeof *sum);

@@ -211,7 +211,7 @@ static double pmb_forces(floe_pd_body *b, const double *x, double *f)
     return pmb_forces_impl(b, x, f, 0);
 }
 
-const floe_pd_material_ops floe_pd_pmb_ops = {"pmb", pmb_init, pmb_forces, pmb_c};
+const floe_pd_material_ops floe_pd_pmb_ops = {.name = "pmb", .init = pmb_init, .forces = pmb_forces, .bond_micromodulus = pmb_c};
 
 /* ---------------------------------------------------------------- LPS ---- */
 
@@ -436,7 +436,7 @@ static double lps_forces(floe_pd_body *b, const double *x, double *f)
     return energy;
 }
 
-const floe_pd_material_ops floe_pd_lps_ops = {"lps", lps_init, lps_forces, lps_c};
+const floe_pd_material_ops floe_pd_lps_ops = {.name = "lps", .init = lps_init, .forces = lps_forces, .bond_micromodulus = lps_c};
 
 /* Solve the dense system M y = r (size s <= 6) by Gaussian elimination with partial
  * pivoting; 0 on success, -1 when a pivot is below tol times the largest |M| entry. */
@@ -599,6 +599,7 @@ int floe_pd_lps_surface_correction(floe_pd_body *b)
 int floe_pd_bond_forces(floe_pd_body *b, const double *x, floe_pd_bond_visit_fn fn, void *user)
 {
     if (!b || !b->ops || !x || !fn) return FLOE_EINVAL;
+    if (b->mat.model == FLOE_PD_USER) return FLOE_ENOTSUP; /* its bond forces are its own */
     const int lps = b->mat.model == FLOE_PD_LPS;
     const double kd = lps ? lps_kdil(b) : 0.0;
     if (lps) { /* a fresh dilatation pass, without breaking bonds */

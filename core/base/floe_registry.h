@@ -19,6 +19,9 @@
 #define FLOE_KIND_LAW "law"
 #define FLOE_KIND_SHAPE "shape"
 #define FLOE_KIND_OBSERVER "output"
+#define FLOE_KIND_PD_MATERIAL "pd_material" /* peridynamics/floe_pd.h floe_pd_material_create_fn */
+#define FLOE_KIND_PROVIDER "provider"       /* core/world/floe_provider.h floe_provider_create_fn */
+#define FLOE_KIND_PACKING "packing"         /* core/scene/floe_scene.h: the bodies' particle generators */
 
 typedef enum floe_param_type {
     FLOE_PARAM_REAL,     /* double */

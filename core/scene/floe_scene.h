@@ -28,6 +28,19 @@ int floe_scene_load_string(const char *text, const char *path, const char *outdi
  * loader calls it; call it yourself before floe_registry_find or floe_register. */
 int floe_register_builtins(char *err, size_t errlen);
 
+/* Packings (floe_registry.h kind FLOE_KIND_PACKING): the particle generators of a scene's
+ * `bodies: [{packing: NAME, shape, material, ..., <its parameters>}]`. The built-ins
+ * (lattice, hexagonal, random; core/scene/packings.c) are read by the loader itself
+ * (FLOE_ENTRY_LOADER_PARSES; their schemas document them). A registered packing of your
+ * own gets its parameter struct (read by its schema), the scene's dimension and the
+ * particle's bounding radius, and returns *n centres in *x (3n doubles, malloc'd; the
+ * loader frees them) or an error code with a message; in 2D z must be 0. The loader keeps
+ * the body keys (shape, material, velocity, angular_velocity, orientation, motion, name,
+ * grow) for itself. */
+typedef int (*floe_packing_create_fn)(const void *params, int dim, double bounding_radius, double **x, long *n,
+                                      char *err, size_t errlen);
+int floe_register_builtin_packings(char *err, size_t errlen);
+
 /* Plugins (core/scene/plugin.c, docs/extending.md): loads the shared library at path and
  * calls its `int floe_plugin_init(char *err, size_t errlen)`, which registers shapes, laws
  * or outputs with floe_register. Loading the same path again does nothing. FLOE_EIO when it

@@ -23,6 +23,11 @@ static const char *type_name(floe_param_type t) {
 static void default_text(const floe_param *p, char *buf, size_t len) {
     if (p->flags & FLOE_PARAM_REQUIRED) { snprintf(buf, len, "required"); return; }
     if (p->type == FLOE_PARAM_POINTS || p->type == FLOE_PARAM_NODE) { snprintf(buf, len, "-"); return; }
+    /* a default outside the range reads "not given" (floe_registry.h): an alternative */
+    if ((p->type == FLOE_PARAM_REAL || p->type == FLOE_PARAM_INT) && floe_param_check(p, p->def, NULL, 0)) {
+        snprintf(buf, len, "not given");
+        return;
+    }
     switch (p->type) {
     case FLOE_PARAM_REAL: snprintf(buf, len, "%g", p->def); break;
     case FLOE_PARAM_INT: snprintf(buf, len, "%d", (int)p->def); break;
@@ -56,6 +61,12 @@ static const struct help_kind {
     {FLOE_KIND_OBSERVER, "Outputs",
      "Outputs, named in `outputs: [{type: NAME, every: N | interval: T, ...}]` (every: steps, default 100; "
      "interval: seconds of simulated time)."},
+    {FLOE_KIND_PD_MATERIAL, "PD materials",
+     "PD materials, named in `peridynamics: [{material: {model: NAME, ...}, ...}]`."},
+    {FLOE_KIND_PROVIDER, "Force providers",
+     "Force providers, named in `forces: [{type: NAME, ...}]`; they act on every free particle after gravity."},
+    {FLOE_KIND_PACKING, "Packings",
+     "Packings, named in `bodies: [{packing: NAME, shape, material, ...}]` (no packing: one body at `position`)."},
 };
 #define NKINDS ((int)(sizeof help_kinds / sizeof *help_kinds))
 

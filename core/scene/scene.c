@@ -176,6 +176,9 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
         sc_cat(&b, ", staggered PD-DEM: PD step %.4g s (%s %d)", w->pd_every > 1 ? w->pd_every * dt : dt / w->pd_sub,
                w->pd_every > 1 ? "every" : "substeps", w->pd_every > 1 ? w->pd_every : w->pd_sub);
     sc_cat(&b, "\n");
+    for (int k = 0; k < w->nuprov; k++) /* registered force providers (forces:) */
+        sc_cat(&b, "%s%s", k ? ", " : "forces:     ", w->uprov[k]->klass->name);
+    if (w->nuprov) sc_cat(&b, "\n");
     double nsteps = dt > 0 ? ceil(s->duration / dt - 1e-9) : 0;
     sc_cat(&b, "duration:   %g s = %s%.0f steps\n", s->duration, w->def.adaptive ? "at most " : "",
            w->def.adaptive && w->dt_lo > 0 ? ceil(s->duration / w->dt_lo - 1e-9) : nsteps);
@@ -206,7 +209,7 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
 static const char *const sc_root_keys[] = {"name", "description", "dimension", "time", "gravity",
                                            "neighbor", "contact_detection", "mass_2d", "materials", "laws",
                                            "walls", "bodies", "peridynamics", "outputs", "bonds", "checks", "plugins",
-                                           NULL};
+                                           "forces", NULL};
 
 /* checks: {energy: stop | warn | off, energy_tolerance} (the energy watchdog, floe_world.h) */
 static int sc_checks(sc *s, const sc_map *r, floe_world_def *def)
@@ -486,6 +489,7 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     struct fy_node *wv = sc_get(&r, "walls", &wk);
     FLOE_TRY(sc_parse_walls(s, wv == wk ? NULL : wv, wk));
     { struct fy_node *bok, *bov = sc_get(&r, "bonds", &bok); FLOE_TRY(sc_parse_bonds(s, bov == bok ? NULL : bov, bok)); } /* beam bonds */
+    { struct fy_node *fk, *fv = sc_get(&r, "forces", &fk); FLOE_TRY(sc_parse_forces(s, fv == fk ? NULL : fv, fk)); }
     FLOE_TRY(sc_check_pairs(s));
     FLOE_TRY(sc_check_memory(s, NULL, "the scene", 0));
     struct fy_node *ok;

@@ -773,6 +773,71 @@ static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
 }
 
 static const char *const sc_packings[] = {"lattice", "hexagonal", "random", NULL};
+#define SC_PACKING_USER 4
+/* the body keys the loader reads for every packing (a registered packing gets the rest) */
+#define SC_BODY_KEYS_TEXT "packing|shape|material|velocity|angular_velocity|orientation|motion|name|grow"
+
+/* The packing of bodies entry e: *kind 3 for a single body (no packing key), 0..2 for the
+ * built-ins (sc_packings), SC_PACKING_USER for a registered one (*ent) */
+static int sc_packing_of(sc *s, struct fy_node *e, const char *what, const floe_registry_entry **ent, int *kind)
+{
+    static const char *const none[] = {NULL};
+    sc_map m = {e, e, ""};
+    *ent = NULL;
+    *kind = 3;
+    if (!e || !fy_node_is_mapping(e)) return sc_map_open(s, e, e, what, none, &m); /* its message */
+    snprintf(m.what, sizeof m.what, "%s", what);
+    const char *t;
+    struct fy_node *at;
+    FLOE_TRY(sc_str(s, &m, "packing", 0, NULL, &t, &at));
+    if (!t) return FLOE_OK;
+    *ent = floe_registry_find(FLOE_KIND_PACKING, t);
+    if (!*ent) {
+        const char *names[64];
+        int nn = 0;
+        for (; nn < floe_registry_count(FLOE_KIND_PACKING) && nn < 64; nn++)
+            names[nn] = floe_registry_at(FLOE_KIND_PACKING, nn)->name;
+        char f[160], sug[512];
+        sc_field(f, sizeof f, &m, "packing");
+        sc_suggest(sug, sizeof sug, t, names, nn);
+        return sc_fail(s, FLOE_EINVAL, at, "%s: unknown value '%s'%s", f, t, sug);
+    }
+    *kind = SC_PACKING_USER;
+    for (int q = 0; sc_packings[q]; q++)
+        if (!strcmp(t, sc_packings[q]) && ((*ent)->flags & FLOE_ENTRY_LOADER_PARSES)) *kind = q;
+    return FLOE_OK;
+}
+
+/* A registered packing of a plugin (floe_packing_create_fn): its parameters by its schema,
+ * the centres from its constructor, checked (finite, z = 0 in 2D, a sane count) */
+static int sc_user_packing(sc *s, const sc_map *m, const floe_registry_entry *ent, sc_points *pts, const sc_common *c)
+{
+    void *params = calloc(1, ent->params_size);
+    if (!params) return sc_fail(s, FLOE_ENOMEM, m->at, "out of memory");
+    char label[96];
+    snprintf(label, sizeof label, "packing '%s'", ent->name);
+    int rc = sc_read_schema(s, m, ent, label, SC_BODY_KEYS_TEXT, params);
+    double *x = NULL;
+    long n = 0;
+    if (!rc) {
+        char err[512] = "";
+        int g = ((floe_packing_create_fn)ent->create)(params, s->dim, c->shape.rb, &x, &n, err, sizeof err);
+        if (g) rc = sc_fail(s, g, m->at, "%s: packing '%s': %s", m->what, ent->name, err[0] ? err : floe_strerror(g));
+        else if (n < 1 || n > SC_MAX_PARTICLES_PER_ENTRY || !x)
+            rc = sc_fail(s, FLOE_EINVAL, m->at, "%s: packing '%s' made %ld particles (1 to 1e8)", m->what, ent->name, n);
+    }
+    free(params);
+    if (!rc) rc = sc_check_memory(s, m->at, m->what, (double)n);
+    for (long i = 0; i < n && !rc; i++) {
+        double *p = x + 3 * i;
+        if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]) || (s->dim == 2 && p[2] != 0))
+            rc = sc_fail(s, FLOE_EINVAL, m->at, "%s: packing '%s': particle %ld at (%g, %g, %g) is not %s", m->what,
+                         ent->name, i, p[0], p[1], p[2], s->dim == 2 ? "finite in the plane z = 0" : "finite");
+        else if (sc_points_push(pts, p)) rc = sc_fail(s, FLOE_ENOMEM, m->at, "out of memory");
+    }
+    free(x);
+    return rc;
+}
 
 int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key)
 {
@@ -807,12 +872,18 @@ int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key)
         char what[32];
         snprintf(what, sizeof what, "bodies[%d]", entry);
         sc_map m;
-        FLOE_TRY(sc_map_open(s, e, e, what, keys_all, &m));
+        /* packing: a registered packing (floe_registry.h FLOE_KIND_PACKING); none: one body */
+        const floe_registry_entry *pent = NULL;
         int packing;
-        FLOE_TRY(sc_enum(s, &m, "packing", sc_packings, 3, &packing));
+        FLOE_TRY(sc_packing_of(s, e, what, &pent, &packing));
+        if (packing == SC_PACKING_USER) { /* its schema checks the keys (sc_user_packing) */
+            m.node = m.at = e;
+            snprintf(m.what, sizeof m.what, "%s", what);
+        } else
+            FLOE_TRY(sc_map_open(s, e, e, what, keys_all, &m));
         const char *const *valid = packing == 3 ? keys_single
                                    : packing == 2 ? keys_random : keys_lattice;
-        {
+        if (packing != SC_PACKING_USER) {
             void *it2 = NULL;
             struct fy_node_pair *p;
             while ((p = fy_node_mapping_iterate(e, &it2))) {
@@ -843,7 +914,8 @@ int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key)
             if (c.grow) FLOE_TRY(sc_add_growth(s, &c, pidx, e, what));
         } else {
             sc_points pts = {0};
-            int rc = packing == 2 ? sc_random(s, &m, &pts, &c)
+            int rc = packing == SC_PACKING_USER ? sc_user_packing(s, &m, pent, &pts, &c)
+                   : packing == 2 ? sc_random(s, &m, &pts, &c)
                                   : sc_lattice(s, &m, packing == 1, &pts, &c);
             if (rc == FLOE_OK && c.grow && c.grow_index >= pts.n) {
                 struct fy_node *gk;

@@ -14,6 +14,7 @@
 #include "floe_mesh.h"
 #include "floe_pd.h"
 #include "floe_beam.h"
+#include "floe_provider.h"
 
 #include <errno.h>
 #include <libfyaml.h>
@@ -145,6 +146,7 @@ typedef struct sc_rng { unsigned long long s; } sc_rng; /* floe_rng.h */
 #define sc_num floe_sc_num
 #define sc_parse_bodies floe_sc_parse_bodies
 #define sc_parse_bonds floe_sc_parse_bonds
+#define sc_parse_forces floe_sc_parse_forces
 #define sc_parse_laws floe_sc_parse_laws
 #define sc_parse_materials floe_sc_parse_materials
 #define sc_parse_outputs floe_sc_parse_outputs
@@ -188,6 +190,7 @@ int sc_node_long(sc *s, struct fy_node *v, struct fy_node *k, const char *field,
 int sc_num(sc *s, const sc_map *m, const char *key, int required, double def, double *out);
 int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key);
 int sc_parse_bonds(sc *s, struct fy_node *seq, struct fy_node *key);
+int sc_parse_forces(sc *s, struct fy_node *seq, struct fy_node *key);
 int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key);
 int sc_parse_materials(sc *s, struct fy_node *seq, struct fy_node *key);
 int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, const char *outdir,

@@ -277,15 +277,64 @@ static int sc_pd_check_holes(sc *s, const sc_pd_cut *cut, struct fy_node *at, co
     return FLOE_OK;
 }
 
+/* peridynamics[i].material: {model: NAME, <its parameters>}, NAME a registered PD material
+ * (floe_registry.h FLOE_KIND_PD_MATERIAL: pmb, lps, or a plugin's), its parameters read by
+ * its schema and turned into *pm by its constructor */
+static int sc_pd_material(sc *s, struct fy_node *mv, struct fy_node *mk, const char *fm, floe_pd_material *pm)
+{
+    static const char *const no_keys[] = {NULL};
+    sc_map mm;
+    const char *mname;
+    struct fy_node *mat;
+    memset(pm, 0, sizeof *pm);
+    if (!mv || !fy_node_is_mapping(mv)) return sc_map_open(s, mv, mk, fm, no_keys, &mm); /* its message */
+    mm.node = mv;
+    mm.at = mv;
+    snprintf(mm.what, sizeof mm.what, "%s", fm);
+    FLOE_TRY(sc_str(s, &mm, "model", 1, NULL, &mname, &mat));
+    const floe_registry_entry *ent = floe_registry_find(FLOE_KIND_PD_MATERIAL, mname);
+    if (!ent) {
+        const char *names[64];
+        int nn = 0;
+        for (; nn < floe_registry_count(FLOE_KIND_PD_MATERIAL) && nn < 64; nn++)
+            names[nn] = floe_registry_at(FLOE_KIND_PD_MATERIAL, nn)->name;
+        char sug[512];
+        sc_suggest(sug, sizeof sug, mname, names, nn);
+        return sc_fail(s, FLOE_EINVAL, mat, "%s.model: unknown value '%s'%s", fm, mname, sug);
+    }
+    /* a key of another material: say whose it is */
+    void *it = NULL;
+    struct fy_node_pair *pr;
+    while ((pr = fy_node_mapping_iterate(mv, &it))) {
+        const char *ks = sc_text(fy_node_pair_key(pr));
+        if (!ks || !strcmp(ks, "model") || floe_schema_index(ent, ks) >= 0) continue;
+        for (int q = 0; q < floe_registry_count(FLOE_KIND_PD_MATERIAL); q++) {
+            const floe_registry_entry *o = floe_registry_at(FLOE_KIND_PD_MATERIAL, q);
+            if (o != ent && floe_schema_index(o, ks) >= 0)
+                return sc_fail(s, FLOE_EINVAL, fy_node_pair_key(pr), "%s: %s is a %s option, not one of %s's (floe help "
+                               "pd_material %s lists the %s options)", fm, ks, o->name, ent->name, o->name, o->name);
+        }
+    }
+    void *params = calloc(1, ent->params_size);
+    if (!params) return sc_fail(s, FLOE_ENOMEM, mv, "out of memory");
+    char label[96];
+    snprintf(label, sizeof label, "pd_material '%s'", ent->name);
+    int rc = sc_read_schema(s, &mm, ent, label, "model", params);
+    if (!rc) {
+        char err[512] = "";
+        int c = ((floe_pd_material_create_fn)ent->create)(params, s->dim, pm, err, sizeof err);
+        if (c) rc = sc_fail(s, c, mv, "%s: %s", fm, err[0] ? err : "invalid values");
+    }
+    free(params);
+    return rc;
+}
+
 int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
 {
     static const char *const keys[] = {"region", "spacing", "horizon", "material", "contact_material", "velocity",
                                        "surface_correction", "thickness", "name", "boundary", "lattice", "cracks",
                                        NULL};
     static const char *const region_keys[] = {"box", "shape", "position", "remove", NULL};
-    static const char *const mat_keys[] = {"model", "density", "bulk_modulus", "shear_modulus", "young",
-                                           "critical_stretch", "fracture_energy", "influence", "alpha",
-                                           "yield_compression", "yield_tension", "plane", NULL};
     if (!seq) return FLOE_OK;
     if (sc_is_missing(seq) || !fy_node_is_sequence(seq))
         return sc_fail(s, FLOE_EPARSE, sc_is_missing(seq) ? key : seq,
@@ -350,44 +399,8 @@ int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
         }
         char fm[64];
         snprintf(fm, sizeof fm, "%s.material", what);
-        sc_map mm;
-        int rc = sc_map_open(s, mv == mk ? NULL : mv, mk, fm, mat_keys, &mm);
-        static const char *const models[] = {"pmb", "lps", NULL};
-        static const char *const infl[] = {"constant", "gaussian", NULL};
-        int model = 0, inf = 0;
-        double rho = 0, K = 0, G = 0, E = 0, sc_ = 0, Gc = 0, alpha = 0;
-        if (!rc) rc = sc_enum(s, &mm, "model", models, -1, &model);
-        if (!rc) rc = sc_pos_num(s, &mm, "density", &rho);
-        if (!rc) rc = sc_num(s, &mm, "bulk_modulus", 0, 0, &K);
-        if (!rc) rc = sc_num(s, &mm, "shear_modulus", 0, 0, &G);
-        if (!rc) rc = sc_num(s, &mm, "young", 0, 0, &E);
-        if (!rc) rc = sc_num(s, &mm, "critical_stretch", 0, 0, &sc_);
-        if (!rc) rc = sc_num(s, &mm, "fracture_energy", 0, 0, &Gc);
-        if (!rc) rc = sc_enum(s, &mm, "influence", infl, 0, &inf);
-        /* PMB per-point critical stretch (LAMMPS peri/pmb): s0 = critical_stretch - alpha s_min */
-        if (!rc) rc = sc_num(s, &mm, "alpha", 0, 0, &alpha);
-        if (!rc && !(alpha >= 0 && alpha < 1e3)) rc = sc_range(s, &mm, "alpha", ">= 0", alpha);
-        if (!rc && alpha > 0 && model != 0) rc = sc_fail(s, FLOE_EINVAL, mv, "%s: alpha is a pmb option", fm);
-        /* PMB elastic-perfectly-plastic bonds (003 eq 6): yield stretches (magnitudes) */
-        double ycomp = 0, yten = 0;
-        int plane = 0;
-        static const char *const planes[] = {"stress", "strain", NULL};
-        if (!rc) rc = sc_num(s, &mm, "yield_compression", 0, 0, &ycomp);
-        if (!rc && !(ycomp >= 0 && isfinite(ycomp))) rc = sc_range(s, &mm, "yield_compression", ">= 0 (a stretch magnitude)", ycomp);
-        if (!rc) rc = sc_num(s, &mm, "yield_tension", 0, 0, &yten);
-        if (!rc && !(yten >= 0 && isfinite(yten))) rc = sc_range(s, &mm, "yield_tension", ">= 0 (a stretch)", yten);
-        if (!rc && (ycomp > 0 || yten > 0) && model != 0)
-            rc = sc_fail(s, FLOE_EINVAL, mv, "%s: yield_compression / yield_tension are pmb options", fm);
-        if (!rc && (ycomp > 0 || yten > 0) && alpha > 0)
-            rc = sc_fail(s, FLOE_EINVAL, mv, "%s: plastic bonds and alpha cannot be combined", fm);
-        if (!rc) rc = sc_enum(s, &mm, "plane", planes, 0, &plane);
-        if (!rc && plane != 0 && s->dim != 2) rc = sc_fail(s, FLOE_EINVAL, mv, "%s: plane is a 2D option", fm);
-        if (!rc && !(K > 0) && !(s->dim == 2 && model == 0 && E > 0))
-            rc = sc_fail(s, FLOE_EINVAL, mv, "%s: bulk_modulus > 0 is required%s", fm,
-                         s->dim == 2 ? " (2D PMB: or young)" : "");
-        if (!rc && model == 1 && !(G > 0)) rc = sc_fail(s, FLOE_EINVAL, mv, "%s: lps needs shear_modulus > 0", fm);
-        if (!rc && (sc_ < 0 || Gc < 0)) rc = sc_fail(s, FLOE_EINVAL, mv, "%s: critical_stretch and fracture_energy must be >= 0", fm);
-        if (!rc && sc_ > 0 && Gc > 0) rc = sc_fail(s, FLOE_EINVAL, mv, "%s: give critical_stretch or fracture_energy, not both", fm);
+        floe_pd_material pm;
+        int rc = sc_pd_material(s, mv == mk ? NULL : mv, mk, fm, &pm);
         floe_pd_body *b = NULL;
         sc_pd_cut cut = {NULL, 0, {{NULL, {0, 0, 0}, {1, 0, 0, 0}}}};
         if (!rc) rc = sc_pd_parse_remove(s, &rm, fr, &reg, &cut, &r);
@@ -411,19 +424,12 @@ int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key)
         floe_geometry_destroy(reg.g);
         sc_pd_cut_free(&cut);
         if (!rc) {
-            floe_pd_material pm = model == 0 ? floe_pd_material_pmb(rho, K, sc_)
-                                             : floe_pd_material_lps(rho, K, G, sc_, inf ? FLOE_PD_W_GAUSS : FLOE_PD_W_ONE);
-            if (model == 0 && s->dim == 2 && E > 0) pm.E = E;
-            pm.G_c = Gc;
-            pm.alpha = alpha;
-            pm.yield_compression = ycomp;
-            pm.yield_tension = yten;
-            pm.plane = plane ? FLOE_PD_PLANE_STRAIN : FLOE_PD_PLANE_STRESS;
             int c = floe_pd_set_material(b, &pm);
             if (c) rc = sc_fail(s, c, mv, "%s: %s", fm, c == FLOE_ENOTSUP ? "not available in this dimension" : "invalid values");
         }
-        int corr = 1;
-        if (!rc) rc = sc_bool(s, &m, "surface_correction", 1, &corr);
+        /* a user material without a surface correction goes without one unless asked */
+        int corr = 1, corr_def = pm.model != FLOE_PD_USER || (pm.ops && pm.ops->surface_correction);
+        if (!rc) rc = sc_bool(s, &m, "surface_correction", corr_def, &corr);
         if (!rc && corr) {
             int c = floe_pd_surface_correction(b);
             if (c) rc = sc_fail(s, c, e, "%s: surface correction failed", what);

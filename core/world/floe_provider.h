@@ -23,6 +23,7 @@
 #define FLOE_PROVIDER_H
 
 #include "floe_world.h"
+#include "floe_provider_ctx.h"
 
 typedef struct floe_provider floe_provider;
 struct floe_step_ctx; /* particle_store.h (internal): the store and the evaluation's kind */
@@ -63,6 +64,27 @@ typedef struct floe_provider_class {
 struct floe_provider {
     const floe_provider_class *klass;
 };
+
+/* A user provider (a plugin's, or a registered kind "provider" named in a scene's
+ * `forces:`): a struct that starts with `floe_provider base` and a class whose forces()
+ * reads the evaluation through floe_provider_ctx_of(ctx) (floe_provider_ctx.h). Add it
+ * before the world is prepared (its first step): FLOE_OK and the world owns it (freed by
+ * klass->destroy, or free() when NULL, at floe_world_destroy); otherwise an error code with
+ * the message in floe_world_last_error, and the caller keeps it (NULL, a class without
+ * name or forces, a version other than 1, a world already prepared). User providers run
+ * after the body forces and before beam bonds and contacts, in the order they were added;
+ * group FLOE_GROUP_PD ones run with the PD bonds (the staggered scheme's PD rate). Their
+ * state (state_size/save/restore) is saved and restored with every other provider's
+ * around a rejected adaptive step and RK2's probe; excludes() keeps pairs out of the
+ * contact list. */
+int floe_world_add_provider(floe_world *w, floe_provider *pv);
+
+/* The constructor of a registered provider (floe_registry.h, kind FLOE_KIND_PROVIDER): its
+ * parameter struct read by the schema, and the world it will be added to (its particles
+ * are all added). NULL with a message in err for invalid parameters. */
+typedef floe_provider *(*floe_provider_create_fn)(const void *params, const floe_world *w, char *err, size_t errlen);
+/* Registers the built-in providers (linear_drag); floe_register_builtins calls it. */
+int floe_register_builtin_providers(char *err, size_t errlen);
 
 /* The world's providers in evaluation order (built at prepare from what the scene holds:
  * a scene without bonds or PD has no such stage). */

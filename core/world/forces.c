@@ -612,6 +612,7 @@ static size_t pd_state_size(const floe_provider *pv, const floe_world *w) {
         n += (size_t)b->nbond;
         if (b->s0) n += 2 * (size_t)b->n * sizeof(double);
         if (b->splast) n += (size_t)b->nbond * sizeof(float);
+        if (b->ops->state_size) n += b->ops->state_size(b); /* a user material's (floe_pd.h) */
     }
     return n;
 }
@@ -634,6 +635,12 @@ static void pd_state_io(floe_world *w, unsigned char *buf, int save) {
         IO(b->broken, (size_t)b->nbond);
         if (b->s0) IO(b->s0, 2 * (size_t)b->n * sizeof(double));
         if (b->splast) IO(b->splast, (size_t)b->nbond * sizeof(float));
+        if (b->ops->state_size) { /* a user material's state */
+            size_t m = b->ops->state_size(b);
+            if (save) b->ops->save(b, buf);
+            else b->ops->restore(b, buf);
+            buf += m;
+        }
     }
 #undef IO
 }

@@ -145,8 +145,7 @@ void floe_world_destroy(floe_world *w) {
     for (int k = 0; k < w->npd_bc; k++) { free(w->pd_bc[k]->pts); free(w->pd_bc[k]->fold); free(w->pd_bc[k]); }
     free(w->pd_bc); free(w->pd_nbroken_seen);
     floe_beam_set_destroy(w->beams);
-    for (int k = 0; k < w->nprov; k++) free(w->prov[k]);
-    free(w->prov);
+    floe_world_providers_free(w); /* providers.c: built-in and user providers */
     free(w->pbuf);
     free(w);
 }

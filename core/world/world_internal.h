@@ -120,6 +120,9 @@ struct floe_world {
     /* the force providers of the staged step (floe_provider.h), built at prepare, and the
      * byte buffer of their state for RK2's midpoint probe */
     struct floe_provider **prov; int nprov, prov_cap;
+    /* user providers (floe_world_add_provider, providers.c), owned by the world; prov
+     * holds them too once prepared */
+    struct floe_provider **uprov; int nuprov, uprov_cap;
     unsigned char *pbuf; size_t pbuf_cap;
 };
 
@@ -128,6 +131,9 @@ struct floe_world {
  * order, the neighbour list rebuilt between stages when one asks, the ledger booked from
  * their accumulators. The DEM group zeroes p->f and p->t first; the PD group adds. */
 int floe_world_forces(floe_world *w, const floe_step_ctx *ctx, int groups);
+/* providers.c: 1 when pv is a user provider (owned through uprov); frees every provider */
+int floe_provider_is_user(const floe_world *w, const struct floe_provider *pv);
+void floe_world_providers_free(floe_world *w);
 /* the forces at the present state, advancing nothing (as at prepare; for tests) */
 int floe_compute_forces(floe_world *w);
 

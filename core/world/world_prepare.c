@@ -24,14 +24,18 @@ static int build_providers(floe_world *w) {
     if (w->beams) want[n++] = &floe_beam_provider_class;
     want[n++] = &floe_contact_provider_class;
     if (w->npd) want[n++] = &floe_pd_provider_class;
-    for (int k = 0; k < w->nprov; k++) free(w->prov[k]);
+    for (int k = 0; k < w->nprov; k++)
+        if (!floe_provider_is_user(w, w->prov[k])) free(w->prov[k]);
     w->nprov = 0;
-    if (grow((void **)&w->prov, &w->prov_cap, n, sizeof *w->prov)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    if (grow((void **)&w->prov, &w->prov_cap, n + w->nuprov, sizeof *w->prov))
+        return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     for (int k = 0; k < n; k++) {
         floe_provider *pv = malloc(sizeof *pv);
         if (!pv) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
         pv->klass = want[k];
         w->prov[w->nprov++] = pv;
+        /* user providers (floe_world_add_provider) after the body forces, in their order */
+        for (int u = 0; k == 0 && u < w->nuprov; u++) w->prov[w->nprov++] = w->uprov[u];
     }
     return FLOE_OK;
 }
