@@ -23,7 +23,8 @@ static void usage(FILE *f)
             "usage: %s run [SCENE] [-o OUTDIR] [-q]   run a scene (no SCENE: the built-in demo)\n"
             "       %s check SCENE                   load and prepare a scene, print its summary\n"
             "       %s info                          version, build and the registered components\n"
-            "       %s help [KIND [NAME]]            the components of a kind (shape, law, output) and\n"
+            "       %s help [KIND [NAME]]            the components of a kind (shape, law, output,\n"
+            "                                        integrator) and\n"
             "                                        the parameters of one, e.g. help law hertz_mindlin\n"
             "       %s help --markdown               the reference of every component (docs/reference.md)\n"
             "       %s --help\n"
@@ -284,7 +285,7 @@ static int cmd_info(void)
     }
     printf("also:        plane (walls), user SDF callback (C API); packings lattice, hexagonal, random\n");
     for (int k = 0; k < floe_plugin_count(); k++) printf("plugin:      %s\n", floe_plugin_path(k));
-    printf("help:        floe help KIND [NAME] (kinds: shape, law, output)\n");
+    printf("help:        floe help KIND [NAME] (kinds: shape, law, output, integrator)\n");
     return 0;
 }
 

@@ -19,6 +19,7 @@
 #define FLOE_KIND_LAW "law"
 #define FLOE_KIND_SHAPE "shape"
 #define FLOE_KIND_OBSERVER "output"
+#define FLOE_KIND_INTEGRATOR "integrator" /* floe_integrator.h: create returns the class */
 
 typedef enum floe_param_type {
     FLOE_PARAM_REAL,     /* double */

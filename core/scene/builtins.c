@@ -6,10 +6,12 @@
 #include "floe_contact.h"
 #include "floe_geometry.h"
 #include "floe_observer.h"
+#include "floe_integrator.h"
 
 int floe_register_builtins(char *err, size_t errlen) {
     FLOE_TRY(floe_register_builtin_laws(err, errlen));
     FLOE_TRY(floe_register_builtin_shapes(err, errlen));
     FLOE_TRY(floe_register_builtin_outputs(err, errlen));
+    FLOE_TRY(floe_register_builtin_integrators(err, errlen));
     return FLOE_OK;
 }

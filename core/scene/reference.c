@@ -44,6 +44,9 @@ static const char *kind_intro(const char *kind) {
     if (!strcmp(kind, FLOE_KIND_LAW))
         return "Contact laws, named in `laws: [{materials: [a, b], model: NAME, ...}]`.";
     if (!strcmp(kind, FLOE_KIND_SHAPE)) return "Shapes, named in `shape: {NAME: {...}}` of bodies and PD regions.";
+    if (!strcmp(kind, FLOE_KIND_INTEGRATOR))
+        return "Time integrators, named in `time: {integrator: NAME}` (floe_integrator.h); the Newmark-beta solvers "
+               "of bonded systems are documented here and run through the C API (floe_newmark.h).";
     if (!strcmp(kind, FLOE_KIND_OBSERVER))
         return "Outputs, named in `outputs: [{type: NAME, every: N | interval: T, ...}]` (every: steps, default 100; "
                "interval: seconds of simulated time).";
@@ -85,7 +88,7 @@ static void write_entry(FILE *f, const floe_registry_entry *e, int md) {
     fprintf(f, "\n");
 }
 
-static const char *const kinds[] = {FLOE_KIND_SHAPE, FLOE_KIND_LAW, FLOE_KIND_OBSERVER};
+static const char *const kinds[] = {FLOE_KIND_SHAPE, FLOE_KIND_LAW, FLOE_KIND_OBSERVER, FLOE_KIND_INTEGRATOR};
 
 int floe_reference_write(FILE *f, const char *kind, const char *name, int markdown, char *err, size_t errlen) {
     FLOE_TRY(floe_register_builtins(err, errlen));
@@ -99,7 +102,8 @@ int floe_reference_write(FILE *f, const char *kind, const char *name, int markdo
         if (kind && strcmp(kind, kinds[q])) continue;
         found = 1;
         if (markdown) fprintf(f, "## %s\n\n%s\n\n", !strcmp(kinds[q], "law") ? "Contact laws"
-                                                   : !strcmp(kinds[q], "shape") ? "Shapes" : "Outputs",
+                                                   : !strcmp(kinds[q], "shape") ? "Shapes"
+                                                   : !strcmp(kinds[q], "output") ? "Outputs" : "Integrators",
                               kind_intro(kinds[q]));
         else if (!name) fprintf(f, "%s\n", kind_intro(kinds[q]));
         int n = floe_registry_count(kinds[q]), shown = 0;
@@ -121,7 +125,7 @@ int floe_reference_write(FILE *f, const char *kind, const char *name, int markdo
         }
     }
     if (!found) {
-        snprintf(err, errlen, "unknown kind '%s' (kinds: shape, law, output)", kind);
+        snprintf(err, errlen, "unknown kind '%s' (kinds: shape, law, output, integrator)", kind);
         return FLOE_EINVAL;
     }
     return FLOE_OK;

@@ -91,7 +91,10 @@ struct floe_world {
     double *dt_part;          /* n: critical estimate of each particle (limiting kinds) */
     double lf_dt_prev;        /* leapfrog: the previous step (0: velocities synchronised) */
     double *ibuf; size_t ibuf_cap; /* integrator scratch (RK2 start state, staggered forces) */
-    struct floe_snapshot *snap; /* adaptive: the state at the start of the trial step */
+    struct floe_snapshot *snap; /* adaptive: the state at the start of the trial step (owned by
+                                   the controller, core/integrators/adaptive.c; freed by
+                                   floe_world_destroy through snap_free) */
+    void (*snap_free)(struct floe_snapshot *snap);
     int track_depth;          /* forces.c records eta_depth (adaptive) */
     double eta_depth;         /* max over contacts of |v_n| dt / min(R_i, R_j) at the last evaluation */
     double elastic_contact, elastic_pd; /* the two parts of energy.elastic */
@@ -139,7 +142,7 @@ typedef struct floe_pd_bc_rec {
     double *fold;            /* BODY_FORCE: 3n last external force, for the trapezoid work */
 } floe_pd_bc_rec;
 
-/* PD boundary regions and breakage (core/world/world.c, next to floe_world_add_pd_body):
+/* PD boundary regions and breakage (core/world/world_pd.c, next to floe_world_add_pd_body):
  * add the body forces of every body-force region to p->f and return their work over the
  * step (trapezoid, mid-step velocities; the caller books it when stepping); after the
  * bond forces, 1 when a newly broken bond lets a pair within reach meet by contact and the
