@@ -8,9 +8,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* the same over every free particle from the forces in p->f, p->t (velocity Verlet and
- * leapfrog: the half kick h F / m) or the staggered groups fs, ts, fpd; 0 for a class
- * without a closing half kick (RK2) */
+/* the energy of the closing half kick (shadow_term, step.c) over every free particle, from
+ * the forces in p->f, p->t (velocity Verlet and leapfrog: the half kick h F / m) or the
+ * staggered groups fs, ts, fpd; 0 for a class without a closing half kick (RK2) */
 static double shadow_energy(const floe_world *w, const double *fs, const double *ts, const double *fpd) {
     const floe_particles *p = &w->p;
     const floe_integrator_class *ic = floe_integrator_class_of(w->def.integrator);
