@@ -6,7 +6,8 @@ usage: python3 tests/test_integrator_registry.py <floe_cli_path> <tests_dir>
 
 Checks: `floe help integrator` lists the five registered integrators (the three a scene may
 name and the two Newmark-beta solvers, documented only); `floe help integrator rk2` prints
-its doc, source and critical-step factor; an unknown name fails naming the kind; the scene's
+its doc, source and critical-step factor; an unknown name fails naming the kind, and a
+part of exactly one name ("verlet") is answered with that name; the scene's
 time.integrator is looked up in the registry: rk2 and leapfrog load, a documented-only
 class (newmark_implicit) is refused with the loader's unchanged "unknown value" message and
 its choices; check_layers.py fails on a circle of calls between two files of a folder
@@ -62,6 +63,11 @@ def main():
         rc, out, err = run([cli, "help", "integrator", "newmark_implicit"])
         check(rc == 0 and "beta" in out and "line_search_eps" in out,
               "help integrator newmark_implicit lists its parameters:\n%s%s" % (out, err))
+        rc, out, err = run([cli, "help", "integrator", "verlet"])
+        check(rc != 0 and "did you mean 'velocity_verlet'?" in err,
+              "help integrator verlet points at velocity_verlet (a part of one name): %s" % err)
+        rc, out, err = run([cli, "help", "integrator", "newmark"])
+        check(rc != 0 and "did you mean" not in err, "a part of two names suggests neither: %s" % err)
         rc, out, err = run([cli, "help", "integrator", "euler"])
         check(rc != 0 and "no integrator named 'euler'" in err, "unknown integrator refused (exit %d): %s" % (rc, err))
         # the scene's time.integrator through the registry

@@ -119,6 +119,12 @@ int floe_reference_write(FILE *f, const char *kind, const char *name, int markdo
         }
         if (name && !shown) {
             const char *near = floe_registry_closest(kinds[q], name);
+            if (!near) { /* a part of exactly one name ("verlet") */
+                int hits = 0;
+                for (int k = 0; k < n; k++)
+                    if (strstr(floe_registry_at(kinds[q], k)->name, name)) { near = floe_registry_at(kinds[q], k)->name; hits++; }
+                if (hits != 1) near = NULL;
+            }
             snprintf(err, errlen, "no %s named '%s'%s%s%s (floe help %s lists them)", kinds[q], name,
                      near ? " (did you mean '" : "", near ? near : "", near ? "'?)" : "", kinds[q]);
             return FLOE_EINVAL;
