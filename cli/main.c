@@ -274,8 +274,9 @@ static int cmd_info(void)
         fprintf(stderr, "%s: error: %s\n", prog, err);
         return 1;
     }
-    static const char *const kinds[][2] = {{"shape", "shapes:      "}, {"law", "contact laws:"}, {"output", "outputs:     "}};
-    for (int q = 0; q < 3; q++) {
+    static const char *const kinds[][2] = {{"shape", "shapes:      "}, {"law", "contact laws:"}, {"output", "outputs:     "},
+                                           {"integrator", "integrators: "}};
+    for (int q = 0; q < (int)(sizeof kinds / sizeof *kinds); q++) {
         printf("%s", kinds[q][1]);
         for (int k = 0; k < floe_registry_count(kinds[q][0]); k++) {
             const floe_registry_entry *e = floe_registry_at(kinds[q][0], k);
