@@ -8,6 +8,14 @@ layer holds, is an error. Also checked: the quoted includes between headers have
 
 Usage: scripts/check_layers.py [repo root]. Exit status 0 when clean, 1 with one line per
 offending include (file:line: what is wrong).
+
+Also checked: the sources of each layer folder call each other without a circle. A source
+uses another when it calls (or takes the address of) a function that only that other source
+of the folder defines at file scope (not static); the uses must form a DAG, so each folder
+reads bottom to top (docs/architecture.md, "Files"). This is read from the text (comments
+and strings removed), not compiled: a call through a function pointer stored elsewhere, or
+through a macro that builds the name, is not seen; a local variable named like another
+file's function is not counted (only name( and initialiser or argument positions are).
 """
 import os
 import re
@@ -20,6 +28,59 @@ def layers_of(root):
     if not m:
         sys.exit("check_layers: no set(FLOE_LAYERS ...) in CMakeLists.txt")
     return m.group(1).split() + ["cli"]
+
+
+def _strip(src):
+    src = re.sub(r"/\*.*?\*/", " ", src, flags=re.S)
+    src = re.sub(r"//[^\n]*", " ", src)
+    src = re.sub(r'"(\\.|[^"\\\n])*"', '""', src)
+    return re.sub(r"'(\\.|[^'\\\n])*'", "''", src)
+
+
+_DEF = re.compile(r"^(?!static\b)(?:[A-Za-z_][\w \t*]*?[\s*])(\w+)\s*\([^;{]*\)\s*\{", re.M | re.S)
+_SDEF = re.compile(r"^static\b[^;{(]*?[\s*](\w+)\s*\([^;{]*\)\s*\{", re.M | re.S)
+_CALL = re.compile(r"\b(\w+)\s*\(")
+_REF = re.compile(r"[=,(]\s*&?(\w+)\s*[,)};]")
+
+
+def call_cycles(root, layers):
+    """Circles of calls among the sources (.c, .cpp) of each layer folder."""
+    out = []
+    for layer in layers:
+        d = os.path.join(root, layer)
+        if not os.path.isdir(d):
+            continue
+        srcs = [n for n in sorted(os.listdir(d)) if n.endswith((".c", ".cpp"))]
+        text = {f: _strip(open(os.path.join(d, f), encoding="utf-8", errors="replace").read()) for f in srcs}
+        defs = {f: {m.group(1) for m in _DEF.finditer(text[f])} for f in srcs}
+        owner = {}
+        for f in srcs:
+            for name in defs[f]:
+                owner.setdefault(name, []).append(f)
+        edges = {}
+        for f in srcs:
+            own = defs[f] | {m.group(1) for m in _SDEF.finditer(text[f])}
+            for name in set(_CALL.findall(text[f])) | set(_REF.findall(text[f])):
+                o = owner.get(name)
+                if name not in own and o and len(o) == 1:
+                    edges.setdefault(f, {}).setdefault(o[0], set()).add(name)
+        state = {}
+
+        def visit(u, stack):
+            state[u] = 1
+            for t in sorted(edges.get(u, {})):
+                if state.get(t) == 1:
+                    cyc = stack[stack.index(t):] + [t]
+                    out.append(f"{layer}: call circle: " + " -> ".join(
+                        f"{a} ({', '.join(sorted(edges[a][b])[:4])})" for a, b in zip(cyc, cyc[1:])) + f" -> {t}")
+                elif not state.get(t):
+                    visit(t, stack + [t])
+            state[u] = 2
+
+        for u in sorted(edges):
+            if not state.get(u):
+                visit(u, [u])
+    return out
 
 
 def main():
@@ -76,12 +137,14 @@ def main():
     for h in sorted(edges):
         if not state.get(h):
             visit(h, [h])
+    errors.extend(call_cycles(root, layers))
     for e in errors:
         print(e)
     if errors:
         print(f"check_layers: {len(errors)} problem(s); layers bottom first: {' < '.join(layers)}")
         return 1
-    print(f"check_layers: {len(files)} files in {len(layers)} layers, no include from above, no header cycle")
+    print(f"check_layers: {len(files)} files in {len(layers)} layers, no include from above, no header cycle, "
+          "no call circle among the files of a folder")
     return 0
 
 

@@ -22,6 +22,7 @@
 #define FLOE_KIND_PD_MATERIAL "pd_material" /* peridynamics/floe_pd.h floe_pd_material_create_fn */
 #define FLOE_KIND_PROVIDER "provider"       /* core/world/floe_provider.h floe_provider_create_fn */
 #define FLOE_KIND_PACKING "packing"         /* core/scene/floe_scene.h: the bodies' particle generators */
+#define FLOE_KIND_INTEGRATOR "integrator" /* floe_integrator.h: create returns the class */
 
 typedef enum floe_param_type {
     FLOE_PARAM_REAL,     /* double */

@@ -3,21 +3,7 @@
  * local frames and factored by SuiteSparse CHOLMOD (implicit), block-diagonal node solves
  * (explicit), incremental internal forces (eqs 19-20), stresses and breakage (eqs 10-11),
  * step cuts by the line search of eqs 29-30. floe_newmark.h has the equations. */
-#include "newmark_internal.h"
-
-int nm_error(floe_newmark *s, int code, const char *fmt, ...) {
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(s->err, sizeof s->err, fmt, ap);
-    va_end(ap);
-    return code;
-}
-
-double now_s(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "newmark_base.h"
 
 floe_newmark_def floe_newmark_default_def(void) {
     floe_newmark_def d;
@@ -246,48 +232,6 @@ int floe_newmark_set_initial(floe_newmark *s, int i, const double u[3], const do
 
 /* ---- bond kernels ---- */
 
-/* local end components of the global vector g (2 nd) */
-void to_local(const floe_newmark *s, const nm_bond *b, const double *g, double *ul) {
-    const int nd = s->nd;
-    const double *R = b->R;
-    const int ends[2] = {b->i, b->j};
-    for (int e = 0; e < 2; e++) {
-        const double *q = g + (size_t)nd * ends[e];
-        double *o = ul + nd * e;
-        if (nd == 3) {
-            o[0] = R[0] * q[0] + R[1] * q[1];
-            o[1] = R[3] * q[0] + R[4] * q[1];
-            o[2] = q[2];
-        } else {
-            for (int r = 0; r < 3; r++) {
-                o[r] = R[3 * r] * q[0] + R[3 * r + 1] * q[1] + R[3 * r + 2] * q[2];
-                o[3 + r] = R[3 * r] * q[3] + R[3 * r + 1] * q[4] + R[3 * r + 2] * q[5];
-            }
-        }
-    }
-}
-
-/* g += T fl (local end forces back to global components), scaled by sc */
-void add_global(const floe_newmark *s, const nm_bond *b, const double *fl, double sc, double *g) {
-    const int nd = s->nd;
-    const double *R = b->R;
-    const int ends[2] = {b->i, b->j};
-    for (int e = 0; e < 2; e++) {
-        double *q = g + (size_t)nd * ends[e];
-        const double *f = fl + nd * e;
-        if (nd == 3) {
-            q[0] += sc * (R[0] * f[0] + R[3] * f[1]);
-            q[1] += sc * (R[1] * f[0] + R[4] * f[1]);
-            q[2] += sc * f[2];
-        } else {
-            for (int c = 0; c < 3; c++) {
-                q[c] += sc * (R[c] * f[0] + R[3 + c] * f[1] + R[6 + c] * f[2]);
-                q[3 + c] += sc * (R[c] * f[3] + R[3 + c] * f[4] + R[6 + c] * f[5]);
-            }
-        }
-    }
-}
-
 /* f = K_loc u (004 eq 7) from the cached entries: floe_beam_local_apply without divisions */
 static inline void local_apply(const nm_bond *b, int dim, const double *u, double *f) {
     const double *k = b->k;
@@ -392,29 +336,6 @@ static void bond_dampers(floe_newmark *s, nm_bond *b) {
         }
 }
 
-/* the dampers of bond b at either end in the node's nd dofs, T^T diag(c) T (nd x nd,
- * row-major; 2D: the x, y dampers in the bond's axes and the rotational one) */
-void bond_damper_block(int nd, const nm_bond *b, double *D) {
-    const double *R = b->R;
-    memset(D, 0, (size_t)(nd * nd) * sizeof *D);
-    if (nd == 3) {
-        for (int p = 0; p < 2; p++)
-            for (int q = 0; q < 2; q++)
-                D[p * 3 + q] = R[p] * b->c[0] * R[q] + R[3 + p] * b->c[1] * R[3 + q];
-        D[8] = b->c[5];
-    } else
-        for (int p = 0; p < 3; p++)
-            for (int q = 0; q < 3; q++) {
-                double ct = 0, cr = 0;
-                for (int r = 0; r < 3; r++) {
-                    ct += R[3 * r + p] * b->c[r] * R[3 * r + q];
-                    cr += R[3 * r + p] * b->c[3 + r] * R[3 * r + q];
-                }
-                D[p * 6 + q] = ct;
-                D[(3 + p) * 6 + 3 + q] = cr;
-            }
-}
-
 /* the C block of every node: sum over its intact bonds of T^T diag(c) T, plus alpha M */
 static void build_cblk(floe_newmark *s) {
     const int nd = s->nd, nn = nd * nd;
@@ -455,47 +376,6 @@ static void c_apply(const floe_newmark *s, const double *g, double *out) {
             o[r] = acc;
         }
     }
-}
-
-double node_m(const floe_newmark *s, int i, int k) {
-    int rot = s->nd == 3 ? k == 2 : k >= 3;
-    return rot ? s->inertia[i] : s->mass[i];
-}
-
-/* explicit: inverse of the free part of M + gamma dt C for every node (Gauss-Jordan on at
- * most 6 x 6, symmetric positive definite) */
-int build_ablk(floe_newmark *s, double dt) {
-    const int nd = s->nd, nn = nd * nd;
-    for (int i = 0; i < s->n; i++) {
-        double A[36], Inv[36];
-        int fr[6], m = 0;
-        for (int k = 0; k < nd; k++)
-            if (s->eq[nd * i + k] >= 0) fr[m++] = k;
-        for (int p = 0; p < m; p++)
-            for (int q = 0; q < m; q++) {
-                A[p * m + q] = s->def.gamma * dt * s->cblk[(size_t)nn * i + fr[p] * nd + fr[q]];
-                Inv[p * m + q] = p == q;
-            }
-        for (int p = 0; p < m; p++) A[p * m + p] += node_m(s, i, fr[p]);
-        for (int c = 0; c < m; c++) {
-            double piv = A[c * m + c];
-            if (!(piv > 0)) return nm_error(s, FLOE_EUNSTABLE, "node %d: M + gamma dt C is not positive definite", i);
-            for (int q = 0; q < m; q++) { A[c * m + q] /= piv; Inv[c * m + q] /= piv; }
-            for (int r = 0; r < m; r++) {
-                if (r == c) continue;
-                double f = A[r * m + c];
-                if (f == 0) continue;
-                for (int q = 0; q < m; q++) { A[r * m + q] -= f * A[c * m + q]; Inv[r * m + q] -= f * Inv[c * m + q]; }
-            }
-        }
-        double *O = s->ablk + (size_t)nn * i;
-        memset(O, 0, (size_t)nn * sizeof *O);
-        for (int p = 0; p < m; p++)
-            for (int q = 0; q < m; q++) O[fr[p] * nd + fr[q]] = Inv[p * m + q];
-    }
-    s->ablk_dt = dt;
-    s->ablk_epoch = s->epoch;
-    return FLOE_OK;
 }
 
 /* ---- critical steps ---- */

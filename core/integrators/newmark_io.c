@@ -1,6 +1,6 @@
 /* newmark_io.c - the Newmark-beta solver's queries, VTK and CSV output, and the solver
  * built from a world's particles and beam bonds. */
-#include "newmark_internal.h"
+#include "newmark_base.h"
 
 /* ---- queries, output ---- */
 

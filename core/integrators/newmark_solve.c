@@ -1,7 +1,7 @@
 /* newmark_solve.c - the Newmark-beta solves: the sparse K, C, M pattern and CHOLMOD
  * factors with rank-one downdates for broken bonds (implicit), block-diagonal node solves
  * (explicit). */
-#include "newmark_internal.h"
+#include "newmark_base.h"
 
 /* ---- sparse matrix (implicit) ---- */
 
@@ -271,5 +271,41 @@ int solve_explicit(floe_newmark *s, double dt, const double *rhs, double *x) {
         }
     }
     s->st.seconds_solve += now_s() - t0;
+    return FLOE_OK;
+}
+
+/* explicit: inverse of the free part of M + gamma dt C for every node (Gauss-Jordan on at
+ * most 6 x 6, symmetric positive definite) */
+int build_ablk(floe_newmark *s, double dt) {
+    const int nd = s->nd, nn = nd * nd;
+    for (int i = 0; i < s->n; i++) {
+        double A[36], Inv[36];
+        int fr[6], m = 0;
+        for (int k = 0; k < nd; k++)
+            if (s->eq[nd * i + k] >= 0) fr[m++] = k;
+        for (int p = 0; p < m; p++)
+            for (int q = 0; q < m; q++) {
+                A[p * m + q] = s->def.gamma * dt * s->cblk[(size_t)nn * i + fr[p] * nd + fr[q]];
+                Inv[p * m + q] = p == q;
+            }
+        for (int p = 0; p < m; p++) A[p * m + p] += node_m(s, i, fr[p]);
+        for (int c = 0; c < m; c++) {
+            double piv = A[c * m + c];
+            if (!(piv > 0)) return nm_error(s, FLOE_EUNSTABLE, "node %d: M + gamma dt C is not positive definite", i);
+            for (int q = 0; q < m; q++) { A[c * m + q] /= piv; Inv[c * m + q] /= piv; }
+            for (int r = 0; r < m; r++) {
+                if (r == c) continue;
+                double f = A[r * m + c];
+                if (f == 0) continue;
+                for (int q = 0; q < m; q++) { A[r * m + q] -= f * A[c * m + q]; Inv[r * m + q] -= f * Inv[c * m + q]; }
+            }
+        }
+        double *O = s->ablk + (size_t)nn * i;
+        memset(O, 0, (size_t)nn * sizeof *O);
+        for (int p = 0; p < m; p++)
+            for (int q = 0; q < m; q++) O[fr[p] * nd + fr[q]] = Inv[p * m + q];
+    }
+    s->ablk_dt = dt;
+    s->ablk_epoch = s->epoch;
     return FLOE_OK;
 }

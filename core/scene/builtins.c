@@ -8,6 +8,7 @@
 #include "floe_observer.h"
 #include "floe_provider.h"
 #include "floe_pd.h"
+#include "floe_integrator.h"
 
 int floe_register_builtins(char *err, size_t errlen) {
     FLOE_TRY(floe_register_builtin_laws(err, errlen));
@@ -16,5 +17,6 @@ int floe_register_builtins(char *err, size_t errlen) {
     FLOE_TRY(floe_register_builtin_pd_materials(err, errlen));
     FLOE_TRY(floe_register_builtin_providers(err, errlen));
     FLOE_TRY(floe_register_builtin_packings(err, errlen));
+    FLOE_TRY(floe_register_builtin_integrators(err, errlen));
     return FLOE_OK;
 }

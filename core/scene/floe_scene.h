@@ -24,7 +24,7 @@ int floe_scene_load_string(const char *text, const char *path, const char *outdi
                            floe_world **out_world, floe_scene_info *info,
                            char *err, size_t errlen);
 
-/* Registers the built-in laws, shapes and outputs (floe_registry.h); idempotent. The scene
+/* Registers the built-in laws, shapes, outputs and integrators (floe_registry.h); idempotent. The scene
  * loader calls it; call it yourself before floe_registry_find or floe_register. */
 int floe_register_builtins(char *err, size_t errlen);
 

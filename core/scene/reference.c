@@ -65,6 +65,9 @@ static const struct help_kind {
      "PD materials, named in `peridynamics: [{material: {model: NAME, ...}, ...}]`."},
     {FLOE_KIND_PROVIDER, "Force providers",
      "Force providers, named in `forces: [{type: NAME, ...}]`; they act on every free particle after gravity."},
+    {FLOE_KIND_INTEGRATOR, "Integrators",
+     "Time integrators, named in `time: {integrator: NAME}` (floe_integrator.h); the Newmark-beta solvers of bonded "
+     "systems are documented here and run through the C API (floe_newmark.h)."},
     {FLOE_KIND_PACKING, "Packings",
      "Packings, named in `bodies: [{packing: NAME, shape, material, ...}]` (no packing: one body at `position`)."},
 };

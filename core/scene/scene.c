@@ -6,6 +6,7 @@
  * 1-based line and column. Packings (lattice, hexagonal, random) are expanded here; the
  * world does the physics. ParticLS §5.2 (growing radius) and §5.3 (RVE) are the examples. */
 #include "scene_internal.h"
+#include "floe_integrator.h"
 
 /* ------------------------------------------------------------------------------------ */
 /* Summary                                                                               */
@@ -230,11 +231,25 @@ static int sc_checks(sc *s, const sc_map *r, floe_world_def *def)
 /* time.integrator, time.adaptive, time.pd_dem (docs/scene-format.md, docs/integrators.md) */
 static int sc_time_integration(sc *s, const sc_map *tm, floe_world_def *def)
 {
-    static const char *const integ[] = {"velocity_verlet", "leapfrog", "rk2", NULL};
     static const char *const schemes[] = {"monolithic", "staggered", NULL};
     static const char *const ad_keys[] = {"dt_min", "dt_max", "velocity_tolerance", "penetration_tolerance", NULL};
     static const char *const pd_keys[] = {"scheme", "substeps", "every", NULL};
-    FLOE_TRY(sc_enum(s, tm, "integrator", integ, FLOE_VELOCITY_VERLET, &def->integrator));
+    /* the integrators are the registry's (kind "integrator", floe_integrator.h): every
+     * class a world can step, in registration order */
+    const char *integ[17];
+    int ids[16], ni = 0, vv = 0;
+    for (int k = 0, n = floe_registry_count(FLOE_KIND_INTEGRATOR); k < n && ni < 16; k++) {
+        const floe_registry_entry *e = floe_registry_at(FLOE_KIND_INTEGRATOR, k);
+        const floe_integrator_class *c = ((floe_integrator_class_fn)e->create)();
+        if (!c || !c->step) continue; /* documented only (the Newmark solvers) */
+        if (c->id == FLOE_VELOCITY_VERLET) vv = ni;
+        ids[ni] = c->id;
+        integ[ni++] = e->name;
+    }
+    integ[ni] = NULL;
+    int ik = vv;
+    FLOE_TRY(sc_enum(s, tm, "integrator", integ, vv, &ik));
+    def->integrator = ni ? ids[ik] : FLOE_VELOCITY_VERLET;
     struct fy_node *ak, *av = sc_get(tm, "adaptive", &ak);
     if (av && av != ak && fy_node_is_mapping(av)) {
         sc_map am;

@@ -1,8 +1,10 @@
 /* world.c - the simulation world: the particle store, registration of materials, laws,
  * geometries, particles, walls, states and observers, and the accessors. Its other parts:
- * world_pd.c (PD bodies and regions), world_prepare.c (prepare, observers, finish),
- * timestep.c (critical-step estimates), step.c (the steps), watchdog.c (energy watchdog),
- * forces.c (the staged force providers), neighbor.c (Verlet list). */
+ * world_pd.c (PD bodies and regions), world_beams.c (beam bonds), forces.c (the staged force
+ * providers), timestep.c (critical-step estimates), world_prepare.c (the store's part of
+ * prepare, observers, finish), neighbor.c (Verlet list). This file is the bottom of the
+ * folder: it calls none of them. The driver (prepare, step, run, the integrators, the
+ * energy watchdog) is the layer above: core/integrators (docs/architecture.md). */
 #include "world_internal.h"
 #include "floe_pd.h"
 #include "beam_set.h"
@@ -12,28 +14,20 @@
 #include <stdlib.h>
 #include <string.h>
 #include "world_parts.h"
-#include "floe_integrator.h"
-
-const char *floe_strerror(int code) {
-    switch (code) {
-    case FLOE_OK: return "FLOE_OK";
-    case FLOE_EINVAL: return "FLOE_EINVAL";
-    case FLOE_ENOMEM: return "FLOE_ENOMEM";
-    case FLOE_EIO: return "FLOE_EIO";
-    case FLOE_EPARSE: return "FLOE_EPARSE";
-    case FLOE_EUNSTABLE: return "FLOE_EUNSTABLE";
-    case FLOE_ENOTSUP: return "FLOE_ENOTSUP";
-    case FLOE_ESTOP: return "FLOE_ESTOP";
-    default: return "FLOE_E?";
-    }
-}
+#include "error_text.h"
 
 int floe_world_error(floe_world *w, int code, const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(w->err, sizeof w->err, fmt, ap);
+    floe_error_vset(w->err, sizeof w->err, code, fmt, ap);
     va_end(ap);
     return code;
+}
+
+/* the names of the energy watchdog's modes (the watchdog: core/integrators/watchdog.c) */
+const char *floe_energy_check_name(int mode) {
+    static const char *const names[] = {"stop", "warn", "off"};
+    return mode >= FLOE_CHECK_STOP && mode <= FLOE_CHECK_OFF ? names[mode] : NULL;
 }
 
 const char *floe_world_last_error(const floe_world *w) { return w->err; }
@@ -139,7 +133,7 @@ void floe_world_destroy(floe_world *w) {
     free(w->det.scratch);
     free(w->dt_part);
     free(w->ibuf);
-    snapshot_free(w->snap);
+    if (w->snap && w->snap_free) w->snap_free(w->snap); /* the adaptive controller's (core/integrators) */
     for (int k = 0; k < w->npd; k++) floe_pd_body_destroy(w->pd[k]);
     free(w->pd); free(w->pd_first); free(w->pd_of); free(w->pd_fold); free(w->pd_fnew); free(w->pd_eold); free(w->pd_diss);
     for (int k = 0; k < w->npd_bc; k++) { free(w->pd_bc[k]->pts); free(w->pd_bc[k]->fold); free(w->pd_bc[k]); }
@@ -450,18 +444,7 @@ double floe_world_energy_balance_error(const floe_world *w) {
     return fabs(in - out) / scale;
 }
 
-/* ---- integrator and estimate queries ---- */
-
-const char *floe_integrator_name(int integrator) {
-    const floe_integrator_class *c = floe_integrator_class_of(integrator);
-    return c ? c->name : NULL;
-}
-
-int floe_world_dt_estimates(floe_world *w, floe_dt_estimates *out) {
-    if (!w->prepared) FLOE_TRY(floe_world_prepare(w));
-    *out = w->dte;
-    return FLOE_OK;
-}
+/* ---- estimate queries (floe_world_dt_estimates: core/integrators/driver.c, it prepares) ---- */
 
 double floe_world_particle_critical_dt(const floe_world *w, int i) {
     if (i < 0 || i >= w->p.n) return -1;

@@ -85,13 +85,16 @@ struct floe_world {
     struct floe_pd_bc_rec **pd_bc; int npd_bc, pd_bc_cap;
     long long *pd_nbroken_seen; /* npd: broken bonds of each body when the contact list was
                                    last checked for newly broken pairs (floe_pd_after_forces) */
-    /* time integration (core/world/world.c, issue #5): critical-step estimates, integrators,
+    /* time integration (core/integrators, issue #5): critical-step estimates, integrators,
      * adaptive steps, staggered PD-DEM; scratch only when a scheme needs it */
     floe_dt_estimates dte;    /* at prepare */
     double *dt_part;          /* n: critical estimate of each particle (limiting kinds) */
     double lf_dt_prev;        /* leapfrog: the previous step (0: velocities synchronised) */
     double *ibuf; size_t ibuf_cap; /* integrator scratch (RK2 start state, staggered forces) */
-    struct floe_snapshot *snap; /* adaptive: the state at the start of the trial step */
+    struct floe_snapshot *snap; /* adaptive: the state at the start of the trial step (owned by
+                                   the controller, core/integrators/adaptive.c; freed by
+                                   floe_world_destroy through snap_free) */
+    void (*snap_free)(struct floe_snapshot *snap);
     int track_depth;          /* forces.c records eta_depth (adaptive) */
     double eta_depth;         /* max over contacts of |v_n| dt / min(R_i, R_j) at the last evaluation */
     double elastic_contact, elastic_pd; /* the two parts of energy.elastic */
@@ -102,7 +105,7 @@ struct floe_world {
     double dt_lo, dt_hi;      /* adaptive: the bounds in use */
     double dt_cap;            /* adaptive: the step may not pass this (floe_world_run's end) */
     floe_step_stats st;
-    /* energy watchdog (core/world/world.c energy_watchdog): the dissipation of each PD body's
+    /* energy watchdog (core/integrators/watchdog.c energy_watchdog): the dissipation of each PD body's
      * bonds since it was added (npd), the contact with the most negative dissipation over
      * its life at the last advancing evaluation (forces.c, reset there) and over the run */
     double *pd_diss; int pd_diss_n;
@@ -111,7 +114,7 @@ struct floe_world {
     double wd_scale;          /* the energy scale: largest K + elastic + |work| seen */
     double wd_gscale;         /* its floor: sum of m |g| R over the free particles (prepare) */
     double wd_shadow, wd_shadow0; /* energy of the last closing half kick, now and at prepare
-                                 (core/world/world.c shadow_term; 0 for RK2) */
+                                 (core/integrators/step.c shadow_term; 0 without a closing half kick: RK2) */
     double wd_created;        /* largest created fraction of the scale seen */
     long wd_step;             /* step at which the tolerance was passed (-1: not yet) */
     char wd_msg[1024];
@@ -145,7 +148,7 @@ typedef struct floe_pd_bc_rec {
     double *fold;            /* BODY_FORCE: 3n last external force, for the trapezoid work */
 } floe_pd_bc_rec;
 
-/* PD boundary regions and breakage (core/world/world.c, next to floe_world_add_pd_body):
+/* PD boundary regions and breakage (core/world/world_pd.c, next to floe_world_add_pd_body):
  * add the body forces of every body-force region to p->f and return their work over the
  * step (trapezoid, mid-step velocities; the caller books it when stepping); after the
  * bond forces, 1 when a newly broken bond lets a pair within reach meet by contact and the

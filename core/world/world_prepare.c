@@ -1,5 +1,8 @@
-/* world_prepare.c - prepare (masses, providers, time step, first forces, energy at the start),
- * observers and finish. */
+/* world_prepare.c - the store's part of prepare (providers, masses, the laws and detectors
+ * every pair needs, estimates; the neighbour list and clock; the energy at the start; the
+ * observers' start), observers and finish. floe_world_prepare itself, which chooses the step
+ * and evaluates the first forces with the integrator, is the driver's
+ * (core/integrators/driver.c). */
 #include "world_parts.h"
 
 #include <math.h>
@@ -7,10 +10,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-int observers_call(floe_world *w, int force_all);
-int contacts_wanted(const floe_world *w);
-int stag_split_forces(floe_world *w, const floe_step_ctx *ctx);
-static double shadow_energy(const floe_world *w, const double *fs, const double *ts, const double *fpd);
 
 extern const floe_provider_class floe_body_provider_class, floe_beam_provider_class, floe_contact_provider_class,
     floe_pd_provider_class;
@@ -69,10 +68,8 @@ void providers_state_io(floe_world *w, unsigned char *buf, int save) {
     }
 }
 
-int floe_world_prepare(floe_world *w) {
-    if (w->prepared) return FLOE_OK;
+int prepare_store(floe_world *w) {
     floe_particles *p = &w->p;
-    w->err[0] = 0;
     FLOE_TRY(build_providers(w));
     /* masses and inertia */
     for (int i = 0; i < p->n; i++) {
@@ -184,9 +181,11 @@ int floe_world_prepare(floe_world *w) {
         }
         memset(w->pd_fold, 0, (size_t)3 * w->pd_npts * sizeof *fo);
     }
-    FLOE_TRY(estimate_dt(w));
-    FLOE_TRY(choose_dt(w));
-    if (w->step == 0) w->lf_dt_prev = 0; /* leapfrog: the velocities given are synchronised */
+    return estimate_dt(w);
+}
+
+int prepare_state(floe_world *w) {
+    floe_particles *p = &w->p;
     int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
     if (rc) return floe_world_error(w, rc, "neighbour list build failed (out of memory)");
     {
@@ -206,12 +205,11 @@ int floe_world_prepare(floe_world *w) {
     w->prepared = 1;
     w->t0 = w->time;
     w->step0 = w->step;
-    {
-        floe_step_ctx c0 = {&w->p, w->def.dim, 0, w->time, w->dt, 0.0, 0, w->record_contacts || w->obs_need_contacts, 0};
-        rc = w->def.pd_dem == FLOE_PD_DEM_STAGGERED && w->npd ? stag_split_forces(w, &c0)
-                                                               : floe_world_forces(w, &c0, FLOE_GROUP_ALL);
-    }
-    if (rc) return rc;
+    return FLOE_OK;
+}
+
+void prepare_ledger(floe_world *w, double shadow) {
+    const floe_particles *p = &w->p;
     /* energy at start */
     floe_energy *e = &w->energy;
     double kt = 0, kr = 0;
@@ -222,12 +220,8 @@ int floe_world_prepare(floe_world *w) {
     }
     e->kinetic_trans = kt;
     e->kinetic_rot = kr;
-    {
-        const int stag = w->def.pd_dem == FLOE_PD_DEM_STAGGERED && w->npd;
-        const size_t n3 = 3 * (size_t)p->n;
-        w->wd_shadow = stag ? shadow_energy(w, w->ibuf, w->ibuf + n3, w->ibuf + 2 * n3) : shadow_energy(w, p->f, p->t, NULL);
-        w->wd_shadow0 = w->wd_shadow; /* the watchdog's balance restarts with the ledger */
-    }
+    w->wd_shadow = shadow;
+    w->wd_shadow0 = w->wd_shadow; /* the watchdog's balance restarts with the ledger */
     if (w->step == 0) {
         e->initial = kt + kr + e->elastic;
         e->work_body = e->work_boundary = e->dissipated = 0;
@@ -236,13 +230,16 @@ int floe_world_prepare(floe_world *w) {
          * the present state, so the balance error restarts from 0 here */
         e->initial = kt + kr + e->elastic + e->dissipated - e->work_body - e->work_boundary;
     }
+}
+
+int prepare_observers(floe_world *w) {
     for (int k = 0; k < w->nobs; k++) {
         floe_observer *o = w->obs[k];
         if (o->begun) continue; /* re-prepared mid-run: already writing */
         o->begun = 1;
         o->next_time = w->time;
         if (o->klass->begin) {
-            rc = o->klass->begin(o, w);
+            int rc = o->klass->begin(o, w);
             if (rc) return floe_world_error(w, rc, "observer %s failed to start: %s", o->klass->name,
                                             w->err[0] ? w->err : "(no message)");
         }
@@ -302,43 +299,4 @@ int floe_world_finish(floe_world *w) {
     if (rc) memcpy(w->err, first, sizeof first);
     w->finished = 1;
     return rc;
-}
-
-/* Energy of the closing half kick of free particle i (velocity change dv, angular momentum
- * change dL): 1/2 m |dv|^2 + 1/2 dL . I^-1 dL. Velocity Verlet conserves exactly (linear
- * forces) K + U minus this term (1/2 m v_{n+1/2} . v_{n-1/2} + U), not K + U, whose
- * measured value oscillates by up to (w dt/2)^2 / (1 - (w dt/2)^2) near the stability
- * limit; the energy watchdog compares that conserved form (w->wd_shadow). */
-double shadow_term(const floe_particles *p, int i, const double dv[3], const double dL[3]) {
-    double e = 0.5 * p->mass[i] * floe_v3_dot(dv, dv);
-    const double *I = p->inertia + 3 * i;
-    if (p->iso[i]) {
-        if (I[0] > 0 && isfinite(I[0])) e += 0.5 * floe_v3_dot(dL, dL) / I[0];
-    } else {
-        double b[3];
-        floe_q_rotate_inv(b, p->q + 4 * i, dL);
-        for (int k = 0; k < 3; k++)
-            if (I[k] > 0 && isfinite(I[k])) e += 0.5 * b[k] * b[k] / I[k];
-    }
-    return e;
-}
-
-/* the same over every free particle from the forces in p->f, p->t (velocity Verlet and
- * leapfrog: the half kick h F / m) or the staggered groups fs, ts, fpd; 0 for RK2 */
-static double shadow_energy(const floe_world *w, const double *fs, const double *ts, const double *fpd) {
-    const floe_particles *p = &w->p;
-    if (w->def.integrator == FLOE_RK2 && !fpd) return 0;
-    const double h = 0.5 * w->dt, hp = fpd ? 0.5 * w->dt / (w->pd_sub > 0 ? w->pd_sub : 1) : 0;
-    double e = 0;
-    for (int i = 0; i < p->n; i++) {
-        if (p->motion[i] != FLOE_FREE) continue;
-        double dv[3], dL[3];
-        for (int k = 0; k < 3; k++) {
-            dv[k] = h * p->inv_mass[i] * fs[3 * i + k];
-            if (fpd && w->pd_every == 1 && w->pd_of && w->pd_of[i] >= 0) dv[k] += hp * p->inv_mass[i] * fpd[3 * i + k];
-            dL[k] = h * ts[3 * i + k];
-        }
-        e += shadow_term(p, i, dv, dL);
-    }
-    return e;
 }

@@ -1,7 +1,8 @@
-/* step.c - the steps: velocity Verlet, leapfrog, RK2, staggered PD-DEM (000 §3.2) and the
- * adaptive controller (003 §4.3); the rotation helpers. */
-#include "world_parts.h"
-#include "floe_integrator.h"
+/* step.c - the steps: velocity Verlet, leapfrog, RK2, staggered PD-DEM (000 §3.2); the
+ * rotation and kinematic helpers they share. The bottom of core/integrators: the classes
+ * (integrators.c), the adaptive controller (adaptive.c), prepare (driver.c) and the
+ * step/run loop with the energy watchdog (watchdog.c) call these, never the reverse. */
+#include "integrator_parts.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -10,19 +11,6 @@
 #include <string.h>
 /* ---- rotation helpers ---- */
 
-/* omega = R I^-1 R^T L (world frame) */
-static void omega_from_L(const double q[4], const double I[3], const double L[3], double om[3]) {
-    double Lb[3];
-    floe_q_rotate_inv(Lb, q, L);
-    for (int k = 0; k < 3; k++) Lb[k] = I[k] > 0 && isfinite(I[k]) ? Lb[k] / I[k] : 0;
-    floe_q_rotate(om, q, Lb);
-}
-void L_from_omega(const double q[4], const double I[3], const double om[3], double L[3]) {
-    double ob[3];
-    floe_q_rotate_inv(ob, q, om);
-    for (int k = 0; k < 3; k++) ob[k] *= I[k];
-    floe_q_rotate(L, q, ob);
-}
 /* q <- exp(h omega / 2) q, i.e. rotate by the vector h*omega */
 static void q_advance(double out[4], const double q[4], const double om[3], double h) {
     double th[3] = {h * om[0], h * om[1], h * om[2]}, dq[4];
@@ -119,19 +107,12 @@ static int check_particle(floe_world *w, int i, const double xold[3]) {
     return FLOE_OK;
 }
 
-/* largest squared distance of x from its position at the neighbour build, into *maxd2 */
-static inline void note_disp(const double *x, const double *xb, double *maxd2) {
-    double dx = x[0] - xb[0], dy = x[1] - xb[1], dz = x[2] - xb[2];
-    double d2 = dx * dx + dy * dy + dz * dz;
-    if (d2 > *maxd2) *maxd2 = d2;
-}
-
 /* omega of free particle i from its angular momentum */
 static inline void omega_update(floe_particles *p, int i) {
     if (p->iso[i]) {
         double inv = 1.0 / p->inertia[3 * i];
         for (int k = 0; k < 3; k++) p->w[3 * i + k] = p->L[3 * i + k] * inv;
-    } else omega_from_L(p->q + 4 * i, p->inertia + 3 * i, p->L + 3 * i, p->w + 3 * i);
+    } else floe_omega_from_L(p->q + 4 * i, p->inertia + 3 * i, p->L + 3 * i, p->w + 3 * i);
 }
 
 /* the orientation of an anisotropic free particle i over dt with its angular momentum L:
@@ -140,16 +121,16 @@ static void rotate_drift_aniso(floe_particles *p, int i, double dt) {
     double *q = p->q + 4 * i, *L = p->L + 3 * i, *om = p->w + 3 * i;
     const double *I = p->inertia + 3 * i, h = 0.5 * dt;
     double qm[4], omm[3], qn[4];
-    omega_from_L(q, I, L, omm);
+    floe_omega_from_L(q, I, L, omm);
     q_advance(qm, q, omm, h);
     for (int it = 0; it < 2; it++) {
-        omega_from_L(qm, I, L, omm);
+        floe_omega_from_L(qm, I, L, omm);
         q_advance(qm, q, omm, h);
     }
-    omega_from_L(qm, I, L, omm);
+    floe_omega_from_L(qm, I, L, omm);
     q_advance(qn, q, omm, dt);
     memcpy(q, qn, sizeof qn);
-    omega_from_L(q, I, L, om);
+    floe_omega_from_L(q, I, L, om);
 }
 
 /* the orientation of free particle i over dt (eq 23 as the midpoint rule of step_verlet):
@@ -232,7 +213,7 @@ static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb) {
  * its one kick per step v_{n+1/2} = v_{n-1/2} + dt a_n is velocity Verlet's two half kicks
  * merged, so both follow the same trajectory (to rounding); they differ in the velocity
  * they store (leapfrog: half a step behind the positions, as in the paper). */
-static int step_verlet(floe_world *w) {
+int step_verlet(floe_world *w) {
     floe_particles *p = &w->p;
     const double dt = w->dt, h = 0.5 * dt;
     const int n = p->n, leap = w->def.integrator == FLOE_LEAPFROG;
@@ -307,7 +288,7 @@ static int step_verlet(floe_world *w) {
             if (p->iso[i]) {
                 double inv = 1.0 / p->inertia[3 * i];
                 for (int k = 0; k < 3; k++) p->w[3 * i + k] = L[k] * inv;
-            } else omega_from_L(p->q + 4 * i, p->inertia + 3 * i, L, p->w + 3 * i);
+            } else floe_omega_from_L(p->q + 4 * i, p->inertia + 3 * i, L, p->w + 3 * i);
             ke = 0.5 * p->mass[i] * floe_v3_dot(v, v);
             kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
         } else {
@@ -319,7 +300,7 @@ static int step_verlet(floe_world *w) {
             if (p->iso[i]) {
                 double inv = 1.0 / p->inertia[3 * i];
                 for (int k = 0; k < 3; k++) ws[k] = Ls[k] * inv;
-            } else omega_from_L(p->q + 4 * i, p->inertia + 3 * i, Ls, ws);
+            } else floe_omega_from_L(p->q + 4 * i, p->inertia + 3 * i, Ls, ws);
             ke = 0.5 * p->mass[i] * floe_v3_dot(vs, vs);
             kre = 0.5 * floe_v3_dot(Ls, ws);
         }
@@ -375,7 +356,7 @@ static int rk2_midpoint_forces(floe_world *w, double h) {
  * the contact history then grows by the tangential displacement of the step and the
  * energy ledger's trapezoid work is that of the actual displacement; that force only
  * enters the next step's midpoint, where an O(dt) error costs O(dt^3) locally. */
-static int step_rk2(floe_world *w) {
+int step_rk2(floe_world *w) {
     floe_particles *p = &w->p;
     const int n = p->n;
     const double dt = w->dt, h = 0.5 * dt, t_n = w->time;
@@ -521,7 +502,7 @@ static int stag_pd_forces(floe_world *w, double span, const double *xs, double *
     return rc;
 }
 
-static int step_staggered(floe_world *w) {
+int step_staggered(floe_world *w) {
     floe_particles *p = &w->p;
     const int n = p->n, m = w->pd_sub, ke = w->pd_every;
     const size_t n3 = 3 * (size_t)n;
@@ -660,214 +641,21 @@ static int step_staggered(floe_world *w) {
     return FLOE_OK;
 }
 
-/* ---- adaptive steps (003 §4.3) ----
- * A trial step is taken from a saved state; it is accepted when
- *   eta_v = max_i |v_i(t+dt) - v_i(t)| dt / R_i <= adapt_velocity_tol  and
- *   eta_d = max_contacts |v_n| dt / min(R_i, R_j) <= adapt_depth_tol
- * (the velocity change and the overlap change over the step relative to the particle
- * size), else the state is restored and the step redone with a smaller dt (also when the
- * trial went unstable); the next step grows by the same criterion, at most 2x, within
- * [dt_min, dt_max]. A trial that rebuilt the neighbour list (the contact history changes
- * its layout) cannot be undone and is accepted: the list is rebuilt before a trial whose
- * drift could pass the skin. */
-
-typedef struct floe_snapshot {
-    double *d; size_t dcap;
-    unsigned char *c; size_t ccap;
-    floe_energy energy;
-    double elastic_contact, elastic_pd, time, t0;
-    double wd_shadow, wd_shadow0;
-    long step, step0;
-} floe_snapshot;
-
-void snapshot_free(floe_snapshot *s) {
-    if (!s) return;
-    free(s->d);
-    free(s->c);
-    free(s);
-}
-
-/* sizes of what a step changes: particle state (22 n), pair history, ledger memories,
- * PD forces and broken flags, state objects */
-static void snapshot_sizes(const floe_world *w, size_t *nd, size_t *nc) {
-    size_t d = 22 * (size_t)w->p.n;
-    for (int s = 0; s < w->nstates; s++) d += w->states[s]->klass->size(w->states[s]);
-    *nd = d;
-    *nc = providers_state_size(w); /* contact history, bonds, the callbacks' last forces */
-}
-
-#define SNAP_COPY(save, a, b, nbytes) \
-    do { if ((nbytes) > 0) { if (save) memcpy((a), (b), (nbytes)); else memcpy((b), (a), (nbytes)); } } while (0)
-
-static int snapshot_io(floe_world *w, int save) {
-    floe_snapshot *s = w->snap;
-    floe_particles *p = &w->p;
-    if (save) {
-        size_t nd, nc;
-        snapshot_sizes(w, &nd, &nc);
-        if (nd > s->dcap) {
-            double *d = realloc(s->d, nd * sizeof *d);
-            if (!d) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-            s->d = d;
-            s->dcap = nd;
-        }
-        if (nc > s->ccap) {
-            unsigned char *c = realloc(s->c, nc ? nc : 1);
-            if (!c) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-            s->c = c;
-            s->ccap = nc;
-        }
-        s->energy = w->energy;
-        s->elastic_contact = w->elastic_contact;
-        s->elastic_pd = w->elastic_pd;
-        s->wd_shadow = w->wd_shadow;
-        s->wd_shadow0 = w->wd_shadow0;
-        s->time = w->time;
-        s->t0 = w->t0;
-        s->step = w->step;
-        s->step0 = w->step0;
-    }
-    double *d = s->d;
-    unsigned char *c = s->c;
-    const size_t n = (size_t)p->n;
-    /* state objects first: set() may rescale a particle's mass, inertia and momentum,
-     * which are restored after */
-    for (int k = 0; k < w->nstates; k++) {
-        floe_state *st = w->states[k];
-        size_t m = st->klass->size(st);
-        if (save) st->klass->get(st, d);
-        else {
-            int rc = st->klass->set(st, w, d);
-            if (rc) return floe_world_error(w, rc, "state object %s could not be restored", st->klass->name);
-        }
-        d += m;
-    }
-    SNAP_COPY(save, d, p->x, 3 * n * sizeof *d); d += 3 * n;
-    SNAP_COPY(save, d, p->v, 3 * n * sizeof *d); d += 3 * n;
-    SNAP_COPY(save, d, p->q, 4 * n * sizeof *d); d += 4 * n;
-    SNAP_COPY(save, d, p->L, 3 * n * sizeof *d); d += 3 * n;
-    SNAP_COPY(save, d, p->w, 3 * n * sizeof *d); d += 3 * n;
-    SNAP_COPY(save, d, p->f, 3 * n * sizeof *d); d += 3 * n;
-    SNAP_COPY(save, d, p->t, 3 * n * sizeof *d); d += 3 * n;
-    /* the providers' own state (floe_provider.h): what a step of each changes */
-    providers_state_io(w, c, save);
-    if (!save) {
-        w->energy = s->energy;
-        w->elastic_contact = s->elastic_contact;
-        w->elastic_pd = s->elastic_pd;
-        w->wd_shadow = s->wd_shadow;
-        w->wd_shadow0 = s->wd_shadow0;
-        w->time = s->time;
-        w->t0 = s->t0;
-        w->step = s->step;
-        w->step0 = s->step0;
-    }
-    return FLOE_OK;
-}
-
-/* ---- the integrator classes (floe_integrator.h) ---- */
-
-static const floe_integrator_class integrators[] = {
-    {.version = 1, .name = "velocity_verlet", .id = FLOE_VELOCITY_VERLET,
-     .flags = FLOE_INTEGRATOR_RESTORES | FLOE_INTEGRATOR_KICK_DRIFT | FLOE_INTEGRATOR_UNDAMPED_BONDS,
-     .step = step_verlet},
-    {.version = 1, .name = "leapfrog", .id = FLOE_LEAPFROG, .flags = FLOE_INTEGRATOR_UNDAMPED_BONDS,
-     .step = step_verlet, /* the same kicks, with the velocities kept at half steps */
-     .why_not_restores = "leapfrog keeps half-step velocities, which a rejected step could not restore consistently",
-     .why_not_kick_drift = "leapfrog's velocities live at half steps"},
-    {.version = 1, .name = "rk2", .id = FLOE_RK2, .flags = FLOE_INTEGRATOR_RESTORES, .step = step_rk2,
-     .why_not_kick_drift = "RK2 evaluates forces at its midpoint",
-     .why_not_bonds = "RK2 has no stable step for undamped bonds (energy grows by 1 + (w dt)^4/4 per step) and its "
-                      "midpoint evaluation would book the bonds' energy twice"},
-};
-
-const floe_integrator_class *floe_integrator_class_of(int integrator) {
-    for (size_t k = 0; k < sizeof integrators / sizeof *integrators; k++)
-        if (integrators[k].id == integrator) return &integrators[k];
-    return NULL;
-}
-
-int step_once(floe_world *w) {
-    if (w->def.pd_dem == FLOE_PD_DEM_STAGGERED && w->npd) return step_staggered(w);
-    return floe_integrator_class_of(w->def.integrator)->step(w);
-}
-
-/* the largest displacement from the neighbour build that the next drift of dt can reach
- * (velocity Verlet and RK2 both move by dt (v + dt/2 F/m)) */
-static double predicted_disp2(const floe_world *w, double dt) {
-    const floe_particles *p = &w->p;
-    const double *xb = w->nl.x_build;
-    if (!xb || w->nl.n_build != p->n) return INFINITY;
-    double m2 = 0;
-    for (int i = 0; i < p->n; i++) {
-        if (p->motion[i] == FLOE_FIXED) continue;
-        double y[3];
+/* Energy of the closing half kick of free particle i (velocity change dv, angular momentum
+ * change dL): 1/2 m |dv|^2 + 1/2 dL . I^-1 dL. Velocity Verlet conserves exactly (linear
+ * forces) K + U minus this term (1/2 m v_{n+1/2} . v_{n-1/2} + U), not K + U, whose
+ * measured value oscillates by up to (w dt/2)^2 / (1 - (w dt/2)^2) near the stability
+ * limit; the energy watchdog compares that conserved form (w->wd_shadow). */
+double shadow_term(const floe_particles *p, int i, const double dv[3], const double dL[3]) {
+    double e = 0.5 * p->mass[i] * floe_v3_dot(dv, dv);
+    const double *I = p->inertia + 3 * i;
+    if (p->iso[i]) {
+        if (I[0] > 0 && isfinite(I[0])) e += 0.5 * floe_v3_dot(dL, dL) / I[0];
+    } else {
+        double b[3];
+        floe_q_rotate_inv(b, p->q + 4 * i, dL);
         for (int k = 0; k < 3; k++)
-            y[k] = p->x[3 * i + k] + dt * (p->v[3 * i + k] + 0.5 * dt * p->inv_mass[i] * p->f[3 * i + k]);
-        note_disp(y, xb + 3 * i, &m2);
+            if (I[k] > 0 && isfinite(I[k])) e += 0.5 * b[k] * b[k] / I[k];
     }
-    return m2;
-}
-
-int step_adaptive(floe_world *w) {
-    floe_particles *p = &w->p;
-    const double tv = w->def.adapt_velocity_tol, td = w->def.adapt_depth_tol;
-    if (!w->snap) {
-        w->snap = calloc(1, sizeof *w->snap);
-        if (!w->snap) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-    }
-    for (;;) {
-        double dt = fmin(w->dt_next, w->dt_cap);
-        if (dt != w->dt) { /* the clock restarts from here at the new step */
-            w->t0 = w->time;
-            w->step0 = w->step;
-            /* the watchdog's conserved form at the new step (the half kick grows as dt):
-             * the same state, so its balance goes on continuously */
-            double r2 = (dt / w->dt) * (dt / w->dt);
-            w->wd_shadow0 += w->wd_shadow * (r2 - 1);
-            w->wd_shadow *= r2;
-            w->dt = dt;
-        }
-        double lim = 0.5 * w->nl.skin;
-        if (predicted_disp2(w, dt) > lim * lim) {
-            int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
-            if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
-        }
-        FLOE_TRY(snapshot_io(w, 1));
-        const long rb = w->nl.rebuilds;
-        w->track_depth = 1;
-        int rc = step_once(w);
-        w->track_depth = 0;
-        const int undoable = w->nl.rebuilds == rb;
-        double eta_v = 0, eta_d = w->eta_depth;
-        if (!rc) {
-            const double *v0 = w->snap->d + 3 * (size_t)p->n; /* after x (states first) */
-            size_t so = 0;
-            for (int s = 0; s < w->nstates; s++) so += w->states[s]->klass->size(w->states[s]);
-            v0 += so;
-            for (int i = 0; i < p->n; i++) {
-                if (p->motion[i] != FLOE_FREE || !isfinite(p->radius[i])) continue;
-                double dv[3];
-                floe_v3_sub(dv, p->v + 3 * i, v0 + 3 * i);
-                double e = floe_v3_norm(dv) * dt / p->radius[i];
-                if (e > eta_v) eta_v = e;
-            }
-        }
-        /* step factor from the criterion: eta_v grows as dt^2 (a dt^2), eta_d as dt */
-        double fv = eta_v > 0 ? sqrt(tv / eta_v) : INFINITY, fd = eta_d > 0 ? td / eta_d : INFINITY;
-        double f = 0.9 * fmin(fv, fd);
-        const int at_min = dt <= w->dt_lo * (1 + 1e-9);
-        if ((rc == FLOE_EUNSTABLE || (rc == FLOE_OK && (eta_v > tv || eta_d > td))) && undoable && !at_min) {
-            FLOE_TRY(snapshot_io(w, 0));
-            w->st.rejected++;
-            f = rc ? 0.25 : fmax(0.1, fmin(0.9, f));
-            w->dt_next = fmax(w->dt_lo, dt * f);
-            w->err[0] = 0;
-            continue;
-        }
-        if (rc) return rc;
-        f = fmax(0.1, fmin(2.0, f));
-        if (!(dt < w->dt_next) || f < 1) w->dt_next = fmin(w->dt_hi, fmax(w->dt_lo, dt * f));
-        return FLOE_OK;
-    }
+    return e;
 }

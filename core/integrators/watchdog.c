@@ -1,5 +1,7 @@
-/* watchdog.c - the energy watchdog: a run that creates energy stops, naming the pair or PD body. */
-#include "world_parts.h"
+/* watchdog.c - the top of the driver: floe_world_step (the scheme's step, or the adaptive
+ * controller around it, then the energy watchdog and the observers) and floe_world_run;
+ * the energy watchdog: a run that creates energy stops, naming the pair or PD body. */
+#include "integrator_parts.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -14,11 +16,6 @@
  * dissipation over its life (forces.c keeps it in the pair's history), each PD body's bond
  * dissipation, the ledger's total dissipation, and the balance error (energy that appeared
  * outside the ledger: the integration). The diagnosis below runs only when one trips. */
-
-const char *floe_energy_check_name(int mode) {
-    static const char *const names[] = {"stop", "warn", "off"};
-    return mode >= FLOE_CHECK_STOP && mode <= FLOE_CHECK_OFF ? names[mode] : NULL;
-}
 
 int floe_world_set_energy_check(floe_world *w, int mode, double tol) {
     if (!floe_energy_check_name(mode) || !(tol >= 0 && tol < 1))
@@ -163,7 +160,7 @@ static int energy_watchdog(floe_world *w) {
 
 int floe_world_step(floe_world *w) {
     if (!w->prepared) FLOE_TRY(floe_world_prepare(w));
-    int rc = w->def.adaptive ? step_adaptive(w) : step_once(w);
+    int rc = w->def.adaptive ? step_adaptive(w, step_once) : step_once(w);
     if (rc) return rc;
     floe_step_stats *s = &w->st;
     s->accepted++;

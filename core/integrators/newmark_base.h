@@ -1,7 +1,9 @@
-/* newmark_internal.h - the Newmark-beta solver's data and the helpers its files share
- * (core/integrators: newmark.c, newmark_solve.c, newmark_io.c). Internal: not installed. */
-#ifndef FLOE_NEWMARK_INTERNAL_H
-#define FLOE_NEWMARK_INTERNAL_H
+/* newmark_base.h - the Newmark-beta solver's data and the helpers its files share
+ * (core/integrators: newmark.c, newmark_solve.c, newmark_io.c, newmark_base.c). Internal:
+ * not installed. The files call downward only: newmark.c and newmark_io.c -> newmark_solve.c
+ * -> newmark_base.c. */
+#ifndef FLOE_NEWMARK_BASE_H
+#define FLOE_NEWMARK_BASE_H
 #include "floe_newmark.h"
 #include "world_internal.h"
 
@@ -79,34 +81,100 @@ struct floe_newmark {
 #endif
 };
 
-#define add_global floe_nm_add_global
-#define bond_damper_block floe_nm_bond_damper_block
 #define build_ablk floe_nm_build_ablk
 #define build_pattern floe_nm_build_pattern
 #define downdate_bonds floe_nm_downdate_bonds
 #define factor floe_nm_factor
 #define nm_error floe_nm_nm_error
-#define node_m floe_nm_node_m
 #define now_s floe_nm_now_s
 #define solve_explicit floe_nm_solve_explicit
 #define solve_implicit floe_nm_solve_implicit
-#define to_local floe_nm_to_local
 
-void add_global(const floe_newmark *s, const nm_bond *b, const double *fl, double sc, double *g);
-void bond_damper_block(int nd, const nm_bond *b, double *D);
 int build_ablk(floe_newmark *s, double dt);
 int build_pattern(floe_newmark *s);
 int downdate_bonds(floe_newmark *s, int slot, const int *broken, int nbr);
 int factor(floe_newmark *s, int slot, double dt);
-double node_m(const floe_newmark *s, int i, int k);
 double now_s(void);
 int solve_explicit(floe_newmark *s, double dt, const double *rhs, double *x);
 int solve_implicit(floe_newmark *s, double dt, const double *rhs, double *x);
-void to_local(const floe_newmark *s, const nm_bond *b, const double *g, double *ul);
 int nm_error(floe_newmark *s, int code, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
+
+/* ---- the bond kernels and node masses every file of the solver uses (inline: the
+ * assembly and the per-step loops keep them inlined; in this header, below every file, so
+ * that newmark.c -> newmark_solve.c -> newmark_base.c stays one direction) ---- */
+
+/* local end components of the global vector g (2 nd) */
+static inline void to_local(const floe_newmark *s, const nm_bond *b, const double *g, double *ul) {
+    const int nd = s->nd;
+    const double *R = b->R;
+    const int ends[2] = {b->i, b->j};
+    for (int e = 0; e < 2; e++) {
+        const double *q = g + (size_t)nd * ends[e];
+        double *o = ul + nd * e;
+        if (nd == 3) {
+            o[0] = R[0] * q[0] + R[1] * q[1];
+            o[1] = R[3] * q[0] + R[4] * q[1];
+            o[2] = q[2];
+        } else {
+            for (int r = 0; r < 3; r++) {
+                o[r] = R[3 * r] * q[0] + R[3 * r + 1] * q[1] + R[3 * r + 2] * q[2];
+                o[3 + r] = R[3 * r] * q[3] + R[3 * r + 1] * q[4] + R[3 * r + 2] * q[5];
+            }
+        }
+    }
+}
+
+/* g += T fl (local end forces back to global components), scaled by sc */
+static inline void add_global(const floe_newmark *s, const nm_bond *b, const double *fl, double sc, double *g) {
+    const int nd = s->nd;
+    const double *R = b->R;
+    const int ends[2] = {b->i, b->j};
+    for (int e = 0; e < 2; e++) {
+        double *q = g + (size_t)nd * ends[e];
+        const double *f = fl + nd * e;
+        if (nd == 3) {
+            q[0] += sc * (R[0] * f[0] + R[3] * f[1]);
+            q[1] += sc * (R[1] * f[0] + R[4] * f[1]);
+            q[2] += sc * f[2];
+        } else {
+            for (int c = 0; c < 3; c++) {
+                q[c] += sc * (R[c] * f[0] + R[3 + c] * f[1] + R[6 + c] * f[2]);
+                q[3 + c] += sc * (R[c] * f[3] + R[3 + c] * f[4] + R[6 + c] * f[5]);
+            }
+        }
+    }
+}
+
+/* the dampers of bond b at either end in the node's nd dofs, T^T diag(c) T (nd x nd,
+ * row-major; 2D: the x, y dampers in the bond's axes and the rotational one) */
+static inline void bond_damper_block(int nd, const nm_bond *b, double *D) {
+    const double *R = b->R;
+    memset(D, 0, (size_t)(nd * nd) * sizeof *D);
+    if (nd == 3) {
+        for (int p = 0; p < 2; p++)
+            for (int q = 0; q < 2; q++)
+                D[p * 3 + q] = R[p] * b->c[0] * R[q] + R[3 + p] * b->c[1] * R[3 + q];
+        D[8] = b->c[5];
+    } else
+        for (int p = 0; p < 3; p++)
+            for (int q = 0; q < 3; q++) {
+                double ct = 0, cr = 0;
+                for (int r = 0; r < 3; r++) {
+                    ct += R[3 * r + p] * b->c[r] * R[3 * r + q];
+                    cr += R[3 * r + p] * b->c[3 + r] * R[3 * r + q];
+                }
+                D[p * 6 + q] = ct;
+                D[(3 + p) * 6 + 3 + q] = cr;
+            }
+}
+
+static inline double node_m(const floe_newmark *s, int i, int k) {
+    int rot = s->nd == 3 ? k == 2 : k >= 3;
+    return rot ? s->inertia[i] : s->mass[i];
+}
 
 #endif

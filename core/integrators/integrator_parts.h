@@ -1,0 +1,45 @@
+/* integrator_parts.h - the helpers the driver's files share (core/integrators: step.c,
+ * integrators.c, adaptive.c, driver.c, watchdog.c). Internal: not installed. The files
+ * form a chain without circles (docs/architecture.md): step.c < integrators.c, adaptive.c
+ * < driver.c < watchdog.c. */
+#ifndef FLOE_INTEGRATOR_PARTS_H
+#define FLOE_INTEGRATOR_PARTS_H
+
+#include "world_parts.h"
+#include "floe_integrator.h"
+
+#define step_verlet floe_i_step_verlet
+#define step_rk2 floe_i_step_rk2
+#define step_staggered floe_i_step_staggered
+#define stag_split_forces floe_i_stag_split_forces
+#define shadow_term floe_i_shadow_term
+#define step_once floe_i_step_once
+#define step_adaptive floe_i_step_adaptive
+#define choose_dt floe_i_choose_dt
+
+/* step.c: one step of each scheme (velocity Verlet and leapfrog share step_verlet) */
+int step_verlet(floe_world *w);
+int step_rk2(floe_world *w);
+int step_staggered(floe_world *w);
+/* step.c: the staggered scheme's first forces (F_C, then F_PD, p->f = their sum) */
+int stag_split_forces(floe_world *w, const floe_step_ctx *ctx);
+/* step.c: energy of the closing half kick of free particle i (the watchdog's conserved form) */
+double shadow_term(const floe_particles *p, int i, const double dv[3], const double dL[3]);
+/* integrators.c: one step of the world's scheme (the staggered PD-DEM scheme when chosen
+ * and PD bodies exist, else the integrator class's step) */
+int step_once(floe_world *w);
+/* adaptive.c: the adaptive controller around any step that can be undone (the class has
+ * FLOE_INTEGRATOR_RESTORES; choose_dt refuses the others) */
+int step_adaptive(floe_world *w, int (*inner)(floe_world *w));
+/* driver.c: the step, the staggered ratios and the adaptive bounds (at prepare) */
+int choose_dt(floe_world *w);
+
+/* largest squared distance of x from its position at the neighbour build, into *maxd2 */
+static inline void floe_i_note_disp(const double *x, const double *xb, double *maxd2) {
+    double dx = x[0] - xb[0], dy = x[1] - xb[1], dz = x[2] - xb[2];
+    double d2 = dx * dx + dy * dy + dz * dz;
+    if (d2 > *maxd2) *maxd2 = d2;
+}
+#define note_disp floe_i_note_disp
+
+#endif
