@@ -33,28 +33,6 @@ floe_provider_ctx floe_provider_ctx_of(const struct floe_step_ctx *ctx) {
     return c;
 }
 
-int floe_provider_is_user(const floe_world *w, const floe_provider *pv) {
-    for (int k = 0; k < w->nuprov; k++)
-        if (w->uprov[k] == pv) return 1;
-    return 0;
-}
-
-void floe_world_providers_free(floe_world *w) {
-    for (int k = 0; k < w->nprov; k++)
-        if (!floe_provider_is_user(w, w->prov[k])) free(w->prov[k]);
-    free(w->prov);
-    w->prov = NULL;
-    w->nprov = w->prov_cap = 0;
-    for (int k = 0; k < w->nuprov; k++) {
-        floe_provider *pv = w->uprov[k];
-        if (pv->klass->destroy) pv->klass->destroy(pv);
-        else free(pv);
-    }
-    free(w->uprov);
-    w->uprov = NULL;
-    w->nuprov = w->uprov_cap = 0;
-}
-
 int floe_world_add_provider(floe_world *w, floe_provider *pv) {
     if (!w) return FLOE_EINVAL;
     if (!pv || !pv->klass) return floe_world_error(w, FLOE_EINVAL, "provider is NULL or has no class");

@@ -108,6 +108,30 @@ static void particles_free(floe_particles *p) {
     free(p->pieces);
 }
 
+/* the providers the world owns (built at prepare, and users' from floe_world_add_provider,
+ * user_providers.c): the store frees them */
+int floe_provider_is_user(const floe_world *w, const floe_provider *pv) {
+    for (int k = 0; k < w->nuprov; k++)
+        if (w->uprov[k] == pv) return 1;
+    return 0;
+}
+
+void floe_world_providers_free(floe_world *w) {
+    for (int k = 0; k < w->nprov; k++)
+        if (!floe_provider_is_user(w, w->prov[k])) free(w->prov[k]);
+    free(w->prov);
+    w->prov = NULL;
+    w->nprov = w->prov_cap = 0;
+    for (int k = 0; k < w->nuprov; k++) {
+        floe_provider *pv = w->uprov[k];
+        if (pv->klass->destroy) pv->klass->destroy(pv);
+        else free(pv);
+    }
+    free(w->uprov);
+    w->uprov = NULL;
+    w->nuprov = w->uprov_cap = 0;
+}
+
 void floe_world_destroy(floe_world *w) {
     if (!w) return;
     particles_free(&w->p);
@@ -139,7 +163,7 @@ void floe_world_destroy(floe_world *w) {
     for (int k = 0; k < w->npd_bc; k++) { free(w->pd_bc[k]->pts); free(w->pd_bc[k]->fold); free(w->pd_bc[k]); }
     free(w->pd_bc); free(w->pd_nbroken_seen);
     floe_beam_set_destroy(w->beams);
-    floe_world_providers_free(w); /* providers.c: built-in and user providers */
+    floe_world_providers_free(w); /* built-in and user providers */
     free(w->pbuf);
     free(w);
 }
