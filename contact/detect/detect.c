@@ -153,8 +153,10 @@ static int vertices_plane(floe_detect_ctx *w, const shape_ref *a, const shape_re
     int nv = 0;
     const double *V;
     floe_polytope_view pv; /* a polytope's corners for this dimension (2D: its z = 0 section) */
-    if (floe_geometry_polytope(a->g, w->dim, &pv)) V = pv.v, nv = pv.nv;
-    else V = a->g->klass->vertices(a->g, &nv);
+    if (floe_geometry_polytope(a->g, w->dim, &pv)) {
+        V = pv.v;
+        nv = pv.nv;
+    } else V = a->g->klass->vertices(a->g, &nv);
     double nw[3], rel[3];
     plane_normal(b, nw);
     floe_v3_sub(rel, a->x, b->x);
@@ -186,9 +188,9 @@ static int vertices_plane(floe_detect_ctx *w, const shape_ref *a, const shape_re
     return 1;
 }
 
-/* convex shape a against plane b: the support point in direction -n (the shape's own
- * `support`, or floe_geometry_support's climb along the zero level set, which needs only
- * the SDF, exact or a bound: test_sdf_bound). */
+/* convex shape a against plane b: a polytope's corners (vertices_plane), else the support
+ * point in direction -n (the shape's own `support`, or floe_geometry_support's climb along
+ * the zero level set, which needs only the SDF, exact or a bound: test_sdf_bound). */
 static int convex_plane(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     (void)w; (void)warm;
     const floe_geometry *g = a->g;
@@ -663,7 +665,7 @@ static int admm_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b,
 static const pair_fn pair_table[4][4] = {
     /*            SPHERE        BOX         PLANE         USER */
     /* SPHERE */ {sphere_sphere, sphere_sdf, sphere_plane, sphere_sdf},
-    /* BOX    */ {NULL, admm_pair, vertices_plane, admm_pair},
+    /* BOX    */ {NULL, admm_pair, convex_plane, admm_pair},
     /* PLANE  */ {NULL, NULL, NULL, NULL},
     /* USER   */ {NULL, NULL, convex_plane, admm_pair},
 };
