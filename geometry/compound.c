@@ -150,9 +150,19 @@ static void comp_destroy(floe_geometry *g) {
     free(c);
 }
 
-const floe_geometry_class floe_compound_class = {1, "compound", FLOE_GEOM_COMPOUND, comp_sdf, comp_grad,
-                                                 comp_project, comp_radius, comp_mass, comp_destroy,
-                                                 comp_support, NULL, NULL};
+static int comp_piece_count(const floe_geometry *g) { return ((const floe_compound *)g)->n; }
+static const floe_geometry *comp_piece(const floe_geometry *g, int k, double x[3], double q[4], double *r) {
+    const floe_compound *c = (const floe_compound *)g;
+    floe_v3_copy(x, c->piece_x + 3 * k);
+    memcpy(q, c->piece_q + 4 * k, 4 * sizeof(double));
+    *r = c->piece_r[k];
+    return c->piece[k];
+}
+
+const floe_geometry_class floe_compound_class = {
+    .version = 1, .name = "compound", .kind = FLOE_GEOM_COMPOUND, .sdf = comp_sdf, .gradient = comp_grad,
+    .project = comp_project, .bounding_radius = comp_radius, .mass_properties = comp_mass,
+    .destroy = comp_destroy, .support = comp_support, .piece_count = comp_piece_count, .piece = comp_piece};
 
 floe_geometry *floe_compound_create(floe_geometry **pieces, const double *x, const double *q, int n, int dim,
                                     char *err, size_t errlen) {

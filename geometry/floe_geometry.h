@@ -17,8 +17,10 @@ typedef enum floe_geometry_kind {
     FLOE_GEOM_BOX = 1,
     FLOE_GEOM_PLANE = 2,   /* half-space z <= 0 in the body frame: outward normal +z */
     FLOE_GEOM_USER = 3,    /* any other convex shape with an SDF (user callback, polyhedron,
-                              ellipsoid, ...): contact by ADMM (contact/detect/admm.c) */
-    FLOE_GEOM_COMPOUND = 4,/* union of convex pieces (one rigid body): one contact per piece pair */
+                              ellipsoid, ...): the exact LP when both shapes are polytopes
+                              (class `polytope`), else ADMM (contact/detect/admm.c) */
+    FLOE_GEOM_COMPOUND = 4,/* union of convex pieces (one rigid body): one contact per piece pair
+                              (detection reads the class's piece_count and piece, not the kind) */
     FLOE_GEOM_KIND_COUNT = 5
 } floe_geometry_kind;
 #define FLOE_GEOM_CONVEX FLOE_GEOM_USER
@@ -34,6 +36,15 @@ typedef struct floe_mass_properties {
 } floe_mass_properties;
 
 typedef struct floe_geometry floe_geometry;
+
+/* A convex polytope as the exact contact paths read it (a class's `polytope` entry): arrays
+ * the geometry owns, valid while it lives, in the body frame. */
+typedef struct floe_polytope_view {
+    const double *plane;  /* np face planes (n, d): unit outward normal n, inside n.X <= d */
+    int np;
+    const double *v;      /* nv corners, 3 doubles each */
+    int nv;
+} floe_polytope_view;
 
 typedef struct floe_geometry_class {
     int version;              /* 1 */
@@ -57,14 +68,47 @@ typedef struct floe_geometry_class {
     /* optional: proximal operator argmin_x phi(x) + |x - v|^2 / (2 t), t > 0 (NULL: derived
      * from sdf and gradient, exact for exact SDFs away from edges and corners) */
     void (*prox)(const floe_geometry *g, const double v[3], double t, double out[3]);
+    /* ---- optional capabilities: the library asks the class, never its identity, so a class
+     * of a user or a plugin that gives one takes the same paths as the built-ins (a class
+     * written before these entries leaves them NULL: C zero-fills a shorter initializer) ---- */
+    /* a convex polytope: its face planes and corners for a world of dimension dim (2: the
+     * edges, normals in the xy plane, and the corners of the section z = 0, with z = 0).
+     * A class that gives it takes the exact paths (docs/extending.md, "A shape"): the
+     * deepest-point LP against any other polytope, the contact manifold, the per-vertex
+     * plane contact, the overlap-area law and the manifold's time-step factor. */
+    void (*polytope)(const floe_geometry *g, int dim, floe_polytope_view *out);
+    /* a union of convex pieces (one rigid body): how many, and piece k (0 <= k < count) with
+     * its pose in the body frame (x, unit quaternion q) and its bounding radius r; detection
+     * gives each piece pair its own contact. Pieces are not themselves unions. */
+    int (*piece_count)(const floe_geometry *g);
+    const floe_geometry *(*piece)(const floe_geometry *g, int k, double x[3], double q[4], double *r);
+    /* the dimension of the shape: 2 (planar, in the xy plane: 2D worlds only, mass per unit
+     * thickness), 3 (a solid: 3D worlds only); NULL or 0: either */
+    int (*dimension)(const floe_geometry *g);
+    /* the step of the central differences where the library derives the gradient from the
+     * SDF (NULL: 1e-6 x the bounding radius) */
+    double (*fd_step)(const floe_geometry *g);
+    /* the check when the shape is added to a world: FLOE_OK or an error with a message (NULL:
+     * floe_geometry_check measures the Lipschitz constant of a shape without `project`) */
+    int (*check)(const floe_geometry *g, char *err, size_t errlen);
 } floe_geometry_class;
+
+/* Capabilities, asked through the class (NULL entries answered here). */
+/* 1 and *out filled when g is a convex polytope (its class gives `polytope`), else 0 */
+int floe_geometry_polytope(const floe_geometry *g, int dim, floe_polytope_view *out);
+/* the number of convex pieces: the class's piece_count, 1 for a convex shape */
+int floe_geometry_piece_count(const floe_geometry *g);
+/* 2, 3 or 0 (either): the class's `dimension` */
+int floe_geometry_dimension(const floe_geometry *g);
 
 struct floe_geometry {
     const floe_geometry_class *klass;
 };
 
 typedef struct floe_sphere { floe_geometry base; double radius; } floe_sphere;
-typedef struct floe_box { floe_geometry base; double half[3]; double vert[24]; } floe_box; /* half extents, corners */
+/* half extents, corners (bit k of corner v: the sign along axis k), face planes (-x, +x, -y,
+ * +y, -z, +z: the first four are its 2D edges) and the corners of its z = 0 section (2D) */
+typedef struct floe_box { floe_geometry base; double half[3]; double vert[24]; double plane[24]; double vert2[12]; } floe_box;
 typedef struct floe_plane { floe_geometry base; } floe_plane;
 
 /* User SDF callback shape: f(X, user) in the body frame, with a bounding radius.
@@ -207,18 +251,13 @@ extern const floe_geometry_class floe_compound_class;
 floe_geometry *floe_compound_create(floe_geometry **pieces, const double *x, const double *q, int n, int dim,
                                     char *err, size_t errlen);
 
-/* Body-frame face planes (n, d: inside n.X <= d) of a box or polytope, NULL for any other
- * shape; a box's in buf (dim 2: its four x and y faces only: its z faces would cap the
- * depth at the half thickness with a zero in-plane normal). */
-const double *floe_polytope_planes(const floe_geometry *g, int dim, int *np, double buf[24]);
-
 /* Stiffness multiplier of a polytope's contact manifold (docs/models.md, "Contact
  * manifold"): resting on any one face with K = 2 (2D) or 4 (3D) springs of stiffness k at
  * that face's corners (all of them, scaled by K/corners, if it has more), the body's highest
  * frequency is about sqrt(r k / m) with r = the largest over faces of max(K, max over
  * rocking axes e of m sum (rho . (n x e))^2 / I_e) (translation and rocking taken apart;
  * rho from the face's centre, I_e from the principal moments `inertia` of a body of mass
- * `mass`). For boxes and polytopes; 0 for any other shape. A thin square plate: 12, a cube:
+ * `mass`). For any shape whose class gives `polytope`; 0 for any other shape. A thin square plate: 12, a cube:
  * 6 (one spring at the bounding radius: 1 + m R^2 / I_min = 7 and 5.5). */
 double floe_polytope_manifold_factor(const floe_geometry *g, int dim, const double inertia[3], double mass);
 

@@ -15,9 +15,9 @@ double floe_geometry_bounding_radius(const floe_geometry *g) { return g->klass->
 static double fd_step(const floe_geometry *g) {
     double r = g->klass->bounding_radius(g);
     double h = (isfinite(r) && r > 0 ? r : 1.0) * 1e-6;
-    if (g->klass == &floe_user_shape_class) {
-        const floe_user_shape *u = (const floe_user_shape *)g;
-        if (u->h > 0) h = u->h;
+    if (g->klass->fd_step) {
+        double hc = g->klass->fd_step(g);
+        if (hc > 0) h = hc;
     }
     return h;
 }
@@ -223,16 +223,14 @@ double floe_geometry_lipschitz(const floe_geometry *g, int pairs, double a_out[3
 }
 
 int floe_geometry_check(const floe_geometry *g, char *err, size_t errlen) {
+    if (g->klass->check) return g->klass->check(g, err, errlen);
     if (g->klass->project) return FLOE_OK; /* its own projection: the SDF is the class's business */
-    double L, a[3], b[3];
-    const char *name = g->klass->name ? g->klass->name : "custom";
-    if (g->klass == &floe_user_shape_class) {
-        const floe_user_shape *u = (const floe_user_shape *)g;
-        L = u->lipschitz;
-        floe_v3_copy(a, u->lip_a);
-        floe_v3_copy(b, u->lip_b);
-        name = u->name;
-    } else L = floe_geometry_lipschitz(g, FLOE_SDF_LIPSCHITZ_PAIRS, a, b);
+    double a[3], b[3], L = floe_geometry_lipschitz(g, FLOE_SDF_LIPSCHITZ_PAIRS, a, b);
+    return floe_lipschitz_verdict(g->klass->name ? g->klass->name : "custom", L, a, b, err, errlen);
+}
+
+int floe_lipschitz_verdict(const char *name, double L, const double a[3], const double b[3], char *err,
+                           size_t errlen) {
     if (L <= FLOE_SDF_LIPSCHITZ_MAX) return FLOE_OK;
     floe_set_err(err, errlen,
                  "shape '%s': its SDF changes by %.3g x the distance between (%.3g, %.3g, %.3g) and "
@@ -245,12 +243,7 @@ int floe_geometry_check(const floe_geometry *g, char *err, size_t errlen) {
 int floe_geometry_mass_properties(const floe_geometry *g, int dim, double density,
                                   floe_mass_properties *out) {
     if (g->klass->mass_properties) return g->klass->mass_properties(g, dim, density, out);
-    int n = 64;
-    if (g->klass == &floe_user_shape_class) {
-        const floe_user_shape *u = (const floe_user_shape *)g;
-        if (u->quad_cells > 0) n = u->quad_cells;
-    }
-    return floe_geometry_mass_numeric(g, dim, density, n, out);
+    return floe_geometry_mass_numeric(g, dim, density, 64, out);
 }
 
 /* Midpoint quadrature of the indicator (sdf <= 0) over the bounding cube, with cells that
@@ -368,25 +361,18 @@ void floe_set_err(char *err, size_t errlen, const char *fmt, ...) {
     va_end(ap);
 }
 
-const double *floe_polytope_planes(const floe_geometry *g, int dim, int *np, double buf[24]) {
-    if (g->klass == &floe_box_class) {
-        const double *h = ((const floe_box *)g)->half;
-        for (int a = 0; a < 3; a++)
-            for (int s = 0; s < 2; s++) {
-                double *P = buf + 4 * (2 * a + s);
-                P[0] = P[1] = P[2] = 0;
-                P[a] = s ? 1.0 : -1.0;
-                P[3] = h[a];
-            }
-        *np = dim == 2 ? 4 : 6;
-        return buf;
-    }
-    if (g->klass == &floe_polytope_class) {
-        const floe_polytope *p = (const floe_polytope *)g;
-        *np = p->np;
-        return p->plane;
-    }
-    return NULL;
+int floe_geometry_polytope(const floe_geometry *g, int dim, floe_polytope_view *out) {
+    if (!g->klass->polytope) return 0;
+    g->klass->polytope(g, dim, out);
+    return 1;
+}
+
+int floe_geometry_piece_count(const floe_geometry *g) {
+    return g->klass->piece_count ? g->klass->piece_count(g) : 1;
+}
+
+int floe_geometry_dimension(const floe_geometry *g) {
+    return g->klass->dimension ? g->klass->dimension(g) : 0;
 }
 
 /* floe_polytope_manifold_factor (floe_geometry.h): one face's corners V (nc of them), its
@@ -424,22 +410,11 @@ static double face_factor(const double *V, int nc, const double n[3], int dim, c
 }
 
 double floe_polytope_manifold_factor(const floe_geometry *g, int dim, const double inertia[3], double mass) {
-    double Vb[24], Pb[24], Vf[3 * 64];
-    const double *V = NULL, *P = NULL;
-    int nv = 0, np = 0;
-    if (!(P = floe_polytope_planes(g, dim, &np, Pb))) return 0.0;
-    if (g->klass == &floe_box_class) {
-        const double *h = ((const floe_box *)g)->half;
-        for (int k = 0; k < 8; k++) {
-            Vb[3 * k] = k & 1 ? h[0] : -h[0];
-            Vb[3 * k + 1] = k & 2 ? h[1] : -h[1];
-            Vb[3 * k + 2] = dim == 2 ? 0.0 : (k & 4 ? h[2] : -h[2]);
-        }
-        V = Vb; nv = dim == 2 ? 4 : 8;
-    } else {
-        const floe_polytope *p = (const floe_polytope *)g;
-        V = p->v; nv = p->nv;
-    }
+    double Vf[3 * 64];
+    floe_polytope_view pv;
+    if (!floe_geometry_polytope(g, dim, &pv)) return 0.0;
+    const double *V = pv.v, *P = pv.plane;
+    const int nv = pv.nv, np = pv.np;
     const double R = g->klass->bounding_radius(g), tol = 1e-9 * R;
     double best = 0.0;
     for (int f = 0; f < np; f++) {

@@ -11,4 +11,9 @@ void floe_set_err(char *err, size_t errlen, const char *fmt, ...)
 #endif
     ;
 
+/* FLOE_OK when the Lipschitz constant L of the shape `name` (worst pair a, b) is at most
+ * FLOE_SDF_LIPSCHITZ_MAX, else FLOE_EINVAL with the message that names the contract */
+int floe_lipschitz_verdict(const char *name, double L, const double a[3], const double b[3], char *err,
+                           size_t errlen);
+
 #endif

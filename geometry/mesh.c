@@ -5,6 +5,9 @@
  * naming the option. */
 #include "geometry_internal.h"
 #include "floe_mesh.h"
+#ifdef FLOE_HAVE_CGAL
+#include "mesh_cgal.h"
+#endif
 
 #include <errno.h>
 #include <math.h>
@@ -217,10 +220,6 @@ int floe_mesh_load(const char *path, double scale, floe_mesh *out, char *err, si
 
 /* ---- checks ---- */
 
-#ifdef FLOE_HAVE_CGAL
-int floe_mesh_cgal_validate_(const floe_mesh *m, const char *name, char *err, size_t errlen);
-#endif
-
 typedef struct dedge { int a, b, t; } dedge; /* a < b; t: +1 if the triangle runs a->b, -1 if b->a */
 
 static int dedge_cmp(const void *x, const void *y) {
@@ -338,15 +337,65 @@ int floe_mesh_validate(const floe_mesh *m, const char *name, char *err, size_t e
         return FLOE_EINVAL;
     }
 #ifdef FLOE_HAVE_CGAL
-    return floe_mesh_cgal_validate_(m, name, err, errlen);
+    const floe_cgal_mesh cm = {m->nv, m->nt, m->v, m->tri};
+    return floe_cgal_validate(&cm, name, err, errlen);
 #else
     return FLOE_OK;
 #endif
 }
 
-/* ---- without CGAL ---- */
+/* ---- hull, decomposition and distances: CGAL (mesh_cgal.h) on the mesh's arrays ---- */
 
-#ifndef FLOE_HAVE_CGAL
+#ifdef FLOE_HAVE_CGAL
+/* the arrays of a CGAL result handed over to a floe_mesh */
+static void take_cgal(floe_cgal_mesh *from, floe_mesh *to) {
+    to->nv = from->nv;
+    to->nt = from->nt;
+    to->v = from->v;
+    to->tri = from->tri;
+    from->v = NULL;
+    from->tri = NULL;
+    from->nv = from->nt = 0;
+}
+
+int floe_mesh_hull(const double *pts, int n, floe_mesh *hull, char *err, size_t errlen) {
+    if (!hull) return FLOE_EINVAL;
+    floe_cgal_mesh h = {0, 0, NULL, NULL};
+    int rc = floe_cgal_hull(pts, n, &h, err, errlen);
+    take_cgal(&h, hull);
+    return rc;
+}
+
+int floe_mesh_decompose(const floe_mesh *m, const char *name, floe_mesh **pieces, int *npieces, char *err,
+                        size_t errlen) {
+    if (!pieces || !npieces) return FLOE_EINVAL;
+    *pieces = NULL;
+    *npieces = 0;
+    floe_cgal_mesh *cp = NULL;
+    int np = 0;
+    const floe_cgal_mesh cm = {m ? m->nv : 0, m ? m->nt : 0, m ? m->v : NULL, m ? m->tri : NULL};
+    int rc = floe_cgal_decompose(&cm, name, &cp, &np, err, errlen);
+    if (rc != FLOE_OK) return rc;
+    floe_mesh *out = malloc((size_t)np * sizeof *out);
+    if (!out) {
+        for (int k = 0; k < np; k++) floe_cgal_mesh_free(&cp[k]);
+        free(cp);
+        floe_set_err(err, errlen, "%s: out of memory in the convex decomposition", nm(name));
+        return FLOE_ENOMEM;
+    }
+    for (int k = 0; k < np; k++) take_cgal(&cp[k], &out[k]);
+    free(cp);
+    *pieces = out;
+    *npieces = np;
+    return FLOE_OK;
+}
+
+int floe_mesh_distances(const floe_mesh *m, const double *pts, int n, double *dist) {
+    if (!m) return floe_cgal_distances(NULL, pts, n, dist);
+    const floe_cgal_mesh cm = {m->nv, m->nt, m->v, m->tri};
+    return floe_cgal_distances(&cm, pts, n, dist);
+}
+#else
 int floe_mesh_hull(const double *pts, int n, floe_mesh *hull, char *err, size_t errlen) {
     (void)pts, (void)n;
     if (hull) hull->nv = hull->nt = 0, hull->v = NULL, hull->tri = NULL;

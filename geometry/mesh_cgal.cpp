@@ -1,8 +1,10 @@
-/* mesh_cgal.cpp - the CGAL half of floe_mesh.h: convex hull (convex_hull_3), convex
- * decomposition (Nef polyhedra, convex_decomposition_3), self-intersection test and the
- * exact point-mesh distance (AABB tree). All CGAL code of floe lives in this one file (CGAL is
- * header-only and slow to compile). Every entry point catches every C++ exception and turns
- * it into an error code and a message: no exception crosses into C. */
+/* mesh_cgal.cpp - the CGAL algorithms of the triangle meshes (mesh_cgal.h, on plain arrays;
+ * geometry/mesh.c wraps them in floe_cgal_mesh.h and this file calls nothing back): convex hull
+ * (convex_hull_3), convex decomposition (Nef polyhedra, convex_decomposition_3),
+ * self-intersection test and the exact point-mesh distance (AABB tree). All CGAL code of floe
+ * lives in this one file (CGAL is header-only and slow to compile). Every entry point catches
+ * every C++ exception and turns it into an error code and a message: no exception crosses
+ * into C. */
 #include <CGAL/AABB_face_graph_triangle_primitive.h>
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -25,10 +27,9 @@
 #include <new>
 #include <vector>
 
+#include "mesh_cgal.h"
 extern "C" {
-#include "floe_mesh.h"
-/* internal, called by floe_mesh_validate in mesh.c */
-int floe_mesh_cgal_validate_(const floe_mesh *m, const char *name, char *err, size_t errlen);
+#include "floe_base.h"
 }
 
 namespace {
@@ -51,10 +52,10 @@ void set_err(char *err, size_t errlen, const char *fmt, ...) {
 
 const char *nm(const char *name) { return name ? name : "mesh"; }
 
-/* the surface mesh of a floe_mesh; false (and a message) when a triangle cannot be added
+/* the surface mesh of a floe_cgal_mesh; false (and a message) when a triangle cannot be added
  * (non-manifold vertex or edge, or a repeated vertex index) */
 template <class Mesh>
-bool to_surface_mesh(const floe_mesh *m, Mesh &sm, const char *name, char *err, size_t errlen) {
+bool to_surface_mesh(const floe_cgal_mesh *m, Mesh &sm, const char *name, char *err, size_t errlen) {
     typedef typename boost::graph_traits<Mesh>::vertex_descriptor VD;
     typedef typename Mesh::Point P;
     std::vector<VD> vd((size_t)m->nv);
@@ -78,7 +79,7 @@ bool to_surface_mesh(const floe_mesh *m, Mesh &sm, const char *name, char *err, 
 }
 
 /* triangle mesh of a convex hull held in an IMesh (fan-triangulates any polygon face) */
-int hull_to_floe(const IMesh &sm, floe_mesh *out, char *err, size_t errlen) {
+int hull_to_floe(const IMesh &sm, floe_cgal_mesh *out, char *err, size_t errlen) {
     std::vector<int> index(sm.number_of_vertices() + sm.number_of_removed_vertices(), -1);
     std::vector<double> v;
     std::vector<int> tri;
@@ -118,7 +119,7 @@ int hull_to_floe(const IMesh &sm, floe_mesh *out, char *err, size_t errlen) {
 }
 
 /* convex hull of points in double precision; the hull vertices are input points */
-int hull_points(const std::vector<IPoint> &pts, floe_mesh *out, const char *what, char *err, size_t errlen) {
+int hull_points(const std::vector<IPoint> &pts, floe_cgal_mesh *out, const char *what, char *err, size_t errlen) {
     size_t n = pts.size();
     if (n < 4) {
         set_err(err, errlen, "%s: %zu points, a convex hull needs at least 4 (zero volume)", what, n);
@@ -163,7 +164,16 @@ bool finite_points(const double *p, int n) {
 
 } // namespace
 
-extern "C" int floe_mesh_hull(const double *pts, int n, floe_mesh *hull, char *err, size_t errlen) {
+extern "C" void floe_cgal_mesh_free(floe_cgal_mesh *m) {
+    if (!m) return;
+    std::free(m->v);
+    std::free(m->tri);
+    m->v = NULL;
+    m->tri = NULL;
+    m->nv = m->nt = 0;
+}
+
+extern "C" int floe_cgal_hull(const double *pts, int n, floe_cgal_mesh *hull, char *err, size_t errlen) {
     if (!hull) return FLOE_EINVAL;
     hull->nv = hull->nt = 0;
     hull->v = NULL;
@@ -193,7 +203,7 @@ extern "C" int floe_mesh_hull(const double *pts, int n, floe_mesh *hull, char *e
     }
 }
 
-extern "C" int floe_mesh_cgal_validate_(const floe_mesh *m, const char *name, char *err, size_t errlen) {
+extern "C" int floe_cgal_validate(const floe_cgal_mesh *m, const char *name, char *err, size_t errlen) {
     try {
         IMesh sm;
         if (!to_surface_mesh(m, sm, name, err, errlen)) return FLOE_EINVAL;
@@ -218,7 +228,7 @@ extern "C" int floe_mesh_cgal_validate_(const floe_mesh *m, const char *name, ch
     }
 }
 
-extern "C" int floe_mesh_decompose(const floe_mesh *m, const char *name, floe_mesh **pieces, int *npieces,
+extern "C" int floe_cgal_decompose(const floe_cgal_mesh *m, const char *name, floe_cgal_mesh **pieces, int *npieces,
                                    char *err, size_t errlen) {
     if (!pieces || !npieces) return FLOE_EINVAL;
     *pieces = NULL;
@@ -227,7 +237,7 @@ extern "C" int floe_mesh_decompose(const floe_mesh *m, const char *name, floe_me
         set_err(err, errlen, "%s is empty: no triangles to decompose", nm(name));
         return FLOE_EINVAL;
     }
-    std::vector<floe_mesh> out;
+    std::vector<floe_cgal_mesh> out;
     try {
         EMesh sm;
         if (!to_surface_mesh(m, sm, name, err, errlen)) return FLOE_EINVAL;
@@ -248,7 +258,7 @@ extern "C" int floe_mesh_decompose(const floe_mesh *m, const char *name, floe_me
             std::vector<IPoint> pts;
             Shell_points sp = {&pts};
             nef.visit_shell_objects(Nef::SFace_const_handle(ci->shells_begin()), sp);
-            floe_mesh piece = {0, 0, NULL, NULL};
+            floe_cgal_mesh piece = {0, 0, NULL, NULL};
             char perr[256] = "";
             int rc = hull_points(pts, &piece, "convex piece", perr, sizeof perr);
             if (rc == FLOE_ENOMEM) throw std::bad_alloc();
@@ -259,28 +269,28 @@ extern "C" int floe_mesh_decompose(const floe_mesh *m, const char *name, floe_me
             set_err(err, errlen, "%s: the convex decomposition has no piece with volume (zero volume)", nm(name));
             return FLOE_EINVAL;
         }
-        floe_mesh *arr = (floe_mesh *)std::malloc(out.size() * sizeof(floe_mesh));
+        floe_cgal_mesh *arr = (floe_cgal_mesh *)std::malloc(out.size() * sizeof(floe_cgal_mesh));
         if (!arr) throw std::bad_alloc();
-        std::memcpy(arr, out.data(), out.size() * sizeof(floe_mesh));
+        std::memcpy(arr, out.data(), out.size() * sizeof(floe_cgal_mesh));
         *pieces = arr;
         *npieces = (int)out.size();
         return FLOE_OK;
     } catch (const std::bad_alloc &) {
-        for (floe_mesh &p : out) floe_mesh_free(&p);
+        for (floe_cgal_mesh &p : out) floe_cgal_mesh_free(&p);
         set_err(err, errlen, "%s: out of memory in the convex decomposition", nm(name));
         return FLOE_ENOMEM;
     } catch (const std::exception &e) {
-        for (floe_mesh &p : out) floe_mesh_free(&p);
+        for (floe_cgal_mesh &p : out) floe_cgal_mesh_free(&p);
         set_err(err, errlen, "%s: CGAL convex decomposition failed: %s", nm(name), e.what());
         return FLOE_EINVAL;
     } catch (...) {
-        for (floe_mesh &p : out) floe_mesh_free(&p);
+        for (floe_cgal_mesh &p : out) floe_cgal_mesh_free(&p);
         set_err(err, errlen, "%s: CGAL convex decomposition failed", nm(name));
         return FLOE_EINVAL;
     }
 }
 
-extern "C" int floe_mesh_distances(const floe_mesh *m, const double *pts, int n, double *dist) {
+extern "C" int floe_cgal_distances(const floe_cgal_mesh *m, const double *pts, int n, double *dist) {
     typedef CGAL::AABB_face_graph_triangle_primitive<IMesh> Primitive;
     typedef CGAL::AABB_traits<IK, Primitive> Traits;
     typedef CGAL::AABB_tree<Traits> Tree;

@@ -247,11 +247,24 @@ static void poly_destroy(floe_geometry *g) {
     free(pp);
 }
 
-/* one class for both dimensions (other modules test klass == &floe_polytope_class and read
- * `dim`): the name is "polyhedron" for polygons too */
-const floe_geometry_class floe_polytope_class = {1, "polyhedron", FLOE_GEOM_USER, poly_sdf, poly_grad,
-                                                 poly_project, poly_radius, poly_mass, poly_destroy,
-                                                 poly_support, poly_vertices, NULL};
+/* its planes and corners as they are (a polygon's lie in the plane z = 0) */
+static void poly_polytope(const floe_geometry *g, int dim, floe_polytope_view *out) {
+    const floe_polytope *p = (const floe_polytope *)g;
+    (void)dim;
+    out->plane = p->plane;
+    out->np = p->np;
+    out->v = p->v;
+    out->nv = p->nv;
+}
+static int poly_dimension(const floe_geometry *g) { return ((const floe_polytope *)g)->dim; }
+
+/* one class for both dimensions (`dimension` tells a polygon from a polyhedron): the name is
+ * "polyhedron" for polygons too */
+const floe_geometry_class floe_polytope_class = {
+    .version = 1, .name = "polyhedron", .kind = FLOE_GEOM_USER, .sdf = poly_sdf, .gradient = poly_grad,
+    .project = poly_project, .bounding_radius = poly_radius, .mass_properties = poly_mass,
+    .destroy = poly_destroy, .support = poly_support, .vertices = poly_vertices, .polytope = poly_polytope,
+    .dimension = poly_dimension};
 /* ---- 2D convex hull (Andrew's monotone chain) on points pts (2 each); writes the hull
  * indices counter-clockwise into out (size >= n + 1), returns their count. Collinear and
  * duplicate points (|cross| <= tol) are dropped. ---- */

@@ -141,8 +141,10 @@ static int ell_mass(const floe_geometry *g, int dim, double rho, floe_mass_prope
     }
     return FLOE_OK;
 }
-const floe_geometry_class floe_ellipsoid_class = {1, "ellipsoid", FLOE_GEOM_USER, ell_sdf, ell_grad, ell_project,
-                                                  ell_radius, ell_mass, NULL, ell_support, NULL, NULL};
+const floe_geometry_class floe_ellipsoid_class = {
+    .version = 1, .name = "ellipsoid", .kind = FLOE_GEOM_USER, .sdf = ell_sdf, .gradient = ell_grad,
+    .project = ell_project, .bounding_radius = ell_radius, .mass_properties = ell_mass,
+    .support = ell_support};
 
 static int pos(double x) { return x > 0 && isfinite(x); }
 
@@ -219,8 +221,10 @@ static int cyl_mass(const floe_geometry *g, int dim, double rho, floe_mass_prope
     o->quadrature_error = 0; o->off_axis = 0;
     return FLOE_OK;
 }
-const floe_geometry_class floe_cylinder_class = {1, "cylinder", FLOE_GEOM_USER, cyl_sdf, cyl_grad, cyl_project,
-                                                 cyl_radius, cyl_mass, NULL, cyl_support, NULL, NULL};
+const floe_geometry_class floe_cylinder_class = {
+    .version = 1, .name = "cylinder", .kind = FLOE_GEOM_USER, .sdf = cyl_sdf, .gradient = cyl_grad,
+    .project = cyl_project, .bounding_radius = cyl_radius, .mass_properties = cyl_mass,
+    .support = cyl_support};
 floe_geometry *floe_cylinder_create(double radius, double height) {
     if (!pos(radius) || !pos(height)) return NULL;
     floe_cylinder *c = malloc(sizeof *c);
@@ -267,8 +271,10 @@ static int cap_mass(const floe_geometry *g, int dim, double rho, floe_mass_prope
     o->quadrature_error = 0; o->off_axis = 0;
     return FLOE_OK;
 }
-const floe_geometry_class floe_capsule_class = {1, "capsule", FLOE_GEOM_USER, cap_sdf, cap_grad, cap_project,
-                                                cap_radius, cap_mass, NULL, cap_support, NULL, NULL};
+const floe_geometry_class floe_capsule_class = {
+    .version = 1, .name = "capsule", .kind = FLOE_GEOM_USER, .sdf = cap_sdf, .gradient = cap_grad,
+    .project = cap_project, .bounding_radius = cap_radius, .mass_properties = cap_mass,
+    .support = cap_support};
 floe_geometry *floe_capsule_create(double radius, double length) {
     if (!pos(radius) || !(length >= 0) || !isfinite(length)) return NULL;
     floe_capsule *c = malloc(sizeof *c);
@@ -329,8 +335,10 @@ static int cone_mass(const floe_geometry *g, int dim, double rho, floe_mass_prop
     o->quadrature_error = 0; o->off_axis = 0;
     return FLOE_OK;
 }
-const floe_geometry_class floe_cone_class = {1, "cone", FLOE_GEOM_USER, cone_sdf, cone_grad, cone_project,
-                                             cone_radius, cone_mass, NULL, cone_support, NULL, NULL};
+const floe_geometry_class floe_cone_class = {
+    .version = 1, .name = "cone", .kind = FLOE_GEOM_USER, .sdf = cone_sdf, .gradient = cone_grad,
+    .project = cone_project, .bounding_radius = cone_radius, .mass_properties = cone_mass,
+    .support = cone_support};
 floe_geometry *floe_cone_create(double radius, double height) {
     if (!pos(radius) || !pos(height)) return NULL;
     floe_cone *c = malloc(sizeof *c);
@@ -384,8 +392,10 @@ static void rnd_destroy(floe_geometry *g) {
     floe_geometry_destroy(s->inner);
     free(s);
 }
-const floe_geometry_class floe_rounded_class = {1, "rounded", FLOE_GEOM_USER, rnd_sdf, rnd_grad, rnd_project,
-                                                rnd_radius, rnd_mass, rnd_destroy, rnd_support, NULL, NULL};
+const floe_geometry_class floe_rounded_class = {
+    .version = 1, .name = "rounded", .kind = FLOE_GEOM_USER, .sdf = rnd_sdf, .gradient = rnd_grad,
+    .project = rnd_project, .bounding_radius = rnd_radius, .mass_properties = rnd_mass,
+    .destroy = rnd_destroy, .support = rnd_support};
 floe_geometry *floe_rounded_create(floe_geometry *inner, double r) {
     if (!inner) return NULL;
     if (!pos(r)) { floe_geometry_destroy(inner); return NULL; }

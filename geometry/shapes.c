@@ -1,6 +1,7 @@
 /* shapes.c - built-in shapes: sphere (ParticLS eq 25), box (eq 26), half-space plane and
  * the user SDF callback shape. Mass properties are analytic for the built-ins. */
 #include "floe_geometry.h"
+#include "geometry_internal.h"
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -41,9 +42,10 @@ static void sphere_support(const floe_geometry *g, const double d[3], double o[3
     double R = ((const floe_sphere *)g)->radius;
     o[0] = R * d[0]; o[1] = R * d[1]; o[2] = R * d[2];
 }
-const floe_geometry_class floe_sphere_class = {1, "sphere", FLOE_GEOM_SPHERE, sphere_sdf, sphere_grad,
-                                               sphere_project, sphere_radius, sphere_mass, NULL,
-                                               sphere_support, NULL, NULL};
+const floe_geometry_class floe_sphere_class = {
+    .version = 1, .name = "sphere", .kind = FLOE_GEOM_SPHERE, .sdf = sphere_sdf, .gradient = sphere_grad,
+    .project = sphere_project, .bounding_radius = sphere_radius, .mass_properties = sphere_mass,
+    .support = sphere_support};
 
 floe_geometry *floe_sphere_create(double radius) {
     if (!(radius > 0) || !isfinite(radius)) return NULL;
@@ -119,8 +121,20 @@ static const double *box_vertices(const floe_geometry *g, int *count) {
     *count = 8;
     return ((const floe_box *)g)->vert;
 }
-const floe_geometry_class floe_box_class = {1, "box", FLOE_GEOM_BOX, box_sdf, box_grad, box_project,
-                                            box_radius, box_mass, NULL, box_support, box_vertices, NULL};
+/* a convex polytope (floe_geometry_class.polytope): in 2D its four x and y faces only (its z
+ * faces would cap the depth at the half thickness with a zero in-plane normal) and the
+ * corners of its z = 0 section */
+static void box_polytope(const floe_geometry *g, int dim, floe_polytope_view *out) {
+    const floe_box *b = (const floe_box *)g;
+    out->plane = b->plane;
+    out->np = dim == 2 ? 4 : 6;
+    out->v = dim == 2 ? b->vert2 : b->vert;
+    out->nv = dim == 2 ? 4 : 8;
+}
+const floe_geometry_class floe_box_class = {
+    .version = 1, .name = "box", .kind = FLOE_GEOM_BOX, .sdf = box_sdf, .gradient = box_grad,
+    .project = box_project, .bounding_radius = box_radius, .mass_properties = box_mass,
+    .support = box_support, .vertices = box_vertices, .polytope = box_polytope};
 
 floe_geometry *floe_box_create(double lx, double ly, double lz) {
     if (!(lx > 0 && ly > 0 && lz > 0) || !isfinite(lx + ly + lz)) return NULL;
@@ -130,6 +144,18 @@ floe_geometry *floe_box_create(double lx, double ly, double lz) {
     floe_v3_set(b->half, 0.5 * lx, 0.5 * ly, 0.5 * lz);
     for (int v = 0; v < 8; v++)
         for (int k = 0; k < 3; k++) b->vert[3 * v + k] = (v >> k & 1 ? 1 : -1) * b->half[k];
+    for (int a = 0; a < 3; a++)
+        for (int s = 0; s < 2; s++) {
+            double *P = b->plane + 4 * (2 * a + s);
+            P[0] = P[1] = P[2] = 0;
+            P[a] = s ? 1.0 : -1.0;
+            P[3] = b->half[a];
+        }
+    for (int v = 0; v < 4; v++) { /* the z = -h corners, in the plane z = 0 */
+        b->vert2[3 * v] = b->vert[3 * v];
+        b->vert2[3 * v + 1] = b->vert[3 * v + 1];
+        b->vert2[3 * v + 2] = 0.0;
+    }
     return &b->base;
 }
 
@@ -153,8 +179,9 @@ static int plane_mass(const floe_geometry *g, int dim, double rho, floe_mass_pro
     o->off_axis = 0;
     return FLOE_OK;
 }
-const floe_geometry_class floe_plane_class = {1, "plane", FLOE_GEOM_PLANE, plane_sdf, plane_grad,
-                                              plane_project, plane_radius, plane_mass, NULL, NULL, NULL, NULL};
+const floe_geometry_class floe_plane_class = {
+    .version = 1, .name = "plane", .kind = FLOE_GEOM_PLANE, .sdf = plane_sdf, .gradient = plane_grad,
+    .project = plane_project, .bounding_radius = plane_radius, .mass_properties = plane_mass};
 
 floe_geometry *floe_plane_create(void) {
     floe_plane *p = malloc(sizeof *p);
@@ -169,8 +196,20 @@ static double user_sdf(const floe_geometry *g, const double X[3]) {
     return u->fn(X, u->user);
 }
 static double user_radius(const floe_geometry *g) { return ((const floe_user_shape *)g)->radius; }
-const floe_geometry_class floe_user_shape_class = {1, "user_sdf", FLOE_GEOM_USER, user_sdf, NULL, NULL,
-                                                   user_radius, NULL, NULL, NULL, NULL, NULL};
+static double user_fd_step(const floe_geometry *g) { return ((const floe_user_shape *)g)->h; }
+/* numerical quadrature on its own grid */
+static int user_mass(const floe_geometry *g, int dim, double rho, floe_mass_properties *o) {
+    const floe_user_shape *u = (const floe_user_shape *)g;
+    return floe_geometry_mass_numeric(g, dim, rho, u->quad_cells > 0 ? u->quad_cells : 64, o);
+}
+/* the Lipschitz constant measured at creation, under the shape's own name */
+static int user_check(const floe_geometry *g, char *err, size_t errlen) {
+    const floe_user_shape *u = (const floe_user_shape *)g;
+    return floe_lipschitz_verdict(u->name, u->lipschitz, u->lip_a, u->lip_b, err, errlen);
+}
+const floe_geometry_class floe_user_shape_class = {
+    .version = 1, .name = "user_sdf", .kind = FLOE_GEOM_USER, .sdf = user_sdf,
+    .bounding_radius = user_radius, .mass_properties = user_mass, .fd_step = user_fd_step, .check = user_check};
 
 floe_geometry *floe_user_shape_create_named(floe_sdf_fn fn, void *user, double bounding_radius, const char *name) {
     if (!fn || !(bounding_radius > 0) || !isfinite(bounding_radius)) return NULL;

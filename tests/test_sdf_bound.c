@@ -366,8 +366,9 @@ static void test_admm_collision(void) {
 /* a custom class with only sdf and bounding_radius (no project): sampled when added */
 static double steep_sdf(const floe_geometry *g, const double X[3]) { (void)g; return 3 * (floe_v3_norm(X) - 0.004); }
 static double steep_radius(const floe_geometry *g) { (void)g; return 0.005; }
-static const floe_geometry_class steep_class = {1, "steep_custom", FLOE_GEOM_USER, steep_sdf, NULL, NULL,
-                                                steep_radius, NULL, NULL, NULL, NULL, NULL};
+static const floe_geometry_class steep_class = {
+    .version = 1, .name = "steep_custom", .kind = FLOE_GEOM_USER, .sdf = steep_sdf,
+    .bounding_radius = steep_radius};
 
 /* ---- 4. the Lipschitz check ---- */
 static void test_lipschitz(void) {

@@ -118,7 +118,7 @@ int floe_admm_half(const floe_pose *a, const floe_pose *b, const floe_admm_optio
         floe_v3_copy(u, warm8 + 3);
         if (warm8[6] > 0 && isfinite(warm8[6])) t = warm8[6] * size;
         if (!(isfinite(z[1] + z[2] + u[0] + u[1] + u[2]))) cold = 1;
-        else if (ga->klass->support && !ga->klass->vertices) {
+        else if (ga->klass->support && !ga->klass->vertices && !ga->klass->polytope) {
             /* predictor for a curved a: at the solution a's outward normal is opposite to
              * b's SDF gradient, so the point of a whose normal is -grad phi_b (evaluated at
              * the kept point, in the bodies' new relative pose) follows the motion */

@@ -1,14 +1,16 @@
 /* detect.c - contact detection, producing the contact summary of ParticLS eq 15.
  *
  * Dispatch is a table over geometry kinds (Box2D style), applied to convex pieces (a
- * compound body contributes one piece per list entry, so non-convex bodies get one contact
- * per piece pair):
+ * body whose class gives piece_count/piece, such as a compound, contributes one piece per
+ * list entry, so non-convex bodies get one contact per piece pair). Within a kind, the paths
+ * follow what the class gives, never which class it is (floe_geometry.h, capabilities):
  *   sphere-sphere, sphere-plane, sphere-anything (the other shape's SDF and gradient at
  *   the sphere centre: exact for exact SDFs; spheres never enter ADMM);
  *   polytope-plane (the deepest vertex and a manifold of the next ones), convex-plane (support
  *   point: the shape's `support` or iterated projection);
- *   polytope-polytope (boxes, polyhedra, polygons): the exact deepest-point LP
- *   (contact/detect/polytope_lp.c), warm-started from the previous basis;
+ *   polytope-polytope (any two shapes whose classes give `polytope`: boxes, polyhedra,
+ *   polygons, a user's polytope): the exact deepest-point LP (contact/detect/polytope_lp.c),
+ *   warm-started from the previous basis;
  *   any other convex pair: ADMM on the two SDFs (contact/detect/admm.c), warm-started.
  * Warm-start state lives in the neighbour list (FLOE_DETECT_WARM doubles per entry) and is
  * allocated only when a scene has such pairs. */
@@ -149,20 +151,21 @@ static void mf_set_extras(floe_contact *c, const mf_vertex *best, int nb) {
 static int vertices_plane(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     (void)warm;
     int nv = 0;
-    const double *V = a->g->klass->vertices(a->g, &nv);
+    const double *V;
+    floe_polytope_view pv; /* a polytope's corners for this dimension (2D: its z = 0 section) */
+    if (floe_geometry_polytope(a->g, w->dim, &pv)) {
+        V = pv.v;
+        nv = pv.nv;
+    } else V = a->g->klass->vertices(a->g, &nv);
     double nw[3], rel[3];
     plane_normal(b, nw);
     floe_v3_sub(rel, a->x, b->x);
     if (floe_v3_dot(rel, nw) >= a->r) return 0;
-    const int is_box = a->kind == FLOE_GEOM_BOX, K = w->dim == 2 ? 2 : 4;
+    const int K = w->dim == 2 ? 2 : 4;
     mf_vertex best[4];
     int nb = 0;
     for (int v = 0; v < nv; v++) {
         double X[3] = {V[3 * v], V[3 * v + 1], V[3 * v + 2]}, xw[3];
-        if (w->dim == 2 && is_box) {
-            if (X[2] > 0) continue; /* 2D: one face of the box (the z = -h corners) */
-            X[2] = 0;
-        }
         floe_q_rotate(xw, a->q, X);
         floe_v3_add(xw, xw, a->x);
         floe_v3_sub(rel, xw, b->x);
@@ -185,13 +188,13 @@ static int vertices_plane(floe_detect_ctx *w, const shape_ref *a, const shape_re
     return 1;
 }
 
-/* convex shape a against plane b: the support point in direction -n (the shape's own
- * `support`, or floe_geometry_support's climb along the zero level set, which needs only
- * the SDF, exact or a bound: test_sdf_bound). */
+/* convex shape a against plane b: a polytope's corners (vertices_plane), else the support
+ * point in direction -n (the shape's own `support`, or floe_geometry_support's climb along
+ * the zero level set, which needs only the SDF, exact or a bound: test_sdf_bound). */
 static int convex_plane(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     (void)w; (void)warm;
     const floe_geometry *g = a->g;
-    if (g->klass->vertices && g->klass->kind != FLOE_GEOM_COMPOUND) return vertices_plane(w, a, b, warm, c);
+    if (g->klass->polytope || g->klass->vertices) return vertices_plane(w, a, b, warm, c);
     double nw[3], nb[3], X[3] = {0, 0, 0}, rel[3];
     plane_normal(b, nw);
     floe_v3_sub(rel, a->x, b->x);
@@ -218,14 +221,11 @@ static int convex_plane(floe_detect_ctx *w, const shape_ref *a, const shape_ref 
 
 /* ---- polytope-polytope: exact LP ---- */
 
-/* body-frame face planes of a box or polytope (NULL otherwise; floe_geometry.h) */
-static const double *body_planes(const floe_geometry *g, int dim, int *np, double buf[24]) {
-    return floe_polytope_planes(g, dim, np, buf);
-}
+/* a convex polytope: its class gives its planes and corners (floe_geometry_class.polytope) */
+static int is_polytope(const floe_geometry *g) { return g->klass->polytope != NULL; }
 
-static int is_polytope(const floe_geometry *g) {
-    return g->klass == &floe_box_class || g->klass == &floe_polytope_class;
-}
+/* the planes and corners of a polytope for the world's dimension (body frame) */
+static void body_polytope(const floe_geometry *g, int dim, floe_polytope_view *pv) { g->klass->polytope(g, dim, pv); }
 
 /* planes and vertices of b expressed in a's body frame (scratch owned by the world) */
 static int lp_scratch(floe_detect_ctx *w, int need) {
@@ -249,10 +249,11 @@ static void plane_to_frame(const double P[4], const shape_ref *from, const shape
 /* one half: a's point deepest in b, in world coordinates */
 static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm4, double x[3], double *s,
                    double n[3], double *gnorm, int *pivots) {
-    double ba[24], bb[24];
-    int na = 0, nb = 0, nva = 0;
-    const double *pa = body_planes(a->g, w->dim, &na, ba), *pb = body_planes(b->g, w->dim, &nb, bb);
-    const double *va = a->g->klass->vertices(a->g, &nva);
+    floe_polytope_view A, B;
+    body_polytope(a->g, w->dim, &A);
+    body_polytope(b->g, w->dim, &B);
+    const double *pa = A.plane, *pb = B.plane, *va = A.v;
+    const int na = A.np, nb = B.np, nva = A.nv;
     if (lp_scratch(w, 4 * nb)) return FLOE_ENOMEM;
     double *tb = w->det->scratch;
     for (int k = 0; k < nb; k++) plane_to_frame(pb + 4 * k, b, a, tb + 4 * k);
@@ -280,13 +281,14 @@ static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, d
 #define OV_MAX FLOE_OVERLAP_MAX
 
 static int ov_polygon(const shape_ref *s, double (*P)[2]) {
-    int nv = 0, k = 0;
-    const double *V = s->g->klass->vertices(s->g, &nv);
-    const int box = s->g->klass == &floe_box_class;
+    int k = 0;
+    floe_polytope_view pv; /* 2D: the corners of the z = 0 section */
+    body_polytope(s->g, 2, &pv);
+    const double *V = pv.v;
+    const int nv = pv.nv;
     double ang[OV_MAX], cx = 0, cy = 0;
     for (int v = 0; v < nv && k < OV_MAX; v++) {
-        double X[3] = {V[3 * v], V[3 * v + 1], box ? 0.0 : V[3 * v + 2]}, xw[3];
-        if (box && V[3 * v + 2] > 0) continue;
+        double X[3] = {V[3 * v], V[3 * v + 1], V[3 * v + 2]}, xw[3];
         floe_q_rotate(xw, s->q, X);
         P[k][0] = xw[0] + s->x[0];
         P[k][1] = xw[1] + s->x[1];
@@ -306,9 +308,11 @@ static int ov_polygon(const shape_ref *s, double (*P)[2]) {
 }
 
 static int ov_lines(const shape_ref *s, double (*Lh)[3]) {
-    double buf[24], nw[3];
-    int np = 0;
-    const double *pl = body_planes(s->g, 2, &np, buf);
+    double nw[3];
+    floe_polytope_view pv;
+    body_polytope(s->g, 2, &pv);
+    const double *pl = pv.plane;
+    const int np = pv.np;
     for (int k = 0; k < np && k < OV_MAX; k++) {
         floe_q_rotate(nw, s->q, pl + 4 * k);
         Lh[k][0] = nw[0];
@@ -318,11 +322,12 @@ static int ov_lines(const shape_ref *s, double (*Lh)[3]) {
     return np < OV_MAX ? np : OV_MAX;
 }
 
-/* world-frame planes (n, h) and corners of a box or polytope */
+/* world-frame planes (n, h) and corners of a polytope */
 static int ov_planes3(const shape_ref *s, double *pl, double *V, int *nv) {
-    double buf[24];
-    int np = 0, n = 0;
-    const double *bp = body_planes(s->g, 3, &np, buf), *bv = s->g->klass->vertices(s->g, &n);
+    floe_polytope_view pv;
+    body_polytope(s->g, 3, &pv);
+    const double *bp = pv.plane, *bv = pv.v;
+    const int np = pv.np, n = pv.nv;
     if (np > FLOE_POLY3_FACES || n > 4 * FLOE_POLY3_FACES * FLOE_POLY3_CORNERS) return -1;
     for (int k = 0; k < np; k++) {
         floe_q_rotate(pl + 4 * k, s->q, bp + 4 * k);
@@ -433,17 +438,14 @@ static void count_iterations(floe_detect_ctx *w, int it) {
  * minus b's outward face normal), -1 when a is j */
 static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double sign, mf_vertex *best,
                         int *nb, int cap) {
-    int nv = 0, np = 0;
-    double buf[24];
-    const double *V = a->g->klass->vertices(a->g, &nv), *P = body_planes(b->g, w->dim, &np, buf);
+    floe_polytope_view pa, pb; /* a's corners (2D: its z = 0 section), b's planes */
+    body_polytope(a->g, w->dim, &pa);
+    body_polytope(b->g, w->dim, &pb);
+    const double *V = pa.v, *P = pb.plane;
+    const int nv = pa.nv, np = pb.np;
     if (!V || !P) return;
-    const int flat_box = w->dim == 2 && a->g->klass == &floe_box_class;
     for (int v = 0; v < nv; v++) {
         double X[3] = {V[3 * v], V[3 * v + 1], V[3 * v + 2]}, xw[3], rel[3], Xb[3];
-        if (flat_box) { /* 2D: one face of the box (its z = -h corners) */
-            if (X[2] > 0) continue;
-            X[2] = 0;
-        }
         floe_q_rotate(xw, a->q, X);
         floe_v3_add(xw, xw, a->x);
         floe_v3_sub(rel, xw, b->x);
@@ -663,7 +665,7 @@ static int admm_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b,
 static const pair_fn pair_table[4][4] = {
     /*            SPHERE        BOX         PLANE         USER */
     /* SPHERE */ {sphere_sphere, sphere_sdf, sphere_plane, sphere_sdf},
-    /* BOX    */ {NULL, admm_pair, vertices_plane, admm_pair},
+    /* BOX    */ {NULL, admm_pair, convex_plane, admm_pair},
     /* PLANE  */ {NULL, NULL, NULL, NULL},
     /* USER   */ {NULL, NULL, convex_plane, admm_pair},
 };
@@ -681,44 +683,42 @@ static int kinds_supported(const floe_geometry *a, const floe_geometry *b) {
     return lookup(a->klass->kind, b->klass->kind, &swap) != NULL;
 }
 
+/* piece k of a body: its class's piece (a union of convex pieces), else the shape itself */
+static const floe_geometry *piece_shape(const floe_geometry *g, int k) {
+    double x[3], q[4], r;
+    return g->klass->piece ? g->klass->piece(g, k, x, q, &r) : g;
+}
+
 int floe_detect_supported(const floe_geometry *a, const floe_geometry *b) {
-    const floe_compound *ca = a->klass == &floe_compound_class ? (const floe_compound *)a : NULL;
-    const floe_compound *cb = b->klass == &floe_compound_class ? (const floe_compound *)b : NULL;
-    int na = ca ? ca->n : 1, nb = cb ? cb->n : 1;
+    const int na = floe_geometry_piece_count(a), nb = floe_geometry_piece_count(b);
     for (int i = 0; i < na; i++)
         for (int j = 0; j < nb; j++)
-            if (!kinds_supported(ca ? ca->piece[i] : a, cb ? cb->piece[j] : b)) return 0;
+            if (!kinds_supported(piece_shape(a, i), piece_shape(b, j))) return 0;
     return 1;
 }
 
 int floe_detect_needs_warm(const floe_geometry *a, const floe_geometry *b) {
-    const floe_compound *ca = a->klass == &floe_compound_class ? (const floe_compound *)a : NULL;
-    const floe_compound *cb = b->klass == &floe_compound_class ? (const floe_compound *)b : NULL;
-    int na = ca ? ca->n : 1, nb = cb ? cb->n : 1;
+    const int na = floe_geometry_piece_count(a), nb = floe_geometry_piece_count(b);
     for (int i = 0; i < na; i++)
         for (int j = 0; j < nb; j++) {
             int swap;
-            pair_fn f = lookup((ca ? ca->piece[i] : a)->klass->kind, (cb ? cb->piece[j] : b)->klass->kind, &swap);
+            pair_fn f = lookup(piece_shape(a, i)->klass->kind, piece_shape(b, j)->klass->kind, &swap);
             if (f == admm_pair) return 1;
         }
     return 0;
 }
 
-int floe_piece_count(const floe_geometry *g) {
-    return g->klass == &floe_compound_class ? ((const floe_compound *)g)->n : 1;
-}
+int floe_piece_count(const floe_geometry *g) { return floe_geometry_piece_count(g); }
 
 static void make_ref(const floe_body_ref *body, int piece, shape_ref *s) {
     const floe_geometry *g = body->g;
     const double *x = body->x, *q = body->q;
-    if (g->klass == &floe_compound_class) {
-        const floe_compound *cg = (const floe_compound *)g;
-        double off[3];
-        floe_q_rotate(off, q, cg->piece_x + 3 * piece);
+    if (g->klass->piece) { /* a piece of a union: its pose in the body frame, then the body's */
+        double px[3], pq[4], off[3];
+        s->g = g->klass->piece(g, piece, px, pq, &s->r);
+        floe_q_rotate(off, q, px);
         floe_v3_add(s->x, x, off);
-        floe_q_mul(s->q, q, cg->piece_q + 4 * piece);
-        s->g = cg->piece[piece];
-        s->r = cg->piece_r[piece];
+        floe_q_mul(s->q, q, pq);
     } else {
         floe_v3_copy(s->x, x);
         memcpy(s->q, q, sizeof s->q);

@@ -136,7 +136,7 @@ static int energy_watchdog(floe_world *w) {
             }
             if (!cause[0]) {
                 const floe_geometry_class *gk = bi >= 0 ? w->geoms[p->geom[bi]]->klass : NULL;
-                const int poly = gk == &floe_box_class || gk == &floe_polytope_class || gk == &floe_compound_class;
+                const int poly = gk && (gk->polytope || gk->piece_count); /* a polytope or a union of pieces */
                 snprintf(cause, sizeof cause, "the integration created it: the step %g s is too large for the "
                          "stiffness, or a force is not conservative (a body-force callback)%s; lower dt or safety",
                          w->dt, poly ? ", or a polytope contact under a point law (linear, Hertz) crossed a kink of "

@@ -83,12 +83,12 @@ int prepare_store(floe_world *w) {
         if (!(p->radius[i] > 0)) return floe_world_error(w, FLOE_EINVAL, "particle %d: bounding radius must be > 0", i);
         floe_mass_properties mp;
         int mdim = (w->def.dim == 2 && w->def.mass_2d_area) ? 2 : 3;
-        int polygon = g->klass == &floe_polytope_class && ((const floe_polytope *)g)->dim == 2;
+        int polygon = floe_geometry_dimension(g) == 2;
         if (polygon && w->def.dim == 3)
             return floe_world_error(w, FLOE_EINVAL,
                                     "particle %d: a polygon is a 2D shape (dim: 2); in 3D use a prism or polyhedron", i);
         if (polygon) mdim = 2; /* a polygon has no 3D body: mass per metre of thickness */
-        if (w->def.dim == 2 && g->klass == &floe_polytope_class && !polygon)
+        if (w->def.dim == 2 && floe_geometry_dimension(g) == 3)
             return floe_world_error(w, FLOE_EINVAL,
                                     "particle %d: a polyhedron (or prism, mesh) is a 3D shape; in 2D use a polygon", i);
         int rc = floe_geometry_mass_properties(g, mdim, w->mats[p->material[i]].density, &mp);
