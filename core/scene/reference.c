@@ -138,6 +138,12 @@ int floe_reference_write(FILE *f, const char *kind, const char *name, int markdo
         }
         if (name && !shown) {
             const char *near = floe_registry_closest(kq, name);
+            if (!near) { /* a part of exactly one name ("verlet") */
+                int hits = 0;
+                for (int k = 0; k < n; k++)
+                    if (strstr(floe_registry_at(kq, k)->name, name)) { near = floe_registry_at(kq, k)->name; hits++; }
+                if (hits != 1) near = NULL;
+            }
             snprintf(err, errlen, "no %s named '%s'%s%s%s (floe help %s lists them)", kq, name,
                      near ? " (did you mean '" : "", near ? near : "", near ? "'?)" : "", kq);
             return FLOE_EINVAL;
