@@ -309,7 +309,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     int any_pieces = 0; /* compound bodies: their pairs are per piece */
     for (int g = 0; g < w->ngeoms; g++) any_pieces |= floe_piece_count(w->geoms[g]) > 1;
     for (int k = 0; k < nl->npairs; k++) {
-        int i = nl->pi[k], j = nl->pj[k], sub = nl->sub[k];
+        int i = nl->pi[k], j = nl->pj[k], sub = any_pieces ? nl->sub[k] : 0; /* 0 unless compound */
         if (any_none && floe_contact_law_no_contact(w->laws[p->material[i] * nm + p->material[j]])) continue;
         double *warm = nl->use_warm ? nl->warm + (size_t)k * FLOE_DETECT_WARM : NULL;
         floe_contact c;
@@ -469,14 +469,17 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
             p->f[3 * j + a] -= res.force[a];
             p->t[3 * i + a] += ti[a] + res.torque_i[a];
             p->t[3 * j + a] += -tj[a] + res.torque_j[a];
-            /* the manifold's springs: conservative, their energy is stored, nothing dissipated
-             * (their work over a step is the change of their energy up to the integrator's
-             * error, which the balance shows) */
-            p->f[3 * i + a] += fx[a];
-            p->f[3 * j + a] -= fx[a];
-            p->t[3 * i + a] += tx_i[a];
-            p->t[3 * j + a] += tx_j[a];
         }
+        if (c.nextra > 0)
+            for (int a = 0; a < 3; a++) {
+                /* the manifold's springs: conservative, their energy is stored, nothing
+                 * dissipated (their work over a step is the change of their energy up to the
+                 * integrator's error, which the balance shows) */
+                p->f[3 * i + a] += fx[a];
+                p->f[3 * j + a] -= fx[a];
+                p->t[3 * i + a] += tx_i[a];
+                p->t[3 * j + a] += tx_j[a];
+            }
         elastic += res.energy + ex;
         /* dissipation ledger: work done on the contact by the relative motion over the step
          * (mid-step velocities) minus the change of its stored energy */
