@@ -30,8 +30,9 @@ static void usage(FILE *f)
             "\n"
             "  -o OUTDIR   directory for the scene's outputs (default ./out)\n"
             "  -q          quiet: no summary and no progress line, only errors\n"
-            "  --plugin F  load the plugin F (a shared library registering shapes, laws or outputs)\n"
-            "              before the command; repeatable; scenes can list theirs under plugins:\n"
+            "  --plugin F  load the plugin F (a shared library registering shapes, laws, normal and\n"
+            "              tangential parts, outputs, PD materials, force providers, integrators and\n"
+            "              packings) before the command; repeatable; scenes can list theirs under plugins:\n"
             "\n"
             "Ctrl-C (SIGINT) or SIGTERM stops a run after the current step with every output\n"
             "complete (exit 130 / 143); a second signal kills at once.\n"
@@ -213,7 +214,8 @@ static void print_dt_estimates(floe_world *w)
         "caged particle, spring-dashpot limit (Gershgorin)", "one contact, impact at the expected speed",
         "no move over half a radius per step", "PD nodal sqrt(2 rho / sum V c/|xi|)", "PD CFL dx / c (000 eqs 41-42)",
         "sqrt(m/k) (000 eq 43; 004 eq 28 is 2x)", "Rayleigh wave (Hertz materials)",
-        "Hertz contact duration at the expected speed", "beam bonds, largest eigenvalue bound"};
+        "Hertz contact duration at the expected speed", "beam bonds, largest eigenvalue bound",
+        "force providers' own limit (critical_dt)"};
     floe_dt_estimates e;
     if (floe_world_dt_estimates(w, &e) != FLOE_OK) return;
     printf("time-step estimates (expected relative speed %.3g m/s):\n", e.v_expected);

@@ -69,7 +69,7 @@ enum { FLOE_PD_W_ONE = 0, FLOE_PD_W_GAUSS = 1 };              /* LPS influence f
 enum { FLOE_PD_PLANE_STRESS = 0, FLOE_PD_PLANE_STRAIN = 1 };  /* 2D PMB and LPS           */
 
 typedef struct floe_pd_material {
-    int model;          /* FLOE_PD_PMB or FLOE_PD_LPS                                       */
+    int model;          /* FLOE_PD_PMB, FLOE_PD_LPS or FLOE_PD_USER (ops)                   */
     double rho;         /* mass density                                                     */
     /* Elastic constants. PMB: give K (3D) or E (2D), or c directly; nu is fixed by the
      * model (3D and 2D plane strain: 1/4, 2D plane stress: 1/3). LPS: K and G (the 3D

@@ -231,6 +231,68 @@ static void test_scene(void) {
                        "forces[0].c is required");
 }
 
+/* a provider's critical_dt enters the step estimate (kind "provider"): a stiff tether of
+ * stiffness k on a sphere of mass m limits the step to 2 sqrt(m/k), and the automatic step
+ * is the safety factor times it; a provider that reports 0 is refused by name */
+typedef struct tether { floe_provider base; double k, dt; } tether;
+static int tether_forces(floe_provider *pv, floe_world *w, const struct floe_step_ctx *sc, floe_provider_out *o) {
+    (void)w; (void)o;
+    floe_provider_ctx c = floe_provider_ctx_of(sc);
+    for (int i = 0; i < c.n; i++)
+        if (c.motion[i] == FLOE_FREE)
+            for (int a = 0; a < 3; a++) c.f[3 * i + a] -= ((tether *)pv)->k * c.x[3 * i + a];
+    return FLOE_OK;
+}
+static double tether_dt(floe_provider *pv, floe_world *w) { (void)w; return ((tether *)pv)->dt; }
+static const floe_provider_class tether_class = {.version = 1, .name = "tether", .group = FLOE_GROUP_DEM,
+    .forces = tether_forces, .critical_dt = tether_dt};
+
+static floe_world *tether_world(double k, double dtp, double *mass) {
+    floe_world_def d = floe_default_world_def();
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material m = {"m", 1000, 1e6, 0.3};
+    floe_world_add_material(w, &m);
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = floe_world_add_geometry(w, floe_sphere_create(0.01));
+    p.x[0] = 0.001;
+    floe_world_add_particle(w, &p);
+    *mass = 1000 * 4.0 / 3.0 * M_PI * 1e-6;
+    tether *t = calloc(1, sizeof *t);
+    t->base.klass = &tether_class;
+    t->k = k;
+    t->dt = dtp;
+    CHECK(floe_world_add_provider(w, &t->base) == FLOE_OK, "tether added");
+    return w;
+}
+
+static void test_critical(void) {
+    double m;
+    const double k = 1e4;
+    floe_world *w = tether_world(k, 2 * sqrt(4.18879e-3 / k), &m);
+    CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
+    floe_dt_estimates e;
+    CHECK(floe_world_dt_estimates(w, &e) == FLOE_OK, "estimates");
+    double want = 2 * sqrt(4.18879e-3 / k);
+    CHECK(e.limiting == FLOE_DT_PROVIDER && e.critical == want, "critical %g s by kind %s (want %g by provider)",
+          e.critical, floe_dt_kind_name(e.limiting), want);
+    CHECK_NEAR(floe_world_dt(w), 0.2 * want, 1e-12, "automatic dt = 0.2 x the provider's critical_dt");
+    /* stable at that step: the tethered sphere oscillates with amplitude 1 mm for 2000 steps */
+    double xmax = 0;
+    for (int s = 0; s < 2000; s++) {
+        if (floe_world_step(w)) break;
+        floe_particles_view v;
+        floe_world_particles(w, &v);
+        xmax = fmax(xmax, fabs(v.x[0]));
+    }
+    CHECK(xmax < 1.001e-3, "tethered sphere bounded: |x| up to %g m", xmax);
+    floe_world_destroy(w);
+    w = tether_world(k, 0.0, &m);
+    int rc = floe_world_prepare(w);
+    CHECK(rc != FLOE_OK && strstr(floe_world_last_error(w), "tether"), "critical_dt 0 refused: %s",
+          floe_world_last_error(w));
+    floe_world_destroy(w);
+}
+
 int main(void) {
     char err[256];
     CHECK(floe_register_builtins(err, sizeof err) == FLOE_OK, "builtins: %s", err);
@@ -238,5 +300,6 @@ int main(void) {
     test_adaptive();
     test_add_convention();
     test_scene();
+    test_critical();
     return check_summary("test_providers");
 }

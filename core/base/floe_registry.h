@@ -1,13 +1,14 @@
 /* floe_registry.h - registries of named components with parameter schemas (issue #11).
  *
- * Every extensible kind (contact laws, shapes, observers, and later PD materials,
- * integrators, packings and force providers) keeps a registry: a name, a one-paragraph
- * doc, a constructor and a parameter schema (key, type, unit, range, default, one-line
- * doc). The scene loader reads a component's parameters generically from its schema
- * (validation, closest-key hints, file:line:col), `floe help` and `floe info` print the
- * schemas, and docs/reference.md is generated from them. A plugin (a shared library named
- * in a scene's `plugins:` or by `floe run --plugin`) registers its components by calling
- * floe_register from its init function, exactly as the built-ins do.
+ * Every extensible kind (shapes, contact laws, normal and tangential parts of composed laws
+ * (contact/laws/floe_contact.h), outputs, PD materials, force providers, integrators and
+ * packings) keeps a registry: a name, a one-paragraph doc, a constructor and a parameter
+ * schema (key, type, unit, range, default, one-line doc). The scene loader reads a
+ * component's parameters generically from its schema (validation, closest-key hints,
+ * file:line:col), `floe help` and `floe info` print the schemas, and docs/reference.md is
+ * generated from them. A plugin (a shared library named in a scene's `plugins:` or by
+ * `floe run --plugin`) registers its components by calling floe_register from its init
+ * function, exactly as the built-ins do.
  *
  * The registry is process-wide: register before worlds are built on several threads. */
 #ifndef FLOE_REGISTRY_H
@@ -92,9 +93,11 @@ typedef struct floe_registry_entry {
 } floe_registry_entry;
 
 /* Registers a copy of *e (its strings and schema must outlive the registry: static data).
- * FLOE_EINVAL when a field is missing or a schema entry is malformed (range, default out
- * of range, duplicate key, too many parameters), and also when kind/name is taken. The
- * message goes to err. */
+ * FLOE_EINVAL when kind, name or create is missing, params_size does not cover
+ * floe_params_head, or a schema entry is malformed (a parameter without key or doc, an
+ * offset outside the parameter struct, a choice without choices or whose default is not
+ * among them, a duplicate key, too many parameters), and also when kind/name is taken. A
+ * default outside the range is allowed: it reads "not given". The message goes to err. */
 int floe_register(const floe_registry_entry *e, char *err, size_t errlen);
 /* The entry of kind/name, or NULL. */
 const floe_registry_entry *floe_registry_find(const char *kind, const char *name);

@@ -269,13 +269,14 @@ int step_verlet(floe_world *w) {
         }
         double *v = p->v + 3 * i, *L = p->L + 3 * i;
         double im = p->inv_mass[i];
+        /* isotropic bodies: one division for omega and the shadow term */
+        const double I0 = p->inertia[3 * i], inv0 = p->iso[i] ? 1.0 / I0 : 0.0;
         if (shadow) {
             double dv[3], dL[3];
             for (int k = 0; k < 3; k++) { dv[k] = h * im * p->f[3 * i + k]; dL[k] = h * p->t[3 * i + k]; }
-            const double I0 = p->inertia[3 * i];
-            /* spheres inline (shadow_term's isotropic case, same operations) */
+            /* spheres inline (shadow_term's isotropic case) */
             sh += p->iso[i] && I0 > 0 && I0 < INFINITY
-                      ? 0.5 * p->mass[i] * floe_v3_dot(dv, dv) + 0.5 * floe_v3_dot(dL, dL) / I0
+                      ? 0.5 * p->mass[i] * floe_v3_dot(dv, dv) + 0.5 * floe_v3_dot(dL, dL) * inv0
                       : shadow_term(p, i, dv, dL);
         }
         /* the drift of this step was dt * v_half: a particle that moved more than half its
@@ -286,8 +287,7 @@ int step_verlet(floe_world *w) {
             for (int k = 0; k < 3; k++) v[k] += h * im * p->f[3 * i + k];
             floe_v3_axpy(L, h, p->t + 3 * i);
             if (p->iso[i]) {
-                double inv = 1.0 / p->inertia[3 * i];
-                for (int k = 0; k < 3; k++) p->w[3 * i + k] = L[k] * inv;
+                for (int k = 0; k < 3; k++) p->w[3 * i + k] = L[k] * inv0;
             } else floe_omega_from_L(p->q + 4 * i, p->inertia + 3 * i, L, p->w + 3 * i);
             ke = 0.5 * p->mass[i] * floe_v3_dot(v, v);
             kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);

@@ -1,14 +1,16 @@
 /* floe_provider.h - force providers and the staged step (issue #11, docs/architecture.md).
  *
  * Everything that puts forces on particles is a provider: body forces (gravity, PD
- * body-force regions, the body-force callback), beam bonds, contacts, PD bonds (later:
- * drag fields, periodic cells). The world evaluates them in a fixed order through a
+ * body-force regions, the body-force callback), user providers (floe_world_add_provider,
+ * a scene's forces:, e.g. linear_drag in user_providers.c), beam bonds, contacts, PD bonds
+ * (later: periodic cells). The world evaluates them in a fixed order through a
  * per-step context (particle_store.h floe_step_ctx: stepping, probe, history step, record),
  * never through flags on the world, and rebuilds the neighbour list between stages when a
  * provider asks (a bond broke and its pair may now touch), never inside one.
  *
  * Each provider declares what the world needs around the step:
- *   critical_dt   its stability limit (the world takes the smallest);
+ *   critical_dt   its stability limit (a user provider's is the time-step estimate's kind
+ *                 FLOE_DT_PROVIDER; the beam stage's is FLOE_DT_BEAM);
  *   excludes      pairs it holds, that must never enter the contact list (bonded pairs);
  *   state         bytes of its own state that a step changes (contact history, a bond's
  *                 last force, broken flags), saved and restored by the adaptive controller
@@ -47,7 +49,8 @@ typedef struct floe_provider_class {
     /* required: add forces and torques to ctx->p->f and ->t (zeroed by the world before the
      * DEM group), and the ledger terms to out */
     int (*forces)(floe_provider *pv, floe_world *w, const struct floe_step_ctx *ctx, floe_provider_out *out);
-    /* optional: the provider's critical time step (s; INFINITY: no limit), at prepare */
+    /* optional: the provider's critical time step (s, > 0; INFINITY: no limit), read at
+     * prepare by the time-step estimate (floe_dt_estimates kind FLOE_DT_PROVIDER) */
     double (*critical_dt)(floe_provider *pv, floe_world *w);
     /* optional: 1 when the pair (i, j) must never enter the contact list */
     int (*excludes)(const floe_provider *pv, const floe_world *w, int i, int j);

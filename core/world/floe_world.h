@@ -149,6 +149,8 @@ typedef enum floe_dt_kind {
                                     expected speed */
     FLOE_DT_BEAM,                /* limits: beam bonds, 2/sqrt(lambda_max) of the bonded
                                     particles' stiffness (block Gershgorin, contact/bonds/beam_bond.c) */
+    FLOE_DT_PROVIDER,            /* limits: the smallest critical_dt of the user force providers
+                                    (floe_provider.h; the particle is -1) */
     FLOE_DT_NKINDS
 } floe_dt_kind;
 typedef struct floe_dt_estimates {

@@ -134,7 +134,8 @@ static void dt_note(floe_dt_estimates *d, int k, double dt, int i) {
 
 const char *floe_dt_kind_name(int kind) {
     static const char *const names[FLOE_DT_NKINDS] = {"contact_packing", "contact_impact", "motion", "pd_nodal",
-                                                      "pd_cfl", "dem_sqrt_m_k", "rayleigh", "hertz", "beam_bond"};
+                                                      "pd_cfl", "dem_sqrt_m_k", "rayleigh", "hertz", "beam_bond",
+                                                      "provider"};
     return kind >= 0 && kind < FLOE_DT_NKINDS ? names[kind] : NULL;
 }
 
@@ -268,6 +269,15 @@ int estimate_dt(floe_world *w) {
     if (w->beams) { /* beam bonds */
         d->limits[FLOE_DT_BEAM] = 1;
         d->dt[FLOE_DT_BEAM] = floe_world_beam_critical_dt(w);
+    }
+    for (int k = 0; k < w->nuprov; k++) { /* user providers' own stability limits */
+        floe_provider *pv = w->uprov[k];
+        if (!pv->klass->critical_dt) continue;
+        const double dpv = pv->klass->critical_dt(pv, w);
+        if (!(dpv > 0)) return floe_world_error(w, FLOE_EINVAL, "force provider %s: critical_dt gave %g s (must be > 0; "
+                                                "INFINITY for no limit)", pv->klass->name, dpv);
+        if (dpv < INFINITY) d->limits[FLOE_DT_PROVIDER] = 1;
+        if (dpv < d->dt[FLOE_DT_PROVIDER]) d->dt[FLOE_DT_PROVIDER] = dpv;
     }
     d->critical = INFINITY;
     d->limiting = d->limiting_particle = -1;
