@@ -262,6 +262,7 @@ int step_verlet(floe_world *w) {
      * velocity v_{n+1/2} + dt/2 a_{n+1}) */
     double kt = 0, kr = 0, wbound = 0, sh = 0;
     const int shadow = w->def.energy_check != FLOE_CHECK_OFF;
+    const double hh2 = 0.5 * h * h;
     for (int i = 0; i < n; i++) {
         if (p->motion[i] != FLOE_FREE) {
             if (p->motion[i] == FLOE_KINEMATIC) wbound += kinematic_close(w, i, h);
@@ -272,12 +273,15 @@ int step_verlet(floe_world *w) {
         /* isotropic bodies: one division for omega and the shadow term */
         const double I0 = p->inertia[3 * i], inv0 = p->iso[i] ? 1.0 / I0 : 0.0;
         if (shadow) {
-            double dv[3], dL[3];
-            for (int k = 0; k < 3; k++) { dv[k] = h * im * p->f[3 * i + k]; dL[k] = h * p->t[3 * i + k]; }
-            /* spheres inline (shadow_term's isotropic case) */
-            sh += p->iso[i] && I0 > 0 && I0 < INFINITY
-                      ? 0.5 * p->mass[i] * floe_v3_dot(dv, dv) + 0.5 * floe_v3_dot(dL, dL) * inv0
-                      : shadow_term(p, i, dv, dL);
+            if (p->iso[i] && I0 > 0 && I0 < INFINITY) {
+                /* spheres inline: shadow_term's isotropic case, 1/2 m |h F/m|^2 + 1/2 |h T|^2 / I */
+                const double *fi = p->f + 3 * i, *ti = p->t + 3 * i;
+                sh += hh2 * (im * floe_v3_dot(fi, fi) + inv0 * floe_v3_dot(ti, ti));
+            } else {
+                double dv[3], dL[3];
+                for (int k = 0; k < 3; k++) { dv[k] = h * im * p->f[3 * i + k]; dL[k] = h * p->t[3 * i + k]; }
+                sh += shadow_term(p, i, dv, dL);
+            }
         }
         /* the drift of this step was dt * v_half: a particle that moved more than half its
          * radius, or whose state is not finite (NaN fails every comparison), is unstable */
