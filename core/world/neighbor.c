@@ -16,7 +16,7 @@ int floe_nl_init(floe_neighbor_list *nl) {
 void floe_nl_free(floe_neighbor_list *nl) {
     floe_kdtree_destroy(nl->tree);
     free(nl->pi); free(nl->pj); free(nl->sub); free(nl->warm); free(nl->hist); free(nl->touching);
-    free(nl->x_build); free(nl->walls); free(nl->scratch); free(nl->r_build); free(nl->q_walls);
+    free(nl->x_build); free(nl->walls); free(nl->scratch); free(nl->r_build); free(nl->q_walls); free(nl->cand);
     memset(nl, 0, sizeof *nl);
 }
 
