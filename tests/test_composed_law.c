@@ -60,6 +60,8 @@ static void compare(const char *what, floe_contact_law *fused, floe_contact_law 
     printf("  %-40s worst relative difference %.2e over 400 steps (max |F| %.3g N, %g slipping)\n", what, worst,
            fscale, slips);
     CHECK(worst <= 1e-12, "%s: composed and fused differ by %.3g (tol 1e-12)", what, worst);
+    floe_contact_law_destroy(fused);
+    floe_contact_law_destroy(comp);
 }
 
 /* two spheres colliding obliquely with spin; returns the world after nsteps */
