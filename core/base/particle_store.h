@@ -27,9 +27,20 @@ typedef struct floe_particles {
     unsigned char *motion; /* n floe_motion */
     unsigned char *kind;   /* n geometry kind (cached) */
     unsigned char *iso;    /* n 1 = isotropic inertia (spheres; every body in 2D) */
+    double *inv_iso;       /* n 1/I of an isotropic body (iso = 1; 0 if I is 0 or infinite), else 0:
+                            * the integrators' omega = L / I without a division */
     double *rdot;          /* n outward surface speed set by state objects (growing radius), m/s */
     int *pieces;           /* n convex pieces of the geometry (compound bodies > 1) */
+    void *block;           /* the one allocation the arrays above live in (world.c
+                            * particles_reserve: each array starts at its own offset in
+                            * the 4 KiB page, see there); NULL for a store the caller built */
 } floe_particles;
+
+/* inv_iso of particle i from its iso flag and inertia (after either changes) */
+static inline void floe_particle_inv_iso_update(floe_particles *p, int i) {
+    const double I0 = p->inertia[3 * i];
+    p->inv_iso[i] = p->iso[i] && I0 > 0 && I0 < INFINITY ? 1.0 / I0 : 0.0;
+}
 
 /* What a force provider is handed for one evaluation (core/world/floe_provider.h): the store
  * (forces f and torques t are accumulated into it), the dimension, the time at the

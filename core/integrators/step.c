@@ -110,16 +110,15 @@ static int check_particle(floe_world *w, int i, const double xold[3]) {
 /* omega of free particle i from its angular momentum */
 static inline void omega_update(floe_particles *p, int i) {
     if (p->iso[i]) {
-        double inv = 1.0 / p->inertia[3 * i];
+        const double inv = p->inv_iso[i];
         for (int k = 0; k < 3; k++) p->w[3 * i + k] = p->L[3 * i + k] * inv;
     } else floe_omega_from_L(p->q + 4 * i, p->inertia + 3 * i, p->L + 3 * i, p->w + 3 * i);
 }
 
-/* the orientation of an anisotropic free particle i over dt with its angular momentum L:
- * the midpoint rule of eq 23 by two fixed-point passes */
-static void rotate_drift_aniso(floe_particles *p, int i, double dt) {
-    double *q = p->q + 4 * i, *L = p->L + 3 * i, *om = p->w + 3 * i;
-    const double *I = p->inertia + 3 * i, h = 0.5 * dt;
+/* the orientation q of an anisotropic free body (principal moments I) over dt with its
+ * angular momentum L: the midpoint rule of eq 23 by two fixed-point passes; om <- omega */
+static void rotate_drift_aniso(double *q, const double *I, const double *L, double *om, double dt) {
+    const double h = 0.5 * dt;
     double qm[4], omm[3], qn[4];
     floe_omega_from_L(q, I, L, omm);
     q_advance(qm, q, omm, h);
@@ -133,28 +132,29 @@ static void rotate_drift_aniso(floe_particles *p, int i, double dt) {
     floe_omega_from_L(q, I, L, om);
 }
 
-/* the orientation of free particle i over dt (eq 23 as the midpoint rule of step_verlet):
- * the isotropic fast path q <- exp(dt omega / 2) q without trig, inlined into the particle
- * loop: as a called function (AVX stack realignment, omega and q through memory) it took a
- * third of a 20,000-sphere step; inlined, the 2,000-step bench/dem-settle dropped from 2.85 to
- * 2.1 s of user time (watchdog off, 2026-12-02) */
-static inline __attribute__((always_inline)) void rotate_drift(floe_particles *p, int i, double dt) {
-    double *q = p->q + 4 * i, *L = p->L + 3 * i, *om = p->w + 3 * i;
-    const double *I = p->inertia + 3 * i, h = 0.5 * dt;
-    if (p->iso[i]) {
-        double inv = 1.0 / I[0];
-        for (int k = 0; k < 3; k++) om[k] = L[k] * inv;
-        double th[3] = {h * om[0], h * om[1], h * om[2]}, t2 = floe_v3_dot(th, th);
-        if (t2 > 0) {
-            double c = 1 - 0.5 * t2, dq[4] = {c, th[0], th[1], th[2]}, qn[4];
-            floe_q_mul(qn, dq, q);
-            double s2 = qn[0] * qn[0] + qn[1] * qn[1] + qn[2] * qn[2] + qn[3] * qn[3];
-            double sc = 1.5 - 0.5 * s2;
-            for (int k = 0; k < 4; k++) q[k] = qn[k] * sc;
-        }
-    } else if (floe_v3_dot(L, L) > 0) {
-        rotate_drift_aniso(p, i, dt);
+/* the orientation of an isotropic free body (1/I = inv) over dt = 2h (eq 23 as the midpoint
+ * rule of step_verlet): om <- L / I, q <- exp(dt omega / 2) q without trig, inlined into the
+ * particle loop: as a called function (AVX stack realignment, omega and q through memory)
+ * it took a third of a 20,000-sphere step; inlined, the 2,000-step bench/dem-settle dropped
+ * from 2.85 to 2.1 s of user time (watchdog off, 2026-12-02) */
+static inline __attribute__((always_inline)) void rotate_drift_iso(double *q, const double *L, double *om, double inv,
+                                                                   double h) {
+    for (int k = 0; k < 3; k++) om[k] = L[k] * inv;
+    double th[3] = {h * om[0], h * om[1], h * om[2]}, t2 = floe_v3_dot(th, th);
+    if (t2 > 0) {
+        double c = 1 - 0.5 * t2, dq[4] = {c, th[0], th[1], th[2]}, qn[4];
+        floe_q_mul(qn, dq, q);
+        double s2 = qn[0] * qn[0] + qn[1] * qn[1] + qn[2] * qn[2] + qn[3] * qn[3];
+        double sc = 1.5 - 0.5 * s2;
+        for (int k = 0; k < 4; k++) q[k] = qn[k] * sc;
     }
+}
+
+/* the orientation of free particle i over dt */
+static inline void rotate_drift(floe_particles *p, int i, double dt) {
+    double *q = p->q + 4 * i, *L = p->L + 3 * i, *om = p->w + 3 * i;
+    if (p->iso[i]) rotate_drift_iso(q, L, om, p->inv_iso[i], 0.5 * dt);
+    else if (floe_v3_dot(L, L) > 0) rotate_drift_aniso(q, p->inertia + 3 * i, L, om, dt);
 }
 
 /* state objects over the step, RK2 midpoint (eq 21) */
@@ -212,7 +212,11 @@ static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb) {
 /* Velocity Verlet (ParticLS eq 22) and leapfrog (000 eq 44). Leapfrog keeps v_{n-1/2}:
  * its one kick per step v_{n+1/2} = v_{n-1/2} + dt a_n is velocity Verlet's two half kicks
  * merged, so both follow the same trajectory (to rounding); they differ in the velocity
- * they store (leapfrog: half a step behind the positions, as in the paper). */
+ * they store (leapfrog: half a step behind the positions, as in the paper).
+ * The free particles' loops read the store through restrict pointers (nothing else in the
+ * loop writes it: kinematic particles, whose callbacks see the world, have their own loops),
+ * so the compiler keeps a particle's state in registers instead of reloading it after every
+ * store to another array. */
 int step_verlet(floe_world *w) {
     floe_particles *p = &w->p;
     const double dt = w->dt, h = 0.5 * dt;
@@ -224,34 +228,48 @@ int step_verlet(floe_world *w) {
     double maxd2 = 0; /* largest squared displacement since the neighbour build */
     const double *xb = w->nl.x_build;
     const int have_xb = xb && w->nl.n_build == n;
-    /* 1. first half kick + drift (eq 22), rotation by the midpoint rule (eq 23) */
-    for (int i = 0; i < n; i++) {
-        double *x = p->x + 3 * i, *v = p->v + 3 * i, *q = p->q + 4 * i;
-        if (p->motion[i] == FLOE_FIXED) continue;
-        if (p->motion[i] == FLOE_KINEMATIC) {
+    const unsigned char *restrict motion = p->motion, *restrict iso = p->iso;
+    const double *restrict F = p->f, *restrict T = p->t, *restrict IM = p->inv_mass, *restrict M = p->mass;
+    const double *restrict II = p->inv_iso, *restrict XB = have_xb ? xb : NULL;
+    const double g0 = w->def.gravity[0], g1 = w->def.gravity[1], g2 = w->def.gravity[2];
+    int kin = 0; /* any kinematic particle */
+    /* 1. first half kick + drift (eq 22), rotation by the midpoint rule (eq 23); then the
+     * kinematic particles at their prescribed velocity */
+    {
+        double *restrict X = p->x, *restrict V = p->v, *restrict Q = p->q, *restrict W = p->w, *restrict LL = p->L;
+        for (int i = 0; i < n; i++) {
+            const unsigned char mo = motion[i];
+            if (mo != FLOE_FREE) { kin |= mo == FLOE_KINEMATIC; continue; }
+            double *x = X + 3 * i, *v = V + 3 * i;
+            const double im = IM[i];
+            for (int k = 0; k < 3; k++) v[k] += k1 * im * F[3 * i + k];
+            for (int k = 0; k < 3; k++) x[k] += dt * v[k];
+            if (XB) note_disp(x, XB + 3 * i, &maxd2);
+            /* rotation: L by the half kick, then the orientation over dt (the isotropic fast
+             * path q <- exp(dt omega / 2) q without trig, or the midpoint rule) */
+            floe_v3_axpy(LL + 3 * i, k1, T + 3 * i);
+            if (iso[i]) rotate_drift_iso(Q + 4 * i, LL + 3 * i, W + 3 * i, II[i], h);
+            else if (floe_v3_dot(LL + 3 * i, LL + 3 * i) > 0)
+                rotate_drift_aniso(Q + 4 * i, p->inertia + 3 * i, LL + 3 * i, W + 3 * i, dt);
+            /* body-force work over the step uses the drift displacement (exact for gravity
+             * when the second half adds the same force) */
+            wb += dt * (M[i] * (g0 * v[0] + g1 * v[1] + g2 * v[2]));
+        }
+    }
+    if (kin)
+        for (int i = 0; i < n; i++) {
+            if (motion[i] != FLOE_KINEMATIC) continue;
+            double *x = p->x + 3 * i, *q = p->q + 4 * i;
             /* keep the force of the step's start for the trapezoid work of the boundary */
             memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
             memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
             kinematic_velocity(w, i, w->time + h);
-            floe_v3_axpy(x, dt, v);
+            floe_v3_axpy(x, dt, p->v + 3 * i);
             if (have_xb) note_disp(x, xb + 3 * i, &maxd2);
             double qn[4];
             q_advance(qn, q, p->w + 3 * i, dt);
             memcpy(q, qn, sizeof qn);
-            continue;
         }
-        double im = p->inv_mass[i];
-        for (int k = 0; k < 3; k++) v[k] += k1 * im * p->f[3 * i + k];
-        for (int k = 0; k < 3; k++) x[k] += dt * v[k];
-        if (have_xb) note_disp(x, xb + 3 * i, &maxd2);
-        /* body-force work over the step uses the drift displacement (exact for gravity
-         * when the second half adds the same force) */
-        /* rotation: L by the half kick, then the orientation over dt (rotate_drift: the
-         * isotropic fast path q <- exp(dt omega / 2) q without trig, or the midpoint rule) */
-        floe_v3_axpy(p->L + 3 * i, k1, p->t + 3 * i);
-        rotate_drift(p, i, dt);
-        wb += dt * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
-    }
     /* 2. state objects, RK2 midpoint (eq 21) */
     FLOE_TRY(advance_states(w, dt));
     advance_clock(w);
@@ -260,65 +278,87 @@ int step_verlet(floe_world *w) {
     FLOE_TRY(forces_advancing(w));
     /* 4. second half kick (leapfrog: none; its kinetic energy is that of the synchronised
      * velocity v_{n+1/2} + dt/2 a_{n+1}) */
-    double kt = 0, kr = 0, wbound = 0, sh = 0;
+    double kt = 0, kr = 0, wbound = 0, sh_iso = 0, sh = 0;
     const int shadow = w->def.energy_check != FLOE_CHECK_OFF;
     const double hh2 = 0.5 * h * h;
-    for (int i = 0; i < n; i++) {
-        if (p->motion[i] != FLOE_FREE) {
-            if (p->motion[i] == FLOE_KINEMATIC) wbound += kinematic_close(w, i, h);
-            continue;
-        }
-        double *v = p->v + 3 * i, *L = p->L + 3 * i;
-        double im = p->inv_mass[i];
-        /* isotropic bodies: one division for omega and the shadow term */
-        const double I0 = p->inertia[3 * i], inv0 = p->iso[i] ? 1.0 / I0 : 0.0;
-        if (shadow) {
-            if (p->iso[i] && I0 > 0 && I0 < INFINITY) {
-                /* spheres inline: shadow_term's isotropic case, 1/2 m |h F/m|^2 + 1/2 |h T|^2 / I */
-                const double *fi = p->f + 3 * i, *ti = p->t + 3 * i;
-                sh += hh2 * (im * floe_v3_dot(fi, fi) + inv0 * floe_v3_dot(ti, ti));
+    int bad = -1; /* the first free particle that failed the checks below */
+    {
+        double *restrict V = p->v, *restrict W = p->w, *restrict LL = p->L;
+        const double *restrict X = p->x, *restrict R = p->radius;
+        for (int i = 0; i < n; i++) {
+            if (motion[i] != FLOE_FREE) continue;
+            double *v = V + 3 * i, *L = LL + 3 * i, *om = W + 3 * i;
+            const double *f = F + 3 * i, *t = T + 3 * i;
+            const double im = IM[i];
+            /* the drift of this step was dt * v_half: a particle that moved more than half
+             * its radius, or whose state is not finite (NaN fails every comparison), is
+             * unstable */
+            const double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * dt * dt, lim = 0.5 * R[i];
+            double ke, kre;
+            if (iso[i]) {
+                /* isotropic bodies: omega = L / I, and the shadow term's isotropic case
+                 * 1/2 m |h F/m|^2 + 1/2 |h T|^2 / I (times hh2 after the loop) */
+                const double ii = II[i];
+                sh_iso += im * (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]) + ii * (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+                if (!leap) {
+                    for (int k = 0; k < 3; k++) v[k] += h * im * f[k];
+                    for (int k = 0; k < 3; k++) L[k] += h * t[k];
+                    for (int k = 0; k < 3; k++) om[k] = L[k] * ii;
+                    ke = 0.5 * M[i] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+                    kre = 0.5 * (L[0] * om[0] + L[1] * om[1] + L[2] * om[2]);
+                } else {
+                    double vs[3], Ls[3];
+                    for (int k = 0; k < 3; k++) {
+                        vs[k] = v[k] + h * im * f[k];
+                        Ls[k] = L[k] + h * t[k];
+                    }
+                    double ws[3] = {Ls[0] * ii, Ls[1] * ii, Ls[2] * ii};
+                    ke = 0.5 * M[i] * floe_v3_dot(vs, vs);
+                    kre = 0.5 * floe_v3_dot(Ls, ws);
+                }
             } else {
-                double dv[3], dL[3];
-                for (int k = 0; k < 3; k++) { dv[k] = h * im * p->f[3 * i + k]; dL[k] = h * p->t[3 * i + k]; }
-                sh += shadow_term(p, i, dv, dL);
+                const double *I = p->inertia + 3 * i, *q = p->q + 4 * i;
+                if (shadow) {
+                    double dv[3], dL[3];
+                    for (int k = 0; k < 3; k++) { dv[k] = h * im * f[k]; dL[k] = h * t[k]; }
+                    sh += shadow_term(p, i, dv, dL);
+                }
+                if (!leap) {
+                    for (int k = 0; k < 3; k++) v[k] += h * im * f[k];
+                    for (int k = 0; k < 3; k++) L[k] += h * t[k];
+                    floe_omega_from_L(q, I, L, om);
+                    ke = 0.5 * M[i] * floe_v3_dot(v, v);
+                    kre = 0.5 * floe_v3_dot(L, om);
+                } else {
+                    double vs[3], Ls[3], ws[3];
+                    for (int k = 0; k < 3; k++) {
+                        vs[k] = v[k] + h * im * f[k];
+                        Ls[k] = L[k] + h * t[k];
+                    }
+                    floe_omega_from_L(q, I, Ls, ws);
+                    ke = 0.5 * M[i] * floe_v3_dot(vs, vs);
+                    kre = 0.5 * floe_v3_dot(Ls, ws);
+                }
             }
-        }
-        /* the drift of this step was dt * v_half: a particle that moved more than half its
-         * radius, or whose state is not finite (NaN fails every comparison), is unstable */
-        double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * dt * dt, lim = 0.5 * p->radius[i];
-        double ke, kre;
-        if (!leap) {
-            for (int k = 0; k < 3; k++) v[k] += h * im * p->f[3 * i + k];
-            floe_v3_axpy(L, h, p->t + 3 * i);
-            if (p->iso[i]) {
-                for (int k = 0; k < 3; k++) p->w[3 * i + k] = L[k] * inv0;
-            } else floe_omega_from_L(p->q + 4 * i, p->inertia + 3 * i, L, p->w + 3 * i);
-            ke = 0.5 * p->mass[i] * floe_v3_dot(v, v);
-            kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
-        } else {
-            double vs[3], Ls[3], ws[3];
-            for (int k = 0; k < 3; k++) {
-                vs[k] = v[k] + h * im * p->f[3 * i + k];
-                Ls[k] = L[k] + h * p->t[3 * i + k];
-            }
-            if (p->iso[i]) {
-                double inv = 1.0 / p->inertia[3 * i];
-                for (int k = 0; k < 3; k++) ws[k] = Ls[k] * inv;
-            } else floe_omega_from_L(p->q + 4 * i, p->inertia + 3 * i, Ls, ws);
-            ke = 0.5 * p->mass[i] * floe_v3_dot(vs, vs);
-            kre = 0.5 * floe_v3_dot(Ls, ws);
-        }
-        kt += ke;
-        kr += kre;
-        if (!(d2 <= lim * lim) || !(ke + kre < INFINITY) || !(fabs(p->x[3 * i]) + fabs(p->x[3 * i + 1]) + fabs(p->x[3 * i + 2]) < INFINITY)) {
-            double xold[3];
-            for (int k = 0; k < 3; k++) xold[k] = p->x[3 * i + k] - dt * (v[k] - k2 * im * p->f[3 * i + k]);
-            int rc = check_particle(w, i, xold);
-            if (rc) return rc;
+            kt += ke;
+            kr += kre;
+            if (!(d2 <= lim * lim) || !(ke + kre < INFINITY) ||
+                !(fabs(X[3 * i]) + fabs(X[3 * i + 1]) + fabs(X[3 * i + 2]) < INFINITY))
+                if (bad < 0) bad = i;
         }
     }
+    if (kin)
+        for (int i = 0; i < n; i++)
+            if (motion[i] == FLOE_KINEMATIC) wbound += kinematic_close(w, i, h);
+    /* a particle failed the quick test: the checks with the message, from the first one on */
+    for (int i = bad; i >= 0 && i < n; i++) {
+        if (motion[i] != FLOE_FREE) continue;
+        double xold[3];
+        for (int k = 0; k < 3; k++) xold[k] = p->x[3 * i + k] - dt * (p->v[3 * i + k] - k2 * p->inv_mass[i] * p->f[3 * i + k]);
+        FLOE_TRY(check_particle(w, i, xold));
+    }
     if (leap) w->lf_dt_prev = dt;
-    w->wd_shadow = sh;
+    w->wd_shadow = shadow ? sh + hh2 * sh_iso : 0.0;
     w->energy.kinetic_trans = kt;
     w->energy.kinetic_rot = kr;
     w->energy.work_body += wb;
@@ -654,7 +694,7 @@ double shadow_term(const floe_particles *p, int i, const double dv[3], const dou
     double e = 0.5 * p->mass[i] * floe_v3_dot(dv, dv);
     const double *I = p->inertia + 3 * i;
     if (p->iso[i]) {
-        if (I[0] > 0 && isfinite(I[0])) e += 0.5 * floe_v3_dot(dL, dL) / I[0];
+        e += 0.5 * floe_v3_dot(dL, dL) * p->inv_iso[i];
     } else {
         double b[3];
         floe_q_rotate_inv(b, p->q + 4 * i, dL);

@@ -62,6 +62,7 @@ static int gr_set(floe_state *s, floe_world *w, const double *y) {
             w->p.inertia[3 * i + k] *= scale;
             L[k] *= scale;
         }
+        floe_particle_inv_iso_update(&w->p, i);
         if (w->p.motion[i] == FLOE_FREE) w->energy.work_boundary += ke_t + ke_r;
     }
     return FLOE_OK;

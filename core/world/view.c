@@ -83,16 +83,17 @@ int floe_world_memory(const floe_world *w, floe_memory_stats *o) {
     if (!w || !o) return FLOE_EINVAL;
     const floe_particles *p = &w->p;
     const floe_neighbor_list *nl = &w->nl;
-    /* per particle: x v w L f t inertia (3 doubles each), q (4), mass inv_mass radius rdot,
-     * geom material group pieces (int), motion kind iso (byte) */
-    const size_t per_particle = (7 * 3 + 4 + 4) * sizeof(double) + 4 * sizeof(int) + 3;
+    /* per particle: x v w L f t inertia (3 doubles each), q (4), mass inv_mass inv_iso radius
+     * rdot, geom material group pieces (int), motion kind iso (byte); the store's block adds
+     * under a page per array (world.c particles_reserve) */
+    const size_t per_particle = (7 * 3 + 4 + 5) * sizeof(double) + 4 * sizeof(int) + 3;
     /* per pair: pi pj sub, history, touching, warm starts when in use */
     const size_t per_pair = 3 * sizeof(int) + FLOE_MAX_HISTORY * sizeof(double) + 1 +
                             (nl->use_warm ? FLOE_DETECT_WARM * sizeof(double) : 0);
     o->particle_capacity = p->cap;
     o->pair_capacity = nl->cap;
     o->contact_capacity = w->contacts_cap;
-    o->particles = (size_t)p->cap * per_particle;
+    o->particles = (size_t)p->cap * per_particle + (p->block ? 20 * 4096 : 0);
     o->neighbor_list = (size_t)nl->cap * per_pair + (size_t)nl->n_build * 4 * sizeof(double) +
                        (size_t)nl->nwalls * (sizeof(int) + 4 * sizeof(double)) + (size_t)nl->scratch_cap * sizeof(int);
     o->contacts = (size_t)w->contacts_cap * sizeof(floe_contact_info);

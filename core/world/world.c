@@ -102,10 +102,8 @@ floe_world *floe_world_create(const floe_world_def *def, char *err, size_t errle
 }
 
 static void particles_free(floe_particles *p) {
-    free(p->x); free(p->v); free(p->q); free(p->w); free(p->L); free(p->f); free(p->t);
-    free(p->mass); free(p->inv_mass); free(p->inertia); free(p->radius); free(p->geom);
-    free(p->material); free(p->group); free(p->motion); free(p->kind); free(p->iso); free(p->rdot);
-    free(p->pieces);
+    free(p->block);
+    p->block = NULL;
 }
 
 /* the providers the world owns (built at prepare, and users' from floe_world_add_provider,
@@ -216,15 +214,42 @@ int floe_world_add_geometry(floe_world *w, floe_geometry *g) {
     return w->ngeoms++;
 }
 
+/* The arrays of the store in one allocation, each starting at its own offset within a
+ * 4 KiB page (a multiple of 320 bytes, i.e. 5 cache lines, apart). Allocated one by one,
+ * every array above the allocator's mmap threshold started 16 bytes into a page, so x[i],
+ * v[i], f[i], L[i], ... of one particle had the same low 12 address bits: the integration
+ * loops, which stream a dozen of them, paid the loads' false dependence on earlier stores
+ * to another array (4K aliasing) and competed for one L1 set (bench/RESULTS.md,
+ * "The store in one block"). */
 static int particles_reserve(floe_particles *p, int need) {
     if (need <= p->cap) return FLOE_OK;
     int nc = p->cap ? p->cap : 64;
     while (nc < need) nc *= 2;
-#define RE(field, k) do { void *t_ = realloc(p->field, (size_t)nc * (k) * sizeof *p->field); if (!t_) return FLOE_ENOMEM; p->field = t_; } while (0)
-    RE(x, 3); RE(v, 3); RE(q, 4); RE(w, 3); RE(L, 3); RE(f, 3); RE(t, 3);
-    RE(mass, 1); RE(inv_mass, 1); RE(inertia, 3); RE(radius, 1); RE(geom, 1);
-    RE(material, 1); RE(group, 1); RE(motion, 1); RE(kind, 1); RE(iso, 1); RE(rdot, 1); RE(pieces, 1);
-#undef RE
+    enum { PAGE = 4096, STAGGER = 320 };
+    size_t off[20], total = 0;
+    int nf = 0;
+#define LAY(field, k) do { \
+        size_t base_ = (total + PAGE - 1) / PAGE * PAGE; \
+        off[nf] = base_ + (size_t)((nf + 1) * STAGGER) % PAGE; \
+        total = off[nf] + (size_t)nc * (k) * sizeof *p->field; \
+        nf++; } while (0)
+#define FIELDS(X) X(x, 3); X(v, 3); X(q, 4); X(w, 3); X(L, 3); X(f, 3); X(t, 3); X(mass, 1); X(inv_mass, 1); \
+    X(inertia, 3); X(inv_iso, 1); X(radius, 1); X(rdot, 1); X(geom, 1); X(material, 1); X(group, 1); X(pieces, 1);            \
+    X(motion, 1); X(kind, 1); X(iso, 1)
+    FIELDS(LAY);
+    char *b = malloc(total);
+    if (!b) return FLOE_ENOMEM;
+    nf = 0;
+#define MOVE(field, k) do { \
+        void *dst_ = b + off[nf++]; \
+        if (p->n > 0) memcpy(dst_, p->field, (size_t)p->n * (k) * sizeof *p->field); \
+        p->field = dst_; } while (0)
+    FIELDS(MOVE);
+#undef MOVE
+#undef LAY
+#undef FIELDS
+    free(p->block);
+    p->block = b;
     p->cap = nc;
     return FLOE_OK;
 }
@@ -258,6 +283,7 @@ int floe_world_add_particle(floe_world *w, const floe_particle_def *d) {
     p->motion[i] = (unsigned char)d->motion;
     p->kind[i] = (unsigned char)g->klass->kind;
     p->iso[i] = 0;
+    p->inv_iso[i] = 0;
     p->rdot[i] = 0;
     p->pieces[i] = floe_piece_count(g);
     p->radius[i] = floe_geometry_bounding_radius(g);

@@ -116,6 +116,7 @@ int prepare_store(floe_world *w) {
             p->iso[i] = w->def.dim == 2 || imax - imin <= 1e-12 * imax;
             if (w->def.dim == 2) p->inertia[3 * i] = p->inertia[3 * i + 1] = I[2];
         }
+        floe_particle_inv_iso_update(p, i);
         p->inv_mass[i] = p->motion[i] == FLOE_FREE ? 1.0 / p->mass[i] : 0;
         L_from_omega(p->q + 4 * i, p->inertia + 3 * i, p->w + 3 * i, p->L + 3 * i);
     }
