@@ -37,22 +37,27 @@ static inline void floe_mindlin_tangential(double g_star, double tdr, double mu,
     const double dt = c->dt;
     const double kt = 8.0 * g_star * sqrt(c->r_eff * c->depth);
     const double gt = nf->gn * tdr; /* sqrt(kt m) = sqrt(Sn m) sqrt(4 G* / E*) */
-    floe_contact_rotate_history(Fs, c->n);
-    floe_v3_axpy(Fs, -kt * dt, c->vt);
-    for (int k = 0; k < 3; ++k) Ft[k] = Fs[k] - gt * c->vt[k];
-    const double vt2 = floe_v3_dot(c->vt, c->vt);
+    const double vt[3] = {c->vt[0], c->vt[1], c->vt[2]};
+    /* the stored force in registers, written back once: updated in place in the history, its
+     * element stores were read back by a vector load (a store-forwarding stall per contact) */
+    double S[3] = {Fs[0], Fs[1], Fs[2]};
+    floe_contact_rotate_history(S, c->n);
+    floe_v3_axpy(S, -kt * dt, vt);
+    for (int k = 0; k < 3; ++k) Ft[k] = S[k] - gt * vt[k];
+    const double vt2 = floe_v3_dot(vt, vt);
     const double limit = mu * (nf->fn + c->fn_extra); /* + the manifold's other springs */
     const double ft2 = floe_v3_dot(Ft, Ft);
     *diss += gt * vt2 * dt;
     const double half_inv_kt = 0.5 / kt;
     if (ft2 > limit * limit) {
         const double ftmag = sqrt(ft2);
-        const double e_before = floe_v3_dot(Fs, Fs) * half_inv_kt;
+        const double e_before = floe_v3_dot(S, S) * half_inv_kt;
         floe_v3_scale(Ft, limit / ftmag);
-        for (int k = 0; k < 3; ++k) Fs[k] = Ft[k] + gt * c->vt[k];
-        *diss += e_before - floe_v3_dot(Fs, Fs) * half_inv_kt;
+        for (int k = 0; k < 3; ++k) S[k] = Ft[k] + gt * vt[k];
+        *diss += e_before - floe_v3_dot(S, S) * half_inv_kt;
     }
-    *energy += floe_v3_dot(Fs, Fs) * half_inv_kt;
+    *energy += floe_v3_dot(S, S) * half_inv_kt;
+    Fs[0] = S[0]; Fs[1] = S[1]; Fs[2] = S[2];
 }
 
 /* Linear spring-dashpot normal force kn d + gn vn with the onset/release treatment of the
