@@ -334,6 +334,75 @@ static inline void pair_release(floe_world *w, const floe_particles *p, floe_nei
     nl->touching[k] = 0;
 }
 
+/* the contact of two overlapping spheres i, j (radii ri, rj, centres xa, xb, xb - xa =
+ * (dx, dy, dz), d2 its square): normal, depth, effective radius, surface points, point */
+static inline __attribute__((always_inline)) void sphere_contact(floe_contact *c, int i, int j, const double *xa,
+                                                                 const double *xb, double ri, double rj, double dx,
+                                                                 double dy, double dz, double d2) {
+    const double rs = ri + rj, dist = sqrt(d2), inv = dist > 0 ? 1.0 / dist : 0.0;
+    if (dist > 0) floe_v3_set(c->n, dx * inv, dy * inv, dz * inv);
+    else floe_v3_set(c->n, 1, 0, 0);
+    c->i = i; c->j = j;
+    c->depth = rs - dist;
+    c->r_eff = ri * rj / rs;
+    for (int a = 0; a < 3; a++) {
+        c->x1[a] = xa[a] + ri * c->n[a];
+        c->x2[a] = xb[a] - rj * c->n[a];
+        c->point[a] = 0.5 * (c->x1[a] + c->x2[a]);
+    }
+}
+
+/* The end of a pair evaluation, the same for both bodies: the stored energy (res.energy +
+ * the manifold springs' ex), the dissipation ledger, the pair's history, and its record (with
+ * the manifold's force fx) or its count. */
+static inline __attribute__((always_inline)) int pair_book(floe_world *w, const floe_step_ctx *ctx,
+                                                           const stage_env *env, int i, int j,
+                                                           const floe_contact *c, const floe_contact_result *res,
+                                                           const double fx[3], double ex, double *hist,
+                                                           stage_acc *acc) {
+    const floe_particles *p = env->p;
+    acc->elastic += res->energy + ex;
+    /* dissipation ledger: work done on the contact by the relative motion over the step
+     * (mid-step velocities) minus the change of its stored energy */
+    if (env->stepping) {
+        /* trapezoid rule: the work of velocity Verlet over a step is (F_old + F_new)/2 . dx */
+        double fav[3];
+        for (int a = 0; a < 3; a++) fav[a] = 0.5 * (res->force[a] + hist[FLOE_FORCE_SLOT + a]);
+        double wc = -floe_v3_dot(fav, c->vr) * c->dt;
+        /* couples of the law (rocking dashpots): their work over the step */
+        wc -= (floe_v3_dot(res->torque_i, p->w + 3 * i) + floe_v3_dot(res->torque_j, p->w + 3 * j)) * c->dt;
+        /* surfaces that grow (state objects) move towards each other at rdot_i + rdot_j:
+         * that work enters the contact from outside the particle system */
+        double grow = env->any_growth ? p->rdot[i] + p->rdot[j] : 0.0;
+        if (grow != 0) {
+            double wg = -floe_v3_dot(fav, c->n) * grow * c->dt;
+            wc += wg;
+            acc->wgrow += wg;
+        }
+        double dk = wc - (res->energy - hist[FLOE_ENERGY_SLOT]);
+        acc->diss += dk;
+        hist[FLOE_DISS_SLOT] += dk;
+        /* the watchdog reads the work done on the contact since it began, dissipation +
+         * stored energy: negative when it gave back more than it took (robust to a law
+         * whose stored energy is not the potential of its force) */
+        double wk = hist[FLOE_DISS_SLOT] + res->energy;
+        if (wk < w->wd_pair_min) life_dissipation(w, i, j, wk);
+    }
+    hist[FLOE_ENERGY_SLOT] = res->energy;
+    memcpy(hist + FLOE_FORCE_SLOT, res->force, 3 * sizeof(double));
+    if (!ctx->record) w->ncontacts++;
+    else {
+        /* one record per pair: the manifold's springs in its force (the stress observer's
+         * branch vector between centres needs the total only) */
+        floe_contact_result rec = *res;
+        floe_v3_add(rec.force, rec.force, fx);
+        rec.fn += c->fn_extra;
+        rec.energy += ex;
+        if (push_contact(w, c, &rec)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
+    return FLOE_OK;
+}
+
 /* One entry k of the neighbour list: detection, law, forces, ledger. The stage first
  * filters the entries whose bounding spheres are apart (most of them) in a small loop, then
  * runs this over the rest: with this body inside the loop over every entry the compiler kept
@@ -343,7 +412,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
                                stage_acc *acc) {
     floe_particles *p = env->p;
     floe_neighbor_list *nl = env->nl;
-    const int stepping = env->stepping, track = env->track, any_growth = env->any_growth, nm = env->nm;
+    const int stepping = env->stepping, track = env->track, nm = env->nm;
     const int any_none = env->any_none, any_pieces = env->any_pieces, any_overlap = env->any_overlap;
     floe_detect_ctx dctx = *env->dctx;
     int i = nl->pi[k], j = nl->pj[k], sub = any_pieces ? nl->sub[k] : 0; /* 0 unless compound */
@@ -371,18 +440,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     if (d2 < rs * rs) {
         if (p->kind[i] == FLOE_GEOM_SPHERE && p->kind[j] == FLOE_GEOM_SPHERE) {
             /* sphere-sphere inline (the bounding test above is the exact test) */
-            double dist = sqrt(d2), inv = dist > 0 ? 1.0 / dist : 0.0;
-            double ri = p->radius[i], rj = p->radius[j];
-            if (dist > 0) floe_v3_set(c.n, dx * inv, dy * inv, dz * inv);
-            else floe_v3_set(c.n, 1, 0, 0);
-            c.i = i; c.j = j;
-            c.depth = rs - dist;
-            c.r_eff = ri * rj / rs;
-            for (int a = 0; a < 3; a++) {
-                c.x1[a] = xa[a] + ri * c.n[a];
-                c.x2[a] = xb[a] - rj * c.n[a];
-                c.point[a] = 0.5 * (c.x1[a] + c.x2[a]);
-            }
+            sphere_contact(&c, i, j, xa, xb, p->radius[i], p->radius[j], dx, dy, dz, d2);
             r = 1;
         } else if (!sub && ((p->kind[i] == FLOE_GEOM_SPHERE && p->kind[j] == FLOE_GEOM_PLANE) ||
                             (p->kind[i] == FLOE_GEOM_PLANE && p->kind[j] == FLOE_GEOM_SPHERE))) {
@@ -524,46 +582,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
             p->t[3 * i + a] += tx_i[a];
             p->t[3 * j + a] += tx_j[a];
         }
-    acc->elastic += res.energy + ex;
-    /* dissipation ledger: work done on the contact by the relative motion over the step
-     * (mid-step velocities) minus the change of its stored energy */
-    if (stepping) {
-        /* trapezoid rule: the work of velocity Verlet over a step is (F_old + F_new)/2 . dx */
-        double fav[3];
-        for (int a = 0; a < 3; a++) fav[a] = 0.5 * (res.force[a] + hist[FLOE_FORCE_SLOT + a]);
-        double wc = -floe_v3_dot(fav, c.vr) * c.dt;
-        /* couples of the law (rocking dashpots): their work over the step */
-        wc -= (floe_v3_dot(res.torque_i, p->w + 3 * i) + floe_v3_dot(res.torque_j, p->w + 3 * j)) * c.dt;
-        /* surfaces that grow (state objects) move towards each other at rdot_i + rdot_j:
-         * that work enters the contact from outside the particle system */
-        double grow = any_growth ? p->rdot[i] + p->rdot[j] : 0.0;
-        if (grow != 0) {
-            double wg = -floe_v3_dot(fav, c.n) * grow * c.dt;
-            wc += wg;
-            acc->wgrow += wg;
-        }
-        double dk = wc - (res.energy - hist[FLOE_ENERGY_SLOT]);
-        acc->diss += dk;
-        hist[FLOE_DISS_SLOT] += dk;
-        /* the watchdog reads the work done on the contact since it began, dissipation +
-         * stored energy: negative when it gave back more than it took (robust to a law
-         * whose stored energy is not the potential of its force) */
-        double wk = hist[FLOE_DISS_SLOT] + res.energy;
-        if (wk < w->wd_pair_min) life_dissipation(w, i, j, wk);
-    }
-    hist[FLOE_ENERGY_SLOT] = res.energy;
-    memcpy(hist + FLOE_FORCE_SLOT, res.force, 3 * sizeof(double));
-    if (!ctx->record) w->ncontacts++;
-    else {
-        /* one record per pair: the manifold's springs in its force (the stress observer's
-         * branch vector between centres needs the total only) */
-        floe_contact_result rec = res;
-        floe_v3_add(rec.force, rec.force, fx);
-        rec.fn += c.fn_extra;
-        rec.energy += ex;
-        if (push_contact(w, &c, &rec)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-    }
-    return FLOE_OK;
+    return pair_book(w, ctx, env, i, j, &c, &res, fx, ex, hist, acc);
 }
 
 /* Entry k when both particles are spheres, under a law that needs no overlap area: the
@@ -589,17 +608,7 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
     c.gscale = 1.0;
     c.nextra = 0;
     c.fn_extra = 0.0;
-    const double dist = sqrt(d2), inv = dist > 0 ? 1.0 / dist : 0.0;
-    if (dist > 0) floe_v3_set(c.n, dx * inv, dy * inv, dz * inv);
-    else floe_v3_set(c.n, 1, 0, 0);
-    c.i = i; c.j = j;
-    c.depth = rs - dist;
-    c.r_eff = rad_i * rad_j / rs;
-    for (int a = 0; a < 3; a++) {
-        c.x1[a] = xa[a] + rad_i * c.n[a];
-        c.x2[a] = xb[a] - rad_j * c.n[a];
-        c.point[a] = 0.5 * (c.x1[a] + c.x2[a]);
-    }
+    sphere_contact(&c, i, j, xa, xb, rad_i, rad_j, dx, dy, dz, d2);
     double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
     nl->touching[k] = 1;
     /* the centre of the smaller sphere inside the other: the normal would flip */
@@ -635,36 +644,8 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
         Ti[a] += ti[a] + res.torque_i[a];
         Tj[a] += -tj[a] + res.torque_j[a];
     }
-    acc->elastic += res.energy + 0.0;
-    if (env->stepping) { /* the ledger of contact_pair */
-        double fav[3];
-        for (int a = 0; a < 3; a++) fav[a] = 0.5 * (res.force[a] + hist[FLOE_FORCE_SLOT + a]);
-        double wc = -floe_v3_dot(fav, c.vr) * c.dt;
-        wc -= (floe_v3_dot(res.torque_i, wi) + floe_v3_dot(res.torque_j, wj)) * c.dt;
-        double grow = env->any_growth ? p->rdot[i] + p->rdot[j] : 0.0;
-        if (grow != 0) {
-            double wg = -floe_v3_dot(fav, c.n) * grow * c.dt;
-            wc += wg;
-            acc->wgrow += wg;
-        }
-        double dk = wc - (res.energy - hist[FLOE_ENERGY_SLOT]);
-        acc->diss += dk;
-        hist[FLOE_DISS_SLOT] += dk;
-        double wk = hist[FLOE_DISS_SLOT] + res.energy;
-        if (wk < w->wd_pair_min) life_dissipation(w, i, j, wk);
-    }
-    hist[FLOE_ENERGY_SLOT] = res.energy;
-    memcpy(hist + FLOE_FORCE_SLOT, res.force, 3 * sizeof(double));
-    if (!ctx->record) w->ncontacts++;
-    else {
-        floe_contact_result rec = res;
-        const double zero[3] = {0, 0, 0};
-        floe_v3_add(rec.force, rec.force, zero);
-        rec.fn += c.fn_extra;
-        rec.energy += 0.0;
-        if (push_contact(w, &c, &rec)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-    }
-    return FLOE_OK;
+    const double zero[3] = {0, 0, 0};
+    return pair_book(w, ctx, env, i, j, &c, &res, zero, 0.0, hist, acc);
 }
 
 static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, floe_provider_out *out) {
