@@ -74,20 +74,7 @@ static void plane_normal(const shape_ref *s, double nw[3]) {
 
 static int sphere_plane(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
     (void)w; (void)warm;
-    double nw[3], d[3];
-    plane_normal(b, nw);
-    floe_v3_sub(d, a->x, b->x);
-    double s = floe_v3_dot(d, nw);
-    if (s >= a->r) return 0;
-    floe_v3_set(c->n, -nw[0], -nw[1], -nw[2]);
-    c->depth = a->r - s;
-    for (int k = 0; k < 3; k++) {
-        c->x1[k] = a->x[k] - a->r * nw[k];
-        c->x2[k] = a->x[k] - s * nw[k];
-    }
-    c->r_eff = a->r;
-    finish(c);
-    return 1;
+    return floe_sphere_plane_contact(a->x, a->r, b->x, b->q, c);
 }
 
 /* sphere a against any shape b with an SDF: distance of the sphere centre. The SDF never

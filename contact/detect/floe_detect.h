@@ -53,6 +53,29 @@ int floe_detect(floe_detect_ctx *ctx, const floe_body_ref *a, const floe_body_re
  * resultant; 1 if they overlap, 0 if not, -FLOE_ENOTSUP for other pairs */
 int floe_detect_overlap(const floe_detect_ctx *ctx, const floe_body_ref *a, const floe_body_ref *b, int sub,
                         floe_contact *c);
+/* A sphere (centre xs, radius r) against a wall (a plane body at xp, orientation qp: the
+ * half-space z <= 0 of its frame): 1 and c filled seen from the sphere (x1 on the sphere, x2
+ * on the wall, n from the sphere into the wall, the midpoint as the point) if they touch,
+ * else 0. Inline: detection's sphere-plane pair and the world's sphere path share it. */
+static inline int floe_sphere_plane_contact(const double xs[3], double r, const double xp[3], const double qp[4],
+                                            floe_contact *c) {
+    const double ez[3] = {0, 0, 1};
+    double nw[3], d[3];
+    floe_q_rotate(nw, qp, ez);
+    floe_v3_sub(d, xs, xp);
+    const double s = floe_v3_dot(d, nw);
+    if (s >= r) return 0;
+    floe_v3_set(c->n, -nw[0], -nw[1], -nw[2]);
+    c->depth = r - s;
+    for (int k = 0; k < 3; k++) {
+        c->x1[k] = xs[k] - r * nw[k];
+        c->x2[k] = xs[k] - s * nw[k];
+    }
+    c->r_eff = r;
+    for (int k = 0; k < 3; k++) c->point[k] = 0.5 * (c->x1[k] + c->x2[k]);
+    return 1;
+}
+
 /* 1 if a detector exists for the two geometries (every piece pair of compounds) */
 int floe_detect_supported(const floe_geometry *a, const floe_geometry *b);
 /* 1 if some piece pair goes through ADMM or the polytope LP (needs warm-start storage) */

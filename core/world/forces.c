@@ -444,30 +444,15 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
             r = 1;
         } else if (!sub && ((p->kind[i] == FLOE_GEOM_SPHERE && p->kind[j] == FLOE_GEOM_PLANE) ||
                             (p->kind[i] == FLOE_GEOM_PLANE && p->kind[j] == FLOE_GEOM_SPHERE))) {
-            /* sphere-wall inline (contact/detect/detect.c sphere_plane, the same operations
-             * in the same order, seen from i): a settled bed has as many of these as contacts
-             * between spheres */
+            /* sphere-wall inline (detection's own kernel, without the call through its
+             * pair table): a settled bed has as many of these as contacts between spheres */
             const int sph = p->kind[i] == FLOE_GEOM_SPHERE ? i : j, pl = sph == i ? j : i;
-            const double ez[3] = {0, 0, 1}, *xs = p->x + 3 * sph, *xp = p->x + 3 * pl, rsph = p->radius[sph];
-            double nw[3], ds[3];
-            floe_q_rotate(nw, p->q + 4 * pl, ez);
-            floe_v3_sub(ds, xs, xp);
-            const double s = floe_v3_dot(ds, nw);
-            if (s < rsph) {
-                double xa_[3], xb_[3];
-                for (int a = 0; a < 3; a++) {
-                    xa_[a] = xs[a] - rsph * nw[a]; /* the sphere's deepest point */
-                    xb_[a] = xs[a] - s * nw[a];    /* its projection on the wall */
-                }
-                const double sg = sph == i ? -1.0 : 1.0; /* n points from i to j */
-                floe_v3_set(c.n, sg * nw[0], sg * nw[1], sg * nw[2]);
-                c.i = i; c.j = j;
-                c.depth = rsph - s;
-                memcpy(c.x1, sph == i ? xa_ : xb_, sizeof c.x1);
-                memcpy(c.x2, sph == i ? xb_ : xa_, sizeof c.x2);
-                for (int a = 0; a < 3; a++) c.point[a] = 0.5 * (c.x1[a] + c.x2[a]);
-                c.r_eff = rsph;
-                r = 1;
+            r = floe_sphere_plane_contact(p->x + 3 * sph, p->radius[sph], p->x + 3 * pl, p->q + 4 * pl, &c);
+            c.i = i; c.j = j;
+            if (r && sph == j) { /* seen from i, as floe_detect swaps the roles back */
+                double t[3];
+                floe_v3_copy(t, c.x1); floe_v3_copy(c.x1, c.x2); floe_v3_copy(c.x2, t);
+                floe_v3_scale(c.n, -1.0);
             }
         } else r = detect_pair(w, &dctx, i, j, sub, warm, &c);
     } else if (!(rs < INFINITY)) {
