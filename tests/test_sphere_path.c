@@ -1,0 +1,134 @@
+/* test_sphere_path.c - the contact stage's lean body for sphere pairs (core/world/forces.c,
+ * sphere_pair) and its inline sphere-wall kernel against the general path: the same
+ * operations in the same order, so the same bits (docs/architecture.md, "The pair loop").
+ *  1. 300 Hertz-Mindlin spheres of mixed sizes (friction, damping, gravity) poured into a
+ *     box of six walls, one of them tilted and one added after the spheres (so that both
+ *     orders of a sphere-wall pair occur), for 8,000 steps; the same scene with one fixed
+ *     compound body far above them sends every list entry through the general body
+ *     (contact_pair): positions, velocities, angular velocities, forces, torques and the
+ *     energy ledger equal bit for bit;
+ *  2. every sphere-wall contact the stage recorded (the inline kernel, seen from i) against
+ *     detection's own answer for the pair (floe_world_probe_contact): normal, depth and
+ *     point equal bit for bit, for walls before and after the sphere in the pair. */
+#include "check.h"
+#include "floe.h"
+#include <string.h>
+
+#define NS 300
+
+static unsigned long long rng_state = 12345;
+static double urand(void) {
+    rng_state = rng_state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return (double)(rng_state >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* the box: walls 0..4 first (floor tilted), spheres 5..5+NS-1, then the last wall; with a
+ * compound, a fixed body of two spheres near the ceiling (index 6 + NS) */
+static floe_world *scene(int with_compound) {
+    floe_world_def def = floe_default_world_def();
+    def.dt = 5e-6;
+    def.gravity[2] = -9.81;
+    def.skin = 0.0004;
+    char err[256];
+    floe_world *w = floe_world_create(&def, err, sizeof err);
+    if (!w) return NULL;
+    floe_material m = {"glass", 2500, 1e7, 0.3};
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5));
+    const double L = 0.02, H = 0.06;
+    double nf[3] = {0.08, -0.05, 1.0}, p0[3] = {0, 0, 0};
+    floe_world_add_wall(w, p0, nf, 0, FLOE_FIXED); /* tilted floor */
+    double px[3] = {L, 0, 0}, nx[3] = {-1, 0, 0}, ny0[3] = {0, 1, 0}, py[3] = {0, 0.0176, 0}, ny1[3] = {0, -1, 0};
+    double nx0[3] = {1, 0, 0}, ph[3] = {0, 0, H}, nh[3] = {0, 0, -1};
+    floe_world_add_wall(w, p0, nx0, 0, FLOE_FIXED);
+    floe_world_add_wall(w, px, nx, 0, FLOE_FIXED);
+    floe_world_add_wall(w, p0, ny0, 0, FLOE_FIXED);
+    floe_world_add_wall(w, ph, nh, 0, FLOE_FIXED);
+    rng_state = 12345;
+    int g[3] = {floe_world_add_geometry(w, floe_sphere_create(0.0008)), floe_world_add_geometry(w, floe_sphere_create(0.001)),
+                floe_world_add_geometry(w, floe_sphere_create(0.0012))};
+    for (int k = 0; k < NS; k++) {
+        floe_particle_def p = floe_default_particle_def();
+        p.geometry = g[k % 3];
+        int a = k % 7, b = (k / 7) % 7, c = k / 49;
+        floe_v3_set(p.x, 0.0022 + 0.0023 * a + 0.00005 * urand(), 0.0022 + 0.0023 * b + 0.00005 * urand(),
+                    0.0025 + 0.0023 * c + 0.00005 * urand());
+        floe_v3_set(p.v, 0.1 * (urand() - 0.5), 0.1 * (urand() - 0.5), -0.3 - 0.2 * urand());
+        floe_v3_set(p.w, 20 * (urand() - 0.5), 20 * (urand() - 0.5), 20 * (urand() - 0.5));
+        floe_world_add_particle(w, &p);
+    }
+    floe_world_add_wall(w, py, ny1, 0, FLOE_FIXED); /* after the spheres: pairs (sphere, wall) */
+    if (with_compound) {
+        floe_geometry *pieces[2] = {floe_sphere_create(0.001), floe_sphere_create(0.001)};
+        double xs[6] = {-0.001, 0, 0, 0.001, 0, 0}, qs[8] = {1, 0, 0, 0, 1, 0, 0, 0};
+        floe_geometry *cg = floe_compound_create(pieces, xs, qs, 2, 3, err, sizeof err);
+        floe_particle_def p = floe_default_particle_def();
+        p.geometry = floe_world_add_geometry(w, cg);
+        p.motion = FLOE_FIXED;
+        floe_v3_set(p.x, 0.5 * L, 0.5 * L, H - 0.004);
+        floe_world_add_particle(w, &p);
+    }
+    return w;
+}
+
+static int same(const double *a, const double *b, int n) { return memcmp(a, b, (size_t)n * sizeof(double)) == 0; }
+
+int main(void) {
+    floe_world *a = scene(0), *b = scene(1);
+    CHECK(a && b, "worlds created");
+    if (!a || !b) return check_summary("test_sphere_path");
+    int rc = floe_world_prepare(a);
+    CHECK(rc == 0, "prepare (spheres only): %s", floe_world_last_error(a));
+    rc = floe_world_prepare(b);
+    CHECK(rc == 0, "prepare (with a compound): %s", floe_world_last_error(b));
+    for (int s = 0; s < 8000 && !rc; s++) {
+        rc = floe_world_step(a);
+        if (!rc) rc = floe_world_step(b);
+    }
+    CHECK(rc == 0, "8,000 steps: %s", rc ? floe_world_last_error(a) : "");
+    /* 1. the same bits, sphere by sphere */
+    int diff = 0, moving = 0;
+    for (int i = 5; i < 5 + NS; i++) {
+        floe_particle_state pa, pb;
+        floe_world_get_particle(a, i, &pa);
+        floe_world_get_particle(b, i, &pb);
+        if (!(same(pa.x, pb.x, 3) && same(pa.v, pb.v, 3) && same(pa.w, pb.w, 3) && same(pa.f, pb.f, 3) &&
+              same(pa.torque, pb.torque, 3) && same(pa.q, pb.q, 4)))
+            diff++;
+        moving += floe_v3_norm(pa.v) > 1e-6;
+    }
+    int contacts = floe_world_contact_count(a);
+    printf("  spheres differing between the lean and the general body: %d of %d (contacts %d, moving %d)\n", diff, NS,
+           contacts, moving);
+    CHECK(diff == 0, "%d spheres differ between sphere_pair and contact_pair", diff);
+    CHECK(contacts > NS / 2, "the pile is in contact (%d contacts)", contacts);
+    floe_energy ea = floe_world_energy(a), eb = floe_world_energy(b);
+    CHECK(ea.kinetic_trans == eb.kinetic_trans && ea.kinetic_rot == eb.kinetic_rot && ea.elastic == eb.elastic &&
+              ea.dissipated == eb.dissipated && ea.work_body == eb.work_body,
+          "energy ledger differs: K %.17g vs %.17g, elastic %.17g vs %.17g, dissipated %.17g vs %.17g",
+          ea.kinetic_trans, eb.kinetic_trans, ea.elastic, eb.elastic, ea.dissipated, eb.dissipated);
+    /* 2. the stage's sphere-wall contacts against detection's answer */
+    floe_world_record_contacts(a, 1);
+    rc = floe_world_step(a);
+    const floe_contact_info *ci = NULL;
+    int nc = floe_world_contacts(a, &ci);
+    CHECK(rc == 0 && nc > 0, "recorded contacts (%d)", nc);
+    int wall_first = 0, wall_last = 0, bad = 0;
+    for (int k = 0; k < nc; k++) {
+        const int i = ci[k].i, j = ci[k].j;
+        const int wi = i < 5 || i == 5 + NS, wj = j < 5 || j == 5 + NS;
+        if (!(wi || wj)) continue;
+        floe_contact c;
+        int r = floe_world_probe_contact(a, i, j, 0, &c);
+        if (r != 1 || !same(c.n, ci[k].n, 3) || !same(c.point, ci[k].point, 3) || c.depth != ci[k].depth) bad++;
+        if (wi) wall_first++;
+        else wall_last++;
+    }
+    printf("  sphere-wall contacts: %d with the wall first, %d with the sphere first; differing from detection: %d\n",
+           wall_first, wall_last, bad);
+    CHECK(wall_first > 0 && wall_last > 0, "both orders of sphere-wall pairs occur (%d, %d)", wall_first, wall_last);
+    CHECK(bad == 0, "%d sphere-wall contacts differ from floe_world_probe_contact", bad);
+    floe_world_destroy(a);
+    floe_world_destroy(b);
+    return check_summary("test_sphere_path");
+}
