@@ -228,17 +228,19 @@ int step_verlet(floe_world *w) {
     double maxd2 = 0; /* largest squared displacement since the neighbour build */
     const double *xb = w->nl.x_build;
     const int have_xb = xb && w->nl.n_build == n;
-    const unsigned char *restrict motion = p->motion, *restrict iso = p->iso;
-    const double *restrict F = p->f, *restrict T = p->t, *restrict IM = p->inv_mass, *restrict M = p->mass;
-    const double *restrict II = p->inv_iso, *restrict XB = have_xb ? xb : NULL;
+    const unsigned char *motion = p->motion;
     const double g0 = w->def.gravity[0], g1 = w->def.gravity[1], g2 = w->def.gravity[2];
     int kin = 0; /* any kinematic particle */
     /* 1. first half kick + drift (eq 22), rotation by the midpoint rule (eq 23); then the
      * kinematic particles at their prescribed velocity */
     {
+        /* restrict: within this block nothing else writes what they point to */
         double *restrict X = p->x, *restrict V = p->v, *restrict Q = p->q, *restrict W = p->w, *restrict LL = p->L;
+        const unsigned char *restrict MO = p->motion, *restrict iso = p->iso;
+        const double *restrict F = p->f, *restrict T = p->t, *restrict IM = p->inv_mass, *restrict M = p->mass;
+        const double *restrict II = p->inv_iso, *restrict XB = have_xb ? xb : NULL;
         for (int i = 0; i < n; i++) {
-            const unsigned char mo = motion[i];
+            const unsigned char mo = MO[i];
             if (mo != FLOE_FREE) { kin |= mo == FLOE_KINEMATIC; continue; }
             double *x = X + 3 * i, *v = V + 3 * i;
             const double im = IM[i];
@@ -285,8 +287,11 @@ int step_verlet(floe_world *w) {
     {
         double *restrict V = p->v, *restrict W = p->w, *restrict LL = p->L;
         const double *restrict X = p->x, *restrict R = p->radius;
+        const unsigned char *restrict MO = p->motion, *restrict iso = p->iso;
+        const double *restrict F = p->f, *restrict T = p->t, *restrict IM = p->inv_mass, *restrict M = p->mass;
+        const double *restrict II = p->inv_iso;
         for (int i = 0; i < n; i++) {
-            if (motion[i] != FLOE_FREE) continue;
+            if (MO[i] != FLOE_FREE) continue;
             double *v = V + 3 * i, *L = LL + 3 * i, *om = W + 3 * i;
             const double *f = F + 3 * i, *t = T + 3 * i;
             const double im = IM[i];
