@@ -13,5 +13,6 @@
 #include "floe_view.h"
 #include "floe_registry.h"
 #include "floe_provider.h"
+#include "floe_forcing.h"
 #include "floe_integrator.h"
 #endif

@@ -31,6 +31,11 @@ typedef struct floe_particles {
                             * the integrators' omega = L / I without a division */
     double *rdot;          /* n outward surface speed set by state objects (growing radius), m/s */
     int *pieces;           /* n convex pieces of the geometry (compound bodies > 1) */
+    double *thick;         /* n ice thickness of 2D floes, m (docs/sea-ice.md): NULL until a
+                            * particle is given one (floe_particle_def.thickness); then 0 for
+                            * the others (none: masses and forces per metre, read as 1 m by
+                            * floe_particle_thickness). Outside the block: only scenes with
+                            * floes pay for it */
     void *block;           /* the one allocation the arrays above live in (world.c
                             * particles_reserve: each array starts at its own offset in
                             * the 4 KiB page, see there); NULL for a store the caller built */
@@ -40,6 +45,11 @@ typedef struct floe_particles {
 static inline void floe_particle_inv_iso_update(floe_particles *p, int i) {
     const double I0 = p->inertia[3 * i];
     p->inv_iso[i] = p->iso[i] && I0 > 0 && I0 < INFINITY ? 1.0 / I0 : 0.0;
+}
+
+/* the thickness forces and laws use for particle i: the floe's, else 1 m (per metre) */
+static inline double floe_particle_thickness(const floe_particles *p, int i) {
+    return p->thick && p->thick[i] > 0 ? p->thick[i] : 1.0;
 }
 
 /* What a force provider is handed for one evaluation (core/world/floe_provider.h): the store

@@ -7,6 +7,7 @@
 #include "floe_geometry.h"
 #include "floe_observer.h"
 #include "floe_provider.h"
+#include "floe_forcing.h"
 #include "floe_pd.h"
 #include "floe_integrator.h"
 
@@ -16,6 +17,7 @@ int floe_register_builtins(char *err, size_t errlen) {
     FLOE_TRY(floe_register_builtin_outputs(err, errlen));
     FLOE_TRY(floe_register_builtin_pd_materials(err, errlen));
     FLOE_TRY(floe_register_builtin_providers(err, errlen));
+    FLOE_TRY(floe_register_builtin_forcing(err, errlen));
     FLOE_TRY(floe_register_builtin_packings(err, errlen));
     FLOE_TRY(floe_register_builtin_integrators(err, errlen));
     return FLOE_OK;

@@ -315,6 +315,7 @@ typedef struct sc_common {
     double grow_rate;
     struct fy_node *grow_at;     /* the rate's node, for messages */
     int grow_update_mass;
+    double thickness;    /* 2D floes: h, m (0: none) */
 } sc_common;
 
 static const char *const sc_motions[] = {"free", "fixed", "kinematic", NULL};
@@ -381,6 +382,14 @@ static int sc_parse_common(sc *s, const sc_map *m, int entry, int packing, sc_co
     int mo;
     FLOE_TRY(sc_enum(s, m, "motion", sc_motions, 0, &mo));
     c->motion = (floe_motion)mo;
+    c->thickness = 0;
+    if (sc_has(m, "thickness")) { /* a floe: mass = density x area x thickness */
+        if (s->dim != 2)
+            return sc_fail(s, FLOE_EINVAL, sc_get(m, "thickness", NULL),
+                           "%s.thickness is for 2D floes (dimension: 2)", m->what);
+        FLOE_TRY(sc_num(s, m, "thickness", 1, 0, &c->thickness));
+        if (!(c->thickness > 0)) return sc_range(s, m, "thickness", "> 0 (m)", c->thickness);
+    }
 
     c->grow = 0;
     c->grow_index = 0;
@@ -431,6 +440,7 @@ static int sc_add_one(sc *s, const sc_common *c, int gi, const double x[3], int 
     for (int k = 0; k < 4; k++) d.q[k] = c->q[k];
     d.motion = c->motion;
     d.group = entry;
+    d.thickness = c->thickness;
     int r = floe_world_add_particle(s->w, &d);
     if (r < 0) return sc_fail(s, -r, at, "%s: %s", what, floe_world_last_error(s->w));
     *pidx = r;
@@ -842,17 +852,17 @@ static int sc_user_packing(sc *s, const sc_map *m, const floe_registry_entry *en
 int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key)
 {
     static const char *const keys_single[] = {"shape", "material", "position", "velocity",
-                                              "angular_velocity", "orientation", "motion", "name",
+                                              "angular_velocity", "orientation", "motion", "name", "thickness",
                                               "grow_rate", "grow", "packing", NULL};
     static const char *const keys_lattice[] = {"packing", "shape", "material", "origin", "counts",
                                                "region", "spacing", "jitter", "seed", "velocity",
-                                               "angular_velocity", "orientation", "motion", "name",
+                                               "angular_velocity", "orientation", "motion", "name", "thickness",
                                                "grow", NULL};
     static const char *const keys_random[] = {"packing", "shape", "material", "region", "count",
                                               "seed", "max_tries", "velocity", "angular_velocity",
-                                              "orientation", "motion", "name", "grow", NULL};
+                                              "orientation", "motion", "name", "grow", "thickness", NULL};
     static const char *const keys_all[] = {"shape", "material", "position", "velocity",
-                                           "angular_velocity", "orientation", "motion", "name",
+                                           "angular_velocity", "orientation", "motion", "name", "thickness",
                                            "grow_rate", "grow", "packing", "origin", "counts",
                                            "region", "spacing", "jitter", "seed", "count",
                                            "max_tries", NULL};

@@ -31,6 +31,8 @@ typedef struct floe_particles_view {
     const int *material, *group;    /* n */
     const unsigned char *motion;    /* n: floe_motion */
     const int *pieces;              /* n: convex pieces of the geometry (compounds > 1, else 1) */
+    const double *thickness;        /* n: 2D floes' thickness (m; 0: none), NULL when no particle
+                                       of the world has one (floe_particle_def.thickness) */
 } floe_particles_view;
 
 /* Fills out; FLOE_EINVAL when w or out is NULL. */

@@ -106,6 +106,11 @@ typedef struct floe_particle_def {
     floe_motion motion;
     int group;                /* user tag written as "body" in outputs */
     double mass;              /* 0 = from geometry and density */
+    double thickness;         /* 2D floes (sea ice, docs/sea-ice.md): thickness h, m; the mass
+                                 from density is then density x area x h and the inertia
+                                 density x h x the polar moment of the area (kg, kg m^2: forces
+                                 in N); laws and forcing that read thickness use it. 0 = none
+                                 (2D masses per metre of thickness, read as h = 1 m) */
 } floe_particle_def;
 
 floe_particle_def floe_default_particle_def(void);
@@ -212,6 +217,7 @@ typedef struct floe_particle_state {
     double mass, radius;     /* radius: bounding radius */
     int material, group;
     floe_motion motion;
+    double thickness;        /* 2D floes: h, m; 0 for a particle without one */
 } floe_particle_state;
 int floe_world_get_particle(const floe_world *w, int i, floe_particle_state *out);
 

@@ -21,6 +21,7 @@ int floe_world_particles(const floe_world *w, floe_particles_view *o) {
     o->group = p->group;
     o->motion = p->motion;
     o->pieces = p->pieces;
+    o->thickness = p->thick;
     return FLOE_OK;
 }
 
@@ -93,7 +94,8 @@ int floe_world_memory(const floe_world *w, floe_memory_stats *o) {
     o->particle_capacity = p->cap;
     o->pair_capacity = nl->cap;
     o->contact_capacity = w->contacts_cap;
-    o->particles = (size_t)p->cap * per_particle + (p->block ? 20 * 4096 : 0);
+    o->particles = (size_t)p->cap * per_particle + (p->block ? 20 * 4096 : 0) +
+                   (p->thick ? (size_t)p->cap * sizeof(double) : 0);
     o->neighbor_list = (size_t)nl->cap * per_pair + (size_t)nl->n_build * 4 * sizeof(double) +
                        (size_t)nl->nwalls * (sizeof(int) + 4 * sizeof(double)) + (size_t)nl->scratch_cap * sizeof(int);
     o->contacts = (size_t)w->contacts_cap * sizeof(floe_contact_info);

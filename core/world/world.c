@@ -104,6 +104,8 @@ floe_world *floe_world_create(const floe_world_def *def, char *err, size_t errle
 static void particles_free(floe_particles *p) {
     free(p->block);
     p->block = NULL;
+    free(p->thick);
+    p->thick = NULL;
 }
 
 /* the providers the world owns (built at prepare, and users' from floe_world_add_provider,
@@ -248,6 +250,14 @@ static int particles_reserve(floe_particles *p, int need) {
 #undef MOVE
 #undef LAY
 #undef FIELDS
+    if (p->thick) { /* floes' thickness: its own allocation, present only when used */
+        double *t = realloc(p->thick, (size_t)nc * sizeof *t);
+        if (!t) {
+            free(b);
+            return FLOE_ENOMEM;
+        }
+        p->thick = t;
+    }
     free(p->block);
     p->block = b;
     p->cap = nc;
@@ -265,8 +275,16 @@ int floe_world_add_particle(floe_world *w, const floe_particle_def *d) {
     double qn = sqrt(d->q[0] * d->q[0] + d->q[1] * d->q[1] + d->q[2] * d->q[2] + d->q[3] * d->q[3]);
     if (!(qn > 0) || !isfinite(qn)) return -floe_world_error(w, FLOE_EINVAL, "particle: orientation quaternion must be non-zero");
     if (d->mass < 0 || !isfinite(d->mass)) return -floe_world_error(w, FLOE_EINVAL, "particle: mass must be >= 0 (0 = from density)");
+    if (d->thickness < 0 || !isfinite(d->thickness))
+        return -floe_world_error(w, FLOE_EINVAL, "particle: thickness must be >= 0 and finite (0 = none), got %g", d->thickness);
+    if (d->thickness > 0 && w->def.dim != 2)
+        return -floe_world_error(w, FLOE_EINVAL, "particle: a thickness is for 2D floes (dimension: 2)");
     floe_particles *p = &w->p;
     if (particles_reserve(p, p->n + 1)) return -floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    if (d->thickness > 0 && !p->thick) { /* the first floe: none for every particle so far */
+        p->thick = calloc((size_t)p->cap, sizeof *p->thick);
+        if (!p->thick) return -floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
     int i = p->n++;
     const floe_geometry *g = w->geoms[d->geometry];
     memcpy(p->x + 3 * i, d->x, sizeof d->x);
@@ -288,6 +306,7 @@ int floe_world_add_particle(floe_world *w, const floe_particle_def *d) {
     p->pieces[i] = floe_piece_count(g);
     p->radius[i] = floe_geometry_bounding_radius(g);
     p->mass[i] = d->mass; /* resolved at prepare */
+    if (p->thick) p->thick[i] = d->thickness;
     w->prepared = 0;
     return i;
 }
@@ -401,6 +420,7 @@ int floe_world_get_particle(const floe_world *w, int i, floe_particle_state *o) 
     o->material = p->material[i];
     o->group = p->group[i];
     o->motion = (floe_motion)p->motion[i];
+    o->thickness = p->thick ? p->thick[i] : 0;
     return FLOE_OK;
 }
 

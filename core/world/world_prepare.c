@@ -88,6 +88,8 @@ int prepare_store(floe_world *w) {
             return floe_world_error(w, FLOE_EINVAL,
                                     "particle %d: a polygon is a 2D shape (dim: 2); in 3D use a prism or polyhedron", i);
         if (polygon) mdim = 2; /* a polygon has no 3D body: mass per metre of thickness */
+        const double h = p->thick ? p->thick[i] : 0;
+        if (h > 0) mdim = 2;   /* a floe: area x thickness */
         if (w->def.dim == 2 && floe_geometry_dimension(g) == 3)
             return floe_world_error(w, FLOE_EINVAL,
                                     "particle %d: a polyhedron (or prism, mesh) is a 3D shape; in 2D use a polygon", i);
@@ -102,6 +104,10 @@ int prepare_store(floe_world *w) {
                                     "off-diagonal inertia %.2g (relative): define the SDF about the centre "
                                     "of mass with the principal axes along x, y, z",
                                     i, g->klass->name, mp.centroid[0], mp.centroid[1], mp.centroid[2], mp.off_axis);
+        if (h > 0) { /* a floe of thickness h: mass and inertia per metre, times h */
+            mp.mass *= h;
+            for (int k = 0; k < 3; k++) mp.inertia[k] *= h;
+        }
         if (p->mass[i] > 0) { /* user mass: scale inertia */
             double s = p->mass[i] / mp.mass;
             for (int k = 0; k < 3; k++) mp.inertia[k] *= s;

@@ -1,0 +1,116 @@
+/* floe_forcing.h - environmental forcing of 2D floes (sea ice, docs/sea-ice.md): velocity
+ * fields of the ocean and the atmosphere, quadratic drag with a turning angle integrated
+ * over each floe's area, Coriolis and the sea-surface tilt. Each is a force provider
+ * (floe_provider.h), registered under the kind "provider" so that a scene names it in
+ * `forces:`; C code creates them with the functions below and adds them with
+ * floe_world_add_provider.
+ *
+ * Conventions (as SubZero, Montemuro et al. 2023, and Hibler 1979): x east, y north, f > 0
+ * in the northern hemisphere, k the unit vector up (+z); a turning angle theta > 0 rotates
+ * the stress counter-clockwise. Forces are in N when the floes have a thickness (masses in
+ * kg), per metre of thickness otherwise. */
+#ifndef FLOE_FORCING_H
+#define FLOE_FORCING_H
+
+#include "floe_provider.h"
+
+/* ---- velocity fields (2D, in the plane z = 0) ---- */
+typedef enum floe_field_kind {
+    FLOE_FIELD_UNIFORM = 0, /* u = U */
+    FLOE_FIELD_SHEAR = 1,   /* u = U + (rate (y - c_y), 0): simple shear about the line y = c_y */
+    FLOE_FIELD_GYRE = 2,    /* u = U + curl of psi = S L/pi sin(pi (x - c_x)/L) sin(pi (y - c_y)/L)
+                               (one closed gyre filling the square [c, c + L]^2, counter-clockwise
+                               for S > 0, peak speed S at the middle of its sides) */
+    FLOE_FIELD_VORTEX = 3   /* u = U + a Rankine vortex about c: azimuthal speed S r/R inside the
+                               core radius R, S R/r outside (counter-clockwise for S > 0) */
+} floe_field_kind;
+
+typedef struct floe_field {
+    floe_field_kind kind;
+    double U[3];        /* uniform part, m/s (z ignored) */
+    double rate;        /* shear: du_x/dy, 1/s */
+    double speed;       /* gyre, vortex: S, m/s */
+    double length;      /* gyre: L (m); vortex: R (m) */
+    double center[3];   /* shear: c_y; gyre: the corner c; vortex: the centre c (m) */
+} floe_field;
+
+/* The field's velocity u at position x (m) and time t (s): u[2] = 0. */
+void floe_field_eval(const floe_field *f, const double x[3], double t, double u[3]);
+/* An upper bound of |u| over the plane (the gyre and vortex peaks plus |U|; INFINITY for a
+ * shear, whose speed grows without bound) */
+double floe_field_max_speed(const floe_field *f);
+/* "uniform", "shear", "gyre", "vortex" (NULL out of range) */
+const char *floe_field_kind_name(int kind);
+/* FLOE_OK, or FLOE_EINVAL with what is wrong in err (a non-finite value, a gyre or vortex
+ * without a positive length) */
+int floe_field_check(const floe_field *f, char *err, size_t errlen);
+
+/* ---- quadratic drag: tau = rho C_d |du| R(theta) du over the floe's area ---- */
+typedef struct floe_drag_def {
+    double rho;             /* fluid density, kg/m^3 */
+    double cd;              /* drag coefficient (ice-water or ice-air) */
+    double turning_angle;   /* theta, radians (> 0: counter-clockwise, northern hemisphere) */
+    floe_field field;       /* the fluid's velocity */
+    int quadrature;         /* subdivision level n of the area quadrature (>= 1; 0: 1):
+                               polygons: n^2 triangles per fan triangle, 3 points each;
+                               discs: n + 1 Gauss-Legendre rings x 8n angles; other shapes:
+                               a grid of (8n)^2 */
+} floe_drag_def;
+/* SubZero's ocean (rho 1027, C_d 3e-3, theta 15 deg) and atmosphere (rho 1.2, C_d 1e-3,
+ * theta 0): Subzero.jl src/simulation_components/simulation.jl `Constants` */
+floe_drag_def floe_ocean_drag_default(void);
+floe_drag_def floe_wind_drag_default(void);
+/* A drag provider named `name` ("ocean_drag", "wind_drag", ...; copied), NULL with the
+ * message in err for invalid parameters. 2D worlds only (refused at the first evaluation
+ * of a 3D world). */
+floe_provider *floe_drag_create(const char *name, const floe_drag_def *d, char *err, size_t errlen);
+
+/* ---- Coriolis, F = -m f k x (v - U_g), with the sea-surface tilt ----
+ * On every free particle's centre of mass (no torque), with the tilt of the sea surface:
+ *   none:        U_g = 0 (Coriolis alone);
+ *   geostrophic: the surface slopes so that the current `field` is in geostrophic balance
+ *                (g grad(eta) = -f k x U_o, SubZero's "tilt"): U_g = U_o(x_c), Coriolis acts
+ *                on the velocity relative to the current;
+ *   slope:       a given slope: F adds -m g grad(eta) (U_g = 0).
+ * Under velocity Verlet the rotation by f over a step is applied as the implicit-midpoint
+ * (Cayley) rotation of v - U_g: a free inertial oscillation keeps its amplitude to round-off
+ * and its period 2 pi / f to (f dt)^2 / 12 (an explicit force would grow the amplitude by
+ * exp(pi f dt) per period); other integrators take -m f k x (v - U_g) as it is. */
+#define FLOE_EARTH_OMEGA 7.2921e-5 /* rad/s, sidereal rotation rate of the Earth */
+/* f = 2 Omega sin(latitude), latitude in degrees (negative south) */
+double floe_coriolis_parameter(double latitude_deg);
+typedef enum floe_tilt_kind { FLOE_TILT_NONE = 0, FLOE_TILT_GEOSTROPHIC = 1, FLOE_TILT_SLOPE = 2 } floe_tilt_kind;
+typedef struct floe_coriolis_def {
+    double f;               /* Coriolis parameter, 1/s (1.4e-4, SubZero's; > 0 north) */
+    floe_tilt_kind tilt;
+    floe_field field;       /* geostrophic: the current */
+    double slope[3];        /* slope: grad(eta) (dimensionless; z ignored) */
+    double g;               /* slope: gravity, m/s^2 (9.81) */
+} floe_coriolis_def;
+floe_coriolis_def floe_coriolis_default(void);
+floe_provider *floe_coriolis_create(const floe_coriolis_def *d, char *err, size_t errlen);
+
+/* ---- area quadrature of a 2D shape (body frame): points (3 doubles each, z = 0) and
+ * weights (m^2, summing to the shape's area) ---- */
+typedef struct floe_area_quadrature {
+    int n;
+    double *x;   /* 3n */
+    double *w;   /* n */
+    double area; /* the shape's area (sum of w) */
+} floe_area_quadrature;
+/* Builds the quadrature of g at level `level` (>= 1): polygons and compound bodies of
+ * polygons (fan triangles from the centroid, each cut into level^2 similar triangles, each
+ * by a 3-point rule exact for quadratics), discs (level + 1 Gauss-Legendre rings x 8 level
+ * angles: exact for polynomials in r up to degree 2 level + 1 times trigonometric ones of
+ * order < 8 level),
+ * any other bounded 2D shape by a (8 level)^2 grid of its bounding square (cells whose
+ * centre has sdf < 0; weights rescaled to its area from mass properties). FLOE_OK, or an
+ * error with the message in err. */
+int floe_area_quadrature_build(const floe_geometry *g, int level, floe_area_quadrature *q, char *err, size_t errlen);
+void floe_area_quadrature_free(floe_area_quadrature *q);
+
+/* Registers ocean_drag, wind_drag and coriolis (kind "provider");
+ * floe_register_builtins calls it. */
+int floe_register_builtin_forcing(char *err, size_t errlen);
+
+#endif

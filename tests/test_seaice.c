@@ -1,0 +1,382 @@
+/* test_seaice.c - floes and their forcing (core/forcing, docs/sea-ice.md), through public
+ * headers only:
+ *  - thickness-scaled masses: a floe of thickness h weighs rho h A with inertia rho h J
+ *    (polygon and disc, 1e-12), a particle without thickness keeps its mass per metre, a
+ *    thickness in 3D or negative is refused with a message;
+ *  - SubZero's coupling oracles (Subzero.jl test/test_physical_processes/test_coupling.jl,
+ *    "OA Forcings", a 5 x 20 km floe, h = 0.25 m, default constants): force per area
+ *    (2.9760, 0.8296) for a still floe in a 1 m/s current with the geostrophic tilt,
+ *    (-0.1756, -0.1419) for a floe moving at (0.25, 0.1) in still water with Coriolis,
+ *    (-0.0013, -6.708e-4) under a (-1, -0.5) m/s wind (to the 4 digits they print, and to
+ *    1e-9 against the closed forms);
+ *  - the drag torque of a disc spinning in still water, -cos(theta) 2 pi rho C_d w^2 R^5 / 5
+ *    (Gauss-Legendre rings: 1e-12), of a spinning square, -rho C_d w^2 (8 a^5 / 5)
+ *    int_0^{pi/4} sec^5 (1e-2 at the default level 1, 1e-5 at level 8, falling with the level);
+ *  - free drift: one floe under wind, current, Coriolis and tilt reaches the steady
+ *    solution of the momentum balance (solved by Newton to round-off) within 0.1 %;
+ *  - the inertial oscillation: u - U_o turns clockwise with the period 2 pi / f (0.5 %;
+ *    measured ~1e-5) and a kept amplitude (1e-9);
+ *  - scenes: the providers by name with thicknesses; errors (both f and latitude, a drag in
+ *    3D, a gyre without length) refused with what is wrong. */
+#include "check.h"
+#include "floe.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const double RHO_I = 920.0;
+
+/* a 2D world with one ice material and a rectangle floe (half sides a, b) of thickness h */
+static floe_world *ice_world(double dt, int integrator) {
+    floe_world_def d = floe_default_world_def();
+    d.dim = 2;
+    d.mass_2d_area = 1;
+    d.dt = dt;
+    d.allow_unstable_dt = 1;
+    d.integrator = integrator;
+    d.gravity[0] = d.gravity[1] = d.gravity[2] = 0;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material m = {"ice", RHO_I, 6e6, 0.3};
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, floe_linear_law_create(1e3, 0, 0, 0, 0));
+    return w;
+}
+
+static int add_rect(floe_world *w, double a, double b, double h, const double x[3], const double v[3]) {
+    const double xy[8] = {-a, -b, a, -b, a, b, -a, b};
+    char err[256];
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = floe_world_add_geometry(w, floe_polygon_create(xy, 4, err, sizeof err));
+    p.thickness = h;
+    if (x) memcpy(p.x, x, sizeof p.x);
+    if (v) memcpy(p.v, v, sizeof p.v);
+    return floe_world_add_particle(w, &p);
+}
+
+static void test_masses(void) {
+    floe_world *w = ice_world(1.0, FLOE_VELOCITY_VERLET);
+    const double a = 2500, b = 10000, h = 0.25, R = 3000;
+    int i = add_rect(w, a, b, h, NULL, NULL);
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = floe_world_add_geometry(w, floe_sphere_create(R));
+    p.thickness = 1.5;
+    p.x[0] = 5e4;
+    int j = floe_world_add_particle(w, &p);
+    p.thickness = 0;
+    p.x[0] = -5e4;
+    int k = floe_world_add_particle(w, &p);
+    CHECK(i >= 0 && j >= 0 && k >= 0, "floes added");
+    CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
+    floe_particles_view v;
+    floe_world_particles(w, &v);
+    double A = 4 * a * b;
+    CHECK_NEAR(v.mass[i], RHO_I * h * A, 1e-12, "rectangle floe: m = rho h A");
+    CHECK_NEAR(v.inertia[3 * i + 2], RHO_I * h * A * (4 * a * a + 4 * b * b) / 12, 1e-12,
+               "rectangle floe: I = rho h A (w^2 + l^2) / 12");
+    CHECK_NEAR(v.mass[j], RHO_I * 1.5 * M_PI * R * R, 1e-12, "disc floe: m = rho h pi R^2");
+    CHECK_NEAR(v.inertia[3 * j + 2], 0.5 * v.mass[j] * R * R, 1e-12, "disc floe: I = m R^2 / 2");
+    CHECK_NEAR(v.mass[k], RHO_I * M_PI * R * R, 1e-12, "no thickness: mass per metre");
+    CHECK(v.thickness && v.thickness[i] == h && v.thickness[k] == 0, "the view lists the thicknesses");
+    floe_particle_state st;
+    floe_world_get_particle(w, j, &st);
+    CHECK(st.thickness == 1.5, "floe_world_get_particle: thickness %g", st.thickness);
+    p.thickness = -1;
+    CHECK(floe_world_add_particle(w, &p) < 0 && strstr(floe_world_last_error(w), "thickness"),
+          "a negative thickness is refused: %s", floe_world_last_error(w));
+    floe_world_destroy(w);
+    floe_world_def d3 = floe_default_world_def();
+    floe_world *w3 = floe_world_create(&d3, NULL, 0);
+    floe_material m = {"ice", RHO_I, 6e6, 0.3};
+    floe_world_add_material(w3, &m);
+    floe_particle_def q = floe_default_particle_def();
+    q.geometry = floe_world_add_geometry(w3, floe_sphere_create(1));
+    q.thickness = 1;
+    CHECK(floe_world_add_particle(w3, &q) < 0 && strstr(floe_world_last_error(w3), "2D"),
+          "a thickness in 3D is refused: %s", floe_world_last_error(w3));
+    floe_world_destroy(w3);
+}
+
+/* force per area on floe 0 after prepare */
+static void force_per_area(floe_world *w, double A, double out[3]) {
+    floe_particle_state st;
+    floe_world_get_particle(w, 0, &st);
+    out[0] = st.f[0] / A;
+    out[1] = st.f[1] / A;
+    out[2] = st.torque[2];
+}
+
+static void test_subzero_oracles(void) {
+    const double a = 2500, b = 10000, h = 0.25, A = 4 * a * b, f = 1.4e-4;
+    const double rc = 1027 * 3e-3, c15 = cos(15 * M_PI / 180), s15 = sin(15 * M_PI / 180);
+    char err[256];
+    /* 1. a still floe in a 1 m/s eastward current, with the geostrophic tilt */
+    {
+        floe_world *w = ice_world(1e-3, FLOE_VELOCITY_VERLET);
+        add_rect(w, a, b, h, NULL, NULL);
+        floe_drag_def od = floe_ocean_drag_default();
+        od.field.U[0] = 1;
+        floe_world_add_provider(w, floe_drag_create("ocean_drag", &od, err, sizeof err));
+        floe_coriolis_def cd = floe_coriolis_default();
+        cd.tilt = FLOE_TILT_GEOSTROPHIC;
+        cd.field.U[0] = 1;
+        floe_world_add_provider(w, floe_coriolis_create(&cd, err, sizeof err));
+        CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
+        double F[3];
+        force_per_area(w, A, F);
+        CHECK_NEAR(F[0], 2.9760, 5e-5, "SubZero oracle: still floe, current (1,0): F_x/A (2.9760)");
+        CHECK_NEAR(F[1], 0.8296, 5e-5, "SubZero oracle: F_y/A (0.8296)");
+        CHECK_NEAR(F[0], rc * c15, 1e-9, "closed form rho C cos(15)");
+        CHECK_NEAR(F[1], rc * s15 + RHO_I * h * f, 1e-6, "closed form rho C sin(15) + rho_i h f");
+        CHECK(fabs(F[2]) < 1e-9 * rc * A * b, "no torque on the still floe in a uniform current (%g)", F[2]);
+        floe_world_destroy(w);
+    }
+    /* 2. a floe moving at (0.25, 0.1) in still water, with Coriolis (no tilt) */
+    {
+        floe_world *w = ice_world(1e-3, FLOE_VELOCITY_VERLET);
+        const double v[3] = {0.25, 0.1, 0};
+        add_rect(w, a, b, h, NULL, v);
+        floe_drag_def od = floe_ocean_drag_default();
+        floe_world_add_provider(w, floe_drag_create("ocean_drag", &od, err, sizeof err));
+        floe_coriolis_def cd = floe_coriolis_default();
+        floe_world_add_provider(w, floe_coriolis_create(&cd, err, sizeof err));
+        CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
+        double F[3];
+        force_per_area(w, A, F);
+        CHECK_NEAR(F[0], -0.1756, 3e-4, "SubZero oracle: moving floe, still water: F_x/A (-0.1756)");
+        CHECK_NEAR(F[1], -0.1419, 3e-4, "SubZero oracle: F_y/A (-0.1419)");
+        double dx = -0.25, dy = -0.1, s = rc * hypot(dx, dy);
+        CHECK_NEAR(F[0], s * (c15 * dx - s15 * dy) + RHO_I * h * f * 0.1, 1e-6, "closed form, x");
+        CHECK_NEAR(F[1], s * (s15 * dx + c15 * dy) - RHO_I * h * f * 0.25, 1e-6, "closed form, y");
+        floe_world_destroy(w);
+    }
+    /* 3. a still floe under a (-1, -0.5) m/s wind */
+    {
+        floe_world *w = ice_world(1e-3, FLOE_VELOCITY_VERLET);
+        add_rect(w, a, b, h, NULL, NULL);
+        floe_drag_def wd = floe_wind_drag_default();
+        wd.field.U[0] = -1;
+        wd.field.U[1] = -0.5;
+        floe_world_add_provider(w, floe_drag_create("wind_drag", &wd, err, sizeof err));
+        CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
+        double F[3];
+        force_per_area(w, A, F);
+        CHECK_NEAR(F[0], -0.0013, 4e-2, "SubZero oracle: wind (-1,-0.5): F_x/A (-0.0013)");
+        CHECK_NEAR(F[1], -6.708e-4, 1e-4, "SubZero oracle: F_y/A (-6.708e-4)");
+        CHECK_NEAR(F[0], -1.2e-3 * hypot(1, 0.5), 1e-9, "closed form rho_a C |U| U_x");
+        floe_world_destroy(w);
+    }
+}
+
+/* the drag torque on a floe spinning at w in still water (one provider, level lev) */
+static double spin_torque(const double *xy, int nv, double R, double wz, double theta, int lev) {
+    floe_world *w = ice_world(1e-3, FLOE_VELOCITY_VERLET);
+    char err[256];
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = floe_world_add_geometry(w, xy ? floe_polygon_create(xy, nv, err, sizeof err) : floe_sphere_create(R));
+    p.thickness = 1;
+    p.w[2] = wz;
+    floe_world_add_particle(w, &p);
+    floe_drag_def od = floe_ocean_drag_default();
+    od.turning_angle = theta;
+    od.quadrature = lev;
+    floe_world_add_provider(w, floe_drag_create("ocean_drag", &od, err, sizeof err));
+    double t = NAN;
+    if (floe_world_prepare(w) == FLOE_OK) {
+        floe_particle_state st;
+        floe_world_get_particle(w, 0, &st);
+        t = st.torque[2];
+        CHECK(fabs(st.f[0]) + fabs(st.f[1]) < 1e-9 * fabs(t) / (R > 0 ? R : 1), "no net force on a spinning floe");
+    }
+    floe_world_destroy(w);
+    return t;
+}
+
+static void test_torque(void) {
+    const double rc = 1027 * 3e-3, wz = 2e-3, R = 1000;
+    for (int k = 0; k < 2; k++) {
+        double th = k ? 15 * M_PI / 180 : 0;
+        double t = spin_torque(NULL, 0, R, wz, th, 3);
+        CHECK_NEAR(t, -cos(th) * 2 * M_PI * rc * wz * wz * pow(R, 5) / 5, 1e-12,
+                   k ? "disc spin torque, theta 15: -cos(theta) 2 pi rho C w^2 R^5 / 5" : "disc spin torque, theta 0");
+    }
+    /* a square of half side a: int r^3 dA = (8 a^5 / 5) int_0^{pi/4} sec^5 */
+    const double a = 500, xy[8] = {-a, -a, a, -a, a, a, -a, a};
+    const double sec3 = (sqrt(2.0) + log(1 + sqrt(2.0))) / 2, sec5 = 2 * sqrt(2.0) / 4 + 0.75 * sec3;
+    const double exact = -rc * wz * wz * 8 * pow(a, 5) / 5 * sec5;
+    double prev = INFINITY;
+    for (int lev = 1; lev <= 8; lev *= 2) {
+        double t = spin_torque(xy, 4, a, wz, 0, lev), e = fabs(t / exact - 1);
+        printf("  square spin torque, level %d: rel. error %.3e\n", lev, e);
+        CHECK(e < prev, "the square's torque error falls with the level (%g after %g)", e, prev);
+        prev = e;
+        if (lev == 1) CHECK(e < 1e-2, "square spin torque at the default level 1 within 1e-2 (%g)", e);
+        if (lev == 8) CHECK(e < 1e-5, "square spin torque at level 8 within 1e-5 (%g)", e);
+    }
+}
+
+/* steady free drift: solve rho_a Ca |Ua - u| (Ua - u) + rho_w Cw |Uo - u| R(th)(Uo - u) -
+ * rho_i h f k x (u - Uo) = 0 by Newton (finite-difference Jacobian, to round-off) */
+static void drift_residual(const double u[2], const double Ua[2], const double Uo[2], double th, double h, double f,
+                           double r[2]) {
+    double ax = Ua[0] - u[0], ay = Ua[1] - u[1], sa = 1.2 * 1e-3 * hypot(ax, ay);
+    double ox = Uo[0] - u[0], oy = Uo[1] - u[1], so = 1027 * 3e-3 * hypot(ox, oy);
+    double c = cos(th), s = sin(th), b = RHO_I * h * f;
+    /* -b k x (u - Uo) = b k x (Uo - u) = b (-oy, ox) */
+    r[0] = sa * ax + so * (c * ox - s * oy) - b * oy;
+    r[1] = sa * ay + so * (s * ox + c * oy) + b * ox;
+}
+
+static void test_free_drift(void) {
+    const double Ua[2] = {10, 2}, Uo[2] = {0.05, -0.08}, th = 15 * M_PI / 180, h = 1.0, f = 1.4e-4;
+    double u[2] = {0.2, 0};
+    for (int it = 0; it < 60; it++) {
+        double r[2], J[2][2], e = 1e-7;
+        drift_residual(u, Ua, Uo, th, h, f, r);
+        for (int k = 0; k < 2; k++) {
+            double up[2] = {u[0], u[1]}, rp[2];
+            up[k] += e;
+            drift_residual(up, Ua, Uo, th, h, f, rp);
+            J[0][k] = (rp[0] - r[0]) / e;
+            J[1][k] = (rp[1] - r[1]) / e;
+        }
+        double det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+        u[0] -= (J[1][1] * r[0] - J[0][1] * r[1]) / det;
+        u[1] -= (-J[1][0] * r[0] + J[0][0] * r[1]) / det;
+    }
+    double r[2];
+    drift_residual(u, Ua, Uo, th, h, f, r);
+    CHECK(hypot(r[0], r[1]) < 1e-12, "the steady balance solved (residual %g)", hypot(r[0], r[1]));
+    printf("  steady free drift: u = (%.6f, %.6f) m/s, %.2f%% of the wind\n", u[0], u[1],
+           100 * hypot(u[0], u[1]) / hypot(Ua[0], Ua[1]));
+    char err[256];
+    floe_world *w = ice_world(5.0, FLOE_VELOCITY_VERLET);
+    add_rect(w, 1500, 1000, h, NULL, NULL);
+    floe_drag_def od = floe_ocean_drag_default();
+    od.field.U[0] = Uo[0];
+    od.field.U[1] = Uo[1];
+    floe_world_add_provider(w, floe_drag_create("ocean_drag", &od, err, sizeof err));
+    floe_drag_def wd = floe_wind_drag_default();
+    wd.field.U[0] = Ua[0];
+    wd.field.U[1] = Ua[1];
+    floe_world_add_provider(w, floe_drag_create("wind_drag", &wd, err, sizeof err));
+    floe_coriolis_def cd = floe_coriolis_default();
+    cd.tilt = FLOE_TILT_GEOSTROPHIC;
+    cd.field = od.field;
+    floe_world_add_provider(w, floe_coriolis_create(&cd, err, sizeof err));
+    int rc = floe_world_run(w, 60000, NULL, NULL);
+    CHECK(rc == FLOE_OK, "free drift run: %s", floe_world_last_error(w));
+    floe_particle_state st;
+    floe_world_get_particle(w, 0, &st);
+    double e = hypot(st.v[0] - u[0], st.v[1] - u[1]) / hypot(u[0], u[1]);
+    printf("  free drift after 60,000 s: (%.6f, %.6f), error %.2e of |u|\n", st.v[0], st.v[1], e);
+    CHECK(e < 1e-3, "free drift within 0.1 %% of the steady solution (%g)", e);
+    CHECK(fabs(st.w[2]) < 1e-12, "a symmetric floe in uniform fields does not turn (%g)", st.w[2]);
+    CHECK(fabs(floe_world_energy_balance_error(w)) < 1e-3,
+          "energy balance closes (%g)", floe_world_energy_balance_error(w));
+    floe_world_destroy(w);
+}
+
+static void test_inertial(void) {
+    const double f = 1.4e-4, Uo[2] = {0.1, -0.03}, T = 2 * M_PI / f;
+    char err[256];
+    floe_world *w = ice_world(60.0, FLOE_VELOCITY_VERLET);
+    const double v0[3] = {0.3, 0.1, 0};
+    add_rect(w, 1000, 700, 0.8, NULL, v0);
+    floe_coriolis_def cd = floe_coriolis_default();
+    cd.f = f;
+    cd.tilt = FLOE_TILT_GEOSTROPHIC;
+    cd.field.U[0] = Uo[0];
+    cd.field.U[1] = Uo[1];
+    floe_world_add_provider(w, floe_coriolis_create(&cd, err, sizeof err));
+    /* u - Uo = (u0 - Uo) exp(-i f t): the angle of u - Uo falls by f t; crossings of the
+     * x axis from above (uy - Uoy through 0 with ux - Uox < 0 ... ) timed by interpolation */
+    double amp0 = hypot(v0[0] - Uo[0], v0[1] - Uo[1]), amin = INFINITY, amax = 0;
+    double prev_y = v0[1] - Uo[1], prev_t = 0, cross[8];
+    int nc = 0;
+    while (floe_world_time(w) < 3.2 * T && nc < 8) {
+        if (floe_world_step(w) != FLOE_OK) break;
+        floe_particle_state st;
+        floe_world_get_particle(w, 0, &st);
+        double ux = st.v[0] - Uo[0], uy = st.v[1] - Uo[1], t = floe_world_time(w), a = hypot(ux, uy);
+        amin = fmin(amin, a);
+        amax = fmax(amax, a);
+        if (prev_y > 0 && uy <= 0 && ux > 0) cross[nc++] = prev_t + (t - prev_t) * prev_y / (prev_y - uy);
+        prev_y = uy;
+        prev_t = t;
+    }
+    CHECK(nc >= 3, "three downward crossings (%d)", nc);
+    if (nc >= 3) {
+        double Tm = (cross[nc - 1] - cross[0]) / (nc - 1);
+        CHECK_NEAR(Tm, T, 5e-3, "inertial period 2 pi / f (tol 0.5 %)");
+    }
+    CHECK(amax - amin <= 1e-9 * amp0 && fabs(amax - amp0 * cos(0.5 * f * 60.0)) < 1e-3 * amp0,
+          "the inertial amplitude is kept (%g .. %g of %g)", amin, amax, amp0);
+    floe_world_destroy(w);
+}
+
+static const char *scene =
+    "dimension: 2\n"
+    "mass_2d: area\n"
+    "time: {duration: 100, dt: 10}\n"
+    "gravity: [0, 0]\n"
+    "materials: [{name: ice, density: 920, young: 6e6, poisson: 0.3}]\n"
+    "laws: [{materials: [ice, ice], model: linear, kn: 1e3, ks: 0}]\n"
+    "bodies:\n"
+    "  - {material: ice, position: [0, 0], thickness: 0.25, shape: {polygon: {vertices: [[-2500, -10000], [2500, -10000], [2500, 10000], [-2500, 10000]]}}}\n"
+    "forces:\n"
+    "  - {type: ocean_drag, velocity: [1, 0]}\n"
+    "  - {type: coriolis, tilt: geostrophic, velocity: [1, 0]}\n";
+
+static void expect_scene_error(const char *from, const char *to, const char *word) {
+    char text[4096], err[1024] = "";
+    const char *p = strstr(scene, from);
+    if (!p) {
+        CHECK(0, "scene text has no '%s'", from);
+        return;
+    }
+    snprintf(text, sizeof text, "%.*s%s%s", (int)(p - scene), scene, to, p + strlen(from));
+    floe_world *w = NULL;
+    int rc = floe_scene_load_ex("t.yaml", text, NULL, 0, &w, NULL, err, sizeof err);
+    if (rc == FLOE_OK) {
+        rc = floe_world_prepare(w);
+        snprintf(err, sizeof err, "%s", floe_world_last_error(w));
+    }
+    CHECK(rc != FLOE_OK && strstr(err, word), "'%s' refused with '%s': %s", to, word, err);
+    floe_world_destroy(w);
+}
+
+static void test_scene(void) {
+    char err[1024] = "";
+    floe_world *w = NULL;
+    int rc = floe_scene_load_ex("t.yaml", scene, NULL, 0, &w, NULL, err, sizeof err);
+    CHECK(rc == FLOE_OK, "sea-ice scene: %s", err);
+    if (rc == FLOE_OK) {
+        CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
+        floe_particle_state st;
+        floe_world_get_particle(w, 0, &st);
+        const double A = 5000.0 * 20000.0;
+        CHECK_NEAR(st.mass, RHO_I * 0.25 * A, 1e-12, "scene: thickness-scaled mass");
+        CHECK_NEAR(st.f[1] / A, 0.8296, 5e-5, "scene: the SubZero oracle through the scene");
+    }
+    floe_world_destroy(w);
+    expect_scene_error("tilt: geostrophic,", "f: 1e-4, latitude: 70, tilt: geostrophic,", "either f or latitude");
+    expect_scene_error("tilt: geostrophic, velocity: [1, 0]", "tilt: none, velocity: [1, 0]", "only read with tilt");
+    expect_scene_error("{type: ocean_drag, velocity: [1, 0]}", "{type: ocean_drag, field: gyre, speed: 1}",
+                       "length must be > 0");
+    expect_scene_error("thickness: 0.25", "thickness: -1", "thickness");
+    expect_scene_error("dimension: 2\nmass_2d: area\ntime: {duration: 100, dt: 10}\ngravity: [0, 0]\n",
+                       "dimension: 3\ntime: {duration: 100, dt: 10}\ngravity: [0, 0, 0]\n", "2D");
+}
+
+int main(void) {
+    char err[256];
+    floe_register_builtins(err, sizeof err);
+    test_masses();
+    test_subzero_oracles();
+    test_torque();
+    test_free_drift();
+    test_inertial();
+    test_scene();
+    return check_summary("test_seaice");
+}
