@@ -16,6 +16,9 @@
  *    solution of the momentum balance (solved by Newton to round-off) within 0.1 %;
  *  - the inertial oscillation: u - U_o turns clockwise with the period 2 pi / f (0.5 %;
  *    measured ~1e-5) and a kept amplitude (1e-9);
+ *  - a Voronoi floe field (`floe_field:`): areas add up to concentration x region (1e-9),
+ *    masses rho h A with h in thickness +- spread, reproducible from its seed; bad keys and
+ *    ranges refused at their line;
  *  - scenes: the providers by name with thicknesses; errors (both f and latitude, a drag in
  *    3D, a gyre without length) refused with what is wrong. */
 #include "check.h"
@@ -369,6 +372,67 @@ static void test_scene(void) {
                        "dimension: 3\ntime: {duration: 100, dt: 10}\ngravity: [0, 0, 0]\n", "2D");
 }
 
+static const char *field_scene =
+    "dimension: 2\n"
+    "mass_2d: area\n"
+    "time: {duration: 100, dt: 10}\n"
+    "gravity: [0, 0]\n"
+    "materials: [{name: ice, density: 920, young: 6e6, poisson: 0.3}]\n"
+    "laws: [{materials: [ice, ice], model: linear, kn: 1e3, ks: 0}]\n"
+    "bodies:\n"
+    "  - floe_field: {region: {min: [0, 0], max: [1e5, 5e4]}, count: 150, lloyd: 4, concentration: 0.7, seed: 7, "
+    "thickness: 0.5, thickness_spread: 0.2}\n"
+    "    material: ice\n";
+
+/* a Voronoi floe field: the floes' areas add up to concentration x region, each floe's mass
+ * is rho h A with h within thickness +- spread, the same seed gives the same field */
+static void test_floe_field(void) {
+    char err[1024] = "";
+    floe_world *w = NULL, *w2 = NULL;
+    int rc = floe_scene_load_ex("f.yaml", field_scene, NULL, 0, &w, NULL, err, sizeof err);
+    CHECK(rc == FLOE_OK, "floe field scene: %s", err);
+    rc = rc ? rc : floe_scene_load_ex("f.yaml", field_scene, NULL, 0, &w2, NULL, err, sizeof err);
+    if (rc == FLOE_OK && floe_world_prepare(w) == FLOE_OK && floe_world_prepare(w2) == FLOE_OK) {
+        floe_particles_view v, v2;
+        floe_world_particles(w, &v);
+        floe_world_particles(w2, &v2);
+        CHECK(v.n == 150, "150 floes (%d)", v.n);
+        double area = 0, hmin = INFINITY, hmax = 0, same = 1;
+        for (int i = 0; i < v.n; i++) {
+            floe_mass_properties mp;
+            floe_geometry_mass_properties(floe_world_particle_geometry(w, i), 2, 1.0, &mp);
+            area += mp.volume;
+            double h = v.thickness[i];
+            hmin = fmin(hmin, h);
+            hmax = fmax(hmax, h);
+            if (fabs(v.mass[i] - 920 * h * mp.volume) > 1e-12 * v.mass[i]) same = 0;
+            for (int a = 0; a < 2; a++) same = same && v.x[3 * i + a] == v2.x[3 * i + a];
+            same = same && v.thickness[i] == v2.thickness[i];
+        }
+        CHECK_NEAR(area, 0.7 * 1e5 * 5e4, 1e-9, "floe field: total floe area = concentration x region");
+        CHECK(hmin >= 0.3 && hmax <= 0.7 && hmax - hmin > 0.2, "thickness in 0.5 +- 0.2 ([%g, %g])", hmin, hmax);
+        CHECK(same, "masses rho h A and the same field from the same seed");
+    }
+    floe_world_destroy(w);
+    floe_world_destroy(w2);
+    const char *bad[][3] = {{"concentration: 0.7", "concentration: 1.5", "concentration"},
+                            {"thickness_spread: 0.2", "thickness_spread: 0.5", "thickness_spread"},
+                            {"count: 150", "count: 0", "count"},
+                            {"max: [1e5, 5e4]", "max: [1e5, -5e4]", "max must exceed min"},
+                            {"lloyd: 4,", "lloyd: 4, size: 3,", "unknown key 'size'"}};
+    for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+        char text[2048];
+        const char *p = strstr(field_scene, bad[k][0]);
+        snprintf(text, sizeof text, "%.*s%s%s", (int)(p - field_scene), field_scene, bad[k][1], p + strlen(bad[k][0]));
+        floe_world *wb = NULL;
+        err[0] = 0;
+        rc = floe_scene_load_ex("f.yaml", text, NULL, 0, &wb, NULL, err, sizeof err);
+        CHECK(rc != FLOE_OK && strstr(err, bad[k][2]) && strstr(err, "f.yaml:8:"), "'%s' refused at its line: %s",
+              bad[k][1], err);
+        floe_world_destroy(wb);
+    }
+}
+
 int main(void) {
     char err[256];
     floe_register_builtins(err, sizeof err);
@@ -378,5 +442,6 @@ int main(void) {
     test_free_drift();
     test_inertial();
     test_scene();
+    test_floe_field();
     return check_summary("test_seaice");
 }

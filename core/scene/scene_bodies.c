@@ -881,6 +881,13 @@ int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key)
     while ((e = fy_node_sequence_iterate(seq, &it))) {
         char what[32];
         snprintf(what, sizeof what, "bodies[%d]", entry);
+        if (fy_node_is_mapping(e) && fy_node_mapping_lookup_by_string(e, "floe_field", -1)) {
+            s->entry_first[entry] = s->nparticles; /* a Voronoi floe field (scene_floes.c) */
+            FLOE_TRY(sc_floe_field(s, e, entry, what));
+            s->entry_count[entry] = s->nparticles - s->entry_first[entry];
+            s->nbody_entries = ++entry;
+            continue;
+        }
         sc_map m;
         /* packing: a registered packing (floe_registry.h FLOE_KIND_PACKING); none: one body */
         const floe_registry_entry *pent = NULL;
