@@ -19,6 +19,10 @@
  *  - a Voronoi floe field (`floe_field:`): areas add up to concentration x region (1e-9),
  *    masses rho h A with h in thickness +- spread, reproducible from its seed; bad keys and
  *    ranges refused at their line;
+ *  - Hopkins' ridging law against its formulas: elastic k_e d L, loading along the series
+ *    ridging curve (1e-9), the permanent ridge, unloading and reloading elastic up to the
+ *    hardened yield, the shear spring G h_eff and Coulomb sliding, the damped branch at a
+ *    slow rate on the quasi-static curve (1e-3);
  *  - scenes: the providers by name with thicknesses; errors (both f and latitude, a drag in
  *    3D, a gyre without length) refused with what is wrong. */
 #include "check.h"
@@ -433,6 +437,93 @@ static void test_floe_field(void) {
     }
 }
 
+/* Hopkins' ridging law against its formulas (docs/sea-ice.md "Ridging law"): two disc
+ * floes of radius r and thickness h along x, driven through a prescribed overlap history */
+typedef struct hk_run {
+    const floe_contact_law *law;
+    floe_contact c;
+    double hist[FLOE_MAX_HISTORY];
+} hk_run;
+
+static double hk_step(hk_run *r, double depth, double rate, double vt, double dt, floe_contact_result *out) {
+    r->c.depth = depth;
+    r->c.vn = rate;
+    r->c.vt[1] = vt;
+    r->c.dt = dt;
+    memset(out, 0, sizeof *out);
+    CHECK(r->law->klass->force(r->law, &r->c, r->hist, out) == FLOE_OK, "hopkins force");
+    return out->fn;
+}
+
+static void test_hopkins(void) {
+    floe_hopkins_def d = floe_hopkins_default();
+    const double E = d.young, rr = 500, h = 0.8, L = 4 * rr * rr / (2 * rr), ke = E * h / (2 * rr);
+    const double kr = d.plastic_friction * h, kp = d.plastic_hardening * h * h;
+    d.damping = 0;
+    char err[256];
+    hk_run r;
+    memset(&r, 0, sizeof r);
+    r.law = floe_hopkins_law_create(&d, err, sizeof err);
+    CHECK(r.law != NULL, "hopkins created: %s", err);
+    if (!r.law) return;
+    r.c.n[0] = 1;
+    r.c.thick_i = r.c.thick_j = h;
+    r.c.rad_i = r.c.rad_j = rr;
+    r.c.r_eff = rr / 2;
+    r.c.m_eff = 920 * h * M_PI * rr * rr / 2;
+    floe_contact_result o;
+    /* elastic below the yield: F = k_e d L, the force on i along -n, energy k_e L d^2 / 2 */
+    const double dy = kr / ke; /* the yield overlap */
+    double F = hk_step(&r, 0.5 * dy, 1e-3, 0, 1.0, &o);
+    CHECK_NEAR(F, ke * 0.5 * dy * L, 1e-12, "hopkins elastic: F = k_e d L");
+    CHECK_NEAR(o.force[0], -F, 1e-15, "hopkins: the force pushes i away from j");
+    CHECK_NEAR(o.energy, 0.5 * ke * L * 0.25 * dy * dy, 1e-12, "hopkins elastic energy k_e L d^2 / 2");
+    /* loading at a steady rate: beyond the yield the series law
+     * F/L = k_e (k_p d + k_r) / (k_p + k_e) (eta = 0), the ridge d_p = d - F / (k_e L) */
+    const int N = 2000;
+    const double dmax = 50 * dy, dt = 1.0, rate = dmax / (N * dt);
+    double worst = 0;
+    for (int k = 1; k <= N; k++) {
+        double dk = dmax * k / N;
+        F = hk_step(&r, dk, rate, 0, dt, &o);
+        double ref = fmin(ke * dk, ke * (kp * dk + kr) / (kp + ke)) * L;
+        worst = fmax(worst, fabs(F - ref) / ref);
+    }
+    CHECK(worst < 1e-9, "hopkins loading follows min(elastic, series ridging) (worst %.2e)", worst);
+    const double dp = dmax - F / (ke * L);
+    CHECK_NEAR(r.hist[0], dp, 1e-9, "hopkins: the plastic ridge d_p = d - F/(k_e L)");
+    CHECK(dp > 0.9 * dmax, "most of the overlap is ridge (%g of %g)", dp, dmax);
+    /* unloading: elastic from the ridge, no load behind it, the ridge kept */
+    F = hk_step(&r, dmax - 0.5 * (dmax - dp), -rate, 0, dt, &o);
+    CHECK_NEAR(F, ke * 0.5 * (dmax - dp) * L, 1e-9, "hopkins unloading: elastic from the ridge");
+    F = hk_step(&r, 0.5 * dp, -rate, 0, dt, &o);
+    CHECK(F == 0 && fabs(r.hist[0] - dp) < 1e-9 * dp, "hopkins: no load behind the ridge, which stays (F %g, d_p %g)", F, r.hist[0]);
+    /* reloading: elastic from d_p up to the hardened yield k_r + k_p d_p */
+    F = hk_step(&r, dp + 0.5 * (kr + kp * dp) / ke, rate, 0, dt, &o);
+    CHECK_NEAR(F, 0.5 * (kr + kp * dp) * L, 1e-9, "hopkins reloading: elastic below the hardened yield");
+    /* tangential: stick with k_t = G h_eff, then Coulomb sliding */
+    const double kt = E / (2 * (1 + d.poisson)) * (h / 2), Fn = F;
+    double sl = 1e-4 * Fn / kt;
+    hk_step(&r, r.c.depth, 0, sl / dt, dt, &o);
+    CHECK_NEAR(o.force[1], -kt * sl, 1e-9, "hopkins shear spring k_t = G h_eff");
+    hk_step(&r, r.c.depth, 0, 1e4 * sl / dt, dt, &o);
+    CHECK_NEAR(o.force[1], -d.friction * Fn, 1e-9, "hopkins Coulomb sliding mu F");
+    /* damped ridging: at a slow rate the backward-Euler Maxwell branch tends to the
+     * quasi-static series curve */
+    floe_contact_law_class const *K = r.law->klass;
+    K->destroy((floe_contact_law *)r.law);
+    d.damping = 0.1;
+    r.law = floe_hopkins_law_create(&d, err, sizeof err);
+    memset(r.hist, 0, sizeof r.hist);
+    const double slow = dmax / 2e6;
+    for (int k = 1; k <= N; k++) F = hk_step(&r, dmax * k / N, slow, 0, dmax / N / slow, &o);
+    CHECK_NEAR(F, ke * (kp * dmax + kr) / (kp + ke) * L, 1e-3, "hopkins damped, slow: the quasi-static ridging force");
+    r.law->klass->destroy((floe_contact_law *)r.law);
+    d.plastic_hardening = -1;
+    CHECK(floe_hopkins_law_create(&d, err, sizeof err) == NULL && strstr(err, "plastic_hardening"),
+          "a negative hardening is refused: %s", err);
+}
+
 int main(void) {
     char err[256];
     floe_register_builtins(err, sizeof err);
@@ -443,5 +534,6 @@ int main(void) {
     test_inertial();
     test_scene();
     test_floe_field();
+    test_hopkins();
     return check_summary("test_seaice");
 }

@@ -4,7 +4,7 @@
 #include "floe_contact.h"
 
 extern const floe_registry_entry floe_law_entry_hertz_mindlin, floe_law_entry_linear, floe_law_entry_viscoelastic,
-    floe_law_entry_short_range, floe_law_entry_none, floe_law_entry_overlap_area, floe_normal_entry_hooke,
+    floe_law_entry_short_range, floe_law_entry_none, floe_law_entry_overlap_area, floe_law_entry_hopkins, floe_normal_entry_hooke,
     floe_normal_entry_hertz, floe_tangential_entry_coulomb, floe_tangential_entry_mindlin;
 
 static const floe_registry_entry *const builtin[] = {
@@ -14,6 +14,7 @@ static const floe_registry_entry *const builtin[] = {
     &floe_law_entry_short_range,
     &floe_law_entry_none,
     &floe_law_entry_overlap_area,
+    &floe_law_entry_hopkins,
     /* the parts a scene composes (laws: [{normal: ..., tangential: ...}]) */
     &floe_normal_entry_hooke,
     &floe_normal_entry_hertz,

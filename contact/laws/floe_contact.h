@@ -66,6 +66,10 @@ typedef struct floe_contact {
     double fn_extra;                     /* their elastic normal load, N (set by the world before
                                             the law is called): laws add it to the Coulomb
                                             limit, so the patch's friction is mu x the total */
+    /* set for laws whose info has needs_floe (sea ice, docs/sea-ice.md): the two bodies'
+     * thickness (m; 1 for a particle without one, floe_particle_def.thickness) and bounding
+     * radii (m; INFINITY for a wall) */
+    double thick_i, thick_j, rad_i, rad_j;
 } floe_contact;
 #define FLOE_MANIFOLD_EXTRA 3
 
@@ -93,6 +97,11 @@ typedef struct floe_law_info {
                                 detection must fill it (polytope pairs only) */
     int spreads_load;        /* 1: the law's stiffness already counts the contact length (the
                                 critical step does not add the contact manifold's factor) */
+    int needs_floe;          /* 1: the law reads thick_i/j and rad_i/j of the contact summary
+                                (the world then takes its general contact path) */
+    int single_point;        /* 1: the law models the whole contact at its deepest point (a
+                                contact length of its own, plastic history): polytope pairs
+                                get no manifold springs */
 } floe_law_info;
 
 typedef struct floe_contact_law_class {
@@ -314,6 +323,23 @@ void floe_tangential_part_destroy(floe_tangential_part *tp);
  * `laws: [{materials: [a, b], model: <name>, <its parameters>}]`. */
 typedef floe_contact_law *(*floe_law_create_fn)(const void *params, const floe_material *a,
                                                 const floe_material *b, char *err, size_t errlen);
+/* Hopkins' elastic-plastic ridging law for 2D sea-ice floes (contact/laws/hopkins_law.c,
+ * docs/sea-ice.md "Ridging law"): reads each floe's thickness (floe_contact.thick_i/j). */
+typedef struct floe_hopkins_def {
+    double young;             /* E, Pa (2e9, DEMSI) */
+    double poisson;           /* nu (0.3) */
+    double damping;           /* eta: normal damping, fraction of critical (0.1) */
+    double plastic_friction;  /* C_f, Pa: ridging yield per length k_r = C_f h_r (26126) */
+    double plastic_hardening; /* C_h, Pa/m^2: hardening k_p = C_h h_r^2 (928) */
+    double friction;          /* Coulomb mu (0.3) */
+    double gs;                /* tangential dashpot, N s/m (0) */
+    double thickness_max;     /* m: the thickest floe, for the critical time step (5) */
+} floe_hopkins_def;
+floe_hopkins_def floe_hopkins_default(void);
+/* NULL with the message in err for an invalid definition */
+floe_contact_law *floe_hopkins_law_create(const floe_hopkins_def *d, char *err, size_t errlen);
+extern const floe_contact_law_class floe_hopkins_law_class;
+
 /* entry flag: the law needs the materials' young and poisson (Hertz-type stiffness) */
 #define FLOE_LAW_NEEDS_YOUNG 256
 /* Registers the built-in laws (idempotent); FLOE_OK or the registry's error. */

@@ -294,6 +294,7 @@ typedef struct stage_env {
     floe_neighbor_list *nl;
     const floe_detect_ctx *dctx;
     int stepping, track, any_growth, nm, any_none, any_pieces, any_overlap;
+    int any_floe; /* a law reads the floes' thickness and radii (floe_law_info.needs_floe) */
 } stage_env;
 
 /* the smaller of two radii (never NaN): fmin is a library call here (NaN rules) */
@@ -506,6 +507,13 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     /* prepare evaluates forces without advancing history; the RK2 midpoint advances it
      * by hist_dt and restores it (the providers' save/restore) */
     c.dt = stepping ? ctx->dt : ctx->hist_dt;
+    if (env->any_floe) {
+        c.thick_i = floe_particle_thickness(p, i);
+        c.thick_j = floe_particle_thickness(p, j);
+        c.rad_i = p->radius[i];
+        c.rad_j = p->radius[j];
+        if (c.nextra > 0 && floe_contact_law_info(law).single_point) c.nextra = 0;
+    }
     /* the manifold's other vertices (polytope pairs, floe_contact.h): elastic springs of
      * the same law, evaluated first so that the law's friction sees their load; the law's
      * dashpot and friction then act at the manifold's load centre */
@@ -650,14 +658,18 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
      * pair is looked up only when it touches (a load per pair saved on the sphere path) */
     int any_none = 0;
     int any_overlap = 0; /* laws that read the overlap area (floe_law_info.needs_overlap) */
+    int any_floe = 0;    /* laws that read the floes' thickness (floe_law_info.needs_floe) */
     for (int k = 0; k < nm * nm; k++) {
         any_none |= floe_contact_law_no_contact(w->laws[k]);
-        if (w->laws[k]) any_overlap |= floe_contact_law_info(w->laws[k]).needs_overlap;
+        if (!w->laws[k]) continue;
+        const floe_law_info li = floe_contact_law_info(w->laws[k]);
+        any_overlap |= li.needs_overlap;
+        any_floe |= li.needs_floe;
     }
     int any_pieces = 0; /* compound bodies: their pairs are per piece */
     for (int g = 0; g < w->ngeoms; g++) any_pieces |= floe_piece_count(w->geoms[g]) > 1;
     stage_acc acc = {eta_d, elastic, diss, wgrow};
-    const stage_env env = {p, nl, &dctx, stepping, track, any_growth, nm, any_none, any_pieces, any_overlap};
+    const stage_env env = {p, nl, &dctx, stepping, track, any_growth, nm, any_none, any_pieces, any_overlap, any_floe};
     const int *pi = nl->pi, *pj = nl->pj;
     const unsigned char *touching = nl->touching;
     const double *x = p->x, *rad = p->radius;
@@ -686,7 +698,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
         }
     /* spheres under a point law: the lean body (sphere_pair); every other entry the general one */
     const unsigned char *kind = p->kind;
-    if (!any_pieces && !any_overlap)
+    if (!any_pieces && !any_overlap && !any_floe)
         for (int q = 0; q < nc; q++) {
             const int k = cand[q];
             if (kind[pi[k]] == FLOE_GEOM_SPHERE && kind[pj[k]] == FLOE_GEOM_SPHERE) FLOE_TRY(sphere_pair(w, ctx, &env, k, &acc));
