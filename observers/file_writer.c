@@ -1,11 +1,13 @@
 /* file_writer.c - the observers' file writer (file_writer.h): CSV rows formatted whole and
  * written at the end of the observation in writes that never cut a row at a page boundary;
- * whole files through a temporary name and rename. */
+ * whole files through a temporary name and rename; the parts of a VTK XML series that the
+ * vtk and outlines outputs share. */
 #include "file_writer.h"
 
 #include <errno.h>
 #include <fcntl.h>
 #include <stdarg.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -209,4 +211,118 @@ void floe_fw_replace_abandon(floe_fw_replace *r) {
     if (r->f) fclose(r->f);
     if (r->tmp) remove(r->tmp);
     replace_free(r);
+}
+
+/* ---- VTK XML series ---- */
+
+const char *floe_fw_vtk_type_name(floe_fw_vtk_type t) {
+    switch (t) {
+    case FLOE_FW_INT32: return "Int32";
+    case FLOE_FW_FLOAT64: return "Float64";
+    case FLOE_FW_INT64: return "Int64";
+    default: return "UInt8";
+    }
+}
+
+size_t floe_fw_vtk_type_size(floe_fw_vtk_type t) {
+    switch (t) {
+    case FLOE_FW_INT32: return 4;
+    case FLOE_FW_FLOAT64: return 8;
+    case FLOE_FW_INT64: return 8;
+    default: return 1;
+    }
+}
+
+const char *floe_fw_vtk_byte_order(void) {
+    const uint16_t one = 1;
+    unsigned char c;
+    memcpy(&c, &one, 1);
+    return c == 1 ? "LittleEndian" : "BigEndian";
+}
+
+char *floe_fw_series_path(const char *dir, const char *prefix, int frame, const char *suffix) {
+    size_t len = (dir ? strlen(dir) : 0) + strlen(prefix) + strlen(suffix) + 32;
+    char *s = malloc(len);
+    if (!s) return NULL;
+    const char *d = dir ? dir : "";
+    const char *sep = dir ? "/" : "";
+    if (frame >= 0)
+        snprintf(s, len, "%s%s%s_%06d%s", d, sep, prefix, frame, suffix);
+    else
+        snprintf(s, len, "%s%s%s%s", d, sep, prefix, suffix);
+    return s;
+}
+
+static void write_xml_attr(FILE *f, const char *s) {
+    for (; *s; s++) {
+        switch (*s) {
+        case '&': fputs("&amp;", f); break;
+        case '<': fputs("&lt;", f); break;
+        case '>': fputs("&gt;", f); break;
+        case '"': fputs("&quot;", f); break;
+        case '\'': fputs("&apos;", f); break;
+        default: fputc(*s, f);
+        }
+    }
+}
+
+int floe_fw_write_pvd(const char *dir, const char *prefix, const double *times, int frames) {
+    char *path = floe_fw_series_path(dir, prefix, -1, ".pvd");
+    if (!path) {
+        errno = ENOMEM;
+        return FLOE_ENOMEM;
+    }
+    floe_fw_replace r;
+    int rc = floe_fw_replace_begin(&r, path);
+    free(path);
+    if (rc != FLOE_OK) return rc;
+    FILE *f = r.f;
+    fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" "
+               "byte_order=\"%s\">\n  <Collection>\n", floe_fw_vtk_byte_order());
+    for (int k = 0; k < frames; k++) {
+        char *name = floe_fw_series_path(NULL, prefix, k, ".vtu");
+        if (!name) {
+            floe_fw_replace_abandon(&r);
+            errno = ENOMEM;
+            return FLOE_ENOMEM;
+        }
+        fprintf(f, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"0\" file=\"", times[k]);
+        write_xml_attr(f, name);
+        fputs("\"/>\n", f);
+        free(name);
+    }
+    fputs("  </Collection>\n</VTKFile>\n", f);
+    return floe_fw_replace_commit(&r);
+}
+
+void floe_fw_vtu_begin(FILE *f, double time, long step) {
+    fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
+               "byte_order=\"%s\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n", floe_fw_vtk_byte_order());
+    fprintf(f, "    <FieldData>\n"
+               "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
+               "format=\"ascii\">%.17g</DataArray>\n"
+               "      <DataArray type=\"Int64\" Name=\"Step\" NumberOfTuples=\"1\" "
+               "format=\"ascii\">%ld</DataArray>\n    </FieldData>\n",
+            time, step);
+}
+
+void floe_fw_vtk_ascii_values(FILE *f, floe_fw_vtk_type t, int ncomp, int m, const void *buf) {
+    const int32_t *i32 = buf;
+    const int64_t *i64 = buf;
+    const double *f64 = buf;
+    const uint8_t *u8 = buf;
+    for (int a = 0; a < m; a++) {
+        fputs("          ", f);
+        for (int c = 0; c < ncomp; c++) {
+            size_t e = (size_t)a * ncomp + c;
+            if (c) fputc(' ', f);
+            switch (t) {
+            case FLOE_FW_INT32: fprintf(f, "%ld", (long)i32[e]); break;
+            case FLOE_FW_INT64: fprintf(f, "%lld", (long long)i64[e]); break;
+            case FLOE_FW_UINT8: fprintf(f, "%u", (unsigned)u8[e]); break;
+            default: fprintf(f, "%.17g", f64[e]); break;
+            }
+        }
+        fputc('\n', f);
+    }
 }

@@ -22,6 +22,9 @@
  * floe_fw_replace_commit closes it and renames it onto PATH, so that PATH is at every
  * instant either absent, its previous complete version, or the new complete one.
  *
+ * VTK XML series (the vtk and outlines outputs): frame and collection names, the .pvd, the
+ * opening of a .vtu and ASCII data arrays, below.
+ *
  * Errors are reported through the world (floe_world_report_error), each message beginning
  * with the writer's name (`who`) and naming the path and the errno text. */
 #ifndef FILE_WRITER_H
@@ -81,5 +84,30 @@ int floe_fw_replace_begin(floe_fw_replace *r, const char *path);
 int floe_fw_replace_commit(floe_fw_replace *r);
 /* Closes and removes the temporary file (a frame refused half-written). Frees r's names. */
 void floe_fw_replace_abandon(floe_fw_replace *r);
+
+/* ---- VTK XML series (the vtk and outlines outputs) ----
+ * A series is DIR/PREFIX_NNNNNN.vtu per frame and DIR/PREFIX.pvd listing them, each written
+ * through floe_fw_replace_* (the .pvd rewritten after every frame, so that it lists only
+ * complete frames). */
+typedef enum floe_fw_vtk_type { FLOE_FW_INT32, FLOE_FW_FLOAT64, FLOE_FW_INT64, FLOE_FW_UINT8 } floe_fw_vtk_type;
+/* "Int32", "Float64", "Int64", "UInt8" */
+const char *floe_fw_vtk_type_name(floe_fw_vtk_type t);
+/* bytes of one value: 4, 8, 8, 1 */
+size_t floe_fw_vtk_type_size(floe_fw_vtk_type t);
+/* "LittleEndian" or "BigEndian": this machine's byte order, as a VTKFile declares it */
+const char *floe_fw_vtk_byte_order(void);
+/* malloc'd (NULL: out of memory) "DIR/PREFIX_NNNNNN" + suffix for frame >= 0, else
+ * "DIR/PREFIX" + suffix; dir NULL: without "DIR/" (the name a .pvd gives) */
+char *floe_fw_series_path(const char *dir, const char *prefix, int frame, const char *suffix);
+/* Writes DIR/PREFIX.pvd listing frames 0..frames-1 at times[] (s). FLOE_OK, or FLOE_ENOMEM /
+ * FLOE_EIO with errno set. */
+int floe_fw_write_pvd(const char *dir, const char *prefix, const double *times, int frames);
+/* The opening of a .vtu up to its <Piece>: the XML declaration, VTKFile (UnstructuredGrid,
+ * header_type UInt64, this machine's byte order) and the field data TimeValue (s; ParaView
+ * reads it as the time of a single file) and Step. */
+void floe_fw_vtu_begin(FILE *f, double time, long step);
+/* m tuples of ncomp values of type t at buf as the text of an ASCII DataArray, one tuple a
+ * line (Float64 with 17 significant digits: read back exactly). */
+void floe_fw_vtk_ascii_values(FILE *f, floe_fw_vtk_type t, int ncomp, int m, const void *buf);
 
 #endif

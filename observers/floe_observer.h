@@ -26,6 +26,15 @@ floe_observer *floe_energy_tracker_create(const char *path, char *err, size_t er
 floe_observer *floe_vtk_writer_create(const char *dir, const char *prefix, char *err, size_t errlen);
 /* CSV snapshot of all particles per frame (one file, "t,id,..." rows). */
 floe_observer *floe_csv_writer_create(const char *path, char *err, size_t errlen);
+/* 2D outlines (observers/outline_writer.c): one .vtu per frame (prefix_NNNNNN.vtu, default
+ * prefix "outlines") and prefix.pvd listing them, with one VTK_POLYGON cell per particle with
+ * a bounded radius (one per piece of a compound), counter-clockwise in world coordinates;
+ * cell data id, body, material, velocity, angular_velocity, area. segments (>= 3): the points
+ * of a curved shape's outline (rays from its origin); ascii: 1 = ASCII, 0 = raw binary
+ * appended data. dim must be 2: otherwise NULL and "outlines is a 2D output (dimension: 2);
+ * use vtk in 3D" in err. */
+floe_observer *floe_outline_writer_create(const char *dir, const char *prefix, int dim, int segments, int ascii,
+                                          char *err, size_t errlen);
 
 /* ---- additions: stress evaluation, accessors, VTK options ---- */
 
@@ -54,8 +63,8 @@ int floe_collection_tracker_last(const floe_observer *o, double sigma[6], double
  * slower, human-readable). Returns FLOE_EINVAL if o is not a VTK writer. */
 int floe_vtk_writer_set_ascii(floe_observer *o, int ascii);
 
-/* Registers the built-in outputs (vtk, csv, energy, stress, tracker) for the registry's
- * documentation and help (the scene loader builds them itself); idempotent. */
+/* Registers the built-in outputs (vtk, csv, energy, stress, tracker; the scene loader builds
+ * them itself, the entries document them) and outlines (read by its schema); idempotent. */
 int floe_register_builtin_outputs(char *err, size_t errlen);
 
 #endif

@@ -1,8 +1,10 @@
 /* output_registry.c - the built-in outputs in the registry (floe_registry.h). The scene
- * loader reads their keys itself (group: 'all' or an index; particle and wall lists), so
- * the entries document them; a plugin's output is read by its schema alone. */
+ * loader reads the keys of vtk, csv, energy, stress and tracker itself (group: 'all' or an
+ * index; particle and wall lists), so their entries document them; outlines, like a plugin's
+ * output, is read by its schema alone and built by its constructor here. */
 #include "floe_observer.h"
 
+#include <stddef.h>
 #include <stdio.h>
 
 static floe_observer *loader_builds(const void *p, const floe_output_ctx *ctx, char *err, size_t errlen) {
@@ -32,6 +34,28 @@ static const floe_param tracker_schema[] = {
     {.key = "particles", .type = FLOE_PARAM_NODE, .unit = "", .doc = "list of particle ids"},
     {.key = "walls", .type = FLOE_PARAM_NODE, .unit = "", .doc = "list of wall indices"}};
 
+/* outlines: 2D particles as VTK polygons (outline_writer.c) */
+typedef struct outlines_params {
+    floe_params_head head;
+    char prefix[FLOE_PARAM_STRING_MAX];
+    int segments;
+    int ascii;
+} outlines_params;
+static const floe_param outlines_schema[] = {
+    {.key = "prefix", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "outlines",
+     .doc = "files prefix_NNNNNN.vtu and prefix.pvd in the output directory",
+     .offset = offsetof(outlines_params, prefix)},
+    {.key = "segments", .type = FLOE_PARAM_INT, .unit = "", .min = 3, .max = 1e6, .def = 48,
+     .doc = "points of a curved outline (disc, ellipse, user SDF): one on each ray from the body origin",
+     .offset = offsetof(outlines_params, segments)},
+    {.key = "ascii", .type = FLOE_PARAM_BOOL, .unit = "", .doc = "ASCII instead of raw binary appended data",
+     .offset = offsetof(outlines_params, ascii)}};
+
+static floe_observer *outlines_create(const void *params, const floe_output_ctx *ctx, char *err, size_t errlen) {
+    const outlines_params *p = params;
+    return floe_outline_writer_create(ctx->outdir, p->prefix, ctx->dim, p->segments, p->ascii, err, errlen);
+}
+
 #define OUT(n, t, d, src, sch) {.kind = FLOE_KIND_OBSERVER, .name = n, .title = t, .doc = d, .source = src, \
     .params = sch, .nparams = COUNT(sch), .params_size = sizeof(floe_params_head), .create = (floe_fn)loader_builds, \
     .flags = FLOE_ENTRY_LOADER_PARSES}
@@ -46,6 +70,12 @@ static const floe_registry_entry builtin[] = {
         "ParticLS eq 24", stress_schema),
     OUT("tracker", "particle tracker", "The state of chosen particles and walls over time.", "ParticLS §4.3",
         tracker_schema),
+    {.kind = FLOE_KIND_OBSERVER, .name = "outlines", .title = "2D outlines",
+     .doc = "2D worlds: every particle's outline as a VTK polygon (one per piece of a compound), one .vtu per "
+            "frame and a .pvd series, for ParaView; cell data id, body, material, velocity, angular_velocity, "
+            "area. Polygons by their corners, curved shapes by `segments` points. Refused in 3D.",
+     .source = "docs/scene-format.md", .params = outlines_schema, .nparams = COUNT(outlines_schema),
+     .params_size = sizeof(outlines_params), .create = (floe_fn)outlines_create},
 };
 
 int floe_register_builtin_outputs(char *err, size_t errlen) {

@@ -55,50 +55,25 @@ typedef struct vtk_writer {
 
 static const floe_observer_class vtk_writer_class;
 
-enum { T_INT32, T_FLOAT64, T_INT64, T_UINT8 };
 enum {
     A_ID, A_BODY, A_MATERIAL, A_MOTION, A_RADIUS, A_VELOCITY, A_ANGVEL, A_FORCE, A_TORQUE,
     A_ORIENT, A_DAMAGE, A_VONMISES, A_FDENS, A_STRAIN, A_NPOINTDATA,
     A_POINTS = A_NPOINTDATA, A_CONN, A_OFFSETS, A_TYPES, A_COUNT
 };
 
-typedef struct array_desc { const char *name; int type; int ncomp; } array_desc;
+typedef struct array_desc { const char *name; floe_fw_vtk_type type; int ncomp; } array_desc;
 
 static const array_desc arrays[A_COUNT] = {
-    {"id", T_INT32, 1},          {"body", T_INT32, 1},
-    {"material", T_INT32, 1},    {"motion", T_INT32, 1},
-    {"radius", T_FLOAT64, 1},    {"velocity", T_FLOAT64, 3},
-    {"angular_velocity", T_FLOAT64, 3}, {"force", T_FLOAT64, 3},
-    {"torque", T_FLOAT64, 3},    {"orientation", T_FLOAT64, 4},
-    {"damage", T_FLOAT64, 1},    {"von_mises", T_FLOAT64, 1},
-    {"force_density", T_FLOAT64, 3}, {"strain", T_FLOAT64, 9},
-    {"Points", T_FLOAT64, 3},    {"connectivity", T_INT64, 1},
-    {"offsets", T_INT64, 1},     {"types", T_UINT8, 1},
+    {"id", FLOE_FW_INT32, 1},          {"body", FLOE_FW_INT32, 1},
+    {"material", FLOE_FW_INT32, 1},    {"motion", FLOE_FW_INT32, 1},
+    {"radius", FLOE_FW_FLOAT64, 1},    {"velocity", FLOE_FW_FLOAT64, 3},
+    {"angular_velocity", FLOE_FW_FLOAT64, 3}, {"force", FLOE_FW_FLOAT64, 3},
+    {"torque", FLOE_FW_FLOAT64, 3},    {"orientation", FLOE_FW_FLOAT64, 4},
+    {"damage", FLOE_FW_FLOAT64, 1},    {"von_mises", FLOE_FW_FLOAT64, 1},
+    {"force_density", FLOE_FW_FLOAT64, 3}, {"strain", FLOE_FW_FLOAT64, 9},
+    {"Points", FLOE_FW_FLOAT64, 3},    {"connectivity", FLOE_FW_INT64, 1},
+    {"offsets", FLOE_FW_INT64, 1},     {"types", FLOE_FW_UINT8, 1},
 };
-
-static const char *type_name(int t) {
-    switch (t) {
-    case T_INT32: return "Int32";
-    case T_FLOAT64: return "Float64";
-    case T_INT64: return "Int64";
-    default: return "UInt8";
-    }
-}
-static size_t type_size(int t) {
-    switch (t) {
-    case T_INT32: return 4;
-    case T_FLOAT64: return 8;
-    case T_INT64: return 8;
-    default: return 1;
-    }
-}
-
-static int host_little_endian(void) {
-    const uint16_t one = 1;
-    unsigned char c;
-    memcpy(&c, &one, 1);
-    return c == 1;
-}
 
 static int is_wall(const floe_world *w, const floe_particles_view *p, int i) {
     if (!isfinite(p->radius[i])) return 1;
@@ -206,7 +181,7 @@ static void fill_array(const vtk_writer *v, const floe_world *w, int k, int m, v
 /* First non-finite value of a Float64 array filled by fill_array: its point (index into
  * v->idx) or -1. A NaN or infinity is never written: the frame is refused instead. */
 static int first_non_finite(int k, int m, const void *buf) {
-    if (arrays[k].type != T_FLOAT64) return -1;
+    if (arrays[k].type != FLOE_FW_FLOAT64) return -1;
     const double *f64 = buf;
     size_t n = (size_t)m * (size_t)arrays[k].ncomp;
     for (size_t e = 0; e < n; e++)
@@ -228,80 +203,10 @@ static int fill_finite(const vtk_writer *v, floe_world *w, int k, int m) {
     return a >= 0 ? non_finite_error(w, v, k, a) : FLOE_OK;
 }
 
-static void write_ascii_values(FILE *f, int type, int ncomp, int m, const void *buf) {
-    const int32_t *i32 = buf;
-    const int64_t *i64 = buf;
-    const double *f64 = buf;
-    const uint8_t *u8 = buf;
-    for (int a = 0; a < m; a++) {
-        fputs("          ", f);
-        for (int c = 0; c < ncomp; c++) {
-            size_t e = (size_t)a * ncomp + c;
-            if (c) fputc(' ', f);
-            switch (type) {
-            case T_INT32: fprintf(f, "%ld", (long)i32[e]); break;
-            case T_INT64: fprintf(f, "%lld", (long long)i64[e]); break;
-            case T_UINT8: fprintf(f, "%u", (unsigned)u8[e]); break;
-            default: fprintf(f, "%.17g", f64[e]); break;
-            }
-        }
-        fputc('\n', f);
-    }
-}
-
-static void write_xml_attr(FILE *f, const char *s) {
-    for (; *s; s++) {
-        switch (*s) {
-        case '&': fputs("&amp;", f); break;
-        case '<': fputs("&lt;", f); break;
-        case '>': fputs("&gt;", f); break;
-        case '"': fputs("&quot;", f); break;
-        case '\'': fputs("&apos;", f); break;
-        default: fputc(*s, f);
-        }
-    }
-}
-
-/* malloc'd "dir/prefix" + suffix (frame >= 0: "_NNNNNN.vtu"; else suffix as given) */
-static char *make_path(const vtk_writer *v, int with_dir, int frame, const char *suffix) {
-    size_t len = strlen(v->dir) + strlen(v->prefix) + strlen(suffix) + 32;
-    char *s = malloc(len);
-    if (!s) return NULL;
-    const char *d = with_dir ? v->dir : "";
-    const char *sep = with_dir ? "/" : "";
-    if (frame >= 0)
-        snprintf(s, len, "%s%s%s_%06d%s", d, sep, v->prefix, frame, suffix);
-    else
-        snprintf(s, len, "%s%s%s%s", d, sep, v->prefix, suffix);
-    return s;
-}
-
 /* the collection, through a temporary file renamed into place: at every instant the .pvd
  * on disk is complete and lists only frames whose .vtu is complete */
 static int write_pvd(const vtk_writer *v) {
-    char *path = make_path(v, 1, -1, ".pvd");
-    if (!path) return FLOE_ENOMEM;
-    floe_fw_replace r;
-    int rc = floe_fw_replace_begin(&r, path);
-    free(path);
-    if (rc != FLOE_OK) return rc;
-    FILE *f = r.f;
-    fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" "
-               "byte_order=\"%s\">\n  <Collection>\n",
-            host_little_endian() ? "LittleEndian" : "BigEndian");
-    for (int k = 0; k < v->frames; k++) {
-        char *name = make_path(v, 0, k, ".vtu");
-        if (!name) {
-            floe_fw_replace_abandon(&r);
-            return FLOE_ENOMEM;
-        }
-        fprintf(f, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"0\" file=\"", v->times[k]);
-        write_xml_attr(f, name);
-        fputs("\"/>\n", f);
-        free(name);
-    }
-    fputs("  </Collection>\n</VTKFile>\n", f);
-    return floe_fw_replace_commit(&r);
+    return floe_fw_write_pvd(v->dir, v->prefix, v->times, v->frames);
 }
 
 static int vw_write(vtk_writer *v, floe_world *w) {
@@ -345,7 +250,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
 
     int ascii = v->ascii || m == 0;
     /* the frame goes to PREFIX_NNNNNN.vtu.tmp, renamed into place when complete */
-    char *path = make_path(v, 1, v->frames, ".vtu");
+    char *path = floe_fw_series_path(v->dir, v->prefix, v->frames, ".vtu");
     if (!path) return floe_world_report_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
     floe_fw_replace r;
     int rc = floe_fw_replace_begin(&r, path);
@@ -356,15 +261,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
     }
     FILE *f = r.f;
 
-    fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
-               "byte_order=\"%s\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n",
-            host_little_endian() ? "LittleEndian" : "BigEndian");
-    fprintf(f, "    <FieldData>\n"
-               "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
-               "format=\"ascii\">%.17g</DataArray>\n"
-               "      <DataArray type=\"Int64\" Name=\"Step\" NumberOfTuples=\"1\" "
-               "format=\"ascii\">%ld</DataArray>\n    </FieldData>\n",
-            time, step);
+    floe_fw_vtu_begin(f, time, step);
     fprintf(f, "    <Piece NumberOfPoints=\"%d\" NumberOfCells=\"%d\">\n", m, m);
 
     uint64_t offset = 0;
@@ -374,7 +271,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
         if (k == A_CONN) fputs("      </Points>\n      <Cells>\n", f);
         if (k >= A_DAMAGE && k <= A_STRAIN && !npd) continue; /* only scenes with PD bodies */
         const array_desc *a = &arrays[k];
-        fprintf(f, "        <DataArray type=\"%s\" Name=\"%s\"", type_name(a->type), a->name);
+        fprintf(f, "        <DataArray type=\"%s\" Name=\"%s\"", floe_fw_vtk_type_name(a->type), a->name);
         if (a->ncomp > 1) fprintf(f, " NumberOfComponents=\"%d\"", a->ncomp);
         if (ascii) {
             fputs(" format=\"ascii\">\n", f);
@@ -384,11 +281,11 @@ static int vw_write(vtk_writer *v, floe_world *w) {
                 free(path);
                 return bad;
             }
-            write_ascii_values(f, a->type, a->ncomp, m, v->buf);
+            floe_fw_vtk_ascii_values(f, a->type, a->ncomp, m, v->buf);
             fputs("        </DataArray>\n", f);
         } else {
             fprintf(f, " format=\"appended\" offset=\"%llu\"/>\n", (unsigned long long)offset);
-            offset += sizeof(uint64_t) + (uint64_t)m * (uint64_t)a->ncomp * type_size(a->type);
+            offset += sizeof(uint64_t) + (uint64_t)m * (uint64_t)a->ncomp * floe_fw_vtk_type_size(a->type);
         }
     }
     fputs("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n", f);
@@ -397,7 +294,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
         for (int k = 0; k < A_COUNT; k++) {
             if (k >= A_DAMAGE && k <= A_STRAIN && !npd) continue;
             const array_desc *a = &arrays[k];
-            uint64_t nbytes = (uint64_t)m * (uint64_t)a->ncomp * type_size(a->type);
+            uint64_t nbytes = (uint64_t)m * (uint64_t)a->ncomp * floe_fw_vtk_type_size(a->type);
             int bad = fill_finite(v, w, k, m);
             if (bad != FLOE_OK) {
                 floe_fw_replace_abandon(&r);
