@@ -159,10 +159,23 @@ static const floe_geometry *comp_piece(const floe_geometry *g, int k, double x[3
     return c->piece[k];
 }
 
+/* planar when a piece is (polygons: 2D worlds only), solid when a piece is, else either */
+static int comp_dimension(const floe_geometry *g) {
+    const floe_compound *c = (const floe_compound *)g;
+    int d = 0;
+    for (int k = 0; k < c->n; k++) {
+        int dk = floe_geometry_dimension(c->piece[k]);
+        if (dk == 2) return 2;
+        if (dk == 3) d = 3;
+    }
+    return d;
+}
+
 const floe_geometry_class floe_compound_class = {
     .version = 1, .name = "compound", .kind = FLOE_GEOM_COMPOUND, .sdf = comp_sdf, .gradient = comp_grad,
     .project = comp_project, .bounding_radius = comp_radius, .mass_properties = comp_mass,
-    .destroy = comp_destroy, .support = comp_support, .piece_count = comp_piece_count, .piece = comp_piece};
+    .destroy = comp_destroy, .support = comp_support, .piece_count = comp_piece_count, .piece = comp_piece,
+    .dimension = comp_dimension};
 
 floe_geometry *floe_compound_create(floe_geometry **pieces, const double *x, const double *q, int n, int dim,
                                     char *err, size_t errlen) {

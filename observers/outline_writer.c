@@ -21,8 +21,9 @@
  *     polygon is inscribed: a disc of radius r gives the area (N/2) r^2 sin(2 pi / N).
  *   A body-frame point p of particle i (position x, orientation q) is at x + R(q) p.
  * Cell data: id (Int32, world particle index), body (Int32, group tag), material (Int32),
- *   velocity (Float64 x3, m/s), angular_velocity (Float64 x3, rad/s) and area (Float64, m^2:
- *   the polygon's own area, as drawn). No point data.
+ *   velocity (Float64 x3, m/s), angular_velocity (Float64 x3, rad/s), area (Float64, m^2:
+ *   the polygon's own area, as drawn) and thickness (Float64, m: a floe's, 0 for a body
+ *   without one). No point data.
  * Field data: TimeValue (Float64, s) and Step (Int64), as the vtk output.
  *
  * Particle state is read through the public view only (floe_world_get_particle and the
@@ -59,6 +60,7 @@ typedef struct outline_writer {
     int ncell, cell_cap;
     int32_t *id, *body, *material;
     double *vel, *angvel, *area;     /* 3, 3 and 1 per cell */
+    double *thick;                   /* 1 per cell: the floe's thickness (m; 0: none) */
     int64_t *offsets;                /* the end of each cell's points */
     uint8_t *types;
     /* ... and their points (each cell's points consecutive) */
@@ -72,14 +74,14 @@ typedef struct outline_writer {
 
 static const floe_observer_class outline_writer_class;
 
-enum { O_ID, O_BODY, O_MATERIAL, O_VELOCITY, O_ANGVEL, O_AREA, O_POINTS, O_CONN, O_OFFSETS, O_TYPES, O_COUNT };
+enum { O_ID, O_BODY, O_MATERIAL, O_VELOCITY, O_ANGVEL, O_AREA, O_THICK, O_POINTS, O_CONN, O_OFFSETS, O_TYPES, O_COUNT };
 
 typedef struct array_desc { const char *name; floe_fw_vtk_type type; int ncomp; } array_desc;
 
 static const array_desc arrays[O_COUNT] = {
     {"id", FLOE_FW_INT32, 1},      {"body", FLOE_FW_INT32, 1},       {"material", FLOE_FW_INT32, 1},
     {"velocity", FLOE_FW_FLOAT64, 3}, {"angular_velocity", FLOE_FW_FLOAT64, 3}, {"area", FLOE_FW_FLOAT64, 1},
-    {"Points", FLOE_FW_FLOAT64, 3}, {"connectivity", FLOE_FW_INT64, 1}, {"offsets", FLOE_FW_INT64, 1},
+    {"thickness", FLOE_FW_FLOAT64, 1}, {"Points", FLOE_FW_FLOAT64, 3}, {"connectivity", FLOE_FW_INT64, 1}, {"offsets", FLOE_FW_INT64, 1},
     {"types", FLOE_FW_UINT8, 1},
 };
 
@@ -93,6 +95,7 @@ static const void *array_data(const outline_writer *o, int k, int *tuples) {
     case O_VELOCITY: return o->vel;
     case O_ANGVEL: return o->angvel;
     case O_AREA: return o->area;
+    case O_THICK: return o->thick;
     case O_POINTS: return o->pts;
     case O_CONN: return o->conn;
     case O_OFFSETS: return o->offsets;
@@ -116,6 +119,7 @@ static int reserve(outline_writer *o, int more, int more_pts) {
         if (grow((void **)&o->id, sizeof *o->id, c) || grow((void **)&o->body, sizeof *o->body, c) ||
             grow((void **)&o->material, sizeof *o->material, c) || grow((void **)&o->vel, 3 * sizeof *o->vel, c) ||
             grow((void **)&o->angvel, 3 * sizeof *o->angvel, c) || grow((void **)&o->area, sizeof *o->area, c) ||
+            grow((void **)&o->thick, sizeof *o->thick, c) ||
             grow((void **)&o->offsets, sizeof *o->offsets, c) || grow((void **)&o->types, sizeof *o->types, c))
             return FLOE_ENOMEM;
         o->cell_cap = c;
@@ -276,6 +280,7 @@ static int add_cell(outline_writer *o, int i, const floe_particle_state *st, int
     memcpy(o->vel + 3 * (size_t)j, st->v, 3 * sizeof(double));
     memcpy(o->angvel + 3 * (size_t)j, st->w, 3 * sizeof(double));
     o->area[j] = 0.5 * fabs(twice);
+    o->thick[j] = st->thickness;
     o->offsets[j] = o->npt;
     o->types[j] = 7; /* VTK_POLYGON */
     return FLOE_OK;
@@ -443,6 +448,7 @@ static void ow_destroy(floe_observer *b) {
     free(o->vel);
     free(o->angvel);
     free(o->area);
+    free(o->thick);
     free(o->offsets);
     free(o->types);
     free(o->pts);

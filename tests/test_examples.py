@@ -27,6 +27,8 @@ usage: python3 tests/test_examples.py <floe_cli_path> <tests_dir>
 - examples/kalthoff-winkler (issue #10) at dx = 2 mm: each crack is a straight path from its
   pre-cracked notch at 61.5-70 degrees (line fit through the tip, measured 64.0; 59.2
   without the PMB's alpha = 0.25, which the scene now has); energy balances.
+- examples/sea-ice-free-drift (issue #12): the floe reaches the steady free drift (the balance
+  solved by Newton) within 0.1 % after two days.
 Prints "N passed, N failed".
 """
 import csv
@@ -155,6 +157,48 @@ def check_mesh_grains(cli, root, tmp, duration):
 
 
 # ---- peridynamics examples (issue #4): plate-with-hole, brittle-cylinder-impact, rubber-cube ----
+
+def check_free_drift(cli, root, tmp):
+    """examples/sea-ice-free-drift: after two days the floe drifts at the steady free drift
+    (the balance of wind stress, turned water stress and Coriolis, solved here by Newton)
+    within 0.1 %, and its outline series lists 49 frames."""
+    out = os.path.join(tmp, "free-drift")
+    scene = os.path.join(root, "examples", "sea-ice-free-drift", "scene.yaml")
+    p = subprocess.run([cli, "run", scene, "-o", out, "-q"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                       universal_newlines=True, timeout=300)
+    check(p.returncode == 0, "sea-ice-free-drift run: exit %d\n%s" % (p.returncode, p.stderr))
+    if p.returncode:
+        return
+    th, f, h = math.radians(15), 1.4e-4, 1.0
+
+    def res(u):
+        ax, ay = 10 - u[0], -u[1]
+        sa = 1.2e-3 * math.hypot(ax, ay)
+        so = 1027 * 3e-3 * math.hypot(u[0], u[1])
+        b = 920 * h * f
+        return (sa * ax + so * (-math.cos(th) * u[0] + math.sin(th) * u[1]) + b * u[1],
+                sa * ay + so * (-math.sin(th) * u[0] - math.cos(th) * u[1]) - b * u[0])
+    u = [0.2, 0.0]
+    for _ in range(60):
+        r, e = res(u), 1e-7
+        J = [[0.0, 0.0], [0.0, 0.0]]
+        for k in range(2):
+            up = list(u)
+            up[k] += e
+            rp = res(up)
+            J[0][k], J[1][k] = (rp[0] - r[0]) / e, (rp[1] - r[1]) / e
+        det = J[0][0] * J[1][1] - J[0][1] * J[1][0]
+        u = [u[0] - (J[1][1] * r[0] - J[0][1] * r[1]) / det, u[1] - (-J[1][0] * r[0] + J[0][0] * r[1]) / det]
+    rows = list(csv.DictReader(open(os.path.join(out, "floe.csv"))))
+    last = rows[-1]
+    v = (float(last["vx [m/s]"]), float(last["vy [m/s]"]))
+    err = math.hypot(v[0] - u[0], v[1] - u[1]) / math.hypot(u[0], u[1])
+    print("  free drift: (%.5f, %.5f) m/s vs steady (%.5f, %.5f), %.2f %% of the wind at %.1f deg right; "
+          "error %.1e" % (v[0], v[1], u[0], u[1], 10 * math.hypot(*u), -math.degrees(math.atan2(u[1], u[0])), err))
+    check(err < 1e-3, "sea-ice-free-drift: steady free drift within 0.1 %% (%.2e)" % err)
+    pvd = open(os.path.join(out, "floe.pvd")).read()
+    check(pvd.count("<DataSet") == 49, "sea-ice-free-drift: 49 outline frames (%d)" % pvd.count("<DataSet"))
+
 
 def read_vtu_arrays(path):
     """Point arrays of a floe .vtu (raw appended or ASCII) as {name: [tuple, ...]}."""
@@ -374,6 +418,7 @@ def main():
         check_brittle_cylinder(cli, root, tmp)
         check_rubber_cube(cli, root, tmp)
         check_kalthoff_winkler(cli, root, tmp)
+        check_free_drift(cli, root, tmp)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     finish("test_examples")

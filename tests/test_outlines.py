@@ -17,7 +17,8 @@ Checks, tolerances stated at each:
 - the disc's points all at distance r from its centre (1e-9 relative), the ellipse's on the
   ellipse, and their areas equal to the inscribed N-gon's, (N/2) r^2 sin(2 pi / N) (1e-9
   relative; within 1 % of pi r^2 for N = 48); the polygons' areas to 1e-9;
-- cell data id / body / material / velocity / angular_velocity / area;
+- cell data id / body / material / velocity / angular_velocity / area / thickness (one floe 0.5 m
+  thick, the others 0);
 - the same scene written in binary with segments: 12 gives the same polygons bit for bit
   and 12-point curved outlines;
 - a 3D scene with an outlines output is refused with "outlines is a 2D output";
@@ -123,10 +124,12 @@ def scene_text(outlines):
              "gravity: [0, 0]", "materials:", "  - {name: ice, density: 917}", "laws:",
              "  - {materials: [ice, ice], model: linear, kn: 1000, ks: 500, friction: 0.3}",
              "walls:", "  - {point: [0, -10], normal: [0, 1], material: ice}", "bodies:"]
-    for name, pos, ang, vel, om in BODIES:
+    for k, (name, pos, ang, vel, om) in enumerate(BODIES):
+        # the first body is a floe 0.5 m thick (the cell array `thickness`; 0 for the others)
         lines.append("  - {material: ice, position: [%r, %r], orientation: %s, velocity: [%r, %r], "
-                     "angular_velocity: [0, 0, %r], shape: %s}" % (pos[0], pos[1], q(ang), vel[0], vel[1], om,
-                                                                   shapes[name]))
+                     "angular_velocity: [0, 0, %r], %sshape: %s}" % (pos[0], pos[1], q(ang), vel[0], vel[1], om,
+                                                                     "thickness: 0.5, " if k == 0 else "",
+                                                                     shapes[name]))
     lines.append("outputs:")
     lines.append("  - {type: vtk, every: %d, prefix: frame, ascii: true}" % EVERY)
     lines.append("  - " + outlines)
@@ -314,7 +317,8 @@ def check_run(outdir, segments, frames_vtk):
         check(f["npoints"] == len(f["points"]) == len(f["conn"]), "%s: point counts" % name)
         check(all(p[2] == 0.0 for p in f["points"]), "%s: z not 0" % name)
         want = {"id": ("Int32", 1), "body": ("Int32", 1), "material": ("Int32", 1),
-                "velocity": ("Float64", 3), "angular_velocity": ("Float64", 3), "area": ("Float64", 1)}
+                "velocity": ("Float64", 3), "angular_velocity": ("Float64", 3), "area": ("Float64", 1),
+                "thickness": ("Float64", 1)}
         for a, (typ, nc) in want.items():
             have = f["cell"].get(a)
             if check(have is not None, "%s: cell array %s missing" % (name, a)):
@@ -322,6 +326,9 @@ def check_run(outdir, segments, frames_vtk):
                       "%s: %s is %s with %s tuples" % (name, a, have[0], len(have[1])))
         if any(a not in f["cell"] for a in want):
             continue
+        th = [r[0] for r in f["cell"]["thickness"][1]]
+        check(th.count(0.5) == 1 and all(t in (0.0, 0.5) for t in th),
+              "%s: one floe 0.5 m thick, the others 0 (%s)" % (name, th))
         polys = polygons(f)
         result.append(polys)
         cid = [r[0] for r in f["cell"]["id"][1]]

@@ -129,11 +129,19 @@ int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, const char
         }
         const char *name;
         struct fy_node *name_at;
-        FLOE_TRY(sc_str(s, &m, type == 0 ? "prefix" : "file", 0, type < 0 ? udefault : defaults[type], &name, &name_at));
-        if (!*name || (type == 0 && strchr(name, '/')))
+        /* a series of files named by a prefix (vtk, and registered outputs whose schema has
+         * `prefix`, such as outlines), or one file */
+        const int pk = type < 0 && ent ? floe_schema_index(ent, "prefix") : -1;
+        const int by_prefix = type == 0 || pk >= 0;
+        const char *defname = type == 0 ? defaults[0]
+                              : pk >= 0  ? (ent->params[pk].def_text ? ent->params[pk].def_text : tname)
+                              : type < 0 ? udefault
+                                         : defaults[type];
+        FLOE_TRY(sc_str(s, &m, by_prefix ? "prefix" : "file", 0, defname, &name, &name_at));
+        if (!*name || (by_prefix && strchr(name, '/')))
             return sc_fail(s, FLOE_EINVAL, name_at, "%s.%s: '%s' is not a valid %s", what,
-                           type == 0 ? "prefix" : "file", name, type == 0 ? "prefix" : "file name");
-        if (type == 0 || name[0] != '/')
+                           by_prefix ? "prefix" : "file", name, by_prefix ? "prefix" : "file name");
+        if (by_prefix || name[0] != '/')
             snprintf(o->target, sizeof o->target, "%s/%s", outdir, name);
         else
             snprintf(o->target, sizeof o->target, "%s", name);
@@ -141,7 +149,7 @@ int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, const char
         {
             const char *nm = name;
             while (nm[0] == '.' && nm[1] == '/') nm += 2;
-            if (type == 0 || nm[0] != '/') snprintf(o->file, sizeof o->file, "%s/%s%s", outdir, nm, type == 0 ? ".pvd" : "");
+            if (by_prefix || nm[0] != '/') snprintf(o->file, sizeof o->file, "%s/%s%s", outdir, nm, by_prefix ? ".pvd" : "");
             else snprintf(o->file, sizeof o->file, "%s", nm);
             o->name_at = name_at;
             for (int j = 0; j < i; j++) {
@@ -153,7 +161,7 @@ int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, const char
                 return sc_fail(s, FLOE_EINVAL, name_at ? name_at : e,
                                "%s writes %s, which outputs[%d] (line %d, column %d) writes too: give "
                                "each output its own %s", what, o->file, j, l, c,
-                               type == 0 ? "prefix" : "file");
+                               by_prefix ? "prefix" : "file");
             }
         }
 

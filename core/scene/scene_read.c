@@ -613,3 +613,37 @@ int sc_read_schema(sc *s, const sc_map *m, const floe_registry_entry *ent, const
 
 
 double sc_rng_uniform(sc_rng *r) { return floe_rng_uniform(&r->s); }
+
+/* Memory a scene needs (SC_BYTES_* in scene_internal.h) */
+
+double sc_phys_mem(void)
+{
+    long pages = sysconf(_SC_PHYS_PAGES), ps = sysconf(_SC_PAGE_SIZE);
+    double have = pages > 0 && ps > 0 ? (double)pages * (double)ps : INFINITY;
+#ifdef FLOE_SCENE_MEMORY_CAP
+    have = fmin(have, FLOE_SCENE_MEMORY_CAP); /* the fuzzing build (-DFLOE_FUZZ=ON) */
+#endif
+    return have;
+}
+
+double sc_mem_estimate(const sc *s, double more_particles)
+{
+    double bonds = 0;
+    for (int b = 0; s->w && b < s->w->npd; b++) bonds += (double)s->w->pd[b]->nbond;
+    double n = (s->w ? (double)s->w->p.n : 0.0) + more_particles;
+    return SC_BYTES_BASE + n * SC_BYTES_PER_PARTICLE + bonds * SC_BYTES_PER_BOND;
+}
+
+/* refuse `more` particles (or the scene so far, more = 0) beyond the machine's memory */
+int sc_check_memory(sc *s, struct fy_node *at, const char *what, double more)
+{
+    double need = sc_mem_estimate(s, more), have = sc_phys_mem();
+    if (need <= have) return FLOE_OK;
+    if (more > 0)
+        return sc_fail(s, FLOE_ENOMEM, at, "%s: %.4g particles: the scene would need about %.3g GB (estimate, "
+                       "%.0f bytes per particle), more than this machine's memory (%.3g GB)", what, more,
+                       need / 1e9, SC_BYTES_PER_PARTICLE, have / 1e9);
+    return sc_fail(s, FLOE_ENOMEM, at, "%s needs about %.3g GB (estimate: %d particles, %.0f bytes each, and "
+                   "%.0f bytes per PD bond), more than this machine's memory (%.3g GB)", what, need / 1e9,
+                   s->w ? s->w->p.n : 0, SC_BYTES_PER_PARTICLE, SC_BYTES_PER_BOND, have / 1e9);
+}
