@@ -13,7 +13,8 @@
  *    (Gauss-Legendre rings: 1e-12), of a spinning square, -rho C_d w^2 (8 a^5 / 5)
  *    int_0^{pi/4} sec^5 (1e-2 at the default level 1, 1e-5 at level 8, falling with the level);
  *  - free drift: one floe under wind, current, Coriolis and tilt reaches the steady
- *    solution of the momentum balance (solved by Newton to round-off) within 0.1 %;
+ *    solution of the momentum balance (solved by Newton to round-off) within 0.1 %, also
+ *    with the drag integrated every 10th step and held in between;
  *  - the inertial oscillation: u - U_o turns clockwise with the period 2 pi / f (0.5 %;
  *    measured ~1e-5) and a kept amplitude (1e-9);
  *  - a Voronoi floe field (`floe_field:`): areas add up to concentration x region (1e-9),
@@ -257,15 +258,35 @@ static void test_free_drift(void) {
     printf("  steady free drift: u = (%.6f, %.6f) m/s, %.2f%% of the wind\n", u[0], u[1],
            100 * hypot(u[0], u[1]) / hypot(Ua[0], Ua[1]));
     char err[256];
+    for (int every = 1; every <= 10; every += 9) {
     floe_world *w = ice_world(5.0, FLOE_VELOCITY_VERLET);
     add_rect(w, 1500, 1000, h, NULL, NULL);
     floe_drag_def od = floe_ocean_drag_default();
+    od.every = every;
+    if (every > 1) { /* held: the drag of a floe starting at rest stays that of rest for 9 steps */
+        floe_world *w1 = ice_world(5.0, FLOE_VELOCITY_VERLET);
+        add_rect(w1, 1500, 1000, h, NULL, NULL);
+        floe_drag_def oc = od;
+        oc.field.U[0] = 0.3;
+        floe_world_add_provider(w1, floe_drag_create("ocean_drag", &oc, err, sizeof err));
+        floe_world_prepare(w1);
+        floe_particle_state s0, s9, s10;
+        floe_world_get_particle(w1, 0, &s0);
+        for (int k = 0; k < 9; k++) floe_world_step(w1);
+        floe_world_get_particle(w1, 0, &s9);
+        floe_world_step(w1);
+        floe_world_get_particle(w1, 0, &s10);
+        CHECK(s9.f[0] == s0.f[0] && s9.f[1] == s0.f[1] && s10.f[0] != s0.f[0] && s9.v[0] != 0,
+              "every 10: the drag is held for 9 steps and renewed at the 10th (%g %g %g)", s0.f[0], s9.f[0], s10.f[0]);
+        floe_world_destroy(w1);
+    }
     od.field.U[0] = Uo[0];
     od.field.U[1] = Uo[1];
     floe_world_add_provider(w, floe_drag_create("ocean_drag", &od, err, sizeof err));
     floe_drag_def wd = floe_wind_drag_default();
     wd.field.U[0] = Ua[0];
     wd.field.U[1] = Ua[1];
+    wd.every = every;
     floe_world_add_provider(w, floe_drag_create("wind_drag", &wd, err, sizeof err));
     floe_coriolis_def cd = floe_coriolis_default();
     cd.tilt = FLOE_TILT_GEOSTROPHIC;
@@ -276,12 +297,14 @@ static void test_free_drift(void) {
     floe_particle_state st;
     floe_world_get_particle(w, 0, &st);
     double e = hypot(st.v[0] - u[0], st.v[1] - u[1]) / hypot(u[0], u[1]);
-    printf("  free drift after 60,000 s: (%.6f, %.6f), error %.2e of |u|\n", st.v[0], st.v[1], e);
-    CHECK(e < 1e-3, "free drift within 0.1 %% of the steady solution (%g)", e);
+    printf("  free drift after 60,000 s, drag every %d steps: (%.6f, %.6f), error %.2e of |u|\n", every, st.v[0],
+           st.v[1], e);
+    CHECK(e < 1e-3, "free drift within 0.1 %% of the steady solution (%g, drag every %d steps)", e, every);
     CHECK(fabs(st.w[2]) < 1e-12, "a symmetric floe in uniform fields does not turn (%g)", st.w[2]);
     CHECK(fabs(floe_world_energy_balance_error(w)) < 1e-3,
           "energy balance closes (%g)", floe_world_energy_balance_error(w));
     floe_world_destroy(w);
+    }
 }
 
 static void test_inertial(void) {

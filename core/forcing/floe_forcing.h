@@ -55,6 +55,9 @@ typedef struct floe_drag_def {
                                polygons: n^2 triangles per fan triangle, 3 points each;
                                discs: n + 1 Gauss-Legendre rings x 8n angles; other shapes:
                                a grid of (8n)^2 */
+    int every;              /* evaluate every k-th step (>= 1; 0: 1), holding the force and
+                               torque in between (SubZero couples every 10 steps): k times
+                               cheaper, the drag lagging by up to k steps */
 } floe_drag_def;
 /* SubZero's ocean (rho 1027, C_d 3e-3, theta 15 deg) and atmosphere (rho 1.2, C_d 1e-3,
  * theta 0): Subzero.jl src/simulation_components/simulation.jl `Constants` */

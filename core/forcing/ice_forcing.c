@@ -117,14 +117,24 @@ static int drag_forces(floe_provider *pv, floe_world *w, const struct floe_step_
     if (ctx->dim != 2)
         return floe_world_report_error(w, FLOE_EINVAL, "%s is for 2D floes (dimension: 2): it integrates the drag "
                                        "over each floe's area in the plane", d->name);
+    const int fresh = d->last.n < p->n; /* no force held yet */
     if (last_reserve(&d->last, p->n)) return floe_world_report_error(w, FLOE_ENOMEM, "%s: out of memory", d->name);
+    /* every k-th step (and at prepare) the drag is integrated; in between it is held */
+    const int hold = d->d.every > 1 && !fresh && ctx->stepping && floe_world_step_count(w) % d->d.every != 0;
     double work = 0;
     for (int i = 0; i < p->n; i++) {
         if (p->motion[i] != FLOE_FREE) continue;
-        const floe_area_quadrature *q = drag_quad(d, w, p->geom[i]);
-        if (!q) return FLOE_EINVAL;
         double fr[3];
-        drag_floe(d, q, p->x + 3 * i, p->v + 3 * i, p->w + 3 * i, p->q + 4 * i, ctx->time, fr);
+        if (hold) {
+            const double *o = d->last.old + 4 * (size_t)i;
+            fr[0] = o[0];
+            fr[1] = o[1];
+            fr[2] = o[3];
+        } else {
+            const floe_area_quadrature *q = drag_quad(d, w, p->geom[i]);
+            if (!q) return FLOE_EINVAL;
+            drag_floe(d, q, p->x + 3 * i, p->v + 3 * i, p->w + 3 * i, p->q + 4 * i, ctx->time, fr);
+        }
         p->f[3 * i] += fr[0];
         p->f[3 * i + 1] += fr[1];
         p->t[3 * i + 2] += fr[2];
@@ -198,6 +208,10 @@ floe_provider *floe_drag_create(const char *name, const floe_drag_def *def, char
         snprintf(err, errlen, "%s: the turning angle must be within [-90, 90] degrees", name);
         return NULL;
     }
+    if (def->every < 0) {
+        snprintf(err, errlen, "%s: every must be >= 1 (steps)", name);
+        return NULL;
+    }
     if (def->quadrature < 0 || def->quadrature > 64) {
         snprintf(err, errlen, "%s: quadrature must be in [1, 64]", name);
         return NULL;
@@ -215,6 +229,7 @@ floe_provider *floe_drag_create(const char *name, const floe_drag_def *def, char
     snprintf(d->name, sizeof d->name, "%s", name);
     d->d = *def;
     if (!d->d.quadrature) d->d.quadrature = 1;
+    if (!d->d.every) d->d.every = 1;
     d->cs = cos(def->turning_angle);
     d->sn = sin(def->turning_angle);
     d->klass = (floe_provider_class){.version = 1, .name = d->name, .group = FLOE_GROUP_DEM, .forces = drag_forces,
@@ -379,7 +394,7 @@ static floe_field field_of(const field_params *p) {
 typedef struct drag_params {
     floe_params_head head;
     double rho, cd, turning_angle;
-    int quadrature;
+    int quadrature, every;
     int field;
     double velocity[3], shear_rate, speed, length, center[3];
 } drag_params;
@@ -392,6 +407,7 @@ static floe_provider *drag_build(const char *name, const void *params, char *err
     d.cd = p->cd;
     d.turning_angle = p->turning_angle * M_PI / 180;
     d.quadrature = p->quadrature;
+    d.every = p->every;
     field_params fp = {p->field, {p->velocity[0], p->velocity[1], p->velocity[2]}, p->shear_rate, p->speed, p->length,
                        {p->center[0], p->center[1], p->center[2]}};
     d.field = field_of(&fp);
@@ -417,6 +433,9 @@ static floe_provider *wind_create(const void *params, const floe_world *w, char 
      {.key = "quadrature", .type = FLOE_PARAM_INT, .unit = "", .min = 1, .max = 64, .def = 1,                     \
       .doc = "subdivision level of the area quadrature (polygons: level^2 triangles of 3 points per edge's fan triangle)",    \
       .offset = offsetof(drag_params, quadrature)},                                                                \
+     {.key = "every", .type = FLOE_PARAM_INT, .unit = "steps", .min = 1, .max = 1e9, .def = 1,                    \
+      .doc = "integrate the drag every k-th step and hold it in between (SubZero couples every 10)",             \
+      .offset = offsetof(drag_params, every)},                                                                     \
      FIELD_PARAMS(drag_params)}
 
 static const floe_param ocean_schema[] = DRAG_SCHEMA(1027.0, 3.0e-3, 15.0, "water");

@@ -196,5 +196,9 @@ int floe_area_quadrature_build(const floe_geometry *g, int level, floe_area_quad
     double sum = 0;
     for (int k = 0; k < q->n; k++) sum += q->w[k];
     q->area = sum;
+    /* to its size: a field of floes keeps one per floe */
+    double *nx = realloc(q->x, (size_t)q->n * 3 * sizeof *nx), *nw = nx ? realloc(q->w, (size_t)q->n * sizeof *nw) : NULL;
+    if (nx) q->x = nx;
+    if (nw) q->w = nw;
     return FLOE_OK;
 }
