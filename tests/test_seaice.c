@@ -23,7 +23,9 @@
  *  - Hopkins' ridging law against its formulas: elastic k_e d L, loading along the series
  *    ridging curve (1e-9), the permanent ridge, unloading and reloading elastic up to the
  *    hardened yield, the shear spring G h_eff and Coulomb sliding, the damped branch at a
- *    slow rate on the quasi-static curve (1e-3);
+ *    slow rate on the quasi-static curve (1e-3); two square floes edge on edge: elastic
+ *    below the yield (kinetic energy back to 1e-3), ridging above it (energy lost, the
+ *    ledger closing);
  *  - scenes: the providers by name with thicknesses; errors (both f and latitude, a drag in
  *    3D, a gyre without length) refused with what is wrong. */
 #include "check.h"
@@ -547,6 +549,53 @@ static void test_hopkins(void) {
           "a negative hardening is refused: %s", err);
 }
 
+/* two square floes (side 1 km, h = 1 m) meeting edge on edge under Hopkins' law without
+ * damping: below the yield the collision is elastic (kinetic energy back to 1e-3, the
+ * overlap-area measure keeps the force conservative where the deepest point would jump);
+ * above it they ridge (energy dissipated, a permanent ridge), and the ledger closes */
+static double hk_collide(double vrel, double *balance, double *ke0) {
+    floe_world_def d = floe_default_world_def();
+    d.dim = 2;
+    d.mass_2d_area = 1;
+    d.gravity[0] = d.gravity[1] = d.gravity[2] = 0;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material m = {"ice", RHO_I, 1e7, 0.3};
+    floe_world_add_material(w, &m);
+    floe_hopkins_def hd = floe_hopkins_default();
+    hd.young = 1e7;
+    hd.damping = 0;
+    hd.thickness_max = 1;
+    char err[256];
+    floe_world_set_law(w, 0, 0, floe_hopkins_law_create(&hd, err, sizeof err));
+    const double xa[3] = {-505, 0, 0}, xb[3] = {505, 0, 0}, va[3] = {vrel / 2, 0, 0}, vb[3] = {-vrel / 2, 0, 0};
+    add_rect(w, 500, 500, 1.0, xa, va);
+    add_rect(w, 500, 500, 1.0, xb, vb);
+    double t_end = 40 / (vrel > 0 ? vrel : 1) + 200;
+    int rc = floe_world_run(w, t_end, NULL, NULL);
+    CHECK(rc == FLOE_OK, "hopkins collision at %g m/s: %s", vrel, floe_world_last_error(w));
+    floe_energy e = floe_world_energy(w);
+    *balance = floe_world_energy_balance_error(w);
+    *ke0 = e.initial;
+    double ke = e.kinetic_trans + e.kinetic_rot;
+    floe_particle_state a, b;
+    floe_world_get_particle(w, 0, &a);
+    floe_world_get_particle(w, 1, &b);
+    CHECK(a.v[0] < 0 && b.v[0] > 0, "the floes separate (%g, %g)", a.v[0], b.v[0]);
+    floe_world_destroy(w);
+    return ke;
+}
+
+static void test_hopkins_polygons(void) {
+    double bal, ke0;
+    double ke = hk_collide(0.2, &bal, &ke0);
+    CHECK_NEAR(ke, ke0, 1e-3, "hopkins, polygons edge on edge below the yield: kinetic energy back (elastic)");
+    CHECK(fabs(bal) < 1e-4, "energy balance %g", bal);
+    ke = hk_collide(2.0, &bal, &ke0);
+    printf("  hopkins ridging collision at 2 m/s: %.1f %% of the kinetic energy left\n", 100 * ke / ke0);
+    CHECK(ke < 0.9 * ke0 && ke > 0, "hopkins above the yield: the floes ridge and lose energy (%g of %g)", ke, ke0);
+    CHECK(fabs(bal) < 1e-3, "energy balance with ridging %g", bal);
+}
+
 int main(void) {
     char err[256];
     floe_register_builtins(err, sizeof err);
@@ -558,5 +607,6 @@ int main(void) {
     test_scene();
     test_floe_field();
     test_hopkins();
+    test_hopkins_polygons();
     return check_summary("test_seaice");
 }

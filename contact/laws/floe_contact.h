@@ -102,6 +102,8 @@ typedef struct floe_law_info {
     int single_point;        /* 1: the law models the whole contact at its deepest point (a
                                 contact length of its own, plastic history): polytope pairs
                                 get no manifold springs */
+    int prefers_overlap;     /* 1: polytope pairs get the overlap fields (area*, as
+                                needs_overlap), other pairs the deepest point (area = 0) */
 } floe_law_info;
 
 typedef struct floe_contact_law_class {

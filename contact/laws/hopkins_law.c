@@ -19,7 +19,11 @@
  * Tangential: a spring k_t = G h_eff (G = E / (2 (1 + nu)), h_eff = 1/(1/h_i + 1/h_j)) and a
  * dashpot g_t on the slip along t = k x n, capped by Coulomb mu F (the spring reset to the
  * cap when sliding). History: d_p, F_prev, the shear spring s. A 2D law (floes in the plane).
- * Stored energy: k_e L d_e^2 / 2 + k_t s^2 / 2; the ridging work is dissipated. */
+ * Stored energy: k_e L d_e^2 / 2 + k_t s^2 / 2; the ridging work is dissipated.
+ * Two polygons: d and L come from their overlap (A, I: L = A^2/(2I), d = 2I/A, exact for a
+ * flat overlap), the force along the overlap energy's gradient g_A (elastic: exactly
+ * k_e g_A, the gradient of k_e I), so that edge-on-edge contacts conserve energy; discs
+ * and walls: the deepest point, L = 4 R*. */
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -55,7 +59,18 @@ static int hopkins_force(const floe_contact_law *law_, const floe_contact *c, do
     const hopkins_law *H = (const hopkins_law *)law_;
     hk_geom g;
     hk_setup(H, c, &g);
-    const double d = c->depth, dd = c->vn, dt = c->dt, L = g.L;
+    /* two polygons: the overlap (area A, energy integral I, its gradient g_A) gives the
+     * contact length L = A^2 / (2 I) and the depth d = 2 I / A (a flat overlap of width L and
+     * depth d: A = L d, I = L d^2 / 2); the force acts along g_A, so that the elastic part
+     * k_e g_A is the gradient of k_e I (conservative across edge-on-edge contacts) */
+    const double ga = floe_v3_norm(c->area_force);
+    const int ov = c->area > 0 && c->area_energy > 0 && ga > 0;
+    if (ov) {
+        g.L = c->area * c->area / (2 * c->area_energy);
+        const double m = c->m_eff < INFINITY ? c->m_eff : 0;
+        g.ce = 2 * H->eta * sqrt(g.ke * g.L * m) / g.L;
+    }
+    const double d = ov ? 2 * c->area_energy / c->area : c->depth, dd = c->vn, dt = c->dt, L = g.L;
     double *dp = hist, *fprev = hist + 1, *s = hist + 2;
     const double de = d - *dp;
     double diss = 0;
@@ -101,8 +116,10 @@ static int hopkins_force(const floe_contact_law *law_, const floe_contact *c, do
         if (dt > 0) *s = g.kt > 0 ? -(Ft + H->gt * vt) / g.kt : 0;
         diss += e0 - 0.5 * g.kt * *s * *s;
     }
-    /* force on i: the normal pushes i away from j (-n) */
-    for (int k = 0; k < 3; k++) out->force[k] = -F * c->n[k] + Ft * t[k];
+    /* force on i: the normal pushes i away from j (-n; polygons: along g_A, scaled so that
+     * an elastic contact without damping gets exactly k_e g_A) */
+    for (int k = 0; k < 3; k++)
+        out->force[k] = (ov ? F * c->area_force[k] / c->area : -F * c->n[k]) + Ft * t[k];
     const double dnew = d - *dp;
     out->energy = 0.5 * g.ke * L * dnew * dnew + 0.5 * g.kt * *s * *s;
     out->dissipation = diss;
@@ -135,6 +152,7 @@ static void hopkins_info(const floe_contact_law *law, floe_law_info *info) {
     (void)law;
     info->needs_floe = 1;
     info->single_point = 1;
+    info->prefers_overlap = 1;
     info->spreads_load = 1;
 }
 

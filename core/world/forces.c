@@ -462,10 +462,14 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
         warm[0] = NAN; /* apart: the next approach starts cold */
     }
     const floe_contact_law *law = r > 0 ? w->laws[p->material[i] * nm + p->material[j]] : NULL;
-    if (r == 1 && any_overlap && floe_contact_law_info(law).needs_overlap) {
+    const floe_law_info linfo = r == 1 && any_overlap ? floe_contact_law_info(law) : (floe_law_info){0};
+    if (linfo.needs_overlap || linfo.prefers_overlap) {
         floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
         r = floe_detect_overlap(&dctx, &bi, &bj, sub, &c);
-        if (r == -FLOE_ENOTSUP)
+        if (r == -FLOE_ENOTSUP && linfo.prefers_overlap) { /* not two polytopes: the deepest point */
+            r = 1;
+            c.area = 0;
+        } else if (r == -FLOE_ENOTSUP)
             return floe_world_error(w, FLOE_ENOTSUP,
                                     "contact law %s needs two polytopes (polygons, boxes, prisms, polyhedra); particles %d and %d are %s-%s",
                                     law->klass->name, i, j, w->geoms[p->geom[i]]->klass->name,
@@ -663,7 +667,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
         any_none |= floe_contact_law_no_contact(w->laws[k]);
         if (!w->laws[k]) continue;
         const floe_law_info li = floe_contact_law_info(w->laws[k]);
-        any_overlap |= li.needs_overlap;
+        any_overlap |= li.needs_overlap | li.prefers_overlap;
         any_floe |= li.needs_floe;
     }
     int any_pieces = 0; /* compound bodies: their pairs are per piece */
