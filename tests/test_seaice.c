@@ -26,6 +26,9 @@
  *    slow rate on the quasi-static curve (1e-3); two square floes edge on edge: elastic
  *    below the yield (kinetic energy back to 1e-3), ridging above it (energy lost, the
  *    ledger closing);
+ *  - bonded cells: a beam bond breaks in tension, shear, compression and shear under
+ *    compression (Mohr-Coulomb, friction angle 45 deg) at the step where that stress first
+ *    passes its strength (the last stress before within 1 % below it);
  *  - scenes: the providers by name with thicknesses; errors (both f and latitude, a drag in
  *    3D, a gyre without length) refused with what is wrong. */
 #include "check.h"
@@ -596,6 +599,77 @@ static void test_hopkins_polygons(void) {
     CHECK(fabs(bal) < 1e-3, "energy balance with ridging %g", bal);
 }
 
+/* bonded cells (beam bonds, docs/sea-ice.md "Bonded floes"): two discs, one fixed, the
+ * other moved at a constant speed (pulled, pushed, sheared, or pushed then sheared); the
+ * bond breaks in the mode asked, at the step where its stress first passes the strength:
+ * the last stress before the break is within 1 % below the strength */
+typedef struct mc_motion {
+    double t1, u;
+} mc_motion;
+
+static void mc_move(double t, double v[3], double om[3], void *user) {
+    const mc_motion *m = user;
+    v[0] = t < m->t1 ? -m->u : 0; /* pushed, then sheared */
+    v[1] = t < m->t1 ? 0 : m->u;
+    v[2] = 0;
+    om[0] = om[1] = om[2] = 0;
+}
+
+static void bond_mode(int mode, double phi) {
+    static const char *const what[] = {"", "tension", "shear", "compression", "shear under compression"};
+    floe_world_def d = floe_default_world_def();
+    d.dim = 2;
+    d.mass_2d_area = 1;
+    d.dt = 1e-3;
+    d.allow_unstable_dt = 1;
+    d.gravity[0] = d.gravity[1] = d.gravity[2] = 0;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material m = {"ice", RHO_I, 1e9, 0.3};
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, floe_linear_law_create(1e6, 0, 0, 0, 0));
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = floe_world_add_geometry(w, floe_sphere_create(1.0));
+    p.motion = FLOE_FIXED;
+    floe_world_add_particle(w, &p);
+    /* the moved cell: kinematic at a constant velocity (a strain of 5e-8 per step) */
+    const double u = 1e-4;
+    p.x[0] = 2.0;
+    p.motion = FLOE_KINEMATIC;
+    p.v[0] = mode == 1 ? u : mode == 3 ? -u : 0;
+    p.v[1] = mode == 2 ? u : 0;
+    floe_world_add_particle(w, &p);
+    mc_motion mm = {2e-4 / u, u}; /* pushed by 0.2 mm (N/A = -1e5 Pa), then sheared */
+    if (mode == 4) floe_world_set_motion(w, 1, mc_move, &mm);
+    floe_beam_params bp = floe_default_beam_params();
+    bp.young = 1e9;
+    bp.poisson = 0.3;
+    const double lim = 2e5;
+    if (mode == 1) bp.tensile_strength = lim;
+    if (mode == 2 || mode == 4) bp.shear_strength = lim;
+    if (mode == 3) bp.compressive_strength = lim;
+    bp.friction_angle = phi;
+    CHECK(floe_world_add_beam_bond(w, 0, 1, &bp) >= 0, "bond: %s", floe_world_last_error(w));
+    floe_beam_bond_info prev, b;
+    memset(&prev, 0, sizeof prev);
+    int broke = 0;
+    for (long k = 0; k < 200000 && !broke; k++) {
+        if (floe_world_step(w) != FLOE_OK) break;
+        floe_world_beam_bond(w, 0, &b);
+        if (b.broken) broke = 1;
+        else prev = b;
+    }
+    CHECK(broke && b.mode == (mode == 4 ? 2 : mode), "%s: the bond broke in mode %d (got %d)", what[mode],
+          mode == 4 ? 2 : mode, b.mode);
+    /* the stress of that mode at the last step before the break, and its limit */
+    double s = mode == 1 ? prev.sigma : mode == 3 ? prev.sigma_c : prev.tau;
+    double l = mode == 4 ? lim + tan(phi * M_PI / 180) * 0.5 * (prev.sigma_c - prev.sigma) : lim;
+    printf("  bond breaks in %-24s at %.6g Pa (strength %.6g Pa)\n", what[mode], s, l);
+    CHECK(s <= l && s >= 0.99 * l, "%s: the last stress before the break %g is within 1 %% below the strength %g",
+          what[mode], s, l);
+    if (mode == 4) CHECK(l > 1.4 * lim, "Mohr-Coulomb: compression raised the shear limit (%g)", l);
+    floe_world_destroy(w);
+}
+
 int main(void) {
     char err[256];
     floe_register_builtins(err, sizeof err);
@@ -608,5 +682,6 @@ int main(void) {
     test_floe_field();
     test_hopkins();
     test_hopkins_polygons();
+    for (int mode = 1; mode <= 4; mode++) bond_mode(mode, mode == 4 ? 45.0 : 0.0);
     return check_summary("test_seaice");
 }

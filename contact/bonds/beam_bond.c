@@ -22,7 +22,9 @@ typedef struct beam_bond {
     double xi;               /* damping ratio */
     double damp;             /* 2 xi / omega_a (s), cached at prepare */
     double sig_lim, tau_lim;
-    double sigma, tau;       /* last stresses */
+    double sigc_lim, tan_phi; /* compressive strength (Pa), Mohr-Coulomb slope */
+    double sigma, tau, sigc; /* last stresses: tensile and compressive fibre, shear */
+    int mode;                /* 0 intact, 1 tension, 2 shear, 3 compression */
     double fold[9];          /* last force on i, torques on i and j (energy ledger) */
     double energy;           /* last stored energy */
     double t_broken;
@@ -160,6 +162,10 @@ int floe_beam_check_params(const floe_beam_params *par, char *err, size_t errlen
         bad = "tensile_strength and tensile_sd must be >= 0";
     else if (!(par->shear_strength >= 0 && par->shear_sd >= 0) || !isfinite(par->shear_strength + par->shear_sd))
         bad = "shear_strength and shear_sd must be >= 0";
+    else if (!(par->compressive_strength >= 0 && par->compressive_sd >= 0) ||
+             !isfinite(par->compressive_strength + par->compressive_sd))
+        bad = "compressive_strength and compressive_sd must be >= 0";
+    else if (!(par->friction_angle >= 0 && par->friction_angle < 90)) bad = "friction_angle must be in [0, 90) degrees";
     else if (!(par->max_distance >= 0) || !isfinite(par->max_distance)) bad = "max_distance must be >= 0";
     if (bad) {
         if (err && errlen) snprintf(err, errlen, "beam bonds: %s", bad);
@@ -296,6 +302,12 @@ int floe_beam_set_push(floe_beam_set *s, const floe_particles *p, int dim, int i
     b->tau_lim = INFINITY;
     if (par->tensile_strength > 0) b->sig_lim = fmax(0.0, par->tensile_strength + par->tensile_sd * floe_beam_normal(rng));
     if (par->shear_strength > 0) b->tau_lim = fmax(0.0, par->shear_strength + par->shear_sd * floe_beam_normal(rng));
+    b->sigc_lim = INFINITY;
+    if (par->compressive_strength > 0)
+        b->sigc_lim = fmax(0.0, par->compressive_strength + par->compressive_sd * floe_beam_normal(rng));
+    b->tan_phi = tan(par->friction_angle * M_PI / 180);
+    b->mode = 0;
+    b->sigc = 0;
     b->t_broken = -1;
     return s->n++;
 }
@@ -326,6 +338,9 @@ int floe_beam_set_info(const floe_beam_set *s, int k, floe_beam_bond_info *o) {
     o->tau = b->tau;
     o->sigma_lim = b->sig_lim;
     o->tau_lim = b->tau_lim;
+    o->sigma_c = b->sigc;
+    o->sigma_c_lim = b->sigc_lim;
+    o->mode = b->mode;
     o->section = b->s;
     return FLOE_OK;
 }
@@ -431,12 +446,19 @@ int floe_beam_set_forces(floe_beam_set *s, const floe_step_ctx *ctx, double *ela
         /* stresses of 004 eq 11 from the elastic forces */
         double Ms[3];
         floe_v3_add(Ms, Mi, Mj);
-        double sigma = N / c->A + fmax(floe_v3_norm(Mi), floe_v3_norm(Mj)) / c->W;
+        const double bend = fmax(floe_v3_norm(Mi), floe_v3_norm(Mj)) / c->W;
+        double sigma = N / c->A + bend, sigc = -N / c->A + bend;
         double tau = 1.5 * floe_v3_norm(Ms) / (L * c->A) + fabs(T) / (2.0 * c->W);
         b->sigma = sigma;
         b->tau = tau;
+        b->sigc = sigc;
         double Fi[3] = {0, 0, 0}, Ti[3] = {0, 0, 0}, Tj[3] = {0, 0, 0};
-        if (stepping && (sigma > b->sig_lim || tau > b->tau_lim)) {
+        /* Mohr-Coulomb: axial compression raises the shear limit */
+        const double tau_lim = b->tau_lim + (N < 0 ? b->tan_phi * (-N / c->A) : 0.0);
+        const int mode = sigma > b->sig_lim ? 1 : tau > tau_lim ? 2 : sigc > b->sigc_lim ? 3 : 0;
+        if (stepping && mode) {
+            b->mode = mode;
+            b->sigc = 0;
             b->broken = 1;
             b->t_broken = ctx->time;
             b->sigma = b->tau = 0;

@@ -94,6 +94,13 @@ typedef struct floe_beam_params {
     double max_distance;     /* > 0: bond pairs whose centres are within this distance (m)
                                 instead of radius_factor (ParticLS Fig. 11, fixed radius) */
     int group;               /* bond only particles of this group (FLOE_BEAM_ALL_GROUPS: any) */
+    /* compression and the Mohr-Coulomb envelope (sea-ice floes of bonded cells, DEMSI's
+     * bonds; docs/sea-ice.md "Bonded floes"): a bond also breaks when its largest
+     * compressive fibre stress -N/A + max|M|/W exceeds sigma_c (drawn after the other two,
+     * only when its mean is > 0), and its shear limit grows with the axial compression:
+     * tau_lim + tan(friction_angle) max(0, -N/A) */
+    double compressive_strength, compressive_sd; /* sigma_c, Pa (0: no compressive breakage) */
+    double friction_angle;   /* degrees in [0, 90) (0: a shear limit independent of compression) */
 } floe_beam_params;
 
 /* E = 0 (must be set), nu = 0.25, Euler-Bernoulli, radius_ratio 1, thickness 1, no damping,
@@ -108,6 +115,8 @@ typedef struct floe_beam_bond_info {
     double sigma, tau;       /* stresses of eq 11 at the last force evaluation (0 once broken), Pa */
     double sigma_lim, tau_lim; /* strengths (INFINITY: unbreakable by that stress), Pa */
     floe_beam_section section;
+    double sigma_c, sigma_c_lim; /* compressive fibre stress (last evaluation) and its strength, Pa */
+    int mode;                /* how it broke: 0 intact, 1 tension, 2 shear (Mohr-Coulomb), 3 compression */
 } floe_beam_bond_info;
 
 #endif

@@ -270,7 +270,8 @@ int sc_parse_bonds(sc *s, struct fy_node *seq, struct fy_node *key)
     static const char *const keys[] = {"young", "poisson", "radius_factor", "max_distance", "timoshenko",
                                        "shear_coefficient", "area", "inertia", "polar", "section_modulus",
                                        "radius_ratio", "thickness", "damping_ratio", "tensile_strength",
-                                       "tensile_sd", "shear_strength", "shear_sd", "seed", "group", NULL};
+                                       "tensile_sd", "shear_strength", "shear_sd", "compressive_strength",
+                                       "compressive_sd", "friction_angle", "seed", "group", NULL};
     if (!seq) return FLOE_OK;
     if (sc_is_missing(seq) || !fy_node_is_sequence(seq))
         return sc_fail(s, FLOE_EPARSE, sc_is_missing(seq) ? key : seq,
@@ -303,6 +304,9 @@ int sc_parse_bonds(sc *s, struct fy_node *seq, struct fy_node *key)
         FLOE_TRY(sc_num(s, &m, "tensile_sd", 0, 0, &bp.tensile_sd));
         FLOE_TRY(sc_num(s, &m, "shear_strength", 0, 0, &bp.shear_strength));
         FLOE_TRY(sc_num(s, &m, "shear_sd", 0, 0, &bp.shear_sd));
+        FLOE_TRY(sc_num(s, &m, "compressive_strength", 0, 0, &bp.compressive_strength));
+        FLOE_TRY(sc_num(s, &m, "compressive_sd", 0, 0, &bp.compressive_sd));
+        FLOE_TRY(sc_num(s, &m, "friction_angle", 0, 0, &bp.friction_angle));
         FLOE_TRY(sc_long(s, &m, "seed", 0, 1, &seed));
         FLOE_TRY(sc_long(s, &m, "group", 0, 0, &group));
         if (seed < 0) return sc_range(s, &m, "seed", ">= 0", (double)seed);
