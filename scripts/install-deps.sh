@@ -5,7 +5,7 @@
 #                                    FLOE_WITH_ASSIMP; GLPK for a test)
 #   scripts/install-deps.sh --bench  also the peer codes used by bench/ (LIGGGHTS, nanoflann)
 set -euo pipefail
-pkgs=(build-essential cmake pkg-config libfyaml-dev python3 python3-vtk9
+pkgs=(build-essential cmake pkg-config libfyaml-dev libjson-c-dev python3 python3-vtk9
       g++ libcgal-dev libgmp-dev libmpfr-dev libassimp-dev libglpk-dev)
 pkgs+=(libsuitesparse-dev)   # CHOLMOD: implicit Newmark-beta (FLOE_WITH_CHOLMOD)
 pkgs+=(clang)                # the scene fuzzer (scripts/fuzz.sh, libFuzzer)

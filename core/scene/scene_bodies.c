@@ -854,6 +854,13 @@ int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key)
             s->nbody_entries = ++entry;
             continue;
         }
+        if (fy_node_is_mapping(e) && fy_node_mapping_lookup_by_string(e, "polygons_file", -1)) {
+            s->entry_first[entry] = s->nparticles; /* floes from a GeoJSON file (scene_geojson.c) */
+            FLOE_TRY(sc_polygons_file(s, e, entry, what));
+            s->entry_count[entry] = s->nparticles - s->entry_first[entry];
+            s->nbody_entries = ++entry;
+            continue;
+        }
         sc_map m;
         /* packing: a registered packing (floe_registry.h FLOE_KIND_PACKING); none: one body */
         const floe_registry_entry *pent = NULL;
