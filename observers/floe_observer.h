@@ -35,6 +35,9 @@ floe_observer *floe_csv_writer_create(const char *path, char *err, size_t errlen
  * use vtk in 3D" in err. */
 floe_observer *floe_outline_writer_create(const char *dir, const char *prefix, int dim, int segments, int ascii,
                                           char *err, size_t errlen);
+/* The floe size distribution (floe_sizes.c): one CSV row per floe (a connected set of free
+ * particles joined by intact beam bonds) per observation; 2D only (NULL with a message). */
+floe_observer *floe_sizes_create(const char *path, int dim, char *err, size_t errlen);
 
 /* ---- additions: stress evaluation, accessors, VTK options ---- */
 

@@ -56,6 +56,20 @@ static floe_observer *outlines_create(const void *params, const floe_output_ctx 
     return floe_outline_writer_create(ctx->outdir, p->prefix, ctx->dim, p->segments, p->ascii, err, errlen);
 }
 
+/* floe_sizes: the floe size distribution (floe_sizes.c) */
+typedef struct fsd_params {
+    floe_params_head head;
+    char file[FLOE_PARAM_STRING_MAX];
+} fsd_params;
+static const floe_param fsd_schema[] = {
+    {.key = "file", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "floe_sizes.csv",
+     .doc = "CSV file in the output directory", .offset = offsetof(fsd_params, file)}};
+
+static floe_observer *fsd_create(const void *params, const floe_output_ctx *ctx, char *err, size_t errlen) {
+    (void)params;
+    return floe_sizes_create(ctx->path, ctx->dim, err, errlen);
+}
+
 #define OUT(n, t, d, src, sch) {.kind = FLOE_KIND_OBSERVER, .name = n, .title = t, .doc = d, .source = src, \
     .params = sch, .nparams = COUNT(sch), .params_size = sizeof(floe_params_head), .create = (floe_fn)loader_builds, \
     .flags = FLOE_ENTRY_LOADER_PARSES}
@@ -76,6 +90,12 @@ static const floe_registry_entry builtin[] = {
             "area. Polygons by their corners, curved shapes by `segments` points. Refused in 3D.",
      .source = "docs/scene-format.md", .params = outlines_schema, .nparams = COUNT(outlines_schema),
      .params_size = sizeof(outlines_params), .create = (floe_fn)outlines_create},
+    {.kind = FLOE_KIND_OBSERVER, .name = "floe_sizes", .title = "floe size distribution",
+     .doc = "2D sea ice: one CSV row per floe per frame (t, floe, particles, area, centroid), a floe being a "
+            "connected set of free particles joined by intact beam bonds: a bonded floe breaking shows its "
+            "fragments. Refused in 3D.",
+     .source = "docs/sea-ice.md, \"Outputs\"", .params = fsd_schema, .nparams = COUNT(fsd_schema),
+     .params_size = sizeof(fsd_params), .create = (floe_fn)fsd_create},
 };
 
 int floe_register_builtin_outputs(char *err, size_t errlen) {

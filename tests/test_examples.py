@@ -29,6 +29,8 @@ usage: python3 tests/test_examples.py <floe_cli_path> <tests_dir>
   without the PMB's alpha = 0.25, which the scene now has); energy balances.
 - examples/sea-ice-free-drift (issue #12): the floe reaches the steady free drift (the balance
   solved by Newton) within 0.1 % after two days.
+- examples/sea-ice-breakup (issue #12) to t = 500 s: the bonded floe breaks into >= 20
+  fragments (floe_sizes output) whose areas add up to the floe's; the energy ledger closes.
 Prints "N passed, N failed".
 """
 import csv
@@ -198,6 +200,30 @@ def check_free_drift(cli, root, tmp):
     check(err < 1e-3, "sea-ice-free-drift: steady free drift within 0.1 %% (%.2e)" % err)
     pvd = open(os.path.join(out, "floe.pvd")).read()
     check(pvd.count("<DataSet") == 49, "sea-ice-free-drift: 49 outline frames (%d)" % pvd.count("<DataSet"))
+
+
+def check_breakup(cli, root, tmp):
+    """examples/sea-ice-breakup to t = 500 s: one floe of 428 bonded cells at t = 0 breaks into
+    at least 20 fragments (the floe_sizes output), whose areas add up to the floe's (1e-9),
+    and the energy ledger closes (1e-3)."""
+    scene = copy_example(root, tmp, "sea-ice-breakup", 500)
+    out = os.path.join(tmp, "breakup-out")
+    if not run_example(cli, scene, out, "sea-ice-breakup"):
+        return
+    rows = list(csv.DictReader(open(os.path.join(out, "floe_sizes.csv"))))
+    times = sorted({float(r["t [s]"]) for r in rows})
+    first = [r for r in rows if float(r["t [s]"]) == times[0]]
+    last = [r for r in rows if float(r["t [s]"]) == times[-1]]
+    check(len(first) == 1 and int(first[0]["particles"]) == 428, "sea-ice-breakup: one floe of 428 cells at t = 0")
+    check(len(last) >= 20, "sea-ice-breakup: at least 20 fragments at t = %g s (%d)" % (times[-1], len(last)))
+    a0 = sum(float(r["area [m^2]"]) for r in first)
+    a1 = sum(float(r["area [m^2]"]) for r in last)
+    check(abs(a1 - a0) <= 1e-9 * a0, "sea-ice-breakup: fragment areas add up to the floe's (%.10g vs %.10g)" % (a1, a0))
+    erows = list(csv.DictReader(open(os.path.join(out, "energy.csv"))))
+    err = float(erows[-1]["balance_error"])
+    check(abs(err) < 1e-3, "sea-ice-breakup: energy balance error %.2e < 1e-3" % err)
+    print("  sea-ice break-up: %d fragments at t = %g s, largest %d cells" %
+          (len(last), times[-1], max(int(r["particles"]) for r in last)))
 
 
 def read_vtu_arrays(path):
@@ -419,6 +445,7 @@ def main():
         check_rubber_cube(cli, root, tmp)
         check_kalthoff_winkler(cli, root, tmp)
         check_free_drift(cli, root, tmp)
+        check_breakup(cli, root, tmp)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     finish("test_examples")
