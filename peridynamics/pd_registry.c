@@ -132,9 +132,5 @@ const floe_registry_entry floe_pd_material_entry_lps = {
 static const floe_registry_entry *const builtin[] = {&floe_pd_material_entry_pmb, &floe_pd_material_entry_lps};
 
 int floe_register_builtin_pd_materials(char *err, size_t errlen) {
-    for (size_t k = 0; k < sizeof builtin / sizeof *builtin; k++) {
-        if (floe_registry_find(builtin[k]->kind, builtin[k]->name)) continue;
-        FLOE_TRY(floe_register(builtin[k], err, errlen));
-    }
-    return FLOE_OK;
+    return floe_register_list(builtin, sizeof builtin / sizeof *builtin, err, errlen);
 }

@@ -23,9 +23,5 @@ static const floe_registry_entry *const builtin[] = {
 };
 
 int floe_register_builtin_laws(char *err, size_t errlen) {
-    for (size_t k = 0; k < sizeof builtin / sizeof *builtin; k++) {
-        if (floe_registry_find(builtin[k]->kind, builtin[k]->name)) continue;
-        FLOE_TRY(floe_register(builtin[k], err, errlen));
-    }
-    return FLOE_OK;
+    return floe_register_list(builtin, sizeof builtin / sizeof *builtin, err, errlen);
 }

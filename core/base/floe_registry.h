@@ -99,6 +99,9 @@ typedef struct floe_registry_entry {
  * among them, a duplicate key, too many parameters), and also when kind/name is taken. A
  * default outside the range is allowed: it reads "not given". The message goes to err. */
 int floe_register(const floe_registry_entry *e, char *err, size_t errlen);
+/* Registers each of the n entries of list that is not registered yet (a kind's built-in
+ * list, registered again without error): FLOE_OK or the first error. */
+int floe_register_list(const floe_registry_entry *const *list, size_t n, char *err, size_t errlen);
 /* The entry of kind/name, or NULL. */
 const floe_registry_entry *floe_registry_find(const char *kind, const char *name);
 /* Entries of a kind in registration order: count, and entry k (NULL out of range). kind

@@ -202,3 +202,12 @@ int floe_param_check(const floe_param *p, double v, char *why, size_t whylen) {
     }
     return FLOE_EINVAL;
 }
+
+int floe_register_list(const floe_registry_entry *const *list, size_t n, char *err, size_t errlen) {
+    for (size_t k = 0; k < n; k++) {
+        if (floe_registry_find(list[k]->kind, list[k]->name)) continue;
+        int rc = floe_register(list[k], err, errlen);
+        if (rc) return rc;
+    }
+    return FLOE_OK;
+}

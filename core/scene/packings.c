@@ -69,9 +69,5 @@ static const floe_registry_entry *const builtin[] = {&floe_packing_entry_lattice
                                                      &floe_packing_entry_random};
 
 int floe_register_builtin_packings(char *err, size_t errlen) {
-    for (size_t k = 0; k < sizeof builtin / sizeof *builtin; k++) {
-        if (floe_registry_find(builtin[k]->kind, builtin[k]->name)) continue;
-        FLOE_TRY(floe_register(builtin[k], err, errlen));
-    }
-    return FLOE_OK;
+    return floe_register_list(builtin, sizeof builtin / sizeof *builtin, err, errlen);
 }

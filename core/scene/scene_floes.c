@@ -14,10 +14,28 @@
 static const char *const field_keys[] = {"region", "count", "lloyd", "concentration", "seed", "thickness",
                                          "thickness_spread", NULL};
 
+/* the keys every floe entry shares (a field, a GeoJSON file): material, velocity, motion */
+int sc_floe_entry(sc *s, const sc_map *m, int entry, const char *what, int *mat, double v[3], int *motion)
+{
+    static const char *const motions[] = {"free", "fixed", "kinematic", NULL};
+    const char *mname;
+    struct fy_node *mat_at;
+    FLOE_TRY(sc_str(s, m, "material", 1, NULL, &mname, &mat_at));
+    char fmat[128];
+    snprintf(fmat, sizeof fmat, "%s.material", what);
+    FLOE_TRY(sc_material_ref(s, mname, mat_at, fmat, mat));
+    if (!s->mats[*mat].body_user) {
+        s->mats[*mat].body_user = mat_at;
+        s->mats[*mat].body_entry = entry;
+    }
+    FLOE_TRY(sc_vec(s, m, "velocity", 0, NULL, v));
+    FLOE_TRY(sc_check_planar(s, m, "velocity", v));
+    return sc_enum(s, m, "motion", motions, 0, motion);
+}
+
 int sc_floe_field(sc *s, struct fy_node *e, int entry, const char *what)
 {
     static const char *const keys[] = {"floe_field", "material", "velocity", "motion", "name", NULL};
-    static const char *const motions[] = {"free", "fixed", "kinematic", NULL};
     sc_map m;
     FLOE_TRY(sc_map_open(s, e, e, what, keys, &m));
     struct fy_node *fk, *fv = sc_get(&m, "floe_field", &fk);
@@ -58,22 +76,9 @@ int sc_floe_field(sc *s, struct fy_node *e, int entry, const char *what)
         return sc_range(s, &fm, "thickness_spread", "in [0, thickness) (m: h is uniform in thickness +- spread)", dh);
     FLOE_TRY(sc_check_memory(s, fk, f, (double)count));
     /* material, velocity, motion */
-    const char *mname;
-    struct fy_node *mat_at;
-    FLOE_TRY(sc_str(s, &m, "material", 1, NULL, &mname, &mat_at));
-    char fmat[128];
-    snprintf(fmat, sizeof fmat, "%s.material", what);
-    int mat;
-    FLOE_TRY(sc_material_ref(s, mname, mat_at, fmat, &mat));
-    if (!s->mats[mat].body_user) {
-        s->mats[mat].body_user = mat_at;
-        s->mats[mat].body_entry = entry;
-    }
+    int mat, mo;
     double v[3];
-    FLOE_TRY(sc_vec(s, &m, "velocity", 0, NULL, v));
-    FLOE_TRY(sc_check_planar(s, &m, "velocity", v));
-    int mo;
-    FLOE_TRY(sc_enum(s, &m, "motion", motions, 0, &mo));
+    FLOE_TRY(sc_floe_entry(s, &m, entry, what, &mat, v, &mo));
     /* the tessellation */
     double *seeds = malloc((size_t)count * 2 * sizeof *seeds);
     if (!seeds) return sc_fail(s, FLOE_ENOMEM, fk, "out of memory");

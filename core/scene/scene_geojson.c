@@ -886,7 +886,6 @@ static int gj_add_bodies(gj *g, int mat, const double v[3], int motion, int entr
 int sc_polygons_file(sc *s, struct fy_node *e, int entry, const char *what)
 {
     static const char *const keys[] = {"polygons_file", "material", "thickness", "velocity", "motion", "name", NULL};
-    static const char *const motions[] = {"free", "fixed", "kinematic", NULL};
     sc_map m;
     FLOE_TRY(sc_map_open(s, e, e, what, keys, &m));
     const char *file;
@@ -904,22 +903,9 @@ int sc_polygons_file(sc *s, struct fy_node *e, int entry, const char *what)
         FLOE_TRY(sc_num(s, &m, "thickness", 1, 0, &g.h));
         if (!(g.h > 0)) return sc_range(s, &m, "thickness", "> 0 (m)", g.h);
     }
-    const char *mname;
-    struct fy_node *mat_at;
-    FLOE_TRY(sc_str(s, &m, "material", 1, NULL, &mname, &mat_at));
-    char fmat[128];
-    snprintf(fmat, sizeof fmat, "%s.material", what);
-    int mat;
-    FLOE_TRY(sc_material_ref(s, mname, mat_at, fmat, &mat));
-    if (!s->mats[mat].body_user) {
-        s->mats[mat].body_user = mat_at;
-        s->mats[mat].body_entry = entry;
-    }
+    int mat, mo;
     double v[3];
-    FLOE_TRY(sc_vec(s, &m, "velocity", 0, NULL, v));
-    FLOE_TRY(sc_check_planar(s, &m, "velocity", v));
-    int mo;
-    FLOE_TRY(sc_enum(s, &m, "motion", motions, 0, &mo));
+    FLOE_TRY(sc_floe_entry(s, &m, entry, what, &mat, v, &mo));
     /* relative paths are relative to the scene file (as a mesh's file) */
     char path[1024];
     const char *slash = s->path ? strrchr(s->path, '/') : NULL;

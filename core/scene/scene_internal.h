@@ -148,6 +148,7 @@ typedef struct sc_rng { unsigned long long s; } sc_rng; /* floe_rng.h */
 #define sc_parse_bonds floe_sc_parse_bonds
 #define sc_parse_forces floe_sc_parse_forces
 #define sc_floe_field floe_sc_floe_field
+#define sc_floe_entry floe_sc_floe_entry
 #define sc_polygons_file floe_sc_polygons_file
 #define sc_parse_laws floe_sc_parse_laws
 #define sc_parse_materials floe_sc_parse_materials
@@ -195,6 +196,8 @@ int sc_parse_bonds(sc *s, struct fy_node *seq, struct fy_node *key);
 int sc_parse_forces(sc *s, struct fy_node *seq, struct fy_node *key);
 /* a body entry {floe_field: {...}, material, ...}: a Voronoi field of 2D floes (scene_floes.c) */
 int sc_floe_field(sc *s, struct fy_node *e, int entry, const char *what);
+/* the keys every floe entry shares: material (its index), velocity, motion (scene_floes.c) */
+int sc_floe_entry(sc *s, const sc_map *m, int entry, const char *what, int *mat, double v[3], int *motion);
 /* a body entry {polygons_file: PATH, material, ...}: floes, coasts and islands from a GeoJSON
  * file of polygons (scene_geojson.c) */
 int sc_polygons_file(sc *s, struct fy_node *e, int entry, const char *what);
