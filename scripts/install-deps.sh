@@ -8,6 +8,7 @@ set -euo pipefail
 pkgs=(build-essential cmake pkg-config libfyaml-dev libjson-c-dev python3 python3-vtk9
       g++ libcgal-dev libgmp-dev libmpfr-dev libassimp-dev libglpk-dev)
 pkgs+=(libsuitesparse-dev)   # CHOLMOD: implicit Newmark-beta (FLOE_WITH_CHOLMOD)
+pkgs+=(libnetcdf-dev)        # gridded velocity fields from NetCDF files (FLOE_WITH_NETCDF)
 pkgs+=(clang)                # the scene fuzzer (scripts/fuzz.sh, libFuzzer)
 if [[ "${1:-}" == "--bench" ]]; then
   pkgs+=(g++ libnanoflann-dev liggghts)

@@ -1,17 +1,18 @@
-/* field.c - analytic velocity fields of the ocean and the atmosphere (floe_forcing.h). */
+/* field.c - velocity fields of the ocean and the atmosphere (floe_forcing.h): the analytic
+ * ones, and the dispatch to gridded data (netcdf_field.c). */
 #include "floe_forcing.h"
 
 #include <math.h>
 #include <stdio.h>
 
-static const char *const kind_names[] = {"uniform", "shear", "gyre", "vortex"};
+static const char *const kind_names[] = {"uniform", "shear", "gyre", "vortex", "netcdf"};
 
 const char *floe_field_kind_name(int kind) {
     return kind >= 0 && kind < (int)(sizeof kind_names / sizeof *kind_names) ? kind_names[kind] : NULL;
 }
 
 void floe_field_eval(const floe_field *f, const double x[3], double t, double u[3]) {
-    (void)t; /* the analytic fields are steady */
+    /* the analytic fields are steady: only a grid reads t */
     u[0] = f->U[0];
     u[1] = f->U[1];
     u[2] = 0;
@@ -36,6 +37,13 @@ void floe_field_eval(const floe_field *f, const double x[3], double t, double u[
         }
         break;
     }
+    case FLOE_FIELD_GRID: {
+        double g[3];
+        floe_field_grid_eval(f->grid, x, t, g);
+        u[0] += g[0];
+        u[1] += g[1];
+        break;
+    }
     default:
         break;
     }
@@ -47,6 +55,7 @@ double floe_field_max_speed(const floe_field *f) {
     case FLOE_FIELD_SHEAR: return f->rate != 0 ? INFINITY : u;
     case FLOE_FIELD_GYRE:
     case FLOE_FIELD_VORTEX: return u + fabs(f->speed);
+    case FLOE_FIELD_GRID: return u + (f->grid ? floe_field_grid_max_speed(f->grid) : 0);
     default: return u;
     }
 }
@@ -66,5 +75,19 @@ int floe_field_check(const floe_field *f, char *err, size_t errlen) {
         snprintf(err, errlen, "field %s: length must be > 0 (m), got %g", kind_names[f->kind], f->length);
         return FLOE_EINVAL;
     }
+    if (f->kind == FLOE_FIELD_GRID && !f->grid) {
+        snprintf(err, errlen, "field netcdf: no grid data (floe_field.grid is NULL)");
+        return FLOE_EINVAL;
+    }
     return FLOE_OK;
+}
+
+int floe_field_covers(const floe_field *f, const double x[3], double r, int i, char *err, size_t errlen) {
+    if (f->kind != FLOE_FIELD_GRID || !f->grid) return FLOE_OK;
+    double lo[2], hi[2], t[2];
+    floe_field_grid_extent(f->grid, lo, hi, t);
+    if (x[0] - r >= lo[0] && x[0] + r <= hi[0] && x[1] - r >= lo[1] && x[1] + r <= hi[1]) return FLOE_OK;
+    snprintf(err, errlen, "field file %s: the grid x in [%g, %g], y in [%g, %g] does not cover particle %d at "
+             "(%g, %g) (radius %g)", floe_field_grid_label(f->grid), lo[0], hi[0], lo[1], hi[1], i, x[0], x[1], r);
+    return FLOE_EINVAL;
 }

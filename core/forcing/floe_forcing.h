@@ -21,9 +21,15 @@ typedef enum floe_field_kind {
     FLOE_FIELD_GYRE = 2,    /* u = U + curl of psi = S L/pi sin(pi (x - c_x)/L) sin(pi (y - c_y)/L)
                                (one closed gyre filling the square [c, c + L]^2, counter-clockwise
                                for S > 0, peak speed S at the middle of its sides) */
-    FLOE_FIELD_VORTEX = 3   /* u = U + a Rankine vortex about c: azimuthal speed S r/R inside the
+    FLOE_FIELD_VORTEX = 3,  /* u = U + a Rankine vortex about c: azimuthal speed S r/R inside the
                                core radius R, S R/r outside (counter-clockwise for S > 0) */
+    FLOE_FIELD_GRID = 4     /* u = U + gridded data (floe_field_grid, read from a NetCDF file):
+                               bilinear in x, y and linear in t between the records */
 } floe_field_kind;
+
+/* Gridded, time-varying velocity data (core/forcing/netcdf_field.c): opaque, immutable once
+ * built, reference-counted (floe_field_grid_retain/release; the count is atomic). */
+typedef struct floe_field_grid floe_field_grid;
 
 typedef struct floe_field {
     floe_field_kind kind;
@@ -32,18 +38,72 @@ typedef struct floe_field {
     double speed;       /* gyre, vortex: S, m/s */
     double length;      /* gyre: L (m); vortex: R (m) */
     double center[3];   /* shear: c_y; gyre: the corner c; vortex: the centre c (m) */
+    floe_field_grid *grid; /* grid: the data, borrowed: a provider created with this field takes
+                              its own reference, the caller keeps (and releases) its own */
 } floe_field;
 
-/* The field's velocity u at position x (m) and time t (s): u[2] = 0. */
+/* The field's velocity u at position x (m) and time t (s): u[2] = 0. A grid is evaluated at
+ * the point clamped into its extent (the providers refuse particles outside it first:
+ * floe_field_covers) and at t clamped into its records' time range. */
 void floe_field_eval(const floe_field *f, const double x[3], double t, double u[3]);
 /* An upper bound of |u| over the plane (the gyre and vortex peaks plus |U|; INFINITY for a
- * shear, whose speed grows without bound) */
+ * shear, whose speed grows without bound; a grid: |U| plus its largest |u| over the data) */
 double floe_field_max_speed(const floe_field *f);
-/* "uniform", "shear", "gyre", "vortex" (NULL out of range) */
+/* "uniform", "shear", "gyre", "vortex", "netcdf" (NULL out of range) */
 const char *floe_field_kind_name(int kind);
 /* FLOE_OK, or FLOE_EINVAL with what is wrong in err (a non-finite value, a gyre or vortex
- * without a positive length) */
+ * without a positive length, a grid field without its data) */
 int floe_field_check(const floe_field *f, char *err, size_t errlen);
+/* FLOE_OK when the field is defined over the bounding box [x - r, x + r] of particle i (every
+ * analytic field is); for a grid outside its extent FLOE_EINVAL with "field file F: the grid
+ * x in [a, b], y in [c, d] does not cover particle i at (x, y) (radius r)" in err. */
+int floe_field_covers(const floe_field *f, const double x[3], double r, int i, char *err, size_t errlen);
+
+/* ---- gridded fields ----
+ * Velocities u[k][j][i] at the nodes (x_i, y_j) of a rectilinear grid (coordinates strictly
+ * increasing, uniformly spaced or not; at least 2 nodes per axis) and the times t_k (s,
+ * strictly increasing; one record: a steady field). */
+typedef struct floe_field_grid_def {
+    const char *file;       /* NetCDF file (CF conventions); a relative path is opened from the
+                               current directory (a scene's `file` is first made relative to
+                               the scene file's folder, core/scene/scene_forces.c) */
+    const char *u_var, *v_var; /* the velocity components' variables ("u", "v") */
+    const char *x_var, *y_var; /* the coordinates, projected metres ("x", "y") */
+    const char *time_var;   /* the time coordinate ("time"), read when u and v are (time, y, x) */
+    double scale;           /* multiplier of the velocities read (1) */
+} floe_field_grid_def;
+floe_field_grid_def floe_field_grid_default(void);
+/* Reads a grid from a NetCDF file: u and v as double, of dimensions (time, y, x) or (y, x)
+ * (steady), the same for both; x, y and time one-dimensional on those dimensions, strictly
+ * increasing; CF scale_factor and add_offset applied; a value equal to _FillValue,
+ * missing_value (or the type's default fill when no _FillValue is set) or not finite is
+ * refused, as are x or y in degrees; the time's units "seconds|minutes|hours|days since
+ * DATE", converted to seconds (the simulation time t is the file's time in seconds since its
+ * DATE). Returns the grid with one reference (the caller's: floe_field_grid_release), or NULL
+ * with the message in err: "field file F: ...". Without FLOE_WITH_NETCDF: NULL, err says so. */
+floe_field_grid *floe_field_grid_load(const floe_field_grid_def *d, char *err, size_t errlen);
+/* A grid from arrays (copied): x[nx], y[ny], t[nt] (s) and u, v of nt*ny*nx values, node
+ * (i, j) of record k at index (k ny + j) nx + i; `label` names it in messages (the file).
+ * One reference, or NULL with the message in err. */
+floe_field_grid *floe_field_grid_create(int nx, const double *x, int ny, const double *y, int nt, const double *t,
+                                        const double *u, const double *v, const char *label, char *err,
+                                        size_t errlen);
+/* Adds a reference and returns g (NULL: NULL). */
+floe_field_grid *floe_field_grid_retain(floe_field_grid *g);
+/* Drops a reference; the last one frees the grid (NULL: nothing). */
+void floe_field_grid_release(floe_field_grid *g);
+/* The grid's velocity (m/s) at (x[0], x[1]) and time t, both clamped into its extent:
+ * bilinear in space, linear in time (exact for fields linear in x, y and t); u[2] = 0 */
+void floe_field_grid_eval(const floe_field_grid *g, const double x[3], double t, double u[3]);
+/* Its extent: x in [lo[0], hi[0]], y in [lo[1], hi[1]] (m), times in [t[0], t[1]] (s) */
+void floe_field_grid_extent(const floe_field_grid *g, double lo[2], double hi[2], double t[2]);
+/* Its label (the file), the largest |u| over its data (m/s), and the largest velocity
+ * gradient component over its cells (1/s) */
+const char *floe_field_grid_label(const floe_field_grid *g);
+double floe_field_grid_max_speed(const floe_field_grid *g);
+double floe_field_grid_max_gradient(const floe_field_grid *g);
+/* 1 when floe was built with NetCDF (FLOE_WITH_NETCDF), 0 otherwise */
+int floe_field_grid_netcdf(void);
 
 /* ---- quadratic drag: tau = rho C_d |du| R(theta) du over the floe's area ---- */
 typedef struct floe_drag_def {

@@ -1,6 +1,7 @@
 /* ice_forcing.c - the forcing providers of floes (floe_forcing.h, docs/sea-ice.md): ocean
  * and wind drag integrated over each floe's area, Coriolis with the sea-surface tilt, and
- * their registry entries (kind "provider", named in a scene's `forces:`). */
+ * their registry entries (kind "provider", named in a scene's `forces:`; a gridded field's
+ * file is read when the provider is created). */
 #include "floe_forcing.h"
 #include "floe_view.h"
 #include "floe_registry.h"
@@ -18,6 +19,22 @@ typedef struct last_force {
     double *old; /* 4n */
     int n;
 } last_force;
+
+/* A gridded field covers every free particle's bounding box [x - r, x + r], or the provider
+ * refuses: at its first evaluation (the world's prepare), and whenever a particle leaves the
+ * grid during the run (the time then in the message); a grid is never extrapolated. */
+static int field_covers_all(floe_world *w, const char *who, const floe_field *f, const floe_particles *p, int first,
+                            double time) {
+    if (f->kind != FLOE_FIELD_GRID) return FLOE_OK;
+    char msg[768];
+    for (int i = 0; i < p->n; i++) {
+        if (p->motion[i] != FLOE_FREE || !floe_field_covers(f, p->x + 3 * i, p->radius[i], i, msg, sizeof msg))
+            continue;
+        if (first) return floe_world_report_error(w, FLOE_EINVAL, "%s: %s", who, msg);
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: %s at t = %.9g s", who, msg, time);
+    }
+    return FLOE_OK;
+}
 
 static int last_reserve(last_force *l, int n) {
     if (l->n >= n) return FLOE_OK;
@@ -40,6 +57,7 @@ typedef struct drag_pv {
     floe_area_quadrature *quad;/* per geometry index, built at first use */
     int nquad;
     last_force last;
+    int evaluated;             /* 1 after the first evaluation (prepare) */
 } drag_pv;
 
 floe_drag_def floe_ocean_drag_default(void) {
@@ -119,6 +137,8 @@ static int drag_forces(floe_provider *pv, floe_world *w, const struct floe_step_
                                        "over each floe's area in the plane", d->name);
     const int fresh = d->last.n < p->n; /* no force held yet */
     if (last_reserve(&d->last, p->n)) return floe_world_report_error(w, FLOE_ENOMEM, "%s: out of memory", d->name);
+    FLOE_TRY(field_covers_all(w, d->name, &d->d.field, p, !d->evaluated, ctx->time));
+    d->evaluated = 1;
     /* every k-th step (and at prepare) the drag is integrated; in between it is held */
     const int hold = d->d.every > 1 && !fresh && ctx->stepping && floe_world_step_count(w) % d->d.every != 0;
     double work = 0;
@@ -167,6 +187,7 @@ static double drag_critical(floe_provider *pv, floe_world *w) {
         floe_field_eval(&d->d.field, pvw.x + 3 * i, 0, U);
         double du = hypot(U[0] - pvw.v[3 * i], U[1] - pvw.v[3 * i + 1]) + fabs(pvw.w[3 * i + 2]) * R;
         if (d->d.field.kind == FLOE_FIELD_SHEAR) du += fabs(d->d.field.rate) * R;
+        if (d->d.field.kind == FLOE_FIELD_GRID) du += floe_field_grid_max_gradient(d->d.field.grid) * R;
         double c = 2 * d->d.rho * d->d.cd * du * mp.volume / pvw.mass[i];
         if (c > cmax) cmax = c;
     }
@@ -192,6 +213,7 @@ static void drag_destroy(floe_provider *pv) {
     for (int k = 0; k < d->nquad; k++) floe_area_quadrature_free(d->quad + k);
     free(d->quad);
     free(d->last.old);
+    floe_field_grid_release(d->d.field.grid);
     free(d);
 }
 
@@ -228,6 +250,7 @@ floe_provider *floe_drag_create(const char *name, const floe_drag_def *def, char
     }
     snprintf(d->name, sizeof d->name, "%s", name);
     d->d = *def;
+    d->d.field.grid = def->field.kind == FLOE_FIELD_GRID ? floe_field_grid_retain(def->field.grid) : NULL;
     if (!d->d.quadrature) d->d.quadrature = 1;
     if (!d->d.every) d->d.every = 1;
     d->cs = cos(def->turning_angle);
@@ -255,12 +278,16 @@ typedef struct coriolis_pv {
     floe_provider base;
     floe_coriolis_def d;
     last_force last;
+    int evaluated;             /* 1 after the first evaluation (prepare) */
 } coriolis_pv;
 
 static int coriolis_forces(floe_provider *pv, floe_world *w, const struct floe_step_ctx *ctx, floe_provider_out *out) {
     coriolis_pv *c = (coriolis_pv *)pv;
     floe_particles *p = ctx->p;
     if (last_reserve(&c->last, p->n)) return floe_world_report_error(w, FLOE_ENOMEM, "coriolis: out of memory");
+    if (c->d.tilt == FLOE_TILT_GEOSTROPHIC)
+        FLOE_TRY(field_covers_all(w, "coriolis", &c->d.field, p, !c->evaluated, ctx->time));
+    c->evaluated = 1;
     const double f = c->d.f;
     /* velocity Verlet: the Cayley rotation over the step, a = -i f u / (1 + i f dt / 2) in
      * complex form (u = v - U_g), so that v_{n+3/2} = v_{n+1/2} + dt a turns u by
@@ -316,6 +343,7 @@ static void coriolis_restore(floe_provider *pv, floe_world *w, const unsigned ch
 static void coriolis_destroy(floe_provider *pv) {
     coriolis_pv *c = (coriolis_pv *)pv;
     free(c->last.old);
+    floe_field_grid_release(c->d.field.grid);
     free(c);
 }
 
@@ -350,53 +378,96 @@ floe_provider *floe_coriolis_create(const floe_coriolis_def *def, char *err, siz
     }
     c->base.klass = &coriolis_class;
     c->d = *def;
+    c->d.field.grid = def->tilt == FLOE_TILT_GEOSTROPHIC && def->field.kind == FLOE_FIELD_GRID
+                          ? floe_field_grid_retain(def->field.grid) : NULL;
     return &c->base;
 }
 
 /* ======================= registry ======================= */
 
-/* the keys of a velocity field, shared by the drag and Coriolis schemas */
+/* the keys of a velocity field, shared by the drag and Coriolis schemas (S.fp a field_params) */
 #define FIELD_PARAMS(S)                                                                                           \
-    {.key = "field", .type = FLOE_PARAM_CHOICE, .choices = "uniform|shear|gyre|vortex", .def = 0,                \
+    {.key = "field", .type = FLOE_PARAM_CHOICE, .choices = "uniform|shear|gyre|vortex|netcdf", .def = 0,         \
      .doc = "the fluid's velocity field (docs/sea-ice.md, \"Velocity fields\"): uniform, simple shear, one gyre, " \
-            "a Rankine vortex",                                                                                    \
-     .offset = offsetof(S, field)},                                                                               \
+            "a Rankine vortex, gridded data from a NetCDF file",                                                  \
+     .offset = offsetof(S, fp.field)},                                                                            \
     {.key = "velocity", .type = FLOE_PARAM_VEC3, .unit = "m/s", .doc = "its uniform part U (every field adds it)", \
-     .offset = offsetof(S, velocity)},                                                                            \
+     .offset = offsetof(S, fp.velocity)},                                                                         \
     {.key = "shear_rate", .type = FLOE_PARAM_REAL, .unit = "1/s", .def = 0,                                      \
-     .doc = "shear: du_x/dy about the line y = center_y", .offset = offsetof(S, shear_rate)},                     \
+     .doc = "shear: du_x/dy about the line y = center_y", .offset = offsetof(S, fp.shear_rate)},                  \
     {.key = "speed", .type = FLOE_PARAM_REAL, .unit = "m/s", .def = 0,                                           \
-     .doc = "gyre, vortex: peak speed S (> 0 counter-clockwise)", .offset = offsetof(S, speed)},                 \
+     .doc = "gyre, vortex: peak speed S (> 0 counter-clockwise)", .offset = offsetof(S, fp.speed)},              \
     {.key = "length", .type = FLOE_PARAM_REAL, .unit = "m", .def = 0, .min = 0, .max = INFINITY,                 \
-     .doc = "gyre: side L of its square; vortex: core radius R", .offset = offsetof(S, length)},                 \
+     .doc = "gyre: side L of its square; vortex: core radius R", .offset = offsetof(S, fp.length)},              \
     {.key = "center", .type = FLOE_PARAM_VEC3, .unit = "m",                                                       \
      .doc = "shear: a point of the line of zero shear velocity; gyre: the square's lower-left corner; vortex: "   \
             "its centre",                                                                                          \
-     .offset = offsetof(S, center)}
+     .offset = offsetof(S, fp.center)},                                                                           \
+    {.key = "file", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "",                                        \
+     .doc = "netcdf: the NetCDF file (CF; x, y in metres; a relative path from the scene file's folder)",            \
+     .offset = offsetof(S, fp.file)},                                                                             \
+    {.key = "u_var", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "u",                                      \
+     .doc = "netcdf: the variable of the velocity's x component, (time, y, x) or (y, x)",                        \
+     .offset = offsetof(S, fp.u_var)},                                                                            \
+    {.key = "v_var", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "v",                                      \
+     .doc = "netcdf: the variable of the velocity's y component (the same grid as u_var)",                       \
+     .offset = offsetof(S, fp.v_var)},                                                                            \
+    {.key = "x_var", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "x",                                      \
+     .doc = "netcdf: the x coordinate (m, strictly increasing)", .offset = offsetof(S, fp.x_var)},               \
+    {.key = "y_var", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "y",                                      \
+     .doc = "netcdf: the y coordinate (m, strictly increasing)", .offset = offsetof(S, fp.y_var)},               \
+    {.key = "time_var", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "time",                                \
+     .doc = "netcdf: the time coordinate (units seconds, minutes, hours or days since DATE; the simulation time is "   \
+            "the time since DATE)",                                                                                \
+     .offset = offsetof(S, fp.time_var)},                                                                         \
+    {.key = "scale", .type = FLOE_PARAM_REAL, .unit = "", .def = 1,                                               \
+     .doc = "netcdf: multiplier of the velocities read (after the file's scale_factor and add_offset)",           \
+     .offset = offsetof(S, fp.scale)}
 
 typedef struct field_params {
     int field;
     double velocity[3], shear_rate, speed, length, center[3];
+    char file[FLOE_PARAM_STRING_MAX], u_var[FLOE_PARAM_STRING_MAX], v_var[FLOE_PARAM_STRING_MAX];
+    char x_var[FLOE_PARAM_STRING_MAX], y_var[FLOE_PARAM_STRING_MAX], time_var[FLOE_PARAM_STRING_MAX];
+    double scale;
 } field_params;
 
-static floe_field field_of(const field_params *p) {
-    floe_field f;
-    memset(&f, 0, sizeof f);
-    f.kind = (floe_field_kind)p->field;
-    memcpy(f.U, p->velocity, sizeof f.U);
-    f.rate = p->shear_rate;
-    f.speed = p->speed;
-    f.length = p->length;
-    memcpy(f.center, p->center, sizeof f.center);
-    return f;
+/* The field of a provider's parameters (entry e, struct params): a netcdf one reads its file
+ * (the grid's reference is the caller's: floe_field_grid_release after creating the
+ * provider). FLOE_OK, or an error with the message in err. */
+static int field_of(const floe_registry_entry *e, const void *params, const field_params *p, floe_field *f,
+                    char *err, size_t errlen) {
+    memset(f, 0, sizeof *f);
+    f->kind = (floe_field_kind)p->field;
+    memcpy(f->U, p->velocity, sizeof f->U);
+    f->rate = p->shear_rate;
+    f->speed = p->speed;
+    f->length = p->length;
+    memcpy(f->center, p->center, sizeof f->center);
+    static const char *const grid_keys[] = {"file", "u_var", "v_var", "x_var", "y_var", "time_var", "scale"};
+    if (f->kind != FLOE_FIELD_GRID) {
+        for (size_t k = 0; e && k < sizeof grid_keys / sizeof *grid_keys; k++)
+            if (floe_params_given(e, params, grid_keys[k])) {
+                snprintf(err, errlen, "%s is only read with field: netcdf", grid_keys[k]);
+                return FLOE_EINVAL;
+            }
+        return FLOE_OK;
+    }
+    if (!p->file[0]) {
+        snprintf(err, errlen, "field: netcdf needs file (the NetCDF file of the velocities)");
+        return FLOE_EINVAL;
+    }
+    floe_field_grid_def gd = {.file = p->file, .u_var = p->u_var, .v_var = p->v_var, .x_var = p->x_var,
+                              .y_var = p->y_var, .time_var = p->time_var, .scale = p->scale};
+    f->grid = floe_field_grid_load(&gd, err, errlen);
+    return f->grid ? FLOE_OK : FLOE_EINVAL;
 }
 
 typedef struct drag_params {
     floe_params_head head;
     double rho, cd, turning_angle;
     int quadrature, every;
-    int field;
-    double velocity[3], shear_rate, speed, length, center[3];
+    field_params fp;
 } drag_params;
 
 static floe_provider *drag_build(const char *name, const void *params, char *err, size_t errlen) {
@@ -408,10 +479,10 @@ static floe_provider *drag_build(const char *name, const void *params, char *err
     d.turning_angle = p->turning_angle * M_PI / 180;
     d.quadrature = p->quadrature;
     d.every = p->every;
-    field_params fp = {p->field, {p->velocity[0], p->velocity[1], p->velocity[2]}, p->shear_rate, p->speed, p->length,
-                       {p->center[0], p->center[1], p->center[2]}};
-    d.field = field_of(&fp);
-    return floe_drag_create(name, &d, err, errlen);
+    if (field_of(floe_registry_find(FLOE_KIND_PROVIDER, name), p, &p->fp, &d.field, err, errlen)) return NULL;
+    floe_provider *pv = floe_drag_create(name, &d, err, errlen);
+    floe_field_grid_release(d.field.grid); /* the provider holds its own reference */
+    return pv;
 }
 static floe_provider *ocean_create(const void *params, const floe_world *w, char *err, size_t errlen) {
     (void)w;
@@ -464,8 +535,7 @@ typedef struct coriolis_params {
     double f, latitude;
     int tilt;
     double slope[3], g;
-    int field;
-    double velocity[3], shear_rate, speed, length, center[3];
+    field_params fp;
 } coriolis_params;
 
 static floe_provider *coriolis_make(const void *params, const floe_world *w, char *err, size_t errlen) {
@@ -496,10 +566,10 @@ static floe_provider *coriolis_make(const void *params, const floe_world *w, cha
         snprintf(err, errlen, "slope is only read with tilt: slope");
         return NULL;
     }
-    field_params fp = {p->field, {p->velocity[0], p->velocity[1], p->velocity[2]}, p->shear_rate, p->speed, p->length,
-                       {p->center[0], p->center[1], p->center[2]}};
-    d.field = field_of(&fp);
-    return floe_coriolis_create(&d, err, errlen);
+    if (field_of(e, p, &p->fp, &d.field, err, errlen)) return NULL;
+    floe_provider *pv = floe_coriolis_create(&d, err, errlen);
+    floe_field_grid_release(d.field.grid); /* the provider holds its own reference */
+    return pv;
 }
 
 static const floe_param coriolis_schema[] = {

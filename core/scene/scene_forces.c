@@ -1,6 +1,7 @@
 /* scene_forces.c - scene section `forces`: registered force providers (floe_provider.h,
  * kind FLOE_KIND_PROVIDER), each `{type: NAME, <its parameters>}` read by its schema and
- * added to the world (floe_world_add_provider). */
+ * added to the world (floe_world_add_provider). A relative `file` parameter is made
+ * relative to the scene file's folder. */
 #include "scene_internal.h"
 
 /* the registered names of a kind, for "did you mean" */
@@ -41,6 +42,20 @@ int sc_parse_forces(sc *s, struct fy_node *seq, struct fy_node *key)
         char label[96];
         snprintf(label, sizeof label, "provider '%s'", ent->name);
         int rc = sc_read_schema(s, &m, ent, label, "type", params);
+        /* a relative `file` (a NetCDF field's) is relative to the scene file, as a mesh's */
+        const int fk = floe_schema_index(ent, "file");
+        const char *slash = s->path ? strrchr(s->path, '/') : NULL;
+        if (!rc && fk >= 0 && ent->params[fk].type == FLOE_PARAM_STRING && slash) {
+            char *f = (char *)params + ent->params[fk].offset;
+            if (f[0] && f[0] != '/') {
+                char full[2 * FLOE_PARAM_STRING_MAX];
+                int len = snprintf(full, sizeof full, "%.*s/%s", (int)(slash - s->path), s->path, f);
+                if (len < 0 || len >= FLOE_PARAM_STRING_MAX)
+                    rc = sc_fail(s, FLOE_EINVAL, sc_get(&m, "file", NULL), "%s.file: the path %s is longer than %d "
+                                 "characters", m.what, full, FLOE_PARAM_STRING_MAX - 1);
+                else memcpy(f, full, (size_t)len + 1);
+            }
+        }
         floe_provider *pv = NULL;
         if (!rc) {
             char err[512] = "";

@@ -1,0 +1,661 @@
+/* netcdf_field.c - gridded, time-varying velocity fields (floe_forcing.h, docs/sea-ice.md
+ * "Velocity fields"): the grid (rectilinear, spacing uniform or not: cells found by
+ * bisection), its interpolation (bilinear in x and y, linear in t, the point and the time
+ * clamped into the grid), and its reader of NetCDF files written with the CF conventions
+ * (CF 1.11: section 4 coordinate types, 4.4 time units "U since DATE", 8.1 packed data
+ * scale_factor/add_offset, 2.5.1 _FillValue/missing_value), through libnetcdf (opened at
+ * the first file read) when floe is built with FLOE_WITH_NETCDF. */
+#include "floe_forcing.h"
+
+#include <ctype.h>
+#include <math.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#ifdef FLOE_HAVE_NETCDF
+#include <dlfcn.h>
+#include <netcdf.h>
+#include <unistd.h>
+#endif
+
+struct floe_field_grid {
+    atomic_int refs;
+    int nx, ny, nt;
+    double *x, *y, *t;  /* nodes (m, m) and record times (s) */
+    double *u, *v;      /* nt ny nx: record k, row j, column i at (k ny + j) nx + i */
+    double umax, gmax;  /* largest |u| (m/s) and velocity gradient component (1/s) */
+    char label[512];    /* the file, for messages */
+};
+
+/* ======================= the grid ======================= */
+
+floe_field_grid_def floe_field_grid_default(void) {
+    floe_field_grid_def d = {.file = NULL, .u_var = "u", .v_var = "v", .x_var = "x", .y_var = "y",
+                             .time_var = "time", .scale = 1.0};
+    return d;
+}
+
+static void grid_free(floe_field_grid *g) {
+    if (!g) return;
+    free(g->x);
+    free(g->y);
+    free(g->t);
+    free(g->u);
+    free(g->v);
+    free(g);
+}
+
+floe_field_grid *floe_field_grid_retain(floe_field_grid *g) {
+    if (g) atomic_fetch_add(&g->refs, 1);
+    return g;
+}
+
+void floe_field_grid_release(floe_field_grid *g) {
+    if (g && atomic_fetch_sub(&g->refs, 1) == 1) grid_free(g);
+}
+
+/* the coordinate c[n] named `name`: finite, strictly increasing, with `least` values at least */
+static int check_axis(const double *c, int n, int least, const char *label, const char *name, char *err,
+                      size_t errlen) {
+    if (n < least) {
+        snprintf(err, errlen, "field file %s: '%s' has %d value%s: a grid needs at least %d along each axis", label,
+                 name, n, n == 1 ? "" : "s", least);
+        return FLOE_EINVAL;
+    }
+    for (int k = 0; k < n; k++) {
+        if (!isfinite(c[k])) {
+            snprintf(err, errlen, "field file %s: '%s'[%d] is not finite (%g)", label, name, k, c[k]);
+            return FLOE_EINVAL;
+        }
+        if (k && !(c[k] > c[k - 1])) {
+            snprintf(err, errlen, "field file %s: '%s' is not strictly increasing ('%s'[%d] = %.17g after '%s'[%d] = "
+                     "%.17g)", label, name, name, k, c[k], name, k - 1, c[k - 1]);
+            return FLOE_EINVAL;
+        }
+    }
+    return FLOE_OK;
+}
+
+static double *copy_of(const double *a, size_t n) {
+    double *c = malloc(n * sizeof *c);
+    if (c) memcpy(c, a, n * sizeof *c);
+    return c;
+}
+
+/* the largest |u| and velocity gradient component (differences along the cells' edges) */
+static void grid_bounds(floe_field_grid *g) {
+    const int nx = g->nx, ny = g->ny;
+    double um = 0, gm = 0;
+    for (int k = 0; k < g->nt; k++)
+        for (int j = 0; j < ny; j++)
+            for (int i = 0; i < nx; i++) {
+                const size_t o = ((size_t)k * ny + j) * nx + i;
+                um = fmax(um, hypot(g->u[o], g->v[o]));
+                if (i + 1 < nx) {
+                    const double h = g->x[i + 1] - g->x[i];
+                    gm = fmax(gm, fmax(fabs(g->u[o + 1] - g->u[o]), fabs(g->v[o + 1] - g->v[o])) / h);
+                }
+                if (j + 1 < ny) {
+                    const double h = g->y[j + 1] - g->y[j];
+                    gm = fmax(gm, fmax(fabs(g->u[o + nx] - g->u[o]), fabs(g->v[o + nx] - g->v[o])) / h);
+                }
+            }
+    g->umax = um;
+    g->gmax = gm;
+}
+
+/* builds a grid that takes the arrays (on success and on failure); names: of x, y and time */
+static floe_field_grid *grid_build(int nx, double *x, int ny, double *y, int nt, double *t, double *u, double *v,
+                                   const char *label, const char *const names[3], char *err, size_t errlen) {
+    floe_field_grid *g = calloc(1, sizeof *g);
+    if (!g || !x || !y || !t || !u || !v) {
+        snprintf(err, errlen, "field file %s: out of memory", label);
+        free(g), free(x), free(y), free(t), free(u), free(v);
+        return NULL;
+    }
+    atomic_init(&g->refs, 1);
+    g->nx = nx, g->ny = ny, g->nt = nt;
+    g->x = x, g->y = y, g->t = t, g->u = u, g->v = v;
+    snprintf(g->label, sizeof g->label, "%s", label);
+    if (check_axis(x, nx, 2, label, names[0], err, errlen) || check_axis(y, ny, 2, label, names[1], err, errlen) ||
+        check_axis(t, nt, 1, label, names[2], err, errlen)) {
+        grid_free(g);
+        return NULL;
+    }
+    const size_t n = (size_t)nt * ny * nx;
+    for (size_t k = 0; k < n; k++)
+        if (!isfinite(u[k]) || !isfinite(v[k])) {
+            snprintf(err, errlen, "field file %s: the velocity at value %zu is not finite (%g, %g)", label, k, u[k],
+                     v[k]);
+            grid_free(g);
+            return NULL;
+        }
+    grid_bounds(g);
+    return g;
+}
+
+/* n1 n2 n3 values fit in memory addresses */
+static int size_ok(double n1, double n2, double n3) { return n1 * n2 * n3 * sizeof(double) < (double)SIZE_MAX / 4; }
+
+floe_field_grid *floe_field_grid_create(int nx, const double *x, int ny, const double *y, int nt, const double *t,
+                                        const double *u, const double *v, const char *label, char *err,
+                                        size_t errlen) {
+    if (!label) label = "(arrays)";
+    if (!x || !y || !t || !u || !v || nx < 0 || ny < 0 || nt < 1 || !size_ok(nx, ny, nt)) {
+        snprintf(err, errlen, "field file %s: the grid needs x, y, t, u and v (nt >= 1)", label);
+        return NULL;
+    }
+    const size_t n = (size_t)nt * ny * nx;
+    static const char *const names[3] = {"x", "y", "t"};
+    return grid_build(nx, copy_of(x, (size_t)nx), ny, copy_of(y, (size_t)ny), nt, copy_of(t, (size_t)nt),
+                      copy_of(u, n), copy_of(v, n), label, names, err, errlen);
+}
+
+/* the cell [c[i], c[i+1]] holding s (clamped into [c[0], c[n-1]]) and the fraction f of s in it */
+static int cell_of(const double *c, int n, double s, double *f) {
+    if (n < 2 || s <= c[0]) {
+        *f = 0;
+        return 0;
+    }
+    if (s >= c[n - 1]) {
+        *f = 1;
+        return n - 2;
+    }
+    int lo = 0, hi = n - 1;
+    while (hi - lo > 1) {
+        const int mid = lo + (hi - lo) / 2;
+        if (c[mid] <= s) lo = mid;
+        else hi = mid;
+    }
+    *f = (s - c[lo]) / (c[lo + 1] - c[lo]);
+    return lo;
+}
+
+static double bilinear(const double *a, int nx, double fx, double fy) {
+    return (1 - fy) * ((1 - fx) * a[0] + fx * a[1]) + fy * ((1 - fx) * a[nx] + fx * a[nx + 1]);
+}
+
+void floe_field_grid_eval(const floe_field_grid *g, const double x[3], double t, double u[3]) {
+    double fx, fy, ft;
+    const int i = cell_of(g->x, g->nx, x[0], &fx), j = cell_of(g->y, g->ny, x[1], &fy);
+    const int k = cell_of(g->t, g->nt, t, &ft);
+    const size_t o = ((size_t)k * g->ny + j) * g->nx + i, rec = (size_t)g->ny * g->nx;
+    u[0] = bilinear(g->u + o, g->nx, fx, fy);
+    u[1] = bilinear(g->v + o, g->nx, fx, fy);
+    u[2] = 0;
+    if (g->nt > 1) {
+        u[0] = (1 - ft) * u[0] + ft * bilinear(g->u + o + rec, g->nx, fx, fy);
+        u[1] = (1 - ft) * u[1] + ft * bilinear(g->v + o + rec, g->nx, fx, fy);
+    }
+}
+
+void floe_field_grid_extent(const floe_field_grid *g, double lo[2], double hi[2], double t[2]) {
+    lo[0] = g->x[0];
+    hi[0] = g->x[g->nx - 1];
+    lo[1] = g->y[0];
+    hi[1] = g->y[g->ny - 1];
+    t[0] = g->t[0];
+    t[1] = g->t[g->nt - 1];
+}
+
+const char *floe_field_grid_label(const floe_field_grid *g) { return g->label; }
+double floe_field_grid_max_speed(const floe_field_grid *g) { return g->umax; }
+double floe_field_grid_max_gradient(const floe_field_grid *g) { return g->gmax; }
+
+/* ======================= the NetCDF reader ======================= */
+
+#ifdef FLOE_HAVE_NETCDF
+
+int floe_field_grid_netcdf(void) { return 1; }
+
+/* libnetcdf is opened with dlopen when a file is read, not linked: it brings HDF5, curl and
+ * TLS libraries whose loading costs every floe process about 10 MB of memory and 30 ms,
+ * field file or not. The functions floe calls, typed as their netcdf.h prototypes (checked
+ * at compile time, without referring to the symbols). */
+#define NC_FUNCTIONS(X) \
+    X(open, int, (const char *, int, int *)) \
+    X(close, int, (int)) \
+    X(strerror, const char *, (int)) \
+    X(inq_varid, int, (int, const char *, int *)) \
+    X(inq_nvars, int, (int, int *)) \
+    X(inq_varname, int, (int, int, char *)) \
+    X(inq_varndims, int, (int, int, int *)) \
+    X(inq_vardimid, int, (int, int, int *)) \
+    X(inq_vartype, int, (int, int, nc_type *)) \
+    X(inq_dim, int, (int, int, char *, size_t *)) \
+    X(inq_dimname, int, (int, int, char *)) \
+    X(inq_dimlen, int, (int, int, size_t *)) \
+    X(inq_att, int, (int, int, const char *, nc_type *, size_t *)) \
+    X(get_att_text, int, (int, int, const char *, char *)) \
+    X(get_att_string, int, (int, int, const char *, char **)) \
+    X(free_string, int, (size_t, char **)) \
+    X(get_att_double, int, (int, int, const char *, double *)) \
+    X(get_var_double, int, (int, int, double *))
+
+#define NC_TYPEDEF(name, ret, args) typedef ret(*nc_##name##_fn) args;
+NC_FUNCTIONS(NC_TYPEDEF)
+#define NC_MEMBER(name, ret, args) nc_##name##_fn name;
+typedef struct nc_api {
+    NC_FUNCTIONS(NC_MEMBER)
+} nc_api;
+#define NC_TYPED(name, ret, args) \
+    _Static_assert(_Generic(&nc_##name, nc_##name##_fn: 1, default: 0), "nc_" #name " as in netcdf.h");
+NC_FUNCTIONS(NC_TYPED)
+
+/* the library found at configure time: its SONAME (libnetcdf.so.19), searched as the
+ * dynamic loader does, then its path */
+#ifndef FLOE_NETCDF_SONAME
+#define FLOE_NETCDF_SONAME "libnetcdf.so"
+#endif
+#ifndef FLOE_NETCDF_PATH
+#define FLOE_NETCDF_PATH "libnetcdf.so"
+#endif
+
+/* fills f from libnetcdf; FLOE_OK or a message in err. The library is never closed (dlopen
+ * counts the references; HDF5, under it, registers exit handlers), so that it is loaded once
+ * per process and every later call is a lookup. */
+static int nc_api_load(nc_api *f, const char *file, char *err, size_t errlen) {
+    static const char *const libs[] = {FLOE_NETCDF_SONAME, FLOE_NETCDF_PATH};
+    void *h = NULL;
+    char why[256] = "";
+    for (size_t k = 0; k < sizeof libs / sizeof *libs && !h; k++) {
+        h = dlopen(libs[k], RTLD_NOW | RTLD_LOCAL);
+        const char *e = h ? NULL : dlerror();
+        if (e && k == 0) snprintf(why, sizeof why, "%s", e);
+    }
+    if (!h) {
+        snprintf(err, errlen, "field file %s: cannot load the NetCDF library %s (%s): install libnetcdf (Debian "
+                 "package libnetcdf-dev)", file, FLOE_NETCDF_SONAME, why);
+        return FLOE_ENOTSUP;
+    }
+#define NC_NAME(name, ret, args) "nc_" #name,
+#define NC_SLOT(name, ret, args) (void **)&f->name,
+    static const char *const names[] = {NC_FUNCTIONS(NC_NAME)};
+    void **slot[] = {NC_FUNCTIONS(NC_SLOT)};
+    for (size_t k = 0; k < sizeof slot / sizeof *slot; k++) {
+        void *sym = dlsym(h, names[k]);
+        if (!sym) {
+            snprintf(err, errlen, "field file %s: the NetCDF library has no %s", file, names[k]);
+            return FLOE_ENOTSUP;
+        }
+        memcpy(slot[k], &sym, sizeof sym); /* POSIX: a data pointer converts to a function pointer */
+    }
+    return FLOE_OK;
+}
+
+typedef struct ncr {
+    nc_api f;
+    int nc;           /* the open file */
+    const char *file;
+    char *err;
+    size_t errlen;
+} ncr;
+
+/* the message of a libnetcdf status */
+static int nc_fail(ncr *r, int status, const char *what) {
+    snprintf(r->err, r->errlen, "field file %s: %s: %s", r->file, what, r->f.strerror(status));
+    return FLOE_EINVAL;
+}
+
+/* the id of variable `name`; missing: the message lists the file's variables */
+static int var_id(ncr *r, const char *name, int *id) {
+    if (r->f.inq_varid(r->nc, name, id) == NC_NOERR) return FLOE_OK;
+    char list[768] = "";
+    int nv = 0;
+    r->f.inq_nvars(r->nc, &nv);
+    size_t at = 0;
+    for (int k = 0; k < nv && at + 4 < sizeof list; k++) {
+        char vn[NC_MAX_NAME + 1];
+        if (r->f.inq_varname(r->nc, k, vn) != NC_NOERR) continue;
+        at += (size_t)snprintf(list + at, sizeof list - at, "%s%s", k ? ", " : "", vn);
+    }
+    snprintf(r->err, r->errlen, "field file %s has no variable '%s' (it has: %s)", r->file, name,
+             nv ? list : "no variables");
+    return FLOE_EINVAL;
+}
+
+/* text attribute `name` of variable var into buf: 1, or 0 when absent or not text */
+static int att_text(const ncr *r, int var, const char *name, char *buf, size_t len) {
+    nc_type ty;
+    size_t n;
+    buf[0] = 0;
+    if (r->f.inq_att(r->nc, var, name, &ty, &n) != NC_NOERR) return 0;
+    if (ty == NC_CHAR) {
+        char *all = malloc(n + 1);
+        int ok = all && r->f.get_att_text(r->nc, var, name, all) == NC_NOERR;
+        if (ok) {
+            size_t m = n < len - 1 ? n : len - 1;
+            memcpy(buf, all, m);
+            buf[m] = 0;
+        }
+        free(all);
+        return ok;
+    }
+    if (ty == NC_STRING && n >= 1) {
+        char **s = calloc(n, sizeof *s);
+        int ok = s && r->f.get_att_string(r->nc, var, name, s) == NC_NOERR;
+        if (ok) snprintf(buf, len, "%s", s[0] ? s[0] : "");
+        if (ok) r->f.free_string(n, s);
+        free(s);
+        return ok;
+    }
+    return 0;
+}
+
+/* numeric attribute `name` of var: up to max values into vals; their count (0 when absent or text) */
+static int att_doubles(const ncr *r, int var, const char *name, double *vals, int max) {
+    nc_type ty;
+    size_t n;
+    if (r->f.inq_att(r->nc, var, name, &ty, &n) != NC_NOERR || ty == NC_CHAR || ty == NC_STRING || n == 0) return 0;
+    double *all = malloc(n * sizeof *all);
+    if (!all || r->f.get_att_double(r->nc, var, name, all) != NC_NOERR) {
+        free(all);
+        return 0;
+    }
+    int k = (int)(n < (size_t)max ? n : (size_t)max);
+    memcpy(vals, all, (size_t)k * sizeof *vals);
+    free(all);
+    return k;
+}
+
+/* the default fill value of a type (netcdf.h NC_FILL_*): 0 when reading does not check one
+ * (bytes and characters, as the NetCDF user guide says) */
+static int default_fill(nc_type ty, double *f) {
+    switch (ty) {
+    case NC_DOUBLE: *f = NC_FILL_DOUBLE; return 1;
+    case NC_FLOAT: *f = NC_FILL_FLOAT; return 1;
+    case NC_SHORT: *f = NC_FILL_SHORT; return 1;
+    case NC_INT: *f = NC_FILL_INT; return 1;
+    case NC_USHORT: *f = NC_FILL_USHORT; return 1;
+    case NC_UINT: *f = NC_FILL_UINT; return 1;
+    case NC_INT64: *f = (double)NC_FILL_INT64; return 1;
+    case NC_UINT64: *f = (double)NC_FILL_UINT64; return 1;
+    default: return 0;
+    }
+}
+
+/* "(time, y, x)" and "(3, 4, 5)": the dimension names and lengths of a variable */
+static void dims_text(const ncr *r, int nd, const int *dims, char *names, char *lens, size_t len) {
+    size_t a = 0, b = 0;
+    a += (size_t)snprintf(names, len, "(");
+    b += (size_t)snprintf(lens, len, "(");
+    for (int k = 0; k < nd && a < len && b < len; k++) {
+        char dn[NC_MAX_NAME + 1] = "?";
+        size_t dl = 0;
+        r->f.inq_dim(r->nc, dims[k], dn, &dl);
+        a += (size_t)snprintf(names + a, len - a, "%s%s", k ? ", " : "", dn);
+        b += (size_t)snprintf(lens + b, len - b, "%s%zu", k ? ", " : "", dl);
+    }
+    if (a < len) snprintf(names + a, len - a, ")");
+    if (b < len) snprintf(lens + b, len - b, ")");
+}
+
+/* reads variable var (`name`, nd dimensions of lengths dl) as double: refuses fill values and
+ * non-finite numbers (naming the index), then unpacks it (CF 8.1: scale_factor, add_offset) */
+static int read_values(ncr *r, int var, const char *name, int nd, const size_t *dl, double **out) {
+    size_t n = 1;
+    for (int k = 0; k < nd; k++) n *= dl[k];
+    double *a = malloc((n ? n : 1) * sizeof *a);
+    if (!a) {
+        snprintf(r->err, r->errlen, "field file %s: out of memory reading '%s' (%zu values)", r->file, name, n);
+        return FLOE_ENOMEM;
+    }
+    int st = r->f.get_var_double(r->nc, var, a);
+    if (st != NC_NOERR) {
+        free(a);
+        char what[NC_MAX_NAME + 32];
+        snprintf(what, sizeof what, "reading '%s'", name);
+        return nc_fail(r, st, what);
+    }
+    double fill[9];
+    const char *fname[9];
+    int nf = att_doubles(r, var, "_FillValue", fill, 1);
+    if (nf) fname[0] = "_FillValue";
+    else {
+        nc_type ty;
+        if (r->f.inq_vartype(r->nc, var, &ty) == NC_NOERR && default_fill(ty, fill)) fname[nf++] = "the default fill value";
+    }
+    int nm = att_doubles(r, var, "missing_value", fill + nf, 8);
+    for (int k = 0; k < nm; k++) fname[nf + k] = "missing_value";
+    nf += nm;
+    double sf = 1, ao = 0;
+    att_doubles(r, var, "scale_factor", &sf, 1);
+    att_doubles(r, var, "add_offset", &ao, 1);
+    for (size_t k = 0; k < n; k++) {
+        int bad = -1;
+        for (int m = 0; m < nf && bad < 0; m++)
+            if (a[k] == fill[m]) bad = m;
+        if (bad >= 0 || !isfinite(a[k])) {
+            char idx[96] = "", dn[256], dlen[256];
+            size_t rest = k, at = 0;
+            size_t sub[NC_MAX_VAR_DIMS];
+            for (int d = nd - 1; d >= 0; d--) {
+                sub[d] = dl[d] ? rest % dl[d] : 0;
+                rest = dl[d] ? rest / dl[d] : 0;
+            }
+            for (int d = 0; d < nd && at < sizeof idx; d++)
+                at += (size_t)snprintf(idx + at, sizeof idx - at, "%s%zu", d ? ", " : "", sub[d]);
+            int dims[NC_MAX_VAR_DIMS];
+            r->f.inq_vardimid(r->nc, var, dims);
+            dims_text(r, nd, dims, dn, dlen, sizeof dn);
+            if (bad >= 0)
+                snprintf(r->err, r->errlen, "field file %s: variable '%s' holds a fill value (%s %g) at index [%s] %s: "
+                         "missing data are not supported (fill them or cut the grid)", r->file, name, fname[bad],
+                         fill[bad], idx, dn);
+            else
+                snprintf(r->err, r->errlen, "field file %s: variable '%s' holds %g at index [%s] %s", r->file, name,
+                         a[k], idx, dn);
+            free(a);
+            return FLOE_EINVAL;
+        }
+        a[k] = a[k] * sf + ao;
+    }
+    *out = a;
+    return FLOE_OK;
+}
+
+/* a lower-case copy of s (up to len) */
+static void lower(char *d, const char *s, size_t len) {
+    size_t k = 0;
+    for (; s[k] && k + 1 < len; k++) d[k] = (char)tolower((unsigned char)s[k]);
+    d[k] = 0;
+}
+
+static int word_in(const char *w, const char *const *list) {
+    for (; *list; list++)
+        if (!strcmp(w, *list)) return 1;
+    return 0;
+}
+
+/* the factor to metres of a coordinate's units (absent: metres) */
+static int length_units(ncr *r, int var, const char *name, double *to_m) {
+    char u[128], lu[128];
+    *to_m = 1;
+    if (!att_text(r, var, "units", u, sizeof u)) return FLOE_OK;
+    lower(lu, u, sizeof lu);
+    static const char *const m[] = {"m", "meter", "meters", "metre", "metres", NULL};
+    static const char *const km[] = {"km", "kilometer", "kilometers", "kilometre", "kilometres", NULL};
+    if (word_in(lu, m)) return FLOE_OK;
+    if (word_in(lu, km)) {
+        *to_m = 1000;
+        return FLOE_OK;
+    }
+    if (!strncmp(lu, "degree", 6))
+        snprintf(r->err, r->errlen, "field file %s: '%s' is in degrees (units '%s'): only projected coordinates in "
+                 "metres are read (project the grid first)", r->file, name, u);
+    else
+        snprintf(r->err, r->errlen, "field file %s: the units '%s' of '%s' are not a length (m or km: projected "
+                 "coordinates)", r->file, u, name);
+    return FLOE_EINVAL;
+}
+
+/* the factor to seconds of a time's units "U since DATE" (CF 4.4) */
+static int time_units(ncr *r, int var, const char *name, double *to_s) {
+    char u[256], lu[256], w[32];
+    if (!att_text(r, var, "units", u, sizeof u)) {
+        snprintf(r->err, r->errlen, "field file %s: '%s' has no units (seconds, minutes, hours or days since a date)",
+                 r->file, name);
+        return FLOE_EINVAL;
+    }
+    lower(lu, u, sizeof lu);
+    static const char *const sec[] = {"seconds", "second", "secs", "sec", "s", NULL};
+    static const char *const min[] = {"minutes", "minute", "mins", "min", NULL};
+    static const char *const hour[] = {"hours", "hour", "hrs", "hr", "h", NULL};
+    static const char *const day[] = {"days", "day", "d", NULL};
+    int used = 0;
+    if (sscanf(lu, " %31[a-z] since %n", w, &used) == 1 && used > 0) {
+        if (word_in(w, sec)) *to_s = 1;
+        else if (word_in(w, min)) *to_s = 60;
+        else if (word_in(w, hour)) *to_s = 3600;
+        else if (word_in(w, day)) *to_s = 86400;
+        else used = 0;
+        if (used) return FLOE_OK;
+    }
+    snprintf(r->err, r->errlen, "field file %s: the time units '%s' of '%s' are not supported (seconds, minutes, "
+             "hours or days since a date)", r->file, u, name);
+    return FLOE_EINVAL;
+}
+
+/* the velocities' dimensions, for messages */
+typedef struct vel_dims {
+    const char *u;  /* the u variable's name */
+    char names[256], lens[256];
+} vel_dims;
+
+/* a one-dimensional coordinate variable `name` on dimension dim, the velocities' `which`
+ * one: its values (in m or s from its units) */
+static int read_axis(ncr *r, const vel_dims *vd, const char *name, const char *which, int dim, int is_time,
+                     double **out, int *n) {
+    int var, nd;
+    FLOE_TRY(var_id(r, name, &var));
+    r->f.inq_varndims(r->nc, var, &nd);
+    int d[NC_MAX_VAR_DIMS];
+    r->f.inq_vardimid(r->nc, var, d);
+    if (nd != 1 || d[0] != dim) {
+        char dn[NC_MAX_NAME + 1] = "?", cn[256], cl[256];
+        r->f.inq_dimname(r->nc, dim, dn);
+        dims_text(r, nd, d, cn, cl, sizeof cn);
+        snprintf(r->err, r->errlen, "field file %s: wrong dimensions: '%s' is %s, expected (time, y, x) or (y, x): "
+                 "the coordinate '%s' must be one-dimensional on its %s dimension '%s' (it is %s)", r->file, vd->u,
+                 vd->names, name, which, dn, cn);
+        return FLOE_EINVAL;
+    }
+    double f = 1;
+    FLOE_TRY(is_time ? time_units(r, var, name, &f) : length_units(r, var, name, &f));
+    size_t len;
+    r->f.inq_dimlen(r->nc, dim, &len);
+    if (len > INT32_MAX) {
+        snprintf(r->err, r->errlen, "field file %s: '%s' has too many values (%zu)", r->file, name, len);
+        return FLOE_EINVAL;
+    }
+    FLOE_TRY(read_values(r, var, name, 1, &len, out));
+    for (size_t k = 0; k < len; k++) (*out)[k] *= f;
+    *n = (int)len;
+    return FLOE_OK;
+}
+
+/* the velocity component `name`: its id, number of dimensions and their ids */
+static int velocity_var(ncr *r, const char *name, int *var, int *nd, int dims[NC_MAX_VAR_DIMS]) {
+    FLOE_TRY(var_id(r, name, var));
+    r->f.inq_varndims(r->nc, *var, nd);
+    r->f.inq_vardimid(r->nc, *var, dims);
+    if (*nd != 2 && *nd != 3) {
+        char dn[256], dl[256];
+        dims_text(r, *nd, dims, dn, dl, sizeof dn);
+        snprintf(r->err, r->errlen, "field file %s: wrong dimensions: '%s' has %d dimension%s %s; expected (time, y, x) "
+                 "or (y, x)", r->file, name, *nd, *nd == 1 ? "" : "s", dn);
+        return FLOE_EINVAL;
+    }
+    return FLOE_OK;
+}
+
+static floe_field_grid *read_grid(ncr *r, const floe_field_grid_def *d) {
+    int uv, vv, nu, nv, du[NC_MAX_VAR_DIMS], dv[NC_MAX_VAR_DIMS];
+    if (velocity_var(r, d->u_var, &uv, &nu, du) || velocity_var(r, d->v_var, &vv, &nv, dv)) return NULL;
+    if (nu != nv || memcmp(du, dv, (size_t)nu * sizeof *du)) {
+        char un[256], ul[256], vn[256], vl[256];
+        dims_text(r, nu, du, un, ul, sizeof un);
+        dims_text(r, nv, dv, vn, vl, sizeof vn);
+        snprintf(r->err, r->errlen, "field file %s: mismatched shapes: '%s' is %s = %s but '%s' is %s = %s (the "
+                 "components must share their grid)", r->file, d->u_var, un, ul, d->v_var, vn, vl);
+        return NULL;
+    }
+    double *x = NULL, *y = NULL, *t = NULL, *u = NULL, *v = NULL;
+    int nx = 0, ny = 0, nt = 1;
+    vel_dims vd = {.u = d->u_var};
+    dims_text(r, nu, du, vd.names, vd.lens, sizeof vd.names);
+    int ok = !read_axis(r, &vd, d->x_var, "last", du[nu - 1], 0, &x, &nx) &&
+             !read_axis(r, &vd, d->y_var, nu == 3 ? "second" : "first", du[nu - 2], 0, &y, &ny);
+    if (ok && nu == 3) ok = !read_axis(r, &vd, d->time_var, "first", du[0], 1, &t, &nt);
+    else if (ok) ok = (t = calloc(1, sizeof *t)) != NULL;
+    size_t dl[3] = {(size_t)nt, (size_t)ny, (size_t)nx};
+    const size_t *dls = nu == 3 ? dl : dl + 1;
+    if (ok && !size_ok(nx, ny, nt)) {
+        snprintf(r->err, r->errlen, "field file %s: the grid is too large (%d x %d x %d)", r->file, nt, ny, nx);
+        ok = 0;
+    }
+    ok = ok && !read_values(r, uv, d->u_var, nu, dls, &u) && !read_values(r, vv, d->v_var, nv, dls, &v);
+    if (!ok) {
+        if (!r->err[0]) snprintf(r->err, r->errlen, "field file %s: out of memory", r->file);
+        free(x), free(y), free(t), free(u), free(v);
+        return NULL;
+    }
+    const size_t n = (size_t)nt * ny * nx;
+    for (size_t k = 0; k < n; k++) {
+        u[k] *= d->scale;
+        v[k] *= d->scale;
+    }
+    const char *const names[3] = {d->x_var, d->y_var, d->time_var};
+    return grid_build(nx, x, ny, y, nt, t, u, v, r->file, names, r->err, r->errlen);
+}
+
+floe_field_grid *floe_field_grid_load(const floe_field_grid_def *def, char *err, size_t errlen) {
+    floe_field_grid_def d = floe_field_grid_default();
+    if (def) {
+        d.file = def->file;
+        if (def->u_var && def->u_var[0]) d.u_var = def->u_var;
+        if (def->v_var && def->v_var[0]) d.v_var = def->v_var;
+        if (def->x_var && def->x_var[0]) d.x_var = def->x_var;
+        if (def->y_var && def->y_var[0]) d.y_var = def->y_var;
+        if (def->time_var && def->time_var[0]) d.time_var = def->time_var;
+        d.scale = def->scale;
+    }
+    if (!d.file || !d.file[0]) {
+        snprintf(err, errlen, "field netcdf: a file is required");
+        return NULL;
+    }
+    if (!isfinite(d.scale)) {
+        snprintf(err, errlen, "field file %s: scale must be finite", d.file);
+        return NULL;
+    }
+    ncr r = {.nc = -1, .file = d.file, .err = err, .errlen = errlen};
+    err[0] = 0;
+    if (nc_api_load(&r.f, d.file, err, errlen)) return NULL;
+    int st = r.f.open(d.file, NC_NOWRITE, &r.nc);
+    if (st != NC_NOERR) {
+        char cwd[512];
+        if (d.file[0] != '/' && getcwd(cwd, sizeof cwd)) {
+            char what[600];
+            snprintf(what, sizeof what, "cannot open it (a relative path opens from the current directory, %s)", cwd);
+            nc_fail(&r, st, what);
+        } else nc_fail(&r, st, "cannot open it");
+        return NULL;
+    }
+    floe_field_grid *g = read_grid(&r, &d);
+    r.f.close(r.nc);
+    return g;
+}
+
+#else /* without NetCDF */
+
+int floe_field_grid_netcdf(void) { return 0; }
+
+floe_field_grid *floe_field_grid_load(const floe_field_grid_def *def, char *err, size_t errlen) {
+    snprintf(err, errlen, "field file %s: floe was built without NetCDF (configure with -DFLOE_WITH_NETCDF=ON; Debian "
+             "package libnetcdf-dev)", def && def->file ? def->file : "?");
+    return NULL;
+}
+
+#endif
