@@ -38,6 +38,11 @@ floe_observer *floe_outline_writer_create(const char *dir, const char *prefix, i
 /* The floe size distribution (floe_sizes.c): one CSV row per floe (a connected set of free
  * particles joined by intact beam bonds) per observation; 2D only (NULL with a message). */
 floe_observer *floe_sizes_create(const char *path, int dim, char *err, size_t errlen);
+/* The area flux through the gate segment a -> b (gate_flux.c): per observation the net
+ * crossings and floe area since the start (positive to the right of a -> b) and the rate;
+ * 2D only (NULL with a message). */
+floe_observer *floe_gate_flux_create(const char *path, int dim, const double a[2], const double b[2], char *err,
+                                     size_t errlen);
 
 /* ---- additions: stress evaluation, accessors, VTK options ---- */
 

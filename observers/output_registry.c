@@ -70,6 +70,25 @@ static floe_observer *fsd_create(const void *params, const floe_output_ctx *ctx,
     return floe_sizes_create(ctx->path, ctx->dim, err, errlen);
 }
 
+/* gate_flux: the floe area through a gate line (gate_flux.c) */
+typedef struct gate_params {
+    floe_params_head head;
+    char file[FLOE_PARAM_STRING_MAX];
+    double from[3], to[3];
+} gate_params;
+static const floe_param gate_schema[] = {
+    {.key = "file", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "gate_flux.csv",
+     .doc = "CSV file in the output directory", .offset = offsetof(gate_params, file)},
+    {.key = "from", .type = FLOE_PARAM_VEC3, .flags = FLOE_PARAM_REQUIRED, .unit = "m",
+     .doc = "the gate's first end A", .offset = offsetof(gate_params, from)},
+    {.key = "to", .type = FLOE_PARAM_VEC3, .flags = FLOE_PARAM_REQUIRED, .unit = "m",
+     .doc = "its second end B: crossings to the right of A -> B count positive", .offset = offsetof(gate_params, to)}};
+
+static floe_observer *gate_create(const void *params, const floe_output_ctx *ctx, char *err, size_t errlen) {
+    const gate_params *p = params;
+    return floe_gate_flux_create(ctx->path, ctx->dim, p->from, p->to, err, errlen);
+}
+
 #define OUT(n, t, d, src, sch) {.kind = FLOE_KIND_OBSERVER, .name = n, .title = t, .doc = d, .source = src, \
     .params = sch, .nparams = COUNT(sch), .params_size = sizeof(floe_params_head), .create = (floe_fn)loader_builds, \
     .flags = FLOE_ENTRY_LOADER_PARSES}
@@ -96,6 +115,12 @@ static const floe_registry_entry builtin[] = {
             "fragments. Refused in 3D.",
      .source = "docs/sea-ice.md, \"Outputs\"", .params = fsd_schema, .nparams = COUNT(fsd_schema),
      .params_size = sizeof(fsd_params), .create = (floe_fn)fsd_create},
+    {.kind = FLOE_KIND_OBSERVER, .name = "gate_flux", .title = "gate flux",
+     .doc = "2D sea ice: the net number and area of floes whose centres crossed the segment from -> to "
+            "(positive to its right), and the area rate, one CSV row per frame. Observe often enough that no "
+            "floe crosses and returns between two rows.",
+     .source = "docs/sea-ice.md, \"Outputs\"", .params = gate_schema, .nparams = COUNT(gate_schema),
+     .params_size = sizeof(gate_params), .create = (floe_fn)gate_create},
 };
 
 int floe_register_builtin_outputs(char *err, size_t errlen) {

@@ -29,14 +29,17 @@
  *  - bonded cells: a beam bond breaks in tension, shear, compression and shear under
  *    compression (Mohr-Coulomb, friction angle 45 deg) at the step where that stress first
  *    passes its strength (the last stress before within 1 % below it);
+ *  - the gate_flux output: net crossings and area of floes through a gate line, by sign;
  *  - scenes: the providers by name with thicknesses; errors (both f and latitude, a drag in
  *    3D, a gyre without length) refused with what is wrong. */
 #include "check.h"
 #include "floe.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static const double RHO_I = 920.0;
 
@@ -670,6 +673,55 @@ static void bond_mode(int mode, double phi) {
     floe_world_destroy(w);
 }
 
+/* the gate_flux output: two floes moving south and one north across a gate from (0, 0) to
+ * (10 km, 0) (its right side is south), one floe passing beside it: 2 - 1 = 1 net crossing
+ * and the net area of the southbound ones minus the northbound one */
+static void test_gate_flux(void) {
+    char dir[] = "/tmp/floe_gate_XXXXXX";
+    if (!mkdtemp(dir)) {
+        CHECK(0, "mkdtemp");
+        return;
+    }
+    const char *text =
+        "dimension: 2\nmass_2d: area\ntime: {duration: 4000, dt: 10}\ngravity: [0, 0]\n"
+        "materials: [{name: ice, density: 920, young: 6e6, poisson: 0.3}]\n"
+        "laws: [{materials: [ice, ice], model: none}]\n"
+        "bodies:\n"
+        "  - {material: ice, position: [2000, 1000], velocity: [0, -1], thickness: 1, shape: {polygon: {vertices: "
+        "[[-500, -500], [500, -500], [500, 500], [-500, 500]]}}}\n"
+        "  - {material: ice, position: [6000, 1500], velocity: [0, -1], thickness: 1, shape: {polygon: {vertices: "
+        "[[-300, -300], [300, -300], [300, 300], [-300, 300]]}}}\n"
+        "  - {material: ice, position: [8000, -1000], velocity: [0, 1], thickness: 1, shape: {polygon: {vertices: "
+        "[[-200, -200], [200, -200], [200, 200], [-200, 200]]}}}\n"
+        "  - {material: ice, position: [15000, 1000], velocity: [0, -1], thickness: 1, shape: {polygon: {vertices: "
+        "[[-400, -400], [400, -400], [400, 400], [-400, 400]]}}}\n"
+        "outputs:\n"
+        "  - {type: gate_flux, interval: 100, file: gate.csv, from: [0, 0], to: [10000, 0]}\n";
+    char err[1024] = "";
+    floe_world *w = NULL;
+    floe_scene_info info;
+    int rc = floe_scene_load_ex("t.yaml", text, dir, 1, &w, &info, err, sizeof err);
+    CHECK(rc == FLOE_OK, "gate scene: %s", err);
+    if (rc == FLOE_OK) {
+        CHECK(floe_world_run(w, info.duration, NULL, NULL) == FLOE_OK, "gate run: %s", floe_world_last_error(w));
+        floe_world_finish(w);
+    }
+    floe_world_destroy(w);
+    char path[256], line[256], last[256] = "";
+    snprintf(path, sizeof path, "%s/gate.csv", dir);
+    FILE *f = fopen(path, "r");
+    CHECK(f != NULL, "gate.csv written");
+    while (f && fgets(line, sizeof line, f)) snprintf(last, sizeof last, "%s", line);
+    if (f) fclose(f);
+    double t = 0, area = 0, rate = 0;
+    long n = 0;
+    CHECK(sscanf(last, "%lf,%ld,%lf,%lf", &t, &n, &area, &rate) == 4, "gate row: %s", last);
+    CHECK(n == 1, "gate: 2 southbound - 1 northbound = 1 net crossing (%ld)", n);
+    CHECK_NEAR(area, 1000.0 * 1000 + 600 * 600 - 400 * 400, 1e-9, "gate: net area through (southbound - northbound)");
+    remove(path);
+    rmdir(dir);
+}
+
 int main(void) {
     char err[256];
     floe_register_builtins(err, sizeof err);
@@ -683,5 +735,6 @@ int main(void) {
     test_hopkins();
     test_hopkins_polygons();
     for (int mode = 1; mode <= 4; mode++) bond_mode(mode, mode == 4 ? 45.0 : 0.0);
+    test_gate_flux();
     return check_summary("test_seaice");
 }
