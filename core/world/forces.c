@@ -462,7 +462,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
         warm[0] = NAN; /* apart: the next approach starts cold */
     }
     const floe_contact_law *law = r > 0 ? w->laws[p->material[i] * nm + p->material[j]] : NULL;
-    const floe_law_info linfo = r == 1 && any_overlap ? floe_contact_law_info(law) : (floe_law_info){0};
+    const floe_law_info linfo = r == 1 && (any_overlap || env->any_floe) ? floe_contact_law_info(law) : (floe_law_info){0};
     if (linfo.needs_overlap || linfo.prefers_overlap) {
         floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
         r = floe_detect_overlap(&dctx, &bi, &bj, sub, &c);
@@ -516,7 +516,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
         c.thick_j = floe_particle_thickness(p, j);
         c.rad_i = p->radius[i];
         c.rad_j = p->radius[j];
-        if (c.nextra > 0 && floe_contact_law_info(law).single_point) c.nextra = 0;
+        if (c.nextra > 0 && linfo.single_point) c.nextra = 0;
     }
     /* the manifold's other vertices (polytope pairs, floe_contact.h): elastic springs of
      * the same law, evaluated first so that the law's friction sees their load; the law's
