@@ -43,6 +43,11 @@ floe_observer *floe_sizes_create(const char *path, int dim, char *err, size_t er
  * 2D only (NULL with a message). */
 floe_observer *floe_gate_flux_create(const char *path, int dim, const double a[2], const double b[2], char *err,
                                      size_t errlen);
+/* Concentration, mean velocity and thickness of the ice per cell of an nx x ny grid over
+ * [lo, hi], sampled at samples^2 points per cell (ice_grid.c): a VTK series DIR/PREFIX_*.vtu
+ * and DIR/PREFIX.pvd; 2D only (NULL with a message). */
+floe_observer *floe_ice_grid_create(const char *dir, const char *prefix, int dim, const double lo[2],
+                                    const double hi[2], int nx, int ny, int samples, char *err, size_t errlen);
 
 /* ---- additions: stress evaluation, accessors, VTK options ---- */
 

@@ -89,6 +89,34 @@ static floe_observer *gate_create(const void *params, const floe_output_ctx *ctx
     return floe_gate_flux_create(ctx->path, ctx->dim, p->from, p->to, err, errlen);
 }
 
+/* ice_grid: concentration, velocity and thickness on a grid (ice_grid.c) */
+typedef struct grid_params {
+    floe_params_head head;
+    char prefix[FLOE_PARAM_STRING_MAX];
+    double min[3], max[3];
+    int nx, ny, samples;
+} grid_params;
+static const floe_param grid_schema[] = {
+    {.key = "prefix", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "ice_grid",
+     .doc = "files prefix_NNNNNN.vtu and prefix.pvd in the output directory", .offset = offsetof(grid_params, prefix)},
+    {.key = "min", .type = FLOE_PARAM_VEC3, .flags = FLOE_PARAM_REQUIRED, .unit = "m",
+     .doc = "the grid's lower-left corner", .offset = offsetof(grid_params, min)},
+    {.key = "max", .type = FLOE_PARAM_VEC3, .flags = FLOE_PARAM_REQUIRED, .unit = "m",
+     .doc = "its upper-right corner", .offset = offsetof(grid_params, max)},
+    {.key = "nx", .type = FLOE_PARAM_INT, .flags = FLOE_PARAM_REQUIRED, .unit = "", .min = 1, .max = 1e6,
+     .doc = "cells along x", .offset = offsetof(grid_params, nx)},
+    {.key = "ny", .type = FLOE_PARAM_INT, .flags = FLOE_PARAM_REQUIRED, .unit = "", .min = 1, .max = 1e6,
+     .doc = "cells along y", .offset = offsetof(grid_params, ny)},
+    {.key = "samples", .type = FLOE_PARAM_INT, .unit = "", .min = 1, .max = 1000, .def = 4,
+     .doc = "sample points per cell and axis (concentration error O(1/samples) at a slanted edge)",
+     .offset = offsetof(grid_params, samples)}};
+
+static floe_observer *grid_create(const void *params, const floe_output_ctx *ctx, char *err, size_t errlen) {
+    const grid_params *p = params;
+    return floe_ice_grid_create(ctx->outdir, p->prefix, ctx->dim, p->min, p->max, p->nx, p->ny, p->samples, err,
+                                errlen);
+}
+
 #define OUT(n, t, d, src, sch) {.kind = FLOE_KIND_OBSERVER, .name = n, .title = t, .doc = d, .source = src, \
     .params = sch, .nparams = COUNT(sch), .params_size = sizeof(floe_params_head), .create = (floe_fn)loader_builds, \
     .flags = FLOE_ENTRY_LOADER_PARSES}
@@ -121,6 +149,11 @@ static const floe_registry_entry builtin[] = {
             "floe crosses and returns between two rows.",
      .source = "docs/sea-ice.md, \"Outputs\"", .params = gate_schema, .nparams = COUNT(gate_schema),
      .params_size = sizeof(gate_params), .create = (floe_fn)gate_create},
+    {.kind = FLOE_KIND_OBSERVER, .name = "ice_grid", .title = "ice on a grid",
+     .doc = "2D sea ice: per cell of an nx x ny grid, the ice concentration (fraction of samples inside floes), the "
+            "mean ice velocity and thickness over the ice; a VTK series of quads (.vtu, .pvd) for ParaView.",
+     .source = "docs/sea-ice.md, \"Outputs\"", .params = grid_schema, .nparams = COUNT(grid_schema),
+     .params_size = sizeof(grid_params), .create = (floe_fn)grid_create},
 };
 
 int floe_register_builtin_outputs(char *err, size_t errlen) {

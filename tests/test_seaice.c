@@ -30,6 +30,7 @@
  *    compression (Mohr-Coulomb, friction angle 45 deg) at the step where that stress first
  *    passes its strength (the last stress before within 1 % below it);
  *  - the gate_flux output: net crossings and area of floes through a gate line, by sign;
+ *  - the ice_grid output: concentration, velocity and thickness per cell of a square floe;
  *  - scenes: the providers by name with thicknesses; errors (both f and latitude, a drag in
  *    3D, a gyre without length) refused with what is wrong. */
 #include "check.h"
@@ -722,6 +723,87 @@ static void test_gate_flux(void) {
     rmdir(dir);
 }
 
+/* the ice_grid output: a 2 km square floe (h = 0.5 m, moving and spinning) on the 1 km cells
+ * of a 4 x 4 grid: concentration 1 in the four cells it covers and 0 elsewhere, the cells'
+ * velocity v + w k x (cell centre - floe centre), thickness 0.5 */
+static int read_array(const char *text, const char *name, int n, int ncomp, double *out) {
+    char key[64];
+    snprintf(key, sizeof key, "Name=\"%s\"", name);
+    const char *p = strstr(text, key);
+    if (!p || !(p = strchr(p, '>'))) return 0;
+    p++;
+    for (int k = 0; k < n * ncomp; k++) {
+        char *end;
+        out[k] = strtod(p, &end);
+        if (end == p) return 0;
+        p = end;
+    }
+    return 1;
+}
+
+static void test_ice_grid(void) {
+    char dir[] = "/tmp/floe_grid_XXXXXX";
+    if (!mkdtemp(dir)) {
+        CHECK(0, "mkdtemp");
+        return;
+    }
+    const char *text =
+        "dimension: 2\nmass_2d: area\ntime: {duration: 1e-6, dt: 1e-6}\ngravity: [0, 0]\n"
+        "materials: [{name: ice, density: 920, young: 6e6, poisson: 0.3}]\n"
+        "laws: [{materials: [ice, ice], model: none}]\n"
+        "bodies:\n"
+        "  - {material: ice, position: [1000, 1000], velocity: [0.2, -0.1], angular_velocity: [0, 0, 1e-3], "
+        "thickness: 0.5, shape: {polygon: {vertices: [[-1000, -1000], [1000, -1000], [1000, 1000], [-1000, 1000]]}}}\n"
+        "outputs:\n"
+        "  - {type: ice_grid, every: 1, prefix: grid, min: [0, 0], max: [4000, 4000], nx: 4, ny: 4, samples: 4}\n";
+    char err[1024] = "";
+    floe_world *w = NULL;
+    floe_scene_info info;
+    int rc = floe_scene_load_ex("t.yaml", text, dir, 1, &w, &info, err, sizeof err);
+    CHECK(rc == FLOE_OK, "ice_grid scene: %s", err);
+    if (rc == FLOE_OK) {
+        CHECK(floe_world_run(w, info.duration, NULL, NULL) == FLOE_OK, "run: %s", floe_world_last_error(w));
+        floe_world_finish(w);
+    }
+    floe_world_destroy(w);
+    char path[256];
+    snprintf(path, sizeof path, "%s/grid_000000.vtu", dir);
+    FILE *f = fopen(path, "r");
+    static char buf[1 << 16];
+    size_t len = f ? fread(buf, 1, sizeof buf - 1, f) : 0;
+    if (f) fclose(f);
+    buf[len] = 0;
+    double c[16], v[48], h[16];
+    int ok = read_array(buf, "concentration", 16, 1, c) && read_array(buf, "velocity", 16, 3, v) &&
+             read_array(buf, "thickness", 16, 1, h);
+    CHECK(ok, "ice_grid: frame 0 read (%s)", path);
+    if (ok) {
+        int right = 1;
+        double werr = 0;
+        for (int j = 0; j < 4; j++)
+            for (int i = 0; i < 4; i++) {
+                const int k = j * 4 + i, in = i < 2 && j < 2;
+                right = right && c[k] == (in ? 1.0 : 0.0) && h[k] == (in ? 0.5 : 0.0);
+                if (in) {
+                    const double rx = 500 + 1000 * i - 1000, ry = 500 + 1000 * j - 1000;
+                    werr = fmax(werr, fabs(v[3 * k] - (0.2 - 1e-3 * ry)) + fabs(v[3 * k + 1] - (-0.1 + 1e-3 * rx)));
+                }
+            }
+        CHECK(right, "ice_grid: concentration 1 and thickness 0.5 in the 4 covered cells, 0 elsewhere");
+        CHECK(werr < 1e-9, "ice_grid: cell velocity v + w k x r (error %g)", werr);
+    }
+    char cmd[300];
+    snprintf(cmd, sizeof cmd, "%s/grid.pvd", dir);
+    CHECK(access(cmd, F_OK) == 0, "ice_grid: the .pvd series is written");
+    for (int k = 0; k < 4; k++) {
+        snprintf(cmd, sizeof cmd, "%s/grid_%06d.vtu", dir, k);
+        remove(cmd);
+    }
+    snprintf(cmd, sizeof cmd, "%s/grid.pvd", dir);
+    remove(cmd);
+    rmdir(dir);
+}
+
 int main(void) {
     char err[256];
     floe_register_builtins(err, sizeof err);
@@ -736,5 +818,6 @@ int main(void) {
     test_hopkins_polygons();
     for (int mode = 1; mode <= 4; mode++) bond_mode(mode, mode == 4 ? 45.0 : 0.0);
     test_gate_flux();
+    test_ice_grid();
     return check_summary("test_seaice");
 }
