@@ -44,6 +44,8 @@ typedef struct floe_polytope_view {
     int np;
     const double *v;      /* nv corners, 3 doubles each */
     int nv;
+    int ccw;              /* optional, 2D: 1 when the corners are in counter-clockwise order
+                             (0, the default: detection sorts them) */
 } floe_polytope_view;
 
 typedef struct floe_geometry_class {

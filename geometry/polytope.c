@@ -255,6 +255,7 @@ static void poly_polytope(const floe_geometry *g, int dim, floe_polytope_view *o
     out->np = p->np;
     out->v = p->v;
     out->nv = p->nv;
+    out->ccw = p->dim == 2; /* a polygon's hull, counter-clockwise */
 }
 static int poly_dimension(const floe_geometry *g) { return ((const floe_polytope *)g)->dim; }
 

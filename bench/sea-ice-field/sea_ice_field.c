@@ -9,7 +9,7 @@
  * Prints floe-steps/s per configuration, ns per floe-step of forcing and of contacts, the
  * contacts and pair evaluations per step, and the heap bytes per floe (glibc mallinfo2:
  * everything the world holds, the floes' own polygons and the drag's quadrature included).
- * usage: bench_sea_ice_field [N=10000] [steps=500] [warm=200] */
+ * usage: bench_sea_ice_field [N=10000] [steps=500] [warm=200] [configuration: all] */
 #include "floe.h"
 
 #include <malloc.h>
@@ -89,11 +89,17 @@ int main(int argc, char **argv) {
     floe_register_builtins(err, sizeof err);
     static const char *const name[] = {"move", "forcing", "forcing10", "contacts"};
     double r[4], c[4], e[4], b[4];
+    const char *only = argc > 4 ? argv[4] : NULL;
     for (int k = 0; k < 4; k++) {
+        if (only && strcmp(only, name[k])) {
+            r[k] = 1; c[k] = e[k] = b[k] = 0;
+            continue;
+        }
         if (run(k, n, steps, warm, r + k, c + k, e + k, b + k)) return 1;
         printf("%-8s N=%d steps=%ld floe_steps_per_s=%.4e contacts=%.1f pair_evals_per_step=%.1f bytes_per_floe=%.0f\n",
                name[k], n, steps, r[k], c[k], e[k], b[k]);
     }
+    if (only) return 0;
     printf("breakdown: move %.1f ns, forcing %.1f ns (every 10th step: %.1f ns), contacts %.1f ns per floe-step "
            "(%.1f ns per contact)\n",
            1e9 / r[0], 1e9 / r[1] - 1e9 / r[0], 1e9 / r[2] - 1e9 / r[0], 1e9 / r[3] - 1e9 / r[1],

@@ -212,7 +212,10 @@ static int convex_plane(floe_detect_ctx *w, const shape_ref *a, const shape_ref 
 static int is_polytope(const floe_geometry *g) { return g->klass->polytope != NULL; }
 
 /* the planes and corners of a polytope for the world's dimension (body frame) */
-static void body_polytope(const floe_geometry *g, int dim, floe_polytope_view *pv) { g->klass->polytope(g, dim, pv); }
+static void body_polytope(const floe_geometry *g, int dim, floe_polytope_view *pv) {
+    pv->ccw = 0; /* a class that does not say */
+    g->klass->polytope(g, dim, pv);
+}
 
 /* planes and vertices of b expressed in a's body frame (scratch owned by the world) */
 static int lp_scratch(floe_detect_ctx *w, int need) {
@@ -267,22 +270,39 @@ static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, d
 /* ---- overlap integrals (the overlap-area law, contact/detect/overlap.c): world-frame inputs ---- */
 #define OV_MAX FLOE_OVERLAP_MAX
 
-static int ov_polygon(const shape_ref *s, double (*P)[2]) {
-    int k = 0;
-    floe_polytope_view pv; /* 2D: the corners of the z = 0 section */
+/* 2D: a body's corners (its z = 0 section) and lines n.x <= h, relative to the point o (the
+ * first body's centre: local coordinates keep the overlap's digits when floes sit hundreds
+ * of km from the origin), corners counter-clockwise. A body in the plane turns about z only:
+ * its rotation is (c, -s; s, c) with c, s from the quaternion. */
+static void ov_rot2(const shape_ref *s, double *c, double *sn) {
+    const double *q = s->q; /* (w, x, y, z) */
+    *c = 1 - 2 * (q[2] * q[2] + q[3] * q[3]);
+    *sn = 2 * (q[0] * q[3] + q[1] * q[2]);
+}
+
+static int ov_polygon(const shape_ref *s, const double o[2], double (*P)[2]) {
+    floe_polytope_view pv;
     body_polytope(s->g, 2, &pv);
     const double *V = pv.v;
-    const int nv = pv.nv;
-    double ang[OV_MAX], cx = 0, cy = 0;
-    for (int v = 0; v < nv && k < OV_MAX; v++) {
-        double X[3] = {V[3 * v], V[3 * v + 1], V[3 * v + 2]}, xw[3];
-        floe_q_rotate(xw, s->q, X);
-        P[k][0] = xw[0] + s->x[0];
-        P[k][1] = xw[1] + s->x[1];
-        cx += P[k][0];
-        cy += P[k][1];
-        k++;
+    const int k = pv.nv < OV_MAX ? pv.nv : OV_MAX;
+    double c, sn, tx = s->x[0] - o[0], ty = s->x[1] - o[1], cx = 0, cy = 0;
+    ov_rot2(s, &c, &sn);
+    for (int v = 0; v < k; v++) {
+        P[v][0] = c * V[3 * v] - sn * V[3 * v + 1] + tx;
+        P[v][1] = sn * V[3 * v] + c * V[3 * v + 1] + ty;
+        cx += P[v][0];
+        cy += P[v][1];
     }
+    /* polygons keep their corners in order (counter-clockwise: every turn to the left; the
+     * class says so, or each turn is looked at); other sections are sorted about the centre */
+    int ordered = 1;
+    if (pv.ccw) return k;
+    for (int a = 0; a < k && ordered; a++) {
+        const double *p0 = P[a], *p1 = P[(a + 1) % k], *p2 = P[(a + 2) % k];
+        ordered = (p1[0] - p0[0]) * (p2[1] - p1[1]) - (p1[1] - p0[1]) * (p2[0] - p1[0]) > 0;
+    }
+    if (ordered) return k;
+    double ang[OV_MAX];
     cx /= k; cy /= k;
     for (int a = 0; a < k; a++) ang[a] = atan2(P[a][1] - cy, P[a][0] - cx);
     for (int a = 1; a < k; a++) /* counter-clockwise */
@@ -294,19 +314,22 @@ static int ov_polygon(const shape_ref *s, double (*P)[2]) {
     return k;
 }
 
-static int ov_lines(const shape_ref *s, double (*Lh)[3]) {
-    double nw[3];
+/* line k of a body (its face k), relative to o */
+static void ov_line1(const shape_ref *s, const double o[2], const double *pl, double L[3]) {
+    double c, sn;
+    ov_rot2(s, &c, &sn);
+    const double nx = c * pl[0] - sn * pl[1], ny = sn * pl[0] + c * pl[1];
+    L[0] = nx;
+    L[1] = ny;
+    L[2] = pl[3] + nx * (s->x[0] - o[0]) + ny * (s->x[1] - o[1]);
+}
+
+static int ov_lines(const shape_ref *s, const double o[2], double (*Lh)[3]) {
     floe_polytope_view pv;
     body_polytope(s->g, 2, &pv);
-    const double *pl = pv.plane;
-    const int np = pv.np;
-    for (int k = 0; k < np && k < OV_MAX; k++) {
-        floe_q_rotate(nw, s->q, pl + 4 * k);
-        Lh[k][0] = nw[0];
-        Lh[k][1] = nw[1];
-        Lh[k][2] = pl[4 * k + 3] + nw[0] * s->x[0] + nw[1] * s->x[1];
-    }
-    return np < OV_MAX ? np : OV_MAX;
+    const int np = pv.np < OV_MAX ? pv.np : OV_MAX;
+    for (int k = 0; k < np; k++) ov_line1(s, o, pv.plane + 4 * k, Lh[k]);
+    return np;
 }
 
 /* world-frame planes (n, h) and corners of a polytope */
@@ -361,28 +384,59 @@ static int overlap3(const shape_ref *a, const shape_ref *b, double F[3], double 
 }
 
 int floe_detect_overlap(const floe_detect_ctx *w, const floe_body_ref *bi, const floe_body_ref *bj, int sub,
-                        floe_contact *c) {
+                        double *warm, floe_contact *c) {
     shape_ref a, b;
     make_ref(bi, FLOE_SUB_A(sub), &a);
     make_ref(bj, FLOE_SUB_B(sub), &b);
     if (!is_polytope(a.g) || !is_polytope(b.g)) return -FLOE_ENOTSUP;
     c->nextra = 0; /* the overlap law has its own patch */
-    double F[3] = {0, 0, 0}, M[3] = {0, 0, 0}, cen[3], meas, I, l2;
+    double F[3] = {0, 0, 0}, M[3] = {0, 0, 0}, cen[3], meas, I, l2, org[3] = {0, 0, 0};
     if (w->dim == 2) {
-        double PA[OV_MAX][2], PB[OV_MAX][2], LA[OV_MAX][3], LB[OV_MAX][3];
-        int na = ov_polygon(&a, PA), nb = ov_polygon(&b, PB), la = ov_lines(&a, LA), lb = ov_lines(&b, LB);
-        double f1[2], f2[2], m1, m2, ar1, ar2, c1[2], c2[2];
-        double I1 = floe_overlap_term2(PA, na, LB, lb, f1, &m1, &ar1, c1); /* on A, from its boundary in B */
-        double I2 = floe_overlap_term2(PB, nb, LA, la, f2, &m2, &ar2, c2); /* on B, from its boundary in A */
-        /* on A: half of each term, the second by action and reaction */
-        F[0] = 0.5 * (f1[0] - f2[0]);
-        F[1] = 0.5 * (f1[1] - f2[1]);
-        M[2] = 0.5 * (m1 - m2);
-        meas = 0.5 * (ar1 + ar2);
-        I = 0.5 * (I1 + I2);
-        cen[0] = ar1 > 0 ? c1[0] : c->point[0];
-        cen[1] = ar1 > 0 ? c1[1] : c->point[1];
+        const double o[2] = {a.x[0], a.x[1]};
+        floe_overlap2 ov;
+        memset(&ov, 0, sizeof ov);
+        w->det->calls++;
+        /* a line that kept them apart last time (warm[0]: its number, k + 1 for A's face k,
+         * np_A + k + 1 for B's; 0 none, NaN after the bounding circles parted) is tried first,
+         * with only that line and the other body's corners: most neighbours in a packed
+         * field touch along an edge and stay so */
+        const double tol = 1e-10 * (a.r + b.r);
+        const int axis = warm && warm[0] >= 1 ? (int)warm[0] : 0;
+        int apart = 0;
+        if (axis) {
+            floe_polytope_view va, vb;
+            body_polytope(a.g, 2, &va);
+            body_polytope(b.g, 2, &vb);
+            double P[OV_MAX][2], L[3];
+            if (axis <= va.np && axis <= OV_MAX) {
+                ov_line1(&a, o, va.plane + 4 * (axis - 1), L);
+                apart = floe_overlap_pen2(P, ov_polygon(&b, o, P), L) <= tol;
+            } else if (axis - va.np <= vb.np && axis - va.np <= OV_MAX) {
+                ov_line1(&b, o, vb.plane + 4 * (axis - va.np - 1), L);
+                apart = floe_overlap_pen2(P, ov_polygon(&a, o, P), L) <= tol;
+            }
+        }
+        if (apart)
+            w->det->separated++;
+        else {
+            double PA[OV_MAX][2], PB[OV_MAX][2], LA[OV_MAX][3], LB[OV_MAX][3];
+            const int na = ov_polygon(&a, o, PA), nb = ov_polygon(&b, o, PB);
+            const int la = ov_lines(&a, o, LA), lb = ov_lines(&b, o, LB);
+            int r = floe_overlap_pair2(PA, na, LA, la, PB, nb, LB, lb, &ov);
+            if (r < 0) return -FLOE_ENOTSUP;
+            if (warm) warm[0] = r ? 0 : floe_overlap_axis2(PA, na, LA, la, PB, nb, LB, lb, tol);
+        }
+        /* moments and points about o from here on */
+        F[0] = ov.f[0];
+        F[1] = ov.f[1];
+        M[2] = ov.m;
+        meas = ov.area;
+        I = ov.I;
+        cen[0] = ov.cen[0]; /* (0, 0) when apart: then F = 0 and cen is not read */
+        cen[1] = ov.cen[1];
         cen[2] = 0.5 * (a.x[2] + b.x[2]);
+        org[0] = o[0];
+        org[1] = o[1];
         l2 = I > 0 ? meas * meas / (2 * I) : 0; /* contact length A^2 / 2I (flat: exact) */
         l2 *= l2;
     } else {
@@ -408,10 +462,18 @@ int floe_detect_overlap(const floe_detect_ctx *w, const floe_body_ref *bi, const
     for (int k = 0; k < 3; k++) c->area_couple[k] = mpar * u[k];
     floe_v3_sub(d, cen, p);
     double s = floe_v3_dot(d, u);
-    for (int k = 0; k < 3; k++) c->point[k] = p[k] + s * u[k];
+    for (int k = 0; k < 3; k++) c->point[k] = p[k] + s * u[k] + org[k];
     if (w->dim == 2) c->point[2] = cen[2];
     floe_v3_set(c->n, -u[0], -u[1], -u[2]); /* from i to j: the force on i pushes it back */
     c->gscale = 1.0;
+    if (w->dim == 2) { /* polygons: no point detection ran, the rest of the summary from the overlap */
+        c->i = bi->id;
+        c->j = bj->id;
+        c->depth = 2 * I / meas; /* the mean depth (a flat overlap: its depth) */
+        floe_v3_copy(c->x1, c->point);
+        floe_v3_copy(c->x2, c->point);
+        c->r_eff = a.r * b.r / (a.r + b.r);
+    }
     return 1;
 }
 

@@ -50,9 +50,11 @@ int floe_detect(floe_detect_ctx *ctx, const floe_body_ref *a, const floe_body_re
                 floe_contact *c);
 /* overlap area, its energy integral and conservative resultant for a polytope pair (the
  * overlap-area law): fills area, area_force, area_energy, and moves point and n onto the
- * resultant; 1 if they overlap, 0 if not, -FLOE_ENOTSUP for other pairs */
+ * resultant; 1 if they overlap, 0 if not, -FLOE_ENOTSUP for other pairs. 2D: a test on its
+ * own (no point detection before it): also fills i, j, depth (2I/A), x1 = x2 = point, r_eff;
+ * warm (may be NULL): the pair's slot, where warm[0] caches a separating line. */
 int floe_detect_overlap(const floe_detect_ctx *ctx, const floe_body_ref *a, const floe_body_ref *b, int sub,
-                        floe_contact *c);
+                        double *warm, floe_contact *c);
 /* A sphere (centre xs, radius r) against a wall (a plane body at xp, orientation qp: the
  * half-space z <= 0 of its frame): 1 and c filled seen from the sphere (x1 on the sphere, x2
  * on the wall, n from the sphere into the wall, the midpoint as the point) if they touch,

@@ -9,11 +9,25 @@
 #define FLOE_POLY3_FACES 48  /* faces of a polyhedron handled (3D) */
 #define FLOE_POLY3_CORNERS 32 /* corners of one of its faces */
 
-/* 2D term for polygons X (CCW corners, world) and Y (lines n.x <= h as (nx, ny, h)):
- * returns I_XY = ∫_{X∩Y} -φ_Y dA; f, *m: the load on X (-dI_XY/dx_X: force, moment about the
- * origin); *area, cen: area and centroid of X∩Y. */
-double floe_overlap_term2(double (*X)[2], int nx, double (*Y)[3], int ny, double f[2], double *m, double *area,
-                          double cen[2]);
+/* Both terms of two convex polygons A, B at once (CCW corners and lines n.x <= h as
+ * (nx, ny, h), world or any common frame): the overlap O = A ∩ B clipped once, each term's
+ * depth integrals over only the lines nearest somewhere in O. f, m: the load on A (half of
+ * each term, -dI/dx_A; moment about the frame's origin), I = (I_AB + I_BA)/2, the overlap's
+ * area and centroid. Returns 1 when they overlap (area > 0), 0 when apart, -1 when a polygon
+ * has more than FLOE_OVERLAP_MAX corners. */
+typedef struct floe_overlap2 {
+    double f[2], m, I, area, cen[2];
+} floe_overlap2;
+int floe_overlap_pair2(double (*A)[2], int na, double (*LA)[3], int la, double (*B)[2], int nb, double (*LB)[3],
+                       int lb, floe_overlap2 *out);
+
+/* Separating lines of two convex polygons (same inputs): the first line (k + 1 for A's line k,
+ * la + k + 1 for B's line k) behind which the other polygon's corners lie no deeper than tol
+ * (apart, or touching), 0 when there is none (they overlap). floe_overlap_pen2: how deep the
+ * corners of X lie behind the line L (n.x <= h inside), at most (a cached line tested again). */
+int floe_overlap_axis2(double (*A)[2], int na, double (*LA)[3], int la, double (*B)[2], int nb, double (*LB)[3],
+                       int lb, double tol);
+double floe_overlap_pen2(double (*X)[2], int nx, const double L[3]);
 
 /* A convex polyhedron as face polygons (world frame). */
 typedef struct floe_poly3 {

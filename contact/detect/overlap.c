@@ -12,18 +12,22 @@
 
 #define OV_MAX FLOE_OVERLAP_MAX
 
-/* Sutherland-Hodgman: P (n corners) ∩ {a.x <= b} */
+/* Sutherland-Hodgman: P (n corners) ∩ {a.x <= b}; P unchanged when all of it is inside */
 static int ov_clip(double (*P)[2], int n, double ax, double ay, double b) {
-    double Q[OV_MAX][2];
-    int m = 0;
-    for (int i = 0; i < n && m < OV_MAX - 1; i++) {
-        const double *p = P[i], *q = P[(i + 1) % n];
-        double dp = ax * p[0] + ay * p[1] - b, dq = ax * q[0] + ay * q[1] - b;
-        if (dp <= 0) { Q[m][0] = p[0]; Q[m][1] = p[1]; m++; }
+    double d[OV_MAX], Q[OV_MAX][2];
+    int out = 0, m = 0;
+    for (int i = 0; i < n; i++) {
+        d[i] = ax * P[i][0] + ay * P[i][1] - b;
+        out |= d[i] > 0;
+    }
+    if (!out) return n;
+    for (int i = 0, j = n - 1; i < n && m < OV_MAX - 1; j = i++) { /* the edge from corner j to i */
+        const double dp = d[j], dq = d[i];
+        if (dp <= 0) { Q[m][0] = P[j][0]; Q[m][1] = P[j][1]; m++; }
         if ((dp < 0 && dq > 0) || (dp > 0 && dq < 0)) {
-            double t = dp / (dp - dq);
-            Q[m][0] = p[0] + t * (q[0] - p[0]);
-            Q[m][1] = p[1] + t * (q[1] - p[1]);
+            const double t = dp / (dp - dq);
+            Q[m][0] = P[j][0] + t * (P[i][0] - P[j][0]);
+            Q[m][1] = P[j][1] + t * (P[i][1] - P[j][1]);
             m++;
         }
     }
@@ -31,97 +35,144 @@ static int ov_clip(double (*P)[2], int n, double ax, double ay, double b) {
     return m;
 }
 
+/* area and centroid, from the first corner (a thin overlap of two floes far from the
+ * origin keeps its digits) */
 static double ov_area(double (*P)[2], int n, double c[2]) {
     double a = 0, cx = 0, cy = 0;
-    for (int i = 0; i < n; i++) {
-        const double *p = P[i], *q = P[(i + 1) % n];
-        double cr = p[0] * q[1] - q[0] * p[1];
+    const double ox = P[0][0], oy = P[0][1];
+    for (int i = 1; i + 1 < n; i++) {
+        const double px = P[i][0] - ox, py = P[i][1] - oy, qx = P[i + 1][0] - ox, qy = P[i + 1][1] - oy;
+        double cr = px * qy - qx * py;
         a += cr;
-        cx += (p[0] + q[0]) * cr;
-        cy += (p[1] + q[1]) * cr;
+        cx += (px + qx) * cr;
+        cy += (py + qy) * cr;
     }
     a *= 0.5;
     if (c) {
-        c[0] = a != 0 ? cx / (6 * a) : 0;
-        c[1] = a != 0 ? cy / (6 * a) : 0;
+        c[0] = ox + (a != 0 ? cx / (6 * a) : 0);
+        c[1] = oy + (a != 0 ? cy / (6 * a) : 0);
     }
     return a;
 }
 
-/* one term: the load on X (force f, moment m about the origin, per unit stiffness) and
- * I_XY; also the overlap polygon's area and centroid */
-double floe_overlap_term2(double (*X)[2], int nx, double (*Y)[3], int ny, double f[2], double *m, double *area,
-                          double cen[2]) {
-    f[0] = f[1] = *m = 0;
-    for (int e = 0; e < nx; e++) {
-        const double *p = X[e], *q = X[(e + 1) % nx];
-        double dx = q[0] - p[0], dy = q[1] - p[1], len = sqrt(dx * dx + dy * dy);
-        if (!(len > 0)) continue;
-        double nxe = dy / len, nye = -dx / len; /* outward normal of a CCW polygon */
-        /* the part of the edge inside Y: t in [t0, t1] */
-        double t0 = 0, t1 = 1;
-        for (int k = 0; k < ny && t0 < t1; k++) {
-            double v0 = Y[k][2] - Y[k][0] * p[0] - Y[k][1] * p[1], sl = -(Y[k][0] * dx + Y[k][1] * dy);
-            /* v0 + sl t >= 0 inside */
-            if (sl == 0) { if (v0 < 0) t1 = t0; continue; }
-            double tc = -v0 / sl;
-            if (sl > 0) { if (tc > t0) t0 = tc; }
-            else if (tc < t1) t1 = tc;
+/* the lines of Y that can be nearest somewhere in the convex polygon O: with m_f and M_f the
+ * least and greatest depth h_f - n_f.x of line f over O's corners, d_Y <= U = min_f M_f on O,
+ * so a line with m_f > U is nowhere the nearest (depths are linear, their extremes are at
+ * corners). A thin overlap keeps one to three of Y's lines. */
+static int ov_active(double (*O)[2], int no, double (*Y)[3], int ny, int *act) {
+    double lo[OV_MAX], U = INFINITY, span = 0;
+    for (int k = 0; k < ny; k++) {
+        double mn = INFINITY, mx = -INFINITY;
+        for (int v = 0; v < no; v++) {
+            double d = Y[k][2] - Y[k][0] * O[v][0] - Y[k][1] * O[v][1];
+            mn = d < mn ? d : mn;
+            mx = d > mx ? d : mx;
         }
-        if (!(t1 > t0)) continue;
-        /* d_Y along the piece: the lower envelope of the lines' depth, walked piece by piece */
-        double t = t0;
-        for (int guard = 0; guard <= ny && t < t1; guard++) {
-            int fb = -1;
-            double vb = INFINITY, sb = 0;
-            for (int k = 0; k < ny; k++) {
-                double v = Y[k][2] - Y[k][0] * (p[0] + t * dx) - Y[k][1] * (p[1] + t * dy);
-                double sl = -(Y[k][0] * dx + Y[k][1] * dy);
-                if (v < vb - 1e-15 * len || (v <= vb + 1e-15 * len && sl < sb)) { vb = v; sb = sl; fb = k; }
-            }
-            double tn = t1;
-            for (int k = 0; k < ny; k++) {
-                if (k == fb) continue;
-                double v = Y[k][2] - Y[k][0] * (p[0] + t * dx) - Y[k][1] * (p[1] + t * dy);
-                double sl = -(Y[k][0] * dx + Y[k][1] * dy);
-                if (sl < sb) {
-                    double tc = t + (v - vb) / (sb - sl);
-                    if (tc > t && tc < tn) tn = tc;
-                }
-            }
-            double da = vb, db = vb + sb * (tn - t), L = (tn - t) * len;
-            if (da < 0) da = 0;
-            if (db < 0) db = 0;
-            double ax = p[0] + t * dx, ay = p[1] + t * dy, bx = p[0] + tn * dx, by = p[1] + tn * dy;
-            double s0 = 0.5 * L * (da + db);                        /* ∫ d ds */
-            double mx = L * (da * (2 * ax + bx) + db * (ax + 2 * bx)) / 6; /* ∫ x d ds */
-            double my = L * (da * (2 * ay + by) + db * (ay + 2 * by)) / 6;
-            f[0] -= s0 * nxe;
-            f[1] -= s0 * nye;
-            *m -= mx * nye - my * nxe; /* ∫ x × (-d n) */
-            t = tn;
-        }
+        lo[k] = mn;
+        if (mx < U) U = mx;
+        if (mx - mn > span) span = mx - mn;
     }
-    /* I_XY: the overlap split into the regions nearest to each line of Y */
-    double O[OV_MAX][2];
-    memcpy(O, X, sizeof(double) * 2 * (size_t)nx);
-    int no = nx;
-    for (int k = 0; k < ny && no > 0; k++) no = ov_clip(O, no, Y[k][0], Y[k][1], Y[k][2]);
-    *area = no > 2 ? ov_area(O, no, cen) : 0;
-    double I = 0;
-    for (int fk = 0; fk < ny && no > 2; fk++) {
+    const double eps = 1e-9 * (fabs(U) + span); /* a line at the edge of the test stays in */
+    int na = 0;
+    for (int k = 0; k < ny; k++)
+        if (lo[k] <= U + eps) act[na++] = k;
+    return na;
+}
+
+/* one term: I_XY = ∫_O d_Y over the overlap O = X ∩ Y and the load on X (force f, moment m
+ * about the origin, per unit stiffness), -dI_XY/dx_X = -∫_{∂X∩Y} d_Y n_X ds. d_Y vanishes on
+ * ∂Y, so by the divergence theorem that boundary integral is ∫_O ∇d_Y dA, and with the
+ * regions R_f of O where line f of Y is the nearest (∇d_Y = -n_f there; area a_f, centroid
+ * c_f):
+ *     I = Σ a_f (h_f - n_f.c_f),   f = Σ a_f n_f,   m = Σ (a_f c_f) × n_f.
+ * Only areas and first moments: the last region is O less the others. act: Y's lines that
+ * are nearest somewhere in O (ov_active); aO, cO: O's area and centroid. */
+static double ov_term2(double (*Y)[3], const int *act, int nact, double (*O)[2], int no, double aO,
+                       const double cO[2], double f[2], double *m) {
+    double I = 0, ar = aO, mx = aO * cO[0], my = aO * cO[1];
+    f[0] = f[1] = *m = 0;
+    for (int fa = 0; fa + 1 < nact; fa++) {
+        const double *F = Y[act[fa]];
         double R[OV_MAX][2], c[2];
         memcpy(R, O, sizeof(double) * 2 * (size_t)no);
         int nr = no;
-        for (int g = 0; g < ny && nr > 2; g++) {
-            if (g == fk) continue; /* h_f - n_f.x <= h_g - n_g.x */
-            nr = ov_clip(R, nr, Y[g][0] - Y[fk][0], Y[g][1] - Y[fk][1], Y[g][2] - Y[fk][2]);
+        for (int g = 0; g < nact && nr > 2; g++) {
+            if (g == fa) continue; /* h_f - n_f.x <= h_g - n_g.x */
+            const double *G = Y[act[g]];
+            nr = ov_clip(R, nr, G[0] - F[0], G[1] - F[1], G[2] - F[2]);
         }
         if (nr < 3) continue;
-        double a = ov_area(R, nr, c);
-        I += a * (Y[fk][2] - Y[fk][0] * c[0] - Y[fk][1] * c[1]);
+        const double a = ov_area(R, nr, c);
+        I += a * (F[2] - F[0] * c[0] - F[1] * c[1]);
+        f[0] += a * F[0];
+        f[1] += a * F[1];
+        *m += a * (c[0] * F[1] - c[1] * F[0]);
+        ar -= a;
+        mx -= a * c[0];
+        my -= a * c[1];
+    }
+    const double *F = Y[act[nact - 1]];
+    if (ar > 0) {
+        I += ar * F[2] - F[0] * mx - F[1] * my;
+        f[0] += ar * F[0];
+        f[1] += ar * F[1];
+        *m += mx * F[1] - my * F[0];
     }
     return I;
+}
+
+int floe_overlap_pair2(double (*A)[2], int na, double (*LA)[3], int la, double (*B)[2], int nb, double (*LB)[3],
+                       int lb, floe_overlap2 *out) {
+    memset(out, 0, sizeof *out);
+    (void)B;
+    (void)nb;
+    double O[OV_MAX][2];
+    if (na > OV_MAX || nb > OV_MAX || la > OV_MAX || lb > OV_MAX) return -1;
+    memcpy(O, A, sizeof(double) * 2 * (size_t)na);
+    int no = na;
+    for (int k = 0; k < lb && no > 2; k++) no = ov_clip(O, no, LB[k][0], LB[k][1], LB[k][2]);
+    if (no < 3) return 0;
+    double e2 = 0; /* the overlap's size squared */
+    for (int v = 1; v < no; v++) {
+        const double dx = O[v][0] - O[0][0], dy = O[v][1] - O[0][1];
+        e2 = dx * dx + dy * dy > e2 ? dx * dx + dy * dy : e2;
+    }
+    out->area = ov_area(O, no, out->cen);
+    /* a sliver thinner than 1e-10 of its length is two polygons that share an edge (a
+     * Voronoi field): its area and centroid are round-off; touching, not overlapping */
+    if (!(out->area > 1e-10 * e2)) {
+        out->area = 0;
+        return 0;
+    }
+    int actA[OV_MAX], actB[OV_MAX];
+    const int nactB = ov_active(O, no, LB, lb, actB), nactA = ov_active(O, no, LA, la, actA);
+    double f1[2], f2[2], m1, m2;
+    const double I1 = ov_term2(LB, actB, nactB, O, no, out->area, out->cen, f1, &m1); /* on A, in B */
+    const double I2 = ov_term2(LA, actA, nactA, O, no, out->area, out->cen, f2, &m2); /* on B, in A */
+    /* on A: half of each term, the second by action and reaction */
+    out->f[0] = 0.5 * (f1[0] - f2[0]);
+    out->f[1] = 0.5 * (f1[1] - f2[1]);
+    out->m = 0.5 * (m1 - m2);
+    out->I = 0.5 * (I1 + I2);
+    return 1;
+}
+
+double floe_overlap_pen2(double (*X)[2], int nx, const double L[3]) {
+    double pen = -INFINITY;
+    for (int v = 0; v < nx; v++) {
+        const double d = L[2] - L[0] * X[v][0] - L[1] * X[v][1];
+        pen = d > pen ? d : pen;
+    }
+    return pen;
+}
+
+int floe_overlap_axis2(double (*A)[2], int na, double (*LA)[3], int la, double (*B)[2], int nb, double (*LB)[3],
+                       int lb, double tol) {
+    for (int k = 0; k < la; k++)
+        if (floe_overlap_pen2(B, nb, LA[k]) <= tol) return k + 1;
+    for (int k = 0; k < lb; k++)
+        if (floe_overlap_pen2(A, na, LB[k]) <= tol) return la + k + 1;
+    return 0;
 }
 
 

@@ -170,7 +170,7 @@ int floe_world_detect(floe_world *w, int i, int j, int sub, double *warm, floe_c
 int floe_world_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact *c) {
     floe_detect_ctx ctx = {w->def.dim, w->step, &w->det};
     floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
-    return floe_detect_overlap(&ctx, &bi, &bj, sub, c);
+    return floe_detect_overlap(&ctx, &bi, &bj, sub, NULL, c);
 }
 
 /* ---- provider "body": gravity, PD body-force regions, the body-force callback (the
@@ -295,7 +295,16 @@ typedef struct stage_env {
     const floe_detect_ctx *dctx;
     int stepping, track, any_growth, nm, any_none, any_pieces, any_overlap;
     int any_floe; /* a law reads the floes' thickness and radii (floe_law_info.needs_floe) */
+    int overlap2d; /* 2D and a law reads the overlap: polygon pairs skip the point detection */
 } stage_env;
+
+/* the pair's law reads the overlap (the overlap-area law, or prefers it: Hopkins') */
+static inline int pair_wants_overlap(const floe_world *w, int i, int j, int nm) {
+    const floe_contact_law *law = w->laws[w->p.material[i] * nm + w->p.material[j]];
+    if (!law) return 0;
+    const floe_law_info li = floe_contact_law_info(law);
+    return li.needs_overlap | li.prefers_overlap;
+}
 
 /* the smaller of two radii (never NaN): fmin is a library call here (NaN rules) */
 static inline double rmin(double a, double b) { return a < b ? a : b; }
@@ -423,7 +432,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     c.gscale = 1.0;
     c.nextra = 0;
     c.fn_extra = 0.0;
-    int r = 0;
+    int r = 0, ov_done = 0;
     /* bounding spheres apart: no contact for any pair of shapes (most list pairs) */
     const double *xa = p->x + 3 * i, *xb = p->x + 3 * j;
     double rad_i = p->radius[i], rad_j = p->radius[j];
@@ -455,6 +464,13 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
                 floe_v3_copy(t, c.x1); floe_v3_copy(c.x1, c.x2); floe_v3_copy(c.x2, t);
                 floe_v3_scale(c.n, -1.0);
             }
+        } else if (env->overlap2d && pair_wants_overlap(w, i, j, nm)) {
+            /* two polygons under an overlap law: the overlap is the exact test (area > 0),
+             * no deepest-point LP before it */
+            floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
+            r = floe_detect_overlap(&dctx, &bi, &bj, sub, warm, &c);
+            if (r == -FLOE_ENOTSUP) r = detect_pair(w, &dctx, i, j, sub, warm, &c); /* a disc, a wall */
+            else ov_done = 1;
         } else r = detect_pair(w, &dctx, i, j, sub, warm, &c);
     } else if (!(rs < INFINITY)) {
         r = detect_pair(w, &dctx, i, j, sub, warm, &c);
@@ -463,9 +479,9 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     }
     const floe_contact_law *law = r > 0 ? w->laws[p->material[i] * nm + p->material[j]] : NULL;
     const floe_law_info linfo = r == 1 && (any_overlap || env->any_floe) ? floe_contact_law_info(law) : (floe_law_info){0};
-    if (linfo.needs_overlap || linfo.prefers_overlap) {
+    if (!ov_done && (linfo.needs_overlap || linfo.prefers_overlap)) {
         floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
-        r = floe_detect_overlap(&dctx, &bi, &bj, sub, &c);
+        r = floe_detect_overlap(&dctx, &bi, &bj, sub, NULL, &c);
         if (r == -FLOE_ENOTSUP && linfo.prefers_overlap) { /* not two polytopes: the deepest point */
             r = 1;
             c.area = 0;
@@ -670,10 +686,14 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
         any_overlap |= li.needs_overlap | li.prefers_overlap;
         any_floe |= li.needs_floe;
     }
-    int any_pieces = 0; /* compound bodies: their pairs are per piece */
-    for (int g = 0; g < w->ngeoms; g++) any_pieces |= floe_piece_count(w->geoms[g]) > 1;
+    /* compound bodies: their pairs are per piece (the geometries added since the last look) */
+    if (w->pieces_seen > w->ngeoms) w->pieces_seen = w->any_pieces = 0; /* geometries taken back */
+    for (; w->pieces_seen < w->ngeoms; w->pieces_seen++) w->any_pieces |= floe_piece_count(w->geoms[w->pieces_seen]) > 1;
+    const int any_pieces = w->any_pieces;
     stage_acc acc = {eta_d, elastic, diss, wgrow};
-    const stage_env env = {p, nl, &dctx, stepping, track, any_growth, nm, any_none, any_pieces, any_overlap, any_floe};
+    const stage_env env = {p,         nl,         &dctx,       stepping, track,
+                           any_growth, nm,        any_none,    any_pieces, any_overlap,
+                           any_floe,  w->def.dim == 2 && any_overlap};
     const int *pi = nl->pi, *pj = nl->pj;
     const unsigned char *touching = nl->touching;
     const double *x = p->x, *rad = p->radius;

@@ -50,6 +50,7 @@ struct floe_world {
     char err[1024];
     floe_particles p;
     floe_geometry **geoms; int ngeoms, geoms_cap;
+    int pieces_seen, any_pieces; /* geoms[0 .. pieces_seen) looked at: any of them a compound */
     floe_material *mats; int nmats, mats_cap;
     floe_contact_law **laws;  /* nmats x nmats (symmetric, owned once via law_owned) */
     floe_contact_law **law_owned; int nlaws_owned, law_owned_cap;

@@ -142,11 +142,23 @@ int prepare_store(floe_world *w) {
                                         w->mats[a].name, w->mats[b].name);
         }
     {
-        /* geometry pairs present among (free, any) particles */
+        /* geometry pairs present among (free, any) particles; geometries of one class that
+         * are not unions stand for each other (detection goes by class: a field of 10,000
+         * floes has 10,000 polygons of one class) */
         int ng = w->ngeoms;
-        int *seen = calloc((size_t)ng * 2, sizeof(int));
+        int *seen = calloc((size_t)ng * 4, sizeof(int));
         if (!seen) return FLOE_ENOMEM;
-        for (int i = 0; i < p->n; i++) seen[2 * p->geom[i] + (p->motion[i] == FLOE_FREE)]++;
+        int *rep = seen + 2 * ng, *firsts = seen + 3 * ng, nfirst = 0;
+        for (int g = 0; g < ng; g++) {
+            const floe_geometry *G = w->geoms[g];
+            rep[g] = g;
+            if (G->klass->piece || floe_geometry_piece_count(G) != 1) continue;
+            int r = 0;
+            while (r < nfirst && w->geoms[firsts[r]]->klass != G->klass) r++; /* a handful of classes */
+            if (r == nfirst) firsts[nfirst++] = g;
+            rep[g] = firsts[r];
+        }
+        for (int i = 0; i < p->n; i++) seen[2 * rep[p->geom[i]] + (p->motion[i] == FLOE_FREE)]++;
         int rc = FLOE_OK;
         for (int a = 0; a < ng && !rc; a++) {
             if (!seen[2 * a + 1]) continue;
