@@ -295,6 +295,62 @@ int floe_fw_write_pvd(const char *dir, const char *prefix, const double *times, 
     return floe_fw_replace_commit(&r);
 }
 
+int floe_fw_series_init(floe_fw_series *s, const char *who, const char *dir, const char *prefix) {
+    memset(s, 0, sizeof *s);
+    s->who = who;
+    s->dir = strdup(dir);
+    s->prefix = strdup(prefix);
+    if (s->dir && s->prefix) return FLOE_OK;
+    floe_fw_series_free(s);
+    return FLOE_ENOMEM;
+}
+
+void floe_fw_series_free(floe_fw_series *s) {
+    free(s->dir);
+    free(s->prefix);
+    free(s->times);
+    free(s->path);
+    memset(s, 0, sizeof *s);
+}
+
+int floe_fw_series_due(const floe_fw_series *s, long step) { return !s->observed || s->last_step != step; }
+
+int floe_fw_series_begin(floe_fw_series *s, floe_world *w, floe_fw_replace *r) {
+    if (s->frames == s->cap) {
+        int nc = s->cap ? 2 * s->cap : 64;
+        double *t = realloc(s->times, (size_t)nc * sizeof *t);
+        if (!t) return floe_world_report_error(w, FLOE_ENOMEM, "%s: out of memory", s->who);
+        s->times = t;
+        s->cap = nc;
+    }
+    free(s->path);
+    s->path = floe_fw_series_path(s->dir, s->prefix, s->frames, ".vtu");
+    if (!s->path) return floe_world_report_error(w, FLOE_ENOMEM, "%s: out of memory", s->who);
+    int rc = floe_fw_replace_begin(r, s->path);
+    if (rc != FLOE_OK)
+        return floe_world_report_error(w, rc, "%s: cannot open %s.tmp: %s", s->who, s->path, strerror(errno));
+    return FLOE_OK;
+}
+
+int floe_fw_series_commit(floe_fw_series *s, floe_world *w, floe_fw_replace *r, double time, long step) {
+    int rc = floe_fw_replace_commit(r);
+    if (rc != FLOE_OK)
+        return floe_world_report_error(w, rc, "%s: writing %s failed: %s", s->who, s->path, strerror(errno));
+    s->times[s->frames++] = time;
+    s->last_step = step;
+    s->observed = 1;
+    rc = floe_fw_write_pvd(s->dir, s->prefix, s->times, s->frames);
+    if (rc != FLOE_OK)
+        return floe_world_report_error(w, rc, "%s: writing %s/%s.pvd failed: %s", s->who, s->dir, s->prefix,
+                                       rc == FLOE_ENOMEM ? "out of memory" : strerror(errno));
+    return FLOE_OK;
+}
+
+void floe_fw_series_abandon(floe_fw_series *s, floe_fw_replace *r) {
+    (void)s;
+    floe_fw_replace_abandon(r);
+}
+
 void floe_fw_vtu_begin(FILE *f, double time, long step) {
     fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
                "byte_order=\"%s\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n", floe_fw_vtk_byte_order());

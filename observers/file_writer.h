@@ -102,6 +102,26 @@ char *floe_fw_series_path(const char *dir, const char *prefix, int frame, const 
 /* Writes DIR/PREFIX.pvd listing frames 0..frames-1 at times[] (s). FLOE_OK, or FLOE_ENOMEM /
  * FLOE_EIO with errno set. */
 int floe_fw_write_pvd(const char *dir, const char *prefix, const double *times, int frames);
+/* A series being written: frames opened with floe_fw_series_begin (the next frame's
+ * PREFIX_NNNNNN.vtu.tmp; r->f to write it), then floe_fw_series_commit (renamed into place,
+ * its time recorded, the .pvd rewritten) or floe_fw_series_abandon. Errors are reported
+ * through the world with `who`. floe_fw_series_due: this step is not written yet. */
+typedef struct floe_fw_series {
+    const char *who;   /* "vtk writer": the start of every message (a literal) */
+    char *dir, *prefix;
+    double *times;     /* the frames' times (s) */
+    int frames, cap;
+    long last_step;    /* the step of the last frame */
+    int observed;      /* a frame was written */
+    char *path;        /* the frame being written */
+} floe_fw_series;
+/* strdup's dir and prefix; FLOE_ENOMEM (and nothing held) when out of memory */
+int floe_fw_series_init(floe_fw_series *s, const char *who, const char *dir, const char *prefix);
+void floe_fw_series_free(floe_fw_series *s);
+int floe_fw_series_due(const floe_fw_series *s, long step);
+int floe_fw_series_begin(floe_fw_series *s, floe_world *w, floe_fw_replace *r);
+int floe_fw_series_commit(floe_fw_series *s, floe_world *w, floe_fw_replace *r, double time, long step);
+void floe_fw_series_abandon(floe_fw_series *s, floe_fw_replace *r);
 /* The opening of a .vtu up to its <Piece>: the XML declaration, VTKFile (UnstructuredGrid,
  * header_type UInt64, this machine's byte order) and the field data TimeValue (s; ParaView
  * reads it as the time of a single file) and Step. */

@@ -21,13 +21,9 @@
 
 typedef struct ice_grid {
     floe_observer base;
-    char *dir, *prefix;
+    floe_fw_series ser;   /* DIR/PREFIX_NNNNNN.vtu, DIR/PREFIX.pvd */
     double lo[2], hi[2];
     int nx, ny, s;
-    double *times;
-    int frames, times_cap;
-    long last_step;
-    int observed;
     unsigned char *owned; /* per sample: taken by a floe already */
     double *acc;          /* per cell: ice samples, vx, vy, h sums */
 } ice_grid;
@@ -107,54 +103,25 @@ static int ig_write(ice_grid *g, floe_world *w) {
     ig_sample(g, w, &v);
     const double time = floe_world_time(w);
     const long step = floe_world_step_count(w);
-    if (g->frames == g->times_cap) {
-        int nc = g->times_cap ? 2 * g->times_cap : 64;
-        double *t = realloc(g->times, (size_t)nc * sizeof *t);
-        if (!t) return floe_world_report_error(w, FLOE_ENOMEM, "ice_grid: out of memory");
-        g->times = t;
-        g->times_cap = nc;
-    }
-    char *path = floe_fw_series_path(g->dir, g->prefix, g->frames, ".vtu");
-    if (!path) return floe_world_report_error(w, FLOE_ENOMEM, "ice_grid: out of memory");
     floe_fw_replace r;
-    int rc = floe_fw_replace_begin(&r, path);
-    if (rc != FLOE_OK) {
-        rc = floe_world_report_error(w, rc, "ice_grid: cannot open %s.tmp: %s", path, strerror(errno));
-        free(path);
-        return rc;
-    }
+    FLOE_TRY(floe_fw_series_begin(&g->ser, w, &r));
     ig_frame(g, r.f, time, step);
-    rc = floe_fw_replace_commit(&r);
-    if (rc != FLOE_OK) rc = floe_world_report_error(w, rc, "ice_grid: writing %s failed: %s", path, strerror(errno));
-    free(path);
-    if (rc != FLOE_OK) return rc;
-    g->times[g->frames++] = time;
-    g->last_step = step;
-    g->observed = 1;
-    rc = floe_fw_write_pvd(g->dir, g->prefix, g->times, g->frames);
-    if (rc != FLOE_OK)
-        return floe_world_report_error(w, rc, "ice_grid: writing %s/%s.pvd failed: %s", g->dir, g->prefix,
-                                       rc == FLOE_ENOMEM ? "out of memory" : strerror(errno));
-    return FLOE_OK;
+    return floe_fw_series_commit(&g->ser, w, &r, time, step);
 }
 
 static int ig_observe(floe_observer *o, floe_world *w) {
     ice_grid *g = (ice_grid *)o;
-    if (g->observed && g->last_step == floe_world_step_count(w)) return FLOE_OK;
-    return ig_write(g, w);
+    return floe_fw_series_due(&g->ser, floe_world_step_count(w)) ? ig_write(g, w) : FLOE_OK;
 }
 
 static int ig_end(floe_observer *o, floe_world *w) {
     ice_grid *g = (ice_grid *)o;
-    if (!g->observed || g->last_step != floe_world_step_count(w)) return ig_write(g, w);
-    return FLOE_OK;
+    return floe_fw_series_due(&g->ser, floe_world_step_count(w)) ? ig_write(g, w) : FLOE_OK;
 }
 
 static void ig_destroy(floe_observer *o) {
     ice_grid *g = (ice_grid *)o;
-    free(g->dir);
-    free(g->prefix);
-    free(g->times);
+    floe_fw_series_free(&g->ser);
     free(g->owned);
     free(g->acc);
     free(g);
@@ -178,12 +145,10 @@ floe_observer *floe_ice_grid_create(const char *dir, const char *prefix, int dim
     }
     ice_grid *g = calloc(1, sizeof *g);
     if (g) {
-        g->dir = strdup(dir);
-        g->prefix = strdup(prefix);
         g->owned = malloc((size_t)nx * ny * samples * samples);
         g->acc = malloc((size_t)nx * ny * 4 * sizeof *g->acc);
     }
-    if (!g || !g->dir || !g->prefix || !g->owned || !g->acc) {
+    if (!g || floe_fw_series_init(&g->ser, "ice_grid", dir, prefix) || !g->owned || !g->acc) {
         if (g) ig_destroy(&g->base);
         if (err && errlen) snprintf(err, errlen, "ice_grid: out of memory");
         return NULL;

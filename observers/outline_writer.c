@@ -49,13 +49,8 @@ typedef struct pt2 { double x, y; } pt2;
 
 typedef struct outline_writer {
     floe_observer base;
-    char *dir, *prefix;
+    floe_fw_series ser;              /* DIR/PREFIX_NNNNNN.vtu, DIR/PREFIX.pvd */
     int ascii, segments;
-    int frames;
-    double *times;
-    int times_cap;
-    long last_step;
-    int observed;
     /* the frame being assembled: cells */
     int ncell, cell_cap;
     int32_t *id, *body, *material;
@@ -392,56 +387,26 @@ static void write_frame(const outline_writer *o, FILE *f, double time, long step
 static int ow_write(outline_writer *o, floe_world *w) {
     double time = floe_world_time(w);
     long step = floe_world_step_count(w);
-    if (o->frames == o->times_cap) {
-        int nc = o->times_cap ? 2 * o->times_cap : 64;
-        if (grow((void **)&o->times, sizeof *o->times, nc) != FLOE_OK)
-            return floe_world_report_error(w, FLOE_ENOMEM, "outline writer: out of memory");
-        o->times_cap = nc;
-    }
     FLOE_TRY(assemble(o, w));
-    char *path = floe_fw_series_path(o->dir, o->prefix, o->frames, ".vtu");
-    if (!path) return floe_world_report_error(w, FLOE_ENOMEM, "outline writer: out of memory");
     floe_fw_replace r;
-    int rc = floe_fw_replace_begin(&r, path);
-    if (rc != FLOE_OK) {
-        rc = floe_world_report_error(w, rc, "outline writer: cannot open %s.tmp: %s", path, strerror(errno));
-        free(path);
-        return rc;
-    }
+    FLOE_TRY(floe_fw_series_begin(&o->ser, w, &r));
     write_frame(o, r.f, time, step);
-    rc = floe_fw_replace_commit(&r);
-    if (rc != FLOE_OK)
-        rc = floe_world_report_error(w, rc, "outline writer: writing %s failed: %s", path, strerror(errno));
-    free(path);
-    if (rc != FLOE_OK) return rc;
-
-    o->times[o->frames++] = time;
-    o->last_step = step;
-    o->observed = 1;
-    rc = floe_fw_write_pvd(o->dir, o->prefix, o->times, o->frames);
-    if (rc != FLOE_OK)
-        return floe_world_report_error(w, rc, "outline writer: writing %s/%s.pvd failed: %s", o->dir, o->prefix,
-                                       rc == FLOE_ENOMEM ? "out of memory" : strerror(errno));
-    return FLOE_OK;
+    return floe_fw_series_commit(&o->ser, w, &r, time, step);
 }
 
 static int ow_observe(floe_observer *b, floe_world *w) {
     outline_writer *o = (outline_writer *)b;
-    if (o->observed && o->last_step == floe_world_step_count(w)) return FLOE_OK;
-    return ow_write(o, w);
+    return floe_fw_series_due(&o->ser, floe_world_step_count(w)) ? ow_write(o, w) : FLOE_OK;
 }
 
 static int ow_end(floe_observer *b, floe_world *w) {
     outline_writer *o = (outline_writer *)b;
-    if (!o->observed || o->last_step != floe_world_step_count(w)) return ow_write(o, w);
-    return FLOE_OK;
+    return floe_fw_series_due(&o->ser, floe_world_step_count(w)) ? ow_write(o, w) : FLOE_OK;
 }
 
 static void ow_destroy(floe_observer *b) {
     outline_writer *o = (outline_writer *)b;
-    free(o->dir);
-    free(o->prefix);
-    free(o->times);
+    floe_fw_series_free(&o->ser);
     free(o->id);
     free(o->body);
     free(o->material);
@@ -461,12 +426,6 @@ static void ow_destroy(floe_observer *b) {
 static const floe_observer_class outline_writer_class = {
     1, "outline_writer", NULL, ow_observe, ow_end, ow_destroy, 0};
 
-static char *dup_str(const char *s) {
-    char *d = malloc(strlen(s) + 1);
-    if (d) strcpy(d, s);
-    return d;
-}
-
 floe_observer *floe_outline_writer_create(const char *dir, const char *prefix, int dim, int segments, int ascii,
                                           char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';
@@ -485,24 +444,20 @@ floe_observer *floe_outline_writer_create(const char *dir, const char *prefix, i
         return NULL;
     }
     outline_writer *o = calloc(1, sizeof *o);
-    if (o) {
-        o->dir = dup_str(dir);
-        o->prefix = dup_str(prefix);
-    }
-    if (!o || !o->dir || !o->prefix) {
+    if (!o || floe_fw_series_init(&o->ser, "outline writer", dir, prefix)) {
         if (err && errlen) snprintf(err, errlen, "outline writer: out of memory");
         if (o) ow_destroy(&o->base);
         return NULL;
     }
     o->segments = segments;
     o->ascii = ascii != 0;
-    size_t L = strlen(o->dir); /* strip trailing slashes (keep "/") */
-    while (L > 1 && o->dir[L - 1] == '/') o->dir[--L] = '\0';
+    size_t L = strlen(o->ser.dir); /* strip trailing slashes (keep "/") */
+    while (L > 1 && o->ser.dir[L - 1] == '/') o->ser.dir[--L] = '\0';
     /* an empty collection now: checks that the directory is writable */
-    int rc = floe_fw_write_pvd(o->dir, o->prefix, o->times, 0);
+    int rc = floe_fw_write_pvd(o->ser.dir, o->ser.prefix, NULL, 0);
     if (rc != FLOE_OK) {
         if (err && errlen)
-            snprintf(err, errlen, "outline writer: cannot write %s/%s.pvd: %s", o->dir, o->prefix,
+            snprintf(err, errlen, "outline writer: cannot write %s/%s.pvd: %s", o->ser.dir, o->ser.prefix,
                      rc == FLOE_ENOMEM ? "out of memory" : strerror(errno));
         ow_destroy(&o->base);
         return NULL;

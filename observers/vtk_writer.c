@@ -40,13 +40,8 @@
 
 typedef struct vtk_writer {
     floe_observer base;
-    char *dir, *prefix;
+    floe_fw_series ser; /* DIR/PREFIX_NNNNNN.vtu, DIR/PREFIX.pvd */
     int ascii;
-    int frames;
-    double *times;
-    int times_cap;
-    long last_step;
-    int observed;
     int *idx;
     int idx_cap;
     unsigned char *buf;
@@ -203,12 +198,6 @@ static int fill_finite(const vtk_writer *v, floe_world *w, int k, int m) {
     return a >= 0 ? non_finite_error(w, v, k, a) : FLOE_OK;
 }
 
-/* the collection, through a temporary file renamed into place: at every instant the .pvd
- * on disk is complete and lists only frames whose .vtu is complete */
-static int write_pvd(const vtk_writer *v) {
-    return floe_fw_write_pvd(v->dir, v->prefix, v->times, v->frames);
-}
-
 static int vw_write(vtk_writer *v, floe_world *w) {
     floe_particles_view view;
     const floe_particles_view *p = &view;
@@ -233,13 +222,6 @@ static int vw_write(vtk_writer *v, floe_world *w) {
         v->buf = nb;
         v->buf_cap = need;
     }
-    if (v->frames == v->times_cap) {
-        int nc = v->times_cap ? 2 * v->times_cap : 64;
-        double *nt = realloc(v->times, (size_t)nc * sizeof *nt);
-        if (!nt) return floe_world_report_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
-        v->times = nt;
-        v->times_cap = nc;
-    }
 
     /* the state arrays are checked before a file is opened (the derived PD arrays as they
      * are computed) */
@@ -249,16 +231,10 @@ static int vw_write(vtk_writer *v, floe_world *w) {
     }
 
     int ascii = v->ascii || m == 0;
-    /* the frame goes to PREFIX_NNNNNN.vtu.tmp, renamed into place when complete */
-    char *path = floe_fw_series_path(v->dir, v->prefix, v->frames, ".vtu");
-    if (!path) return floe_world_report_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
+    /* the frame goes to PREFIX_NNNNNN.vtu.tmp, renamed into place when complete; the .pvd is
+     * rewritten after it, so that at every instant it lists only complete frames */
     floe_fw_replace r;
-    int rc = floe_fw_replace_begin(&r, path);
-    if (rc != FLOE_OK) {
-        rc = floe_world_report_error(w, rc, "vtk writer: cannot open %s.tmp: %s", path, strerror(errno));
-        free(path);
-        return rc;
-    }
+    FLOE_TRY(floe_fw_series_begin(&v->ser, w, &r));
     FILE *f = r.f;
 
     floe_fw_vtu_begin(f, time, step);
@@ -277,8 +253,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
             fputs(" format=\"ascii\">\n", f);
             int bad = fill_finite(v, w, k, m);
             if (bad != FLOE_OK) {
-                floe_fw_replace_abandon(&r);
-                free(path);
+                floe_fw_series_abandon(&v->ser, &r);
                 return bad;
             }
             floe_fw_vtk_ascii_values(f, a->type, a->ncomp, m, v->buf);
@@ -297,8 +272,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
             uint64_t nbytes = (uint64_t)m * (uint64_t)a->ncomp * floe_fw_vtk_type_size(a->type);
             int bad = fill_finite(v, w, k, m);
             if (bad != FLOE_OK) {
-                floe_fw_replace_abandon(&r);
-                free(path);
+                floe_fw_series_abandon(&v->ser, &r);
                 return bad;
             }
             fwrite(&nbytes, sizeof nbytes, 1, f);
@@ -307,39 +281,22 @@ static int vw_write(vtk_writer *v, floe_world *w) {
         fputs("\n  </AppendedData>\n", f);
     }
     fputs("</VTKFile>\n", f);
-    rc = floe_fw_replace_commit(&r);
-    if (rc != FLOE_OK)
-        rc = floe_world_report_error(w, rc, "vtk writer: writing %s failed: %s", path, strerror(errno));
-    free(path);
-    if (rc != FLOE_OK) return rc;
-
-    v->times[v->frames++] = time;
-    v->last_step = step;
-    v->observed = 1;
-    rc = write_pvd(v);
-    if (rc != FLOE_OK)
-        return floe_world_report_error(w, rc, "vtk writer: writing %s/%s.pvd failed: %s", v->dir, v->prefix,
-                                rc == FLOE_ENOMEM ? "out of memory" : strerror(errno));
-    return FLOE_OK;
+    return floe_fw_series_commit(&v->ser, w, &r, time, step);
 }
 
 static int vw_observe(floe_observer *o, floe_world *w) {
     vtk_writer *v = (vtk_writer *)o;
-    if (v->observed && v->last_step == floe_world_step_count(w)) return FLOE_OK;
-    return vw_write(v, w);
+    return floe_fw_series_due(&v->ser, floe_world_step_count(w)) ? vw_write(v, w) : FLOE_OK;
 }
 
 static int vw_end(floe_observer *o, floe_world *w) {
     vtk_writer *v = (vtk_writer *)o;
-    if (!v->observed || v->last_step != floe_world_step_count(w)) return vw_write(v, w);
-    return FLOE_OK;
+    return floe_fw_series_due(&v->ser, floe_world_step_count(w)) ? vw_write(v, w) : FLOE_OK;
 }
 
 static void vw_destroy(floe_observer *o) {
     vtk_writer *v = (vtk_writer *)o;
-    free(v->dir);
-    free(v->prefix);
-    free(v->times);
+    floe_fw_series_free(&v->ser);
     free(v->idx);
     free(v->buf);
     free(v);
@@ -354,34 +311,24 @@ int floe_vtk_writer_set_ascii(floe_observer *o, int ascii) {
     return FLOE_OK;
 }
 
-static char *dup_str(const char *s) {
-    char *d = malloc(strlen(s) + 1);
-    if (d) strcpy(d, s);
-    return d;
-}
-
 floe_observer *floe_vtk_writer_create(const char *dir, const char *prefix, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';
     if (!dir || !*dir) dir = ".";
     if (!prefix || !*prefix) prefix = "particles";
     vtk_writer *v = calloc(1, sizeof *v);
-    if (v) {
-        v->dir = dup_str(dir);
-        v->prefix = dup_str(prefix);
-    }
-    if (!v || !v->dir || !v->prefix) {
+    if (!v || floe_fw_series_init(&v->ser, "vtk writer", dir, prefix)) {
         if (err && errlen) snprintf(err, errlen, "vtk writer: out of memory");
         if (v) vw_destroy(&v->base);
         return NULL;
     }
     /* strip trailing slashes (keep "/") */
-    size_t L = strlen(v->dir);
-    while (L > 1 && v->dir[L - 1] == '/') v->dir[--L] = '\0';
+    size_t L = strlen(v->ser.dir);
+    while (L > 1 && v->ser.dir[L - 1] == '/') v->ser.dir[--L] = '\0';
     /* an empty collection now: checks that the directory is writable */
-    int rc = write_pvd(v);
+    int rc = floe_fw_write_pvd(v->ser.dir, v->ser.prefix, NULL, 0);
     if (rc != FLOE_OK) {
         if (err && errlen)
-            snprintf(err, errlen, "vtk writer: cannot write %s/%s.pvd: %s", v->dir, v->prefix,
+            snprintf(err, errlen, "vtk writer: cannot write %s/%s.pvd: %s", v->ser.dir, v->ser.prefix,
                      rc == FLOE_ENOMEM ? "out of memory" : strerror(errno));
         vw_destroy(&v->base);
         return NULL;

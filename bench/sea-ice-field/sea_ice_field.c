@@ -5,7 +5,8 @@
  *   forcing   + ocean drag (a uniform current), wind drag (a vortex, pushing the floes
  *             together) and Coriolis with the geostrophic tilt;
  *   forcing10 the same with the drags integrated every 10th step (SubZero's coupling);
- *   contacts  forcing + Hopkins' ridging law between floes (detection: the exact polygon LP).
+ *   contacts  forcing + Hopkins' ridging law between floes (detection: the polygons' overlap);
+ *   contacts10 the same with the drags every 10th step (SubZero's coupling).
  * Prints floe-steps/s per configuration, ns per floe-step of forcing and of contacts, the
  * contacts and pair evaluations per step, and the heap bytes per floe (glibc mallinfo2:
  * everything the world holds, the floes' own polygons and the drag's quadrature included).
@@ -25,7 +26,8 @@ static double now(void) {
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-static const char *const law_of[] = {"none", "none", "none", "hopkins, young: 1e7, thickness_max: 1.5"};
+static const char *const law_of[] = {"none", "none", "none", "hopkins, young: 1e7, thickness_max: 1.5",
+                                     "hopkins, young: 1e7, thickness_max: 1.5"};
 
 static int run(int cfg, int n, long steps, long warm, double *rate, double *contacts, double *evals, double *bytes) {
     /* floes of about 5 km: a square region of side 5 km x sqrt(n); a convergent vortex and
@@ -33,7 +35,7 @@ static int run(int cfg, int n, long steps, long warm, double *rate, double *cont
     const double L = 5000.0 * sqrt((double)n);
     char scene[4096], err[1024];
     char forces[1024] = "";
-    const int every = cfg == 2 ? 10 : 1;
+    const int every = cfg == 2 || cfg == 4 ? 10 : 1;
     if (cfg >= 1)
         snprintf(forces, sizeof forces,
                  "forces:\n"
@@ -87,10 +89,10 @@ int main(int argc, char **argv) {
     long steps = argc > 2 ? atol(argv[2]) : 500, warm = argc > 3 ? atol(argv[3]) : 200;
     char err[256];
     floe_register_builtins(err, sizeof err);
-    static const char *const name[] = {"move", "forcing", "forcing10", "contacts"};
-    double r[4], c[4], e[4], b[4];
+    static const char *const name[] = {"move", "forcing", "forcing10", "contacts", "contacts10"};
+    double r[5], c[5], e[5], b[5];
     const char *only = argc > 4 ? argv[4] : NULL;
-    for (int k = 0; k < 4; k++) {
+    for (int k = 0; k < 5; k++) {
         if (only && strcmp(only, name[k])) {
             r[k] = 1; c[k] = e[k] = b[k] = 0;
             continue;
