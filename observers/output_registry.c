@@ -117,6 +117,20 @@ static floe_observer *grid_create(const void *params, const floe_output_ctx *ctx
                                 errlen);
 }
 
+/* fracture_events: the breaks of beam bonds (fracture_events.c) */
+typedef struct fracture_params {
+    floe_params_head head;
+    char file[FLOE_PARAM_STRING_MAX];
+} fracture_params;
+static const floe_param fracture_schema[] = {
+    {.key = "file", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "fracture_events.csv",
+     .doc = "CSV file in the output directory", .offset = offsetof(fracture_params, file)}};
+
+static floe_observer *fracture_create(const void *params, const floe_output_ctx *ctx, char *err, size_t errlen) {
+    (void)params;
+    return floe_fracture_events_create(ctx->path, err, errlen);
+}
+
 #define OUT(n, t, d, src, sch) {.kind = FLOE_KIND_OBSERVER, .name = n, .title = t, .doc = d, .source = src, \
     .params = sch, .nparams = COUNT(sch), .params_size = sizeof(floe_params_head), .create = (floe_fn)loader_builds, \
     .flags = FLOE_ENTRY_LOADER_PARSES}
@@ -154,6 +168,12 @@ static const floe_registry_entry builtin[] = {
             "mean ice velocity and thickness over the ice; a VTK series of quads (.vtu, .pvd) for ParaView.",
      .source = "docs/sea-ice.md, \"Outputs\"", .params = grid_schema, .nparams = COUNT(grid_schema),
      .params_size = sizeof(grid_params), .create = (floe_fn)grid_create},
+    {.kind = FLOE_KIND_OBSERVER, .name = "fracture_events", .title = "fracture events",
+     .doc = "Beam bonds: one CSV row per bond break (t, step, i, j, mode tension | shear | compression, the "
+            "midpoint x y z of the centres, the stress that broke it and its strength), each break once, written "
+            "at the first observation after it.",
+     .source = "docs/sea-ice.md, \"Outputs\"", .params = fracture_schema, .nparams = COUNT(fracture_schema),
+     .params_size = sizeof(fracture_params), .create = (floe_fn)fracture_create},
 };
 
 int floe_register_builtin_outputs(char *err, size_t errlen) {
