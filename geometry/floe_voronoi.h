@@ -10,7 +10,13 @@
  *
  * Lloyd relaxation (Lloyd 1982, Du, Faber & Gunzburger 1999) moves each seed to the
  * centroid of its cell and tessellates again; it lowers the quantization energy
- * sum_k int_cell_k |x - s_k|^2 dA at every iteration and evens out the cell areas. */
+ * sum_k int_cell_k |x - s_k|^2 dA at every iteration and evens out the cell areas.
+ *
+ * Power (Laguerre) tessellations give each seed a weight w_k: cell k holds the points of
+ * least power distance |x - s_k|^2 - w_k (Aurenhammer 1987). The bisectors move, a cell may
+ * not hold its seed, and a cell may be empty. With weights chosen by a damped Newton method
+ * (floe_voronoi_areas) the cells get prescribed areas: fields of floes of a given size
+ * distribution (docs/sea-ice.md, "Floe size distributions"). */
 #ifndef FLOE_VORONOI_H
 #define FLOE_VORONOI_H
 
@@ -22,7 +28,9 @@
  * diagonal, or a turn of less than 1e-12 rad, are removed (the corners are computed
  * relative to the seed, then offset and rounded). seed (2n) are the seeds of these
  * cells (after Lloyd relaxation, the relaxed ones), area (n) and centroid (2n) those of the
- * polygons. All arrays are owned by the struct: floe_voronoi_free. */
+ * polygons. In a power tessellation (weight not NULL: the seeds' weights, n) a cell may be
+ * empty (no corners, area 0, centroid at its seed) and need not hold its seed. All arrays
+ * are owned by the struct: floe_voronoi_free. */
 typedef struct floe_voronoi {
     int n;            /* number of cells (= seeds) */
     double *xy;       /* 2 start[n] corner coordinates */
@@ -30,6 +38,7 @@ typedef struct floe_voronoi {
     double *seed;     /* 2n */
     double *area;     /* n */
     double *centroid; /* 2n */
+    double *weight;   /* n, power tessellations only (NULL otherwise) */
 } floe_voronoi;
 
 /* Voronoi tessellation of the rectangle [lo, hi] for the n seeds seeds[2k], seeds[2k+1]
@@ -42,6 +51,25 @@ typedef struct floe_voronoi {
  * less than 3 corners (seeds nearly coincident); FLOE_ENOMEM. err may be NULL. */
 int floe_voronoi_rect(const double lo[2], const double hi[2], const double *seeds, int n, int lloyd_iterations,
                       floe_voronoi *out, char *err, size_t errlen);
+
+/* Power tessellation of the rectangle [lo, hi] for the n seeds with the weights
+ * weights[k] (m^2; equal weights give the Voronoi tessellation): cell k is the part of the
+ * rectangle where |x - s_k|^2 - w_k is least. Cells may be empty. Errors as
+ * floe_voronoi_rect, and non-finite or NULL weights. */
+int floe_voronoi_power_rect(const double lo[2], const double hi[2], const double *seeds, const double *weights, int n,
+                            floe_voronoi *out, char *err, size_t errlen);
+
+/* A power tessellation of the rectangle [lo, hi] whose cell k has the area areas[k] (the
+ * areas are scaled to sum to the rectangle's area) to the relative tolerance tol, starting
+ * from the n seeds; then lloyd_iterations times the seeds are moved to their cells'
+ * centroids and the weights solved again (capacity-constrained centroidal power cells:
+ * rounder cells). The weights come from a damped Newton method (Kitagawa, Merigot &
+ * Thibert 2019) started from equal weights, each step a conjugate-gradient solve on the
+ * cells' adjacency; out->weight holds them. Errors (FLOE_EINVAL with a message): those of
+ * floe_voronoi_rect, an area not positive and finite, tol not in (0, 0.5], a Newton
+ * method that does not converge in 200 steps; FLOE_ENOMEM. */
+int floe_voronoi_areas(const double lo[2], const double hi[2], const double *seeds, const double *areas, int n,
+                       int lloyd_iterations, double tol, floe_voronoi *out, char *err, size_t errlen);
 
 /* Free the arrays of a tessellation and zero it (a zeroed struct is fine). */
 void floe_voronoi_free(floe_voronoi *v);

@@ -43,6 +43,15 @@ floe_observer *floe_sizes_create(const char *path, int dim, char *err, size_t er
  * 2D only (NULL with a message). */
 floe_observer *floe_gate_flux_create(const char *path, int dim, const double a[2], const double b[2], char *err,
                                      size_t errlen);
+/* The breaks of beam bonds (fracture_events.c): one CSV row per bond break, written at the
+ * first observation after it (t, step, i, j, mode, midpoint, stress, strength). */
+floe_observer *floe_fracture_events_create(const char *path, char *err, size_t errlen);
+/* The ice load on fixed and kinematic bodies (coast_load.c): per observation and body the
+ * contact force, the number of contacts, the length in contact (or `length` when > 0) and
+ * the force per length; body (a particle id) and group (a body entry) choose them (-1: any).
+ * 2D only (NULL with a message). */
+floe_observer *floe_coast_load_create(const char *path, int dim, int body, int group, double length, char *err,
+                                      size_t errlen);
 /* Concentration, mean velocity and thickness of the ice per cell of an nx x ny grid over
  * [lo, hi], sampled at samples^2 points per cell (ice_grid.c): a VTK series DIR/PREFIX_*.vtu
  * and DIR/PREFIX.pvd; 2D only (NULL with a message). */

@@ -117,6 +117,44 @@ static floe_observer *grid_create(const void *params, const floe_output_ctx *ctx
                                 errlen);
 }
 
+/* fracture_events: the breaks of beam bonds (fracture_events.c) */
+typedef struct fracture_params {
+    floe_params_head head;
+    char file[FLOE_PARAM_STRING_MAX];
+} fracture_params;
+static const floe_param fracture_schema[] = {
+    {.key = "file", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "fracture_events.csv",
+     .doc = "CSV file in the output directory", .offset = offsetof(fracture_params, file)}};
+
+static floe_observer *fracture_create(const void *params, const floe_output_ctx *ctx, char *err, size_t errlen) {
+    (void)params;
+    return floe_fracture_events_create(ctx->path, err, errlen);
+}
+
+/* coast_load: the ice load on coasts (coast_load.c) */
+typedef struct coast_params {
+    floe_params_head head;
+    char file[FLOE_PARAM_STRING_MAX];
+    int body, group;
+    double length;
+} coast_params;
+static const floe_param coast_schema[] = {
+    {.key = "file", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "coast_load.csv",
+     .doc = "CSV file in the output directory", .offset = offsetof(coast_params, file)},
+    {.key = "body", .type = FLOE_PARAM_INT, .unit = "", .min = -1, .max = 2e9, .def = -1,
+     .doc = "the one body (particle id) reported; -1: every fixed or kinematic body", .offset = offsetof(coast_params, body)},
+    {.key = "group", .type = FLOE_PARAM_INT, .unit = "", .min = -1, .max = 2e9, .def = -1,
+     .doc = "only the fixed or kinematic bodies of this body entry (bodies[group]); -1: any",
+     .offset = offsetof(coast_params, group)},
+    {.key = "length", .type = FLOE_PARAM_REAL, .unit = "m", .min = 0, .max = INFINITY, .def = 0,
+     .doc = "divide the force by this length; 0: by the length in contact (the contact patches' lengths)",
+     .offset = offsetof(coast_params, length)}};
+
+static floe_observer *coast_create(const void *params, const floe_output_ctx *ctx, char *err, size_t errlen) {
+    const coast_params *p = params;
+    return floe_coast_load_create(ctx->path, ctx->dim, p->body, p->group, p->length, err, errlen);
+}
+
 #define OUT(n, t, d, src, sch) {.kind = FLOE_KIND_OBSERVER, .name = n, .title = t, .doc = d, .source = src, \
     .params = sch, .nparams = COUNT(sch), .params_size = sizeof(floe_params_head), .create = (floe_fn)loader_builds, \
     .flags = FLOE_ENTRY_LOADER_PARSES}
@@ -154,6 +192,18 @@ static const floe_registry_entry builtin[] = {
             "mean ice velocity and thickness over the ice; a VTK series of quads (.vtu, .pvd) for ParaView.",
      .source = "docs/sea-ice.md, \"Outputs\"", .params = grid_schema, .nparams = COUNT(grid_schema),
      .params_size = sizeof(grid_params), .create = (floe_fn)grid_create},
+    {.kind = FLOE_KIND_OBSERVER, .name = "fracture_events", .title = "fracture events",
+     .doc = "Beam bonds: one CSV row per bond break (t, step, i, j, mode tension | shear | compression, the "
+            "midpoint x y z of the centres, the stress that broke it and its strength), each break once, written "
+            "at the first observation after it.",
+     .source = "docs/sea-ice.md, \"Outputs\"", .params = fracture_schema, .nparams = COUNT(fracture_schema),
+     .params_size = sizeof(fracture_params), .create = (floe_fn)fracture_create},
+    {.kind = FLOE_KIND_OBSERVER, .name = "coast_load", .title = "ice load on coasts",
+     .doc = "2D sea ice: per fixed or kinematic body (a coast, an island) and observation, the contact force on it "
+            "(fx, fy, |F|), the number of contacts, the length in contact (polygon pairs: A^2/(2I) of each overlap; "
+            "others: the chord at the contact's depth) or the length given, and the force per length (N/m).",
+     .source = "docs/sea-ice.md, \"Outputs\"", .params = coast_schema, .nparams = COUNT(coast_schema),
+     .params_size = sizeof(coast_params), .create = (floe_fn)coast_create},
 };
 
 int floe_register_builtin_outputs(char *err, size_t errlen) {

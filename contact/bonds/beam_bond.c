@@ -28,6 +28,8 @@ typedef struct beam_bond {
     double fold[9];          /* last force on i, torques on i and j (energy ledger) */
     double energy;           /* last stored energy */
     double t_broken;
+    double s_broken, lim_broken; /* the stress of its mode that broke it and that strength */
+    double x_broken[3];          /* the midpoint of the centres at the break */
     int broken;
 } beam_bond;
 
@@ -309,6 +311,8 @@ int floe_beam_set_push(floe_beam_set *s, const floe_particles *p, int dim, int i
     b->mode = 0;
     b->sigc = 0;
     b->t_broken = -1;
+    b->s_broken = b->lim_broken = 0;
+    memset(b->x_broken, 0, sizeof b->x_broken);
     return s->n++;
 }
 
@@ -342,6 +346,9 @@ int floe_beam_set_info(const floe_beam_set *s, int k, floe_beam_bond_info *o) {
     o->sigma_c_lim = b->sigc_lim;
     o->mode = b->mode;
     o->section = b->s;
+    o->stress_broken = b->s_broken;
+    o->strength_broken = b->lim_broken;
+    memcpy(o->x_broken, b->x_broken, sizeof o->x_broken);
     return FLOE_OK;
 }
 
@@ -458,6 +465,9 @@ int floe_beam_set_forces(floe_beam_set *s, const floe_step_ctx *ctx, double *ela
         const int mode = sigma > b->sig_lim ? 1 : tau > tau_lim ? 2 : sigc > b->sigc_lim ? 3 : 0;
         if (stepping && mode) {
             b->mode = mode;
+            b->s_broken = mode == 1 ? sigma : mode == 2 ? tau : sigc;
+            b->lim_broken = mode == 1 ? b->sig_lim : mode == 2 ? tau_lim : b->sigc_lim;
+            for (int a = 0; a < 3; a++) b->x_broken[a] = 0.5 * (xi[a] + xj[a]);
             b->sigc = 0;
             b->broken = 1;
             b->t_broken = ctx->time;

@@ -117,6 +117,11 @@ typedef struct floe_beam_bond_info {
     floe_beam_section section;
     double sigma_c, sigma_c_lim; /* compressive fibre stress (last evaluation) and its strength, Pa */
     int mode;                /* how it broke: 0 intact, 1 tension, 2 shear (Mohr-Coulomb), 3 compression */
+    /* the break (0 while intact): the stress of its mode that passed the strength (sigma,
+     * tau or sigma_c) and that strength (in shear with the Mohr-Coulomb term), Pa, at the
+     * evaluation that broke it (time t_broken); the midpoint of the two centres then, m */
+    double stress_broken, strength_broken;
+    double x_broken[3];
 } floe_beam_bond_info;
 
 #endif
