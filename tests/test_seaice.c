@@ -28,7 +28,10 @@
  *    ledger closing);
  *  - bonded cells: a beam bond breaks in tension, shear, compression and shear under
  *    compression (Mohr-Coulomb, friction angle 45 deg) at the step where that stress first
- *    passes its strength (the last stress before within 1 % below it);
+ *    passes its strength (the last stress before within 1 % below it); under the elliptical
+ *    (Hibler-type) yield the same four motions break it where its yield function, computed
+ *    here from the bond's stresses, first reaches 1 (the last value before within 2 %), in
+ *    the mode of the larger term, compression raising the shear limit;
  *  - the gate_flux output: net crossings and area of floes through a gate line, by sign;
  *  - the ice_grid output: concentration, velocity and thickness per cell of a square floe;
  *  - scenes: the providers by name with thicknesses; errors (both f and latitude, a drag in
@@ -674,6 +677,79 @@ static void bond_mode(int mode, double phi) {
     floe_world_destroy(w);
 }
 
+/* the elliptical yield (FLOE_BEAM_YIELD_ELLIPSE): sigma_t = 2e5, sigma_c = 6e5, tau_s = 3e5
+ * Pa; the same motions as bond_mode. Shear at N = 0 breaks at tau_s sqrt(1 - (s0/a)^2) =
+ * 2.598e5 Pa; after a push to N/A = -1e5 Pa at tau_s sqrt(1 - ((-1e5 - s0)/a)^2) = 2.905e5. The yield function of the bond's last stresses before
+ * the break, computed here, is in [0.98, 1); the mode is the larger term's. */
+static double ellipse_f(const floe_beam_bond_info *b, double st, double sc, double ts) {
+    const double s0 = 0.5 * (st - sc), a = 0.5 * (st + sc), y = (b->tau / ts) * (b->tau / ts);
+    const double xp = ((b->sigma - s0) / a) * ((b->sigma - s0) / a), xm = ((-b->sigma_c - s0) / a) * ((-b->sigma_c - s0) / a);
+    return (xp > xm ? xp : xm) + y;
+}
+
+static double bond_ellipse(int mode) {
+    static const char *const what[] = {"", "tension", "shear", "compression", "shear under compression"};
+    const double st = 2e5, sc = 6e5, ts = 3e5;
+    floe_world_def d = floe_default_world_def();
+    d.dim = 2;
+    d.mass_2d_area = 1;
+    d.dt = 1e-3;
+    d.allow_unstable_dt = 1;
+    d.gravity[0] = d.gravity[1] = d.gravity[2] = 0;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material m = {"ice", RHO_I, 1e9, 0.3};
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, floe_linear_law_create(1e6, 0, 0, 0, 0));
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = floe_world_add_geometry(w, floe_sphere_create(1.0));
+    p.motion = FLOE_FIXED;
+    floe_world_add_particle(w, &p);
+    const double u = 1e-4;
+    p.x[0] = 2.0;
+    p.motion = FLOE_KINEMATIC;
+    p.v[0] = mode == 1 ? u : mode == 3 ? -u : 0;
+    p.v[1] = mode == 2 ? u : 0;
+    floe_world_add_particle(w, &p);
+    mc_motion mm = {2e-4 / u, u}; /* pushed by 0.2 mm (N/A = -1e5 Pa), then sheared */
+    if (mode == 4) floe_world_set_motion(w, 1, mc_move, &mm);
+    floe_beam_params bp = floe_default_beam_params();
+    bp.young = 1e9;
+    bp.poisson = 0.3;
+    bp.tensile_strength = st;
+    bp.compressive_strength = sc;
+    bp.shear_strength = ts;
+    bp.yield = FLOE_BEAM_YIELD_ELLIPSE;
+    /* the section of the 2 m x 1 m rectangle (A, I) but a large section modulus: bending
+     * stress small against the shear stress, so that a sideways motion breaks the bond in
+     * shear (with the rectangle's W the bending fibre, twice the shear stress, breaks it in
+     * tension first) */
+    bp.area = 2.0;
+    bp.inertia = 2.0 / 3.0;
+    bp.section_modulus = 20.0;
+    CHECK(floe_world_add_beam_bond(w, 0, 1, &bp) >= 0, "ellipse bond: %s", floe_world_last_error(w));
+    floe_beam_bond_info prev, b;
+    memset(&prev, 0, sizeof prev);
+    memset(&b, 0, sizeof b);
+    int broke = 0;
+    for (long k = 0; k < 400000 && !broke; k++) {
+        if (floe_world_step(w) != FLOE_OK) break;
+        floe_world_beam_bond(w, 0, &b);
+        if (b.broken) broke = 1;
+        else prev = b;
+    }
+    const int want = mode == 4 ? 2 : mode;
+    CHECK(broke && b.mode == want, "ellipse, %s: broke in mode %d (got %d)", what[mode], want, b.mode);
+    const double F = ellipse_f(&prev, st, sc, ts);
+    printf("  ellipse: breaks in %-24s yield function before %.5f; %.6g Pa of %.6g Pa\n", what[mode], F,
+           b.stress_broken, b.strength_broken);
+    CHECK(F < 1 && F >= 0.98, "ellipse, %s: the yield function before the break %g in [0.98, 1)", what[mode], F);
+    CHECK(b.stress_broken >= b.strength_broken && b.stress_broken <= 1.02 * b.strength_broken,
+          "ellipse, %s: the break's stress %g just past the envelope %g", what[mode], b.stress_broken,
+          b.strength_broken);
+    floe_world_destroy(w);
+    return b.strength_broken;
+}
+
 /* the gate_flux output: two floes moving south and one north across a gate from (0, 0) to
  * (10 km, 0) (its right side is south), one floe passing beside it: 2 - 1 = 1 net crossing
  * and the net area of the southbound ones minus the northbound one */
@@ -817,6 +893,18 @@ int main(void) {
     test_hopkins();
     test_hopkins_polygons();
     for (int mode = 1; mode <= 4; mode++) bond_mode(mode, mode == 4 ? 45.0 : 0.0);
+    {
+        double lim[5] = {0};
+        for (int mode = 1; mode <= 4; mode++) lim[mode] = bond_ellipse(mode);
+        /* pure pull: the tensile strength; push: the compressive one (bending is nil) */
+        CHECK_NEAR(lim[1], 2e5, 1e-6, "ellipse: a pull breaks at sigma_t");
+        CHECK_NEAR(lim[3], 6e5, 1e-6, "ellipse: a push breaks at sigma_c");
+        CHECK(lim[4] > lim[2], "ellipse: compression raises the shear limit (%g > %g)", lim[4], lim[2]);
+        /* near the envelope's values at N = 0 and N/A = -1e5 Pa; the bending fibre (1/15 of tau
+         * here) moves them by a few per cent */
+        CHECK_NEAR(lim[2], 3e5 * sqrt(0.75), 5e-2, "ellipse: shear at N = 0");
+        CHECK_NEAR(lim[4], 3e5 * sqrt(1 - 0.0625), 5e-2, "ellipse: shear after a push to -1e5 Pa");
+    }
     test_gate_flux();
     test_ice_grid();
     return check_summary("test_seaice");

@@ -23,6 +23,7 @@ typedef struct beam_bond {
     double damp;             /* 2 xi / omega_a (s), cached at prepare */
     double sig_lim, tau_lim;
     double sigc_lim, tan_phi; /* compressive strength (Pa), Mohr-Coulomb slope */
+    int ellipse;              /* the elliptical yield (FLOE_BEAM_YIELD_ELLIPSE) */
     double sigma, tau, sigc; /* last stresses: tensile and compressive fibre, shear */
     int mode;                /* 0 intact, 1 tension, 2 shear, 3 compression */
     double fold[9];          /* last force on i, torques on i and j (energy ledger) */
@@ -42,6 +43,30 @@ struct floe_beam_set {
     unsigned long long rng_seed;
     int rng_set;
 };
+
+/* ---- breakage by the elliptical yield (floe_beam.h, FLOE_BEAM_YIELD_ELLIPSE) ---- */
+
+/* the fibres of normal stress sp (tension side, N/A + bend) and sm (N/A - bend) under the
+ * shear tau: 0 inside the ellipse, else the mode (1 tension, 2 shear, 3 compression) and the
+ * stress of that mode (compression as a magnitude) with the envelope's value there */
+static int ellipse_mode(const beam_bond *b, double sp, double sm, double tau, double *stress, double *strength) {
+    const double st = b->sig_lim, sc = b->sigc_lim, ts = b->tau_lim;
+    const double s0 = 0.5 * (st - sc), a = 0.5 * (st + sc);
+    const double y = ts > 0 ? (tau / ts) * (tau / ts) : (tau != 0 ? INFINITY : 0);
+    const double xp = a > 0 ? ((sp - s0) / a) * ((sp - s0) / a) : INFINITY;
+    const double xm = a > 0 ? ((sm - s0) / a) * ((sm - s0) / a) : INFINITY;
+    const double s = xp >= xm ? sp : sm, x = xp >= xm ? xp : xm;
+    if (!(x + y >= 1)) return 0;
+    if (x >= y) {
+        const double r = a * sqrt(fmax(0.0, 1 - y));
+        *stress = s > s0 ? s : -s;
+        *strength = s > s0 ? s0 + r : r - s0;
+        return s > s0 ? 1 : 3;
+    }
+    *stress = tau;
+    *strength = ts * sqrt(fmax(0.0, 1 - x));
+    return 2;
+}
 
 /* ---- section, local stiffness, stresses ---- */
 
@@ -169,6 +194,14 @@ int floe_beam_check_params(const floe_beam_params *par, char *err, size_t errlen
         bad = "compressive_strength and compressive_sd must be >= 0";
     else if (!(par->friction_angle >= 0 && par->friction_angle < 90)) bad = "friction_angle must be in [0, 90) degrees";
     else if (!(par->max_distance >= 0) || !isfinite(par->max_distance)) bad = "max_distance must be >= 0";
+    else if (par->yield != FLOE_BEAM_YIELD_LIMITS && par->yield != FLOE_BEAM_YIELD_ELLIPSE)
+        bad = "yield must be FLOE_BEAM_YIELD_LIMITS or FLOE_BEAM_YIELD_ELLIPSE";
+    else if (par->yield == FLOE_BEAM_YIELD_ELLIPSE &&
+             !(par->tensile_strength > 0 && par->compressive_strength > 0 && par->shear_strength > 0))
+        bad = "the elliptical yield needs tensile_strength, compressive_strength and shear_strength > 0";
+    else if (par->yield == FLOE_BEAM_YIELD_ELLIPSE && par->friction_angle != 0)
+        bad = "friction_angle is for the Mohr-Coulomb limits, not the elliptical yield (its compression side "
+              "already strengthens the bond in shear)";
     if (bad) {
         if (err && errlen) snprintf(err, errlen, "beam bonds: %s", bad);
         return FLOE_EINVAL;
@@ -308,6 +341,7 @@ int floe_beam_set_push(floe_beam_set *s, const floe_particles *p, int dim, int i
     if (par->compressive_strength > 0)
         b->sigc_lim = fmax(0.0, par->compressive_strength + par->compressive_sd * floe_beam_normal(rng));
     b->tan_phi = tan(par->friction_angle * M_PI / 180);
+    b->ellipse = par->yield == FLOE_BEAM_YIELD_ELLIPSE;
     b->mode = 0;
     b->sigc = 0;
     b->t_broken = -1;
@@ -460,13 +494,21 @@ int floe_beam_set_forces(floe_beam_set *s, const floe_step_ctx *ctx, double *ela
         b->tau = tau;
         b->sigc = sigc;
         double Fi[3] = {0, 0, 0}, Ti[3] = {0, 0, 0}, Tj[3] = {0, 0, 0};
-        /* Mohr-Coulomb: axial compression raises the shear limit */
-        const double tau_lim = b->tau_lim + (N < 0 ? b->tan_phi * (-N / c->A) : 0.0);
-        const int mode = sigma > b->sig_lim ? 1 : tau > tau_lim ? 2 : sigc > b->sigc_lim ? 3 : 0;
+        double s_brk = 0, l_brk = 0;
+        int mode;
+        if (b->ellipse)
+            mode = ellipse_mode(b, sigma, -sigc, tau, &s_brk, &l_brk);
+        else {
+            /* Mohr-Coulomb: axial compression raises the shear limit */
+            const double tau_lim = b->tau_lim + (N < 0 ? b->tan_phi * (-N / c->A) : 0.0);
+            mode = sigma > b->sig_lim ? 1 : tau > tau_lim ? 2 : sigc > b->sigc_lim ? 3 : 0;
+            s_brk = mode == 1 ? sigma : mode == 2 ? tau : sigc;
+            l_brk = mode == 1 ? b->sig_lim : mode == 2 ? tau_lim : b->sigc_lim;
+        }
         if (stepping && mode) {
             b->mode = mode;
-            b->s_broken = mode == 1 ? sigma : mode == 2 ? tau : sigc;
-            b->lim_broken = mode == 1 ? b->sig_lim : mode == 2 ? tau_lim : b->sigc_lim;
+            b->s_broken = s_brk;
+            b->lim_broken = l_brk;
             for (int a = 0; a < 3; a++) b->x_broken[a] = 0.5 * (xi[a] + xj[a]);
             b->sigc = 0;
             b->broken = 1;

@@ -101,7 +101,19 @@ typedef struct floe_beam_params {
      * tau_lim + tan(friction_angle) max(0, -N/A) */
     double compressive_strength, compressive_sd; /* sigma_c, Pa (0: no compressive breakage) */
     double friction_angle;   /* degrees in [0, 90) (0: a shear limit independent of compression) */
+    /* FLOE_BEAM_YIELD_ELLIPSE instead of the three limits above: an elliptical envelope in
+     * the (normal, shear) stress plane through the tensile strength sigma_t and the
+     * compressive strength -sigma_c on the normal axis, with semi-axis tau_s (the shear
+     * strength) at its centre, as Hibler's (1979) elliptical yield curve; all three strengths
+     * must be > 0 and friction_angle 0. A fibre of normal stress s (either extreme fibre,
+     * N/A +- max|M|/W) with the shear stress tau breaks the bond when
+     *     ((s - s0) / a)^2 + (tau / tau_s)^2 >= 1,   s0 = (sigma_t - sigma_c)/2,
+     *     a = (sigma_t + sigma_c)/2,
+     * in the mode whose term is larger (tension or compression by the sign of s - s0; shear). */
+    int yield;               /* FLOE_BEAM_YIELD_LIMITS (0, the default) or FLOE_BEAM_YIELD_ELLIPSE */
 } floe_beam_params;
+#define FLOE_BEAM_YIELD_LIMITS 0
+#define FLOE_BEAM_YIELD_ELLIPSE 1
 
 /* E = 0 (must be set), nu = 0.25, Euler-Bernoulli, radius_ratio 1, thickness 1, no damping,
  * unbreakable, seed 1, all groups. */
@@ -118,8 +130,9 @@ typedef struct floe_beam_bond_info {
     double sigma_c, sigma_c_lim; /* compressive fibre stress (last evaluation) and its strength, Pa */
     int mode;                /* how it broke: 0 intact, 1 tension, 2 shear (Mohr-Coulomb), 3 compression */
     /* the break (0 while intact): the stress of its mode that passed the strength (sigma,
-     * tau or sigma_c) and that strength (in shear with the Mohr-Coulomb term), Pa, at the
-     * evaluation that broke it (time t_broken); the midpoint of the two centres then, m */
+     * tau or sigma_c) and that strength (in shear with the Mohr-Coulomb term; under the
+     * elliptical yield the envelope's value at the other stress), Pa, at the evaluation that
+     * broke it (time t_broken); the midpoint of the two centres then, m */
     double stress_broken, strength_broken;
     double x_broken[3];
 } floe_beam_bond_info;

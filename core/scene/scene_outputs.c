@@ -271,7 +271,7 @@ int sc_parse_bonds(sc *s, struct fy_node *seq, struct fy_node *key)
                                        "shear_coefficient", "area", "inertia", "polar", "section_modulus",
                                        "radius_ratio", "thickness", "damping_ratio", "tensile_strength",
                                        "tensile_sd", "shear_strength", "shear_sd", "compressive_strength",
-                                       "compressive_sd", "friction_angle", "seed", "group", NULL};
+                                       "compressive_sd", "friction_angle", "yield", "seed", "group", NULL};
     if (!seq) return FLOE_OK;
     if (sc_is_missing(seq) || !fy_node_is_sequence(seq))
         return sc_fail(s, FLOE_EPARSE, sc_is_missing(seq) ? key : seq,
@@ -307,6 +307,8 @@ int sc_parse_bonds(sc *s, struct fy_node *seq, struct fy_node *key)
         FLOE_TRY(sc_num(s, &m, "compressive_strength", 0, 0, &bp.compressive_strength));
         FLOE_TRY(sc_num(s, &m, "compressive_sd", 0, 0, &bp.compressive_sd));
         FLOE_TRY(sc_num(s, &m, "friction_angle", 0, 0, &bp.friction_angle));
+        static const char *const yields[] = {"limits", "ellipse", NULL};
+        FLOE_TRY(sc_enum(s, &m, "yield", yields, FLOE_BEAM_YIELD_LIMITS, &bp.yield));
         FLOE_TRY(sc_long(s, &m, "seed", 0, 1, &seed));
         FLOE_TRY(sc_long(s, &m, "group", 0, 0, &group));
         if (seed < 0) return sc_range(s, &m, "seed", ">= 0", (double)seed);
