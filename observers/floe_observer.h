@@ -46,6 +46,12 @@ floe_observer *floe_gate_flux_create(const char *path, int dim, const double a[2
 /* The breaks of beam bonds (fracture_events.c): one CSV row per bond break, written at the
  * first observation after it (t, step, i, j, mode, midpoint, stress, strength). */
 floe_observer *floe_fracture_events_create(const char *path, char *err, size_t errlen);
+/* The contacts (contact_writer.c): every contact at each observation as a CSV row (t, i, j,
+ * point, normal, fn, ft, force on i, depth, energy); and force chains, a VTK series of lines
+ * between the centres of contacting bounded bodies with cell data fn, ft, force, depth
+ * (DIR/PREFIX_NNNNNN.vtu, DIR/PREFIX.pvd). Both make the world record the contacts. */
+floe_observer *floe_contact_csv_create(const char *path, char *err, size_t errlen);
+floe_observer *floe_force_chains_create(const char *dir, const char *prefix, char *err, size_t errlen);
 /* The ice load on fixed and kinematic bodies (coast_load.c): per observation and body the
  * contact force, the number of contacts, the length in contact (or `length` when > 0) and
  * the force per length; body (a particle id) and group (a body entry) choose them (-1: any).

@@ -155,6 +155,33 @@ static floe_observer *coast_create(const void *params, const floe_output_ctx *ct
     return floe_coast_load_create(ctx->path, ctx->dim, p->body, p->group, p->length, err, errlen);
 }
 
+/* contacts and force_chains: the contacts (contact_writer.c) */
+typedef struct contacts_params {
+    floe_params_head head;
+    char file[FLOE_PARAM_STRING_MAX];
+} contacts_params;
+static const floe_param contacts_schema[] = {
+    {.key = "file", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "contacts.csv",
+     .doc = "CSV file in the output directory", .offset = offsetof(contacts_params, file)}};
+
+static floe_observer *contacts_create(const void *params, const floe_output_ctx *ctx, char *err, size_t errlen) {
+    (void)params;
+    return floe_contact_csv_create(ctx->path, err, errlen);
+}
+
+typedef struct chains_params {
+    floe_params_head head;
+    char prefix[FLOE_PARAM_STRING_MAX];
+} chains_params;
+static const floe_param chains_schema[] = {
+    {.key = "prefix", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "force_chains",
+     .doc = "files prefix_NNNNNN.vtu and prefix.pvd in the output directory", .offset = offsetof(chains_params, prefix)}};
+
+static floe_observer *chains_create(const void *params, const floe_output_ctx *ctx, char *err, size_t errlen) {
+    const chains_params *p = params;
+    return floe_force_chains_create(ctx->outdir, p->prefix, err, errlen);
+}
+
 #define OUT(n, t, d, src, sch) {.kind = FLOE_KIND_OBSERVER, .name = n, .title = t, .doc = d, .source = src, \
     .params = sch, .nparams = COUNT(sch), .params_size = sizeof(floe_params_head), .create = (floe_fn)loader_builds, \
     .flags = FLOE_ENTRY_LOADER_PARSES}
@@ -204,6 +231,16 @@ static const floe_registry_entry builtin[] = {
             "others: the chord at the contact's depth) or the length given, and the force per length (N/m).",
      .source = "docs/sea-ice.md, \"Outputs\"", .params = coast_schema, .nparams = COUNT(coast_schema),
      .params_size = sizeof(coast_params), .create = (floe_fn)coast_create},
+    {.kind = FLOE_KIND_OBSERVER, .name = "contacts", .title = "contact list",
+     .doc = "Every contact at each observation, one CSV row each: t, i, j, the point, the unit normal from i to j, "
+            "the normal and tangential force magnitudes, the force on i, the overlap depth and the stored energy.",
+     .source = "docs/scene-format.md", .params = contacts_schema, .nparams = COUNT(contacts_schema),
+     .params_size = sizeof(contacts_params), .create = (floe_fn)contacts_create},
+    {.kind = FLOE_KIND_OBSERVER, .name = "force_chains", .title = "force chains",
+     .doc = "A VTK series of lines (.vtu, .pvd) from centre to centre of every contact between two bounded bodies "
+            "(walls left out), with cell data fn, ft, force and depth: force chains in ParaView.",
+     .source = "docs/scene-format.md", .params = chains_schema, .nparams = COUNT(chains_schema),
+     .params_size = sizeof(chains_params), .create = (floe_fn)chains_create},
 };
 
 int floe_register_builtin_outputs(char *err, size_t errlen) {
