@@ -407,6 +407,9 @@ static void test_scene(void) {
     expect_scene_error("{type: ocean_drag, velocity: [1, 0]}", "{type: ocean_drag, field: gyre, speed: 1}",
                        "length must be > 0");
     expect_scene_error("thickness: 0.25", "thickness: -1", "thickness");
+    /* Hopkins' critical step assumes thickness_max: a thicker floe is refused, naming it */
+    expect_scene_error("model: linear, kn: 1e3, ks: 0}", "model: hopkins, thickness_max: 0.2}",
+                       "0.25 m thick, more than thickness_max = 0.2 m");
     expect_scene_error("dimension: 2\nmass_2d: area\ntime: {duration: 100, dt: 10}\ngravity: [0, 0]\n",
                        "dimension: 3\ntime: {duration: 100, dt: 10}\ngravity: [0, 0, 0]\n", "2D");
 }

@@ -104,6 +104,8 @@ typedef struct floe_law_info {
                                 get no manifold springs */
     int prefers_overlap;     /* 1: polytope pairs get the overlap fields (area*, as
                                 needs_overlap), other pairs the deepest point (area = 0) */
+    double thickness_max;    /* > 0: the critical step (stiffness()) assumes no floe of the
+                                law's materials is thicker (m); the world refuses a thicker one */
 } floe_law_info;
 
 typedef struct floe_contact_law_class {

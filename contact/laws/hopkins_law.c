@@ -149,7 +149,7 @@ static void hopkins_tangential(const floe_contact_law *law_, double r_eff, doubl
 }
 
 static void hopkins_info(const floe_contact_law *law, floe_law_info *info) {
-    (void)law;
+    info->thickness_max = ((const hopkins_law *)law)->hmax;
     info->needs_floe = 1;
     info->single_point = 1;
     info->prefers_overlap = 1;

@@ -126,6 +126,23 @@ int prepare_store(floe_world *w) {
         p->inv_mass[i] = p->motion[i] == FLOE_FREE ? 1.0 / p->mass[i] : 0;
         L_from_omega(p->q + 4 * i, p->inertia + 3 * i, p->w + 3 * i, p->L + 3 * i);
     }
+    /* laws whose critical step assumes the thickest floe (Hopkins' thickness_max): no floe of
+     * their materials may be thicker, or the step estimate would be unsafe */
+    if (p->thick)
+        for (int a = 0; a < w->nmats; a++)
+            for (int b = a; b < w->nmats; b++) {
+                const floe_contact_law *law = w->laws[a * w->nmats + b];
+                const double hmax = law ? floe_contact_law_info(law).thickness_max : 0;
+                if (!(hmax > 0)) continue;
+                for (int i = 0; i < p->n; i++)
+                    if ((p->material[i] == a || p->material[i] == b) && p->thick[i] > hmax)
+                        return floe_world_error(w, FLOE_EINVAL,
+                                                "particle %d (body %d) is %g m thick, more than thickness_max = %g m "
+                                                "of the %s law for (%s, %s), which its critical time step assumes: "
+                                                "set the law's thickness_max to the thickest floe",
+                                                i, p->group[i], p->thick[i], hmax, law->klass->name, w->mats[a].name,
+                                                w->mats[b].name);
+            }
     /* every material pair that can meet needs a law; every geometry pair a detector */
     for (int a = 0; a < w->nmats; a++)
         for (int b = a; b < w->nmats; b++) {
