@@ -9,6 +9,7 @@ pkgs=(build-essential cmake pkg-config libfyaml-dev libjson-c-dev python3 python
       g++ libcgal-dev libgmp-dev libmpfr-dev libassimp-dev libglpk-dev)
 pkgs+=(libsuitesparse-dev)   # CHOLMOD: implicit Newmark-beta (FLOE_WITH_CHOLMOD)
 pkgs+=(libnetcdf-dev)        # gridded velocity fields from NetCDF files (FLOE_WITH_NETCDF)
+pkgs+=(libshp-dev)           # floes and coastlines from ESRI shapefiles (FLOE_WITH_SHAPELIB)
 pkgs+=(clang)                # the scene fuzzer (scripts/fuzz.sh, libFuzzer)
 pkgs+=(python3-matplotlib)   # scripts/plot_fsd.py (floe size distribution PNG; its test skips without)
 if [[ "${1:-}" == "--bench" ]]; then

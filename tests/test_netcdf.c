@@ -17,7 +17,20 @@
  *      index), x not increasing, unsupported time units, x in degrees, u and v of different
  *      shapes, a grid not covering a floe (refused at prepare, naming the particle), a floe
  *      drifting out of the grid during the run (refused, with the time), file:line of the
- *      scene on load errors, grid keys without field: netcdf.
+ *      scene on load errors, grid keys without field: netcdf;
+ *  (5) grids in longitude and latitude: equirectangular (lon0 -30, lat0 75) on a non-uniform
+ *      lon/lat grid, a field linear in lon, lat and t read back at 200 scene points to 1e-12
+ *      (the expected lon, lat from x = R (lon - lon0) cos(lat0), y = R (lat - lat0) written
+ *      out here), its largest gradient per scene metre, a grid written 0..360 read at
+ *      lon0 - 30 = 330, coverage checked in lon/lat ranges (a floe past lon -20 refused by
+ *      the C API and at a scene's prepare); refused: degrees without projection (the message
+ *      names the key to add, also through a scene), metres with one, latitudes along x,
+ *      lat0 90, lat0 with polar_stereographic, lon0 without netcdf. Polar stereographic:
+ *      Snyder's (1987) worked example (International ellipsoid, 71 S, 100 W; 75 S, 150 E:
+ *      x = -1,540,033.6 m, y = -560,526.4 m) to 0.05 m, the scale 1 along lat_ts = 70 N
+ *      (WGS84, 1e-9), lon0 along -y, 1000 round trips (1e-11 degrees); a grid round the
+ *      north pole with a field linear in lon, lat, turned from (east, north) into x, y, at 300
+ *      scene points to 1e-12; coverage of the pole and of a sector; the opposite pole refused.
  * Built without FLOE_WITH_NETCDF it prints "skipped: built without FLOE_WITH_NETCDF". */
 #include "check.h"
 #include "floe.h"
@@ -48,14 +61,14 @@ static double urand(void) {
 }
 
 static char tmpdir[256];
-static char written[32][320];
+static char written[48][320];
 static int nwritten;
 
 /* the path of file `name` in the temporary directory (remembered for the clean-up) */
 static const char *tmp_path(const char *name) {
     static char p[320];
     snprintf(p, sizeof p, "%s/%s", tmpdir, name);
-    if (nwritten < 32) snprintf(written[nwritten++], sizeof written[0], "%s", p);
+    if (nwritten < 48) snprintf(written[nwritten++], sizeof written[0], "%s", p);
     return p;
 }
 
@@ -66,6 +79,8 @@ typedef struct spec {
     const double *u, *v;       /* nt ny nx values (ny nx when steady) */
     const char *time_units;    /* NULL: "seconds since 2000-01-01 00:00:00" */
     const char *x_units;       /* NULL: "m" */
+    const char *y_units;       /* NULL: "m" */
+    const char *x_name, *y_name; /* the coordinates' names (NULL: "x", "y") */
     int packed;                /* u, v stored as shorts with scale_factor and add_offset */
     double sf, ao;
     int has_fill;              /* u has _FillValue `fill` */
@@ -83,14 +98,15 @@ static int nc_ok(int st, const char *what) {
 static int write_nc(const char *path, const spec *s) {
     int nc, dx, dy, dt = -1, vx, vy, vt = -1, vu, vv;
     if (!nc_ok(nc_create(path, NC_CLOBBER | NC_NETCDF4, &nc), "nc_create")) return 0;
-    nc_def_dim(nc, "x", (size_t)s->nx, &dx);
-    nc_def_dim(nc, "y", (size_t)s->ny, &dy);
+    const char *xn = s->x_name ? s->x_name : "x", *yn = s->y_name ? s->y_name : "y";
+    nc_def_dim(nc, xn, (size_t)s->nx, &dx);
+    nc_def_dim(nc, yn, (size_t)s->ny, &dy);
     if (s->nt) nc_def_dim(nc, "time", NC_UNLIMITED, &dt);
-    nc_def_var(nc, "x", NC_DOUBLE, 1, &dx, &vx);
-    nc_def_var(nc, "y", NC_DOUBLE, 1, &dy, &vy);
-    const char *xu = s->x_units ? s->x_units : "m";
+    nc_def_var(nc, xn, NC_DOUBLE, 1, &dx, &vx);
+    nc_def_var(nc, yn, NC_DOUBLE, 1, &dy, &vy);
+    const char *xu = s->x_units ? s->x_units : "m", *yu = s->y_units ? s->y_units : "m";
     nc_put_att_text(nc, vx, "units", strlen(xu), xu);
-    nc_put_att_text(nc, vy, "units", 1, "m");
+    nc_put_att_text(nc, vy, "units", strlen(yu), yu);
     if (s->nt) {
         nc_def_var(nc, "time", NC_DOUBLE, 1, &dt, &vt);
         const char *tu = s->time_units ? s->time_units : "seconds since 2000-01-01 00:00:00";
@@ -583,6 +599,304 @@ static void test_ownership(void) {
           err);
 }
 
+/* ---- (5) grids in longitude and latitude ---- */
+#define R_EARTH 6371000.0
+#define DEGR (M_PI / 180)
+
+/* a field linear in lon, lat (degrees) and t (s) */
+static void lin_ll(double lon, double lat, double t, double u[2]) {
+    u[0] = 0.1 + 0.01 * lon - 0.02 * lat + 1e-6 * t;
+    u[1] = -0.2 + 0.015 * lon + 0.005 * lat - 2e-6 * t;
+}
+
+/* writes a (time, lat, lon) file of lin_ll on the nodes lon[nx], lat[ny], times (hours) t[nt] */
+static int write_ll(const char *path, int nx, const double *lon, int ny, const double *lat, int nt, const double *th) {
+    double *u = malloc(sizeof(double) * nx * ny * nt), *v = malloc(sizeof(double) * nx * ny * nt);
+    for (int k = 0; k < nt; k++)
+        for (int j = 0; j < ny; j++)
+            for (int i = 0; i < nx; i++) {
+                double w[2];
+                lin_ll(lon[i], lat[j], 3600 * th[k], w);
+                u[((size_t)k * ny + j) * nx + i] = w[0];
+                v[((size_t)k * ny + j) * nx + i] = w[1];
+            }
+    spec s = {.nx = nx, .ny = ny, .nt = nt, .x = lon, .y = lat, .t = th, .u = u, .v = v,
+              .time_units = "hours since 2020-01-01", .x_units = "degrees_east", .y_units = "degrees_north",
+              .x_name = "lon", .y_name = "lat"};
+    int ok = write_nc(path, &s);
+    free(u);
+    free(v);
+    return ok;
+}
+
+static floe_field_grid *load_ll(const char *path, floe_projection pj, char *err, size_t len) {
+    floe_field_grid_def d = floe_field_grid_default();
+    d.file = path;
+    d.x_var = "lon";
+    d.y_var = "lat";
+    d.projection = pj;
+    return floe_field_grid_load(&d, err, len);
+}
+
+static void test_equirectangular(void) {
+    enum { NLON = 9, NLAT = 7 };
+    double lon[NLON], lat[NLAT];
+    const double th[2] = {0, 6};
+    for (int i = 0; i < NLON; i++) lon[i] = -40 + 20 * pow(i / (NLON - 1.0), 1.3); /* non-uniform */
+    for (int j = 0; j < NLAT; j++) lat[j] = 70 + 10 * j / (NLAT - 1.0);
+    char path[320];
+    snprintf(path, sizeof path, "%s", tmp_path("lonlat.nc"));
+    if (!write_ll(path, NLON, lon, NLAT, lat, 2, th)) return;
+    char err[1024];
+    const floe_projection pj = {.kind = FLOE_PROJECTION_EQUIRECTANGULAR, .lon0 = -30, .lat0 = 75};
+    floe_field_grid *g = load_ll(path, pj, err, sizeof err);
+    CHECK(g != NULL, "a lon/lat grid loads with projection equirectangular: %s", err);
+    if (!g) return;
+    /* the scene's points: chosen ones, then random ones inside the grid (about +-250 km in x,
+     * +-550 km in y: lon -40..-20, lat 70..80 at lon0 -30, lat0 75) */
+    double pts[200][2] = {{0, 0}, {1e5, 0}, {0, -2e5}, {-2.5e5, 5e5}, {2.8e5, -5.5e5}};
+    for (int n = 5; n < 200; n++) pts[n][0] = -2.8e5 + 5.6e5 * urand(), pts[n][1] = -5.5e5 + 1.1e6 * urand();
+    double worst = 0;
+    for (int n = 0; n < 200; n++) {
+        /* x = R (lon - lon0) cos(lat0), y = R (lat - lat0), in radians */
+        const double lo = -30 + pts[n][0] / (R_EARTH * cos(75 * DEGR)) / DEGR, la = 75 + pts[n][1] / R_EARTH / DEGR;
+        const double t = 6 * 3600 * urand(), x[3] = {pts[n][0], pts[n][1], 0};
+        double ue[2], ug[3];
+        lin_ll(lo, la, t, ue);
+        floe_field_grid_eval(g, x, t, ug);
+        for (int c = 0; c < 2; c++) worst = fmax(worst, fabs(ug[c] - ue[c]) / fabs(ue[c]));
+        if (n == 1) printf("  scene (100 km, 0) is (lon, lat) = (%.12g, %.12g): u = (%.15g, %.15g)\n", lo, la, ug[0], ug[1]);
+    }
+    printf("  equirectangular lon/lat grid, 200 scene points: worst relative error %.2e\n", worst);
+    CHECK(worst <= 1e-12, "a field linear in lon, lat, t is read back exactly at the scene's points (worst %g)", worst);
+    /* the largest gradient per metre of the scene: dv/dlon = 0.015 per degree over R cos(lat0) dlon */
+    CHECK_NEAR(floe_field_grid_max_gradient(g), 0.015 / (R_EARTH * cos(75 * DEGR) * DEGR), 1e-9,
+               "max gradient (1/s): dv/dx of the lon/lat field");
+    floe_projection got = floe_field_grid_projection(g);
+    CHECK(got.kind == FLOE_PROJECTION_EQUIRECTANGULAR && got.lon0 == -30 && got.lat0 == 75, "the grid's projection");
+    /* coverage in the scene's metres: a 10 km floe at the centre, one beyond lon -20 */
+    const double in[3] = {0, 0, 0}, out[3] = {3.0e5, 0, 0};
+    CHECK(floe_field_grid_covers(g, in, 1e4, 0, err, sizeof err) == FLOE_OK, "covers the centre: %s", err);
+    int rc = floe_field_grid_covers(g, out, 1e4, 3, err, sizeof err);
+    CHECK(rc != FLOE_OK && has(err, "the grid lon in [-40, -20], lat in [70, 80] (degrees)") &&
+              has(err, "does not cover particle 3") && has(err, "its box spans lon [-19."),
+          "a floe beyond lon -20 is not covered: %s", err);
+    printf("  not covered: %s\n", err);
+    floe_field_grid_release(g);
+    /* longitudes written 0..360: the scene's lon -30 is read at 330 */
+    double lon360[NLON];
+    for (int i = 0; i < NLON; i++) lon360[i] = lon[i] + 360;
+    char p360[320];
+    snprintf(p360, sizeof p360, "%s", tmp_path("lon360.nc"));
+    if (!write_ll(p360, NLON, lon360, NLAT, lat, 2, th)) return;
+    g = load_ll(p360, pj, err, sizeof err);
+    CHECK(g != NULL, "a 0..360 grid loads: %s", err);
+    if (g) {
+        const double x[3] = {1e5, 2e5, 0};
+        const double lo = 330 + 1e5 / (R_EARTH * cos(75 * DEGR)) / DEGR, la = 75 + 2e5 / R_EARTH / DEGR;
+        double ue[2], ug[3];
+        lin_ll(lo, la, 0, ue);
+        floe_field_grid_eval(g, x, 0, ug);
+        CHECK(fabs(ug[0] - ue[0]) <= 1e-12 * fabs(ue[0]) && fabs(ug[1] - ue[1]) <= 1e-12 * fabs(ue[1]),
+              "lon0 -30 on a 310..340 grid: read at lon %g (%.17g, %.17g vs %.17g, %.17g)", lo, ug[0], ug[1], ue[0],
+              ue[1]);
+        CHECK(floe_field_grid_covers(g, x, 1e4, 0, err, sizeof err) == FLOE_OK, "and covered: %s", err);
+        floe_field_grid_release(g);
+    }
+    /* refused: degrees without a projection (the message says which key to add), metres with
+     * one, lon and lat swapped, a bad lat0 */
+    {
+        floe_projection none = {0};
+        g = load_ll(path, none, err, sizeof err);
+        CHECK(!g && has(err, "'lon' is in degrees") && has(err, "add the key projection") &&
+                  has(err, "equirectangular with lon0 and lat0"),
+              "degrees without a projection: %s", err);
+        printf("  no projection: %s\n", err);
+        floe_field_grid_release(g);
+        g = load(tmp_path("good.nc"), NULL, 1.0, err, sizeof err); /* metres: fine without */
+        floe_field_grid_release(g);
+        floe_field_grid_def d = floe_field_grid_default();
+        d.file = tmp_path("good.nc");
+        d.projection = pj;
+        g = floe_field_grid_load(&d, err, sizeof err);
+        CHECK(!g && has(err, "'x' is in metres") && has(err, "drop the key projection"), "metres with a projection: %s",
+              err);
+        floe_field_grid_release(g);
+        const double sx[2] = {70, 80}, sy[2] = {-40, -20}, su[4] = {1, 2, 3, 4};
+        spec sw = {.nx = 2, .ny = 2, .x = sx, .y = sy, .u = su, .v = su, .x_units = "degrees_north",
+                   .y_units = "degrees_east", .x_name = "lon", .y_name = "lat"};
+        char pswap[320];
+        snprintf(pswap, sizeof pswap, "%s", tmp_path("swapped.nc"));
+        write_nc(pswap, &sw);
+        g = load_ll(pswap, pj, err, sizeof err);
+        CHECK(!g && has(err, "'lon' is a latitude (units 'degrees_north'): x_var must name the longitude"),
+              "latitudes along x refused: %s", err);
+        printf("  swapped: %s\n", err);
+        floe_field_grid_release(g);
+        floe_projection bad = pj;
+        bad.lat0 = 90;
+        g = load_ll(path, bad, err, sizeof err);
+        CHECK(!g && has(err, "lat0 must be in (-90, 90)"), "lat0 90 refused: %s", err);
+        floe_field_grid_release(g);
+    }
+    /* through a scene: the keys, the coverage at prepare, the keys' checks */
+    char field[768];
+    floe_world *w;
+    snprintf(field, sizeof field, "field: netcdf, file: '%s', x_var: lon, y_var: lat, projection: equirectangular, "
+             "lon0: -30, lat0: 75", path);
+    w = load_scene(field, 0, 0, err, sizeof err);
+    CHECK(w != NULL, "a scene with projection: equirectangular loads: %s", err);
+    if (w) {
+        rc = run_steps(w, 10);
+        floe_particle_state st;
+        floe_world_get_particle(w, 0, &st);
+        double ue[2];
+        lin_ll(-30, 75, 0, ue);
+        CHECK(rc == FLOE_OK && st.v[0] * ue[0] > 0 && st.v[1] * ue[1] > 0,
+              "the floe at (lon0, lat0) drifts with the current there (%g, %g): v (%g, %g): %s", ue[0], ue[1], st.v[0],
+              st.v[1], floe_world_last_error(w));
+        floe_world_destroy(w);
+    }
+    w = load_scene(field, 2.95e5, 0, err, sizeof err);
+    rc = w ? floe_world_prepare(w) : FLOE_EINVAL;
+    const char *m = w ? floe_world_last_error(w) : err;
+    CHECK(rc != FLOE_OK && has(m, "does not cover particle 0") && has(m, "lon in [-40, -20]"),
+          "a floe east of the lon/lat grid refused at prepare: %s", m);
+    floe_world_destroy(w);
+    snprintf(field, sizeof field, "field: netcdf, file: '%s', x_var: lon, y_var: lat", path);
+    w = load_scene(field, 0, 0, err, sizeof err);
+    CHECK(!w && has(err, "t.yaml:10:") && has(err, "is in degrees") && has(err, "add the key projection"),
+          "scene: a file in degrees without projection: %s", err);
+    printf("  through the scene: %s\n", err);
+    floe_world_destroy(w);
+    snprintf(field, sizeof field, "field: netcdf, file: '%s', x_var: lon, y_var: lat, projection: polar_stereographic, "
+             "lat0: 75", path);
+    w = load_scene(field, 0, 0, err, sizeof err);
+    CHECK(!w && has(err, "lat0 is only read with projection: equirectangular (not polar_stereographic)"),
+          "lat0 with polar: %s", err);
+    floe_world_destroy(w);
+    snprintf(field, sizeof field, "field: netcdf, file: '%s', lon0: 10", path);
+    w = load_scene(field, 0, 0, err, sizeof err);
+    CHECK(!w && has(err, "lon0 is only read with a projection"), "lon0 without projection: %s", err);
+    floe_world_destroy(w);
+    w = load_scene("velocity: [0.1, 0], lon0: 3", 0, 0, err, sizeof err);
+    CHECK(!w && has(err, "lon0 is only read with field: netcdf"), "lon0 without netcdf: %s", err);
+    floe_world_destroy(w);
+}
+
+static void test_polar_stereographic(void) {
+    char err[1024];
+    /* Snyder (1987), the numerical example of the polar stereographic ellipsoid: International
+     * ellipsoid (a = 6,378,388 m, e^2 = 0.00672267: rf = 297), south pole, standard parallel
+     * 71 S, central meridian 100 W; the point 75 S, 150 E: x = -1,540,033.6 m, y = -560,526.4 m */
+    const floe_projection sn = {.kind = FLOE_PROJECTION_POLAR_STEREOGRAPHIC, .lon0 = -100, .lat_ts = -71,
+                                .a = 6378388, .rf = 297};
+    CHECK(floe_projection_check(&sn, err, sizeof err) == FLOE_OK, "Snyder's projection checks: %s", err);
+    const double ll[2] = {150, -75};
+    double xy[2], back[2];
+    floe_projection_forward(&sn, ll, xy);
+    printf("  Snyder's example: x = %.2f m, y = %.2f m (book: -1540033.6, -560526.4)\n", xy[0], xy[1]);
+    CHECK(fabs(xy[0] + 1540033.6) <= 0.05 && fabs(xy[1] + 560526.4) <= 0.05,
+          "Snyder's polar stereographic example to his 0.1 m (%.3f, %.3f)", xy[0], xy[1]);
+    floe_projection_inverse(&sn, xy, back);
+    CHECK(fabs(remainder(back[0] - 150, 360)) <= 1e-10 && fabs(back[1] + 75) <= 1e-10,
+          "and back: (%.15g, %.15g)", back[0], back[1]);
+    /* WGS84, north (EPSG:3413: lon0 -45, lat_ts 70): true scale along 70 N, round trips */
+    const floe_projection ns = {.kind = FLOE_PROJECTION_POLAR_STEREOGRAPHIC, .lon0 = -45, .lat_ts = 70};
+    {
+        const double a = 6378137, f = 1 / 298.257223563, e2 = f * (2 - f), p = 70 * DEGR;
+        const double par = a * cos(p) / sqrt(1 - e2 * sin(p) * sin(p)); /* the parallel's radius */
+        const double l1[2] = {10, 70}, l2[2] = {10 + 1e-4, 70};
+        double p1[2], p2[2];
+        floe_projection_forward(&ns, l1, p1);
+        floe_projection_forward(&ns, l2, p2);
+        const double k = hypot(p2[0] - p1[0], p2[1] - p1[1]) / (par * 1e-4 * DEGR);
+        printf("  scale factor along 70 N: %.12f\n", k);
+        CHECK(fabs(k - 1) <= 1e-9, "true scale along lat_ts (k = %.12f)", k);
+        const double pole[2] = {123, 90};
+        floe_projection_forward(&ns, pole, p1);
+        CHECK(hypot(p1[0], p1[1]) <= 1e-6, "the pole at the origin (%g, %g)", p1[0], p1[1]);
+        const double m45[2] = {-45, 80}, m45e[2] = {45, 80};
+        floe_projection_forward(&ns, m45, p1);
+        floe_projection_forward(&ns, m45e, p2);
+        CHECK(fabs(p1[0]) <= 1e-9 && p1[1] < 0 && fabs(p2[1]) <= 1e-9 && p2[0] > 0,
+              "lon0 runs down -y, 90 degrees east of it along +x: (%g, %g), (%g, %g)", p1[0], p1[1], p2[0], p2[1]);
+        double worst = 0;
+        for (int n = 0; n < 1000; n++) {
+            const double q[2] = {-180 + 360 * urand(), 30 + 60 * urand()};
+            double z[2], r[2];
+            floe_projection_forward(&ns, q, z);
+            floe_projection_inverse(&ns, z, r);
+            worst = fmax(worst, fmax(fabs(remainder(r[0] - q[0], 360)) * cos(q[1] * DEGR), fabs(r[1] - q[1])));
+        }
+        printf("  1000 round trips lon/lat -> x, y -> lon/lat: worst %.2e degrees\n", worst);
+        CHECK(worst <= 1e-11, "round trips (worst %g degrees)", worst);
+    }
+    /* a grid all round the pole, lon -180..180 every 15, lat 60..90: the field turned into x, y */
+    enum { NLON = 25, NLAT = 7 };
+    double lon[NLON], lat[NLAT];
+    const double th[1] = {0};
+    for (int i = 0; i < NLON; i++) lon[i] = -180 + 15 * i;
+    for (int j = 0; j < NLAT; j++) lat[j] = 60 + 5 * j;
+    char path[320];
+    snprintf(path, sizeof path, "%s", tmp_path("polar.nc"));
+    if (!write_ll(path, NLON, lon, NLAT, lat, 1, th)) return;
+    floe_field_grid *g = load_ll(path, ns, err, sizeof err);
+    CHECK(g != NULL, "a lon/lat grid loads with projection polar_stereographic: %s", err);
+    if (!g) return;
+    double worst = 0;
+    for (int n = 0; n < 300; n++) {
+        /* within 2,500 km of the pole (latitude above about 67 N) */
+        const double r = 2.5e6 * sqrt(urand()), th2 = 2 * M_PI * urand(), x[3] = {r * cos(th2), r * sin(th2), 0};
+        double q[2], ue[2], ug[3];
+        floe_projection_inverse(&ns, x, q);
+        const double lo = q[0] - 360 * floor((q[0] + 180) / 360); /* into the grid's [-180, 180) */
+        lin_ll(lo, q[1], 0, ue);
+        /* east at x: along the parallel, counter-clockwise about the north pole */
+        const double a = atan2(x[0], -x[1]), e[2] = {cos(a), sin(a)}, nn[2] = {-sin(a), cos(a)};
+        const double want[2] = {ue[0] * e[0] + ue[1] * nn[0], ue[0] * e[1] + ue[1] * nn[1]};
+        floe_field_grid_eval(g, x, 0, ug);
+        const double sc = hypot(want[0], want[1]);
+        worst = fmax(worst, hypot(ug[0] - want[0], ug[1] - want[1]) / sc);
+    }
+    printf("  polar stereographic lon/lat grid, 300 scene points: worst relative error %.2e\n", worst);
+    CHECK(worst <= 1e-12, "the field linear in lon, lat, turned from (east, north) into (x, y) (worst %g)", worst);
+    /* a floe over the pole: covered by a grid all round it up to 90 N */
+    const double pole[3] = {1e3, -2e3, 0};
+    CHECK(floe_field_grid_covers(g, pole, 5e4, 0, err, sizeof err) == FLOE_OK, "the pole is covered: %s", err);
+    floe_field_grid_release(g);
+    /* a sector lon -90..0, lat 60..85: a floe at lon -45, lat 75 is covered, one at lon +10 and one over the pole not */
+    double sec[7];
+    for (int i = 0; i < 7; i++) sec[i] = -90 + 15 * i;
+    const double slat[6] = {60, 65, 70, 75, 80, 85};
+    char ps[320];
+    snprintf(ps, sizeof ps, "%s", tmp_path("sector.nc"));
+    if (!write_ll(ps, 7, sec, 6, slat, 1, th)) return;
+    g = load_ll(ps, ns, err, sizeof err);
+    CHECK(g != NULL, "a sector loads: %s", err);
+    if (!g) return;
+    double x1[3] = {0, 0, 0}, x2[3] = {0, 0, 0};
+    const double l1[2] = {-45, 75}, l2[2] = {10, 75};
+    floe_projection_forward(&ns, l1, x1);
+    floe_projection_forward(&ns, l2, x2);
+    CHECK(floe_field_grid_covers(g, x1, 2e4, 0, err, sizeof err) == FLOE_OK, "lon -45, lat 75 covered: %s", err);
+    int rc = floe_field_grid_covers(g, x2, 2e4, 1, err, sizeof err);
+    CHECK(rc != FLOE_OK && has(err, "does not cover particle 1") && has(err, "lon in [-90, 0]"), "lon 10 not covered: %s",
+          err);
+    printf("  not covered: %s\n", err);
+    rc = floe_field_grid_covers(g, pole, 5e4, 2, err, sizeof err);
+    CHECK(rc != FLOE_OK && has(err, "every longitude"), "the pole not covered by a sector: %s", err);
+    floe_field_grid_release(g);
+    /* a grid reaching the south pole with the north pole's projection */
+    const double slat2[3] = {-90, 0, 80};
+    char pfar[320];
+    snprintf(pfar, sizeof pfar, "%s", tmp_path("far.nc"));
+    if (!write_ll(pfar, 7, sec, 3, slat2, 1, th)) return;
+    g = load_ll(pfar, ns, err, sizeof err);
+    CHECK(!g && has(err, "without the pole opposite"), "the opposite pole refused: %s", err);
+    floe_field_grid_release(g);
+}
+
 int main(void) {
     snprintf(tmpdir, sizeof tmpdir, "/tmp/floe_netcdf_XXXXXX");
     if (!mkdtemp(tmpdir)) {
@@ -595,6 +909,8 @@ int main(void) {
     test_packed();
     test_errors();
     test_ownership();
+    test_equirectangular();
+    test_polar_stereographic();
     for (int k = 0; k < nwritten; k++) remove(written[k]);
     rmdir(tmpdir);
     return check_summary("test_netcdf");

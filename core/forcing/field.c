@@ -85,10 +85,5 @@ int floe_field_check(const floe_field *f, char *err, size_t errlen) {
 
 int floe_field_covers(const floe_field *f, const double x[3], double r, int i, char *err, size_t errlen) {
     if (f->kind != FLOE_FIELD_GRID || !f->grid) return FLOE_OK;
-    double lo[2], hi[2], t[2];
-    floe_field_grid_extent(f->grid, lo, hi, t);
-    if (x[0] - r >= lo[0] && x[0] + r <= hi[0] && x[1] - r >= lo[1] && x[1] + r <= hi[1]) return FLOE_OK;
-    snprintf(err, errlen, "field file %s: the grid x in [%g, %g], y in [%g, %g] does not cover particle %d at "
-             "(%g, %g) (radius %g)", floe_field_grid_label(f->grid), lo[0], hi[0], lo[1], hi[1], i, x[0], x[1], r);
-    return FLOE_EINVAL;
+    return floe_field_grid_covers(f->grid, x, r, i, err, errlen);
 }

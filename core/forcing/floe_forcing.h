@@ -55,9 +55,47 @@ const char *floe_field_kind_name(int kind);
  * without a positive length, a grid field without its data) */
 int floe_field_check(const floe_field *f, char *err, size_t errlen);
 /* FLOE_OK when the field is defined over the bounding box [x - r, x + r] of particle i (every
- * analytic field is); for a grid outside its extent FLOE_EINVAL with "field file F: the grid
- * x in [a, b], y in [c, d] does not cover particle i at (x, y) (radius r)" in err. */
+ * analytic field is); a grid: floe_field_grid_covers. */
 int floe_field_covers(const floe_field *f, const double x[3], double r, int i, char *err, size_t errlen);
+
+/* ---- map projections: the scene's plane (x east, y north, metres) as a map of the Earth,
+ * for grids in longitude and latitude (docs/sea-ice.md, "Longitude/latitude grids") ---- */
+typedef enum floe_projection_kind {
+    FLOE_PROJECTION_NONE = 0,            /* the grid is in the scene's metres */
+    FLOE_PROJECTION_EQUIRECTANGULAR = 1, /* a sphere of radius FLOE_EARTH_RADIUS (Snyder 1987,
+                                            eqs. 12-1, 12-2): x = R (lon - lon0) cos(lat0),
+                                            y = R (lat - lat0), angles in radians */
+    FLOE_PROJECTION_POLAR_STEREOGRAPHIC = 2 /* an ellipsoid, polar aspect, true scale along
+                                            lat_ts (Snyder 1987, eqs. 21-30 to 21-34, 15-9,
+                                            14-15; inverse 20-16, 20-18, 21-39, 21-40, 7-9) */
+} floe_projection_kind;
+#define FLOE_EARTH_RADIUS 6371000.0      /* m, the Earth's mean radius (IUGG) */
+#define FLOE_WGS84_A 6378137.0           /* m, WGS84 semi-major axis (EPSG:7030) */
+#define FLOE_WGS84_RF 298.257223563      /* WGS84 inverse flattening */
+typedef struct floe_projection {
+    floe_projection_kind kind;
+    double lon0;   /* degrees: equirectangular: the longitude of x = 0; polar stereographic: the
+                      central meridian, straight down (-y) from the north pole, up (+y) from
+                      the south pole (EPSG:3413: -45) */
+    double lat0;   /* degrees, equirectangular: the latitude of y = 0, |lat0| < 90 (the scale
+                      is true along it) */
+    double lat_ts; /* degrees, polar stereographic: the latitude of true scale, > 0 for the
+                      north pole, < 0 for the south (EPSG:3413: 70; EPSG:3031: -71) */
+    double a, rf;  /* polar stereographic: the ellipsoid's semi-major axis (m) and inverse
+                      flattening; 0: WGS84's (rf = INFINITY: a sphere of radius a) */
+} floe_projection;
+/* FLOE_OK, or FLOE_EINVAL with what is wrong (an unknown kind, a value not finite, |lat0| >=
+ * 90, lat_ts 0 or beyond 90, a <= 0, rf <= 1) */
+int floe_projection_check(const floe_projection *p, char *err, size_t errlen);
+/* (lon, lat) in degrees to the scene's (x, y) in metres, and back (lon in (lon0 - 180,
+ * lon0 + 180] for the polar stereographic; the inverse's latitude to round-off). NONE: the
+ * identity. */
+void floe_projection_forward(const floe_projection *p, const double lonlat[2], double xy[2]);
+void floe_projection_inverse(const floe_projection *p, const double xy[2], double lonlat[2]);
+/* The angle (radians, counter-clockwise) from the scene's +x to east at (x, y): a velocity
+ * (east, north) is (x, y) turned by it. 0 for NONE and equirectangular; lon - lon0 at the
+ * north pole's polar stereographic, lon0 - lon at the south's. */
+double floe_projection_east_angle(const floe_projection *p, const double xy[2]);
 
 /* ---- gridded fields ----
  * Velocities u[k][j][i] at the nodes (x_i, y_j) of a rectilinear grid (coordinates strictly
@@ -68,16 +106,23 @@ typedef struct floe_field_grid_def {
                                current directory (a scene's `file` is first made relative to
                                the scene file's folder, core/scene/scene_forces.c) */
     const char *u_var, *v_var; /* the velocity components' variables ("u", "v") */
-    const char *x_var, *y_var; /* the coordinates, projected metres ("x", "y") */
+    const char *x_var, *y_var; /* the coordinates ("x", "y"): metres, or longitude and latitude
+                               in degrees with a projection */
     const char *time_var;   /* the time coordinate ("time"), read when u and v are (time, y, x) */
     double scale;           /* multiplier of the velocities read (1) */
+    floe_projection projection; /* NONE: x, y in metres (m or km); otherwise x_var is the
+                               longitude and y_var the latitude (units degrees_east and
+                               degrees_north, or none), the scene's points are mapped onto
+                               them and the velocities (east, north) turned into the scene's
+                               x and y (floe_projection_east_angle) */
 } floe_field_grid_def;
 floe_field_grid_def floe_field_grid_default(void);
 /* Reads a grid from a NetCDF file: u and v as double, of dimensions (time, y, x) or (y, x)
  * (steady), the same for both; x, y and time one-dimensional on those dimensions, strictly
  * increasing; CF scale_factor and add_offset applied; a value equal to _FillValue,
  * missing_value (or the type's default fill when no _FillValue is set) or not finite is
- * refused, as are x or y in degrees; the time's units "seconds|minutes|hours|days since
+ * refused, as are x or y in degrees without a projection (the message says which key to
+ * add) and metres with one; the time's units "seconds|minutes|hours|days since
  * DATE", converted to seconds (the simulation time t is the file's time in seconds since its
  * DATE). Returns the grid with one reference (the caller's: floe_field_grid_release), or NULL
  * with the message in err: "field file F: ...". Without FLOE_WITH_NETCDF: NULL, err says so. */
@@ -92,11 +137,23 @@ floe_field_grid *floe_field_grid_create(int nx, const double *x, int ny, const d
 floe_field_grid *floe_field_grid_retain(floe_field_grid *g);
 /* Drops a reference; the last one frees the grid (NULL: nothing). */
 void floe_field_grid_release(floe_field_grid *g);
-/* The grid's velocity (m/s) at (x[0], x[1]) and time t, both clamped into its extent:
- * bilinear in space, linear in time (exact for fields linear in x, y and t); u[2] = 0 */
+/* The grid's velocity (m/s) at the scene's point (x[0], x[1]) (m) and time t, both clamped
+ * into its extent: bilinear in space, linear in time (exact for fields linear in x, y and
+ * t); a projected grid is interpolated at the point's (lon, lat), linear in lon and lat, the
+ * longitude taken modulo 360 into the grid's range, and its (east, north) turned into x, y;
+ * u[2] = 0 */
 void floe_field_grid_eval(const floe_field_grid *g, const double x[3], double t, double u[3]);
-/* Its extent: x in [lo[0], hi[0]], y in [lo[1], hi[1]] (m), times in [t[0], t[1]] (s) */
+/* Its extent in its own coordinates: x in [lo[0], hi[0]], y in [lo[1], hi[1]] (m, or
+ * longitude and latitude in degrees when projected), times in [t[0], t[1]] (s) */
 void floe_field_grid_extent(const floe_field_grid *g, double lo[2], double hi[2], double t[2]);
+/* Its projection (kind NONE: metres) */
+floe_projection floe_field_grid_projection(const floe_field_grid *g);
+/* FLOE_OK when the grid covers the scene's box [x - r, x + r] of particle i, mapped into the
+ * grid's coordinates when projected (the box's longitude and latitude ranges); otherwise
+ * FLOE_EINVAL with "field file F: the grid x in [a, b], y in [c, d] does not cover particle i
+ * at (x, y) (radius r)" in err ("the grid lon in [a, b], lat in [c, d] (degrees) ..." with the
+ * box's ranges when projected). */
+int floe_field_grid_covers(const floe_field_grid *g, const double x[3], double r, int i, char *err, size_t errlen);
 /* Its label (the file), the largest |u| over its data (m/s), and the largest velocity
  * gradient component over its cells (1/s) */
 const char *floe_field_grid_label(const floe_field_grid *g);

@@ -413,16 +413,34 @@ floe_provider *floe_coriolis_create(const floe_coriolis_def *def, char *err, siz
      .doc = "netcdf: the variable of the velocity's y component (the same grid as u_var)",                       \
      .offset = offsetof(S, fp.v_var)},                                                                            \
     {.key = "x_var", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "x",                                      \
-     .doc = "netcdf: the x coordinate (m, strictly increasing)", .offset = offsetof(S, fp.x_var)},               \
+     .doc = "netcdf: the x coordinate (m; the longitude with a projection), strictly increasing",                \
+     .offset = offsetof(S, fp.x_var)},                                                                            \
     {.key = "y_var", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "y",                                      \
-     .doc = "netcdf: the y coordinate (m, strictly increasing)", .offset = offsetof(S, fp.y_var)},               \
+     .doc = "netcdf: the y coordinate (m; the latitude with a projection), strictly increasing",                 \
+     .offset = offsetof(S, fp.y_var)},                                                                            \
     {.key = "time_var", .type = FLOE_PARAM_STRING, .unit = "", .def_text = "time",                                \
      .doc = "netcdf: the time coordinate (units seconds, minutes, hours or days since DATE; the simulation time is "   \
             "the time since DATE)",                                                                                \
      .offset = offsetof(S, fp.time_var)},                                                                         \
     {.key = "scale", .type = FLOE_PARAM_REAL, .unit = "", .def = 1,                                               \
      .doc = "netcdf: multiplier of the velocities read (after the file's scale_factor and add_offset)",           \
-     .offset = offsetof(S, fp.scale)}
+     .offset = offsetof(S, fp.scale)},                                                                            \
+    {.key = "projection", .type = FLOE_PARAM_CHOICE, .choices = "none|equirectangular|polar_stereographic",      \
+     .def = 0,                                                                                                    \
+     .doc = "netcdf: the scene as a map of a grid in longitude and latitude (degrees): equirectangular (sphere "  \
+            "R = 6371 km) or polar stereographic (WGS84); none: a grid in metres",                                \
+     .offset = offsetof(S, fp.projection)},                                                                       \
+    {.key = "lon0", .type = FLOE_PARAM_REAL, .unit = "deg", .def = 0,                                            \
+     .doc = "netcdf, projection: the longitude of x = 0 (equirectangular), the central meridian "                \
+            "(polar_stereographic, -y from the north pole; EPSG:3413 -45)",                                       \
+     .offset = offsetof(S, fp.lon0)},                                                                             \
+    {.key = "lat0", .type = FLOE_PARAM_REAL, .flags = FLOE_PARAM_MIN_OPEN | FLOE_PARAM_MAX_OPEN, .unit = "deg",  \
+     .min = -90, .max = 90, .def = 0,                                                                             \
+     .doc = "netcdf, equirectangular: the latitude of y = 0, where the scale is true",                            \
+     .offset = offsetof(S, fp.lat0)},                                                                             \
+    {.key = "lat_ts", .type = FLOE_PARAM_REAL, .unit = "deg", .min = -90, .max = 90, .def = 70,                  \
+     .doc = "netcdf, polar_stereographic: the latitude of true scale, > 0 north pole, < 0 south (EPSG:3413 70)",  \
+     .offset = offsetof(S, fp.lat_ts)}
 
 typedef struct field_params {
     int field;
@@ -430,6 +448,8 @@ typedef struct field_params {
     char file[FLOE_PARAM_STRING_MAX], u_var[FLOE_PARAM_STRING_MAX], v_var[FLOE_PARAM_STRING_MAX];
     char x_var[FLOE_PARAM_STRING_MAX], y_var[FLOE_PARAM_STRING_MAX], time_var[FLOE_PARAM_STRING_MAX];
     double scale;
+    int projection;
+    double lon0, lat0, lat_ts;
 } field_params;
 
 /* The field of a provider's parameters (entry e, struct params): a netcdf one reads its file
@@ -444,7 +464,8 @@ static int field_of(const floe_registry_entry *e, const void *params, const fiel
     f->speed = p->speed;
     f->length = p->length;
     memcpy(f->center, p->center, sizeof f->center);
-    static const char *const grid_keys[] = {"file", "u_var", "v_var", "x_var", "y_var", "time_var", "scale"};
+    static const char *const grid_keys[] = {"file", "u_var", "v_var", "x_var", "y_var", "time_var", "scale",
+                                            "projection", "lon0", "lat0", "lat_ts"};
     if (f->kind != FLOE_FIELD_GRID) {
         for (size_t k = 0; e && k < sizeof grid_keys / sizeof *grid_keys; k++)
             if (floe_params_given(e, params, grid_keys[k])) {
@@ -457,8 +478,25 @@ static int field_of(const floe_registry_entry *e, const void *params, const fiel
         snprintf(err, errlen, "field: netcdf needs file (the NetCDF file of the velocities)");
         return FLOE_EINVAL;
     }
+    /* the projection's keys: each only with the projection that reads it */
+    static const struct { const char *key; int for_kind; } pkeys[] = {
+        {"lon0", -1}, {"lat0", FLOE_PROJECTION_EQUIRECTANGULAR}, {"lat_ts", FLOE_PROJECTION_POLAR_STEREOGRAPHIC}};
+    static const char *const pnames[] = {"none", "equirectangular", "polar_stereographic"};
+    for (size_t k = 0; e && k < sizeof pkeys / sizeof *pkeys; k++)
+        if (floe_params_given(e, params, pkeys[k].key) &&
+            (p->projection == FLOE_PROJECTION_NONE || (pkeys[k].for_kind >= 0 && pkeys[k].for_kind != p->projection))) {
+            if (pkeys[k].for_kind >= 0)
+                snprintf(err, errlen, "%s is only read with projection: %s (not %s)", pkeys[k].key,
+                         pnames[pkeys[k].for_kind], pnames[p->projection]);
+            else
+                snprintf(err, errlen, "%s is only read with a projection (equirectangular or polar_stereographic)",
+                         pkeys[k].key);
+            return FLOE_EINVAL;
+        }
     floe_field_grid_def gd = {.file = p->file, .u_var = p->u_var, .v_var = p->v_var, .x_var = p->x_var,
-                              .y_var = p->y_var, .time_var = p->time_var, .scale = p->scale};
+                              .y_var = p->y_var, .time_var = p->time_var, .scale = p->scale,
+                              .projection = {.kind = (floe_projection_kind)p->projection, .lon0 = p->lon0,
+                                             .lat0 = p->lat0, .lat_ts = p->lat_ts}};
     f->grid = floe_field_grid_load(&gd, err, errlen);
     return f->grid ? FLOE_OK : FLOE_EINVAL;
 }

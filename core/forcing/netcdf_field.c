@@ -1,10 +1,13 @@
 /* netcdf_field.c - gridded, time-varying velocity fields (floe_forcing.h, docs/sea-ice.md
  * "Velocity fields"): the grid (rectilinear, spacing uniform or not: cells found by
  * bisection), its interpolation (bilinear in x and y, linear in t, the point and the time
- * clamped into the grid), and its reader of NetCDF files written with the CF conventions
- * (CF 1.11: section 4 coordinate types, 4.4 time units "U since DATE", 8.1 packed data
- * scale_factor/add_offset, 2.5.1 _FillValue/missing_value), through libnetcdf (opened at
- * the first file read) when floe is built with FLOE_WITH_NETCDF. */
+ * clamped into the grid), the map projections of grids in longitude and latitude
+ * (equirectangular on a sphere; polar stereographic on an ellipsoid, Snyder 1987, "Map
+ * Projections: A Working Manual", USGS Prof. Paper 1395, chapters 7, 14, 15, 20, 21), and
+ * the reader of NetCDF files written with the CF conventions (CF 1.11: section 4 coordinate
+ * types, 4.1 latitude and 4.2 longitude units, 4.4 time units "U since DATE", 8.1 packed
+ * data scale_factor/add_offset, 2.5.1 _FillValue/missing_value), through libnetcdf (opened
+ * at the first file read) when floe is built with FLOE_WITH_NETCDF. */
 #include "floe_forcing.h"
 
 #include <ctype.h>
@@ -20,16 +23,151 @@
 #include <unistd.h>
 #endif
 
+/* ======================= map projections ======================= */
+
+#define DEG (M_PI / 180)
+
+/* a projection with its constants worked out */
+typedef struct proj {
+    floe_projection p;
+    double R, c0;       /* equirectangular: R and R cos(lat0) */
+    double a, e, K;     /* polar stereographic: rho = K t (Snyder 21-33, 21-34) */
+    double sgn;         /* +1 north pole, -1 south */
+} proj;
+
+/* Snyder eq. 15-9: t(phi) = tan(pi/4 - phi/2) / [(1 - e sin phi)/(1 + e sin phi)]^(e/2) */
+static double ps_t(double phi, double e) {
+    const double es = e * sin(phi);
+    return tan(M_PI / 4 - phi / 2) / pow((1 - es) / (1 + es), e / 2);
+}
+
+static void proj_init(proj *q, const floe_projection *p) {
+    memset(q, 0, sizeof *q);
+    q->p = *p;
+    if (p->kind == FLOE_PROJECTION_EQUIRECTANGULAR) {
+        q->R = FLOE_EARTH_RADIUS;
+        q->c0 = q->R * cos(p->lat0 * DEG);
+    } else if (p->kind == FLOE_PROJECTION_POLAR_STEREOGRAPHIC) {
+        q->a = p->a > 0 ? p->a : FLOE_WGS84_A;
+        const double rf = p->rf > 0 ? p->rf : FLOE_WGS84_RF, f = isinf(rf) ? 0 : 1 / rf;
+        q->e = sqrt(f * (2 - f));
+        q->sgn = p->lat_ts < 0 ? -1 : 1;
+        const double pc = q->sgn * p->lat_ts * DEG, e = q->e; /* the north pole's formulas */
+        if (pc >= M_PI / 2) /* true scale at the pole, k0 = 1: Snyder eq. 21-33 */
+            q->K = 2 * q->a / sqrt(pow(1 + e, 1 + e) * pow(1 - e, 1 - e));
+        else /* eq. 21-34 with m_c from eq. 14-15: m = cos phi / sqrt(1 - e^2 sin^2 phi) */
+            q->K = q->a * cos(pc) / sqrt(1 - e * e * sin(pc) * sin(pc)) / ps_t(pc, e);
+    }
+}
+
+static void proj_forward(const proj *q, const double ll[2], double xy[2]) {
+    switch (q->p.kind) {
+    case FLOE_PROJECTION_EQUIRECTANGULAR:
+        xy[0] = q->c0 * (ll[0] - q->p.lon0) * DEG;
+        xy[1] = q->R * (ll[1] - q->p.lat0) * DEG;
+        break;
+    case FLOE_PROJECTION_POLAR_STEREOGRAPHIC: {
+        /* the south pole's aspect is the north's with phi, lambda, lambda0, x and y negated */
+        const double s = q->sgn, rho = q->K * ps_t(s * ll[1] * DEG, q->e), dl = (ll[0] - q->p.lon0) * DEG;
+        xy[0] = rho * sin(dl);      /* eq. 21-30 */
+        xy[1] = -s * rho * cos(dl); /* eq. 21-31 */
+        break;
+    }
+    default:
+        xy[0] = ll[0];
+        xy[1] = ll[1];
+    }
+}
+
+static void proj_inverse(const proj *q, const double xy[2], double ll[2]) {
+    switch (q->p.kind) {
+    case FLOE_PROJECTION_EQUIRECTANGULAR:
+        ll[0] = q->p.lon0 + xy[0] / q->c0 / DEG;
+        ll[1] = q->p.lat0 + xy[1] / q->R / DEG;
+        break;
+    case FLOE_PROJECTION_POLAR_STEREOGRAPHIC: {
+        const double s = q->sgn, e = q->e, rho = hypot(xy[0], xy[1]); /* eq. 20-18 */
+        const double t = rho / q->K;                                   /* eqs. 21-39, 21-40 */
+        double phi = M_PI / 2 - 2 * atan(t);                           /* eq. 7-11, then 7-9 */
+        for (int k = 0; k < 30; k++) {
+            const double es = e * sin(phi), next = M_PI / 2 - 2 * atan(t * pow((1 - es) / (1 + es), e / 2));
+            const double d = fabs(next - phi);
+            phi = next;
+            if (d <= 1e-15) break;
+        }
+        ll[1] = s * phi / DEG;
+        ll[0] = q->p.lon0 + (rho > 0 ? atan2(xy[0], -s * xy[1]) / DEG : 0); /* eq. 20-16 */
+        break;
+    }
+    default:
+        ll[0] = xy[0];
+        ll[1] = xy[1];
+    }
+}
+
+static double proj_east_angle(const proj *q, const double xy[2]) {
+    if (q->p.kind != FLOE_PROJECTION_POLAR_STEREOGRAPHIC || (xy[0] == 0 && xy[1] == 0)) return 0;
+    /* east is along the parallel (a circle about the pole): d(x, y)/d lambda */
+    return q->sgn * atan2(xy[0], -q->sgn * xy[1]);
+}
+
+int floe_projection_check(const floe_projection *p, char *err, size_t errlen) {
+    if (!p || (unsigned)p->kind > FLOE_PROJECTION_POLAR_STEREOGRAPHIC) {
+        snprintf(err, errlen, "projection: unknown kind %d", p ? (int)p->kind : -1);
+        return FLOE_EINVAL;
+    }
+    if (!isfinite(p->lon0) || !isfinite(p->lat0) || !isfinite(p->lat_ts) || !isfinite(p->a) || isnan(p->rf)) {
+        snprintf(err, errlen, "projection: lon0, lat0, lat_ts and a must be finite");
+        return FLOE_EINVAL;
+    }
+    if (p->kind == FLOE_PROJECTION_EQUIRECTANGULAR && !(fabs(p->lat0) < 90)) {
+        snprintf(err, errlen, "projection equirectangular: lat0 must be in (-90, 90) degrees, got %g", p->lat0);
+        return FLOE_EINVAL;
+    }
+    if (p->kind == FLOE_PROJECTION_POLAR_STEREOGRAPHIC) {
+        if (!(fabs(p->lat_ts) <= 90) || p->lat_ts == 0) {
+            snprintf(err, errlen, "projection polar_stereographic: lat_ts must be in [-90, 0) (south pole) or (0, 90] "
+                     "(north pole) degrees, got %g", p->lat_ts);
+            return FLOE_EINVAL;
+        }
+        if (p->a < 0 || (p->rf != 0 && !(p->rf > 1))) {
+            snprintf(err, errlen, "projection polar_stereographic: the ellipsoid needs a > 0 (m) and rf > 1 (0: WGS84), "
+                     "got a = %g, rf = %g", p->a, p->rf);
+            return FLOE_EINVAL;
+        }
+    }
+    return FLOE_OK;
+}
+
+void floe_projection_forward(const floe_projection *p, const double lonlat[2], double xy[2]) {
+    proj q;
+    proj_init(&q, p);
+    proj_forward(&q, lonlat, xy);
+}
+
+void floe_projection_inverse(const floe_projection *p, const double xy[2], double lonlat[2]) {
+    proj q;
+    proj_init(&q, p);
+    proj_inverse(&q, xy, lonlat);
+}
+
+double floe_projection_east_angle(const floe_projection *p, const double xy[2]) {
+    proj q;
+    proj_init(&q, p);
+    return proj_east_angle(&q, xy);
+}
+
+/* ======================= the grid ======================= */
+
 struct floe_field_grid {
     atomic_int refs;
     int nx, ny, nt;
-    double *x, *y, *t;  /* nodes (m, m) and record times (s) */
+    double *x, *y, *t;  /* nodes (m, m; or lon, lat in degrees when projected) and record times (s) */
     double *u, *v;      /* nt ny nx: record k, row j, column i at (k ny + j) nx + i */
-    double umax, gmax;  /* largest |u| (m/s) and velocity gradient component (1/s) */
+    double umax, gmax;  /* largest |u| (m/s) and velocity gradient component (1/s, per scene metre) */
+    proj pr;            /* the scene's map onto (x, y) (kind NONE: the identity) */
     char label[512];    /* the file, for messages */
 };
-
-/* ======================= the grid ======================= */
 
 floe_field_grid_def floe_field_grid_default(void) {
     floe_field_grid_def d = {.file = NULL, .u_var = "u", .v_var = "v", .x_var = "x", .y_var = "y",
@@ -84,7 +222,18 @@ static double *copy_of(const double *a, size_t n) {
     return c;
 }
 
-/* the largest |u| and velocity gradient component (differences along the cells' edges) */
+/* the scene distance between nodes (i, j) and (i + di, j + dj) */
+static double node_distance(const floe_field_grid *g, int i, int j, int di, int dj) {
+    if (g->pr.p.kind == FLOE_PROJECTION_NONE) return di ? g->x[i + 1] - g->x[i] : g->y[j + 1] - g->y[j];
+    const double a[2] = {g->x[i], g->y[j]}, b[2] = {g->x[i + di], g->y[j + dj]};
+    double pa[2], pb[2];
+    proj_forward(&g->pr, a, pa);
+    proj_forward(&g->pr, b, pb);
+    return hypot(pb[0] - pa[0], pb[1] - pa[1]);
+}
+
+/* the largest |u| and velocity gradient component (differences along the cells' edges, per
+ * metre of the scene; two nodes on one point, a pole, are skipped) */
 static void grid_bounds(floe_field_grid *g) {
     const int nx = g->nx, ny = g->ny;
     double um = 0, gm = 0;
@@ -94,12 +243,12 @@ static void grid_bounds(floe_field_grid *g) {
                 const size_t o = ((size_t)k * ny + j) * nx + i;
                 um = fmax(um, hypot(g->u[o], g->v[o]));
                 if (i + 1 < nx) {
-                    const double h = g->x[i + 1] - g->x[i];
-                    gm = fmax(gm, fmax(fabs(g->u[o + 1] - g->u[o]), fabs(g->v[o + 1] - g->v[o])) / h);
+                    const double h = node_distance(g, i, j, 1, 0);
+                    if (h > 0) gm = fmax(gm, fmax(fabs(g->u[o + 1] - g->u[o]), fabs(g->v[o + 1] - g->v[o])) / h);
                 }
                 if (j + 1 < ny) {
-                    const double h = g->y[j + 1] - g->y[j];
-                    gm = fmax(gm, fmax(fabs(g->u[o + nx] - g->u[o]), fabs(g->v[o + nx] - g->v[o])) / h);
+                    const double h = node_distance(g, i, j, 0, 1);
+                    if (h > 0) gm = fmax(gm, fmax(fabs(g->u[o + nx] - g->u[o]), fabs(g->v[o + nx] - g->v[o])) / h);
                 }
             }
     g->umax = um;
@@ -108,7 +257,8 @@ static void grid_bounds(floe_field_grid *g) {
 
 /* builds a grid that takes the arrays (on success and on failure); names: of x, y and time */
 static floe_field_grid *grid_build(int nx, double *x, int ny, double *y, int nt, double *t, double *u, double *v,
-                                   const char *label, const char *const names[3], char *err, size_t errlen) {
+                                   const floe_projection *pj, const char *label, const char *const names[3],
+                                   char *err, size_t errlen) {
     floe_field_grid *g = calloc(1, sizeof *g);
     if (!g || !x || !y || !t || !u || !v) {
         snprintf(err, errlen, "field file %s: out of memory", label);
@@ -123,6 +273,23 @@ static floe_field_grid *grid_build(int nx, double *x, int ny, double *y, int nt,
         check_axis(t, nt, 1, label, names[2], err, errlen)) {
         grid_free(g);
         return NULL;
+    }
+    if (pj && pj->kind != FLOE_PROJECTION_NONE) {
+        char why[256];
+        if (floe_projection_check(pj, why, sizeof why)) {
+            snprintf(err, errlen, "field file %s: %s", label, why);
+            grid_free(g);
+            return NULL;
+        }
+        /* latitudes on the sphere; the polar stereographic sends the other pole to infinity */
+        const double far = pj->kind == FLOE_PROJECTION_POLAR_STEREOGRAPHIC ? (pj->lat_ts < 0 ? 90 : -90) : 0;
+        if (y[0] < -90 || y[ny - 1] > 90 || (far && (y[0] == far || y[ny - 1] == far))) {
+            snprintf(err, errlen, "field file %s: the latitude '%s' spans [%g, %g] degrees: it must lie in [-90, 90]%s",
+                     label, names[1], y[0], y[ny - 1], far ? ", without the pole opposite to the polar stereographic's" : "");
+            grid_free(g);
+            return NULL;
+        }
+        proj_init(&g->pr, pj);
     }
     const size_t n = (size_t)nt * ny * nx;
     for (size_t k = 0; k < n; k++)
@@ -150,7 +317,7 @@ floe_field_grid *floe_field_grid_create(int nx, const double *x, int ny, const d
     const size_t n = (size_t)nt * ny * nx;
     static const char *const names[3] = {"x", "y", "t"};
     return grid_build(nx, copy_of(x, (size_t)nx), ny, copy_of(y, (size_t)ny), nt, copy_of(t, (size_t)nt),
-                      copy_of(u, n), copy_of(v, n), label, names, err, errlen);
+                      copy_of(u, n), copy_of(v, n), NULL, label, names, err, errlen);
 }
 
 /* the cell [c[i], c[i+1]] holding s (clamped into [c[0], c[n-1]]) and the fraction f of s in it */
@@ -177,9 +344,16 @@ static double bilinear(const double *a, int nx, double fx, double fy) {
     return (1 - fy) * ((1 - fx) * a[0] + fx * a[1]) + fy * ((1 - fx) * a[nx] + fx * a[nx + 1]);
 }
 
+/* longitude lon taken modulo 360 into [lo, lo + 360) */
+static double wrap_lon(double lon, double lo) { return lon - 360 * floor((lon - lo) / 360); }
+
 void floe_field_grid_eval(const floe_field_grid *g, const double x[3], double t, double u[3]) {
-    double fx, fy, ft;
-    const int i = cell_of(g->x, g->nx, x[0], &fx), j = cell_of(g->y, g->ny, x[1], &fy);
+    double fx, fy, ft, p[2] = {x[0], x[1]};
+    if (g->pr.p.kind != FLOE_PROJECTION_NONE) {
+        proj_inverse(&g->pr, x, p);
+        p[0] = wrap_lon(p[0], g->x[0]);
+    }
+    const int i = cell_of(g->x, g->nx, p[0], &fx), j = cell_of(g->y, g->ny, p[1], &fy);
     const int k = cell_of(g->t, g->nt, t, &ft);
     const size_t o = ((size_t)k * g->ny + j) * g->nx + i, rec = (size_t)g->ny * g->nx;
     u[0] = bilinear(g->u + o, g->nx, fx, fy);
@@ -188,6 +362,12 @@ void floe_field_grid_eval(const floe_field_grid *g, const double x[3], double t,
     if (g->nt > 1) {
         u[0] = (1 - ft) * u[0] + ft * bilinear(g->u + o + rec, g->nx, fx, fy);
         u[1] = (1 - ft) * u[1] + ft * bilinear(g->v + o + rec, g->nx, fx, fy);
+    }
+    const double a = proj_east_angle(&g->pr, x);
+    if (a != 0) { /* (east, north) turned into (x, y) */
+        const double c = cos(a), s = sin(a), ue = u[0];
+        u[0] = c * ue - s * u[1];
+        u[1] = s * ue + c * u[1];
     }
 }
 
@@ -198,6 +378,71 @@ void floe_field_grid_extent(const floe_field_grid *g, double lo[2], double hi[2]
     hi[1] = g->y[g->ny - 1];
     t[0] = g->t[0];
     t[1] = g->t[g->nt - 1];
+}
+
+floe_projection floe_field_grid_projection(const floe_field_grid *g) { return g->pr.p; }
+
+/* the longitude and latitude ranges of the scene's box [c - r, c + r] (degrees, lon[0] from
+ * the projection's inverse, lon[1] - lon[0] < 360); *all: every longitude (the box holds the
+ * polar stereographic's pole) */
+static void box_lonlat(const proj *q, const double c[2], double r, double lon[2], double lat[2], int *all) {
+    const double xs[2] = {c[0] - r, c[0] + r}, ys[2] = {c[1] - r, c[1] + r};
+    *all = 0;
+    if (q->p.kind == FLOE_PROJECTION_EQUIRECTANGULAR) { /* affine, increasing */
+        double lo[2], hi[2];
+        const double a[2] = {xs[0], ys[0]}, b[2] = {xs[1], ys[1]};
+        proj_inverse(q, a, lo);
+        proj_inverse(q, b, hi);
+        lon[0] = lo[0], lon[1] = hi[0], lat[0] = lo[1], lat[1] = hi[1];
+        return;
+    }
+    /* polar stereographic: the latitude is monotone in the distance rho to the pole, the
+     * longitude the angle about it: the nearest and farthest points of the box give the
+     * latitudes, its corners the longitudes (seen from outside, a convex box spans less than
+     * 180 degrees about the pole, between two of its corners) */
+    const double dx = fmax(0, fmax(xs[0], -xs[1])), dy = fmax(0, fmax(ys[0], -ys[1]));
+    double rmax = 0, ll[2], l0 = 0, dmin = 0, dmax = 0;
+    for (int k = 0; k < 4; k++) {
+        const double p[2] = {xs[k & 1], ys[k >> 1]};
+        rmax = fmax(rmax, hypot(p[0], p[1]));
+        proj_inverse(q, p, ll);
+        if (k == 0) l0 = ll[0];
+        const double d = remainder(ll[0] - l0, 360);
+        dmin = fmin(dmin, d);
+        dmax = fmax(dmax, d);
+    }
+    const double pn[2] = {hypot(dx, dy), 0}, pf[2] = {rmax, 0};
+    double ln[2], lf[2];
+    proj_inverse(q, pn, ln);
+    proj_inverse(q, pf, lf);
+    lat[0] = fmin(ln[1], lf[1]);
+    lat[1] = fmax(ln[1], lf[1]);
+    *all = dx == 0 && dy == 0;
+    lon[0] = l0 + dmin;
+    lon[1] = l0 + dmax;
+}
+
+int floe_field_grid_covers(const floe_field_grid *g, const double x[3], double r, int i, char *err, size_t errlen) {
+    const double lo[2] = {g->x[0], g->y[0]}, hi[2] = {g->x[g->nx - 1], g->y[g->ny - 1]};
+    if (g->pr.p.kind == FLOE_PROJECTION_NONE) {
+        if (x[0] - r >= lo[0] && x[0] + r <= hi[0] && x[1] - r >= lo[1] && x[1] + r <= hi[1]) return FLOE_OK;
+        snprintf(err, errlen, "field file %s: the grid x in [%g, %g], y in [%g, %g] does not cover particle %d at "
+                 "(%g, %g) (radius %g)", g->label, lo[0], hi[0], lo[1], hi[1], i, x[0], x[1], r);
+        return FLOE_EINVAL;
+    }
+    double lon[2], lat[2];
+    int all;
+    box_lonlat(&g->pr, x, r, lon, lat, &all);
+    const double w0 = wrap_lon(lon[0], lo[0]), w1 = lon[1] + (w0 - lon[0]);
+    const int in_lon = all ? hi[0] - lo[0] >= 360 : w1 <= hi[0];
+    if (in_lon && lat[0] >= lo[1] && lat[1] <= hi[1]) return FLOE_OK;
+    char span[96];
+    if (all) snprintf(span, sizeof span, "every longitude (it holds the pole)");
+    else snprintf(span, sizeof span, "lon [%.6g, %.6g]", w0, w1);
+    snprintf(err, errlen, "field file %s: the grid lon in [%g, %g], lat in [%g, %g] (degrees) does not cover particle %d "
+             "at (%g, %g) (radius %g): its box spans %s, lat [%.6g, %.6g]", g->label, lo[0], hi[0], lo[1], hi[1], i,
+             x[0], x[1], r, span, lat[0], lat[1]);
+    return FLOE_EINVAL;
 }
 
 const char *floe_field_grid_label(const floe_field_grid *g) { return g->label; }
@@ -291,6 +536,7 @@ typedef struct ncr {
     const char *file;
     char *err;
     size_t errlen;
+    int projected;    /* x and y are longitude and latitude (a projection was given) */
 } ncr;
 
 /* the message of a libnetcdf status */
@@ -469,25 +715,59 @@ static int word_in(const char *w, const char *const *list) {
     return 0;
 }
 
-/* the factor to metres of a coordinate's units (absent: metres) */
-static int length_units(ncr *r, int var, const char *name, double *to_m) {
+/* CF 4.1, 4.2: "degrees_east" (also degree_east, degree_E, degrees_E, degreeE, degreesE),
+ * "degrees_north" (the same forms with N), plain "degrees": 'e', 'n', 'd'; 0 otherwise */
+static char degree_kind(const char *lu) {
+    if (strncmp(lu, "degree", 6)) return 0;
+    const char *r = lu + 6;
+    if (*r == 's') r++;
+    if (*r == '_') r++;
+    if (!*r) return 'd';
+    if (!strcmp(r, "east") || !strcmp(r, "e")) return 'e';
+    if (!strcmp(r, "north") || !strcmp(r, "n")) return 'n';
+    return 0;
+}
+
+/* the factor to metres of a coordinate's units (absent: metres); with a projection, a
+ * longitude (axis 0) or latitude (axis 1) in degrees (absent: degrees) */
+static int coordinate_units(ncr *r, int var, const char *name, int axis, double *to_m) {
     char u[128], lu[128];
     *to_m = 1;
     if (!att_text(r, var, "units", u, sizeof u)) return FLOE_OK;
     lower(lu, u, sizeof lu);
     static const char *const m[] = {"m", "meter", "meters", "metre", "metres", NULL};
     static const char *const km[] = {"km", "kilometer", "kilometers", "kilometre", "kilometres", NULL};
+    const char deg = degree_kind(lu);
+    const int metres = word_in(lu, m) || word_in(lu, km);
+    if (r->projected) {
+        if (deg == (axis ? 'e' : 'n'))
+            snprintf(r->err, r->errlen, "field file %s: '%s' is a %s (units '%s'): %s must name the %s (units %s)",
+                     r->file, name, axis ? "longitude" : "latitude", u, axis ? "y_var" : "x_var",
+                     axis ? "latitude" : "longitude", axis ? "degrees_north" : "degrees_east");
+        else if (deg)
+            return FLOE_OK;
+        else if (metres)
+            snprintf(r->err, r->errlen, "field file %s: '%s' is in metres (units '%s'), but a projection maps the "
+                     "scene onto longitude and latitude: drop the key projection for a grid in metres", r->file, name,
+                     u);
+        else
+            snprintf(r->err, r->errlen, "field file %s: the units '%s' of '%s' are not degrees (a projection reads "
+                     "longitude and latitude: degrees_east, degrees_north)", r->file, u, name);
+        return FLOE_EINVAL;
+    }
     if (word_in(lu, m)) return FLOE_OK;
     if (word_in(lu, km)) {
         *to_m = 1000;
         return FLOE_OK;
     }
-    if (!strncmp(lu, "degree", 6))
-        snprintf(r->err, r->errlen, "field file %s: '%s' is in degrees (units '%s'): only projected coordinates in "
-                 "metres are read (project the grid first)", r->file, name, u);
+    if (deg || !strncmp(lu, "degree", 6))
+        snprintf(r->err, r->errlen, "field file %s: '%s' is in degrees (units '%s'): add the key projection "
+                 "(equirectangular with lon0 and lat0, or polar_stereographic with lon0 and lat_ts) to map the "
+                 "scene's metres onto longitude and latitude (x_var the longitude, y_var the latitude)", r->file,
+                 name, u);
     else
         snprintf(r->err, r->errlen, "field file %s: the units '%s' of '%s' are not a length (m or km: projected "
-                 "coordinates)", r->file, u, name);
+                 "coordinates) nor degrees (with the key projection)", r->file, u, name);
     return FLOE_EINVAL;
 }
 
@@ -521,6 +801,7 @@ static int time_units(ncr *r, int var, const char *name, double *to_s) {
 /* the velocities' dimensions, for messages */
 typedef struct vel_dims {
     const char *u;  /* the u variable's name */
+    int ydim;       /* the dimension of y */
     char names[256], lens[256];
 } vel_dims;
 
@@ -543,7 +824,7 @@ static int read_axis(ncr *r, const vel_dims *vd, const char *name, const char *w
         return FLOE_EINVAL;
     }
     double f = 1;
-    FLOE_TRY(is_time ? time_units(r, var, name, &f) : length_units(r, var, name, &f));
+    FLOE_TRY(is_time ? time_units(r, var, name, &f) : coordinate_units(r, var, name, dim == vd->ydim, &f));
     size_t len;
     r->f.inq_dimlen(r->nc, dim, &len);
     if (len > INT32_MAX) {
@@ -584,7 +865,7 @@ static floe_field_grid *read_grid(ncr *r, const floe_field_grid_def *d) {
     }
     double *x = NULL, *y = NULL, *t = NULL, *u = NULL, *v = NULL;
     int nx = 0, ny = 0, nt = 1;
-    vel_dims vd = {.u = d->u_var};
+    vel_dims vd = {.u = d->u_var, .ydim = du[nu - 2]};
     dims_text(r, nu, du, vd.names, vd.lens, sizeof vd.names);
     int ok = !read_axis(r, &vd, d->x_var, "last", du[nu - 1], 0, &x, &nx) &&
              !read_axis(r, &vd, d->y_var, nu == 3 ? "second" : "first", du[nu - 2], 0, &y, &ny);
@@ -608,7 +889,7 @@ static floe_field_grid *read_grid(ncr *r, const floe_field_grid_def *d) {
         v[k] *= d->scale;
     }
     const char *const names[3] = {d->x_var, d->y_var, d->time_var};
-    return grid_build(nx, x, ny, y, nt, t, u, v, r->file, names, r->err, r->errlen);
+    return grid_build(nx, x, ny, y, nt, t, u, v, &d->projection, r->file, names, r->err, r->errlen);
 }
 
 floe_field_grid *floe_field_grid_load(const floe_field_grid_def *def, char *err, size_t errlen) {
@@ -621,6 +902,7 @@ floe_field_grid *floe_field_grid_load(const floe_field_grid_def *def, char *err,
         if (def->y_var && def->y_var[0]) d.y_var = def->y_var;
         if (def->time_var && def->time_var[0]) d.time_var = def->time_var;
         d.scale = def->scale;
+        d.projection = def->projection;
     }
     if (!d.file || !d.file[0]) {
         snprintf(err, errlen, "field netcdf: a file is required");
@@ -630,8 +912,14 @@ floe_field_grid *floe_field_grid_load(const floe_field_grid_def *def, char *err,
         snprintf(err, errlen, "field file %s: scale must be finite", d.file);
         return NULL;
     }
-    ncr r = {.nc = -1, .file = d.file, .err = err, .errlen = errlen};
+    ncr r = {.nc = -1, .file = d.file, .err = err, .errlen = errlen,
+             .projected = d.projection.kind != FLOE_PROJECTION_NONE};
     err[0] = 0;
+    char why[256];
+    if (r.projected && floe_projection_check(&d.projection, why, sizeof why)) {
+        snprintf(err, errlen, "field file %s: %s", d.file, why);
+        return NULL;
+    }
     if (nc_api_load(&r.f, d.file, err, errlen)) return NULL;
     int st = r.f.open(d.file, NC_NOWRITE, &r.nc);
     if (st != NC_NOERR) {

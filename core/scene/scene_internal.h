@@ -150,6 +150,15 @@ typedef struct sc_rng { unsigned long long s; } sc_rng; /* floe_rng.h */
 #define sc_floe_field floe_sc_floe_field
 #define sc_floe_entry floe_sc_floe_entry
 #define sc_polygons_file floe_sc_polygons_file
+#define sc_polys_build floe_sc_polys_build
+#define sc_polys_create floe_sc_polys_create
+#define sc_polys_destroy floe_sc_polys_destroy
+#define sc_polys_fail floe_sc_polys_fail
+#define sc_polys_fail_at floe_sc_polys_fail_at
+#define sc_polys_names floe_sc_polys_names
+#define sc_polys_ring floe_sc_polys_ring
+#define sc_polys_thickness floe_sc_polys_thickness
+#define sc_shapefile_read floe_sc_shapefile_read
 #define sc_parse_laws floe_sc_parse_laws
 #define sc_parse_materials floe_sc_parse_materials
 #define sc_parse_outputs floe_sc_parse_outputs
@@ -199,8 +208,44 @@ int sc_floe_field(sc *s, struct fy_node *e, int entry, const char *what);
 /* the keys every floe entry shares: material (its index), velocity, motion (scene_floes.c) */
 int sc_floe_entry(sc *s, const sc_map *m, int entry, const char *what, int *mat, double v[3], int *motion);
 /* a body entry {polygons_file: PATH, material, ...}: floes, coasts and islands from a GeoJSON
- * file of polygons (scene_geojson.c) */
+ * file of polygons, or from an ESRI shapefile when PATH ends in .shp (scene_geojson.c) */
 int sc_polygons_file(sc *s, struct fy_node *e, int entry, const char *what);
+/* The polygons of a polygons_file entry as its reader hands them over (scene_polygons.c): one
+ * path checks every ring and builds the bodies, whatever the file's format. */
+typedef struct sc_polys sc_polys;
+/* an empty set for the entry `what` ("bodies[2].polygons_file", copied) reading `file`
+ * (borrowed), at node `at` (for messages), entry thickness h (m; 0: none); NULL out of memory */
+sc_polys *sc_polys_create(sc *s, struct fy_node *at, const char *what, const char *file, double h);
+void sc_polys_destroy(sc_polys *g);
+/* checks that no two polygons overlap, then adds one body per polygon (material mat, the
+ * entry's velocity and motion where a polygon's `fixed` does not say, group `entry`) */
+int sc_polys_build(sc_polys *g, int mat, const double v[3], int motion, int entry);
+/* the words naming a polygon in messages: "feature"/"shape", "polygon"/"part" (the parts
+ * of a multi-polygon) and its ring ("ring 0"/"the ring") */
+void sc_polys_names(sc_polys *g, const char *unit, const char *part, const char *ring);
+/* the entry's thickness (m; 0: none): a polygon's own thickness overrides it */
+double sc_polys_thickness(const sc_polys *g);
+/* One outer ring of polygon `feature` (part `part` of it; -1: a single polygon): n points
+ * (x, y), as the file writes them (the closing point and repeats may be there; point k is
+ * named k in messages), thickness h (m; 0: none), fixed -1 (not said), 0 or 1. Checked
+ * (finite, >= 3 distinct points, simple, non-zero area), cut into convex pieces, kept;
+ * FLOE_OK or the error reported at the entry naming the file and the polygon. */
+int sc_polys_ring(sc_polys *g, int feature, int part, const double *xy, long n, double h, int fixed);
+/* an error at the entry, "what: file: message" */
+int sc_polys_fail(sc_polys *g, int code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+/* the same at a line and column of the file, "what: file:line:col: message" */
+int sc_polys_fail_at(sc_polys *g, int code, int line, int col, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 5, 6)))
+#endif
+    ;
+/* Reads the polygons of an ESRI shapefile (path: its .shp) into g through shapelib
+ * (scene_shapefile.c); without FLOE_WITH_SHAPELIB an error naming the option. */
+int sc_shapefile_read(sc_polys *g, const char *path);
 int sc_parse_laws(sc *s, struct fy_node *seq, struct fy_node *key);
 int sc_parse_materials(sc *s, struct fy_node *seq, struct fy_node *key);
 int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, const char *outdir,
