@@ -13,7 +13,7 @@ floe's symbols), and runs the example scene with the installed `floe`:
   - a bead over the hole falls through it (no contact);
   - two beads meeting through the plugin's Hooke law restitute 1 (within 1e-5: an undamped
     spring under velocity Verlet) after a contact of pi sqrt(m_eff / k) (within 2 steps);
-  - the plugin's `contacts` output writes a row every step.
+  - the plugin's `contact_count` output writes a row every step.
 Then the registry's errors: a scene naming the torus without the plugin, a missing plugin
 file, a plugin without floe_plugin_init, a bad torus parameter (the constructor's message
 at the shape's line), a misspelled key of a plugin law (closest key), and `floe help` /
@@ -100,7 +100,7 @@ def main():
         check(rc == 0 and "spring stiffness" in out and "N/m" in out and so in out,
               "floe help law hooke --plugin: exit %d\n%s%s" % (rc, out, err))
         rc, out, err = run([floe, "--plugin", so, "info"], cwd=run_dir)
-        check(rc == 0 and "torus (plugin)" in out and "contacts (plugin)" in out,
+        check(rc == 0 and "torus (plugin)" in out and "contact_count (plugin)" in out,
               "floe info --plugin lists the plugin's components:\n%s%s" % (out, err))
 
         # ---- errors ----

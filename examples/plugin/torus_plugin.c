@@ -3,7 +3,7 @@
  *
  *   shape  `torus`   {major: R, minor: r}: a ring about the body z axis, exact SDF
  *   law    `hooke`   {k: N/m}: F = k d along the normal, nothing else (energy-conserving)
- *   output `contacts` a CSV of t, contacts, kinetic energy, every `every` steps
+ *   output `contact_count` a CSV of t, contacts, kinetic energy, every `every` steps
  *
  * Build against an installed floe (no library to link: the floe CLI exports its symbols):
  *   cc -O2 -shared -fPIC -o torus_plugin.so torus_plugin.c $(pkg-config --cflags floe)
@@ -164,7 +164,7 @@ static floe_contact_law *hooke_create(const void *params, const floe_material *a
     return &h->base;
 }
 
-/* ---- output: contacts ---- */
+/* ---- output: contact_count ---- */
 
 typedef struct contacts_out {
     floe_observer base;
@@ -190,7 +190,7 @@ static void contacts_destroy(floe_observer *o) {
 }
 
 static const floe_observer_class contacts_class = {
-    .version = 1, .name = "contacts", .observe = contacts_observe, .destroy = contacts_destroy,
+    .version = 1, .name = "contact_count", .observe = contacts_observe, .destroy = contacts_destroy,
 };
 
 typedef struct contacts_params {
@@ -233,7 +233,7 @@ static const floe_registry_entry entries[] = {
      .doc = "A linear spring on the depth along the normal; no damping, no friction.", .source = "examples/plugin",
      .params = hooke_schema, .nparams = COUNT(hooke_schema), .params_size = sizeof(hooke_params),
      .create = (floe_fn)hooke_create},
-    {.kind = FLOE_KIND_OBSERVER, .name = "contacts", .title = "contact count (plugin)",
+    {.kind = FLOE_KIND_OBSERVER, .name = "contact_count", .title = "contact count (plugin)",
      .doc = "CSV of t, the number of contacts and the kinetic energy.", .source = "examples/plugin",
      .params = contacts_schema, .nparams = COUNT(contacts_schema), .params_size = sizeof(contacts_params),
      .create = (floe_fn)contacts_create},
