@@ -202,7 +202,8 @@ static void advance_clock(floe_world *w) {
 }
 
 static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb) {
-    if (floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0)) {
+    if (w->cell ? floe_nl_needs_rebuild_cell(&w->nl, &w->p)
+                : floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0)) {
         int rc = floe_nl_build(&w->nl, &w->p, w->def.dim, w->def.leaf_size);
         if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
     }
@@ -231,6 +232,7 @@ int step_verlet(floe_world *w) {
     const unsigned char *motion = p->motion;
     const double g0 = w->def.gravity[0], g1 = w->def.gravity[1], g2 = w->def.gravity[2];
     int kin = 0; /* any kinematic particle */
+    if (w->cell) FLOE_TRY(floe_cell_begin_step(w)); /* the cell's velocity gradient of this step */
     /* 1. first half kick + drift (eq 22), rotation by the midpoint rule (eq 23); then the
      * kinematic particles at their prescribed velocity */
     {
@@ -272,6 +274,8 @@ int step_verlet(floe_world *w) {
             q_advance(qn, q, p->w + 3 * i, dt);
             memcpy(q, qn, sizeof qn);
         }
+    /* the periodic cell's affine map of the particles and of the cell itself */
+    if (w->cell) FLOE_TRY(floe_cell_after_drift(w, dt));
     /* 2. state objects, RK2 midpoint (eq 21) */
     FLOE_TRY(advance_states(w, dt));
     advance_clock(w);

@@ -47,6 +47,8 @@ typedef struct floe_contact_info {
     double force[3];
     double fn;
     double energy;
+    double branch[3];        /* from i's centre to j's (j's periodic image in a cell), m */
+    double r_eff, m_eff;     /* the contact's effective radius (m) and mass (kg) */
 } floe_contact_info;
 
 /* The contacts of the last force evaluation: sets *out and returns their number (>= 0), or

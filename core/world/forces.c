@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static int push_contact(floe_world *w, const floe_contact *c, const floe_contact_result *r) {
+static int push_contact(floe_world *w, const floe_contact *c, const floe_contact_result *r, const double l[3]) {
     if (w->ncontacts == w->contacts_cap) {
         int nc = w->contacts_cap ? 2 * w->contacts_cap : 1024;
         floe_contact_rec *t = realloc(w->contacts, (size_t)nc * sizeof *t);
@@ -25,6 +25,9 @@ static int push_contact(floe_world *w, const floe_contact *c, const floe_contact
     memcpy(k->force, r->force, sizeof k->force);
     k->fn = r->fn;
     k->energy = r->energy;
+    memcpy(k->branch, l, sizeof k->branch);
+    k->r_eff = c->r_eff;
+    k->m_eff = c->m_eff;
     return FLOE_OK;
 }
 
@@ -156,9 +159,21 @@ static inline floe_body_ref body_ref(const floe_world *w, int i) {
     return b;
 }
 
+/* the same with j at xb (its periodic image, or its own centre) */
+static inline floe_body_ref body_ref_at(const floe_world *w, int j, const double *xb) {
+    floe_body_ref b = body_ref(w, j);
+    b.x = xb;
+    return b;
+}
+
 static int detect_pair(const floe_world *w, floe_detect_ctx *ctx, int i, int j, int sub, double *warm,
                        floe_contact *c) {
     floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
+    return floe_detect(ctx, &bi, &bj, sub, warm, c);
+}
+static int detect_pair_at(const floe_world *w, floe_detect_ctx *ctx, int i, int j, const double *xb, int sub,
+                          double *warm, floe_contact *c) {
+    floe_body_ref bi = body_ref(w, i), bj = body_ref_at(w, j, xb);
     return floe_detect(ctx, &bi, &bj, sub, warm, c);
 }
 
@@ -288,6 +303,7 @@ const floe_provider_class floe_beam_provider_class = {
 /* What the pair evaluations add up (contact_stage), and what they share. */
 typedef struct stage_acc {
     double eta_d, elastic, diss, wgrow;
+    double vir[9], kdiag[9]; /* periodic cell: sum l (x) F, and k_n (n_a l_b)^2 for the servo */
 } stage_acc;
 typedef struct stage_env {
     floe_particles *p;
@@ -296,7 +312,25 @@ typedef struct stage_env {
     int stepping, track, any_growth, nm, any_none, any_pieces, any_overlap;
     int any_floe; /* a law reads the floes' thickness and radii (floe_law_info.needs_floe) */
     int overlap2d; /* 2D and a law reads the overlap: polygon pairs skip the point detection */
+    const floe_cell_state *cell; /* periodic cell (NULL: none): images, affine velocities */
+    const int *img;              /* the list's image codes (with a cell) */
 } stage_env;
+
+/* periodic cell: j's image xs = x_j + H n of entry k (xs untouched and x_j returned when the
+ * entry has no image) */
+static inline const double *pair_image(const stage_env *env, int k, const double *xj, double xs[3]) {
+    if (!env->img || !env->img[k]) return xj;
+    double sh[3];
+    floe_img_shift(env->cell->H, env->img[k], sh);
+    floe_v3_add(xs, xj, sh);
+    return xs;
+}
+/* periodic cell: the mean field's relative velocity of i with respect to j's image, -L l
+ * (l = x_j' - x_i), subtracted from the fluctuation velocities' v_i - v_j */
+static inline void pair_affine_sub(const stage_env *env, const double l[3], double vr[3]) {
+    const double *L = env->cell->L;
+    for (int a = 0; a < 3; a++) vr[a] -= L[3 * a] * l[0] + L[3 * a + 1] * l[1] + L[3 * a + 2] * l[2];
+}
 
 /* the pair's law reads the overlap (the overlap-area law, or prefers it: Hopkins') */
 static inline int pair_wants_overlap(const floe_world *w, int i, int j, int nm) {
@@ -331,11 +365,19 @@ static __attribute__((noinline, cold)) int pair_law_failed(floe_world *w, const 
 /* the release of entry k (its pair no longer touches): the last force still did work over
  * half a step; the history is reset (ParticLS §3.1) */
 static inline void pair_release(floe_world *w, const floe_particles *p, floe_neighbor_list *nl, int k, int i, int j,
-                                int stepping, stage_acc *acc) {
+                                int stepping, stage_acc *acc, const stage_env *env, const double *xb) {
     double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
     if (stepping) {
         double vr[3];
         floe_v3_sub(vr, p->v + 3 * i, p->v + 3 * j);
+        if (env->cell) { /* the cell's share of the last half step's work */
+            double l[3], v0[3];
+            floe_v3_sub(l, xb, p->x + 3 * i);
+            floe_v3_copy(v0, vr);
+            pair_affine_sub(env, l, vr);
+            floe_v3_sub(v0, v0, vr);
+            acc->wgrow += 0.5 * floe_v3_dot(hist + FLOE_FORCE_SLOT, v0) * w->dt;
+        }
         double dk = hist[FLOE_ENERGY_SLOT] - 0.5 * floe_v3_dot(hist + FLOE_FORCE_SLOT, vr) * w->dt;
         acc->diss += dk;
         life_dissipation(w, i, j, hist[FLOE_DISS_SLOT] + dk);
@@ -369,9 +411,25 @@ static inline __attribute__((always_inline)) int pair_book(floe_world *w, const 
                                                            const stage_env *env, int i, int j,
                                                            const floe_contact *c, const floe_contact_result *res,
                                                            const double fx[3], double ex, double *hist,
-                                                           stage_acc *acc) {
+                                                           stage_acc *acc, const double *xb) {
     const floe_particles *p = env->p;
     acc->elastic += res->energy + ex;
+    double l[3] = {0, 0, 0};
+    if (env->cell || ctx->record) floe_v3_sub(l, xb, p->x + 3 * i);
+    if (env->cell) {
+        /* the homogenised stress's sum, and the servo's stiffness (eq 29's D_abab) */
+        double ft[3];
+        floe_v3_add(ft, res->force, fx);
+        for (int a = 0; a < 3; a++)
+            for (int b = 0; b < 3; b++) acc->vir[3 * a + b] += l[a] * ft[b];
+        if (env->cell->want_kdiag) {
+            const floe_contact_law *law = w->laws[p->material[i] * env->nm + p->material[j]];
+            double kn = 0, cn = 0;
+            if (law && law->klass->stiffness) law->klass->stiffness(law, c->r_eff, c->m_eff, c->depth, &kn, &cn);
+            for (int a = 0; a < 3; a++)
+                for (int b = 0; b < 3; b++) acc->kdiag[3 * a + b] += kn * c->n[a] * c->n[a] * l[b] * l[b];
+        }
+    }
     /* dissipation ledger: work done on the contact by the relative motion over the step
      * (mid-step velocities) minus the change of its stored energy */
     if (env->stepping) {
@@ -388,6 +446,12 @@ static inline __attribute__((always_inline)) int pair_book(floe_world *w, const 
             double wg = -floe_v3_dot(fav, c->n) * grow * c->dt;
             wc += wg;
             acc->wgrow += wg;
+        }
+        if (env->cell) { /* the work of the cell's deformation on the contact: fav . L l dt */
+            const double *L = env->cell->L;
+            double la[3];
+            for (int a = 0; a < 3; a++) la[a] = L[3 * a] * l[0] + L[3 * a + 1] * l[1] + L[3 * a + 2] * l[2];
+            acc->wgrow += floe_v3_dot(fav, la) * c->dt;
         }
         double dk = wc - (res->energy - hist[FLOE_ENERGY_SLOT]);
         acc->diss += dk;
@@ -408,7 +472,7 @@ static inline __attribute__((always_inline)) int pair_book(floe_world *w, const 
         floe_v3_add(rec.force, rec.force, fx);
         rec.fn += c->fn_extra;
         rec.energy += ex;
-        if (push_contact(w, c, &rec)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        if (push_contact(w, c, &rec, l)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
     return FLOE_OK;
 }
@@ -434,13 +498,14 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     c.fn_extra = 0.0;
     int r = 0, ov_done = 0;
     /* bounding spheres apart: no contact for any pair of shapes (most list pairs) */
-    const double *xa = p->x + 3 * i, *xb = p->x + 3 * j;
+    double xs[3];
+    const double *xa = p->x + 3 * i, *xb = pair_image(env, k, p->x + 3 * j, xs);
     double rad_i = p->radius[i], rad_j = p->radius[j];
     double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2], rs = rad_i + rad_j;
     if (any_pieces && (p->pieces[i] > 1 || p->pieces[j] > 1)) {
         /* compound bodies: the bounding spheres of this entry's two pieces */
         double ca[3], cb[3];
-        floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
+        floe_body_ref bi = body_ref(w, i), bj = body_ref_at(w, j, xb);
         floe_piece_centre(&bi, FLOE_SUB_A(sub), ca, &rad_i);
         floe_piece_centre(&bj, FLOE_SUB_B(sub), cb, &rad_j);
         dx = cb[0] - ca[0]; dy = cb[1] - ca[1]; dz = cb[2] - ca[2];
@@ -467,11 +532,11 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
         } else if (env->overlap2d && pair_wants_overlap(w, i, j, nm)) {
             /* two polygons under an overlap law: the overlap is the exact test (area > 0),
              * no deepest-point LP before it */
-            floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
+            floe_body_ref bi = body_ref(w, i), bj = body_ref_at(w, j, xb);
             r = floe_detect_overlap(&dctx, &bi, &bj, sub, warm, &c);
-            if (r == -FLOE_ENOTSUP) r = detect_pair(w, &dctx, i, j, sub, warm, &c); /* a disc, a wall */
+            if (r == -FLOE_ENOTSUP) r = detect_pair_at(w, &dctx, i, j, xb, sub, warm, &c); /* a disc, a wall */
             else ov_done = 1;
-        } else r = detect_pair(w, &dctx, i, j, sub, warm, &c);
+        } else r = detect_pair_at(w, &dctx, i, j, xb, sub, warm, &c);
     } else if (!(rs < INFINITY)) {
         r = detect_pair(w, &dctx, i, j, sub, warm, &c);
     } else if (warm) {
@@ -480,7 +545,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     const floe_contact_law *law = r > 0 ? w->laws[p->material[i] * nm + p->material[j]] : NULL;
     const floe_law_info linfo = r == 1 && (any_overlap || env->any_floe) ? floe_contact_law_info(law) : (floe_law_info){0};
     if (!ov_done && (linfo.needs_overlap || linfo.prefers_overlap)) {
-        floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
+        floe_body_ref bi = body_ref(w, i), bj = body_ref_at(w, j, xb);
         r = floe_detect_overlap(&dctx, &bi, &bj, sub, NULL, &c);
         if (r == -FLOE_ENOTSUP && linfo.prefers_overlap) { /* not two polytopes: the deepest point */
             r = 1;
@@ -500,7 +565,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
                                 w->geoms[p->geom[i]]->klass->name, w->geoms[p->geom[j]]->klass->name);
     double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
     if (r == 0) {
-        if (nl->touching[k]) pair_release(w, p, nl, k, i, j, stepping, acc);
+        if (nl->touching[k]) pair_release(w, p, nl, k, i, j, stepping, acc, env, xb);
         return FLOE_OK;
     }
     nl->touching[k] = 1;
@@ -515,6 +580,9 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     floe_v3_cross(ui, p->w + 3 * i, ri);
     floe_v3_cross(uj, p->w + 3 * j, rj);
     for (int a = 0; a < 3; a++) c.vr[a] = (p->v[3 * i + a] + ui[a]) - (p->v[3 * j + a] + uj[a]);
+    double lb[3];
+    floe_v3_sub(lb, xb, xa);
+    if (env->cell) pair_affine_sub(env, lb, c.vr);
     c.vn = floe_v3_dot(c.vr, c.n);
     floe_v3_sub(c.wr, p->w + 3 * i, p->w + 3 * j);
     if (track) { /* adaptive steps: overlap change over the step relative to the size */
@@ -549,6 +617,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
         floe_v3_cross(uc_i, p->w + 3 * i, rc_i);
         floe_v3_cross(uc_j, p->w + 3 * j, rc_j);
         for (int a = 0; a < 3; a++) c.vr[a] = (p->v[3 * i + a] + uc_i[a]) - (p->v[3 * j + a] + uc_j[a]);
+        if (env->cell) pair_affine_sub(env, lb, c.vr);
         c.vn = floe_v3_dot(c.vr, c.n);
         for (int a = 0; a < 3; a++) c.vt[a] = c.vr[a] - c.vn * c.n[a];
     }
@@ -595,7 +664,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
             p->t[3 * i + a] += tx_i[a];
             p->t[3 * j + a] += tx_j[a];
         }
-    return pair_book(w, ctx, env, i, j, &c, &res, fx, ex, hist, acc);
+    return pair_book(w, ctx, env, i, j, &c, &res, fx, ex, hist, acc, xb);
 }
 
 /* Entry k when both particles are spheres, under a law that needs no overlap area: the
@@ -607,12 +676,13 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
     floe_particles *p = env->p;
     floe_neighbor_list *nl = env->nl;
     const int i = nl->pi[k], j = nl->pj[k];
-    const double *xa = p->x + 3 * i, *xb = p->x + 3 * j;
+    double xs[3];
+    const double *xa = p->x + 3 * i, *xb = pair_image(env, k, p->x + 3 * j, xs);
     const double rad_i = p->radius[i], rad_j = p->radius[j];
     const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2], rs = rad_i + rad_j;
     const double d2 = dx * dx + dy * dy + dz * dz;
     if (!(d2 < rs * rs)) {
-        if (nl->touching[k]) pair_release(w, p, nl, k, i, j, env->stepping, acc);
+        if (nl->touching[k]) pair_release(w, p, nl, k, i, j, env->stepping, acc, env, xb);
         return FLOE_OK;
     }
     const floe_contact_law *law = w->laws[p->material[i] * env->nm + p->material[j]];
@@ -633,6 +703,10 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
     floe_v3_cross(ui, wi, ri);
     floe_v3_cross(uj, wj, rj);
     for (int a = 0; a < 3; a++) c.vr[a] = (vi[a] + ui[a]) - (vj[a] + uj[a]);
+    if (env->cell) {
+        const double l[3] = {dx, dy, dz};
+        pair_affine_sub(env, l, c.vr);
+    }
     c.vn = floe_v3_dot(c.vr, c.n);
     floe_v3_sub(c.wr, wi, wj);
     if (env->track) {
@@ -658,7 +732,7 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
         Tj[a] += -tj[a] + res.torque_j[a];
     }
     const double zero[3] = {0, 0, 0};
-    return pair_book(w, ctx, env, i, j, &c, &res, zero, 0.0, hist, acc);
+    return pair_book(w, ctx, env, i, j, &c, &res, zero, 0.0, hist, acc, xb);
 }
 
 static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, floe_provider_out *out) {
@@ -690,10 +764,10 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     if (w->pieces_seen > w->ngeoms) w->pieces_seen = w->any_pieces = 0; /* geometries taken back */
     for (; w->pieces_seen < w->ngeoms; w->pieces_seen++) w->any_pieces |= floe_piece_count(w->geoms[w->pieces_seen]) > 1;
     const int any_pieces = w->any_pieces;
-    stage_acc acc = {eta_d, elastic, diss, wgrow};
+    stage_acc acc = {eta_d, elastic, diss, wgrow, {0}, {0}};
     const stage_env env = {p,         nl,         &dctx,       stepping, track,
                            any_growth, nm,        any_none,    any_pieces, any_overlap,
-                           any_floe,  w->def.dim == 2 && any_overlap};
+                           any_floe,  w->def.dim == 2 && any_overlap, w->cell, w->cell ? nl->img : NULL};
     const int *pi = nl->pi, *pj = nl->pj;
     const unsigned char *touching = nl->touching;
     const double *x = p->x, *rad = p->radius;
@@ -708,6 +782,18 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     const int npairs = nl->npairs;
     if (any_pieces || use_warm)
         for (int k = 0; k < npairs; k++) cand[nc++] = k;
+    else if (env.img)
+        for (int k = 0; k < npairs; k++) {
+            /* periodic cell: the same test with j's image */
+            const int i = pi[k], j = pj[k];
+            double xs[3];
+            const double *xj = pair_image(&env, k, x + 3 * j, xs);
+            const double dx = xj[0] - x[3 * i], dy = xj[1] - x[3 * i + 1], dz = xj[2] - x[3 * i + 2];
+            const double rs = rad[i] + rad[j];
+            const int apart = (rs < INFINITY) & (dx * dx + dy * dy + dz * dz >= rs * rs) & !touching[k];
+            cand[nc] = k;
+            nc += !apart;
+        }
     else
         for (int k = 0; k < npairs; k++) {
             /* most entries of a loose packing: two bounding spheres apart, untouched before;
@@ -736,6 +822,11 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     wgrow = acc.wgrow;
 
     w->eta_depth = eta_d;
+    if (w->cell && !ctx->probe) {
+        memcpy(w->cell->virial, acc.vir, sizeof acc.vir);
+        memcpy(w->cell->kdiag, acc.kdiag, sizeof acc.kdiag);
+        w->cell->valid = 1;
+    }
     out->elastic = elastic;
     out->dissipated = diss;
     out->work_boundary = wgrow;

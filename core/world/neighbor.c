@@ -15,7 +15,7 @@ int floe_nl_init(floe_neighbor_list *nl) {
 
 void floe_nl_free(floe_neighbor_list *nl) {
     floe_kdtree_destroy(nl->tree);
-    free(nl->pi); free(nl->pj); free(nl->sub); free(nl->warm); free(nl->hist); free(nl->touching);
+    free(nl->pi); free(nl->pj); free(nl->sub); free(nl->img); free(nl->warm); free(nl->hist); free(nl->touching);
     free(nl->x_build); free(nl->walls); free(nl->scratch); free(nl->r_build); free(nl->q_walls); free(nl->cand);
     memset(nl, 0, sizeof *nl);
 }
@@ -58,7 +58,7 @@ static uint64_t mix(uint64_t k) {
     return k;
 }
 
-static int push_one(floe_neighbor_list *nl, int i, int j, int sub) {
+static int push_one(floe_neighbor_list *nl, int i, int j, int sub, int img) {
     if (nl->npairs == nl->cap) {
         int nc = nl->cap ? 2 * nl->cap : 1024;
         int *a = realloc(nl->pi, nc * sizeof(int));
@@ -70,23 +70,33 @@ static int push_one(floe_neighbor_list *nl, int i, int j, int sub) {
         int *c = realloc(nl->sub, nc * sizeof(int));
         if (!c) return FLOE_ENOMEM;
         nl->sub = c;
+        if (nl->cell) {
+            int *d = realloc(nl->img, nc * sizeof(int));
+            if (!d) return FLOE_ENOMEM;
+            nl->img = d;
+        }
         nl->cap = nc;
     }
     nl->pi[nl->npairs] = i;
     nl->pj[nl->npairs] = j;
     nl->sub[nl->npairs] = sub;
+    if (nl->cell) nl->img[nl->npairs] = img;
     nl->npairs++;
     return FLOE_OK;
 }
 
 /* one entry per piece pair: compound bodies turn with respect to their centre of mass
  * without a rebuild, so all their piece pairs are listed and culled in the force loop */
-static int push_pair(floe_neighbor_list *nl, const floe_particles *p, int i, int j) {
-    if (i > j) { int t = i; i = j; j = t; }
+static int push_pair(floe_neighbor_list *nl, const floe_particles *p, int i, int j, const int n[3]) {
+    int img = 0;
+    if (i > j) {
+        int t = i; i = j; j = t;
+        if (n) img = floe_img_encode(-n[0], -n[1], -n[2]);
+    } else if (n) img = floe_img_encode(n[0], n[1], n[2]);
     int na = p->pieces ? p->pieces[i] : 1, nb = p->pieces ? p->pieces[j] : 1;
-    if (na == 1 && nb == 1) return push_one(nl, i, j, 0);
+    if (na == 1 && nb == 1) return push_one(nl, i, j, 0, img);
     for (int a = 0; a < na; a++)
-        for (int b = 0; b < nb; b++) FLOE_TRY(push_one(nl, i, j, FLOE_SUB(a, b)));
+        for (int b = 0; b < nb; b++) FLOE_TRY(push_one(nl, i, j, FLOE_SUB(a, b), img));
     return FLOE_OK;
 }
 
@@ -94,9 +104,13 @@ static int cmp_pair(const void *a, const void *b) {
     const int *x = a, *y = b;
     if (x[0] != y[0]) return x[0] < y[0] ? -1 : 1;
     if (x[1] != y[1]) return x[1] < y[1] ? -1 : 1;
-    return (x[2] > y[2]) - (x[2] < y[2]);
+    if (x[2] != y[2]) return x[2] < y[2] ? -1 : 1;
+    return (x[3] > y[3]) - (x[3] < y[3]);
 }
-static uint64_t entry_hash(uint64_t key, int sub) { return mix(key ^ ((uint64_t)(uint32_t)sub * 0x9E3779B97F4A7C15ULL)); }
+/* an entry is (i, j, piece pair, image): the history follows all four */
+static uint64_t entry_hash(uint64_t key, int sub, int img) {
+    return mix(key ^ ((uint64_t)(uint32_t)sub * 0x9E3779B97F4A7C15ULL) ^ ((uint64_t)(uint32_t)img << 17));
+}
 
 int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int leaf_size) {
     int n = p->n;
@@ -104,7 +118,9 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     int nold = 0;
     uint64_t *okeys = NULL;
     double *ohist = NULL, *owarm = NULL;
-    int *osub = NULL;
+    int *osub = NULL, *oimg = NULL;
+    const floe_cell_state *cell = nl->cell;
+    const int *img_old = nl->img && nl->npairs ? nl->img : NULL;
     unsigned char *otouch = NULL;
     int hcap = 0;
     const int W = FLOE_DETECT_WARM, use_warm = nl->use_warm && nl->warm;
@@ -116,21 +132,24 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
         while (hcap < 2 * nold) hcap <<= 1;
         okeys = malloc(hcap * sizeof *okeys);
         osub = malloc(hcap * sizeof *osub);
+        oimg = malloc(hcap * sizeof *oimg);
         otouch = malloc(hcap);
         ohist = malloc((size_t)hcap * FLOE_MAX_HISTORY * sizeof *ohist);
         owarm = use_warm ? malloc((size_t)hcap * W * sizeof *owarm) : NULL;
-        if (!okeys || !osub || !otouch || !ohist || (use_warm && !owarm)) {
-            free(okeys); free(osub); free(otouch); free(ohist); free(owarm);
+        if (!okeys || !osub || !oimg || !otouch || !ohist || (use_warm && !owarm)) {
+            free(okeys); free(osub); free(oimg); free(otouch); free(ohist); free(owarm);
             return FLOE_ENOMEM;
         }
         for (int k = 0; k < hcap; k++) okeys[k] = UINT64_MAX;
         for (int k = 0; k < nl->npairs; k++) {
             if (!KEEP(k)) continue;
             uint64_t key = pair_key(nl->pi[k], nl->pj[k]);
-            size_t h = entry_hash(key, nl->sub[k]) & (hcap - 1);
+            const int im = img_old ? img_old[k] : 0;
+            size_t h = entry_hash(key, nl->sub[k], im) & (hcap - 1);
             while (okeys[h] != UINT64_MAX) h = (h + 1) & (hcap - 1);
             okeys[h] = key;
             osub[h] = nl->sub[k];
+            oimg[h] = im;
             otouch[h] = nl->touching[k];
             memcpy(ohist + h * FLOE_MAX_HISTORY, nl->hist + (size_t)k * FLOE_MAX_HISTORY,
                    FLOE_MAX_HISTORY * sizeof(double));
@@ -151,9 +170,13 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     }
     int *bidx = malloc((nb ? nb : 1) * sizeof(int));
     double *bx = malloc((nb ? nb : 1) * 3 * sizeof(double));
+    /* periodic cell: the tree holds the positions wrapped into the cell, x + H sh */
+    int *bsh = cell ? malloc((nb ? nb : 1) * 3 * sizeof(int)) : NULL;
+    int *nimg = cell && !nl->img ? malloc((size_t)(nl->cap ? nl->cap : 1) * sizeof(int)) : NULL;
+    if (nimg) nl->img = nimg;
     nl->walls = malloc((nw ? nw : 1) * sizeof(int));
-    if (!bidx || !bx || !nl->walls) {
-        free(bidx); free(bx); free(okeys); free(ohist); free(osub); free(otouch); free(owarm);
+    if (!bidx || !bx || !nl->walls || (cell && (!bsh || !nl->img))) {
+        free(bidx); free(bx); free(bsh); free(okeys); free(ohist); free(osub); free(oimg); free(otouch); free(owarm);
         return FLOE_ENOMEM;
     }
     double rmin = INFINITY;
@@ -161,6 +184,18 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     for (int i = 0; i < n; i++) {
         if (isfinite(p->radius[i])) {
             memcpy(bx + 3 * nb, p->x + 3 * i, 3 * sizeof(double));
+            if (cell) {
+                double d[3], sf[3];
+                floe_v3_sub(d, p->x + 3 * i, cell->o);
+                for (int r = 0; r < 3; r++) sf[r] = cell->Hinv[3 * r] * d[0] + cell->Hinv[3 * r + 1] * d[1] + cell->Hinv[3 * r + 2] * d[2];
+                for (int r = 0; r < 3; r++) {
+                    double fl = r < dim ? floor(sf[r]) : 0.0;
+                    bsh[3 * nb + r] = -(int)fl;
+                }
+                for (int r = 0; r < 3; r++)
+                    bx[3 * nb + r] += cell->H[3 * r] * bsh[3 * nb] + cell->H[3 * r + 1] * bsh[3 * nb + 1] +
+                                      cell->H[3 * r + 2] * bsh[3 * nb + 2];
+            }
             bidx[nb++] = i;
             if (p->radius[i] < rmin) rmin = p->radius[i];
         } else {
@@ -176,12 +211,41 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     /* mixed sizes: each pair is found from its larger particle (ties: the lower index),
      * whose query radius 2 r_i + skin covers every partner no larger than itself, so a few
      * big particles do not inflate the search of all the small ones */
-    for (int a = 0; a < nb && rc == FLOE_OK; a++) {
+    /* periodic cell: each particle also looks for the images of the others through the
+     * neighbouring cells' copies of itself, y + H m, m in {-1, 0, 1}^dim (the cell is wider than
+     * a reach: floe_cell_prepare), skipping the copies whose ball misses the cell */
+    double wd[3] = {INFINITY, INFINITY, INFINITY};
+    if (cell)
+        for (int r = 0; r < dim; r++) {
+            const double *h = cell->Hinv + 3 * r;
+            wd[r] = 1.0 / sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+        }
+    const int mr = cell ? 1 : 0, mz = cell && dim == 3 ? 1 : 0;
+    for (int a = 0; a < nb && rc == FLOE_OK; a++)
+      for (int m0 = -mr; m0 <= mr && rc == FLOE_OK; m0++)
+      for (int m1 = -mr; m1 <= mr && rc == FLOE_OK; m1++)
+      for (int m2 = -mz; m2 <= mz && rc == FLOE_OK; m2++) {
         int i = bidx[a];
         double reach = 2 * p->radius[i] + skin;
+        const double *qx = p->x + 3 * i;
+        double qy[3];
+        const int m[3] = {m0, m1, m2};
+        if (cell) {
+            double d[3], sf[3];
+            floe_v3_sub(d, bx + 3 * a, cell->o);
+            int skip = 0;
+            for (int r = 0; r < 3; r++) {
+                sf[r] = cell->Hinv[3 * r] * d[0] + cell->Hinv[3 * r + 1] * d[1] + cell->Hinv[3 * r + 2] * d[2] + m[r];
+                if (r < dim && (sf[r] * wd[r] < -reach || (sf[r] - 1) * wd[r] > reach)) skip = 1;
+            }
+            if (skip) continue;
+            for (int r = 0; r < 3; r++)
+                qy[r] = bx[3 * a + r] + cell->H[3 * r] * m0 + cell->H[3 * r + 1] * m1 + cell->H[3 * r + 2] * m2;
+            qx = qy;
+        }
         int cnt;
         for (;;) {
-            cnt = floe_kdtree_radius(nl->tree, p->x + 3 * i, reach, nl->scratch, nl->scratch_cap);
+            cnt = floe_kdtree_radius(nl->tree, qx, reach, nl->scratch, nl->scratch_cap);
             if (cnt <= nl->scratch_cap) break;
             int nc = cnt + cnt / 2 + 64;
             int *s = realloc(nl->scratch, nc * sizeof(int));
@@ -191,14 +255,21 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
         }
         if (rc) break;
         for (int k = 0; k < cnt; k++) {
-            int j = bidx[nl->scratch[k]];
+            const int b = nl->scratch[k], j = bidx[b];
             if (p->radius[j] > p->radius[i] || (p->radius[j] == p->radius[i] && j <= i)) continue;
             if (p->motion[i] != FLOE_FREE && p->motion[j] != FLOE_FREE) continue;
-            if (nl->exclude && nl->exclude(nl->exclude_ctx, i, j)) continue;
+            int n[3] = {0, 0, 0};
             double d[3];
             floe_v3_sub(d, p->x + 3 * j, p->x + 3 * i);
+            if (cell) {
+                /* x_j + H sh_j = y_j ~ y_i + H m = x_i + H (sh_i + m): j's image x_j + H n near x_i */
+                for (int r = 0; r < 3; r++) n[r] = bsh[3 * b + r] - bsh[3 * a + r] - m[r];
+                for (int r = 0; r < 3; r++) d[r] += cell->H[3 * r] * n[0] + cell->H[3 * r + 1] * n[1] + cell->H[3 * r + 2] * n[2];
+            }
+            /* bonded pairs (PD families, beams) are excluded only as their direct pair */
+            if (nl->exclude && !(n[0] | n[1] | n[2]) && nl->exclude(nl->exclude_ctx, i, j)) continue;
             double lim = p->radius[i] + p->radius[j] + skin;
-            if (floe_v3_dot(d, d) <= lim * lim) rc = push_pair(nl, p, i, j);
+            if (floe_v3_dot(d, d) <= lim * lim) rc = push_pair(nl, p, i, j, cell ? n : NULL);
         }
     }
     if (rc == FLOE_OK) {
@@ -220,22 +291,25 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             if (p->motion[i] != FLOE_FREE && p->motion[wi] != FLOE_FREE) continue;
             double d[3];
             floe_v3_sub(d, p->x + 3 * i, p->x + 3 * wi);
-            if (floe_v3_dot(d, nw) <= p->radius[i] + skin) rc = push_pair(nl, p, i, wi);
+            if (floe_v3_dot(d, nw) <= p->radius[i] + skin) rc = push_pair(nl, p, i, wi, NULL);
         }
     }
     free(bx);
     free(bidx);
+    free(bsh);
     if (rc == FLOE_OK) {
         /* deterministic order, cache friendly: sort by (i, j) */
-        int *tmp = malloc((size_t)(nl->npairs ? nl->npairs : 1) * 3 * sizeof(int));
+        int *tmp = malloc((size_t)(nl->npairs ? nl->npairs : 1) * 4 * sizeof(int));
         if (!tmp) rc = FLOE_ENOMEM;
         else {
             for (int k = 0; k < nl->npairs; k++) {
-                tmp[3 * k] = nl->pi[k]; tmp[3 * k + 1] = nl->pj[k]; tmp[3 * k + 2] = nl->sub[k];
+                tmp[4 * k] = nl->pi[k]; tmp[4 * k + 1] = nl->pj[k]; tmp[4 * k + 2] = nl->sub[k];
+                tmp[4 * k + 3] = cell ? nl->img[k] : 0;
             }
-            qsort(tmp, nl->npairs, 3 * sizeof(int), cmp_pair);
+            qsort(tmp, nl->npairs, 4 * sizeof(int), cmp_pair);
             for (int k = 0; k < nl->npairs; k++) {
-                nl->pi[k] = tmp[3 * k]; nl->pj[k] = tmp[3 * k + 1]; nl->sub[k] = tmp[3 * k + 2];
+                nl->pi[k] = tmp[4 * k]; nl->pj[k] = tmp[4 * k + 1]; nl->sub[k] = tmp[4 * k + 2];
+                if (cell) nl->img[k] = tmp[4 * k + 3];
             }
             free(tmp);
         }
@@ -261,8 +335,10 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
         if (nold) {
             for (int k = 0; k < nl->npairs; k++) {
                 uint64_t key = pair_key(nl->pi[k], nl->pj[k]);
-                size_t h = entry_hash(key, nl->sub[k]) & (hcap - 1);
-                while (okeys[h] != UINT64_MAX && (okeys[h] != key || osub[h] != nl->sub[k])) h = (h + 1) & (hcap - 1);
+                const int im = cell ? nl->img[k] : 0;
+                size_t h = entry_hash(key, nl->sub[k], im) & (hcap - 1);
+                while (okeys[h] != UINT64_MAX && (okeys[h] != key || osub[h] != nl->sub[k] || oimg[h] != im))
+                    h = (h + 1) & (hcap - 1);
                 if (okeys[h] == key) {
                     memcpy(nl->hist + (size_t)k * FLOE_MAX_HISTORY, ohist + h * FLOE_MAX_HISTORY,
                            FLOE_MAX_HISTORY * sizeof(double));
@@ -285,11 +361,19 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             }
             nl->n_build = n;
             nl->rebuilds++;
+            if (cell) {
+                memcpy(nl->Hb, cell->H, sizeof nl->Hb);
+                double rm = 0;
+                for (int i = 0; i < n; i++)
+                    if (isfinite(p->radius[i]) && p->radius[i] > rm) rm = p->radius[i];
+                nl->rmax_b = rm;
+            }
         }
     }
     free(okeys);
     free(ohist);
     free(osub);
+    free(oimg);
     free(otouch);
     free(owarm);
     if (rc) { /* leave a consistent (empty) list: the caller reports the error */

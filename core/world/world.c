@@ -165,6 +165,7 @@ void floe_world_destroy(floe_world *w) {
     floe_beam_set_destroy(w->beams);
     floe_world_providers_free(w); /* built-in and user providers */
     free(w->pbuf);
+    free(w->cell);
     free(w);
 }
 

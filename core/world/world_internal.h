@@ -11,6 +11,7 @@
 #include "floe_detect.h"
 #include "particle_store.h"
 #include "floe_world_beams.h"
+#include "floe_cell.h"
 
 
 typedef struct floe_motion_cb { int particle; floe_motion_fn fn; void *user; } floe_motion_cb;
@@ -18,12 +19,46 @@ typedef struct floe_motion_cb { int particle; floe_motion_fn fn; void *user; } f
 /* One active contact of the current step (the public floe_contact_info, floe_view.h). */
 typedef floe_contact_info floe_contact_rec;
 
+/* A periodic cell (floe_cell.h, core/world/cell.c); NULL in a world without one. */
+typedef struct floe_cell_state {
+    double o[3], H[9], Hinv[9];
+    double L[9];             /* velocity gradient of the present step, 1/s */
+    floe_cell_control ctl;
+    double virial[9];        /* sum over contacts of l (x) F (branch from i to j's image, force
+                                on i) at the last force evaluation, N m */
+    double kdiag[9];         /* servo: sum over contacts of k_n (n_a l_b)^2 (eq 29's D_abab x V) */
+    int want_kdiag;          /* a component is stress-controlled: the stage sums kdiag */
+    int valid;               /* virial is that of the last evaluation */
+    /* a strain increment in progress (floe_world_cell_strain): step k of n goes to
+     * H = H0 + (k / n) dH exactly */
+    int path; long path_k, path_n; double path_H0[9], path_dH[9], path_de[9]; int path_mask[9];
+    double rmax;             /* largest bounding radius (prepare) */
+} floe_cell_state;
+
+/* image code of a pair: j's image is x_j + H n, n packed 10 bits per component (0 = none) */
+static inline int floe_img_encode(int a, int b, int c) { return (a & 1023) | (b & 1023) << 10 | (c & 1023) << 20; }
+static inline void floe_img_decode(int code, int n[3]) {
+    n[0] = ((code & 1023) ^ 512) - 512;
+    n[1] = (((code >> 10) & 1023) ^ 512) - 512;
+    n[2] = (((code >> 20) & 1023) ^ 512) - 512;
+}
+/* the shift H n of image code `code` */
+static inline void floe_img_shift(const double H[9], int code, double s[3]) {
+    int n[3];
+    floe_img_decode(code, n);
+    for (int r = 0; r < 3; r++) s[r] = H[3 * r] * n[0] + H[3 * r + 1] * n[1] + H[3 * r + 2] * n[2];
+}
+
 /* Neighbour list with Verlet skin and per-pair history kept across rebuilds. */
 typedef struct floe_neighbor_list {
     floe_kdtree *tree;
     int npairs, cap;
     int *pi, *pj;            /* candidate pairs, i < j, walls included */
     int *sub;                /* piece pair FLOE_SUB(a, b) of compound bodies (0 otherwise) */
+    int *img;                /* periodic cell: image code of j (floe_img_encode); NULL without */
+    const floe_cell_state *cell; /* the world's cell (NULL: none), set before a build */
+    double Hb[9];            /* the cell at the last build */
+    double rmax_b;           /* the largest bounding radius at the last build */
     double *warm;            /* npairs * FLOE_DETECT_WARM warm-start state (ADMM/LP), allocated
                                 only when the scene has such pairs (use_warm) */
     int use_warm;
@@ -130,6 +165,7 @@ struct floe_world {
      * holds them too once prepared */
     struct floe_provider **uprov; int nuprov, uprov_cap;
     unsigned char *pbuf; size_t pbuf_cap;
+    floe_cell_state *cell;    /* periodic cell (floe_cell.h, cell.c); NULL without */
 };
 
 /* The staged force evaluation (core/world/forces.c, floe_provider.h): the providers of the
@@ -180,6 +216,14 @@ int floe_nl_needs_rebuild(const floe_neighbor_list *nl, const floe_particles *p)
 int floe_nl_needs_rebuild_after_drift(const floe_neighbor_list *nl, const floe_particles *p, double maxd2,
                                       int growth);
 int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int leaf_size);
+
+/* the periodic cell (core/world/cell.c): checks at prepare (what a cell refuses, its width),
+ * the step's velocity gradient (servo, strain path) before the drift, the affine map of the
+ * particles and the cell after it, and the rebuild test that discounts the affine motion */
+int floe_cell_prepare(floe_world *w);
+int floe_cell_begin_step(floe_world *w);
+int floe_cell_after_drift(floe_world *w, double dt);
+int floe_nl_needs_rebuild_cell(const floe_neighbor_list *nl, const floe_particles *p);
 
 /* detection of the pair (i, j), piece pair sub, at the particles' current poses
  * (contact/detect/floe_detect.h); for tests and diagnostics */
