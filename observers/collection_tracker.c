@@ -29,6 +29,8 @@
  * way, s_ab = (1/V) sum l_a f_b, is symmetric only in static equilibrium; we report its
  * symmetric part (sxy = (s_xy + s_yx)/2, ...).
  *
+ * In a periodic cell (floe_cell.h) d_ij runs to j's image and V is the cell's volume.
+ *
  * Volume V: the value given (> 0), otherwise the axis-aligned bounding box of the members,
  * each inflated by its bounding radius (an overestimate for non-spherical shapes). In 2D the
  * box is the bounding rectangle in x, y times a thickness of 1 m (consistent with 2D masses
@@ -50,6 +52,7 @@
  * the file. */
 #include "floe_observer.h"
 #include "file_writer.h"
+#include "floe_cell.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -99,6 +102,8 @@ static void stress_eval(const floe_world *w, const floe_particles_view *p, const
         }
     }
     double V = volume;
+    const int periodic = floe_world_cell(w, NULL, NULL);
+    if (!(V > 0) && periodic) V = floe_world_cell_volume(w); /* the periodic cell's */
     if (!(V > 0)) {
         if (out->particles == 0)
             V = 0;
@@ -117,7 +122,7 @@ static void stress_eval(const floe_world *w, const floe_particles_view *p, const
         int mi = member[i], mj = member[j];
         double l[3], f[3];
         if (mi && mj) {
-            floe_v3_sub(l, p->x + 3 * j, p->x + 3 * i);  /* d_ij = x_j - x_i */
+            floe_v3_copy(l, rc->branch);                  /* d_ij = x_j - x_i (j's image in a cell) */
             floe_v3_copy(f, rc->force);                   /* force on i (from j) */
             out->contacts++;
         } else if (mi) {

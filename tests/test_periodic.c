@@ -98,6 +98,18 @@ static void lattice_case(int dim) {
     double Vo[36];
     floe_tangent_to_voigt(D, Vo);
     CHECK_NEAR(Vo[0], kn / s, 1e-6, "Voigt D_11");
+    /* the RVE's measures: Z = 2 dim, fabric I / dim, porosity 1 - (sphere / cube) */
+    floe_rve_measures me;
+    CHECK(floe_world_cell_measures(w, &me) == FLOE_OK, "measures");
+    snprintf(what, sizeof what, "%dD lattice coordination", dim);
+    CHECK_NEAR(me.coordination, 2.0 * dim, 1e-12, what);
+    snprintf(what, sizeof what, "%dD lattice fabric F_00", dim);
+    CHECK_NEAR(me.fabric[0], 1.0 / dim, 1e-12, what);
+    const double solid = dim == 3 ? 4.0 / 3.0 * M_PI * r * r * r / (s * s * s) : M_PI * r * r / (s * s);
+    double vdef = (1 + de[0]) * (1 + de[4]) * (1 + de[8]);
+    snprintf(what, sizeof what, "%dD lattice porosity", dim);
+    CHECK_NEAR(me.porosity, 1 - solid / vdef, 1e-12, what);
+    CHECK_NEAR(me.void_ratio, me.porosity / (1 - me.porosity), 1e-12, "void ratio = n / (1 - n)");
     /* 1b. a finite increment with shear: the exact lattice stress */
     double de2[9] = {0};
     de2[0] = -2e-3; de2[4] = -1e-3; de2[1] = 4e-4; de2[3] = 1e-4;

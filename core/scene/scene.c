@@ -210,7 +210,7 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
 static const char *const sc_root_keys[] = {"name", "description", "dimension", "time", "gravity",
                                            "neighbor", "contact_detection", "mass_2d", "materials", "laws",
                                            "walls", "bodies", "peridynamics", "outputs", "bonds", "checks", "plugins",
-                                           "forces", NULL};
+                                           "forces", "cell", NULL};
 
 /* checks: {energy: stop | warn | off, energy_tolerance} (the energy watchdog, floe_world.h) */
 static int sc_checks(sc *s, const sc_map *r, floe_world_def *def)
@@ -505,6 +505,7 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     FLOE_TRY(sc_parse_walls(s, wv == wk ? NULL : wv, wk));
     { struct fy_node *bok, *bov = sc_get(&r, "bonds", &bok); FLOE_TRY(sc_parse_bonds(s, bov == bok ? NULL : bov, bok)); } /* beam bonds */
     { struct fy_node *fk, *fv = sc_get(&r, "forces", &fk); FLOE_TRY(sc_parse_forces(s, fv == fk ? NULL : fv, fk)); }
+    { struct fy_node *ck, *cv = sc_get(&r, "cell", &ck); if (cv) FLOE_TRY(sc_parse_cell(s, cv == ck ? NULL : cv, ck)); } /* periodic cell */
     FLOE_TRY(sc_check_pairs(s));
     FLOE_TRY(sc_check_memory(s, NULL, "the scene", 0));
     struct fy_node *ok;

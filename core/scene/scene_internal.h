@@ -201,6 +201,7 @@ int sc_node_list(sc *s, struct fy_node *v, struct fy_node *k, const char *field,
 int sc_node_long(sc *s, struct fy_node *v, struct fy_node *k, const char *field, long *out);
 int sc_num(sc *s, const sc_map *m, const char *key, int required, double def, double *out);
 int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key);
+int sc_parse_cell(sc *s, struct fy_node *v, struct fy_node *key);
 int sc_parse_bonds(sc *s, struct fy_node *seq, struct fy_node *key);
 int sc_parse_forces(sc *s, struct fy_node *seq, struct fy_node *key);
 /* a body entry {floe_field: {...}, material, ...}: a Voronoi field of 2D floes (scene_floes.c) */

@@ -422,3 +422,32 @@ int floe_world_cell_strain(floe_world *w, const double de[9], double max_rate, c
     memset(c->L, 0, sizeof c->L);
     return rc;
 }
+
+int floe_world_cell_measures(const floe_world *w, floe_rve_measures *out) {
+    memset(out, 0, sizeof *out);
+    if (!w->cell) return FLOE_EINVAL;
+    FLOE_TRY(floe_world_cell_stress(w, out->sigma, NULL));
+    const floe_contact_info *cs;
+    int nc = floe_world_contacts(w, &cs);
+    if (nc < 0) return FLOE_EINVAL;
+    for (int q = 0; q < nc; q++)
+        for (int a = 0; a < 3; a++)
+            for (int b = 0; b < 3; b++) out->fabric[3 * a + b] += cs[q].n[a] * cs[q].n[b];
+    if (nc > 0)
+        for (int k = 0; k < 9; k++) out->fabric[k] /= nc;
+    const floe_particles *p = &w->p;
+    double vs = 0;
+    for (int i = 0; i < p->n; i++) {
+        /* the shape's volume (2D: its area, x 1 m), whatever the masses were taken from */
+        floe_mass_properties mp;
+        if (floe_geometry_mass_properties(w->geoms[p->geom[i]], w->def.dim, 1.0, &mp) == FLOE_OK) vs += mp.volume;
+    }
+    out->contacts = nc;
+    out->particles = p->n;
+    out->coordination = p->n ? 2.0 * nc / p->n : 0.0;
+    out->volume = det3(w->cell->H);
+    out->solid_volume = vs;
+    out->porosity = 1.0 - vs / out->volume;
+    out->void_ratio = vs > 0 ? (out->volume - vs) / vs : INFINITY;
+    return FLOE_OK;
+}

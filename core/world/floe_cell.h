@@ -88,6 +88,22 @@ int floe_world_tangent_contact(const floe_world *w, double volume, double D[81])
  * V[6 I + J] = (D_ijkl + D_jikl + D_ijlk + D_jilk) / 4 */
 void floe_tangent_to_voigt(const double D[81], double V[36]);
 
+/* What an RVE reports (floe_world_cell_measures), at the last force evaluation:
+ *   sigma         the cell's stress (floe_world_cell_stress, Pa)
+ *   fabric        F = (1/Nc) sum_c n_c (x) n_c over the contacts (trace 1)
+ *   coordination  Z = 2 Nc / N (N: the particles)
+ *   solid_volume  sum of the particles' shape volumes (2D: areas x 1 m)
+ *   porosity      1 - solid_volume / volume; void_ratio (volume - solid) / solid */
+typedef struct floe_rve_measures {
+    double sigma[9], fabric[9];
+    double coordination, porosity, void_ratio;
+    double volume, solid_volume;
+    int contacts, particles;
+} floe_rve_measures;
+/* FLOE_EINVAL without a cell, before prepare, or when contacts were not recorded
+ * (floe_world_record_contacts) */
+int floe_world_cell_measures(const floe_world *w, floe_rve_measures *out);
+
 /* Apply the strain increment de (de[3 a + b]: the displacement gradient, so the cell goes
  * from H to (I + de) H, exactly, through linear steps of H) over the number of steps that
  * keeps every |L_ab| <= max_rate (1/s), at least one; components marked in stress_mask
