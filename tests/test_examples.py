@@ -35,6 +35,8 @@ usage: python3 tests/test_examples.py <floe_cli_path> <tests_dir>
   friction (mu = 0.7) at most 6 floes cross the constriction and at most 2 in the last 10 h while
   >= 30 floes wait upstream (the arch); without friction at least 4 more cross and >= 2 in the
   last 10 h (the floes keep flowing).
+- examples/rve-periodic (issue #13) to t = 0.4 s: the periodic cell's stress servo holds
+  sxx = syy = szz = -10 kPa within 1 %, coordination > 3, the energy ledger closes.
 Prints "N passed, N failed".
 """
 import csv
@@ -456,6 +458,26 @@ def check_rubber_cube(cli, root, tmp):
           % (min(ezz), z, max(exx), max(vm)))
 
 
+def check_rve_periodic(cli, root, tmp):
+    """examples/rve-periodic (issue #13) to t = 0.4 s: the cell's servo holds every normal
+    stress at -10 kPa within 1 % (mean of the last 5 rows), the packing is jammed (coordination
+    > 3), and the energy ledger closes with the cell's work booked (balance_error < 1e-3)."""
+    scene = copy_example(root, tmp, "rve-periodic", 0.4)
+    out = os.path.join(tmp, "rve-periodic-out")
+    if not run_example(cli, scene, out, "rve-periodic"):
+        return
+    rows = list(csv.DictReader(open(os.path.join(out, "stress.csv"))))[-5:]
+    for c in ("sxx [Pa]", "syy [Pa]", "szz [Pa]"):
+        m = sum(float(r[c]) for r in rows) / len(rows)
+        check(abs(m + 1e4) < 100, "rve-periodic: %s = %.1f Pa, target -10000 within 1 %%" % (c, m))
+    z = float(rows[-1]["coordination"])
+    check(z > 3, "rve-periodic: jammed, coordination %.2f > 3" % z)
+    erows = list(csv.DictReader(open(os.path.join(out, "energy.csv"))))
+    err = float(erows[-1]["balance_error"])
+    check(err < 1e-3, "rve-periodic: energy balance error %.2e < 1e-3" % err)
+    print("  rve-periodic: coordination %.2f, balance error %.2e" % (z, err))
+
+
 def main():
     cli, tests = sys.argv[1], sys.argv[2]
     root = os.path.dirname(os.path.abspath(tests))
@@ -507,6 +529,7 @@ def main():
         check_free_drift(cli, root, tmp)
         check_breakup(cli, root, tmp)
         check_strait_jam(cli, root, tmp)
+        check_rve_periodic(cli, root, tmp)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     finish("test_examples")
