@@ -6,6 +6,7 @@
  * 1-based line and column. Packings (lattice, hexagonal, random) are expanded here; the
  * world does the physics. ParticLS §5.2 (growing radius) and §5.3 (RVE) are the examples. */
 #include "scene_internal.h"
+#include "floe_cell.h"
 #include "floe_integrator.h"
 
 /* ------------------------------------------------------------------------------------ */
@@ -154,6 +155,25 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
     sc_cat(&b, "%s\n", first ? "none (no pair of particles can touch)" : "");
     sc_cat(&b, "gravity:    (%g, %g, %g) m/s^2\n", w->def.gravity[0], w->def.gravity[1],
            w->def.gravity[2]);
+    double cH[9];
+    if (floe_world_cell(w, NULL, cH)) {
+        floe_cell_control cc;
+        floe_world_cell_get_control(w, &cc);
+        static const char *const cn[] = {"xx", "xy", "xz", "yx", "yy", "yz", "zx", "zy", "zz"};
+        sc_cat(&b, "cell:       periodic, a = (%g, %g, %g), b = (%g, %g, %g), c = (%g, %g, %g) m; volume %g m^3\n",
+               cH[0], cH[3], cH[6], cH[1], cH[4], cH[7], cH[2], cH[5], cH[8], floe_world_cell_volume(w));
+        int first_c = 1;
+        for (int k = 0; k < 9; k++) {
+            if (cc.mode[k] == FLOE_CELL_STRESS)
+                sc_cat(&b, "%s%s stress %g Pa", first_c ? "            control: " : ", ", cn[k], cc.stress[k]);
+            else if (cc.rate[k] != 0)
+                sc_cat(&b, "%s%s rate %g 1/s", first_c ? "            control: " : ", ", cn[k], cc.rate[k]);
+            else continue;
+            first_c = 0;
+        }
+        if (!first_c && cc.max_rate > 0) sc_cat(&b, "; servo at most %g 1/s\n", cc.max_rate);
+        else if (!first_c) sc_cat(&b, "\n");
+    }
     double dtc = floe_world_critical_dt(w), dt = floe_world_dt(w);
     floe_dt_estimates est;
     floe_world_dt_estimates(w, &est);
