@@ -537,6 +537,25 @@ static void test_pd_scene(void)
     expect_error("stretch and energy", t, NULL, "not both", NULL);
 }
 
+/* the periodic cell block (core/scene/scene_cell.c, docs/periodic.md) */
+static void test_cell(void)
+{
+    printf("periodic cell\n");
+    const char *ok = BASE_MATS ONE_BODY "cell: {size: [0.01, 0.01, 0.01]}\n";
+    const char *t = edit(ok, "size:", "sise:");
+    expect_error("cell key misspelled", t, loc_of(t, "sise", 0), "did you mean 'size'?", NULL);
+    t = edit(ok, "[0.01, 0.01, 0.01]", "[0.01, 0, 0.01]");
+    expect_error("cell size 0", t, NULL, "cell.size", "> 0");
+    t = edit(ok, "0.01]}", "0.01], strain_rate: {xx: -1}, stress: {xx: -100}, max_strain_rate: 1}");
+    expect_error("rate and stress on xx", t, NULL, "xx", "both a strain rate and a stress");
+    t = edit(ok, "0.01]}", "0.01], stress: {zz: -100}}");
+    expect_error("stress without max rate", t, NULL, "max_strain_rate", "required");
+    t = edit(ok, "0.01]}", "0.01], strain_rate: {xq: 1}}");
+    expect_error("unknown component", t, loc_of(t, "xq", 0), "'xq'", NULL);
+    t = edit(ok, "[0.01, 0.01, 0.01]", "[0.003, 0.01, 0.01]");
+    expect_error("cell of 1.5 diameters", t, loc_of(t, "[0.003", 0), "two particle diameters", NULL);
+}
+
 int main(void)
 {
     test_malformed();
@@ -548,5 +567,6 @@ int main(void)
     test_valid();
     test_shapes();
     test_pd_scene();
+    test_cell();
     return check_summary("test_scene_errors");
 }

@@ -13,7 +13,9 @@
  * A component may be given a strain rate or a stress, not both. */
 #include "scene_internal.h"
 #include "floe_cell.h"
+#include "floe_view.h"
 
+#include <math.h>
 #include <string.h>
 
 static const char *const comp_names[] = {"xx", "xy", "xz", "yx", "yy", "yz", "zx", "zy", "zz", NULL};
@@ -63,6 +65,21 @@ int sc_parse_cell(sc *s, struct fy_node *v, struct fy_node *key) {
     }
     if (floe_world_set_cell(s->w, o, H) != FLOE_OK)
         return sc_fail(s, FLOE_EINVAL, key, "cell: %s", floe_world_last_error(s->w));
+    {
+        /* the width check of prepare, here with the line */
+        floe_particles_view pv;
+        double wd[3], rmax = 0;
+        floe_world_particles(s->w, &pv);
+        for (int i = 0; i < pv.n; i++)
+            if (pv.radius[i] > rmax && pv.radius[i] < INFINITY) rmax = pv.radius[i];
+        floe_world_cell_widths(s->w, wd);
+        for (int a = 0; a < s->dim; a++)
+            if (wd[a] < 4 * rmax)
+                return sc_fail(s, FLOE_EINVAL, sc_get(&cm, "size", NULL),
+                               "cell: %g m wide across the faces of cell vector %d, less than two particle "
+                               "diameters (the largest bounding diameter is %g m): make the cell larger", wd[a], a,
+                               2 * rmax);
+    }
     floe_cell_control c = floe_default_cell_control();
     int rset[9], sset[9];
     FLOE_TRY(read_components(s, &cm, "strain_rate", c.rate, rset));
