@@ -125,9 +125,12 @@ def test_views_are_zero_copy_and_read_only(tmp_path):
 
 def test_two_sphere_overlap_follows_the_linear_law(tmp_path):
     w = floe.World.from_string(PAIR, outdir=str(tmp_path))
+    w.step()
     with pytest.raises(floe.FloeError, match="record_contacts"):
-        w.step()
         w.contacts()
+    with pytest.raises(floe.FloeError, match="record_contacts"):
+        w.collection_stress()
+    assert w.contact_count() == 1   # counted without records
     w.record_contacts()
     w.step()
     c = w.contacts()
