@@ -12,6 +12,7 @@ pkgs+=(libnetcdf-dev)        # gridded velocity fields from NetCDF files (FLOE_W
 pkgs+=(libshp-dev)           # floes and coastlines from ESRI shapefiles (FLOE_WITH_SHAPELIB)
 pkgs+=(clang)                # the scene fuzzer (scripts/fuzz.sh, libFuzzer)
 pkgs+=(python3-matplotlib)   # scripts/plot_fsd.py (floe size distribution PNG; its test skips without)
+pkgs+=(python3-numpy python3-cffi python3-pytest)   # the Python package python/ (FLOE_BUILD_PYTHON)
 if [[ "${1:-}" == "--bench" ]]; then
   pkgs+=(g++ libnanoflann-dev liggghts)
 fi
