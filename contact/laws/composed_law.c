@@ -31,6 +31,14 @@ void floe_tangential_part_destroy(floe_tangential_part *tp) {
     else free(tp);
 }
 
+int floe_composed_law_set_friction(floe_contact_law *law, double mu) {
+    floe_composed_law *L = (floe_composed_law *)law;
+    if (!L->tp) return FLOE_ENOTSUP;
+    L->tp->friction = mu;
+    law->friction = mu;
+    return FLOE_OK;
+}
+
 static int composed_force(const floe_contact_law *law, const floe_contact *c, double *hist, floe_contact_result *out) {
     const floe_composed_law *L = (const floe_composed_law *)law;
     for (int k = 0; k < 3; ++k) out->force[k] = out->torque_i[k] = out->torque_j[k] = 0.0;

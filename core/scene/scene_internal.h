@@ -15,6 +15,7 @@
 #include "floe_pd.h"
 #include "floe_beam.h"
 #include "floe_provider.h"
+#include "floe_servo.h"
 
 #include <errno.h>
 #include <libfyaml.h>
