@@ -273,6 +273,10 @@ int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key);
 /* the body's radius_distribution (scene_psd.c), and n radii drawn from it into r, largest first */
 int sc_parse_psd(sc *s, const sc_map *body, sc_psd *d);
 int sc_psd_draw(const sc_psd *d, long n, double *r);
+/* the scene's prepare block at node v (key k; scene_prepare.c): read and its walls made servo
+ * walls; run = 1 also runs it (compaction, friction, the clock back to 0) and writes a line
+ * saying what it reached into done */
+int sc_parse_prepare(sc *s, struct fy_node *v, struct fy_node *k, int run, char *done, size_t donelen);
 int sc_parse_walls(sc *s, struct fy_node *seq, struct fy_node *key);
 double sc_phys_mem(void);
 int sc_pos_num(sc *s, const sc_map *m, const char *key, double *out);
