@@ -3,7 +3,6 @@
 #include <stdlib.h>
 
 #include "floe_contact.h"
-#include "law_parts.h"
 
 floe_law_info floe_contact_law_info(const floe_contact_law *law)
 {
@@ -20,19 +19,6 @@ void floe_contact_law_destroy(floe_contact_law *law)
         law->klass->destroy(law);
     else
         free(law);
-}
-
-int floe_contact_law_set_friction(floe_contact_law *law, double mu)
-{
-    if (!law || !law->klass || !(mu >= 0.0) || !isfinite(mu)) return FLOE_EINVAL;
-    const floe_contact_law_class *k = law->klass;
-    if (k == &floe_linear_law_class) ((floe_linear_law *)law)->mu = mu;
-    else if (k == &floe_hertz_mindlin_law_class) ((floe_hertz_mindlin_law *)law)->mu = mu;
-    else if (k == &floe_overlap_law_class) ((floe_overlap_law *)law)->mu = mu;
-    else if (k == &floe_composed_law_class) return floe_composed_law_set_friction(law, mu);
-    else if (k != &floe_hopkins_law_class) return FLOE_ENOTSUP; /* hopkins reads base.friction */
-    law->friction = mu;
-    return FLOE_OK;
 }
 
 /* Coulomb friction with a shear spring (ParticLS eqs 17-18): see floe_contact.h and the

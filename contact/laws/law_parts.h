@@ -6,9 +6,6 @@
 
 #include "floe_contact.h"
 
-/* the composed law's friction setter (composed_law.c): its tangential part's mu;
- * FLOE_ENOTSUP for a frictionless composition (no tangential part) */
-int floe_composed_law_set_friction(floe_contact_law *law, double mu);
 
 #define FLOE_HM_DAMP_PREF 1.8257418583505538 /* 2 sqrt(5/6) */
 

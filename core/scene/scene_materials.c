@@ -277,7 +277,8 @@ static int sc_wall_servo(sc *s, const sc_map *wm, int idx)
     sc_map m;
     FLOE_TRY(sc_map_open(s, v == k ? NULL : v, k, f, keys, &m));
     floe_servo_def d = floe_default_servo_def();
-    FLOE_TRY(sc_pos_num(s, &m, "pressure", &d.pressure));
+    FLOE_TRY(sc_num(s, &m, "pressure", 1, 0, &d.pressure));
+    if (!(d.pressure > 0)) return sc_range(s, &m, "pressure", "> 0 (Pa; 2D: N/m)", d.pressure);
     FLOE_TRY(sc_num(s, &m, "max_speed", 0, 0.0, &d.max_speed));
     if (!(d.max_speed >= 0)) return sc_range(s, &m, "max_speed", ">= 0 (m/s; 0: automatic)", d.max_speed);
     FLOE_TRY(sc_num(s, &m, "gain", 0, 0.0, &d.gain));

@@ -45,7 +45,8 @@ static int psd_lognormal(sc *s, struct fy_node *v, struct fy_node *k, const char
         return sc_fail(s, FLOE_EPARSE, has_mean ? sc_get(&m, "mean", NULL) : m.at,
                        "%s: give either median or mean (m)", f);
     double c, sigma;
-    FLOE_TRY(sc_pos_num(s, &m, has_med ? "median" : "mean", &c));
+    FLOE_TRY(sc_num(s, &m, has_med ? "median" : "mean", 1, 0, &c));
+    if (!(c > 0) || !isfinite(c)) return sc_range(s, &m, has_med ? "median" : "mean", "> 0 (m)", c);
     FLOE_TRY(sc_num(s, &m, "sigma", 1, 0, &sigma));
     if (!(sigma >= 0) || !(sigma <= 5)) return sc_range(s, &m, "sigma", "in [0, 5] (of ln r)", sigma);
     FLOE_TRY(sc_num(s, &m, "min", 0, 0.0, &d->lo));
