@@ -37,6 +37,8 @@ usage: python3 tests/test_examples.py <floe_cli_path> <tests_dir>
   last 10 h (the floes keep flowing).
 - examples/rve-periodic (issue #13) to t = 0.4 s: the periodic cell's stress servo holds
   sxx = syy = szz = -10 kPa within 1 %, coordination > 3, the energy ledger closes.
+- examples/rve-compaction (issue #13): the preparation (servo walls, then friction) leaves
+  every wall at 2 kPa within 2 % at the start of the run and at its end; the ledger closes.
 Prints "N passed, N failed".
 """
 import csv
@@ -478,6 +480,45 @@ def check_rve_periodic(cli, root, tmp):
     print("  rve-periodic: coordination %.2f, balance error %.2e" % (z, err))
 
 
+def check_rve_compaction(cli, root, tmp):
+    """examples/rve-compaction (issue #13): the preparation compacts the sample to 2 kPa on
+    every servo wall; the main run (friction on) starts and ends there: each wall's pressure
+    -F.n / A (A the product of the other walls' separations) within 2 % of 2 kPa at t = 0
+    and at the end, the porosity of a random packing (0.3 to 0.5), the energy ledger closes."""
+    scene = os.path.join(root, "examples", "rve-compaction", "scene.yaml")
+    out = os.path.join(tmp, "rve-compaction")
+    if not run_example(cli, scene, out, "rve-compaction"):
+        return
+    rows = list(csv.DictReader(open(os.path.join(out, "walls.csv"))))
+    ids = sorted({int(r["id"]) for r in rows})
+    check(len(ids) == 6, "rve-compaction: six walls tracked (%d)" % len(ids))
+    if len(ids) != 6:
+        return
+    times = sorted({float(r["t [s]"]) for r in rows})
+    vbox_end = None
+    for t in (times[0], times[-1]):
+        w = {int(r["id"]): r for r in rows if float(r["t [s]"]) == t}
+        L = [float(w[ids[2 * a + 1]]["xyz"[a] + " [m]"]) - float(w[ids[2 * a]]["xyz"[a] + " [m]"]) for a in range(3)]
+        ps = []
+        for a in range(3):
+            A = L[(a + 1) % 3] * L[(a + 2) % 3]
+            for k in range(2):
+                f = float(w[ids[2 * a + k]]["f" + "xyz"[a] + " [N]"])
+                ps.append(abs(f) / A)
+        worst = max(abs(p - 2000.0) / 2000.0 for p in ps)
+        check(worst <= 0.02, "rve-compaction at t = %g s: every wall at 2 kPa within 2 %% (%s)"
+              % (t, ", ".join("%.0f" % p for p in ps)))
+        vbox = L[0] * L[1] * L[2]
+        print("  rve-compaction t = %.3f s: box %.4f x %.4f x %.4f m, wall pressures %s Pa (worst %.2f %%)"
+              % (t, L[0], L[1], L[2], " ".join("%.0f" % p for p in ps), 100 * worst))
+        vbox_end = vbox
+    erows = list(csv.DictReader(open(os.path.join(out, "energy.csv"))))
+    err = float(erows[-1]["balance_error"])
+    check(err < 1e-3, "rve-compaction energy balance error %.2e < 1e-3" % err)
+    check(vbox_end is not None and 0.00015 < vbox_end < 0.00030, "rve-compaction: the box shrank from 3.4e-4 m^3 (%.3g)"
+          % vbox_end)
+
+
 def main():
     cli, tests = sys.argv[1], sys.argv[2]
     root = os.path.dirname(os.path.abspath(tests))
@@ -530,6 +571,7 @@ def main():
         check_breakup(cli, root, tmp)
         check_strait_jam(cli, root, tmp)
         check_rve_periodic(cli, root, tmp)
+        check_rve_compaction(cli, root, tmp)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     finish("test_examples")

@@ -6,6 +6,7 @@
  *               mindlin Mindlin spring 8 G* sqrt(R* d) with a Coulomb limit (000 eq 36)
  * The kernels are those of the fused laws (law_parts.h, linear_law.c, contact_law.c), so
  * hertz + mindlin is hertz_mindlin and hooke + coulomb is viscoelastic to rounding. */
+#include <math.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -29,6 +30,28 @@ void floe_tangential_part_destroy(floe_tangential_part *tp) {
     if (!tp) return;
     if (tp->klass && tp->klass->destroy) tp->klass->destroy(tp);
     else free(tp);
+}
+
+static int composed_set_friction(floe_contact_law *law, double mu) {
+    floe_composed_law *L = (floe_composed_law *)law;
+    if (!L->tp) return FLOE_ENOTSUP;
+    L->tp->friction = mu;
+    law->friction = mu;
+    return FLOE_OK;
+}
+
+/* the laws' friction setter (floe_contact.h), here beside the composed law it reaches into */
+int floe_contact_law_set_friction(floe_contact_law *law, double mu)
+{
+    if (!law || !law->klass || !(mu >= 0.0) || !isfinite(mu)) return FLOE_EINVAL;
+    const floe_contact_law_class *k = law->klass;
+    if (k == &floe_linear_law_class) ((floe_linear_law *)law)->mu = mu;
+    else if (k == &floe_hertz_mindlin_law_class) ((floe_hertz_mindlin_law *)law)->mu = mu;
+    else if (k == &floe_overlap_law_class) ((floe_overlap_law *)law)->mu = mu;
+    else if (k == &floe_composed_law_class) return composed_set_friction(law, mu);
+    else if (k != &floe_hopkins_law_class) return FLOE_ENOTSUP; /* hopkins reads base.friction */
+    law->friction = mu;
+    return FLOE_OK;
 }
 
 static int composed_force(const floe_contact_law *law, const floe_contact *c, double *hist, floe_contact_result *out) {

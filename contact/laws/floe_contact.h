@@ -186,6 +186,12 @@ floe_contact_law *floe_linear_law_create(double kn, double ks, double gn, double
 floe_contact_law *floe_hertz_mindlin_law_create(const floe_material *a, const floe_material *b,
                                                 double restitution, double mu);
 void floe_contact_law_destroy(floe_contact_law *law);
+/* Set the law's Coulomb friction coefficient mu (>= 0, finite) in place: the built-in
+ * laws (linear/viscoelastic, hertz_mindlin, overlap_area, hopkins, a composed law with a
+ * tangential part). FLOE_EINVAL for NULL or mu out of range, FLOE_ENOTSUP for a law that
+ * cannot (a frictionless composition, a user law). A law with a zero tangential stiffness
+ * (linear ks = 0) stays frictionless whatever mu: give it ks > 0. */
+int floe_contact_law_set_friction(floe_contact_law *law, double mu);
 
 /* Hertz-Mindlin damping ratio for a restitution coefficient e (monotone map, computed by
  * integrating the dimensionless collision ODE and bisection; cached). */

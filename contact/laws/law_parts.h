@@ -6,6 +6,7 @@
 
 #include "floe_contact.h"
 
+
 #define FLOE_HM_DAMP_PREF 1.8257418583505538 /* 2 sqrt(5/6) */
 
 /* Hertz normal force with the restitution-calibrated dashpot (003 eqs 15-21, 000 eq 36):

@@ -61,6 +61,11 @@ int floe_reference_write(FILE *f, const char *kind, const char *name, int markdo
 int floe_help_kind_count(void);
 const char *floe_help_kind(int k);
 
+/* A scene's `prepare` block (docs/granular.md, "Preparation") runs when the scene is loaded
+ * for a run (not by `floe check`): its progress lines go to f (NULL, the default: silent;
+ * the CLI may pass stderr). Process-wide. */
+void floe_scene_set_prepare_log(FILE *f);
+
 /* The built-in default demo scene (YAML text). */
 const char *floe_scene_default_demo(void);
 

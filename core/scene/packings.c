@@ -42,6 +42,10 @@ static const floe_param random_schema[] = {
      .doc = "seed of the placement"},
     {.key = "max_tries", .type = FLOE_PARAM_INT, .unit = "", .min = 1, .max = 1e9, .def = 100000,
      .doc = "placement attempts at most (raised to count)"},
+    {.key = "radius_distribution", .type = FLOE_PARAM_NODE, .unit = "m",
+     .doc = "spheres (discs) of drawn radii instead of a shape: {uniform: [rmin, rmax]}, {lognormal: {median or "
+            "mean, sigma, min, max}} or {given: [[r, fraction], ...], by: volume (default) or number}, with seed "
+            "(docs/granular.md); placed largest first"},
 };
 
 const floe_registry_entry floe_packing_entry_lattice = {
@@ -62,7 +66,7 @@ const floe_registry_entry floe_packing_entry_random = {
     .doc = "count particles placed at random inside the region without overlap of their bounding spheres (random "
            "sequential addition; fails with a message when the region is jammed).",
     .source = "docs/scene-format.md, \"bodies\"",
-    .params = random_schema, .nparams = 4, .params_size = sizeof(packing_doc), .create = (floe_fn)loader_reads,
+    .params = random_schema, .nparams = 5, .params_size = sizeof(packing_doc), .create = (floe_fn)loader_reads,
     .flags = FLOE_ENTRY_LOADER_PARSES};
 
 static const floe_registry_entry *const builtin[] = {&floe_packing_entry_lattice, &floe_packing_entry_hexagonal,

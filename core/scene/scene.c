@@ -230,7 +230,7 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
 static const char *const sc_root_keys[] = {"name", "description", "dimension", "time", "gravity",
                                            "neighbor", "contact_detection", "mass_2d", "materials", "laws",
                                            "walls", "bodies", "peridynamics", "outputs", "bonds", "checks", "plugins",
-                                           "forces", "cell", NULL};
+                                           "forces", "cell", "prepare", NULL};
 
 /* checks: {energy: stop | warn | off, energy_tolerance} (the energy watchdog, floe_world.h) */
 static int sc_checks(sc *s, const sc_map *r, floe_world_def *def)
@@ -528,6 +528,12 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     { struct fy_node *ck, *cv = sc_get(&r, "cell", &ck); if (cv) FLOE_TRY(sc_parse_cell(s, cv == ck ? NULL : cv, ck)); } /* periodic cell */
     FLOE_TRY(sc_check_pairs(s));
     FLOE_TRY(sc_check_memory(s, NULL, "the scene", 0));
+    /* the preparation (scene_prepare.c): run before the outputs exist, only for a run */
+    char prepared[512] = "";
+    {
+        struct fy_node *pk, *pv = sc_get(&r, "prepare", &pk);
+        if (pv) FLOE_TRY(sc_parse_prepare(s, pv, pk, with_outputs, prepared, sizeof prepared));
+    }
     struct fy_node *ok;
     struct fy_node *ov = sc_get(&r, "outputs", &ok);
     FLOE_TRY(sc_parse_outputs(s, ov == ok ? NULL : ov, ok, outdir, with_outputs));
@@ -554,6 +560,11 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     info->nobservers = s->nobservers;
     info->nstates = s->nstates;
     sc_summary(s, info->name, outdir, with_outputs, info);
+    if (prepared[0]) {
+        size_t L = strlen(info->summary);
+        snprintf(info->summary + L, sizeof info->summary - L, "%s%s\n", L && info->summary[L - 1] != '\n' ? "\n" : "",
+                 prepared);
+    }
     return FLOE_OK;
 }
 

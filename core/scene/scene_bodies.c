@@ -264,6 +264,15 @@ static int sc_parse_shape(sc *s, const sc_map *body, sc_shape *sh)
     sc_field(f, sizeof f, body, "shape");
     memset(sh, 0, sizeof *sh);
     floe_q_identity(sh->fq);
+    if (sc_has(body, "radius_distribution")) {
+        /* spheres (discs) of drawn radii (scene_psd.c): sc_parse_bodies sets the radius */
+        if (v)
+            return sc_fail(s, FLOE_EPARSE, k, "%s: give either shape or radius_distribution (spheres of drawn "
+                           "radii)", f);
+        sh->kind = 0;
+        snprintf(sh->field, sizeof sh->field, "%s.radius_distribution", body->what);
+        return FLOE_OK;
+    }
     if (!v)
         return sc_fail(s, FLOE_EPARSE, body->at, "%s is required ({sphere: {radius: R}}, "
                        "{box: {size: [lx, ly, lz]}}, polyhedron, ...: docs/scene-format.md)", f);
@@ -633,14 +642,22 @@ static int sc_lattice(sc *s, const sc_map *m, int hex, sc_points *pts, const sc_
 
 /* Random sequential placement of non-overlapping bounding spheres inside the region (each
  * particle lies entirely inside it), with a cell grid for the overlap test. */
-static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
+static int sc_random_count(sc *s, const sc_map *m, long *count)
+{
+    FLOE_TRY(sc_long(s, m, "count", 1, 0, count));
+    if (*count < 1 || *count > SC_MAX_PARTICLES_PER_ENTRY)
+        return sc_range(s, m, "count", "in [1, 1e8] (particles per entry)", (double)*count);
+    return FLOE_OK;
+}
+
+/* radii: NULL (every particle's bounding radius is the shape's) or count drawn radii, largest
+ * first (scene_psd.c): each sphere then lies inside the region and apart from the others */
+static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c, const double *radii)
 {
     double lo[3], hi[3];
     FLOE_TRY(sc_parse_region(s, m, lo, hi));
     long count, seed, max_tries;
-    FLOE_TRY(sc_long(s, m, "count", 1, 0, &count));
-    if (count < 1 || count > SC_MAX_PARTICLES_PER_ENTRY)
-        return sc_range(s, m, "count", "in [1, 1e8] (particles per entry)", (double)count);
+    FLOE_TRY(sc_random_count(s, m, &count));
     FLOE_TRY(sc_long(s, m, "seed", 0, 1, &seed));
     FLOE_TRY(sc_long(s, m, "max_tries", 0, 100000, &max_tries));
     if (max_tries < 1 || max_tries > SC_MAX_TRIES)
@@ -661,7 +678,19 @@ static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
         }
     }
     /* the bounding spheres of count particles cannot fill more than the region */
-    {
+    if (radii) {
+        double vreg = 1, vsum = 0;
+        for (int a = 0; a < s->dim; a++) vreg *= hi[a] - lo[a];
+        for (long i = 0; i < count; i++)
+            vsum += s->dim == 3 ? 4.0 / 3.0 * M_PI * radii[i] * radii[i] * radii[i] : M_PI * radii[i] * radii[i];
+        if (vsum > SC_RANDOM_MAX_FRACTION(s->dim) * vreg)
+            return sc_fail(s, FLOE_EINVAL, sc_get(m, "count", NULL),
+                           "%s: %ld spheres of the radius distribution (solid %s %g) cannot be placed apart in the "
+                           "region (%s %g): they would fill %.0f %% of it, more than a random close packing (%.0f %%); "
+                           "enlarge region or lower count", m->what, count, s->dim == 3 ? "volume" : "area", vsum,
+                           s->dim == 3 ? "volume" : "area", vreg, 100.0 * vsum / vreg,
+                           100.0 * SC_RANDOM_MAX_FRACTION(s->dim));
+    } else {
         double vreg = 1, vone = s->dim == 3 ? 4.0 / 3.0 * M_PI * rb * rb * rb : M_PI * rb * rb;
         for (int a = 0; a < s->dim; a++) vreg *= hi[a] - lo[a];
         if ((double)count * vone > vreg)
@@ -703,9 +732,13 @@ static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
         failed++;
         double x[3];
         long ci[3];
+        /* with radii: this sphere's room is the region less its own radius (rb is the
+         * largest, the first one's) */
+        const double ri = radii ? radii[placed] : rb, shrink = rb - ri;
         for (int a = 0; a < 3; a++) {
-            x[a] = a < s->dim ? a0[a] + (a1[a] - a0[a]) * sc_rng_uniform(&rng) : a0[a];
+            x[a] = a < s->dim ? a0[a] - shrink + (a1[a] - a0[a] + 2.0 * shrink) * sc_rng_uniform(&rng) : a0[a];
             ci[a] = a < s->dim ? (long)floor((x[a] - a0[a]) / cell) : 0;
+            if (ci[a] < 0) ci[a] = 0; /* a smaller sphere nearer the wall than rb */
             if (ci[a] >= nc[a]) ci[a] = nc[a] - 1;
         }
         int ok = 1;
@@ -718,7 +751,8 @@ static int sc_random(sc *s, const sc_map *m, sc_points *pts, const sc_common *c)
                     for (long q = head[(cz * nc[1] + cy) * nc[0] + cx]; q >= 0 && ok; q = next[q]) {
                         double r[3];
                         floe_v3_sub(r, x, pts->x + 3 * q);
-                        if (floe_v3_dot(r, r) < d2min) ok = 0;
+                        double dmin = radii ? ri + radii[q] : 0;
+                        if (floe_v3_dot(r, r) < (radii ? dmin * dmin : d2min)) ok = 0;
                     }
                 }
         if (!ok) continue;
@@ -826,12 +860,13 @@ int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key)
                                                "grow", NULL};
     static const char *const keys_random[] = {"packing", "shape", "material", "region", "count",
                                               "seed", "max_tries", "velocity", "angular_velocity",
-                                              "orientation", "motion", "name", "grow", "thickness", NULL};
+                                              "orientation", "motion", "name", "grow", "thickness",
+                                              "radius_distribution", NULL};
     static const char *const keys_all[] = {"shape", "material", "position", "velocity",
                                            "angular_velocity", "orientation", "motion", "name", "thickness",
                                            "grow_rate", "grow", "packing", "origin", "counts",
                                            "region", "spacing", "jitter", "seed", "count",
-                                           "max_tries", NULL};
+                                           "max_tries", "radius_distribution", NULL};
     if (!seq || sc_is_missing(seq))
         return sc_fail(s, FLOE_EPARSE, key, "bodies must be a non-empty list of bodies or packings");
     if (!fy_node_is_sequence(seq))
@@ -889,6 +924,9 @@ int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key)
                 }
             }
         }
+        if (packing != 2 && packing != SC_PACKING_USER && sc_has(&m, "radius_distribution"))
+            return sc_fail(s, FLOE_EPARSE, sc_get(&m, "radius_distribution", NULL),
+                           "%s.radius_distribution is for the random packing (packing: random)", what);
         sc_common c;
         FLOE_TRY(sc_parse_common(s, &m, entry, packing != 3, &c));
         s->entry_first[entry] = s->nparticles;
@@ -904,8 +942,22 @@ int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key)
             if (c.grow) FLOE_TRY(sc_add_growth(s, &c, pidx, e, what));
         } else {
             sc_points pts = {0};
-            int rc = packing == SC_PACKING_USER ? sc_user_packing(s, &m, pent, &pts, &c)
-                   : packing == 2 ? sc_random(s, &m, &pts, &c)
+            double *radii = NULL; /* a radius distribution's radii, largest first */
+            int rc = FLOE_OK;
+            if (packing == 2 && sc_has(&m, "radius_distribution")) {
+                sc_psd psd;
+                long count = 0;
+                rc = sc_parse_psd(s, &m, &psd);
+                if (!rc) rc = sc_random_count(s, &m, &count);
+                if (!rc) rc = sc_check_memory(s, sc_get(&m, "count", NULL), what, (double)count);
+                if (!rc && !(radii = malloc((size_t)count * sizeof *radii)))
+                    rc = sc_fail(s, FLOE_ENOMEM, e, "out of memory");
+                if (!rc) rc = sc_psd_draw(&psd, count, radii);
+                if (!rc) c.shape.radius = c.shape.rb = radii[0];
+            }
+            if (!rc)
+                rc = packing == SC_PACKING_USER ? sc_user_packing(s, &m, pent, &pts, &c)
+                   : packing == 2 ? sc_random(s, &m, &pts, &c, radii)
                                   : sc_lattice(s, &m, packing == 1, &pts, &c);
             if (rc == FLOE_OK && c.grow && c.grow_index >= pts.n) {
                 struct fy_node *gk;
@@ -916,15 +968,22 @@ int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key)
             if (rc == FLOE_OK && (double)s->nparticles + (double)pts.n > 2.0e9)
                 rc = sc_fail(s, FLOE_EINVAL, e, "%s: too many particles", what);
             int gi = -1;
-            if (rc == FLOE_OK) rc = sc_add_geometry(s, &c.shape, e, what, &gi);
-            /* one shared geometry; the growing-radius state gives its particle its own */
+            if (rc == FLOE_OK && !radii) rc = sc_add_geometry(s, &c.shape, e, what, &gi);
+            /* one shared geometry (drawn radii: one per distinct radius, the radii sorted);
+             * the growing-radius state gives its particle its own */
             for (long i = 0; i < pts.n && rc == FLOE_OK; i++) {
                 int pidx;
+                if (radii && (i == 0 || radii[i] != radii[i - 1])) {
+                    c.shape.radius = radii[i];
+                    rc = sc_add_geometry(s, &c.shape, e, what, &gi);
+                    if (rc) break;
+                }
                 rc = sc_add_one(s, &c, gi, pts.x + 3 * i, entry, e, what, &pidx);
                 if (rc == FLOE_OK && c.grow && i == c.grow_index)
                     rc = sc_add_growth(s, &c, pidx, e, what);
             }
             free(pts.x);
+            free(radii);
             if (rc != FLOE_OK) return rc;
         }
         s->entry_count[entry] = s->nparticles - s->entry_first[entry];

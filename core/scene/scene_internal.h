@@ -15,6 +15,7 @@
 #include "floe_pd.h"
 #include "floe_beam.h"
 #include "floe_provider.h"
+#include "floe_servo.h"
 
 #include <errno.h>
 #include <libfyaml.h>
@@ -41,6 +42,9 @@
 /* random packing: placement stops after this many tries in a row without a placement */
 #define SC_MAX_FAILED_TRIES 10000000L
 #define SC_MAX_TRIES 1000000000L
+/* random packing of drawn radii: refused outright when the spheres' solid would fill more
+ * of the region than a random close packing does (3D 0.64, 2D 0.84) */
+#define SC_RANDOM_MAX_FRACTION(dim) ((dim) == 3 ? 0.64 : 0.84)
 /* Memory a scene needs, estimated before its particles are made (measured: 64k and 256k
  * touching spheres, check and run, ~550 B per particle; brittle-cylinder-impact ~35 B per
  * PD bond): a scene beyond the machine's memory is refused instead of dying part-way. */
@@ -120,6 +124,18 @@ typedef struct sc_map {
 
 typedef struct sc_rng { unsigned long long s; } sc_rng; /* floe_rng.h */
 
+/* A radius distribution (scene_psd.c): kind 0 uniform [lo, hi], 1 lognormal (ln r normal
+ * of mean mu and deviation sigma, truncated to [lo, hi]), 2 given radii r with their count
+ * probabilities p; seed of its own stream. */
+#define SC_PSD_MAX_GIVEN 64
+typedef struct sc_psd {
+    int kind;
+    double lo, hi, mu, sigma;
+    int ngiven;
+    double r[SC_PSD_MAX_GIVEN], p[SC_PSD_MAX_GIVEN];
+    unsigned long long seed;
+} sc_psd;
+
 /* the helpers shared by the section files (names kept short here, prefixed in the library) */
 #define sc_bool floe_sc_bool
 #define sc_build_laws floe_sc_build_laws
@@ -166,6 +182,9 @@ typedef struct sc_rng { unsigned long long s; } sc_rng; /* floe_rng.h */
 #define sc_parse_walls floe_sc_parse_walls
 #define sc_phys_mem floe_sc_phys_mem
 #define sc_pos_num floe_sc_pos_num
+#define sc_parse_psd floe_sc_parse_psd
+#define sc_psd_draw floe_sc_psd_draw
+#define sc_parse_prepare floe_sc_parse_prepare
 #define sc_range floe_sc_range
 #define sc_read_schema floe_sc_read_schema
 #define sc_rng_uniform floe_sc_rng_uniform
@@ -252,6 +271,13 @@ int sc_parse_materials(sc *s, struct fy_node *seq, struct fy_node *key);
 int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, const char *outdir,
                             int with_outputs);
 int sc_parse_pd(sc *s, struct fy_node *seq, struct fy_node *key);
+/* the body's radius_distribution (scene_psd.c), and n radii drawn from it into r, largest first */
+int sc_parse_psd(sc *s, const sc_map *body, sc_psd *d);
+int sc_psd_draw(const sc_psd *d, long n, double *r);
+/* the scene's prepare block at node v (key k; scene_prepare.c): read and its walls made servo
+ * walls; run = 1 also runs it (compaction, friction, the clock back to 0) and writes a line
+ * saying what it reached into done */
+int sc_parse_prepare(sc *s, struct fy_node *v, struct fy_node *k, int run, char *done, size_t donelen);
 int sc_parse_walls(sc *s, struct fy_node *seq, struct fy_node *key);
 double sc_phys_mem(void);
 int sc_pos_num(sc *s, const sc_map *m, const char *key, double *out);

@@ -267,9 +267,36 @@ int sc_build_laws(sc *s)
 /* ------------------------------------------------------------------------------------ */
 /* Walls                                                                                 */
 
+/* walls[i].servo: {pressure, max_speed, gain, area: A | auto} (floe_servo.h) */
+static int sc_wall_servo(sc *s, const sc_map *wm, int idx)
+{
+    static const char *const keys[] = {"pressure", "max_speed", "gain", "area", NULL};
+    struct fy_node *k, *v = sc_get(wm, "servo", &k);
+    char f[96];
+    sc_field(f, sizeof f, wm, "servo");
+    sc_map m;
+    FLOE_TRY(sc_map_open(s, v == k ? NULL : v, k, f, keys, &m));
+    floe_servo_def d = floe_default_servo_def();
+    FLOE_TRY(sc_num(s, &m, "pressure", 1, 0, &d.pressure));
+    if (!(d.pressure > 0)) return sc_range(s, &m, "pressure", "> 0 (Pa; 2D: N/m)", d.pressure);
+    FLOE_TRY(sc_num(s, &m, "max_speed", 0, 0.0, &d.max_speed));
+    if (!(d.max_speed >= 0)) return sc_range(s, &m, "max_speed", ">= 0 (m/s; 0: automatic)", d.max_speed);
+    FLOE_TRY(sc_num(s, &m, "gain", 0, 0.0, &d.gain));
+    if (!(d.gain >= 0)) return sc_range(s, &m, "gain", ">= 0 (m/(s Pa); 0: automatic)", d.gain);
+    struct fy_node *av = sc_get(&m, "area", NULL);
+    const char *at = av ? sc_text(av) : NULL;
+    if (av && !(at && !strcmp(at, "auto"))) {
+        FLOE_TRY(sc_num(s, &m, "area", 1, 0.0, &d.area));
+        if (!(d.area > 0)) return sc_range(s, &m, "area", "> 0 (m^2; 2D: m) or auto", d.area);
+    }
+    int rc = floe_world_add_servo_wall(s->w, idx, &d);
+    if (rc) return sc_fail(s, rc, v, "%s: %s", f, floe_world_last_error(s->w));
+    return FLOE_OK;
+}
+
 int sc_parse_walls(sc *s, struct fy_node *seq, struct fy_node *key)
 {
-    static const char *const keys[] = {"point", "normal", "material", "velocity", "name", NULL};
+    static const char *const keys[] = {"point", "normal", "material", "velocity", "name", "servo", NULL};
     if (!seq) return FLOE_OK;
     if (sc_is_missing(seq) || !fy_node_is_sequence(seq))
         return sc_fail(s, FLOE_EPARSE, sc_is_missing(seq) ? key : seq,
@@ -316,7 +343,24 @@ int sc_parse_walls(sc *s, struct fy_node *seq, struct fy_node *key)
             /* a kinematic particle moves with its prescribed (here constant) velocity */
             floe_v3_copy(s->w->p.v + 3 * idx, v);
         }
+        if (sc_has(&m, "servo")) {
+            if (moving)
+                return sc_fail(s, FLOE_EPARSE, sc_get(&m, "servo", NULL), "%s: give either velocity or servo (a servo "
+                               "wall moves by itself)", what);
+            FLOE_TRY(sc_wall_servo(s, &m, idx));
+        }
         s->nwalls = ++i;
+    }
+    /* the servo walls' automatic areas need the box of the other walls: checked here, at
+     * their entries */
+    it = NULL;
+    i = 0;
+    int first = s->w->p.n - s->nwalls;
+    while ((e = fy_node_sequence_iterate(seq, &it))) {
+        if (floe_world_is_servo_wall(s->w, first + i) && floe_world_servo_check(s->w, first + i))
+            return sc_fail(s, FLOE_EINVAL, fy_node_mapping_lookup_by_string(e, "servo", -1), "walls[%d].servo: %s", i,
+                           floe_world_last_error(s->w));
+        i++;
     }
     return FLOE_OK;
 }
