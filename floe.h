@@ -6,6 +6,7 @@
 #include "floe_contact.h"
 #include "floe_world.h"
 #include "floe_cell.h"
+#include "floe_servo.h"
 #include "floe_state.h"
 #include "floe_kdtree.h"
 #include "floe_observer.h"
