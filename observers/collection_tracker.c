@@ -122,7 +122,8 @@ static void stress_eval(const floe_world *w, const floe_particles_view *p, const
         int mi = member[i], mj = member[j];
         double l[3], f[3];
         if (mi && mj) {
-            floe_v3_copy(l, rc->branch);                  /* d_ij = x_j - x_i (j's image in a cell) */
+            if (periodic) floe_v3_copy(l, rc->branch);    /* d_ij = x_j' - x_i to j's image */
+            else floe_v3_sub(l, p->x + 3 * j, p->x + 3 * i); /* d_ij = x_j - x_i */
             floe_v3_copy(f, rc->force);                   /* force on i (from j) */
             out->contacts++;
         } else if (mi) {

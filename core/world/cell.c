@@ -374,9 +374,10 @@ int floe_nl_needs_rebuild_cell(const floe_neighbor_list *nl, const floe_particle
     return 0;
 }
 
-int floe_world_cell_strain(floe_world *w, const double de[9], double max_rate, const int *stress_mask, long *steps) {
+/* the path of a strain increment (floe_world_cell_strain, core/integrators/rve.c): checks,
+ * then step k of n goes to H0 + (k / n) dF H0 (mask: components left to the servo) */
+int floe_cell_path_begin(floe_world *w, const double de[9], double max_rate, const int *stress_mask, long *nsteps) {
     floe_cell_state *c = w->cell;
-    if (steps) *steps = 0;
     if (!c) return floe_world_error(w, FLOE_EINVAL, "strain increment: the world has no periodic cell");
     if (!(max_rate > 0) || !isfinite(max_rate))
         return floe_world_error(w, FLOE_EINVAL, "strain increment: max_rate must be > 0 (1/s), got %g", max_rate);
@@ -392,7 +393,6 @@ int floe_world_cell_strain(floe_world *w, const double de[9], double max_rate, c
     }
     if (!(det3(F) > 0))
         return floe_world_error(w, FLOE_EINVAL, "strain increment: det(I + de) = %g <= 0: the cell would invert", det3(F));
-    if (!w->prepared) FLOE_TRY(floe_world_prepare(w));
     double Hend[9], Hendi[9];
     mul3(F, c->H, Hend);
     if (inv3(Hend, Hendi) == FLOE_OK) {
@@ -413,14 +413,13 @@ int floe_world_cell_strain(floe_world *w, const double de[9], double max_rate, c
     double dF[9];
     for (int k = 0; k < 9; k++) c->path_de[k] = dF[k] = F[k] - (k % 4 == 0);
     mul3(dF, c->H, c->path_dH);
-    int rc = FLOE_OK;
-    for (long s = 0; s < n && rc == FLOE_OK; s++) {
-        rc = floe_world_step(w);
-        if (rc == FLOE_OK && steps) (*steps)++;
-    }
-    c->path = 0;
-    memset(c->L, 0, sizeof c->L);
-    return rc;
+    *nsteps = n;
+    return FLOE_OK;
+}
+void floe_cell_path_end(floe_world *w) {
+    if (!w->cell) return;
+    w->cell->path = 0;
+    memset(w->cell->L, 0, sizeof w->cell->L);
 }
 
 int floe_world_cell_measures(const floe_world *w, floe_rve_measures *out) {

@@ -166,6 +166,7 @@ struct floe_world {
     struct floe_provider **uprov; int nuprov, uprov_cap;
     unsigned char *pbuf; size_t pbuf_cap;
     floe_cell_state *cell;    /* periodic cell (floe_cell.h, cell.c); NULL without */
+    int obs_muted;            /* observers not called (the RVE's probes, core/integrators/rve.c) */
 };
 
 /* The staged force evaluation (core/world/forces.c, floe_provider.h): the providers of the
@@ -224,6 +225,8 @@ int floe_cell_prepare(floe_world *w);
 int floe_cell_begin_step(floe_world *w);
 int floe_cell_after_drift(floe_world *w, double dt);
 int floe_nl_needs_rebuild_cell(const floe_neighbor_list *nl, const floe_particles *p);
+int floe_cell_path_begin(floe_world *w, const double de[9], double max_rate, const int *stress_mask, long *nsteps);
+void floe_cell_path_end(floe_world *w);
 
 /* detection of the pair (i, j), piece pair sub, at the particles' current poses
  * (contact/detect/floe_detect.h); for tests and diagnostics */

@@ -300,6 +300,7 @@ int contacts_wanted(const floe_world *w) {
 }
 
 int observers_call(floe_world *w, int force_all) {
+    if (w->obs_muted) return FLOE_OK;
     for (int k = 0; k < w->nobs; k++) {
         floe_observer *o = w->obs[k];
         int due = force_all || observer_due(w, o);

@@ -76,6 +76,8 @@ typedef struct floe_contact_info {
     double force[3];
     double fn;
     double energy;
+    double branch[3];
+    double r_eff, m_eff;
 } floe_contact_info;
 int floe_world_contacts(const floe_world *w, const floe_contact_info **out);
 
