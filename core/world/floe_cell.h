@@ -74,6 +74,12 @@ int floe_world_cell_velocity_gradient(const floe_world *w, double L[9]);
  * without a cell or before prepare. */
 int floe_world_cell_stress(const floe_world *w, double sigma[9], double kinetic[9]);
 
+/* Evaluate the forces again at the present state, advancing nothing (no history, no
+ * ledger), with the contacts recorded: the stress, measures and eq 29 tangent below then
+ * describe the present state (e.g. right after loading a scene, before any step).
+ * FLOE_EINVAL before prepare. Works with or without a cell. */
+int floe_world_refresh_forces(floe_world *w);
+
 /* The contact-stiffness tangent of ParticLS eq 29 over the contacts of the last force
  * evaluation (recorded: floe_world_record_contacts), as a 4th-order tensor D[27 i + 9 j +
  * 3 k + l] (Pa):

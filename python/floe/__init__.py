@@ -16,8 +16,9 @@ from ._api import (FLOE_EINVAL, FLOE_EIO, FLOE_ENOMEM, FLOE_ENOTSUP, FLOE_EPARSE
 from ._api import call_err as _call_err
 from ._api import cstr as _cstr
 from .world import PARTICLE_FIELDS, World, contact_dtype
+from .rve import RVE
 
-__all__ = ["World", "FloeError", "Record", "load", "load_string", "load_plugin", "default_demo",
+__all__ = ["World", "RVE", "FloeError", "Record", "load", "load_string", "load_plugin", "default_demo",
            "contact_dtype", "PARTICLE_FIELDS", "ffi", "lib"]
 
 

@@ -84,6 +84,37 @@ int floe_world_contacts(const floe_world *w, const floe_contact_info **out);
 int floe_world_dim(const floe_world *w);
 int floe_world_is_prepared(const floe_world *w);
 
+/* ---- core/world/floe_cell.h ---- */
+int floe_world_set_cell(floe_world *w, const double origin[3], const double H[9]);
+int floe_world_cell(const floe_world *w, double origin[3], double H[9]);
+double floe_world_cell_volume(const floe_world *w);
+int floe_world_cell_widths(const floe_world *w, double width[3]);
+int floe_world_cell_wrap(const floe_world *w, const double x[3], double out[3]);
+typedef struct floe_cell_control {
+    int mode[9];
+    double rate[9];
+    double stress[9];
+    double max_rate;
+    double servo_time;
+} floe_cell_control;
+floe_cell_control floe_default_cell_control(void);
+int floe_world_cell_set_control(floe_world *w, const floe_cell_control *c);
+int floe_world_cell_get_control(const floe_world *w, floe_cell_control *c);
+int floe_world_cell_velocity_gradient(const floe_world *w, double L[9]);
+int floe_world_cell_stress(const floe_world *w, double sigma[9], double kinetic[9]);
+int floe_world_refresh_forces(floe_world *w);
+int floe_world_tangent_contact(const floe_world *w, double volume, double D[81]);
+void floe_tangent_to_voigt(const double D[81], double V[36]);
+typedef struct floe_rve_measures {
+    double sigma[9], fabric[9];
+    double coordination, porosity, void_ratio;
+    double volume, solid_volume;
+    int contacts, particles;
+} floe_rve_measures;
+int floe_world_cell_measures(const floe_world *w, floe_rve_measures *out);
+int floe_world_cell_strain(floe_world *w, const double de[9], double max_rate, const int *stress_mask,
+                           long *steps);
+
 /* ---- core/scene/floe_scene.h ---- */
 typedef struct floe_scene_info {
     char name[128];
