@@ -3,6 +3,7 @@
  * whole files through a temporary name and rename; the parts of a VTK XML series that the
  * vtk and outlines outputs share. */
 #include "file_writer.h"
+#include "floe_checkpoint.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -10,6 +11,7 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 enum { FW_INITIAL_CAP = 4096 };
@@ -42,6 +44,11 @@ static int write_all(int fd, const char *p, size_t n) {
     return 0;
 }
 
+/* floe_outputs_keep_existing (floe_checkpoint.h): files opened from now on in this thread
+ * keep their content (a restart) */
+static _Thread_local int keep_existing;
+void floe_outputs_keep_existing(int on) { keep_existing = on != 0; }
+
 int floe_fw_open(floe_file_writer *fw, const char *who, const char *path, const char *header,
                  char *err, size_t errlen) {
     memset(fw, 0, sizeof *fw);
@@ -54,6 +61,17 @@ int floe_fw_open(floe_file_writer *fw, const char *who, const char *path, const 
         if (err && errlen) snprintf(err, errlen, "%s: out of memory", who);
         floe_fw_free(fw);
         return FLOE_ENOMEM;
+    }
+    if (keep_existing) { /* a restart: the observer's restore cuts the file back */
+        fw->fd = open(path, O_WRONLY | O_CREAT | O_CLOEXEC, 0666);
+        off_t end = fw->fd >= 0 ? lseek(fw->fd, 0, SEEK_END) : -1;
+        if (end < 0) {
+            if (err && errlen) snprintf(err, errlen, "%s: cannot open %s: %s", who, path, strerror(errno));
+            floe_fw_free(fw);
+            return FLOE_EIO;
+        }
+        fw->offset = (long long)end;
+        return FLOE_OK;
     }
     fw->fd = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
     fw->offset = (long long)strlen(header);
@@ -381,4 +399,76 @@ void floe_fw_vtk_ascii_values(FILE *f, floe_fw_vtk_type t, int ncomp, int m, con
         }
         fputc('\n', f);
     }
+}
+
+/* ---- checkpoints ---- */
+
+size_t floe_fw_state_size(void) { return sizeof(long long) + sizeof(long) + sizeof(int); }
+
+unsigned char *floe_fw_state_save(const floe_file_writer *fw, long last_step, int observed, unsigned char *buf) {
+    buf = floe_fw_put(buf, &fw->offset, sizeof fw->offset);
+    buf = floe_fw_put(buf, &last_step, sizeof last_step);
+    return floe_fw_put(buf, &observed, sizeof observed);
+}
+
+int floe_fw_state_restore(floe_file_writer *fw, floe_world *w, long *last_step, int *observed,
+                          const unsigned char *buf) {
+    long long len;
+    buf = floe_fw_get(buf, &len, sizeof len);
+    buf = floe_fw_get(buf, last_step, sizeof *last_step);
+    floe_fw_get(buf, observed, sizeof *observed);
+    return floe_fw_resume(fw, w, len);
+}
+
+int floe_fw_resume(floe_file_writer *fw, floe_world *w, long long length) {
+    if (fw->fd < 0) fw->fd = open(fw->path, O_WRONLY | O_CREAT | O_CLOEXEC, 0666);
+    struct stat st;
+    if (fw->fd < 0 || fstat(fw->fd, &st) != 0)
+        return floe_world_report_error(w, FLOE_EIO, "%s: cannot reopen %s: %s", fw->who, fw->path, strerror(errno));
+    if ((long long)st.st_size < length)
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: %s has %lld bytes, fewer than the %lld it had at the "
+                                       "checkpoint: it was changed or removed since, the run cannot continue it "
+                                       "(restart with the output directory of the run that wrote the checkpoint)",
+                                       fw->who, fw->path, (long long)st.st_size, length);
+    if (ftruncate(fw->fd, (off_t)length) != 0 || lseek(fw->fd, (off_t)length, SEEK_SET) < 0)
+        return floe_world_report_error(w, FLOE_EIO, "%s: cannot cut %s back to %lld bytes: %s", fw->who, fw->path,
+                                       length, strerror(errno));
+    fw->offset = length;
+    floe_fw_discard(fw);
+    return FLOE_OK;
+}
+
+size_t floe_fw_series_state_size(const floe_fw_series *s) {
+    return sizeof(int) + sizeof(long) + sizeof(int) + (size_t)s->frames * sizeof(double);
+}
+
+unsigned char *floe_fw_series_state_save(const floe_fw_series *s, unsigned char *buf) {
+    buf = floe_fw_put(buf, &s->frames, sizeof s->frames);
+    buf = floe_fw_put(buf, &s->last_step, sizeof s->last_step);
+    buf = floe_fw_put(buf, &s->observed, sizeof s->observed);
+    return s->frames ? floe_fw_put(buf, s->times, (size_t)s->frames * sizeof(double)) : buf;
+}
+
+int floe_fw_series_state_restore(floe_fw_series *s, floe_world *w, const unsigned char *buf, size_t n) {
+    int frames;
+    if (n < sizeof(int)) return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state too short", s->who);
+    floe_fw_get(buf, &frames, sizeof frames);
+    if (frames < 0 || n < sizeof(int) + sizeof(long) + sizeof(int) + (size_t)frames * sizeof(double))
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state does not match", s->who);
+    if (frames > s->cap) {
+        double *t = realloc(s->times, (size_t)frames * sizeof *t);
+        if (!t) return floe_world_report_error(w, FLOE_ENOMEM, "%s: out of memory", s->who);
+        s->times = t;
+        s->cap = frames;
+    }
+    buf += sizeof frames;
+    buf = floe_fw_get(buf, &s->last_step, sizeof s->last_step);
+    buf = floe_fw_get(buf, &s->observed, sizeof s->observed);
+    if (frames) floe_fw_get(buf, s->times, (size_t)frames * sizeof(double));
+    s->frames = frames;
+    /* the collection as it was at the checkpoint (frames written after it are written again) */
+    if (frames > 0 && floe_fw_write_pvd(s->dir, s->prefix, s->times, s->frames) != FLOE_OK)
+        return floe_world_report_error(w, FLOE_EIO, "%s: writing %s/%s.pvd failed: %s", s->who, s->dir, s->prefix,
+                                       strerror(errno));
+    return FLOE_OK;
 }
