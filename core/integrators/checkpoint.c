@@ -599,7 +599,7 @@ static int restore_observers(floe_world *w, ibuf *r, char *err, size_t errlen) {
             return fail(err, errlen, FLOE_ENOTSUP, "output %d (%s) had no checkpoint hooks when the checkpoint was "
                         "written: it cannot be continued", k, name);
         w->err[0] = 0;
-        int rc = o->klass->begin ? o->klass->begin(o, w) : FLOE_OK;
+        int rc = o->klass->begin && !o->begun ? o->klass->begin(o, w) : FLOE_OK;
         if (!rc) rc = o->klass->restore(o, w, r->p + r->pos, (size_t)m);
         if (rc) return fail(err, errlen, rc, "output %d (%s) could not be continued: %s", k, name, w->err);
         r->pos += m;
@@ -726,7 +726,9 @@ static int check_header(const unsigned char *p, size_t len, const char *path, ui
 int floe_world_checkpoint_load(floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name,
                                char *err, size_t errlen) {
     if (!w || !path) return fail(err, errlen, FLOE_EINVAL, "checkpoint: no world or no path");
-    if (w->prepared)
+    /* a world freshly built: prepared by the scene loader (its outputs began and wrote the
+     * start, which the observers' restore cuts off again) or not, but no step taken */
+    if (w->step != 0 || w->finished)
         return fail(err, errlen, FLOE_EINVAL, "checkpoint %s: load it into a world freshly built from its scene, "
                     "before its first step", path);
     unsigned char *p = NULL;
