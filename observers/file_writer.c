@@ -62,15 +62,8 @@ int floe_fw_open(floe_file_writer *fw, const char *who, const char *path, const 
         floe_fw_free(fw);
         return FLOE_ENOMEM;
     }
-    if (keep_existing) { /* a restart: the observer's restore cuts the file back */
-        fw->fd = open(path, O_WRONLY | O_CREAT | O_CLOEXEC, 0666);
-        off_t end = fw->fd >= 0 ? lseek(fw->fd, 0, SEEK_END) : -1;
-        if (end < 0) {
-            if (err && errlen) snprintf(err, errlen, "%s: cannot open %s: %s", who, path, strerror(errno));
-            floe_fw_free(fw);
-            return FLOE_EIO;
-        }
-        fw->offset = (long long)end;
+    if (keep_existing) { /* a restart: nothing written until the restore cuts the file back */
+        fw->held = 1;
         return FLOE_OK;
     }
     fw->fd = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
@@ -128,6 +121,10 @@ size_t floe_fw_next_write(const char *p, size_t n, long long off) {
 }
 
 int floe_fw_flush(floe_file_writer *fw, floe_world *w) {
+    if (fw->held) {
+        floe_fw_discard(fw);
+        return FLOE_OK;
+    }
     if (fw->nomem) {
         floe_fw_discard(fw);
         return floe_world_report_error(w, FLOE_ENOMEM, "%s: out of memory formatting rows for %s",
@@ -285,6 +282,7 @@ static void write_xml_attr(FILE *f, const char *s) {
 }
 
 int floe_fw_write_pvd(const char *dir, const char *prefix, const double *times, int frames) {
+    if (keep_existing && frames == 0) return FLOE_OK; /* a restart's new series: the restore writes it */
     char *path = floe_fw_series_path(dir, prefix, -1, ".pvd");
     if (!path) {
         errno = ENOMEM;
@@ -316,6 +314,7 @@ int floe_fw_write_pvd(const char *dir, const char *prefix, const double *times, 
 int floe_fw_series_init(floe_fw_series *s, const char *who, const char *dir, const char *prefix) {
     memset(s, 0, sizeof *s);
     s->who = who;
+    s->held = keep_existing;
     s->dir = strdup(dir);
     s->prefix = strdup(prefix);
     if (s->dir && s->prefix) return FLOE_OK;
@@ -351,6 +350,10 @@ int floe_fw_series_begin(floe_fw_series *s, floe_world *w, floe_fw_replace *r) {
 }
 
 int floe_fw_series_commit(floe_fw_series *s, floe_world *w, floe_fw_replace *r, double time, long step) {
+    if (s->held) { /* a restart before its restore: the frame is dropped */
+        floe_fw_replace_abandon(r);
+        return FLOE_OK;
+    }
     int rc = floe_fw_replace_commit(r);
     if (rc != FLOE_OK)
         return floe_world_report_error(w, rc, "%s: writing %s failed: %s", s->who, s->path, strerror(errno));
@@ -421,8 +424,12 @@ int floe_fw_state_restore(floe_file_writer *fw, floe_world *w, long *last_step, 
 }
 
 int floe_fw_resume(floe_file_writer *fw, floe_world *w, long long length) {
-    if (fw->fd < 0) fw->fd = open(fw->path, O_WRONLY | O_CREAT | O_CLOEXEC, 0666);
+    if (fw->fd < 0) fw->fd = open(fw->path, O_WRONLY | O_CLOEXEC);
     struct stat st;
+    if (fw->fd < 0 && errno == ENOENT)
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: %s is missing: it had %lld bytes at the checkpoint; the "
+                                       "run cannot continue it (restart with the output directory of the run that "
+                                       "wrote the checkpoint)", fw->who, fw->path, length);
     if (fw->fd < 0 || fstat(fw->fd, &st) != 0)
         return floe_world_report_error(w, FLOE_EIO, "%s: cannot reopen %s: %s", fw->who, fw->path, strerror(errno));
     if ((long long)st.st_size < length)
@@ -434,6 +441,7 @@ int floe_fw_resume(floe_file_writer *fw, floe_world *w, long long length) {
         return floe_world_report_error(w, FLOE_EIO, "%s: cannot cut %s back to %lld bytes: %s", fw->who, fw->path,
                                        length, strerror(errno));
     fw->offset = length;
+    fw->held = 0;
     floe_fw_discard(fw);
     return FLOE_OK;
 }
@@ -466,6 +474,7 @@ int floe_fw_series_state_restore(floe_fw_series *s, floe_world *w, const unsigne
     buf = floe_fw_get(buf, &s->observed, sizeof s->observed);
     if (frames) floe_fw_get(buf, s->times, (size_t)frames * sizeof(double));
     s->frames = frames;
+    s->held = 0;
     /* the collection as it was at the checkpoint (frames written after it are written again) */
     if (frames > 0 && floe_fw_write_pvd(s->dir, s->prefix, s->times, s->frames) != FLOE_OK)
         return floe_world_report_error(w, FLOE_EIO, "%s: writing %s/%s.pvd failed: %s", s->who, s->dir, s->prefix,
