@@ -241,6 +241,12 @@ static void refused(const char *what, const char *text, const char *path, uint64
     floe_world_destroy(w);
 }
 
+static int noop_observe(floe_observer *o, floe_world *w) {
+    (void)o;
+    (void)w;
+    return FLOE_OK;
+}
+
 static void test_refusals(void) {
     printf("refusals\n");
     floe_world *b = load(SPHERES);
@@ -274,6 +280,22 @@ static void test_refusals(void) {
     refused("not a checkpoint", SPHERES, "ckpt_magic.bin", hash_of(SPHERES), "not a floe checkpoint");
     refused("missing file", SPHERES, "no_such_ckpt.bin", hash_of(SPHERES), "cannot open");
     free(p);
+    /* an observer without checkpoint hooks (a class of version 1): refused, naming it */
+    {
+        static const floe_observer_class old_class = {.version = 1, .name = "old_style", .observe = noop_observe};
+        floe_world *w2 = load(SPHERES);
+        floe_observer *o = calloc(1, sizeof *o);
+        if (w2 && o) {
+            o->klass = &old_class;
+            o->period_steps = 1;
+            CHECK(floe_world_add_observer(w2, o) == FLOE_OK, "observer added");
+            rc = floe_world_checkpoint_load(w2, "ckpt_ref.bin", hash_of(SPHERES), "t.yaml", err, sizeof err);
+            CHECK(rc != FLOE_OK && strstr(err, "old_style") && strstr(err, "no checkpoint hooks"),
+                  "an observer without hooks is refused, named: %s", err);
+            printf("  observer without hooks: %s\n", err);
+        }
+        floe_world_destroy(w2);
+    }
     /* a world that has started is refused (load into a fresh one) */
     floe_world *w = load(SPHERES);
     if (w) {
