@@ -84,7 +84,8 @@ static void cw_save(const floe_observer *o, unsigned char *buf) {
 }
 static int cw_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
     csv_writer *t = (csv_writer *)o;
-    if (n != floe_fw_state_size()) return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state does not match", t->out.who);
+    if (n != floe_fw_state_size())
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state does not match", t->out.who);
     return floe_fw_state_restore(&t->out, w, &t->last_step, &t->observed, buf);
 }
 

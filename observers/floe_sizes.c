@@ -127,11 +127,13 @@ static void fs_save(const floe_observer *o, unsigned char *buf) {
 }
 static int fs_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
     floe_sizes *t = (floe_sizes *)o;
-    if (n != floe_fw_state_size()) return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state does not match", t->out.who);
+    if (n != floe_fw_state_size())
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state does not match", t->out.who);
     return floe_fw_state_restore(&t->out, w, &t->last_step, &t->observed, buf);
 }
 
-static const floe_observer_class floe_sizes_class = {2, "floe_sizes", NULL, fs_observe, fs_end, fs_destroy, 0, fs_state_size, fs_save, fs_restore};
+static const floe_observer_class floe_sizes_class = {2, "floe_sizes", NULL, fs_observe, fs_end, fs_destroy, 0,
+    fs_state_size, fs_save, fs_restore};
 
 floe_observer *floe_sizes_create(const char *path, int dim, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';

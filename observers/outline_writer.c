@@ -424,8 +424,12 @@ static void ow_destroy(floe_observer *b) {
 }
 
 /* checkpoints (floe_observer_base.h): the series' frames */
-static size_t ow_state_size(const floe_observer *o) { return floe_fw_series_state_size(&((const outline_writer *)o)->ser); }
-static void ow_save(const floe_observer *o, unsigned char *buf) { floe_fw_series_state_save(&((const outline_writer *)o)->ser, buf); }
+static size_t ow_state_size(const floe_observer *o) {
+    return floe_fw_series_state_size(&((const outline_writer *)o)->ser);
+}
+static void ow_save(const floe_observer *o, unsigned char *buf) {
+    floe_fw_series_state_save(&((const outline_writer *)o)->ser, buf);
+}
 static int ow_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
     return floe_fw_series_state_restore(&((outline_writer *)o)->ser, w, buf, n);
 }

@@ -108,7 +108,8 @@ static void pt_save(const floe_observer *o, unsigned char *buf) {
 }
 static int pt_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
     particle_tracker *t = (particle_tracker *)o;
-    if (n != floe_fw_state_size()) return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state does not match", t->out.who);
+    if (n != floe_fw_state_size())
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state does not match", t->out.who);
     return floe_fw_state_restore(&t->out, w, &t->last_step, &t->observed, buf);
 }
 

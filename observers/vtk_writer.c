@@ -303,8 +303,12 @@ static void vw_destroy(floe_observer *o) {
 }
 
 /* checkpoints (floe_observer_base.h): the series' frames */
-static size_t vw_state_size(const floe_observer *o) { return floe_fw_series_state_size(&((const vtk_writer *)o)->ser); }
-static void vw_save(const floe_observer *o, unsigned char *buf) { floe_fw_series_state_save(&((const vtk_writer *)o)->ser, buf); }
+static size_t vw_state_size(const floe_observer *o) {
+    return floe_fw_series_state_size(&((const vtk_writer *)o)->ser);
+}
+static void vw_save(const floe_observer *o, unsigned char *buf) {
+    floe_fw_series_state_save(&((const vtk_writer *)o)->ser, buf);
+}
 static int vw_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
     return floe_fw_series_state_restore(&((vtk_writer *)o)->ser, w, buf, n);
 }

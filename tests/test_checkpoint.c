@@ -18,6 +18,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 static const char *SPHERES =
     "name: spheres\n"
@@ -178,7 +179,13 @@ static long roundtrip(const char *what, const char *text, double t1, long k) {
             n = floe_world_state_size(b);
             buf = malloc(n);
             rc = buf ? floe_world_state_save(b, buf, n, err, sizeof err) : FLOE_ENOMEM;
-        } else rc = floe_world_checkpoint_save(b, "ckpt_test.bin", hash_of(text), "t.yaml", err, sizeof err);
+        } else {
+            struct timespec t0, t1s;
+            clock_gettime(CLOCK_MONOTONIC, &t0);
+            rc = floe_world_checkpoint_save(b, "ckpt_test.bin", hash_of(text), "t.yaml", err, sizeof err);
+            clock_gettime(CLOCK_MONOTONIC, &t1s);
+            printf("  save: %.3f ms\n", 1e3 * (double)(t1s.tv_sec - t0.tv_sec) + 1e-6 * (double)(t1s.tv_nsec - t0.tv_nsec));
+        }
         CHECK(rc == FLOE_OK, "%s: save: %s", what, err);
         floe_world_destroy(b);
         floe_world *c = load(text);
