@@ -17,4 +17,5 @@
 #include "floe_provider.h"
 #include "floe_forcing.h"
 #include "floe_integrator.h"
+#include "floe_checkpoint.h"
 #endif

@@ -6,9 +6,12 @@
 #include "floe_detect.h"
 #include "floe_mesh.h"
 #include "floe_newmark.h"
+#include "floe_checkpoint.h"
 
+#include <errno.h>
 #include <math.h>
 #include <signal.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -20,7 +23,8 @@ static const char *prog = "floe";
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: %s run [SCENE] [-o OUTDIR] [-q]   run a scene (no SCENE: the built-in demo)\n"
+            "usage: %s run [SCENE] [-o OUTDIR] [-q] [--checkpoint-every T] [--checkpoint FILE] [--restart FILE]\n"
+            "                                        run a scene (no SCENE: the built-in demo)\n"
             "       %s check SCENE                   load and prepare a scene, print its summary\n"
             "       %s info                          version, build and the registered components\n"
             "       %s help [KIND [NAME]]            the components of a kind (floe info lists the kinds)\n"
@@ -30,12 +34,19 @@ static void usage(FILE *f)
             "\n"
             "  -o OUTDIR   directory for the scene's outputs (default ./out)\n"
             "  -q          quiet: no summary and no progress line, only errors\n"
+            "  --checkpoint-every T  write a checkpoint every T seconds of simulated time (at the first\n"
+            "              step boundary at or after each multiple of T), replacing the previous one\n"
+            "  --checkpoint FILE     the checkpoint file (default OUTDIR/checkpoint.bin)\n"
+            "  --restart FILE        continue the run saved in FILE: the same SCENE and OUTDIR as the run\n"
+            "              that wrote it; the outputs go on as if the run had not stopped\n"
+            "              (docs/checkpoints.md)\n"
             "  --plugin F  load the plugin F (a shared library registering shapes, laws, normal and\n"
             "              tangential parts, outputs, PD materials, force providers, integrators and\n"
             "              packings) before the command; repeatable; scenes can list theirs under plugins:\n"
             "\n"
             "Ctrl-C (SIGINT) or SIGTERM stops a run after the current step with every output\n"
-            "complete (exit 130 / 143); a second signal kills at once.\n"
+            "complete and a checkpoint written (exit 130 / 143; continue with --restart); a second\n"
+            "signal kills at once.\n"
             "Scene files are YAML, described in docs/scene-format.md.\n",
             prog, prog, prog, prog, prog, prog);
 }
@@ -78,13 +89,40 @@ typedef struct progress {
     double t0, last;
     long last_step;
     int printed;
+    /* checkpoints: the file, the scene's hash and name, the interval and the next time */
+    const char *ckpt;
+    uint64_t hash;
+    const char *scene;
+    double every, next;
+    int written;         /* checkpoints written */
+    int failed;          /* a checkpoint could not be written (reported once) */
 } progress;
+
+static void write_checkpoint(progress *p, const floe_world *w)
+{
+    char err[1024];
+    if (floe_world_checkpoint_save(w, p->ckpt, p->hash, p->scene, err, sizeof err) == FLOE_OK) {
+        p->written++;
+        return;
+    }
+    if (!p->failed) {
+        if (p->printed) fprintf(stderr, "\n");
+        fprintf(stderr, "%s: warning: %s (the run goes on)\n", prog, err);
+    }
+    p->failed = 1;
+}
 
 static int on_progress(const floe_world *w, long step, long nsteps, void *user)
 {
     progress *p = user;
-    (void)w;
-    if (stop_signal) return 1;
+    if (stop_signal) {
+        write_checkpoint(p, w);
+        return 1;
+    }
+    if (p->every > 0 && floe_world_time(w) >= p->next && step < nsteps) {
+        write_checkpoint(p, w);
+        while (p->next <= floe_world_time(w)) p->next += p->every;
+    }
     if (!p->show) return 0;
     /* clock_gettime is cheap, but skip it on most steps of large runs anyway */
     if (step != nsteps && (step & 7)) return 0;
@@ -105,25 +143,76 @@ static int on_progress(const floe_world *w, long step, long nsteps, void *user)
     return 0;
 }
 
-static int cmd_run(const char *scene, const char *outdir, int quiet)
+/* the scene's hash for checkpoints: its text (the file's bytes, or the demo's) */
+static int scene_hash(const char *scene, uint64_t *h)
+{
+    *h = FLOE_CHECKPOINT_HASH0;
+    if (!scene) {
+        *h = floe_checkpoint_hash(*h, floe_scene_default_demo(), strlen(floe_scene_default_demo()));
+        return 0;
+    }
+    FILE *f = fopen(scene, "rb");
+    if (!f) return -1;
+    unsigned char buf[65536];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, f)) > 0) *h = floe_checkpoint_hash(*h, buf, n);
+    fclose(f);
+    return 0;
+}
+
+typedef struct run_opts {
+    const char *outdir;
+    int quiet;
+    double ckpt_every;      /* > 0: seconds of simulated time between checkpoints */
+    const char *ckpt;       /* the checkpoint file (NULL: OUTDIR/checkpoint.bin) */
+    const char *restart;    /* continue from this checkpoint */
+} run_opts;
+
+static int cmd_run(const char *scene, const run_opts *o)
 {
     char err[1024];
     floe_scene_info info;
     floe_world *w = NULL;
-    const char *label = scene ? scene : "<demo>";
+    const char *label = scene ? scene : "<demo>", *outdir = o->outdir;
+    const int quiet = o->quiet;
+    char ckpt_default[1200];
+    snprintf(ckpt_default, sizeof ckpt_default, "%s/checkpoint.bin", outdir);
+    progress pr = {0};
+    pr.ckpt = o->ckpt ? o->ckpt : ckpt_default;
+    pr.scene = label;
+    pr.every = o->ckpt_every;
+    if (scene_hash(scene, &pr.hash)) {
+        fprintf(stderr, "%s: error: cannot read %s: %s\n", prog, scene, strerror(errno));
+        return 1;
+    }
+    /* a restart: the outputs keep what the stopped run wrote (the load cuts them back to
+     * the checkpoint) */
+    floe_outputs_keep_existing(o->restart != NULL);
     int rc = scene ? floe_scene_load(scene, outdir, &w, &info, err, sizeof err)
                    : floe_scene_load_string(floe_scene_default_demo(), "<demo>", outdir, &w, &info,
                                             err, sizeof err);
+    floe_outputs_keep_existing(0);
     if (rc != FLOE_OK) {
         fprintf(stderr, "%s: error: %s\n", prog, err);
         return 1;
     }
+    if (o->restart) {
+        rc = floe_world_checkpoint_load(w, o->restart, pr.hash, label, err, sizeof err);
+        if (rc != FLOE_OK) {
+            fprintf(stderr, "%s: error: %s: cannot restart: %s\n", prog, label, err);
+            floe_world_destroy(w);
+            return 1;
+        }
+    }
+    if (pr.every > 0) pr.next = (floor(floe_world_time(w) / pr.every + 1e-9) + 1) * pr.every;
     if (!quiet) {
         printf("%s", info.summary);
         printf("output:     %s\n", outdir);
+        if (o->restart)
+            printf("restart:    %s at t = %g s, step %ld\n", o->restart, floe_world_time(w), floe_world_step_count(w));
+        if (pr.every > 0) printf("checkpoint: %s every %g s\n", pr.ckpt, pr.every);
         fflush(stdout);
     }
-    progress pr = {0};
     pr.show = !quiet && isatty(STDERR_FILENO);
     long step0 = floe_world_step_count(w);
     double t_start = now_s();
@@ -140,6 +229,9 @@ static int cmd_run(const char *scene, const char *outdir, int quiet)
                 rc != FLOE_OK && rc != FLOE_ESTOP ? ": " : "",
                 rc != FLOE_OK && rc != FLOE_ESTOP ? floe_world_last_error(w) : "");
         fprintf(stderr, "%s: outputs written so far are complete and in %s\n", prog, outdir);
+        if (!pr.failed)
+            fprintf(stderr, "%s: checkpoint written to %s; continue with: %s run %s -o %s --restart %s\n", prog,
+                    pr.ckpt, prog, scene ? scene : "", outdir, pr.ckpt);
         floe_world_destroy(w);
         return 128 + sig;
     }
@@ -201,6 +293,7 @@ static int cmd_run(const char *scene, const char *outdir, int quiet)
         else printf("  energy watchdog:    %s (tolerance %.3g of the energy scale), largest creation %.2g%s\n",
                     floe_energy_check_name(ec.mode), ec.tolerance, ec.created,
                     ec.tripped_step >= 0 ? ", TRIPPED (warning above)" : "");
+        if (pr.written) printf("  checkpoints:        %d written, the last in %s\n", pr.written, pr.ckpt);
         printf("  outputs in:         %s\n", outdir);
     }
     floe_world_destroy(w);
@@ -380,9 +473,29 @@ int main(int argc, char **argv)
     if (!strcmp(cmd, "run")) {
         const char *scene = NULL, *outdir = "out";
         int quiet = 0;
+        run_opts ro = {0};
         for (int i = 2; i < argc; i++) {
             const char *a = argv[i];
-            if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
+            if (!strcmp(a, "--checkpoint-every") || !strcmp(a, "--checkpoint") || !strcmp(a, "--restart")) {
+                if (i + 1 >= argc) {
+                    fprintf(stderr, "%s: %s needs %s\n", prog, a,
+                            strcmp(a, "--checkpoint-every") ? "a file" : "seconds of simulated time");
+                    usage(stderr);
+                    return 2;
+                }
+                const char *v = argv[++i];
+                if (!strcmp(a, "--checkpoint")) ro.ckpt = v;
+                else if (!strcmp(a, "--restart")) ro.restart = v;
+                else {
+                    char *end = NULL;
+                    ro.ckpt_every = strtod(v, &end);
+                    if (!end || *end || !(ro.ckpt_every > 0) || !isfinite(ro.ckpt_every)) {
+                        fprintf(stderr, "%s: --checkpoint-every takes seconds of simulated time > 0 (got '%s')\n",
+                                prog, v);
+                        return 2;
+                    }
+                }
+            } else if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
                 if (i + 1 >= argc) {
                     fprintf(stderr, "%s: %s needs a directory\n", prog, a);
                     usage(stderr);
@@ -412,7 +525,9 @@ int main(int argc, char **argv)
             fprintf(stderr, "%s: empty output directory\n", prog);
             return 2;
         }
-        return cmd_run(scene, outdir, quiet);
+        ro.outdir = outdir;
+        ro.quiet = quiet;
+        return cmd_run(scene, &ro);
     }
     fprintf(stderr, "%s: unknown command '%s'\n", prog, cmd);
     usage(stderr);

@@ -149,7 +149,24 @@ static void cl_destroy(floe_observer *o) {
     free(c);
 }
 
-static const floe_observer_class coast_load_class = {1, "coast_load", cl_begin, cl_observe, cl_end, cl_destroy, 1};
+/* checkpoints (floe_observer_base.h): the file's length, the last row block's step */
+static size_t cl_state_size(const floe_observer *o) {
+    (void)o;
+    return floe_fw_state_size();
+}
+static void cl_save(const floe_observer *o, unsigned char *buf) {
+    const coast_load *t = (const coast_load *)o;
+    floe_fw_state_save(&t->out, t->last_step, t->observed, buf);
+}
+static int cl_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
+    coast_load *t = (coast_load *)o;
+    if (n != floe_fw_state_size())
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state does not match", t->out.who);
+    return floe_fw_state_restore(&t->out, w, &t->last_step, &t->observed, buf);
+}
+
+static const floe_observer_class coast_load_class = {2, "coast_load", cl_begin, cl_observe, cl_end, cl_destroy, 1,
+    cl_state_size, cl_save, cl_restore};
 
 floe_observer *floe_coast_load_create(const char *path, int dim, int body, int group, double length, char *err,
                                       size_t errlen) {

@@ -225,8 +225,12 @@ static void ct_destroy(floe_observer *o) {
     free(t);
 }
 
+static size_t ct_state_size(const floe_observer *o);
+static void ct_save(const floe_observer *o, unsigned char *buf);
+static int ct_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n);
 static const floe_observer_class collection_tracker_class = {
-    1, "collection_tracker", NULL, ct_observe, ct_end, ct_destroy, 1};
+    2, "collection_tracker", NULL, ct_observe, ct_end, ct_destroy, 1,
+    ct_state_size, ct_save, ct_restore}; /* checkpoint hooks (end of file) */
 
 int floe_collection_tracker_last(const floe_observer *o, double sigma[6], double *coord) {
     if (!o || o->klass != &collection_tracker_class) return FLOE_EINVAL;
@@ -261,4 +265,23 @@ floe_observer *floe_collection_tracker_create(const char *path, int group, doubl
     t->base.klass = &collection_tracker_class;
     t->base.period_steps = 1;
     return &t->base;
+}
+
+/* checkpoints (floe_observer_base.h): the file's length, the last row's step and values */
+static size_t ct_state_size(const floe_observer *o) {
+    (void)o;
+    return floe_fw_state_size() + sizeof(floe_collection_stats);
+}
+static void ct_save(const floe_observer *o, unsigned char *buf) {
+    const collection_tracker *t = (const collection_tracker *)o;
+    buf = floe_fw_state_save(&t->out, t->last_step, t->observed, buf);
+    floe_fw_put(buf, &t->last, sizeof t->last);
+}
+static int ct_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
+    collection_tracker *t = (collection_tracker *)o;
+    if (n != ct_state_size(o))
+        return floe_world_report_error(w, FLOE_EINVAL, "collection tracker: checkpoint state does not match");
+    FLOE_TRY(floe_fw_state_restore(&t->out, w, &t->last_step, &t->observed, buf));
+    floe_fw_get(buf + floe_fw_state_size(), &t->last, sizeof t->last);
+    return FLOE_OK;
 }

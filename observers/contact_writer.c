@@ -82,7 +82,24 @@ static void cc_destroy(floe_observer *o) {
     free(c);
 }
 
-static const floe_observer_class contact_csv_class = {1, "contacts", NULL, cc_observe, cc_end, cc_destroy, 1};
+/* checkpoints (floe_observer_base.h): the file's length, the last row block's step */
+static size_t cc_state_size(const floe_observer *o) {
+    (void)o;
+    return floe_fw_state_size();
+}
+static void cc_save(const floe_observer *o, unsigned char *buf) {
+    const contact_csv *t = (const contact_csv *)o;
+    floe_fw_state_save(&t->out, t->last_step, t->observed, buf);
+}
+static int cc_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
+    contact_csv *t = (contact_csv *)o;
+    if (n != floe_fw_state_size())
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state does not match", t->out.who);
+    return floe_fw_state_restore(&t->out, w, &t->last_step, &t->observed, buf);
+}
+
+static const floe_observer_class contact_csv_class = {2, "contacts", NULL, cc_observe, cc_end, cc_destroy, 1,
+    cc_state_size, cc_save, cc_restore};
 
 floe_observer *floe_contact_csv_create(const char *path, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';
@@ -200,7 +217,19 @@ static void fc_destroy(floe_observer *o) {
     free(c);
 }
 
-static const floe_observer_class force_chains_class = {1, "force_chains", NULL, fc_observe, fc_end, fc_destroy, 1};
+/* checkpoints (floe_observer_base.h): the series' frames */
+static size_t fc_state_size(const floe_observer *o) {
+    return floe_fw_series_state_size(&((const force_chains *)o)->ser);
+}
+static void fc_save(const floe_observer *o, unsigned char *buf) {
+    floe_fw_series_state_save(&((const force_chains *)o)->ser, buf);
+}
+static int fc_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
+    return floe_fw_series_state_restore(&((force_chains *)o)->ser, w, buf, n);
+}
+
+static const floe_observer_class force_chains_class = {2, "force_chains", NULL, fc_observe, fc_end, fc_destroy, 1,
+    fc_state_size, fc_save, fc_restore};
 
 floe_observer *floe_force_chains_create(const char *dir, const char *prefix, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';

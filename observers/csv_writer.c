@@ -73,8 +73,24 @@ static void cw_destroy(floe_observer *o) {
     free(t);
 }
 
+/* checkpoints (floe_observer_base.h): the file's length, the last row block's step */
+static size_t cw_state_size(const floe_observer *o) {
+    (void)o;
+    return floe_fw_state_size();
+}
+static void cw_save(const floe_observer *o, unsigned char *buf) {
+    const csv_writer *t = (const csv_writer *)o;
+    floe_fw_state_save(&t->out, t->last_step, t->observed, buf);
+}
+static int cw_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
+    csv_writer *t = (csv_writer *)o;
+    if (n != floe_fw_state_size())
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state does not match", t->out.who);
+    return floe_fw_state_restore(&t->out, w, &t->last_step, &t->observed, buf);
+}
+
 static const floe_observer_class csv_writer_class = {
-    1, "csv_writer", NULL, cw_observe, cw_end, cw_destroy, 0};
+    2, "csv_writer", NULL, cw_observe, cw_end, cw_destroy, 0, cw_state_size, cw_save, cw_restore};
 
 floe_observer *floe_csv_writer_create(const char *path, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';

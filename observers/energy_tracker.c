@@ -67,8 +67,24 @@ static void et_destroy(floe_observer *o) {
     free(t);
 }
 
+/* checkpoints (floe_observer_base.h): the file's length, the last row block's step */
+static size_t et_state_size(const floe_observer *o) {
+    (void)o;
+    return floe_fw_state_size();
+}
+static void et_save(const floe_observer *o, unsigned char *buf) {
+    const energy_tracker *t = (const energy_tracker *)o;
+    floe_fw_state_save(&t->out, t->last_step, t->observed, buf);
+}
+static int et_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
+    energy_tracker *t = (energy_tracker *)o;
+    if (n != floe_fw_state_size())
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state does not match", t->out.who);
+    return floe_fw_state_restore(&t->out, w, &t->last_step, &t->observed, buf);
+}
+
 static const floe_observer_class energy_tracker_class = {
-    1, "energy_tracker", NULL, et_observe, et_end, et_destroy, 0};
+    2, "energy_tracker", NULL, et_observe, et_end, et_destroy, 0, et_state_size, et_save, et_restore};
 
 floe_observer *floe_energy_tracker_create(const char *path, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';

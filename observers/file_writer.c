@@ -3,6 +3,7 @@
  * whole files through a temporary name and rename; the parts of a VTK XML series that the
  * vtk and outlines outputs share. */
 #include "file_writer.h"
+#include "floe_checkpoint.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -10,6 +11,7 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 enum { FW_INITIAL_CAP = 4096 };
@@ -42,6 +44,11 @@ static int write_all(int fd, const char *p, size_t n) {
     return 0;
 }
 
+/* floe_outputs_keep_existing (floe_checkpoint.h): files opened from now on in this thread
+ * keep their content (a restart) */
+static _Thread_local int keep_existing;
+void floe_outputs_keep_existing(int on) { keep_existing = on != 0; }
+
 int floe_fw_open(floe_file_writer *fw, const char *who, const char *path, const char *header,
                  char *err, size_t errlen) {
     memset(fw, 0, sizeof *fw);
@@ -54,6 +61,10 @@ int floe_fw_open(floe_file_writer *fw, const char *who, const char *path, const 
         if (err && errlen) snprintf(err, errlen, "%s: out of memory", who);
         floe_fw_free(fw);
         return FLOE_ENOMEM;
+    }
+    if (keep_existing) { /* a restart: nothing written until the restore cuts the file back */
+        fw->held = 1;
+        return FLOE_OK;
     }
     fw->fd = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
     fw->offset = (long long)strlen(header);
@@ -110,6 +121,10 @@ size_t floe_fw_next_write(const char *p, size_t n, long long off) {
 }
 
 int floe_fw_flush(floe_file_writer *fw, floe_world *w) {
+    if (fw->held) {
+        floe_fw_discard(fw);
+        return FLOE_OK;
+    }
     if (fw->nomem) {
         floe_fw_discard(fw);
         return floe_world_report_error(w, FLOE_ENOMEM, "%s: out of memory formatting rows for %s",
@@ -267,6 +282,7 @@ static void write_xml_attr(FILE *f, const char *s) {
 }
 
 int floe_fw_write_pvd(const char *dir, const char *prefix, const double *times, int frames) {
+    if (keep_existing && frames == 0) return FLOE_OK; /* a restart's new series: the restore writes it */
     char *path = floe_fw_series_path(dir, prefix, -1, ".pvd");
     if (!path) {
         errno = ENOMEM;
@@ -298,6 +314,7 @@ int floe_fw_write_pvd(const char *dir, const char *prefix, const double *times, 
 int floe_fw_series_init(floe_fw_series *s, const char *who, const char *dir, const char *prefix) {
     memset(s, 0, sizeof *s);
     s->who = who;
+    s->held = keep_existing;
     s->dir = strdup(dir);
     s->prefix = strdup(prefix);
     if (s->dir && s->prefix) return FLOE_OK;
@@ -333,6 +350,10 @@ int floe_fw_series_begin(floe_fw_series *s, floe_world *w, floe_fw_replace *r) {
 }
 
 int floe_fw_series_commit(floe_fw_series *s, floe_world *w, floe_fw_replace *r, double time, long step) {
+    if (s->held) { /* a restart before its restore: the frame is dropped */
+        floe_fw_replace_abandon(r);
+        return FLOE_OK;
+    }
     int rc = floe_fw_replace_commit(r);
     if (rc != FLOE_OK)
         return floe_world_report_error(w, rc, "%s: writing %s failed: %s", s->who, s->path, strerror(errno));
@@ -381,4 +402,82 @@ void floe_fw_vtk_ascii_values(FILE *f, floe_fw_vtk_type t, int ncomp, int m, con
         }
         fputc('\n', f);
     }
+}
+
+/* ---- checkpoints ---- */
+
+size_t floe_fw_state_size(void) { return sizeof(long long) + sizeof(long) + sizeof(int); }
+
+unsigned char *floe_fw_state_save(const floe_file_writer *fw, long last_step, int observed, unsigned char *buf) {
+    buf = floe_fw_put(buf, &fw->offset, sizeof fw->offset);
+    buf = floe_fw_put(buf, &last_step, sizeof last_step);
+    return floe_fw_put(buf, &observed, sizeof observed);
+}
+
+int floe_fw_state_restore(floe_file_writer *fw, floe_world *w, long *last_step, int *observed,
+                          const unsigned char *buf) {
+    long long len;
+    buf = floe_fw_get(buf, &len, sizeof len);
+    buf = floe_fw_get(buf, last_step, sizeof *last_step);
+    floe_fw_get(buf, observed, sizeof *observed);
+    return floe_fw_resume(fw, w, len);
+}
+
+int floe_fw_resume(floe_file_writer *fw, floe_world *w, long long length) {
+    if (fw->fd < 0) fw->fd = open(fw->path, O_WRONLY | O_CLOEXEC);
+    struct stat st;
+    if (fw->fd < 0 && errno == ENOENT)
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: %s is missing: it had %lld bytes at the checkpoint; the "
+                                       "run cannot continue it (restart with the output directory of the run that "
+                                       "wrote the checkpoint)", fw->who, fw->path, length);
+    if (fw->fd < 0 || fstat(fw->fd, &st) != 0)
+        return floe_world_report_error(w, FLOE_EIO, "%s: cannot reopen %s: %s", fw->who, fw->path, strerror(errno));
+    if ((long long)st.st_size < length)
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: %s has %lld bytes, fewer than the %lld it had at the "
+                                       "checkpoint: it was changed or removed since, the run cannot continue it "
+                                       "(restart with the output directory of the run that wrote the checkpoint)",
+                                       fw->who, fw->path, (long long)st.st_size, length);
+    if (ftruncate(fw->fd, (off_t)length) != 0 || lseek(fw->fd, (off_t)length, SEEK_SET) < 0)
+        return floe_world_report_error(w, FLOE_EIO, "%s: cannot cut %s back to %lld bytes: %s", fw->who, fw->path,
+                                       length, strerror(errno));
+    fw->offset = length;
+    fw->held = 0;
+    floe_fw_discard(fw);
+    return FLOE_OK;
+}
+
+size_t floe_fw_series_state_size(const floe_fw_series *s) {
+    return sizeof(int) + sizeof(long) + sizeof(int) + (size_t)s->frames * sizeof(double);
+}
+
+unsigned char *floe_fw_series_state_save(const floe_fw_series *s, unsigned char *buf) {
+    buf = floe_fw_put(buf, &s->frames, sizeof s->frames);
+    buf = floe_fw_put(buf, &s->last_step, sizeof s->last_step);
+    buf = floe_fw_put(buf, &s->observed, sizeof s->observed);
+    return s->frames ? floe_fw_put(buf, s->times, (size_t)s->frames * sizeof(double)) : buf;
+}
+
+int floe_fw_series_state_restore(floe_fw_series *s, floe_world *w, const unsigned char *buf, size_t n) {
+    int frames;
+    if (n < sizeof(int)) return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state too short", s->who);
+    floe_fw_get(buf, &frames, sizeof frames);
+    if (frames < 0 || n < sizeof(int) + sizeof(long) + sizeof(int) + (size_t)frames * sizeof(double))
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state does not match", s->who);
+    if (frames > s->cap) {
+        double *t = realloc(s->times, (size_t)frames * sizeof *t);
+        if (!t) return floe_world_report_error(w, FLOE_ENOMEM, "%s: out of memory", s->who);
+        s->times = t;
+        s->cap = frames;
+    }
+    buf += sizeof frames;
+    buf = floe_fw_get(buf, &s->last_step, sizeof s->last_step);
+    buf = floe_fw_get(buf, &s->observed, sizeof s->observed);
+    if (frames) floe_fw_get(buf, s->times, (size_t)frames * sizeof(double));
+    s->frames = frames;
+    s->held = 0;
+    /* the collection as it was at the checkpoint (frames written after it are written again) */
+    if (frames > 0 && floe_fw_write_pvd(s->dir, s->prefix, s->times, s->frames) != FLOE_OK)
+        return floe_world_report_error(w, FLOE_EIO, "%s: writing %s/%s.pvd failed: %s", s->who, s->dir, s->prefix,
+                                       strerror(errno));
+    return FLOE_OK;
 }

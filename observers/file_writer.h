@@ -34,6 +34,7 @@
 
 #include <stddef.h>
 #include <stdio.h>
+#include <string.h>
 
 typedef struct floe_file_writer {
     const char *who;   /* "particle tracker": the start of every message (a literal) */
@@ -43,6 +44,8 @@ typedef struct floe_file_writer {
     size_t len, cap;
     long long offset;  /* the file's size (where the next write goes) */
     int nomem;         /* a row did not fit in memory: the flush fails */
+    int held;          /* opened for a restart (floe_outputs_keep_existing): rows are dropped
+                          until the checkpoint's restore (floe_fw_resume) */
 } floe_file_writer;
 
 /* Creates (truncates) path and writes header (a whole line, with its newline). FLOE_OK, or
@@ -114,6 +117,7 @@ typedef struct floe_fw_series {
     long last_step;    /* the step of the last frame */
     int observed;      /* a frame was written */
     char *path;        /* the frame being written */
+    int held;          /* created for a restart: frames are dropped until the restore */
 } floe_fw_series;
 /* strdup's dir and prefix; FLOE_ENOMEM (and nothing held) when out of memory */
 int floe_fw_series_init(floe_fw_series *s, const char *who, const char *dir, const char *prefix);
@@ -129,5 +133,33 @@ void floe_fw_vtu_begin(FILE *f, double time, long step);
 /* m tuples of ncomp values of type t at buf as the text of an ASCII DataArray, one tuple a
  * line (Float64 with 17 significant digits: read back exactly). */
 void floe_fw_vtk_ascii_values(FILE *f, floe_fw_vtk_type t, int ncomp, int m, const void *buf);
+
+/* ---- checkpoints (docs/checkpoints.md; the observers' state hooks, floe_observer_base.h) ----
+ * While floe_outputs_keep_existing(1) is in force (floe_checkpoint.h: a restart loading
+ * its scene), floe_fw_open opens the file without truncating it or writing the header, and
+ * a series is created held: what the observers write before the checkpoint's restore (the
+ * scene loader's first observation) is dropped, so a refused restart changes no file; the
+ * observer's restore then cuts the file back to its length at the checkpoint
+ * (floe_fw_resume), refusing a file shorter than that (changed or removed since). The usual state of a row
+ * file: its length, the step of the last row block and whether one was written; of a
+ * series: the frames' times and the last frame's step (the .pvd is rewritten). Each save
+ * returns the end of what it wrote, each restore reads as much from buf. */
+size_t floe_fw_state_size(void);
+unsigned char *floe_fw_state_save(const floe_file_writer *fw, long last_step, int observed, unsigned char *buf);
+int floe_fw_state_restore(floe_file_writer *fw, floe_world *w, long *last_step, int *observed,
+                          const unsigned char *buf);
+int floe_fw_resume(floe_file_writer *fw, floe_world *w, long long length);
+size_t floe_fw_series_state_size(const floe_fw_series *s);
+unsigned char *floe_fw_series_state_save(const floe_fw_series *s, unsigned char *buf);
+int floe_fw_series_state_restore(floe_fw_series *s, floe_world *w, const unsigned char *buf, size_t n);
+/* bytes in and out of a state buffer; each returns the position after them */
+static inline unsigned char *floe_fw_put(unsigned char *buf, const void *p, size_t n) {
+    memcpy(buf, p, n);
+    return buf + n;
+}
+static inline const unsigned char *floe_fw_get(const unsigned char *buf, void *p, size_t n) {
+    memcpy(p, buf, n);
+    return buf + n;
+}
 
 #endif

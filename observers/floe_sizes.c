@@ -116,7 +116,24 @@ static void fs_destroy(floe_observer *o) {
     free(s);
 }
 
-static const floe_observer_class floe_sizes_class = {1, "floe_sizes", NULL, fs_observe, fs_end, fs_destroy, 0};
+/* checkpoints (floe_observer_base.h): the file's length, the last row block's step */
+static size_t fs_state_size(const floe_observer *o) {
+    (void)o;
+    return floe_fw_state_size();
+}
+static void fs_save(const floe_observer *o, unsigned char *buf) {
+    const floe_sizes *t = (const floe_sizes *)o;
+    floe_fw_state_save(&t->out, t->last_step, t->observed, buf);
+}
+static int fs_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
+    floe_sizes *t = (floe_sizes *)o;
+    if (n != floe_fw_state_size())
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state does not match", t->out.who);
+    return floe_fw_state_restore(&t->out, w, &t->last_step, &t->observed, buf);
+}
+
+static const floe_observer_class floe_sizes_class = {2, "floe_sizes", NULL, fs_observe, fs_end, fs_destroy, 0,
+    fs_state_size, fs_save, fs_restore};
 
 floe_observer *floe_sizes_create(const char *path, int dim, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';

@@ -98,8 +98,38 @@ static void fe_destroy(floe_observer *o) {
     free(f);
 }
 
-static const floe_observer_class fracture_events_class = {1, "fracture_events", NULL, fe_observe, fe_end, fe_destroy,
-                                                          0};
+/* checkpoints (floe_observer_base.h): the file, the breaks written */
+static size_t fe_state_size(const floe_observer *o) {
+    const fracture_events *f = (const fracture_events *)o;
+    return floe_fw_state_size() + 2 * sizeof(int) + (size_t)f->nb;
+}
+static void fe_save(const floe_observer *o, unsigned char *buf) {
+    const fracture_events *f = (const fracture_events *)o;
+    buf = floe_fw_state_save(&f->out, 0, 0, buf);
+    buf = floe_fw_put(buf, &f->reported, sizeof f->reported);
+    buf = floe_fw_put(buf, &f->nb, sizeof f->nb);
+    if (f->nb) floe_fw_put(buf, f->done, (size_t)f->nb);
+}
+static int fe_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
+    fracture_events *f = (fracture_events *)o;
+    int nb = -1, reported;
+    long ls;
+    int obs;
+    if (n >= floe_fw_state_size() + 2 * sizeof nb) memcpy(&nb, buf + floe_fw_state_size() + sizeof nb, sizeof nb);
+    if (nb < 0 || n != floe_fw_state_size() + 2 * sizeof(int) + (size_t)nb)
+        return floe_world_report_error(w, FLOE_EINVAL, "fracture_events: checkpoint state does not match");
+    if (fe_reserve(f, nb)) return floe_world_report_error(w, FLOE_ENOMEM, "fracture_events: out of memory");
+    FLOE_TRY(floe_fw_state_restore(&f->out, w, &ls, &obs, buf));
+    buf += floe_fw_state_size();
+    buf = floe_fw_get(buf, &reported, sizeof reported);
+    buf += sizeof nb;
+    if (nb) floe_fw_get(buf, f->done, (size_t)nb);
+    f->reported = reported;
+    return FLOE_OK;
+}
+
+static const floe_observer_class fracture_events_class = {2, "fracture_events", NULL, fe_observe, fe_end, fe_destroy,
+                                                          0, fe_state_size, fe_save, fe_restore};
 
 floe_observer *floe_fracture_events_create(const char *path, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';

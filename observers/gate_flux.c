@@ -93,7 +93,45 @@ static void gf_destroy(floe_observer *o) {
     free(g);
 }
 
-static const floe_observer_class gate_flux_class = {1, "gate_flux", NULL, gf_observe, gf_end, gf_destroy, 0};
+/* checkpoints (floe_observer_base.h): the file, each particle's side and the sums */
+static size_t gf_state_size(const floe_observer *o) {
+    const gate_flux *g = (const gate_flux *)o;
+    return floe_fw_state_size() + sizeof(int) + (size_t)g->n + 3 * sizeof(double) + sizeof(long);
+}
+static void gf_save(const floe_observer *o, unsigned char *buf) {
+    const gate_flux *g = (const gate_flux *)o;
+    buf = floe_fw_state_save(&g->out, g->last_step, g->observed, buf);
+    buf = floe_fw_put(buf, &g->n, sizeof g->n);
+    if (g->n) buf = floe_fw_put(buf, g->side, (size_t)g->n);
+    const double d[3] = {g->net_area, g->last_area, g->last_t};
+    buf = floe_fw_put(buf, d, sizeof d);
+    floe_fw_put(buf, &g->crossings, sizeof g->crossings);
+}
+static int gf_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
+    gate_flux *g = (gate_flux *)o;
+    int m = -1;
+    if (n >= floe_fw_state_size() + sizeof m) memcpy(&m, buf + floe_fw_state_size(), sizeof m);
+    if (m < 0 || n != floe_fw_state_size() + sizeof(int) + (size_t)m + 3 * sizeof(double) + sizeof(long))
+        return floe_world_report_error(w, FLOE_EINVAL, "gate_flux: checkpoint state does not match");
+    signed char *sd = realloc(g->side, (size_t)(m ? m : 1));
+    double *a = sd ? realloc(g->area, (size_t)(m ? m : 1) * sizeof *a) : NULL;
+    if (sd) g->side = sd;
+    if (!sd || !a) return floe_world_report_error(w, FLOE_ENOMEM, "gate_flux: out of memory");
+    g->area = a;
+    for (int i = 0; i < m; i++) a[i] = -1;
+    g->n = m;
+    FLOE_TRY(floe_fw_state_restore(&g->out, w, &g->last_step, &g->observed, buf));
+    buf += floe_fw_state_size() + sizeof m;
+    if (m) buf = floe_fw_get(buf, g->side, (size_t)m);
+    double d[3];
+    buf = floe_fw_get(buf, d, sizeof d);
+    g->net_area = d[0]; g->last_area = d[1]; g->last_t = d[2];
+    floe_fw_get(buf, &g->crossings, sizeof g->crossings);
+    return FLOE_OK;
+}
+
+static const floe_observer_class gate_flux_class = {2, "gate_flux", NULL, gf_observe, gf_end, gf_destroy, 0,
+                                                    gf_state_size, gf_save, gf_restore};
 
 floe_observer *floe_gate_flux_create(const char *path, int dim, const double a[2], const double b[2], char *err,
                                      size_t errlen) {

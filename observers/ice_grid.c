@@ -127,7 +127,19 @@ static void ig_destroy(floe_observer *o) {
     free(g);
 }
 
-static const floe_observer_class ice_grid_class = {1, "ice_grid", NULL, ig_observe, ig_end, ig_destroy, 0};
+/* checkpoints (floe_observer_base.h): the series' frames */
+static size_t ig_state_size(const floe_observer *o) {
+    return floe_fw_series_state_size(&((const ice_grid *)o)->ser);
+}
+static void ig_save(const floe_observer *o, unsigned char *buf) {
+    floe_fw_series_state_save(&((const ice_grid *)o)->ser, buf);
+}
+static int ig_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
+    return floe_fw_series_state_restore(&((ice_grid *)o)->ser, w, buf, n);
+}
+
+static const floe_observer_class ice_grid_class = {2, "ice_grid", NULL, ig_observe, ig_end, ig_destroy, 0,
+    ig_state_size, ig_save, ig_restore};
 
 floe_observer *floe_ice_grid_create(const char *dir, const char *prefix, int dim, const double lo[2],
                                     const double hi[2], int nx, int ny, int samples, char *err, size_t errlen) {

@@ -423,8 +423,19 @@ static void ow_destroy(floe_observer *b) {
     free(o);
 }
 
+/* checkpoints (floe_observer_base.h): the series' frames */
+static size_t ow_state_size(const floe_observer *o) {
+    return floe_fw_series_state_size(&((const outline_writer *)o)->ser);
+}
+static void ow_save(const floe_observer *o, unsigned char *buf) {
+    floe_fw_series_state_save(&((const outline_writer *)o)->ser, buf);
+}
+static int ow_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
+    return floe_fw_series_state_restore(&((outline_writer *)o)->ser, w, buf, n);
+}
+
 static const floe_observer_class outline_writer_class = {
-    1, "outline_writer", NULL, ow_observe, ow_end, ow_destroy, 0};
+    2, "outline_writer", NULL, ow_observe, ow_end, ow_destroy, 0, ow_state_size, ow_save, ow_restore};
 
 floe_observer *floe_outline_writer_create(const char *dir, const char *prefix, int dim, int segments, int ascii,
                                           char *err, size_t errlen) {

@@ -97,8 +97,24 @@ static void pt_destroy(floe_observer *o) {
     free(t);
 }
 
+/* checkpoints (floe_observer_base.h): the file's length, the last row block's step */
+static size_t pt_state_size(const floe_observer *o) {
+    (void)o;
+    return floe_fw_state_size();
+}
+static void pt_save(const floe_observer *o, unsigned char *buf) {
+    const particle_tracker *t = (const particle_tracker *)o;
+    floe_fw_state_save(&t->out, t->last_step, t->observed, buf);
+}
+static int pt_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
+    particle_tracker *t = (particle_tracker *)o;
+    if (n != floe_fw_state_size())
+        return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state does not match", t->out.who);
+    return floe_fw_state_restore(&t->out, w, &t->last_step, &t->observed, buf);
+}
+
 static const floe_observer_class particle_tracker_class = {
-    1, "particle_tracker", pt_begin, pt_observe, pt_end, pt_destroy, 0};
+    2, "particle_tracker", pt_begin, pt_observe, pt_end, pt_destroy, 0, pt_state_size, pt_save, pt_restore};
 
 floe_observer *floe_particle_tracker_create(const char *path, const int *ids, int n,
                                             char *err, size_t errlen) {

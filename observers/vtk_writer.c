@@ -302,8 +302,19 @@ static void vw_destroy(floe_observer *o) {
     free(v);
 }
 
+/* checkpoints (floe_observer_base.h): the series' frames */
+static size_t vw_state_size(const floe_observer *o) {
+    return floe_fw_series_state_size(&((const vtk_writer *)o)->ser);
+}
+static void vw_save(const floe_observer *o, unsigned char *buf) {
+    floe_fw_series_state_save(&((const vtk_writer *)o)->ser, buf);
+}
+static int vw_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
+    return floe_fw_series_state_restore(&((vtk_writer *)o)->ser, w, buf, n);
+}
+
 static const floe_observer_class vtk_writer_class = {
-    1, "vtk_writer", NULL, vw_observe, vw_end, vw_destroy, 0};
+    2, "vtk_writer", NULL, vw_observe, vw_end, vw_destroy, 0, vw_state_size, vw_save, vw_restore};
 
 int floe_vtk_writer_set_ascii(floe_observer *o, int ascii) {
     if (!o || o->klass != &vtk_writer_class) return FLOE_EINVAL;

@@ -440,7 +440,7 @@ static int fo_end(floe_observer *o, floe_world *w)
     return floe_world_error(w, FLOE_EIO, "%s: closing failed: No space left on device", f->name);
 }
 
-static const floe_observer_class failing_class = {1, "failing", NULL, fo_observe, fo_end, NULL, 0};
+static const floe_observer_class failing_class = {.version = 1, .name = "failing", .observe = fo_observe, .end = fo_end};
 
 static void test_first_error(void)
 {

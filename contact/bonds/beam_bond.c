@@ -365,6 +365,21 @@ void floe_beam_set_truncate(floe_beam_set *s, int n) {
 int floe_beam_set_count(const floe_beam_set *s) { return s ? s->n : 0; }
 int floe_beam_set_broken(const floe_beam_set *s) { return s ? s->nbroken : 0; }
 
+size_t floe_beam_set_state_size(const floe_beam_set *s) {
+    return s ? sizeof(int) + (size_t)s->n * sizeof(beam_bond) : 0;
+}
+void floe_beam_set_state_save(const floe_beam_set *s, unsigned char *buf) {
+    if (!s) return;
+    memcpy(buf, &s->nbroken, sizeof(int));
+    if (s->n) memcpy(buf + sizeof(int), s->b, (size_t)s->n * sizeof(beam_bond));
+}
+int floe_beam_set_state_restore(floe_beam_set *s, const unsigned char *buf, size_t n) {
+    if (!s || n != floe_beam_set_state_size(s)) return FLOE_EINVAL;
+    memcpy(&s->nbroken, buf, sizeof(int));
+    if (s->n) memcpy(s->b, buf + sizeof(int), (size_t)s->n * sizeof(beam_bond));
+    return FLOE_OK;
+}
+
 int floe_beam_set_info(const floe_beam_set *s, int k, floe_beam_bond_info *o) {
     if (!s || k < 0 || k >= s->n) return FLOE_EINVAL;
     const beam_bond *b = &s->b[k];

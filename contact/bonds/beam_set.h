@@ -41,5 +41,12 @@ double floe_beam_set_critical_dt(floe_beam_set *s, const floe_particles *p, int 
  * whose stress exceeds the strength break (only when stepping). Returns the number of bonds
  * broken by this call: the caller lets those pairs meet by contact. */
 int floe_beam_set_forces(floe_beam_set *s, const floe_step_ctx *ctx, double *elastic, double *dissipated);
+/* The bytes of what a step changes in the bonds (last stresses, forces and energies, broken
+ * flags and the breaks' records; the bonds' whole records, so a layout change shows as a
+ * size mismatch): checkpoints (core/integrators/checkpoint.c). restore returns FLOE_EINVAL
+ * when n bytes are not this set's size (another scene). */
+size_t floe_beam_set_state_size(const floe_beam_set *s);
+void floe_beam_set_state_save(const floe_beam_set *s, unsigned char *buf);
+int floe_beam_set_state_restore(floe_beam_set *s, const unsigned char *buf, size_t n);
 
 #endif

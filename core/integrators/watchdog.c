@@ -170,15 +170,49 @@ int floe_world_step(floe_world *w) {
     return observers_call(w, 0);
 }
 
+/* the step becomes dt from the present state on (the clock restarts here; the watchdog's
+ * conserved form follows the closing half kick, which grows as dt: its balance goes on) */
+static void change_dt(floe_world *w, double dt) {
+    if (dt == w->dt) return;
+    const double r = dt / w->dt;
+    w->t0 = w->time;
+    w->step0 = w->step;
+    w->wd_shadow0 += w->wd_shadow * (r * r - 1);
+    w->wd_shadow *= r * r;
+    w->dt = dt;
+}
+
+/* the step may be shortened for the last one (velocity Verlet, RK2: a class whose trial
+ * step can be undone takes any step; not the staggered scheme's PD cycle of several steps,
+ * not leapfrog, whose kick spans the previous step too) */
+static int can_shorten(const floe_world *w) {
+    const floe_integrator_class *ic = floe_integrator_class_of(w->def.integrator);
+    if (!ic || !(ic->flags & FLOE_INTEGRATOR_RESTORES)) return 0;
+    return !(w->def.pd_dem == FLOE_PD_DEM_STAGGERED && w->npd && w->pd_every > 1);
+}
+
 int floe_world_run(floe_world *w, double t_end, floe_progress_fn progress, void *user) {
     int rc = floe_world_prepare(w);
     if (rc) { floe_world_finish(w); return rc; }
     if (!w->def.adaptive) {
-        long nsteps = (long)ceil((t_end - w->time) / w->dt - 1e-9);
-        if (nsteps < 0) nsteps = 0;
+        /* Fixed step: the whole steps that end at or before t_end (counted from the clock's
+         * origin t0, step0, so that a run continued from a checkpoint takes the same steps),
+         * then, when the integrator takes a shorter step, one that ends at t_end; leapfrog
+         * and the staggered scheme with a PD cycle end on the last whole step (at most one
+         * step before t_end). */
+        const double dt = w->dt;
+        long last = w->step0 + (long)floor((t_end - w->t0) / dt + 1e-9);
+        long nfull = last - w->step;
+        if (nfull < 0) nfull = 0;
+        const double t_full = w->t0 + (double)(w->step + nfull - w->step0) * dt;
+        const int tail = can_shorten(w) && t_end - t_full > 1e-9 * dt;
+        const long nsteps = nfull + tail;
         for (long s = 0; s < nsteps; s++) {
+            const int short_step = tail && s == nfull;
             w->last_step_of_run = s == nsteps - 1;
+            if (short_step) change_dt(w, t_end - w->time);
             rc = floe_world_step(w);
+            if (short_step) change_dt(w, dt); /* later runs go on with the scene's step */
             w->last_step_of_run = 0;
             if (rc) break;
             if (progress && progress(w, s + 1, nsteps, user)) {

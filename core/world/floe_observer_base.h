@@ -9,13 +9,24 @@
 #include "floe_registry.h"
 
 typedef struct floe_observer_class {
-    int version; /* 1 */
+    int version; /* 1, or 2 with the checkpoint hooks below */
     const char *name;
     int (*begin)(floe_observer *o, floe_world *w);      /* optional */
     int (*observe)(floe_observer *o, floe_world *w);    /* required */
     int (*end)(floe_observer *o, floe_world *w);        /* optional: flush, close */
     void (*destroy)(floe_observer *o);                  /* optional */
     int needs_contacts;   /* 1: reads floe_world_contacts, so the world records every contact */
+    /* version 2, optional (docs/checkpoints.md): what the observer needs to go on writing
+     * after a restart as if the run had not stopped (its files' lengths, frame counts, what
+     * it accumulates). A checkpoint is written between steps, after the observers of the
+     * step. restore is called on an observer of a world freshly built from the same scene,
+     * after its begin(): it cuts its files back to their length at the checkpoint (they were
+     * opened without truncating, floe_outputs_keep_existing) and takes the state back; n is
+     * the size saved. A world holding an observer without these hooks can save a checkpoint
+     * but not load one (the message names the observer). */
+    size_t (*state_size)(const floe_observer *o);
+    void (*save)(const floe_observer *o, unsigned char *buf);
+    int (*restore)(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n);
 } floe_observer_class;
 
 struct floe_observer {

@@ -206,7 +206,11 @@ int floe_world_particle_count(const floe_world *w);
 int floe_world_step(floe_world *w);
 /* Progress callback: return non-zero to stop. */
 typedef int (*floe_progress_fn)(const floe_world *w, long step, long nsteps, void *user);
-/* Run until time t_end. Observers are flushed (end) also when the run fails. */
+/* Run until time t_end. Observers are flushed (end) also when the run fails. A fixed step
+ * ends exactly at t_end when the integrator can shorten its last step (velocity Verlet, RK2:
+ * the last step is t_end minus the last whole step's end, then the step goes back to dt);
+ * leapfrog and the staggered scheme with a PD cycle (every > 1) end on the last whole step
+ * not past t_end (up to one step before it). Adaptive steps end at t_end. */
 int floe_world_run(floe_world *w, double t_end, floe_progress_fn progress, void *user);
 /* Finish: call end() of every observer (idempotent). */
 int floe_world_finish(floe_world *w);
