@@ -405,6 +405,36 @@ typedef struct section {
     int (*restore)(floe_world *w, ibuf *r, char *err, size_t errlen);
 } section;
 
+/* the periodic cell (floe_cell.h): its whole state, and the list's images and its cell at
+ * the build (the list's other arrays are NLST's) */
+static int has_cell(const floe_world *w) { return w->cell != NULL; }
+static void save_cell(const floe_world *w, obuf *b) {
+    put(b, w->cell, sizeof *w->cell);
+    const int np = w->nl.npairs, has = w->nl.img != NULL;
+    PUT(b, np); PUT(b, has);
+    if (has) put(b, w->nl.img, (size_t)np * sizeof(int));
+    put(b, w->nl.Hb, sizeof w->nl.Hb);
+    PUT(b, w->nl.rmax_b);
+}
+static int restore_cell(floe_world *w, ibuf *r, char *err, size_t errlen) {
+    get(r, w->cell, sizeof *w->cell);
+    int np = -1, has = 0;
+    GET(r, np); GET(r, has);
+    if (r->bad || np != w->nl.npairs)
+        return fail(err, errlen, FLOE_EINVAL, "section CELL does not match this world's neighbour list");
+    if (has) {
+        void *q = realloc(w->nl.img, (size_t)(np > w->nl.cap ? np : w->nl.cap ? w->nl.cap : 1) * sizeof(int));
+        if (!q) return fail(err, errlen, FLOE_ENOMEM, "out of memory");
+        w->nl.img = q;
+        get(r, w->nl.img, (size_t)np * sizeof(int));
+    }
+    get(r, w->nl.Hb, sizeof w->nl.Hb);
+    GET(r, w->nl.rmax_b);
+    w->nl.cell = w->cell;
+    if (r->bad) return fail(err, errlen, FLOE_EINVAL, "section CELL is short");
+    return FLOE_OK;
+}
+
 static int always(const floe_world *w) { (void)w; return 1; }
 static int has_beams(const floe_world *w) { return w->beams != NULL; }
 
@@ -413,6 +443,7 @@ static const section sections[] = {
     {TAG('S', 'O', 'B', 'J'), always, save_states, restore_states},
     {TAG('P', 'A', 'R', 'T'), always, save_particles, restore_particles},
     {TAG('N', 'L', 'S', 'T'), always, save_neighbors, restore_neighbors},
+    {TAG('C', 'E', 'L', 'L'), has_cell, save_cell, restore_cell},
     {TAG('P', 'R', 'O', 'V'), always, save_providers, restore_providers},
     {TAG('B', 'E', 'A', 'M'), has_beams, save_beams, restore_beams},
     {TAG('S', 'T', 'A', 'G'), staggered, save_stag, restore_stag},

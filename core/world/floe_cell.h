@@ -120,4 +120,18 @@ int floe_world_cell_measures(const floe_world *w, floe_rve_measures *out);
 int floe_world_cell_strain(floe_world *w, const double de[9], double max_rate, const int *stress_mask,
                            long *steps);
 
+/* The perturbation tangent (finite strain probes from a saved state, the state restored
+ * after): from the present state (saved in memory, floe_world_state_save), for each
+ * independent component (3D: xx yy zz yz xz xy; 2D: xx yy xy) apply the strain `strain`
+ * (shear: engineering, gamma = strain) by floe_world_cell_strain at max_rate with the cell
+ * otherwise fixed, then relax_steps steps with the cell fixed; the column is (sigma - sigma0) /
+ * strain with sigma0 the unstrained state after as many relaxation steps. Fills D (ijkl, may be
+ * NULL) and Dv (Voigt 6x6, may be NULL) in Pa; *steps (may be NULL) the steps taken in all.
+ * Observers are not called during the probes. The world's state and control are put back,
+ * also on failure. relax_steps = 0 and one step per probe give the instantaneous
+ * (affine + contact history) response; relaxation lets the packing rearrange (a softer
+ * tangent). FLOE_EINVAL without a cell, for strain not in (0, 0.1), max_rate <= 0. */
+int floe_world_tangent_perturb(floe_world *w, double strain, double max_rate, long relax_steps, double D[81],
+                               double Dv[36], long *steps);
+
 #endif
