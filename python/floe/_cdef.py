@@ -115,6 +115,18 @@ int floe_world_cell_measures(const floe_world *w, floe_rve_measures *out);
 int floe_world_cell_strain(floe_world *w, const double de[9], double max_rate, const int *stress_mask,
                            long *steps);
 
+int floe_world_tangent_perturb(floe_world *w, double strain, double max_rate, long relax_steps, double D[81],
+                               double Dv[36], long *steps);
+
+/* ---- core/integrators/floe_checkpoint.h ---- */
+int floe_world_checkpoint_save(const floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name,
+                               char *err, size_t errlen);
+int floe_world_checkpoint_load(floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name,
+                               char *err, size_t errlen);
+size_t floe_world_state_size(const floe_world *w);
+int floe_world_state_save(const floe_world *w, void *buf, size_t len, char *err, size_t errlen);
+int floe_world_state_restore(floe_world *w, const void *buf, size_t len, char *err, size_t errlen);
+
 /* ---- core/scene/floe_scene.h ---- */
 typedef struct floe_scene_info {
     char name[128];

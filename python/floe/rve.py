@@ -121,13 +121,50 @@ class RVE:
         r["fabric"] = np.array(r["fabric"]).reshape(3, 3)
         return r
 
-    def tangent(self, kind="contact"):
-        """The tangent D as (D4 (3,3,3,3), Voigt (6,6)), Pa. kind "contact": ParticLS eq 29 over
-        the contacts of the last evaluation."""
-        if kind != "contact":
-            raise ValueError(f"tangent kind {kind!r}: 'contact'")
+    def tangent(self, kind="contact", strain=1e-6, max_rate=None, relax_steps=1):
+        """The tangent D as (D4 (3,3,3,3), Voigt (6,6)), Pa.
+        kind "contact": ParticLS eq 29 over the contacts of the last evaluation;
+        kind "perturbation": strain probes of `strain` from the present state (saved and put back
+        after; floe_world_tangent_perturb), each applied at max_rate (default: in one step) then
+        relax_steps steps with the cell fixed, against the unstrained state run as long."""
         D = ffi.new("double[81]")
-        self.world.check(lib().floe_world_tangent_contact(self.world.ptr, 0.0, D))
         V = ffi.new("double[36]")
-        lib().floe_tangent_to_voigt(D, V)
+        if kind == "contact":
+            self.world.check(lib().floe_world_tangent_contact(self.world.ptr, 0.0, D))
+            lib().floe_tangent_to_voigt(D, V)
+        elif kind == "perturbation":
+            if max_rate is None:
+                max_rate = strain / self.world.dt
+            steps = ffi.new("long *")
+            self.world.check(lib().floe_world_tangent_perturb(self.world.ptr, float(strain), float(max_rate),
+                                                              int(relax_steps), D, V, steps))
+            self.last_probe_steps = int(steps[0])
+        else:
+            raise ValueError(f"tangent kind {kind!r}: 'contact' or 'perturbation'")
         return np.array(list(D)).reshape(3, 3, 3, 3), np.array(list(V)).reshape(6, 6)
+
+    # -- state ----------------------------------------------------------------------------------
+    def save_state(self):
+        """The whole state (particles, contacts' history, cell, clock, ledger) as bytes
+        (floe_world_state_save; observers excluded)."""
+        n = lib().floe_world_state_size(self.world.ptr)
+        if n == 0:
+            raise FloeError(_api.FLOE_EINVAL, "save_state: the world is not prepared")
+        buf = ffi.new("unsigned char[]", n)
+        _api.call_err(lib().floe_world_state_save, self.world.ptr, buf, n)
+        return bytes(ffi.buffer(buf, n))
+
+    def restore_state(self, state):
+        """Put back a state from save_state (of this RVE or one built from the same scene)."""
+        buf = ffi.from_buffer(state)
+        _api.call_err(lib().floe_world_state_restore, self.world.ptr, buf, len(state))
+
+    def save(self, path, scene_hash=0, name=None):
+        """A checkpoint file (floe_world_checkpoint_save): load it into an RVE built from the
+        same scene with load()."""
+        _api.call_err(lib().floe_world_checkpoint_save, self.world.ptr, _api.cstr(path), int(scene_hash),
+                      _api.cstr(name))
+
+    def load(self, path, scene_hash=0, name=None):
+        _api.call_err(lib().floe_world_checkpoint_load, self.world.ptr, _api.cstr(path), int(scene_hash),
+                      _api.cstr(name))
