@@ -58,13 +58,6 @@ static int sc_points_list(sc *s, struct fy_node *v, struct fy_node *k, const cha
     return FLOE_OK;
 }
 
-int sc_pos_num(sc *s, const sc_map *m, const char *key, double *out)
-{
-    FLOE_TRY(sc_num(s, m, key, 1, 0, out));
-    if (!(*out > 0)) return sc_range(s, m, key, "> 0 (m)", *out);
-    return FLOE_OK;
-}
-
 /* Build any shape from its {kind: {...}} mapping (f names the field in messages). */
 int sc_build_shape(sc *s, struct fy_node *v, struct fy_node *k, const char *f, int depth,
                           floe_geometry **out)

@@ -647,3 +647,11 @@ int sc_check_memory(sc *s, struct fy_node *at, const char *what, double more)
                    "%.0f bytes per PD bond), more than this machine's memory (%.3g GB)", what, need / 1e9,
                    s->w ? s->w->p.n : 0, SC_BYTES_PER_PARTICLE, SC_BYTES_PER_BOND, have / 1e9);
 }
+
+/* a required length > 0 (m) */
+int sc_pos_num(sc *s, const sc_map *m, const char *key, double *out)
+{
+    FLOE_TRY(sc_num(s, m, key, 1, 0, out));
+    if (!(*out > 0)) return sc_range(s, m, key, "> 0 (m)", *out);
+    return FLOE_OK;
+}

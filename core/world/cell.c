@@ -229,15 +229,6 @@ void floe_tangent_to_voigt(const double D[81], double Vo[36]) {
         }
 }
 
-int floe_world_refresh_forces(floe_world *w) {
-    if (!w->prepared) return floe_world_error(w, FLOE_EINVAL, "refresh: prepare the world first");
-    const int keep = w->record_contacts;
-    w->record_contacts = 1;
-    int rc = floe_compute_forces(w);
-    w->record_contacts = keep;
-    return rc;
-}
-
 /* ---- the step ---------------------------------------------------------------------- */
 
 int floe_cell_prepare(floe_world *w) {

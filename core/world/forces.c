@@ -1020,3 +1020,13 @@ int floe_compute_forces(floe_world *w) {
     floe_step_ctx c = {&w->p, w->def.dim, 0, w->time, w->dt, 0.0, 0, w->record_contacts || w->obs_need_contacts, 0};
     return floe_world_forces(w, &c, FLOE_GROUP_ALL);
 }
+
+/* floe_cell.h: the forces again at the present state, the contacts recorded */
+int floe_world_refresh_forces(floe_world *w) {
+    if (!w->prepared) return floe_world_error(w, FLOE_EINVAL, "refresh: prepare the world first");
+    const int keep = w->record_contacts;
+    w->record_contacts = 1;
+    int rc = floe_compute_forces(w);
+    w->record_contacts = keep;
+    return rc;
+}
