@@ -33,6 +33,7 @@
  * a corner are those of least power distance. Each edge keeps the seed whose bisector it
  * lies on, for the Newton method on the weights (floe_voronoi_areas, below). */
 #include "floe_voronoi.h"
+#include "error_text.h"
 #include "floe_base.h"
 #include "floe_kdtree.h"
 #include "floe_rng.h"
@@ -58,12 +59,11 @@
 #define VOR_FLAT_SIN 1e-12
 
 static int fail(char *err, size_t errlen, int code, const char *fmt, ...) {
-    if (err && errlen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, errlen, fmt, ap);
-        va_end(ap);
-    }
+    if (!err || !errlen) return code;
+    va_list ap;
+    va_start(ap, fmt);
+    floe_error_vset(err, errlen, code, fmt, ap); /* the one message convention (error_text.h) */
+    va_end(ap);
     return code;
 }
 

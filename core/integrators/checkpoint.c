@@ -5,6 +5,7 @@
  * `sections` (save, restore). Readers check every length against the world they fill, so
  * that a checkpoint of another scene is refused instead of read out of bounds. */
 #include "integrator_parts.h"
+#include "error_text.h"
 #include "floe_checkpoint.h"
 
 #include <errno.h>
@@ -107,12 +108,11 @@ static int fail(char *err, size_t errlen, int code, const char *fmt, ...)
 #endif
     ;
 static int fail(char *err, size_t errlen, int code, const char *fmt, ...) {
-    if (err && errlen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, errlen, fmt, ap);
-        va_end(ap);
-    }
+    if (!err || !errlen) return code;
+    va_list ap;
+    va_start(ap, fmt);
+    floe_error_vset(err, errlen, code, fmt, ap); /* the one message convention (error_text.h) */
+    va_end(ap);
     return code;
 }
 
