@@ -3,7 +3,8 @@
  * walls then still) or a target pressure (every wall within 1 % at the end of the
  * preparation, 2 % once the run's first forces are taken), friction switched on through
  * the law setter, the run's clock back at 0; `floe check` (with_outputs 0) does not run it;
- * a target not reached in max_time is an error at the block's line saying how far it got. */
+ * a target not reached in max_time is an error at the block's line saying how far it got;
+ * the same two targets in a periodic cell through the cell's control. */
 #include "check.h"
 #include "floe.h"
 #include "floe_servo.h"
@@ -122,6 +123,49 @@ static void test_pressure(void) {
     floe_world_destroy(w);
 }
 
+/* the same preparation in a periodic cell (no walls): the cell's control compacts to the
+ * porosity (within 1 %, the cell then fixed) and to the pressure (the cell's normal stresses
+ * within 1 % at the end of the preparation) */
+static void test_cell(void) {
+    static const char *const cases[2] = {"  compact: {porosity: 0.42}\n  then: {friction: 0.4}\n  max_time: 2\n  hold: 200\n",
+                                         "  compact: {pressure: 2000}\n  max_time: 2\n  hold: 300\n"};
+    for (int c = 0; c < 2; c++) {
+        char text[8192], err[2048];
+        snprintf(text, sizeof text,
+                 "dimension: 3\n"
+                 "time: {duration: 0.01, safety: 0.2}\n"
+                 "gravity: [0, 0, 0]\n"
+                 "materials: [{name: g, density: 2500}]\n"
+                 "laws: [{materials: [g, g], model: viscoelastic, kn: 1.0e4, gn: 1.5, ks: 5.0e3, gs: 0.5, friction: 0}]\n"
+                 "forces: [{type: linear_drag, c: 100}]\n"
+                 "cell: {size: [0.055, 0.055, 0.055]}\n"
+                 "bodies:\n"
+                 "  - {packing: random, material: g, region: {min: [0, 0, 0], max: [0.055, 0.055, 0.055]}, count: 100,\n"
+                 "     seed: 3, radius_distribution: {uniform: [0.004, 0.006]}}\n"
+                 "prepare:\n%s", cases[c]);
+        floe_world *w = NULL;
+        floe_scene_info info;
+        int rc = floe_scene_load_ex("prep_cell.yaml", text, "/tmp", 1, &w, &info, err, sizeof err);
+        CHECK(rc == FLOE_OK, "periodic prepare %d: %s", c, err);
+        if (rc) continue;
+        floe_rve_measures m;
+        floe_world_refresh_forces(w);
+        floe_world_cell_measures(w, &m);
+        if (c == 0) {
+            CHECK_NEAR(m.porosity, 0.42, 0.01, "periodic: porosity reached");
+            CHECK(((floe_linear_law *)w->laws[0])->mu == 0.4, "periodic: friction switched on");
+        } else {
+            const char *q = strstr(info.summary, "normal stresses -");
+            double lo = 0, hi = 0;
+            CHECK(q && sscanf(q, "normal stresses -%lf to -%lf", &lo, &hi) == 2, "summary gives the stresses");
+            CHECK(fabs(lo - 2000) <= 20 && fabs(hi - 2000) <= 20, "periodic: stresses %g to %g Pa within 1 %%", lo, hi);
+        }
+        printf("  %s", strstr(info.summary, "prepared:"));
+        CHECK(floe_world_time(w) == 0, "periodic: the run's clock at 0");
+        floe_world_destroy(w);
+    }
+}
+
 static void test_check_and_errors(void) {
     char err[2048];
     floe_scene_info info;
@@ -152,6 +196,7 @@ static void test_check_and_errors(void) {
 }
 
 int main(void) {
+    test_cell();
     test_check_and_errors();
     test_porosity();
     test_pressure();

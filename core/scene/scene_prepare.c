@@ -16,6 +16,7 @@
  * (floe_servo.h): a periodic cell's stress servo would replace the box walls by the cell's
  * strain rate behind the same two calls (prep_measure, prep_drive). */
 #include "scene_internal.h"
+#include "floe_cell.h"
 
 static FILE *prep_log_file;
 
@@ -243,6 +244,98 @@ static int prep_run(sc *s, prep *pp, char *done, size_t donelen)
     return FLOE_OK;
 }
 
+/* A periodic cell (floe_cell.h): the same two targets through the cell's control instead
+ * of walls. Pressure: every normal stress held at -P by the cell's servo (its max_rate the
+ * scene's, else max_speed / the cell's smallest width), off-diagonal rates 0, until the
+ * three (2D: two) normal stresses are within the tolerance for `hold` steps in a row.
+ * Porosity: every axis at the same inward rate (slowed over the last 2 % of volumetric
+ * strain) until the cell's volume gives the porosity, then `hold` steps with the cell fixed.
+ * The scene's own control is put back after. */
+static int prep_cell_measure(const sc *s, double *pmin, double *pmax)
+{
+    double sig[9];
+    *pmin = INFINITY;
+    *pmax = -INFINITY;
+    if (floe_world_cell_stress(s->w, sig, NULL) != FLOE_OK) { *pmin = *pmax = 0; return FLOE_OK; }
+    for (int a = 0; a < s->dim; a++) {
+        *pmin = fmin(*pmin, -sig[4 * a]);
+        *pmax = fmax(*pmax, -sig[4 * a]);
+    }
+    return FLOE_OK;
+}
+
+static int prep_run_cell(sc *s, prep *pp, char *done, size_t donelen)
+{
+    floe_world *w = s->w;
+    floe_cell_control keep, c = floe_default_cell_control();
+    floe_world_cell_get_control(w, &keep);
+    const double vs = prep_solid(s);
+    if (!(vs > 0)) return sc_fail(s, FLOE_EINVAL, pp->at, "prepare: there are no free particles to compact");
+    double wd[3];
+    floe_world_cell_widths(w, wd);
+    const double wmin = fmin(wd[0], fmin(wd[1], wd[2]));
+    if (pp->max_speed <= 0) {
+        double rs = 0;
+        int nf = 0;
+        for (int i = 0; i < w->p.n; i++)
+            if (w->p.motion[i] == FLOE_FREE) { rs += w->p.radius[i]; nf++; }
+        pp->max_speed = 1e-3 * (rs / nf) / w->dt;
+    }
+    const double rate = keep.max_rate > 0 ? keep.max_rate : pp->max_speed / wmin;
+    double pmin = 0, pmax = 0, V;
+    if (!pp->porosity) {
+        for (int a = 0; a < s->dim; a++) {
+            c.mode[4 * a] = FLOE_CELL_STRESS;
+            c.stress[4 * a] = -pp->target;
+        }
+        c.max_rate = rate;
+        c.servo_time = keep.servo_time;
+        if (floe_world_cell_set_control(w, &c)) return sc_fail(s, FLOE_EINVAL, pp->at, "prepare: %s", floe_world_last_error(w));
+        long in = 0;
+        while (in < pp->hold) {
+            if (w->time >= pp->max_time)
+                return sc_fail(s, FLOE_EINVAL, pp->at, "prepare: the pressure %g was not reached within max_time %g s "
+                               "(%ld steps): the cell's normal stresses are -%.4g to -%.4g, the porosity %.4f",
+                               pp->target, pp->max_time, floe_world_step_count(w), pmin, pmax,
+                               1 - vs / floe_world_cell_volume(w));
+            FLOE_TRY(prep_step(s, pp));
+            prep_cell_measure(s, &pmin, &pmax);
+            int ok = fabs(pmin - pp->target) <= pp->tol * pp->target && fabs(pmax - pp->target) <= pp->tol * pp->target;
+            in = ok ? in + 1 : 0;
+        }
+    } else {
+        const double vt = vs / (1 - pp->target);
+        for (;;) {
+            V = floe_world_cell_volume(w);
+            double e = log(V / vt);
+            if (e <= 0) break;
+            if (w->time >= pp->max_time)
+                return sc_fail(s, FLOE_EINVAL, pp->at, "prepare: the porosity %g was not reached within max_time %g s "
+                               "(%ld steps): it is %.4f", pp->target, pp->max_time, floe_world_step_count(w), 1 - vs / V);
+            double f = fmax(fmin(1.0, e / 0.02), 0.05);
+            /* the step at this rate would pass the target: only what is left of the strain */
+            double r = fmin(rate * f, e / (s->dim * w->dt));
+            for (int a = 0; a < s->dim; a++) c.rate[4 * a] = -r;
+            if (floe_world_cell_set_control(w, &c)) return sc_fail(s, FLOE_EINVAL, pp->at, "prepare: %s", floe_world_last_error(w));
+            FLOE_TRY(prep_step(s, pp));
+        }
+        floe_cell_control fixed = floe_default_cell_control();
+        floe_world_cell_set_control(w, &fixed);
+        for (long k = 0; k < pp->hold; k++) FLOE_TRY(prep_step(s, pp));
+        prep_cell_measure(s, &pmin, &pmax);
+    }
+    V = floe_world_cell_volume(w);
+    double n = 1 - vs / V;
+    if (pp->porosity && fabs(n - pp->target) > pp->tol * pp->target)
+        return sc_fail(s, FLOE_EINVAL, pp->at, "prepare: the porosity reached %.5f is off the target %g by more than "
+                       "the tolerance", n, pp->target);
+    floe_world_cell_set_control(w, &keep);
+    snprintf(done, donelen, "prepared: %s in the periodic cell in %ld steps (%.4g s): porosity %.4f, normal stresses "
+             "-%.4g to -%.4g Pa%s", pp->porosity ? "compacted to the porosity" : "compacted to the pressure",
+             floe_world_step_count(w), w->time, n, pmin, pmax, pp->has_mu ? ", then friction switched on" : "");
+    return FLOE_OK;
+}
+
 /* friction on: the laws between the materials of free particles */
 static int prep_friction(sc *s, const prep *pp)
 {
@@ -268,6 +361,18 @@ int sc_parse_prepare(sc *s, struct fy_node *v, struct fy_node *k, int run, char 
     prep pp;
     done[0] = 0;
     FLOE_TRY(prep_parse(s, v, k, &pp));
+    if (floe_world_cell(s->w, NULL, NULL)) { /* a periodic cell: its control, no walls */
+        if (!run) return FLOE_OK;
+        int rc = floe_world_prepare(s->w);
+        if (rc) return sc_fail(s, rc, pp.at, "prepare: %s", floe_world_last_error(s->w));
+        FLOE_TRY(prep_run_cell(s, &pp, done, donelen));
+        if (pp.has_mu) FLOE_TRY(prep_friction(s, &pp));
+        s->w->time = 0;
+        s->w->step = 0;
+        s->w->prepared = 0;
+        if (prep_log_file) fprintf(prep_log_file, "%s\n", done);
+        return FLOE_OK;
+    }
     FLOE_TRY(prep_box(s, &pp));
     FLOE_TRY(prep_servo(s, &pp));
     if (!run) return FLOE_OK;
