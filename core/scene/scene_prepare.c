@@ -65,24 +65,6 @@ static double prep_volume(const sc *s, const prep *pp, double L[3])
     return V;
 }
 
-/* solid volume (2D: area) of the free particles: spheres exactly, other shapes mass / density
- * (2D: / thickness, 1 m without one) */
-static double prep_solid(const sc *s)
-{
-    const floe_particles *p = &s->w->p;
-    double v = 0;
-    for (int i = 0; i < p->n; i++) {
-        if (p->motion[i] != FLOE_FREE) continue;
-        double r = p->radius[i];
-        if (p->kind[i] == FLOE_GEOM_SPHERE) v += s->dim == 3 ? 4.0 / 3.0 * M_PI * r * r * r : M_PI * r * r;
-        else {
-            double rho = s->w->mats[p->material[i]].density, h = p->thick && p->thick[i] > 0 ? p->thick[i] : 1;
-            v += p->mass[i] / rho / (s->dim == 3 ? 1 : h);
-        }
-    }
-    return v;
-}
-
 /* the measure: the walls' smallest and largest pressure */
 static void prep_measure(const sc *s, const prep *pp, double *pmin, double *pmax)
 {
@@ -178,7 +160,7 @@ static int prep_run(sc *s, prep *pp, char *done, size_t donelen)
 {
     floe_world *w = s->w;
     double L[3];
-    const double vs = prep_solid(s);
+    const double vs = floe_world_solid_volume(s->w);
     if (!(vs > 0)) return sc_fail(s, FLOE_EINVAL, pp->at, "prepare: there are no free particles to compact");
     double V = prep_volume(s, pp, L);
     if (!(V > 0)) return sc_fail(s, FLOE_EINVAL, pp->at, "prepare: the box's walls enclose no volume (%g)", V);
@@ -269,7 +251,7 @@ static int prep_run_cell(sc *s, prep *pp, char *done, size_t donelen)
     floe_world *w = s->w;
     floe_cell_control keep, c = floe_default_cell_control();
     floe_world_cell_get_control(w, &keep);
-    const double vs = prep_solid(s);
+    const double vs = floe_world_solid_volume(s->w);
     if (!(vs > 0)) return sc_fail(s, FLOE_EINVAL, pp->at, "prepare: there are no free particles to compact");
     double wd[3];
     floe_world_cell_widths(w, wd);

@@ -435,12 +435,7 @@ int floe_world_cell_measures(const floe_world *w, floe_rve_measures *out) {
     if (nc > 0)
         for (int k = 0; k < 9; k++) out->fabric[k] /= nc;
     const floe_particles *p = &w->p;
-    double vs = 0;
-    for (int i = 0; i < p->n; i++) {
-        /* the shape's volume (2D: its area, x 1 m), whatever the masses were taken from */
-        floe_mass_properties mp;
-        if (floe_geometry_mass_properties(w->geoms[p->geom[i]], w->def.dim, 1.0, &mp) == FLOE_OK) vs += mp.volume;
-    }
+    double vs = floe_world_solid_volume(w); /* every particle of a cell is free */
     out->contacts = nc;
     out->particles = p->n;
     out->coordination = p->n ? 2.0 * nc / p->n : 0.0;

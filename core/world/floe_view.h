@@ -63,6 +63,11 @@ int floe_world_geometry_count(const floe_world *w);
 const floe_geometry *floe_world_geometry_at(const floe_world *w, int k);
 const floe_geometry *floe_world_particle_geometry(const floe_world *w, int i);
 
+/* The solid volume of the free particles (m^3): each one's shape volume (2D: its area times
+ * 1 m, whatever its mass was taken from; a floe's thickness does not enter), for porosities
+ * and void ratios (the periodic cell's measures, the `prepare` block). 0 for NULL. */
+double floe_world_solid_volume(const floe_world *w);
+
 /* The definition in use (after floe_world_create's defaults; read-only). */
 const floe_world_def *floe_world_definition(const floe_world *w);
 int floe_world_dim(const floe_world *w);

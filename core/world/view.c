@@ -45,6 +45,18 @@ const floe_geometry *floe_world_particle_geometry(const floe_world *w, int i) {
     return w && i >= 0 && i < w->p.n ? w->geoms[w->p.geom[i]] : NULL;
 }
 
+double floe_world_solid_volume(const floe_world *w) {
+    if (!w) return 0.0;
+    const floe_particles *p = &w->p;
+    double v = 0;
+    for (int i = 0; i < p->n; i++) {
+        if (p->motion[i] != FLOE_FREE) continue;
+        floe_mass_properties mp;
+        if (floe_geometry_mass_properties(w->geoms[p->geom[i]], w->def.dim, 1.0, &mp) == FLOE_OK) v += mp.volume;
+    }
+    return v;
+}
+
 const floe_world_def *floe_world_definition(const floe_world *w) { return w ? &w->def : NULL; }
 
 int floe_world_dim(const floe_world *w) { return w ? w->def.dim : 0; }
