@@ -182,7 +182,11 @@ GAUSS = [(-1 / math.sqrt(3), -1 / math.sqrt(3)), (1 / math.sqrt(3), -1 / math.sq
 
 
 class Mesh:
-    def __init__(self, nx, ny, width, height):
+    """nx x ny bilinear quadrilaterals over width x height, 2 x 2 Gauss points each. With
+    bbar (Hughes 1980), each Gauss point's volumetric strain is the element's mean: full
+    integration of a dilatant (or isochoric) flow otherwise locks a coarse mesh."""
+
+    def __init__(self, nx, ny, width, height, bbar=True):
         self.nx, self.ny = nx, ny
         xs, ys = np.linspace(0, width, nx + 1), np.linspace(0, height, ny + 1)
         self.X = np.array([(x, y) for y in ys for x in xs])
@@ -209,6 +213,14 @@ class Mesh:
                 B[2, 1::2] = dNx[0]
                 self.B.append(B)
                 self.w.append(np.linalg.det(J))
+            if bbar:
+                q = slice(len(self.B) - 4, len(self.B))
+                Bs, ws = self.B[q], self.w[q]
+                vol = sum(w * (B[0] + B[1]) for B, w in zip(Bs, ws)) / sum(ws)
+                for B in Bs:
+                    corr = 0.5 * (vol - (B[0] + B[1]))
+                    B[0] += corr
+                    B[1] += corr
         self.dofs = [np.ravel([(2 * n, 2 * n + 1) for n in e]) for e in self.elems]
 
     def nodes_where(self, pred):
@@ -271,6 +283,7 @@ def parse_args(argv=None):
     ap.add_argument("--maxit", type=int, default=6, help="Newton iterations per step at most")
     ap.add_argument("--hold", type=int, default=3000, help="steps of the RVEs under the stress servo after the "
                     "preparation (the shear stress to 0), then as many with the cell fixed")
+    ap.add_argument("--no-bbar", action="store_true", help="plain full integration (locks under dilatancy)")
     ap.add_argument("--smooth", action="store_true", help="smooth platens (default: rough)")
     ap.add_argument("--vtk-every", type=int, default=5, help="write the field every k steps (0: end only)")
     ap.add_argument("--element", action="store_true", help="only the element test: one RVE (packing 0) in "
@@ -321,7 +334,7 @@ def run_fem(a, packs):
     .state, .sigma, .D and evaluate(state, de) -> (sigma, D, state, steps)). Returns the rows
     written to curve.csv and the accumulated Gauss-point strains."""
     H = 2 * a.width
-    mesh = Mesh(a.nx, a.ny, a.width, H)
+    mesh = Mesh(a.nx, a.ny, a.width, H, bbar=not a.no_bbar)
     ngp = 4 * len(mesh.elems)
     rng = np.random.default_rng(a.seed)
     which = rng.integers(0, a.packings, ngp)
@@ -387,6 +400,9 @@ def run_fem(a, packs):
             Kb = K[np.ix_(fdofs, fdofs)]
         Kf = Kb
         R_prev = s_prev = None
+        res_prev = float("inf")
+        best, back = None, 0
+        cap = 0.5 * a.dstrain * H  # the largest move of a node per iteration
         while True:
             it += 1
             de = gp_strains(mesh, du)
@@ -401,8 +417,17 @@ def run_fem(a, packs):
             if a.verbose:
                 print(f"      iteration {it}: residual {res:.3e}, sliding contacts "
                       f"{sum(getattr(p, 'sliding', 0) for p in packs)} (last RVE of each packing)", flush=True)
+            if best is None or res < best[0]:
+                best = (res, du.copy(), de, trial, sig_t, D_t, F)
             if res < a.tol or it >= a.maxit:
                 break
+            if R_prev is not None and res > res_prev and back < 2:
+                # the residual grew: back halfway along the last step, no update from here
+                back += 1
+                s_prev = 0.5 * s_prev
+                du[fdofs] -= s_prev
+                continue
+            back = 0
             if a.solver == "newton":
                 Kf = K[np.ix_(fdofs, fdofs)]
             elif R_prev is not None:
@@ -410,10 +435,15 @@ def run_fem(a, packs):
                 y = R_prev - R[fdofs]
                 Kf = Kf + np.outer(y - Kf @ s_prev, s_prev) / (s_prev @ s_prev)
             s_prev = np.linalg.solve(Kf, R[fdofs])
-            R_prev = R[fdofs].copy()
+            m = np.abs(s_prev).max()
+            if m > cap:  # a softening secant can ask for a huge step: cap it
+                s_prev *= cap / m
+            R_prev, res_prev = R[fdofs].copy(), res
             du[fdofs] += s_prev
-        # keep the states
-        du_last, Kb = du.copy(), Kf
+        # the best iterate (the last one unless the iterations stopped at the cap)
+        res, du, de, trial, sig_t, D_t, F = best
+        # keep the states (and Broyden's stiffness only when it led to convergence)
+        du_last, Kb = du.copy(), (Kf if res < a.tol else None)
         u += du
         eps += de
         state = [t[2] for t in trial]
