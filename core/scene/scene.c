@@ -5,7 +5,7 @@
  * type-checked and range-checked, and every message is "file:line:column: message" with
  * 1-based line and column. Packings (lattice, hexagonal, random) are expanded here; the
  * world does the physics. ParticLS §5.2 (growing radius) and §5.3 (RVE) are the examples. */
-#include "scene_internal.h"
+#include "scene_read.h"
 #include "floe_cell.h"
 #include "floe_integrator.h"
 

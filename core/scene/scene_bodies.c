@@ -1,7 +1,7 @@
 /* scene_bodies.c - scene section `bodies`: shapes (registered shapes, read by their schemas,
  * and the point-list and nested shapes the loader reads itself), single bodies and packings
  * (lattice, hexagonal, random). */
-#include "scene_internal.h"
+#include "scene_read.h"
 
 /* ------------------------------------------------------------------------------------ */
 /* Bodies                                                                                */

@@ -11,7 +11,7 @@
  *     max_strain_rate: ..            # the servo's largest |L_ab| (required with stress)
  *     servo_time: ..                 # the servo's relaxation time, s (default 50 steps)
  * A component may be given a strain rate or a stress, not both. */
-#include "scene_internal.h"
+#include "scene_read.h"
 #include "floe_cell.h"
 #include "floe_view.h"
 

@@ -9,7 +9,7 @@
  * drawn from it until their area reaches concentration x region, and the cells are power
  * cells of those areas / concentration (floe_voronoi_areas), Lloyd-relaxed the same way
  * (docs/sea-ice.md, "Floe size distributions"). */
-#include "scene_internal.h"
+#include "scene_read.h"
 #include "floe_voronoi.h"
 #include "floe_rng.h"
 

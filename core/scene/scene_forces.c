@@ -2,7 +2,7 @@
  * kind FLOE_KIND_PROVIDER), each `{type: NAME, <its parameters>}` read by its schema and
  * added to the world (floe_world_add_provider). A relative `file` parameter is made
  * relative to the scene file's folder. */
-#include "scene_internal.h"
+#include "scene_read.h"
 
 /* the registered names of a kind, for "did you mean" */
 static void sc_kind_suggest(char *buf, size_t len, const char *kind, const char *word)

@@ -9,7 +9,7 @@
  * `fixed` (a coastline or island). Refused here, naming the file and the feature: an
  * unreadable file, invalid JSON (json-c's message at its line and column), other GeoJSON
  * types, malformed positions, holes (interior rings), bad properties. */
-#include "scene_internal.h"
+#include "scene_read.h"
 
 #include <json.h>
 #include <math.h>

@@ -1,6 +1,6 @@
 /* scene_materials.c - scene sections `materials`, `laws` (registered laws, read by their
  * schemas) and `walls`. */
-#include "scene_internal.h"
+#include "scene_read.h"
 
 /* ------------------------------------------------------------------------------------ */
 /* Materials and laws                                                                    */

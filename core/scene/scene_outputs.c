@@ -1,6 +1,6 @@
 /* scene_outputs.c - scene sections `outputs` (built-in and registered outputs) and `bonds`
  * (beam bonds). */
-#include "scene_internal.h"
+#include "scene_read.h"
 
 /* ------------------------------------------------------------------------------------ */
 /* Outputs                                                                               */

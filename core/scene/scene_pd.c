@@ -1,6 +1,6 @@
 /* scene_pd.c - scene section `peridynamics`: PD bodies, regions, holes, cracks and boundary
  * regions; the check that every pair of materials that can touch has a law. */
-#include "scene_internal.h"
+#include "scene_read.h"
 
 /* ------------------------------------------------------------------------------------ */
 /* Peridynamic bodies                                                                    */

@@ -16,7 +16,7 @@
  * over the edges' boxes, then every pair of non-adjacent edges that may meet), rings of zero
  * area, and polygons that overlap each other (boxes first, then the separating-axis test
  * between their convex pieces: floes that only touch are accepted). */
-#include "scene_internal.h"
+#include "scene_read.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -42,7 +42,7 @@ typedef struct pl_poly {
     double *pxy;
 } pl_poly;
 
-/* the polygons of one entry, whichever reader found them (scene_internal.h) */
+/* the polygons of one entry, whichever reader found them (scene_read.h) */
 struct sc_polys {
     sc *s;
     struct fy_node *at;  /* the polygons_file value: every message is reported there */

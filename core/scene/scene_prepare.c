@@ -15,7 +15,7 @@
  * The controller only measures pressures and the box and sets wall targets or speeds
  * (floe_servo.h): a periodic cell's stress servo would replace the box walls by the cell's
  * strain rate behind the same two calls (prep_measure, prep_drive). */
-#include "scene_internal.h"
+#include "scene_read.h"
 #include "floe_cell.h"
 
 static FILE *prep_log_file;

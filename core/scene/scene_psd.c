@@ -12,7 +12,7 @@
  *                                               sieve curve, the default) or of the count;
  * with `seed` (its own stream, 1 by default). The radii come back sorted largest first (the
  * random packing places them in that order). */
-#include "scene_internal.h"
+#include "scene_read.h"
 
 enum { PSD_UNIFORM = 0, PSD_LOGNORMAL = 1, PSD_GIVEN = 2 };
 

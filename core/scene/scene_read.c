@@ -1,6 +1,6 @@
 /* scene_read.c - the scene loader's reading helpers: errors at file:line:col, YAML nodes,
  * numbers, names, vectors, schema-driven parameters (floe_registry.h) and the packing RNG. */
-#include "scene_internal.h"
+#include "scene_read.h"
 
 static long sc_pos(const sc *s, struct fy_node *n);
 static int sc_loc_pos(const sc *s, long pos, int *line, int *col);
@@ -614,7 +614,7 @@ int sc_read_schema(sc *s, const sc_map *m, const floe_registry_entry *ent, const
 
 double sc_rng_uniform(sc_rng *r) { return floe_rng_uniform(&r->s); }
 
-/* Memory a scene needs (SC_BYTES_* in scene_internal.h) */
+/* Memory a scene needs (SC_BYTES_* in scene_read.h) */
 
 double sc_phys_mem(void)
 {

@@ -12,7 +12,7 @@
  * table (the .dbf, dBASE) may carry `thickness` (a number, m) and `fixed` (a logical, or an
  * integer 0/1) per shape, as a GeoJSON Feature's properties; an empty value is as absent.
  * Shape k (0-based, as GeoJSON features) is named "shape k", its part j "shape k part j". */
-#include "scene_internal.h"
+#include "scene_read.h"
 
 #ifdef FLOE_HAVE_SHAPELIB
 

@@ -1,4 +1,4 @@
-/* scene_internal.h - the scene loader's shared context and helpers (the files of core/scene),
+/* scene_read.h - the scene loader's shared context and helpers (the files of core/scene),
  * one file per section of a scene: scene_read.c (errors, YAML node helpers, schema
  * reader, RNG), scene_materials.c (materials, laws, walls), scene_bodies.c (shapes,
  * bodies, packings), scene_pd.c (peridynamic bodies), scene_outputs.c (outputs, bonds),
