@@ -132,7 +132,8 @@ def walls_of(w):
     for a in range(3):
         out[(a, 0)], out[(a, 1)] = ids[2 * a], ids[2 * a + 1]
         if not p.x[ids[2 * a + 1]][a] > p.x[ids[2 * a]][a]:
-            raise RuntimeError("walled.yaml: walls %d, %d are not the pair of axis %d" % (ids[2 * a], ids[2 * a + 1], a))
+            raise RuntimeError("walled.yaml: walls %d, %d are not the pair of axis %d"
+                               % (ids[2 * a], ids[2 * a + 1], a))
     return out
 
 
