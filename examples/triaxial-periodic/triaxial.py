@@ -72,14 +72,15 @@ def principal(sigma):
 
 
 # ---------------------------------------------------------------------------------------
-def run_periodic(n, strain, rate, every, outdir, log, seed=None, friction=None):
+def run_periodic(n, strain, rate, every, outdir, log, seed=None, friction=None, scene="periodic.yaml"):
     t0 = time.time()
-    rve = floe.RVE.from_string(scene_text("periodic.yaml", n, seed, friction), path=os.path.join(HERE, "periodic.yaml"),
+    rve = floe.RVE.from_string(scene_text(scene, n, seed, friction), path=os.path.join(HERE, scene),
                                outdir=outdir, outputs=True)
     w = rve.world
     m0 = rve.measures()
-    log("periodic: %d spheres prepared in %.1f s: porosity %.4f, coordination %.2f, sigma %s Pa"
-        % (m0["particles"], time.time() - t0, m0["porosity"], m0["coordination"],
+    name = scene.split(".")[0]
+    log("%s: %d spheres prepared in %.1f s: porosity %.4f, coordination %.2f, sigma %s Pa"
+        % (name, m0["particles"], time.time() - t0, m0["porosity"], m0["coordination"],
            np.array2string(np.diag(m0["sigma"]), precision=0)))
     _, H0 = rve.cell()
     V0 = rve.volume
@@ -115,8 +116,8 @@ def run_periodic(n, strain, rate, every, outdir, log, seed=None, friction=None):
         n = min(CONTROL, nsteps - k)
         w.step(n)
         k += n
-    log("periodic: %d steps in %.1f s (%.2f us per particle-step)"
-        % (nsteps, time.time() - t1, 1e6 * (time.time() - t1) / (nsteps * m0["particles"])))
+    log("%s: %d steps in %.1f s (%.2f us per particle-step)"
+        % (name, nsteps, time.time() - t1, 1e6 * (time.time() - t1) / (nsteps * m0["particles"])))
     return np.array(rows), m0
 
 
@@ -247,7 +248,8 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=None, help="the placement's seed (default: the scenes' 7)")
     ap.add_argument("--friction", type=float, default=None, help="mu for the test (default: the scenes' 0.3)")
     ap.add_argument("--every", type=int, default=500, help="steps between records")
-    ap.add_argument("--which", choices=["both", "periodic", "walled"], default="both")
+    ap.add_argument("--which", choices=["both", "periodic", "walled", "fcc"], default="both",
+                    help="fcc: the analytical check, a face-centred cubic array (fcc.yaml; --n ignored)")
     ap.add_argument("--out", default="out/triaxial-periodic")
     a = ap.parse_args(argv)
     os.makedirs(a.out, exist_ok=True)
@@ -270,6 +272,18 @@ def main(argv=None):
         np.savetxt(os.path.join(a.out, "walled.csv"), rows, delimiter=",", header=head, comments="")
         res["walled"] = analyse(rows)
         report("walled", res["walled"], log)
+    if a.which == "fcc":
+        rows, _ = run_periodic(None, a.strain, rate, a.every, os.path.join(a.out, "fcc"), log, None, a.friction,
+                               scene="fcc.yaml")
+        np.savetxt(os.path.join(a.out, "fcc.csv"), rows, delimiter=",", header=head, comments="")
+        res["fcc"] = r = analyse(rows)
+        report("fcc", r, log)
+        mu = 0.3 if a.friction is None else a.friction
+        ratio = np.max(rows[:, 5] / rows[:, 6])
+        exact = 2 * (1 + mu) / (1 - mu)
+        r["ratio"], r["ratio_exact"] = float(ratio), exact
+        log("fcc      largest s1/s3 %.4f; Thornton (1979), rigid spheres: 2 (1 + mu) / (1 - mu) = %.4f (%+.2f %%)"
+            % (ratio, exact, 100 * (ratio / exact - 1)))
     return res
 
 
