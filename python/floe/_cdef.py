@@ -118,6 +118,14 @@ int floe_world_cell_strain(floe_world *w, const double de[9], double max_rate, c
 int floe_world_tangent_perturb(floe_world *w, double strain, double max_rate, long relax_steps, double D[81],
                                double Dv[36], long *steps);
 
+/* ---- core/world/floe_servo.h ---- */
+int floe_world_servo_set_pressure(floe_world *w, int wall, double pressure);
+int floe_world_servo_set_speed(floe_world *w, int wall, double speed);
+int floe_world_servo_reset(floe_world *w, int wall);
+double floe_world_wall_pressure(const floe_world *w, int wall);
+double floe_world_servo_area(const floe_world *w, int wall);
+int floe_world_is_servo_wall(const floe_world *w, int wall);
+
 /* ---- core/integrators/floe_checkpoint.h ---- */
 int floe_world_checkpoint_save(const floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name,
                                char *err, size_t errlen);
