@@ -70,8 +70,14 @@ void floe_scene_set_prepare_log(FILE *f);
 const char *floe_scene_default_demo(void);
 
 /* Either form, with control over the outputs: text == NULL reads the file at path;
- * with_outputs == 0 validates the outputs section without creating any directory or file
- * (used by `floe check`). */
+ * with_outputs is one of
+ *   FLOE_SCENE_RUN (1)        a run: the `prepare` block runs, the outputs are opened;
+ *   FLOE_SCENE_NO_OUTPUTS (2) a run without files: the `prepare` block runs, the outputs
+ *                             section is only validated (the Python package's outputs=False);
+ *   FLOE_SCENE_CHECK (0)      `floe check`: neither runs; nothing is created. */
+#define FLOE_SCENE_CHECK 0
+#define FLOE_SCENE_RUN 1
+#define FLOE_SCENE_NO_OUTPUTS 2
 int floe_scene_load_ex(const char *path, const char *text, const char *outdir, int with_outputs,
                        floe_world **out_world, floe_scene_info *info, char *err, size_t errlen);
 

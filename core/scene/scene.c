@@ -211,7 +211,7 @@ static void sc_summary(sc *s, const char *name, const char *outdir, int with_out
         sc_cat(&b, "%s)\n", s->nstates > s->ngrow_listed ? ", ..." : "");
     }
     if (s->nouts) {
-        sc_cat(&b, "outputs%s:\n", with_outputs ? "" : " (not opened by check)");
+        sc_cat(&b, "outputs%s:\n", with_outputs ? "" : " (not opened)");
         for (int i = 0; i < s->nouts; i++) {
             const sc_output *o = &s->outs[i];
             if (o->every) sc_cat(&b, "  %s every %ld steps -> %s%s\n", o->type, o->every, o->target,
@@ -532,11 +532,12 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     char prepared[512] = "";
     {
         struct fy_node *pk, *pv = sc_get(&r, "prepare", &pk);
-        if (pv) FLOE_TRY(sc_parse_prepare(s, pv, pk, with_outputs, prepared, sizeof prepared));
+        if (pv) FLOE_TRY(sc_parse_prepare(s, pv, pk, with_outputs != FLOE_SCENE_CHECK, prepared, sizeof prepared));
     }
     struct fy_node *ok;
     struct fy_node *ov = sc_get(&r, "outputs", &ok);
-    FLOE_TRY(sc_parse_outputs(s, ov == ok ? NULL : ov, ok, outdir, with_outputs));
+    FLOE_TRY(sc_parse_outputs(s, ov == ok ? NULL : ov, ok, outdir,
+                              with_outputs != FLOE_SCENE_CHECK && with_outputs != FLOE_SCENE_NO_OUTPUTS));
 
     int rc = floe_world_prepare(s->w);
     if (rc != FLOE_OK)
@@ -559,7 +560,7 @@ static int sc_build(sc *s, struct fy_node *root, const char *outdir, int with_ou
     info->nlaws = s->nlaws;
     info->nobservers = s->nobservers;
     info->nstates = s->nstates;
-    sc_summary(s, info->name, outdir, with_outputs, info);
+    sc_summary(s, info->name, outdir, with_outputs != FLOE_SCENE_CHECK && with_outputs != FLOE_SCENE_NO_OUTPUTS, info);
     if (prepared[0]) {
         size_t L = strlen(info->summary);
         snprintf(info->summary + L, sizeof info->summary - L, "%s%s\n", L && info->summary[L - 1] != '\n' ? "\n" : "",

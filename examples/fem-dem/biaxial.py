@@ -80,13 +80,12 @@ class Packing:
     """One prepared packing: an RVE whose state is swapped in and out for every Gauss point
     that uses it (all those states come from the same scene)."""
 
-    def __init__(self, args, seed, outdir):
+    def __init__(self, args, seed):
         self.mu, self.kt = args.mu, args.kn / 2
         self.sliding = 0
         text = rve_scene(args.discs, seed, args.p0, args.kn, args.mu, args.rmin, args.rmax, 0.2)
-        os.makedirs(outdir, exist_ok=True)
-        # outputs=True runs the scene's `prepare` block (compaction, then friction)
-        self.rve = floe.RVE.from_string(text, path=f"<rve seed {seed}>", outdir=outdir, outputs=True)
+        # loading runs the scene's `prepare` block (compaction, then friction); no files
+        self.rve = floe.RVE.from_string(text, path=f"<rve seed {seed}>", outputs=False)
         w = self.rve.world
         w.set_dt(args.dt_factor * w.critical_dt)
         # the rate of a quasi-static increment: inertial number I = rate d sqrt(rho / p)
@@ -310,7 +309,7 @@ def main(argv=None):
     packs = []
     for k in range(a.packings):
         t0 = time.time()
-        packs.append(Packing(a, 101 + k, os.path.join(a.out, f"rve{k}")))
+        packs.append(Packing(a, 101 + k))
         p = packs[-1]
         print(f"packing {k}: {a.discs} discs, porosity {p.porosity:.4f}, coordination {p.coordination:.2f}, "
               f"sigma ({p.sigma[0]:.4g}, {p.sigma[1]:.4g}, {p.sigma[2]:.3g}) Pa, rate {p.rate:.3g} 1/s "

@@ -56,7 +56,8 @@ class World:
     def from_scene(cls, path, outdir=None, outputs=True):
         """Load the scene file at path (floe_scene_load_ex). Observers write into outdir
         (created if missing; None: "out"); outputs=False validates the outputs section
-        without creating any file. FloeError with "file:line:column: message" on error."""
+        without creating any file. Either way the scene's `prepare` block runs (compaction,
+        then friction: docs/granular.md). FloeError with "file:line:column: message" on error."""
         return cls._load(cstr(path), ffi.NULL, outdir, outputs)
 
     @classmethod
@@ -69,7 +70,8 @@ class World:
     def _load(cls, path, text, outdir, outputs):
         out = ffi.new("floe_world **")
         info = ffi.new("floe_scene_info *")
-        call_err(lib().floe_scene_load_ex, path, text, cstr(outdir), 1 if outputs else 0, out, info)
+        # FLOE_SCENE_RUN (1) or FLOE_SCENE_NO_OUTPUTS (2): the prepare block runs in both
+        call_err(lib().floe_scene_load_ex, path, text, cstr(outdir), 1 if outputs else 2, out, info)
         return cls(out[0], _api.to_record(info[0]))
 
     def close(self):

@@ -63,7 +63,7 @@ def packing(tmp_path_factory):
     out = str(tmp_path_factory.mktemp("fem-dem"))
     a = biaxial.parse_args(["--nx", "1", "--ny", "1", "--discs", "100", "--packings", "1", "--steps", "6",
                             "--smooth", "--tol", "1e-3", "--maxit", "10", "--vtk-every", "0", "-o", out])
-    return a, biaxial.Packing(a, 101, os.path.join(out, "rve0"))
+    return a, biaxial.Packing(a, 101)
 
 
 def test_packing_prepared(packing):

@@ -106,3 +106,27 @@ def test_state_round_trip(tmp_path):
     assert np.array_equal(rve.world.x, other.world.x)
     with pytest.raises(floe.FloeError, match="scene"):
         floe.RVE.from_string(LATTICE).load(path, scene_hash=8, name="lattice")
+
+
+PREPARED = """
+dimension: 3
+time: {duration: 0.1, dt: 2.0e-5}
+gravity: [0, 0, 0]
+materials: [{name: g, density: 2650}]
+laws: [{materials: [g, g], model: viscoelastic, kn: 2.0e5, ks: 1.0e5, gn: 2.0, gs: 1.0, friction: 0}]
+cell: {size: [0.06, 0.06, 0.06], stress: {xx: -1.0e4, yy: -1.0e4, zz: -1.0e4}, max_strain_rate: 2.0}
+prepare: {compact: {pressure: 1.0e4}, then: {friction: 0.3}, max_time: 1.0, hold: 200}
+bodies:
+  - {packing: random, shape: {sphere: {radius: 0.006}}, material: g, count: 60,
+     region: {min: [0, 0, 0], max: [0.06, 0.06, 0.06]}, seed: 3}
+"""
+
+
+def test_prepare_runs_without_outputs():
+    """outputs=False creates no file but still runs the scene's prepare block: the packing
+    arrives compacted to the target pressure (the `prepare` block's 1 % test) and jammed."""
+    rve = floe.RVE.from_string(PREPARED, outputs=False)
+    m = rve.measures()
+    p = -np.trace(m["sigma"]) / 3
+    assert abs(p - 1.0e4) < 0.02 * 1.0e4, p
+    assert m["coordination"] > 4 and m["porosity"] < 0.45
