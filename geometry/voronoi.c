@@ -58,15 +58,6 @@
 /* corners turning by less than this (sine of the angle) are dropped */
 #define VOR_FLAT_SIN 1e-12
 
-static int fail(char *err, size_t errlen, int code, const char *fmt, ...) {
-    if (!err || !errlen) return code;
-    va_list ap;
-    va_start(ap, fmt);
-    floe_error_vset(err, errlen, code, fmt, ap); /* the one message convention (error_text.h) */
-    va_end(ap);
-    return code;
-}
-
 static int grow_int(int **a, int *cap, int need) {
     if (need <= *cap) return FLOE_OK;
     int c = 2 * need;
@@ -402,7 +393,7 @@ static int tessellate(vor_run *R, floe_voronoi *v, char *err, size_t errlen) {
             continue;
         }
         if (R->c.m < 3)
-            return fail(err, errlen, FLOE_EINVAL,
+            return floe_error_set(err, errlen, FLOE_EINVAL,
                         "voronoi: the cell of seed %d (%.17g, %.17g) degenerates to %d corners: seeds nearly coincide", k,
                         v->seed[2 * k], v->seed[2 * k + 1], R->c.m);
         FLOE_TRY(append_cell(R, v, k));
@@ -411,13 +402,13 @@ static int tessellate(vor_run *R, floe_voronoi *v, char *err, size_t errlen) {
 }
 
 static int check_rect(const double lo[2], const double hi[2], char *err, size_t errlen) {
-    if (!lo || !hi) return fail(err, errlen, FLOE_EINVAL, "voronoi: rectangle corners lo/hi are NULL");
+    if (!lo || !hi) return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: rectangle corners lo/hi are NULL");
     for (int a = 0; a < 2; a++) {
         if (!isfinite(lo[a]) || !isfinite(hi[a]))
-            return fail(err, errlen, FLOE_EINVAL, "voronoi: rectangle lo = (%g, %g), hi = (%g, %g) is not finite", lo[0],
+            return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: rectangle lo = (%g, %g), hi = (%g, %g) is not finite", lo[0],
                         lo[1], hi[0], hi[1]);
         if (!(hi[a] > lo[a]))
-            return fail(err, errlen, FLOE_EINVAL, "voronoi: rectangle has hi[%d] = %g <= lo[%d] = %g (empty)", a, hi[a], a,
+            return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: rectangle has hi[%d] = %g <= lo[%d] = %g (empty)", a, hi[a], a,
                         lo[a]);
     }
     return FLOE_OK;
@@ -427,9 +418,9 @@ static int check_seeds(const double lo[2], const double hi[2], const double *see
     for (int k = 0; k < n; k++) {
         const double *s = seeds + 2 * k;
         if (!isfinite(s[0]) || !isfinite(s[1]))
-            return fail(err, errlen, FLOE_EINVAL, "voronoi: seed %d = (%g, %g) is not finite", k, s[0], s[1]);
+            return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: seed %d = (%g, %g) is not finite", k, s[0], s[1]);
         if (s[0] < lo[0] || s[0] > hi[0] || s[1] < lo[1] || s[1] > hi[1])
-            return fail(err, errlen, FLOE_EINVAL, "voronoi: seed %d = (%g, %g) is outside the rectangle [%g, %g] x [%g, %g]",
+            return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: seed %d = (%g, %g) is outside the rectangle [%g, %g] x [%g, %g]",
                         k, s[0], s[1], lo[0], hi[0], lo[1], hi[1]);
     }
     return FLOE_OK;
@@ -439,12 +430,12 @@ static int check_seeds(const double lo[2], const double hi[2], const double *see
 static int check_input(const double lo[2], const double hi[2], const double *seeds, int n, floe_voronoi *out, char *err,
                        size_t errlen) {
     if (err && errlen) err[0] = '\0';
-    if (!out) return fail(err, errlen, FLOE_EINVAL, "voronoi: output is NULL");
+    if (!out) return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: output is NULL");
     memset(out, 0, sizeof *out);
     FLOE_TRY(check_rect(lo, hi, err, errlen));
     if (n < 1 || n > VOR_MAX_SEEDS)
-        return fail(err, errlen, FLOE_EINVAL, "voronoi: number of seeds n = %d is not in [1, %d]", n, VOR_MAX_SEEDS);
-    if (!seeds) return fail(err, errlen, FLOE_EINVAL, "voronoi: seeds is NULL (n = %d)", n);
+        return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: number of seeds n = %d is not in [1, %d]", n, VOR_MAX_SEEDS);
+    if (!seeds) return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: seeds is NULL (n = %d)", n);
     return check_seeds(lo, hi, seeds, n, err, errlen);
 }
 
@@ -461,7 +452,7 @@ static int check_duplicates(vor_run *R, char *err, size_t errlen) {
             double d = hypot(s[2 * j] - s[2 * k], s[2 * j + 1] - s[2 * k + 1]);
             if (j != k && d <= tol) {
                 int a = j < k ? j : k, b = j < k ? k : j;
-                return fail(err, errlen, FLOE_EINVAL,
+                return floe_error_set(err, errlen, FLOE_EINVAL,
                             "voronoi: seeds %d and %d coincide: (%.17g, %.17g) and (%.17g, %.17g) are %g apart "
                             "(at most %g = 1e-12 x the rectangle diagonal)",
                             a, b, s[2 * a], s[2 * a + 1], s[2 * b], s[2 * b + 1], d, tol);
@@ -482,10 +473,10 @@ static int run_start(vor_run *R, const double *seeds, int n, int weighted, floe_
     v->centroid = malloc(2 * (size_t)n * sizeof *v->centroid);
     if (weighted) v->weight = calloc((size_t)n, sizeof *v->weight);
     if (!R->pts || !v->start || !v->seed || !v->area || !v->centroid || (weighted && !v->weight))
-        return fail(err, errlen, FLOE_ENOMEM, "voronoi: out of memory");
+        return floe_error_set(err, errlen, FLOE_ENOMEM, "voronoi: out of memory");
     memcpy(v->seed, seeds, 2 * (size_t)n * sizeof *seeds);
     int rc = index_seeds(R, v->seed);
-    if (rc == FLOE_ENOMEM) return fail(err, errlen, rc, "voronoi: out of memory");
+    if (rc == FLOE_ENOMEM) return floe_error_set(err, errlen, rc, "voronoi: out of memory");
     return check_duplicates(R, err, errlen);
 }
 
@@ -495,7 +486,7 @@ static int run_tessellate(vor_run *R, floe_voronoi *v, char *err, size_t errlen)
     R->moved = 0;
     if (rc == FLOE_OK && R->w) rc = index_weights(R);
     if (rc == FLOE_OK) rc = tessellate(R, v, err, errlen);
-    if (rc == FLOE_ENOMEM) return fail(err, errlen, rc, "voronoi: out of memory");
+    if (rc == FLOE_ENOMEM) return floe_error_set(err, errlen, rc, "voronoi: out of memory");
     return rc;
 }
 
@@ -532,7 +523,7 @@ int floe_voronoi_rect(const double lo[2], const double hi[2], const double *seed
                       floe_voronoi *out, char *err, size_t errlen) {
     FLOE_TRY(check_input(lo, hi, seeds, n, out, err, errlen));
     if (lloyd_iterations < 0)
-        return fail(err, errlen, FLOE_EINVAL, "voronoi: lloyd_iterations = %d is negative", lloyd_iterations);
+        return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: lloyd_iterations = %d is negative", lloyd_iterations);
     vor_run R = {.lo = {lo[0], lo[1]}, .hi = {hi[0], hi[1]}};
     int rc = voronoi_run(&R, seeds, n, lloyd_iterations, out, err, errlen);
     run_free(&R);
@@ -543,9 +534,9 @@ int floe_voronoi_rect(const double lo[2], const double hi[2], const double *seed
 int floe_voronoi_power_rect(const double lo[2], const double hi[2], const double *seeds, const double *weights, int n,
                             floe_voronoi *out, char *err, size_t errlen) {
     FLOE_TRY(check_input(lo, hi, seeds, n, out, err, errlen));
-    if (!weights) return fail(err, errlen, FLOE_EINVAL, "voronoi: weights is NULL (n = %d)", n);
+    if (!weights) return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: weights is NULL (n = %d)", n);
     for (int k = 0; k < n; k++)
-        if (!isfinite(weights[k])) return fail(err, errlen, FLOE_EINVAL, "voronoi: weight %d = %g is not finite", k, weights[k]);
+        if (!isfinite(weights[k])) return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: weight %d = %g is not finite", k, weights[k]);
     vor_run R = {.lo = {lo[0], lo[1]}, .hi = {hi[0], hi[1]}};
     int rc = run_start(&R, seeds, n, 1, out, err, errlen);
     if (rc == FLOE_OK) {
@@ -710,16 +701,16 @@ static int solve_areas(vor_run *R, floe_voronoi *v, const double *a, double tol,
     if (R->nempty) { /* a warm start that lost a cell: start from the Voronoi cells */
         memset(v->weight, 0, (size_t)n * sizeof *v->weight);
         FLOE_TRY(run_tessellate(R, v, err, errlen));
-        if (R->nempty) return fail(err, errlen, FLOE_EINVAL, "voronoi: %d cells are empty: seeds nearly coincide", R->nempty);
+        if (R->nempty) return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: %d cells are empty: seeds nearly coincide", R->nempty);
     }
     double worst, amin, amin_t = INFINITY;
     for (int k = 0; k < n; k++) amin_t = fmin(amin_t, a[k]);
     double res = area_misfit(v->area, a, n, &worst, &amin), eps = 0.5 * fmin(amin_t, amin);
     for (int it = 0; worst > tol; it++) {
         if (it == VOR_NEWTON_MAX)
-            return fail(err, errlen, FLOE_EINVAL, "voronoi: the cell areas missed their targets by %.3g (relative) after %d Newton steps",
+            return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: the cell areas missed their targets by %.3g (relative) after %d Newton steps",
                         worst, it);
-        if (newton_hessian(N, R, v) != FLOE_OK) return fail(err, errlen, FLOE_ENOMEM, "voronoi: out of memory");
+        if (newton_hessian(N, R, v) != FLOE_OK) return floe_error_set(err, errlen, FLOE_ENOMEM, "voronoi: out of memory");
         for (int k = 0; k < n; k++) N->b[k] = a[k] - v->area[k];
         /* an inexact Newton step (the linear residual below the area error, at most 1e-3);
          * should its line search fail, the same step solved to VOR_CG_TOL */
@@ -731,7 +722,7 @@ static int solve_areas(vor_run *R, floe_voronoi *v, const double *a, double tol,
                 newton_direction(N, rtol = VOR_CG_TOL);
                 tau = 1;
             } else if (tau < VOR_TAU_MIN)
-                return fail(err, errlen, FLOE_EINVAL, "voronoi: the Newton step on the weights found no descent (area error %.3g)", worst);
+                return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: the Newton step on the weights found no descent (area error %.3g)", worst);
             for (int k = 0; k < n; k++) N->wt[k] = v->weight[k] + tau * N->dw[k];
             FLOE_TRY(run_tessellate(R, v, err, errlen));
             res_t = area_misfit(v->area, a, n, &worst_t, &amin);
@@ -750,7 +741,7 @@ static int areas_run(vor_run *R, const double *seeds, const double *areas, int n
     FLOE_TRY(run_start(R, seeds, n, 1, v, err, errlen));
     vor_newton N = {0};
     double *a = malloc((size_t)n * sizeof *a), sum = 0;
-    int rc = a && newton_alloc(&N, n) == FLOE_OK ? FLOE_OK : fail(err, errlen, FLOE_ENOMEM, "voronoi: out of memory");
+    int rc = a && newton_alloc(&N, n) == FLOE_OK ? FLOE_OK : floe_error_set(err, errlen, FLOE_ENOMEM, "voronoi: out of memory");
     if (rc == FLOE_OK) {
         for (int k = 0; k < n; k++) sum += areas[k];
         double scale = (R->hi[0] - R->lo[0]) * (R->hi[1] - R->lo[1]) / sum;
@@ -772,12 +763,12 @@ int floe_voronoi_areas(const double lo[2], const double hi[2], const double *see
                        int lloyd_iterations, double tol, floe_voronoi *out, char *err, size_t errlen) {
     FLOE_TRY(check_input(lo, hi, seeds, n, out, err, errlen));
     if (lloyd_iterations < 0)
-        return fail(err, errlen, FLOE_EINVAL, "voronoi: lloyd_iterations = %d is negative", lloyd_iterations);
-    if (!(tol > 0 && tol <= 0.5)) return fail(err, errlen, FLOE_EINVAL, "voronoi: tolerance %g is not in (0, 0.5]", tol);
-    if (!areas) return fail(err, errlen, FLOE_EINVAL, "voronoi: areas is NULL (n = %d)", n);
+        return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: lloyd_iterations = %d is negative", lloyd_iterations);
+    if (!(tol > 0 && tol <= 0.5)) return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: tolerance %g is not in (0, 0.5]", tol);
+    if (!areas) return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: areas is NULL (n = %d)", n);
     for (int k = 0; k < n; k++)
         if (!(isfinite(areas[k]) && areas[k] > 0))
-            return fail(err, errlen, FLOE_EINVAL, "voronoi: area %d = %g is not a positive number", k, areas[k]);
+            return floe_error_set(err, errlen, FLOE_EINVAL, "voronoi: area %d = %g is not a positive number", k, areas[k]);
     vor_run R = {.lo = {lo[0], lo[1]}, .hi = {hi[0], hi[1]}};
     int rc = areas_run(&R, seeds, areas, n, lloyd_iterations, tol, out, err, errlen);
     run_free(&R);

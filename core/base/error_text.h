@@ -7,7 +7,13 @@
 #include <stdarg.h>
 #include <stddef.h>
 
-/* Formats fmt into buf (len bytes, truncated) and returns code. */
+/* Formats fmt into buf (len bytes, truncated; nothing when buf is NULL or len 0) and
+ * returns code. */
 int floe_error_vset(char *buf, size_t len, int code, const char *fmt, va_list ap);
+int floe_error_set(char *buf, size_t len, int code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
 
 #endif

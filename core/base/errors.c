@@ -22,3 +22,11 @@ int floe_error_vset(char *buf, size_t len, int code, const char *fmt, va_list ap
     if (buf && len) vsnprintf(buf, len, fmt, ap);
     return code;
 }
+
+int floe_error_set(char *buf, size_t len, int code, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    floe_error_vset(buf, len, code, fmt, ap);
+    va_end(ap);
+    return code;
+}

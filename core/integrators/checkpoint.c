@@ -101,21 +101,6 @@ static void get_str(ibuf *r, char *dst, size_t cap) {
     r->pos += n;
 }
 
-/* a message into err; returns code */
-static int fail(char *err, size_t errlen, int code, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 4, 5)))
-#endif
-    ;
-static int fail(char *err, size_t errlen, int code, const char *fmt, ...) {
-    if (!err || !errlen) return code;
-    va_list ap;
-    va_start(ap, fmt);
-    floe_error_vset(err, errlen, code, fmt, ap); /* the one message convention (error_text.h) */
-    va_end(ap);
-    return code;
-}
-
 static const char *tag_name(uint32_t tag, char buf[5]) {
     for (int k = 0; k < 4; k++) buf[k] = (char)(tag >> (8 * k));
     buf[4] = 0;
@@ -136,9 +121,9 @@ static int restore_clock(floe_world *w, ibuf *r, char *err, size_t errlen) {
     long l[3];
     int k[2];
     GET(r, d); GET(r, l); GET(r, k);
-    if (r->bad) return fail(err, errlen, FLOE_EINVAL, "section CLOK is short");
+    if (r->bad) return floe_error_set(err, errlen, FLOE_EINVAL, "section CLOK is short");
     if (k[0] != w->pd_sub || k[1] != w->pd_every)
-        return fail(err, errlen, FLOE_EINVAL, "the staggered PD-DEM ratio (substeps %d, every %d) is not this scene's "
+        return floe_error_set(err, errlen, FLOE_EINVAL, "the staggered PD-DEM ratio (substeps %d, every %d) is not this scene's "
                     "(%d, %d)", k[0], k[1], w->pd_sub, w->pd_every);
     w->time = d[0]; w->dt = d[1]; w->t0 = d[2]; w->dt_crit = d[3]; w->lf_dt_prev = d[4];
     w->dt_next = d[5]; w->dt_lo = d[6]; w->dt_hi = d[7]; w->dt_cap = d[8];
@@ -160,7 +145,7 @@ static int restore_energy(floe_world *w, ibuf *r, char *err, size_t errlen) {
     int k[4];
     GET(r, w->energy); GET(r, d); GET(r, k); GET(r, w->wd_step);
     get_str(r, w->wd_msg, sizeof w->wd_msg);
-    if (r->bad) return fail(err, errlen, FLOE_EINVAL, "section ENRG is short");
+    if (r->bad) return floe_error_set(err, errlen, FLOE_EINVAL, "section ENRG is short");
     w->elastic_contact = d[0]; w->elastic_pd = d[1]; w->eta_depth = d[2]; w->wd_pair_min = d[3]; w->wd_worst = d[4];
     w->wd_scale = d[5]; w->wd_shadow = d[6]; w->wd_shadow0 = d[7]; w->wd_created = d[8]; w->wd_gscale = d[9];
     w->wd_pair_i = k[0]; w->wd_pair_j = k[1]; w->wd_worst_i = k[2]; w->wd_worst_j = k[3];
@@ -181,7 +166,7 @@ static int restore_stats(floe_world *w, ibuf *r, char *err, size_t errlen) {
     long l[7];
     int k[4];
     GET(r, w->st); GET(r, l); GET(r, d->hist); GET(r, k);
-    if (r->bad) return fail(err, errlen, FLOE_EINVAL, "section STAT is short");
+    if (r->bad) return floe_error_set(err, errlen, FLOE_EINVAL, "section STAT is short");
     d->calls = l[0]; d->iterations = l[1]; d->admm_calls = l[2]; d->lp_calls = l[3]; d->separated = l[4];
     d->nonconverged = l[5]; d->first_bad_step = l[6];
     d->cur_i = k[0]; d->cur_j = k[1]; d->first_bad_i = k[2]; d->first_bad_j = k[3];
@@ -205,11 +190,11 @@ static int restore_particles(floe_world *w, ibuf *r, char *err, size_t errlen) {
     int n = -1;
     GET(r, n);
     if (n != p->n)
-        return fail(err, errlen, FLOE_EINVAL, "the checkpoint holds %d particles, this world %d: another scene", n, p->n);
+        return floe_error_set(err, errlen, FLOE_EINVAL, "the checkpoint holds %d particles, this world %d: another scene", n, p->n);
 #define X(a, c) get(r, p->a, (c) * (size_t)n * sizeof(double));
     PART_ARRAYS(X)
 #undef X
-    return r->bad ? fail(err, errlen, FLOE_EINVAL, "section PART is short") : FLOE_OK;
+    return r->bad ? floe_error_set(err, errlen, FLOE_EINVAL, "section PART is short") : FLOE_OK;
 }
 
 /* state objects (floe_state.h): their values through get/set */
@@ -231,20 +216,20 @@ static int restore_states(floe_world *w, ibuf *r, char *err, size_t errlen) {
     int ns = -1;
     GET(r, ns);
     if (ns != w->nstates)
-        return fail(err, errlen, FLOE_EINVAL, "the checkpoint holds %d state objects, this world %d", ns, w->nstates);
+        return floe_error_set(err, errlen, FLOE_EINVAL, "the checkpoint holds %d state objects, this world %d", ns, w->nstates);
     for (int k = 0; k < ns; k++) {
         floe_state *s = w->states[k];
         uint64_t m = 0;
         GET(r, m);
         if (r->bad || m != s->klass->size(s) || m * sizeof(double) > r->len - r->pos)
-            return fail(err, errlen, FLOE_EINVAL, "state object %d (%s): size does not match", k, s->klass->name);
+            return floe_error_set(err, errlen, FLOE_EINVAL, "state object %d (%s): size does not match", k, s->klass->name);
         double *y = malloc((m ? m : 1) * sizeof *y);
-        if (!y) return fail(err, errlen, FLOE_ENOMEM, "out of memory");
+        if (!y) return floe_error_set(err, errlen, FLOE_ENOMEM, "out of memory");
         get(r, y, m * sizeof *y);
         w->err[0] = 0;
         int rc = s->klass->set(s, w, y);
         free(y);
-        if (rc) return fail(err, errlen, rc, "state object %s could not be restored: %s", s->klass->name, w->err);
+        if (rc) return floe_error_set(err, errlen, rc, "state object %s could not be restored: %s", s->klass->name, w->err);
     }
     return FLOE_OK;
 }
@@ -281,10 +266,10 @@ static int restore_neighbors(floe_world *w, ibuf *r, char *err, size_t errlen) {
     GET(r, k); GET(r, nl->skin); GET(r, nl->rebuilds);
     const int np = k[0], warm = k[1], nb = k[2], nwl = k[3];
     if (r->bad || np < 0 || nb != w->p.n || nwl < 0 || nwl > w->p.n)
-        return fail(err, errlen, FLOE_EINVAL, "section NLST does not match this world (%d particles at the build, %d "
+        return floe_error_set(err, errlen, FLOE_EINVAL, "section NLST does not match this world (%d particles at the build, %d "
                     "here)", nb, w->p.n);
     if (warm && !nl->use_warm)
-        return fail(err, errlen, FLOE_EINVAL, "section NLST has warm starts that this scene does not use");
+        return floe_error_set(err, errlen, FLOE_EINVAL, "section NLST has warm starts that this scene does not use");
     const size_t n = (size_t)np;
     int rc = resize((void **)&nl->pi, n * sizeof(int));
     if (!rc) rc = resize((void **)&nl->pj, n * sizeof(int));
@@ -296,7 +281,7 @@ static int restore_neighbors(floe_world *w, ibuf *r, char *err, size_t errlen) {
     if (!rc) rc = resize((void **)&nl->r_build, (size_t)nb * sizeof(double));
     if (!rc) rc = resize((void **)&nl->walls, (size_t)nwl * sizeof(int));
     if (!rc) rc = resize((void **)&nl->q_walls, 4 * (size_t)nwl * sizeof(double));
-    if (rc) return fail(err, errlen, FLOE_ENOMEM, "out of memory");
+    if (rc) return floe_error_set(err, errlen, FLOE_ENOMEM, "out of memory");
     nl->npairs = nl->cap = np;
     nl->n_build = nb;
     nl->nwalls = nwl;
@@ -314,12 +299,12 @@ static int restore_neighbors(floe_world *w, ibuf *r, char *err, size_t errlen) {
     get(r, nl->q_walls, 4 * (size_t)nwl * sizeof(double));
     if (r->bad) {
         nl->npairs = nl->n_build = 0; /* consistent: the next step rebuilds */
-        return fail(err, errlen, FLOE_EINVAL, "section NLST is short");
+        return floe_error_set(err, errlen, FLOE_EINVAL, "section NLST is short");
     }
     for (int a = 0; a < np; a++)
         if (nl->pi[a] < 0 || nl->pi[a] >= w->p.n || nl->pj[a] < 0 || nl->pj[a] >= w->p.n) {
             nl->npairs = nl->n_build = 0;
-            return fail(err, errlen, FLOE_EINVAL, "section NLST: pair %d (%d, %d) out of range", a, nl->pi[a], nl->pj[a]);
+            return floe_error_set(err, errlen, FLOE_EINVAL, "section NLST: pair %d (%d, %d) out of range", a, nl->pi[a], nl->pj[a]);
         }
     return FLOE_OK;
 }
@@ -340,7 +325,7 @@ static int restore_providers(floe_world *w, ibuf *r, char *err, size_t errlen) {
     int np = -1;
     GET(r, np);
     if (np != w->nprov)
-        return fail(err, errlen, FLOE_EINVAL, "the checkpoint holds %d force providers, this world %d: another scene",
+        return floe_error_set(err, errlen, FLOE_EINVAL, "the checkpoint holds %d force providers, this world %d: another scene",
                     np, w->nprov);
     for (int k = 0; k < np; k++) {
         floe_provider *pv = w->prov[k];
@@ -350,7 +335,7 @@ static int restore_providers(floe_world *w, ibuf *r, char *err, size_t errlen) {
         GET(r, m);
         uint64_t want = pv->klass->state_size ? pv->klass->state_size(pv, w) : 0;
         if (r->bad || strcmp(name, pv->klass->name) || m != want || m > r->len - r->pos)
-            return fail(err, errlen, FLOE_EINVAL, "force provider %d: the checkpoint's is %s with %llu bytes of state, "
+            return floe_error_set(err, errlen, FLOE_EINVAL, "force provider %d: the checkpoint's is %s with %llu bytes of state, "
                         "this world's %s with %llu: another scene", k, name, (unsigned long long)m, pv->klass->name,
                         (unsigned long long)want);
         if (m) pv->klass->restore(pv, w, r->p + r->pos);
@@ -370,7 +355,7 @@ static int restore_beams(floe_world *w, ibuf *r, char *err, size_t errlen) {
     uint64_t m = 0;
     GET(r, m);
     if (r->bad || m > r->len - r->pos || floe_beam_set_state_restore(w->beams, r->p + r->pos, m) != FLOE_OK)
-        return fail(err, errlen, FLOE_EINVAL, "section BEAM does not match this world's %d beam bonds: another scene",
+        return floe_error_set(err, errlen, FLOE_EINVAL, "section BEAM does not match this world's %d beam bonds: another scene",
                     floe_beam_set_count(w->beams));
     r->pos += m;
     return FLOE_OK;
@@ -389,7 +374,7 @@ static int restore_stag(floe_world *w, ibuf *r, char *err, size_t errlen) {
     uint64_t m = 0;
     GET(r, m);
     if (r->bad || m != 15 * (uint64_t)w->p.n || m > w->ibuf_cap || m * sizeof(double) > r->len - r->pos)
-        return fail(err, errlen, FLOE_EINVAL, "section STAG does not match this world");
+        return floe_error_set(err, errlen, FLOE_EINVAL, "section STAG does not match this world");
     get(r, w->ibuf, m * sizeof(double));
     return FLOE_OK;
 }
@@ -421,17 +406,17 @@ static int restore_cell(floe_world *w, ibuf *r, char *err, size_t errlen) {
     int np = -1, has = 0;
     GET(r, np); GET(r, has);
     if (r->bad || np != w->nl.npairs)
-        return fail(err, errlen, FLOE_EINVAL, "section CELL does not match this world's neighbour list");
+        return floe_error_set(err, errlen, FLOE_EINVAL, "section CELL does not match this world's neighbour list");
     if (has) {
         void *q = realloc(w->nl.img, (size_t)(np > w->nl.cap ? np : w->nl.cap ? w->nl.cap : 1) * sizeof(int));
-        if (!q) return fail(err, errlen, FLOE_ENOMEM, "out of memory");
+        if (!q) return floe_error_set(err, errlen, FLOE_ENOMEM, "out of memory");
         w->nl.img = q;
         get(r, w->nl.img, (size_t)np * sizeof(int));
     }
     get(r, w->nl.Hb, sizeof w->nl.Hb);
     GET(r, w->nl.rmax_b);
     w->nl.cell = w->cell;
-    if (r->bad) return fail(err, errlen, FLOE_EINVAL, "section CELL is short");
+    if (r->bad) return floe_error_set(err, errlen, FLOE_EINVAL, "section CELL is short");
     return FLOE_OK;
 }
 
@@ -476,17 +461,17 @@ static int index_sections(const unsigned char *p, size_t len, size_t pos, sec_in
         uint32_t tag;
         uint64_t n;
         if (len - pos < sizeof tag + sizeof n)
-            return fail(err, errlen, FLOE_EINVAL, "truncated (a section header cut at byte %zu)", pos);
+            return floe_error_set(err, errlen, FLOE_EINVAL, "truncated (a section header cut at byte %zu)", pos);
         memcpy(&tag, p + pos, sizeof tag);
         memcpy(&n, p + pos + sizeof tag, sizeof n);
         pos += sizeof tag + sizeof n;
         if (n > len - pos) {
             char nm[5];
-            return fail(err, errlen, FLOE_EINVAL, "truncated (section %s of %llu bytes, %zu left)", tag_name(tag, nm),
+            return floe_error_set(err, errlen, FLOE_EINVAL, "truncated (section %s of %llu bytes, %zu left)", tag_name(tag, nm),
                         (unsigned long long)n, len - pos);
         }
         if (tag == TAG_END) return FLOE_OK;
-        if (ix->n == 64) return fail(err, errlen, FLOE_EINVAL, "too many sections");
+        if (ix->n == 64) return floe_error_set(err, errlen, FLOE_EINVAL, "too many sections");
         ix->tag[ix->n] = tag;
         ix->at[ix->n] = pos;
         ix->len[ix->n] = (size_t)n;
@@ -508,7 +493,7 @@ static int restore_sections(floe_world *w, const unsigned char *p, const sec_ind
         const int want = sections[k].want(w), at = find_section(ix, sections[k].tag);
         char nm[5];
         if (want != (at >= 0))
-            return fail(err, errlen, FLOE_EINVAL, "section %s is %s the checkpoint but this world %s it: another scene",
+            return floe_error_set(err, errlen, FLOE_EINVAL, "section %s is %s the checkpoint but this world %s it: another scene",
                         tag_name(sections[k].tag, nm), at >= 0 ? "in" : "missing from", at >= 0 ? "does not need" : "needs");
         if (at < 0) continue;
         ibuf r = {p + ix->at[at], ix->len[at], 0, 0};
@@ -526,7 +511,7 @@ static int prepare_quietly(floe_world *w, char *err, size_t errlen) {
     w->nobs = 0; /* no begin, no first observation: the restored observers go on instead */
     int rc = floe_world_prepare(w);
     w->nobs = nobs;
-    if (rc) return fail(err, errlen, rc, "preparing the world failed: %s", w->err);
+    if (rc) return floe_error_set(err, errlen, rc, "preparing the world failed: %s", w->err);
     return FLOE_OK;
 }
 
@@ -551,11 +536,11 @@ size_t floe_world_state_size(const floe_world *w) {
 }
 
 int floe_world_state_save(const floe_world *w, void *buf, size_t len, char *err, size_t errlen) {
-    if (!w || !w->prepared) return fail(err, errlen, FLOE_EINVAL, "state save: the world has not been prepared");
+    if (!w || !w->prepared) return floe_error_set(err, errlen, FLOE_EINVAL, "state save: the world has not been prepared");
     obuf b = {0};
     int rc = save_mem(w, &b);
-    if (!rc && b.len > len) rc = fail(err, errlen, FLOE_EINVAL, "state save: %zu bytes needed, %zu given", b.len, len);
-    else if (rc) fail(err, errlen, rc, "state save: out of memory");
+    if (!rc && b.len > len) rc = floe_error_set(err, errlen, FLOE_EINVAL, "state save: %zu bytes needed, %zu given", b.len, len);
+    else if (rc) floe_error_set(err, errlen, rc, "state save: out of memory");
     else memcpy(buf, b.p, b.len);
     free(b.p);
     return rc;
@@ -565,17 +550,17 @@ int floe_world_state_restore(floe_world *w, const void *buf, size_t len, char *e
     const unsigned char *p = buf;
     uint32_t fmt = 0;
     if (!w || !buf || len < 12 || memcmp(p, MAGIC_MEM, 8))
-        return fail(err, errlen, FLOE_EINVAL, "state restore: not a floe state buffer");
+        return floe_error_set(err, errlen, FLOE_EINVAL, "state restore: not a floe state buffer");
     memcpy(&fmt, p + 8, sizeof fmt);
     if (fmt != FLOE_CHECKPOINT_FORMAT)
-        return fail(err, errlen, FLOE_EINVAL, "state restore: format %u, this is floe %s format %d", fmt,
+        return floe_error_set(err, errlen, FLOE_EINVAL, "state restore: format %u, this is floe %s format %d", fmt,
                     FLOE_VERSION_STRING, FLOE_CHECKPOINT_FORMAT);
     sec_index ix;
     char why[512];
     int rc = index_sections(p, len, 12, &ix, why, sizeof why);
     if (!rc) rc = prepare_quietly(w, why, sizeof why);
     if (!rc) rc = restore_sections(w, p, &ix, why, sizeof why);
-    if (rc) return fail(err, errlen, rc, "state restore: %s", why);
+    if (rc) return floe_error_set(err, errlen, rc, "state restore: %s", why);
     return FLOE_OK;
 }
 
@@ -603,7 +588,7 @@ static void save_observers(const floe_world *w, obuf *b) {
 static int check_observers(const floe_world *w, char *err, size_t errlen) {
     for (int k = 0; k < w->nobs; k++)
         if (!has_hooks(w->obs[k]))
-            return fail(err, errlen, FLOE_ENOTSUP, "output %d (%s) cannot be continued from a checkpoint (its observer "
+            return floe_error_set(err, errlen, FLOE_ENOTSUP, "output %d (%s) cannot be continued from a checkpoint (its observer "
                         "class has no checkpoint hooks, docs/checkpoints.md); remove it from the scene to restart", k,
                         w->obs[k]->klass->name);
     return FLOE_OK;
@@ -613,7 +598,7 @@ static int restore_observers(floe_world *w, ibuf *r, char *err, size_t errlen) {
     int n = -1;
     GET(r, n);
     if (n != w->nobs)
-        return fail(err, errlen, FLOE_EINVAL, "the checkpoint holds %d outputs, this world %d: another scene", n, w->nobs);
+        return floe_error_set(err, errlen, FLOE_EINVAL, "the checkpoint holds %d outputs, this world %d: another scene", n, w->nobs);
     for (int k = 0; k < n; k++) {
         floe_observer *o = w->obs[k];
         char name[128];
@@ -624,15 +609,15 @@ static int restore_observers(floe_world *w, ibuf *r, char *err, size_t errlen) {
         get_str(r, name, sizeof name);
         GET(r, ps); GET(r, pt); GET(r, nt); GET(r, flags); GET(r, m);
         if (r->bad || strcmp(name, o->klass->name) || m > r->len - r->pos)
-            return fail(err, errlen, FLOE_EINVAL, "output %d: the checkpoint's is %s, this world's %s: another scene",
+            return floe_error_set(err, errlen, FLOE_EINVAL, "output %d: the checkpoint's is %s, this world's %s: another scene",
                         k, name, o->klass->name);
         if (!flags[2])
-            return fail(err, errlen, FLOE_ENOTSUP, "output %d (%s) had no checkpoint hooks when the checkpoint was "
+            return floe_error_set(err, errlen, FLOE_ENOTSUP, "output %d (%s) had no checkpoint hooks when the checkpoint was "
                         "written: it cannot be continued", k, name);
         w->err[0] = 0;
         int rc = o->klass->begin && !o->begun ? o->klass->begin(o, w) : FLOE_OK;
         if (!rc) rc = o->klass->restore(o, w, r->p + r->pos, (size_t)m);
-        if (rc) return fail(err, errlen, rc, "output %d (%s) could not be continued: %s", k, name, w->err);
+        if (rc) return floe_error_set(err, errlen, rc, "output %d (%s) could not be continued: %s", k, name, w->err);
         r->pos += m;
         o->next_time = nt;
         o->begun = 1;
@@ -645,8 +630,8 @@ static int restore_observers(floe_world *w, ibuf *r, char *err, size_t errlen) {
 
 int floe_world_checkpoint_save(const floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name,
                                char *err, size_t errlen) {
-    if (!w || !path || !*path) return fail(err, errlen, FLOE_EINVAL, "checkpoint: no world or no path");
-    if (!w->prepared) return fail(err, errlen, FLOE_EINVAL, "checkpoint: the world has not started (not prepared)");
+    if (!w || !path || !*path) return floe_error_set(err, errlen, FLOE_EINVAL, "checkpoint: no world or no path");
+    if (!w->prepared) return floe_error_set(err, errlen, FLOE_EINVAL, "checkpoint: the world has not started (not prepared)");
     obuf b = {0};
     put(&b, MAGIC, 8);
     const uint32_t head[2] = {FLOE_CHECKPOINT_FORMAT, BOM};
@@ -664,7 +649,7 @@ int floe_world_checkpoint_save(const floe_world *w, const char *path, uint64_t s
     sec_end(&b, at);
     if (b.nomem) {
         free(b.p);
-        return fail(err, errlen, FLOE_ENOMEM, "checkpoint: out of memory");
+        return floe_error_set(err, errlen, FLOE_ENOMEM, "checkpoint: out of memory");
     }
     /* the hash covers everything before it, its own section header included */
     h = floe_checkpoint_hash(FLOE_CHECKPOINT_HASH0, b.p, b.len - sizeof h);
@@ -673,7 +658,7 @@ int floe_world_checkpoint_save(const floe_world *w, const char *path, uint64_t s
     char *tmp = malloc(tl);
     if (!tmp) {
         free(b.p);
-        return fail(err, errlen, FLOE_ENOMEM, "checkpoint: out of memory");
+        return floe_error_set(err, errlen, FLOE_ENOMEM, "checkpoint: out of memory");
     }
     snprintf(tmp, tl, "%s.tmp", path);
     FILE *f = fopen(tmp, "wb");
@@ -684,13 +669,13 @@ int floe_world_checkpoint_save(const floe_world *w, const char *path, uint64_t s
     if (bad) remove(tmp);
     free(tmp);
     free(b.p);
-    if (bad) return fail(err, errlen, FLOE_EIO, "checkpoint: cannot write %s: %s", path, strerror(e));
+    if (bad) return floe_error_set(err, errlen, FLOE_EIO, "checkpoint: cannot write %s: %s", path, strerror(e));
     return FLOE_OK;
 }
 
 static int read_file(const char *path, unsigned char **out, size_t *len, char *err, size_t errlen) {
     FILE *f = fopen(path, "rb");
-    if (!f) return fail(err, errlen, FLOE_EIO, "cannot open %s: %s", path, strerror(errno));
+    if (!f) return floe_error_set(err, errlen, FLOE_EIO, "cannot open %s: %s", path, strerror(errno));
     size_t cap = 1 << 16, n = 0;
     unsigned char *p = malloc(cap);
     while (p) {
@@ -703,10 +688,10 @@ static int read_file(const char *path, unsigned char **out, size_t *len, char *e
     }
     int bad = ferror(f);
     fclose(f);
-    if (!p) return fail(err, errlen, FLOE_ENOMEM, "out of memory reading %s", path);
+    if (!p) return floe_error_set(err, errlen, FLOE_ENOMEM, "out of memory reading %s", path);
     if (bad) {
         free(p);
-        return fail(err, errlen, FLOE_EIO, "cannot read %s", path);
+        return floe_error_set(err, errlen, FLOE_EIO, "cannot read %s", path);
     }
     *out = p;
     *len = n;
@@ -717,7 +702,7 @@ static int read_file(const char *path, unsigned char **out, size_t *len, char *e
 static int check_header(const unsigned char *p, size_t len, const char *path, uint64_t scene_hash,
                         const char *scene_name, size_t *pos, char *err, size_t errlen) {
     if (len < 16 || memcmp(p, MAGIC, 8))
-        return fail(err, errlen, FLOE_EINVAL, "%s is not a floe checkpoint (%s)", path,
+        return floe_error_set(err, errlen, FLOE_EINVAL, "%s is not a floe checkpoint (%s)", path,
                     len < 16 ? "too short" : "no FLOECKPT magic at its start");
     ibuf r = {p, len, 8, 0};
     uint32_t head[2];
@@ -725,30 +710,30 @@ static int check_header(const unsigned char *p, size_t len, const char *path, ui
     uint64_t hash = 0;
     GET(&r, head);
     get_str(&r, version, sizeof version);
-    if (r.bad) return fail(err, errlen, FLOE_EINVAL, "%s: truncated header", path);
+    if (r.bad) return floe_error_set(err, errlen, FLOE_EINVAL, "%s: truncated header", path);
     if (head[1] != BOM)
-        return fail(err, errlen, FLOE_EINVAL, "%s was written on a machine of another byte order", path);
+        return floe_error_set(err, errlen, FLOE_EINVAL, "%s was written on a machine of another byte order", path);
     if (head[0] != FLOE_CHECKPOINT_FORMAT || strcmp(version, FLOE_VERSION_STRING))
-        return fail(err, errlen, FLOE_EINVAL, "%s was written by floe %s, checkpoint format %u; this is floe %s, "
+        return floe_error_set(err, errlen, FLOE_EINVAL, "%s was written by floe %s, checkpoint format %u; this is floe %s, "
                     "format %d: continue it with the floe that wrote it", path, version, head[0], FLOE_VERSION_STRING,
                     FLOE_CHECKPOINT_FORMAT);
     GET(&r, hash);
     get_str(&r, scene, sizeof scene);
-    if (r.bad) return fail(err, errlen, FLOE_EINVAL, "%s: truncated header", path);
+    if (r.bad) return floe_error_set(err, errlen, FLOE_EINVAL, "%s: truncated header", path);
     /* truncated or corrupted: the closing hash over everything before it */
     if (len < r.pos + 12 + sizeof(uint64_t))
-        return fail(err, errlen, FLOE_EINVAL, "%s is truncated (%zu bytes)", path, len);
+        return floe_error_set(err, errlen, FLOE_EINVAL, "%s is truncated (%zu bytes)", path, len);
     uint32_t tag;
     memcpy(&tag, p + len - sizeof(uint64_t) - 12, sizeof tag);
     uint64_t hs;
     memcpy(&hs, p + len - sizeof hs, sizeof hs);
     if (tag != TAG_END)
-        return fail(err, errlen, FLOE_EINVAL, "%s is truncated (%zu bytes, no closing section): the run that wrote it "
+        return floe_error_set(err, errlen, FLOE_EINVAL, "%s is truncated (%zu bytes, no closing section): the run that wrote it "
                     "was stopped while writing, or the file was cut", path, len);
     if (hs != floe_checkpoint_hash(FLOE_CHECKPOINT_HASH0, p, len - sizeof hs))
-        return fail(err, errlen, FLOE_EINVAL, "%s is corrupted (its checksum does not match its content)", path);
+        return floe_error_set(err, errlen, FLOE_EINVAL, "%s is corrupted (its checksum does not match its content)", path);
     if (hash != scene_hash)
-        return fail(err, errlen, FLOE_EINVAL, "%s was written for another scene (%s) than this one (%s): the scene "
+        return floe_error_set(err, errlen, FLOE_EINVAL, "%s was written for another scene (%s) than this one (%s): the scene "
                     "text differs", path, scene[0] ? scene : "unnamed", scene_name ? scene_name : "unnamed");
     *pos = r.pos;
     return FLOE_OK;
@@ -756,17 +741,17 @@ static int check_header(const unsigned char *p, size_t len, const char *path, ui
 
 int floe_world_checkpoint_load(floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name,
                                char *err, size_t errlen) {
-    if (!w || !path) return fail(err, errlen, FLOE_EINVAL, "checkpoint: no world or no path");
+    if (!w || !path) return floe_error_set(err, errlen, FLOE_EINVAL, "checkpoint: no world or no path");
     /* a world freshly built: prepared by the scene loader (its outputs began and wrote the
      * start, which the observers' restore cuts off again) or not, but no step taken */
     if (w->step != 0 || w->finished)
-        return fail(err, errlen, FLOE_EINVAL, "checkpoint %s: load it into a world freshly built from its scene, "
+        return floe_error_set(err, errlen, FLOE_EINVAL, "checkpoint %s: load it into a world freshly built from its scene, "
                     "before its first step", path);
     unsigned char *p = NULL;
     size_t len = 0, pos = 0;
     char why[1024];
     int rc = read_file(path, &p, &len, why, sizeof why);
-    if (rc) return fail(err, errlen, rc, "checkpoint: %s", why);
+    if (rc) return floe_error_set(err, errlen, rc, "checkpoint: %s", why);
     sec_index ix;
     rc = check_header(p, len, path, scene_hash, scene_name, &pos, why, sizeof why);
     if (!rc) rc = index_sections(p, len, pos, &ix, why, sizeof why);
@@ -775,13 +760,13 @@ int floe_world_checkpoint_load(floe_world *w, const char *path, uint64_t scene_h
     if (!rc) rc = restore_sections(w, p, &ix, why, sizeof why);
     if (!rc) {
         int at = find_section(&ix, TAG_OBSV);
-        if (at < 0) rc = fail(why, sizeof why, FLOE_EINVAL, "section OBSV is missing");
+        if (at < 0) rc = floe_error_set(why, sizeof why, FLOE_EINVAL, "section OBSV is missing");
         else {
             ibuf r = {p + ix.at[at], ix.len[at], 0, 0};
             rc = restore_observers(w, &r, why, sizeof why);
         }
     }
     free(p);
-    if (rc) return fail(err, errlen, rc, "checkpoint %s: %s", path, why);
+    if (rc) return floe_error_set(err, errlen, rc, "checkpoint %s: %s", path, why);
     return FLOE_OK;
 }
