@@ -30,6 +30,7 @@
 #include "floe_observer.h"
 #include "file_writer.h"
 #include "floe_pd.h"
+#include "floe_cell.h"
 
 #include <errno.h>
 #include <math.h>
@@ -52,7 +53,7 @@ static const floe_observer_class vtk_writer_class;
 
 enum {
     A_ID, A_BODY, A_MATERIAL, A_MOTION, A_RADIUS, A_VELOCITY, A_ANGVEL, A_FORCE, A_TORQUE,
-    A_ORIENT, A_DAMAGE, A_VONMISES, A_FDENS, A_STRAIN, A_NPOINTDATA,
+    A_ORIENT, A_DAMAGE, A_VONMISES, A_FDENS, A_STRAIN, A_IMAGE, A_NPOINTDATA,
     A_POINTS = A_NPOINTDATA, A_CONN, A_OFFSETS, A_TYPES, A_COUNT
 };
 
@@ -66,6 +67,7 @@ static const array_desc arrays[A_COUNT] = {
     {"torque", FLOE_FW_FLOAT64, 3},    {"orientation", FLOE_FW_FLOAT64, 4},
     {"damage", FLOE_FW_FLOAT64, 1},    {"von_mises", FLOE_FW_FLOAT64, 1},
     {"force_density", FLOE_FW_FLOAT64, 3}, {"strain", FLOE_FW_FLOAT64, 9},
+    {"image", FLOE_FW_INT32, 3},
     {"Points", FLOE_FW_FLOAT64, 3},    {"connectivity", FLOE_FW_INT64, 1},
     {"offsets", FLOE_FW_INT64, 1},     {"types", FLOE_FW_UINT8, 1},
 };
@@ -165,7 +167,22 @@ static void fill_array(const vtk_writer *v, const floe_world *w, int k, int m, v
         }
         return;
     }
-    case A_POINTS: src = p->x; break;
+    case A_POINTS:
+        if (floe_world_cell(w, NULL, NULL)) { /* a periodic cell: wrapped into it */
+            for (int a = 0; a < m; a++) floe_world_cell_wrap(w, p->x + 3 * (size_t)v->idx[a], f64 + 3 * (size_t)a);
+            return;
+        }
+        src = p->x;
+        break;
+    case A_IMAGE: { /* the integer image n of each point: unwrapped = Points + H n */
+        double xw[3];
+        int n[3];
+        for (int a = 0; a < m; a++) {
+            floe_world_cell_wrap_image(w, p->x + 3 * (size_t)v->idx[a], xw, n);
+            for (int c = 0; c < 3; c++) i32[3 * (size_t)a + c] = n[c];
+        }
+        return;
+    }
     default: return;
     }
     for (int a = 0; a < m; a++)
@@ -205,6 +222,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
     double time = floe_world_time(w);
     long step = floe_world_step_count(w);
     int npd = floe_world_pd_body_count(w);
+    const int cell = floe_world_cell(w, NULL, NULL);
     /* points to write */
     if (v->idx_cap < p->n) {
         int *ni = realloc(v->idx, (size_t)p->n * sizeof *ni);
@@ -246,6 +264,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
         if (k == A_POINTS) fputs("      </PointData>\n      <CellData>\n      </CellData>\n      <Points>\n", f);
         if (k == A_CONN) fputs("      </Points>\n      <Cells>\n", f);
         if (k >= A_DAMAGE && k <= A_STRAIN && !npd) continue; /* only scenes with PD bodies */
+        if (k == A_IMAGE && !cell) continue;                  /* only in a periodic cell */
         const array_desc *a = &arrays[k];
         fprintf(f, "        <DataArray type=\"%s\" Name=\"%s\"", floe_fw_vtk_type_name(a->type), a->name);
         if (a->ncomp > 1) fprintf(f, " NumberOfComponents=\"%d\"", a->ncomp);
@@ -268,6 +287,7 @@ static int vw_write(vtk_writer *v, floe_world *w) {
         fputs("  <AppendedData encoding=\"raw\">\n   _", f);
         for (int k = 0; k < A_COUNT; k++) {
             if (k >= A_DAMAGE && k <= A_STRAIN && !npd) continue;
+            if (k == A_IMAGE && !cell) continue;
             const array_desc *a = &arrays[k];
             uint64_t nbytes = (uint64_t)m * (uint64_t)a->ncomp * floe_fw_vtk_type_size(a->type);
             int bad = fill_finite(v, w, k, m);

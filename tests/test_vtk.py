@@ -150,6 +150,67 @@ def check_energy_csv(outdir):
     check(all(b > a for a, b in zip(ts, ts[1:])), "energy: times not increasing")
 
 
+PERIODIC = """
+dimension: 3
+time: {duration: 0.25, dt: 1.0e-4}
+gravity: [0, 0, 0]
+materials: [{name: g, density: 1000}]
+laws: [{materials: [g, g], model: viscoelastic, kn: 1.0e3, ks: 5.0e2, gn: 0, gs: 0, friction: 0}]
+cell: {size: [0.1, 0.1, 0.1]}
+bodies:
+  - {packing: random, shape: {sphere: {radius: 0.004}}, material: g, count: 8, velocity: [1.0, 0.5, -0.3],
+     region: {min: [0, 0, 0], max: [0.1, 0.1, 0.1]}, seed: 5}
+outputs:
+  - {type: vtk, every: 500, prefix: frame}
+"""
+
+
+def check_periodic(cli):
+    """In a periodic cell (fixed, 0.1 m) the vtk output writes the points wrapped into the
+    cell and their integer image n: Points + L n is the unwrapped position, which for spheres
+    drifting at a constant velocity across the faces (8 spheres at (1, 0.5, -0.3) m/s for
+    0.25 s: 2.5 cell widths in x) moves by v t exactly (to round-off)."""
+    outdir = os.path.abspath("test_vtk_periodic_out")
+    shutil.rmtree(outdir, ignore_errors=True)
+    os.makedirs(outdir)
+    scene = os.path.join(outdir, "periodic.yaml")
+    with open(scene, "w") as f:
+        f.write(PERIODIC)
+    proc = subprocess.run([cli, "run", scene, "-o", os.path.join(outdir, "out")], stdout=subprocess.PIPE,
+                          stderr=subprocess.STDOUT, timeout=600, universal_newlines=True)
+    if not check(proc.returncode == 0, "periodic: floe run exited %s:\n%s" % (proc.returncode, proc.stdout[-3000:])):
+        return
+    frames = sorted(glob.glob(os.path.join(outdir, "out", "frame_*.vtu")))
+    if not check(len(frames) >= 2, "periodic: frames written (%d)" % len(frames)):
+        return
+    L, v, t_end = 0.1, (1.0, 0.5, -0.3), 0.25
+
+    def read(path):
+        grid, msgs = read_vtu(path)
+        check(not msgs, "periodic: %s reads without VTK messages (%s)" % (path, msgs))
+        pts = grid.GetPoints()
+        img = grid.GetPointData().GetArray("image")
+        if not check(img is not None and img.GetNumberOfComponents() == 3, "periodic: an image array (3 ints)"):
+            return None
+        n = grid.GetNumberOfPoints()
+        return [(pts.GetPoint(i), img.GetTuple3(i)) for i in range(n)]
+
+    first, last = read(frames[0]), read(frames[-1])
+    if first is None or last is None:
+        return
+    inside = all(0 <= x[c] < L for x, _ in first + last for c in range(3))
+    check(inside, "periodic: every point wrapped into the cell [0, 0.1)^3")
+    crossed = sum(1 for _, n in last if any(n))
+    check(crossed == len(last), "periodic: every sphere has left the cell at least once (%d of %d)" % (crossed, len(last)))
+    worst = 0.0
+    for (x0, n0), (x1, n1) in zip(first, last):
+        for c in range(3):
+            u0, u1 = x0[c] + L * n0[c], x1[c] + L * n1[c]
+            worst = max(worst, abs((u1 - u0) - v[c] * t_end))
+    check(worst < 1e-9, "periodic: unwrapped displacement = v t to %.2e m (< 1e-9)" % worst)
+    print("  periodic vtk: %d points wrapped, displacement error %.2e m" % (len(last), worst))
+
+
 def main():
     if len(sys.argv) != 3:
         print("usage: test_vtk.py <floe_cli_path> <tests_dir>", file=sys.stderr)
@@ -196,6 +257,7 @@ def main():
         if check(os.path.isfile(path), "frame file %s missing" % path):
             check_frame(path, t, k == len(files) - 1)
     check_energy_csv(outdir)
+    check_periodic(cli)
     finish()
 
 

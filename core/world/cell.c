@@ -106,7 +106,12 @@ int floe_world_cell_widths(const floe_world *w, double width[3]) {
 }
 
 int floe_world_cell_wrap(const floe_world *w, const double x[3], double out[3]) {
+    return floe_world_cell_wrap_image(w, x, out, NULL);
+}
+
+int floe_world_cell_wrap_image(const floe_world *w, const double x[3], double out[3], int image[3]) {
     const floe_cell_state *c = w->cell;
+    if (image) image[0] = image[1] = image[2] = 0;
     if (!c) {
         memcpy(out, x, 3 * sizeof(double));
         return FLOE_EINVAL;
@@ -114,7 +119,11 @@ int floe_world_cell_wrap(const floe_world *w, const double x[3], double out[3]) 
     double d[3], s[3];
     floe_v3_sub(d, x, c->o);
     mv3(c->Hinv, d, s);
-    for (int k = 0; k < w->def.dim; k++) s[k] -= floor(s[k]);
+    for (int k = 0; k < w->def.dim; k++) {
+        double f = floor(s[k]);
+        s[k] -= f;
+        if (image) image[k] = (int)f;
+    }
     if (w->def.dim == 2) s[2] = 0;
     mv3(c->H, s, out);
     floe_v3_add(out, out, c->o);

@@ -44,8 +44,10 @@ int floe_world_cell(const floe_world *w, double origin[3], double H[9]);
 double floe_world_cell_volume(const floe_world *w);
 /* The width of the cell across each pair of faces (the distance between opposite faces) */
 int floe_world_cell_widths(const floe_world *w, double width[3]);
-/* Wrap a point into the cell (s in [0, 1)^d) */
+/* Wrap a point into the cell (s in [0, 1)^d); with image (may be NULL), the integer image n
+ * of the point as well: x = out + H n (the `vtk` output writes both in a cell). */
 int floe_world_cell_wrap(const floe_world *w, const double x[3], double out[3]);
+int floe_world_cell_wrap_image(const floe_world *w, const double x[3], double out[3], int image[3]);
 
 /* How the cell deforms (floe_world_cell_control): per component (a, b) of the velocity
  * gradient, mode[3 a + b] = FLOE_CELL_RATE (L_ab = rate[3 a + b], 1/s) or FLOE_CELL_STRESS

@@ -278,8 +278,8 @@ def parse_args(argv=None):
     ap.add_argument("--rmax", type=float, default=1.3e-3)
     ap.add_argument("--inertial", type=float, default=2e-3, help="inertial number of the RVE increments")
     ap.add_argument("--dt-factor", type=float, default=0.4, help="time step / critical estimate")
-    ap.add_argument("--tol", type=float, default=2e-3, help="Newton: |residual| / |reaction| to stop")
-    ap.add_argument("--maxit", type=int, default=6, help="Newton iterations per step at most")
+    ap.add_argument("--tol", type=float, default=1e-2, help="Newton: |residual| / |reaction| to stop")
+    ap.add_argument("--maxit", type=int, default=8, help="Newton iterations per step at most")
     ap.add_argument("--hold", type=int, default=3000, help="steps of the RVEs under the stress servo after the "
                     "preparation (the shear stress to 0), then as many with the cell fixed")
     ap.add_argument("--no-bbar", action="store_true", help="plain full integration (locks under dilatancy)")
