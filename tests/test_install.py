@@ -15,6 +15,9 @@ import subprocess
 import sys
 import tempfile
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from pycheck import build_dir_of, cmake_cache  # noqa: E402
+
 CLI, TESTS = sys.argv[1], sys.argv[2]
 FAILED = []
 
@@ -29,25 +32,6 @@ def check(cond, what):
 def run(cmd, **kw):
     r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, **kw)
     return r.returncode, r.stdout
-
-
-def build_dir_of(cli):
-    d = os.path.dirname(os.path.abspath(cli))
-    while d != os.path.dirname(d):
-        if os.path.exists(os.path.join(d, "CMakeCache.txt")):
-            return d
-        d = os.path.dirname(d)
-    return None
-
-
-def cache(builddir):
-    vals = {}
-    with open(os.path.join(builddir, "CMakeCache.txt")) as f:
-        for line in f:
-            m = re.match(r"^([A-Za-z_0-9]+):[A-Z]+=(.*)$", line.rstrip("\n"))
-            if m:
-                vals[m.group(1)] = m.group(2)
-    return vals
 
 
 # The program: a sphere resting on a wall under gravity, placed at its static Hertz overlap
@@ -124,7 +108,7 @@ def main():
     builddir = build_dir_of(CLI)
     if not check(builddir is not None, "build directory found above the CLI (%s)" % CLI):
         return 1
-    cc = cache(builddir)
+    cc = cmake_cache(builddir)
     if cc.get("FLOE_FUZZ", "OFF").upper() in ("ON", "1", "TRUE"):
         # the fuzzing build instruments the library for libFuzzer: no plain program links it
         print("skipped: FLOE_FUZZ build")

@@ -34,33 +34,14 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from pycheck import check, finish  # noqa: E402
-
-
-def build_dir_of(cli):
-    d = os.path.dirname(os.path.abspath(cli))
-    while d != os.path.dirname(d):
-        if os.path.exists(os.path.join(d, "CMakeCache.txt")):
-            return d
-        d = os.path.dirname(d)
-    return None
-
-
-def cache(builddir):
-    out = {}
-    with open(os.path.join(builddir, "CMakeCache.txt")) as f:
-        for line in f:
-            if ":" in line and "=" in line and not line.startswith(("#", "//")):
-                k, v = line.rstrip("\n").split("=", 1)
-                out[k.split(":")[0]] = v
-    return out
+from pycheck import build_dir_of, check, cmake_cache, finish  # noqa: E402
 
 
 def main():
     cli, tests = sys.argv[1], sys.argv[2]
     root = os.path.dirname(os.path.abspath(tests))
     bdir = build_dir_of(cli)
-    cc = cache(bdir) if bdir else {}
+    cc = cmake_cache(bdir) if bdir else {}
     so = os.path.join(bdir or "", "libfloe.so")
     if cc.get("FLOE_SANITIZE", "OFF").upper() in ("ON", "1", "TRUE") or not os.path.exists(so):
         print("test_triaxial: skipped (a sanitizer build, or no libfloe.so: FLOE_BUILD_PYTHON=OFF)")
