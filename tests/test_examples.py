@@ -3,7 +3,7 @@
 
 usage: python3 tests/test_examples.py <floe_cli_path> <tests_dir>
 
-- `floe check` accepts every examples/*/scene.yaml (the RVE builds its 16,483 spheres; a
+- `floe check` accepts every examples/*/*.yaml (the RVE builds its 16,483 spheres; a
   scene with plugins from its copy in the build tree, next to the built plugin).
 - examples/dilating-sphere (ParticLS §5.2, Fig. 6) runs to t = 3 s: the middle sphere's six
   neighbours are pushed outward (each ends farther than R(t=3) = 3.1 m from the centre
@@ -522,7 +522,8 @@ def check_rve_compaction(cli, root, tmp):
 def main():
     cli, tests = sys.argv[1], sys.argv[2]
     root = os.path.dirname(os.path.abspath(tests))
-    scenes = sorted(glob.glob(os.path.join(root, "examples", "*", "scene.yaml")))
+    # every scene of every example (scene.yaml and the others: periodic.yaml, walled.yaml ...)
+    scenes = sorted(glob.glob(os.path.join(root, "examples", "*", "*.yaml")))
     check(len(scenes) >= 2, "example scenes found: %d" % len(scenes))
     have_mesh = True
     for sc in scenes:
