@@ -138,8 +138,9 @@ static void lattice(void) {
     floe_world_particles(w, &pv);
     const double hm = 0.5 * floe_world_dt(w) / (0.5 * pv.mass[0]);
     printf("  periodic lattice: m %.3g kg, dt %.3g s, worst |Fn / (kn d) - 1| over 100 steps %.2e (the binary form's: %.2e); "
-           "sigma_xx %.6e Pa (step) %.6e Pa (refresh), sigma_yy %.6e / %.6e\n",
-           pv.mass[0], floe_world_dt(w), worst, gn * hm / (1 + gn * hm), sig[0], sref[0], sig[4], sref[4]);
+           "sigma_xx %.6e Pa (step) %.6e Pa (refresh), sigma_yy %.6e / %.6e, differences %.1e %.1e\n",
+           pv.mass[0], floe_world_dt(w), worst, gn * hm / (1 + gn * hm), sig[0], sref[0], sig[4], sref[4],
+           fabs(sig[0] / sref[0] - 1), fabs(sig[4] / sref[4] - 1));
     CHECK(worst <= 1e-9, "lattice at rest: every Fn = kn d within 1e-9 (worst %.2e)", worst);
     CHECK(fabs(sig[0] / sref[0] - 1) <= 1e-9 && fabs(sig[4] / sref[4] - 1) <= 1e-9,
           "lattice: the refresh's stress = the step's within 1e-9 (xx %.2e, yy %.2e)", fabs(sig[0] / sref[0] - 1),

@@ -63,10 +63,10 @@ static inline double linear_an_ext(const floe_contact *c) {
  * Two bodies alone (a_ext = 0): exact for the pair's normal motion under velocity Verlet.
  * A contact at rest held by others (a_ext = Fn_last / m*): Fn = kn d exactly, where
  * a_ext = 0 would give kn d / (1 + gn dt / (2 m*)), a static stiffness too low by
- * zeta w dt (issue 10 B's form before; 2.4-3.5 % in a packing at rest, 14 % in the
- * ParticLS §5.3 RVE). Lagging the whole acceleration instead (this contact's own force
- * too) is unstable above about 0.7 of the critical step (a chain: spectral radius 2.1 at
- * the critical step, zeta 0.3); the implicit own term keeps the scheme stable up to it. */
+ * zeta w dt (issue 10 B's form before; 2.2-4.3 % in tests/test_dashpot_static.c, about
+ * 14 % estimated for the ParticLS §5.3 RVE). Lagging the whole acceleration instead (this contact's own force
+ * too) is unstable from 0.6-0.8 of the critical step (a chain of 20 masses: spectral radius
+ * 2.1 at the critical step, zeta 0.3); the implicit own term keeps it stable up to it. */
 static double linear_dashpot_phase(double kn, double gn, int tension, const floe_contact *c, double *hist, double hm)
 {
     const double d = c->depth, vn = c->vn, dt = c->dt;
