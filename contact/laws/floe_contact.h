@@ -40,6 +40,12 @@ typedef struct floe_contact {
     double r_eff;            /* effective radius R* = (1/Ri + 1/Rj)^-1 (walls: infinite) */
     double m_eff;            /* effective mass m* (fixed/kinematic partners: infinite) */
     double dt;               /* time step the history is advanced by */
+    double an_ext;           /* m/s^2: the rate of change of vn that forces other than this
+                                contact's own give the pair, (a_i - a_j) . n at the last force
+                                evaluation less this contact's last force times 1/m_i + 1/m_j
+                                (0 for two bodies alone; set by the world when a law has a linear
+                                dashpot, 0 otherwise): the linear dashpot's end-of-step velocity
+                                (contact/laws/linear_law.c) */
     double gscale;           /* |grad depth| (<= 1): where the deepest point is equidistant from
                                 two faces the depth grows at this rate along n only, and the
                                 world scales the law's force by it so that the force stays the

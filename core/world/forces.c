@@ -343,6 +343,23 @@ static inline int pair_wants_overlap(const floe_world *w, int i, int j, int nm) 
 /* the smaller of two radii (never NaN): fmin is a library call here (NaN rules) */
 static inline double rmin(double a, double b) { return a < b ? a : b; }
 
+/* The relative normal acceleration of i with respect to j that a linear dashpot adds to its
+ * mid-step velocity (floe_contact.an_ext, contact/laws/linear_law.c): (a_i - a_j) . n from
+ * the accelerations f / m of the last force evaluation (w->dash_a; 0 for fixed and kinematic
+ * bodies), less this contact's own share, its last force F on i (history, scaled by gscale
+ * as applied) times 1/m_i + 1/m_j; the law adds its own new force implicitly. Two bodies
+ * alone: 0 (the law's binary-collision form); a pair held at rest by other contacts:
+ * Fn_last / m* (the dashpot then sees the rest it is at). Translational only: the angular
+ * accelerations have no normal component at the contact point of two spheres (their lever
+ * arms lie along n), and the law's own term uses the translational m* as well. */
+static inline double pair_an_ext(const floe_world *w, const floe_particles *p, int i, int j, const floe_contact *c,
+                                 const double *hist) {
+    const double *ai = w->dash_a + 3 * (size_t)i, *aj = w->dash_a + 3 * (size_t)j, *n = c->n;
+    const double an = (ai[0] - aj[0]) * n[0] + (ai[1] - aj[1]) * n[1] + (ai[2] - aj[2]) * n[2];
+    const double g = c->gscale > 0 ? c->gscale : 1.0;
+    return an - floe_v3_dot(hist + FLOE_FORCE_SLOT, n) * (p->inv_mass[i] + p->inv_mass[j]) / g;
+}
+
 /* the errors of a pair evaluation, out of the hot path */
 static __attribute__((noinline, cold)) int pair_too_deep(floe_world *w, int i, int j, double depth, int wall,
                                                          const double n[3]) {
@@ -595,6 +612,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     /* prepare evaluates forces without advancing history; the RK2 midpoint advances it
      * by hist_dt and restores it (the providers' save/restore) */
     c.dt = stepping ? ctx->dt : ctx->hist_dt;
+    c.an_ext = w->dash_on ? pair_an_ext(w, p, i, j, &c, hist) : 0.0;
     if (env->any_floe) {
         c.thick_i = floe_particle_thickness(p, i);
         c.thick_j = floe_particle_thickness(p, j);
@@ -716,6 +734,7 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
     for (int a = 0; a < 3; a++) c.vt[a] = c.vr[a] - c.vn * c.n[a];
     c.m_eff = 1.0 / (p->inv_mass[i] + p->inv_mass[j]);
     c.dt = env->stepping ? ctx->dt : ctx->hist_dt;
+    c.an_ext = w->dash_on ? pair_an_ext(w, p, i, j, &c, hist) : 0.0;
     floe_contact_result res;
     memset(&res, 0, sizeof res);
     int rc = law->klass->force(law, &c, hist, &res);
@@ -967,12 +986,42 @@ const floe_provider_class floe_pd_provider_class = {
 
 /* ---- the staged evaluation ---- */
 
+/* The accelerations f / m of the last evaluation, for the linear dashpots' end-of-step
+ * velocity (pair_an_ext), kept before p->f is cleared; only when a law has a linear dashpot
+ * (floe_law_info.linear_gn > 0). p->f is part of a checkpoint, so a restart copies the same.
+ * After an RK2 midpoint probe the copy of the probe is kept: the contact history (its last
+ * force) was put back to the step's start, and the accelerations must be of the same
+ * evaluation. */
+static int dashpot_accelerations(floe_world *w, const floe_step_ctx *ctx) {
+    const floe_particles *p = &w->p;
+    int want = 0;
+    for (int k = 0; k < w->nmats * w->nmats && !want; k++)
+        want = w->laws[k] && floe_contact_law_info(w->laws[k]).linear_gn > 0;
+    const int keep = w->dash_keep && w->dash_on;
+    w->dash_keep = ctx->probe;
+    w->dash_on = 0;
+    if (!want || p->n == 0) return FLOE_OK;
+    const size_t n3 = 3 * (size_t)p->n;
+    if (n3 > w->dash_cap) {
+        double *t = realloc(w->dash_a, n3 * sizeof *t);
+        if (!t) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        w->dash_a = t;
+        w->dash_cap = n3;
+    }
+    if (!keep)
+        for (int i = 0; i < p->n; i++)
+            for (int a = 0; a < 3; a++) w->dash_a[3 * i + a] = p->f[3 * i + a] * p->inv_mass[i];
+    w->dash_on = 1;
+    return FLOE_OK;
+}
+
 int floe_world_forces(floe_world *w, const floe_step_ctx *ctx, int groups) {
     floe_particles *p = &w->p;
     const int n = p->n;
     const int stepping = ctx->stepping;
     floe_provider_out od = {0, 0, 0, 0}, op = {0, 0, 0, 0};
     if (groups & FLOE_GROUP_DEM) {
+        FLOE_TRY(dashpot_accelerations(w, ctx));
         if (n > 0) {
             memset(p->f, 0, (size_t)n * 3 * sizeof(double));
             memset(p->t, 0, (size_t)n * 3 * sizeof(double));

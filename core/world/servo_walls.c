@@ -94,11 +94,21 @@ static double law_fn(const floe_contact_law *law, double d, double rad, double m
     c.thick_i = c.thick_j = 1;
     c.rad_i = rad;
     c.rad_j = INFINITY;
-    double hist[FLOE_MAX_HISTORY] = {0};
-    floe_contact_result res;
-    memset(&res, 0, sizeof res);
-    if (law->klass->force(law, &c, hist, &res)) return NAN;
-    return fabs(res.fn) > 0 ? fabs(res.fn) : floe_v3_norm(res.force);
+    /* at rest, held there: a linear dashpot sees the other forces' acceleration Fn / m*
+     * (floe_contact.an_ext), a fixed point reached by repeating the call (the force is
+     * kn d within 1e-12; other laws ignore an_ext and give the same force at once) */
+    double fn = NAN;
+    for (int it = 0; it < 100; it++) {
+        double hist[FLOE_MAX_HISTORY] = {0};
+        floe_contact_result res;
+        memset(&res, 0, sizeof res);
+        if (law->klass->force(law, &c, hist, &res)) return NAN;
+        const double f = fabs(res.fn) > 0 ? fabs(res.fn) : floe_v3_norm(res.force);
+        if (fabs(f - fn) <= 1e-12 * f) return f;
+        fn = f;
+        c.an_ext = fabs(res.fn) / mass;
+    }
+    return fn;
 }
 
 /* delta_s of the gain rule: mean radius and mass of the free particles, the law of the wall

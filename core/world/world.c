@@ -157,6 +157,7 @@ void floe_world_destroy(floe_world *w) {
     free(w->det.scratch);
     free(w->dt_part);
     free(w->ibuf);
+    free(w->dash_a);
     if (w->snap && w->snap_free) w->snap_free(w->snap); /* the adaptive controller's (core/integrators) */
     for (int k = 0; k < w->npd; k++) floe_pd_body_destroy(w->pd[k]);
     free(w->pd); free(w->pd_first); free(w->pd_of); free(w->pd_fold); free(w->pd_fnew); free(w->pd_eold); free(w->pd_diss);

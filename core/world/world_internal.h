@@ -100,6 +100,11 @@ struct floe_world {
     double *dt_part;          /* n: critical estimate of each particle (limiting kinds) */
     double lf_dt_prev;        /* leapfrog: the previous step (0: velocities synchronised) */
     double *ibuf; size_t ibuf_cap; /* integrator scratch (RK2 start state, staggered forces) */
+    double *dash_a; size_t dash_cap; /* 3n: each particle's acceleration f / m of the last force
+                                   evaluation, copied from p->f as an evaluation begins when a
+                                   linear dashpot asks for it (forces.c, floe_contact.an_ext) */
+    int dash_on;              /* dash_a holds this evaluation's copy */
+    int dash_keep;            /* the last evaluation was an RK2 probe: keep its copy */
     struct floe_snapshot *snap; /* adaptive: the state at the start of the trial step (owned by
                                    the controller, core/integrators/adaptive.c; freed by
                                    floe_world_destroy through snap_free) */
