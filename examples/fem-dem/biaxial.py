@@ -100,9 +100,7 @@ class Packing:
         # then the cell fixed while the vibrations the servo stirred die out
         self.rve.set_control()  # from here every component strain-controlled, rate 0
         w.step(args.hold)
-        # the stress and contacts of this last step (not floe_world_refresh_forces: a step's
-        # linear dashpot sees the end-of-step velocity, which lowers static forces by
-        # 1 / (1 + gn dt / 2 m*) against a refresh at dt = 0; docs/periodic.md)
+        # the stress and contacts of this last step
         m = self.rve.measures()
         self.porosity, self.coordination = m["porosity"], m["coordination"]
         self.sigma = voigt_stress(m["sigma"])
