@@ -296,6 +296,28 @@ static void test_restart(void) {
     floe_world_destroy(w2);
 }
 
+/* the stress servo on a PD body: sigma_xx held at 1 kPa through the bonds' virial, with the
+ * bonds' axial stiffness in the servo's D_xxxx (exact for PMB: a first-order relaxation of
+ * time tau = 50 steps, so 10 tau leave e^-10 of the error) */
+static void test_servo(void) {
+    floe_pd_body *b = cube(FLOE_PD_PMB, 0, 0);
+    floe_world *w = world_with(b, 1);
+    floe_cell_control c = floe_default_cell_control();
+    c.mode[0] = FLOE_CELL_STRESS;
+    c.stress[0] = 1e3;
+    c.max_rate = 1.0;
+    CHECK(floe_world_cell_set_control(w, &c) == FLOE_OK, "control: %s", floe_world_last_error(w));
+    int rc = 0;
+    for (int s = 0; s < 500 && !rc; s++) rc = floe_world_step(w);
+    CHECK(rc == FLOE_OK, "servo run: %s", floe_world_last_error(w));
+    double sig[9];
+    floe_world_cell_stress(w, sig, NULL);
+    printf("  servo: sigma_xx %.6f Pa after 500 steps (target 1000), balance error %.2e\n", sig[0],
+           floe_world_energy_balance_error(w));
+    CHECK_NEAR(sig[0], 1e3, 1e-3, "servo holds sigma_xx on a PD body");
+    floe_world_destroy(w);
+}
+
 /* refused: a cell narrower than two horizons */
 static void test_refused(void) {
     floe_pd_body *b = cube(FLOE_PD_PMB, 0, 0);
@@ -320,6 +342,7 @@ int main(void) {
     test_lps_isotropic();
     test_damage();
     test_restart();
+    test_servo();
     test_refused();
     return check_summary("test_pd_periodic");
 }
