@@ -31,6 +31,7 @@
 #include <stdint.h>
 
 #include "floe_base.h"
+#include "floe_image.h"
 
 /* ---- region and lattice ---- */
 
@@ -183,7 +184,50 @@ struct floe_pd_body {
     double bridge_at[3];
     /* a user material's own state (FLOE_PD_USER: its ops->init allocates, ->release frees) */
     void *mstate;
+    /* periodic cell (floe_pd_make_periodic; NULL / unused without one): the image of j per
+     * bond (floe_image.h code), so that the reference bond is xi = X_j + H0 n - X_i and the
+     * deformed one x_j + H n - x_i with H the present cell (*cellH, the caller's array, read
+     * at every evaluation). img stays NULL when no bond crosses the cell's faces.           */
+    int32_t *img;
+    double cellH0[9];
+    const double *cellH;
 };
+
+/* The bond vector of bond k = (i, j): d = x_j - x_i, plus the shift H n of j's image when
+ * the bond crosses a periodic cell's faces (H = cellH0 for the reference X, *cellH for the
+ * present positions). Without images exactly the plain difference. */
+static inline void floe_pd_bond_vec(const floe_pd_body *b, const double *x, const double H[9], int i, int j,
+                                    int64_t k, double d[3])
+{
+    const double *xi = x + 3 * (size_t)i, *xj = x + 3 * (size_t)j;
+    d[0] = xj[0] - xi[0];
+    d[1] = xj[1] - xi[1];
+    d[2] = xj[2] - xi[2];
+    if (b->img && b->img[k]) {
+        double s[3];
+        floe_img_shift(H, b->img[k], s);
+        d[0] += s[0];
+        d[1] += s[1];
+        d[2] += s[2];
+    }
+}
+/* the reference bond vector xi of bond k (X_j + H0 n - X_i) */
+static inline void floe_pd_ref_vec(const floe_pd_body *b, int i, int j, int64_t k, double d[3])
+{
+    floe_pd_bond_vec(b, b->X, b->cellH0, i, j, k, d);
+}
+
+/* Families through the images of a periodic cell x = o + H s (H row-major, its columns the
+ * cell vectors; 2D: H[8] = 1 and no z components): the families are found again in the
+ * reference configuration with the images (a point near a face bonds to the points near the
+ * opposite face, docs/periodic.md), each bond storing j's image; H becomes cellH0, and Hlive
+ * (the caller's present cell, read at every evaluation; may be H itself while it lives)
+ * cellH. The material is set again (floe_pd_set_material) and a surface correction in place
+ * recomputed. Call before any step (no bond broken yet). FLOE_EINVAL when the cell is not
+ * wider than two horizons across every pair of faces (a pair would bond through two images)
+ * or when a point lies on itself; FLOE_ENOTSUP for a body with pre-cracks (the crack is not
+ * kept: cut it after) or a user material (its forces know no images); FLOE_ENOMEM. */
+int floe_pd_make_periodic(floe_pd_body *b, const double o[3], const double H[9], const double *Hlive);
 
 /* Create the lattice points of the region, build the families (|xi| <= delta + 1e-9 dx)
  * with the k-d tree and the partial-volume factors:

@@ -60,6 +60,7 @@ void floe_pd_body_destroy(floe_pd_body *b)
     free(b->s0); /* PMB alpha state (pd_materials.c) */
     free(b->splast); /* PMB plastic stretches */
     free(b->dten); /* LPS surface correction (pd_materials.c) */
+    free(b->img); /* periodic images (floe_pd_make_periodic) */
     if (b->ops && b->ops->release) b->ops->release(b); /* a user material's state */
     free(b);
 }
@@ -414,7 +415,7 @@ int floe_pd_surface_correction(floe_pd_body *b)
         for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
             int j = b->partner[k];
             double L = b->len[k], d[3];
-            floe_v3_sub(d, b->X + 3 * (size_t)j, b->X + 3 * (size_t)i);
+            floe_pd_ref_vec(b, i, j, k, d);
             for (int a = 0; a < nd; a++) {
                 double na = d[a] / L, q = na * na * na * na * L * b->vfac[k];
                 sum[3 * (size_t)i + a] += q * b->V[j];
@@ -428,7 +429,7 @@ int floe_pd_surface_correction(floe_pd_body *b)
         for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
             int j = b->partner[k];
             double L = b->len[k], d[3], q = 0;
-            floe_v3_sub(d, b->X + 3 * (size_t)j, b->X + 3 * (size_t)i);
+            floe_pd_ref_vec(b, i, j, k, d);
             for (int a = 0; a < nd; a++) {
                 double G = 0.5 * (sum[3 * (size_t)i + a] + sum[3 * (size_t)j + a]);
                 double t = d[a] / L / G;
@@ -493,5 +494,173 @@ size_t floe_pd_body_bytes(const floe_pd_body *b)
     if (b->s0) s += 2 * n * sizeof(double); /* PMB alpha state */
     if (b->splast) s += (size_t)b->nbond * sizeof(float); /* PMB plastic stretches */
     if (b->dten) s += 11 * n * sizeof(double); /* LPS surface correction */
+    if (b->img) s += nb * sizeof(int32_t); /* periodic images */
     return s;
+}
+
+/* ---- periodic families (floe_pd_make_periodic) ---- */
+
+typedef struct pd_imgbond {
+    int32_t j, code;
+} pd_imgbond;
+
+static int cmp_imgbond(const void *a, const void *b)
+{
+    int32_t x = ((const pd_imgbond *)a)->j, y = ((const pd_imgbond *)b)->j;
+    return (x > y) - (x < y);
+}
+
+static double pd_det3(const double A[9])
+{
+    return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) + A[2] * (A[3] * A[7] - A[4] * A[6]);
+}
+
+int floe_pd_make_periodic(floe_pd_body *b, const double o[3], const double H[9], const double *Hlive)
+{
+    if (!b || !o || !H || !Hlive || !b->ops) return FLOE_EINVAL;
+    if (b->mat.model == FLOE_PD_USER || b->ncut > 0) return FLOE_ENOTSUP;
+    if (b->nbroken > 0) return FLOE_EINVAL;
+    const int n = b->n, dim = b->dim;
+    double Hc[9];
+    memcpy(Hc, H, sizeof Hc);
+    if (dim == 2) Hc[2] = Hc[5] = Hc[6] = Hc[7] = 0, Hc[8] = 1.0;
+    double det = pd_det3(Hc);
+    if (!(det > 0) || !isfinite(det)) return FLOE_EINVAL;
+    double Hi[9] = {(Hc[4] * Hc[8] - Hc[5] * Hc[7]) / det, (Hc[2] * Hc[7] - Hc[1] * Hc[8]) / det,
+                    (Hc[1] * Hc[5] - Hc[2] * Hc[4]) / det, (Hc[5] * Hc[6] - Hc[3] * Hc[8]) / det,
+                    (Hc[0] * Hc[8] - Hc[2] * Hc[6]) / det, (Hc[2] * Hc[3] - Hc[0] * Hc[5]) / det,
+                    (Hc[3] * Hc[7] - Hc[4] * Hc[6]) / det, (Hc[1] * Hc[6] - Hc[0] * Hc[7]) / det,
+                    (Hc[0] * Hc[4] - Hc[1] * Hc[3]) / det};
+    double tol = b->dx > 0 ? 1e-9 * b->dx : 1e-9 * b->delta;
+    double r = b->delta + tol;
+    /* every width (1/|row k of H^-1|) more than two horizons: one image per pair at most */
+    for (int a = 0; a < dim; a++) {
+        double q = sqrt(Hi[3 * a] * Hi[3 * a] + Hi[3 * a + 1] * Hi[3 * a + 1] + Hi[3 * a + 2] * Hi[3 * a + 2]);
+        if (!(q > 0) || !(1.0 / q > 2.0 * r)) return FLOE_EINVAL;
+    }
+    size_t nn = (size_t)(n > 0 ? n : 1);
+    double *Y = calloc(3 * nn, sizeof *Y);
+    int *sh = malloc(3 * nn * sizeof *sh);
+    int64_t *off = malloc((nn + 1) * sizeof *off);
+    int cap = 256, *buf = malloc((size_t)cap * sizeof *buf);
+    int64_t bcap = 1024, nb = 0;
+    pd_imgbond *bond = malloc((size_t)bcap * sizeof *bond);
+    floe_kdtree *t = NULL;
+    int rc = FLOE_OK;
+    if (!Y || !sh || !off || !buf || !bond) { rc = FLOE_ENOMEM; goto done; }
+    /* the points wrapped into the cell: Y = X - H sh, sh = floor(H^-1 (X - o)) */
+    for (int i = 0; i < n; i++) {
+        const double *X = b->X + 3 * (size_t)i;
+        double d[3] = {X[0] - o[0], X[1] - o[1], X[2] - o[2]}, y[3];
+        for (int a = 0; a < 3; a++) {
+            double s = Hi[3 * a] * d[0] + Hi[3 * a + 1] * d[1] + Hi[3 * a + 2] * d[2];
+            double f = a < dim ? floor(s) : 0.0;
+            if (!(fabs(f) < 400)) { rc = FLOE_EINVAL; goto done; } /* image codes hold +-511 */
+            sh[3 * (size_t)i + a] = (int)f;
+        }
+        for (int a = 0; a < 3; a++)
+            y[a] = X[a] - (Hc[3 * a] * sh[3 * (size_t)i] + Hc[3 * a + 1] * sh[3 * (size_t)i + 1] +
+                           Hc[3 * a + 2] * sh[3 * (size_t)i + 2]);
+        floe_v3_copy(Y + 3 * (size_t)i, y);
+    }
+    t = floe_kdtree_build(Y, n, dim, 0);
+    if (n > 0 && !t) { rc = FLOE_ENOMEM; goto done; }
+    off[0] = 0;
+    const int mz = dim == 3 ? 1 : 0;
+    for (int i = 0; i < n; i++) {
+        int64_t start = nb;
+        const double *yi = Y + 3 * (size_t)i;
+        for (int m0 = -1; m0 <= 1; m0++)
+            for (int m1 = -1; m1 <= 1; m1++)
+                for (int m2 = -mz; m2 <= mz; m2++) {
+                    /* j found near y_i + H m: X_j + H n - X_i = y_j - y_i - H m, n = sh_i - sh_j - m */
+                    double q[3];
+                    for (int a = 0; a < 3; a++) q[a] = yi[a] + Hc[3 * a] * m0 + Hc[3 * a + 1] * m1 + Hc[3 * a + 2] * m2;
+                    int cnt = floe_kdtree_radius(t, q, r, buf, cap);
+                    if (cnt > cap) {
+                        int *nbuf = realloc(buf, (size_t)cnt * sizeof *nbuf);
+                        if (!nbuf) { rc = FLOE_ENOMEM; goto done; }
+                        buf = nbuf;
+                        cap = cnt;
+                        cnt = floe_kdtree_radius(t, q, r, buf, cap);
+                    }
+                    for (int c = 0; c < cnt; c++) {
+                        int j = buf[c];
+                        if (j == i && (m0 || m1 || m2)) { rc = FLOE_EINVAL; goto done; } /* its own image */
+                        if (j <= i) continue;
+                        const int *si = sh + 3 * (size_t)i, *sj = sh + 3 * (size_t)j;
+                        int code = floe_img_encode(si[0] - sj[0] - m0, si[1] - sj[1] - m1, dim == 3 ? si[2] - sj[2] - m2 : 0);
+                        if (nb == bcap) {
+                            pd_imgbond *nbd = realloc(bond, (size_t)(2 * bcap) * sizeof *nbd);
+                            if (!nbd) { rc = FLOE_ENOMEM; goto done; }
+                            bond = nbd;
+                            bcap *= 2;
+                        }
+                        bond[nb].j = j;
+                        bond[nb].code = code;
+                        nb++;
+                    }
+                }
+        qsort(bond + start, (size_t)(nb - start), sizeof *bond, cmp_imgbond);
+        for (int64_t k = start + 1; k < nb; k++)
+            if (bond[k].j == bond[k - 1].j) { rc = FLOE_EINVAL; goto done; } /* two images (cannot be) */
+        off[i + 1] = nb;
+    }
+    {
+        size_t nbb = (size_t)(nb > 0 ? nb : 1);
+        int32_t *part = malloc(nbb * sizeof *part), *img = malloc(nbb * sizeof *img);
+        double *len = malloc(nbb * sizeof *len);
+        float *vfac = malloc(nbb * sizeof *vfac);
+        uint8_t *brk = calloc(nbb, 1);
+        if (!part || !img || !len || !vfac || !brk) {
+            free(part); free(img); free(len); free(vfac); free(brk);
+            rc = FLOE_ENOMEM;
+            goto done;
+        }
+        int any = 0;
+        for (int64_t k = 0; k < nb; k++) {
+            part[k] = bond[k].j;
+            img[k] = bond[k].code;
+            any |= img[k] != 0;
+        }
+        free(b->off); free(b->partner); free(b->len); free(b->vfac); free(b->broken); free(b->img);
+        b->off = off;
+        off = NULL;
+        b->partner = part;
+        b->len = len;
+        b->vfac = vfac;
+        b->broken = brk;
+        b->nbond = nb;
+        b->img = any ? img : NULL; /* no bond across the faces: the plain path */
+        if (!any) free(img);
+        memcpy(b->cellH0, Hc, sizeof Hc);
+        b->cellH = Hlive;
+        for (int i = 0; i < n; i++)
+            for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+                double d[3];
+                floe_pd_ref_vec(b, i, b->partner[k], k, d);
+                double L = floe_v3_norm(d);
+                len[k] = L;
+                double beta = 1.0;
+                if (b->dx > 0 && L > b->delta - 0.5 * b->dx) beta = (b->delta + 0.5 * b->dx - L) / b->dx;
+                if (beta > 1.0) beta = 1.0;
+                if (beta < 0.0) beta = 0.0;
+                vfac[k] = (float)beta;
+            }
+        /* per-bond material state sized by the new families */
+        int corr = b->scorr != NULL || b->dten != NULL;
+        free(b->splast);
+        b->splast = NULL;
+        floe_pd_material m = b->mat;
+        rc = floe_pd_set_material(b, &m);
+        if (rc == FLOE_OK && corr) rc = floe_pd_surface_correction(b);
+    }
+done:
+    floe_kdtree_destroy(t);
+    free(Y);
+    free(sh);
+    free(off);
+    free(buf);
+    free(bond);
+    return rc;
 }

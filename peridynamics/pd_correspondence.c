@@ -43,6 +43,12 @@ int floe_pd_correspondence(const floe_pd_body *b, const double *x, double G, dou
                 xi[a] = b->X[3 * (size_t)j + a] - b->X[3 * (size_t)i + a];
                 Y[a] = x[3 * (size_t)j + a] - x[3 * (size_t)i + a];
             }
+            if (b->img && b->img[k]) { /* across a periodic cell's faces: j's image */
+                double s0[3], s1[3];
+                floe_img_shift(b->cellH0, b->img[k], s0);
+                floe_img_shift(b->cellH, b->img[k], s1);
+                for (int a = 0; a < 3; a++) { xi[a] += s0[a]; Y[a] += s1[a]; }
+            }
             /* the bond seen from i (+xi, +Y, V_j) and from j (-xi, -Y, V_i): the products
              * are even, only the volume differs */
             for (int r = 0; r < 3; r++)

@@ -155,6 +155,16 @@ int floe_pd_crack_cuts(const floe_pd_crack *c, int dim, const double xi[3], cons
     return prep_cuts(&q, xi, xj);
 }
 
+/* the reference position of bond k's partner j: X_j, or its image X_j + H0 n (in xs) */
+static const double *pd_partner_ref(const floe_pd_body *b, int64_t k, double xs[3])
+{
+    const double *xj = b->X + 3 * (size_t)b->partner[k];
+    if (!b->img || !b->img[k]) return xj;
+    floe_img_shift(b->cellH0, b->img[k], xs);
+    floe_v3_add(xs, xs, xj);
+    return xs;
+}
+
 int64_t floe_pd_add_crack(floe_pd_body *b, const floe_pd_crack *c)
 {
     if (!b || floe_pd_crack_check(c, b->dim) != FLOE_OK) return -FLOE_EINVAL;
@@ -172,8 +182,10 @@ int64_t floe_pd_add_crack(floe_pd_body *b, const floe_pd_crack *c)
         for (int d = 0; d < b->dim; d++)
             if (xi[d] < q.lo[d] - reach || xi[d] > q.hi[d] + reach) near = 0;
         if (!near) continue;
-        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++)
-            if (prep_cuts(&q, xi, b->X + 3 * (size_t)b->partner[k])) { cut[k] = 1; ncut++; }
+        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+            double xs[3];
+            if (prep_cuts(&q, xi, pd_partner_ref(b, k, xs))) { cut[k] = 1; ncut++; }
+        }
     }
     if (ncut == 0) { free(cut); return 0; }
     /* compact every per-bond array in place, row by row */
@@ -189,6 +201,7 @@ int64_t floe_pd_add_crack(floe_pd_body *b, const floe_pd_crack *c)
             if (b->scorr) b->scorr[kk] = b->scorr[k];
             if (b->wbond) b->wbond[kk] = b->wbond[k];
             if (b->splast) b->splast[kk] = b->splast[k];
+            if (b->img) b->img[kk] = b->img[k];
             kk++;
         }
         start = end;
@@ -283,7 +296,8 @@ int64_t floe_pd_bonds_across(const floe_pd_body *b, floe_pd_sdf_fn sdf, void *us
             int j = b->partner[k];
             /* the segment can reach inside only when s_i + s_j < |xi| (an SDF is 1-Lipschitz) */
             if (!(s[j] >= 0) || s[i] + s[j] >= b->len[k]) continue;
-            const double *xj = b->X + 3 * (size_t)j;
+            double xs[3];
+            const double *xj = pd_partner_ref(b, k, xs);
             if (!bond_bridges(sdf, user, b->dim, xi, xj, b->len[k], h)) continue;
             if (cnt == 0 && at)
                 for (int d = 0; d < 3; d++) at[d] = 0.5 * (xi[d] + xj[d]);

@@ -88,8 +88,10 @@ static double pmb_c(const floe_pd_body *b) { return b->c; }
  * floe_pd_forces_nobreak) s0 is left as is.
  * `alpha_on` is a constant at both call sites, so the compiler drops the branch from the
  * constant-s_c loop. */
-static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f, const int alpha_on)
+static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f, const int alpha_on, const int per)
 {
+    const int32_t *img = per ? b->img : NULL;
+    const double *H = per ? b->cellH : NULL;
     const double c = b->c, s_c = b->s_c, alpha = b->mat.alpha;
     const int comp = b->mat.broken_tension_only;
     const double *V = b->V;
@@ -113,6 +115,11 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
             const int j = part[k];
             const double *xj = x + 3 * (size_t)j;
             double d0 = xj[0] - xi0, d1 = xj[1] - xi1, d2 = xj[2] - xi2;
+            if (per && img[k]) { /* across the periodic cell's faces: j's image */
+                double sh[3];
+                floe_img_shift(H, img[k], sh);
+                d0 += sh[0]; d1 += sh[1]; d2 += sh[2];
+            }
             double r = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
             double L = len[k];
             double s = (r - L) / L;
@@ -171,12 +178,11 @@ static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
     double energy = 0.0;
     int64_t nbroken = 0;
     for (int i = 0; i < b->n; i++) {
-        const double *xi = x + 3 * (size_t)i;
         double fi[3] = {0, 0, 0};
         for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
             const int j = b->partner[k];
-            const double *xj = x + 3 * (size_t)j;
-            double d[3] = {xj[0] - xi[0], xj[1] - xi[1], xj[2] - xi[2]};
+            double d[3];
+            floe_pd_bond_vec(b, x, b->cellH, i, j, k, d);
             double r = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             double L = b->len[k], s = (r - L) / L;
             if (b->broken[k]) {
@@ -207,8 +213,9 @@ static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
 static double pmb_forces(floe_pd_body *b, const double *x, double *f)
 {
     if (b->splast) return pmb_forces_plastic(b, x, f);
-    if (b->s0 && b->s_c > 0) return pmb_forces_impl(b, x, f, 1);
-    return pmb_forces_impl(b, x, f, 0);
+    if (b->img) return b->s0 && b->s_c > 0 ? pmb_forces_impl(b, x, f, 1, 1) : pmb_forces_impl(b, x, f, 0, 1);
+    if (b->s0 && b->s_c > 0) return pmb_forces_impl(b, x, f, 1, 0);
+    return pmb_forces_impl(b, x, f, 0, 0);
 }
 
 const floe_pd_material_ops floe_pd_pmb_ops = {.name = "pmb", .init = pmb_init, .forces = pmb_forces, .bond_micromodulus = pmb_c};
@@ -294,7 +301,7 @@ static inline void lps_weights(const floe_pd_body *b, int i, int j, int64_t k, d
     if (b->dten) {
         const size_t n6 = 6 * (size_t)b->n;
         double n[3];
-        floe_v3_sub(n, b->X + 3 * (size_t)j, b->X + 3 * (size_t)i);
+        floe_pd_ref_vec(b, i, j, k, n);
         floe_v3_scale(n, 1.0 / b->len[k]);
         *oi = lps_quad(b->dten + 6 * (size_t)i, n);
         *oj = lps_quad(b->dten + 6 * (size_t)j, n);
@@ -315,8 +322,10 @@ static inline void lps_weights(const floe_pd_body *b, int i, int j, int64_t k, d
  * q_i = sum_j alpha_ij w |xi| e^d_ij beta V_j (into dten + 9n; zero for the plain form and an intact
  * family, so the plain form leaves it out). Breaks bonds with e > s_c |xi| when s_c > 0;
  * returns the number broken. */
-static int64_t lps_dilatation(floe_pd_body *b, const double *x)
+static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, const int per)
 {
+    const int32_t *img = per ? b->img : NULL;
+    const double *H = per ? b->cellH : NULL;
     const int n = b->n, dim = b->dim;
     const double s_c = b->s_c;
     const double *V = b->V, *len = b->len, *wb = b->wbond;
@@ -337,6 +346,11 @@ static int64_t lps_dilatation(floe_pd_body *b, const double *x)
             const int j = part[k];
             const double *xj = x + 3 * (size_t)j;
             double d0 = xj[0] - xi[0], d1 = xj[1] - xi[1], d2 = xj[2] - xi[2];
+            if (per && img[k]) { /* across the periodic cell's faces: j's image */
+                double sh[3];
+                floe_img_shift(H, img[k], sh);
+                d0 += sh[0]; d1 += sh[1]; d2 += sh[2];
+            }
             double L = len[k];
             double e = sqrt(d0 * d0 + d1 * d1 + d2 * d2) - L;
             if (s_c > 0 && e > s_c * L) {
@@ -368,6 +382,11 @@ static int64_t lps_dilatation(floe_pd_body *b, const double *x)
     return nbroken;
 }
 
+static int64_t lps_dilatation(floe_pd_body *b, const double *x)
+{
+    return b->img ? lps_dilatation_impl(b, x, 1) : lps_dilatation_impl(b, x, 0);
+}
+
 /* Scalar force states of bond k at both ends (per unit beta V_i V_j), from the energy
  * W_i = k theta_i^2/2 + 1/2 sum_j alpha_ij w (e^d_ij)^2 beta V_j, e^d = e - theta_i |xi|/dim:
  *   t_ij = (k theta_i - q_i/dim) omega_ij |xi| + alpha_ij w e^d_ij
@@ -395,8 +414,10 @@ static inline void lps_bond_t(const floe_pd_body *b, double kd, int i, int j, in
  *   e = |y| - |xi|, theta_i as above, force on i: sum_j (t_ij + t_ji) beta V_i V_j M
  * (000 eq 14); energy sum_i V_i W_i (000 eq 24). Broken bonds (stretch e/|xi| > s_c,
  * checked in the dilatation pass) drop out of theta and t. */
-static double lps_forces(floe_pd_body *b, const double *x, double *f)
+static inline double lps_forces_impl(floe_pd_body *b, const double *x, double *f, const int per)
 {
+    const int32_t *img = per ? b->img : NULL;
+    const double *H = per ? b->cellH : NULL;
     const int n = b->n;
     const double kd = lps_kdil(b);
     const double *V = b->V, *len = b->len;
@@ -415,6 +436,11 @@ static double lps_forces(floe_pd_body *b, const double *x, double *f)
             const int j = part[k];
             const double *xj = x + 3 * (size_t)j;
             double d0 = xj[0] - xi0, d1 = xj[1] - xi1, d2 = xj[2] - xi2;
+            if (per && img[k]) { /* across the periodic cell's faces: j's image */
+                double sh[3];
+                floe_img_shift(H, img[k], sh);
+                d0 += sh[0]; d1 += sh[1]; d2 += sh[2];
+            }
             double r = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
             double tij, tji, eb = 0;
             lps_bond_t(b, kd, i, j, k, r - len[k], &tij, &tji, &eb);
@@ -434,6 +460,11 @@ static double lps_forces(floe_pd_body *b, const double *x, double *f)
         energy += ei;
     }
     return energy;
+}
+
+static double lps_forces(floe_pd_body *b, const double *x, double *f)
+{
+    return b->img ? lps_forces_impl(b, x, f, 1) : lps_forces_impl(b, x, f, 0);
 }
 
 const floe_pd_material_ops floe_pd_lps_ops = {.name = "lps", .init = lps_init, .forces = lps_forces, .bond_micromodulus = lps_c};
@@ -492,7 +523,7 @@ int floe_pd_lps_surface_correction(floe_pd_body *b)
         for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
             int j = b->partner[k];
             double L = b->len[k], nv[3];
-            floe_v3_sub(nv, b->X + 3 * (size_t)j, b->X + 3 * (size_t)i);
+            floe_pd_ref_vec(b, i, j, k, nv);
             floe_v3_scale(nv, 1.0 / L);
             double wl = (b->wbond ? b->wbond[k] : 1.0) * L * L * b->vfac[k];
             double px[5] = {1, nv[0], nv[0] * nv[0], nv[0] * nv[0] * nv[0], 0}, py[5], pz[5];
@@ -541,7 +572,7 @@ int floe_pd_lps_surface_correction(floe_pd_body *b)
             for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
                 int j = b->partner[k];
                 double L = b->len[k], nv[3];
-                floe_v3_sub(nv, b->X + 3 * (size_t)j, b->X + 3 * (size_t)i);
+                floe_pd_ref_vec(b, i, j, k, nv);
                 floe_v3_scale(nv, 1.0 / L);
                 double w = b->wbond ? b->wbond[k] : 1.0, wl = w * L * L * b->vfac[k];
                 double oi = w * lps_quad(A + 6 * (size_t)i, nv), oj = w * lps_quad(A + 6 * (size_t)j, nv);
@@ -612,7 +643,7 @@ int floe_pd_bond_forces(floe_pd_body *b, const double *x, floe_pd_bond_visit_fn 
         for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
             int j = b->partner[k];
             double d[3];
-            floe_v3_sub(d, x + 3 * (size_t)j, x + 3 * (size_t)i);
+            floe_pd_bond_vec(b, x, b->cellH, i, j, k, d);
             double r = floe_v3_norm(d), L = b->len[k], s = (r - L) / L;
             if (b->broken[k] && (lps || !b->mat.broken_tension_only || s >= 0)) continue;
             if (!(r > 0)) continue;

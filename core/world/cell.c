@@ -87,6 +87,7 @@ int floe_world_set_cell(floe_world *w, const double origin[3], const double H[9]
     c->valid = 0;
     c->path = 0;
     w->prepared = 0; /* the list is built again with the images */
+    for (int k = 0; k < w->npd; k++) FLOE_TRY(floe_world_pd_periodic(w, w->pd[k], k)); /* PD families */
     return FLOE_OK;
 }
 
@@ -195,7 +196,8 @@ int floe_world_cell_stress(const floe_world *w, double sigma[9], double kinetic[
     kinetic_stress(w, V, K);
     for (int a = 0; a < 3; a++)
         for (int b = 0; b < 3; b++)
-            sigma[3 * a + b] = 0.5 * (c->virial[3 * a + b] + c->virial[3 * b + a]) / V + K[3 * a + b];
+            sigma[3 * a + b] = 0.5 * (c->virial[3 * a + b] + c->virial[3 * b + a] + c->pd_virial[3 * a + b] +
+                                      c->pd_virial[3 * b + a]) / V + K[3 * a + b];
     if (kinetic) memcpy(kinetic, K, sizeof K);
     return FLOE_OK;
 }

@@ -876,6 +876,30 @@ const floe_provider_class floe_contact_provider_class = {
     .state_size = contact_state_size, .save = contact_save, .restore = contact_restore};
 
 /* ---- provider "pd_bonds": the bond forces of every PD body, with their ledger ---- */
+/* periodic cell: the bonds' share of the homogenised stress, sum l (x) f (l the bond vector
+ * from i to j's image, f the force on i), and of the servo's stiffness, k (n_a l_b)^2 with
+ * k = c beta V_i V_j / |xi| the bond's axial stiffness (the equivalent PMB c for LPS) */
+typedef struct pd_vir_ctx {
+    const floe_pd_body *b;
+    const double *x, *H;
+    double vir[9], kdiag[9];
+    int want_kdiag;
+} pd_vir_ctx;
+static void pd_vir_visit(int i, int j, int64_t k, const double f[3], void *user) {
+    pd_vir_ctx *c = user;
+    double l[3];
+    floe_pd_bond_vec(c->b, c->x, c->H, i, j, k, l);
+    for (int a = 0; a < 3; a++)
+        for (int b = 0; b < 3; b++) c->vir[3 * a + b] += l[a] * f[b];
+    if (c->want_kdiag) {
+        const floe_pd_body *pb = c->b;
+        double r = floe_v3_norm(l), kb = pb->c * (double)pb->vfac[k] * pb->V[i] * pb->V[j] / pb->len[k];
+        if (pb->scorr) kb *= (double)pb->scorr[k];
+        for (int a = 0; a < 3; a++)
+            for (int b = 0; b < 3; b++) c->kdiag[3 * a + b] += kb * (l[a] / r) * (l[a] / r) * l[b] * l[b];
+    }
+}
+
 static int pd_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, floe_provider_out *out) {
     (void)pv;
     floe_particles *p = ctx->p;
@@ -888,6 +912,12 @@ static int pd_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, 
     }
     const int stepping = ctx->stepping;
     double elastic = out->elastic, diss = out->dissipated;
+    pd_vir_ctx vc;
+    memset(&vc, 0, sizeof vc);
+    if (w->cell) {
+        vc.H = w->cell->H;
+        vc.want_kdiag = w->cell->want_kdiag;
+    }
     /* Ledger: the work of the bond forces over the step (trapezoid, as for contacts) minus
      * the change of the stored energy is dissipated; for intact bonds it is the integration
      * error only, a breaking bond releases its energy there. */
@@ -904,6 +934,20 @@ static int pd_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, 
                 p->f[3 * (size_t)(f0 + i) + a] += fa;
                 wk += (fa + fold[3 * i + a]) * p->v[3 * (size_t)(f0 + i) + a];
             }
+        if (w->cell) { /* periodic cell: the bonds' virial (pd_vir_visit) */
+            double v0[9];
+            memcpy(v0, vc.vir, sizeof v0);
+            vc.b = pb;
+            vc.x = p->x + 3 * (size_t)f0;
+            int rc = floe_pd_bond_forces(pb, vc.x, pd_vir_visit, &vc);
+            if (rc != FLOE_OK)
+                return floe_world_error(w, rc, "PD body %d: its bond forces for the cell's stress: %s", b, floe_strerror(rc));
+            /* this body's share of the cell's work (its watchdog ledger; at the present virial) */
+            double wcb = 0;
+            for (int a = 0; a < 3; a++)
+                for (int c = 0; c < 3; c++) wcb += (vc.vir[3 * c + a] - v0[3 * c + a]) * w->cell->L[3 * a + c];
+            if (stepping && b < w->pd_diss_n) w->pd_diss[b] += wcb * ctx->dt;
+        }
         if (stepping) {
             double db = -0.5 * wk * ctx->dt - (e - w->pd_eold[b]);
             diss += db;
@@ -912,6 +956,19 @@ static int pd_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, 
         w->pd_eold[b] = e;
         elastic += e;
         off += np;
+    }
+    if (w->cell && w->npd) { /* the bonds' virial: the cell's stress and its work on the bonds */
+        floe_cell_state *cs = w->cell;
+        if (stepping) { /* the work of the cell's deformation on the bonds, (W_old + W_new)/2 : L dt */
+            double wc = 0;
+            for (int a = 0; a < 3; a++)
+                for (int c = 0; c < 3; c++) wc += 0.5 * (cs->pd_virial[3 * c + a] + vc.vir[3 * c + a]) * cs->L[3 * a + c];
+            out->work_boundary += wc * ctx->dt;
+            diss += wc * ctx->dt; /* the ledger books the work done on the bonds less dE: the cell's too */
+        }
+        memcpy(cs->pd_virial, vc.vir, sizeof vc.vir);
+        if (cs->want_kdiag)
+            for (int k = 0; k < 9; k++) cs->kdiag[k] += vc.kdiag[k];
     }
     if (w->npd) { /* the new forces become the old ones */
         double *t = w->pd_fold;
@@ -1060,7 +1117,7 @@ int floe_world_forces(floe_world *w, const floe_step_ctx *ctx, int groups) {
     w->energy.elastic = w->elastic_contact + w->elastic_pd;
     if (stepping) {
         w->energy.dissipated += od.dissipated + op.dissipated;
-        w->energy.work_boundary += od.work_boundary;
+        w->energy.work_boundary += od.work_boundary + op.work_boundary; /* PD: a periodic cell's work on the bonds */
     }
     return FLOE_OK;
 }

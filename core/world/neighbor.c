@@ -266,8 +266,11 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
                 for (int r = 0; r < 3; r++) n[r] = bsh[3 * b + r] - bsh[3 * a + r] - m[r];
                 for (int r = 0; r < 3; r++) d[r] += cell->H[3 * r] * n[0] + cell->H[3 * r + 1] * n[1] + cell->H[3 * r + 2] * n[2];
             }
-            /* bonded pairs (PD families, beams) are excluded only as their direct pair */
-            if (nl->exclude && !(n[0] | n[1] | n[2]) && nl->exclude(nl->exclude_ctx, i, j)) continue;
+            /* bonded pairs (PD families, beams) are excluded as their direct pair, PD bonds across
+             * the cell's faces through their image too (exclude_image) */
+            if (!(n[0] | n[1] | n[2]) ? nl->exclude && nl->exclude(nl->exclude_ctx, i, j)
+                                      : nl->exclude_image && nl->exclude_image(nl->exclude_ctx, i, j))
+                continue;
             double lim = p->radius[i] + p->radius[j] + skin;
             if (floe_v3_dot(d, d) <= lim * lim) rc = push_pair(nl, p, i, j, cell ? n : NULL);
         }

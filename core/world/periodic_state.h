@@ -4,6 +4,7 @@
 #define FLOE_PERIODIC_STATE_H
 
 #include "floe_cell.h"
+#include "floe_image.h"
 
 /* A periodic cell (floe_cell.h, core/world/cell.c); NULL in a world without one. */
 typedef struct floe_cell_state {
@@ -12,6 +13,8 @@ typedef struct floe_cell_state {
     floe_cell_control ctl;
     double virial[9];        /* sum over contacts of l (x) F (branch from i to j's image, force
                                 on i) at the last force evaluation, N m */
+    double pd_virial[9];     /* the same over the PD bonds (bond vector to j's image, force on
+                                i), forces.c's pd stage; enters the stress with virial */
     double kdiag[9];         /* servo: sum over contacts of k_n (n_a l_b)^2 (eq 29's D_abab x V) */
     int want_kdiag;          /* a component is stress-controlled: the stage sums kdiag */
     int valid;               /* virial is that of the last evaluation */
@@ -21,18 +24,7 @@ typedef struct floe_cell_state {
     double rmax;             /* largest bounding radius (prepare) */
 } floe_cell_state;
 
-/* image code of a pair: j's image is x_j + H n, n packed 10 bits per component (0 = none) */
-static inline int floe_img_encode(int a, int b, int c) { return (a & 1023) | (b & 1023) << 10 | (c & 1023) << 20; }
-static inline void floe_img_decode(int code, int n[3]) {
-    n[0] = ((code & 1023) ^ 512) - 512;
-    n[1] = (((code >> 10) & 1023) ^ 512) - 512;
-    n[2] = (((code >> 20) & 1023) ^ 512) - 512;
-}
-/* the shift H n of image code `code` */
-static inline void floe_img_shift(const double H[9], int code, double s[3]) {
-    int n[3];
-    floe_img_decode(code, n);
-    for (int r = 0; r < 3; r++) s[r] = H[3 * r] * n[0] + H[3 * r + 1] * n[1] + H[3 * r + 2] * n[2];
-}
+/* image codes of the pairs (floe_img_encode, floe_img_decode, floe_img_shift): floe_image.h
+ * (peridynamics/, whose bonds across the faces carry them too) */
 
 #endif

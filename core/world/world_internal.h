@@ -49,6 +49,9 @@ typedef struct floe_neighbor_list {
      * family members of a peridynamic body) */
     int (*exclude)(const void *ctx, int i, int j);
     const void *exclude_ctx;
+    /* the same for a pair through an image of a periodic cell (PD bonds across the faces;
+     * NULL: image pairs are never excluded) */
+    int (*exclude_image)(const void *ctx, int i, int j);
 } floe_neighbor_list;
 
 struct floe_world {
@@ -173,6 +176,8 @@ typedef struct floe_pd_bc_rec {
 double floe_pd_bc_forces(floe_world *w);
 int floe_pd_broken_pairs_reachable(floe_world *w);
 int floe_pd_pair_excluded(const floe_world *w, int i, int j);
+/* the families of PD body b (index k) through the periodic cell's images (world_pd.c) */
+int floe_world_pd_periodic(floe_world *w, struct floe_pd_body *b, int k);
 
 /* the contact list's exclusion of bonded pairs (PD families, beam bonds), installed when
  * either is added (core/world/world.c) */

@@ -50,8 +50,23 @@ static int world_exclude(const void *ctx, int i, int j) {
     return w->beams && floe_beam_set_excludes(w->beams, i, j);
 }
 
+/* a pair through an image of the periodic cell: excluded as above when its points are bonded
+ * (across the faces: the cell is wider than two horizons, so the image within contact reach
+ * is the bond's); unbonded pairs of a body in a cell are beyond the horizon (no pre-cracks
+ * there, floe_pd_make_periodic) and meet by contact */
+static int world_exclude_image(const void *ctx, int i, int j) {
+    const floe_world *w = ctx;
+    if (!w->npd) return 0;
+    int bi = w->pd_of[i];
+    if (bi < 0 || bi != w->pd_of[j]) return 0;
+    int f = w->pd_first[bi];
+    if (floe_pd_bond_index(w->pd[bi], i - f, j - f) < 0) return 0;
+    return floe_pd_pair_excluded(w, i, j);
+}
+
 void floe_world_install_exclusion(floe_world *w) {
     w->nl.exclude = world_exclude;
+    w->nl.exclude_image = world_exclude_image;
     w->nl.exclude_ctx = w;
 }
 
@@ -95,6 +110,11 @@ int floe_pd_broken_pairs_reachable(floe_world *w) {
                 if (p->motion[a] != FLOE_FREE && p->motion[c] != FLOE_FREE) continue;
                 double d[3];
                 floe_v3_sub(d, p->x + 3 * c, p->x + 3 * a);
+                if (pb->img && pb->img[k]) { /* across the periodic cell's faces: c's image */
+                    double sh[3];
+                    floe_img_shift(w->cell->H, pb->img[k], sh);
+                    floe_v3_add(d, d, sh);
+                }
                 if (floe_v3_dot(d, d) > (rr + skin) * (rr + skin)) continue;
                 if (!nl_has_pair(&w->nl, a, c)) { rebuild = 1; break; }
             }
@@ -105,6 +125,21 @@ int floe_pd_broken_pairs_reachable(floe_world *w) {
 /* the contact radius of a point of volume V */
 static double pd_contact_radius(const floe_pd_body *b, double V) {
     return b->dim == 3 ? cbrt(3.0 * V / (4.0 * M_PI)) : sqrt(V / (M_PI * b->thickness));
+}
+
+int floe_world_pd_periodic(floe_world *w, struct floe_pd_body *b, int k) {
+    const floe_cell_state *c = w->cell;
+    int rc = floe_pd_make_periodic(b, c->o, c->H, c->H);
+    if (rc == FLOE_EINVAL)
+        return floe_world_error(w, rc, "PD body %d: its families cannot be found through the periodic cell's images: "
+                                "the cell must be wider than two horizons (2 x %g m) across every pair of faces%s", k,
+                                b->delta, b->nbroken ? ", and no bond may be broken yet" : "");
+    if (rc == FLOE_ENOTSUP)
+        return floe_world_error(w, rc, "PD body %d: a body with pre-cracks or a user material cannot bond through the "
+                                "periodic cell's images (set the cell first and cut the cracks after, on its own "
+                                "material)", k);
+    if (rc != FLOE_OK) return floe_world_error(w, rc, "PD body %d: periodic families: %s", k, floe_strerror(rc));
+    return FLOE_OK;
 }
 
 int floe_world_add_pd_body(floe_world *w, struct floe_pd_body *body, int material, const double v0[3], int *first) {
@@ -122,6 +157,10 @@ int floe_world_add_pd_body(floe_world *w, struct floe_pd_body *body, int materia
     if (v0 && !(isfinite(v0[0]) && isfinite(v0[1]) && isfinite(v0[2]))) {
         floe_pd_body_destroy(body);
         return floe_world_error(w, FLOE_EINVAL, "PD body: the initial velocity must be finite");
+    }
+    if (w->cell) { /* families through the cell's images (docs/periodic.md) */
+        int rc = floe_world_pd_periodic(w, body, w->npd);
+        if (rc != FLOE_OK) { floe_pd_body_destroy(body); return rc; }
     }
     if (w->npd == w->pd_cap) {
         int nc = w->pd_cap ? 2 * w->pd_cap : 4;
