@@ -588,6 +588,9 @@ int floe_pd_make_periodic(floe_pd_body *b, const double o[3], const double H[9],
                         int j = buf[c];
                         if (j == i && (m0 || m1 || m2)) { rc = FLOE_EINVAL; goto done; } /* its own image */
                         if (j <= i) continue;
+                        double dd = 0;
+                        for (int a = 0; a < 3; a++) dd += (Y[3 * (size_t)j + a] - q[a]) * (Y[3 * (size_t)j + a] - q[a]);
+                        if (dd <= 1e-18 * r * r) { rc = FLOE_EINVAL; goto done; } /* two points on one spot */
                         const int *si = sh + 3 * (size_t)i, *sj = sh + 3 * (size_t)j;
                         int code = floe_img_encode(si[0] - sj[0] - m0, si[1] - sj[1] - m1, dim == 3 ? si[2] - sj[2] - m2 : 0);
                         if (nb == bcap) {

@@ -269,7 +269,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             /* bonded pairs (PD families, beams) are excluded as their direct pair, PD bonds across
              * the cell's faces through their image too (exclude_image) */
             if (!(n[0] | n[1] | n[2]) ? nl->exclude && nl->exclude(nl->exclude_ctx, i, j)
-                                      : nl->exclude_image && nl->exclude_image(nl->exclude_ctx, i, j))
+                                      : nl->exclude_image && nl->exclude_image(nl->exclude_ctx, i, j, n))
                 continue;
             double lim = p->radius[i] + p->radius[j] + skin;
             if (floe_v3_dot(d, d) <= lim * lim) rc = push_pair(nl, p, i, j, cell ? n : NULL);

@@ -51,7 +51,7 @@ typedef struct floe_neighbor_list {
     const void *exclude_ctx;
     /* the same for a pair through an image of a periodic cell (PD bonds across the faces;
      * NULL: image pairs are never excluded) */
-    int (*exclude_image)(const void *ctx, int i, int j);
+    int (*exclude_image)(const void *ctx, int i, int j, const int n[3]); /* j's image x_j + H n */
 } floe_neighbor_list;
 
 struct floe_world {

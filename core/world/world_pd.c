@@ -50,18 +50,22 @@ static int world_exclude(const void *ctx, int i, int j) {
     return w->beams && floe_beam_set_excludes(w->beams, i, j);
 }
 
-/* a pair through an image of the periodic cell: excluded as above when its points are bonded
+/* a pair through image n of the periodic cell: excluded as above when its points are bonded
  * (across the faces: the cell is wider than two horizons, so the image within contact reach
- * is the bond's); unbonded pairs of a body in a cell are beyond the horizon (no pre-cracks
- * there, floe_pd_make_periodic) and meet by contact */
-static int world_exclude_image(const void *ctx, int i, int j) {
+ * is the bond's); an unbonded pair of one body (a crack cut after the cell was set,
+ * floe_pd_add_crack) as a broken pair, its reference distance through the same image */
+static int world_exclude_image(const void *ctx, int i, int j, const int n[3]) {
     const floe_world *w = ctx;
     if (!w->npd) return 0;
     int bi = w->pd_of[i];
     if (bi < 0 || bi != w->pd_of[j]) return 0;
     int f = w->pd_first[bi];
-    if (floe_pd_bond_index(w->pd[bi], i - f, j - f) < 0) return 0;
-    return floe_pd_pair_excluded(w, i, j);
+    const floe_pd_body *b = w->pd[bi];
+    if (floe_pd_bond_index(b, i - f, j - f) >= 0) return floe_pd_pair_excluded(w, i, j);
+    double d[3];
+    floe_v3_sub(d, b->X + 3 * (size_t)(j - f), b->X + 3 * (size_t)(i - f));
+    for (int r = 0; r < 3; r++) d[r] += b->cellH0[3 * r] * n[0] + b->cellH0[3 * r + 1] * n[1] + b->cellH0[3 * r + 2] * n[2];
+    return floe_v3_norm(d) < w->p.radius[i] + w->p.radius[j];
 }
 
 void floe_world_install_exclusion(floe_world *w) {
@@ -132,8 +136,9 @@ int floe_world_pd_periodic(floe_world *w, struct floe_pd_body *b, int k) {
     int rc = floe_pd_make_periodic(b, c->o, c->H, c->H);
     if (rc == FLOE_EINVAL)
         return floe_world_error(w, rc, "PD body %d: its families cannot be found through the periodic cell's images: "
-                                "the cell must be wider than two horizons (2 x %g m) across every pair of faces%s", k,
-                                b->delta, b->nbroken ? ", and no bond may be broken yet" : "");
+                                "the cell must be wider than two horizons (2 x %g m) across every pair of faces, and no "
+                                "two points may lie on one spot through the faces (points on both of two opposite "
+                                "faces)%s", k, b->delta, b->nbroken ? ", and no bond may be broken yet" : "");
     if (rc == FLOE_ENOTSUP)
         return floe_world_error(w, rc, "PD body %d: a body with pre-cracks or a user material cannot bond through the "
                                 "periodic cell's images (set the cell first and cut the cracks after, on its own "

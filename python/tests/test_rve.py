@@ -122,10 +122,13 @@ bodies:
 """
 
 
-def test_prepare_runs_without_outputs():
+def test_prepare_runs_without_outputs(tmp_path):
     """outputs=False creates no file but still runs the scene's prepare block: the packing
     arrives compacted to the target pressure (the `prepare` block's 1 % test) and jammed."""
-    rve = floe.RVE.from_string(PREPARED, outputs=False)
+    out = tmp_path / "out"
+    text = PREPARED + "outputs:\n  - {type: stress, every: 10, file: stress.csv}\n"
+    rve = floe.RVE.from_string(text, outdir=str(out), outputs=False)
+    assert not out.exists()
     m = rve.measures()
     p = -np.trace(m["sigma"]) / 3
     assert abs(p - 1.0e4) < 0.02 * 1.0e4, p
