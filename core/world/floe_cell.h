@@ -36,7 +36,10 @@
  * replace the cell (the neighbour list is rebuilt). FLOE_EINVAL for det H <= 0 or not
  * finite. The cell must stay wider than two of its largest particle diameters in every
  * direction: checked at prepare and at every step (a step that makes it narrower fails with
- * FLOE_EUNSTABLE and says so). */
+ * FLOE_EUNSTABLE and says so). PD bodies already in the world get their families through
+ * the images (floe_pd_make_periodic); when one cannot (a narrow cell, pre-cracks, a user
+ * material: FLOE_EINVAL / FLOE_ENOTSUP with a message), the bodies before it have been
+ * converted and the world keeps the new cell: destroy it rather than step it. */
 int floe_world_set_cell(floe_world *w, const double origin[3], const double H[9]);
 /* 1 when the world is periodic, filling origin and H (either may be NULL); 0 otherwise */
 int floe_world_cell(const floe_world *w, double origin[3], double H[9]);
