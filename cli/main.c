@@ -7,6 +7,9 @@
 #include "floe_mesh.h"
 #include "floe_newmark.h"
 #include "floe_checkpoint.h"
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include <errno.h>
 #include <math.h>
@@ -23,7 +26,7 @@ static const char *prog = "floe";
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: %s run [SCENE] [-o OUTDIR] [-q] [--checkpoint-every T] [--checkpoint FILE] [--restart FILE]\n"
+            "usage: %s run [SCENE] [-o OUTDIR] [-q] [-t N] [--checkpoint-every T] [--checkpoint FILE] [--restart FILE]\n"
             "                                        run a scene (no SCENE: the built-in demo)\n"
             "       %s check SCENE                   load and prepare a scene, print its summary\n"
             "       %s info                          version, build and the registered components\n"
@@ -34,6 +37,8 @@ static void usage(FILE *f)
             "\n"
             "  -o OUTDIR   directory for the scene's outputs (default ./out)\n"
             "  -q          quiet: no summary and no progress line, only errors\n"
+            "  -t N, --threads N  threads (OpenMP; default OMP_NUM_THREADS or every core): the\n"
+            "              results are the same to the last bit for any N (docs/parallel.md)\n"
             "  --checkpoint-every T  write a checkpoint every T seconds of simulated time (at the first\n"
             "              step boundary at or after each multiple of T), replacing the previous one\n"
             "  --checkpoint FILE     the checkpoint file (default OUTDIR/checkpoint.bin)\n"
@@ -166,6 +171,7 @@ typedef struct run_opts {
     double ckpt_every;      /* > 0: seconds of simulated time between checkpoints */
     const char *ckpt;       /* the checkpoint file (NULL: OUTDIR/checkpoint.bin) */
     const char *restart;    /* continue from this checkpoint */
+    int threads;            /* -t N (0: OpenMP's default) */
 } run_opts;
 
 static int cmd_run(const char *scene, const run_opts *o)
@@ -196,6 +202,11 @@ static int cmd_run(const char *scene, const run_opts *o)
         fprintf(stderr, "%s: error: %s\n", prog, err);
         return 1;
     }
+    if (o->threads > 0 && (rc = floe_world_set_threads(w, o->threads)) != FLOE_OK) {
+        fprintf(stderr, "%s: error: %s\n", prog, floe_world_last_error(w));
+        floe_world_destroy(w);
+        return 1;
+    }
     if (o->restart) {
         rc = floe_world_checkpoint_load(w, o->restart, pr.hash, label, err, sizeof err);
         if (rc != FLOE_OK) {
@@ -208,6 +219,7 @@ static int cmd_run(const char *scene, const run_opts *o)
     if (!quiet) {
         printf("%s", info.summary);
         printf("output:     %s\n", outdir);
+        if (floe_world_threads(w) > 1) printf("threads:    %d (OpenMP)\n", floe_world_threads(w));
         if (o->restart)
             printf("restart:    %s at t = %g s, step %ld\n", o->restart, floe_world_time(w), floe_world_step_count(w));
         if (pr.every > 0) printf("checkpoint: %s every %g s\n", pr.ckpt, pr.every);
@@ -360,9 +372,13 @@ static int cmd_info(void)
     printf("compiler:    %s\n", __VERSION__);
 #endif
     int feat = floe_mesh_features();
-    printf("features:    CGAL: %s, assimp: %s, CHOLMOD (implicit Newmark): %s, OpenMP: no\n",
+    char omp[64] = "no";
+#ifdef _OPENMP
+    snprintf(omp, sizeof omp, "yes (%d threads by default)", omp_get_max_threads());
+#endif
+    printf("features:    CGAL: %s, assimp: %s, CHOLMOD (implicit Newmark): %s, OpenMP: %s\n",
            feat & FLOE_MESH_HAVE_CGAL ? "yes" : "no", feat & FLOE_MESH_HAVE_ASSIMP ? "yes" : "no",
-           floe_newmark_implicit_available() ? "yes" : "no");
+           floe_newmark_implicit_available() ? "yes" : "no", omp);
     char err[512];
     if (floe_register_builtins(err, sizeof err) != FLOE_OK) {
         fprintf(stderr, "%s: error: %s\n", prog, err);
@@ -506,6 +522,16 @@ int main(int argc, char **argv)
                 outdir = a + 2;
             } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
                 quiet = 1;
+            } else if (!strcmp(a, "-t") || !strcmp(a, "--threads")) {
+                char *end = NULL;
+                long v = i + 1 < argc ? strtol(argv[i + 1], &end, 10) : 0;
+                if (i + 1 >= argc || !end || *end || v < 1 || v > 4096) {
+                    fprintf(stderr, "%s: %s takes a number of threads >= 1 (got '%s')\n", prog, a,
+                            i + 1 < argc ? argv[i + 1] : "");
+                    return 2;
+                }
+                ro.threads = (int)v;
+                i++;
             } else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
                 usage(stdout);
                 return 0;

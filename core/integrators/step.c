@@ -3,7 +3,9 @@
  * (integrators.c), the adaptive controller (adaptive.c), prepare (driver.c) and the
  * step/run loop with the energy watchdog (watchdog.c) call these, never the reverse. */
 #include "integrator_parts.h"
+#include "floe_par.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -218,6 +220,127 @@ static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb) {
  * loop writes it: kinematic particles, whose callbacks see the world, have their own loops),
  * so the compiler keeps a particle's state in registers instead of reloading it after every
  * store to another array. */
+/* velocity Verlet's first half kick and drift of the free particles [i0, i1) (one block,
+ * floe_par.h); returns their body-force work, raises *maxd2 (the largest squared
+ * displacement since the list build) and sets *kin when a kinematic particle is met */
+typedef struct drift_args {
+    double k1, dt, h, g[3];
+    const double *xb; /* positions at the list build (NULL: none) */
+} drift_args;
+static double drift_block(floe_particles *p, const drift_args *a, int i0, int i1, double *maxd2, int *kin) {
+    /* restrict: within this block nothing else writes what they point to */
+    double *restrict X = p->x, *restrict V = p->v, *restrict Q = p->q, *restrict W = p->w, *restrict LL = p->L;
+    const unsigned char *restrict MO = p->motion, *restrict iso = p->iso;
+    const double *restrict F = p->f, *restrict T = p->t, *restrict IM = p->inv_mass, *restrict M = p->mass;
+    const double *restrict II = p->inv_iso, *restrict XB = a->xb;
+    const double k1 = a->k1, dt = a->dt, h = a->h, g0 = a->g[0], g1 = a->g[1], g2 = a->g[2];
+    double wb = 0, md = *maxd2; /* locals: kept in registers */
+    int kn = 0;
+    for (int i = i0; i < i1; i++) {
+        const unsigned char mo = MO[i];
+        if (mo != FLOE_FREE) { kn |= mo == FLOE_KINEMATIC; continue; }
+        double *x = X + 3 * i, *v = V + 3 * i;
+        const double im = IM[i];
+        for (int k = 0; k < 3; k++) v[k] += k1 * im * F[3 * i + k];
+        for (int k = 0; k < 3; k++) x[k] += dt * v[k];
+        if (XB) note_disp(x, XB + 3 * i, &md);
+        /* rotation: L by the half kick, then the orientation over dt (the isotropic fast
+         * path q <- exp(dt omega / 2) q without trig, or the midpoint rule) */
+        floe_v3_axpy(LL + 3 * i, k1, T + 3 * i);
+        if (iso[i]) rotate_drift_iso(Q + 4 * i, LL + 3 * i, W + 3 * i, II[i], h);
+        else if (floe_v3_dot(LL + 3 * i, LL + 3 * i) > 0)
+            rotate_drift_aniso(Q + 4 * i, p->inertia + 3 * i, LL + 3 * i, W + 3 * i, dt);
+        /* body-force work over the step uses the drift displacement (exact for gravity
+         * when the second half adds the same force) */
+        wb += dt * (M[i] * (g0 * v[0] + g1 * v[1] + g2 * v[2]));
+    }
+    *maxd2 = md;
+    *kin |= kn;
+    return wb;
+}
+
+/* the second half kick of the free particles [i0, i1) (leapfrog: their synchronised
+ * velocities' energy only): out = kinetic energy, rotational, the shadow term's isotropic
+ * and general parts; *bad lowered to the first particle that fails the quick checks */
+typedef struct kick_args {
+    double h, dt;
+    int leap, shadow;
+} kick_args;
+static void kick_block(floe_particles *p, const kick_args *a, int i0, int i1, double out[4], int *bad) {
+    double *restrict V = p->v, *restrict W = p->w, *restrict LL = p->L;
+    const double *restrict X = p->x, *restrict R = p->radius;
+    const unsigned char *restrict MO = p->motion, *restrict iso = p->iso;
+    const double *restrict F = p->f, *restrict T = p->t, *restrict IM = p->inv_mass, *restrict M = p->mass;
+    const double *restrict II = p->inv_iso;
+    const double h = a->h, dt = a->dt;
+    const int leap = a->leap, shadow = a->shadow;
+    double kt = 0, kr = 0, sh_iso = 0, sh = 0;
+    int bad_i = *bad;
+    for (int i = i0; i < i1; i++) {
+        if (MO[i] != FLOE_FREE) continue;
+        double *v = V + 3 * i, *L = LL + 3 * i, *om = W + 3 * i;
+        const double *f = F + 3 * i, *t = T + 3 * i;
+        const double im = IM[i];
+        /* the drift of this step was dt * v_half: a particle that moved more than half
+         * its radius, or whose state is not finite (NaN fails every comparison), is
+         * unstable */
+        const double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * dt * dt, lim = 0.5 * R[i];
+        double ke, kre;
+        if (iso[i]) {
+            /* isotropic bodies: omega = L / I, and the shadow term's isotropic case
+             * 1/2 m |h F/m|^2 + 1/2 |h T|^2 / I (times hh2 after the loop) */
+            const double ii = II[i];
+            sh_iso += im * (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]) + ii * (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+            if (!leap) {
+                for (int k = 0; k < 3; k++) v[k] += h * im * f[k];
+                for (int k = 0; k < 3; k++) L[k] += h * t[k];
+                for (int k = 0; k < 3; k++) om[k] = L[k] * ii;
+                ke = 0.5 * M[i] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+                kre = 0.5 * (L[0] * om[0] + L[1] * om[1] + L[2] * om[2]);
+            } else {
+                double vs[3], Ls[3];
+                for (int k = 0; k < 3; k++) {
+                    vs[k] = v[k] + h * im * f[k];
+                    Ls[k] = L[k] + h * t[k];
+                }
+                double ws[3] = {Ls[0] * ii, Ls[1] * ii, Ls[2] * ii};
+                ke = 0.5 * M[i] * floe_v3_dot(vs, vs);
+                kre = 0.5 * floe_v3_dot(Ls, ws);
+            }
+        } else {
+            const double *I = p->inertia + 3 * i, *q = p->q + 4 * i;
+            if (shadow) {
+                double dv[3], dL[3];
+                for (int k = 0; k < 3; k++) { dv[k] = h * im * f[k]; dL[k] = h * t[k]; }
+                sh += shadow_term(p, i, dv, dL);
+            }
+            if (!leap) {
+                for (int k = 0; k < 3; k++) v[k] += h * im * f[k];
+                for (int k = 0; k < 3; k++) L[k] += h * t[k];
+                floe_omega_from_L(q, I, L, om);
+                ke = 0.5 * M[i] * floe_v3_dot(v, v);
+                kre = 0.5 * floe_v3_dot(L, om);
+            } else {
+                double vs[3], Ls[3], ws[3];
+                for (int k = 0; k < 3; k++) {
+                    vs[k] = v[k] + h * im * f[k];
+                    Ls[k] = L[k] + h * t[k];
+                }
+                floe_omega_from_L(q, I, Ls, ws);
+                ke = 0.5 * M[i] * floe_v3_dot(vs, vs);
+                kre = 0.5 * floe_v3_dot(Ls, ws);
+            }
+        }
+        kt += ke;
+        kr += kre;
+        if (!(d2 <= lim * lim) || !(ke + kre < INFINITY) ||
+            !(fabs(X[3 * i]) + fabs(X[3 * i + 1]) + fabs(X[3 * i + 2]) < INFINITY))
+            if (i < bad_i) bad_i = i;
+    }
+    out[0] = kt; out[1] = kr; out[2] = sh_iso; out[3] = sh;
+    *bad = bad_i;
+}
+
 int step_verlet(floe_world *w) {
     floe_particles *p = &w->p;
     const double dt = w->dt, h = 0.5 * dt;
@@ -233,32 +356,23 @@ int step_verlet(floe_world *w) {
     const double g0 = w->def.gravity[0], g1 = w->def.gravity[1], g2 = w->def.gravity[2];
     int kin = 0; /* any kinematic particle */
     if (w->cell) FLOE_TRY(floe_cell_begin_step(w)); /* the cell's velocity gradient of this step */
+    /* threads: blocks of FLOE_PAR_BLOCK particles, their sums added in block order (the same
+     * bits for any number of threads, floe_par.h) */
+    const int B = FLOE_PAR_BLOCK, nb = (n + B - 1) / B, nt = floe_world_loop_threads(w, n);
+    double *red = floe_world_reduce_buf(w, 5 * (size_t)nb);
+    if (nb > 0 && !red) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     /* 1. first half kick + drift (eq 22), rotation by the midpoint rule (eq 23); then the
      * kinematic particles at their prescribed velocity */
     {
-        /* restrict: within this block nothing else writes what they point to */
-        double *restrict X = p->x, *restrict V = p->v, *restrict Q = p->q, *restrict W = p->w, *restrict LL = p->L;
-        const unsigned char *restrict MO = p->motion, *restrict iso = p->iso;
-        const double *restrict F = p->f, *restrict T = p->t, *restrict IM = p->inv_mass, *restrict M = p->mass;
-        const double *restrict II = p->inv_iso, *restrict XB = have_xb ? xb : NULL;
-        for (int i = 0; i < n; i++) {
-            const unsigned char mo = MO[i];
-            if (mo != FLOE_FREE) { kin |= mo == FLOE_KINEMATIC; continue; }
-            double *x = X + 3 * i, *v = V + 3 * i;
-            const double im = IM[i];
-            for (int k = 0; k < 3; k++) v[k] += k1 * im * F[3 * i + k];
-            for (int k = 0; k < 3; k++) x[k] += dt * v[k];
-            if (XB) note_disp(x, XB + 3 * i, &maxd2);
-            /* rotation: L by the half kick, then the orientation over dt (the isotropic fast
-             * path q <- exp(dt omega / 2) q without trig, or the midpoint rule) */
-            floe_v3_axpy(LL + 3 * i, k1, T + 3 * i);
-            if (iso[i]) rotate_drift_iso(Q + 4 * i, LL + 3 * i, W + 3 * i, II[i], h);
-            else if (floe_v3_dot(LL + 3 * i, LL + 3 * i) > 0)
-                rotate_drift_aniso(Q + 4 * i, p->inertia + 3 * i, LL + 3 * i, W + 3 * i, dt);
-            /* body-force work over the step uses the drift displacement (exact for gravity
-             * when the second half adds the same force) */
-            wb += dt * (M[i] * (g0 * v[0] + g1 * v[1] + g2 * v[2]));
-        }
+        const drift_args da = {k1, dt, h, {g0, g1, g2}, have_xb ? xb : NULL};
+        if (nt > 1) {
+            FLOE_OMP(omp parallel for schedule(static) num_threads(nt) reduction(max: maxd2) reduction(|: kin))
+            for (int b = 0; b < nb; b++)
+                red[b] = drift_block(p, &da, b * B, (b + 1) * B < n ? (b + 1) * B : n, &maxd2, &kin);
+        } else
+            for (int b = 0; b < nb; b++)
+                red[b] = drift_block(p, &da, b * B, (b + 1) * B < n ? (b + 1) * B : n, &maxd2, &kin);
+        for (int b = 0; b < nb; b++) wb += red[b];
     }
     if (kin)
         for (int i = 0; i < n; i++) {
@@ -287,80 +401,26 @@ int step_verlet(floe_world *w) {
     double kt = 0, kr = 0, wbound = 0, sh_iso = 0, sh = 0;
     const int shadow = w->def.energy_check != FLOE_CHECK_OFF;
     const double hh2 = 0.5 * h * h;
-    int bad = -1; /* the first free particle that failed the checks below */
+    int bad = INT_MAX; /* the first free particle that failed the checks below */
     {
-        double *restrict V = p->v, *restrict W = p->w, *restrict LL = p->L;
-        const double *restrict X = p->x, *restrict R = p->radius;
-        const unsigned char *restrict MO = p->motion, *restrict iso = p->iso;
-        const double *restrict F = p->f, *restrict T = p->t, *restrict IM = p->inv_mass, *restrict M = p->mass;
-        const double *restrict II = p->inv_iso;
-        for (int i = 0; i < n; i++) {
-            if (MO[i] != FLOE_FREE) continue;
-            double *v = V + 3 * i, *L = LL + 3 * i, *om = W + 3 * i;
-            const double *f = F + 3 * i, *t = T + 3 * i;
-            const double im = IM[i];
-            /* the drift of this step was dt * v_half: a particle that moved more than half
-             * its radius, or whose state is not finite (NaN fails every comparison), is
-             * unstable */
-            const double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * dt * dt, lim = 0.5 * R[i];
-            double ke, kre;
-            if (iso[i]) {
-                /* isotropic bodies: omega = L / I, and the shadow term's isotropic case
-                 * 1/2 m |h F/m|^2 + 1/2 |h T|^2 / I (times hh2 after the loop) */
-                const double ii = II[i];
-                sh_iso += im * (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]) + ii * (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
-                if (!leap) {
-                    for (int k = 0; k < 3; k++) v[k] += h * im * f[k];
-                    for (int k = 0; k < 3; k++) L[k] += h * t[k];
-                    for (int k = 0; k < 3; k++) om[k] = L[k] * ii;
-                    ke = 0.5 * M[i] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-                    kre = 0.5 * (L[0] * om[0] + L[1] * om[1] + L[2] * om[2]);
-                } else {
-                    double vs[3], Ls[3];
-                    for (int k = 0; k < 3; k++) {
-                        vs[k] = v[k] + h * im * f[k];
-                        Ls[k] = L[k] + h * t[k];
-                    }
-                    double ws[3] = {Ls[0] * ii, Ls[1] * ii, Ls[2] * ii};
-                    ke = 0.5 * M[i] * floe_v3_dot(vs, vs);
-                    kre = 0.5 * floe_v3_dot(Ls, ws);
-                }
-            } else {
-                const double *I = p->inertia + 3 * i, *q = p->q + 4 * i;
-                if (shadow) {
-                    double dv[3], dL[3];
-                    for (int k = 0; k < 3; k++) { dv[k] = h * im * f[k]; dL[k] = h * t[k]; }
-                    sh += shadow_term(p, i, dv, dL);
-                }
-                if (!leap) {
-                    for (int k = 0; k < 3; k++) v[k] += h * im * f[k];
-                    for (int k = 0; k < 3; k++) L[k] += h * t[k];
-                    floe_omega_from_L(q, I, L, om);
-                    ke = 0.5 * M[i] * floe_v3_dot(v, v);
-                    kre = 0.5 * floe_v3_dot(L, om);
-                } else {
-                    double vs[3], Ls[3], ws[3];
-                    for (int k = 0; k < 3; k++) {
-                        vs[k] = v[k] + h * im * f[k];
-                        Ls[k] = L[k] + h * t[k];
-                    }
-                    floe_omega_from_L(q, I, Ls, ws);
-                    ke = 0.5 * M[i] * floe_v3_dot(vs, vs);
-                    kre = 0.5 * floe_v3_dot(Ls, ws);
-                }
-            }
-            kt += ke;
-            kr += kre;
-            if (!(d2 <= lim * lim) || !(ke + kre < INFINITY) ||
-                !(fabs(X[3 * i]) + fabs(X[3 * i + 1]) + fabs(X[3 * i + 2]) < INFINITY))
-                if (bad < 0) bad = i;
+        const kick_args ka = {h, dt, leap, shadow};
+        if (nt > 1) {
+            FLOE_OMP(omp parallel for schedule(static) num_threads(nt) reduction(min: bad))
+            for (int b = 0; b < nb; b++)
+                kick_block(p, &ka, b * B, (b + 1) * B < n ? (b + 1) * B : n, red + 4 * (size_t)b, &bad);
+        } else
+            for (int b = 0; b < nb; b++)
+                kick_block(p, &ka, b * B, (b + 1) * B < n ? (b + 1) * B : n, red + 4 * (size_t)b, &bad);
+        for (int b = 0; b < nb; b++) {
+            const double *rb = red + 4 * (size_t)b;
+            kt += rb[0]; kr += rb[1]; sh_iso += rb[2]; sh += rb[3];
         }
     }
     if (kin)
         for (int i = 0; i < n; i++)
             if (motion[i] == FLOE_KINEMATIC) wbound += kinematic_close(w, i, h);
     /* a particle failed the quick test: the checks with the message, from the first one on */
-    for (int i = bad; i >= 0 && i < n; i++) {
+    for (int i = bad; i < n; i++) {
         if (motion[i] != FLOE_FREE) continue;
         double xold[3];
         for (int k = 0; k < 3; k++) xold[k] = p->x[3 * i + k] - dt * (p->v[3 * i + k] - k2 * p->inv_mass[i] * p->f[3 * i + k]);

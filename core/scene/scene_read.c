@@ -1,6 +1,7 @@
 /* scene_read.c - the scene loader's reading helpers: errors at file:line:col, YAML nodes,
  * numbers, names, vectors, schema-driven parameters (floe_registry.h) and the packing RNG. */
 #include "scene_read.h"
+#include "floe_par.h"
 
 static long sc_pos(const sc *s, struct fy_node *n);
 static int sc_loc_pos(const sc *s, long pos, int *line, int *col);
@@ -631,7 +632,8 @@ double sc_mem_estimate(const sc *s, double more_particles)
     double bonds = 0;
     for (int b = 0; s->w && b < s->w->npd; b++) bonds += (double)s->w->pd[b]->nbond;
     double n = (s->w ? (double)s->w->p.n : 0.0) + more_particles;
-    return SC_BYTES_BASE + n * SC_BYTES_PER_PARTICLE + bonds * SC_BYTES_PER_BOND;
+    const double per = SC_BYTES_PER_PARTICLE + (floe_par_max_threads() > 1 ? SC_BYTES_PER_PARTICLE_THREADS : 0.0);
+    return SC_BYTES_BASE + n * per + bonds * SC_BYTES_PER_BOND;
 }
 
 /* refuse `more` particles (or the scene so far, more = 0) beyond the machine's memory */

@@ -51,6 +51,9 @@
 #define SC_BYTES_BASE 16.0e6
 #define SC_BYTES_PER_PARTICLE 700.0
 #define SC_BYTES_PER_BOND 40.0
+/* with threads (OpenMP's default above one): the contact stage's per-entry forces and the
+ * particles' entry lists (docs/parallel.md), 81 B per list entry, ~3-6 entries per particle */
+#define SC_BYTES_PER_PARTICLE_THREADS 300.0
 
 
 /* ------------------------------------------------------------------------------------ */

@@ -344,6 +344,15 @@ floe_energy floe_world_energy(const floe_world *w);
 /* Relative error of the balance initial + work = current + dissipated. */
 double floe_world_energy_balance_error(const floe_world *w);
 
+/* Threads (OpenMP; docs/parallel.md): the number of threads the world's loops use (0: the
+ * OpenMP default, OMP_NUM_THREADS or every core; 1: serial). Results are the same to the last
+ * bit for any number (contact laws, geometries and motion callbacks must then be safe to call
+ * from several threads at once: the built-in ones are). Built without OpenMP
+ * (FLOE_WITH_OPENMP=OFF) a request above 1 is FLOE_ENOTSUP. floe_world_threads: the number
+ * in use. */
+int floe_world_set_threads(floe_world *w, int nthreads);
+int floe_world_threads(const floe_world *w);
+
 /* Energy watchdog (floe_energy_check_mode above): set the mode and tolerance (tol 0 = the
  * default 0.05; FLOE_EINVAL for a mode out of range or tol not in [0, 1)), and its state. */
 int floe_world_set_energy_check(floe_world *w, int mode, double tol);

@@ -6,6 +6,8 @@
 #include "floe_pd.h"
 #include "beam_set.h"
 #include "floe_provider.h"
+#include "floe_par.h"
+#include <limits.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -31,13 +33,6 @@ static int push_contact(floe_world *w, const floe_contact *c, const floe_contact
     return FLOE_OK;
 }
 
-/* Energy watchdog: a contact (i, j) that received the work d (J) since it began (its
- * dissipation plus its stored energy); the most negative of this evaluation and of the run
- * are kept for core/world/world.c energy_watchdog. */
-static void life_dissipation(floe_world *w, int i, int j, double d) {
-    if (d < w->wd_pair_min) { w->wd_pair_min = d; w->wd_pair_i = i; w->wd_pair_j = j; }
-    if (d < w->wd_worst) { w->wd_worst = d; w->wd_worst_i = i; w->wd_worst_j = j; }
-}
 
 /* The springs of a contact manifold's extra vertices (floe_contact.h): the law's elastic
  * force and energy at each vertex's depth (a call with no relative motion, no history and
@@ -196,10 +191,17 @@ static int body_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx
     floe_particles *p = ctx->p;
     const int n = p->n;
     const int stepping = ctx->stepping;
-    for (int i = 0; i < n; i++) {
-        if (p->motion[i] != FLOE_FREE) continue;
-        for (int k = 0; k < 3; k++) p->f[3 * i + k] = p->mass[i] * w->def.gravity[k];
-    }
+    const int nt = floe_world_loop_threads(w, n);
+    const double g[3] = {w->def.gravity[0], w->def.gravity[1], w->def.gravity[2]};
+    if (nt > 1) {
+        FLOE_OMP(omp parallel for schedule(static) num_threads(nt))
+        for (int i = 0; i < n; i++)
+            if (p->motion[i] == FLOE_FREE)
+                for (int k = 0; k < 3; k++) p->f[3 * i + k] = p->mass[i] * g[k];
+    } else
+        for (int i = 0; i < n; i++)
+            if (p->motion[i] == FLOE_FREE)
+                for (int k = 0; k < 3; k++) p->f[3 * i + k] = p->mass[i] * g[k];
     /* PD boundary regions: the external force b V of body-force regions (ParticLS eq 37),
      * its work booked like the body-force callback's (core/world/world.c floe_pd_bc_forces) */
     if (w->npd_bc) {
@@ -301,10 +303,44 @@ const floe_provider_class floe_beam_provider_class = {
 /* ---- provider "contacts": every pair of the neighbour list through detection and the
  * law of its materials (ParticLS eqs 15-20; the manifold of polytope pairs) ---- */
 /* What the pair evaluations add up (contact_stage), and what they share. */
-typedef struct stage_acc {
+struct stage_acc {
     double eta_d, elastic, diss, wgrow;
     double vir[9], kdiag[9]; /* periodic cell: sum l (x) F, and k_n (n_a l_b)^2 for the servo */
-} stage_acc;
+    /* energy watchdog: the contact (wd_i, wd_j) that received the most negative work since it
+     * began (its dissipation plus its stored energy; the first such, 0 if none), for
+     * core/integrators/watchdog.c */
+    double wd_min; int wd_i, wd_j;
+    long ncontacts;          /* contacts counted (not recorded) */
+    /* threads: each entry's force on i and torque increments of i and j go to pf (9 per
+     * entry, act[k] = 1), gathered per particle afterwards; NULL: added to p->f, p->t */
+    double *pf;
+    unsigned char *act;
+};
+typedef struct stage_acc stage_acc;
+
+/* the work d a contact (i, j) received since it began (the watchdog's) */
+static inline void acc_life(stage_acc *acc, int i, int j, double d) {
+    if (d < acc->wd_min) { acc->wd_min = d; acc->wd_i = i; acc->wd_j = j; }
+}
+
+/* entry k's force F on i (-F on j) and torque increments ti, tj, added as a serial loop adds
+ * them (threads: stored for the gather, which adds them in the same order) */
+static inline __attribute__((always_inline)) void pair_apply(floe_particles *p, stage_acc *acc, int k, int i, int j,
+                                                             const double F[3], const double ti[3], const double tj[3]) {
+    if (acc->pf) {
+        double *b = acc->pf + 9 * (size_t)k;
+        for (int a = 0; a < 3; a++) { b[a] = F[a]; b[3 + a] = ti[a]; b[6 + a] = tj[a]; }
+        acc->act[k] = 1;
+        return;
+    }
+    double *fi = p->f + 3 * i, *fj = p->f + 3 * j, *Ti = p->t + 3 * i, *Tj = p->t + 3 * j;
+    for (int a = 0; a < 3; a++) {
+        fi[a] += F[a];
+        fj[a] -= F[a];
+        Ti[a] += ti[a];
+        Tj[a] += tj[a];
+    }
+}
 typedef struct stage_env {
     floe_particles *p;
     floe_neighbor_list *nl;
@@ -397,7 +433,7 @@ static inline void pair_release(floe_world *w, const floe_particles *p, floe_nei
         }
         double dk = hist[FLOE_ENERGY_SLOT] - 0.5 * floe_v3_dot(hist + FLOE_FORCE_SLOT, vr) * w->dt;
         acc->diss += dk;
-        life_dissipation(w, i, j, hist[FLOE_DISS_SLOT] + dk);
+        acc_life(acc, i, j, hist[FLOE_DISS_SLOT] + dk);
     }
     memset(hist, 0, FLOE_MAX_HISTORY * sizeof(double));
     nl->touching[k] = 0;
@@ -477,11 +513,11 @@ static inline __attribute__((always_inline)) int pair_book(floe_world *w, const 
          * stored energy: negative when it gave back more than it took (robust to a law
          * whose stored energy is not the potential of its force) */
         double wk = hist[FLOE_DISS_SLOT] + res->energy;
-        if (wk < w->wd_pair_min) life_dissipation(w, i, j, wk);
+        acc_life(acc, i, j, wk);
     }
     hist[FLOE_ENERGY_SLOT] = res->energy;
     memcpy(hist + FLOE_FORCE_SLOT, res->force, 3 * sizeof(double));
-    if (!ctx->record) w->ncontacts++;
+    if (!ctx->record) acc->ncontacts++;
     else {
         /* one record per pair: the manifold's springs in its force (the stress observer's
          * branch vector between centres needs the total only) */
@@ -663,25 +699,24 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     } else {
         hist[FLOE_TWIST_SLOT] = 0.0;
     }
-    double ti[3], tj[3];
+    double ti[3], tj[3], F[3], Ti[3], Tj[3];
     floe_v3_cross(ti, ri, res.force);
     floe_v3_cross(tj, rj, res.force);
     for (int a = 0; a < 3; a++) {
-        p->f[3 * i + a] += res.force[a];
-        p->f[3 * j + a] -= res.force[a];
-        p->t[3 * i + a] += ti[a] + res.torque_i[a];
-        p->t[3 * j + a] += -tj[a] + res.torque_j[a];
+        F[a] = res.force[a];
+        Ti[a] = ti[a] + res.torque_i[a];
+        Tj[a] = -tj[a] + res.torque_j[a];
     }
     if (c.nextra > 0)
         for (int a = 0; a < 3; a++) {
             /* the manifold's springs: conservative, their energy is stored, nothing
              * dissipated (their work over a step is the change of their energy up to the
              * integrator's error, which the balance shows) */
-            p->f[3 * i + a] += fx[a];
-            p->f[3 * j + a] -= fx[a];
-            p->t[3 * i + a] += tx_i[a];
-            p->t[3 * j + a] += tx_j[a];
+            F[a] += fx[a];
+            Ti[a] += tx_i[a];
+            Tj[a] += tx_j[a];
         }
+    pair_apply(p, acc, k, i, j, F, Ti, Tj);
     return pair_book(w, ctx, env, i, j, &c, &res, fx, ex, hist, acc, xb);
 }
 
@@ -740,18 +775,188 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
     int rc = law->klass->force(law, &c, hist, &res);
     if (rc) return pair_law_failed(w, law, rc, i, j, &c);
     hist[FLOE_TWIST_SLOT] = 0.0;
-    double ti[3], tj[3];
+    double ti[3], tj[3], Ti[3], Tj[3];
     floe_v3_cross(ti, ri, res.force);
     floe_v3_cross(tj, rj, res.force);
-    double *fi = p->f + 3 * i, *fj = p->f + 3 * j, *Ti = p->t + 3 * i, *Tj = p->t + 3 * j;
     for (int a = 0; a < 3; a++) {
-        fi[a] += res.force[a];
-        fj[a] -= res.force[a];
-        Ti[a] += ti[a] + res.torque_i[a];
-        Tj[a] += -tj[a] + res.torque_j[a];
+        Ti[a] = ti[a] + res.torque_i[a];
+        Tj[a] = -tj[a] + res.torque_j[a];
     }
+    pair_apply(p, acc, k, i, j, res.force, Ti, Tj);
     const double zero[3] = {0, 0, 0};
     return pair_book(w, ctx, env, i, j, &c, &res, zero, 0.0, hist, acc, xb);
+}
+
+/* One block of entries [k0, k1): the entries whose bounding spheres may touch go to cand
+ * (the block's own part of the list's scratch), then each through its evaluation. */
+static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env *env, int k0, int k1, int *cand,
+                       stage_acc *acc) {
+    const floe_neighbor_list *nl = env->nl;
+    const floe_particles *p = env->p;
+    const int *pi = nl->pi, *pj = nl->pj;
+    const unsigned char *touching = nl->touching;
+    const double *x = p->x, *rad = p->radius;
+    int nc = 0;
+    if (env->any_pieces || nl->use_warm)
+        for (int k = k0; k < k1; k++) cand[nc++] = k;
+    else if (env->img)
+        for (int k = k0; k < k1; k++) {
+            /* periodic cell: the same test with j's image */
+            const int i = pi[k], j = pj[k];
+            double xs[3];
+            const double *xj = pair_image(env, k, x + 3 * j, xs);
+            const double dx = xj[0] - x[3 * i], dy = xj[1] - x[3 * i + 1], dz = xj[2] - x[3 * i + 2];
+            const double rs = rad[i] + rad[j];
+            const int apart = (rs < INFINITY) & (dx * dx + dy * dy + dz * dz >= rs * rs) & !touching[k];
+            cand[nc] = k;
+            nc += !apart;
+        }
+    else
+        for (int k = k0; k < k1; k++) {
+            /* most entries of a loose packing: two bounding spheres apart, untouched before;
+             * nothing to do. Without a branch: in a dense bed half the entries touch, at
+             * random, and a mispredicted branch per entry cost more than the test */
+            const int i = pi[k], j = pj[k];
+            const double dx = x[3 * j] - x[3 * i], dy = x[3 * j + 1] - x[3 * i + 1], dz = x[3 * j + 2] - x[3 * i + 2];
+            const double rs = rad[i] + rad[j];
+            const int apart = (rs < INFINITY) & (dx * dx + dy * dy + dz * dz >= rs * rs) & !touching[k];
+            cand[nc] = k;
+            nc += !apart;
+        }
+    /* spheres under a point law: the lean body (sphere_pair); every other entry the general one */
+    const unsigned char *kind = p->kind;
+    if (!env->any_pieces && !env->any_overlap && !env->any_floe)
+        for (int q = 0; q < nc; q++) {
+            const int k = cand[q];
+            if (kind[pi[k]] == FLOE_GEOM_SPHERE && kind[pj[k]] == FLOE_GEOM_SPHERE) FLOE_TRY(sphere_pair(w, ctx, env, k, acc));
+            else FLOE_TRY(contact_pair(w, ctx, env, k, acc));
+        }
+    else
+        for (int q = 0; q < nc; q++) FLOE_TRY(contact_pair(w, ctx, env, cand[q], acc));
+    return FLOE_OK;
+}
+
+/* a block's sums into the stage's, in block order (the same for any number of threads) */
+static void acc_merge(floe_world *w, stage_acc *tot, const stage_acc *a) {
+    if (a->eta_d > tot->eta_d) tot->eta_d = a->eta_d;
+    tot->elastic += a->elastic;
+    tot->diss += a->diss;
+    tot->wgrow += a->wgrow;
+    for (int q = 0; q < 9; q++) {
+        tot->vir[q] += a->vir[q];
+        tot->kdiag[q] += a->kdiag[q];
+    }
+    tot->ncontacts += a->ncontacts;
+    if (a->wd_min < w->wd_pair_min) { w->wd_pair_min = a->wd_min; w->wd_pair_i = a->wd_i; w->wd_pair_j = a->wd_j; }
+    if (a->wd_min < w->wd_worst) { w->wd_worst = a->wd_min; w->wd_worst_i = a->wd_i; w->wd_worst_j = a->wd_j; }
+}
+
+static int grow(void **ptr, size_t need, size_t *cap, size_t size) {
+    if (need <= *cap) return 0;
+    void *t = realloc(*ptr, need * size);
+    if (!t) return -1;
+    *ptr = t;
+    *cap = need;
+    return 0;
+}
+
+/* the buffers for nt threads, nb blocks, the list's entries and n particles; the particles'
+ * entries rebuilt after each list build */
+static int par_prepare(floe_world *w, int nt, int nb) {
+    const floe_neighbor_list *nl = &w->nl;
+    const int n = w->p.n, npairs = nl->npairs;
+    if (!w->par && !(w->par = calloc(1, sizeof *w->par))) return FLOE_ENOMEM;
+    floe_par_scratch *ps = w->par;
+    if (grow((void **)&ps->pf, (size_t)(npairs ? npairs : 1) * 9, &ps->pf_cap, sizeof(double)) ||
+        grow((void **)&ps->act, (size_t)(npairs ? npairs : 1), &ps->act_cap, 1))
+        return FLOE_ENOMEM;
+    if (nb > ps->blk_cap) {
+        stage_acc *t = realloc(ps->blk, (size_t)nb * sizeof *t);
+        if (!t) return FLOE_ENOMEM;
+        ps->blk = t;
+        ps->blk_cap = nb;
+    }
+    if (nt > ps->ndet) {
+        floe_detect_state *d = realloc(ps->det, (size_t)nt * sizeof *d);
+        if (!d) return FLOE_ENOMEM;
+        memset(d + ps->ndet, 0, (size_t)(nt - ps->ndet) * sizeof *d);
+        ps->det = d;
+        ps->ndet = nt;
+    }
+    if (nt > ps->nerr) {
+        char(*e)[1024] = realloc(ps->err, (size_t)nt * sizeof *e);
+        if (e) ps->err = e;
+        int *fb = e ? realloc(ps->fail_b, (size_t)nt * sizeof *fb) : NULL;
+        if (fb) ps->fail_b = fb;
+        int *fr = fb ? realloc(ps->fail_rc, (size_t)nt * sizeof *fr) : NULL;
+        if (!fr) return FLOE_ENOMEM;
+        ps->fail_rc = fr;
+        ps->nerr = nt;
+    }
+    if (ps->adj_gen != nl->gen || ps->adj_np != n || !ps->adj_off) {
+        int *off = realloc(ps->adj_off, (size_t)(n + 1) * sizeof *off);
+        if (!off) return FLOE_ENOMEM;
+        ps->adj_off = off;
+        size_t need = 2 * (size_t)npairs, c2 = ps->adj_cap;
+        if (grow((void **)&ps->adj, need ? need : 1, &c2, sizeof(int))) return FLOE_ENOMEM;
+        ps->adj_cap = c2;
+        memset(off, 0, (size_t)(n + 1) * sizeof *off);
+        for (int k = 0; k < npairs; k++) { off[nl->pi[k] + 1]++; off[nl->pj[k] + 1]++; }
+        for (int i = 0; i < n; i++) off[i + 1] += off[i];
+        for (int k = 0; k < npairs; k++) { /* filled in list order: a particle's entries ascend */
+            ps->adj[off[nl->pi[k]]++] = 2 * k;
+            ps->adj[off[nl->pj[k]]++] = 2 * k + 1;
+        }
+        for (int i = n; i > 0; i--) off[i] = off[i - 1];
+        off[0] = 0;
+        ps->adj_gen = nl->gen;
+        ps->adj_np = n;
+    }
+    for (int t = 0; t < nt; t++) { /* the detection statistics of this evaluation, per thread */
+        floe_detect_state *d = &ps->det[t];
+        double *sc = d->scratch;
+        int scap = d->scratch_cap;
+        memset(d, 0, sizeof *d);
+        d->admm = w->det.admm;
+        d->scratch = sc;
+        d->scratch_cap = scap;
+        d->cur_i = -1;
+        ps->fail_b[t] = INT_MAX;
+        ps->fail_rc[t] = 0;
+    }
+    return FLOE_OK;
+}
+
+/* the threads' detection statistics into the world's, as one thread would have left them */
+static void par_merge_detect(floe_world *w, int nt) {
+    floe_detect_state *W = &w->det;
+    const long nonconv0 = W->nonconverged;
+    for (int t = 0; t < nt; t++) {
+        const floe_detect_state *d = &w->par->det[t];
+        W->calls += d->calls;
+        W->iterations += d->iterations;
+        W->admm_calls += d->admm_calls;
+        W->lp_calls += d->lp_calls;
+        W->separated += d->separated;
+        W->nonconverged += d->nonconverged;
+        for (int q = 0; q < FLOE_DETECT_HIST; q++) W->hist[q] += d->hist[q];
+    }
+    if (nonconv0 == 0) /* the first non-converged pair: of the first thread (block) that met one */
+        for (int t = 0; t < nt; t++) {
+            const floe_detect_state *d = &w->par->det[t];
+            if (d->nonconverged > 0) {
+                W->first_bad_i = d->first_bad_i;
+                W->first_bad_j = d->first_bad_j;
+                W->first_bad_step = d->first_bad_step;
+                break;
+            }
+        }
+    for (int t = nt - 1; t >= 0; t--) /* the last pair detected: of the last thread that did */
+        if (w->par->det[t].cur_i >= 0) {
+            W->cur_i = w->par->det[t].cur_i;
+            W->cur_j = w->par->det[t].cur_j;
+            break;
+        }
 }
 
 static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, floe_provider_out *out) {
@@ -759,10 +964,8 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     floe_particles *p = ctx->p;
     const int stepping = ctx->stepping; /* 0 at prepare and at the RK2 probe: no work booked */
     const int track = ctx->track_depth;
-    double eta_d = 0;
     w->ncontacts = 0;
     if (stepping) w->wd_pair_min = 0; /* the watchdog's worst contact of this evaluation */
-    double elastic = out->elastic, diss = out->dissipated, wgrow = out->work_boundary;
     const int any_growth = w->nstates > 0; /* only state objects set rdot */
     floe_neighbor_list *nl = &w->nl;
     const int nm = w->nmats;
@@ -783,72 +986,98 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     if (w->pieces_seen > w->ngeoms) w->pieces_seen = w->any_pieces = 0; /* geometries taken back */
     for (; w->pieces_seen < w->ngeoms; w->pieces_seen++) w->any_pieces |= floe_piece_count(w->geoms[w->pieces_seen]) > 1;
     const int any_pieces = w->any_pieces;
-    stage_acc acc = {eta_d, elastic, diss, wgrow, {0}, {0}};
     const stage_env env = {p,         nl,         &dctx,       stepping, track,
                            any_growth, nm,        any_none,    any_pieces, any_overlap,
                            any_floe,  w->def.dim == 2 && any_overlap, w->cell, w->cell ? nl->img : NULL};
-    const int *pi = nl->pi, *pj = nl->pj;
-    const unsigned char *touching = nl->touching;
-    const double *x = p->x, *rad = p->radius;
-    const int use_warm = nl->use_warm;
     if (nl->npairs > nl->cand_cap) {
         int *c = realloc(nl->cand, (size_t)nl->npairs * sizeof *c);
         if (!c) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
         nl->cand = c;
         nl->cand_cap = nl->npairs;
     }
-    int *cand = nl->cand, nc = 0;
-    const int npairs = nl->npairs;
-    if (any_pieces || use_warm)
-        for (int k = 0; k < npairs; k++) cand[nc++] = k;
-    else if (env.img)
-        for (int k = 0; k < npairs; k++) {
-            /* periodic cell: the same test with j's image */
-            const int i = pi[k], j = pj[k];
-            double xs[3];
-            const double *xj = pair_image(&env, k, x + 3 * j, xs);
-            const double dx = xj[0] - x[3 * i], dy = xj[1] - x[3 * i + 1], dz = xj[2] - x[3 * i + 2];
-            const double rs = rad[i] + rad[j];
-            const int apart = (rs < INFINITY) & (dx * dx + dy * dy + dz * dz >= rs * rs) & !touching[k];
-            cand[nc] = k;
-            nc += !apart;
+    /* blocks of FLOE_PAR_BLOCK entries, their sums added in block order: one thread or many,
+     * the same bits (floe_par.h); recording the contacts keeps one thread (their order) */
+    const int npairs = nl->npairs, B = FLOE_PAR_BLOCK, nb = (npairs + B - 1) / B;
+    int nt = ctx->record ? 1 : floe_world_loop_threads(w, npairs);
+    if (nt > nb) nt = nb;
+    stage_acc tot;
+    memset(&tot, 0, sizeof tot);
+    if (nt <= 1) {
+        for (int b = 0; b < nb; b++) {
+            stage_acc a;
+            memset(&a, 0, sizeof a);
+            const int k0 = b * B, k1 = k0 + B < npairs ? k0 + B : npairs;
+            FLOE_TRY(stage_block(w, ctx, &env, k0, k1, nl->cand + k0, &a));
+            acc_merge(w, &tot, &a);
         }
-    else
-        for (int k = 0; k < npairs; k++) {
-            /* most entries of a loose packing: two bounding spheres apart, untouched before;
-             * nothing to do. Without a branch: in a dense bed half the entries touch, at
-             * random, and a mispredicted branch per entry cost more than the test */
-            const int i = pi[k], j = pj[k];
-            const double dx = x[3 * j] - x[3 * i], dy = x[3 * j + 1] - x[3 * i + 1], dz = x[3 * j + 2] - x[3 * i + 2];
-            const double rs = rad[i] + rad[j];
-            const int apart = (rs < INFINITY) & (dx * dx + dy * dy + dz * dz >= rs * rs) & !touching[k];
-            cand[nc] = k;
-            nc += !apart;
+    } else {
+        if (par_prepare(w, nt, nb)) return floe_world_error(w, FLOE_ENOMEM, "out of memory (threads' buffers)");
+        floe_par_scratch *ps = w->par;
+        FLOE_OMP(omp parallel num_threads(nt))
+        {
+            const int t = floe_par_thread();
+            stage_env te = env;
+            floe_detect_ctx td = {w->def.dim, w->step, &ps->det[t]};
+            te.dctx = &td;
+            floe_world_error_to(ps->err[t], sizeof ps->err[t]);
+            int failed = 0;
+            FLOE_OMP(omp for schedule(static))
+            for (int b = 0; b < nb; b++) {
+                if (failed) continue; /* this thread's first error is the one its blocks met first */
+                stage_acc *a = &ps->blk[b];
+                memset(a, 0, sizeof *a);
+                a->pf = ps->pf;
+                a->act = ps->act;
+                const int k0 = b * B, k1 = k0 + B < npairs ? k0 + B : npairs;
+                memset(ps->act + k0, 0, (size_t)(k1 - k0));
+                int rc = stage_block(w, ctx, &te, k0, k1, nl->cand + k0, a);
+                if (rc) {
+                    failed = 1;
+                    ps->fail_b[t] = b;
+                    ps->fail_rc[t] = rc;
+                }
+            }
+            floe_world_error_to(NULL, 0);
         }
-    /* spheres under a point law: the lean body (sphere_pair); every other entry the general one */
-    const unsigned char *kind = p->kind;
-    if (!any_pieces && !any_overlap && !any_floe)
-        for (int q = 0; q < nc; q++) {
-            const int k = cand[q];
-            if (kind[pi[k]] == FLOE_GEOM_SPHERE && kind[pj[k]] == FLOE_GEOM_SPHERE) FLOE_TRY(sphere_pair(w, ctx, &env, k, &acc));
-            else FLOE_TRY(contact_pair(w, ctx, &env, k, &acc));
+        par_merge_detect(w, nt);
+        int tf = -1; /* the error a serial run meets first: of the lowest failed block */
+        for (int t = 0; t < nt; t++)
+            if (ps->fail_rc[t] && (tf < 0 || ps->fail_b[t] < ps->fail_b[tf])) tf = t;
+        if (tf >= 0) {
+            memcpy(w->err, ps->err[tf], sizeof w->err);
+            w->err[sizeof w->err - 1] = 0;
+            return ps->fail_rc[tf];
         }
-    else
-        for (int q = 0; q < nc; q++) FLOE_TRY(contact_pair(w, ctx, &env, cand[q], &acc));
-    eta_d = acc.eta_d;
-    elastic = acc.elastic;
-    diss = acc.diss;
-    wgrow = acc.wgrow;
-
-    w->eta_depth = eta_d;
+        for (int b = 0; b < nb; b++) acc_merge(w, &tot, &ps->blk[b]);
+        /* each particle's forces, in list order as one thread adds them (pair_apply) */
+        const int n = p->n, *off = ps->adj_off, *adj = ps->adj;
+        const double *pf = ps->pf;
+        const unsigned char *act = ps->act;
+        double *f = p->f, *tq = p->t;
+        FLOE_OMP(omp parallel for schedule(static) num_threads(nt))
+        for (int i = 0; i < n; i++) {
+            const int e1 = off[i + 1];
+            for (int e = off[i]; e < e1; e++) {
+                const int k = adj[e] >> 1;
+                if (!act[k]) continue;
+                const double *bk = pf + 9 * (size_t)k;
+                if (adj[e] & 1)
+                    for (int a = 0; a < 3; a++) { f[3 * i + a] -= bk[a]; tq[3 * i + a] += bk[6 + a]; }
+                else
+                    for (int a = 0; a < 3; a++) { f[3 * i + a] += bk[a]; tq[3 * i + a] += bk[3 + a]; }
+            }
+        }
+    }
+    w->ncontacts += (int)tot.ncontacts;
+    w->eta_depth = tot.eta_d;
     if (w->cell && !ctx->probe) {
-        memcpy(w->cell->virial, acc.vir, sizeof acc.vir);
-        memcpy(w->cell->kdiag, acc.kdiag, sizeof acc.kdiag);
+        memcpy(w->cell->virial, tot.vir, sizeof tot.vir);
+        memcpy(w->cell->kdiag, tot.kdiag, sizeof tot.kdiag);
         w->cell->valid = 1;
     }
-    out->elastic = elastic;
-    out->dissipated = diss;
-    out->work_boundary = wgrow;
+    out->elastic += tot.elastic;
+    out->dissipated += tot.diss;
+    out->work_boundary += tot.wgrow;
     return FLOE_OK;
 }
 

@@ -114,6 +114,7 @@ static uint64_t entry_hash(uint64_t key, int sub, int img) {
 
 int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int leaf_size) {
     int n = p->n;
+    nl->gen++;
     /* keep the history of touching pairs */
     int nold = 0;
     uint64_t *okeys = NULL;

@@ -110,6 +110,11 @@ int floe_world_memory(const floe_world *w, floe_memory_stats *o) {
                    (p->thick ? (size_t)p->cap * sizeof(double) : 0);
     o->neighbor_list = (size_t)nl->cap * per_pair + (size_t)nl->n_build * 4 * sizeof(double) +
                        (size_t)nl->nwalls * (sizeof(int) + 4 * sizeof(double)) + (size_t)nl->scratch_cap * sizeof(int);
+    /* threads: the contact stage's per-entry forces, flags and the particles' entry lists
+     * (forces.c par_prepare), once the list is large enough to be threaded */
+    if (floe_world_loop_threads(w, nl->cap) > 1)
+        o->neighbor_list += (size_t)nl->cap * (9 * sizeof(double) + 1 + 2 * sizeof(int)) +
+                            (size_t)p->cap * sizeof(int);
     o->contacts = (size_t)w->contacts_cap * sizeof(floe_contact_info);
     return FLOE_OK;
 }

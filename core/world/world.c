@@ -6,6 +6,7 @@
  * folder: it calls none of them. The driver (prepare, step, run, the integrators, the
  * energy watchdog) is the layer above: core/integrators (docs/architecture.md). */
 #include "world_internal.h"
+#include "floe_par.h"
 #include "floe_pd.h"
 #include "beam_set.h"
 #include "floe_provider.h"
@@ -16,10 +17,19 @@
 #include "world_parts.h"
 #include "error_text.h"
 
+/* a threaded stage's per-thread error buffer (floe_world_error_to) */
+static _Thread_local char *err_to;
+static _Thread_local size_t err_to_len;
+void floe_world_error_to(char *buf, size_t len) {
+    err_to = buf;
+    err_to_len = buf ? len : 0;
+}
+
 int floe_world_error(floe_world *w, int code, const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);
-    floe_error_vset(w->err, sizeof w->err, code, fmt, ap);
+    if (err_to) floe_error_vset(err_to, err_to_len, code, fmt, ap);
+    else floe_error_vset(w->err, sizeof w->err, code, fmt, ap);
     va_end(ap);
     return code;
 }
@@ -98,7 +108,44 @@ floe_world *floe_world_create(const floe_world_def *def, char *err, size_t errle
     w->dt_cap = INFINITY;
     if (!(w->def.energy_check_tol > 0)) w->def.energy_check_tol = 0.05;
     w->wd_step = -1;
+    w->par_grain = 2048;
     return w;
+}
+
+int floe_world_set_threads(floe_world *w, int nthreads) {
+    if (nthreads < 0) return floe_world_error(w, FLOE_EINVAL, "threads: %d (0 for OpenMP's default, or >= 1)", nthreads);
+#ifndef _OPENMP
+    if (nthreads > 1)
+        return floe_world_error(w, FLOE_ENOTSUP, "threads: %d asked, but floe was built without OpenMP "
+                                "(configure with -DFLOE_WITH_OPENMP=ON)", nthreads);
+#endif
+    w->nthreads = nthreads;
+    return FLOE_OK;
+}
+
+int floe_world_threads(const floe_world *w) { return w->nthreads > 0 ? w->nthreads : floe_par_max_threads(); }
+
+void floe_par_scratch_free(floe_par_scratch *ps) {
+    if (!ps) return;
+    free(ps->pf); free(ps->act); free(ps->adj); free(ps->adj_off); free(ps->blk);
+    for (int t = 0; t < ps->ndet; t++) free(ps->det[t].scratch);
+    free(ps->det); free(ps->err); free(ps->fail_b); free(ps->fail_rc);
+    free(ps);
+}
+
+double *floe_world_reduce_buf(floe_world *w, size_t n) {
+    if (n > w->red_cap) {
+        double *t = realloc(w->red, n * sizeof *t);
+        if (!t) return NULL;
+        w->red = t;
+        w->red_cap = n;
+    }
+    return w->red;
+}
+
+int floe_world_loop_threads(const floe_world *w, long items) {
+    if (items < w->par_grain) return 1;
+    return floe_world_threads(w);
 }
 
 static void particles_free(floe_particles *p) {
@@ -134,6 +181,8 @@ void floe_world_providers_free(floe_world *w) {
 
 void floe_world_destroy(floe_world *w) {
     if (!w) return;
+    floe_par_scratch_free(w->par);
+    free(w->red);
     particles_free(&w->p);
     for (int i = 0; i < w->ngeoms; i++) floe_geometry_destroy(w->geoms[i]);
     free(w->geoms);

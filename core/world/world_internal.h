@@ -43,6 +43,7 @@ typedef struct floe_neighbor_list {
     int n_build;
     double skin;
     long rebuilds;
+    long gen;                /* builds so far, failed ones included (threads' pair index, forces.c) */
     int *walls; int nwalls;  /* particles with unbounded geometry (planes) */
     int *scratch; int scratch_cap;
     /* optional: pairs for which exclude(ctx, i, j) is non-zero are never listed (the bonded
@@ -146,7 +147,30 @@ struct floe_world {
     unsigned char *pbuf; size_t pbuf_cap;
     floe_cell_state *cell;    /* periodic cell (floe_cell.h, cell.c); NULL without */
     int obs_muted;            /* observers not called (the RVE's probes, core/integrators/rve.c) */
+    /* threads (floe_par.h, docs/parallel.md) */
+    int nthreads;             /* asked for (floe_world_set_threads; 0: OpenMP's default) */
+    int par_grain;            /* loops over fewer items run on one thread (the same bits either way) */
+    struct floe_par_scratch *par; /* the threaded contact stage's buffers (forces.c); NULL until used */
+    double *red; size_t red_cap;  /* per-block partial sums of threaded loops (floe_world_reduce_buf) */
 };
+
+/* scratch for n per-block partial sums (NULL: out of memory), kept by the world */
+double *floe_world_reduce_buf(floe_world *w, size_t n);
+/* threads for a loop over `items` items (1 below the grain or without OpenMP) */
+int floe_world_loop_threads(const floe_world *w, long items);
+/* errors of the calling thread go to buf (NULL: back to the world's): a threaded stage keeps
+ * each thread's first error and reports the one a serial run would have met first */
+void floe_world_error_to(char *buf, size_t len);
+/* the threaded contact stage's buffers (forces.c), kept across evaluations by the world */
+typedef struct floe_par_scratch {
+    double *pf; unsigned char *act; size_t pf_cap, act_cap; /* per entry: force on i, torques of i, j */
+    int *adj, *adj_off; size_t adj_cap; int adj_np; long adj_gen; /* per particle: its entries, 2k
+                                                       (as i) or 2k + 1 (as j), in list order */
+    struct stage_acc *blk; int blk_cap;              /* per block (forces.c) */
+    floe_detect_state *det; int ndet;                /* per thread */
+    char (*err)[1024]; int *fail_b, *fail_rc; int nerr;
+} floe_par_scratch;
+void floe_par_scratch_free(floe_par_scratch *ps);
 
 /* The staged force evaluation (core/world/forces.c, floe_provider.h): the providers of the
  * groups (FLOE_GROUP_DEM: body forces, beam bonds, contacts; FLOE_GROUP_PD: PD bonds) in

@@ -1,0 +1,27 @@
+/* floe_par.h - threads (OpenMP, issue 14; docs/parallel.md). Every threaded loop in floe
+ * gives the same bits for any number of threads: sums are taken over blocks of a fixed size
+ * (FLOE_PAR_BLOCK items, independent of the thread count) and the blocks' partial sums added
+ * in block order, also in a serial run; forces of pairs and bonds go to a per-pair buffer and
+ * each particle gathers them in the order a serial loop would add them. Without OpenMP
+ * (FLOE_WITH_OPENMP=OFF) the pragmas vanish and the same code runs on one thread. */
+#ifndef FLOE_PAR_H
+#define FLOE_PAR_H
+
+#ifdef _OPENMP
+#include <omp.h>
+#define FLOE_OMP(x) _Pragma(#x)
+static inline int floe_par_max_threads(void) { return omp_get_max_threads(); }
+static inline int floe_par_thread(void) { return omp_get_thread_num(); }
+static inline int floe_par_nthreads(void) { return omp_get_num_threads(); }
+#else
+#define FLOE_OMP(x)
+static inline int floe_par_max_threads(void) { return 1; }
+static inline int floe_par_thread(void) { return 0; }
+static inline int floe_par_nthreads(void) { return 1; }
+#endif
+
+/* items (particles, pairs) per reduction block: fixed, so that the partial sums and their
+ * order do not depend on the thread count */
+#define FLOE_PAR_BLOCK 512
+
+#endif

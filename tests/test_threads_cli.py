@@ -1,0 +1,153 @@
+#!/usr/bin/env python3
+"""test_threads_cli.py - `floe run -t N` (issue 14, docs/parallel.md): the output files of a
+run are the same, byte for byte, for 1, 2 and 3 threads (every file the scene writes, and the
+checkpoint).
+
+usage: python3 tests/test_threads_cli.py <floe_cli_path> <tests_dir>
+
+Scenes (each with more than the 2,048 pairs and particles above which the loops run
+threaded):
+  - walled: 1,440 spheres of ParticLS 5.3's HCP packing (smaller box) under the linear
+    viscoelastic law (its dashpot reads the last accelerations), the top wall pressing down
+    (kinematic), outputs vtk, csv, energy, tracker of the wall, stress, contacts and
+    force_chains (the recorded steps run on one thread, the others threaded);
+  - periodic: the same packing in a periodic cell shortened along z (image pairs, the
+    cell's virial and the stress output);
+  - settle: 2,500 random spheres of two sizes falling on a floor, Hertz-Mindlin with
+    friction (history across list rebuilds), energy and vtk outputs.
+Also: -t 0 and -t x are refused (exit 2). Prints "N passed, N failed"."""
+import filecmp
+import os
+import shutil
+import sys
+import tempfile
+
+from pycheck import check, counts, finish, run
+
+WALLED = """name: threads-walled
+dimension: 3
+time: {duration: 0.015, dt: 5.0e-5}
+gravity: [0, 0, 0]
+materials:
+  - {name: grain, density: 1}
+laws:
+  - {materials: [grain, grain], model: viscoelastic, kn: 20, ks: 10, gn: 0.08, gs: 0.04, friction: 0.3}
+walls:
+  - {point: [0, 0, 0], normal: [1, 0, 0], material: grain}
+  - {point: [0.4, 0, 0], normal: [-1, 0, 0], material: grain}
+  - {point: [0, 0, 0], normal: [0, 1, 0], material: grain}
+  - {point: [0, 0.4, 0], normal: [0, -1, 0], material: grain}
+  - {point: [0, 0, 0], normal: [0, 0, 1], material: grain}
+  - {point: [0, 0, 0.382], normal: [0, 0, -1], material: grain, velocity: [0, 0, -0.35]}
+bodies:
+  - {packing: hexagonal, shape: {sphere: {radius: 0.019}}, material: grain, spacing: 0.038,
+     region: {min: [0.0191, 0.0191, 0.0191], max: [0.3809, 0.3809, 0.3609]}}
+outputs:
+  - {type: stress, every: 20, file: stress.csv, group: 0}
+  - {type: tracker, every: 20, file: top_wall.csv, walls: [5]}
+  - {type: energy, every: 10, file: energy.csv}
+  - {type: vtk, every: 100, prefix: frame}
+  - {type: csv, every: 150, file: particles.csv}
+  - {type: contacts, every: 150, file: contacts.csv}
+  - {type: force_chains, every: 150}
+"""
+
+PERIODIC = """name: threads-periodic
+dimension: 3
+time: {duration: 0.015, dt: 5.0e-5}
+gravity: [0, 0, 0]
+materials:
+  - {name: grain, density: 1}
+laws:
+  - {materials: [grain, grain], model: viscoelastic, kn: 20, ks: 10, gn: 0.08, gs: 0.04, friction: 0.3}
+cell:
+  size: [0.456, 0.4607255148, 0.4343761144]
+  strain_rate: {xx: 0, yy: 0, zz: -0.5}
+bodies:
+  - {packing: hexagonal, shape: {sphere: {radius: 0.019}}, material: grain, spacing: 0.038,
+     origin: [0.0095, 0.0095, 0.0095], counts: [12, 14, 14]}
+outputs:
+  - {type: stress, every: 20, file: stress.csv}
+  - {type: energy, every: 10, file: energy.csv}
+  - {type: vtk, every: 100, prefix: frame}
+"""
+
+SETTLE = """name: threads-settle
+dimension: 3
+time: {duration: 0.02, safety: 0.5}
+gravity: [0, 0, -9.81]
+materials:
+  - {name: glass, density: 2500, young: 1.0e7, poisson: 0.3}
+laws:
+  - {materials: [glass, glass], model: hertz_mindlin, restitution: 0.5, friction: 0.5}
+walls:
+  - {point: [0, 0, 0], normal: [0, 0, 1], material: glass}
+  - {point: [0, 0, 0], normal: [1, 0, 0], material: glass}
+  - {point: [0.03, 0, 0], normal: [-1, 0, 0], material: glass}
+  - {point: [0, 0, 0], normal: [0, 1, 0], material: glass}
+  - {point: [0, 0.03, 0], normal: [0, -1, 0], material: glass}
+bodies:
+  - {packing: random, shape: {sphere: {radius: 0.0007}}, material: glass,
+     region: {min: [0, 0, 0.0], max: [0.03, 0.03, 0.012]}, velocity: [0.05, 0, -0.3], count: 1500, seed: 5}
+  - {packing: random, shape: {sphere: {radius: 0.0005}}, material: glass,
+     region: {min: [0, 0, 0.012], max: [0.03, 0.03, 0.02]}, velocity: [0, 0.05, -0.3], count: 1000, seed: 6}
+outputs:
+  - {type: energy, every: 20, file: energy.csv}
+  - {type: vtk, interval: 0.005}
+"""
+
+
+def same_tree(a, b, what):
+    names = lambda d: sorted(n for n in os.listdir(d) if not n.endswith(".tmp"))
+    na, nb = names(a), names(b)
+    if not check(na == nb, "%s: files differ: %s vs %s" % (what, na, nb)):
+        return False
+    _, bad, errs = filecmp.cmpfiles(a, b, na, shallow=False)
+    return check(not bad and not errs, "%s: files differ from one thread's: %s" % (what, bad + errs))
+
+
+def main():
+    if len(sys.argv) != 3:
+        print("usage: test_threads_cli.py <floe_cli_path> <tests_dir>", file=sys.stderr)
+        sys.exit(2)
+    cli = os.path.abspath(sys.argv[1])
+    tmp = tempfile.mkdtemp(prefix="floe_test_threads_")
+    try:
+        rc, out, err = run([cli, "info"])
+        if "openmp: no" in out.lower():
+            scene = os.path.join(tmp, "settle.yaml")
+            with open(scene, "w") as f:
+                f.write(SETTLE)
+            rc, out, err = run([cli, "run", scene, "-o", os.path.join(tmp, "x"), "-t", "2"])
+            check(rc == 1 and "FLOE_WITH_OPENMP" in err, "without OpenMP -t 2 is refused naming the option: %s" % err)
+            print("built without OpenMP: skipped")
+            sys.exit(1 if counts["failed"] else 77)
+        for name, text in (("walled", WALLED), ("periodic", PERIODIC), ("settle", SETTLE)):
+            scene = os.path.join(tmp, name + ".yaml")
+            with open(scene, "w") as f:
+                f.write(text)
+            ref = None
+            for t in (1, 2, 3):
+                o = os.path.join(tmp, "%s_t%d" % (name, t))
+                rc, out, err = run([cli, "run", scene, "-o", o, "-t", str(t), "--checkpoint-every", "0.01"], cwd=tmp)
+                if not check(rc == 0, "%s -t %d: exit %d: %s" % (name, t, rc, err)):
+                    break
+                if t > 1:
+                    check("threads:    %d" % t in out, "%s -t %d: the summary names the threads: %s" % (name, t, out))
+                if ref is None:
+                    ref = o
+                    nfiles = len(os.listdir(o))
+                    check(nfiles >= 3, "%s: the run wrote its outputs (%d files)" % (name, nfiles))
+                else:
+                    same_tree(ref, o, "%s -t %d" % (name, t))
+            print("%s: %d files, the same bytes for 1, 2 and 3 threads" % (name, len(os.listdir(ref or tmp))))
+        for bad in ("0", "x", "-2"):
+            rc, out, err = run([cli, "run", os.path.join(tmp, "settle.yaml"), "-o", os.path.join(tmp, "bad"), "-t", bad])
+            check(rc == 2 and "threads" in err, "-t %s refused with exit 2: %d %s" % (bad, rc, err))
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    finish("test_threads_cli")
+
+
+if __name__ == "__main__":
+    main()
