@@ -52,6 +52,12 @@ typedef struct floe_neighbor_list {
     /* the same for a pair through an image of a periodic cell (PD bonds across the faces;
      * NULL: image pairs are never excluded) */
     int (*exclude_image)(const void *ctx, int i, int j, const int n[3]); /* j's image x_j + H n */
+    /* MPI domain decomposition (core/parallel, docs/parallel.md): particles from own_hi on are
+     * ghosts; a pair of a ghost and an owned particle is listed only when the owned one has
+     * the lower global id gid[] (the other rank lists it otherwise), ghost pairs never.
+     * gid NULL: serial */
+    const long long *gid;
+    int own_hi;
 } floe_neighbor_list;
 
 struct floe_world {
@@ -146,7 +152,14 @@ struct floe_world {
     unsigned char *pbuf; size_t pbuf_cap;
     floe_cell_state *cell;    /* periodic cell (floe_cell.h, cell.c); NULL without */
     int obs_muted;            /* observers not called (the RVE's probes, core/integrators/rve.c) */
+    /* MPI domain decomposition (core/parallel/par_internal.h); NULL: serial. Freed through
+     * par_free by floe_world_destroy */
+    struct floe_par *par;
+    void (*par_free)(struct floe_par *par);
 };
+
+/* room for at least need particles in the store (world.c; contents kept) */
+int floe_world_reserve_particles(floe_world *w, int need);
 
 /* The staged force evaluation (core/world/forces.c, floe_provider.h): the providers of the
  * groups (FLOE_GROUP_DEM: body forces, beam bonds, contacts; FLOE_GROUP_PD: PD bonds) in
