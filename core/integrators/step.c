@@ -82,6 +82,7 @@ static double kinematic_close(floe_world *w, int i, double h) {
 static int forces_advancing(floe_world *w) {
     floe_step_ctx c = ctx_step(w, contacts_wanted(w));
     int rc = floe_world_forces(w, &c, FLOE_GROUP_ALL);
+    if (!rc && w->par) rc = floe_par_reverse(w); /* MPI: the ghosts' forces to their owners */
     return rc;
 }
 
@@ -202,6 +203,7 @@ static void advance_clock(floe_world *w) {
 }
 
 static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb) {
+    if (w->par) return floe_par_refresh(w, maxd2, have_xb); /* MPI: all ranks, ghosts (core/parallel) */
     if (w->cell ? floe_nl_needs_rebuild_cell(&w->nl, &w->p)
                 : floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0)) {
         int rc = floe_nl_build(&w->nl, &w->p, w->def.dim, w->def.leaf_size);
