@@ -223,7 +223,8 @@ static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb) {
 int step_verlet(floe_world *w) {
     floe_particles *p = &w->p;
     const double dt = w->dt, h = 0.5 * dt;
-    const int n = p->n, leap = w->def.integrator == FLOE_LEAPFROG;
+    int n = p->n;
+    const int leap = w->def.integrator == FLOE_LEAPFROG;
     /* leapfrog: the kick spans the two half steps around t_n; the first step after the
      * velocities were synchronised (start) spans half a step */
     const double k1 = leap ? 0.5 * (w->lf_dt_prev + dt) : h, k2 = leap ? 0.0 : h;
@@ -283,6 +284,10 @@ int step_verlet(floe_world *w) {
     advance_clock(w);
     /* 3. neighbours and forces at t + dt */
     FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
+    /* MPI (core/parallel): a rebuild migrates particles: the count and the store's arrays
+     * may have changed */
+    n = p->n;
+    motion = p->motion;
     FLOE_TRY(forces_advancing(w));
     /* 4. second half kick (leapfrog: none; its kinetic energy is that of the synchronised
      * velocity v_{n+1/2} + dt/2 a_{n+1}) */

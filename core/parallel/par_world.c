@@ -7,6 +7,7 @@
 #include "world_parts.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -174,9 +175,18 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     if (w->nstates) return refuse(w, "a state object");
     if (w->body_force) return refuse(w, "a body-force callback");
     if (w->nobs) return refuse(w, "an observer (outputs)");
-    if (w->nuprov) return refuse(w, "a user force provider");
     if (w->def.adaptive) return refuse(w, "the adaptive step");
     if (w->def.integrator != FLOE_VELOCITY_VERLET && w->def.integrator != FLOE_LEAPFROG) return refuse(w, "RK2");
+    /* the built-in providers that act per particle or per pair (a servo wall's controller
+     * reads the wall's force, which each rank holds only in part) */
+    for (int k = 0; k < w->nprov + w->nuprov; k++) {
+        const char *nm = (k < w->nprov ? w->prov[k] : w->uprov[k - w->nprov])->klass->name;
+        if (strcmp(nm, "body_forces") && strcmp(nm, "contacts")) {
+            char what[96];
+            snprintf(what, sizeof what, "the force provider %s", nm);
+            return refuse(w, what);
+        }
+    }
     for (int i = 0; i < p->n; i++)
         if (isfinite(p->radius[i]) && p->motion[i] != FLOE_FREE) return refuse(w, "a fixed or kinematic particle (other than a wall)");
     for (int k = 0; k < w->nmotions; k++) {

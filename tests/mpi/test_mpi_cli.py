@@ -2,7 +2,9 @@
 """test_mpi_cli.py - `floe run` under mpirun needs nothing else (docs/parallel.md).
 
 Runs tests/mpi/settle.yaml (216 spheres and 24 boxes settling in a walled box, 6,667 steps)
-with the MPI build's CLI on one process and under `mpirun -np K` (K = 2, 4), and compares
+with the MPI build's CLI on one process and under `mpirun -np K` (K = 2, 4), and
+tests/scenes/vtk_small.yaml (18 spheres falling, few ghosts: a rank's particle count
+changes at rebuilds) with K = 8, and compares
 every output file written by rank 0: the CSV files (particles, energy, tracker) and every
 number of every VTK frame must agree within 1e-9 of the column's (file's) largest magnitude:
 the split run sums the contact forces in another order, nothing else differs.
@@ -15,12 +17,13 @@ import sys
 import tempfile
 
 floe, mpiexec, here = sys.argv[1], sys.argv[2], sys.argv[3]
-scene = os.path.join(here, "settle.yaml")
+SCENES = [(os.path.join(here, "settle.yaml"), (2, 4)),
+          (os.path.join(here, "..", "scenes", "vtk_small.yaml"), (8,))]
 TOL = 1e-9
 fails = 0
 
 
-def run(outdir, np_):
+def run(scene, outdir, np_):
     cmd = [floe, "run", scene, "-o", outdir, "-q"]
     if np_ > 1:
         cmd = [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", str(np_)] + cmd
@@ -92,13 +95,14 @@ def compare_vtu(a, b, name):
     return worst
 
 
-with tempfile.TemporaryDirectory() as tmp:
+for scene, ranks in SCENES:
+  with tempfile.TemporaryDirectory() as tmp:
     ref = os.path.join(tmp, "np1")
-    run(ref, 1)
-    for k in (2, 4):
+    run(scene, ref, 1)
+    for k in ranks:
         out = os.path.join(tmp, f"np{k}")
-        run(out, k)
-        print(f"mpirun -np {k} against one process:")
+        run(scene, out, k)
+        print(f"{os.path.basename(scene)}: mpirun -np {k} against one process:")
         files = sorted(os.listdir(ref))
         if sorted(os.listdir(out)) != files:
             print(f"FAIL: files differ: {sorted(os.listdir(out))} vs {files}")

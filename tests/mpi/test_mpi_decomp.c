@@ -196,10 +196,46 @@ static void check_comm(floe_world *w) {
     free(copies);
 }
 
+/* what is not supported yet is refused with FLOE_ENOTSUP and a message, on every rank */
+static void check_refusals(void) {
+    for (int k = 0; k < 3; k++) {
+        floe_world_def d = floe_default_world_def();
+        d.dt = 1e-6;
+        if (k == 1) d.integrator = FLOE_RK2;
+        floe_world *w = floe_world_create(&d, NULL, 0);
+        floe_material m = glass();
+        floe_world_add_material(w, &m);
+        floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.3));
+        int g = floe_world_add_geometry(w, floe_sphere_create(0.001));
+        for (int i = 0; i < 4; i++) {
+            floe_particle_def p = floe_default_particle_def();
+            p.geometry = g;
+            p.x[0] = 0.003 * i;
+            if (k == 0 && i == 2) p.motion = FLOE_FIXED;
+            floe_world_add_particle(w, &p);
+        }
+        if (k == 2) {
+            double o[3] = {0, 0, -0.002}, n[3] = {0, 0, 1};
+            int wi = floe_world_add_wall(w, o, n, 0, FLOE_FIXED);
+            floe_servo_def sd = floe_default_servo_def();
+            sd.pressure = 100;
+            sd.area = 1e-4;
+            floe_world_add_servo_wall(w, wi, &sd);
+        }
+        int rc = floe_world_parallel_init(w, NULL);
+        const char *why[3] = {"a fixed sphere", "RK2", "a servo wall"};
+        CHECK(rc == FLOE_ENOTSUP && strstr(floe_world_last_error(w), "not supported yet"),
+              "%s refused (rc %d: %s)", why[k], rc, floe_world_last_error(w));
+        if (rank_ == 0) printf("  refused: %s\n", floe_world_last_error(w));
+        floe_world_destroy(w);
+    }
+}
+
 int main(int argc, char **argv) {
     MPI_Init(&argc, &argv);
     MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
     MPI_Comm_size(MPI_COMM_WORLD, &size_);
+    check_refusals();
     const int n_side = 12; /* 1728 particles */
     floe_world *w = build(n_side), *ref = build(n_side);
     int rc = floe_world_parallel_init(w, NULL);
