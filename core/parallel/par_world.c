@@ -280,6 +280,12 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
         memset(&w->energy, 0, sizeof w->energy);
         w->wd_shadow = w->wd_shadow0 = 0;
         w->elastic_contact = w->elastic_pd = 0;
+        /* a wall's force is the sum of the ranks' parts (the boundary work of a kinematic
+         * wall uses it at the next step): the whole of it stays on rank 0 */
+        for (int i = 0; i < P->nrep; i++) {
+            memset(w->p.f + 3 * i, 0, 3 * sizeof(double));
+            memset(w->p.t + 3 * i, 0, 3 * sizeof(double));
+        }
     }
     return FLOE_OK;
 }
