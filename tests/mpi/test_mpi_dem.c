@@ -2,10 +2,12 @@
  * (core/parallel, docs/parallel.md). Run under mpirun with 1, 2 and 4 ranks
  * (tests/CMakeLists.txt). Rank 0 first runs the unsplit world alone; then every rank builds
  * the same world, splits it (floe_world_parallel_init) and steps it.
- *   Short horizon (SHORT steps): every particle's position and velocity equal the unsplit
+ *   Short horizon (3,000 steps): every particle's position and velocity equal the unsplit
  *   run's within round-off: max |dx| <= 1e-10 x the box side, max |dv| <= 1e-8 x the largest
- *   speed (the sums of contact forces are taken in another order, nothing else differs).
- *   Long horizon (LONG steps, settling under gravity): the mean height and the contact count
+ *   speed (the sums of contact forces are taken in another order, nothing else differs);
+ *   the touching pairs are the same and their contact history (gathered by global ids)
+ *   within 1e-8 of its largest entry: the history travels with migrating particles.
+ *   Long horizon (12,000 steps, settling under gravity): the mean height and the contact count
  *   at the end, and the kinetic energy averaged over the last quarter, within stated
  *   tolerances of the unsplit run's; the energy ledger summed over the ranks closes as the
  *   unsplit one does.
@@ -106,6 +108,30 @@ static int run(floe_world *w, long from, long n, stats *st) {
     return 0;
 }
 
+/* the contact history of the touching pairs a world evaluates: records of HR doubles,
+ * (gid_a * N + gid_b, piece pair, hist[FLOE_MAX_HISTORY]) */
+enum { HR = 2 + FLOE_MAX_HISTORY };
+static double *history(const floe_world *w, int N, int *n) {
+    const floe_neighbor_list *nl = &w->nl;
+    double *r = malloc((size_t)(nl->npairs ? nl->npairs : 1) * HR * sizeof *r);
+    int m = 0;
+    for (int k = 0; k < nl->npairs; k++) {
+        if (!nl->touching[k]) continue;
+        long long a = floe_world_parallel_gid(w, nl->pi[k]), b = floe_world_parallel_gid(w, nl->pj[k]);
+        double *e = r + (size_t)m++ * HR;
+        e[0] = (double)(a * N + b);
+        e[1] = nl->sub[k];
+        memcpy(e + 2, nl->hist + (size_t)k * FLOE_MAX_HISTORY, FLOE_MAX_HISTORY * sizeof *e);
+    }
+    *n = m;
+    return r;
+}
+static int cmp_rec(const void *a, const void *b) {
+    const double *x = a, *y = b;
+    if (x[0] != y[0]) return x[0] < y[0] ? -1 : 1;
+    return (x[1] > y[1]) - (x[1] < y[1]);
+}
+
 /* the unsplit world on rank 0 and the split one on all: positions and velocities after
  * nshort steps, then (nlong > nshort) the statistics after nlong */
 static void compare(int shapes, long nshort, long nlong, double xtol, double vtol) {
@@ -114,7 +140,8 @@ static void compare(int shapes, long nshort, long nlong, double xtol, double vto
     double *xs = calloc(3 * N, sizeof *xs), *vs = calloc(3 * N, sizeof *vs);
     double *xp = calloc(3 * N, sizeof *xp), *vp = calloc(3 * N, sizeof *vp);
     stats ss = {0}, sp = {0};
-    int bad = 0;
+    int bad = 0, nhs = 0, nhp = 0;
+    double *hs = NULL, *hp = NULL;
     const char *tag = shapes == 2 ? "a gas of small spheres" : shapes ? "spheres, ellipsoids, boxes" : "spheres";
     double t0 = MPI_Wtime();
     if (rank_ == 0) {
@@ -122,6 +149,7 @@ static void compare(int shapes, long nshort, long nlong, double xtol, double vto
         bad |= run(ws, 0, nshort, NULL);
         memcpy(xs, ws->p.x, 3 * N * sizeof *xs);
         memcpy(vs, ws->p.v, 3 * N * sizeof *vs);
+        hs = history(ws, N, &nhs);
         if (nlong > nshort) bad |= run(ws, nshort, nlong, &ss);
         floe_world_destroy(ws);
     }
@@ -131,6 +159,19 @@ static void compare(int shapes, long nshort, long nlong, double xtol, double vto
     if (rc) exit(1);
     bad |= run(w, 0, nshort, NULL);
     floe_world_parallel_gather(w, xp, vp, N);
+    { /* every rank's touching pairs with their history, on rank 0 */
+        int nh;
+        double *h = history(w, N, &nh);
+        int *cnt = malloc((size_t)2 * size_ * sizeof *cnt), mine = nh * HR;
+        MPI_Gather(&mine, 1, MPI_INT, cnt, 1, MPI_INT, 0, MPI_COMM_WORLD);
+        int tot = 0;
+        for (int r = 0; r < size_ && rank_ == 0; r++) { cnt[size_ + r] = tot; tot += cnt[r]; }
+        hp = malloc((size_t)(tot ? tot : 1) * sizeof *hp);
+        MPI_Gatherv(h, mine, MPI_DOUBLE, hp, cnt, cnt + size_, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+        nhp = tot / HR;
+        free(h);
+        free(cnt);
+    }
     if (nlong > nshort) bad |= run(w, nshort, nlong, &sp);
     int own, gh;
     floe_world_parallel_counts(w, &own, &gh);
@@ -160,6 +201,23 @@ static void compare(int shapes, long nshort, long nlong, double xtol, double vto
         else if (size_ > 1)
             CHECK(exs[0] > 1000 && exs[1] > 0 && exs[2] > size_, "%s: contacts across ranks (%lld contact-steps), "
                   "migrations (%lld) and rebuilds (%lld) happened", tag, exs[0], exs[1], exs[2] / size_);
+        /* the contact history: the same touching pairs, the same spring states */
+        qsort(hs, nhs, HR * sizeof *hs, cmp_rec);
+        qsort(hp, nhp, HR * sizeof *hp, cmp_rec);
+        int same = nhs == nhp;
+        double hmax = 0, dh = 0;
+        for (int k = 0; k < nhs && same; k++) {
+            same &= hs[(size_t)k * HR] == hp[(size_t)k * HR] && hs[(size_t)k * HR + 1] == hp[(size_t)k * HR + 1];
+            for (int c = 2; c < HR; c++) {
+                hmax = fmax(hmax, fabs(hs[(size_t)k * HR + c]));
+                dh = fmax(dh, fabs(hs[(size_t)k * HR + c] - hp[(size_t)k * HR + c]));
+            }
+        }
+        printf("  contact history after %ld steps: %d touching pairs (unsplit %d), largest difference %.2e of the "
+               "largest entry %.3g\n", nshort, nhp, nhs, hmax > 0 ? dh / hmax : dh, hmax);
+        CHECK(same && nhs > 0, "%s: the ranks hold the unsplit world's %d touching pairs (got %d)", tag, nhs, nhp);
+        CHECK(dh <= 1e-8 * hmax, "%s: contact history within 1e-8 of its largest entry (got %.2e)", tag,
+              hmax > 0 ? dh / hmax : dh);
         CHECK(dx <= xtol * LX, "%s: positions after %ld steps within %.0e of the side (got %.2e)", tag, nshort, xtol, dx / LX);
         CHECK(dv <= vtol * vmax, "%s: velocities after %ld steps within %.0e of the largest speed (got %.2e)", tag, nshort,
               vtol, dv / vmax);
@@ -174,7 +232,7 @@ static void compare(int shapes, long nshort, long nlong, double xtol, double vto
         }
     }
     floe_world_destroy(w);
-    free(xs); free(vs); free(xp); free(vp);
+    free(xs); free(vs); free(xp); free(vp); free(hs); free(hp);
 }
 
 int main(int argc, char **argv) {
