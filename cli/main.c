@@ -267,7 +267,9 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
 static int cmd_run(const char *scene, const run_opts *o)
 {
 #ifdef FLOE_HAVE_MPI
-    {
+    int mpi_on = 0;
+    MPI_Initialized(&mpi_on);
+    if (mpi_on) {
         int rank, size;
         MPI_Comm_rank(MPI_COMM_WORLD, &rank);
         MPI_Comm_size(MPI_COMM_WORLD, &size);
@@ -638,16 +640,19 @@ static int cli_main(int argc, char **argv)
     return 2;
 }
 
-/* built with MPI (FLOE_WITH_MPI): MPI is started for every command; `floe run` under
- * mpirun with several ranks splits the world (cmd_run_mpi) */
+/* built with MPI (FLOE_WITH_MPI): MPI is started when a launcher started this process
+ * (mpirun, mpiexec, srun: their environment), so that a plain `floe` stays the serial
+ * program, without MPI's start-up time and memory; `floe run` with several ranks splits the
+ * world (cmd_run_mpi) */
 int main(int argc, char **argv)
 {
 #ifdef FLOE_HAVE_MPI
-    MPI_Init(&argc, &argv);
-    int rc = cli_main(argc, argv);
-    MPI_Finalize();
-    return rc;
-#else
-    return cli_main(argc, argv);
+    if (getenv("OMPI_COMM_WORLD_SIZE") || getenv("PMI_SIZE") || getenv("PMIX_RANK")) {
+        MPI_Init(&argc, &argv);
+        int rc = cli_main(argc, argv);
+        MPI_Finalize();
+        return rc;
+    }
 #endif
+    return cli_main(argc, argv);
 }
