@@ -18,4 +18,5 @@
 #include "floe_forcing.h"
 #include "floe_integrator.h"
 #include "floe_checkpoint.h"
+#include "floe_parallel.h"
 #endif

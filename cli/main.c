@@ -10,6 +10,7 @@
 #ifdef _OPENMP
 #include <omp.h>
 #endif
+#include "floe_parallel.h"
 
 #include <errno.h>
 #include <math.h>
@@ -20,6 +21,9 @@
 #include <string.h>
 #include <time.h>
 #include <unistd.h>
+#ifdef FLOE_HAVE_MPI
+#include <mpi.h>
+#endif
 
 static const char *prog = "floe";
 
@@ -174,8 +178,112 @@ typedef struct run_opts {
     int threads;            /* -t N (0: OpenMP's default) */
 } run_opts;
 
+#ifdef FLOE_HAVE_MPI
+/* `floe run` under mpirun with more than one rank (docs/parallel.md): every rank loads the
+ * scene without outputs and keeps its subdomain (floe_world_parallel_init); rank 0 also
+ * loads it with its outputs, an unsplit mirror that writes the gathered state. An error on
+ * one rank stops all (MPI_Abort): the others would wait for it in a collective. */
+static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
+{
+    char err[1024];
+    floe_scene_info info;
+    floe_world *w = NULL, *mirror = NULL;
+    const char *label = scene ? scene : "<demo>";
+    if (o->restart || o->ckpt_every > 0 || o->ckpt) {
+        if (rank == 0) fprintf(stderr, "%s: error: checkpoints and restarts are not supported under MPI yet "
+                               "(docs/parallel.md)\n", prog);
+        return 1;
+    }
+    const char *text = scene ? NULL : floe_scene_default_demo();
+    int rc = floe_scene_load_ex(scene ? scene : "<demo>", text, o->outdir, FLOE_SCENE_NO_OUTPUTS, &w, &info, err,
+                                sizeof err);
+    if (rc == FLOE_OK && rank == 0)
+        rc = scene ? floe_scene_load(scene, o->outdir, &mirror, &info, err, sizeof err)
+                   : floe_scene_load_string(text, "<demo>", o->outdir, &mirror, &info, err, sizeof err);
+    int any;
+    MPI_Allreduce(&rc, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    if (any != FLOE_OK) {
+        if (rc != FLOE_OK) fprintf(stderr, "%s: error (rank %d): %s\n", prog, rank, err);
+        floe_world_destroy(w);
+        floe_world_destroy(mirror);
+        return 1;
+    }
+    /* threads per rank: -t N, else OMP_NUM_THREADS, else one (ranks usually fill the cores) */
+    rc = floe_world_set_threads(w, o->threads > 0 ? o->threads : getenv("OMP_NUM_THREADS") ? 0 : 1);
+    if (rc == FLOE_OK) rc = floe_world_parallel_init(w, NULL);
+    if (rc == FLOE_OK) rc = floe_world_parallel_outputs(w, mirror);
+    if (rc != FLOE_OK) { /* the same on every rank: the checks are collective */
+        if (rank == 0) fprintf(stderr, "%s: error: %s: %s\n", prog, label, floe_world_last_error(w));
+        floe_world_destroy(w);
+        floe_world_destroy(mirror);
+        return 1;
+    }
+    if (rank == 0 && !o->quiet) {
+        printf("%s", info.summary);
+        printf("output:     %s\n", o->outdir);
+        printf("mpi:        %d ranks (recursive coordinate bisection)\n", size);
+        fflush(stdout);
+    }
+    progress pr = {0};
+    pr.show = rank == 0 && !o->quiet && isatty(STDERR_FILENO);
+    pr.t0 = pr.last = now_s();
+    long step0 = floe_world_step_count(w);
+    rc = floe_world_run(w, info.duration, on_progress, &pr);
+    double wall = now_s() - pr.t0;
+    if (pr.printed) fprintf(stderr, "\r%*s\r", 100, "");
+    if (rc != FLOE_OK) {
+        fprintf(stderr, "%s: error (rank %d): %s: %s (t = %g s, step %ld)\n", prog, rank, label,
+                floe_world_last_error(w), floe_world_time(w), floe_world_step_count(w));
+        MPI_Abort(MPI_COMM_WORLD, 1);
+    }
+    rc = floe_world_parallel_finish(w);
+    if (rc != FLOE_OK) {
+        if (rank == 0) fprintf(stderr, "%s: error: %s: %s\n", prog, label, floe_world_last_error(w));
+        floe_world_destroy(w);
+        floe_world_destroy(mirror);
+        return 1;
+    }
+    floe_energy e;
+    floe_world_parallel_energy(w, &e);
+    int own, gh;
+    floe_world_parallel_counts(w, &own, &gh);
+    double red[3] = {floe_world_contact_count(w), own, gh};
+    floe_world_parallel_sum(w, red, 3);
+    if (rank == 0 && !o->quiet) {
+        long steps = floe_world_step_count(w) - step0;
+        const double cur = e.kinetic_trans + e.kinetic_rot + e.elastic;
+        const double scale = fmax(fabs(e.initial) + fabs(e.work_body) + fabs(e.work_boundary), 1e-300);
+        printf("\nrun finished\n");
+        printf("  steps:              %ld (dt %.4g s, %s)\n", steps, floe_world_dt(w),
+               floe_integrator_name(floe_world_definition(w)->integrator));
+        printf("  simulated time:     %.6g s\n", floe_world_time(w));
+        printf("  wall time:          %.3f s\n", wall);
+        printf("  particle-steps/s:   %.3g (%d particles, %d ranks)\n",
+               wall > 0 ? red[1] * (double)steps / wall : 0, (int)red[1], size);
+        printf("  ghosts (all ranks): %d\n", (int)red[2]);
+        printf("  contacts (current): %d\n", (int)red[0]);
+        printf("  energy balance err: %.3g (relative)\n",
+               (cur + e.dissipated - e.initial - e.work_body - e.work_boundary) / scale);
+        printf("  outputs in:         %s (written by rank 0)\n", o->outdir);
+    }
+    floe_world_destroy(w);
+    floe_world_destroy(mirror);
+    return 0;
+}
+#endif
+
 static int cmd_run(const char *scene, const run_opts *o)
 {
+#ifdef FLOE_HAVE_MPI
+    int mpi_on = 0;
+    MPI_Initialized(&mpi_on);
+    if (mpi_on) {
+        int rank, size;
+        MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+        MPI_Comm_size(MPI_COMM_WORLD, &size);
+        if (size > 1) return cmd_run_mpi(scene, o, rank, size);
+    }
+#endif
     char err[1024];
     floe_scene_info info;
     floe_world *w = NULL;
@@ -403,7 +511,7 @@ static int cmd_info(void)
     return 0;
 }
 
-int main(int argc, char **argv)
+static int cli_main(int argc, char **argv)
 {
     if (argc < 2) {
         usage(stderr);
@@ -558,4 +666,21 @@ int main(int argc, char **argv)
     fprintf(stderr, "%s: unknown command '%s'\n", prog, cmd);
     usage(stderr);
     return 2;
+}
+
+/* built with MPI (FLOE_WITH_MPI): MPI is started when a launcher started this process
+ * (mpirun, mpiexec, srun: their environment), so that a plain `floe` stays the serial
+ * program, without MPI's start-up time and memory; `floe run` with several ranks splits the
+ * world (cmd_run_mpi) */
+int main(int argc, char **argv)
+{
+#ifdef FLOE_HAVE_MPI
+    if (getenv("OMPI_COMM_WORLD_SIZE") || getenv("PMI_SIZE") || getenv("PMIX_RANK")) {
+        MPI_Init(&argc, &argv);
+        int rc = cli_main(argc, argv);
+        MPI_Finalize();
+        return rc;
+    }
+#endif
+    return cli_main(argc, argv);
 }

@@ -10,6 +10,7 @@ pkgs=(build-essential cmake pkg-config libfyaml-dev libjson-c-dev python3 python
 pkgs+=(libsuitesparse-dev)   # CHOLMOD: implicit Newmark-beta (FLOE_WITH_CHOLMOD)
 pkgs+=(libnetcdf-dev)        # gridded velocity fields from NetCDF files (FLOE_WITH_NETCDF)
 pkgs+=(libshp-dev)           # floes and coastlines from ESRI shapefiles (FLOE_WITH_SHAPELIB)
+pkgs+=(libopenmpi-dev openmpi-bin libtrilinos-zoltan-dev)  # MPI domain decomposition (FLOE_WITH_MPI)
 pkgs+=(clang)                # the scene fuzzer (scripts/fuzz.sh, libFuzzer)
 pkgs+=(python3-matplotlib)   # scripts/plot_fsd.py (floe size distribution PNG; its test skips without)
 pkgs+=(python3-numpy python3-cffi python3-pytest)   # the Python package python/ (FLOE_BUILD_PYTHON)

@@ -9,7 +9,8 @@ python3 scripts/check_layers.py
 if [[ "${FLOE_SANITIZE:-0}" == 1 ]]; then
   dir=build-asan; flags=(-DFLOE_SANITIZE=ON -DFLOE_BUILD_BENCH=OFF)
 else
-  dir=build; flags=()
+  # the normal pass builds MPI too (core/parallel; its tests run under mpirun)
+  dir=build; flags=(-DFLOE_WITH_MPI=ON)
 fi
 cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFLOE_WERROR=ON "${flags[@]}"
 cmake --build "$dir" -j"$(nproc)"

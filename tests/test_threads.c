@@ -105,7 +105,7 @@ static int run(int boxes, int leapfrog, int threads, int steps, run_out *o) {
     floe_world_neighbor_stats(w, &ns);
     o->rebuilds = ns.rebuilds;
     floe_world_detect_stats(w, &o->ds);
-    o->threaded = w->par != NULL;
+    o->threaded = w->thr != NULL;
     floe_world_destroy(w);
     return 0;
 }

@@ -7,6 +7,7 @@
 
 #include "world_parts.h"
 #include "floe_integrator.h"
+#include "par_hooks.h"
 
 #define step_verlet floe_i_step_verlet
 #define step_rk2 floe_i_step_rk2

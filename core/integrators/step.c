@@ -84,6 +84,7 @@ static double kinematic_close(floe_world *w, int i, double h) {
 static int forces_advancing(floe_world *w) {
     floe_step_ctx c = ctx_step(w, contacts_wanted(w));
     int rc = floe_world_forces(w, &c, FLOE_GROUP_ALL);
+    if (!rc && w->par) rc = floe_par_reverse(w); /* MPI: the ghosts' forces to their owners */
     return rc;
 }
 
@@ -204,6 +205,7 @@ static void advance_clock(floe_world *w) {
 }
 
 static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb) {
+    if (w->par) return floe_par_refresh(w, maxd2, have_xb); /* MPI: all ranks, ghosts (core/parallel) */
     if (w->cell ? floe_nl_needs_rebuild_cell(&w->nl, &w->p)
                 : floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0)) {
         int rc = floe_nl_build(&w->nl, &w->p, w->def.dim, w->def.leaf_size);
@@ -344,7 +346,8 @@ static void kick_block(floe_particles *p, const kick_args *a, int i0, int i1, do
 int step_verlet(floe_world *w) {
     floe_particles *p = &w->p;
     const double dt = w->dt, h = 0.5 * dt;
-    const int n = p->n, leap = w->def.integrator == FLOE_LEAPFROG;
+    int n = p->n;
+    const int leap = w->def.integrator == FLOE_LEAPFROG;
     /* leapfrog: the kick spans the two half steps around t_n; the first step after the
      * velocities were synchronised (start) spans half a step */
     const double k1 = leap ? 0.5 * (w->lf_dt_prev + dt) : h, k2 = leap ? 0.0 : h;
@@ -359,7 +362,7 @@ int step_verlet(floe_world *w) {
     /* threads: blocks of FLOE_PAR_BLOCK particles, their sums added in block order (the same
      * bits for any number of threads, floe_par.h) */
     const int B = FLOE_PAR_BLOCK, nb = (n + B - 1) / B, nt = floe_world_loop_threads(w, n);
-    double *red = floe_world_reduce_buf(w, 5 * (size_t)nb);
+    double *red = floe_world_reduce_buf(w, (size_t)nb);
     if (nb > 0 && !red) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     /* 1. first half kick + drift (eq 22), rotation by the midpoint rule (eq 23); then the
      * kinematic particles at their prescribed velocity */
@@ -395,6 +398,10 @@ int step_verlet(floe_world *w) {
     advance_clock(w);
     /* 3. neighbours and forces at t + dt */
     FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
+    /* MPI (core/parallel): a rebuild migrates particles: the count and the store's arrays
+     * may have changed */
+    n = p->n;
+    motion = p->motion;
     FLOE_TRY(forces_advancing(w));
     /* 4. second half kick (leapfrog: none; its kinetic energy is that of the synchronised
      * velocity v_{n+1/2} + dt/2 a_{n+1}) */
@@ -403,16 +410,20 @@ int step_verlet(floe_world *w) {
     const double hh2 = 0.5 * h * h;
     int bad = INT_MAX; /* the first free particle that failed the checks below */
     {
+        /* the blocks again: a rebuild may have changed the count (MPI) */
+        const int nb2 = (n + B - 1) / B, nt2 = floe_world_loop_threads(w, n);
+        double *red2 = floe_world_reduce_buf(w, 4 * (size_t)nb2);
+        if (nb2 > 0 && !red2) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
         const kick_args ka = {h, dt, leap, shadow};
-        if (nt > 1) {
-            FLOE_OMP(omp parallel for schedule(static) num_threads(nt) reduction(min: bad))
-            for (int b = 0; b < nb; b++)
-                kick_block(p, &ka, b * B, (b + 1) * B < n ? (b + 1) * B : n, red + 4 * (size_t)b, &bad);
+        if (nt2 > 1) {
+            FLOE_OMP(omp parallel for schedule(static) num_threads(nt2) reduction(min: bad))
+            for (int b = 0; b < nb2; b++)
+                kick_block(p, &ka, b * B, (b + 1) * B < n ? (b + 1) * B : n, red2 + 4 * (size_t)b, &bad);
         } else
-            for (int b = 0; b < nb; b++)
-                kick_block(p, &ka, b * B, (b + 1) * B < n ? (b + 1) * B : n, red + 4 * (size_t)b, &bad);
-        for (int b = 0; b < nb; b++) {
-            const double *rb = red + 4 * (size_t)b;
+            for (int b = 0; b < nb2; b++)
+                kick_block(p, &ka, b * B, (b + 1) * B < n ? (b + 1) * B : n, red2 + 4 * (size_t)b, &bad);
+        for (int b = 0; b < nb2; b++) {
+            const double *rb = red2 + 4 * (size_t)b;
             kt += rb[0]; kr += rb[1]; sh_iso += rb[2]; sh += rb[3];
         }
     }

@@ -63,15 +63,19 @@ static const char *stag_cause(const floe_world *w, char *buf, size_t len) {
 
 static int energy_watchdog(floe_world *w) {
     if (w->def.energy_check == FLOE_CHECK_OFF) return FLOE_OK;
-    const floe_energy *e = &w->energy;
+    /* MPI: the ledger summed over the ranks (core/parallel), the same on every rank */
+    floe_energy er = w->energy;
+    double shadow = w->wd_shadow, shadow0 = w->wd_shadow0, pair_min = w->wd_pair_min;
+    if (w->par) floe_par_watchdog_values(w, &er, &shadow, &shadow0, &pair_min);
+    const floe_energy *e = &er;
     const double cur = e->kinetic_trans + e->kinetic_rot + e->elastic;
     double sc = fmax(fmax(cur + fabs(e->work_body) + fabs(e->work_boundary), fabs(e->initial)), w->wd_gscale);
     if (sc > w->wd_scale) w->wd_scale = sc;
     const double S = w->wd_scale, tol = w->def.energy_check_tol;
     if (!(S > 0)) return FLOE_OK;
-    double c_pair = -w->wd_pair_min / S, c_pd = 0, c_led = -(e->dissipated + e->elastic) / S;
+    double c_pair = -pair_min / S, c_pd = 0, c_led = -(e->dissipated + e->elastic) / S;
     /* the balance in the form velocity Verlet conserves (shadow_term) */
-    double c_bal = (cur - w->wd_shadow + e->dissipated - (e->initial - w->wd_shadow0) - e->work_body - e->work_boundary) / S;
+    double c_bal = (cur - shadow + e->dissipated - (e->initial - shadow0) - e->work_body - e->work_boundary) / S;
     int kb = -1;
     for (int k = 0; k < w->npd && k < w->pd_diss_n; k++)
         if (-w->pd_diss[k] / S > c_pd) { c_pd = -w->pd_diss[k] / S; kb = k; }
@@ -86,6 +90,17 @@ static int energy_watchdog(floe_world *w) {
     /* (NaN passes no test: the particle checks report it) */
     if (!(c_pair > tol || c_pd > tol || c_led > tol || c_bal > tol_bal)) return FLOE_OK;
     if (w->wd_step >= 0 && w->def.energy_check == FLOE_CHECK_WARN) return FLOE_OK; /* warned once */
+    if (w->par) { /* MPI: the culprit may live on another rank; the measures only */
+        snprintf(w->wd_msg, sizeof w->wd_msg, "energy watchdog: %.1f %% of the energy scale %.3g J created by step %ld "
+                 "(t = %g s), summed over the MPI ranks: pair %.3g, ledger %.3g, balance %.3g of the scale",
+                 100 * created, S, w->step, w->time, c_pair, c_led, c_bal);
+        if (w->wd_step < 0) w->wd_step = w->step;
+        if (w->def.energy_check == FLOE_CHECK_WARN) {
+            fprintf(stderr, "floe: warning: %s (checks: energy: warn, the run goes on)\n", w->wd_msg);
+            return FLOE_OK;
+        }
+        return floe_world_error(w, FLOE_EUNSTABLE, "%s", w->wd_msg);
+    }
     char what[256], cause[512], name[96];
     const floe_particles *p = &w->p;
     stag_cause(w, cause, sizeof cause);
@@ -167,6 +182,7 @@ int floe_world_step(floe_world *w) {
     if (s->dt_min_used == 0 || w->dt < s->dt_min_used) s->dt_min_used = w->dt;
     if (w->dt > s->dt_max_used) s->dt_max_used = w->dt;
     FLOE_TRY(energy_watchdog(w));
+    if (w->par) FLOE_TRY(floe_par_observe(w, 0)); /* MPI: the outputs of rank 0's unsplit mirror */
     return observers_call(w, 0);
 }
 

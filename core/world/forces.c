@@ -865,8 +865,8 @@ static int grow(void **ptr, size_t need, size_t *cap, size_t size) {
 static int par_prepare(floe_world *w, int nt, int nb) {
     const floe_neighbor_list *nl = &w->nl;
     const int n = w->p.n, npairs = nl->npairs;
-    if (!w->par && !(w->par = calloc(1, sizeof *w->par))) return FLOE_ENOMEM;
-    floe_par_scratch *ps = w->par;
+    if (!w->thr && !(w->thr = calloc(1, sizeof *w->thr))) return FLOE_ENOMEM;
+    floe_par_scratch *ps = w->thr;
     if (grow((void **)&ps->pf, (size_t)(npairs ? npairs : 1) * 9, &ps->pf_cap, sizeof(double)) ||
         grow((void **)&ps->act, (size_t)(npairs ? npairs : 1), &ps->act_cap, 1))
         return FLOE_ENOMEM;
@@ -932,7 +932,7 @@ static void par_merge_detect(floe_world *w, int nt) {
     floe_detect_state *W = &w->det;
     const long nonconv0 = W->nonconverged;
     for (int t = 0; t < nt; t++) {
-        const floe_detect_state *d = &w->par->det[t];
+        const floe_detect_state *d = &w->thr->det[t];
         W->calls += d->calls;
         W->iterations += d->iterations;
         W->admm_calls += d->admm_calls;
@@ -943,7 +943,7 @@ static void par_merge_detect(floe_world *w, int nt) {
     }
     if (nonconv0 == 0) /* the first non-converged pair: of the first thread (block) that met one */
         for (int t = 0; t < nt; t++) {
-            const floe_detect_state *d = &w->par->det[t];
+            const floe_detect_state *d = &w->thr->det[t];
             if (d->nonconverged > 0) {
                 W->first_bad_i = d->first_bad_i;
                 W->first_bad_j = d->first_bad_j;
@@ -952,9 +952,9 @@ static void par_merge_detect(floe_world *w, int nt) {
             }
         }
     for (int t = nt - 1; t >= 0; t--) /* the last pair detected: of the last thread that did */
-        if (w->par->det[t].cur_i >= 0) {
-            W->cur_i = w->par->det[t].cur_i;
-            W->cur_j = w->par->det[t].cur_j;
+        if (w->thr->det[t].cur_i >= 0) {
+            W->cur_i = w->thr->det[t].cur_i;
+            W->cur_j = w->thr->det[t].cur_j;
             break;
         }
 }
@@ -1012,7 +1012,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
         }
     } else {
         if (par_prepare(w, nt, nb)) return floe_world_error(w, FLOE_ENOMEM, "out of memory (threads' buffers)");
-        floe_par_scratch *ps = w->par;
+        floe_par_scratch *ps = w->thr;
         FLOE_OMP(omp parallel num_threads(nt))
         {
             const int t = floe_par_thread();

@@ -89,7 +89,9 @@ static int push_one(floe_neighbor_list *nl, int i, int j, int sub, int img) {
  * without a rebuild, so all their piece pairs are listed and culled in the force loop */
 static int push_pair(floe_neighbor_list *nl, const floe_particles *p, int i, int j, const int n[3]) {
     int img = 0;
-    if (i > j) {
+    /* MPI: the pair in global-id order, as in the serial world (a history's sign convention
+     * follows its order) */
+    if (nl->gid ? nl->gid[i] > nl->gid[j] : i > j) {
         int t = i; i = j; j = t;
         if (n) img = floe_img_encode(-n[0], -n[1], -n[2]);
     } else if (n) img = floe_img_encode(n[0], n[1], n[2]);
@@ -259,6 +261,12 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             const int b = nl->scratch[k], j = bidx[b];
             if (p->radius[j] > p->radius[i] || (p->radius[j] == p->radius[i] && j <= i)) continue;
             if (p->motion[i] != FLOE_FREE && p->motion[j] != FLOE_FREE) continue;
+            /* MPI (core/parallel): a pair with a ghost is this rank's when its owned particle
+             * has the lower global id; two ghosts are never paired */
+            if (nl->gid && (i >= nl->own_hi || j >= nl->own_hi)) {
+                const int g = i >= nl->own_hi ? i : j, o = g == i ? j : i;
+                if (o >= nl->own_hi || nl->gid[g] < nl->gid[o]) continue;
+            }
             int n[3] = {0, 0, 0};
             double d[3];
             floe_v3_sub(d, p->x + 3 * j, p->x + 3 * i);

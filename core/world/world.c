@@ -181,7 +181,7 @@ void floe_world_providers_free(floe_world *w) {
 
 void floe_world_destroy(floe_world *w) {
     if (!w) return;
-    floe_par_scratch_free(w->par);
+    floe_par_scratch_free(w->thr);
     free(w->red);
     particles_free(&w->p);
     for (int i = 0; i < w->ngeoms; i++) floe_geometry_destroy(w->geoms[i]);
@@ -208,6 +208,7 @@ void floe_world_destroy(floe_world *w) {
     free(w->ibuf);
     free(w->dash_a);
     if (w->snap && w->snap_free) w->snap_free(w->snap); /* the adaptive controller's (core/integrators) */
+    if (w->par && w->par_free) w->par_free(w->par);     /* the decomposition's (core/parallel) */
     for (int k = 0; k < w->npd; k++) floe_pd_body_destroy(w->pd[k]);
     free(w->pd); free(w->pd_first); free(w->pd_of); free(w->pd_fold); free(w->pd_fnew); free(w->pd_eold); free(w->pd_diss);
     for (int k = 0; k < w->npd_bc; k++) { free(w->pd_bc[k]->pts); free(w->pd_bc[k]->fold); free(w->pd_bc[k]); }
@@ -314,6 +315,8 @@ static int particles_reserve(floe_particles *p, int need) {
     p->cap = nc;
     return FLOE_OK;
 }
+
+int floe_world_reserve_particles(floe_world *w, int need) { return particles_reserve(&w->p, need); }
 
 int floe_world_add_particle(floe_world *w, const floe_particle_def *d) {
     if (d->geometry < 0 || d->geometry >= w->ngeoms)

@@ -53,6 +53,12 @@ typedef struct floe_neighbor_list {
     /* the same for a pair through an image of a periodic cell (PD bonds across the faces;
      * NULL: image pairs are never excluded) */
     int (*exclude_image)(const void *ctx, int i, int j, const int n[3]); /* j's image x_j + H n */
+    /* MPI domain decomposition (core/parallel, docs/parallel.md): particles from own_hi on are
+     * ghosts; a pair of a ghost and an owned particle is listed only when the owned one has
+     * the lower global id gid[] (the other rank lists it otherwise), ghost pairs never.
+     * gid NULL: serial */
+    const long long *gid;
+    int own_hi;
 } floe_neighbor_list;
 
 struct floe_world {
@@ -150,8 +156,12 @@ struct floe_world {
     /* threads (floe_par.h, docs/parallel.md) */
     int nthreads;             /* asked for (floe_world_set_threads; 0: OpenMP's default) */
     int par_grain;            /* loops over fewer items run on one thread (the same bits either way) */
-    struct floe_par_scratch *par; /* the threaded contact stage's buffers (forces.c); NULL until used */
+    struct floe_par_scratch *thr; /* the threaded contact stage's buffers (forces.c); NULL until used */
     double *red; size_t red_cap;  /* per-block partial sums of threaded loops (floe_world_reduce_buf) */
+    /* MPI domain decomposition (core/parallel/par_internal.h); NULL: serial. Freed through
+     * par_free by floe_world_destroy */
+    struct floe_par *par;
+    void (*par_free)(struct floe_par *par);
 };
 
 /* scratch for n per-block partial sums (NULL: out of memory), kept by the world */
@@ -171,6 +181,9 @@ typedef struct floe_par_scratch {
     char (*err)[1024]; int *fail_b, *fail_rc; int nerr;
 } floe_par_scratch;
 void floe_par_scratch_free(floe_par_scratch *ps);
+
+/* room for at least need particles in the store (world.c; contents kept) */
+int floe_world_reserve_particles(floe_world *w, int need);
 
 /* The staged force evaluation (core/world/forces.c, floe_provider.h): the providers of the
  * groups (FLOE_GROUP_DEM: body forces, beam bonds, contacts; FLOE_GROUP_PD: PD bonds) in

@@ -1,0 +1,73 @@
+/* floe_parallel.h - MPI domain decomposition of a DEM world (docs/parallel.md, issue 14).
+ *
+ * Every rank builds and prepares the same world (the same scene), then
+ * floe_world_parallel_init splits it: each rank keeps the particles of its subdomain
+ * (recursive coordinate bisection of the particle centres by Zoltan, weights 1) and
+ * receives copies (ghosts) of the other ranks' particles whose bounding sphere can reach a
+ * particle of its own within the neighbour list's skin. Walls (unbounded geometries) are
+ * kept on every rank. After that floe_world_step and floe_world_run go on as in the serial
+ * world, with the communication inside: ghosts refreshed after each drift, the forces on
+ * ghosts summed back to their owners, migration and new ghosts at every neighbour-list
+ * rebuild (all ranks rebuild when any needs to), contact history carried by global ids.
+ *
+ * The functions are collective over the world's communicator unless they say otherwise.
+ * Built without FLOE_WITH_MPI (FLOE_HAVE_MPI undefined), they return FLOE_ENOTSUP. */
+#ifndef FLOE_PARALLEL_H
+#define FLOE_PARALLEL_H
+
+#include "floe_world.h"
+
+/* 1 when the library was built with MPI (FLOE_WITH_MPI=ON), else 0; not collective */
+int floe_parallel_available(void);
+
+/* Split the prepared world over the ranks of comm (a pointer to an MPI_Comm; NULL: MPI_COMM_WORLD),
+ * which must hold the same world on every rank (same particles, in the same order; global id =
+ * index at this call). What is not yet supported is refused with FLOE_ENOTSUP and a message:
+ * peridynamic bodies, beam bonds, periodic cells, state objects, body-force callbacks,
+ * observers, user providers, RK2 and adaptive steps, fixed or kinematic particles other than
+ * walls (docs/parallel.md). */
+int floe_world_parallel_init(floe_world *w, const void *comm);
+
+/* decompose again now (RCB, migration, ghosts, the neighbour list), as the step does at
+ * every rebuild; a serial world: nothing */
+int floe_world_parallel_rebuild(floe_world *w);
+
+/* Outputs of a split world: rank 0 passes mirror, an unsplit copy of the world built from
+ * the same scene with its observers (outputs) attached; the other ranks pass NULL. After
+ * every step whose observers are due, the owned particles' state (x v q w L f t, the walls'
+ * forces summed) and the summed energy ledger are gathered into the mirror and its
+ * observers called, so that the files are those of a serial run. The mirror is prepared
+ * here, and finished by floe_world_parallel_finish; the caller destroys it. Observers that
+ * read contacts are refused (FLOE_ENOTSUP). Collective. */
+int floe_world_parallel_outputs(floe_world *w, floe_world *mirror);
+/* the end of a run: the final state into the mirror, its observers' end (files closed);
+ * a world without a mirror: nothing. Collective. */
+int floe_world_parallel_finish(floe_world *w);
+
+/* rank and size of the world's communicator (0 and 1 for a serial world); not collective */
+int floe_world_parallel_rank(const floe_world *w, int *rank, int *size);
+
+/* particles this rank owns (walls excluded) and ghosts it holds; not collective. A serial
+ * world owns all its bounded particles and holds no ghosts. */
+int floe_world_parallel_counts(const floe_world *w, int *owned, int *ghosts);
+
+/* global id of local particle i (its index in the world before floe_world_parallel_init; the
+ * index itself in a serial world); -1 out of range. Not collective. */
+long long floe_world_parallel_gid(const floe_world *w, int i);
+
+/* 1 when local particle i is owned by this rank or is a wall (kept on every rank), 0 for a
+ * ghost; not collective */
+int floe_world_parallel_is_owned(const floe_world *w, int i);
+
+/* the energy ledger summed over the ranks (a serial world: floe_world_energy) */
+int floe_world_parallel_energy(const floe_world *w, floe_energy *out);
+
+/* sum over the ranks of n doubles (in place); a serial world leaves them */
+int floe_world_parallel_sum(const floe_world *w, double *v, int n);
+
+/* the positions and velocities of every owned particle gathered on rank 0 into x[3 gid] and
+ * v[3 gid] (N = the particle count of the world before the split, walls included; the walls'
+ * entries are left as they are); x or v may be NULL; the arrays are used only on rank 0 */
+int floe_world_parallel_gather(const floe_world *w, double *x, double *v, int N);
+
+#endif

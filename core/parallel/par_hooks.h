@@ -1,0 +1,24 @@
+/* par_hooks.h - where the step (core/integrators) calls the MPI decomposition. Internal.
+ * Called only for a world split by floe_world_parallel_init (w->par set); without
+ * FLOE_HAVE_MPI they do nothing. */
+#ifndef FLOE_PAR_HOOKS_H
+#define FLOE_PAR_HOOKS_H
+
+#include "world_internal.h"
+
+/* after the drift: every rank decides whether its list needs a rebuild (maxd2, have_xb as
+ * in step.c's rebuild_if_needed), all rebuild when one does (RCB, migration, ghosts,
+ * history by global ids, floe_nl_build); otherwise the ghosts are refreshed from their
+ * owners */
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb);
+/* after a force evaluation: the forces and torques on ghosts added to their owners */
+int floe_par_reverse(floe_world *w);
+/* after a step (force_all: every observer, the end): when the mirror's observers are due
+ * (rank 0 decides, all follow), the state gathered into the mirror and its observers
+ * called; nothing without a mirror */
+int floe_par_observe(floe_world *w, int force_all);
+/* the energy watchdog's inputs summed over the ranks (the most negative pair dissipation:
+ * the minimum) */
+void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min);
+
+#endif

@@ -1,0 +1,73 @@
+/* par_internal.h - the MPI decomposition's state (docs/parallel.md). Internal to
+ * core/parallel and its callers in core/integrators; compiled only with FLOE_HAVE_MPI.
+ *
+ * Local store layout on every rank: walls [0, nrep) (unbounded geometries, the same on every
+ * rank, in global-id order), owned particles [nrep, nrep + nown) in global-id order, ghosts
+ * [nrep + nown, n) in the order received (by source rank, then the source's order). Ghosts
+ * carry motion FLOE_FIXED so that the integrators leave them and the neighbour list pairs
+ * them neither with each other nor with walls; their true motion is FLOE_FREE (floe refuses
+ * other bounded particles under MPI). */
+#ifndef FLOE_PAR_INTERNAL_H
+#define FLOE_PAR_INTERNAL_H
+
+#ifdef FLOE_HAVE_MPI
+#include <mpi.h>
+#include "world_internal.h"
+
+/* one particle as it travels: every array of the particle store (particle_store.h) and the
+ * global id, all as doubles (integers below 2^53 are exact) */
+enum { FLOE_PAR_REC = 39 };
+/* what a ghost refresh carries: x v q w L f t */
+enum { FLOE_PAR_FWD = 22 };
+
+typedef struct floe_par {
+    MPI_Comm comm;
+    int rank, size;
+    struct Zoltan_Struct *zz;
+    int ntotal;              /* particles before the split (global ids 0 .. ntotal - 1) */
+    int nrep, nown, nghost;
+    long long *gid; int gid_cap; /* per local particle */
+    /* the ghosts this rank sends: local indices grouped by destination rank (scount[r] of
+     * them to rank r, from sdispl[r]); and those it receives (rcount, rdispl) */
+    int *send_idx; int nsend, send_cap;
+    int *scount, *sdispl, *rcount, *rdispl;
+    double *sbuf, *rbuf; size_t sbuf_cap, rbuf_cap;
+    struct floe_world *mirror; /* rank 0 with outputs: the unsplit world whose observers write
+                                  the gathered state (floe_world_parallel_outputs) */
+    long rebuilds;           /* decompositions (RCB + migration + ghosts) */
+    long long migrated;      /* particles this rank sent to another owner, over the run */
+} floe_par;
+
+/* decomp.c: the pieces, on the world's store */
+/* byte buffers of at least n doubles (0 or FLOE_ENOMEM) */
+int floe_par_reserve(double **buf, size_t *cap, size_t n);
+void floe_par_pack(const floe_particles *p, int i, long long gid, double *r);
+void floe_par_unpack(floe_particles *p, int i, const double *r, long long *gid);
+/* send nitems items of m doubles, item k to rank dest[k]; *out (malloc'ed, caller frees)
+ * receives *nout items, ordered by source rank then the source's order */
+int floe_par_route(floe_par *P, const double *items, const int *dest, int nitems, int m, double **out, int *nout);
+/* destination rank of each owned particle by recursive coordinate bisection (Zoltan, weights
+ * 1): dest[k] for owned particle nrep + k */
+int floe_par_rcb(floe_world *w, floe_par *P, int *dest);
+/* send the owned particles with dest[k] != rank to their new owner and keep those received:
+ * the owned particles become [nrep, nrep + nown) sorted by global id; ghosts are dropped */
+int floe_par_migrate(floe_world *w, floe_par *P, const int *dest);
+/* the ghosts: every owned particle whose bounding sphere, grown by the largest bounding radius
+ * of a rank's owned particles and the skin, reaches the box of that rank's owned centres is
+ * sent to it as a ghost (appended at nrep + nown, motion FLOE_FIXED) */
+int floe_par_ghosts(floe_world *w, floe_par *P, double skin);
+/* refresh the ghosts from their owners (x v q w L f t) */
+int floe_par_forward_comm(floe_world *w, floe_par *P);
+/* add the ghosts' forces and torques to their owners */
+int floe_par_reverse_comm(floe_world *w, floe_par *P);
+/* local index of global id g (-1: not here); sorted table of (gid, local) built by
+ * floe_par_index */
+typedef struct floe_par_index { long long *key; int *loc; int n; } floe_par_index;
+int floe_par_index_build(const floe_par *P, int n, floe_par_index *ix);
+int floe_par_index_find(const floe_par_index *ix, long long g);
+void floe_par_index_free(floe_par_index *ix);
+/* frees the state (Zoltan's too) */
+void floe_par_free(floe_par *P);
+
+#endif
+#endif

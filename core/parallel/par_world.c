@@ -1,0 +1,600 @@
+/* par_world.c - a world split over MPI ranks (floe_parallel.h, docs/parallel.md): the split,
+ * the rebuild sequence (RCB, migration, ghosts, contact history by global ids, the
+ * neighbour list), the step's hooks (par_hooks.h) and the reductions. */
+#include "floe_parallel.h"
+#include "par_hooks.h"
+#include "par_internal.h"
+#include "world_parts.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifdef FLOE_HAVE_MPI
+
+int floe_parallel_available(void) { return 1; }
+
+/* ---- contact history by global ids ----
+ * A pair is evaluated on the rank that owns its anchor: the bounded particle of the pair
+ * with the lower global id (a wall is never the anchor: walls are on every rank). Its
+ * history travels with the anchor. Record: gid_a gid_b (list order) sub touching
+ * hist[FLOE_MAX_HISTORY] warm[FLOE_DETECT_WARM] (warm only when the list keeps warm starts). */
+static int hist_len(const floe_world *w) {
+    return 4 + FLOE_MAX_HISTORY + (w->nl.use_warm && w->nl.warm ? FLOE_DETECT_WARM : 0);
+}
+
+static long long anchor_of(const floe_particles *p, const long long *gid, int i, int j) {
+    const int bi = isfinite(p->radius[i]), bj = isfinite(p->radius[j]);
+    if (bi && bj) return gid[i] < gid[j] ? gid[i] : gid[j];
+    return bi ? gid[i] : gid[j];
+}
+
+/* the kept entries (touching, or a warm start) of the list whose anchor is owned: is_mine(gid) */
+static int hist_export(const floe_world *w, const long long *gid, const unsigned char *mine_by_gid, int lo, int hi,
+                       double **out, int *nout) {
+    const floe_neighbor_list *nl = &w->nl;
+    const floe_particles *p = &w->p;
+    const int m = hist_len(w), use_warm = nl->use_warm && nl->warm;
+    int cnt = 0;
+    double *r = malloc((size_t)(nl->npairs ? nl->npairs : 1) * m * sizeof *r);
+    if (!r) return FLOE_ENOMEM;
+    for (int k = 0; k < nl->npairs; k++) {
+        if (!(nl->touching[k] || (use_warm && isfinite(nl->warm[(size_t)k * FLOE_DETECT_WARM])))) continue;
+        const int i = nl->pi[k], j = nl->pj[k];
+        const long long a = anchor_of(p, gid, i, j);
+        if (mine_by_gid ? !mine_by_gid[a] : 0) continue;
+        if (!mine_by_gid) { /* owned: the anchor's local index in [lo, hi) */
+            const int ia = gid[i] == a ? i : j;
+            if (ia < lo || ia >= hi) continue;
+        }
+        double *e = r + (size_t)cnt++ * m;
+        e[0] = (double)gid[i];
+        e[1] = (double)gid[j];
+        e[2] = nl->sub[k];
+        e[3] = nl->touching[k];
+        memcpy(e + 4, nl->hist + (size_t)k * FLOE_MAX_HISTORY, FLOE_MAX_HISTORY * sizeof *e);
+        if (use_warm) memcpy(e + 4 + FLOE_MAX_HISTORY, nl->warm + (size_t)k * FLOE_DETECT_WARM, FLOE_DETECT_WARM * sizeof *e);
+    }
+    *out = r;
+    *nout = cnt;
+    return FLOE_OK;
+}
+
+static int grow_int(int **a, int n) {
+    int *t = realloc(*a, (size_t)(n ? n : 1) * sizeof *t);
+    if (!t) return FLOE_ENOMEM;
+    *a = t;
+    return FLOE_OK;
+}
+
+/* the received history entries written as the list's previous pairs in the new local
+ * indices, so that floe_nl_build keeps them as it keeps the history across any rebuild */
+static int hist_import(floe_world *w, floe_par *P, const double *in, int nin) {
+    floe_neighbor_list *nl = &w->nl;
+    const int m = hist_len(w), use_warm = nl->use_warm && nl->warm;
+    floe_par_index ix;
+    if (floe_par_index_build(P, w->p.n, &ix)) return FLOE_ENOMEM;
+    if (nin > nl->cap) {
+        if (grow_int(&nl->pi, nin) || grow_int(&nl->pj, nin) || grow_int(&nl->sub, nin)) {
+            floe_par_index_free(&ix);
+            return FLOE_ENOMEM;
+        }
+        nl->cap = nin;
+    }
+    double *h = realloc(nl->hist, (size_t)(nin ? nin : 1) * FLOE_MAX_HISTORY * sizeof *h);
+    unsigned char *t = h ? realloc(nl->touching, (size_t)(nin ? nin : 1)) : NULL;
+    if (h) nl->hist = h;
+    if (t) nl->touching = t;
+    double *wm = NULL;
+    if (h && t && use_warm) {
+        wm = realloc(nl->warm, (size_t)(nin ? nin : 1) * FLOE_DETECT_WARM * sizeof *wm);
+        if (wm) nl->warm = wm;
+    }
+    if (!h || !t || (use_warm && !wm)) { floe_par_index_free(&ix); return FLOE_ENOMEM; }
+    int cnt = 0;
+    for (int k = 0; k < nin; k++) {
+        const double *e = in + (size_t)k * m;
+        const int i = floe_par_index_find(&ix, (long long)e[0]), j = floe_par_index_find(&ix, (long long)e[1]);
+        if (i < 0 || j < 0) continue; /* cannot happen for a touching pair: its partner is a ghost here */
+        nl->pi[cnt] = i;
+        nl->pj[cnt] = j;
+        nl->sub[cnt] = (int)e[2];
+        nl->touching[cnt] = (unsigned char)e[3];
+        memcpy(nl->hist + (size_t)cnt * FLOE_MAX_HISTORY, e + 4, FLOE_MAX_HISTORY * sizeof *e);
+        if (use_warm) memcpy(nl->warm + (size_t)cnt * FLOE_DETECT_WARM, e + 4 + FLOE_MAX_HISTORY, FLOE_DETECT_WARM * sizeof *e);
+        cnt++;
+    }
+    floe_par_index_free(&ix);
+    free(nl->img); /* no periodic cells under MPI */
+    nl->img = NULL;
+    nl->npairs = cnt;
+    return FLOE_OK;
+}
+
+/* the decomposition again: RCB of the owned centres, the history of the pairs whose anchor
+ * leaves routed to its new owner (pend: entries exported before, at the split), migration,
+ * ghosts, the neighbour list */
+static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
+    const int m = hist_len(w), lo = P->nrep, hi = P->nrep + P->nown;
+    double *recs = pend;
+    int nrec = npend, rc = FLOE_OK;
+    if (!recs) FLOE_TRY(hist_export(w, P->gid, NULL, lo, hi, &recs, &nrec));
+    int *dest = malloc((size_t)(P->nown ? P->nown : 1) * sizeof *dest);
+    int *hd = malloc((size_t)(nrec ? nrec : 1) * sizeof *hd);
+    double *in = NULL;
+    int nin = 0;
+    if (!dest || !hd) rc = FLOE_ENOMEM;
+    if (!rc) rc = floe_par_rcb(w, P, dest);
+    if (!rc) /* each entry to its anchor's new owner: the owned particle of the pair with the
+              * lower id (the owned particles are in gid order; walls and ghosts are not among them) */
+        for (int k = 0; k < nrec; k++) {
+            const double *e = recs + (size_t)k * m;
+            int f[2];
+            for (int s = 0; s < 2; s++) {
+                const long long g = (long long)e[s];
+                int a = lo, b = hi;
+                while (a < b) {
+                    int c = (a + b) / 2;
+                    if (P->gid[c] < g) a = c + 1;
+                    else b = c;
+                }
+                f[s] = a < hi && P->gid[a] == g ? a : -1;
+            }
+            const int an = f[0] >= 0 && f[1] >= 0 ? (P->gid[f[0]] < P->gid[f[1]] ? f[0] : f[1]) : f[0] >= 0 ? f[0] : f[1];
+            hd[k] = an >= 0 ? dest[an - lo] : P->rank;
+        }
+    if (!rc) rc = floe_par_migrate(w, P, dest);
+    if (!rc) rc = floe_par_ghosts(w, P, w->nl.skin);
+    if (!rc) rc = floe_par_route(P, recs, hd, nrec, m, &in, &nin);
+    if (!rc) rc = hist_import(w, P, in, nin);
+    free(in); free(dest); free(hd); free(recs);
+    if (rc) return floe_world_error(w, rc, "MPI decomposition failed (out of memory or Zoltan)");
+    w->nl.gid = P->gid;
+    w->nl.own_hi = P->nrep + P->nown;
+    rc = floe_nl_build(&w->nl, &w->p, w->def.dim, w->def.leaf_size);
+    if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
+    P->rebuilds++;
+    return FLOE_OK;
+}
+
+static int refuse(floe_world *w, const char *what) {
+    return floe_world_error(w, FLOE_ENOTSUP, "MPI decomposition: %s is not supported yet (docs/parallel.md)", what);
+}
+
+int floe_world_parallel_init(floe_world *w, const void *comm) {
+    int inited = 0;
+    MPI_Initialized(&inited);
+    if (!inited) return floe_world_error(w, FLOE_EINVAL, "MPI decomposition: MPI_Init has not been called");
+    if (w->par) return floe_world_error(w, FLOE_EINVAL, "MPI decomposition: the world is split already");
+    FLOE_TRY(floe_world_prepare(w));
+    floe_particles *p = &w->p;
+    if (w->npd) return refuse(w, "a peridynamic body");
+    if (w->beams) return refuse(w, "beam bonds");
+    if (w->cell) return refuse(w, "a periodic cell");
+    if (w->nstates) return refuse(w, "a state object");
+    if (w->body_force) return refuse(w, "a body-force callback");
+    if (w->nobs) return refuse(w, "an observer (outputs)");
+    if (w->def.adaptive) return refuse(w, "the adaptive step");
+    if (w->def.integrator != FLOE_VELOCITY_VERLET && w->def.integrator != FLOE_LEAPFROG) return refuse(w, "RK2");
+    /* the built-in providers that act per particle or per pair (a servo wall's controller
+     * reads the wall's force, which each rank holds only in part) */
+    for (int k = 0; k < w->nprov + w->nuprov; k++) {
+        const char *nm = (k < w->nprov ? w->prov[k] : w->uprov[k - w->nprov])->klass->name;
+        if (strcmp(nm, "body_forces") && strcmp(nm, "contacts")) {
+            char what[96];
+            snprintf(what, sizeof what, "the force provider %s", nm);
+            return refuse(w, what);
+        }
+    }
+    for (int i = 0; i < p->n; i++)
+        if (isfinite(p->radius[i]) && p->motion[i] != FLOE_FREE) return refuse(w, "a fixed or kinematic particle (other than a wall)");
+    for (int k = 0; k < w->nmotions; k++) {
+        const int i = w->motions[k].particle;
+        if (i >= 0 && i < p->n && isfinite(p->radius[i])) return refuse(w, "a motion callback on a bounded particle");
+    }
+    floe_par *P = calloc(1, sizeof *P);
+    if (!P) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    MPI_Comm_dup(comm ? *(const MPI_Comm *)comm : MPI_COMM_WORLD, &P->comm);
+    MPI_Comm_rank(P->comm, &P->rank);
+    MPI_Comm_size(P->comm, &P->size);
+    const int S = P->size, n = p->n;
+    P->scount = malloc((size_t)4 * S * sizeof *P->scount);
+    if (P->scount) { P->sdispl = P->scount + S; P->rcount = P->scount + 2 * S; P->rdispl = P->scount + 3 * S; }
+    /* the same world on every rank? (count and a checksum of the positions) */
+    double chk[2] = {n, 0}, chk0[2];
+    for (int i = 0; i < n; i++)
+        if (isfinite(p->radius[i])) chk[1] += p->x[3 * i] + 2 * p->x[3 * i + 1] + 3 * p->x[3 * i + 2] + p->radius[i];
+    memcpy(chk0, chk, sizeof chk);
+    MPI_Bcast(chk0, 2, MPI_DOUBLE, 0, P->comm);
+    int same = chk0[0] == chk[0] && chk0[1] == chk[1], all_same;
+    MPI_Allreduce(&same, &all_same, 1, MPI_INT, MPI_LAND, P->comm);
+    if (!all_same) {
+        floe_par_free(P);
+        return floe_world_error(w, FLOE_EINVAL, "MPI decomposition: the ranks do not hold the same world");
+    }
+    /* global ids = index; walls first, then this rank's block of the bounded particles */
+    int nw = 0, nb = 0;
+    for (int i = 0; i < n; i++) nw += !isfinite(p->radius[i]);
+    nb = n - nw;
+    const int k0 = (int)((long long)nb * P->rank / S), k1 = (int)((long long)nb * (P->rank + 1) / S);
+    unsigned char *mine = calloc((size_t)(n ? n : 1), 1);
+    int *newidx = malloc((size_t)(n ? n : 1) * sizeof *newidx);
+    long long *gid0 = malloc((size_t)(n ? n : 1) * sizeof *gid0);
+    double *recs = NULL, *buf = malloc((size_t)(n ? n : 1) * FLOE_PAR_REC * sizeof *buf);
+    int nrec = 0, rc = !P->scount || !mine || !newidx || !gid0 || !buf ? FLOE_ENOMEM : FLOE_OK;
+    if (!rc) {
+        int kb = 0;
+        for (int i = 0; i < n; i++) {
+            gid0[i] = i;
+            if (isfinite(p->radius[i])) { mine[i] = kb >= k0 && kb < k1; kb++; }
+        }
+        rc = hist_export(w, gid0, mine, 0, 0, &recs, &nrec);
+    }
+    if (!rc) {
+        int a = 0;
+        for (int i = 0; i < n; i++) newidx[i] = -1;
+        for (int i = 0; i < n; i++)
+            if (!isfinite(p->radius[i])) { newidx[i] = a; floe_par_pack(p, i, i, buf + (size_t)a++ * FLOE_PAR_REC); }
+        for (int i = 0; i < n; i++)
+            if (mine[i]) { newidx[i] = a; floe_par_pack(p, i, i, buf + (size_t)a++ * FLOE_PAR_REC); }
+        P->ntotal = n;
+        P->nrep = nw;
+        P->nown = k1 - k0;
+        P->gid = malloc((size_t)(n ? n : 1) * sizeof *P->gid);
+        P->gid_cap = n;
+        if (!P->gid) rc = FLOE_ENOMEM;
+        else {
+            for (int k = 0; k < a; k++) floe_par_unpack(p, k, buf + (size_t)k * FLOE_PAR_REC, P->gid + k);
+            p->n = a;
+            for (int k = 0; k < w->nmotions; k++) {
+                const int i = w->motions[k].particle;
+                if (i >= 0 && i < n) w->motions[k].particle = newidx[i];
+            }
+            w->motion_idx_n = -1;
+            /* the kinematic walls' forces at the step start, moved with them */
+            if (w->kin_old) {
+                double *ko = malloc((size_t)n * 6 * sizeof *ko);
+                if (!ko) rc = FLOE_ENOMEM;
+                else {
+                    for (int i = 0; i < n; i++)
+                        if (newidx[i] >= 0) memcpy(ko + 6 * newidx[i], w->kin_old + 6 * i, 6 * sizeof *ko);
+                    free(w->kin_old);
+                    w->kin_old = ko;
+                }
+            }
+        }
+    }
+    free(mine); free(newidx); free(gid0); free(buf);
+    if (rc) {
+        free(recs);
+        floe_par_free(P);
+        return floe_world_error(w, rc, "out of memory");
+    }
+    w->par = P;
+    w->par_free = floe_par_free;
+    FLOE_TRY(par_rebuild(w, P, recs, nrec));
+    /* the ledger: the values at prepare (the whole world) stay on rank 0; the others start
+     * from nothing but their own kinetic energy */
+    if (P->rank != 0) {
+        memset(&w->energy, 0, sizeof w->energy);
+        w->wd_shadow = w->wd_shadow0 = 0;
+        w->elastic_contact = w->elastic_pd = 0;
+        /* a wall's force is the sum of the ranks' parts (the boundary work of a kinematic
+         * wall uses it at the next step): the whole of it stays on rank 0 */
+        for (int i = 0; i < P->nrep; i++) {
+            memset(w->p.f + 3 * i, 0, 3 * sizeof(double));
+            memset(w->p.t + 3 * i, 0, 3 * sizeof(double));
+        }
+    }
+    return FLOE_OK;
+}
+
+int floe_world_parallel_rebuild(floe_world *w) {
+    if (!w->par) return FLOE_OK;
+    return par_rebuild(w, w->par, NULL, 0);
+}
+
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb) {
+    floe_par *P = w->par;
+    int need = floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0), any = 0;
+    MPI_Allreduce(&need, &any, 1, MPI_INT, MPI_LOR, P->comm);
+    if (any) return par_rebuild(w, P, NULL, 0);
+    int rc = floe_par_forward_comm(w, P);
+    return rc ? floe_world_error(w, rc, "out of memory") : FLOE_OK;
+}
+
+int floe_par_reverse(floe_world *w) {
+    int rc = floe_par_reverse_comm(w, w->par);
+    return rc ? floe_world_error(w, rc, "out of memory") : FLOE_OK;
+}
+
+static void energy_pack(const floe_energy *e, double *v) {
+    v[0] = e->kinetic_trans; v[1] = e->kinetic_rot; v[2] = e->elastic; v[3] = e->work_body;
+    v[4] = e->work_boundary; v[5] = e->dissipated; v[6] = e->initial;
+}
+static void energy_unpack(floe_energy *e, const double *v) {
+    e->kinetic_trans = v[0]; e->kinetic_rot = v[1]; e->elastic = v[2]; e->work_body = v[3];
+    e->work_boundary = v[4]; e->dissipated = v[5]; e->initial = v[6];
+}
+
+void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min) {
+    double v[9], s[9];
+    energy_pack(e, v);
+    v[7] = *shadow;
+    v[8] = *shadow0;
+    MPI_Allreduce(v, s, 9, MPI_DOUBLE, MPI_SUM, w->par->comm);
+    energy_unpack(e, s);
+    *shadow = s[7];
+    *shadow0 = s[8];
+    double pm = *pair_min;
+    MPI_Allreduce(&pm, pair_min, 1, MPI_DOUBLE, MPI_MIN, w->par->comm);
+}
+
+int floe_world_parallel_energy(const floe_world *w, floe_energy *out) {
+    *out = w->energy;
+    if (!w->par) return FLOE_OK;
+    double v[7], s[7];
+    energy_pack(&w->energy, v);
+    MPI_Allreduce(v, s, 7, MPI_DOUBLE, MPI_SUM, w->par->comm);
+    energy_unpack(out, s);
+    return FLOE_OK;
+}
+
+int floe_world_parallel_sum(const floe_world *w, double *v, int n) {
+    if (!w->par || n <= 0) return FLOE_OK;
+    MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_SUM, w->par->comm);
+    return FLOE_OK;
+}
+
+int floe_world_parallel_gather(const floe_world *w, double *x, double *v, int N) {
+    const floe_par *P = w->par;
+    if (!P) {
+        for (int i = 0; i < w->p.n && i < N; i++) {
+            if (x) memcpy(x + 3 * i, w->p.x + 3 * i, 3 * sizeof *x);
+            if (v) memcpy(v + 3 * i, w->p.v + 3 * i, 3 * sizeof *v);
+        }
+        return FLOE_OK;
+    }
+    const int m = 7, lo = P->nrep, no = P->nown;
+    double *sb = malloc((size_t)(no ? no : 1) * m * sizeof *sb);
+    int *cnt = P->rank == 0 ? malloc((size_t)2 * P->size * sizeof *cnt) : NULL;
+    int bad = !sb || (P->rank == 0 && !cnt), anybad;
+    MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_LOR, P->comm);
+    if (anybad) { free(sb); free(cnt); return FLOE_ENOMEM; }
+    for (int k = 0; k < no; k++) {
+        double *r = sb + (size_t)k * m;
+        r[0] = (double)P->gid[lo + k];
+        memcpy(r + 1, w->p.x + 3 * (lo + k), 3 * sizeof *r);
+        memcpy(r + 4, w->p.v + 3 * (lo + k), 3 * sizeof *r);
+    }
+    int mine = no * m;
+    MPI_Gather(&mine, 1, MPI_INT, cnt, 1, MPI_INT, 0, P->comm);
+    double *rb = NULL;
+    int tot = 0;
+    if (P->rank == 0) {
+        for (int r = 0; r < P->size; r++) { cnt[P->size + r] = tot; tot += cnt[r]; }
+        rb = malloc((size_t)(tot ? tot : 1) * sizeof *rb);
+    }
+    MPI_Gatherv(sb, mine, MPI_DOUBLE, rb, cnt, cnt ? cnt + P->size : NULL, MPI_DOUBLE, 0, P->comm);
+    if (P->rank == 0 && rb)
+        for (int k = 0; k < tot / m; k++) {
+            const double *r = rb + (size_t)k * m;
+            const long long g = (long long)r[0];
+            if (g < 0 || g >= N) continue;
+            if (x) memcpy(x + 3 * g, r + 1, 3 * sizeof *x);
+            if (v) memcpy(v + 3 * g, r + 4, 3 * sizeof *v);
+        }
+    free(sb); free(cnt); free(rb);
+    return FLOE_OK;
+}
+
+int floe_world_parallel_rank(const floe_world *w, int *rank, int *size) {
+    *rank = w->par ? w->par->rank : 0;
+    *size = w->par ? w->par->size : 1;
+    return FLOE_OK;
+}
+
+int floe_world_parallel_counts(const floe_world *w, int *owned, int *ghosts) {
+    if (!w->par) {
+        int nb = 0;
+        for (int i = 0; i < w->p.n; i++) nb += isfinite(w->p.radius[i]) != 0;
+        *owned = nb;
+        *ghosts = 0;
+        return FLOE_OK;
+    }
+    *owned = w->par->nown;
+    *ghosts = w->par->nghost;
+    return FLOE_OK;
+}
+
+long long floe_world_parallel_gid(const floe_world *w, int i) {
+    if (i < 0 || i >= w->p.n) return -1;
+    return w->par ? w->par->gid[i] : i;
+}
+
+int floe_world_parallel_is_owned(const floe_world *w, int i) {
+    return !w->par || i < w->par->nrep + w->par->nown;
+}
+
+/* ---- outputs through the mirror (rank 0) ---- */
+
+int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {
+    floe_par *P = w->par;
+    if (!P) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: the world is not split");
+    int bad = 0;
+    if (P->rank == 0 && mirror) {
+        if (mirror->p.n != P->ntotal) bad = 1;
+        for (int k = 0; k < mirror->nobs && !bad; k++)
+            if (mirror->obs[k]->klass->needs_contacts) bad = 2;
+        if (!bad && floe_world_prepare(mirror)) bad = 3;
+    }
+    int any;
+    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, P->comm);
+    if (any == 1) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: the mirror does not hold the split world's particles");
+    if (any == 2) return refuse(w, "an output that reads contacts");
+    if (any == 3) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: %s", floe_world_last_error(mirror));
+    P->mirror = P->rank == 0 ? mirror : NULL;
+    int has = P->mirror != NULL, all_has;
+    MPI_Allreduce(&has, &all_has, 1, MPI_INT, MPI_MAX, P->comm);
+    if (!all_has) P->mirror = NULL;
+    return FLOE_OK;
+}
+
+/* the owned particles' state by global id into the mirror (rank 0), the walls' forces summed */
+static int mirror_gather(floe_world *w, floe_par *P) {
+    const int m = 1 + FLOE_PAR_FWD, lo = P->nrep, no = P->nown;
+    double *sb = malloc((size_t)(no ? no : 1) * m * sizeof *sb);
+    double *wf = malloc((size_t)(P->nrep ? P->nrep : 1) * 6 * sizeof *wf);
+    int *cnt = P->rank == 0 ? malloc((size_t)2 * P->size * sizeof *cnt) : NULL;
+    int bad = !sb || !wf || (P->rank == 0 && !cnt), anybad;
+    MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_LOR, P->comm);
+    if (anybad) { free(sb); free(wf); free(cnt); return FLOE_ENOMEM; }
+    const floe_particles *p = &w->p;
+    for (int k = 0; k < no; k++) {
+        const int i = lo + k;
+        double *r = sb + (size_t)k * m;
+        r[0] = (double)P->gid[i];
+        memcpy(r + 1, p->x + 3 * i, 3 * sizeof *r);
+        memcpy(r + 4, p->v + 3 * i, 3 * sizeof *r);
+        memcpy(r + 7, p->q + 4 * i, 4 * sizeof *r);
+        memcpy(r + 11, p->w + 3 * i, 3 * sizeof *r);
+        memcpy(r + 14, p->L + 3 * i, 3 * sizeof *r);
+        memcpy(r + 17, p->f + 3 * i, 3 * sizeof *r);
+        memcpy(r + 20, p->t + 3 * i, 3 * sizeof *r);
+    }
+    for (int i = 0; i < P->nrep; i++) {
+        memcpy(wf + 6 * i, p->f + 3 * i, 3 * sizeof *wf);
+        memcpy(wf + 6 * i + 3, p->t + 3 * i, 3 * sizeof *wf);
+    }
+    if (P->nrep) MPI_Reduce(P->rank == 0 ? MPI_IN_PLACE : wf, wf, 6 * P->nrep, MPI_DOUBLE, MPI_SUM, 0, P->comm);
+    int mine = no * m, tot = 0;
+    MPI_Gather(&mine, 1, MPI_INT, cnt, 1, MPI_INT, 0, P->comm);
+    double *rb = NULL;
+    if (P->rank == 0) {
+        for (int r = 0; r < P->size; r++) { cnt[P->size + r] = tot; tot += cnt[r]; }
+        rb = malloc((size_t)(tot ? tot : 1) * sizeof *rb);
+    }
+    MPI_Gatherv(sb, mine, MPI_DOUBLE, rb, cnt, cnt ? cnt + P->size : NULL, MPI_DOUBLE, 0, P->comm);
+    floe_world *M = P->mirror;
+    if (P->rank == 0 && rb && M) {
+        floe_particles *q = &M->p;
+        for (int k = 0; k < tot / m; k++) {
+            const double *r = rb + (size_t)k * m;
+            const long long g = (long long)r[0];
+            if (g < 0 || g >= q->n) continue;
+            memcpy(q->x + 3 * g, r + 1, 3 * sizeof *r);
+            memcpy(q->v + 3 * g, r + 4, 3 * sizeof *r);
+            memcpy(q->q + 4 * g, r + 7, 4 * sizeof *r);
+            memcpy(q->w + 3 * g, r + 11, 3 * sizeof *r);
+            memcpy(q->L + 3 * g, r + 14, 3 * sizeof *r);
+            memcpy(q->f + 3 * g, r + 17, 3 * sizeof *r);
+            memcpy(q->t + 3 * g, r + 20, 3 * sizeof *r);
+        }
+        for (int i = 0; i < P->nrep; i++) {
+            const long long g = P->gid[i];
+            memcpy(q->x + 3 * g, p->x + 3 * i, 3 * sizeof(double)); /* a kinematic wall moves */
+            memcpy(q->v + 3 * g, p->v + 3 * i, 3 * sizeof(double));
+            memcpy(q->q + 4 * g, p->q + 4 * i, 4 * sizeof(double));
+            memcpy(q->f + 3 * g, wf + 6 * i, 3 * sizeof(double));
+            memcpy(q->t + 3 * g, wf + 6 * i + 3, 3 * sizeof(double));
+        }
+        M->time = w->time;
+        M->step = w->step;
+        M->dt = w->dt;
+    }
+    free(sb); free(wf); free(cnt); free(rb);
+    return FLOE_OK;
+}
+
+static int mirror_due(const floe_world *w, const floe_world *M) {
+    for (int k = 0; k < M->nobs; k++) {
+        const floe_observer *o = M->obs[k];
+        if (o->period_steps > 0 ? w->step % o->period_steps == 0
+                                : o->period_time > 0 ? w->time >= o->next_time - 1e-9 * w->dt : 1)
+            return 1;
+    }
+    return 0;
+}
+
+int floe_par_observe(floe_world *w, int force_all) {
+    floe_par *P = w->par;
+    int has = P->mirror != NULL;
+    MPI_Bcast(&has, 1, MPI_INT, 0, P->comm);
+    if (!has) return FLOE_OK;
+    int due = P->rank == 0 ? force_all || mirror_due(w, P->mirror) : 0;
+    MPI_Bcast(&due, 1, MPI_INT, 0, P->comm);
+    if (!due) return FLOE_OK;
+    floe_energy e;
+    floe_world_parallel_energy(w, &e);
+    int rc = mirror_gather(w, P), ok;
+    if (P->rank == 0 && !rc) {
+        P->mirror->energy = e;
+        rc = observers_call(P->mirror, force_all);
+        if (rc) floe_world_error(w, rc, "%s", floe_world_last_error(P->mirror));
+    }
+    MPI_Allreduce(&rc, &ok, 1, MPI_INT, MPI_MAX, P->comm);
+    if (ok && !rc) return floe_world_error(w, ok, "an output failed on rank 0");
+    return ok;
+}
+
+int floe_world_parallel_finish(floe_world *w) {
+    floe_par *P = w->par;
+    if (!P) return FLOE_OK;
+    int has = P->mirror != NULL;
+    MPI_Bcast(&has, 1, MPI_INT, 0, P->comm);
+    if (!has) return FLOE_OK;
+    floe_energy e;
+    floe_world_parallel_energy(w, &e);
+    int rc = mirror_gather(w, P), all;
+    if (P->rank == 0 && !rc) {
+        P->mirror->energy = e;
+        P->mirror->last_step_of_run = 1;
+        rc = floe_world_finish(P->mirror);
+        if (rc) floe_world_error(w, rc, "%s", floe_world_last_error(P->mirror));
+    }
+    MPI_Allreduce(&rc, &all, 1, MPI_INT, MPI_MAX, P->comm);
+    return all;
+}
+
+#else /* serial build: a world is never split */
+
+int floe_parallel_available(void) { return 0; }
+int floe_world_parallel_init(floe_world *w, const void *comm) {
+    (void)comm;
+    return floe_world_error(w, FLOE_ENOTSUP, "MPI decomposition: floe was built without MPI (configure with "
+                            "-DFLOE_WITH_MPI=ON)");
+}
+int floe_world_parallel_rebuild(floe_world *w) { (void)w; return FLOE_OK; }
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb) { (void)w; (void)maxd2; (void)have_xb; return FLOE_OK; }
+int floe_par_reverse(floe_world *w) { (void)w; return FLOE_OK; }
+int floe_par_observe(floe_world *w, int force_all) { (void)w; (void)force_all; return FLOE_OK; }
+int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {
+    (void)mirror;
+    return floe_world_error(w, FLOE_ENOTSUP, "MPI outputs: floe was built without MPI");
+}
+int floe_world_parallel_finish(floe_world *w) { (void)w; return FLOE_OK; }
+void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min) {
+    (void)w; (void)e; (void)shadow; (void)shadow0; (void)pair_min;
+}
+int floe_world_parallel_energy(const floe_world *w, floe_energy *out) { *out = w->energy; return FLOE_OK; }
+int floe_world_parallel_sum(const floe_world *w, double *v, int n) { (void)w; (void)v; (void)n; return FLOE_OK; }
+int floe_world_parallel_gather(const floe_world *w, double *x, double *v, int N) {
+    for (int i = 0; i < w->p.n && i < N; i++) {
+        if (x) memcpy(x + 3 * i, w->p.x + 3 * i, 3 * sizeof *x);
+        if (v) memcpy(v + 3 * i, w->p.v + 3 * i, 3 * sizeof *v);
+    }
+    return FLOE_OK;
+}
+int floe_world_parallel_rank(const floe_world *w, int *rank, int *size) { (void)w; *rank = 0; *size = 1; return FLOE_OK; }
+int floe_world_parallel_counts(const floe_world *w, int *owned, int *ghosts) {
+    int nb = 0;
+    for (int i = 0; i < w->p.n; i++) nb += isfinite(w->p.radius[i]) != 0;
+    *owned = nb;
+    *ghosts = 0;
+    return FLOE_OK;
+}
+long long floe_world_parallel_gid(const floe_world *w, int i) { return i >= 0 && i < w->p.n ? i : -1; }
+int floe_world_parallel_is_owned(const floe_world *w, int i) { (void)w; (void)i; return 1; }
+
+#endif

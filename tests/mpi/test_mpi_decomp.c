@@ -1,0 +1,274 @@
+/* test_mpi_decomp.c - the MPI decomposition itself (core/parallel, docs/parallel.md), run
+ * under mpirun with 1, 2 and 4 ranks (tests/CMakeLists.txt): every rank builds the same
+ * world of spheres of two sizes, ellipsoids and boxes in a walled box, splits it, and checks
+ *   - the partition: every bounded particle owned by exactly one rank, walls on every rank;
+ *   - migration keeps every particle's data: each local particle (owned or ghost) equals,
+ *     field by field and bit for bit, the particle of the same global id in an unsplit copy
+ *     (a ghost's motion excepted: FLOE_FIXED by design);
+ *   - the ghosts are exactly those a brute-force search finds (bounding radius + the largest
+ *     bounding radius of the rank + skin from the box of the rank's owned centres), and every
+ *     particle within reach (r_i + r_j + skin) of an owned one is present;
+ *   - the neighbour lists of the ranks together hold every pair of the unsplit list exactly
+ *     once (same global ids, walls included);
+ *   - after a shift of every particle (many change owner) and a new decomposition,
+ *     the same four checks, with particles migrated;
+ *   - the forward refresh gives each ghost its owner's values, the reverse sum gives each
+ *     owner exactly its ghosts' forces. */
+#include "floe.h"
+#include "world_internal.h"
+#include "par_internal.h"
+#include "../check.h"
+#include <mpi.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int rank_, size_;
+static const double L = 0.02; /* box side, m */
+
+static floe_material glass(void) {
+    floe_material m;
+    memset(&m, 0, sizeof m);
+    strcpy(m.name, "glass");
+    m.density = 2500; m.young = 1e7; m.poisson = 0.3;
+    return m;
+}
+
+/* n_side^3 particles on a jittered lattice: spheres of 0.4 and 0.6 mm, ellipsoids, boxes;
+ * 6 walls, three of them added first, three last (walls anywhere in the store) */
+static floe_world *build(int n_side) {
+    floe_world_def d = floe_default_world_def();
+    d.dim = 3; d.dt = 1e-6;
+    d.gravity[2] = -9.81;
+    d.energy_check = FLOE_CHECK_OFF;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material m = glass();
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.3));
+    int g[4];
+    g[0] = floe_world_add_geometry(w, floe_sphere_create(0.0004));
+    g[1] = floe_world_add_geometry(w, floe_sphere_create(0.0006));
+    g[2] = floe_world_add_geometry(w, floe_ellipsoid_create(0.0006, 0.0004, 0.0003));
+    g[3] = floe_world_add_geometry(w, floe_box_create(0.0008, 0.0006, 0.0005));
+    double pts[6][3] = {{0, 0, 0}, {L, 0, 0}, {0, 0, 0}, {0, L, 0}, {0, 0, 0}, {0, 0, L}};
+    double nrm[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (int k = 0; k < 3; k++) floe_world_add_wall(w, pts[k], nrm[k], 0, FLOE_FIXED);
+    unsigned s = 777;
+    const double h = L / n_side;
+    int cnt = 0;
+    for (int a = 0; a < n_side; a++)
+        for (int b = 0; b < n_side; b++)
+            for (int c = 0; c < n_side; c++) {
+                floe_particle_def p = floe_default_particle_def();
+                p.geometry = g[cnt++ % 4];
+                p.material = 0;
+                double j[6];
+                for (int k = 0; k < 6; k++) { s = s * 1103515245u + 12345u; j[k] = (s >> 8) / 16777216.0 - 0.5; }
+                floe_v3_set(p.x, (a + 0.5 + 0.15 * j[0]) * h, (b + 0.5 + 0.15 * j[1]) * h, (c + 0.5 + 0.15 * j[2]) * h);
+                floe_v3_set(p.v, 0.1 * j[3], 0.1 * j[4], 0.1 * j[5]);
+                p.q[0] = 1; p.q[1] = j[0]; p.q[2] = j[1]; p.q[3] = j[2];
+                floe_world_add_particle(w, &p);
+            }
+    for (int k = 3; k < 6; k++) floe_world_add_wall(w, pts[k], nrm[k], 0, FLOE_FIXED);
+    w->nl.skin = 0.0006; /* wide: many ghosts */
+    if (floe_world_prepare(w)) { fprintf(stderr, "prepare: %s\n", floe_world_last_error(w)); exit(2); }
+    return w;
+}
+
+static int cmp_ll(const void *a, const void *b) {
+    const long long x = *(const long long *)a, y = *(const long long *)b;
+    return (x > y) - (x < y);
+}
+
+/* the bounded-bounded and wall pairs of a list as sorted keys gid_a * N + gid_b */
+static long long *pair_keys(const floe_world *w, const long long *gid, int N, int *np) {
+    const floe_neighbor_list *nl = &w->nl;
+    long long *k = malloc((size_t)(nl->npairs ? nl->npairs : 1) * sizeof *k);
+    for (int a = 0; a < nl->npairs; a++) {
+        long long gi = gid ? gid[nl->pi[a]] : nl->pi[a], gj = gid ? gid[nl->pj[a]] : nl->pj[a];
+        if (gi > gj) { long long t = gi; gi = gj; gj = t; }
+        k[a] = gi * N + gj;
+    }
+    qsort(k, nl->npairs, sizeof *k, cmp_ll);
+    *np = nl->npairs;
+    return k;
+}
+
+static void check_split(floe_world *w, floe_world *ref, const char *when) {
+    const floe_par *P = w->par;
+    const floe_particles *p = &w->p, *q = &ref->p;
+    const int N = q->n;
+    int nb = 0;
+    for (int i = 0; i < N; i++) nb += isfinite(q->radius[i]) != 0;
+    /* 1. partition */
+    int *owners = calloc((size_t)(N > 0 ? N : 1), sizeof *owners);
+    for (int i = P->nrep; i < P->nrep + P->nown; i++) owners[P->gid[i]]++;
+    MPI_Allreduce(MPI_IN_PLACE, owners, N, MPI_INT, MPI_SUM, P->comm);
+    int once = 1, walls_ok = P->nrep == N - nb;
+    for (int g = 0; g < N; g++) once &= owners[g] == (isfinite(q->radius[g]) ? 1 : 0);
+    for (int i = 0; i < P->nrep; i++) walls_ok &= !isfinite(p->radius[i]);
+    CHECK(once, "%s: every bounded particle owned by exactly one rank", when);
+    CHECK(walls_ok, "%s: the %d walls on every rank", when, N - nb);
+    free(owners);
+    /* 2. data, bit for bit */
+    int same = 1, sorted = 1;
+    double ra[FLOE_PAR_REC], rb[FLOE_PAR_REC];
+    for (int i = 0; i < p->n; i++) {
+        const long long g = P->gid[i];
+        floe_par_pack(p, i, g, ra);
+        floe_par_pack(q, (int)g, g, rb);
+        if (i >= P->nrep + P->nown) ra[32] = rb[32]; /* a ghost's motion: FLOE_FIXED */
+        if (memcmp(ra, rb, sizeof ra)) same = 0;
+        if (i > P->nrep && i < P->nrep + P->nown && P->gid[i - 1] >= g) sorted = 0;
+    }
+    CHECK(same, "%s: every local particle equals its global id's particle, field by field", when);
+    CHECK(sorted, "%s: owned particles in global-id order", when);
+    /* 3. ghosts against a brute-force search */
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, rmax = 0;
+    for (int i = P->nrep; i < P->nrep + P->nown; i++) {
+        for (int a = 0; a < 3; a++) { lo[a] = fmin(lo[a], p->x[3 * i + a]); hi[a] = fmax(hi[a], p->x[3 * i + a]); }
+        rmax = fmax(rmax, p->radius[i]);
+    }
+    unsigned char *local = calloc((size_t)(N > 0 ? N : 1), 1), *own = calloc((size_t)(N > 0 ? N : 1), 1);
+    for (int i = 0; i < p->n; i++) local[P->gid[i]] = i < P->nrep + P->nown ? 2 : 1;
+    for (int i = P->nrep; i < P->nrep + P->nown; i++) own[P->gid[i]] = 1;
+    const double skin = w->nl.skin;
+    int ghosts_ok = 1, nexp = 0, reach_ok = 1;
+    for (int g = 0; g < N; g++) {
+        if (!isfinite(q->radius[g]) || own[g]) continue;
+        double d2 = 0;
+        for (int a = 0; a < 3; a++) {
+            double e = q->x[3 * g + a] < lo[a] ? lo[a] - q->x[3 * g + a] : q->x[3 * g + a] > hi[a] ? q->x[3 * g + a] - hi[a] : 0;
+            d2 += e * e;
+        }
+        const int want = P->nown > 0 && sqrt(d2) <= q->radius[g] + rmax + skin;
+        nexp += want;
+        if (want != (local[g] == 1)) ghosts_ok = 0;
+    }
+    for (int i = P->nrep; i < P->nrep + P->nown; i++) {
+        const long long gi = P->gid[i];
+        for (int g = 0; g < N; g++) {
+            if (!isfinite(q->radius[g]) || g == gi) continue;
+            double d[3];
+            floe_v3_sub(d, q->x + 3 * g, q->x + 3 * gi);
+            const double lim = q->radius[g] + q->radius[gi] + skin;
+            if (floe_v3_dot(d, d) <= lim * lim && !local[g]) reach_ok = 0;
+        }
+    }
+    CHECK(ghosts_ok && nexp == P->nghost, "%s: rank %d: ghosts %d, brute force %d", when, rank_, P->nghost, nexp);
+    CHECK(reach_ok, "%s: rank %d: every particle within reach of an owned one is here", when, rank_);
+    free(local); free(own);
+    /* 4. the lists together: the unsplit list, each pair once */
+    int np, nr;
+    long long *mine = pair_keys(w, P->gid, N, &np), *want = pair_keys(ref, NULL, N, &nr);
+    int *cnts = rank_ == 0 ? malloc((size_t)size_ * sizeof *cnts) : NULL, *dsp = rank_ == 0 ? malloc((size_t)size_ * sizeof *dsp) : NULL;
+    MPI_Gather(&np, 1, MPI_INT, cnts, 1, MPI_INT, 0, P->comm);
+    int tot = 0;
+    if (rank_ == 0) for (int r = 0; r < size_; r++) { dsp[r] = tot; tot += cnts[r]; }
+    long long *all = rank_ == 0 ? malloc((size_t)(tot ? tot : 1) * sizeof *all) : NULL;
+    MPI_Gatherv(mine, np, MPI_LONG_LONG, all, cnts, dsp, MPI_LONG_LONG, 0, P->comm);
+    if (rank_ == 0) {
+        qsort(all, tot, sizeof *all, cmp_ll);
+        int eq = tot == nr && !memcmp(all, want, (size_t)nr * sizeof *all);
+        CHECK(eq, "%s: the ranks' lists hold the unsplit list's %d pairs once each (got %d)", when, nr, tot);
+        printf("  %s: %d ranks, %d pairs in all (unsplit %d)\n", when, size_, tot, nr);
+    }
+    free(mine); free(want); free(cnts); free(dsp); free(all);
+}
+
+static void check_comm(floe_world *w) {
+    floe_par *P = w->par;
+    floe_particles *p = &w->p;
+    const int g0 = P->nrep + P->nown, N = P->ntotal;
+    for (int i = P->nrep; i < g0; i++) floe_v3_set(p->f + 3 * i, (double)P->gid[i], 2.0 * P->gid[i], -1.0);
+    floe_par_forward_comm(w, P);
+    int fwd = 1;
+    for (int i = g0; i < p->n; i++) fwd &= p->f[3 * i] == (double)P->gid[i] && p->f[3 * i + 1] == 2.0 * P->gid[i];
+    CHECK(fwd, "rank %d: forward refresh: each of %d ghosts holds its owner's force", rank_, P->nghost);
+    /* reverse: ghosts carry 1, owners 0: each owner receives its number of ghost copies */
+    for (int i = P->nrep; i < p->n; i++) floe_v3_set(p->f + 3 * i, i >= g0 ? 1.0 : 0.0, 0, 0);
+    int *copies = calloc((size_t)(N > 0 ? N : 1), sizeof *copies);
+    for (int i = g0; i < p->n; i++) copies[P->gid[i]]++;
+    MPI_Allreduce(MPI_IN_PLACE, copies, N, MPI_INT, MPI_SUM, P->comm);
+    floe_par_reverse_comm(w, P);
+    int rev = 1;
+    for (int i = P->nrep; i < g0; i++) rev &= p->f[3 * i] == copies[P->gid[i]];
+    CHECK(rev, "rank %d: reverse sum: each owner receives its ghosts' forces once", rank_);
+    free(copies);
+}
+
+/* what is not supported yet is refused with FLOE_ENOTSUP and a message, on every rank */
+static void check_refusals(void) {
+    for (int k = 0; k < 3; k++) {
+        floe_world_def d = floe_default_world_def();
+        d.dt = 1e-6;
+        if (k == 1) d.integrator = FLOE_RK2;
+        floe_world *w = floe_world_create(&d, NULL, 0);
+        floe_material m = glass();
+        floe_world_add_material(w, &m);
+        floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.3));
+        int g = floe_world_add_geometry(w, floe_sphere_create(0.001));
+        for (int i = 0; i < 4; i++) {
+            floe_particle_def p = floe_default_particle_def();
+            p.geometry = g;
+            p.x[0] = 0.003 * i;
+            if (k == 0 && i == 2) p.motion = FLOE_FIXED;
+            floe_world_add_particle(w, &p);
+        }
+        if (k == 2) {
+            double o[3] = {0, 0, -0.002}, n[3] = {0, 0, 1};
+            int wi = floe_world_add_wall(w, o, n, 0, FLOE_FIXED);
+            floe_servo_def sd = floe_default_servo_def();
+            sd.pressure = 100;
+            sd.area = 1e-4;
+            floe_world_add_servo_wall(w, wi, &sd);
+        }
+        int rc = floe_world_parallel_init(w, NULL);
+        const char *why[3] = {"a fixed sphere", "RK2", "a servo wall"};
+        CHECK(rc == FLOE_ENOTSUP && strstr(floe_world_last_error(w), "not supported yet"),
+              "%s refused (rc %d: %s)", why[k], rc, floe_world_last_error(w));
+        if (rank_ == 0) printf("  refused: %s\n", floe_world_last_error(w));
+        floe_world_destroy(w);
+    }
+}
+
+int main(int argc, char **argv) {
+    MPI_Init(&argc, &argv);
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+    MPI_Comm_size(MPI_COMM_WORLD, &size_);
+    check_refusals();
+    const int n_side = 12; /* 1728 particles */
+    floe_world *w = build(n_side), *ref = build(n_side);
+    int rc = floe_world_parallel_init(w, NULL);
+    CHECK(rc == 0, "split: %s", rc ? floe_world_last_error(w) : "");
+    if (rc == 0) {
+        check_split(w, ref, "after the split");
+        /* shift the upper half of the box by L/2 along x and the lower half by L/2 along y
+         * (periodically): whatever the cuts, many particles change subdomain (a shift move
+         * would not do: Zoltan renumbers the parts to keep particles where they are) */
+        floe_world *ws[2] = {w, ref};
+        for (int k = 0; k < 2; k++)
+            for (int i = 0; i < ws[k]->p.n; i++)
+                if (isfinite(ws[k]->p.radius[i])) {
+                    double *x = ws[k]->p.x + 3 * i;
+                    const int a = (int)(floe_world_parallel_gid(ws[k], i) % 3);
+                    x[a] = fmod(x[a] + 0.5 * L, L);
+                }
+        floe_nl_build(&ref->nl, &ref->p, 3, ref->def.leaf_size);
+        long long mig0 = w->par->migrated, mig;
+        rc = floe_world_parallel_rebuild(w);
+        CHECK(rc == 0, "rebuild: %s", rc ? floe_world_last_error(w) : "");
+        long long m1 = w->par->migrated - mig0;
+        MPI_Allreduce(&m1, &mig, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+        if (rank_ == 0) printf("  shift move: %lld of %d particles migrated\n", mig, n_side * n_side * n_side);
+        if (size_ > 1) CHECK(mig > n_side * n_side * n_side / 8, "particles migrated after the shift move: %lld", mig);
+        check_split(w, ref, "after the shift move");
+        check_comm(w);
+    }
+    int fails = check_fail_, all;
+    MPI_Allreduce(&fails, &all, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+    if (rank_ == 0) printf("test_mpi_decomp (%d ranks): %d failed checks over all ranks\n", size_, all);
+    floe_world_destroy(w);
+    floe_world_destroy(ref);
+    MPI_Finalize();
+    return all ? 1 : 0;
+}
