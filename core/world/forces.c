@@ -315,6 +315,7 @@ struct stage_acc {
      * entry, act[k] = 1), gathered per particle afterwards; NULL: added to p->f, p->t */
     double *pf;
     unsigned char *act;
+    unsigned char *hit;      /* per particle: some entry of it has a force (the gather skips the rest) */
 };
 typedef struct stage_acc stage_acc;
 
@@ -331,6 +332,9 @@ static inline __attribute__((always_inline)) void pair_apply(floe_particles *p, 
         double *b = acc->pf + 9 * (size_t)k;
         for (int a = 0; a < 3; a++) { b[a] = F[a]; b[3 + a] = ti[a]; b[6 + a] = tj[a]; }
         acc->act[k] = 1;
+        /* two threads may mark the same particle: the same value, a relaxed atomic store */
+        __atomic_store_n(acc->hit + i, (unsigned char)1, __ATOMIC_RELAXED);
+        __atomic_store_n(acc->hit + j, (unsigned char)1, __ATOMIC_RELAXED);
         return;
     }
     double *fi = p->f + 3 * i, *fj = p->f + 3 * j, *Ti = p->t + 3 * i, *Tj = p->t + 3 * j;
@@ -909,6 +913,10 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         }
         for (int i = n; i > 0; i--) off[i] = off[i - 1];
         off[0] = 0;
+        unsigned char *hit = realloc(ps->hit, (size_t)(n ? n : 1));
+        if (!hit) return FLOE_ENOMEM;
+        memset(hit, 0, (size_t)(n ? n : 1));
+        ps->hit = hit;
         ps->adj_gen = nl->gen;
         ps->adj_np = n;
     }
@@ -1021,13 +1029,16 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
             te.dctx = &td;
             floe_world_error_to(ps->err[t], sizeof ps->err[t]);
             int failed = 0;
-            FLOE_OMP(omp for schedule(static))
+            /* blocks handed out in increasing order (dynamic): the lowest failed block is
+             * still the first error, and a dense region does not hold one thread back */
+            FLOE_OMP(omp for schedule(dynamic, 1))
             for (int b = 0; b < nb; b++) {
                 if (failed) continue; /* this thread's first error is the one its blocks met first */
                 stage_acc *a = &ps->blk[b];
                 memset(a, 0, sizeof *a);
                 a->pf = ps->pf;
                 a->act = ps->act;
+                a->hit = ps->hit;
                 const int k0 = b * B, k1 = k0 + B < npairs ? k0 + B : npairs;
                 memset(ps->act + k0, 0, (size_t)(k1 - k0));
                 int rc = stage_block(w, ctx, &te, k0, k1, nl->cand + k0, a);
@@ -1053,19 +1064,24 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
         const int n = p->n, *off = ps->adj_off, *adj = ps->adj;
         const double *pf = ps->pf;
         const unsigned char *act = ps->act;
+        unsigned char *hit = ps->hit;
         double *f = p->f, *tq = p->t;
         FLOE_OMP(omp parallel for schedule(static) num_threads(nt))
         for (int i = 0; i < n; i++) {
+            if (!hit[i]) continue; /* no force on it this evaluation */
+            hit[i] = 0;
+            double fi[3] = {f[3 * i], f[3 * i + 1], f[3 * i + 2]}, ti[3] = {tq[3 * i], tq[3 * i + 1], tq[3 * i + 2]};
             const int e1 = off[i + 1];
             for (int e = off[i]; e < e1; e++) {
                 const int k = adj[e] >> 1;
                 if (!act[k]) continue;
                 const double *bk = pf + 9 * (size_t)k;
                 if (adj[e] & 1)
-                    for (int a = 0; a < 3; a++) { f[3 * i + a] -= bk[a]; tq[3 * i + a] += bk[6 + a]; }
+                    for (int a = 0; a < 3; a++) { fi[a] -= bk[a]; ti[a] += bk[6 + a]; }
                 else
-                    for (int a = 0; a < 3; a++) { f[3 * i + a] += bk[a]; tq[3 * i + a] += bk[3 + a]; }
+                    for (int a = 0; a < 3; a++) { fi[a] += bk[a]; ti[a] += bk[3 + a]; }
             }
+            for (int a = 0; a < 3; a++) { f[3 * i + a] = fi[a]; tq[3 * i + a] = ti[a]; }
         }
     }
     w->ncontacts += (int)tot.ncontacts;

@@ -174,6 +174,7 @@ void floe_world_error_to(char *buf, size_t len);
 /* the threaded contact stage's buffers (forces.c), kept across evaluations by the world */
 typedef struct floe_par_scratch {
     double *pf; unsigned char *act; size_t pf_cap, act_cap; /* per entry: force on i, torques of i, j */
+    unsigned char *hit;                              /* per particle: a force to gather */
     int *adj, *adj_off; size_t adj_cap; int adj_np; long adj_gen; /* per particle: its entries, 2k
                                                        (as i) or 2k + 1 (as j), in list order */
     struct stage_acc *blk; int blk_cap;              /* per block (forces.c) */
