@@ -1034,14 +1034,17 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
             FLOE_OMP(omp for schedule(dynamic, 1))
             for (int b = 0; b < nb; b++) {
                 if (failed) continue; /* this thread's first error is the one its blocks met first */
-                stage_acc *a = &ps->blk[b];
-                memset(a, 0, sizeof *a);
-                a->pf = ps->pf;
-                a->act = ps->act;
-                a->hit = ps->hit;
+                /* the block's sums on this thread's stack (blocks side by side in ps->blk share
+                 * cache lines: updated per pair, they bounced between the cores) */
+                stage_acc la;
+                memset(&la, 0, sizeof la);
+                la.pf = ps->pf;
+                la.act = ps->act;
+                la.hit = ps->hit;
                 const int k0 = b * B, k1 = k0 + B < npairs ? k0 + B : npairs;
                 memset(ps->act + k0, 0, (size_t)(k1 - k0));
-                int rc = stage_block(w, ctx, &te, k0, k1, nl->cand + k0, a);
+                int rc = stage_block(w, ctx, &te, k0, k1, nl->cand + k0, &la);
+                ps->blk[b] = la;
                 if (rc) {
                     failed = 1;
                     ps->fail_b[t] = b;
