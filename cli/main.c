@@ -210,7 +210,11 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
     }
     /* threads per rank: -t N, else OMP_NUM_THREADS, else one (ranks usually fill the cores) */
     rc = floe_world_set_threads(w, o->threads > 0 ? o->threads : getenv("OMP_NUM_THREADS") ? 0 : 1);
+    if (rc == FLOE_OK) rc = floe_world_prepare(w);
     if (rc == FLOE_OK) rc = floe_world_parallel_init(w, NULL);
+    /* rank 0's mirror: a failed prepare is reported here and refused by every rank below */
+    if (rc == FLOE_OK && mirror && floe_world_prepare(mirror) != FLOE_OK)
+        fprintf(stderr, "%s: error: %s: %s\n", prog, label, floe_world_last_error(mirror));
     if (rc == FLOE_OK) rc = floe_world_parallel_outputs(w, mirror);
     if (rc != FLOE_OK) { /* the same on every rank: the checks are collective */
         if (rank == 0) fprintf(stderr, "%s: error: %s: %s\n", prog, label, floe_world_last_error(w));

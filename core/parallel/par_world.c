@@ -167,7 +167,9 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     MPI_Initialized(&inited);
     if (!inited) return floe_world_error(w, FLOE_EINVAL, "MPI decomposition: MPI_Init has not been called");
     if (w->par) return floe_world_error(w, FLOE_EINVAL, "MPI decomposition: the world is split already");
-    FLOE_TRY(floe_world_prepare(w));
+    /* prepared by the caller (floe_world_prepare lives in core/integrators, a layer above) */
+    if (!w->prepared)
+        return floe_world_error(w, FLOE_EINVAL, "MPI decomposition: prepare the world first (floe_world_prepare)");
     floe_particles *p = &w->p;
     if (w->npd) return refuse(w, "a peridynamic body");
     if (w->beams) return refuse(w, "beam bonds");
@@ -427,13 +429,13 @@ int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {
         if (mirror->p.n != P->ntotal) bad = 1;
         for (int k = 0; k < mirror->nobs && !bad; k++)
             if (mirror->obs[k]->klass->needs_contacts) bad = 2;
-        if (!bad && floe_world_prepare(mirror)) bad = 3;
+        if (!bad && !mirror->prepared) bad = 3;
     }
     int any;
     MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, P->comm);
     if (any == 1) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: the mirror does not hold the split world's particles");
     if (any == 2) return refuse(w, "an output that reads contacts");
-    if (any == 3) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: %s", floe_world_last_error(mirror));
+    if (any == 3) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: prepare the mirror first (floe_world_prepare)");
     P->mirror = P->rank == 0 ? mirror : NULL;
     int has = P->mirror != NULL, all_has;
     MPI_Allreduce(&has, &all_has, 1, MPI_INT, MPI_MAX, P->comm);

@@ -222,7 +222,8 @@ static void check_refusals(void) {
             sd.area = 1e-4;
             floe_world_add_servo_wall(w, wi, &sd);
         }
-        int rc = floe_world_parallel_init(w, NULL);
+        int rc = floe_world_prepare(w);
+        if (rc == 0) rc = floe_world_parallel_init(w, NULL);
         const char *why[3] = {"a fixed sphere", "RK2", "a servo wall"};
         CHECK(rc == FLOE_ENOTSUP && strstr(floe_world_last_error(w), "not supported yet"),
               "%s refused (rc %d: %s)", why[k], rc, floe_world_last_error(w));

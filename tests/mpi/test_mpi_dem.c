@@ -154,7 +154,8 @@ static void compare(int shapes, long nshort, long nlong, double xtol, double vto
         floe_world_destroy(ws);
     }
     double t1 = MPI_Wtime();
-    int rc = floe_world_parallel_init(w, NULL);
+    int rc = floe_world_prepare(w);
+    if (rc == 0) rc = floe_world_parallel_init(w, NULL);
     CHECK(rc == 0, "split: %s", rc ? floe_world_last_error(w) : "");
     if (rc) exit(1);
     bad |= run(w, 0, nshort, NULL);
