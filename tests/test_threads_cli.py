@@ -15,6 +15,7 @@ threaded):
     cell's virial and the stress output);
   - settle: 2,500 random spheres of two sizes falling on a floor, Hertz-Mindlin with
     friction (history across list rebuilds), energy and vtk outputs.
+Each run, restarted on 2 threads from its last checkpoint, ends with the same files.
 Also: -t 0 and -t x are refused (exit 2). Prints "N passed, N failed"."""
 import filecmp
 import os
@@ -140,6 +141,13 @@ def main():
                     check(nfiles >= 3, "%s: the run wrote its outputs (%d files)" % (name, nfiles))
                 else:
                     same_tree(ref, o, "%s -t %d" % (name, t))
+            if ref:
+                # continued from its last checkpoint on 2 threads (the list restored, not built)
+                o = os.path.join(tmp, "%s_t3" % name)
+                rc, out, err = run([cli, "run", scene, "-o", o, "-t", "2", "--restart", os.path.join(o, "checkpoint.bin")],
+                                   cwd=tmp)
+                if check(rc == 0, "%s: restart -t 2: exit %d: %s" % (name, rc, err)):
+                    same_tree(ref, o, "%s restarted on 2 threads" % name)
             print("%s: %d files, the same bytes for 1, 2 and 3 threads" % (name, len(os.listdir(ref or tmp))))
         for bad in ("0", "x", "-2"):
             rc, out, err = run([cli, "run", os.path.join(tmp, "settle.yaml"), "-o", os.path.join(tmp, "bad"), "-t", bad])

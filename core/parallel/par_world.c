@@ -109,6 +109,7 @@ static int hist_import(floe_world *w, floe_par *P, const double *in, int nin) {
     free(nl->img); /* no periodic cells under MPI */
     nl->img = NULL;
     nl->npairs = cnt;
+    nl->gen++; /* a new list: the threads' per-particle index is rebuilt (forces.c) */
     return FLOE_OK;
 }
 
