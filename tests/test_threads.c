@@ -70,6 +70,8 @@ typedef struct run_out {
     int ncontacts; long rebuilds;
     floe_detect_stats ds;
     int threaded;
+    int *list; int npairs; /* the neighbour list's entries (i, j, piece pair) at the end */
+    int nl_threads;        /* the threads of its last build's search */
 } run_out;
 
 static int run(int boxes, int leapfrog, int threads, int steps, run_out *o) {
@@ -106,6 +108,14 @@ static int run(int boxes, int leapfrog, int threads, int steps, run_out *o) {
     o->rebuilds = ns.rebuilds;
     floe_world_detect_stats(w, &o->ds);
     o->threaded = w->thr != NULL;
+    o->npairs = w->nl.npairs;
+    o->nl_threads = w->nl.threads;
+    o->list = malloc((size_t)(o->npairs ? o->npairs : 1) * 3 * sizeof(int));
+    for (int k = 0; k < o->npairs; k++) {
+        o->list[3 * k] = w->nl.pi[k];
+        o->list[3 * k + 1] = w->nl.pj[k];
+        o->list[3 * k + 2] = w->nl.sub[k];
+    }
     floe_world_destroy(w);
     return 0;
 }
@@ -128,11 +138,16 @@ static void compare(const char *what, int boxes, int leapfrog, int steps) {
               what, t, o.ncontacts, ref.ncontacts, o.rebuilds, ref.rebuilds);
         CHECK(!memcmp(&o.ds, &ref.ds, sizeof o.ds), "%s: %d threads: detection statistics equal (evaluations %ld/%ld)", what, t,
               o.ds.evaluations, ref.ds.evaluations);
+        CHECK(o.nl_threads == t, "%s: the list searched on %d threads (%d)", what, t, o.nl_threads);
+        CHECK(o.npairs == ref.npairs && !memcmp(o.list, ref.list, (size_t)ref.npairs * 3 * sizeof(int)),
+              "%s: %d threads: the neighbour list entry for entry (%d/%d entries)", what, t, o.npairs, ref.npairs);
         free(o.state);
+        free(o.list);
     }
     printf("%s: %d contacts after %d steps, dissipated %.6e J, LP evaluations %ld: same bits for 1-4 threads\n", what,
            ref.ncontacts, steps, ref.e.dissipated, ref.ds.evaluations);
     free(ref.state);
+    free(ref.list);
 }
 
 int main(void) {

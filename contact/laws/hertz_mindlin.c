@@ -46,7 +46,7 @@
 #include <stdlib.h>
 
 #include "floe_contact.h"
-#include "law_parts.h"
+#include "floe_law_kernels.h"
 
 #define HM_SQRT5 2.2360679774997897
 
@@ -147,15 +147,8 @@ static int hm_force(const floe_contact_law *law_, const floe_contact *c, double 
         floe_v3_set(hist, 0.0, 0.0, 0.0);
         return FLOE_OK;
     }
-    /* the normal and tangential parts of the composed law, fused (law_parts.h) */
-    floe_normal_force nf;
-    floe_hertz_normal(H->e_star, H->damping_ratio, c, &nf);
-    double Ft[3], energy = nf.energy, diss = nf.diss;
-    floe_mindlin_tangential(H->g_star, H->tangent_damping_ratio, H->mu, c, &nf, hist, Ft, &energy, &diss);
-    for (int k = 0; k < 3; ++k) out->force[k] = -nf.fn * c->n[k] + Ft[k];
-    out->energy = energy;
-    out->dissipation = diss;
-    out->fn = nf.fn;
+    /* the normal and tangential parts of the composed law, fused (floe_law_kernels.h) */
+    out->fn = floe_hm_kernel(H, c, hist, out->force, &out->energy, &out->dissipation);
     return FLOE_OK;
 }
 

@@ -156,7 +156,7 @@ int step_adaptive(floe_world *w, int (*inner)(floe_world *w)) {
         }
         double lim = 0.5 * w->nl.skin;
         if (predicted_disp2(w, dt) > lim * lim) {
-            int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
+            int rc = floe_world_nl_build(w);
             if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
         }
         FLOE_TRY(snapshot_io(w, 1));

@@ -208,7 +208,7 @@ static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb) {
     if (w->par) return floe_par_refresh(w, maxd2, have_xb); /* MPI: all ranks, ghosts (core/parallel) */
     if (w->cell ? floe_nl_needs_rebuild_cell(&w->nl, &w->p)
                 : floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0)) {
-        int rc = floe_nl_build(&w->nl, &w->p, w->def.dim, w->def.leaf_size);
+        int rc = floe_world_nl_build(w);
         if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
     }
     return FLOE_OK;

@@ -153,7 +153,7 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     if (rc) return floe_world_error(w, rc, "MPI decomposition failed (out of memory or Zoltan)");
     w->nl.gid = P->gid;
     w->nl.own_hi = P->nrep + P->nown;
-    rc = floe_nl_build(&w->nl, &w->p, w->def.dim, w->def.leaf_size);
+    rc = floe_world_nl_build(w);
     if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
     P->rebuilds++;
     return FLOE_OK;

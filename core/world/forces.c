@@ -7,6 +7,7 @@
 #include "beam_set.h"
 #include "floe_provider.h"
 #include "floe_par.h"
+#include "floe_law_kernels.h"
 #include <limits.h>
 #include <stdlib.h>
 #include <string.h>
@@ -354,6 +355,8 @@ typedef struct stage_env {
     int overlap2d; /* 2D and a law reads the overlap: polygon pairs skip the point detection */
     const floe_cell_state *cell; /* periodic cell (NULL: none): images, affine velocities */
     const int *img;              /* the list's image codes (with a cell) */
+    int fused;                   /* sphere pairs under a built-in law may take its fused kernel
+                                    (sphere_fused: no contacts recorded, no cell, no growth) */
 } stage_env;
 
 /* periodic cell: j's image xs = x_j + H n of entry k (xs untouched and x_j returned when the
@@ -724,6 +727,74 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     return pair_book(w, ctx, env, i, j, &c, &res, fx, ex, hist, acc, xb);
 }
 
+/* A pair of spheres under Hertz-Mindlin, fused (stage_env.fused): sphere_pair + hm_force +
+ * pair_book for an evaluation that records no contact, in a cell-less world without growth,
+ * less what that case never reads (the relative spin, the law's result struct and its
+ * dissipation sums, the couples' work: the law has none) and without the call through the
+ * law's table; the same operations otherwise, so the same bits (tests/test_sphere_path.c).
+ * (dx, dy, dz) = x_j - x_i, dist its length (> 0), depth <= the smaller radius, r_eff =
+ * r_i r_j / (r_i + r_j), m_eff = 1 / (1/m_i + 1/m_j). */
+static inline __attribute__((always_inline)) int sphere_fused(floe_world *w, const floe_step_ctx *ctx,
+                                                              const stage_env *env, int k, stage_acc *acc,
+                                                              int i, int j, double dx, double dy, double dz,
+                                                              double dist, double depth, double r_eff, double m_eff,
+                                                              const floe_contact_law *law, double *hist) {
+    floe_particles *p = env->p;
+    floe_contact cc; /* the fields the kernel reads */
+    floe_contact *c = &cc;
+    const double inv = 1.0 / dist, rad_i = p->radius[i], rad_j = p->radius[j];
+    const double *xa = p->x + 3 * i, *xb = p->x + 3 * j;
+    floe_v3_set(c->n, dx * inv, dy * inv, dz * inv);
+    const double *n = c->n;
+    c->depth = depth;
+    c->r_eff = r_eff;
+    c->fn_extra = 0.0;
+    /* the lever arms to the mid point of the two surface points (sphere_contact) */
+    double ri[3], rj[3], ui[3], uj[3];
+    for (int a = 0; a < 3; a++) {
+        const double x1 = xa[a] + rad_i * n[a], x2 = xb[a] - rad_j * n[a], pt = 0.5 * (x1 + x2);
+        ri[a] = pt - xa[a];
+        rj[a] = pt - xb[a];
+    }
+    const double *wi = p->w + 3 * i, *wj = p->w + 3 * j, *vi = p->v + 3 * i, *vj = p->v + 3 * j;
+    floe_v3_cross(ui, wi, ri);
+    floe_v3_cross(uj, wj, rj);
+    for (int a = 0; a < 3; a++) c->vr[a] = (vi[a] + ui[a]) - (vj[a] + uj[a]);
+    c->vn = floe_v3_dot(c->vr, n);
+    if (env->track) {
+        double e = fabs(c->vn) * w->dt / rmin(rad_i, rad_j);
+        if (e > acc->eta_d) acc->eta_d = e;
+    }
+    for (int a = 0; a < 3; a++) c->vt[a] = c->vr[a] - c->vn * n[a];
+    c->m_eff = m_eff;
+    c->dt = env->stepping ? ctx->dt : ctx->hist_dt;
+    double F[3], energy, diss;
+    floe_hm_kernel((const floe_hertz_mindlin_law *)law, c, hist, F, &energy, &diss);
+    (void)diss;
+    hist[FLOE_TWIST_SLOT] = 0.0;
+    double ti[3], tj[3], Ti[3], Tj[3];
+    floe_v3_cross(ti, ri, F);
+    floe_v3_cross(tj, rj, F);
+    for (int a = 0; a < 3; a++) { /* + the law's couples, zero (as sphere_pair adds them) */
+        Ti[a] = ti[a] + 0.0;
+        Tj[a] = -tj[a] + 0.0;
+    }
+    pair_apply(p, acc, k, i, j, F, Ti, Tj);
+    acc->elastic += energy;
+    if (env->stepping) { /* pair_book's ledger: (F_old + F_new)/2 . dx less the change of energy */
+        double fav[3];
+        for (int a = 0; a < 3; a++) fav[a] = 0.5 * (F[a] + hist[FLOE_FORCE_SLOT + a]);
+        const double dk = -floe_v3_dot(fav, c->vr) * c->dt - (energy - hist[FLOE_ENERGY_SLOT]);
+        acc->diss += dk;
+        hist[FLOE_DISS_SLOT] += dk;
+        acc_life(acc, i, j, hist[FLOE_DISS_SLOT] + energy);
+    }
+    hist[FLOE_ENERGY_SLOT] = energy;
+    memcpy(hist + FLOE_FORCE_SLOT, F, 3 * sizeof(double));
+    acc->ncontacts++;
+    return FLOE_OK;
+}
+
 /* Entry k when both particles are spheres, under a law that needs no overlap area: the
  * operations of contact_pair in the same order (the same bits), without the branches of
  * other shapes (warm starts, pieces, the manifold, the ridge scale) and inlined into the
@@ -744,13 +815,20 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
     }
     const floe_contact_law *law = w->laws[p->material[i] * env->nm + p->material[j]];
     if (env->any_none && floe_contact_law_no_contact(law)) return FLOE_OK;
+    double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
+    nl->touching[k] = 1;
+    if (env->fused && law->klass == &floe_hertz_mindlin_law_class) {
+        const double dist = sqrt(d2), depth = rs - dist, im = p->inv_mass[i] + p->inv_mass[j];
+        /* else the checks below and the law's own, with their messages */
+        if (dist > 0 && depth <= rmin(rad_i, rad_j) && im > 0 && im < INFINITY)
+            return sphere_fused(w, ctx, env, k, acc, i, j, dx, dy, dz, dist, depth, rad_i * rad_j / rs, 1.0 / im,
+                                law, hist);
+    }
     floe_contact c;
     c.gscale = 1.0;
     c.nextra = 0;
     c.fn_extra = 0.0;
     sphere_contact(&c, i, j, xa, xb, rad_i, rad_j, dx, dy, dz, d2);
-    double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
-    nl->touching[k] = 1;
     /* the centre of the smaller sphere inside the other: the normal would flip */
     if (c.depth > rmin(rad_i, rad_j)) return pair_too_deep(w, i, j, c.depth, 0, c.n);
     const double *wi = p->w + 3 * i, *wj = p->w + 3 * j, *vi = p->v + 3 * i, *vj = p->v + 3 * j;
@@ -996,7 +1074,8 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     const int any_pieces = w->any_pieces;
     const stage_env env = {p,         nl,         &dctx,       stepping, track,
                            any_growth, nm,        any_none,    any_pieces, any_overlap,
-                           any_floe,  w->def.dim == 2 && any_overlap, w->cell, w->cell ? nl->img : NULL};
+                           any_floe,  w->def.dim == 2 && any_overlap, w->cell, w->cell ? nl->img : NULL,
+                           !ctx->record && !w->cell && !any_growth};
     if (nl->npairs > nl->cand_cap) {
         int *c = realloc(nl->cand, (size_t)nl->npairs * sizeof *c);
         if (!c) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
@@ -1341,7 +1420,7 @@ int floe_world_forces(floe_world *w, const floe_step_ctx *ctx, int groups) {
         FLOE_TRY(pv->klass->forces(pv, w, ctx, o));
         if (o->rebuild) { /* between stages, never inside one */
             if (ctx->probe) return floe_world_error(w, FLOE_EINVAL, "internal: %s changed pairs at a probe", pv->klass->name);
-            int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
+            int rc = floe_world_nl_build(w);
             if (rc) return floe_world_error(w, rc, "neighbour list rebuild after %s changed pairs failed (out of memory)",
                                             pv->klass->name);
         }

@@ -4,6 +4,7 @@
  * last build. Walls (unbounded planes) are paired with every particle within reach.
  * Per-pair history (shear springs) survives rebuilds through a hash of the pair. */
 #include "world_internal.h"
+#include "floe_par.h"
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,7 +14,16 @@ int floe_nl_init(floe_neighbor_list *nl) {
     return FLOE_OK;
 }
 
+/* one search thread's entries found, (i, j, sub, img) each, and its tree-query scratch */
+struct floe_nl_found {
+    int *e; size_t n, cap;
+    int *scr; int scap;
+    int rc;
+};
+
 void floe_nl_free(floe_neighbor_list *nl) {
+    for (int t = 0; t < nl->nfound; t++) { free(nl->found[t].e); free(nl->found[t].scr); }
+    free(nl->found);
     floe_kdtree_destroy(nl->tree);
     free(nl->pi); free(nl->pj); free(nl->sub); free(nl->img); free(nl->warm); free(nl->hist); free(nl->touching);
     free(nl->x_build); free(nl->walls); free(nl->scratch); free(nl->r_build); free(nl->q_walls); free(nl->cand);
@@ -58,36 +68,24 @@ static uint64_t mix(uint64_t k) {
     return k;
 }
 
-static int push_one(floe_neighbor_list *nl, int i, int j, int sub, int img) {
-    if (nl->npairs == nl->cap) {
-        int nc = nl->cap ? 2 * nl->cap : 1024;
-        int *a = realloc(nl->pi, nc * sizeof(int));
-        if (!a) return FLOE_ENOMEM;
-        nl->pi = a;
-        int *b = realloc(nl->pj, nc * sizeof(int));
-        if (!b) return FLOE_ENOMEM;
-        nl->pj = b;
-        int *c = realloc(nl->sub, nc * sizeof(int));
-        if (!c) return FLOE_ENOMEM;
-        nl->sub = c;
-        if (nl->cell) {
-            int *d = realloc(nl->img, nc * sizeof(int));
-            if (!d) return FLOE_ENOMEM;
-            nl->img = d;
-        }
-        nl->cap = nc;
+static int push_one(struct floe_nl_found *fd, int i, int j, int sub, int img) {
+    if (fd->n + 4 > fd->cap) {
+        size_t nc = fd->cap ? 2 * fd->cap : 4096;
+        int *e = realloc(fd->e, nc * sizeof *e);
+        if (!e) return FLOE_ENOMEM;
+        fd->e = e;
+        fd->cap = nc;
     }
-    nl->pi[nl->npairs] = i;
-    nl->pj[nl->npairs] = j;
-    nl->sub[nl->npairs] = sub;
-    if (nl->cell) nl->img[nl->npairs] = img;
-    nl->npairs++;
+    int *e = fd->e + fd->n;
+    e[0] = i; e[1] = j; e[2] = sub; e[3] = img;
+    fd->n += 4;
     return FLOE_OK;
 }
 
 /* one entry per piece pair: compound bodies turn with respect to their centre of mass
  * without a rebuild, so all their piece pairs are listed and culled in the force loop */
-static int push_pair(floe_neighbor_list *nl, const floe_particles *p, int i, int j, const int n[3]) {
+static int push_pair(struct floe_nl_found *fd, const floe_neighbor_list *nl, const floe_particles *p, int i, int j,
+                     const int n[3]) {
     int img = 0;
     /* MPI: the pair in global-id order, as in the serial world (a history's sign convention
      * follows its order) */
@@ -96,19 +94,198 @@ static int push_pair(floe_neighbor_list *nl, const floe_particles *p, int i, int
         if (n) img = floe_img_encode(-n[0], -n[1], -n[2]);
     } else if (n) img = floe_img_encode(n[0], n[1], n[2]);
     int na = p->pieces ? p->pieces[i] : 1, nb = p->pieces ? p->pieces[j] : 1;
-    if (na == 1 && nb == 1) return push_one(nl, i, j, 0, img);
+    if (na == 1 && nb == 1) return push_one(fd, i, j, 0, img);
     for (int a = 0; a < na; a++)
-        for (int b = 0; b < nb; b++) FLOE_TRY(push_one(nl, i, j, FLOE_SUB(a, b), img));
+        for (int b = 0; b < nb; b++) FLOE_TRY(push_one(fd, i, j, FLOE_SUB(a, b), img));
     return FLOE_OK;
 }
 
-static int cmp_pair(const void *a, const void *b) {
-    const int *x = a, *y = b;
-    if (x[0] != y[0]) return x[0] < y[0] ? -1 : 1;
-    if (x[1] != y[1]) return x[1] < y[1] ? -1 : 1;
-    if (x[2] != y[2]) return x[2] < y[2] ? -1 : 1;
-    return (x[3] > y[3]) - (x[3] < y[3]);
+/* the order of a row's entries: (j, piece pair, image) */
+static inline int entry_less(const int *x, const int *y) {
+    if (x[0] != y[0]) return x[0] < y[0];
+    if (x[1] != y[1]) return x[1] < y[1];
+    return x[2] < y[2];
 }
+static int cmp_entry(const void *a, const void *b) {
+    const int *x = a, *y = b;
+    return entry_less(x, y) ? -1 : entry_less(y, x);
+}
+
+/* the search of bounded particle a (index into bidx) over the tree, from each copy of it in
+ * the neighbouring cells of a periodic cell: its entries into fd */
+typedef struct nl_search {
+    const floe_neighbor_list *nl;
+    const floe_particles *p;
+    const floe_cell_state *cell;
+    const int *bidx, *bsh;
+    const double *bx;
+    double skin, wd[3];
+    int dim;
+} nl_search;
+
+static int search_one(const nl_search *S, struct floe_nl_found *fd, int a) {
+    const floe_neighbor_list *nl = S->nl;
+    const floe_particles *p = S->p;
+    const floe_cell_state *cell = S->cell;
+    const int *bidx = S->bidx, *bsh = S->bsh, dim = S->dim;
+    const double *bx = S->bx;
+    const int mr = cell ? 1 : 0, mz = cell && dim == 3 ? 1 : 0;
+    const int i = bidx[a];
+    const double reach = 2 * p->radius[i] + S->skin;
+    for (int m0 = -mr; m0 <= mr; m0++)
+      for (int m1 = -mr; m1 <= mr; m1++)
+      for (int m2 = -mz; m2 <= mz; m2++) {
+        const double *qx = p->x + 3 * i;
+        double qy[3];
+        const int m[3] = {m0, m1, m2};
+        if (cell) {
+            double d[3], sf[3];
+            floe_v3_sub(d, bx + 3 * a, cell->o);
+            int skip = 0;
+            for (int r = 0; r < 3; r++) {
+                sf[r] = cell->Hinv[3 * r] * d[0] + cell->Hinv[3 * r + 1] * d[1] + cell->Hinv[3 * r + 2] * d[2] + m[r];
+                if (r < dim && (sf[r] * S->wd[r] < -reach || (sf[r] - 1) * S->wd[r] > reach)) skip = 1;
+            }
+            if (skip) continue;
+            for (int r = 0; r < 3; r++)
+                qy[r] = bx[3 * a + r] + cell->H[3 * r] * m0 + cell->H[3 * r + 1] * m1 + cell->H[3 * r + 2] * m2;
+            qx = qy;
+        }
+        int cnt;
+        for (;;) {
+            cnt = floe_kdtree_radius(nl->tree, qx, reach, fd->scr, fd->scap);
+            if (cnt <= fd->scap) break;
+            int nc = cnt + cnt / 2 + 64;
+            int *sc = realloc(fd->scr, nc * sizeof(int));
+            if (!sc) return FLOE_ENOMEM;
+            fd->scr = sc;
+            fd->scap = nc;
+        }
+        for (int k = 0; k < cnt; k++) {
+            const int b = fd->scr[k], j = bidx[b];
+            if (p->radius[j] > p->radius[i] || (p->radius[j] == p->radius[i] && j <= i)) continue;
+            if (p->motion[i] != FLOE_FREE && p->motion[j] != FLOE_FREE) continue;
+            /* MPI (core/parallel): a pair with a ghost is this rank's when its owned particle
+             * has the lower global id; two ghosts are never paired */
+            if (nl->gid && (i >= nl->own_hi || j >= nl->own_hi)) {
+                const int g = i >= nl->own_hi ? i : j, o = g == i ? j : i;
+                if (o >= nl->own_hi || nl->gid[g] < nl->gid[o]) continue;
+            }
+            int n[3] = {0, 0, 0};
+            double d[3];
+            floe_v3_sub(d, p->x + 3 * j, p->x + 3 * i);
+            if (cell) {
+                /* x_j + H sh_j = y_j ~ y_i + H m = x_i + H (sh_i + m): j's image x_j + H n near x_i */
+                for (int r = 0; r < 3; r++) n[r] = bsh[3 * b + r] - bsh[3 * a + r] - m[r];
+                for (int r = 0; r < 3; r++) d[r] += cell->H[3 * r] * n[0] + cell->H[3 * r + 1] * n[1] + cell->H[3 * r + 2] * n[2];
+            }
+            /* bonded pairs (PD families, beams) are excluded as their direct pair, PD bonds across
+             * the cell's faces through their image too (exclude_image) */
+            if (!(n[0] | n[1] | n[2]) ? nl->exclude && nl->exclude(nl->exclude_ctx, i, j)
+                                      : nl->exclude_image && nl->exclude_image(nl->exclude_ctx, i, j, n))
+                continue;
+            double lim = p->radius[i] + p->radius[j] + S->skin;
+            if (floe_v3_dot(d, d) <= lim * lim) FLOE_TRY(push_pair(fd, nl, p, i, j, cell ? n : NULL));
+        }
+    }
+    return FLOE_OK;
+}
+
+/* the list's arrays for cap entries (contents not kept) */
+static int nl_reserve(floe_neighbor_list *nl, size_t need) {
+    if (need <= (size_t)nl->cap && (!nl->cell || nl->img)) return FLOE_OK;
+    if (need > INT32_MAX) return FLOE_ENOMEM;
+    size_t nc = need > (size_t)nl->cap ? need + need / 4 + 1024 : (size_t)nl->cap;
+    if (nc > INT32_MAX) nc = need;
+    int *a = realloc(nl->pi, nc * sizeof(int));
+    if (!a) return FLOE_ENOMEM;
+    nl->pi = a;
+    int *b = realloc(nl->pj, nc * sizeof(int));
+    if (!b) return FLOE_ENOMEM;
+    nl->pj = b;
+    int *c = realloc(nl->sub, nc * sizeof(int));
+    if (!c) return FLOE_ENOMEM;
+    nl->sub = c;
+    if (nl->cell) {
+        int *d = realloc(nl->img, nc * sizeof(int));
+        if (!d) return FLOE_ENOMEM;
+        nl->img = d;
+    }
+    nl->cap = (int)nc;
+    return FLOE_OK;
+}
+
+/* The found entries of every thread into the list, sorted by (i, j, piece pair, image): a
+ * counting sort by i, then each row by the rest (the order does not depend on which thread
+ * found what, nor in which order). */
+static int nl_collect(floe_neighbor_list *nl, int n, int nt) {
+    size_t tot = 0;
+    for (int t = 0; t < nt; t++) tot += nl->found[t].n / 4;
+    FLOE_TRY(nl_reserve(nl, tot ? tot : 1));
+    int *row = calloc((size_t)n + 1, sizeof *row);
+    if (!row) return FLOE_ENOMEM;
+    for (int t = 0; t < nt; t++) {
+        const int *e = nl->found[t].e;
+        for (size_t q = 0; q < nl->found[t].n; q += 4) row[e[q] + 1]++;
+    }
+    for (int i = 0; i < n; i++) row[i + 1] += row[i];
+    /* scatter (row[i] advances to the row's end, then is moved back) */
+    int *pj = nl->pj, *sub = nl->sub, *img = nl->cell ? nl->img : NULL, *pi = nl->pi;
+    for (int t = 0; t < nt; t++) {
+        const int *e = nl->found[t].e;
+        for (size_t q = 0; q < nl->found[t].n; q += 4) {
+            const int k = row[e[q]]++;
+            pi[k] = e[q];
+            pj[k] = e[q + 1];
+            sub[k] = e[q + 2];
+            if (img) img[k] = e[q + 3];
+        }
+    }
+    for (int i = n; i > 0; i--) row[i] = row[i - 1];
+    row[0] = 0;
+    nl->npairs = (int)tot;
+    /* each row by (j, sub, img): insertion sort (a sphere's row is a few entries), qsort
+     * for the long rows of compound bodies */
+    int *tmp = NULL;
+    size_t tcap = 0;
+    for (int i = 0; i < n; i++) {
+        const int k0 = row[i], m = row[i + 1] - k0;
+        if (m < 2) continue;
+        if (m <= 24) {
+            for (int a = 1; a < m; a++) {
+                int key[3] = {pj[k0 + a], sub[k0 + a], img ? img[k0 + a] : 0}, b = a - 1;
+                while (b >= 0) {
+                    const int cur[3] = {pj[k0 + b], sub[k0 + b], img ? img[k0 + b] : 0};
+                    if (!entry_less(key, cur)) break;
+                    pj[k0 + b + 1] = cur[0]; sub[k0 + b + 1] = cur[1];
+                    if (img) img[k0 + b + 1] = cur[2];
+                    b--;
+                }
+                pj[k0 + b + 1] = key[0]; sub[k0 + b + 1] = key[1];
+                if (img) img[k0 + b + 1] = key[2];
+            }
+        } else {
+            if ((size_t)m * 3 > tcap) {
+                int *t2 = realloc(tmp, (size_t)m * 3 * sizeof *t2);
+                if (!t2) { free(tmp); free(row); return FLOE_ENOMEM; }
+                tmp = t2;
+                tcap = (size_t)m * 3;
+            }
+            for (int a = 0; a < m; a++) {
+                tmp[3 * a] = pj[k0 + a]; tmp[3 * a + 1] = sub[k0 + a]; tmp[3 * a + 2] = img ? img[k0 + a] : 0;
+            }
+            qsort(tmp, m, 3 * sizeof(int), cmp_entry);
+            for (int a = 0; a < m; a++) {
+                pj[k0 + a] = tmp[3 * a]; sub[k0 + a] = tmp[3 * a + 1];
+                if (img) img[k0 + a] = tmp[3 * a + 2];
+            }
+        }
+    }
+    free(tmp);
+    free(row);
+    return FLOE_OK;
+}
+
 /* an entry is (i, j, piece pair, image): the history follows all four */
 static uint64_t entry_hash(uint64_t key, int sub, int img) {
     return mix(key ^ ((uint64_t)(uint32_t)sub * 0x9E3779B97F4A7C15ULL) ^ ((uint64_t)(uint32_t)img << 17));
@@ -171,16 +348,28 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
         if (isfinite(p->radius[i])) nb++;
         else nw++;
     }
+    /* the search's threads (the world sets nl->threads for a list this long), their buffers */
+    int nt = nl->threads > 1 && nb > 1 ? nl->threads : 1;
+    if (nt > nl->nfound) {
+        struct floe_nl_found *f = realloc(nl->found, (size_t)nt * sizeof *f);
+        if (f) {
+            memset(f + nl->nfound, 0, (size_t)(nt - nl->nfound) * sizeof *f);
+            nl->found = f;
+            nl->nfound = nt;
+        }
+    }
     int *bidx = malloc((nb ? nb : 1) * sizeof(int));
     double *bx = malloc((nb ? nb : 1) * 3 * sizeof(double));
     /* periodic cell: the tree holds the positions wrapped into the cell, x + H sh */
     int *bsh = cell ? malloc((nb ? nb : 1) * 3 * sizeof(int)) : NULL;
-    int *nimg = cell && !nl->img ? malloc((size_t)(nl->cap ? nl->cap : 1) * sizeof(int)) : NULL;
-    if (nimg) nl->img = nimg;
     nl->walls = malloc((nw ? nw : 1) * sizeof(int));
-    if (!bidx || !bx || !nl->walls || (cell && (!bsh || !nl->img))) {
+    if (!bidx || !bx || !nl->walls || (cell && !bsh) || nt > nl->nfound) {
         free(bidx); free(bx); free(bsh); free(okeys); free(ohist); free(osub); free(oimg); free(otouch); free(owarm);
         return FLOE_ENOMEM;
+    }
+    for (int t = 0; t < nt; t++) {
+        nl->found[t].n = 0;
+        nl->found[t].rc = FLOE_OK;
     }
     double rmin = INFINITY;
     nb = 0;
@@ -217,72 +406,20 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     /* periodic cell: each particle also looks for the images of the others through the
      * neighbouring cells' copies of itself, y + H m, m in {-1, 0, 1}^dim (the cell is wider than
      * a reach: floe_cell_prepare), skipping the copies whose ball misses the cell */
-    double wd[3] = {INFINITY, INFINITY, INFINITY};
+    nl_search S = {nl, p, cell, bidx, bsh, bx, skin, {INFINITY, INFINITY, INFINITY}, dim};
     if (cell)
         for (int r = 0; r < dim; r++) {
             const double *h = cell->Hinv + 3 * r;
-            wd[r] = 1.0 / sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+            S.wd[r] = 1.0 / sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
         }
-    const int mr = cell ? 1 : 0, mz = cell && dim == 3 ? 1 : 0;
-    for (int a = 0; a < nb && rc == FLOE_OK; a++)
-      for (int m0 = -mr; m0 <= mr && rc == FLOE_OK; m0++)
-      for (int m1 = -mr; m1 <= mr && rc == FLOE_OK; m1++)
-      for (int m2 = -mz; m2 <= mz && rc == FLOE_OK; m2++) {
-        int i = bidx[a];
-        double reach = 2 * p->radius[i] + skin;
-        const double *qx = p->x + 3 * i;
-        double qy[3];
-        const int m[3] = {m0, m1, m2};
-        if (cell) {
-            double d[3], sf[3];
-            floe_v3_sub(d, bx + 3 * a, cell->o);
-            int skip = 0;
-            for (int r = 0; r < 3; r++) {
-                sf[r] = cell->Hinv[3 * r] * d[0] + cell->Hinv[3 * r + 1] * d[1] + cell->Hinv[3 * r + 2] * d[2] + m[r];
-                if (r < dim && (sf[r] * wd[r] < -reach || (sf[r] - 1) * wd[r] > reach)) skip = 1;
-            }
-            if (skip) continue;
-            for (int r = 0; r < 3; r++)
-                qy[r] = bx[3 * a + r] + cell->H[3 * r] * m0 + cell->H[3 * r + 1] * m1 + cell->H[3 * r + 2] * m2;
-            qx = qy;
+    if (rc == FLOE_OK) {
+        /* threads: each searches chunks of particles into its own buffer (nl_collect sorts) */
+        FLOE_OMP(omp parallel for schedule(dynamic, 256) num_threads(nt) if (nt > 1))
+        for (int a = 0; a < nb; a++) {
+            struct floe_nl_found *fd = &nl->found[floe_par_thread()];
+            if (fd->rc == FLOE_OK) fd->rc = search_one(&S, fd, a);
         }
-        int cnt;
-        for (;;) {
-            cnt = floe_kdtree_radius(nl->tree, qx, reach, nl->scratch, nl->scratch_cap);
-            if (cnt <= nl->scratch_cap) break;
-            int nc = cnt + cnt / 2 + 64;
-            int *s = realloc(nl->scratch, nc * sizeof(int));
-            if (!s) { rc = FLOE_ENOMEM; break; }
-            nl->scratch = s;
-            nl->scratch_cap = nc;
-        }
-        if (rc) break;
-        for (int k = 0; k < cnt; k++) {
-            const int b = nl->scratch[k], j = bidx[b];
-            if (p->radius[j] > p->radius[i] || (p->radius[j] == p->radius[i] && j <= i)) continue;
-            if (p->motion[i] != FLOE_FREE && p->motion[j] != FLOE_FREE) continue;
-            /* MPI (core/parallel): a pair with a ghost is this rank's when its owned particle
-             * has the lower global id; two ghosts are never paired */
-            if (nl->gid && (i >= nl->own_hi || j >= nl->own_hi)) {
-                const int g = i >= nl->own_hi ? i : j, o = g == i ? j : i;
-                if (o >= nl->own_hi || nl->gid[g] < nl->gid[o]) continue;
-            }
-            int n[3] = {0, 0, 0};
-            double d[3];
-            floe_v3_sub(d, p->x + 3 * j, p->x + 3 * i);
-            if (cell) {
-                /* x_j + H sh_j = y_j ~ y_i + H m = x_i + H (sh_i + m): j's image x_j + H n near x_i */
-                for (int r = 0; r < 3; r++) n[r] = bsh[3 * b + r] - bsh[3 * a + r] - m[r];
-                for (int r = 0; r < 3; r++) d[r] += cell->H[3 * r] * n[0] + cell->H[3 * r + 1] * n[1] + cell->H[3 * r + 2] * n[2];
-            }
-            /* bonded pairs (PD families, beams) are excluded as their direct pair, PD bonds across
-             * the cell's faces through their image too (exclude_image) */
-            if (!(n[0] | n[1] | n[2]) ? nl->exclude && nl->exclude(nl->exclude_ctx, i, j)
-                                      : nl->exclude_image && nl->exclude_image(nl->exclude_ctx, i, j, n))
-                continue;
-            double lim = p->radius[i] + p->radius[j] + skin;
-            if (floe_v3_dot(d, d) <= lim * lim) rc = push_pair(nl, p, i, j, cell ? n : NULL);
-        }
+        for (int t = 0; t < nt && rc == FLOE_OK; t++) rc = nl->found[t].rc;
     }
     if (rc == FLOE_OK) {
         double *qw = realloc(nl->q_walls, (size_t)(nl->nwalls ? nl->nwalls : 1) * 4 * sizeof(double));
@@ -303,28 +440,18 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             if (p->motion[i] != FLOE_FREE && p->motion[wi] != FLOE_FREE) continue;
             double d[3];
             floe_v3_sub(d, p->x + 3 * i, p->x + 3 * wi);
-            if (floe_v3_dot(d, nw) <= p->radius[i] + skin) rc = push_pair(nl, p, i, wi, NULL);
+            if (floe_v3_dot(d, nw) <= p->radius[i] + skin) rc = push_pair(&nl->found[0], nl, p, i, wi, NULL);
         }
     }
     free(bx);
     free(bidx);
     free(bsh);
-    if (rc == FLOE_OK) {
-        /* deterministic order, cache friendly: sort by (i, j) */
-        int *tmp = malloc((size_t)(nl->npairs ? nl->npairs : 1) * 4 * sizeof(int));
-        if (!tmp) rc = FLOE_ENOMEM;
-        else {
-            for (int k = 0; k < nl->npairs; k++) {
-                tmp[4 * k] = nl->pi[k]; tmp[4 * k + 1] = nl->pj[k]; tmp[4 * k + 2] = nl->sub[k];
-                tmp[4 * k + 3] = cell ? nl->img[k] : 0;
-            }
-            qsort(tmp, nl->npairs, 4 * sizeof(int), cmp_pair);
-            for (int k = 0; k < nl->npairs; k++) {
-                nl->pi[k] = tmp[4 * k]; nl->pj[k] = tmp[4 * k + 1]; nl->sub[k] = tmp[4 * k + 2];
-                if (cell) nl->img[k] = tmp[4 * k + 3];
-            }
-            free(tmp);
-        }
+    /* deterministic order, cache friendly: sorted by (i, j, piece pair, image) */
+    if (rc == FLOE_OK) rc = nl_collect(nl, n, nt);
+    for (int t = 0; t < nt; t++) { /* 16 bytes per entry: not kept between builds */
+        free(nl->found[t].e);
+        nl->found[t].e = NULL;
+        nl->found[t].cap = nl->found[t].n = 0;
     }
     if (rc == FLOE_OK) {
         size_t np = nl->npairs ? nl->npairs : 1;
@@ -345,6 +472,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
         if (nl->use_warm)
             for (size_t k = 0; k < (size_t)nl->npairs * FLOE_DETECT_WARM; k++) nl->warm[k] = NAN;
         if (nold) {
+            FLOE_OMP(omp parallel for schedule(static) num_threads(nt) if (nt > 1))
             for (int k = 0; k < nl->npairs; k++) {
                 uint64_t key = pair_key(nl->pi[k], nl->pj[k]);
                 const int im = cell ? nl->img[k] : 0;

@@ -148,6 +148,11 @@ int floe_world_loop_threads(const floe_world *w, long items) {
     return floe_world_threads(w);
 }
 
+int floe_world_nl_build(floe_world *w) {
+    w->nl.threads = floe_world_loop_threads(w, w->p.n);
+    return floe_nl_build(&w->nl, &w->p, w->def.dim, w->def.leaf_size);
+}
+
 static void particles_free(floe_particles *p) {
     free(p->block);
     p->block = NULL;

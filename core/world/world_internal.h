@@ -46,6 +46,10 @@ typedef struct floe_neighbor_list {
     long gen;                /* builds so far, failed ones included (threads' pair index, forces.c) */
     int *walls; int nwalls;  /* particles with unbounded geometry (planes) */
     int *scratch; int scratch_cap;
+    /* threads of the build's search (neighbor.c; set by the world: floe_world_loop_threads)
+     * and their buffers of found entries (freed after each build) and tree-query scratch */
+    int threads;
+    struct floe_nl_found *found; int nfound;
     /* optional: pairs for which exclude(ctx, i, j) is non-zero are never listed (the bonded
      * family members of a peridynamic body) */
     int (*exclude)(const void *ctx, int i, int j);
@@ -236,6 +240,8 @@ int floe_nl_needs_rebuild(const floe_neighbor_list *nl, const floe_particles *p)
 int floe_nl_needs_rebuild_after_drift(const floe_neighbor_list *nl, const floe_particles *p, double maxd2,
                                       int growth);
 int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int leaf_size);
+/* the world's list rebuilt from its particles, its search on the world's threads */
+int floe_world_nl_build(floe_world *w);
 
 /* the periodic cell (core/world/cell.c): checks at prepare (what a cell refuses, its width),
  * the step's velocity gradient (servo, strain path) before the drift, the affine map of the

@@ -222,7 +222,7 @@ int prepare_store(floe_world *w) {
 
 int prepare_state(floe_world *w) {
     floe_particles *p = &w->p;
-    int rc = floe_nl_build(&w->nl, p, w->def.dim, w->def.leaf_size);
+    int rc = floe_world_nl_build(w);
     if (rc) return floe_world_error(w, rc, "neighbour list build failed (out of memory)");
     {
         double *ko = realloc(w->kin_old, (size_t)(p->n ? p->n : 1) * 6 * sizeof(double));

@@ -1,0 +1,28 @@
+/* floe_law_kernels.h - the built-in laws' force kernels for the world's sphere path
+ * (core/world/forces.c): inline, so that a pair of spheres under a fused law pays no call,
+ * no result struct and none of the law's own dissipation sums (the world's ledger books the
+ * dissipation from the work and the stored energy). One copy of each formula: the laws'
+ * force functions (hertz_mindlin.c) are these kernels too. */
+#ifndef FLOE_LAW_KERNELS_H
+#define FLOE_LAW_KERNELS_H
+
+#include "law_parts.h"
+
+/* Hertz-Mindlin (hertz_mindlin.c) on a contact whose depth > 0, n, vn, vt, r_eff and m_eff
+ * (finite, > 0), dt and fn_extra are set: the force on i into F, the stored energy into
+ * *energy and the losses of this evaluation into *diss; hist[0..2], the tangential spring,
+ * advanced. Returns the normal force Fn. */
+static inline __attribute__((always_inline)) double floe_hm_kernel(const floe_hertz_mindlin_law *H,
+                                                                    const floe_contact *c, double *hist,
+                                                                    double F[3], double *energy, double *diss) {
+    floe_normal_force nf;
+    floe_hertz_normal(H->e_star, H->damping_ratio, c, &nf);
+    double Ft[3];
+    *energy = nf.energy;
+    *diss = nf.diss;
+    floe_mindlin_tangential(H->g_star, H->tangent_damping_ratio, H->mu, c, &nf, hist, Ft, energy, diss);
+    for (int k = 0; k < 3; ++k) F[k] = -nf.fn * c->n[k] + Ft[k];
+    return nf.fn;
+}
+
+#endif
