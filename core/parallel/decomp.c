@@ -22,18 +22,33 @@ int floe_par_reserve(double **buf, size_t *cap, size_t n) {
     return FLOE_OK;
 }
 
-/* the record: gid, x3 v3 q4 w3 L3 f3 t3, mass inv_mass inertia3 radius, geom material group
- * motion kind iso, inv_iso rdot pieces thick = 39 doubles */
+void floe_par_pack_state(const floe_particles *p, int i, double *r) {
+    memcpy(r, p->x + 3 * i, 3 * sizeof *r);
+    memcpy(r + 3, p->v + 3 * i, 3 * sizeof *r);
+    memcpy(r + 6, p->q + 4 * i, 4 * sizeof *r);
+    memcpy(r + 10, p->w + 3 * i, 3 * sizeof *r);
+    memcpy(r + 13, p->L + 3 * i, 3 * sizeof *r);
+    memcpy(r + 16, p->f + 3 * i, 3 * sizeof *r);
+    memcpy(r + 19, p->t + 3 * i, 3 * sizeof *r);
+}
+
+void floe_par_unpack_state(floe_particles *p, int i, const double *r) {
+    memcpy(p->x + 3 * i, r, 3 * sizeof *r);
+    memcpy(p->v + 3 * i, r + 3, 3 * sizeof *r);
+    memcpy(p->q + 4 * i, r + 6, 4 * sizeof *r);
+    memcpy(p->w + 3 * i, r + 10, 3 * sizeof *r);
+    memcpy(p->L + 3 * i, r + 13, 3 * sizeof *r);
+    memcpy(p->f + 3 * i, r + 16, 3 * sizeof *r);
+    memcpy(p->t + 3 * i, r + 19, 3 * sizeof *r);
+}
+
+/* the record: gid, the state (x3 v3 q4 w3 L3 f3 t3), mass inv_mass inertia3 radius, geom
+ * material group motion kind iso, inv_iso rdot pieces thick = 39 doubles */
 void floe_par_pack(const floe_particles *p, int i, long long gid, double *r) {
     int k = 0;
     r[k++] = (double)gid;
-    for (int a = 0; a < 3; a++) r[k++] = p->x[3 * i + a];
-    for (int a = 0; a < 3; a++) r[k++] = p->v[3 * i + a];
-    for (int a = 0; a < 4; a++) r[k++] = p->q[4 * i + a];
-    for (int a = 0; a < 3; a++) r[k++] = p->w[3 * i + a];
-    for (int a = 0; a < 3; a++) r[k++] = p->L[3 * i + a];
-    for (int a = 0; a < 3; a++) r[k++] = p->f[3 * i + a];
-    for (int a = 0; a < 3; a++) r[k++] = p->t[3 * i + a];
+    floe_par_pack_state(p, i, r + k);
+    k += FLOE_PAR_FWD;
     r[k++] = p->mass[i];
     r[k++] = p->inv_mass[i];
     for (int a = 0; a < 3; a++) r[k++] = p->inertia[3 * i + a];
@@ -53,13 +68,8 @@ void floe_par_pack(const floe_particles *p, int i, long long gid, double *r) {
 void floe_par_unpack(floe_particles *p, int i, const double *r, long long *gid) {
     int k = 0;
     *gid = (long long)r[k++];
-    for (int a = 0; a < 3; a++) p->x[3 * i + a] = r[k++];
-    for (int a = 0; a < 3; a++) p->v[3 * i + a] = r[k++];
-    for (int a = 0; a < 4; a++) p->q[4 * i + a] = r[k++];
-    for (int a = 0; a < 3; a++) p->w[3 * i + a] = r[k++];
-    for (int a = 0; a < 3; a++) p->L[3 * i + a] = r[k++];
-    for (int a = 0; a < 3; a++) p->f[3 * i + a] = r[k++];
-    for (int a = 0; a < 3; a++) p->t[3 * i + a] = r[k++];
+    floe_par_unpack_state(p, i, r + k);
+    k += FLOE_PAR_FWD;
     p->mass[i] = r[k++];
     p->inv_mass[i] = r[k++];
     for (int a = 0; a < 3; a++) p->inertia[3 * i + a] = r[k++];
@@ -319,32 +329,12 @@ int floe_par_forward_comm(floe_world *w, floe_par *P) {
     if (floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)P->nsend * m) ||
         floe_par_reserve(&P->rbuf, &P->rbuf_cap, (size_t)P->nghost * m))
         return FLOE_ENOMEM;
-    for (int k = 0; k < P->nsend; k++) {
-        const int i = P->send_idx[k];
-        double *r = P->sbuf + (size_t)k * m;
-        memcpy(r, p->x + 3 * i, 3 * sizeof *r);
-        memcpy(r + 3, p->v + 3 * i, 3 * sizeof *r);
-        memcpy(r + 6, p->q + 4 * i, 4 * sizeof *r);
-        memcpy(r + 10, p->w + 3 * i, 3 * sizeof *r);
-        memcpy(r + 13, p->L + 3 * i, 3 * sizeof *r);
-        memcpy(r + 16, p->f + 3 * i, 3 * sizeof *r);
-        memcpy(r + 19, p->t + 3 * i, 3 * sizeof *r);
-    }
+    for (int k = 0; k < P->nsend; k++) floe_par_pack_state(p, P->send_idx[k], P->sbuf + (size_t)k * m);
     int *c = ghost_counts(P, m);
     if (!c) return FLOE_ENOMEM;
     MPI_Alltoallv(P->sbuf, c, c + S, MPI_DOUBLE, P->rbuf, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->comm);
     free(c);
-    for (int k = 0; k < P->nghost; k++) {
-        const int i = g0 + k;
-        const double *r = P->rbuf + (size_t)k * m;
-        memcpy(p->x + 3 * i, r, 3 * sizeof *r);
-        memcpy(p->v + 3 * i, r + 3, 3 * sizeof *r);
-        memcpy(p->q + 4 * i, r + 6, 4 * sizeof *r);
-        memcpy(p->w + 3 * i, r + 10, 3 * sizeof *r);
-        memcpy(p->L + 3 * i, r + 13, 3 * sizeof *r);
-        memcpy(p->f + 3 * i, r + 16, 3 * sizeof *r);
-        memcpy(p->t + 3 * i, r + 19, 3 * sizeof *r);
-    }
+    for (int k = 0; k < P->nghost; k++) floe_par_unpack_state(p, g0 + k, P->rbuf + (size_t)k * m);
     return FLOE_OK;
 }
 

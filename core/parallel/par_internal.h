@@ -17,7 +17,7 @@
 /* one particle as it travels: every array of the particle store (particle_store.h) and the
  * global id, all as doubles (integers below 2^53 are exact) */
 enum { FLOE_PAR_REC = 39 };
-/* what a ghost refresh carries: x v q w L f t */
+/* a particle's state, what a ghost refresh and the mirror gather carry: x v q w L f t */
 enum { FLOE_PAR_FWD = 22 };
 
 typedef struct floe_par {
@@ -41,8 +41,13 @@ typedef struct floe_par {
 /* decomp.c: the pieces, on the world's store */
 /* byte buffers of at least n doubles (0 or FLOE_ENOMEM) */
 int floe_par_reserve(double **buf, size_t *cap, size_t n);
+/* the whole record of local particle i (FLOE_PAR_REC doubles: gid, then the state as
+ * floe_par_pack_state writes it, then the constant fields) */
 void floe_par_pack(const floe_particles *p, int i, long long gid, double *r);
 void floe_par_unpack(floe_particles *p, int i, const double *r, long long *gid);
+/* the state of local particle i: x3 v3 q4 w3 L3 f3 t3 (FLOE_PAR_FWD doubles) */
+void floe_par_pack_state(const floe_particles *p, int i, double *r);
+void floe_par_unpack_state(floe_particles *p, int i, const double *r);
 /* send nitems items of m doubles, item k to rank dest[k]; *out (malloc'ed, caller frees)
  * receives *nout items, ordered by source rank then the source's order */
 int floe_par_route(floe_par *P, const double *items, const int *dest, int nitems, int m, double **out, int *nout);

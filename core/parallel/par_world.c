@@ -458,13 +458,7 @@ static int mirror_gather(floe_world *w, floe_par *P) {
         const int i = lo + k;
         double *r = sb + (size_t)k * m;
         r[0] = (double)P->gid[i];
-        memcpy(r + 1, p->x + 3 * i, 3 * sizeof *r);
-        memcpy(r + 4, p->v + 3 * i, 3 * sizeof *r);
-        memcpy(r + 7, p->q + 4 * i, 4 * sizeof *r);
-        memcpy(r + 11, p->w + 3 * i, 3 * sizeof *r);
-        memcpy(r + 14, p->L + 3 * i, 3 * sizeof *r);
-        memcpy(r + 17, p->f + 3 * i, 3 * sizeof *r);
-        memcpy(r + 20, p->t + 3 * i, 3 * sizeof *r);
+        floe_par_pack_state(p, i, r + 1);
     }
     for (int i = 0; i < P->nrep; i++) {
         memcpy(wf + 6 * i, p->f + 3 * i, 3 * sizeof *wf);
@@ -486,13 +480,7 @@ static int mirror_gather(floe_world *w, floe_par *P) {
             const double *r = rb + (size_t)k * m;
             const long long g = (long long)r[0];
             if (g < 0 || g >= q->n) continue;
-            memcpy(q->x + 3 * g, r + 1, 3 * sizeof *r);
-            memcpy(q->v + 3 * g, r + 4, 3 * sizeof *r);
-            memcpy(q->q + 4 * g, r + 7, 4 * sizeof *r);
-            memcpy(q->w + 3 * g, r + 11, 3 * sizeof *r);
-            memcpy(q->L + 3 * g, r + 14, 3 * sizeof *r);
-            memcpy(q->f + 3 * g, r + 17, 3 * sizeof *r);
-            memcpy(q->t + 3 * g, r + 20, 3 * sizeof *r);
+            floe_par_unpack_state(q, (int)g, r + 1);
         }
         for (int i = 0; i < P->nrep; i++) {
             const long long g = P->gid[i];
