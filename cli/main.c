@@ -228,6 +228,7 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
         printf("mpi:        %d ranks (recursive coordinate bisection)\n", size);
         fflush(stdout);
     }
+    floe_world_parallel_comm_reset(w); /* the run's traffic, the split's left out */
     progress pr = {0};
     pr.show = rank == 0 && !o->quiet && isatty(STDERR_FILENO);
     pr.t0 = pr.last = now_s();
@@ -253,6 +254,23 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
     floe_world_parallel_counts(w, &own, &gh);
     double red[3] = {floe_world_contact_count(w), own, gh};
     floe_world_parallel_sum(w, red, 3);
+    /* the traffic per step and rank (floe_comm_stats): the mean and the largest over the ranks,
+     * by kind, and the mean loads */
+    floe_comm_stats cs;
+    floe_world_parallel_comm(w, &cs);
+    const double st = cs.steps > 0 ? (double)cs.steps : 1.0;
+    double mine[FLOE_COMM_KINDS + 4], sum[FLOE_COMM_KINDS + 4], mx = 0;
+    mine[FLOE_COMM_KINDS] = 0;
+    mine[FLOE_COMM_KINDS + 1] = 0;
+    for (int k = 0; k < FLOE_COMM_KINDS; k++) {
+        mine[k] = (double)cs.bytes[k] / st;
+        mine[FLOE_COMM_KINDS] += mine[k];
+        mine[FLOE_COMM_KINDS + 1] += (double)cs.messages[k] / st;
+    }
+    mine[FLOE_COMM_KINDS + 2] = cs.ghost_steps / st;
+    mine[FLOE_COMM_KINDS + 3] = cs.owned_steps / st;
+    MPI_Reduce(mine, sum, FLOE_COMM_KINDS + 4, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
+    MPI_Reduce(mine + FLOE_COMM_KINDS, &mx, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
     if (rank == 0 && !o->quiet) {
         long steps = floe_world_step_count(w) - step0;
         const double cur = e.kinetic_trans + e.kinetic_rot + e.elastic;
@@ -265,6 +283,12 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
         printf("  particle-steps/s:   %.3g (%d particles, %d ranks)\n",
                wall > 0 ? red[1] * (double)steps / wall : 0, (int)red[1], size);
         printf("  ghosts (all ranks): %d\n", (int)red[2]);
+        printf("  comm/step/rank:     %.0f B mean, %.0f B max, %.2f messages (ghost %.0f, reverse %.0f, migrate %.0f, "
+               "reduce %.0f, output %.0f B); ghosts/rank %.1f, particles/rank %.1f; %ld rebuilds\n",
+               sum[FLOE_COMM_KINDS] / size, mx, sum[FLOE_COMM_KINDS + 1] / size, sum[FLOE_COMM_GHOST] / size,
+               sum[FLOE_COMM_REVERSE] / size, sum[FLOE_COMM_MIGRATE] / size, sum[FLOE_COMM_REDUCE] / size,
+               sum[FLOE_COMM_OUTPUT] / size, sum[FLOE_COMM_KINDS + 2] / size, sum[FLOE_COMM_KINDS + 3] / size,
+               cs.rebuilds);
         printf("  contacts (current): %d\n", (int)red[0]);
         printf("  energy balance err: %.3g (relative)\n",
                (cur + e.dissipated - e.initial - e.work_body - e.work_boundary) / scale);

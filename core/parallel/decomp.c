@@ -22,18 +22,33 @@ int floe_par_reserve(double **buf, size_t *cap, size_t n) {
     return FLOE_OK;
 }
 
-/* the record: gid, x3 v3 q4 w3 L3 f3 t3, mass inv_mass inertia3 radius, geom material group
- * motion kind iso, inv_iso rdot pieces thick = 39 doubles */
+void floe_par_pack_state(const floe_particles *p, int i, double *r) {
+    memcpy(r, p->x + 3 * i, 3 * sizeof *r);
+    memcpy(r + 3, p->v + 3 * i, 3 * sizeof *r);
+    memcpy(r + 6, p->q + 4 * i, 4 * sizeof *r);
+    memcpy(r + 10, p->w + 3 * i, 3 * sizeof *r);
+    memcpy(r + 13, p->L + 3 * i, 3 * sizeof *r);
+    memcpy(r + 16, p->f + 3 * i, 3 * sizeof *r);
+    memcpy(r + 19, p->t + 3 * i, 3 * sizeof *r);
+}
+
+void floe_par_unpack_state(floe_particles *p, int i, const double *r) {
+    memcpy(p->x + 3 * i, r, 3 * sizeof *r);
+    memcpy(p->v + 3 * i, r + 3, 3 * sizeof *r);
+    memcpy(p->q + 4 * i, r + 6, 4 * sizeof *r);
+    memcpy(p->w + 3 * i, r + 10, 3 * sizeof *r);
+    memcpy(p->L + 3 * i, r + 13, 3 * sizeof *r);
+    memcpy(p->f + 3 * i, r + 16, 3 * sizeof *r);
+    memcpy(p->t + 3 * i, r + 19, 3 * sizeof *r);
+}
+
+/* the record: gid, the state (x3 v3 q4 w3 L3 f3 t3), mass inv_mass inertia3 radius, geom
+ * material group motion kind iso, inv_iso rdot pieces thick = 39 doubles */
 void floe_par_pack(const floe_particles *p, int i, long long gid, double *r) {
     int k = 0;
     r[k++] = (double)gid;
-    for (int a = 0; a < 3; a++) r[k++] = p->x[3 * i + a];
-    for (int a = 0; a < 3; a++) r[k++] = p->v[3 * i + a];
-    for (int a = 0; a < 4; a++) r[k++] = p->q[4 * i + a];
-    for (int a = 0; a < 3; a++) r[k++] = p->w[3 * i + a];
-    for (int a = 0; a < 3; a++) r[k++] = p->L[3 * i + a];
-    for (int a = 0; a < 3; a++) r[k++] = p->f[3 * i + a];
-    for (int a = 0; a < 3; a++) r[k++] = p->t[3 * i + a];
+    floe_par_pack_state(p, i, r + k);
+    k += FLOE_PAR_FWD;
     r[k++] = p->mass[i];
     r[k++] = p->inv_mass[i];
     for (int a = 0; a < 3; a++) r[k++] = p->inertia[3 * i + a];
@@ -53,13 +68,8 @@ void floe_par_pack(const floe_particles *p, int i, long long gid, double *r) {
 void floe_par_unpack(floe_particles *p, int i, const double *r, long long *gid) {
     int k = 0;
     *gid = (long long)r[k++];
-    for (int a = 0; a < 3; a++) p->x[3 * i + a] = r[k++];
-    for (int a = 0; a < 3; a++) p->v[3 * i + a] = r[k++];
-    for (int a = 0; a < 4; a++) p->q[4 * i + a] = r[k++];
-    for (int a = 0; a < 3; a++) p->w[3 * i + a] = r[k++];
-    for (int a = 0; a < 3; a++) p->L[3 * i + a] = r[k++];
-    for (int a = 0; a < 3; a++) p->f[3 * i + a] = r[k++];
-    for (int a = 0; a < 3; a++) p->t[3 * i + a] = r[k++];
+    floe_par_unpack_state(p, i, r + k);
+    k += FLOE_PAR_FWD;
     p->mass[i] = r[k++];
     p->inv_mass[i] = r[k++];
     for (int a = 0; a < 3; a++) p->inertia[3 * i + a] = r[k++];
@@ -77,13 +87,37 @@ void floe_par_unpack(floe_particles *p, int i, const double *r, long long *gid) 
     if (p->thick) p->thick[i] = th;
 }
 
-int floe_par_route(floe_par *P, const double *items, const int *dest, int nitems, int m, double **out, int *nout) {
+void floe_par_count(floe_par *P, int k, long long bytes, long long msgs) {
+    if (P->size < 2 || bytes <= 0) return;
+    P->traffic.bytes[k] += bytes;
+    P->traffic.messages[k] += msgs;
+}
+
+void floe_par_count_v(floe_par *P, int k, const int *count, long long item_bytes) {
+    for (int r = 0; r < P->size; r++)
+        if (r != P->rank && count[r] > 0) floe_par_count(P, k, count[r] * item_bytes, 1);
+}
+
+void floe_par_count_allreduce(floe_par *P, int k, long long bytes) { floe_par_count(P, k, bytes, 1); }
+void floe_par_count_bcast(floe_par *P, int k, long long bytes) {
+    if (P->rank == 0) floe_par_count(P, k, bytes, 1);
+}
+void floe_par_count_to_root(floe_par *P, int k, long long bytes) {
+    if (P->rank != 0) floe_par_count(P, k, bytes, 1);
+}
+void floe_par_count_all(floe_par *P, int k, long long bytes) {
+    floe_par_count(P, k, bytes * (P->size - 1), P->size - 1);
+}
+
+int floe_par_route(floe_par *P, int kind, const double *items, const int *dest, int nitems, int m, double **out, int *nout) {
     const int S = P->size;
     int *sc = calloc((size_t)4 * S, sizeof *sc);
     if (!sc) return FLOE_ENOMEM;
     int *sd = sc + S, *rc = sc + 2 * S, *rd = sc + 3 * S;
     for (int k = 0; k < nitems; k++) sc[dest[k]]++;
     MPI_Alltoall(sc, 1, MPI_INT, rc, 1, MPI_INT, P->comm);
+    floe_par_count_all(P, kind, sizeof(int));
+    floe_par_count_v(P, kind, sc, (long long)m * sizeof(double));
     int ns = 0, nr = 0;
     for (int r = 0; r < S; r++) { sd[r] = ns; ns += sc[r]; rd[r] = nr; nr += rc[r]; }
     double *sb = malloc((size_t)(ns ? ns : 1) * m * sizeof *sb);
@@ -204,7 +238,7 @@ int floe_par_migrate(floe_world *w, floe_par *P, const int *dest) {
         }
     double *in = NULL;
     int nin = 0;
-    int rc = floe_par_route(P, out, od, nleave, m, &in, &nin);
+    int rc = floe_par_route(P, FLOE_COMM_MIGRATE, out, od, nleave, m, &in, &nin);
     free(out); free(od);
     if (rc) return rc;
     P->migrated += nleave;
@@ -254,6 +288,7 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
     double *boxes = malloc((size_t)S * 7 * sizeof *boxes);
     if (!boxes) return FLOE_ENOMEM;
     MPI_Allgather(mine, 7, MPI_DOUBLE, boxes, 7, MPI_DOUBLE, P->comm);
+    floe_par_count_all(P, FLOE_COMM_GHOST, 7 * sizeof(double));
     /* the send lists, grouped by destination */
     P->nsend = 0;
     for (int r = 0; r < S; r++) {
@@ -276,6 +311,7 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
     }
     free(boxes);
     MPI_Alltoall(P->scount, 1, MPI_INT, P->rcount, 1, MPI_INT, P->comm);
+    floe_par_count_all(P, FLOE_COMM_GHOST, sizeof(int));
     int nr = 0;
     for (int r = 0; r < S; r++) { P->rdispl[r] = nr; nr += P->rcount[r]; }
     const int m = FLOE_PAR_REC;
@@ -290,6 +326,7 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
         sc[2 * S + r] = P->rcount[r] * m; sc[3 * S + r] = P->rdispl[r] * m;
     }
     MPI_Alltoallv(P->sbuf, sc, sc + S, MPI_DOUBLE, P->rbuf, sc + 2 * S, sc + 3 * S, MPI_DOUBLE, P->comm);
+    floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, (long long)m * sizeof(double));
     free(sc);
     if (par_room(w, P, hi + nr)) return FLOE_ENOMEM;
     for (int k = 0; k < nr; k++) {
@@ -319,32 +356,13 @@ int floe_par_forward_comm(floe_world *w, floe_par *P) {
     if (floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)P->nsend * m) ||
         floe_par_reserve(&P->rbuf, &P->rbuf_cap, (size_t)P->nghost * m))
         return FLOE_ENOMEM;
-    for (int k = 0; k < P->nsend; k++) {
-        const int i = P->send_idx[k];
-        double *r = P->sbuf + (size_t)k * m;
-        memcpy(r, p->x + 3 * i, 3 * sizeof *r);
-        memcpy(r + 3, p->v + 3 * i, 3 * sizeof *r);
-        memcpy(r + 6, p->q + 4 * i, 4 * sizeof *r);
-        memcpy(r + 10, p->w + 3 * i, 3 * sizeof *r);
-        memcpy(r + 13, p->L + 3 * i, 3 * sizeof *r);
-        memcpy(r + 16, p->f + 3 * i, 3 * sizeof *r);
-        memcpy(r + 19, p->t + 3 * i, 3 * sizeof *r);
-    }
+    for (int k = 0; k < P->nsend; k++) floe_par_pack_state(p, P->send_idx[k], P->sbuf + (size_t)k * m);
     int *c = ghost_counts(P, m);
     if (!c) return FLOE_ENOMEM;
     MPI_Alltoallv(P->sbuf, c, c + S, MPI_DOUBLE, P->rbuf, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->comm);
+    floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, (long long)m * sizeof(double));
     free(c);
-    for (int k = 0; k < P->nghost; k++) {
-        const int i = g0 + k;
-        const double *r = P->rbuf + (size_t)k * m;
-        memcpy(p->x + 3 * i, r, 3 * sizeof *r);
-        memcpy(p->v + 3 * i, r + 3, 3 * sizeof *r);
-        memcpy(p->q + 4 * i, r + 6, 4 * sizeof *r);
-        memcpy(p->w + 3 * i, r + 10, 3 * sizeof *r);
-        memcpy(p->L + 3 * i, r + 13, 3 * sizeof *r);
-        memcpy(p->f + 3 * i, r + 16, 3 * sizeof *r);
-        memcpy(p->t + 3 * i, r + 19, 3 * sizeof *r);
-    }
+    for (int k = 0; k < P->nghost; k++) floe_par_unpack_state(p, g0 + k, P->rbuf + (size_t)k * m);
     return FLOE_OK;
 }
 
@@ -363,6 +381,7 @@ int floe_par_reverse_comm(floe_world *w, floe_par *P) {
     int *c = ghost_counts(P, m);
     if (!c) return FLOE_ENOMEM;
     MPI_Alltoallv(P->rbuf, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->sbuf, c, c + S, MPI_DOUBLE, P->comm);
+    floe_par_count_v(P, FLOE_COMM_REVERSE, P->rcount, (long long)m * sizeof(double));
     free(c);
     for (int k = 0; k < P->nsend; k++) {
         const int i = P->send_idx[k];

@@ -65,6 +65,52 @@ int floe_world_parallel_energy(const floe_world *w, floe_energy *out);
 /* sum over the ranks of n doubles (in place); a serial world leaves them */
 int floe_world_parallel_sum(const floe_world *w, double *v, int n);
 
+/* The traffic of a split world: what this rank sent to other ranks, by kind. Bytes are the
+ * payload (no MPI envelopes); Zoltan's own messages during the bisection are not counted.
+ * Point-to-point exchanges (MPI_Alltoall(v)) count exactly what goes to each other rank and one
+ * message per rank that gets something; a gather or reduction to rank 0 counts the payload on
+ * every other rank (one message); MPI_Allgather the payload once for each other rank; an
+ * MPI_Allreduce or MPI_Bcast the payload once (on every rank, or on the root), one message:
+ * the traffic MPI's algorithm makes of them is a small multiple of that (about 2x for a ring,
+ * log2(ranks)x for recursive doubling). A serial world, or one rank, sends nothing. */
+typedef enum floe_comm_kind {
+    FLOE_COMM_GHOST,   /* the ghosts' state to the ranks that hold them: at every step without a
+                        * rebuild x v q w L f t (22 doubles a ghost); at rebuilds every new
+                        * ghost's record (39 doubles), the rank's box (7 doubles) to every rank and
+                        * the ghost count (1 int) to every rank */
+    FLOE_COMM_REVERSE, /* the forces and torques on ghosts summed back to their owners (6 doubles a
+                        * ghost, every step) */
+    FLOE_COMM_MIGRATE, /* at rebuilds: owned particles to their new owners (39 doubles each), the
+                        * contact history of the pairs they anchor (4 + FLOE_MAX_HISTORY doubles
+                        * a pair, + FLOE_DETECT_WARM with warm starts), the counts of both (1 int
+                        * to every rank, twice) */
+    FLOE_COMM_REDUCE,  /* reductions: whether any rank rebuilds (1 int a step), the energy
+                        * watchdog's ledger (10 doubles a step), the split's checks,
+                        * floe_world_parallel_energy and _sum */
+    FLOE_COMM_OUTPUT,  /* outputs: rank 0's word on whether the mirror is due (1 int a step, 2
+                        * with a mirror), and when it is the summed ledger and the owned
+                        * particles' state gathered on rank 0 (1 + 22 doubles a particle), the
+                        * walls' forces (6 doubles a wall), floe_world_parallel_gather */
+    FLOE_COMM_KINDS
+} floe_comm_kind;
+
+typedef struct floe_comm_stats {
+    long long bytes[FLOE_COMM_KINDS];    /* payload sent to other ranks */
+    long long messages[FLOE_COMM_KINDS]; /* messages (or collective contributions) with payload */
+    long steps;                          /* steps over which these were counted */
+    long rebuilds;                       /* decompositions among them (the split's included) */
+    double owned_steps, ghost_steps;     /* sums over those steps of the particles owned and the
+                                          * ghosts held at the step's end */
+} floe_comm_stats;
+
+/* this rank's traffic since the split or the last reset (a serial world: zeros); not
+ * collective */
+int floe_world_parallel_comm(const floe_world *w, floe_comm_stats *out);
+/* the counts back to zero (a run measured without the split before it); not collective */
+int floe_world_parallel_comm_reset(floe_world *w);
+/* the name of a kind ("ghost", "reverse", "migrate", "reduce", "output"); not collective */
+const char *floe_comm_kind_name(floe_comm_kind k);
+
 /* the positions and velocities of every owned particle gathered on rank 0 into x[3 gid] and
  * v[3 gid] (N = the particle count of the world before the split, walls included; the walls'
  * entries are left as they are); x or v may be NULL; the arrays are used only on rank 0 */

@@ -12,12 +12,13 @@
 
 #ifdef FLOE_HAVE_MPI
 #include <mpi.h>
+#include "floe_parallel.h"
 #include "world_internal.h"
 
 /* one particle as it travels: every array of the particle store (particle_store.h) and the
  * global id, all as doubles (integers below 2^53 are exact) */
 enum { FLOE_PAR_REC = 39 };
-/* what a ghost refresh carries: x v q w L f t */
+/* a particle's state, what a ghost refresh and the mirror gather carry: x v q w L f t */
 enum { FLOE_PAR_FWD = 22 };
 
 typedef struct floe_par {
@@ -36,16 +37,36 @@ typedef struct floe_par {
                                   the gathered state (floe_world_parallel_outputs) */
     long rebuilds;           /* decompositions (RCB + migration + ghosts) */
     long long migrated;      /* particles this rank sent to another owner, over the run */
+    floe_comm_stats traffic; /* the traffic (floe_world_parallel_comm) */
 } floe_par;
+
+/* the traffic accounting (floe_comm_stats' conventions; nothing with one rank): */
+/* bytes in msgs messages of kind k */
+void floe_par_count(floe_par *P, int k, long long bytes, long long msgs);
+/* an exchange in which rank r gets count[r] items of item_bytes: the items to the other
+ * ranks, one message to each that gets any */
+void floe_par_count_v(floe_par *P, int k, const int *count, long long item_bytes);
+/* an MPI_Allreduce of bytes (every rank), an MPI_Bcast (the root's share), a gather or
+ * reduction to rank 0 (the other ranks' share), an MPI_Allgather or MPI_Alltoall of bytes to
+ * each rank */
+void floe_par_count_allreduce(floe_par *P, int k, long long bytes);
+void floe_par_count_bcast(floe_par *P, int k, long long bytes);
+void floe_par_count_to_root(floe_par *P, int k, long long bytes);
+void floe_par_count_all(floe_par *P, int k, long long bytes);
 
 /* decomp.c: the pieces, on the world's store */
 /* byte buffers of at least n doubles (0 or FLOE_ENOMEM) */
 int floe_par_reserve(double **buf, size_t *cap, size_t n);
+/* the whole record of local particle i (FLOE_PAR_REC doubles: gid, then the state as
+ * floe_par_pack_state writes it, then the constant fields) */
 void floe_par_pack(const floe_particles *p, int i, long long gid, double *r);
 void floe_par_unpack(floe_particles *p, int i, const double *r, long long *gid);
-/* send nitems items of m doubles, item k to rank dest[k]; *out (malloc'ed, caller frees)
+/* the state of local particle i: x3 v3 q4 w3 L3 f3 t3 (FLOE_PAR_FWD doubles) */
+void floe_par_pack_state(const floe_particles *p, int i, double *r);
+void floe_par_unpack_state(floe_particles *p, int i, const double *r);
+/* send nitems items of m doubles, item k to rank dest[k] (counted as kind); *out (malloc'ed, caller frees)
  * receives *nout items, ordered by source rank then the source's order */
-int floe_par_route(floe_par *P, const double *items, const int *dest, int nitems, int m, double **out, int *nout);
+int floe_par_route(floe_par *P, int kind, const double *items, const int *dest, int nitems, int m, double **out, int *nout);
 /* destination rank of each owned particle by recursive coordinate bisection (Zoltan, weights
  * 1): dest[k] for owned particle nrep + k */
 int floe_par_rcb(floe_world *w, floe_par *P, int *dest);

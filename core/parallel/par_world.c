@@ -11,6 +11,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+const char *floe_comm_kind_name(floe_comm_kind k) {
+    static const char *const names[FLOE_COMM_KINDS] = {"ghost", "reverse", "migrate", "reduce", "output"};
+    return (int)k >= 0 && k < FLOE_COMM_KINDS ? names[k] : "?";
+}
+
 #ifdef FLOE_HAVE_MPI
 
 int floe_parallel_available(void) { return 1; }
@@ -147,7 +152,7 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
         }
     if (!rc) rc = floe_par_migrate(w, P, dest);
     if (!rc) rc = floe_par_ghosts(w, P, w->nl.skin);
-    if (!rc) rc = floe_par_route(P, recs, hd, nrec, m, &in, &nin);
+    if (!rc) rc = floe_par_route(P, FLOE_COMM_MIGRATE, recs, hd, nrec, m, &in, &nin);
     if (!rc) rc = hist_import(w, P, in, nin);
     free(in); free(dest); free(hd); free(recs);
     if (rc) return floe_world_error(w, rc, "MPI decomposition failed (out of memory or Zoltan)");
@@ -156,6 +161,7 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     rc = floe_world_nl_build(w);
     if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
     P->rebuilds++;
+    P->traffic.rebuilds++;
     return FLOE_OK;
 }
 
@@ -212,6 +218,8 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     MPI_Bcast(chk0, 2, MPI_DOUBLE, 0, P->comm);
     int same = chk0[0] == chk[0] && chk0[1] == chk[1], all_same;
     MPI_Allreduce(&same, &all_same, 1, MPI_INT, MPI_LAND, P->comm);
+    floe_par_count_bcast(P, FLOE_COMM_REDUCE, sizeof chk0);
+    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof same);
     if (!all_same) {
         floe_par_free(P);
         return floe_world_error(w, FLOE_EINVAL, "MPI decomposition: the ranks do not hold the same world");
@@ -302,6 +310,7 @@ int floe_par_refresh(floe_world *w, double maxd2, int have_xb) {
     floe_par *P = w->par;
     int need = floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0), any = 0;
     MPI_Allreduce(&need, &any, 1, MPI_INT, MPI_LOR, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof need);
     if (any) return par_rebuild(w, P, NULL, 0);
     int rc = floe_par_forward_comm(w, P);
     return rc ? floe_world_error(w, rc, "out of memory") : FLOE_OK;
@@ -327,31 +336,40 @@ void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shado
     v[7] = *shadow;
     v[8] = *shadow0;
     MPI_Allreduce(v, s, 9, MPI_DOUBLE, MPI_SUM, w->par->comm);
+    floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, sizeof v);
     energy_unpack(e, s);
     *shadow = s[7];
     *shadow0 = s[8];
     double pm = *pair_min;
     MPI_Allreduce(&pm, pair_min, 1, MPI_DOUBLE, MPI_MIN, w->par->comm);
+    floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, sizeof pm);
 }
 
-int floe_world_parallel_energy(const floe_world *w, floe_energy *out) {
+/* the ledger summed over the ranks, counted as kind */
+static void energy_sum(const floe_world *w, floe_energy *out, int kind) {
     *out = w->energy;
-    if (!w->par) return FLOE_OK;
+    if (!w->par) return;
     double v[7], s[7];
     energy_pack(&w->energy, v);
     MPI_Allreduce(v, s, 7, MPI_DOUBLE, MPI_SUM, w->par->comm);
+    floe_par_count_allreduce(w->par, kind, sizeof v);
     energy_unpack(out, s);
+}
+
+int floe_world_parallel_energy(const floe_world *w, floe_energy *out) {
+    energy_sum(w, out, FLOE_COMM_REDUCE);
     return FLOE_OK;
 }
 
 int floe_world_parallel_sum(const floe_world *w, double *v, int n) {
     if (!w->par || n <= 0) return FLOE_OK;
     MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_SUM, w->par->comm);
+    floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, (long long)n * sizeof *v);
     return FLOE_OK;
 }
 
 int floe_world_parallel_gather(const floe_world *w, double *x, double *v, int N) {
-    const floe_par *P = w->par;
+    floe_par *P = w->par;
     if (!P) {
         for (int i = 0; i < w->p.n && i < N; i++) {
             if (x) memcpy(x + 3 * i, w->p.x + 3 * i, 3 * sizeof *x);
@@ -364,6 +382,7 @@ int floe_world_parallel_gather(const floe_world *w, double *x, double *v, int N)
     int *cnt = P->rank == 0 ? malloc((size_t)2 * P->size * sizeof *cnt) : NULL;
     int bad = !sb || (P->rank == 0 && !cnt), anybad;
     MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_LOR, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof bad);
     if (anybad) { free(sb); free(cnt); return FLOE_ENOMEM; }
     for (int k = 0; k < no; k++) {
         double *r = sb + (size_t)k * m;
@@ -373,6 +392,7 @@ int floe_world_parallel_gather(const floe_world *w, double *x, double *v, int N)
     }
     int mine = no * m;
     MPI_Gather(&mine, 1, MPI_INT, cnt, 1, MPI_INT, 0, P->comm);
+    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof mine);
     double *rb = NULL;
     int tot = 0;
     if (P->rank == 0) {
@@ -380,6 +400,7 @@ int floe_world_parallel_gather(const floe_world *w, double *x, double *v, int N)
         rb = malloc((size_t)(tot ? tot : 1) * sizeof *rb);
     }
     MPI_Gatherv(sb, mine, MPI_DOUBLE, rb, cnt, cnt ? cnt + P->size : NULL, MPI_DOUBLE, 0, P->comm);
+    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, (long long)mine * sizeof *sb);
     if (P->rank == 0 && rb)
         for (int k = 0; k < tot / m; k++) {
             const double *r = rb + (size_t)k * m;
@@ -389,6 +410,17 @@ int floe_world_parallel_gather(const floe_world *w, double *x, double *v, int N)
             if (v) memcpy(v + 3 * g, r + 4, 3 * sizeof *v);
         }
     free(sb); free(cnt); free(rb);
+    return FLOE_OK;
+}
+
+int floe_world_parallel_comm(const floe_world *w, floe_comm_stats *out) {
+    if (w->par) *out = w->par->traffic;
+    else memset(out, 0, sizeof *out);
+    return FLOE_OK;
+}
+
+int floe_world_parallel_comm_reset(floe_world *w) {
+    if (w->par) memset(&w->par->traffic, 0, sizeof w->par->traffic);
     return FLOE_OK;
 }
 
@@ -434,12 +466,14 @@ int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {
     }
     int any;
     MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof bad);
     if (any == 1) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: the mirror does not hold the split world's particles");
     if (any == 2) return refuse(w, "an output that reads contacts");
     if (any == 3) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: prepare the mirror first (floe_world_prepare)");
     P->mirror = P->rank == 0 ? mirror : NULL;
     int has = P->mirror != NULL, all_has;
     MPI_Allreduce(&has, &all_has, 1, MPI_INT, MPI_MAX, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof has);
     if (!all_has) P->mirror = NULL;
     return FLOE_OK;
 }
@@ -452,33 +486,31 @@ static int mirror_gather(floe_world *w, floe_par *P) {
     int *cnt = P->rank == 0 ? malloc((size_t)2 * P->size * sizeof *cnt) : NULL;
     int bad = !sb || !wf || (P->rank == 0 && !cnt), anybad;
     MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_LOR, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof bad);
     if (anybad) { free(sb); free(wf); free(cnt); return FLOE_ENOMEM; }
     const floe_particles *p = &w->p;
     for (int k = 0; k < no; k++) {
         const int i = lo + k;
         double *r = sb + (size_t)k * m;
         r[0] = (double)P->gid[i];
-        memcpy(r + 1, p->x + 3 * i, 3 * sizeof *r);
-        memcpy(r + 4, p->v + 3 * i, 3 * sizeof *r);
-        memcpy(r + 7, p->q + 4 * i, 4 * sizeof *r);
-        memcpy(r + 11, p->w + 3 * i, 3 * sizeof *r);
-        memcpy(r + 14, p->L + 3 * i, 3 * sizeof *r);
-        memcpy(r + 17, p->f + 3 * i, 3 * sizeof *r);
-        memcpy(r + 20, p->t + 3 * i, 3 * sizeof *r);
+        floe_par_pack_state(p, i, r + 1);
     }
     for (int i = 0; i < P->nrep; i++) {
         memcpy(wf + 6 * i, p->f + 3 * i, 3 * sizeof *wf);
         memcpy(wf + 6 * i + 3, p->t + 3 * i, 3 * sizeof *wf);
     }
     if (P->nrep) MPI_Reduce(P->rank == 0 ? MPI_IN_PLACE : wf, wf, 6 * P->nrep, MPI_DOUBLE, MPI_SUM, 0, P->comm);
+    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, 6LL * P->nrep * sizeof *wf);
     int mine = no * m, tot = 0;
     MPI_Gather(&mine, 1, MPI_INT, cnt, 1, MPI_INT, 0, P->comm);
+    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof mine);
     double *rb = NULL;
     if (P->rank == 0) {
         for (int r = 0; r < P->size; r++) { cnt[P->size + r] = tot; tot += cnt[r]; }
         rb = malloc((size_t)(tot ? tot : 1) * sizeof *rb);
     }
     MPI_Gatherv(sb, mine, MPI_DOUBLE, rb, cnt, cnt ? cnt + P->size : NULL, MPI_DOUBLE, 0, P->comm);
+    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, (long long)mine * sizeof *sb);
     floe_world *M = P->mirror;
     if (P->rank == 0 && rb && M) {
         floe_particles *q = &M->p;
@@ -486,13 +518,7 @@ static int mirror_gather(floe_world *w, floe_par *P) {
             const double *r = rb + (size_t)k * m;
             const long long g = (long long)r[0];
             if (g < 0 || g >= q->n) continue;
-            memcpy(q->x + 3 * g, r + 1, 3 * sizeof *r);
-            memcpy(q->v + 3 * g, r + 4, 3 * sizeof *r);
-            memcpy(q->q + 4 * g, r + 7, 4 * sizeof *r);
-            memcpy(q->w + 3 * g, r + 11, 3 * sizeof *r);
-            memcpy(q->L + 3 * g, r + 14, 3 * sizeof *r);
-            memcpy(q->f + 3 * g, r + 17, 3 * sizeof *r);
-            memcpy(q->t + 3 * g, r + 20, 3 * sizeof *r);
+            floe_par_unpack_state(q, (int)g, r + 1);
         }
         for (int i = 0; i < P->nrep; i++) {
             const long long g = P->gid[i];
@@ -522,14 +548,20 @@ static int mirror_due(const floe_world *w, const floe_world *M) {
 
 int floe_par_observe(floe_world *w, int force_all) {
     floe_par *P = w->par;
+    /* the step's end: the traffic's step count and the mean loads */
+    P->traffic.steps++;
+    P->traffic.owned_steps += P->nown;
+    P->traffic.ghost_steps += P->nghost;
     int has = P->mirror != NULL;
     MPI_Bcast(&has, 1, MPI_INT, 0, P->comm);
+    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof has);
     if (!has) return FLOE_OK;
     int due = P->rank == 0 ? force_all || mirror_due(w, P->mirror) : 0;
     MPI_Bcast(&due, 1, MPI_INT, 0, P->comm);
+    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof due);
     if (!due) return FLOE_OK;
     floe_energy e;
-    floe_world_parallel_energy(w, &e);
+    energy_sum(w, &e, FLOE_COMM_OUTPUT);
     int rc = mirror_gather(w, P), ok;
     if (P->rank == 0 && !rc) {
         P->mirror->energy = e;
@@ -537,6 +569,7 @@ int floe_par_observe(floe_world *w, int force_all) {
         if (rc) floe_world_error(w, rc, "%s", floe_world_last_error(P->mirror));
     }
     MPI_Allreduce(&rc, &ok, 1, MPI_INT, MPI_MAX, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof rc);
     if (ok && !rc) return floe_world_error(w, ok, "an output failed on rank 0");
     return ok;
 }
@@ -546,9 +579,10 @@ int floe_world_parallel_finish(floe_world *w) {
     if (!P) return FLOE_OK;
     int has = P->mirror != NULL;
     MPI_Bcast(&has, 1, MPI_INT, 0, P->comm);
+    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof has);
     if (!has) return FLOE_OK;
     floe_energy e;
-    floe_world_parallel_energy(w, &e);
+    energy_sum(w, &e, FLOE_COMM_OUTPUT);
     int rc = mirror_gather(w, P), all;
     if (P->rank == 0 && !rc) {
         P->mirror->energy = e;
@@ -557,6 +591,7 @@ int floe_world_parallel_finish(floe_world *w) {
         if (rc) floe_world_error(w, rc, "%s", floe_world_last_error(P->mirror));
     }
     MPI_Allreduce(&rc, &all, 1, MPI_INT, MPI_MAX, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof rc);
     return all;
 }
 
@@ -590,6 +625,12 @@ int floe_world_parallel_gather(const floe_world *w, double *x, double *v, int N)
     return FLOE_OK;
 }
 int floe_world_parallel_rank(const floe_world *w, int *rank, int *size) { (void)w; *rank = 0; *size = 1; return FLOE_OK; }
+int floe_world_parallel_comm(const floe_world *w, floe_comm_stats *out) {
+    (void)w;
+    memset(out, 0, sizeof *out);
+    return FLOE_OK;
+}
+int floe_world_parallel_comm_reset(floe_world *w) { (void)w; return FLOE_OK; }
 int floe_world_parallel_counts(const floe_world *w, int *owned, int *ghosts) {
     int nb = 0;
     for (int i = 0; i < w->p.n; i++) nb += isfinite(w->p.radius[i]) != 0;

@@ -9,10 +9,14 @@ settle_2d.yaml (a 2D world) with K = 3, and compares
 every output file written by rank 0: the CSV files (particles, energy, tracker) and every
 number of every VTK frame must agree within 1e-9 of the column's (file's) largest magnitude:
 the split run sums the contact forces in another order, nothing else differs.
+The summary of settle.yaml under -np 2 carries the traffic line (floe_comm_stats): the mean
+reverse traffic is 48 B x the mean ghosts per rank (within the printed digits, 0.5 %), the
+ghost traffic between 176 and 312 B a ghost, the mean at most the largest rank's.
 
 Usage: test_mpi_cli.py FLOE MPIEXEC TESTS_MPI_DIR
 """
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -98,6 +102,28 @@ def compare_vtu(a, b, name):
     return worst
 
 
+def check_comm_line():
+    global fails
+    scene = os.path.join(here, "settle.yaml")
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", "2", floe, "run", scene, "-o", tmp]
+        r = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    m = re.search(r"comm/step/rank: +([0-9.]+) B mean, ([0-9.]+) B max, ([0-9.]+) messages \(ghost ([0-9.]+), "
+                  r"reverse ([0-9.]+), migrate ([0-9.]+), reduce ([0-9.]+), output ([0-9.]+) B\); "
+                  r"ghosts/rank ([0-9.]+), particles/rank ([0-9.]+); ([0-9]+) rebuilds", r.stdout)
+    if r.returncode != 0 or not m:
+        print(r.stdout, r.stderr)
+        print("FAIL: the traffic line of `floe run` under mpirun -np 2")
+        fails += 1
+        return
+    mean, mx, msgs, gh, rev, mig, red, out, gpr, ppr, reb = (float(v) for v in m.groups())
+    ok = (mean <= mx and gpr > 0 and ppr == 120.0 and abs(rev - 48 * gpr) <= 0.005 * rev
+          and 176 * gpr * 0.995 <= gh <= 312 * gpr * 1.005 + 60 and reb > 0 and red >= 4 and out > 0)
+    fails += not ok
+    print(f"  {'ok  ' if ok else 'FAIL'} traffic line: {m.group(0)}")
+
+
+check_comm_line()
 for scene, ranks in SCENES:
   with tempfile.TemporaryDirectory() as tmp:
     ref = os.path.join(tmp, "np1")

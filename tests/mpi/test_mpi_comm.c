@@ -1,0 +1,338 @@
+/* test_mpi_comm.c - the traffic accounting of a split world (floe_world_parallel_comm,
+ * core/parallel, docs/parallel.md) against what the decomposition implies, exactly (tolerance
+ * 0: the counts are integers). Run under mpirun with 1, 2 and 4 ranks (tests/CMakeLists.txt).
+ * Every rank builds the same world of spheres of two sizes in a walled box (and an unsplit
+ * copy), splits it, and the test works out from the unsplit copy, the owners of every global
+ * id and the ranks' boxes of owned centres (its own MPI calls, not counted) how many ghosts
+ * each rank must send to each other rank, M[o][r]; then
+ *   - ghost refresh (x3 v3 q4 w3 L3 f3 t3, 176 B a ghost): K refreshes send exactly
+ *     K x 176 x sum_r M[me][r] bytes in K x #{r: M[me][r] > 0} messages, nothing else;
+ *   - reverse sum (f3 t3, 48 B a ghost): K x 48 x sum_o M[o][me] bytes, to #{o: M[o][me] > 0}
+ *     ranks;
+ *   - (after the steps below) a rebuild after a shift move (many particles change owner, a third of the list's pairs
+ *     marked touching so that history travels): migration = 312 B per particle that left this
+ *     rank + the history records of the touching pairs whose anchor left (4 +
+ *     FLOE_MAX_HISTORY doubles each) + two count exchanges (4 B to each other rank); ghosts =
+ *     312 B per new ghost sent (M after the move) + the box (56 B) and a count (4 B) to each
+ *     other rank;
+ *   - 200 steps of a gas of fast spheres (a few rebuilds on the way): each step's reverse
+ *     traffic is 48 B x this rank's ghosts at the step's end, the ghost traffic summed over
+ *     the ranks 176 B (312 B at a rebuild, + 60 B x (ranks - 1) per rank) x the ghosts of all
+ *     ranks, the reductions 4 B (whether to rebuild) + 80 B (the watchdog's ledger) a step, the
+ *     outputs' word 4 B on rank 0; the step count and the mean loads;
+ *   - the end of a run with a mirror (rank 0): the gathered state 184 B per owned particle
+ *     and 48 B per wall on every other rank, + the ledger (56 B), the words (4 B each).
+ * With one rank every count is 0. */
+#include "floe.h"
+#include "world_internal.h"
+#include "par_internal.h"
+#include "../check.h"
+#include <mpi.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int rank_, size_;
+static const double L = 0.02; /* box side, m */
+enum { NSIDE = 9 };           /* 729 spheres */
+
+static floe_world *build(void) {
+    floe_world_def d = floe_default_world_def();
+    d.dim = 3; d.dt = 1e-6;
+    d.gravity[2] = -9.81;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material m;
+    memset(&m, 0, sizeof m);
+    strcpy(m.name, "glass");
+    m.density = 2500; m.young = 1e7; m.poisson = 0.3;
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.3));
+    int g[2] = {floe_world_add_geometry(w, floe_sphere_create(0.0004)), floe_world_add_geometry(w, floe_sphere_create(0.0006))};
+    double pts[6][3] = {{0, 0, 0}, {L, 0, 0}, {0, 0, 0}, {0, L, 0}, {0, 0, 0}, {0, 0, L}};
+    double nrm[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (int k = 0; k < 6; k++) floe_world_add_wall(w, pts[k], nrm[k], 0, FLOE_FIXED);
+    unsigned s = 31337;
+    const double h = L / NSIDE;
+    int cnt = 0;
+    for (int a = 0; a < NSIDE; a++)
+        for (int b = 0; b < NSIDE; b++)
+            for (int c = 0; c < NSIDE; c++) {
+                floe_particle_def p = floe_default_particle_def();
+                p.geometry = g[cnt++ % 2];
+                double j[6];
+                for (int k = 0; k < 6; k++) { s = s * 1103515245u + 12345u; j[k] = (s >> 8) / 16777216.0 - 0.5; }
+                floe_v3_set(p.x, (a + 0.5 + 0.15 * j[0]) * h, (b + 0.5 + 0.15 * j[1]) * h, (c + 0.5 + 0.15 * j[2]) * h);
+                floe_v3_set(p.v, 6 * j[3], 6 * j[4], 6 * j[5]); /* fast: rebuilds within 200 steps */
+                floe_world_add_particle(w, &p);
+            }
+    w->nl.skin = 0.0004;
+    if (floe_world_prepare(w)) { fprintf(stderr, "prepare: %s\n", floe_world_last_error(w)); exit(2); }
+    return w;
+}
+
+/* owner[g] of every global id (-1: a wall), from every rank's owned particles */
+static int *owners(const floe_world *w) {
+    const floe_par *P = w->par;
+    const int N = P->ntotal;
+    int *o = malloc((size_t)N * sizeof *o);
+    for (int g = 0; g < N; g++) o[g] = -1;
+    for (int i = P->nrep; i < P->nrep + P->nown; i++) o[P->gid[i]] = rank_;
+    MPI_Allreduce(MPI_IN_PLACE, o, N, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    return o;
+}
+
+/* every particle's position by global id on every rank (walls: 0) */
+static double *positions(const floe_world *w) {
+    const floe_par *P = w->par;
+    double *x = calloc((size_t)3 * P->ntotal, sizeof *x);
+    for (int i = P->nrep; i < P->nrep + P->nown; i++) memcpy(x + 3 * P->gid[i], w->p.x + 3 * i, 3 * sizeof *x);
+    MPI_Allreduce(MPI_IN_PLACE, x, 3 * P->ntotal, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    return x;
+}
+
+/* M[o * S + r]: particles of rank o that rank r must hold as ghosts: those whose bounding
+ * sphere, grown by the largest radius r owns and the skin, reaches the box of r's owned
+ * centres. Positions x by global id, radii from the unsplit world q. */
+static long long *ghost_matrix(const double *x, const floe_particles *q, const int *own, double skin) {
+    const int S = size_, N = q->n;
+    double *box = malloc((size_t)S * 7 * sizeof *box);
+    for (int r = 0; r < S; r++) {
+        double *b = box + 7 * r;
+        for (int a = 0; a < 3; a++) { b[a] = INFINITY; b[3 + a] = -INFINITY; }
+        b[6] = 0;
+    }
+    for (int g = 0; g < N; g++) {
+        if (own[g] < 0) continue;
+        double *b = box + 7 * own[g];
+        for (int a = 0; a < 3; a++) { b[a] = fmin(b[a], x[3 * g + a]); b[3 + a] = fmax(b[3 + a], x[3 * g + a]); }
+        b[6] = fmax(b[6], q->radius[g]);
+    }
+    long long *M = calloc((size_t)S * S, sizeof *M);
+    for (int g = 0; g < N; g++) {
+        if (own[g] < 0) continue;
+        for (int r = 0; r < S; r++) {
+            const double *b = box + 7 * r;
+            if (r == own[g] || !(b[0] <= b[3])) continue;
+            double d2 = 0;
+            for (int a = 0; a < 3; a++) {
+                const double y = x[3 * g + a], e = y < b[a] ? b[a] - y : y > b[3 + a] ? y - b[3 + a] : 0;
+                d2 += e * e;
+            }
+            M[own[g] * S + r] += sqrt(d2) <= q->radius[g] + b[6] + skin;
+        }
+    }
+    free(box);
+    return M;
+}
+
+static floe_comm_stats stats(const floe_world *w) {
+    floe_comm_stats c;
+    floe_world_parallel_comm(w, &c);
+    return c;
+}
+
+/* every kind but `keep` (a bit set) is zero */
+static int others_zero(const floe_comm_stats *c, unsigned keep) {
+    for (int k = 0; k < FLOE_COMM_KINDS; k++)
+        if (!(keep >> k & 1u) && (c->bytes[k] || c->messages[k])) return 0;
+    return 1;
+}
+
+static void check_refresh(floe_world *w, const floe_world *ref) {
+    floe_par *P = w->par;
+    const int S = size_, me = rank_, K = 3;
+    int *own = owners(w);
+    double *x = positions(w);
+    long long *M = ghost_matrix(x, &ref->p, own, w->nl.skin);
+    long long send = 0, recv = 0, smsg = 0, rmsg = 0;
+    for (int r = 0; r < S; r++) {
+        send += M[me * S + r]; smsg += M[me * S + r] > 0;
+        recv += M[r * S + me]; rmsg += M[r * S + me] > 0;
+    }
+    CHECK(recv == P->nghost, "rank %d: the ghosts the decomposition implies (%lld) are those held (%d)", me, recv, P->nghost);
+    floe_world_parallel_comm_reset(w);
+    for (int k = 0; k < K; k++) floe_par_forward_comm(w, P);
+    floe_comm_stats c = stats(w);
+    CHECK(c.bytes[FLOE_COMM_GHOST] == K * 176LL * send && c.messages[FLOE_COMM_GHOST] == K * smsg,
+          "rank %d: %d refreshes: ghost traffic %lld B in %lld messages, expected %lld B (%lld ghosts x 176 B) in %lld",
+          me, K, c.bytes[FLOE_COMM_GHOST], c.messages[FLOE_COMM_GHOST], K * 176LL * send, send, K * smsg);
+    CHECK(others_zero(&c, 1u << FLOE_COMM_GHOST), "rank %d: a refresh sends nothing else", me);
+    floe_world_parallel_comm_reset(w);
+    for (int k = 0; k < K; k++) floe_par_reverse_comm(w, P);
+    c = stats(w);
+    CHECK(c.bytes[FLOE_COMM_REVERSE] == K * 48LL * recv && c.messages[FLOE_COMM_REVERSE] == K * rmsg,
+          "rank %d: %d reverse sums: %lld B in %lld messages, expected %lld B (%lld ghosts x 48 B) in %lld", me, K,
+          c.bytes[FLOE_COMM_REVERSE], c.messages[FLOE_COMM_REVERSE], K * 48LL * recv, recv, K * rmsg);
+    CHECK(others_zero(&c, 1u << FLOE_COMM_REVERSE), "rank %d: a reverse sum sends nothing else", me);
+    if (me == 0)
+        printf("  refresh: rank 0 sends %lld ghosts (%lld B a refresh) to %lld ranks, holds %lld\n", send, 176 * send, smsg, recv);
+    free(own); free(M); free(x);
+}
+
+/* the shift move of test_mpi_decomp, a third of the pairs marked touching, a rebuild (the
+ * world overlaps after it: the last check before the end) */
+static void check_rebuild(floe_world *w, const floe_world *ref) {
+    floe_par *P = w->par;
+    const int S = size_, me = rank_, N = P->ntotal;
+    for (int i = 0; i < w->p.n; i++)
+        if (isfinite(w->p.radius[i])) {
+            double *x = w->p.x + 3 * i;
+            const int a = (int)(floe_world_parallel_gid(w, i) % 3);
+            x[a] = fmod(x[a] + 0.5 * L, L);
+        }
+    floe_neighbor_list *nl = &w->nl;
+    for (int k = 0; k < nl->npairs; k++) nl->touching[k] = k % 3 == 0;
+    const int hl = 4 + FLOE_MAX_HISTORY + (nl->use_warm && nl->warm ? FLOE_DETECT_WARM : 0);
+    int *before = owners(w);
+    /* the kept entries (touching, or a warm start) whose anchor (lower gid of two bounded
+     * particles, else the bounded one) this rank owns, by anchor gid */
+    long long *anchors = malloc((size_t)(nl->npairs ? nl->npairs : 1) * sizeof *anchors);
+    int na = 0;
+    for (int k = 0; k < nl->npairs; k++) {
+        const int use_warm = nl->use_warm && nl->warm;
+        if (!(nl->touching[k] || (use_warm && isfinite(nl->warm[(size_t)k * FLOE_DETECT_WARM])))) continue;
+        const int i = nl->pi[k], j = nl->pj[k];
+        const long long gi = P->gid[i], gj = P->gid[j];
+        const int bi = isfinite(w->p.radius[i]), bj = isfinite(w->p.radius[j]);
+        const long long a = bi && bj ? (gi < gj ? gi : gj) : bi ? gi : gj;
+        if (before[a] == me) anchors[na++] = a;
+    }
+    floe_world_parallel_comm_reset(w);
+    int rc = floe_world_parallel_rebuild(w);
+    CHECK(rc == 0, "rebuild: %s", rc ? floe_world_last_error(w) : "");
+    int *after = owners(w);
+    long long left = 0, hleft = 0;
+    unsigned char *pdest = calloc((size_t)S, 1), *hdest = calloc((size_t)S, 1);
+    for (int g = 0; g < N; g++)
+        if (before[g] == me && after[g] != me) { left++; pdest[after[g]] = 1; }
+    for (int k = 0; k < na; k++)
+        if (after[anchors[k]] != me) { hleft++; hdest[after[anchors[k]]] = 1; }
+    long long pm = 0, hm = 0;
+    for (int r = 0; r < S; r++) { pm += pdest[r]; hm += hdest[r]; }
+    double *x = positions(w);
+    long long *M = ghost_matrix(x, &ref->p, after, w->nl.skin);
+    long long send = 0, smsg = 0;
+    for (int r = 0; r < S; r++) { send += M[me * S + r]; smsg += M[me * S + r] > 0; }
+    const floe_comm_stats c = stats(w);
+    const long long others = S - 1;
+    const long long mig_b = 312 * left + 8LL * hl * hleft + 2 * 4 * others, mig_m = pm + hm + 2 * others;
+    const long long gh_b = 312 * send + (56 + 4) * others, gh_m = smsg + 2 * others;
+    CHECK(c.bytes[FLOE_COMM_MIGRATE] == mig_b && c.messages[FLOE_COMM_MIGRATE] == mig_m,
+          "rank %d: migration %lld B in %lld messages, expected %lld B (%lld particles x 312 B, %lld history records x %d B) "
+          "in %lld", me, c.bytes[FLOE_COMM_MIGRATE], c.messages[FLOE_COMM_MIGRATE], mig_b, left, hleft, 8 * hl, mig_m);
+    CHECK(c.bytes[FLOE_COMM_GHOST] == gh_b && c.messages[FLOE_COMM_GHOST] == gh_m,
+          "rank %d: new ghosts %lld B in %lld messages, expected %lld B (%lld ghosts x 312 B) in %lld", me,
+          c.bytes[FLOE_COMM_GHOST], c.messages[FLOE_COMM_GHOST], gh_b, send, gh_m);
+    CHECK(others_zero(&c, 1u << FLOE_COMM_GHOST | 1u << FLOE_COMM_MIGRATE), "rank %d: a rebuild sends nothing else", me);
+    CHECK(c.rebuilds == 1 && c.steps == 0, "rank %d: one rebuild, no step counted (%ld, %ld)", me, c.rebuilds, c.steps);
+    long long tot[2] = {left, hleft};
+    MPI_Allreduce(MPI_IN_PLACE, tot, 2, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+    if (S > 1) CHECK(tot[0] > N / 8 && tot[1] > 0, "the shift move migrates particles (%lld) and history (%lld)", tot[0], tot[1]);
+    if (me == 0) printf("  rebuild: %lld particles and %lld history records migrated in all\n", tot[0], tot[1]);
+    free(before); free(after); free(anchors); free(pdest); free(hdest); free(M); free(x);
+}
+
+static void check_steps(floe_world *w) {
+    const int S = size_, me = rank_, NSTEP = 200;
+    const long long others = S - 1;
+    const int wd = w->def.energy_check != FLOE_CHECK_OFF;
+    floe_world_parallel_comm_reset(w);
+    floe_comm_stats c0 = stats(w);
+    int ok_rev = 1, ok_red = 1, ok_out = 1, ok_gh = 1, nreb = 0;
+    double gsum = 0, osum = 0;
+    for (int s = 0; s < NSTEP; s++) {
+        int rc = floe_world_step(w);
+        if (rc) { CHECK(0, "step %d: %s", s, floe_world_last_error(w)); break; }
+        floe_comm_stats c = stats(w);
+        int own, gh;
+        floe_world_parallel_counts(w, &own, &gh);
+        gsum += gh; osum += own;
+        const int reb = c.rebuilds > c0.rebuilds;
+        nreb += reb;
+        long long d[FLOE_COMM_KINDS];
+        for (int k = 0; k < FLOE_COMM_KINDS; k++) d[k] = c.bytes[k] - c0.bytes[k];
+        if (S > 1) {
+            ok_rev &= d[FLOE_COMM_REVERSE] == 48LL * gh;
+            ok_red &= d[FLOE_COMM_REDUCE] == 4 + (wd ? 80 : 0);
+            ok_out &= d[FLOE_COMM_OUTPUT] == (me == 0 ? 4 : 0);
+            ok_red &= reb || d[FLOE_COMM_MIGRATE] == 0;
+        } else {
+            for (int k = 0; k < FLOE_COMM_KINDS; k++) ok_rev &= d[k] == 0;
+        }
+        /* over the ranks: every ghost held was sent once, by its owner */
+        long long v[2] = {d[FLOE_COMM_GHOST] - (reb ? 60 * others : 0), gh};
+        MPI_Allreduce(MPI_IN_PLACE, v, 2, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+        ok_gh &= v[0] == (reb ? 312 : 176) * v[1];
+        c0 = c;
+    }
+    CHECK(ok_rev, "rank %d: every step's reverse traffic is 48 B x the ghosts held", me);
+    CHECK(ok_red, "rank %d: every step's reductions are 4 B (+ 80 B for the watchdog)", me);
+    CHECK(ok_out, "rank %d: every step's output word is 4 B on rank 0, nothing elsewhere", me);
+    CHECK(ok_gh, "every step's ghost traffic over the ranks is 176 B (312 B at a rebuild) x all ghosts held");
+    floe_comm_stats c = stats(w);
+    CHECK(c.steps == NSTEP && c.rebuilds == nreb, "rank %d: %ld steps counted (%d), %ld rebuilds (%d)", me, c.steps, NSTEP,
+          c.rebuilds, nreb);
+    CHECK(c.ghost_steps == gsum && c.owned_steps == osum, "rank %d: the mean loads: ghosts %g (%g), owned %g (%g)", me,
+          c.ghost_steps, gsum, c.owned_steps, osum);
+    int any = nreb;
+    MPI_Allreduce(MPI_IN_PLACE, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    CHECK(any > 0, "the gas rebuilds within %d steps (%d)", NSTEP, any);
+    if (me == 0) {
+        printf("  %d steps, %d rebuilds: rank 0 sent per step (B):", NSTEP, nreb);
+        for (int k = 0; k < FLOE_COMM_KINDS; k++)
+            printf(" %s %.1f", floe_comm_kind_name((floe_comm_kind)k), (double)c.bytes[k] / c.steps);
+        printf("\n");
+    }
+}
+
+/* the end of a run with rank 0's mirror (no observers): the state gathered once */
+static void check_finish(floe_world *w, floe_world *ref) {
+    const int me = rank_;
+    int rc = floe_world_parallel_outputs(w, me == 0 ? ref : NULL);
+    CHECK(rc == 0, "outputs: %s", rc ? floe_world_last_error(w) : "");
+    floe_world_parallel_comm_reset(w);
+    rc = floe_world_parallel_finish(w);
+    CHECK(rc == 0, "finish: %s", rc ? floe_world_last_error(w) : "");
+    const floe_par *P = w->par;
+    const floe_comm_stats c = stats(w);
+    long long want = 0, msgs = 0;
+    if (size_ > 1) {
+        /* the word (root), the ledger (7 doubles), the allocation check, the result (all) */
+        want = (me == 0 ? 4 : 0) + 56 + 4 + 4;
+        msgs = (me == 0 ? 1 : 0) + 3;
+        if (me != 0) { /* the walls' forces, the count, the owned particles' state */
+            want += 48LL * P->nrep + 4 + 184LL * P->nown;
+            msgs += (P->nrep > 0) + 1 + (P->nown > 0);
+        }
+    }
+    CHECK(c.bytes[FLOE_COMM_OUTPUT] == want && c.messages[FLOE_COMM_OUTPUT] == msgs,
+          "rank %d: the mirror's gather %lld B in %lld messages, expected %lld B (%d particles x 184 B, %d walls x 48 B) in %lld",
+          me, c.bytes[FLOE_COMM_OUTPUT], c.messages[FLOE_COMM_OUTPUT], want, P->nown, P->nrep, msgs);
+    CHECK(others_zero(&c, 1u << FLOE_COMM_OUTPUT), "rank %d: the gather sends nothing else", me);
+}
+
+int main(int argc, char **argv) {
+    MPI_Init(&argc, &argv);
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+    MPI_Comm_size(MPI_COMM_WORLD, &size_);
+    floe_world *w = build(), *ref = build();
+    CHECK(strcmp(floe_comm_kind_name(FLOE_COMM_MIGRATE), "migrate") == 0, "kind names");
+    int rc = floe_world_parallel_init(w, NULL);
+    CHECK(rc == 0, "split: %s", rc ? floe_world_last_error(w) : "");
+    if (rc == 0) {
+        floe_comm_stats c = stats(w);
+        CHECK(c.rebuilds == 1 && c.steps == 0, "the split: one decomposition, no step (%ld, %ld)", c.rebuilds, c.steps);
+        if (size_ > 1) CHECK(c.bytes[FLOE_COMM_GHOST] > 0 && c.bytes[FLOE_COMM_REDUCE] > 0, "the split's traffic counted");
+        else CHECK(others_zero(&c, 0), "one rank sends nothing");
+        check_refresh(w, ref);
+        check_steps(w);
+        check_rebuild(w, ref);
+        check_finish(w, ref);
+    }
+    int fails = check_fail_, all;
+    MPI_Allreduce(&fails, &all, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+    if (rank_ == 0) printf("test_mpi_comm (%d ranks): %d failed checks over all ranks\n", size_, all);
+    floe_world_destroy(w);
+    floe_world_destroy(ref);
+    MPI_Finalize();
+    return all ? 1 : 0;
+}
