@@ -7,6 +7,7 @@
  *     compound body far above them sends every list entry through the general body
  *     (contact_pair): positions, velocities, angular velocities, forces, torques and the
  *     energy ledger equal bit for bit;
+ *     the same for the linear law with dashpots (the fused kernels of both laws);
  *  2. every sphere-wall contact the stage recorded (the inline kernel, seen from i) against
  *     detection's own answer for the pair (floe_world_probe_contact): normal, depth and
  *     point equal bit for bit, for walls before and after the sphere in the pair. */
@@ -24,7 +25,7 @@ static double urand(void) {
 
 /* the box: walls 0..4 first (floor tilted), spheres 5..5+NS-1, then the last wall; with a
  * compound, a fixed body of two spheres near the ceiling (index 6 + NS) */
-static floe_world *scene(int with_compound) {
+static floe_world *scene(int with_compound, int linear) {
     floe_world_def def = floe_default_world_def();
     def.dt = 5e-6;
     def.gravity[2] = -9.81;
@@ -34,7 +35,9 @@ static floe_world *scene(int with_compound) {
     if (!w) return NULL;
     floe_material m = {"glass", 2500, 1e7, 0.3};
     floe_world_add_material(w, &m);
-    floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5));
+    /* Hertz-Mindlin, or the linear law with dashpots (its an_ext from the accelerations) */
+    floe_world_set_law(w, 0, 0, linear ? floe_linear_law_create(200, 100, 0.02, 0.01, 0.5)
+                                       : floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5));
     const double L = 0.02, H = 0.06;
     double nf[3] = {0.08, -0.05, 1.0}, p0[3] = {0, 0, 0};
     floe_world_add_wall(w, p0, nf, 0, FLOE_FIXED); /* tilted floor */
@@ -73,20 +76,22 @@ static floe_world *scene(int with_compound) {
 
 static int same(const double *a, const double *b, int n) { return memcmp(a, b, (size_t)n * sizeof(double)) == 0; }
 
-int main(void) {
-    floe_world *a = scene(0), *b = scene(1);
-    CHECK(a && b, "worlds created");
-    if (!a || !b) return check_summary("test_sphere_path");
+/* 1. the same bits, sphere by sphere, from the lean (fused) and the general body; returns
+ * world a (spheres only) stepped, for part 2 */
+static floe_world *compare_paths(int linear) {
+    const char *law = linear ? "linear" : "hertz_mindlin";
+    floe_world *a = scene(0, linear), *b = scene(1, linear);
+    CHECK(a && b, "%s: worlds created", law);
+    if (!a || !b) return NULL;
     int rc = floe_world_prepare(a);
-    CHECK(rc == 0, "prepare (spheres only): %s", floe_world_last_error(a));
+    CHECK(rc == 0, "%s: prepare (spheres only): %s", law, floe_world_last_error(a));
     rc = floe_world_prepare(b);
-    CHECK(rc == 0, "prepare (with a compound): %s", floe_world_last_error(b));
+    CHECK(rc == 0, "%s: prepare (with a compound): %s", law, floe_world_last_error(b));
     for (int s = 0; s < 8000 && !rc; s++) {
         rc = floe_world_step(a);
         if (!rc) rc = floe_world_step(b);
     }
-    CHECK(rc == 0, "8,000 steps: %s", rc ? floe_world_last_error(a) : "");
-    /* 1. the same bits, sphere by sphere */
+    CHECK(rc == 0, "%s: 8,000 steps: %s", law, rc ? floe_world_last_error(a) : "");
     int diff = 0, moving = 0;
     for (int i = 5; i < 5 + NS; i++) {
         floe_particle_state pa, pb;
@@ -98,15 +103,26 @@ int main(void) {
         moving += floe_v3_norm(pa.v) > 1e-6;
     }
     int contacts = floe_world_contact_count(a);
-    printf("  spheres differing between the lean and the general body: %d of %d (contacts %d, moving %d)\n", diff, NS,
-           contacts, moving);
-    CHECK(diff == 0, "%d spheres differ between sphere_pair and contact_pair", diff);
-    CHECK(contacts > NS / 2, "the pile is in contact (%d contacts)", contacts);
+    printf("  %s: spheres differing between the lean and the general body: %d of %d (contacts %d, moving %d)\n", law,
+           diff, NS, contacts, moving);
+    CHECK(diff == 0, "%s: %d spheres differ between sphere_pair and contact_pair", law, diff);
+    CHECK(contacts > NS / 2, "%s: the pile is in contact (%d contacts)", law, contacts);
     floe_energy ea = floe_world_energy(a), eb = floe_world_energy(b);
     CHECK(ea.kinetic_trans == eb.kinetic_trans && ea.kinetic_rot == eb.kinetic_rot && ea.elastic == eb.elastic &&
               ea.dissipated == eb.dissipated && ea.work_body == eb.work_body,
-          "energy ledger differs: K %.17g vs %.17g, elastic %.17g vs %.17g, dissipated %.17g vs %.17g",
+          "%s: energy ledger differs: K %.17g vs %.17g, elastic %.17g vs %.17g, dissipated %.17g vs %.17g", law,
           ea.kinetic_trans, eb.kinetic_trans, ea.elastic, eb.elastic, ea.dissipated, eb.dissipated);
+    CHECK(ea.dissipated > 0, "%s: the dashpots and friction dissipate (%g J)", law, ea.dissipated);
+    floe_world_destroy(b);
+    return a;
+}
+
+int main(void) {
+    floe_world *lin = compare_paths(1);
+    floe_world_destroy(lin);
+    floe_world *a = compare_paths(0);
+    if (!a) return check_summary("test_sphere_path");
+    int rc;
     /* 2. the stage's sphere-wall contacts against detection's answer */
     floe_world_record_contacts(a, 1);
     rc = floe_world_step(a);
@@ -129,6 +145,5 @@ int main(void) {
     CHECK(wall_first > 0 && wall_last > 0, "both orders of sphere-wall pairs occur (%d, %d)", wall_first, wall_last);
     CHECK(bad == 0, "%d sphere-wall contacts differ from floe_world_probe_contact", bad);
     floe_world_destroy(a);
-    floe_world_destroy(b);
     return check_summary("test_sphere_path");
 }

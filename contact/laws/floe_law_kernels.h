@@ -2,7 +2,7 @@
  * (core/world/forces.c): inline, so that a pair of spheres under a fused law pays no call,
  * no result struct and none of the law's own dissipation sums (the world's ledger books the
  * dissipation from the work and the stored energy). One copy of each formula: the laws'
- * force functions (hertz_mindlin.c) are these kernels too. */
+ * force functions (hertz_mindlin.c, linear_law.c) are these kernels too. */
 #ifndef FLOE_LAW_KERNELS_H
 #define FLOE_LAW_KERNELS_H
 
@@ -23,6 +23,23 @@ static inline __attribute__((always_inline)) double floe_hm_kernel(const floe_he
     floe_mindlin_tangential(H->g_star, H->tangent_damping_ratio, H->mu, c, &nf, hist, Ft, energy, diss);
     for (int k = 0; k < 3; ++k) F[k] = -nf.fn * c->n[k] + Ft[k];
     return nf.fn;
+}
+
+/* The linear (viscoelastic) law (linear_law.c) on a contact whose depth > 0, n, vn, vt,
+ * m_eff, dt, an_ext and fn_extra are set: as floe_hm_kernel; hist[0..2] is the shear spring's
+ * elongation, hist[3] the dashpot's phase. Returns the normal force Fn. */
+static inline __attribute__((always_inline)) double floe_linear_kernel(const floe_linear_law *L, const floe_contact *c,
+                                                                        double *hist, double F[3], double *energy,
+                                                                        double *diss) {
+    floe_normal_force nf;
+    floe_linear_normal_k(L->kn, L->gn, L->tension, c, hist, &nf);
+    const double Fn = nf.fn;
+    double d = nf.diss, Ft[3];
+    floe_coulomb_k(c, L->ks, L->gs, L->mu, fabs(Fn) + c->fn_extra, hist, Ft, &d);
+    for (int k = 0; k < 3; ++k) F[k] = -Fn * c->n[k] + Ft[k];
+    *energy = nf.energy + 0.5 * L->ks * floe_v3_dot(hist, hist);
+    *diss = d;
+    return Fn;
 }
 
 #endif

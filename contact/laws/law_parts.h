@@ -61,9 +61,115 @@ static inline void floe_mindlin_tangential(double g_star, double tdr, double mu,
     Fs[0] = S[0]; Fs[1] = S[1]; Fs[2] = S[2];
 }
 
+/* Coulomb friction with a shear spring (ParticLS eqs 17-18): see floe_contact.h and the
+ * linear law's header comment (linear_law.c) for the steps and the energy bookkeeping. */
+static inline __attribute__((always_inline)) void floe_coulomb_k(const floe_contact *c, double ks, double gs, double mu,
+                                                                  double Fn, double *s, double Ft[3], double *diss)
+{
+    const double dt = c->dt;
+    floe_contact_rotate_history(s, c->n);
+    floe_v3_axpy(s, dt, c->vt);
+    floe_v3_set(Ft, 0.0, 0.0, 0.0);
+    floe_v3_axpy(Ft, -ks, s);
+    floe_v3_axpy(Ft, -gs, c->vt);
+    const double vt2 = floe_v3_dot(c->vt, c->vt), limit = mu * fabs(Fn), ft2 = floe_v3_dot(Ft, Ft);
+    if (ft2 > limit * limit) {
+        const double ratio = limit / sqrt(ft2);
+        floe_v3_scale(Ft, ratio);
+        if (ks > 0.0) {
+            const double e_before = 0.5 * ks * floe_v3_dot(s, s), minus_inv_ks = -1.0 / ks;
+            for (int k = 0; k < 3; ++k) s[k] = (Ft[k] + gs * c->vt[k]) * minus_inv_ks;
+            *diss += gs * vt2 * dt + (e_before - 0.5 * ks * floe_v3_dot(s, s));
+        } else {
+            floe_v3_set(s, 0.0, 0.0, 0.0);
+            *diss += ratio * gs * vt2 * dt;
+        }
+    } else {
+        *diss += gs * vt2 * dt;
+    }
+}
+
+/* the other forces' rate of change of vn (floe_contact.an_ext); 0 at dt = 0 (prepare,
+ * refresh: the dashpot sees vn itself) and when not finite */
+static inline double floe_linear_an_ext(const floe_contact *c) {
+    return c->dt > 0.0 && isfinite(c->an_ext) ? c->an_ext : 0.0;
+}
+
+/* Onset and release of the dashpot (issue 10 B). The dashpot force jumps by gn vn when
+ * the contact begins and (with tension) when it ends, inside a step. Velocity Verlet
+ * applies each force evaluation over [t - dt/2, t + dt/2] (two half kicks), so the impulse
+ * of the jump depends on where in the step it happens: a first-order error in dt that made
+ * e range over 0.288..0.301 at e = 0.3 and the default step, by onset phase. The first
+ * evaluation of a contact (history[3] == 0), which began tau = d / vn before it (tau <= dt),
+ * scales the dashpot by (dt/2 + tau) / dt, its true window [t - tau, t + dt/2]; with
+ * tension, an evaluation after which the overlap reaches 0 within tau_r = d / -v_{n+3/2}
+ * < dt (the last one) scales it by (dt/2 + tau_r) / dt, and when the contact goes on all
+ * the same (the prediction missed by the change of force), the next evaluation leaves out
+ * the part already covered (history[3] - 1). Without tension the force reaches 0
+ * continuously at kn d + gn vn = 0 (no jump at the end). Returns the factor (1 inside).
+ * The velocity. The law sees the mid-step velocity v_{n+1/2} (the positions are at t_{n+1},
+ * the closing half kick comes after the forces), which lags the dashpot by half a step: a
+ * bias of first order in zeta w dt (e 0.0959 for 0.1 at the default step). The normal
+ * dashpot takes the velocity at t_{n+1} instead, v_{n+1} = v_{n+1/2} + (dt/2) (a_ext - Fn/m*):
+ * the closing half kick of the pair's normal motion, with this contact's new force solved
+ * with it and the other forces' part a_ext = c->an_ext from the last evaluation (the world's
+ * accelerations less this contact's last force, core/world/forces.c):
+ *     Fn = (kn d + gn (vn + a_ext dt/2)) / (1 + gn dt / (2 m*)).
+ * Two bodies alone (a_ext = 0): exact for the pair's normal motion under velocity Verlet.
+ * A contact at rest held by others (a_ext = Fn_last / m*): Fn = kn d exactly, where
+ * a_ext = 0 would give kn d / (1 + gn dt / (2 m*)), a static stiffness too low by
+ * zeta w dt (issue 10 B's form before; 2.2-4.3 % in tests/test_dashpot_static.c, about
+ * 14 % estimated for the ParticLS §5.3 RVE). Lagging the whole acceleration instead (this contact's own force
+ * too) is unstable from 0.6-0.8 of the critical step (a chain of 20 masses: spectral radius
+ * 2.1 at the critical step, zeta 0.3); the implicit own term keeps it stable up to it. */
+static inline double floe_linear_dashpot_phase(double kn, double gn, int tension, const floe_contact *c, double *hist, double hm)
+{
+    const double d = c->depth, vn = c->vn, dt = c->dt;
+    if (!(dt > 0.0)) return 1.0; /* prepare: nothing advances */
+    if (hist[3] == 0.0) { /* first evaluation: the contact began d / vn ago */
+        hist[3] = 1.0;
+        return vn > 0.0 && d <= 2.0 * vn * dt ? 0.5 + fmin(d / (vn * dt), 1.0) : 1.0;
+    }
+    /* the part of this evaluation's window that the previous one already covered, when it
+     * took itself for the last one and the contact went on */
+    const double covered = hist[3] - 1.0;
+    double f = 1.0;
+    hist[3] = 1.0;
+    if (tension && vn < 0.0) {
+        /* the overlap's rate over the next drift: v_{n+3/2} = v_{n+1/2} + dt (a_ext - Fn / m*) */
+        const double ae = floe_linear_an_ext(c);
+        const double fn = (kn * d + gn * (vn + 0.5 * dt * ae)) / (1.0 + gn * hm), vnext = vn + dt * ae - 2.0 * hm * fn;
+        if (vnext < 0.0 && d < -vnext * dt) {
+            f = 0.5 + d / (-vnext * dt);
+            hist[3] = 1.0 + fmax(f - 1.0, 0.0);
+        }
+    }
+    return fmax(f - covered, 0.0);
+}
+
+static inline __attribute__((always_inline)) void floe_linear_normal_k(double kn, double gn, int tension,
+                                                                  const floe_contact *c, double *hist,
+                                                                  floe_normal_force *o)
+{
+    const double d = c->depth, vn = c->vn, dt = c->dt;
+    const double fel = kn * d;
+    /* the dashpot at the velocity of the step's end (floe_linear_dashpot_phase) */
+    const double hm = c->m_eff > 0.0 && isfinite(c->m_eff) ? 0.5 * dt / c->m_eff : 0.0;
+    const double gph = gn * floe_linear_dashpot_phase(kn, gn, tension, c, hist, hm);
+    double Fn = (fel + gph * (vn + 0.5 * dt * floe_linear_an_ext(c))) / (1.0 + gph * hm);
+    if (!tension && Fn < 0.0) Fn = 0.0;
+    o->fn = Fn;
+    o->fel = fel;
+    o->kn = kn;
+    o->gn = gn;
+    o->diss = (Fn - fel) * vn * dt; /* damping force actually applied times vn dt */
+    o->energy = 0.5 * kn * d * d;
+}
+
 /* Linear spring-dashpot normal force kn d + gn vn with the onset/release treatment of the
  * dashpot (history[3]; linear_law.c), clamped at 0 unless tension. */
 void floe_linear_normal(double kn, double gn, int tension, const floe_contact *c, double *hist, floe_normal_force *o);
+
 
 /* The Hertz-Mindlin moduli of two materials: E*, G* and sqrt(4 G* / E*); 0 when a material
  * lacks young > 0 or poisson in (-1, 0.5]. */

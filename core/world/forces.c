@@ -727,7 +727,8 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     return pair_book(w, ctx, env, i, j, &c, &res, fx, ex, hist, acc, xb);
 }
 
-/* A pair of spheres under Hertz-Mindlin, fused (stage_env.fused): sphere_pair + hm_force +
+/* A pair of spheres under Hertz-Mindlin or the linear law, fused (stage_env.fused):
+ * sphere_pair + the law's force function (floe_law_kernels.h) +
  * pair_book for an evaluation that records no contact, in a cell-less world without growth,
  * less what that case never reads (the relative spin, the law's result struct and its
  * dissipation sums, the couples' work: the law has none) and without the call through the
@@ -769,7 +770,13 @@ static inline __attribute__((always_inline)) int sphere_fused(floe_world *w, con
     c->m_eff = m_eff;
     c->dt = env->stepping ? ctx->dt : ctx->hist_dt;
     double F[3], energy, diss;
-    floe_hm_kernel((const floe_hertz_mindlin_law *)law, c, hist, F, &energy, &diss);
+    if (law->klass == &floe_hertz_mindlin_law_class)
+        floe_hm_kernel((const floe_hertz_mindlin_law *)law, c, hist, F, &energy, &diss);
+    else {
+        c->gscale = 1.0;
+        c->an_ext = w->dash_on ? pair_an_ext(w, p, i, j, c, hist) : 0.0;
+        floe_linear_kernel((const floe_linear_law *)law, c, hist, F, &energy, &diss);
+    }
     (void)diss;
     hist[FLOE_TWIST_SLOT] = 0.0;
     double ti[3], tj[3], Ti[3], Tj[3];
@@ -817,7 +824,7 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
     if (env->any_none && floe_contact_law_no_contact(law)) return FLOE_OK;
     double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
     nl->touching[k] = 1;
-    if (env->fused && law->klass == &floe_hertz_mindlin_law_class) {
+    if (env->fused && (law->klass == &floe_hertz_mindlin_law_class || law->klass == &floe_linear_law_class)) {
         const double dist = sqrt(d2), depth = rs - dist, im = p->inv_mass[i] + p->inv_mass[j];
         /* else the checks below and the law's own, with their messages */
         if (dist > 0 && depth <= rmin(rad_i, rad_j) && im > 0 && im < INFINITY)
