@@ -983,19 +983,28 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         ps->nerr = nt;
     }
     if (ps->adj_gen != nl->gen || ps->adj_np != n || !ps->adj_off) {
+        /* a particle's entries as i are its row of the list (sorted by i: floe_nl_build, and a
+         * checkpoint's copy of such a list); those as j are indexed */
         int *off = realloc(ps->adj_off, (size_t)(n + 1) * sizeof *off);
-        if (!off) return FLOE_ENOMEM;
-        ps->adj_off = off;
-        size_t need = 2 * (size_t)npairs, c2 = ps->adj_cap;
-        if (grow((void **)&ps->adj, need ? need : 1, &c2, sizeof(int))) return FLOE_ENOMEM;
+        if (off) ps->adj_off = off;
+        int *row = off ? realloc(ps->row, (size_t)(n + 1) * sizeof *row) : NULL;
+        if (!row) return FLOE_ENOMEM;
+        ps->row = row;
+        size_t c2 = ps->adj_cap;
+        if (grow((void **)&ps->adj, npairs ? (size_t)npairs : 1, &c2, sizeof(int))) return FLOE_ENOMEM;
         ps->adj_cap = c2;
         memset(off, 0, (size_t)(n + 1) * sizeof *off);
-        for (int k = 0; k < npairs; k++) { off[nl->pi[k] + 1]++; off[nl->pj[k] + 1]++; }
-        for (int i = 0; i < n; i++) off[i + 1] += off[i];
-        for (int k = 0; k < npairs; k++) { /* filled in list order: a particle's entries ascend */
-            ps->adj[off[nl->pi[k]]++] = 2 * k;
-            ps->adj[off[nl->pj[k]]++] = 2 * k + 1;
+        memset(row, 0, (size_t)(n + 1) * sizeof *row);
+        for (int k = 0; k < npairs; k++) {
+            if (k > 0 && nl->pi[k] < nl->pi[k - 1]) return FLOE_EINVAL; /* not sorted by i */
+            row[nl->pi[k] + 1]++;
+            off[nl->pj[k] + 1]++;
         }
+        for (int i = 0; i < n; i++) {
+            row[i + 1] += row[i];
+            off[i + 1] += off[i];
+        }
+        for (int k = 0; k < npairs; k++) ps->adj[off[nl->pj[k]]++] = k; /* in list order */
         for (int i = n; i > 0; i--) off[i] = off[i - 1];
         off[0] = 0;
         unsigned char *hit = realloc(ps->hit, (size_t)(n ? n : 1));
@@ -1105,7 +1114,10 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
             acc_merge(w, &tot, &a);
         }
     } else {
-        if (par_prepare(w, nt, nb)) return floe_world_error(w, FLOE_ENOMEM, "out of memory (threads' buffers)");
+        const int prc = par_prepare(w, nt, nb);
+        if (prc)
+            return floe_world_error(w, prc, prc == FLOE_ENOMEM ? "out of memory (threads' buffers)"
+                                                               : "internal: the neighbour list is not sorted by its first particle");
         floe_par_scratch *ps = w->thr;
         FLOE_OMP(omp parallel num_threads(nt))
         {
@@ -1150,7 +1162,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
         }
         for (int b = 0; b < nb; b++) acc_merge(w, &tot, &ps->blk[b]);
         /* each particle's forces, in list order as one thread adds them (pair_apply) */
-        const int n = p->n, *off = ps->adj_off, *adj = ps->adj;
+        const int n = p->n, *off = ps->adj_off, *adj = ps->adj, *row = ps->row;
         const double *pf = ps->pf;
         const unsigned char *act = ps->act;
         unsigned char *hit = ps->hit;
@@ -1160,15 +1172,25 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
             if (!hit[i]) continue; /* no force on it this evaluation */
             hit[i] = 0;
             double fi[3] = {f[3 * i], f[3 * i + 1], f[3 * i + 2]}, ti[3] = {tq[3 * i], tq[3 * i + 1], tq[3 * i + 2]};
-            const int e1 = off[i + 1];
-            for (int e = off[i]; e < e1; e++) {
-                const int k = adj[e] >> 1;
+            /* list order: the entries it is j of before its row, its row, those after it */
+            const int r0 = row[i], r1 = row[i + 1], e1 = off[i + 1];
+            int e = off[i];
+            for (; e < e1 && adj[e] < r0; e++) {
+                const int k = adj[e];
                 if (!act[k]) continue;
                 const double *bk = pf + 9 * (size_t)k;
-                if (adj[e] & 1)
-                    for (int a = 0; a < 3; a++) { fi[a] -= bk[a]; ti[a] += bk[6 + a]; }
-                else
-                    for (int a = 0; a < 3; a++) { fi[a] += bk[a]; ti[a] += bk[3 + a]; }
+                for (int a = 0; a < 3; a++) { fi[a] -= bk[a]; ti[a] += bk[6 + a]; }
+            }
+            for (int k = r0; k < r1; k++) {
+                if (!act[k]) continue;
+                const double *bk = pf + 9 * (size_t)k;
+                for (int a = 0; a < 3; a++) { fi[a] += bk[a]; ti[a] += bk[3 + a]; }
+            }
+            for (; e < e1; e++) {
+                const int k = adj[e];
+                if (!act[k]) continue;
+                const double *bk = pf + 9 * (size_t)k;
+                for (int a = 0; a < 3; a++) { fi[a] -= bk[a]; ti[a] += bk[6 + a]; }
             }
             for (int a = 0; a < 3; a++) { f[3 * i + a] = fi[a]; tq[3 * i + a] = ti[a]; }
         }

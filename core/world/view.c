@@ -113,8 +113,8 @@ int floe_world_memory(const floe_world *w, floe_memory_stats *o) {
     /* threads: the contact stage's per-entry forces, flags and the particles' entry lists
      * (forces.c par_prepare), once the list is large enough to be threaded */
     if (floe_world_loop_threads(w, nl->cap) > 1)
-        o->neighbor_list += (size_t)nl->cap * (9 * sizeof(double) + 1 + 2 * sizeof(int)) +
-                            (size_t)p->cap * sizeof(int);
+        o->neighbor_list += (size_t)nl->cap * (9 * sizeof(double) + 1 + sizeof(int)) +
+                            (size_t)p->cap * (2 * sizeof(int) + 1);
     o->contacts = (size_t)w->contacts_cap * sizeof(floe_contact_info);
     return FLOE_OK;
 }

@@ -179,8 +179,9 @@ void floe_world_error_to(char *buf, size_t len);
 typedef struct floe_par_scratch {
     double *pf; unsigned char *act; size_t pf_cap, act_cap; /* per entry: force on i, torques of i, j */
     unsigned char *hit;                              /* per particle: a force to gather */
-    int *adj, *adj_off; size_t adj_cap; int adj_np; long adj_gen; /* per particle: its entries, 2k
-                                                       (as i) or 2k + 1 (as j), in list order */
+    int *adj, *adj_off; size_t adj_cap; int adj_np; long adj_gen; /* per particle: the entries it is
+                                                       j of, in list order (adj_off: n + 1 offsets) */
+    int *row;                                        /* n + 1: entries [row[i], row[i+1]) have pi = i */
     struct stage_acc *blk; int blk_cap;              /* per block (forces.c) */
     floe_detect_state *det; int ndet;                /* per thread */
     char (*err)[1024]; int *fail_b, *fail_rc; int nerr;
