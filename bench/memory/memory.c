@@ -2,10 +2,19 @@
  * (touching neighbours at 1 % overlap, so every particle has contacts and history),
  * Hertz-Mindlin, prepared and stepped 10 times; prints the resident memory growth per
  * particle and the part of it that the particle store, neighbour list and contact
- * records account for.   bench_memory [N]   (default 1000000) */
+ * records account for.   bench_memory [N [STEPS]]   (default 1000000, 0)
+ * With STEPS > 0 it then times STEPS more steps and prints particle-steps/s: the cost per
+ * particle-step against N (every particle in contact with its 6 lattice neighbours). */
 #include "floe.h"
 #include <stdio.h>
 #include <stdlib.h>
+#include <time.h>
+
+static double now(void) {
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return t.tv_sec + 1e-9 * t.tv_nsec;
+}
 
 static size_t rss(void) {
     FILE *f = fopen("/proc/self/statm", "r");
@@ -15,7 +24,7 @@ static size_t rss(void) {
 }
 
 int main(int argc, char **argv) {
-    long N = argc > 1 ? atol(argv[1]) : 1000000;
+    long N = argc > 1 ? atol(argv[1]) : 1000000, steps = argc > 2 ? atol(argv[2]) : 0;
     int side = (int)ceil(cbrt((double)N));
     size_t r0 = rss();
     floe_world_def d = floe_default_world_def();
@@ -44,6 +53,14 @@ int main(int argc, char **argv) {
     printf("memory: N=%ld spheres, %d candidate pairs, %d contacts: RSS %.0f B/particle "
            "(particle store %.0f, neighbour list + history %.0f, contact records %.0f)\n",
            n, ns.pairs, floe_world_contact_count(w), (double)(r1 - r0) / n, store, nl, cont);
+    if (steps > 0) {
+        double t0 = now();
+        for (long s = 0; s < steps; s++)
+            if (floe_world_step(w)) { fprintf(stderr, "%s\n", floe_world_last_error(w)); return 1; }
+        double dt = now() - t0;
+        printf("time: N=%ld steps=%ld loop_s=%.3f particle_steps_per_s=%.3e ns_per_particle_step=%.1f contacts=%d\n", n,
+               steps, dt, (double)n * steps / dt, 1e9 * dt / ((double)n * steps), floe_world_contact_count(w));
+    }
     floe_world_destroy(w);
     return 0;
 }
