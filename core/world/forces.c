@@ -7,6 +7,7 @@
 #include "beam_set.h"
 #include "floe_provider.h"
 #include "floe_par.h"
+#include "floe_alloc.h"
 #include "floe_law_kernels.h"
 #include <limits.h>
 #include <stdlib.h>
@@ -940,15 +941,6 @@ static void acc_merge(floe_world *w, stage_acc *tot, const stage_acc *a) {
     if (a->wd_min < w->wd_worst) { w->wd_worst = a->wd_min; w->wd_worst_i = a->wd_i; w->wd_worst_j = a->wd_j; }
 }
 
-static int grow(void **ptr, size_t need, size_t *cap, size_t size) {
-    if (need <= *cap) return 0;
-    void *t = realloc(*ptr, need * size);
-    if (!t) return -1;
-    *ptr = t;
-    *cap = need;
-    return 0;
-}
-
 /* the buffers for nt threads, nb blocks, the list's entries and n particles; the particles'
  * entries rebuilt after each list build */
 static int par_prepare(floe_world *w, int nt, int nb) {
@@ -956,8 +948,8 @@ static int par_prepare(floe_world *w, int nt, int nb) {
     const int n = w->p.n, npairs = nl->npairs;
     if (!w->thr && !(w->thr = calloc(1, sizeof *w->thr))) return FLOE_ENOMEM;
     floe_par_scratch *ps = w->thr;
-    if (grow((void **)&ps->pf, (size_t)(npairs ? npairs : 1) * 9, &ps->pf_cap, sizeof(double)) ||
-        grow((void **)&ps->act, (size_t)(npairs ? npairs : 1), &ps->act_cap, 1))
+    if (floe_reserve((void **)&ps->pf, &ps->pf_cap, (size_t)(npairs ? npairs : 1) * 9, sizeof(double)) ||
+        floe_reserve((void **)&ps->act, &ps->act_cap, (size_t)(npairs ? npairs : 1), 1))
         return FLOE_ENOMEM;
     if (nb > ps->blk_cap) {
         stage_acc *t = realloc(ps->blk, (size_t)nb * sizeof *t);
@@ -991,7 +983,7 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         if (!row) return FLOE_ENOMEM;
         ps->row = row;
         size_t c2 = ps->adj_cap;
-        if (grow((void **)&ps->adj, npairs ? (size_t)npairs : 1, &c2, sizeof(int))) return FLOE_ENOMEM;
+        if (floe_reserve((void **)&ps->adj, &c2, npairs ? (size_t)npairs : 1, sizeof(int))) return FLOE_ENOMEM;
         ps->adj_cap = c2;
         memset(off, 0, (size_t)(n + 1) * sizeof *off);
         memset(row, 0, (size_t)(n + 1) * sizeof *row);

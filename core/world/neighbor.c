@@ -5,6 +5,7 @@
  * Per-pair history (shear springs) survives rebuilds through a hash of the pair. */
 #include "world_internal.h"
 #include "floe_par.h"
+#include "floe_alloc.h"
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -69,13 +70,8 @@ static uint64_t mix(uint64_t k) {
 }
 
 static int push_one(struct floe_nl_found *fd, int i, int j, int sub, int img) {
-    if (fd->n + 4 > fd->cap) {
-        size_t nc = fd->cap ? 2 * fd->cap : 4096;
-        int *e = realloc(fd->e, nc * sizeof *e);
-        if (!e) return FLOE_ENOMEM;
-        fd->e = e;
-        fd->cap = nc;
-    }
+    if (fd->n + 4 > fd->cap && floe_reserve((void **)&fd->e, &fd->cap, fd->cap ? 2 * fd->cap : 4096, sizeof(int)))
+        return FLOE_ENOMEM;
     int *e = fd->e + fd->n;
     e[0] = i; e[1] = j; e[2] = sub; e[3] = img;
     fd->n += 4;
@@ -197,20 +193,9 @@ static int nl_reserve(floe_neighbor_list *nl, size_t need) {
     if (need > INT32_MAX) return FLOE_ENOMEM;
     size_t nc = need > (size_t)nl->cap ? need + need / 4 + 1024 : (size_t)nl->cap;
     if (nc > INT32_MAX) nc = need;
-    int *a = realloc(nl->pi, nc * sizeof(int));
-    if (!a) return FLOE_ENOMEM;
-    nl->pi = a;
-    int *b = realloc(nl->pj, nc * sizeof(int));
-    if (!b) return FLOE_ENOMEM;
-    nl->pj = b;
-    int *c = realloc(nl->sub, nc * sizeof(int));
-    if (!c) return FLOE_ENOMEM;
-    nl->sub = c;
-    if (nl->cell) {
-        int *d = realloc(nl->img, nc * sizeof(int));
-        if (!d) return FLOE_ENOMEM;
-        nl->img = d;
-    }
+    if (floe_resize((void **)&nl->pi, nc, sizeof(int)) || floe_resize((void **)&nl->pj, nc, sizeof(int)) ||
+        floe_resize((void **)&nl->sub, nc, sizeof(int)) || (nl->cell && floe_resize((void **)&nl->img, nc, sizeof(int))))
+        return FLOE_ENOMEM;
     nl->cap = (int)nc;
     return FLOE_OK;
 }
