@@ -99,8 +99,8 @@ int main(int argc, char **argv) {
     floe_neighbor_stats ns;
     floe_world_neighbor_stats(w, &ns);
     printf("floe dem-settle: N=%d warmup=%ld steps=%ld dt=%g loop_s=%.3f particle_steps_per_s=%.3e contacts=%d "
-           "rebuilds=%ld ke=%.4e rss_per_particle=%.0f B\n",
-           n, warmup, nsteps, floe_world_dt(w), loop, (double)n * nsteps / loop, floe_world_contact_count(w), ns.rebuilds,
+           "pairs=%d rebuilds=%ld ke=%.4e rss_per_particle=%.0f B\n",
+           n, warmup, nsteps, floe_world_dt(w), loop, (double)n * nsteps / loop, floe_world_contact_count(w), ns.pairs, ns.rebuilds,
            e.kinetic_trans, (double)(rss1 - rss0) / n);
     floe_world_destroy(w);
     return 0;
