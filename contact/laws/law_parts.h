@@ -157,7 +157,7 @@ static inline __attribute__((always_inline)) void floe_linear_normal_k(double kn
     const double hm = c->m_eff > 0.0 && isfinite(c->m_eff) ? 0.5 * dt / c->m_eff : 0.0;
     const double gph = gn * floe_linear_dashpot_phase(kn, gn, tension, c, hist, hm);
     double Fn = (fel + gph * (vn + 0.5 * dt * floe_linear_an_ext(c))) / (1.0 + gph * hm);
-    if (!tension && Fn < 0.0) Fn = 0.0;
+    if (!tension) Fn = Fn < 0.0 ? 0.0 : Fn; /* a max, without a branch on the sign (NaN stays NaN) */
     o->fn = Fn;
     o->fel = fel;
     o->kn = kn;
