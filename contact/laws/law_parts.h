@@ -128,7 +128,9 @@ static inline double floe_linear_dashpot_phase(double kn, double gn, int tension
     if (!(dt > 0.0)) return 1.0; /* prepare: nothing advances */
     if (hist[3] == 0.0) { /* first evaluation: the contact began d / vn ago */
         hist[3] = 1.0;
-        return vn > 0.0 && d <= 2.0 * vn * dt ? 0.5 + fmin(d / (vn * dt), 1.0) : 1.0;
+        if (!(vn > 0.0 && d <= 2.0 * vn * dt)) return 1.0;
+        const double r = d / (vn * dt);
+        return 0.5 + (r < 1.0 ? r : 1.0); /* fmin(r, 1), without the library call */
     }
     /* the part of this evaluation's window that the previous one already covered, when it
      * took itself for the last one and the contact went on */
@@ -141,10 +143,10 @@ static inline double floe_linear_dashpot_phase(double kn, double gn, int tension
         const double fn = (kn * d + gn * (vn + 0.5 * dt * ae)) / (1.0 + gn * hm), vnext = vn + dt * ae - 2.0 * hm * fn;
         if (vnext < 0.0 && d < -vnext * dt) {
             f = 0.5 + d / (-vnext * dt);
-            hist[3] = 1.0 + fmax(f - 1.0, 0.0);
+            hist[3] = 1.0 + (f - 1.0 > 0.0 ? f - 1.0 : 0.0);
         }
     }
-    return fmax(f - covered, 0.0);
+    return f - covered > 0.0 ? f - covered : 0.0; /* fmax(., 0) (NaN: 0), inline */
 }
 
 static inline __attribute__((always_inline)) void floe_linear_normal_k(double kn, double gn, int tension,
