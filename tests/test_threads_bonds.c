@@ -5,8 +5,9 @@
  * built and stepped with 1-4 threads at the default loop grain (2,048 items: every world here
  * is above it), and the particles' positions, velocities, forces (and for beams orientations,
  * angular velocities, torques), the energy ledger, the broken counts and flags, and the PD
- * per-point state (s0, theta) must equal one thread's to the last bit (memcmp). Bonds break
- * during every run (the counts are checked to grow after the first steps):
+ * per-point state (s0, theta, q) and the correspondence stress output (F, sigma, von Mises)
+ * must equal one thread's to the last bit (memcmp). Bonds break
+ * during every run (checked: some broken halfway, more at the end):
  *   A. a 2D PMB plate of 5,200 points (70,000 bonds) with an edge notch, stretched: the crack
  *      runs from the notch;
  *   B. the same with LAMMPS' per-point critical stretch (alpha: the s0 maxima);
@@ -14,9 +15,11 @@
  *      gathered), and plain LPS;
  *   D. elastic-plastic PMB (yield in tension);
  *   E. PMB under the RK2 integrator (the midpoint probe: the no-breakage evaluation);
- *   F. a 3D PMB block (5,120 points);
- *   G. 3,600 discs with 7,080 damped beam bonds (2D) and a 3D lattice of 3,240 spheres with
- *      8,000 bonds, pulled apart: bonds break, the broken pairs meet by contact.
+ *   F. a 3D PMB block (5,120 points, 244,000 bonds);
+ *   G. PMB and LPS plates filling a periodic cell (bonds through its faces: the images path),
+ *      two crossed shear waves;
+ *   H. 3,600 discs with 7,080 damped beam bonds (2D) and a 3D lattice of 3,240 spheres with
+ *      9,036 bonds, pulled apart: bonds break, some broken pairs meet by contact.
  * Built without OpenMP, the test checks that 2 threads are refused and skips. */
 #include "check.h"
 #include "floe.h"
@@ -27,10 +30,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { PMB, ALPHA, LPS_SC, LPS_PLAIN, PLASTIC, PMB_RK2, PMB_3D, BEAM_2D, BEAM_3D };
+enum { PMB, ALPHA, LPS_SC, LPS_PLAIN, PLASTIC, PMB_RK2, PMB_3D, PMB_CELL, LPS_CELL, BEAM_2D, BEAM_3D };
 static const char *names[] = {"PMB plate",   "PMB alpha plate", "LPS plate (surface correction, Gaussian)",
                               "LPS plate (plain)", "plastic PMB plate", "PMB plate, RK2",
-                              "PMB 3D block", "beam-bonded discs (2D)", "beam-bonded spheres (3D)"};
+                              "PMB 3D block", "PMB in a periodic cell", "LPS in a periodic cell",
+                              "beam-bonded discs (2D)", "beam-bonded spheres (3D)"};
 
 static floe_world *new_world(int dim, int integrator) {
     floe_world_def d = floe_default_world_def();
@@ -49,7 +53,7 @@ static floe_world *new_world(int dim, int integrator) {
  * an edge notch across the middle (its bonds removed: pd_crack.c), stretched along x: the
  * crack starts at the notch after some 80 steps and runs */
 static floe_world *pd_world(int kind) {
-    const int dim = kind == PMB_3D ? 3 : 2;
+    const int dim = kind == PMB_3D ? 3 : 2, cell = kind == PMB_CELL || kind == LPS_CELL;
     floe_world *w = new_world(dim, kind == PMB_RK2 ? FLOE_RK2 : FLOE_VELOCITY_VERLET);
     if (!w) return NULL;
     floe_pd_region r;
@@ -58,12 +62,13 @@ static floe_world *pd_world(int kind) {
     r.dx = 1e-3;
     r.horizon_factor = 3;
     r.thickness = 1e-3;
-    if (dim == 2) floe_v3_set(r.hi, 100e-3, 52e-3, 1e-3);
+    if (cell) floe_v3_set(r.hi, 72e-3, 72e-3, 1e-3);
+    else if (dim == 2) floe_v3_set(r.hi, 100e-3, 52e-3, 1e-3);
     else floe_v3_set(r.hi, 32e-3, 16e-3, 10e-3);
     floe_pd_body *b = NULL;
     if (floe_pd_body_create(&b, &r)) { floe_world_destroy(w); return NULL; }
     floe_pd_material m;
-    if (kind == LPS_SC || kind == LPS_PLAIN)
+    if (kind == LPS_SC || kind == LPS_PLAIN || kind == LPS_CELL)
         m = floe_pd_material_lps(2200, 14.9e9, 8.9e9, 2e-3, kind == LPS_SC ? FLOE_PD_W_GAUSS : FLOE_PD_W_ONE);
     else {
         m = floe_pd_material_pmb(2200, 14.9e9, 2e-3);
@@ -75,10 +80,20 @@ static floe_world *pd_world(int kind) {
     const double xm = 0.5 * r.hi[0], depth = dim == 2 ? 15e-3 : 5e-3, a0[3] = {xm, -1e-3, -1e-3};
     const double e1[3] = {0, depth + 1e-3, 0}, e2[3] = {0, 0, r.hi[2] + 2e-3}, a1[3] = {xm, depth, 0};
     const floe_pd_crack cr = dim == 2 ? floe_pd_crack_segment(a0, a1) : floe_pd_crack_rectangle(a0, e1, e2);
-    if (floe_pd_set_material(b, &m) || floe_pd_add_crack(b, &cr) <= 0 ||
-        (kind == LPS_SC && floe_pd_surface_correction(b)) || floe_world_add_pd_body(w, b, 0, NULL, NULL)) {
+    const double o[3] = {0, 0, 0}, H[9] = {72e-3, 0, 0, 0, 72e-3, 0, 0, 0, 1};
+    if (floe_pd_set_material(b, &m) || (!cell && floe_pd_add_crack(b, &cr) <= 0) ||
+        (kind == LPS_SC && floe_pd_surface_correction(b)) || (cell && floe_world_set_cell(w, o, H)) ||
+        floe_world_add_pd_body(w, b, 0, NULL, NULL)) {
         floe_world_destroy(w);
         return NULL;
+    }
+    if (cell) { /* an infinite plate (bonds through the faces): two crossed shear waves */
+        for (int i = 0; i < b->n; i++) {
+            const double *X = b->X + 3 * i, k = 2 * M_PI / 72e-3;
+            double vi[3] = {12.0 * sin(k * X[1]), 9.0 * sin(k * X[0] + 0.5), 0};
+            floe_world_set_velocity(w, i, vi, NULL);
+        }
+        return w;
     }
     /* a uniform extension along x (v at the ends), and a little shear */
     const double v = dim == 2 ? 10.0 : 14.0;
@@ -127,7 +142,7 @@ typedef struct run_out {
     unsigned char *flags; size_t nflags;
     floe_energy e;
     long long nbroken, nbroken_early;
-    int ncontacts, nbonds, threaded;
+    int ncontacts, nbonds, threaded, images;
 } run_out;
 
 static int run(int kind, int threads, int steps, run_out *o) {
@@ -154,7 +169,7 @@ static int run(int kind, int threads, int steps, run_out *o) {
     const size_t nextra = b ? (b->s0 ? 2 * (size_t)b->n : 0) + (b->theta ? (size_t)b->n : 0) +
                                   (b->dten ? 11 * (size_t)b->n : 0)
                             : 0;
-    o->nstate = n * (beams ? 22 : 9) + nextra;
+    o->nstate = n * (beams ? 22 : 9) + nextra + (b ? 19 * (size_t)b->n + 1 : 0);
     o->state = malloc(o->nstate * sizeof(double));
     double *d = o->state;
     memcpy(d, p->x, 3 * n * sizeof(double)); d += 3 * n;
@@ -179,12 +194,22 @@ static int run(int kind, int threads, int steps, run_out *o) {
         if (b->s0) { memcpy(d, b->s0, 2 * (size_t)b->n * sizeof(double)); d += 2 * (size_t)b->n; }
         if (b->theta) { memcpy(d, b->theta, (size_t)b->n * sizeof(double)); d += b->n; }
         if (b->dten) { memcpy(d, b->dten, 11 * (size_t)b->n * sizeof(double)); d += 11 * (size_t)b->n; }
+        /* the correspondence stress of the output (pd_correspondence.c), threaded as well */
+        int sing = 0;
+        const size_t m = (size_t)b->n;
+        if (floe_pd_correspondence(b, p->x, 8.9e9, 9e9, d, NULL, d + 9 * m, d + 18 * m, &sing)) {
+            floe_world_destroy(w);
+            return 1;
+        }
+        d += 19 * m;
+        *d++ = sing;
         o->nflags = (size_t)b->nbond;
         o->flags = malloc(o->nflags ? o->nflags : 1);
         memcpy(o->flags, b->broken, o->nflags);
         o->nbroken = b->nbroken;
         o->nbonds = (int)b->nbond;
         o->threaded = b->par != NULL;
+        o->images = b->img != NULL;
     }
     o->e = floe_world_energy(w);
     o->ncontacts = floe_world_contact_count(w);
@@ -198,6 +223,7 @@ static void compare(int kind, int steps) {
     memset(&ref, 0, sizeof ref);
     CHECK(run(kind, 1, steps, &ref) == 0, "%s: one thread runs", what);
     CHECK(!ref.threaded, "%s: one thread keeps the serial path", what);
+    if (kind == PMB_CELL || kind == LPS_CELL) CHECK(ref.images, "%s: bonds through the cell's faces", what);
     CHECK(ref.nbroken_early > 0 && ref.nbroken > ref.nbroken_early,
           "%s: bonds break during the run (%lld after %d steps, %lld at the end)", what, ref.nbroken_early, steps / 2,
           ref.nbroken);
@@ -237,6 +263,8 @@ int main(void) {
     compare(PLASTIC, 240);
     compare(PMB_RK2, 240);
     compare(PMB_3D, 160);
+    compare(PMB_CELL, 240);
+    compare(LPS_CELL, 240);
     compare(BEAM_2D, 400);
     compare(BEAM_3D, 300);
     return check_summary("test_threads_bonds");
