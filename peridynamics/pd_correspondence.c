@@ -60,6 +60,7 @@ static inline void corr_add(double *K, double *N, double w, double Vo, const dou
  * computed at both its ends, no per-bond buffer. The same bits for any thread count.
  * Returns 0, or -1 when the index cannot be allocated (the caller runs the serial loop). */
 static int corr_sums_threaded(const floe_pd_body *b, const double *x, double *K, double *N, int nt) {
+    (void)nt; /* without OpenMP (never called there) */
     const int n = b->n;
     const int64_t nb = b->nbond;
     int64_t *roff = calloc((size_t)n + 1, sizeof *roff), *rk = malloc((size_t)(nb > 0 ? nb : 1) * sizeof *rk);
