@@ -85,7 +85,7 @@ static double pmb_c(const floe_pd_body *b) { return b->c; }
  * in P->g and each row's sums in P->row, and every point then gathers them in the order of
  * the serial loop (pd_gather): the same additions, the same bits. A bond that adds nothing
  * stores +0 for a subtraction (x - +0 = x) and -0 for an addition (x + -0 = x), for every x.
- * Energies and broken counts are summed per block of FLOE_PAR_BLOCK rows and the blocks in
+ * Energies and broken counts are summed per block of FLOE_PD_ROW_BLOCK rows and the blocks in
  * order, on one thread too. */
 
 void floe_pd_par_free(floe_pd_body *b)
@@ -101,7 +101,7 @@ void floe_pd_par_free(floe_pd_body *b)
 static int pd_threads(const floe_pd_body *b)
 {
 #ifdef _OPENMP
-    const int nblk = (b->n + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK;
+    const int nblk = (b->n + FLOE_PD_ROW_BLOCK - 1) / FLOE_PD_ROW_BLOCK;
     const int nt = b->nthreads < nblk ? b->nthreads : nblk;
     return nt > 1 ? nt : 1;
 #else
@@ -129,7 +129,7 @@ static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs)
     floe_pd_par *P = b->par;
     const int n = b->n;
     const int64_t nb = b->nbond;
-    const int nblk = (n + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK;
+    const int nblk = (n + FLOE_PD_ROW_BLOCK - 1) / FLOE_PD_ROW_BLOCK;
     if (!P->roff || P->n != n || P->nbond != nb) {
         free(P->roff); /* a failure below leaves the index unbuilt */
         free(P->rk);
@@ -306,7 +306,7 @@ static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, con
 
 static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f, const int alpha_on, const int per)
 {
-    const int n = b->n, B = FLOE_PAR_BLOCK, nblk = (n + B - 1) / B, st = alpha_on ? 4 : 3;
+    const int n = b->n, B = FLOE_PD_ROW_BLOCK, nblk = (n + B - 1) / B, st = alpha_on ? 4 : 3;
     const int nt = pd_threads(b);
     floe_pd_par *P = nt > 1 ? pd_par_get(b, st, st) : NULL;
     double *s0n = alpha_on ? b->s0 + n : NULL;
@@ -409,7 +409,7 @@ static inline __attribute__((always_inline)) double plastic_row(floe_pd_body *b,
 
 static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
 {
-    const int n = b->n, B = FLOE_PAR_BLOCK, nblk = (n + B - 1) / B;
+    const int n = b->n, B = FLOE_PD_ROW_BLOCK, nblk = (n + B - 1) / B;
     const int nt = pd_threads(b);
     floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3) : NULL;
     double energy = 0.0;
@@ -640,7 +640,7 @@ static inline void lps_dil_final(floe_pd_body *b, int i)
 
 static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, const int per)
 {
-    const int n = b->n, B = FLOE_PAR_BLOCK, nblk = (n + B - 1) / B;
+    const int n = b->n, B = FLOE_PD_ROW_BLOCK, nblk = (n + B - 1) / B;
     double *th = b->theta;
     double *p = b->dten ? b->dten + 9 * (size_t)n : NULL, *mi = p ? p + n : NULL;
     const int st = p ? 3 : 1;
@@ -767,7 +767,7 @@ static inline __attribute__((always_inline)) double lps_row(const floe_pd_body *
 
 static inline double lps_forces_impl(floe_pd_body *b, const double *x, double *f, const int per)
 {
-    const int n = b->n, B = FLOE_PAR_BLOCK, nblk = (n + B - 1) / B;
+    const int n = b->n, B = FLOE_PD_ROW_BLOCK, nblk = (n + B - 1) / B;
     const double kd = lps_kdil(b);
     b->nbroken += lps_dilatation(b, x);
     const int nt = pd_threads(b);

@@ -10,8 +10,14 @@
  * the rows in parallel, each bond's share of j into g (per bond) and each row's sums into
  * row (per point), then every point gathers its shares in the serial loop's order: the bonds
  * whose partner it is in increasing k (the reverse index rk), its own row sum where the
- * serial loop adds it. Partial sums (energy, broken bonds) are per block of FLOE_PAR_BLOCK
+ * serial loop adds it. Partial sums (energy, broken bonds) are per block of FLOE_PD_ROW_BLOCK
  * rows, added in block order, also on one thread. */
+
+/* Rows per block: fixed (not the thread count's), and smaller than FLOE_PAR_BLOCK because a
+ * row holds tens of bonds (about 14 in 2D, 60 in 3D at a horizon of 3 dx): a body of 5,000
+ * points gives its threads 40 blocks to share, not 10. The blocks are also the threads'
+ * unit of work (handed out in increasing order). */
+#define FLOE_PD_ROW_BLOCK 128
 typedef struct floe_pd_par {
     int64_t *roff, *rk;   /* the bonds whose partner is p: rk[roff[p] .. roff[p + 1]), ascending */
     int n;                /* points and bonds the reverse index was built for */
