@@ -2,22 +2,23 @@
  * 14, docs/parallel.md "The same bits"): peridynamic bonds (peridynamics/pd_materials.c, the
  * rows in parallel and a per-point gather in the serial order) and beam bonds
  * (contact/bonds/beam_bond.c, the bonds in parallel and a per-particle gather). Each world is
- * built and stepped with 1-4 threads at the default loop grain (2,048 items: every world here
- * is above it), and the particles' positions, velocities, forces (and for beams orientations,
- * angular velocities, torques), the energy ledger, the broken counts and flags, and the PD
- * per-point state (s0, theta, q) and the correspondence stress output (F, sigma, von Mises)
- * must equal one thread's to the last bit (memcmp). Bonds break
- * during every run (checked: some broken halfway, more at the end):
+ * built and stepped with 1-4 threads at the default loop grain (2,048 items: every bond loop
+ * here is above it, and the PD ledger's loop over points in A, F and G), and the particles'
+ * positions, velocities, forces (and for beams orientations, angular velocities, torques),
+ * the energy ledger, the broken counts and flags, the PD per-point state (s0, theta, q) and
+ * the correspondence stress output (F, sigma, von Mises) must equal one thread's to the last
+ * bit (memcmp). Bonds break during every run (checked: some broken halfway, more at the end):
  *   A. a 2D PMB plate of 5,200 points (70,000 bonds) with an edge notch, stretched: the crack
  *      runs from the notch;
- *   B. the same with LAMMPS' per-point critical stretch (alpha: the s0 maxima);
+ *   B. a plate of 1,920 points (25,000 bonds) with LAMMPS' per-point critical stretch
+ *      (alpha: the s0 maxima), and the same plate for C-E;
  *   C. LPS with the position-aware surface correction and the Gaussian influence (theta and q
  *      gathered), and plain LPS;
  *   D. elastic-plastic PMB (yield in tension);
  *   E. PMB under the RK2 integrator (the midpoint probe: the no-breakage evaluation);
- *   F. a 3D PMB block (5,120 points, 244,000 bonds);
- *   G. PMB and LPS plates filling a periodic cell (bonds through its faces: the images path),
- *      two crossed shear waves;
+ *   F. a 3D PMB block (2,304 points, 102,000 bonds);
+ *   G. PMB and LPS plates of 2,304 points filling a periodic cell (bonds through its faces:
+ *      the images path), two crossed shear waves;
  *   H. 3,600 discs with 7,080 damped beam bonds (2D) and a 3D lattice of 3,240 spheres with
  *      9,036 bonds, pulled apart: bonds break, some broken pairs meet by contact.
  * Built without OpenMP, the test checks that 2 threads are refused and skips. */
@@ -49,9 +50,10 @@ static floe_world *new_world(int dim, int integrator) {
     return w;
 }
 
-/* a PD plate (2D, 100 x 52 points) or block (3D, 32 x 16 x 10), dx 1 mm, horizon 3 dx, with
- * an edge notch across the middle (its bonds removed: pd_crack.c), stretched along x: the
- * crack starts at the notch after some 80 steps and runs */
+/* a PD plate (2D: 100 x 52 points for A, 60 x 32 for the others) or block (3D, 24 x 12 x 8),
+ * dx 1 mm, horizon 3 dx, with an edge notch across the middle (its bonds removed:
+ * pd_crack.c), stretched along x: the crack starts at the notch after some 80 steps and
+ * runs. G: a 48 x 48 plate filling a periodic cell. */
 static floe_world *pd_world(int kind) {
     const int dim = kind == PMB_3D ? 3 : 2, cell = kind == PMB_CELL || kind == LPS_CELL;
     floe_world *w = new_world(dim, kind == PMB_RK2 ? FLOE_RK2 : FLOE_VELOCITY_VERLET);
@@ -62,9 +64,11 @@ static floe_world *pd_world(int kind) {
     r.dx = 1e-3;
     r.horizon_factor = 3;
     r.thickness = 1e-3;
-    if (cell) floe_v3_set(r.hi, 72e-3, 72e-3, 1e-3);
-    else if (dim == 2) floe_v3_set(r.hi, 100e-3, 52e-3, 1e-3);
-    else floe_v3_set(r.hi, 32e-3, 16e-3, 10e-3);
+    const double Lc = 48e-3; /* the periodic cell's side */
+    if (cell) floe_v3_set(r.hi, Lc, Lc, 1e-3);
+    else if (kind == PMB) floe_v3_set(r.hi, 100e-3, 52e-3, 1e-3);
+    else if (dim == 2) floe_v3_set(r.hi, 60e-3, 32e-3, 1e-3);
+    else floe_v3_set(r.hi, 24e-3, 12e-3, 8e-3);
     floe_pd_body *b = NULL;
     if (floe_pd_body_create(&b, &r)) { floe_world_destroy(w); return NULL; }
     floe_pd_material m;
@@ -77,10 +81,10 @@ static floe_world *pd_world(int kind) {
         if (kind == PLASTIC) { m.yield_tension = 1e-3; m.s_c = 4e-3; }
     }
     /* a notch across the middle from the edge y = 0, 15 mm (2D) or 5 mm (3D) deep */
-    const double xm = 0.5 * r.hi[0], depth = dim == 2 ? 15e-3 : 5e-3, a0[3] = {xm, -1e-3, -1e-3};
+    const double xm = 0.5 * r.hi[0], depth = 0.3 * r.hi[1], a0[3] = {xm, -1e-3, -1e-3};
     const double e1[3] = {0, depth + 1e-3, 0}, e2[3] = {0, 0, r.hi[2] + 2e-3}, a1[3] = {xm, depth, 0};
     const floe_pd_crack cr = dim == 2 ? floe_pd_crack_segment(a0, a1) : floe_pd_crack_rectangle(a0, e1, e2);
-    const double o[3] = {0, 0, 0}, H[9] = {72e-3, 0, 0, 0, 72e-3, 0, 0, 0, 1};
+    const double o[3] = {0, 0, 0}, H[9] = {Lc, 0, 0, 0, Lc, 0, 0, 0, 1};
     if (floe_pd_set_material(b, &m) || (!cell && floe_pd_add_crack(b, &cr) <= 0) ||
         (kind == LPS_SC && floe_pd_surface_correction(b)) || (cell && floe_world_set_cell(w, o, H)) ||
         floe_world_add_pd_body(w, b, 0, NULL, NULL)) {
@@ -89,14 +93,14 @@ static floe_world *pd_world(int kind) {
     }
     if (cell) { /* an infinite plate (bonds through the faces): two crossed shear waves */
         for (int i = 0; i < b->n; i++) {
-            const double *X = b->X + 3 * i, k = 2 * M_PI / 72e-3;
+            const double *X = b->X + 3 * i, k = 2 * M_PI / Lc;
             double vi[3] = {12.0 * sin(k * X[1]), 9.0 * sin(k * X[0] + 0.5), 0};
             floe_world_set_velocity(w, i, vi, NULL);
         }
         return w;
     }
     /* a uniform extension along x (v at the ends), and a little shear */
-    const double v = dim == 2 ? 10.0 : 14.0;
+    const double v = (dim == 2 ? 200.0 : 280.0) * xm; /* a strain rate of 200 /s (3D 280 /s) */
     for (int i = 0; i < b->n; i++) {
         double vi[3] = {v * (b->X[3 * i] - xm) / xm, 0.1 * v * (b->X[3 * i + 1] / r.hi[1] - 0.5), 0};
         floe_world_set_velocity(w, i, vi, NULL);
