@@ -706,7 +706,8 @@ int floe_beam_set_forces(floe_beam_set *s, const floe_step_ctx *ctx, double *ela
             for (int q = 0; q < n; q++) {
                 const int e1 = off[q + 1];
                 if (off[q] == e1) continue;
-                double fq[3] = {f[3 * q], f[3 * q + 1], f[3 * q + 2]}, tq_[3] = {tq[3 * q], tq[3 * q + 1], tq[3 * q + 2]};
+                double fq[3] = {f[3 * q], f[3 * q + 1], f[3 * q + 2]};
+                double tq_[3] = {tq[3 * q], tq[3 * q + 1], tq[3 * q + 2]};
                 for (int e = off[q]; e < e1; e++) {
                     const int k = bix[e] >> 1;
                     if (!act[k]) continue;

@@ -1195,15 +1195,18 @@ static int pd_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, 
         /* the forces onto the particles and their work, summed per block of points in block
          * order (the same bits threaded or not) */
         const int B = FLOE_PAR_BLOCK, nblk = (np + B - 1) / B, ntl = floe_world_loop_threads(w, np);
-        double *pf = p->f + 3 * (size_t)f0, *red = ntl > 1 && nblk > 1 ? floe_world_reduce_buf(w, (size_t)nblk) : NULL;
+        double *pf = p->f + 3 * (size_t)f0;
+        double *red = ntl > 1 && nblk > 1 ? floe_world_reduce_buf(w, (size_t)nblk) : NULL;
         const double *vel = p->v + 3 * (size_t)f0;
         double wk = 0;
         if (red) {
             FLOE_OMP(omp parallel for schedule(static) num_threads(ntl))
-            for (int c = 0; c < nblk; c++) red[c] = pd_ledger_block(fnew, fold, pf, vel, c * B, (c + 1) * B < np ? (c + 1) * B : np);
+            for (int c = 0; c < nblk; c++)
+                red[c] = pd_ledger_block(fnew, fold, pf, vel, c * B, (c + 1) * B < np ? (c + 1) * B : np);
             for (int c = 0; c < nblk; c++) wk += red[c];
         } else
-            for (int c = 0; c < nblk; c++) wk += pd_ledger_block(fnew, fold, pf, vel, c * B, (c + 1) * B < np ? (c + 1) * B : np);
+            for (int c = 0; c < nblk; c++)
+                wk += pd_ledger_block(fnew, fold, pf, vel, c * B, (c + 1) * B < np ? (c + 1) * B : np);
         if (w->cell) { /* periodic cell: the bonds' virial (pd_vir_visit) */
             double v0[9];
             memcpy(v0, vc.vir, sizeof v0);
