@@ -191,6 +191,12 @@ struct floe_pd_body {
     int32_t *img;
     double cellH0[9];
     const double *cellH;
+    /* threads (docs/parallel.md): the PMB and LPS bond loops run on this many threads when
+     * it is above one (0, the default of a created body: one); the world sets it before each
+     * evaluation from its thread count and loop grain. The results are the same bits for any
+     * count. par: their buffers (pd_materials.c), NULL until a threaded evaluation.         */
+    int nthreads;
+    struct floe_pd_par *par;
 };
 
 /* The bond vector of bond k = (i, j): d = x_j - x_i, plus the shift H n of j's image when

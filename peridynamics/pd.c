@@ -6,6 +6,7 @@
 
 #include "floe_pd.h"
 #include "floe_kdtree.h"
+#include "pd_par.h"
 
 floe_pd_material floe_pd_material_pmb(double rho, double K, double s_c)
 {
@@ -62,6 +63,7 @@ void floe_pd_body_destroy(floe_pd_body *b)
     free(b->dten); /* LPS surface correction (pd_materials.c) */
     free(b->img); /* periodic images (floe_pd_make_periodic) */
     if (b->ops && b->ops->release) b->ops->release(b); /* a user material's state */
+    floe_pd_par_free(b); /* threads' buffers (pd_materials.c) */
     free(b);
 }
 
@@ -627,6 +629,7 @@ int floe_pd_make_periodic(floe_pd_body *b, const double o[3], const double H[9],
             any |= img[k] != 0;
         }
         free(b->off); free(b->partner); free(b->len); free(b->vfac); free(b->broken); free(b->img);
+        floe_pd_par_free(b); /* the threads' index of the old bonds */
         b->off = off;
         off = NULL;
         b->partner = part;

@@ -6,8 +6,9 @@
  * S = G (1 - C^-1) + lambda/2 (J^2 - 1) C^-1 (eq 29) and Cauchy sigma = F S F^T / J (eq 30),
  * von Mises stress of sigma. Intact bonds only (a broken bond carries no deformation), w = 1,
  * beta (partial volume) included. For an affine motion x = F0 X the fit is exact: F_I = F0 at
- * every point with three independent intact bonds. */
+ * every point with three independent intact bonds. Threaded with b->nthreads (the same bits). */
 #include "floe_pd.h"
+#include "floe_par.h"
 #include <stdlib.h>
 #include <string.h>
 
@@ -28,38 +29,102 @@ static void mul3(const double A[9], const double B[9], double C[9]) {
         for (int j = 0; j < 3; j++) C[3 * i + j] = A[3 * i] * B[j] + A[3 * i + 1] * B[3 + j] + A[3 * i + 2] * B[6 + j];
 }
 
+/* bond k = (i, j), intact: its reference and deformed vectors xi, Y (with j's image across a
+ * periodic cell's faces) */
+static inline void corr_bond(const floe_pd_body *b, const double *x, int i, int j, int64_t k, double xi[3],
+                             double Y[3]) {
+    for (int a = 0; a < 3; a++) {
+        xi[a] = b->X[3 * (size_t)j + a] - b->X[3 * (size_t)i + a];
+        Y[a] = x[3 * (size_t)j + a] - x[3 * (size_t)i + a];
+    }
+    if (b->img && b->img[k]) { /* across a periodic cell's faces: j's image */
+        double s0[3], s1[3];
+        floe_img_shift(b->cellH0, b->img[k], s0);
+        floe_img_shift(b->cellH, b->img[k], s1);
+        for (int a = 0; a < 3; a++) { xi[a] += s0[a]; Y[a] += s1[a]; }
+    }
+}
+
+/* the bond's share of K and N of one end, whose partner has volume Vo */
+static inline void corr_add(double *K, double *N, double w, double Vo, const double xi[3], const double Y[3]) {
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) {
+            K[3 * r + c] += w * Vo * xi[r] * xi[c];
+            N[3 * r + c] += w * Vo * Y[r] * xi[c];
+        }
+}
+
+/* Threads (b->nthreads > 1, docs/parallel.md): point q sums its own K and N in the order of
+ * the serial loop over the rows, which adds the bonds whose partner q is (rows below q,
+ * increasing k) and then q's own row: through an index of the bonds by partner, each bond
+ * computed at both its ends, no per-bond buffer. The same bits for any thread count.
+ * Returns 0, or -1 when the index cannot be allocated (the caller runs the serial loop). */
+static int corr_sums_threaded(const floe_pd_body *b, const double *x, double *K, double *N, int nt) {
+    (void)nt; /* without OpenMP (never called there) */
+    const int n = b->n;
+    const int64_t nb = b->nbond;
+    int64_t *roff = calloc((size_t)n + 1, sizeof *roff), *rk = malloc((size_t)(nb > 0 ? nb : 1) * sizeof *rk);
+    if (!roff || !rk) { free(roff); free(rk); return -1; }
+    for (int64_t k = 0; k < nb; k++) roff[b->partner[k] + 1]++;
+    for (int q = 0; q < n; q++) roff[q + 1] += roff[q];
+    for (int64_t k = 0; k < nb; k++) rk[roff[b->partner[k]]++] = k;
+    for (int q = n; q > 0; q--) roff[q] = roff[q - 1];
+    roff[0] = 0;
+    FLOE_OMP(omp parallel for schedule(dynamic, 256) num_threads(nt))
+    for (int q = 0; q < n; q++) {
+        double *Kq = K + 9 * (size_t)q, *Nq = N + 9 * (size_t)q;
+        for (int64_t e = roff[q]; e < roff[q + 1]; e++) {
+            const int64_t k = rk[e];
+            if (b->broken[k]) continue;
+            int lo = 0, hi = n - 1; /* the row i of bond k: off[i] <= k < off[i + 1] */
+            while (lo < hi) {
+                int mid = lo + (hi - lo + 1) / 2;
+                if (b->off[mid] <= k) lo = mid;
+                else hi = mid - 1;
+            }
+            double xi[3], Y[3];
+            corr_bond(b, x, lo, q, k, xi, Y);
+            corr_add(Kq, Nq, (double)b->vfac[k], b->V[lo], xi, Y);
+        }
+        for (int64_t k = b->off[q]; k < b->off[q + 1]; k++) {
+            if (b->broken[k]) continue;
+            const int j = b->partner[k];
+            double xi[3], Y[3];
+            corr_bond(b, x, q, j, k, xi, Y);
+            corr_add(Kq, Nq, (double)b->vfac[k], b->V[j], xi, Y);
+        }
+    }
+    free(roff);
+    free(rk);
+    return 0;
+}
+
 int floe_pd_correspondence(const floe_pd_body *b, const double *x, double G, double lambda, double *F, double *E,
                            double *sigma, double *von_mises, int *singular) {
     if (!b || !x) return FLOE_EINVAL;
     const int n = b->n, dim = b->dim;
     double *K = calloc((size_t)n * 9, sizeof *K), *N = calloc((size_t)n * 9, sizeof *N);
     if (!K || !N) { free(K); free(N); return FLOE_ENOMEM; }
-    for (int i = 0; i < n; i++)
-        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
-            if (b->broken[k]) continue;
-            int j = b->partner[k];
-            double xi[3], Y[3], w = (double)b->vfac[k];
-            for (int a = 0; a < 3; a++) {
-                xi[a] = b->X[3 * (size_t)j + a] - b->X[3 * (size_t)i + a];
-                Y[a] = x[3 * (size_t)j + a] - x[3 * (size_t)i + a];
+    int nt = b->nthreads > 1 && b->nbond >= 2048 ? b->nthreads : 1;
+#ifndef _OPENMP
+    nt = 1;
+#endif
+    if (nt <= 1 || corr_sums_threaded(b, x, K, N, nt)) {
+        nt = 1;
+        for (int i = 0; i < n; i++)
+            for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+                if (b->broken[k]) continue;
+                int j = b->partner[k];
+                double xi[3], Y[3];
+                corr_bond(b, x, i, j, k, xi, Y);
+                /* the bond seen from i (+xi, +Y, V_j) and from j (-xi, -Y, V_i): the products
+                 * are even, only the volume differs */
+                corr_add(K + 9 * (size_t)i, N + 9 * (size_t)i, (double)b->vfac[k], b->V[j], xi, Y);
+                corr_add(K + 9 * (size_t)j, N + 9 * (size_t)j, (double)b->vfac[k], b->V[i], xi, Y);
             }
-            if (b->img && b->img[k]) { /* across a periodic cell's faces: j's image */
-                double s0[3], s1[3];
-                floe_img_shift(b->cellH0, b->img[k], s0);
-                floe_img_shift(b->cellH, b->img[k], s1);
-                for (int a = 0; a < 3; a++) { xi[a] += s0[a]; Y[a] += s1[a]; }
-            }
-            /* the bond seen from i (+xi, +Y, V_j) and from j (-xi, -Y, V_i): the products
-             * are even, only the volume differs */
-            for (int r = 0; r < 3; r++)
-                for (int c = 0; c < 3; c++) {
-                    K[9 * (size_t)i + 3 * r + c] += w * b->V[j] * xi[r] * xi[c];
-                    K[9 * (size_t)j + 3 * r + c] += w * b->V[i] * xi[r] * xi[c];
-                    N[9 * (size_t)i + 3 * r + c] += w * b->V[j] * Y[r] * xi[c];
-                    N[9 * (size_t)j + 3 * r + c] += w * b->V[i] * Y[r] * xi[c];
-                }
-        }
-    int nsing = 0;
+    }
+    int nsing = 0; /* a count: exact in any order */
+    FLOE_OMP(omp parallel for schedule(static) reduction(+ : nsing) num_threads(nt) if (nt > 1))
     for (int i = 0; i < n; i++) {
         double *Ki = K + 9 * (size_t)i, *Ni = N + 9 * (size_t)i, Kinv[9], Fi[9];
         if (dim == 2) { Ki[8] = 1.0; Ni[8] = 1.0; } /* plane: F_zz = 1 */

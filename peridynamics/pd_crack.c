@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "floe_pd.h"
+#include "pd_par.h"
 
 floe_pd_crack floe_pd_crack_segment(const double a[3], const double b[3])
 {
@@ -210,6 +211,7 @@ int64_t floe_pd_add_crack(floe_pd_body *b, const floe_pd_crack *c)
     free(cut);
     b->nbond = kk;
     b->nbroken -= nbroken_cut;
+    floe_pd_par_free(b); /* the threads' index of the old bonds */
     b->ncut += ncut;
     /* the material state depends on the families (LPS m_i, the surface corrections) */
     if (b->ops) {

@@ -1,11 +1,16 @@
 /* pd_materials.c - PD material vtables: PMB bond-based (000 eqs 9-12, 003 eqs 2-5) and the
  * linear peridynamic solid (000 eqs 15-25, ParticLS eqs 30-35; 2D: Le, Silling & Bobaru 2014)
  * with its position-aware surface correction (floe_pd.h). One pass per bond (each bond
- * is stored once, i < j); forces are applied to both ends. */
+ * is stored once, i < j); forces are applied to both ends. With threads (b->nthreads) the
+ * rows run in parallel and each point gathers its bonds' forces in the serial order: the
+ * same bits for any thread count ("threads" below, docs/parallel.md). */
 #include <float.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "floe_pd.h"
+#include "floe_par.h"
+#include "pd_par.h"
 
 /* ---------------------------------------------------------------- PMB ---- */
 
@@ -72,6 +77,131 @@ static int pmb_init(floe_pd_body *b)
 
 static double pmb_c(const floe_pd_body *b) { return b->c; }
 
+/* ------------------------------------------------------------ threads ---- */
+
+/* The bond loops below run over the rows i (each bond k = (i, j) once, j > i) and add a
+ * bond's force to j when they meet it and i's row sum at the end of row i. Threaded
+ * (b->nthreads > 1, pd_par.h), the rows are computed in parallel with each bond's share of j
+ * in P->g and each row's sums in P->row, and every point then gathers them in the order of
+ * the serial loop (pd_gather): the same additions, the same bits. A bond that adds nothing
+ * stores +0 for a subtraction (x - +0 = x) and -0 for an addition (x + -0 = x), for every x.
+ * Energies and broken counts are summed per block of FLOE_PD_ROW_BLOCK rows and the blocks in
+ * order, on one thread too. */
+
+void floe_pd_par_free(floe_pd_body *b)
+{
+    if (!b || !b->par) return;
+    floe_pd_par *P = b->par;
+    free(P->roff); free(P->rk); free(P->g); free(P->row); free(P->blk); free(P->blkn);
+    free(P);
+    b->par = NULL;
+}
+
+/* the threads of this evaluation: b->nthreads, at most one per block of rows */
+static int pd_threads(const floe_pd_body *b)
+{
+#ifdef _OPENMP
+    const int nblk = (b->n + FLOE_PD_ROW_BLOCK - 1) / FLOE_PD_ROW_BLOCK;
+    const int nt = b->nthreads < nblk ? b->nthreads : nblk;
+    return nt > 1 ? nt : 1;
+#else
+    (void)b;
+    return 1;
+#endif
+}
+
+static int pd_grow(void **ptr, size_t need, size_t *cap, size_t size)
+{
+    if (need <= *cap) return 0;
+    void *t = realloc(*ptr, need * size);
+    if (!t) return -1;
+    *ptr = t;
+    *cap = need;
+    return 0;
+}
+
+/* The buffers of a threaded evaluation, gs doubles per bond and rs per point, and the
+ * reverse index (built again when the bonds changed); NULL when out of memory: the caller
+ * then runs the serial loop, which gives the same bits. */
+static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs)
+{
+    if (!b->par && !(b->par = calloc(1, sizeof *b->par))) return NULL;
+    floe_pd_par *P = b->par;
+    const int n = b->n;
+    const int64_t nb = b->nbond;
+    const int nblk = (n + FLOE_PD_ROW_BLOCK - 1) / FLOE_PD_ROW_BLOCK;
+    if (!P->roff || P->n != n || P->nbond != nb) {
+        free(P->roff); /* a failure below leaves the index unbuilt */
+        free(P->rk);
+        P->roff = P->rk = NULL;
+        int64_t *roff = calloc((size_t)n + 1, sizeof *roff), *rk = malloc((size_t)(nb > 0 ? nb : 1) * sizeof *rk);
+        if (!roff || !rk) { free(roff); free(rk); return NULL; }
+        for (int64_t k = 0; k < nb; k++) roff[b->partner[k] + 1]++;
+        for (int p = 0; p < n; p++) roff[p + 1] += roff[p];
+        for (int64_t k = 0; k < nb; k++) rk[roff[b->partner[k]]++] = k; /* ascending k per partner */
+        for (int p = n; p > 0; p--) roff[p] = roff[p - 1];
+        roff[0] = 0;
+        P->roff = roff;
+        P->rk = rk;
+        P->n = n;
+        P->nbond = nb;
+    }
+    size_t bc = (size_t)P->blk_cap;
+    if (pd_grow((void **)&P->g, (size_t)gs * (size_t)(nb > 0 ? nb : 1), &P->g_cap, sizeof(double)) ||
+        pd_grow((void **)&P->row, (size_t)rs * (size_t)(n > 0 ? n : 1), &P->row_cap, sizeof(double)))
+        return NULL;
+    if ((size_t)nblk > bc) {
+        double *e = realloc(P->blk, (size_t)nblk * sizeof *e);
+        if (!e) return NULL;
+        P->blk = e;
+        int64_t *c = realloc(P->blkn, (size_t)nblk * sizeof *c);
+        if (!c) return NULL;
+        P->blkn = c;
+        P->blk_cap = nblk;
+    }
+    return P;
+}
+
+/* Point q's sums in the serial loop's order: v[0 .. gs) (from v's values: f, or 0) gets the
+ * shares of the bonds whose partner q is, in increasing k, added (sub = 0) or subtracted
+ * (sub = 1), and q's own row sums row[0 .. gs) where the serial loop adds them: after the
+ * bonds of the rows below q, before those of rows above (none: every partner is above its
+ * row). With mx (PMB alpha) the shares' and the row's slot gs is a maximum (first of equal
+ * values, as the serial loop keeps it), into *mx from -INFINITY. */
+static inline __attribute__((always_inline)) void pd_gather(const floe_pd_body *b, const floe_pd_par *P, int q,
+                                                            double *v, const int gs, const int st, const int sub,
+                                                            double *mx)
+{
+    const int64_t k0 = b->off[q], e1 = P->roff[q + 1];
+    const int64_t *rk = P->rk;
+    const double *row = P->row + (size_t)st * (size_t)q;
+    double m = -INFINITY;
+    int64_t e = P->roff[q];
+    for (; e < e1 && rk[e] < k0; e++) {
+        const double *g = P->g + (size_t)st * (size_t)rk[e];
+        for (int c = 0; c < gs; c++) v[c] = sub ? v[c] - g[c] : v[c] + g[c];
+        if (mx && g[gs] > m) m = g[gs];
+    }
+    for (int c = 0; c < gs; c++) v[c] += row[c];
+    if (mx && row[gs] > m) m = row[gs];
+    for (; e < e1; e++) {
+        const double *g = P->g + (size_t)st * (size_t)rk[e];
+        for (int c = 0; c < gs; c++) v[c] = sub ? v[c] - g[c] : v[c] + g[c];
+        if (mx && g[gs] > m) m = g[gs];
+    }
+    if (mx) *mx = m;
+}
+
+/* f[q] after a threaded force loop: f minus the bonds' shares, plus the row sum */
+static inline __attribute__((always_inline)) void pd_gather_f(const floe_pd_body *b, const floe_pd_par *P, int q,
+                                                              double *f, const int st, double *mx)
+{
+    double v[3] = {f[3 * (size_t)q], f[3 * (size_t)q + 1], f[3 * (size_t)q + 2]};
+    pd_gather(b, P, q, v, 3, st, 1, mx);
+    f[3 * (size_t)q] = v[0];
+    f[3 * (size_t)q + 1] = v[1];
+    f[3 * (size_t)q + 2] = v[2];
+}
 /* 000 eqs 9-12 / 003 eq 2: pair force c s mu beta V_i V_j along the deformed bond, with
  * s = (|y| - |xi|)/|xi| (003 eq 4). A bond breaks when s > s_c and stays broken; a broken
  * bond still pushes in compression when broken_tension_only is set (003: mu = 1 for s <= 0).
@@ -87,77 +217,140 @@ static double pmb_c(const floe_pd_body *b) { return b->c; }
  * every 100 steps; without it 8-11 % off.) Without breakage (s_c = 0,
  * floe_pd_forces_nobreak) s0 is left as is.
  * `alpha_on` is a constant at both call sites, so the compiler drops the branch from the
- * constant-s_c loop. */
-static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f, const int alpha_on, const int per)
+ * constant-s_c loop.
+ *
+ * Row i: its energy returned, bonds broken counted in *nbroken. Serial (gb NULL): the forces
+ * added to f and s0n[j] raised as the loop meets them. Threaded: each bond's force on i (and
+ * with alpha its candidate s00 - alpha s for both ends' s0, -INFINITY for none) into gb, the
+ * row's force sum (and its own s0 candidate) into rb, stride 4 with alpha, else 3. */
+static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, const double *x, double *f, int i,
+                                                            double *s0n, double *gb, double *rb, int64_t *nbroken,
+                                                            const int alpha_on, const int per)
 {
     const int32_t *img = per ? b->img : NULL;
     const double *H = per ? b->cellH : NULL;
     const double c = b->c, s_c = b->s_c, alpha = b->mat.alpha;
-    const int comp = b->mat.broken_tension_only;
+    const int comp = b->mat.broken_tension_only, st = alpha_on ? 4 : 3;
     const double *V = b->V;
     const int32_t *part = b->partner;
     const double *len = b->len;
     const float *vfac = b->vfac, *scorr = b->scorr;
     uint8_t *brk = b->broken;
     const double *s0 = alpha_on ? b->s0 : NULL;
-    double *s0n = alpha_on ? b->s0 + b->n : NULL;
-    if (alpha_on)
-        for (int i = 0; i < b->n; i++) s0n[i] = -INFINITY;
-    double energy = 0.0;
-    int64_t nbroken = 0;
-    for (int i = 0; i < b->n; i++) {
-        const double xi0 = x[3 * (size_t)i], xi1 = x[3 * (size_t)i + 1], xi2 = x[3 * (size_t)i + 2];
-        const double Vi = V[i];
-        const double s0i = alpha_on ? s0[i] : 0.0;
-        double s0ni = alpha_on ? s0n[i] : 0.0;
-        double fi0 = 0, fi1 = 0, fi2 = 0, ei = 0;
-        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
-            const int j = part[k];
-            const double *xj = x + 3 * (size_t)j;
-            double d0 = xj[0] - xi0, d1 = xj[1] - xi1, d2 = xj[2] - xi2;
-            if (per && img[k]) { /* across the periodic cell's faces: j's image */
-                double sh[3];
-                floe_img_shift(H, img[k], sh);
-                d0 += sh[0]; d1 += sh[1]; d2 += sh[2];
+    const double xi0 = x[3 * (size_t)i], xi1 = x[3 * (size_t)i + 1], xi2 = x[3 * (size_t)i + 2];
+    const double Vi = V[i];
+    const double s0i = alpha_on ? s0[i] : 0.0;
+    double s0ni = alpha_on ? (gb ? -INFINITY : s0n[i]) : 0.0;
+    double fi0 = 0, fi1 = 0, fi2 = 0, ei = 0;
+    for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+        const int j = part[k];
+        const double *xj = x + 3 * (size_t)j;
+        double d0 = xj[0] - xi0, d1 = xj[1] - xi1, d2 = xj[2] - xi2;
+        if (per && img[k]) { /* across the periodic cell's faces: j's image */
+            double sh[3];
+            floe_img_shift(H, img[k], sh);
+            d0 += sh[0]; d1 += sh[1]; d2 += sh[2];
+        }
+        double r = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+        double L = len[k];
+        double s = (r - L) / L;
+        double g0 = 0, g1 = 0, g2 = 0, t = -INFINITY;
+        int on = 1; /* the bond carries a force in this evaluation */
+        if (brk[k]) {
+            on = comp && !(s >= 0);
+        } else {
+            double sck = s_c;
+            if (alpha_on) {
+                t = s_c - alpha * s;
+                if (t > s0ni) s0ni = t;
+                if (!gb && t > s0n[j]) s0n[j] = t;
+                sck = s0i < s0[j] ? s0i : s0[j];
             }
-            double r = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
-            double L = len[k];
-            double s = (r - L) / L;
-            if (brk[k]) {
-                if (!comp || s >= 0) continue;
-            } else {
-                double sck = s_c;
-                if (alpha_on) {
-                    double t = s_c - alpha * s;
-                    if (t > s0ni) s0ni = t;
-                    if (t > s0n[j]) s0n[j] = t;
-                    sck = s0i < s0[j] ? s0i : s0[j];
-                }
-                if (s_c > 0 && s > sck) {
-                    brk[k] = 1;
-                    nbroken++;
-                    /* LAMMPS' order with alpha: the bond's force of this evaluation is applied,
-                     * then it breaks */
-                    if ((!comp || s >= 0) && !alpha_on) continue;
-                }
+            if (s_c > 0 && s > sck) {
+                brk[k] = 1;
+                (*nbroken)++;
+                /* LAMMPS' order with alpha: the bond's force of this evaluation is applied,
+                 * then it breaks */
+                if ((!comp || s >= 0) && !alpha_on) on = 0;
             }
-            if (!(r > 0)) continue;
+        }
+        if (on && r > 0) {
             double w = (double)vfac[k] * (scorr ? (double)scorr[k] : 1.0) * Vi * V[j];
             double fm = c * s * w / r;
             ei += 0.5 * c * s * s * L * w;
-            double g0 = fm * d0, g1 = fm * d1, g2 = fm * d2;
+            g0 = fm * d0; g1 = fm * d1; g2 = fm * d2;
             fi0 += g0; fi1 += g1; fi2 += g2;
-            double *fj = f + 3 * (size_t)j;
-            fj[0] -= g0; fj[1] -= g1; fj[2] -= g2;
+            if (!gb) {
+                double *fj = f + 3 * (size_t)j;
+                fj[0] -= g0; fj[1] -= g1; fj[2] -= g2;
+            }
         }
+        if (gb) {
+            double *q = gb + (size_t)st * (size_t)k;
+            q[0] = g0; q[1] = g1; q[2] = g2;
+            if (alpha_on) q[3] = t;
+        }
+    }
+    if (gb) {
+        double *q = rb + (size_t)st * (size_t)i;
+        q[0] = fi0; q[1] = fi1; q[2] = fi2;
+        if (alpha_on) q[3] = s0ni;
+    } else {
         if (alpha_on) s0n[i] = s0ni;
         f[3 * (size_t)i] += fi0;
         f[3 * (size_t)i + 1] += fi1;
         f[3 * (size_t)i + 2] += fi2;
-        energy += ei;
     }
-    if (alpha_on)
-        for (int i = 0; i < b->n; i++) b->s0[i] = s0n[i] == -INFINITY ? DBL_MAX : s0n[i];
+    return ei;
+}
+
+static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f, const int alpha_on, const int per)
+{
+    const int n = b->n, B = FLOE_PD_ROW_BLOCK, nblk = (n + B - 1) / B, st = alpha_on ? 4 : 3;
+    const int nt = pd_threads(b);
+    floe_pd_par *P = nt > 1 ? pd_par_get(b, st, st) : NULL;
+    double *s0n = alpha_on ? b->s0 + n : NULL;
+    double energy = 0.0;
+    int64_t nbroken = 0;
+    if (!P) {
+        if (alpha_on)
+            for (int i = 0; i < n; i++) s0n[i] = -INFINITY;
+        for (int c = 0; c < nblk; c++) {
+            const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
+            double eb = 0.0;
+            for (int i = c * B; i < i1; i++) eb += pmb_row(b, x, f, i, s0n, NULL, NULL, &nbroken, alpha_on, per);
+            energy += eb;
+        }
+        if (alpha_on)
+            for (int i = 0; i < n; i++) b->s0[i] = s0n[i] == -INFINITY ? DBL_MAX : s0n[i];
+    } else {
+        FLOE_OMP(omp parallel num_threads(nt))
+        {
+            FLOE_OMP(omp for schedule(dynamic, 1))
+            for (int c = 0; c < nblk; c++) {
+                const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
+                double eb = 0.0;
+                int64_t nbk = 0;
+                for (int i = c * B; i < i1; i++) eb += pmb_row(b, x, NULL, i, NULL, P->g, P->row, &nbk, alpha_on, per);
+                P->blk[c] = eb;
+                P->blkn[c] = nbk;
+            }
+            /* the old s0 is read by the rows above and written below, after their barrier */
+            FLOE_OMP(omp for schedule(static))
+            for (int q = 0; q < n; q++) {
+                double m;
+                pd_gather_f(b, P, q, f, st, alpha_on ? &m : NULL);
+                if (alpha_on) {
+                    s0n[q] = m;
+                    b->s0[q] = m == -INFINITY ? DBL_MAX : m;
+                }
+            }
+        }
+        for (int c = 0; c < nblk; c++) {
+            energy += P->blk[c];
+            nbroken += P->blkn[c];
+        }
+    }
     b->nbroken += nbroken;
     return energy;
 }
@@ -168,43 +361,85 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
  * elastically with the residual s_p. Breakage by s_c acts on the total stretch s, a broken
  * bond pushes back in compression (broken_tension_only) with the capped elastic law. The
  * returned energy is the stored elastic energy 1/2 c s_e^2 |xi| w; the plastic work is what
- * the world's ledger books as dissipated (it books -work - dE). */
-static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
+ * the world's ledger books as dissipated (it books -work - dE). Row i as pmb_row (stride 3). */
+static inline __attribute__((always_inline)) double plastic_row(floe_pd_body *b, const double *x, double *f, int i,
+                                                                double *gb, double *rb, int64_t *nbroken)
 {
     const double c = b->c, s_c = b->s_c;
     const double syc = b->mat.yield_compression, syt = b->mat.yield_tension;
     const int comp = b->mat.broken_tension_only;
     float *sp = b->splast;
-    double energy = 0.0;
-    int64_t nbroken = 0;
-    for (int i = 0; i < b->n; i++) {
-        double fi[3] = {0, 0, 0};
-        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
-            const int j = b->partner[k];
-            double d[3];
-            floe_pd_bond_vec(b, x, b->cellH, i, j, k, d);
-            double r = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-            double L = b->len[k], s = (r - L) / L;
-            if (b->broken[k]) {
-                if (!comp || s >= 0) continue;
-            } else if (s_c > 0 && s > s_c) {
-                b->broken[k] = 1;
-                nbroken++;
-                if (!comp || s >= 0) continue;
-            }
+    double fi[3] = {0, 0, 0}, ei = 0;
+    for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+        const int j = b->partner[k];
+        double d[3], g[3] = {0, 0, 0};
+        floe_pd_bond_vec(b, x, b->cellH, i, j, k, d);
+        double r = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        double L = b->len[k], s = (r - L) / L;
+        int on = 1;
+        if (b->broken[k]) {
+            on = comp && !(s >= 0);
+        } else if (s_c > 0 && s > s_c) {
+            b->broken[k] = 1;
+            (*nbroken)++;
+            on = comp && !(s >= 0);
+        }
+        if (on) {
             double se = s - (double)sp[k];
             if (syc > 0 && se < -syc) { sp[k] = (float)(s + syc); se = s - (double)sp[k]; }
             if (syt > 0 && se > syt) { sp[k] = (float)(s - syt); se = s - (double)sp[k]; }
-            if (!(r > 0)) continue;
-            double w = (double)b->vfac[k] * (b->scorr ? (double)b->scorr[k] : 1.0) * b->V[i] * b->V[j];
-            double fm = c * se * w / r;
-            energy += 0.5 * c * se * se * L * w;
-            for (int a = 0; a < 3; a++) {
-                fi[a] += fm * d[a];
-                f[3 * (size_t)j + a] -= fm * d[a];
+            if (r > 0) {
+                double w = (double)b->vfac[k] * (b->scorr ? (double)b->scorr[k] : 1.0) * b->V[i] * b->V[j];
+                double fm = c * se * w / r;
+                ei += 0.5 * c * se * se * L * w;
+                for (int a = 0; a < 3; a++) {
+                    g[a] = fm * d[a];
+                    fi[a] += g[a];
+                    if (!gb) f[3 * (size_t)j + a] -= g[a];
+                }
             }
         }
+        if (gb) memcpy(gb + 3 * (size_t)k, g, sizeof g);
+    }
+    if (gb) memcpy(rb + 3 * (size_t)i, fi, sizeof fi);
+    else
         for (int a = 0; a < 3; a++) f[3 * (size_t)i + a] += fi[a];
+    return ei;
+}
+
+static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
+{
+    const int n = b->n, B = FLOE_PD_ROW_BLOCK, nblk = (n + B - 1) / B;
+    const int nt = pd_threads(b);
+    floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3) : NULL;
+    double energy = 0.0;
+    int64_t nbroken = 0;
+    if (!P) {
+        for (int c = 0; c < nblk; c++) {
+            const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
+            double eb = 0.0;
+            for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, f, i, NULL, NULL, &nbroken);
+            energy += eb;
+        }
+    } else {
+        FLOE_OMP(omp parallel num_threads(nt))
+        {
+            FLOE_OMP(omp for schedule(dynamic, 1))
+            for (int c = 0; c < nblk; c++) {
+                const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
+                double eb = 0.0;
+                int64_t nbk = 0;
+                for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, NULL, i, P->g, P->row, &nbk);
+                P->blk[c] = eb;
+                P->blkn[c] = nbk;
+            }
+            FLOE_OMP(omp for schedule(static))
+            for (int q = 0; q < n; q++) pd_gather_f(b, P, q, f, 3, NULL);
+        }
+        for (int c = 0; c < nblk; c++) {
+            energy += P->blk[c];
+            nbroken += P->blkn[c];
+        }
     }
     b->nbroken += nbroken;
     return energy;
@@ -321,12 +556,16 @@ static inline void lps_weights(const floe_pd_body *b, int i, int j, int64_t k, d
  * dim/m_i without the surface correction: 000 eq 18, ParticLS eq 32); with it also
  * q_i = sum_j alpha_ij w |xi| e^d_ij beta V_j (into dten + 9n; zero for the plain form and an intact
  * family, so the plain form leaves it out). Breaks bonds with e > s_c |xi| when s_c > 0;
- * returns the number broken. */
-static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, const int per)
+ * returns the number broken.
+ * Row i (the number broken returned): serial (gb NULL) j's shares of theta (and of the sums
+ * p, mi of q) added as the loop meets them and i's row sums at its end; threaded the shares
+ * into gb and the row sums into rb, stride 3 with the surface correction, else 1. */
+static inline __attribute__((always_inline)) int64_t lps_dil_row(floe_pd_body *b, const double *x, int i, double *gb,
+                                                                 double *rb, const int per)
 {
     const int32_t *img = per ? b->img : NULL;
     const double *H = per ? b->cellH : NULL;
-    const int n = b->n, dim = b->dim;
+    const int n = b->n;
     const double s_c = b->s_c;
     const double *V = b->V, *len = b->len, *wb = b->wbond;
     const float *vfac = b->vfac;
@@ -334,15 +573,13 @@ static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, cons
     uint8_t *brk = b->broken;
     double *th = b->theta;
     double *p = b->dten ? b->dten + 9 * (size_t)n : NULL, *mi = p ? p + n : NULL;
+    const int st = p ? 3 : 1;
     int64_t nbroken = 0;
-    for (int i = 0; i < n; i++) th[i] = 0;
-    if (p)
-        for (int i = 0; i < n; i++) p[i] = mi[i] = 0;
-    for (int i = 0; i < n; i++) {
-        const double *xi = x + 3 * (size_t)i;
-        double ti = 0;
-        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
-            if (brk[k]) continue;
+    const double *xi = x + 3 * (size_t)i;
+    double ti = 0, pi = 0, mii = 0;
+    for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+        double cj[3] = {-0.0, -0.0, -0.0}; /* j's shares (-0: none) */
+        if (!brk[k]) {
             const int j = part[k];
             const double *xj = x + 3 * (size_t)j;
             double d0 = xj[0] - xi[0], d1 = xj[1] - xi[1], d2 = xj[2] - xi[2];
@@ -356,29 +593,87 @@ static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, cons
             if (s_c > 0 && e > s_c * L) {
                 brk[k] = 1;
                 nbroken++;
-                continue;
-            }
-            double a = (wb ? wb[k] : 1.0) * L * (double)vfac[k];
-            if (p) {
-                double oi, oj, ai, aj;
-                lps_weights(b, i, j, k, &oi, &oj, &ai, &aj);
-                ti += a * oi * e * V[j];
-                th[j] += a * oj * e * V[i];
-                p[i] += ai * a * e * V[j];
-                p[j] += aj * a * e * V[i];
-                mi[i] += ai * a * L * V[j];
-                mi[j] += aj * a * L * V[i];
             } else {
-                ti += a * e * V[j];
-                th[j] += a * e * V[i];
+                double a = (wb ? wb[k] : 1.0) * L * (double)vfac[k];
+                if (p) {
+                    double oi, oj, ai, aj;
+                    lps_weights(b, i, j, k, &oi, &oj, &ai, &aj);
+                    ti += a * oi * e * V[j];
+                    cj[0] = a * oj * e * V[i];
+                    pi += ai * a * e * V[j];
+                    cj[1] = aj * a * e * V[i];
+                    mii += ai * a * L * V[j];
+                    cj[2] = aj * a * L * V[i];
+                    if (!gb) { th[j] += cj[0]; p[j] += cj[1]; mi[j] += cj[2]; }
+                } else {
+                    ti += a * e * V[j];
+                    cj[0] = a * e * V[i];
+                    if (!gb) th[j] += cj[0];
+                }
             }
         }
-        th[i] += ti;
+        if (gb)
+            for (int c = 0; c < st; c++) gb[(size_t)st * (size_t)k + c] = cj[c];
     }
-    if (p)
-        for (int i = 0; i < n; i++) p[i] -= th[i] * mi[i] / dim; /* q_i */
-    else
-        for (int i = 0; i < n; i++) th[i] = b->m[i] > 0 ? dim * th[i] / b->m[i] : 0.0;
+    if (gb) {
+        double *r = rb + (size_t)st * (size_t)i;
+        r[0] = ti;
+        if (p) { r[1] = pi; r[2] = mii; }
+    } else {
+        th[i] += ti;
+        if (p) { p[i] += pi; mi[i] += mii; }
+    }
+    return nbroken;
+}
+
+/* point i once its sums are complete: q_i, or the plain theta_i = dim sum / m_i */
+static inline void lps_dil_final(floe_pd_body *b, int i)
+{
+    const int n = b->n, dim = b->dim;
+    double *th = b->theta;
+    if (b->dten) {
+        double *p = b->dten + 9 * (size_t)n, *mi = p + n;
+        p[i] -= th[i] * mi[i] / dim; /* q_i */
+    } else
+        th[i] = b->m[i] > 0 ? dim * th[i] / b->m[i] : 0.0;
+}
+
+static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, const int per)
+{
+    const int n = b->n, B = FLOE_PD_ROW_BLOCK, nblk = (n + B - 1) / B;
+    double *th = b->theta;
+    double *p = b->dten ? b->dten + 9 * (size_t)n : NULL, *mi = p ? p + n : NULL;
+    const int st = p ? 3 : 1;
+    const int nt = pd_threads(b);
+    floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3) : NULL;
+    int64_t nbroken = 0;
+    if (!P) {
+        for (int i = 0; i < n; i++) th[i] = 0;
+        if (p)
+            for (int i = 0; i < n; i++) p[i] = mi[i] = 0;
+        for (int i = 0; i < n; i++) nbroken += lps_dil_row(b, x, i, NULL, NULL, per);
+        for (int i = 0; i < n; i++) lps_dil_final(b, i);
+        return nbroken;
+    }
+    FLOE_OMP(omp parallel num_threads(nt))
+    {
+        FLOE_OMP(omp for schedule(dynamic, 1))
+        for (int c = 0; c < nblk; c++) {
+            const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
+            int64_t nbk = 0;
+            for (int i = c * B; i < i1; i++) nbk += lps_dil_row(b, x, i, P->g, P->row, per);
+            P->blkn[c] = nbk;
+        }
+        FLOE_OMP(omp for schedule(static))
+        for (int q = 0; q < n; q++) {
+            double v[3] = {0, 0, 0};
+            pd_gather(b, P, q, v, st, st, 0, NULL);
+            th[q] = v[0];
+            if (p) { p[q] = v[1]; mi[q] = v[2]; }
+            lps_dil_final(b, q);
+        }
+    }
+    for (int c = 0; c < nblk; c++) nbroken += P->blkn[c];
     return nbroken;
 }
 
@@ -413,26 +708,23 @@ static inline void lps_bond_t(const floe_pd_body *b, double kd, int i, int j, in
 /* 000 eqs 18-25 / ParticLS eqs 30-35 (3D), Le et al. 2014 (2D):
  *   e = |y| - |xi|, theta_i as above, force on i: sum_j (t_ij + t_ji) beta V_i V_j M
  * (000 eq 14); energy sum_i V_i W_i (000 eq 24). Broken bonds (stretch e/|xi| > s_c,
- * checked in the dilatation pass) drop out of theta and t. */
-static inline double lps_forces_impl(floe_pd_body *b, const double *x, double *f, const int per)
+ * checked in the dilatation pass) drop out of theta and t. Row i as pmb_row (stride 3). */
+static inline __attribute__((always_inline)) double lps_row(const floe_pd_body *b, const double *x, double *f, int i,
+                                                            double kd, double *gb, double *rb, const int per)
 {
     const int32_t *img = per ? b->img : NULL;
     const double *H = per ? b->cellH : NULL;
-    const int n = b->n;
-    const double kd = lps_kdil(b);
     const double *V = b->V, *len = b->len;
     const float *vfac = b->vfac;
     const int32_t *part = b->partner;
     const uint8_t *brk = b->broken;
     const double *th = b->theta;
-    b->nbroken += lps_dilatation(b, x);
-    double energy = 0.0;
-    for (int i = 0; i < n; i++) {
-        const double xi0 = x[3 * (size_t)i], xi1 = x[3 * (size_t)i + 1], xi2 = x[3 * (size_t)i + 2];
-        const double Vi = V[i];
-        double fi0 = 0, fi1 = 0, fi2 = 0, ei = 0.5 * kd * th[i] * th[i] * Vi;
-        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
-            if (brk[k]) continue;
+    const double xi0 = x[3 * (size_t)i], xi1 = x[3 * (size_t)i + 1], xi2 = x[3 * (size_t)i + 2];
+    const double Vi = V[i];
+    double fi0 = 0, fi1 = 0, fi2 = 0, ei = 0.5 * kd * th[i] * th[i] * Vi;
+    for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+        double g0 = 0, g1 = 0, g2 = 0;
+        if (!brk[k]) {
             const int j = part[k];
             const double *xj = x + 3 * (size_t)j;
             double d0 = xj[0] - xi0, d1 = xj[1] - xi1, d2 = xj[2] - xi2;
@@ -446,19 +738,63 @@ static inline double lps_forces_impl(floe_pd_body *b, const double *x, double *f
             lps_bond_t(b, kd, i, j, k, r - len[k], &tij, &tji, &eb);
             double bv = (double)vfac[k] * Vi * V[j];
             ei += eb * bv;
-            if (!(r > 0)) continue;
-            double fm = (tij + tji) * bv / r;
-            double g0 = fm * d0, g1 = fm * d1, g2 = fm * d2;
-            fi0 += g0; fi1 += g1; fi2 += g2;
-            double *fj = f + 3 * (size_t)j;
-            fj[0] -= g0; fj[1] -= g1; fj[2] -= g2;
+            if (r > 0) {
+                double fm = (tij + tji) * bv / r;
+                g0 = fm * d0; g1 = fm * d1; g2 = fm * d2;
+                fi0 += g0; fi1 += g1; fi2 += g2;
+                if (!gb) {
+                    double *fj = f + 3 * (size_t)j;
+                    fj[0] -= g0; fj[1] -= g1; fj[2] -= g2;
+                }
+            }
         }
+        if (gb) {
+            double *q = gb + 3 * (size_t)k;
+            q[0] = g0; q[1] = g1; q[2] = g2;
+        }
+    }
+    if (gb) {
+        double *q = rb + 3 * (size_t)i;
+        q[0] = fi0; q[1] = fi1; q[2] = fi2;
+    } else {
         f[3 * (size_t)i] += fi0;
         f[3 * (size_t)i + 1] += fi1;
         f[3 * (size_t)i + 2] += fi2;
-        /* theta_j's k theta^2/2 V_j term is added when the loop reaches j */
-        energy += ei;
     }
+    /* theta_j's k theta^2/2 V_j term is added when the loop reaches j */
+    return ei;
+}
+
+static inline double lps_forces_impl(floe_pd_body *b, const double *x, double *f, const int per)
+{
+    const int n = b->n, B = FLOE_PD_ROW_BLOCK, nblk = (n + B - 1) / B;
+    const double kd = lps_kdil(b);
+    b->nbroken += lps_dilatation(b, x);
+    const int nt = pd_threads(b);
+    floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3) : NULL;
+    double energy = 0.0;
+    if (!P) {
+        for (int c = 0; c < nblk; c++) {
+            const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
+            double eb = 0.0;
+            for (int i = c * B; i < i1; i++) eb += lps_row(b, x, f, i, kd, NULL, NULL, per);
+            energy += eb;
+        }
+        return energy;
+    }
+    FLOE_OMP(omp parallel num_threads(nt))
+    {
+        FLOE_OMP(omp for schedule(dynamic, 1))
+        for (int c = 0; c < nblk; c++) {
+            const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
+            double eb = 0.0;
+            for (int i = c * B; i < i1; i++) eb += lps_row(b, x, NULL, i, kd, P->g, P->row, per);
+            P->blk[c] = eb;
+        }
+        FLOE_OMP(omp for schedule(static))
+        for (int q = 0; q < n; q++) pd_gather_f(b, P, q, f, 3, NULL);
+    }
+    for (int c = 0; c < nblk; c++) energy += P->blk[c];
     return energy;
 }
 

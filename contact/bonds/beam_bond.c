@@ -5,6 +5,7 @@
  * equations. */
 #include "beam_set.h"
 #include "floe_rng.h"
+#include "floe_par.h"
 
 #include <stdint.h>
 #include <stdio.h>
@@ -42,6 +43,17 @@ struct floe_beam_set {
     unsigned long long rng;   /* strengths of single bonds: one stream per seed (rng_seed) */
     unsigned long long rng_seed;
     int rng_set;
+    /* threads (docs/parallel.md): the bond loop on nthreads (> 1) threads writes each bond's
+     * force on i and torques on i and j into pf (9 per bond; act[k] = 1 when it has them),
+     * then every particle gathers its bonds in bond order, as the serial loop adds them: bix
+     * holds per particle (bix_off) its bonds as 2k (end i) or 2k + 1 (end j), ascending, built
+     * for bix_np particles at generation bix_gen of the bonds (gen: bumped by push and
+     * truncate). Sums per block of FLOE_PAR_BLOCK bonds (blk), added in block order. */
+    int nthreads;
+    long gen, bix_gen;
+    double *pf; unsigned char *act; size_t pf_cap, act_cap;
+    int *bix, *bix_off, bix_np; size_t bix_cap;
+    double *blk; int *blkn; int blk_cap;
 };
 
 /* ---- breakage by the elliptical yield (floe_beam.h, FLOE_BEAM_YIELD_ELLIPSE) ---- */
@@ -215,6 +227,7 @@ void floe_beam_set_destroy(floe_beam_set *s) {
     if (!s) return;
     free(s->b);
     free(s->off); free(s->adj); free(s->adj_bond);
+    free(s->pf); free(s->act); free(s->bix); free(s->bix_off); free(s->blk); free(s->blkn);
     free(s);
 }
 
@@ -347,6 +360,7 @@ int floe_beam_set_push(floe_beam_set *s, const floe_particles *p, int dim, int i
     b->t_broken = -1;
     b->s_broken = b->lim_broken = 0;
     memset(b->x_broken, 0, sizeof b->x_broken);
+    s->gen++;
     return s->n++;
 }
 
@@ -359,8 +373,16 @@ unsigned long long *floe_beam_set_rng(floe_beam_set *s, unsigned long long seed)
 }
 
 void floe_beam_set_truncate(floe_beam_set *s, int n) {
-    if (n >= 0 && n < s->n) s->n = n;
+    if (n >= 0 && n < s->n) {
+        s->n = n;
+        s->gen++;
+    }
 }
+
+void floe_beam_set_threads(floe_beam_set *s, int nthreads) {
+    if (s) s->nthreads = nthreads;
+}
+int floe_beam_set_threaded(const floe_beam_set *s) { return s && s->pf; }
 
 int floe_beam_set_count(const floe_beam_set *s) { return s ? s->n : 0; }
 int floe_beam_set_broken(const floe_beam_set *s) { return s ? s->nbroken : 0; }
@@ -460,129 +482,251 @@ double floe_beam_set_critical_dt(floe_beam_set *s, const floe_particles *p, int 
 
 /* ---- forces ---- */
 
-int floe_beam_set_forces(floe_beam_set *s, const floe_step_ctx *ctx, double *elastic, double *dissipated) {
-    if (!s) return 0;
+/* Bond k (skipped when broken): its forces and torques, stresses, breakage and ledger; its
+ * energy added to *el, its dissipation to *ds (when stepping), a break counted in *nbreak.
+ * Serial (pf NULL): the forces added to p->f, p->t. Threaded: the force on i and the
+ * torques on i and j into pf + 9k with act[k] = 1 (0: nothing to add). */
+static inline __attribute__((always_inline)) void beam_eval(floe_beam_set *s, const floe_step_ctx *ctx, int k,
+                                                            double *pf, unsigned char *act, double *el, double *ds,
+                                                            int *nbreak) {
     floe_particles *p = ctx->p;
     const int stepping = ctx->stepping, dim = ctx->dim;
     const double dt = ctx->dt;
-    int nbreak = 0;
-    double el = 0, ds = 0;
-    for (int k = 0; k < s->n; k++) {
-        beam_bond *b = &s->b[k];
-        if (b->broken) continue;
-        const int i = b->i, j = b->j;
-        const floe_beam_section *c = &b->s;
-        const double *xi = p->x + 3 * i, *xj = p->x + 3 * j, *qi = p->q + 4 * i, *qj = p->q + 4 * j;
-        double d[3], e[3], ti[3], tj[3], thi[3], thj[3];
-        floe_v3_sub(d, xj, xi);
-        double L = floe_v3_norm(d);
-        for (int a = 0; a < 3; a++) e[a] = d[a] / L;
-        floe_q_rotate(ti, qi, b->ci);
-        floe_q_rotate(tj, qj, b->cj);
-        floe_v3_cross(thi, e, ti); /* end rotations relative to the chord */
-        floe_v3_cross(thj, e, tj);
-        double twist = 0;
-        if (dim == 3) {
-            double ni[3], nj[3], cr[3];
-            floe_q_rotate(ni, qi, b->ni);
-            floe_q_rotate(nj, qj, b->nj);
-            floe_v3_axpy(ni, -floe_v3_dot(ni, e), e);
-            floe_v3_axpy(nj, -floe_v3_dot(nj, e), e);
-            floe_v3_cross(cr, ni, nj);
-            twist = atan2(floe_v3_dot(cr, e), floe_v3_dot(ni, nj));
-        }
-        const double l0 = c->l, f = 1.0 / (1.0 + c->phi), ka = c->E * c->A / l0, kt = c->G * c->J / l0;
-        const double c1 = (4.0 + c->phi) * c->E * c->I / l0 * f, c2 = (2.0 - c->phi) * c->E * c->I / l0 * f;
-        double u = L - l0, N = ka * u, T = kt * twist, Mi[3], Mj[3];
-        for (int a = 0; a < 3; a++) {
-            Mi[a] = c1 * thi[a] + c2 * thj[a];
-            Mj[a] = c2 * thi[a] + c1 * thj[a];
-        }
-        double energy = 0.5 * (N * u + floe_v3_dot(thi, Mi) + floe_v3_dot(thj, Mj) + T * twist);
-        /* stresses of 004 eq 11 from the elastic forces */
-        double Ms[3];
-        floe_v3_add(Ms, Mi, Mj);
-        const double bend = fmax(floe_v3_norm(Mi), floe_v3_norm(Mj)) / c->W;
-        double sigma = N / c->A + bend, sigc = -N / c->A + bend;
-        double tau = 1.5 * floe_v3_norm(Ms) / (L * c->A) + fabs(T) / (2.0 * c->W);
-        b->sigma = sigma;
-        b->tau = tau;
-        b->sigc = sigc;
-        double Fi[3] = {0, 0, 0}, Ti[3] = {0, 0, 0}, Tj[3] = {0, 0, 0};
-        double s_brk = 0, l_brk = 0;
-        int mode;
-        if (b->ellipse)
-            mode = ellipse_mode(b, sigma, -sigc, tau, &s_brk, &l_brk);
-        else {
-            /* Mohr-Coulomb: axial compression raises the shear limit */
-            const double tau_lim = b->tau_lim + (N < 0 ? b->tan_phi * (-N / c->A) : 0.0);
-            mode = sigma > b->sig_lim ? 1 : tau > tau_lim ? 2 : sigc > b->sigc_lim ? 3 : 0;
-            s_brk = mode == 1 ? sigma : mode == 2 ? tau : sigc;
-            l_brk = mode == 1 ? b->sig_lim : mode == 2 ? tau_lim : b->sigc_lim;
-        }
-        if (stepping && mode) {
-            b->mode = mode;
-            b->s_broken = s_brk;
-            b->lim_broken = l_brk;
-            for (int a = 0; a < 3; a++) b->x_broken[a] = 0.5 * (xi[a] + xj[a]);
-            b->sigc = 0;
-            b->broken = 1;
-            b->t_broken = ctx->time;
-            b->sigma = b->tau = 0;
-            s->nbroken++;
-            nbreak++;
-            energy = 0;
-        } else {
-            if (b->damp > 0) { /* stiffness-proportional damping on the deformation rates */
-                const double *vi = p->v + 3 * i, *vj = p->v + 3 * j, *wi = p->w + 3 * i, *wj = p->w + 3 * j;
-                double vr[3], wch[3], rdi[3], rdj[3];
-                floe_v3_sub(vr, vj, vi);
-                floe_v3_cross(wch, e, vr);
-                floe_v3_scale(wch, 1.0 / L);
-                double wie = floe_v3_dot(wi, e), wje = floe_v3_dot(wj, e);
-                for (int a = 0; a < 3; a++) {
-                    rdi[a] = wi[a] - wie * e[a] - wch[a];
-                    rdj[a] = wj[a] - wje * e[a] - wch[a];
-                }
-                if (dim == 2) rdi[0] = rdi[1] = rdj[0] = rdj[1] = 0;
-                const double h = b->damp;
-                N += h * ka * floe_v3_dot(e, vr);
-                T += dim == 3 ? h * kt * (wje - wie) : 0.0;
-                for (int a = 0; a < 3; a++) {
-                    Mi[a] += h * (c1 * rdi[a] + c2 * rdj[a]);
-                    Mj[a] += h * (c2 * rdi[a] + c1 * rdj[a]);
-                }
-                floe_v3_add(Ms, Mi, Mj);
-            }
-            /* force on j: -N e + ((M_i + M_j) x e) / L; torques -M_i + T e and -M_j - T e */
-            double Fj[3];
-            floe_v3_cross(Fj, Ms, e);
+    beam_bond *b = &s->b[k];
+    if (act) act[k] = 0;
+    if (b->broken) return;
+    const int i = b->i, j = b->j;
+    const floe_beam_section *c = &b->s;
+    const double *xi = p->x + 3 * i, *xj = p->x + 3 * j, *qi = p->q + 4 * i, *qj = p->q + 4 * j;
+    double d[3], e[3], ti[3], tj[3], thi[3], thj[3];
+    floe_v3_sub(d, xj, xi);
+    double L = floe_v3_norm(d);
+    for (int a = 0; a < 3; a++) e[a] = d[a] / L;
+    floe_q_rotate(ti, qi, b->ci);
+    floe_q_rotate(tj, qj, b->cj);
+    floe_v3_cross(thi, e, ti); /* end rotations relative to the chord */
+    floe_v3_cross(thj, e, tj);
+    double twist = 0;
+    if (dim == 3) {
+        double ni[3], nj[3], cr[3];
+        floe_q_rotate(ni, qi, b->ni);
+        floe_q_rotate(nj, qj, b->nj);
+        floe_v3_axpy(ni, -floe_v3_dot(ni, e), e);
+        floe_v3_axpy(nj, -floe_v3_dot(nj, e), e);
+        floe_v3_cross(cr, ni, nj);
+        twist = atan2(floe_v3_dot(cr, e), floe_v3_dot(ni, nj));
+    }
+    const double l0 = c->l, f = 1.0 / (1.0 + c->phi), ka = c->E * c->A / l0, kt = c->G * c->J / l0;
+    const double c1 = (4.0 + c->phi) * c->E * c->I / l0 * f, c2 = (2.0 - c->phi) * c->E * c->I / l0 * f;
+    double u = L - l0, N = ka * u, T = kt * twist, Mi[3], Mj[3];
+    for (int a = 0; a < 3; a++) {
+        Mi[a] = c1 * thi[a] + c2 * thj[a];
+        Mj[a] = c2 * thi[a] + c1 * thj[a];
+    }
+    double energy = 0.5 * (N * u + floe_v3_dot(thi, Mi) + floe_v3_dot(thj, Mj) + T * twist);
+    /* stresses of 004 eq 11 from the elastic forces */
+    double Ms[3];
+    floe_v3_add(Ms, Mi, Mj);
+    const double bend = fmax(floe_v3_norm(Mi), floe_v3_norm(Mj)) / c->W;
+    double sigma = N / c->A + bend, sigc = -N / c->A + bend;
+    double tau = 1.5 * floe_v3_norm(Ms) / (L * c->A) + fabs(T) / (2.0 * c->W);
+    b->sigma = sigma;
+    b->tau = tau;
+    b->sigc = sigc;
+    double Fi[3] = {0, 0, 0}, Ti[3] = {0, 0, 0}, Tj[3] = {0, 0, 0};
+    double s_brk = 0, l_brk = 0;
+    int mode;
+    if (b->ellipse)
+        mode = ellipse_mode(b, sigma, -sigc, tau, &s_brk, &l_brk);
+    else {
+        /* Mohr-Coulomb: axial compression raises the shear limit */
+        const double tau_lim = b->tau_lim + (N < 0 ? b->tan_phi * (-N / c->A) : 0.0);
+        mode = sigma > b->sig_lim ? 1 : tau > tau_lim ? 2 : sigc > b->sigc_lim ? 3 : 0;
+        s_brk = mode == 1 ? sigma : mode == 2 ? tau : sigc;
+        l_brk = mode == 1 ? b->sig_lim : mode == 2 ? tau_lim : b->sigc_lim;
+    }
+    if (stepping && mode) {
+        b->mode = mode;
+        b->s_broken = s_brk;
+        b->lim_broken = l_brk;
+        for (int a = 0; a < 3; a++) b->x_broken[a] = 0.5 * (xi[a] + xj[a]);
+        b->sigc = 0;
+        b->broken = 1;
+        b->t_broken = ctx->time;
+        b->sigma = b->tau = 0;
+        (*nbreak)++;
+        energy = 0;
+    } else {
+        if (b->damp > 0) { /* stiffness-proportional damping on the deformation rates */
+            const double *vi = p->v + 3 * i, *vj = p->v + 3 * j, *wi = p->w + 3 * i, *wj = p->w + 3 * j;
+            double vr[3], wch[3], rdi[3], rdj[3];
+            floe_v3_sub(vr, vj, vi);
+            floe_v3_cross(wch, e, vr);
+            floe_v3_scale(wch, 1.0 / L);
+            double wie = floe_v3_dot(wi, e), wje = floe_v3_dot(wj, e);
             for (int a = 0; a < 3; a++) {
-                Fj[a] = Fj[a] / L - N * e[a];
-                Fi[a] = -Fj[a];
-                Ti[a] = -Mi[a] + T * e[a];
-                Tj[a] = -Mj[a] - T * e[a];
+                rdi[a] = wi[a] - wie * e[a] - wch[a];
+                rdj[a] = wj[a] - wje * e[a] - wch[a];
+            }
+            if (dim == 2) rdi[0] = rdi[1] = rdj[0] = rdj[1] = 0;
+            const double h = b->damp;
+            N += h * ka * floe_v3_dot(e, vr);
+            T += dim == 3 ? h * kt * (wje - wie) : 0.0;
+            for (int a = 0; a < 3; a++) {
+                Mi[a] += h * (c1 * rdi[a] + c2 * rdj[a]);
+                Mj[a] += h * (c2 * rdi[a] + c1 * rdj[a]);
+            }
+            floe_v3_add(Ms, Mi, Mj);
+        }
+        /* force on j: -N e + ((M_i + M_j) x e) / L; torques -M_i + T e and -M_j - T e */
+        double Fj[3];
+        floe_v3_cross(Fj, Ms, e);
+        for (int a = 0; a < 3; a++) {
+            Fj[a] = Fj[a] / L - N * e[a];
+            Fi[a] = -Fj[a];
+            Ti[a] = -Mi[a] + T * e[a];
+            Tj[a] = -Mj[a] - T * e[a];
+        }
+        if (pf) { /* the gather adds -Fi = Fj to j */
+            double *q = pf + 9 * (size_t)k;
+            memcpy(q, Fi, sizeof Fi);
+            memcpy(q + 3, Ti, sizeof Ti);
+            memcpy(q + 6, Tj, sizeof Tj);
+            act[k] = 1;
+        } else
+            for (int a = 0; a < 3; a++) {
                 p->f[3 * i + a] += Fi[a];
                 p->f[3 * j + a] += Fj[a];
                 p->t[3 * i + a] += Ti[a];
                 p->t[3 * j + a] += Tj[a];
             }
-        }
-        if (stepping) {
-            /* ledger: work of the bond forces over the step (trapezoid, mid-step velocities) */
-            const double *vi = p->v + 3 * i, *vj = p->v + 3 * j, *wi = p->w + 3 * i, *wj = p->w + 3 * j;
-            double wk = 0;
-            for (int a = 0; a < 3; a++)
-                wk += (Fi[a] + b->fold[a]) * (vi[a] - vj[a]) + (Ti[a] + b->fold[3 + a]) * wi[a] +
-                      (Tj[a] + b->fold[6 + a]) * wj[a];
-            ds += -0.5 * wk * dt - (energy - b->energy);
-        }
-        memcpy(b->fold, Fi, sizeof Fi);
-        memcpy(b->fold + 3, Ti, sizeof Ti);
-        memcpy(b->fold + 6, Tj, sizeof Tj);
-        b->energy = energy;
-        el += energy;
     }
+    if (stepping) {
+        /* ledger: work of the bond forces over the step (trapezoid, mid-step velocities) */
+        const double *vi = p->v + 3 * i, *vj = p->v + 3 * j, *wi = p->w + 3 * i, *wj = p->w + 3 * j;
+        double wk = 0;
+        for (int a = 0; a < 3; a++)
+            wk += (Fi[a] + b->fold[a]) * (vi[a] - vj[a]) + (Ti[a] + b->fold[3 + a]) * wi[a] +
+                  (Tj[a] + b->fold[6 + a]) * wj[a];
+        *ds += -0.5 * wk * dt - (energy - b->energy);
+    }
+    memcpy(b->fold, Fi, sizeof Fi);
+    memcpy(b->fold + 3, Ti, sizeof Ti);
+    memcpy(b->fold + 6, Tj, sizeof Tj);
+    b->energy = energy;
+    *el += energy;
+}
+
+static int beam_grow(void **ptr, size_t need, size_t *cap, size_t size) {
+    if (need <= *cap) return 0;
+    void *t = realloc(*ptr, need * size);
+    if (!t) return -1;
+    *ptr = t;
+    *cap = need;
+    return 0;
+}
+
+/* the threaded loop's buffers for nblk blocks and n particles, the particles' bonds rebuilt
+ * when bonds were added or dropped; -1: out of memory (the caller runs the serial loop,
+ * which gives the same bits) */
+static int beam_par_prepare(floe_beam_set *s, int n, int nblk) {
+    const size_t nb = (size_t)(s->n > 0 ? s->n : 1);
+    if (beam_grow((void **)&s->pf, 9 * nb, &s->pf_cap, sizeof(double)) ||
+        beam_grow((void **)&s->act, nb, &s->act_cap, 1))
+        return -1;
+    if (nblk > s->blk_cap) {
+        double *e = realloc(s->blk, 2 * (size_t)nblk * sizeof *e);
+        if (!e) return -1;
+        s->blk = e;
+        int *c = realloc(s->blkn, (size_t)nblk * sizeof *c);
+        if (!c) return -1;
+        s->blkn = c;
+        s->blk_cap = nblk;
+    }
+    if (!s->bix_off || s->bix_gen != s->gen || s->bix_np != n) {
+        int *off = realloc(s->bix_off, ((size_t)n + 1) * sizeof *off);
+        if (!off) return -1;
+        s->bix_off = off;
+        s->bix_np = -1; /* unbuilt until the end */
+        if (beam_grow((void **)&s->bix, 2 * nb, &s->bix_cap, sizeof(int))) return -1;
+        memset(off, 0, ((size_t)n + 1) * sizeof *off);
+        for (int k = 0; k < s->n; k++) { off[s->b[k].i + 1]++; off[s->b[k].j + 1]++; }
+        for (int q = 0; q < n; q++) off[q + 1] += off[q];
+        for (int k = 0; k < s->n; k++) { /* in bond order: a particle's bonds ascend */
+            s->bix[off[s->b[k].i]++] = 2 * k;
+            s->bix[off[s->b[k].j]++] = 2 * k + 1;
+        }
+        for (int q = n; q > 0; q--) off[q] = off[q - 1];
+        off[0] = 0;
+        s->bix_np = n;
+        s->bix_gen = s->gen;
+    }
+    return 0;
+}
+
+int floe_beam_set_forces(floe_beam_set *s, const floe_step_ctx *ctx, double *elastic, double *dissipated) {
+    if (!s) return 0;
+    floe_particles *p = ctx->p;
+    const int stepping = ctx->stepping, nbond = s->n, B = FLOE_PAR_BLOCK, nblk = (nbond + B - 1) / B;
+    int nbreak = 0;
+    double el = 0, ds = 0;
+    int nt = s->nthreads < nblk ? s->nthreads : nblk;
+#ifndef _OPENMP
+    nt = 1;
+#endif
+    if (nt > 1 && beam_par_prepare(s, p->n, nblk)) nt = 1;
+    if (nt <= 1) {
+        for (int c = 0; c < nblk; c++) {
+            const int k1 = (c + 1) * B < nbond ? (c + 1) * B : nbond;
+            double eb = 0, db = 0;
+            for (int k = c * B; k < k1; k++) beam_eval(s, ctx, k, NULL, NULL, &eb, &db, &nbreak);
+            el += eb;
+            ds += db;
+        }
+    } else {
+        double *pf = s->pf, *blk = s->blk;
+        unsigned char *act = s->act;
+        int *blkn = s->blkn;
+        const int n = p->n, *off = s->bix_off, *bix = s->bix;
+        double *f = p->f, *tq = p->t;
+        FLOE_OMP(omp parallel num_threads(nt))
+        {
+            FLOE_OMP(omp for schedule(dynamic, 1))
+            for (int c = 0; c < nblk; c++) {
+                const int k1 = (c + 1) * B < nbond ? (c + 1) * B : nbond;
+                double eb = 0, db = 0;
+                int nbk = 0;
+                for (int k = c * B; k < k1; k++) beam_eval(s, ctx, k, pf, act, &eb, &db, &nbk);
+                blk[2 * c] = eb;
+                blk[2 * c + 1] = db;
+                blkn[c] = nbk;
+            }
+            /* each particle's forces in bond order, as the serial loop adds them */
+            FLOE_OMP(omp for schedule(static))
+            for (int q = 0; q < n; q++) {
+                const int e1 = off[q + 1];
+                if (off[q] == e1) continue;
+                double fq[3] = {f[3 * q], f[3 * q + 1], f[3 * q + 2]};
+                double tq_[3] = {tq[3 * q], tq[3 * q + 1], tq[3 * q + 2]};
+                for (int e = off[q]; e < e1; e++) {
+                    const int k = bix[e] >> 1;
+                    if (!act[k]) continue;
+                    const double *bk = pf + 9 * (size_t)k;
+                    if (bix[e] & 1)
+                        for (int a = 0; a < 3; a++) { fq[a] += -bk[a]; tq_[a] += bk[6 + a]; }
+                    else
+                        for (int a = 0; a < 3; a++) { fq[a] += bk[a]; tq_[a] += bk[3 + a]; }
+                }
+                for (int a = 0; a < 3; a++) { f[3 * q + a] = fq[a]; tq[3 * q + a] = tq_[a]; }
+            }
+        }
+        for (int c = 0; c < nblk; c++) {
+            el += blk[2 * c];
+            ds += blk[2 * c + 1];
+            nbreak += blkn[c];
+        }
+    }
+    s->nbroken += nbreak;
     *elastic += el;
     if (stepping) *dissipated += ds;
     return nbreak;

@@ -22,6 +22,11 @@ int floe_beam_set_push(floe_beam_set *s, const floe_particles *p, int dim, int i
 unsigned long long *floe_beam_set_rng(floe_beam_set *s, unsigned long long seed);
 /* drops the bonds from index n on (a failed batch) */
 void floe_beam_set_truncate(floe_beam_set *s, int n);
+/* threads for the bond loop of floe_beam_set_forces (the world sets it per evaluation; 0 or 1:
+ * one); the results are the same bits for any count (docs/parallel.md) */
+void floe_beam_set_threads(floe_beam_set *s, int nthreads);
+/* 1 once an evaluation ran threaded (its buffers exist; for tests) */
+int floe_beam_set_threaded(const floe_beam_set *s);
 /* the partner index over the first n particles (after pushes): FLOE_OK or FLOE_ENOMEM */
 int floe_beam_set_index(floe_beam_set *s, int n);
 int floe_beam_set_count(const floe_beam_set *s);

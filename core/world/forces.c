@@ -281,6 +281,7 @@ static int beam_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx
     if (!w->beams) return FLOE_OK;
     floe_step_ctx bc = *ctx;
     bc.stepping = ctx->stepping && !ctx->probe;
+    floe_beam_set_threads(w->beams, floe_world_loop_threads(w, floe_beam_set_count(w->beams)));
     int nbreak = floe_beam_set_forces(w->beams, &bc, &out->elastic, &out->dissipated);
     if (nbreak > 0) out->rebuild = 1;
     return FLOE_OK;
@@ -1248,9 +1249,25 @@ static void pd_vir_visit(int i, int j, int64_t k, const double f[3], void *user)
     }
 }
 
+/* points [i0, i1) of a body: their new bond forces fnew added to the particles' pf, and the
+ * work of the forces over the step (trapezoid with the old ones fold, mid-step velocities v,
+ * times 2/dt) returned */
+static double pd_ledger_block(const double *fnew, const double *fold, double *pf, const double *v, int i0, int i1) {
+    double wk = 0;
+    for (int i = i0; i < i1; i++)
+        for (int a = 0; a < 3; a++) {
+            double fa = fnew[3 * i + a];
+            pf[3 * (size_t)i + a] += fa;
+            wk += (fa + fold[3 * i + a]) * v[3 * (size_t)i + a];
+        }
+    return wk;
+}
+
 static int pd_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, floe_provider_out *out) {
     (void)pv;
     floe_particles *p = ctx->p;
+    /* threads for each body's bond loops (pd_materials.c: the same bits for any count) */
+    for (int k = 0; k < w->npd; k++) w->pd[k]->nthreads = floe_world_loop_threads(w, (long)w->pd[k]->nbond);
     if (ctx->probe) { /* RK2 midpoint: the bond forces without breakage, nothing booked */
         for (int k = 0; k < w->npd; k++) {
             int f0 = w->pd_first[k];
@@ -1275,13 +1292,21 @@ static int pd_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, 
         double *fold = w->pd_fold + 3 * (size_t)off, *fnew = w->pd_fnew + 3 * (size_t)off;
         memset(fnew, 0, (size_t)3 * np * sizeof *fnew);
         double e = floe_pd_forces(pb, p->x + 3 * (size_t)f0, fnew);
+        /* the forces onto the particles and their work, summed per block of points in block
+         * order (the same bits threaded or not) */
+        const int B = FLOE_PAR_BLOCK, nblk = (np + B - 1) / B, ntl = floe_world_loop_threads(w, np);
+        double *pf = p->f + 3 * (size_t)f0;
+        double *red = ntl > 1 && nblk > 1 ? floe_world_reduce_buf(w, (size_t)nblk) : NULL;
+        const double *vel = p->v + 3 * (size_t)f0;
         double wk = 0;
-        for (int i = 0; i < np; i++)
-            for (int a = 0; a < 3; a++) {
-                double fa = fnew[3 * i + a];
-                p->f[3 * (size_t)(f0 + i) + a] += fa;
-                wk += (fa + fold[3 * i + a]) * p->v[3 * (size_t)(f0 + i) + a];
-            }
+        if (red) {
+            FLOE_OMP(omp parallel for schedule(static) num_threads(ntl))
+            for (int c = 0; c < nblk; c++)
+                red[c] = pd_ledger_block(fnew, fold, pf, vel, c * B, (c + 1) * B < np ? (c + 1) * B : np);
+            for (int c = 0; c < nblk; c++) wk += red[c];
+        } else
+            for (int c = 0; c < nblk; c++)
+                wk += pd_ledger_block(fnew, fold, pf, vel, c * B, (c + 1) * B < np ? (c + 1) * B : np);
         if (w->cell) { /* periodic cell: the bonds' virial (pd_vir_visit) */
             double v0[9];
             memcpy(v0, vc.vir, sizeof v0);

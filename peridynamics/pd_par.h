@@ -1,0 +1,33 @@
+/* pd_par.h - the buffers of the threaded PD bond loops (pd_materials.c; docs/parallel.md,
+ * "The same bits"). Internal to peridynamics/. */
+#ifndef FLOE_PD_PAR_H
+#define FLOE_PD_PAR_H
+
+#include "floe_pd.h"
+
+/* Each bond k = (i, j) is stored in row i (i < j); a serial loop over the rows adds its force
+ * to j when it meets it and i's row sum at the end of row i. A threaded evaluation computes
+ * the rows in parallel, each bond's share of j into g (per bond) and each row's sums into
+ * row (per point), then every point gathers its shares in the serial loop's order: the bonds
+ * whose partner it is in increasing k (the reverse index rk), its own row sum where the
+ * serial loop adds it. Partial sums (energy, broken bonds) are per block of FLOE_PD_ROW_BLOCK
+ * rows, added in block order, also on one thread. */
+
+/* Rows per block: fixed (not the thread count's), and smaller than FLOE_PAR_BLOCK because a
+ * row holds tens of bonds (about 14 in 2D, 60 in 3D at a horizon of 3 dx): a body of 5,000
+ * points gives its threads 40 blocks to share, not 10. The blocks are also the threads'
+ * unit of work (handed out in increasing order). */
+#define FLOE_PD_ROW_BLOCK 128
+typedef struct floe_pd_par {
+    int64_t *roff, *rk;   /* the bonds whose partner is p: rk[roff[p] .. roff[p + 1]), ascending */
+    int n;                /* points and bonds the reverse index was built for */
+    int64_t nbond;
+    double *g; size_t g_cap;     /* per bond: its share of the partner (stride set by the loop) */
+    double *row; size_t row_cap; /* per point: its row's sums */
+    double *blk; int64_t *blkn; int blk_cap; /* per block of rows: energy, broken bonds */
+} floe_pd_par;
+
+/* frees b->par (the bond arrays changed: pd_crack.c, floe_pd_make_periodic; or the body goes) */
+void floe_pd_par_free(floe_pd_body *b);
+
+#endif
