@@ -46,7 +46,7 @@
 #include <stdlib.h>
 
 #include "floe_contact.h"
-#include "floe_law_kernels.h"
+#include "law_kernels.h"
 
 #define HM_SQRT5 2.2360679774997897
 
@@ -147,7 +147,7 @@ static int hm_force(const floe_contact_law *law_, const floe_contact *c, double 
         floe_v3_set(hist, 0.0, 0.0, 0.0);
         return FLOE_OK;
     }
-    /* the normal and tangential parts of the composed law, fused (floe_law_kernels.h) */
+    /* the normal and tangential parts of the composed law, fused (law_kernels.h) */
     out->fn = floe_hm_kernel(H, c, hist, out->force, &out->energy, &out->dissipation);
     return FLOE_OK;
 }

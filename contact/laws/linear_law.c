@@ -30,7 +30,7 @@
 #include <stdlib.h>
 
 #include "floe_contact.h"
-#include "floe_law_kernels.h"
+#include "law_kernels.h"
 
 static const double linear_pi = 3.14159265358979323846;
 

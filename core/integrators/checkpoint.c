@@ -4,7 +4,7 @@
  * cell, the neighbour list's images) is one more pair and one line in each of the tables
  * `sections` (save, restore). Readers check every length against the world they fill, so
  * that a checkpoint of another scene is refused instead of read out of bounds. */
-#include "floe_alloc.h"
+#include "alloc_util.h"
 #include "integrator_parts.h"
 #include "error_text.h"
 #include "floe_checkpoint.h"
@@ -255,7 +255,7 @@ static void save_neighbors(const floe_world *w, obuf *b) {
     put(b, nl->q_walls, 4 * (size_t)nl->nwalls * sizeof(double));
 }
 /* realloc to at least n bytes (n = 0: one) */
-/* n bytes (floe_alloc.h) */
+/* n bytes (alloc_util.h) */
 static int resize(void **ptr, size_t n) { return floe_resize(ptr, n, 1); }
 static int restore_neighbors(floe_world *w, ibuf *r, char *err, size_t errlen) {
     floe_neighbor_list *nl = &w->nl;

@@ -7,8 +7,8 @@
 #include "beam_set.h"
 #include "floe_provider.h"
 #include "floe_par.h"
-#include "floe_alloc.h"
-#include "floe_law_kernels.h"
+#include "alloc_util.h"
+#include "law_kernels.h"
 #include <limits.h>
 #include <stdlib.h>
 #include <string.h>
@@ -730,7 +730,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
 }
 
 /* A pair of spheres under Hertz-Mindlin or the linear law, fused (stage_env.fused):
- * sphere_pair + the law's force function (floe_law_kernels.h) +
+ * sphere_pair + the law's force function (law_kernels.h) +
  * pair_book for an evaluation that records no contact, in a cell-less world without growth,
  * less what that case never reads (the relative spin, the law's result struct and its
  * dissipation sums, the couples' work: the law has none) and without the call through the

@@ -5,7 +5,7 @@
  * Per-pair history (shear springs) survives rebuilds through a hash of the pair. */
 #include "world_internal.h"
 #include "floe_par.h"
-#include "floe_alloc.h"
+#include "alloc_util.h"
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>

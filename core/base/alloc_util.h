@@ -1,4 +1,4 @@
-/* floe_alloc.h - arrays that grow (internal to the library): one copy of the realloc
+/* alloc_util.h - arrays that grow (internal to the library): one copy of the realloc
  * pattern the world, the checkpoints and the MPI layer share. */
 #ifndef FLOE_ALLOC_H
 #define FLOE_ALLOC_H

@@ -1,4 +1,4 @@
-/* floe_law_kernels.h - the built-in laws' force kernels for the world's sphere path
+/* law_kernels.h - the built-in laws' force kernels for the world's sphere path
  * (core/world/forces.c): inline, so that a pair of spheres under a fused law pays no call,
  * no result struct and none of the law's own dissipation sums (the world's ledger books the
  * dissipation from the work and the stored energy). One copy of each formula: the laws'
