@@ -16,8 +16,9 @@ parsed here: raw appended binary or ASCII, no VTK module needed) and checks:
   - Points, velocity and id-matched positions and velocities agree with the serial frame
     within 1e-9 of the array's largest magnitude (the split run sums contact forces in
     another order: round-off only over this horizon).
-Cases: vtk + energy (rank 0's mirror writes energy.csv) at K = 2 and 4; vtk alone (ASCII) at
-K = 4, where no state may be gathered on rank 0 (the traffic line's output bytes per step and
+Cases: vtk + energy (rank 0's mirror writes energy.csv) at K = 2 and 4; vtk alone (ASCII,
+every 0.93 ms of simulated time: 8 frames, the last one the final state written at the end)
+at K = 4, where no state may be gathered on rank 0 (the traffic line's output bytes per step and
 rank: at most the 4-byte word rank 0 broadcasts, no particle state).
 Negative controls: a removed piece and a piece replaced by another rank's (duplicate ids)
 must each be found by the same checks.
@@ -199,13 +200,13 @@ with tempfile.TemporaryDirectory() as tmp:
             negative_controls(ref, out, k, par)
     # vtk alone, ASCII: no mirror, no gather
     text = open(SCENE).read()
-    text = re.sub(r"outputs:\n(  - .*\n)+", "outputs:\n  - {type: vtk, every: 500, prefix: frame, ascii: true}\n", text)
+    text = re.sub(r"outputs:\n(  - .*\n)+", "outputs:\n  - {type: vtk, interval: 0.00093, prefix: frame, ascii: true}\n", text)
     scene2 = os.path.join(tmp, "vtk_only.yaml")
     open(scene2, "w").write(text)
     ref2 = os.path.join(tmp, "np1_vtk")
     run(scene2, ref2, 1)
     out2 = os.path.join(tmp, "np4_vtk")
-    print("vtk alone (ASCII): mpirun -np 4 against one process:")
+    print("vtk alone (ASCII, by interval): mpirun -np 4 against one process:")
     stdout = run(scene2, out2, 4)
     check_run(ref2, out2, 4)
     m = re.search(r"output ([0-9.]+) B\)", stdout)
