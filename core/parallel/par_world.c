@@ -548,6 +548,18 @@ static int mirror_due(const floe_world *w, const floe_world *M) {
     return 0;
 }
 
+/* one call of an output's observe (end: its end), its message prefixed with its name */
+static int output_call(floe_world *w, floe_observer *o, int end) {
+    w->err[0] = 0;
+    int rc = end ? (o->klass->end ? o->klass->end(o, w) : FLOE_OK) : o->klass->observe(o, w);
+    if (!rc) return FLOE_OK;
+    char why[sizeof w->err];
+    memcpy(why, w->err, sizeof why);
+    return end ? floe_world_error(w, rc, "output %s failed at its end: %s", o->klass->name, why[0] ? why : floe_strerror(rc))
+               : floe_world_error(w, rc, "output %s failed at step %ld: %s", o->klass->name, w->step,
+                                  why[0] ? why : floe_strerror(rc));
+}
+
 /* every rank's own outputs (floe_world_parallel_add_output) that are due, as the world calls
  * its observers; the same on every rank, so their collective calls meet */
 static int outputs_call(floe_world *w, floe_par *P, int force_all) {
@@ -556,14 +568,7 @@ static int outputs_call(floe_world *w, floe_par *P, int force_all) {
         if (!force_all && !output_due(w, o)) continue;
         if (o->period_time > 0 && o->period_steps <= 0)
             while (o->next_time <= w->time + 1e-9 * w->dt) o->next_time += o->period_time;
-        w->err[0] = 0;
-        int rc = o->klass->observe(o, w);
-        if (rc) {
-            char why[sizeof w->err];
-            memcpy(why, w->err, sizeof why);
-            return floe_world_error(w, rc, "output %s failed at step %ld: %s", o->klass->name, w->step,
-                                    why[0] ? why : floe_strerror(rc));
-        }
+        FLOE_TRY(output_call(w, o, 0));
     }
     return FLOE_OK;
 }
@@ -587,16 +592,18 @@ int floe_world_parallel_add_output(floe_world *w, floe_observer *o) {
     }
     P->outs[P->nouts++] = o;
     o->begun = 1;
+    w->err[0] = 0;
     int rc = o->klass->begin ? o->klass->begin(o, w) : FLOE_OK;
-    if (rc) return floe_world_error(w, rc, "output %s failed to start: %s", o->klass->name, w->err[0] ? w->err : "(no message)");
+    if (rc) {
+        char why[sizeof w->err];
+        memcpy(why, w->err, sizeof why);
+        return floe_world_error(w, rc, "output %s failed to start: %s", o->klass->name, why[0] ? why : "(no message)");
+    }
     /* the state at the split (a prepared world's observers write theirs) */
     o->next_time = w->time;
     if (o->period_time > 0 && o->period_steps <= 0)
         while (o->next_time <= w->time + 1e-9 * w->dt) o->next_time += o->period_time;
-    w->err[0] = 0;
-    rc = o->klass->observe(o, w);
-    if (rc) return floe_world_error(w, rc, "output %s failed at step %ld: %s", o->klass->name, w->step, w->err[0] ? w->err : floe_strerror(rc));
-    return FLOE_OK;
+    return output_call(w, o, 0);
 }
 
 int floe_par_observe(floe_world *w, int force_all) {
@@ -638,10 +645,8 @@ int floe_world_parallel_finish(floe_world *w) {
         floe_observer *o = P->outs[k];
         if (o->ended) continue;
         o->ended = 1;
-        w->err[0] = 0;
-        int r = o->klass->end ? o->klass->end(o, w) : FLOE_OK;
-        if (r && !orc) orc = floe_world_error(w, r, "output %s failed at its end: %s", o->klass->name,
-                                              w->err[0] ? w->err : floe_strerror(r));
+        int r = output_call(w, o, 1);
+        if (r && !orc) orc = r;
     }
     int has = P->mirror != NULL;
     MPI_Bcast(&has, 1, MPI_INT, 0, P->comm);
