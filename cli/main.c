@@ -1,6 +1,7 @@
 /* main.c - the `floe` command: run a scene file (or the built-in demo), check a scene,
  * print build information. Scene format: docs/scene-format.md. */
 #include "floe_scene.h"
+#include "floe_observer.h"
 #include "floe_registry.h"
 #include "floe_view.h"
 #include "floe_detect.h"
@@ -179,15 +180,45 @@ typedef struct run_opts {
 } run_opts;
 
 #ifdef FLOE_HAVE_MPI
+/* the scene's vtk outputs of this rank (floe_scene_set_vtk_mode), until the split world takes them */
+typedef struct vtk_pieces {
+    floe_observer **o;
+    int n;
+} vtk_pieces;
+
+static int take_piece(void *ctx, floe_observer *obs)
+{
+    vtk_pieces *vp = ctx;
+    floe_observer **no = realloc(vp->o, (size_t)(vp->n + 1) * sizeof *no);
+    if (!no) {
+        floe_observer_destroy(obs);
+        return 1;
+    }
+    vp->o = no;
+    vp->o[vp->n++] = obs;
+    return 0;
+}
+
+static void free_pieces(vtk_pieces *vp, int from)
+{
+    for (int k = from; k < vp->n; k++) floe_observer_destroy(vp->o[k]);
+    free(vp->o);
+    vp->o = NULL;
+    vp->n = 0;
+}
+
 /* `floe run` under mpirun with more than one rank (docs/parallel.md): every rank loads the
- * scene without outputs and keeps its subdomain (floe_world_parallel_init); rank 0 also
- * loads it with its outputs, an unsplit mirror that writes the gathered state. An error on
- * one rank stops all (MPI_Abort): the others would wait for it in a collective. */
+ * scene with only its vtk outputs, as the writers of its pieces, and keeps its subdomain
+ * (floe_world_parallel_init), which the pieces then write (floe_world_parallel_add_output);
+ * when the scene has other outputs, rank 0 also loads it with them (its vtk outputs left
+ * out), an unsplit mirror that writes the gathered state. An error on one rank stops all
+ * (MPI_Abort): the others would wait for it in a collective. */
 static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
 {
     char err[1024];
     floe_scene_info info;
     floe_world *w = NULL, *mirror = NULL;
+    vtk_pieces vp = {NULL, 0};
     const char *label = scene ? scene : "<demo>";
     if (o->restart || o->ckpt_every > 0 || o->ckpt) {
         if (rank == 0) fprintf(stderr, "%s: error: checkpoints and restarts are not supported under MPI yet "
@@ -195,15 +226,21 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
         return 1;
     }
     const char *text = scene ? NULL : floe_scene_default_demo();
-    int rc = floe_scene_load_ex(scene ? scene : "<demo>", text, o->outdir, FLOE_SCENE_NO_OUTPUTS, &w, &info, err,
+    floe_scene_set_vtk_mode(FLOE_SCENE_VTK_PIECES, rank, size, take_piece, &vp);
+    int rc = floe_scene_load_ex(scene ? scene : "<demo>", text, o->outdir, FLOE_SCENE_RUN, &w, &info, err,
                                 sizeof err);
-    if (rc == FLOE_OK && rank == 0)
+    /* the other outputs go through rank 0's mirror (the same count on every rank) */
+    const int need_mirror = rc == FLOE_OK && info.nobservers > vp.n;
+    floe_scene_set_vtk_mode(FLOE_SCENE_VTK_SKIP, 0, 0, NULL, NULL);
+    if (rc == FLOE_OK && rank == 0 && need_mirror)
         rc = scene ? floe_scene_load(scene, o->outdir, &mirror, &info, err, sizeof err)
                    : floe_scene_load_string(text, "<demo>", o->outdir, &mirror, &info, err, sizeof err);
+    floe_scene_set_vtk_mode(FLOE_SCENE_VTK_SERIAL, 0, 0, NULL, NULL);
     int any;
     MPI_Allreduce(&rc, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
     if (any != FLOE_OK) {
         if (rc != FLOE_OK) fprintf(stderr, "%s: error (rank %d): %s\n", prog, rank, err);
+        free_pieces(&vp, 0);
         floe_world_destroy(w);
         floe_world_destroy(mirror);
         return 1;
@@ -216,6 +253,11 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
     if (rc == FLOE_OK && mirror && floe_world_prepare(mirror) != FLOE_OK)
         fprintf(stderr, "%s: error: %s: %s\n", prog, label, floe_world_last_error(mirror));
     if (rc == FLOE_OK) rc = floe_world_parallel_outputs(w, mirror);
+    /* the vtk pieces: the split world takes them (and writes the state at the split) */
+    int taken = 0;
+    const int npieces = vp.n;
+    while (rc == FLOE_OK && taken < vp.n) rc = floe_world_parallel_add_output(w, vp.o[taken++]);
+    free_pieces(&vp, rc == FLOE_OK ? vp.n : taken);
     if (rc != FLOE_OK) { /* the same on every rank: the checks are collective */
         if (rank == 0) fprintf(stderr, "%s: error: %s: %s\n", prog, label, floe_world_last_error(w));
         floe_world_destroy(w);
@@ -292,7 +334,10 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
         printf("  contacts (current): %d\n", (int)red[0]);
         printf("  energy balance err: %.3g (relative)\n",
                (cur + e.dissipated - e.initial - e.work_body - e.work_boundary) / scale);
-        printf("  outputs in:         %s (written by rank 0)\n", o->outdir);
+        printf("  outputs in:         %s (%s)\n", o->outdir,
+               !npieces ? "written by rank 0"
+               : mirror ? "vtk: a piece per rank and a .pvtu; the others written by rank 0"
+                        : "vtk: a piece per rank and a .pvtu");
     }
     floe_world_destroy(w);
     floe_world_destroy(mirror);

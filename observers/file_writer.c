@@ -282,6 +282,10 @@ static void write_xml_attr(FILE *f, const char *s) {
 }
 
 int floe_fw_write_pvd(const char *dir, const char *prefix, const double *times, int frames) {
+    return floe_fw_write_pvd_as(dir, prefix, times, frames, ".vtu");
+}
+
+int floe_fw_write_pvd_as(const char *dir, const char *prefix, const double *times, int frames, const char *suffix) {
     if (keep_existing && frames == 0) return FLOE_OK; /* a restart's new series: the restore writes it */
     char *path = floe_fw_series_path(dir, prefix, -1, ".pvd");
     if (!path) {
@@ -296,7 +300,7 @@ int floe_fw_write_pvd(const char *dir, const char *prefix, const double *times, 
     fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" "
                "byte_order=\"%s\">\n  <Collection>\n", floe_fw_vtk_byte_order());
     for (int k = 0; k < frames; k++) {
-        char *name = floe_fw_series_path(NULL, prefix, k, ".vtu");
+        char *name = floe_fw_series_path(NULL, prefix, k, suffix);
         if (!name) {
             floe_fw_replace_abandon(&r);
             errno = ENOMEM;

@@ -105,6 +105,8 @@ char *floe_fw_series_path(const char *dir, const char *prefix, int frame, const 
 /* Writes DIR/PREFIX.pvd listing frames 0..frames-1 at times[] (s). FLOE_OK, or FLOE_ENOMEM /
  * FLOE_EIO with errno set. */
 int floe_fw_write_pvd(const char *dir, const char *prefix, const double *times, int frames);
+/* the same with frame files PREFIX_NNNNNN + suffix (".pvtu": a series of parallel frames) */
+int floe_fw_write_pvd_as(const char *dir, const char *prefix, const double *times, int frames, const char *suffix);
 /* A series being written: frames opened with floe_fw_series_begin (the next frame's
  * PREFIX_NNNNNN.vtu.tmp; r->f to write it), then floe_fw_series_commit (renamed into place,
  * its time recorded, the .pvd rewritten) or floe_fw_series_abandon. Errors are reported

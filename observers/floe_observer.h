@@ -24,6 +24,15 @@ floe_observer *floe_energy_tracker_create(const char *path, char *err, size_t er
 /* VTK: one .vtu per frame (prefix_NNNNNN.vtu) and prefix.pvd listing them. Point data:
  * id, radius, velocity, angular_velocity, force, body, material. */
 floe_observer *floe_vtk_writer_create(const char *dir, const char *prefix, char *err, size_t errlen);
+/* The VTK writer of rank `rank` of `size` (size >= 1) in an MPI run (docs/parallel.md): it is
+ * called with that rank's split world (floe_world_parallel_add_output, at the same steps on
+ * every rank: its observe and end are collective) and writes the rank's piece of each frame,
+ * prefix_NNNNNN_R.vtu, with the particles the rank owns (id: the global particle id; walls and
+ * ghosts left out); rank 0 then writes prefix_NNNNNN.pvtu naming the size pieces and
+ * prefix.pvd listing the .pvtu files. With an unsplit world and size 1 it writes the one
+ * piece of every particle. floe_vtk_writer_set_ascii applies. */
+floe_observer *floe_vtk_writer_create_piece(const char *dir, const char *prefix, int rank, int size, char *err,
+                                            size_t errlen);
 /* CSV snapshot of all particles per frame (one file, "t,id,..." rows). */
 floe_observer *floe_csv_writer_create(const char *path, char *err, size_t errlen);
 /* 2D outlines (observers/outline_writer.c): one .vtu per frame (prefix_NNNNNN.vtu, default

@@ -3,6 +3,7 @@
  * owned particles, ghosts by bounding radius and their forward and reverse refresh. The
  * world-level sequence (par_world.c) calls these, never the reverse. */
 #include "par_internal.h"
+#include "floe_observer_base.h"
 
 #ifdef FLOE_HAVE_MPI
 #include <float.h>
@@ -431,6 +432,8 @@ void floe_par_index_free(floe_par_index *ix) {
 void floe_par_free(floe_par *P) {
     if (!P) return;
     if (P->zz) Zoltan_Destroy(&P->zz);
+    for (int k = 0; k < P->nouts; k++) floe_observer_destroy(P->outs[k]);
+    free(P->outs);
     free(P->gid); free(P->send_idx); free(P->scount); free(P->sbuf); free(P->rbuf);
     MPI_Comm_free(&P->comm);
     free(P);

@@ -44,6 +44,17 @@ int floe_world_parallel_outputs(floe_world *w, floe_world *mirror);
  * a world without a mirror: nothing. Collective. */
 int floe_world_parallel_finish(floe_world *w);
 
+/* An output that every rank writes from its own part of the split world (the vtk output's
+ * pieces, floe_vtk_writer_create_piece): o is called on every rank with the split world (its
+ * owned particles, ghosts and walls) now (the state at the split, as a prepared world's
+ * observers are), after every step at which it is due (period_steps or period_time, the same
+ * on every rank) and at its end in floe_world_parallel_finish; its observe and end may call
+ * the collective functions of this header. It needs no gather: without a mirror
+ * (floe_world_parallel_outputs with NULL) no state goes to rank 0. Outputs that read
+ * contacts are refused (FLOE_ENOTSUP). The world takes o (also on failure) and destroys it.
+ * Collective: every rank adds its outputs in the same order. */
+int floe_world_parallel_add_output(floe_world *w, floe_observer *o);
+
 /* rank and size of the world's communicator (0 and 1 for a serial world); not collective */
 int floe_world_parallel_rank(const floe_world *w, int *rank, int *size);
 

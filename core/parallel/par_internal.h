@@ -35,6 +35,7 @@ typedef struct floe_par {
     double *sbuf, *rbuf; size_t sbuf_cap, rbuf_cap;
     struct floe_world *mirror; /* rank 0 with outputs: the unsplit world whose observers write
                                   the gathered state (floe_world_parallel_outputs) */
+    struct floe_observer **outs; int nouts; /* every rank's own outputs (floe_world_parallel_add_output) */
     long rebuilds;           /* decompositions (RCB + migration + ghosts) */
     long long migrated;      /* particles this rank sent to another owner, over the run */
     floe_comm_stats traffic; /* the traffic (floe_world_parallel_comm) */

@@ -2,6 +2,7 @@
  * the rebuild sequence (RCB, migration, ghosts, contact history by global ids, the
  * neighbour list), the step's hooks (par_hooks.h) and the reductions. */
 #include "floe_parallel.h"
+#include "floe_observer_base.h"
 #include "par_hooks.h"
 #include "par_internal.h"
 #include "world_parts.h"
@@ -536,14 +537,73 @@ static int mirror_gather(floe_world *w, floe_par *P) {
     return FLOE_OK;
 }
 
+static int output_due(const floe_world *w, const floe_observer *o) {
+    return o->period_steps > 0 ? w->step % o->period_steps == 0
+                               : o->period_time > 0 ? w->time >= o->next_time - 1e-9 * w->dt : 1;
+}
+
 static int mirror_due(const floe_world *w, const floe_world *M) {
-    for (int k = 0; k < M->nobs; k++) {
-        const floe_observer *o = M->obs[k];
-        if (o->period_steps > 0 ? w->step % o->period_steps == 0
-                                : o->period_time > 0 ? w->time >= o->next_time - 1e-9 * w->dt : 1)
-            return 1;
-    }
+    for (int k = 0; k < M->nobs; k++)
+        if (output_due(w, M->obs[k])) return 1;
     return 0;
+}
+
+/* one call of an output's observe (end: its end), its message prefixed with its name */
+static int output_call(floe_world *w, floe_observer *o, int end) {
+    w->err[0] = 0;
+    int rc = end ? (o->klass->end ? o->klass->end(o, w) : FLOE_OK) : o->klass->observe(o, w);
+    if (!rc) return FLOE_OK;
+    char why[sizeof w->err];
+    memcpy(why, w->err, sizeof why);
+    return end ? floe_world_error(w, rc, "output %s failed at its end: %s", o->klass->name, why[0] ? why : floe_strerror(rc))
+               : floe_world_error(w, rc, "output %s failed at step %ld: %s", o->klass->name, w->step,
+                                  why[0] ? why : floe_strerror(rc));
+}
+
+/* every rank's own outputs (floe_world_parallel_add_output) that are due, as the world calls
+ * its observers; the same on every rank, so their collective calls meet */
+static int outputs_call(floe_world *w, floe_par *P, int force_all) {
+    for (int k = 0; k < P->nouts; k++) {
+        floe_observer *o = P->outs[k];
+        if (!force_all && !output_due(w, o)) continue;
+        if (o->period_time > 0 && o->period_steps <= 0)
+            while (o->next_time <= w->time + 1e-9 * w->dt) o->next_time += o->period_time;
+        FLOE_TRY(output_call(w, o, 0));
+    }
+    return FLOE_OK;
+}
+
+int floe_world_parallel_add_output(floe_world *w, floe_observer *o) {
+    floe_par *P = w->par;
+    if (!o) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: no output");
+    if (!P) {
+        floe_observer_destroy(o);
+        return floe_world_error(w, FLOE_EINVAL, "MPI outputs: the world is not split");
+    }
+    int bad = o->klass->needs_contacts, any;
+    floe_observer **no = bad ? NULL : realloc(P->outs, (size_t)(P->nouts + 1) * sizeof *no);
+    if (!bad && !no) bad = 2;
+    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof bad);
+    if (no) P->outs = no;
+    if (any) {
+        floe_observer_destroy(o);
+        return any == 1 ? refuse(w, "an output that reads contacts") : floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
+    P->outs[P->nouts++] = o;
+    o->begun = 1;
+    w->err[0] = 0;
+    int rc = o->klass->begin ? o->klass->begin(o, w) : FLOE_OK;
+    if (rc) {
+        char why[sizeof w->err];
+        memcpy(why, w->err, sizeof why);
+        return floe_world_error(w, rc, "output %s failed to start: %s", o->klass->name, why[0] ? why : "(no message)");
+    }
+    /* the state at the split (a prepared world's observers write theirs) */
+    o->next_time = w->time;
+    if (o->period_time > 0 && o->period_steps <= 0)
+        while (o->next_time <= w->time + 1e-9 * w->dt) o->next_time += o->period_time;
+    return output_call(w, o, 0);
 }
 
 int floe_par_observe(floe_world *w, int force_all) {
@@ -552,6 +612,7 @@ int floe_par_observe(floe_world *w, int force_all) {
     P->traffic.steps++;
     P->traffic.owned_steps += P->nown;
     P->traffic.ghost_steps += P->nghost;
+    FLOE_TRY(outputs_call(w, P, force_all));
     int has = P->mirror != NULL;
     MPI_Bcast(&has, 1, MPI_INT, 0, P->comm);
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof has);
@@ -577,10 +638,20 @@ int floe_par_observe(floe_world *w, int force_all) {
 int floe_world_parallel_finish(floe_world *w) {
     floe_par *P = w->par;
     if (!P) return FLOE_OK;
+    /* every rank's outputs: their end (collective; an error is the same on every rank when the
+     * output agrees on it, as the vtk pieces do) */
+    int orc = FLOE_OK;
+    for (int k = 0; k < P->nouts; k++) {
+        floe_observer *o = P->outs[k];
+        if (o->ended) continue;
+        o->ended = 1;
+        int r = output_call(w, o, 1);
+        if (r && !orc) orc = r;
+    }
     int has = P->mirror != NULL;
     MPI_Bcast(&has, 1, MPI_INT, 0, P->comm);
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof has);
-    if (!has) return FLOE_OK;
+    if (!has) return orc;
     floe_energy e;
     energy_sum(w, &e, FLOE_COMM_OUTPUT);
     int rc = mirror_gather(w, P), all;
@@ -592,7 +663,7 @@ int floe_world_parallel_finish(floe_world *w) {
     }
     MPI_Allreduce(&rc, &all, 1, MPI_INT, MPI_MAX, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof rc);
-    return all;
+    return orc ? orc : all;
 }
 
 #else /* serial build: a world is never split */
@@ -612,6 +683,10 @@ int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {
     return floe_world_error(w, FLOE_ENOTSUP, "MPI outputs: floe was built without MPI");
 }
 int floe_world_parallel_finish(floe_world *w) { (void)w; return FLOE_OK; }
+int floe_world_parallel_add_output(floe_world *w, floe_observer *o) {
+    floe_observer_destroy(o);
+    return floe_world_error(w, FLOE_ENOTSUP, "MPI outputs: floe was built without MPI");
+}
 void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min) {
     (void)w; (void)e; (void)shadow; (void)shadow0; (void)pair_min;
 }

@@ -78,6 +78,23 @@ const char *floe_scene_default_demo(void);
 #define FLOE_SCENE_CHECK 0
 #define FLOE_SCENE_RUN 1
 #define FLOE_SCENE_NO_OUTPUTS 2
+/* MPI runs (the CLI under mpirun, docs/parallel.md): what the loads of this thread that open
+ * outputs (FLOE_SCENE_RUN) do with the scene's `vtk` outputs, until set again.
+ *   FLOE_SCENE_VTK_SERIAL (0, the default): opened and attached like the other outputs;
+ *   FLOE_SCENE_VTK_SKIP (1): validated, not opened (rank 0's mirror when the ranks write the
+ *                            vtk pieces); the other outputs are opened;
+ *   FLOE_SCENE_VTK_PIECES (2): only the vtk outputs are opened, each as the writer of rank
+ *                            `rank`'s piece of `size` (floe_vtk_writer_create_piece), and
+ *                            handed to take(ctx, o), which owns it from then on (a nonzero
+ *                            return fails the load), instead of being attached to the world;
+ *                            the other outputs are only validated.
+ * rank, size, take and ctx are read in mode 2 only. FLOE_EINVAL for a mode or rank that does
+ * not exist. */
+#define FLOE_SCENE_VTK_SERIAL 0
+#define FLOE_SCENE_VTK_SKIP 1
+#define FLOE_SCENE_VTK_PIECES 2
+int floe_scene_set_vtk_mode(int mode, int rank, int size, int (*take)(void *ctx, floe_observer *o), void *ctx);
+
 int floe_scene_load_ex(const char *path, const char *text, const char *outdir, int with_outputs,
                        floe_world **out_world, floe_scene_info *info, char *err, size_t errlen);
 

@@ -25,6 +25,24 @@ static int sc_mkdir_p(const char *dir)
 
 static const char *const sc_output_types[] = {"vtk", "csv", "energy", "stress", "tracker", NULL};
 
+/* floe_scene_set_vtk_mode (floe_scene.h): the vtk outputs of an MPI run */
+static _Thread_local int vtk_mode = FLOE_SCENE_VTK_SERIAL, vtk_rank, vtk_size;
+static _Thread_local int (*vtk_take)(void *ctx, floe_observer *o);
+static _Thread_local void *vtk_ctx;
+
+int floe_scene_set_vtk_mode(int mode, int rank, int size, int (*take)(void *ctx, floe_observer *o), void *ctx)
+{
+    if (mode != FLOE_SCENE_VTK_SERIAL && mode != FLOE_SCENE_VTK_SKIP && mode != FLOE_SCENE_VTK_PIECES)
+        return FLOE_EINVAL;
+    if (mode == FLOE_SCENE_VTK_PIECES && (!take || size < 1 || rank < 0 || rank >= size)) return FLOE_EINVAL;
+    vtk_mode = mode;
+    vtk_rank = rank;
+    vtk_size = size;
+    vtk_take = take;
+    vtk_ctx = ctx;
+    return FLOE_OK;
+}
+
 int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, const char *outdir,
                             int with_outputs)
 {
@@ -221,7 +239,12 @@ int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, const char
                     ids[nids++] = (int)(l ? s->nparticles + id : id);
                 }
         }
-        if (with_outputs) {
+        /* an MPI run's vtk outputs (floe_scene_set_vtk_mode): pieces opened alone, or left to them */
+        const int open_it = with_outputs && (vtk_mode == FLOE_SCENE_VTK_SERIAL ||
+                                             (vtk_mode == FLOE_SCENE_VTK_SKIP && type != 0) ||
+                                             (vtk_mode == FLOE_SCENE_VTK_PIECES && type == 0));
+        const int piece = type == 0 && vtk_mode == FLOE_SCENE_VTK_PIECES;
+        if (open_it) {
             char oerr[512] = "";
             floe_observer *obs = NULL;
             if (type < 0) {
@@ -230,7 +253,8 @@ int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, const char
             }
             switch (type) {
             case 0:
-                obs = floe_vtk_writer_create(outdir, name, oerr, sizeof oerr);
+                obs = piece ? floe_vtk_writer_create_piece(outdir, name, vtk_rank, vtk_size, oerr, sizeof oerr)
+                            : floe_vtk_writer_create(outdir, name, oerr, sizeof oerr);
                 if (obs && ascii) floe_vtk_writer_set_ascii(obs, 1);
                 break;
             case 1: obs = floe_csv_writer_create(o->target, oerr, sizeof oerr); break;
@@ -246,6 +270,12 @@ int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, const char
                                oerr[0] ? oerr : "could not create the output");
             obs->period_steps = o->every;
             obs->period_time = o->every ? 0.0 : o->interval;
+            if (piece) { /* handed over, not attached: the caller adds it to the split world */
+                if (vtk_take(vtk_ctx, obs) != 0) return sc_fail(s, FLOE_ENOMEM, e, "%s: out of memory", what);
+                s->nouts = ++i;
+                s->nobservers = i;
+                continue;
+            }
             int rc = floe_world_add_observer(s->w, obs);
             if (rc != FLOE_OK) {
                 floe_observer_destroy(obs);

@@ -6,8 +6,9 @@ with the MPI build's CLI on one process and under `mpirun -np K` (K = 2, 4), and
 tests/scenes/vtk_small.yaml (18 spheres falling, few ghosts: a rank's particle count
 changes at rebuilds) with K = 8, kinematic_wall.yaml (a moving wall, leapfrog) and
 settle_2d.yaml (a 2D world) with K = 3, and compares
-every output file written by rank 0: the CSV files (particles, energy, tracker) and every
-number of every VTK frame must agree within 1e-9 of the column's (file's) largest magnitude:
+every output file: the CSV files (particles, energy, tracker, written by rank 0) and every
+number of every VTK frame (the vtk output's frames: a .pvtu and a piece per rank, read
+together and ordered by id) must agree within 1e-9 of the column's (file's) largest magnitude:
 the split run sums the contact forces in another order, nothing else differs.
 The summary of settle.yaml under -np 2 carries the traffic line (floe_comm_stats): the mean
 reverse traffic is 48 B x the mean ghosts per rank (within the printed digits, 0.5 %), the
@@ -73,9 +74,11 @@ def compare_csv(a, b, name):
 
 
 def vtu_arrays(path):
-    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+    """the arrays of a .vtu, or of a .pvtu's pieces together (the vtk output under mpirun), the
+    points in the order of their ids"""
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader, vtkXMLPUnstructuredGridReader
     from vtkmodules.util.numpy_support import vtk_to_numpy
-    r = vtkXMLUnstructuredGridReader()
+    r = vtkXMLPUnstructuredGridReader() if path.endswith(".pvtu") else vtkXMLUnstructuredGridReader()
     r.SetFileName(path)
     r.Update()
     g = r.GetOutput()
@@ -83,6 +86,9 @@ def vtu_arrays(path):
     pd = g.GetPointData()
     for k in range(pd.GetNumberOfArrays()):
         out[pd.GetArrayName(k)] = vtk_to_numpy(pd.GetArray(k))
+    if "id" in out:
+        order = out["id"].argsort(kind="stable")
+        out = {k: v[order] for k, v in out.items()}
     return out
 
 
@@ -133,8 +139,13 @@ for scene, ranks in SCENES:
         run(scene, out, k)
         print(f"{os.path.basename(scene)}: mpirun -np {k} against one process:")
         files = sorted(os.listdir(ref))
-        if sorted(os.listdir(out)) != files:
-            print(f"FAIL: files differ: {sorted(os.listdir(out))} vs {files}")
+        # the vtk output under mpirun: PREFIX_NNNNNN.pvtu and a piece per rank for each serial
+        # PREFIX_NNNNNN.vtu (test_mpi_pvtu.py checks the pieces themselves)
+        par = {n[:-len(".pvtu")] + ".vtu" for n in os.listdir(out) if n.endswith(".pvtu")}
+        pieces = {n for n in os.listdir(out) for f in par if re.fullmatch(re.escape(f[:-4]) + r"_\d+\.vtu", n)}
+        got = sorted((set(os.listdir(out)) - pieces - {f[:-4] + ".pvtu" for f in par}) | par)
+        if got != files:
+            print(f"FAIL: files differ: {got} vs {files}")
             fails += 1
         for name in files:
             if name.endswith(".csv"):
@@ -147,7 +158,8 @@ for scene, ranks in SCENES:
         vtus = [n for n in files if n.endswith(".vtu")]
         if not vtus:
             continue
-        worst = max(compare_vtu(os.path.join(ref, n), os.path.join(out, n), n) for n in vtus)
+        worst = max(compare_vtu(os.path.join(ref, n), os.path.join(out, n if n not in par else n[:-4] + ".pvtu"), n)
+                    for n in vtus)
         ok = worst <= TOL
         fails += not ok
         print(f"  {'ok  ' if ok else 'FAIL'} {len(vtus)} VTK files: largest difference {worst:.2e} of the file's scale (tol {TOL:g})")
