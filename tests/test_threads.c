@@ -120,7 +120,8 @@ static int run(int boxes, int leapfrog, int threads, int steps, run_out *o) {
     return 0;
 }
 
-static void compare(const char *what, int boxes, int leapfrog, int steps) {
+/* unused without OpenMP (main skips) */
+static __attribute__((unused)) void compare(const char *what, int boxes, int leapfrog, int steps) {
     run_out ref, o;
     memset(&ref, 0, sizeof ref);
     CHECK(run(boxes, leapfrog, 1, steps, &ref) == 0, "%s: one thread runs", what);
