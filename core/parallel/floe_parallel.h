@@ -52,7 +52,10 @@ int floe_world_parallel_finish(floe_world *w);
  * the collective functions of this header. It needs no gather: without a mirror
  * (floe_world_parallel_outputs with NULL) no state goes to rank 0. Outputs that read
  * contacts are refused (FLOE_ENOTSUP). The world takes o (also on failure) and destroys it.
- * Collective: every rank adds its outputs in the same order. */
+ * Collective: every rank adds its outputs in the same order. An output whose observe fails
+ * on some ranks only must agree on the failure itself (the VTK pieces do, through
+ * floe_world_parallel_sum): a rank that returns alone leaves the others waiting in the next
+ * collective. */
 int floe_world_parallel_add_output(floe_world *w, floe_observer *o);
 
 /* rank and size of the world's communicator (0 and 1 for a serial world); not collective */

@@ -828,8 +828,9 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
     nl->touching[k] = 1;
     if (env->fused && (law->klass == &floe_hertz_mindlin_law_class || law->klass == &floe_linear_law_class)) {
         const double dist = sqrt(d2), depth = rs - dist, im = p->inv_mass[i] + p->inv_mass[j];
-        /* else the checks below and the law's own, with their messages */
-        if (dist > 0 && depth <= rmin(rad_i, rad_j) && im > 0 && im < INFINITY)
+        /* else the checks below and the law's own, with their messages (depth 0 by rounding:
+         * the law resets its spring) */
+        if (dist > 0 && depth > 0 && depth <= rmin(rad_i, rad_j) && im > 0 && im < INFINITY)
             return sphere_fused(w, ctx, env, k, acc, i, j, dx, dy, dz, dist, depth, rad_i * rad_j / rs, 1.0 / im,
                                 law, hist);
     }

@@ -149,7 +149,12 @@ int floe_world_loop_threads(const floe_world *w, long items) {
 }
 
 int floe_world_nl_build(floe_world *w) {
-    w->nl.threads = floe_world_loop_threads(w, w->p.n);
+    int nt = floe_world_loop_threads(w, w->p.n);
+    /* the search calls the providers' excludes from every thread: a user's on one thread
+     * (floe_provider.h does not ask it to be thread-safe) */
+    for (int k = 0; k < w->nprov && nt > 1; k++)
+        if (w->prov[k]->klass->excludes && floe_provider_is_user(w, w->prov[k])) nt = 1;
+    w->nl.threads = nt;
     return floe_nl_build(&w->nl, &w->p, w->def.dim, w->def.leaf_size);
 }
 
