@@ -319,6 +319,7 @@ struct stage_acc {
     double *pf;
     unsigned char *act;
     unsigned char *hit;      /* per particle: some entry of it has a force (the gather skips the rest) */
+    const unsigned char *own; /* per particle: all its entries lie in one part (floe_par_scratch.own) */
 };
 typedef struct stage_acc stage_acc;
 
@@ -331,16 +332,24 @@ static inline void acc_life(stage_acc *acc, int i, int j, double d) {
  * them (threads: stored for the gather, which adds them in the same order) */
 static inline __attribute__((always_inline)) void pair_apply(floe_particles *p, stage_acc *acc, int k, int i, int j,
                                                              const double F[3], const double ti[3], const double tj[3]) {
+    double *fi = p->f + 3 * i, *fj = p->f + 3 * j, *Ti = p->t + 3 * i, *Tj = p->t + 3 * j;
     if (acc->pf) {
+        /* an end whose entries all lie in this thread's part takes its share directly, in
+         * list order as one thread adds it; the other end's share waits for the gather */
+        const int oi = acc->own[i], oj = acc->own[j];
+        if (oi)
+            for (int a = 0; a < 3; a++) { fi[a] += F[a]; Ti[a] += ti[a]; }
+        if (oj)
+            for (int a = 0; a < 3; a++) { fj[a] -= F[a]; Tj[a] += tj[a]; }
+        if (oi & oj) return;
         double *b = acc->pf + 9 * (size_t)k;
         for (int a = 0; a < 3; a++) { b[a] = F[a]; b[3 + a] = ti[a]; b[6 + a] = tj[a]; }
         acc->act[k] = 1;
         /* two threads may mark the same particle: the same value, a relaxed atomic store */
-        __atomic_store_n(acc->hit + i, (unsigned char)1, __ATOMIC_RELAXED);
-        __atomic_store_n(acc->hit + j, (unsigned char)1, __ATOMIC_RELAXED);
+        if (!oi) __atomic_store_n(acc->hit + i, (unsigned char)1, __ATOMIC_RELAXED);
+        if (!oj) __atomic_store_n(acc->hit + j, (unsigned char)1, __ATOMIC_RELAXED);
         return;
     }
-    double *fi = p->f + 3 * i, *fj = p->f + 3 * j, *Ti = p->t + 3 * i, *Tj = p->t + 3 * j;
     for (int a = 0; a < 3; a++) {
         fi[a] += F[a];
         fj[a] -= F[a];
@@ -1007,6 +1016,28 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         ps->hit = hit;
         ps->adj_gen = nl->gen;
         ps->adj_np = n;
+        ps->part_blocks = 0; /* own[] below */
+    }
+    /* parts of about nb / (4 nt) blocks (a few per thread: the dynamic schedule balances
+     * them); a particle is owned by a part when every entry it is i or j of lies in it: the
+     * thread of that part is then its only writer, and adds its forces in list order */
+    const int G = nb > 4 * nt ? (nb + 4 * nt - 1) / (4 * nt) : 1;
+    if (ps->part_blocks != G) {
+        unsigned char *own = realloc(ps->own, (size_t)(n ? n : 1));
+        if (!own) return FLOE_ENOMEM;
+        ps->own = own;
+        const int *row = ps->row, *off = ps->adj_off, *adj = ps->adj;
+        const long span = (long)G * FLOE_PAR_BLOCK;
+        for (int i = 0; i < n; i++) {
+            int lo = INT_MAX, hi = -1;
+            if (row[i + 1] > row[i]) { lo = row[i]; hi = row[i + 1] - 1; }
+            if (off[i + 1] > off[i]) { /* adj: in list order */
+                if (adj[off[i]] < lo) lo = adj[off[i]];
+                if (adj[off[i + 1] - 1] > hi) hi = adj[off[i + 1] - 1];
+            }
+            own[i] = hi < 0 || lo / span == hi / span;
+        }
+        ps->part_blocks = G;
     }
     for (int t = 0; t < nt; t++) { /* the detection statistics of this evaluation, per thread */
         floe_detect_state *d = &ps->det[t];
@@ -1121,10 +1152,14 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
             te.dctx = &td;
             floe_world_error_to(ps->err[t], sizeof ps->err[t]);
             int failed = 0;
-            /* blocks handed out in increasing order (dynamic): the lowest failed block is
-             * still the first error, and a dense region does not hold one thread back */
+            /* parts (runs of ps->part_blocks blocks) handed out in increasing order (dynamic):
+             * the lowest failed block is still the first error, and a dense region does not
+             * hold one thread back; a part's blocks in order on one thread, which applies the
+             * forces of the particles it owns (ps->own) directly */
+            const int G = ps->part_blocks, nparts = (nb + G - 1) / G;
             FLOE_OMP(omp for schedule(dynamic, 1))
-            for (int b = 0; b < nb; b++) {
+            for (int part = 0; part < nparts; part++)
+            for (int b = part * G; b < (part + 1) * G && b < nb; b++) {
                 if (failed) continue; /* this thread's first error is the one its blocks met first */
                 /* the block's sums on this thread's stack (blocks side by side in ps->blk share
                  * cache lines: updated per pair, they bounced between the cores) */
@@ -1133,6 +1168,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
                 la.pf = ps->pf;
                 la.act = ps->act;
                 la.hit = ps->hit;
+                la.own = ps->own;
                 const int k0 = b * B, k1 = k0 + B < npairs ? k0 + B : npairs;
                 memset(ps->act + k0, 0, (size_t)(k1 - k0));
                 int rc = stage_block(w, ctx, &te, k0, k1, nl->cand + k0, &la);
