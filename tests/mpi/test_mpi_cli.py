@@ -6,7 +6,8 @@ with the MPI build's CLI on one process and under `mpirun -np K` (K = 2, 4), and
 tests/scenes/vtk_small.yaml (18 spheres falling, few ghosts: a rank's particle count
 changes at rebuilds) with K = 8, kinematic_wall.yaml (a moving wall, leapfrog) and
 settle_2d.yaml (a 2D world) with K = 3, bonded.yaml (a block of beam-bonded spheres
-breaking on the floor: 83 breaks) with K = 2 and 4, and compares
+breaking on the floor: 83 breaks) with K = 2 and 4, bonded_2d.yaml (a bonded 2D plate: 184
+breaks; floe_sizes reads the bonds gathered into rank 0's mirror) with K = 3, and compares
 every output file: the CSV files (particles, energy, tracker, written by rank 0) and every
 number of every VTK frame (the vtk output's frames: a .pvtu and a piece per rank, read
 together and ordered by id) must agree within 1e-9 of the column's (file's) largest magnitude
@@ -29,7 +30,8 @@ SCENES = [(os.path.join(here, "settle.yaml"), (2, 4)),
           (os.path.join(here, "..", "scenes", "vtk_small.yaml"), (8,)),
           (os.path.join(here, "kinematic_wall.yaml"), (3,)),
           (os.path.join(here, "settle_2d.yaml"), (3,)),
-          (os.path.join(here, "bonded.yaml"), (2, 4))]
+          (os.path.join(here, "bonded.yaml"), (2, 4)),
+          (os.path.join(here, "bonded_2d.yaml"), (3,))]
 TOL = 1e-9
 fails = 0
 
