@@ -76,7 +76,10 @@ int floe_world_parallel_is_owned(const floe_world *w, int i);
 /* the beam bonds (floe_world_beams.h) and the broken ones among them, summed over the ranks
  * (each bond is held by one rank: the owner of its end of lower global id); a serial world:
  * floe_world_beam_bond_count and floe_world_beam_broken_count. In a split world those two
- * and floe_world_beam_bond count and list this rank's bonds only. */
+ * and floe_world_beam_bond count and list this rank's bonds only (their ends as local
+ * indices: floe_world_parallel_gid gives the global ids; broken bonds whose other end is on
+ * another rank are counted here but not listed), and floe_world_write_beam_bonds_csv writes
+ * them. Collective. */
 int floe_world_parallel_beam_counts(const floe_world *w, long long *bonds, long long *broken);
 
 /* the energy ledger summed over the ranks (a serial world: floe_world_energy) */

@@ -107,9 +107,8 @@ int floe_par_beams_out(floe_world *w, floe_par *P, const int *dest) {
     int r2 = floe_par_route(P, FLOE_COMM_MIGRATE, recs, hd, n, m, &P->bin, &P->nbin);
     free(recs);
     free(hd);
-    if (!rc) rc = r2;
-    if (!rc && lost) rc = FLOE_EINVAL;
-    return rc;
+    P->blost = lost; /* reported by floe_par_beams_in, on every rank */
+    return rc ? rc : r2;
 }
 
 static int cmp_gid2(const void *a, const void *b) {
@@ -122,7 +121,7 @@ int floe_par_beams_in(floe_world *w, floe_par *P) {
     if (!w->beams) return FLOE_OK;
     const int m = brec_len(), n = P->nbin, own_hi = P->nrep + P->nown;
     double *in = P->bin;
-    int rc = FLOE_OK, bad = 0;
+    int rc = FLOE_OK, bad = P->blost ? 1 : 0;
     floe_par_index ix = {NULL, NULL, 0};
     int *ii = malloc((size_t)(n ? n : 1) * sizeof *ii), *jj = malloc((size_t)(n ? n : 1) * sizeof *jj);
     double *keep = malloc((size_t)(n ? n : 1) * m * sizeof *keep);

@@ -45,6 +45,7 @@ typedef struct floe_par {
      * neighbour list's rebuild count then (a list rebuilt since, after a bond broke, asks
      * for a decomposition at the next step) */
     double *bout, *bin, *bpark; int nbout, nbin, npark;
+    int blost;               /* bonds whose anchor was not owned at the export (internal error) */
     double bout_reach, bond_reach;
     long nl_rebuilds;
 } floe_par;
