@@ -258,6 +258,13 @@ static void compare(const char *tag, floe_world *(*build)(void), long nsteps, do
         floe_world_destroy(ws);
     }
     w = split(build, 1);
+    { /* bonds are made before the split */
+        floe_beam_params bp = floe_default_beam_params();
+        bp.young = 1e8;
+        const int r1 = floe_world_add_beam_bond(w, 0, 1, &bp), r2 = floe_world_add_beam_bonds(w, 1.01, &bp);
+        CHECK(r1 == -FLOE_ENOTSUP && r2 == -FLOE_ENOTSUP && strstr(floe_world_last_error(w), "before floe_world_parallel_init"),
+              "%s: bonds added to a split world are refused (%d, %d: %s)", tag, r1, r2, floe_world_last_error(w));
+    }
     bad |= run(w, nsteps, &rp);
     snapshot(w, N, sp);
     floe_world_destroy(w);
