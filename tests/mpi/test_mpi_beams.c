@@ -341,6 +341,68 @@ static void compare(const char *tag, floe_world *(*build)(void), long nsteps, do
     free(ss); free(sp);
 }
 
+/* owner rank of every global id (walls and unknown: -1) */
+static int *owners(floe_world *w, int N) {
+    int *o = malloc((size_t)N * sizeof *o);
+    for (int g = 0; g < N; g++) o[g] = -1;
+    for (int i = 0; i < w->p.n; i++)
+        if (isfinite(w->p.radius[i]) && floe_world_parallel_is_owned(w, i)) o[floe_world_parallel_gid(w, i)] = rank_;
+    MPI_Allreduce(MPI_IN_PLACE, o, N, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    return o;
+}
+
+/* the traffic of a decomposition with bonds, exactly (docs/parallel.md, "Traffic
+ * accounting"): the gapped chain shifted along itself by 0.3 of its period (x + 24 spacings
+ * modulo 80: the last 24 go to the start; the order along x changes, so particles and
+ * bonds change owner; no contact, so no history), then a rebuild. Expected on every rank:
+ * migrate = 312 B a particle that leaves + 408 B a bond whose anchor leaves + 3 routes x
+ * 4 B (counts) to every other rank; ghost = 176 B a ghost sent by the refresh before the
+ * bonds are measured + 312 B a new ghost + (56 + 4) B to every other rank; reduce = 8 B
+ * (the longest bond) + 8 B (the bonds' check); nothing else. */
+static void traffic(void) {
+    floe_world *w = split(build_chain, 1);
+    floe_par *P = w->par;
+    const int N = (int)P->ntotal, S = size_;
+    const double period = NCHAIN * 3 * R;
+    int *before = owners(w, N);
+    long long *anchors = malloc((size_t)(floe_world_beam_bond_count(w) + 1) * sizeof *anchors);
+    int na = 0;
+    for (int k = 0; k < floe_world_beam_bond_count(w); k++) {
+        floe_beam_bond_info b;
+        floe_world_beam_bond(w, k, &b);
+        anchors[na++] = floe_world_parallel_gid(w, b.i);
+    }
+    for (int i = 0; i < w->p.n; i++) w->p.x[3 * i] = fmod(w->p.x[3 * i] + 0.3 * period, period);
+    const long long nsend0 = P->nsend;
+    floe_world_parallel_comm_reset(w);
+    int rc = floe_world_parallel_rebuild(w);
+    CHECK(rc == 0, "traffic: rebuild: %s", rc ? floe_world_last_error(w) : "");
+    int *after = owners(w, N);
+    long long left = 0, bleft = 0;
+    for (int g = 0; g < N; g++) left += before[g] == rank_ && after[g] != rank_;
+    for (int k = 0; k < na; k++) bleft += after[anchors[k]] != rank_;
+    floe_comm_stats c;
+    floe_world_parallel_comm(w, &c);
+    const long long others = S - 1, nsend1 = P->nsend;
+    const long long mig = S > 1 ? 312 * left + 408 * bleft + 3 * 4 * others : 0;
+    const long long gh = S > 1 ? 176 * nsend0 + 312 * nsend1 + 60 * others : 0, red = S > 1 ? 16 : 0;
+    CHECK(c.bytes[FLOE_COMM_MIGRATE] == mig, "rank %d: migration %lld B, expected %lld (%lld particles x 312, %lld bonds x "
+          "408)", rank_, c.bytes[FLOE_COMM_MIGRATE], mig, left, bleft);
+    CHECK(c.bytes[FLOE_COMM_GHOST] == gh, "rank %d: ghosts %lld B, expected %lld (%lld refreshed x 176, %lld new x 312)",
+          rank_, c.bytes[FLOE_COMM_GHOST], gh, nsend0, nsend1);
+    CHECK(c.bytes[FLOE_COMM_REDUCE] == red && c.bytes[FLOE_COMM_REVERSE] == 0 && c.bytes[FLOE_COMM_OUTPUT] == 0,
+          "rank %d: reductions %lld B (expected %lld), nothing else", rank_, c.bytes[FLOE_COMM_REDUCE], red);
+    long long tot[2] = {left, bleft};
+    MPI_Allreduce(MPI_IN_PLACE, tot, 2, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+    if (S > 1) CHECK(tot[0] > 0 && tot[1] > 0, "traffic: particles (%lld) and bonds (%lld) changed owner", tot[0], tot[1]);
+    if (rank_ == 0) printf("  traffic of a rebuild: %lld particles and %lld bonds changed owner\n", tot[0], tot[1]);
+    long long nb, nbr;
+    floe_world_parallel_beam_counts(w, &nb, &nbr);
+    CHECK(nb == NCHAIN - 1 && nbr == 0, "traffic: the bonds after the move (%lld, %lld broken)", nb, nbr);
+    free(before); free(after); free(anchors);
+    floe_world_destroy(w);
+}
+
 int main(int argc, char **argv) {
     MPI_Init(&argc, &argv);
     MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
@@ -349,6 +411,7 @@ int main(int argc, char **argv) {
     compare("chain", build_chain, nchain, 1e-10, 1e-8, 1e-9, 0);
     compare("block", build_block, nblock, 1e-10, 1e-8, 1e-9, 1);
     compare("stretch", build_stretch, nchain, 1e-10, 1e-8, 1e-9, 0);
+    traffic();
     int fails = check_fail_, all;
     MPI_Allreduce(&fails, &all, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
     if (rank_ == 0) printf("test_mpi_beams (%d ranks): %d failed checks over all ranks\n", size_, all);
