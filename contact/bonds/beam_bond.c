@@ -379,6 +379,57 @@ void floe_beam_set_truncate(floe_beam_set *s, int n) {
     }
 }
 
+size_t floe_beam_set_rec_size(void) { return sizeof(beam_bond); }
+
+int floe_beam_set_rec_get(const floe_beam_set *s, int k, void *rec, int *i, int *j, int *broken) {
+    if (!s || k < 0 || k >= s->n) return FLOE_EINVAL;
+    const beam_bond *b = &s->b[k];
+    memcpy(rec, b, sizeof *b);
+    *i = b->i;
+    *j = b->j;
+    *broken = b->broken;
+    return FLOE_OK;
+}
+
+int floe_beam_set_rec_put(floe_beam_set *s, int k, const void *rec) {
+    if (!s || k < 0 || k >= s->n) return FLOE_EINVAL;
+    beam_bond *b = &s->b[k];
+    const int i = b->i, j = b->j, was = b->broken != 0;
+    memcpy(b, rec, sizeof *b);
+    b->i = i;
+    b->j = j;
+    s->nbroken += (b->broken != 0) - was;
+    return FLOE_OK;
+}
+
+int floe_beam_rec_broken(const void *rec) {
+    beam_bond b;
+    memcpy(&b, rec, sizeof b);
+    return b.broken;
+}
+
+int floe_beam_set_rec_replace(floe_beam_set *s, const unsigned char *recs, size_t stride, const int *ii, const int *jj,
+                              int n) {
+    if (n > s->cap) {
+        beam_bond *nb = realloc(s->b, (size_t)n * sizeof *nb);
+        if (!nb) return FLOE_ENOMEM;
+        s->b = nb;
+        s->cap = n;
+    }
+    int nbroken = 0;
+    for (int k = 0; k < n; k++) {
+        beam_bond *b = &s->b[k];
+        memcpy(b, recs + (size_t)k * stride, sizeof *b);
+        b->i = ii[k];
+        b->j = jj[k];
+        nbroken += b->broken != 0;
+    }
+    s->n = n;
+    s->nbroken = nbroken;
+    s->gen++; /* the threads' per-particle index again */
+    return FLOE_OK;
+}
+
 void floe_beam_set_threads(floe_beam_set *s, int nthreads) {
     if (s) s->nthreads = nthreads;
 }

@@ -22,6 +22,20 @@ int floe_beam_set_push(floe_beam_set *s, const floe_particles *p, int dim, int i
 unsigned long long *floe_beam_set_rng(floe_beam_set *s, unsigned long long seed);
 /* drops the bonds from index n on (a failed batch) */
 void floe_beam_set_truncate(floe_beam_set *s, int n);
+/* MPI (core/parallel, docs/parallel.md "Beam bonds"): a bond's whole record (section,
+ * reference frame, strengths, stresses, last forces and energy, broken flag and break) as
+ * rec_size bytes, to move it between ranks; rec_get copies bond k's and gives its ends
+ * and broken flag; rec_replace makes the set the n records at recs (stride bytes apart)
+ * with their ends renumbered to ii[k], jj[k] (local indices), the broken count recounted
+ * (FLOE_ENOMEM leaves the set as it was); call floe_beam_set_index afterwards */
+size_t floe_beam_set_rec_size(void);
+int floe_beam_set_rec_get(const floe_beam_set *s, int k, void *rec, int *i, int *j, int *broken);
+int floe_beam_rec_broken(const void *rec);
+/* bond k's record replaced by rec, its ends kept (an unsplit copy of the world takes the
+ * state of the split world's bonds); the broken count follows */
+int floe_beam_set_rec_put(floe_beam_set *s, int k, const void *rec);
+int floe_beam_set_rec_replace(floe_beam_set *s, const unsigned char *recs, size_t stride, const int *ii, const int *jj,
+                              int n);
 /* threads for the bond loop of floe_beam_set_forces (the world sets it per evaluation; 0 or 1:
  * one); the results are the same bits for any count (docs/parallel.md) */
 void floe_beam_set_threads(floe_beam_set *s, int nthreads);

@@ -298,7 +298,9 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
         const double *b = boxes + 7 * r;
         if (r == P->rank || !(b[0] <= b[3])) continue;
         for (int i = lo; i < hi; i++) {
-            if (!(box_dist(p->x + 3 * i, b, b + 3, dim) <= p->radius[i] + b[6] + skin)) continue;
+            /* beam bonds: the partner of a bond anchored on r is within the bond's length of
+             * one of r's centres (bond_reach: the longest, par_beams.c) */
+            if (!(box_dist(p->x + 3 * i, b, b + 3, dim) <= fmax(p->radius[i] + b[6], P->bond_reach) + skin)) continue;
             if (P->nsend == P->send_cap) {
                 int nc = P->send_cap ? 2 * P->send_cap : 256;
                 int *t = realloc(P->send_idx, (size_t)nc * sizeof *t);
@@ -434,6 +436,7 @@ void floe_par_free(floe_par *P) {
     if (P->zz) Zoltan_Destroy(&P->zz);
     for (int k = 0; k < P->nouts; k++) floe_observer_destroy(P->outs[k]);
     free(P->outs);
+    free(P->bout); free(P->bin); free(P->bpark);
     free(P->gid); free(P->send_idx); free(P->scount); free(P->sbuf); free(P->rbuf);
     MPI_Comm_free(&P->comm);
     free(P);

@@ -23,7 +23,7 @@ int floe_parallel_available(void);
 /* Split the prepared world over the ranks of comm (a pointer to an MPI_Comm; NULL: MPI_COMM_WORLD),
  * which must hold the same world on every rank (same particles, in the same order; global id =
  * index at this call). What is not yet supported is refused with FLOE_ENOTSUP and a message:
- * peridynamic bodies, beam bonds, periodic cells, state objects, body-force callbacks,
+ * peridynamic bodies, periodic cells, state objects, body-force callbacks,
  * observers, user providers, RK2 and adaptive steps, fixed or kinematic particles other than
  * walls (docs/parallel.md). */
 int floe_world_parallel_init(floe_world *w, const void *comm);
@@ -72,6 +72,15 @@ long long floe_world_parallel_gid(const floe_world *w, int i);
 /* 1 when local particle i is owned by this rank or is a wall (kept on every rank), 0 for a
  * ghost; not collective */
 int floe_world_parallel_is_owned(const floe_world *w, int i);
+
+/* the beam bonds (floe_world_beams.h) and the broken ones among them, summed over the ranks
+ * (each bond is held by one rank: the owner of its end of lower global id); a serial world:
+ * floe_world_beam_bond_count and floe_world_beam_broken_count. In a split world those two
+ * and floe_world_beam_bond count and list this rank's bonds only (their ends as local
+ * indices: floe_world_parallel_gid gives the global ids; broken bonds whose other end is on
+ * another rank are counted here but not listed), and floe_world_write_beam_bonds_csv writes
+ * them. Collective. */
+int floe_world_parallel_beam_counts(const floe_world *w, long long *bonds, long long *broken);
 
 /* the energy ledger summed over the ranks (a serial world: floe_world_energy) */
 int floe_world_parallel_energy(const floe_world *w, floe_energy *out);

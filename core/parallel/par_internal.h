@@ -39,6 +39,15 @@ typedef struct floe_par {
     long rebuilds;           /* decompositions (RCB + migration + ghosts) */
     long long migrated;      /* particles this rank sent to another owner, over the run */
     floe_comm_stats traffic; /* the traffic (floe_world_parallel_comm) */
+    /* beam bonds (par_beams.c): records exported at the split (bout), received at a
+     * decomposition until the new store exists (bin), broken bonds whose other end is not
+     * here (bpark); the halo's reach (the longest intact bond at the decomposition); the
+     * neighbour list's rebuild count then (a list rebuilt since, after a bond broke, asks
+     * for a decomposition at the next step) */
+    double *bout, *bin, *bpark; int nbout, nbin, npark;
+    int blost;               /* bonds whose anchor was not owned at the export (internal error) */
+    double bout_reach, bond_reach;
+    long nl_rebuilds;
 } floe_par;
 
 /* the traffic accounting (floe_comm_stats' conventions; nothing with one rank): */
@@ -88,6 +97,19 @@ typedef struct floe_par_index { long long *key; int *loc; int n; } floe_par_inde
 int floe_par_index_build(const floe_par *P, int n, floe_par_index *ix);
 int floe_par_index_find(const floe_par_index *ix, long long g);
 void floe_par_index_free(floe_par_index *ix);
+/* par_beams.c: beam bonds follow their anchor (the end of lower global id). At the split,
+ * before the store is reordered: the bonds whose anchor is in mine (by global id = index)
+ * set aside. At a decomposition, after RCB and before the migration: the ghosts refreshed,
+ * the bonds (or those set aside) and the parked ones routed to the new owner of their
+ * anchor (dest of the owned particles), the halo's reach reduced over the ranks. After the
+ * ghosts: the set rebuilt from what arrived (FLOE_EINVAL with a message, on every rank,
+ * when an intact bond's end is not here) */
+int floe_par_beams_split(floe_world *w, floe_par *P, const unsigned char *mine);
+int floe_par_beams_out(floe_world *w, floe_par *P, const int *dest);
+int floe_par_beams_in(floe_world *w, floe_par *P);
+/* the bonds' records gathered on rank 0 into the mirror M's bonds (by global ids), for its
+ * outputs; FLOE_EINVAL on rank 0 when they do not match M's bonds */
+int floe_par_beams_gather(floe_world *w, floe_par *P, struct floe_world *M);
 /* frees the state (Zoltan's too) */
 void floe_par_free(floe_par *P);
 

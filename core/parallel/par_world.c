@@ -151,16 +151,19 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
             const int an = f[0] >= 0 && f[1] >= 0 ? (P->gid[f[0]] < P->gid[f[1]] ? f[0] : f[1]) : f[0] >= 0 ? f[0] : f[1];
             hd[k] = an >= 0 ? dest[an - lo] : P->rank;
         }
+    if (!rc) rc = floe_par_beams_out(w, P, dest); /* beam bonds (par_beams.c) */
     if (!rc) rc = floe_par_migrate(w, P, dest);
     if (!rc) rc = floe_par_ghosts(w, P, w->nl.skin);
     if (!rc) rc = floe_par_route(P, FLOE_COMM_MIGRATE, recs, hd, nrec, m, &in, &nin);
     if (!rc) rc = hist_import(w, P, in, nin);
     free(in); free(dest); free(hd); free(recs);
     if (rc) return floe_world_error(w, rc, "MPI decomposition failed (out of memory or Zoltan)");
+    FLOE_TRY(floe_par_beams_in(w, P)); /* its own message, agreed by every rank */
     w->nl.gid = P->gid;
     w->nl.own_hi = P->nrep + P->nown;
     rc = floe_world_nl_build(w);
     if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
+    P->nl_rebuilds = w->nl.rebuilds;
     P->rebuilds++;
     P->traffic.rebuilds++;
     return FLOE_OK;
@@ -180,7 +183,6 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
         return floe_world_error(w, FLOE_EINVAL, "MPI decomposition: prepare the world first (floe_world_prepare)");
     floe_particles *p = &w->p;
     if (w->npd) return refuse(w, "a peridynamic body");
-    if (w->beams) return refuse(w, "beam bonds");
     if (w->cell) return refuse(w, "a periodic cell");
     if (w->nstates) return refuse(w, "a state object");
     if (w->body_force) return refuse(w, "a body-force callback");
@@ -191,7 +193,7 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
      * reads the wall's force, which each rank holds only in part) */
     for (int k = 0; k < w->nprov + w->nuprov; k++) {
         const char *nm = (k < w->nprov ? w->prov[k] : w->uprov[k - w->nprov])->klass->name;
-        if (strcmp(nm, "body_forces") && strcmp(nm, "contacts")) {
+        if (strcmp(nm, "body_forces") && strcmp(nm, "contacts") && strcmp(nm, "beam_bonds")) {
             char what[96];
             snprintf(what, sizeof what, "the force provider %s", nm);
             return refuse(w, what);
@@ -242,6 +244,7 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
             if (isfinite(p->radius[i])) { mine[i] = kb >= k0 && kb < k1; kb++; }
         }
         rc = hist_export(w, gid0, mine, 0, 0, &recs, &nrec);
+        if (!rc) rc = floe_par_beams_split(w, P, mine); /* beam bonds: those anchored here */
     }
     if (!rc) {
         int a = 0;
@@ -310,6 +313,9 @@ int floe_world_parallel_rebuild(floe_world *w) {
 int floe_par_refresh(floe_world *w, double maxd2, int have_xb) {
     floe_par *P = w->par;
     int need = floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0), any = 0;
+    /* a bond broke and the list was rebuilt in the force stage (forces.c): the ghosts were
+     * chosen for the list of the last decomposition, so decompose again */
+    if (w->beams && w->nl.rebuilds != P->nl_rebuilds) need = 1;
     MPI_Allreduce(&need, &any, 1, MPI_INT, MPI_LOR, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof need);
     if (any) return par_rebuild(w, P, NULL, 0);
@@ -534,7 +540,8 @@ static int mirror_gather(floe_world *w, floe_par *P) {
         M->dt = w->dt;
     }
     free(sb); free(wf); free(cnt); free(rb);
-    return FLOE_OK;
+    /* the beam bonds' state (broken flags, stresses: fracture_events, floe_sizes) */
+    return floe_par_beams_gather(w, P, P->rank == 0 ? P->mirror : NULL);
 }
 
 static int output_due(const floe_world *w, const floe_observer *o) {
