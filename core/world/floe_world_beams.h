@@ -16,7 +16,9 @@ int floe_world_add_beam_bonds(floe_world *w, double radius_factor, const floe_be
 /* One bond between particles i and j; returns its index or -error. */
 int floe_world_add_beam_bond(floe_world *w, int i, int j, const floe_beam_params *par);
 
-/* Bonds and broken bonds so far. */
+/* Bonds and broken bonds so far. In a world split over MPI ranks (floe_parallel.h) these and
+ * floe_world_beam_bond cover this rank's bonds only, with local indices;
+ * floe_world_parallel_beam_counts sums over the ranks. */
 int floe_world_beam_bond_count(const floe_world *w);
 int floe_world_beam_broken_count(const floe_world *w);
 
