@@ -15,7 +15,8 @@
  *   - The file continues: every rank reads it (floe_world_checkpoint_load_state), the ranks
  *     split it, run M steps; rank 0 also reads it into an unsplit world (the serial load) and
  *     runs M steps; both within 1e-10 of the side of the unsplit run of K + M steps.
- *   - A collect whose rank 0 holds no unsplit world fails on every rank (FLOE_EINVAL), none
+ *   - A collect whose rank 0 holds no unsplit world fails on every rank (FLOE_EINVAL); a file
+ *     that one rank cannot read fails the agreement (floe_parallel_agree) on every rank: none
  *     waits. */
 #include "floe.h"
 #include "floe_checkpoint.h"
@@ -170,6 +171,18 @@ int main(int argc, char **argv) {
     if (!rc) rc = steps(Wr, M);
     CHECK(rc == FLOE_OK, "restart under %d ranks stepped", size_);
     positions(Wr, xr, N);
+    /* a file that only the last rank cannot read: the load fails there alone, the agreement
+     * tells every rank (none goes on to the split and waits there) */
+    {
+        floe_world *Wb = build();
+        const int last = rank_ == size_ - 1;
+        const int own = floe_world_checkpoint_load_state(Wb, last ? "test_mpi_collect_missing.bin" : path, HASH, "collect", err,
+                                                         sizeof err);
+        const int all = floe_parallel_agree(NULL, own);
+        CHECK(last ? own == FLOE_EIO : own == FLOE_OK, "rank %d: its own load (%d: %s)", rank_, own, own ? err : "");
+        CHECK(all == FLOE_EIO, "rank %d: the agreement says the load failed somewhere (%d)", rank_, all);
+        floe_world_destroy(Wb);
+    }
     /* and serially on rank 0 */
     if (rank_ == 0) {
         floe_world *S = build();
