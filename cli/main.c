@@ -288,8 +288,10 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
         int r0 = mine;
         MPI_Bcast(&r0, 1, MPI_INT, 0, MPI_COMM_WORLD);
         if (floe_parallel_agree(NULL, mine) != FLOE_OK) {
-            if (mine != FLOE_OK && (rank == 0 || r0 == FLOE_OK))
-                fprintf(stderr, "%s: error%s: %s: cannot restart: %s\n", prog, rank ? " (another rank)" : "", label, err);
+            if (mine != FLOE_OK && rank == 0)
+                fprintf(stderr, "%s: error: %s: cannot restart: %s\n", prog, label, err);
+            else if (mine != FLOE_OK && r0 == FLOE_OK)
+                fprintf(stderr, "%s: error (rank %d): %s: cannot restart: %s\n", prog, rank, label, err);
             else if (rank == 0)
                 fprintf(stderr, "%s: error: %s: cannot restart: another rank could not read %s\n", prog, label, o->restart);
             free_pieces(&vp, 0);

@@ -25,8 +25,10 @@ files, so a restarted run must also continue them without a frame missing or rep
  only: this part does not show that they are carried, only that the convex pairs restart.)
  (d) a missing and a corrupted checkpoint under R ranks: every rank exits non-zero (each
      rank's status is printed by a wrapper), rank 0 names the reason, within a time limit
-     (no rank left waiting in a collective); a scene with a vtk output is refused with a
-     message under R > 1.
+     (no rank left waiting in a collective); under R > 1 also a file that only ranks 1..R-1
+     cannot read (an MPMD launch gives them another path): every rank exits non-zero, rank 0
+     says another rank could not read it and each failing rank why; a scene with a vtk
+     output is refused with a message.
 
 Tolerance: 1e-9 of each column's largest magnitude (energy.csv: of the largest energy),
 as tests/mpi/test_mpi_cli.py. A restart under R > 1 ranks is not bit-identical to the
@@ -228,6 +230,25 @@ with tempfile.TemporaryDirectory() as tmp:
         first = err.strip().splitlines()[0] if err.strip() else ""
         print(f"  {'ok  ' if ok else 'FAIL'} (d) {what} checkpoint: rank exits {codes}; {first}")
     if R > 1:
+        # only the other ranks cannot read the file (an MPMD launch: rank 0 is given the
+        # checkpoint, the others a missing path): all exit non-zero, rank 0 says another rank
+        # failed, the failing ranks say why
+        shutil.copytree(d("B"), d("bad_others"))
+        mk = lambda path: f'{" ".join(cmd_of(1, ["-o", d("bad_others"), "--restart", path]))}; ' \
+                          f'echo "rank-exit $OMPI_COMM_WORLD_RANK $?"'  # noqa: E731
+        cmd = [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", "1", "sh", "-c", mk(ck), ":",
+               "-np", str(R - 1), "sh", "-c", mk(d("nothing.bin"))]
+        try:
+            r = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+            codes = [int(line.split()[-1]) for line in r.stdout.splitlines() if line.startswith("rank-exit")]
+            err = r.stderr
+        except subprocess.TimeoutExpired:
+            codes, err = [], "timed out (a rank waits)"
+        ok = len(codes) == R and all(c != 0 for c in codes) and "another rank could not read" in err and \
+            err.count("cannot open") == R - 1
+        fails += not ok
+        print(f"  {'ok  ' if ok else 'FAIL'} (d) only ranks 1..{R - 1} cannot read the file: rank exits {codes}; "
+              f"{' | '.join(line for line in err.strip().splitlines() if 'error' in line)[:300]}")
         # settle.yaml has a vtk output
         inner = [floe, "run", os.path.join(here, "settle.yaml"), "-q", "-o", d("vtk"), "--checkpoint-every", EVERY]
         r = subprocess.run([mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", str(R)] + inner,
