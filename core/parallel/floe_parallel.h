@@ -123,7 +123,8 @@ typedef enum floe_comm_kind {
     FLOE_COMM_OUTPUT,  /* outputs: rank 0's word on whether the mirror is due (1 int a step, 2
                         * with a mirror), and when it is the summed ledger and the owned
                         * particles' state gathered on rank 0 (1 + 22 doubles a particle), the
-                        * walls' forces (6 doubles a wall), floe_world_parallel_gather */
+                        * walls' forces (6 doubles a wall), floe_world_parallel_gather and
+                        * floe_world_parallel_collect (checkpoints) */
     FLOE_COMM_KINDS
 } floe_comm_kind;
 
