@@ -8,6 +8,7 @@
 #include "integrator_parts.h"
 #include "error_text.h"
 #include "floe_checkpoint.h"
+#include "floe_parallel.h"
 
 #include <errno.h>
 #include <math.h>
@@ -737,8 +738,10 @@ static int check_header(const unsigned char *p, size_t len, const char *path, ui
     return FLOE_OK;
 }
 
-int floe_world_checkpoint_load(floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name,
-                               char *err, size_t errlen) {
+/* the file into w; with_obs: the observers' section too (else it is skipped: an MPI rank's
+ * share of a world whose outputs are rank 0's mirror's) */
+static int load_file(floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name, int with_obs,
+                     char *err, size_t errlen) {
     if (!w || !path) return floe_error_set(err, errlen, FLOE_EINVAL, "checkpoint: no world or no path");
     /* a world freshly built: prepared by the scene loader (its outputs began and wrote the
      * start, which the observers' restore cuts off again) or not, but no step taken */
@@ -753,10 +756,10 @@ int floe_world_checkpoint_load(floe_world *w, const char *path, uint64_t scene_h
     sec_index ix;
     rc = check_header(p, len, path, scene_hash, scene_name, &pos, why, sizeof why);
     if (!rc) rc = index_sections(p, len, pos, &ix, why, sizeof why);
-    if (!rc) rc = check_observers(w, why, sizeof why);
+    if (!rc && with_obs) rc = check_observers(w, why, sizeof why);
     if (!rc) rc = prepare_quietly(w, why, sizeof why);
     if (!rc) rc = restore_sections(w, p, &ix, why, sizeof why);
-    if (!rc) {
+    if (!rc && with_obs) {
         int at = find_section(&ix, TAG_OBSV);
         if (at < 0) rc = floe_error_set(why, sizeof why, FLOE_EINVAL, "section OBSV is missing");
         else {
@@ -767,4 +770,31 @@ int floe_world_checkpoint_load(floe_world *w, const char *path, uint64_t scene_h
     free(p);
     if (rc) return floe_error_set(err, errlen, rc, "checkpoint %s: %s", path, why);
     return FLOE_OK;
+}
+
+int floe_world_checkpoint_load(floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name,
+                               char *err, size_t errlen) {
+    return load_file(w, path, scene_hash, scene_name, 1, err, errlen);
+}
+
+int floe_world_checkpoint_load_state(floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name,
+                                     char *err, size_t errlen) {
+    return load_file(w, path, scene_hash, scene_name, 0, err, errlen);
+}
+
+/* ---- under MPI (core/parallel, docs/parallel.md): the same file, written by rank 0 ---- */
+
+int floe_world_parallel_checkpoint_save(const floe_world *w, floe_world *full, const char *path, uint64_t scene_hash,
+                                        const char *scene_name, char *err, size_t errlen) {
+    if (!w || !w->par) return floe_world_checkpoint_save(w, path, scene_hash, scene_name, err, errlen);
+    int rank = 0, size = 1;
+    floe_world_parallel_rank(w, &rank, &size);
+    int rc = floe_world_parallel_collect(w, full); /* collective; its error is every rank's */
+    if (rc) return floe_error_set(err, errlen, rc, "checkpoint: %s", floe_world_last_error(w));
+    if (rank == 0) rc = floe_world_checkpoint_save(full, path, scene_hash, scene_name, err, errlen);
+    double bad = rc != FLOE_OK;
+    floe_world_parallel_sum(w, &bad, 1);
+    if (bad > 0 && rank != 0)
+        return floe_error_set(err, errlen, FLOE_EIO, "checkpoint: rank 0 could not write %s", path);
+    return rc;
 }

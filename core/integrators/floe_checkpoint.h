@@ -54,6 +54,27 @@ int floe_world_checkpoint_save(const floe_world *w, const char *path, uint64_t s
  * FLOE_EIO, FLOE_ENOMEM. After a failed load the world must be destroyed. */
 int floe_world_checkpoint_load(floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name,
                                char *err, size_t errlen);
+/* The same without the observers' section (the file must hold it; it is checked, not read):
+ * for a world whose outputs are continued elsewhere, an MPI rank's share of a run whose
+ * outputs rank 0's mirror writes (floe_world_parallel_checkpoint_load). */
+int floe_world_checkpoint_load_state(floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name,
+                                     char *err, size_t errlen);
+
+/* Under MPI (floe_parallel.h, docs/parallel.md). The file is the serial one: written under
+ * any number of ranks, it continues under any other number, or in one process.
+ * _save: collective over a split world w: its whole state is gathered into full, an unsplit
+ * world prepared from the same scene on rank 0 (NULL on the others; rank 0's output mirror
+ * serves: its observers' state is the file's), then rank 0 writes full's checkpoint; every
+ * rank returns the outcome (another rank's message: "rank 0 could not write"). An unsplit
+ * world: floe_world_checkpoint_save(w).
+ * A restart under MPI (cli/main.c): every rank reads the file into its world, freshly built
+ * from the scene without outputs, with floe_world_checkpoint_load_state; the ranks agree on
+ * the outcome (floe_parallel_agree: a rank that failed alone leaves none waiting); then the
+ * world is split as a fresh run's is (floe_world_parallel_init), the contact history carried
+ * to the pairs' new owners. Rank 0's output mirror, if any, is loaded with
+ * floe_world_checkpoint_load (its observers continue their files). */
+int floe_world_parallel_checkpoint_save(const floe_world *w, floe_world *full, const char *path, uint64_t scene_hash,
+                                        const char *scene_name, char *err, size_t errlen);
 
 /* The same state in memory, without the observers (for a caller that runs a world
  * repeatedly from one state, e.g. a representative volume): the bytes needed (0 when the

@@ -58,6 +58,25 @@ int floe_world_parallel_finish(floe_world *w);
  * collective. */
 int floe_world_parallel_add_output(floe_world *w, floe_observer *o);
 
+/* The whole state of a split world gathered into full, an unsplit world on rank 0 (the other
+ * ranks pass NULL), so that full can be written as a serial checkpoint
+ * (floe_world_parallel_checkpoint_save, floe_checkpoint.h): full must be prepared from the same
+ * scene (rank 0's mirror of floe_world_parallel_outputs serves); it receives every particle's
+ * state (x v q w L f t by global id, the walls' forces summed), the neighbour list of the whole
+ * world (the union of the ranks' lists, each pair once, in the serial list's order, with its
+ * contact history, touching flags and warm starts, and the positions at the last build), the
+ * clock, the energy ledger summed over the ranks (the watchdog's terms with it) and the step
+ * and detection statistics. Its observers are not called. Counted as FLOE_COMM_OUTPUT. An
+ * error (a missing or foreign full world, out of memory) is returned on every rank. A serial
+ * world: nothing. Collective. */
+int floe_world_parallel_collect(const floe_world *w, floe_world *full);
+
+/* the largest of rc over the ranks of comm (a pointer to an MPI_Comm; NULL: MPI_COMM_WORLD),
+ * so that every rank takes the same branch after a step that may fail on some ranks only (a
+ * file read by every rank); rc itself when MPI is not running or the build has none.
+ * Collective. */
+int floe_parallel_agree(const void *comm, int rc);
+
 /* rank and size of the world's communicator (0 and 1 for a serial world); not collective */
 int floe_world_parallel_rank(const floe_world *w, int *rank, int *size);
 
@@ -113,7 +132,8 @@ typedef enum floe_comm_kind {
     FLOE_COMM_OUTPUT,  /* outputs: rank 0's word on whether the mirror is due (1 int a step, 2
                         * with a mirror), and when it is the summed ledger and the owned
                         * particles' state gathered on rank 0 (1 + 22 doubles a particle), the
-                        * walls' forces (6 doubles a wall), floe_world_parallel_gather */
+                        * walls' forces (6 doubles a wall), floe_world_parallel_gather and
+                        * floe_world_parallel_collect (checkpoints) */
     FLOE_COMM_KINDS
 } floe_comm_kind;
 

@@ -1,6 +1,7 @@
 /* par_world.c - a world split over MPI ranks (floe_parallel.h, docs/parallel.md): the split,
  * the rebuild sequence (RCB, migration, ghosts, contact history by global ids, the
  * neighbour list), the step's hooks (par_hooks.h) and the reductions. */
+#include "alloc_util.h"
 #include "floe_parallel.h"
 #include "floe_observer_base.h"
 #include "par_hooks.h"
@@ -673,9 +674,224 @@ int floe_world_parallel_finish(floe_world *w) {
     return orc ? orc : all;
 }
 
+/* ---- the whole state on rank 0 (checkpoints: floe_world_parallel_collect) ---- */
+
+/* entries sorted by (gid_i, gid_j, piece pair): the serial list's order (its rows by i,
+ * each row by (j, piece pair)); a wall pair is ordered by index as any other */
+static int pair_cmp(const void *a, const void *b) {
+    const double *x = a, *y = b;
+    for (int k = 0; k < 3; k++)
+        if (x[k] != y[k]) return x[k] < y[k] ? -1 : 1;
+    return 0;
+}
+
+/* a local index (of this rank's world) as a global id, -1 kept */
+static int gid_or(const floe_par *P, int i) { return i >= 0 && i < P->nrep + P->nown + P->nghost ? (int)P->gid[i] : -1; }
+
+int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
+    floe_par *P = w->par;
+    if (!P) return FLOE_OK;
+    const floe_neighbor_list *nl = &w->nl;
+    const int lo = P->nrep, no = P->nown, use_warm = nl->use_warm && nl->warm != NULL;
+    const int mp = 1 + FLOE_PAR_FWD + 4;                                 /* gid, state, x_build, r_build */
+    const int me = 4 + FLOE_MAX_HISTORY + (use_warm ? FLOE_DETECT_WARM : 0); /* gid_i gid_j sub touching hist warm */
+    /* the full world must be an unsplit, prepared copy of this world's scene (rank 0) */
+    int bad = 0;
+    if (P->rank == 0) {
+        if (!full || full->par || !full->prepared) bad = 1;
+        else if (full->p.n != P->ntotal || (full->nl.use_warm != 0) != (nl->use_warm != 0)) bad = 2;
+    }
+    double *sp = malloc((size_t)(no ? no : 1) * mp * sizeof *sp);
+    double *se = malloc((size_t)(nl->npairs ? nl->npairs : 1) * me * sizeof *se);
+    double *wf = malloc((size_t)(P->nrep ? P->nrep : 1) * 6 * sizeof *wf);
+    int *cnt = P->rank == 0 ? malloc((size_t)4 * P->size * sizeof *cnt) : NULL;
+    if (!bad && (!sp || !se || !wf || (P->rank == 0 && !cnt))) bad = 3;
+    int any;
+    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof bad);
+    if (any) {
+        free(sp); free(se); free(wf); free(cnt);
+        return any == 3 ? floe_world_error((floe_world *)w, FLOE_ENOMEM, "MPI checkpoint: out of memory")
+               : any == 1 ? floe_world_error((floe_world *)w, FLOE_EINVAL, "MPI checkpoint: rank 0 needs an unsplit, prepared "
+                                            "world of the same scene to collect the state into")
+                          : floe_world_error((floe_world *)w, FLOE_EINVAL, "MPI checkpoint: rank 0's unsplit world is not "
+                                            "this world's scene (%d particles, %d here before the split)",
+                                            full ? full->p.n : -1, P->ntotal);
+    }
+    const floe_particles *p = &w->p;
+    for (int k = 0; k < no; k++) {
+        const int i = lo + k;
+        double *r = sp + (size_t)k * mp;
+        r[0] = (double)P->gid[i];
+        floe_par_pack_state(p, i, r + 1);
+        const int built = i < nl->n_build;
+        for (int a = 0; a < 3; a++) r[1 + FLOE_PAR_FWD + a] = built ? nl->x_build[3 * i + a] : p->x[3 * i + a];
+        r[1 + FLOE_PAR_FWD + 3] = built ? nl->r_build[i] : p->radius[i];
+    }
+    /* every entry of this rank's list: each pair is listed on exactly one rank */
+    for (int k = 0; k < nl->npairs; k++) {
+        double *e = se + (size_t)k * me;
+        e[0] = (double)P->gid[nl->pi[k]];
+        e[1] = (double)P->gid[nl->pj[k]];
+        e[2] = nl->sub[k];
+        e[3] = nl->touching[k];
+        memcpy(e + 4, nl->hist + (size_t)k * FLOE_MAX_HISTORY, FLOE_MAX_HISTORY * sizeof *e);
+        if (use_warm) memcpy(e + 4 + FLOE_MAX_HISTORY, nl->warm + (size_t)k * FLOE_DETECT_WARM, FLOE_DETECT_WARM * sizeof *e);
+    }
+    for (int i = 0; i < P->nrep; i++) {
+        memcpy(wf + 6 * i, p->f + 3 * i, 3 * sizeof *wf);
+        memcpy(wf + 6 * i + 3, p->t + 3 * i, 3 * sizeof *wf);
+    }
+    if (P->nrep) MPI_Reduce(P->rank == 0 ? MPI_IN_PLACE : wf, wf, 6 * P->nrep, MPI_DOUBLE, MPI_SUM, 0, P->comm);
+    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, 6LL * P->nrep * sizeof *wf);
+    /* the ledger and the watchdog's per-rank terms: sums (the pair dissipation's minimum, the
+     * largest depth rate); the detection counters summed */
+    double sv[11], ss[11], mn[2], mx[2];
+    energy_pack(&w->energy, sv);
+    sv[7] = w->elastic_contact; sv[8] = w->elastic_pd; sv[9] = w->wd_shadow; sv[10] = w->wd_shadow0;
+    MPI_Reduce(sv, ss, 11, MPI_DOUBLE, MPI_SUM, 0, P->comm);
+    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof sv);
+    mn[0] = w->wd_pair_min; mn[1] = -w->eta_depth;
+    MPI_Reduce(mn, mx, 2, MPI_DOUBLE, MPI_MIN, 0, P->comm);
+    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof mn);
+    long dl[6 + FLOE_DETECT_HIST], ds[6 + FLOE_DETECT_HIST];
+    const floe_detect_state *d = &w->det;
+    dl[0] = d->calls; dl[1] = d->iterations; dl[2] = d->admm_calls; dl[3] = d->lp_calls; dl[4] = d->separated;
+    dl[5] = d->nonconverged;
+    memcpy(dl + 6, d->hist, sizeof d->hist);
+    MPI_Reduce(dl, ds, 6 + FLOE_DETECT_HIST, MPI_LONG, MPI_SUM, 0, P->comm);
+    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof dl);
+    /* the particles and the entries to rank 0 */
+    int mine[2] = {no * mp, nl->npairs * me}, tot[2] = {0, 0};
+    double *rb[2] = {NULL, NULL};
+    const double *sb[2] = {sp, se};
+    int rc = FLOE_OK;
+    for (int s = 0; s < 2; s++) {
+        MPI_Gather(&mine[s], 1, MPI_INT, cnt, 1, MPI_INT, 0, P->comm);
+        floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof mine[s]);
+        int nomem = 0;
+        if (P->rank == 0) {
+            long long t = 0;
+            for (int r = 0; r < P->size; r++) { cnt[P->size + r] = (int)t; t += cnt[r]; }
+            if (t > 0x7fffffff) nomem = 1; /* MPI counts are ints */
+            tot[s] = (int)t;
+            rb[s] = nomem ? NULL : malloc((size_t)(tot[s] ? tot[s] : 1) * sizeof *rb[s]);
+            nomem = !rb[s];
+        }
+        MPI_Bcast(&nomem, 1, MPI_INT, 0, P->comm);
+        floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof nomem);
+        if (nomem) { rc = FLOE_ENOMEM; break; }
+        MPI_Gatherv(sb[s], mine[s], MPI_DOUBLE, rb[s], cnt, cnt ? cnt + P->size : NULL, MPI_DOUBLE, 0, P->comm);
+        floe_par_count_to_root(P, FLOE_COMM_OUTPUT, (long long)mine[s] * sizeof(double));
+    }
+    free(sp); free(se);
+    if (!rc && P->rank == 0) {
+        floe_particles *q = &full->p;
+        floe_neighbor_list *fl = &full->nl;
+        const int N = q->n, ne = tot[1] / me;
+        /* the list of the whole world, in the serial order */
+        qsort(rb[1], (size_t)ne, (size_t)me * sizeof(double), pair_cmp);
+        int nwl = nl->nwalls;
+        int r2 = floe_resize((void **)&fl->pi, (size_t)ne * sizeof(int), 1);
+        if (!r2) r2 = floe_resize((void **)&fl->pj, (size_t)ne * sizeof(int), 1);
+        if (!r2) r2 = floe_resize((void **)&fl->sub, (size_t)ne * sizeof(int), 1);
+        if (!r2) r2 = floe_resize((void **)&fl->hist, (size_t)ne * FLOE_MAX_HISTORY * sizeof(double), 1);
+        if (!r2) r2 = floe_resize((void **)&fl->touching, (size_t)ne, 1);
+        if (!r2 && fl->use_warm) r2 = floe_resize((void **)&fl->warm, (size_t)ne * FLOE_DETECT_WARM * sizeof(double), 1);
+        if (!r2) r2 = floe_resize((void **)&fl->x_build, 3 * (size_t)N * sizeof(double), 1);
+        if (!r2) r2 = floe_resize((void **)&fl->r_build, (size_t)N * sizeof(double), 1);
+        if (!r2) r2 = floe_resize((void **)&fl->walls, (size_t)nwl * sizeof(int), 1);
+        if (!r2) r2 = floe_resize((void **)&fl->q_walls, 4 * (size_t)nwl * sizeof(double), 1);
+        if (r2) rc = FLOE_ENOMEM;
+        else {
+            for (int k = 0; k < ne; k++) {
+                const double *e = rb[1] + (size_t)k * me;
+                fl->pi[k] = (int)e[0];
+                fl->pj[k] = (int)e[1];
+                fl->sub[k] = (int)e[2];
+                fl->touching[k] = (unsigned char)e[3];
+                memcpy(fl->hist + (size_t)k * FLOE_MAX_HISTORY, e + 4, FLOE_MAX_HISTORY * sizeof *e);
+                if (fl->use_warm) {
+                    if (use_warm) memcpy(fl->warm + (size_t)k * FLOE_DETECT_WARM, e + 4 + FLOE_MAX_HISTORY, FLOE_DETECT_WARM * sizeof *e);
+                    else for (int a = 0; a < FLOE_DETECT_WARM; a++) fl->warm[(size_t)k * FLOE_DETECT_WARM + a] = NAN;
+                }
+            }
+            fl->npairs = fl->cap = ne;
+            fl->gen++;
+            free(fl->img);
+            fl->img = NULL;
+            fl->n_build = N;
+            fl->skin = nl->skin;
+            fl->rebuilds = nl->rebuilds;
+            /* the particles: the owners' state and build positions by global id */
+            for (int k = 0; k < tot[0] / mp; k++) {
+                const double *r = rb[0] + (size_t)k * mp;
+                const long long g = (long long)r[0];
+                if (g < 0 || g >= N) continue;
+                floe_par_unpack_state(q, (int)g, r + 1);
+                memcpy(fl->x_build + 3 * g, r + 1 + FLOE_PAR_FWD, 3 * sizeof(double));
+                fl->r_build[g] = r[1 + FLOE_PAR_FWD + 3];
+            }
+            /* the walls: rank 0's (the same on every rank), their forces summed */
+            for (int i = 0; i < P->nrep; i++) {
+                const long long g = P->gid[i];
+                double st[FLOE_PAR_FWD];
+                floe_par_pack_state(p, i, st);
+                floe_par_unpack_state(q, (int)g, st);
+                memcpy(q->f + 3 * g, wf + 6 * i, 3 * sizeof(double));
+                memcpy(q->t + 3 * g, wf + 6 * i + 3, 3 * sizeof(double));
+                const int built = i < nl->n_build;
+                for (int a = 0; a < 3; a++) fl->x_build[3 * g + a] = built ? nl->x_build[3 * i + a] : p->x[3 * i + a];
+                fl->r_build[g] = built ? nl->r_build[i] : p->radius[i];
+            }
+            fl->nwalls = nwl;
+            for (int a = 0; a < nwl; a++) fl->walls[a] = (int)P->gid[nl->walls[a]];
+            memcpy(fl->q_walls, nl->q_walls, 4 * (size_t)nwl * sizeof(double));
+            /* the clock and the integrator's memory: the same on every rank */
+            full->time = w->time; full->dt = w->dt; full->t0 = w->t0; full->dt_crit = w->dt_crit;
+            full->lf_dt_prev = w->lf_dt_prev; full->dt_next = w->dt_next; full->dt_lo = w->dt_lo; full->dt_hi = w->dt_hi;
+            full->dt_cap = w->dt_cap; full->step = w->step; full->step0 = w->step0; full->pd_cycle = w->pd_cycle;
+            /* the ledger */
+            energy_unpack(&full->energy, ss);
+            full->elastic_contact = ss[7]; full->elastic_pd = ss[8]; full->wd_shadow = ss[9]; full->wd_shadow0 = ss[10];
+            full->wd_pair_min = mx[0]; full->eta_depth = -mx[1];
+            full->wd_worst = w->wd_worst; full->wd_scale = w->wd_scale; full->wd_created = w->wd_created;
+            full->wd_gscale = w->wd_gscale; full->wd_step = w->wd_step;
+            full->wd_pair_i = gid_or(P, w->wd_pair_i); full->wd_pair_j = gid_or(P, w->wd_pair_j);
+            full->wd_worst_i = gid_or(P, w->wd_worst_i); full->wd_worst_j = gid_or(P, w->wd_worst_j);
+            memcpy(full->wd_msg, w->wd_msg, sizeof full->wd_msg);
+            /* the statistics: the steps are every rank's; the detector's counts summed */
+            full->st = w->st;
+            floe_detect_state *fd = &full->det;
+            fd->calls = ds[0]; fd->iterations = ds[1]; fd->admm_calls = ds[2]; fd->lp_calls = ds[3]; fd->separated = ds[4];
+            fd->nonconverged = ds[5];
+            memcpy(fd->hist, ds + 6, sizeof fd->hist);
+            fd->cur_i = gid_or(P, d->cur_i); fd->cur_j = gid_or(P, d->cur_j);
+            fd->first_bad_i = gid_or(P, d->first_bad_i); fd->first_bad_j = gid_or(P, d->first_bad_j);
+            fd->first_bad_step = d->first_bad_step;
+            full->ncontacts = 0;
+            full->contacts_valid = 0;
+        }
+    }
+    free(rb[0]); free(rb[1]); free(wf); free(cnt);
+    MPI_Bcast(&rc, 1, MPI_INT, 0, P->comm);
+    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof rc);
+    return rc ? floe_world_error((floe_world *)w, rc, "MPI checkpoint: out of memory on rank 0") : FLOE_OK;
+}
+
+int floe_parallel_agree(const void *comm, int rc) {
+    int inited = 0, all = rc;
+    MPI_Initialized(&inited);
+    if (!inited) return rc;
+    MPI_Allreduce(&rc, &all, 1, MPI_INT, MPI_MAX, comm ? *(const MPI_Comm *)comm : MPI_COMM_WORLD);
+    return all;
+}
+
 #else /* serial build: a world is never split */
 
 int floe_parallel_available(void) { return 0; }
+int floe_world_parallel_collect(const floe_world *w, floe_world *full) { (void)w; (void)full; return FLOE_OK; }
+int floe_parallel_agree(const void *comm, int rc) { (void)comm; return rc; }
 int floe_world_parallel_init(floe_world *w, const void *comm) {
     (void)comm;
     return floe_world_error(w, FLOE_ENOTSUP, "MPI decomposition: floe was built without MPI (configure with "

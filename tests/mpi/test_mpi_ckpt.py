@@ -1,0 +1,263 @@
+#!/usr/bin/env python3
+"""test_mpi_ckpt.py - checkpoints and restarts of `floe run` under mpirun (docs/parallel.md).
+
+Registered for R = 1, 2 and 4 ranks (test_mpi_ckpt_np{1,2,4}); R = 1 is the serial program
+(`mpirun -np 1 floe` runs in one process). Scene: tests/mpi/ckpt.yaml (144 spheres packed
+overlapping in a box, Hertz-Mindlin with friction, 1,000 steps; a checkpoint at step 500,
+t = 1.5 ms, by --checkpoint-every 0.0015). Outputs compared: particles.csv (every 250 steps:
+positions, velocities, angular velocities, forces) and energy.csv (every 50 steps), the whole
+files, so a restarted run must also continue them without a frame missing or repeated.
+
+ (a) R ranks uninterrupted (A) against R ranks that write the checkpoint (B: writing it must
+     not change the run: equal to A to the last digit) and a restart from it under R ranks.
+ (b) the checkpoint written under R ranks restarted serially and under R' ranks (R' = 2 for
+     R = 1 and 4, 4 for R = 2); a serial checkpoint restarted under R ranks.
+     Every run is also compared with the serial uninterrupted run.
+ (c) the contact history survives: the same checkpoint with the tangential springs (the
+     history of every neighbour-list entry, in NLST and in the contacts provider's PROV
+     section; the file's checksum recomputed) zeroed, restarted under R ranks, must differ
+     from A by more than the tolerance (measured: about 1e-3 of the scale on positions):
+     the check can fail, and would if a restart dropped the history.
+ Convex shapes (tests/mpi/ckpt_convex.yaml: 20 boxes and 20 ellipsoids under a tilted 100 g,
+ 2,000 steps, a checkpoint at step 1,000): the ADMM/LP warm starts are in the file too; the
+ restart under R ranks and the serial restart of the R-rank checkpoint against the serial
+ run, within the same tolerance. (Making the warm starts cold changes this scene by 1e-14
+ only: this part does not show that they are carried, only that the convex pairs restart.)
+ (d) a missing and a corrupted checkpoint under R ranks: every rank exits non-zero (each
+     rank's status is printed by a wrapper), rank 0 names the reason, within a time limit
+     (no rank left waiting in a collective); under R > 1 also a file that only ranks 1..R-1
+     cannot read (an MPMD launch gives them another path): every rank exits non-zero, rank 0
+     says another rank could not read it and each failing rank why; a scene with a vtk
+     output is refused with a message.
+
+Tolerance: 1e-9 of each column's largest magnitude (energy.csv: of the largest energy),
+as tests/mpi/test_mpi_cli.py. A restart under R > 1 ranks is not bit-identical to the
+uninterrupted run: the restarted world is decomposed afresh (RCB of the positions at the
+checkpoint, the neighbour list built again), so the owners of the particles, hence the order
+in which each particle's contact forces are summed (its own rows, then the ghosts' parts sent
+back), differ from the uninterrupted run's at round-off; the serial and split runs differ the
+same way (test_mpi_cli: 1e-12). With R = 1 the restart is the serial one: bit for bit
+(required here: difference 0).
+
+Usage: test_mpi_ckpt.py FLOE MPIEXEC TESTS_MPI_DIR R
+"""
+import os
+import shutil
+import struct
+import subprocess
+import sys
+import tempfile
+
+floe, mpiexec, here, R = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+SCENE = os.path.join(here, "ckpt.yaml")
+TOL = 1e-9
+MAX_HISTORY = 10  # FLOE_MAX_HISTORY (contact/laws/floe_contact.h)
+EVERY = "0.0015"
+R2 = {1: 2, 2: 4, 4: 2}.get(R, 2)
+fails = 0
+
+
+def cmd_of(np_, args, scene=None):
+    cmd = [floe, "run", scene or SCENE, "-q"] + args
+    if np_ > 1:
+        cmd = [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", str(np_)] + cmd
+    return cmd
+
+
+def run(np_, args, expect_ok=True, timeout=600, scene=None):
+    cmd = cmd_of(np_, args, scene)
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    if expect_ok and r.returncode != 0:
+        print(r.stdout, r.stderr)
+        sys.exit(f"FAIL: {' '.join(cmd)} exited {r.returncode}")
+    return r
+
+
+def csv_rows(path):
+    with open(path) as f:
+        head = f.readline()
+        return head, [[float(v) for v in line.split(",")] for line in f if line.strip()]
+
+
+def diff_csv(a, b, name):
+    """largest difference over the columns, relative to each column's scale (None: the files
+    do not have the same rows)"""
+    ha, ra = csv_rows(a)
+    hb, rb = csv_rows(b)
+    if ha != hb or len(ra) != len(rb):
+        print(f"    {name}: header or row count differs ({len(ra)} vs {len(rb)})")
+        return None
+    cols = ha.strip().split(",")
+    joule = [c for c, h in enumerate(cols) if "[J]" in h]
+    worst = 0.0
+    for c in range(len(ra[0])):
+        if name == "energy.csv" and c not in joule and c != 0:
+            continue  # the balance error: a ratio of round-off
+        scale = max(max(abs(r[c]) for r in ra), 1e-300)
+        if c in joule:
+            scale = max(max(abs(r[j]) for r in ra for j in joule), 1e-300)
+        worst = max(worst, max(abs(x[c] - y[c]) for x, y in zip(ra, rb)) / scale)
+    return worst
+
+
+def compare(ref, out, what, tol=TOL, exact=False):
+    global fails
+    d = None
+    for name in ("particles.csv", "energy.csv"):
+        d = diff_csv(os.path.join(ref, name), os.path.join(out, name), name)
+        ok = d is not None and (d == 0 if exact else d <= tol)
+        fails += not ok
+        dd = "rows differ" if d is None else f"{d:.2e}"
+        print(f"  {'ok  ' if ok else 'FAIL'} {what}: {name} largest difference {dd} of the scale "
+              f"(tol {'0' if exact else f'{tol:g}'})")
+    return d
+
+
+def restart(np_, src_dir, ckpt, dst_dir, scene=None):
+    """continue in a copy of the directory of the run that wrote the checkpoint"""
+    shutil.copytree(src_dir, dst_dir)
+    run(np_, ["-o", dst_dir, "--restart", ckpt], scene=scene)
+
+
+def zero_history(src, dst):
+    """the checkpoint with every entry's history zeroed (NLST and the contacts provider's
+    PROV state), its closing FNV-1a hash recomputed; returns the number of entries"""
+    b = bytearray(open(src, "rb").read())
+    pos = 8 + 8
+    n = struct.unpack_from("<I", b, pos)[0]
+    pos += 4 + n + 8
+    n = struct.unpack_from("<I", b, pos)[0]
+    pos += 4 + n
+    zeroed = 0
+    while pos < len(b):
+        tag = bytes(b[pos:pos + 4]).decode()
+        ln = struct.unpack_from("<Q", b, pos + 4)[0]
+        body = pos + 12
+        if tag == "NLST":
+            npairs = struct.unpack_from("<i", b, body)[0]
+            h = body + 16 + 8 + 8 + 3 * 4 * npairs
+            b[h:h + 8 * MAX_HISTORY * npairs] = bytes(8 * MAX_HISTORY * npairs)
+            zeroed = npairs
+        elif tag == "PROV":
+            q = body
+            nprov = struct.unpack_from("<i", b, q)[0]
+            q += 4
+            for _ in range(nprov):
+                n = struct.unpack_from("<I", b, q)[0]
+                name = bytes(b[q + 4:q + 4 + n]).decode()
+                q += 4 + n
+                m = struct.unpack_from("<Q", b, q)[0]
+                q += 8
+                if name == "contacts":
+                    b[q:q + 8 * MAX_HISTORY * zeroed] = bytes(8 * MAX_HISTORY * zeroed)
+                q += m
+        elif tag == "END ":
+            break
+        pos = body + ln
+    h = 0xcbf29ce484222325
+    for c in b[:len(b) - 8]:
+        h = ((h ^ c) * 0x100000001b3) & 0xFFFFFFFFFFFFFFFF
+    struct.pack_into("<Q", b, len(b) - 8, h)
+    open(dst, "wb").write(bytes(b))
+    return zeroed
+
+
+def rank_exits(np_, args, timeout=120):
+    """every rank's exit status (a shell wrapper prints it), rank 0's stderr"""
+    inner = " ".join(cmd_of(1, args))
+    wrap = f'{inner}; echo "rank-exit $OMPI_COMM_WORLD_RANK $?"'
+    cmd = ["sh", "-c", wrap] if np_ == 1 else \
+        [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", str(np_), "sh", "-c", wrap]
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    codes = [int(line.split()[-1]) for line in r.stdout.splitlines() if line.startswith("rank-exit")]
+    return codes, r.stderr
+
+
+with tempfile.TemporaryDirectory() as tmp:
+    d = lambda name: os.path.join(tmp, name)  # noqa: E731
+    print(f"R = {R} ranks (R' = {R2})")
+    run(1, ["-o", d("S")])                                            # serial, uninterrupted
+    run(R, ["-o", d("A")])                                            # R ranks, uninterrupted
+    run(R, ["-o", d("B"), "--checkpoint-every", EVERY])               # R ranks, writes the checkpoint
+    ck = os.path.join(d("B"), "checkpoint.bin")
+    if not os.path.exists(ck):
+        sys.exit("FAIL: no checkpoint written")
+    compare(d("A"), d("B"), "(a) writing the checkpoint leaves the run", exact=True)
+    # (a) the restart under R ranks
+    restart(R, d("B"), os.path.join(d("C"), "checkpoint.bin"), d("C"))
+    compare(d("A"), d("C"), f"(a) restart under {R} vs {R} uninterrupted", exact=(R == 1))
+    compare(d("S"), d("C"), f"(a) restart under {R} vs serial uninterrupted")
+    # (b) the same checkpoint restarted serially and under R' ranks
+    restart(1, d("B"), os.path.join(d("D"), "checkpoint.bin"), d("D"))
+    compare(d("A"), d("D"), f"(b) {R}-rank checkpoint restarted serially vs {R} uninterrupted")
+    compare(d("S"), d("D"), f"(b) {R}-rank checkpoint restarted serially vs serial", exact=(R == 1))
+    restart(R2, d("B"), os.path.join(d("E"), "checkpoint.bin"), d("E"))
+    compare(d("S"), d("E"), f"(b) {R}-rank checkpoint restarted under {R2} vs serial")
+    # (b) a serial checkpoint restarted under R ranks
+    run(1, ["-o", d("F"), "--checkpoint-every", EVERY])
+    restart(R, d("F"), os.path.join(d("G"), "checkpoint.bin"), d("G"))
+    compare(d("S"), d("G"), f"(b) serial checkpoint restarted under {R} vs serial", exact=(R == 1))
+    # (c) negative control: the history zeroed must be seen
+    shutil.copytree(d("B"), d("H"))
+    npairs = zero_history(ck, os.path.join(d("H"), "checkpoint.bin"))
+    run(R, ["-o", d("H"), "--restart", os.path.join(d("H"), "checkpoint.bin")])
+    dz = diff_csv(os.path.join(d("A"), "particles.csv"), os.path.join(d("H"), "particles.csv"), "particles.csv")
+    ok = dz is not None and dz > 100 * TOL
+    fails += not ok
+    print(f"  {'ok  ' if ok else 'FAIL'} (c) history of {npairs} entries zeroed: particles.csv differs by "
+          f"{dz if dz is None else f'{dz:.2e}'} of the scale (must be > 100 x tol)")
+    # convex shapes (boxes, ellipsoids): the detector's warm starts travel in the file too
+    cv = os.path.join(here, "ckpt_convex.yaml")
+    run(1, ["-o", d("cS")], scene=cv)
+    run(R, ["-o", d("cA"), "--checkpoint-every", "0.002"], scene=cv)
+    restart(R, d("cA"), os.path.join(d("cB"), "checkpoint.bin"), d("cB"), scene=cv)
+    compare(d("cS"), d("cB"), f"(a) convex shapes: restart under {R} vs serial", exact=(R == 1))
+    restart(1, d("cA"), os.path.join(d("cC"), "checkpoint.bin"), d("cC"), scene=cv)
+    compare(d("cS"), d("cC"), f"(b) convex shapes: {R}-rank checkpoint restarted serially vs serial", exact=(R == 1))
+    # (d) bad input: every rank exits non-zero, rank 0 says why, nobody hangs
+    bad = d("bad.bin")
+    blob = bytearray(open(ck, "rb").read())
+    blob[len(blob) // 2] ^= 0xFF
+    open(bad, "wb").write(bytes(blob))
+    for what, path, needle in (("missing", d("nothing.bin"), "cannot open"), ("corrupted", bad, "corrupted")):
+        shutil.copytree(d("B"), d("bad_" + what))
+        try:
+            codes, err = rank_exits(R, ["-o", d("bad_" + what), "--restart", path])
+        except subprocess.TimeoutExpired:
+            codes, err = [], "timed out (a rank waits)"
+        ok = len(codes) == R and all(c != 0 for c in codes) and "cannot restart" in err and needle in err
+        fails += not ok
+        first = err.strip().splitlines()[0] if err.strip() else ""
+        print(f"  {'ok  ' if ok else 'FAIL'} (d) {what} checkpoint: rank exits {codes}; {first}")
+    if R > 1:
+        # only the other ranks cannot read the file (an MPMD launch: rank 0 is given the
+        # checkpoint, the others a missing path): all exit non-zero, rank 0 says another rank
+        # failed, the failing ranks say why
+        shutil.copytree(d("B"), d("bad_others"))
+        mk = lambda path: f'{" ".join(cmd_of(1, ["-o", d("bad_others"), "--restart", path]))}; ' \
+                          f'echo "rank-exit $OMPI_COMM_WORLD_RANK $?"'  # noqa: E731
+        cmd = [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", "1", "sh", "-c", mk(ck), ":",
+               "-np", str(R - 1), "sh", "-c", mk(d("nothing.bin"))]
+        try:
+            r = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+            codes = [int(line.split()[-1]) for line in r.stdout.splitlines() if line.startswith("rank-exit")]
+            err = r.stderr
+        except subprocess.TimeoutExpired:
+            codes, err = [], "timed out (a rank waits)"
+        ok = len(codes) == R and all(c != 0 for c in codes) and "another rank could not read" in err and \
+            err.count("cannot open") == R - 1
+        fails += not ok
+        print(f"  {'ok  ' if ok else 'FAIL'} (d) only ranks 1..{R - 1} cannot read the file: rank exits {codes}; "
+              f"{' | '.join(line for line in err.strip().splitlines() if 'error' in line)[:300]}")
+        # settle.yaml has a vtk output
+        inner = [floe, "run", os.path.join(here, "settle.yaml"), "-q", "-o", d("vtk"), "--checkpoint-every", EVERY]
+        r = subprocess.run([mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", str(R)] + inner,
+                           capture_output=True, text=True, timeout=120)
+        ok = r.returncode != 0 and "vtk" in r.stderr and r.stderr.count("error") == 1
+        fails += not ok
+        print(f"  {'ok  ' if ok else 'FAIL'} (d) a vtk output with checkpoints under {R} ranks refused: "
+              f"{r.stderr.strip()[:160]}")
+
+if fails:
+    sys.exit(f"FAIL: {fails} check(s)")
+print("ok")
