@@ -876,7 +876,16 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
     free(rb[0]); free(rb[1]); free(wf); free(cnt);
     MPI_Bcast(&rc, 1, MPI_INT, 0, P->comm);
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof rc);
-    return rc ? floe_world_error((floe_world *)w, rc, "MPI checkpoint: out of memory on rank 0") : FLOE_OK;
+    if (rc) return floe_world_error((floe_world *)w, rc, "MPI checkpoint: out of memory on rank 0");
+    /* the beam bonds' state (broken flags, stresses), held by the ranks that anchor them */
+    if (!w->beams) return FLOE_OK;
+    rc = floe_par_beams_gather((floe_world *)w, P, P->rank == 0 ? full : NULL);
+    int all = rc; /* a mismatch is found on rank 0 only: every rank's error */
+    MPI_Allreduce(&rc, &all, 1, MPI_INT, MPI_MAX, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof rc);
+    if (rc) return rc; /* its message is set */
+    return all ? floe_world_error((floe_world *)w, all, "MPI checkpoint: gathering the beam bonds failed on rank 0")
+               : FLOE_OK;
 }
 
 int floe_parallel_agree(const void *comm, int rc) {
