@@ -1019,9 +1019,12 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         ps->part_blocks = 0; /* own[] below */
     }
     /* parts of about nb / (4 nt) blocks (a few per thread: the dynamic schedule balances
-     * them); a particle is owned by a part when every entry it is i or j of lies in it: the
-     * thread of that part is then its only writer, and adds its forces in list order */
-    const int G = nb > 4 * nt ? (nb + 4 * nt - 1) / (4 * nt) : 1;
+     * them), at most 64 blocks (32,768 entries: a large list whose work is uneven, as a
+     * projectile's impact region in bench/pd-impact, stays balanced); a particle is owned
+     * by a part when every entry it is i or j of lies in it: the thread of that part is then
+     * its only writer, and adds its forces in list order */
+    int G = nb > 4 * nt ? (nb + 4 * nt - 1) / (4 * nt) : 1;
+    if (G > 64) G = 64;
     if (ps->part_blocks != G) {
         unsigned char *own = realloc(ps->own, (size_t)(n ? n : 1));
         if (!own) return FLOE_ENOMEM;
