@@ -4,12 +4,13 @@
 # only, one thread. Prints each run and the medians of particle-steps/s, ns per candidate
 # pair evaluation and ns per contact, and the polyhedra/spheres ratios.
 #   REPS=3 STEPS=2000 N=5000 bench/polyhedra-settle/run.sh
+#   REPS=1 STEPS=2000 WARMUP=40000 bench/polyhedra-settle/run.sh    # the settled bed (~30 min)
 # The library is built without CGAL/assimp (not needed: the grains are built from planes),
 # in its own build folder (BUILD, default build-bench-poly), Release -O3 -march=native.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
-REPS=${REPS:-3}; STEPS=${STEPS:-2000}; N=${N:-5000}
+REPS=${REPS:-3}; STEPS=${STEPS:-2000}; N=${N:-5000}; WARMUP=${WARMUP:-0}
 build=${BUILD:-$root/build-bench-poly}
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DFLOE_BUILD_TESTS=OFF -DFLOE_BUILD_EXAMPLES=OFF \
   -DFLOE_WITH_CGAL=OFF -DFLOE_WITH_ASSIMP=OFF >/dev/null
@@ -17,7 +18,7 @@ cmake --build "$build" -j"$(nproc)" --target bench_polyhedra_settle >/dev/null
 export OMP_NUM_THREADS=1
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 for r in $(seq "$REPS"); do
-  "$build/bench/bench_polyhedra_settle" "$STEPS" "$N" | tee -a "$work/all.txt"
+  "$build/bench/bench_polyhedra_settle" "$STEPS" "$N" "$WARMUP" | tee -a "$work/all.txt"
 done
 python3 - "$work/all.txt" "$REPS" <<'PY'
 import re, statistics, sys
