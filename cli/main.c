@@ -235,36 +235,47 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
     int rc = ckpt_on && scene_hash(scene, &hash) ? FLOE_EIO : FLOE_OK;
     if (rc != FLOE_OK) snprintf(err, sizeof err, "cannot read %s: %s", scene, strerror(errno));
     const char *text = scene ? NULL : floe_scene_default_demo();
+    /* a restart: the outputs keep what the stopped run wrote (the pieces' series are created
+     * held; the mirror's load cuts its files back) */
+    floe_outputs_keep_existing(o->restart != NULL);
     floe_scene_set_vtk_mode(FLOE_SCENE_VTK_PIECES, rank, size, take_piece, &vp);
     if (rc == FLOE_OK)
         rc = floe_scene_load_ex(scene ? scene : "<demo>", text, o->outdir, FLOE_SCENE_RUN, &w, &info, err, sizeof err);
     /* the other outputs go through rank 0's mirror (the same count on every rank); checkpoints
      * need rank 0's unsplit world even without them */
     const int need_mirror = rc == FLOE_OK && info.nobservers > vp.n;
-    const int refuse_vtk = rc == FLOE_OK && ckpt_on && vp.n > 0;
     floe_scene_set_vtk_mode(FLOE_SCENE_VTK_SKIP, 0, 0, NULL, NULL);
-    /* a restart: the mirror's outputs keep what the stopped run wrote (its load cuts them back) */
-    floe_outputs_keep_existing(o->restart != NULL);
-    if (rc == FLOE_OK && rank == 0 && (need_mirror || ckpt_on) && !refuse_vtk)
+    if (rc == FLOE_OK && rank == 0 && (need_mirror || ckpt_on))
         rc = scene ? floe_scene_load(scene, o->outdir, &mirror, &info, err, sizeof err)
                    : floe_scene_load_string(text, "<demo>", o->outdir, &mirror, &info, err, sizeof err);
     floe_outputs_keep_existing(0);
     floe_scene_set_vtk_mode(FLOE_SCENE_VTK_SERIAL, 0, 0, NULL, NULL);
     int any;
     MPI_Allreduce(&rc, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-    if (any != FLOE_OK || refuse_vtk) {
+    if (any != FLOE_OK) {
         if (rc != FLOE_OK) fprintf(stderr, "%s: error (rank %d): %s\n", prog, rank, err);
-        else if (refuse_vtk && rank == 0)
-            fprintf(stderr, "%s: error: %s: checkpoints and restarts under MPI do not cover the vtk output yet (its "
-                    "series is written in pieces, one per rank); remove the vtk outputs, or checkpoint in one process "
-                    "(docs/parallel.md)\n", prog, label);
         free_pieces(&vp, 0);
         floe_world_destroy(w);
         floe_world_destroy(mirror);
         return 1;
     }
-    /* a restart: rank 0's mirror first (its outputs continue), every rank agreeing on it */
+    /* a restart: the vtk pieces' series on every rank (their state is in the file, written by
+     * rank 0), then rank 0's mirror (its outputs continue), every rank agreeing on each */
     if (o->restart) {
+        if (vp.n > 0) {
+            rc = floe_world_checkpoint_restore_split_outputs(w, vp.o, vp.n, o->restart, hash, label, err, sizeof err);
+            int r0 = rc; /* rank 0 says why; another rank only when it failed alone */
+            MPI_Bcast(&r0, 1, MPI_INT, 0, MPI_COMM_WORLD);
+            if (rc != FLOE_OK && rank == 0) fprintf(stderr, "%s: error: %s: cannot restart: %s\n", prog, label, err);
+            else if (rc != FLOE_OK && r0 == FLOE_OK)
+                fprintf(stderr, "%s: error (rank %d): %s: cannot restart: %s\n", prog, rank, label, err);
+        }
+        if (floe_parallel_agree(NULL, rc) != FLOE_OK) {
+            free_pieces(&vp, 0);
+            floe_world_destroy(w);
+            floe_world_destroy(mirror);
+            return 1;
+        }
         if (rank == 0) {
             rc = floe_world_checkpoint_load(mirror, o->restart, hash, label, err, sizeof err);
             if (rc != FLOE_OK) fprintf(stderr, "%s: error: %s: cannot restart: %s\n", prog, label, err);

@@ -462,11 +462,41 @@ static int vw_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
     return floe_fw_series_state_restore(&((vtk_writer *)o)->ser, w, buf, n);
 }
 
+/* pieces: the same state (the series' frames and times, every rank's; rank 0 writes it under
+ * MPI, floe_world_parallel_checkpoint_save); the restore rewrites the .pvd of the .pvtu frames
+ * up to the checkpoint (rank 0), the frames after it written again, with this run's number of
+ * pieces (a frame's .pvtu names its own pieces: the rank count may change at a restart) */
+static int vw_piece_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
+    vtk_writer *v = (vtk_writer *)o;
+    floe_fw_series *s = &v->ser;
+    int frames;
+    if (n < sizeof(int)) return floe_world_report_error(w, FLOE_EINVAL, "vtk writer: checkpoint state too short");
+    floe_fw_get(buf, &frames, sizeof frames);
+    if (frames < 0 || n < sizeof(int) + sizeof(long) + sizeof(int) + (size_t)frames * sizeof(double))
+        return floe_world_report_error(w, FLOE_EINVAL, "vtk writer: checkpoint state does not match");
+    if (frames > s->cap) {
+        double *t = realloc(s->times, (size_t)frames * sizeof *t);
+        if (!t) return floe_world_report_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
+        s->times = t;
+        s->cap = frames;
+    }
+    buf += sizeof frames;
+    buf = floe_fw_get(buf, &s->last_step, sizeof s->last_step);
+    buf = floe_fw_get(buf, &s->observed, sizeof s->observed);
+    if (frames) floe_fw_get(buf, s->times, (size_t)frames * sizeof(double));
+    s->frames = frames;
+    s->held = 0;
+    int rc = v->rank == 0 ? floe_fw_write_pvd_as(s->dir, s->prefix, s->times, frames, ".pvtu") : FLOE_OK;
+    if (rc != FLOE_OK)
+        return floe_world_report_error(w, FLOE_EIO, "vtk writer: writing %s/%s.pvd failed: %s", s->dir, s->prefix,
+                                       strerror(errno));
+    return FLOE_OK;
+}
+
 static const floe_observer_class vtk_writer_class = {
     2, "vtk_writer", NULL, vw_observe, vw_end, vw_destroy, 0, vw_state_size, vw_save, vw_restore};
-/* pieces: no checkpoint hooks (MPI runs take no checkpoints yet) */
 static const floe_observer_class vtk_piece_class = {
-    1, "vtk_writer", NULL, vw_observe, vw_end, vw_destroy, 0, NULL, NULL, NULL};
+    2, "vtk_writer", NULL, vw_observe, vw_end, vw_destroy, 0, vw_state_size, vw_save, vw_piece_restore};
 
 int floe_vtk_writer_set_ascii(floe_observer *o, int ascii) {
     if (!o || (o->klass != &vtk_writer_class && o->klass != &vtk_piece_class)) return FLOE_EINVAL;

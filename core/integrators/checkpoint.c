@@ -569,18 +569,48 @@ static int has_hooks(const floe_observer *o) {
     return o->klass->version >= 2 && o->klass->state_size && o->klass->save && o->klass->restore;
 }
 
-static void save_observers(const floe_world *w, obuf *b) {
-    PUT(b, w->nobs);
-    for (int k = 0; k < w->nobs; k++) {
-        const floe_observer *o = w->obs[k];
+/* the observers of w, then (extra: a split world's own outputs under MPI, the vtk pieces of
+ * rank 0, floe_world_parallel_add_output) nextra more, marked begun = 2: a world's restore
+ * skips them, floe_world_checkpoint_restore_split_outputs reads them */
+static void save_observers(const floe_world *w, floe_observer *const *extra, int nextra, obuf *b) {
+    const int n = w->nobs + nextra;
+    PUT(b, n);
+    for (int k = 0; k < n; k++) {
+        const floe_observer *o = k < w->nobs ? w->obs[k] : extra[k - w->nobs];
         const int hooks = has_hooks(o);
         uint64_t m = hooks ? o->klass->state_size(o) : 0;
-        const int flags[3] = {o->begun, o->ended, hooks};
+        const int flags[3] = {k < w->nobs ? o->begun : 2, o->ended, hooks};
         put_str(b, o->klass->name);
         PUT(b, o->period_steps); PUT(b, o->period_time); PUT(b, o->next_time); PUT(b, flags); PUT(b, m);
         unsigned char *dst = m ? room(b, m) : NULL;
         if (dst) o->klass->save(o, dst);
     }
+}
+
+/* one entry of the observers' section: its header into the arguments, r after it (its state
+ * of *m bytes at r->p + r->pos, not consumed) */
+static void get_observer(ibuf *r, char *name, size_t cap, double *nt, int flags[3], uint64_t *m) {
+    long ps;
+    double pt;
+    get_str(r, name, cap);
+    GET(r, ps); GET(r, pt); GET(r, *nt); GET(r, flags[0]); GET(r, flags[1]); GET(r, flags[2]); GET(r, *m);
+    if (*m > r->len - r->pos) r->bad = 1;
+}
+
+/* the number of entries of the section r that are a split world's own outputs (-1: malformed) */
+static int count_split(ibuf r, int n) {
+    int split = 0;
+    for (int k = 0; k < n; k++) {
+        char name[128];
+        double nt;
+        int flags[3] = {0, 0, 0};
+        uint64_t m = 0;
+        get_observer(&r, name, sizeof name, &nt, flags, &m);
+        if (r.bad) return -1;
+        r.pos += m;
+        split += flags[0] == 2;
+    }
+    return split;
 }
 
 /* before anything is changed: every observer of w can be continued */
@@ -596,27 +626,37 @@ static int check_observers(const floe_world *w, char *err, size_t errlen) {
 static int restore_observers(floe_world *w, ibuf *r, char *err, size_t errlen) {
     int n = -1;
     GET(r, n);
-    if (n != w->nobs)
+    const int split = r->bad || n < 0 ? -1 : count_split(*r, n);
+    if (split < 0) return floe_error_set(err, errlen, FLOE_EINVAL, "the observers' section is malformed");
+    if (n - split != w->nobs) {
+        if (split > 0)
+            return floe_error_set(err, errlen, FLOE_EINVAL, "the checkpoint was written under MPI with %d output(s) written "
+                        "in pieces per rank (the vtk output: a .pvtu series), which a run in one process cannot continue "
+                        "(it writes a .vtu series): restart it under mpirun with more than one rank", split);
         return floe_error_set(err, errlen, FLOE_EINVAL, "the checkpoint holds %d outputs, this world %d: another scene", n, w->nobs);
-    for (int k = 0; k < n; k++) {
-        floe_observer *o = w->obs[k];
+    }
+    for (int k = 0, i = 0; k < n; k++) {
         char name[128];
-        long ps;
-        double pt, nt;
+        double nt;
         int flags[3];
         uint64_t m = 0;
-        get_str(r, name, sizeof name);
-        GET(r, ps); GET(r, pt); GET(r, nt); GET(r, flags); GET(r, m);
-        if (r->bad || strcmp(name, o->klass->name) || m > r->len - r->pos)
+        get_observer(r, name, sizeof name, &nt, flags, &m);
+        if (r->bad) return floe_error_set(err, errlen, FLOE_EINVAL, "the observers' section is malformed");
+        if (flags[0] == 2) { /* a split world's own output: not this world's */
+            r->pos += m;
+            continue;
+        }
+        floe_observer *o = w->obs[i++];
+        if (strcmp(name, o->klass->name))
             return floe_error_set(err, errlen, FLOE_EINVAL, "output %d: the checkpoint's is %s, this world's %s: another scene",
-                        k, name, o->klass->name);
+                        i - 1, name, o->klass->name);
         if (!flags[2])
             return floe_error_set(err, errlen, FLOE_ENOTSUP, "output %d (%s) had no checkpoint hooks when the checkpoint was "
-                        "written: it cannot be continued", k, name);
+                        "written: it cannot be continued", i - 1, name);
         w->err[0] = 0;
         int rc = o->klass->begin && !o->begun ? o->klass->begin(o, w) : FLOE_OK;
         if (!rc) rc = o->klass->restore(o, w, r->p + r->pos, (size_t)m);
-        if (rc) return floe_error_set(err, errlen, rc, "output %d (%s) could not be continued: %s", k, name, w->err);
+        if (rc) return floe_error_set(err, errlen, rc, "output %d (%s) could not be continued: %s", i - 1, name, w->err);
         r->pos += m;
         o->next_time = nt;
         o->begun = 1;
@@ -627,8 +667,8 @@ static int restore_observers(floe_world *w, ibuf *r, char *err, size_t errlen) {
 
 /* ---- the file ---- */
 
-int floe_world_checkpoint_save(const floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name,
-                               char *err, size_t errlen) {
+static int save_file(const floe_world *w, floe_observer *const *extra, int nextra, const char *path,
+                     uint64_t scene_hash, const char *scene_name, char *err, size_t errlen) {
     if (!w || !path || !*path) return floe_error_set(err, errlen, FLOE_EINVAL, "checkpoint: no world or no path");
     if (!w->prepared) return floe_error_set(err, errlen, FLOE_EINVAL, "checkpoint: the world has not started (not prepared)");
     obuf b = {0};
@@ -640,7 +680,7 @@ int floe_world_checkpoint_save(const floe_world *w, const char *path, uint64_t s
     put_str(&b, scene_name ? scene_name : "");
     save_sections(w, &b);
     size_t at = sec_begin(&b, TAG_OBSV);
-    save_observers(w, &b);
+    save_observers(w, extra, nextra, &b);
     sec_end(&b, at);
     at = sec_begin(&b, TAG_END);
     uint64_t h = 0;
@@ -670,6 +710,11 @@ int floe_world_checkpoint_save(const floe_world *w, const char *path, uint64_t s
     free(b.p);
     if (bad) return floe_error_set(err, errlen, FLOE_EIO, "checkpoint: cannot write %s: %s", path, strerror(e));
     return FLOE_OK;
+}
+
+int floe_world_checkpoint_save(const floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name,
+                               char *err, size_t errlen) {
+    return save_file(w, NULL, 0, path, scene_hash, scene_name, err, errlen);
 }
 
 static int read_file(const char *path, unsigned char **out, size_t *len, char *err, size_t errlen) {
@@ -791,10 +836,71 @@ int floe_world_parallel_checkpoint_save(const floe_world *w, floe_world *full, c
     floe_world_parallel_rank(w, &rank, &size);
     int rc = floe_world_parallel_collect(w, full); /* collective; its error is every rank's */
     if (rc) return floe_error_set(err, errlen, rc, "checkpoint: %s", floe_world_last_error(w));
-    if (rank == 0) rc = floe_world_checkpoint_save(full, path, scene_hash, scene_name, err, errlen);
+    /* rank 0's own outputs (the vtk pieces) after the mirror's: their series state (frames and
+     * times) is every rank's */
+    floe_observer *const *own = NULL;
+    const int nown = floe_world_parallel_own_outputs(w, &own);
+    if (rank == 0) rc = save_file(full, own, nown, path, scene_hash, scene_name, err, errlen);
     double bad = rc != FLOE_OK;
     floe_world_parallel_sum(w, &bad, 1);
     if (bad > 0 && rank != 0)
         return floe_error_set(err, errlen, FLOE_EIO, "checkpoint: rank 0 could not write %s", path);
     return rc;
+}
+
+int floe_world_checkpoint_restore_split_outputs(floe_world *w, floe_observer **obs, int nobs, const char *path,
+                                                uint64_t scene_hash, const char *scene_name, char *err, size_t errlen) {
+    if (!w || !path || (nobs > 0 && !obs)) return floe_error_set(err, errlen, FLOE_EINVAL, "checkpoint: no world or no path");
+    unsigned char *p = NULL;
+    size_t len = 0, pos = 0;
+    char why[1024];
+    int rc = read_file(path, &p, &len, why, sizeof why);
+    if (rc) return floe_error_set(err, errlen, rc, "checkpoint: %s", why);
+    sec_index ix;
+    rc = check_header(p, len, path, scene_hash, scene_name, &pos, why, sizeof why);
+    if (!rc) rc = index_sections(p, len, pos, &ix, why, sizeof why);
+    int at = rc ? -1 : find_section(&ix, TAG_OBSV);
+    if (!rc && at < 0) rc = floe_error_set(why, sizeof why, FLOE_EINVAL, "section OBSV is missing");
+    if (!rc) {
+        ibuf r = {p + ix.at[at], ix.len[at], 0, 0};
+        int n = -1;
+        GET(&r, n);
+        const int split = r.bad || n < 0 ? -1 : count_split(r, n);
+        if (split < 0) rc = floe_error_set(why, sizeof why, FLOE_EINVAL, "the observers' section is malformed");
+        else if (split != nobs)
+            rc = floe_error_set(why, sizeof why, FLOE_EINVAL, "the checkpoint holds %d output(s) written in pieces per rank, "
+                        "this run writes %d (the vtk output): %s", split, nobs, split == 0 ? "a checkpoint written by one "
+                        "process (a .vtu series) continues in one process only" : "another scene");
+        for (int k = 0, i = 0; !rc && k < n; k++) {
+            char name[128];
+            double nt;
+            int flags[3];
+            uint64_t m = 0;
+            get_observer(&r, name, sizeof name, &nt, flags, &m);
+            if (r.bad) {
+                rc = floe_error_set(why, sizeof why, FLOE_EINVAL, "the observers' section is malformed");
+                break;
+            }
+            if (flags[0] != 2) {
+                r.pos += m;
+                continue;
+            }
+            floe_observer *o = obs[i++];
+            if (strcmp(name, o->klass->name) || !flags[2] || !has_hooks(o)) {
+                rc = floe_error_set(why, sizeof why, FLOE_EINVAL, "output %s in pieces: the checkpoint's is %s: another "
+                            "scene, or no checkpoint hooks", o->klass->name, name);
+                break;
+            }
+            w->err[0] = 0;
+            rc = o->klass->restore(o, w, r.p + r.pos, (size_t)m);
+            if (rc) rc = floe_error_set(why, sizeof why, rc, "output %s could not be continued: %s", name, w->err);
+            r.pos += m;
+            o->next_time = nt;
+            o->begun = 1;
+            o->ended = 0;
+        }
+    }
+    free(p);
+    if (rc) return floe_error_set(err, errlen, rc, "checkpoint %s: %s", path, why);
+    return FLOE_OK;
 }

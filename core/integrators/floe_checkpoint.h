@@ -75,6 +75,14 @@ int floe_world_checkpoint_load_state(floe_world *w, const char *path, uint64_t s
  * floe_world_checkpoint_load (its observers continue their files). */
 int floe_world_parallel_checkpoint_save(const floe_world *w, floe_world *full, const char *path, uint64_t scene_hash,
                                         const char *scene_name, char *err, size_t errlen);
+/* The outputs that every rank of a split world writes itself (floe_world_parallel_add_output:
+ * the vtk pieces) are in the file too: rank 0's, after the mirror's observers, marked as such
+ * (their state, the series' frames and times, is every rank's; a world's load skips them, and
+ * a run in one process refuses a file that holds some). At a restart every rank restores its
+ * nobs such outputs, before it adds them to its split world, from the file (in the order they
+ * were added); a file holding another number of them is refused (0: written by one process). */
+int floe_world_checkpoint_restore_split_outputs(floe_world *w, floe_observer **obs, int nobs, const char *path,
+                                                uint64_t scene_hash, const char *scene_name, char *err, size_t errlen);
 
 /* The same state in memory, without the observers (for a caller that runs a world
  * repeatedly from one state, e.g. a representative volume): the bytes needed (0 when the

@@ -57,6 +57,10 @@ int floe_world_parallel_finish(floe_world *w);
  * floe_world_parallel_sum): a rank that returns alone leaves the others waiting in the next
  * collective. */
 int floe_world_parallel_add_output(floe_world *w, floe_observer *o);
+/* the outputs added so (*outs, in the order added) and their number; 0 for an unsplit world.
+ * An output restored from a checkpoint before it is added (its begun set,
+ * floe_world_checkpoint_restore_split_outputs) is not called at the split: it goes on. */
+int floe_world_parallel_own_outputs(const floe_world *w, floe_observer *const **outs);
 
 /* The whole state of a split world gathered into full, an unsplit world on rank 0 (the other
  * ranks pass NULL), so that full can be written as a serial checkpoint

@@ -599,6 +599,9 @@ int floe_world_parallel_add_output(floe_world *w, floe_observer *o) {
         return any == 1 ? refuse(w, "an output that reads contacts") : floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
     P->outs[P->nouts++] = o;
+    /* restored from a checkpoint (floe_world_checkpoint_restore_split_outputs): it goes on
+     * from its state, its next time, as a restarted world's observers do (nothing written now) */
+    if (o->begun) return FLOE_OK;
     o->begun = 1;
     w->err[0] = 0;
     int rc = o->klass->begin ? o->klass->begin(o, w) : FLOE_OK;
@@ -612,6 +615,11 @@ int floe_world_parallel_add_output(floe_world *w, floe_observer *o) {
     if (o->period_time > 0 && o->period_steps <= 0)
         while (o->next_time <= w->time + 1e-9 * w->dt) o->next_time += o->period_time;
     return output_call(w, o, 0);
+}
+
+int floe_world_parallel_own_outputs(const floe_world *w, floe_observer *const **outs) {
+    *outs = w && w->par ? w->par->outs : NULL;
+    return w && w->par ? w->par->nouts : 0;
 }
 
 int floe_par_observe(floe_world *w, int force_all) {
@@ -915,6 +923,11 @@ int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {
     return floe_world_error(w, FLOE_ENOTSUP, "MPI outputs: floe was built without MPI");
 }
 int floe_world_parallel_finish(floe_world *w) { (void)w; return FLOE_OK; }
+int floe_world_parallel_own_outputs(const floe_world *w, floe_observer *const **outs) {
+    (void)w;
+    *outs = NULL;
+    return 0;
+}
 int floe_world_parallel_add_output(floe_world *w, floe_observer *o) {
     floe_observer_destroy(o);
     return floe_world_error(w, FLOE_ENOTSUP, "MPI outputs: floe was built without MPI");

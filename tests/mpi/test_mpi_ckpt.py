@@ -31,8 +31,16 @@ files, so a restarted run must also continue them without a frame missing or rep
      rank's status is printed by a wrapper), rank 0 names the reason, within a time limit
      (no rank left waiting in a collective); under R > 1 also a file that only ranks 1..R-1
      cannot read (an MPMD launch gives them another path): every rank exits non-zero, rank 0
-     says another rank could not read it and each failing rank why; a scene with a vtk
-     output is refused with a message.
+     says another rank could not read it and each failing rank why.
+ (e) the vtk output (tests/mpi/ckpt_vtk.yaml, ASCII frames every 250 steps, one at the
+     checkpoint): written uninterrupted and with the checkpoint under R ranks, the same series;
+     restarted under R ranks in a copy whose frames after the checkpoint were removed (the .pvd
+     still listing them): the .pvd lists the uninterrupted run's 5 frames at its times and the
+     last frame's pieces hold its particles (positions, velocities) within the tolerance. Under
+     R > 1: restarted under R' ranks (the later frames in R' pieces), the same; restarted
+     serially: refused (a .pvtu series is not continued as a .vtu one), saying to use mpirun,
+     the .pvd unchanged. Under R = 1: the serial checkpoint restarted under 2 ranks is refused
+     the same way (a .vtu series is not continued as a .pvtu one).
 
 Tolerance: 1e-9 of each column's largest magnitude (energy.csv: of the largest energy),
 as tests/mpi/test_mpi_cli.py. A restart under R > 1 ranks is not bit-identical to the
@@ -51,6 +59,7 @@ import struct
 import subprocess
 import sys
 import tempfile
+import xml.etree.ElementTree as ET
 
 floe, mpiexec, here, R = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
 SCENE = os.path.join(here, "ckpt.yaml")
@@ -115,6 +124,60 @@ def compare(ref, out, what, tol=TOL, exact=False):
         print(f"  {'ok  ' if ok else 'FAIL'} {what}: {name} largest difference {dd} of the scale "
               f"(tol {'0' if exact else f'{tol:g}'})")
     return d
+
+
+def read_pvd(path):
+    root = ET.parse(path).getroot()
+    return [(float(e.get("timestep")), e.get("file")) for e in root.find("Collection").findall("DataSet")]
+
+
+def read_points(path):
+    """{id: (x y z vx vy vz)} of an ASCII .vtu written by floe"""
+    piece = ET.parse(path).getroot().find("UnstructuredGrid/Piece")
+    arr = {}
+    for parent in ("PointData", "Points"):
+        for da in piece.find(parent).findall("DataArray"):
+            arr[da.get("Name")] = [float(v) for v in (da.text or "").split()]
+    ids = [int(v) for v in arr["id"]]
+    return {i: tuple(arr["Points"][3 * a:3 * a + 3] + arr["velocity"][3 * a:3 * a + 3]) for a, i in enumerate(ids)}
+
+
+def read_frame(outdir, name):
+    """the particles of a frame: a .vtu, or the pieces a .pvtu names (their number too)"""
+    path = os.path.join(outdir, name)
+    if name.endswith(".vtu"):
+        return read_points(path), 1
+    pieces = [p.get("Source") for p in ET.parse(path).getroot().find("PUnstructuredGrid").findall("Piece")]
+    out = {}
+    for src in pieces:
+        out.update(read_points(os.path.join(outdir, src)))
+    return out, len(pieces)
+
+
+def vtk_check(ref, out, k, what):
+    """out's .pvd lists ref's frames at ref's times (.pvtu under more than one rank), and its
+    last frame (k pieces) holds ref's particles within TOL of the scale"""
+    global fails
+    pr, po = read_pvd(os.path.join(ref, "frame.pvd")), read_pvd(os.path.join(out, "frame.pvd"))
+    ok = len(pr) == len(po) == 5 and all(a[1] == b[1] and abs(a[0] - b[0]) <= 1e-15 for a, b in zip(pr, po))
+    fails += not ok
+    print(f"  {'ok  ' if ok else 'FAIL'} {what}: frame.pvd lists {len(po)} frames {[t for t, _ in po]} "
+          f"(the reference {len(pr)})")
+    if not ok or not po:
+        return
+    a, _ = read_frame(ref, pr[-1][1])
+    b, nb = read_frame(out, po[-1][1])
+    worst = None
+    if sorted(a) == sorted(b) and len(a) == 144:
+        worst = 0.0
+        for c in range(6):
+            scale = max(max(abs(v[c]) for v in a.values()), 1e-300)
+            worst = max(worst, max(abs(a[i][c] - b[i][c]) for i in a) / scale)
+    want_k = k if po[-1][1].endswith(".pvtu") else 1
+    ok = worst is not None and worst <= TOL and nb == want_k and po[-1][1].endswith(".pvtu" if k > 1 else ".vtu")
+    fails += not ok
+    print(f"  {'ok  ' if ok else 'FAIL'} {what}: last frame {po[-1][1]} ({nb} piece(s)): positions and velocities "
+          f"differ by {'ids differ' if worst is None else f'{worst:.2e}'} of the scale (tol {TOL:g})")
 
 
 def restart(np_, src_dir, ckpt, dst_dir, scene=None):
@@ -263,14 +326,45 @@ with tempfile.TemporaryDirectory() as tmp:
         fails += not ok
         print(f"  {'ok  ' if ok else 'FAIL'} (d) only ranks 1..{R - 1} cannot read the file: rank exits {codes}; "
               f"{' | '.join(line for line in err.strip().splitlines() if 'error' in line)[:300]}")
-        # settle.yaml has a vtk output
-        inner = [floe, "run", os.path.join(here, "settle.yaml"), "-q", "-o", d("vtk"), "--checkpoint-every", EVERY]
-        r = subprocess.run([mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", str(R)] + inner,
-                           capture_output=True, text=True, timeout=120)
-        ok = r.returncode != 0 and "vtk" in r.stderr and r.stderr.count("error") == 1
+
+    # (e) the vtk output (ckpt_vtk.yaml: ASCII frames every 250 steps, one at the checkpoint)
+    VS = os.path.join(here, "ckpt_vtk.yaml")
+    run(R, ["-o", d("VA")], scene=VS)                                  # R ranks, uninterrupted
+    run(R, ["-o", d("VB"), "--checkpoint-every", EVERY], scene=VS)     # writes the checkpoint
+    vck = os.path.join(d("VB"), "checkpoint.bin")
+    vtk_check(d("VA"), d("VB"), R, "(e) writing the checkpoint leaves the series")
+    # the restart in a copy whose frames after the checkpoint are gone and whose .pvd still
+    # lists them: they must be written again and the .pvd continued from the checkpoint's
+    shutil.copytree(d("VB"), d("VC"))
+    for n in os.listdir(d("VC")):
+        if n.startswith(("frame_000003", "frame_000004")):
+            os.remove(os.path.join(d("VC"), n))
+    run(R, ["-o", d("VC"), "--restart", os.path.join(d("VC"), "checkpoint.bin")], scene=VS)
+    vtk_check(d("VA"), d("VC"), R, f"(e) restart under {R} vs {R} uninterrupted")
+    if R > 1:
+        # another rank count: the frames up to the checkpoint keep their R pieces, the later
+        # ones have R' pieces
+        shutil.copytree(d("VB"), d("VD"))
+        run(R2, ["-o", d("VD"), "--restart", os.path.join(d("VD"), "checkpoint.bin")], scene=VS)
+        vtk_check(d("VA"), d("VD"), R2, f"(e) {R}-rank checkpoint restarted under {R2} vs {R} uninterrupted")
+        # a .pvtu series cannot be continued as a .vtu one, nor the reverse: refused, clearly,
+        # and the files left as they were
+        shutil.copytree(d("VB"), d("VE"))
+        before = read_pvd(os.path.join(d("VE"), "frame.pvd"))
+        r = run(1, ["-o", d("VE"), "--restart", os.path.join(d("VE"), "checkpoint.bin")], expect_ok=False, scene=VS)
+        ok = r.returncode != 0 and "mpirun" in r.stderr and read_pvd(os.path.join(d("VE"), "frame.pvd")) == before
         fails += not ok
-        print(f"  {'ok  ' if ok else 'FAIL'} (d) a vtk output with checkpoints under {R} ranks refused: "
-              f"{r.stderr.strip()[:160]}")
+        print(f"  {'ok  ' if ok else 'FAIL'} (e) the {R}-rank checkpoint with a vtk output restarted serially "
+              f"refused, the .pvd unchanged: {r.stderr.strip()[:240]}")
+    else:
+        shutil.copytree(d("VB"), d("VE"))
+        before = read_pvd(os.path.join(d("VE"), "frame.pvd"))
+        r = run(2, ["-o", d("VE"), "--restart", os.path.join(d("VE"), "checkpoint.bin")], expect_ok=False, scene=VS)
+        ok = r.returncode != 0 and "one process" in r.stderr and r.stderr.count("error") == 1 and \
+            read_pvd(os.path.join(d("VE"), "frame.pvd")) == before
+        fails += not ok
+        print(f"  {'ok  ' if ok else 'FAIL'} (e) the serial checkpoint with a vtk output restarted under 2 ranks "
+              f"refused, the .pvd unchanged: {r.stderr.strip()[:240]}")
 
 if fails:
     sys.exit(f"FAIL: {fails} check(s)")
