@@ -14,6 +14,7 @@
 #include "floe.h"
 #include "floe_parallel.h"
 #include "../check.h"
+#include "../test_files.h"
 #include "mpi_common.h"
 #include <stdlib.h>
 #include <string.h>
@@ -89,19 +90,6 @@ static int same_list(const long *got, int n, const long *want, int m) {
     for (int k = 0; k < n; k++)
         if (got[k] != want[k]) return 0;
     return 1;
-}
-
-static char *slurp(const char *path) {
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *s = malloc((size_t)n + 1);
-    size_t got = fread(s, 1, (size_t)n, f);
-    s[got] = 0;
-    fclose(f);
-    return s;
 }
 
 static int count_of(const char *s, const char *what) {
