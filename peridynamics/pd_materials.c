@@ -168,6 +168,22 @@ static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs)
  * bonds of the rows below q, before those of rows above (none: every partner is above its
  * row). With mx (PMB alpha) the shares' and the row's slot gs is a maximum (first of equal
  * values, as the serial loop keeps it), into *mx from -INFINITY. */
+/* The bond vector from i (at xi0, xi1, xi2) to its partner j; a bond across
+ * the periodic cell's faces (img[k] != 0) goes to j's image. */
+static inline __attribute__((always_inline)) void pd_bond_vec(const double *x, int j, double xi0, double xi1,
+                                                              double xi2, int per, const int32_t *img,
+                                                              const double *H, int64_t k, double *d0, double *d1,
+                                                              double *d2)
+{
+    const double *xj = x + 3 * (size_t)j;
+    *d0 = xj[0] - xi0; *d1 = xj[1] - xi1; *d2 = xj[2] - xi2;
+    if (per && img[k]) {
+        double sh[3];
+        floe_img_shift(H, img[k], sh);
+        *d0 += sh[0]; *d1 += sh[1]; *d2 += sh[2];
+    }
+}
+
 static inline __attribute__((always_inline)) void pd_gather(const floe_pd_body *b, const floe_pd_par *P, int q,
                                                             double *v, const int gs, const int st, const int sub,
                                                             double *mx)
@@ -244,13 +260,8 @@ static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, con
     double fi0 = 0, fi1 = 0, fi2 = 0, ei = 0;
     for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
         const int j = part[k];
-        const double *xj = x + 3 * (size_t)j;
-        double d0 = xj[0] - xi0, d1 = xj[1] - xi1, d2 = xj[2] - xi2;
-        if (per && img[k]) { /* across the periodic cell's faces: j's image */
-            double sh[3];
-            floe_img_shift(H, img[k], sh);
-            d0 += sh[0]; d1 += sh[1]; d2 += sh[2];
-        }
+        double d0, d1, d2;
+        pd_bond_vec(x, j, xi0, xi1, xi2, per, img, H, k, &d0, &d1, &d2);
         double r = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
         double L = len[k];
         double s = (r - L) / L;
@@ -581,13 +592,8 @@ static inline __attribute__((always_inline)) int64_t lps_dil_row(floe_pd_body *b
         double cj[3] = {-0.0, -0.0, -0.0}; /* j's shares (-0: none) */
         if (!brk[k]) {
             const int j = part[k];
-            const double *xj = x + 3 * (size_t)j;
-            double d0 = xj[0] - xi[0], d1 = xj[1] - xi[1], d2 = xj[2] - xi[2];
-            if (per && img[k]) { /* across the periodic cell's faces: j's image */
-                double sh[3];
-                floe_img_shift(H, img[k], sh);
-                d0 += sh[0]; d1 += sh[1]; d2 += sh[2];
-            }
+            double d0, d1, d2;
+            pd_bond_vec(x, j, xi[0], xi[1], xi[2], per, img, H, k, &d0, &d1, &d2);
             double L = len[k];
             double e = sqrt(d0 * d0 + d1 * d1 + d2 * d2) - L;
             if (s_c > 0 && e > s_c * L) {
@@ -726,13 +732,8 @@ static inline __attribute__((always_inline)) double lps_row(const floe_pd_body *
         double g0 = 0, g1 = 0, g2 = 0;
         if (!brk[k]) {
             const int j = part[k];
-            const double *xj = x + 3 * (size_t)j;
-            double d0 = xj[0] - xi0, d1 = xj[1] - xi1, d2 = xj[2] - xi2;
-            if (per && img[k]) { /* across the periodic cell's faces: j's image */
-                double sh[3];
-                floe_img_shift(H, img[k], sh);
-                d0 += sh[0]; d1 += sh[1]; d2 += sh[2];
-            }
+            double d0, d1, d2;
+            pd_bond_vec(x, j, xi0, xi1, xi2, per, img, H, k, &d0, &d1, &d2);
             double r = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
             double tij, tji, eb = 0;
             lps_bond_t(b, kd, i, j, k, r - len[k], &tij, &tji, &eb);

@@ -2,6 +2,7 @@
  * against hand calculations (sign: tension positive), coordination, volumes, and the CSV /
  * VTK writers' files. */
 #include "check.h"
+#include "test_files.h"
 #include "floe_observer.h"
 #include "file_writer.h" /* internal: unit test of the observers' file writer */
 #include "world_internal.h" /* internal: unit test of the observers on a hand-made world (its contacts, time and particles set directly) */
@@ -76,21 +77,6 @@ static void add_contact(hand_world *h, int i, int j, const double point[3], cons
     floe_v3_copy(c->point, point);
     floe_v3_copy(c->force, force_on_i);
     c->fn = floe_v3_norm(force_on_i);
-}
-
-/* Read a whole small text file (NULL if missing). */
-static char *slurp(const char *path) {
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *s = malloc((size_t)n + 1);
-    if (!s) { fclose(f); return NULL; }
-    size_t got = fread(s, 1, (size_t)n, f);
-    s[got] = '\0';
-    fclose(f);
-    return s;
 }
 
 static int count_lines(const char *s) {

@@ -32,11 +32,10 @@
 #include "beam_set.h"
 #include "par_internal.h"
 #include "../check.h"
-#include <mpi.h>
+#include "mpi_common.h"
 #include <stdlib.h>
 #include <string.h>
 
-static int rank_, size_;
 static const double R = 0.001;
 
 static floe_world *new_world(void) {
@@ -44,12 +43,7 @@ static floe_world *new_world(void) {
     d.dim = 3;
     d.dt_safety = 0.3;
     floe_world *w = floe_world_create(&d, NULL, 0);
-    floe_material m;
-    memset(&m, 0, sizeof m);
-    strcpy(m.name, "glass");
-    m.density = 2500; m.young = 1e8; m.poisson = 0.3;
-    floe_world_add_material(w, &m);
-    floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.3));
+    mpi_test_add_glass(w, 1e8);
     return w;
 }
 
@@ -404,17 +398,13 @@ static void traffic(void) {
 }
 
 int main(int argc, char **argv) {
-    MPI_Init(&argc, &argv);
-    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
-    MPI_Comm_size(MPI_COMM_WORLD, &size_);
+    mpi_test_init(&argc, &argv);
     const long nchain = argc > 1 ? atol(argv[1]) : 2000, nblock = argc > 2 ? atol(argv[2]) : 2000;
     compare("chain", build_chain, nchain, 1e-10, 1e-8, 1e-9, 0);
     compare("block", build_block, nblock, 1e-10, 1e-8, 1e-9, 1);
     compare("stretch", build_stretch, nchain, 1e-10, 1e-8, 1e-9, 0);
     traffic();
-    int fails = check_fail_, all;
-    MPI_Allreduce(&fails, &all, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
-    if (rank_ == 0) printf("test_mpi_beams (%d ranks): %d failed checks over all ranks\n", size_, all);
+    int all = mpi_test_failed("test_mpi_beams");
     MPI_Finalize();
     return all ? 1 : 0;
 }

@@ -27,11 +27,10 @@
 #include "world_internal.h"
 #include "par_internal.h"
 #include "../check.h"
-#include <mpi.h>
+#include "mpi_common.h"
 #include <stdlib.h>
 #include <string.h>
 
-static int rank_, size_;
 static const double L = 0.02; /* box side, m */
 enum { NSIDE = 9 };           /* 729 spheres */
 
@@ -40,16 +39,9 @@ static floe_world *build(void) {
     d.dim = 3; d.dt = 1e-6;
     d.gravity[2] = -9.81;
     floe_world *w = floe_world_create(&d, NULL, 0);
-    floe_material m;
-    memset(&m, 0, sizeof m);
-    strcpy(m.name, "glass");
-    m.density = 2500; m.young = 1e7; m.poisson = 0.3;
-    floe_world_add_material(w, &m);
-    floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.3));
+    mpi_test_add_glass(w, 1e7);
     int g[2] = {floe_world_add_geometry(w, floe_sphere_create(0.0004)), floe_world_add_geometry(w, floe_sphere_create(0.0006))};
-    double pts[6][3] = {{0, 0, 0}, {L, 0, 0}, {0, 0, 0}, {0, L, 0}, {0, 0, 0}, {0, 0, L}};
-    double nrm[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-    for (int k = 0; k < 6; k++) floe_world_add_wall(w, pts[k], nrm[k], 0, FLOE_FIXED);
+    mpi_test_box_walls(w, L, L, L, 0, 6);
     unsigned s = 31337;
     const double h = L / NSIDE;
     int cnt = 0;
@@ -311,9 +303,7 @@ static void check_finish(floe_world *w, floe_world *ref) {
 }
 
 int main(int argc, char **argv) {
-    MPI_Init(&argc, &argv);
-    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
-    MPI_Comm_size(MPI_COMM_WORLD, &size_);
+    mpi_test_init(&argc, &argv);
     floe_world *w = build(), *ref = build();
     CHECK(strcmp(floe_comm_kind_name(FLOE_COMM_MIGRATE), "migrate") == 0, "kind names");
     int rc = floe_world_parallel_init(w, NULL);
@@ -328,9 +318,7 @@ int main(int argc, char **argv) {
         check_rebuild(w, ref);
         check_finish(w, ref);
     }
-    int fails = check_fail_, all;
-    MPI_Allreduce(&fails, &all, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
-    if (rank_ == 0) printf("test_mpi_comm (%d ranks): %d failed checks over all ranks\n", size_, all);
+    int all = mpi_test_failed("test_mpi_comm");
     floe_world_destroy(w);
     floe_world_destroy(ref);
     MPI_Finalize();

@@ -18,20 +18,11 @@
 #include "world_internal.h"
 #include "par_internal.h"
 #include "../check.h"
-#include <mpi.h>
+#include "mpi_common.h"
 #include <stdlib.h>
 #include <string.h>
 
-static int rank_, size_;
 static const double L = 0.02; /* box side, m */
-
-static floe_material glass(void) {
-    floe_material m;
-    memset(&m, 0, sizeof m);
-    strcpy(m.name, "glass");
-    m.density = 2500; m.young = 1e7; m.poisson = 0.3;
-    return m;
-}
 
 /* n_side^3 particles on a jittered lattice: spheres of 0.4 and 0.6 mm, ellipsoids, boxes;
  * 6 walls, three of them added first, three last (walls anywhere in the store) */
@@ -41,7 +32,7 @@ static floe_world *build(int n_side) {
     d.gravity[2] = -9.81;
     d.energy_check = FLOE_CHECK_OFF;
     floe_world *w = floe_world_create(&d, NULL, 0);
-    floe_material m = glass();
+    floe_material m = mpi_test_glass(1e7);
     floe_world_add_material(w, &m);
     floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.3));
     int g[4];
@@ -49,9 +40,7 @@ static floe_world *build(int n_side) {
     g[1] = floe_world_add_geometry(w, floe_sphere_create(0.0006));
     g[2] = floe_world_add_geometry(w, floe_ellipsoid_create(0.0006, 0.0004, 0.0003));
     g[3] = floe_world_add_geometry(w, floe_box_create(0.0008, 0.0006, 0.0005));
-    double pts[6][3] = {{0, 0, 0}, {L, 0, 0}, {0, 0, 0}, {0, L, 0}, {0, 0, 0}, {0, 0, L}};
-    double nrm[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-    for (int k = 0; k < 3; k++) floe_world_add_wall(w, pts[k], nrm[k], 0, FLOE_FIXED);
+    mpi_test_box_walls(w, L, L, L, 0, 3);
     unsigned s = 777;
     const double h = L / n_side;
     int cnt = 0;
@@ -68,7 +57,7 @@ static floe_world *build(int n_side) {
                 p.q[0] = 1; p.q[1] = j[0]; p.q[2] = j[1]; p.q[3] = j[2];
                 floe_world_add_particle(w, &p);
             }
-    for (int k = 3; k < 6; k++) floe_world_add_wall(w, pts[k], nrm[k], 0, FLOE_FIXED);
+    mpi_test_box_walls(w, L, L, L, 3, 6);
     w->nl.skin = 0.0006; /* wide: many ghosts */
     if (floe_world_prepare(w)) { fprintf(stderr, "prepare: %s\n", floe_world_last_error(w)); exit(2); }
     return w;
@@ -203,7 +192,7 @@ static void check_refusals(void) {
         d.dt = 1e-6;
         if (k == 1) d.integrator = FLOE_RK2;
         floe_world *w = floe_world_create(&d, NULL, 0);
-        floe_material m = glass();
+        floe_material m = mpi_test_glass(1e7);
         floe_world_add_material(w, &m);
         floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.3));
         int g = floe_world_add_geometry(w, floe_sphere_create(0.001));
@@ -233,9 +222,7 @@ static void check_refusals(void) {
 }
 
 int main(int argc, char **argv) {
-    MPI_Init(&argc, &argv);
-    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
-    MPI_Comm_size(MPI_COMM_WORLD, &size_);
+    mpi_test_init(&argc, &argv);
     check_refusals();
     const int n_side = 12; /* 1728 particles */
     floe_world *w = build(n_side), *ref = build(n_side);
@@ -265,9 +252,7 @@ int main(int argc, char **argv) {
         check_split(w, ref, "after the shift move");
         check_comm(w);
     }
-    int fails = check_fail_, all;
-    MPI_Allreduce(&fails, &all, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
-    if (rank_ == 0) printf("test_mpi_decomp (%d ranks): %d failed checks over all ranks\n", size_, all);
+    int all = mpi_test_failed("test_mpi_decomp");
     floe_world_destroy(w);
     floe_world_destroy(ref);
     MPI_Finalize();

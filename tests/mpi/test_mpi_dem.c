@@ -19,11 +19,10 @@
 #include "world_internal.h"
 #include "par_internal.h"
 #include "../check.h"
-#include <mpi.h>
+#include "mpi_common.h"
 #include <stdlib.h>
 #include <string.h>
 
-static int rank_, size_;
 enum { NX = 8, NY = 8, NZ = 6 };
 static const double R = 0.001, SP = 0.0022, DT = 2.5e-6;
 static const double LX = NX * SP + 0.0008, LY = NY * SP + 0.0008, LZ = 0.05;
@@ -33,20 +32,13 @@ static floe_world *build(int shapes) {
     d.dim = 3; d.dt = DT;
     d.gravity[2] = -9.81;
     floe_world *w = floe_world_create(&d, NULL, 0);
-    floe_material m;
-    memset(&m, 0, sizeof m);
-    strcpy(m.name, "glass");
-    m.density = 2500; m.young = 1e7; m.poisson = 0.3;
-    floe_world_add_material(w, &m);
-    floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.3));
+    mpi_test_add_glass(w, 1e7);
     int g[4];
     g[0] = floe_world_add_geometry(w, floe_sphere_create(R));
     g[3] = floe_world_add_geometry(w, floe_sphere_create(0.25 * R));
     g[1] = floe_world_add_geometry(w, floe_ellipsoid_create(R, 0.8 * R, 0.6 * R));
     g[2] = floe_world_add_geometry(w, floe_box_create(1.4 * R, 1.2 * R, 1.0 * R));
-    double pts[6][3] = {{0, 0, 0}, {LX, 0, 0}, {0, 0, 0}, {0, LY, 0}, {0, 0, 0}, {0, 0, LZ}};
-    double nrm[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-    for (int k = 0; k < 6; k++) floe_world_add_wall(w, pts[k], nrm[k], 0, FLOE_FIXED);
+    mpi_test_box_walls(w, LX, LY, LZ, 0, 6);
     unsigned s = 4242;
     int cnt = 0;
     for (int c = 0; c < NZ; c++)
@@ -237,18 +229,14 @@ static void compare(int shapes, long nshort, long nlong, double xtol, double vto
 }
 
 int main(int argc, char **argv) {
-    MPI_Init(&argc, &argv);
-    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
-    MPI_Comm_size(MPI_COMM_WORLD, &size_);
+    mpi_test_init(&argc, &argv);
     const long nshort = argc > 1 ? atol(argv[1]) : 3000, nlong = argc > 2 ? atol(argv[2]) : 12000;
     compare(0, nshort, nlong, 1e-10, 1e-8);
     compare(1, nshort, 0, 1e-8, 1e-6);
     /* few ghosts, many migrations: a rank's store grows at a rebuild within a step (the
      * second half kick must see the particles that arrived) */
     compare(2, nshort, 0, 1e-10, 1e-8);
-    int fails = check_fail_, all;
-    MPI_Allreduce(&fails, &all, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
-    if (rank_ == 0) printf("test_mpi_dem (%d ranks): %d failed checks over all ranks\n", size_, all);
+    int all = mpi_test_failed("test_mpi_dem");
     MPI_Finalize();
     return all ? 1 : 0;
 }

@@ -14,12 +14,12 @@
 #include "floe.h"
 #include "floe_parallel.h"
 #include "../check.h"
-#include <mpi.h>
+#include "../test_files.h"
+#include "mpi_common.h"
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
-static int rank_, size_;
 static const double L = 0.02;
 enum { NSIDE = 5, NSTEPS = 25 };
 
@@ -27,16 +27,9 @@ static floe_world *build(void) {
     floe_world_def d = floe_default_world_def();
     d.dim = 3; d.dt = 1e-6;
     floe_world *w = floe_world_create(&d, NULL, 0);
-    floe_material m;
-    memset(&m, 0, sizeof m);
-    strcpy(m.name, "glass");
-    m.density = 2500; m.young = 1e7; m.poisson = 0.3;
-    floe_world_add_material(w, &m);
-    floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.3));
+    mpi_test_add_glass(w, 1e7);
     int g = floe_world_add_geometry(w, floe_sphere_create(0.001));
-    double pts[6][3] = {{0, 0, 0}, {L, 0, 0}, {0, 0, 0}, {0, L, 0}, {0, 0, 0}, {0, 0, L}};
-    double nrm[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-    for (int k = 0; k < 6; k++) floe_world_add_wall(w, pts[k], nrm[k], 0, FLOE_FIXED);
+    mpi_test_box_walls(w, L, L, L, 0, 6);
     unsigned s = 4242;
     const double h = L / NSIDE;
     for (int a = 0; a < NSIDE; a++)
@@ -99,19 +92,6 @@ static int same_list(const long *got, int n, const long *want, int m) {
     return 1;
 }
 
-static char *slurp(const char *path) {
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *s = malloc((size_t)n + 1);
-    size_t got = fread(s, 1, (size_t)n, f);
-    s[got] = 0;
-    fclose(f);
-    return s;
-}
-
 static int count_of(const char *s, const char *what) {
     int n = 0;
     for (const char *p = s; (p = strstr(p, what)); p += strlen(what)) n++;
@@ -168,9 +148,7 @@ static void check_files(const char *dir, int frames) {
 }
 
 int main(int argc, char **argv) {
-    MPI_Init(&argc, &argv);
-    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
-    MPI_Comm_size(MPI_COMM_WORLD, &size_);
+    mpi_test_init(&argc, &argv);
     char dir[256] = "";
     if (rank_ == 0) {
         snprintf(dir, sizeof dir, "%s/floe_mpi_outputs_XXXXXX", getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
