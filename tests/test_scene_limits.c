@@ -17,6 +17,7 @@
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
+#include "test_files.h"
 
 #define BASE_MATS                                                                      \
     "dimension: 3\n"                                                                   \
@@ -255,21 +256,6 @@ static void test_text(void)
     expect_fail("default file taken", t, loc_of(t, "particles.csv", 0), "outputs[0] (line 10, column 5)", "particles.csv");
     t = BASE_MATS ONE_BODY "outputs:\n  - {type: vtk, prefix: f}\n  - {type: vtk, prefix: f, every: 7}\n";
     expect_fail("two vtk prefixes", t, loc_of(t, "f, every", 0), "outputs[0]", "f.pvd");
-}
-
-/* whole file as a string (caller frees), NULL if missing */
-static char *slurp(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *b = malloc((size_t)n + 1);
-    if (b && fread(b, 1, (size_t)n, f) != (size_t)n) n = 0;
-    if (b) b[n] = 0;
-    fclose(f);
-    return b;
 }
 
 static int has_nan_text(const char *t)
