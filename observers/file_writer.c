@@ -462,6 +462,11 @@ unsigned char *floe_fw_series_state_save(const floe_fw_series *s, unsigned char 
 }
 
 int floe_fw_series_state_restore(floe_fw_series *s, floe_world *w, const unsigned char *buf, size_t n) {
+    return floe_fw_series_state_restore_as(s, w, buf, n, ".vtu", 1);
+}
+
+int floe_fw_series_state_restore_as(floe_fw_series *s, floe_world *w, const unsigned char *buf, size_t n,
+                                    const char *suffix, int pvd) {
     int frames;
     if (n < sizeof(int)) return floe_world_report_error(w, FLOE_EINVAL, "%s: checkpoint state too short", s->who);
     floe_fw_get(buf, &frames, sizeof frames);
@@ -480,7 +485,8 @@ int floe_fw_series_state_restore(floe_fw_series *s, floe_world *w, const unsigne
     s->frames = frames;
     s->held = 0;
     /* the collection as it was at the checkpoint (frames written after it are written again) */
-    if (frames > 0 && floe_fw_write_pvd(s->dir, s->prefix, s->times, s->frames) != FLOE_OK)
+    if ((pvd == 2 || (pvd == 1 && frames > 0)) &&
+        floe_fw_write_pvd_as(s->dir, s->prefix, s->times, s->frames, suffix) != FLOE_OK)
         return floe_world_report_error(w, FLOE_EIO, "%s: writing %s/%s.pvd failed: %s", s->who, s->dir, s->prefix,
                                        strerror(errno));
     return FLOE_OK;

@@ -154,6 +154,10 @@ int floe_fw_resume(floe_file_writer *fw, floe_world *w, long long length);
 size_t floe_fw_series_state_size(const floe_fw_series *s);
 unsigned char *floe_fw_series_state_save(const floe_fw_series *s, unsigned char *buf);
 int floe_fw_series_state_restore(floe_fw_series *s, floe_world *w, const unsigned char *buf, size_t n);
+/* the same with the collection's frames named by suffix (".vtu", ".pvtu"); pvd: 0 the .pvd
+ * left alone, 1 rewritten when there are frames, 2 always */
+int floe_fw_series_state_restore_as(floe_fw_series *s, floe_world *w, const unsigned char *buf, size_t n,
+                                    const char *suffix, int pvd);
 /* bytes in and out of a state buffer; each returns the position after them */
 static inline unsigned char *floe_fw_put(unsigned char *buf, const void *p, size_t n) {
     memcpy(buf, p, n);

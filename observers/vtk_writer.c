@@ -468,29 +468,7 @@ static int vw_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
  * pieces (a frame's .pvtu names its own pieces: the rank count may change at a restart) */
 static int vw_piece_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n) {
     vtk_writer *v = (vtk_writer *)o;
-    floe_fw_series *s = &v->ser;
-    int frames;
-    if (n < sizeof(int)) return floe_world_report_error(w, FLOE_EINVAL, "vtk writer: checkpoint state too short");
-    floe_fw_get(buf, &frames, sizeof frames);
-    if (frames < 0 || n < sizeof(int) + sizeof(long) + sizeof(int) + (size_t)frames * sizeof(double))
-        return floe_world_report_error(w, FLOE_EINVAL, "vtk writer: checkpoint state does not match");
-    if (frames > s->cap) {
-        double *t = realloc(s->times, (size_t)frames * sizeof *t);
-        if (!t) return floe_world_report_error(w, FLOE_ENOMEM, "vtk writer: out of memory");
-        s->times = t;
-        s->cap = frames;
-    }
-    buf += sizeof frames;
-    buf = floe_fw_get(buf, &s->last_step, sizeof s->last_step);
-    buf = floe_fw_get(buf, &s->observed, sizeof s->observed);
-    if (frames) floe_fw_get(buf, s->times, (size_t)frames * sizeof(double));
-    s->frames = frames;
-    s->held = 0;
-    int rc = v->rank == 0 ? floe_fw_write_pvd_as(s->dir, s->prefix, s->times, frames, ".pvtu") : FLOE_OK;
-    if (rc != FLOE_OK)
-        return floe_world_report_error(w, FLOE_EIO, "vtk writer: writing %s/%s.pvd failed: %s", s->dir, s->prefix,
-                                       strerror(errno));
-    return FLOE_OK;
+    return floe_fw_series_state_restore_as(&v->ser, w, buf, n, ".pvtu", v->rank == 0 ? 2 : 0);
 }
 
 static const floe_observer_class vtk_writer_class = {
