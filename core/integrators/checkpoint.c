@@ -785,6 +785,18 @@ static int check_header(const unsigned char *p, size_t len, const char *path, ui
 
 /* the file into w; with_obs: the observers' section too (else it is skipped: an MPI rank's
  * share of a world whose outputs are rank 0's mirror's) */
+/* read the file at path, check its header against the scene and index its sections; on a
+ * failure the reason is in why, and *p stays NULL when the file could not be read (else the
+ * caller frees it) */
+static int open_indexed(const char *path, uint64_t scene_hash, const char *scene_name, unsigned char **p, size_t *len,
+                        sec_index *ix, char *why, size_t wlen) {
+    size_t pos = 0;
+    int rc = read_file(path, p, len, why, wlen);
+    if (rc) return rc;
+    rc = check_header(*p, *len, path, scene_hash, scene_name, &pos, why, wlen);
+    return rc ? rc : index_sections(*p, *len, pos, ix, why, wlen);
+}
+
 static int load_file(floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name, int with_obs,
                      char *err, size_t errlen) {
     if (!w || !path) return floe_error_set(err, errlen, FLOE_EINVAL, "checkpoint: no world or no path");
@@ -794,13 +806,11 @@ static int load_file(floe_world *w, const char *path, uint64_t scene_hash, const
         return floe_error_set(err, errlen, FLOE_EINVAL, "checkpoint %s: load it into a world freshly built from its scene, "
                     "before its first step", path);
     unsigned char *p = NULL;
-    size_t len = 0, pos = 0;
+    size_t len = 0;
     char why[1024];
-    int rc = read_file(path, &p, &len, why, sizeof why);
-    if (rc) return floe_error_set(err, errlen, rc, "checkpoint: %s", why);
     sec_index ix;
-    rc = check_header(p, len, path, scene_hash, scene_name, &pos, why, sizeof why);
-    if (!rc) rc = index_sections(p, len, pos, &ix, why, sizeof why);
+    int rc = open_indexed(path, scene_hash, scene_name, &p, &len, &ix, why, sizeof why);
+    if (rc && !p) return floe_error_set(err, errlen, rc, "checkpoint: %s", why);
     if (!rc && with_obs) rc = check_observers(w, why, sizeof why);
     if (!rc) rc = prepare_quietly(w, why, sizeof why);
     if (!rc) rc = restore_sections(w, p, &ix, why, sizeof why);
@@ -852,13 +862,11 @@ int floe_world_checkpoint_restore_split_outputs(floe_world *w, floe_observer **o
                                                 uint64_t scene_hash, const char *scene_name, char *err, size_t errlen) {
     if (!w || !path || (nobs > 0 && !obs)) return floe_error_set(err, errlen, FLOE_EINVAL, "checkpoint: no world or no path");
     unsigned char *p = NULL;
-    size_t len = 0, pos = 0;
+    size_t len = 0;
     char why[1024];
-    int rc = read_file(path, &p, &len, why, sizeof why);
-    if (rc) return floe_error_set(err, errlen, rc, "checkpoint: %s", why);
     sec_index ix;
-    rc = check_header(p, len, path, scene_hash, scene_name, &pos, why, sizeof why);
-    if (!rc) rc = index_sections(p, len, pos, &ix, why, sizeof why);
+    int rc = open_indexed(path, scene_hash, scene_name, &p, &len, &ix, why, sizeof why);
+    if (rc && !p) return floe_error_set(err, errlen, rc, "checkpoint: %s", why);
     int at = rc ? -1 : find_section(&ix, TAG_OBSV);
     if (!rc && at < 0) rc = floe_error_set(why, sizeof why, FLOE_EINVAL, "section OBSV is missing");
     if (!rc) {
