@@ -162,12 +162,6 @@ static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs)
     return P;
 }
 
-/* Point q's sums in the serial loop's order: v[0 .. gs) (from v's values: f, or 0) gets the
- * shares of the bonds whose partner q is, in increasing k, added (sub = 0) or subtracted
- * (sub = 1), and q's own row sums row[0 .. gs) where the serial loop adds them: after the
- * bonds of the rows below q, before those of rows above (none: every partner is above its
- * row). With mx (PMB alpha) the shares' and the row's slot gs is a maximum (first of equal
- * values, as the serial loop keeps it), into *mx from -INFINITY. */
 /* The bond vector from i (at xi0, xi1, xi2) to its partner j; a bond across
  * the periodic cell's faces (img[k] != 0) goes to j's image. */
 static inline __attribute__((always_inline)) void pd_bond_vec(const double *x, int j, double xi0, double xi1,
@@ -184,6 +178,12 @@ static inline __attribute__((always_inline)) void pd_bond_vec(const double *x, i
     }
 }
 
+/* Point q's sums in the serial loop's order: v[0 .. gs) (from v's values: f, or 0) gets the
+ * shares of the bonds whose partner q is, in increasing k, added (sub = 0) or subtracted
+ * (sub = 1), and q's own row sums row[0 .. gs) where the serial loop adds them: after the
+ * bonds of the rows below q, before those of rows above (none: every partner is above its
+ * row). With mx (PMB alpha) the shares' and the row's slot gs is a maximum (first of equal
+ * values, as the serial loop keeps it), into *mx from -INFINITY. */
 static inline __attribute__((always_inline)) void pd_gather(const floe_pd_body *b, const floe_pd_par *P, int q,
                                                             double *v, const int gs, const int st, const int sub,
                                                             double *mx)

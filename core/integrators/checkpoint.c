@@ -783,8 +783,6 @@ static int check_header(const unsigned char *p, size_t len, const char *path, ui
     return FLOE_OK;
 }
 
-/* the file into w; with_obs: the observers' section too (else it is skipped: an MPI rank's
- * share of a world whose outputs are rank 0's mirror's) */
 /* read the file at path, check its header against the scene and index its sections; on a
  * failure the reason is in why, and *p stays NULL when the file could not be read (else the
  * caller frees it) */
@@ -797,6 +795,8 @@ static int open_indexed(const char *path, uint64_t scene_hash, const char *scene
     return rc ? rc : index_sections(*p, *len, pos, ix, why, wlen);
 }
 
+/* the file into w; with_obs: the observers' section too (else it is skipped: an MPI rank's
+ * share of a world whose outputs are rank 0's mirror's) */
 static int load_file(floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name, int with_obs,
                      char *err, size_t errlen) {
     if (!w || !path) return floe_error_set(err, errlen, FLOE_EINVAL, "checkpoint: no world or no path");

@@ -54,7 +54,7 @@ int floe_world_checkpoint_save(const floe_world *w, const char *path, uint64_t s
  * FLOE_EIO, FLOE_ENOMEM. After a failed load the world must be destroyed. */
 int floe_world_checkpoint_load(floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name,
                                char *err, size_t errlen);
-/* The same without the observers' section (the file must hold it; it is checked, not read):
+/* The same without the observers' section (skipped, not read):
  * for a world whose outputs are continued elsewhere, an MPI rank's share of a run whose
  * outputs rank 0's mirror writes (floe_world_parallel_checkpoint_load). */
 int floe_world_checkpoint_load_state(floe_world *w, const char *path, uint64_t scene_hash, const char *scene_name,

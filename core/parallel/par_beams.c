@@ -108,7 +108,11 @@ int floe_par_beams_out(floe_world *w, floe_par *P, const int *dest) {
     free(recs);
     free(hd);
     P->blost = lost; /* reported by floe_par_beams_in, on every rank */
-    return rc ? rc : r2;
+    /* agreed: a rank that failed alone would skip the decomposition's collectives */
+    int mine = rc ? rc : r2, all = mine;
+    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MAX, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof mine);
+    return all;
 }
 
 static int cmp_gid2(const void *a, const void *b) {
@@ -176,7 +180,7 @@ int floe_par_beams_gather(floe_world *w, floe_par *P, floe_world *M) {
     int bad = rc != 0, anybad;
     MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_LOR, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof bad);
-    if (anybad) { free(recs); free(cnt); return FLOE_ENOMEM; }
+    if (anybad) { free(recs); free(cnt); return floe_world_error(w, FLOE_ENOMEM, "MPI: gathering the beam bonds: out of memory"); }
     MPI_Gather(&mine, 1, MPI_INT, cnt, 1, MPI_INT, 0, P->comm);
     floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof mine);
     double *rb = NULL;
@@ -184,8 +188,11 @@ int floe_par_beams_gather(floe_world *w, floe_par *P, floe_world *M) {
     if (P->rank == 0) {
         for (int r = 0; r < P->size; r++) { cnt[P->size + r] = tot; tot += cnt[r]; }
         rb = malloc((size_t)(tot ? tot : 1) * sizeof *rb);
-        if (!rb) tot = 0;
     }
+    int norb = P->rank == 0 && !rb; /* rank 0 out of memory: nobody sends */
+    MPI_Bcast(&norb, 1, MPI_INT, 0, P->comm);
+    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof norb);
+    if (norb) { free(recs); free(cnt); return floe_world_error(w, FLOE_ENOMEM, "MPI: gathering the beam bonds: out of memory on rank 0"); }
     MPI_Gatherv(recs, mine, MPI_DOUBLE, rb, cnt, cnt ? cnt + P->size : NULL, MPI_DOUBLE, 0, P->comm);
     floe_par_count_to_root(P, FLOE_COMM_OUTPUT, (long long)mine * sizeof *recs);
     int miss = 0;

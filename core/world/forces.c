@@ -1029,6 +1029,9 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         unsigned char *own = realloc(ps->own, (size_t)(n ? n : 1));
         if (!own) return FLOE_ENOMEM;
         ps->own = own;
+        /* flags a failed evaluation left (no gather ran) would make a particle owned now
+         * gather its buffered entries again */
+        memset(ps->hit, 0, (size_t)(n ? n : 1));
         const int *row = ps->row, *off = ps->adj_off, *adj = ps->adj;
         const long span = (long)G * FLOE_PAR_BLOCK;
         for (int i = 0; i < n; i++) {
