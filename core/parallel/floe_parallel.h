@@ -38,7 +38,9 @@ int floe_world_parallel_rebuild(floe_world *w);
  * forces summed) and the summed energy ledger are gathered into the mirror and its
  * observers called, so that the files are those of a serial run. The mirror is prepared
  * here, and finished by floe_world_parallel_finish; the caller destroys it. Observers that
- * read contacts are refused (FLOE_ENOTSUP). Collective. */
+ * read contacts (stress, contacts, force chains, coast load) get the contacts of every rank:
+ * the ranks record theirs at the steps one is due (rank 0 says which, a step ahead) and send
+ * them, by global ids, in the serial list's order. Collective. */
 int floe_world_parallel_outputs(floe_world *w, floe_world *mirror);
 /* the end of a run: the final state into the mirror, its observers' end (files closed);
  * a world without a mirror: nothing. Collective. */

@@ -462,28 +462,143 @@ int floe_world_parallel_is_owned(const floe_world *w, int i) {
 
 /* ---- outputs through the mirror (rank 0) ---- */
 
+/* a local index (of this rank's world) as a global id, -1 kept */
+static int gid_or(const floe_par *P, int i) { return i >= 0 && i < P->nrep + P->nown + P->nghost ? (int)P->gid[i] : -1; }
+
+static int mirror_reads_contacts(const floe_world *M) {
+    for (int k = 0; k < M->nobs; k++)
+        if (M->obs[k]->klass->needs_contacts) return 1;
+    return 0;
+}
+
+/* an output of M that reads contacts is due after the next step (the clock of step.c's
+ * advance_clock; the adaptive step is refused under MPI, so dt is the next step's) */
+static int contacts_due_next(const floe_world *w, const floe_world *M) {
+    const long step = w->step + 1;
+    const double time = w->t0 + (double)(step - w->step0) * w->dt;
+    for (int k = 0; k < M->nobs; k++) {
+        const floe_observer *o = M->obs[k];
+        if (!o->klass->needs_contacts) continue;
+        if (o->period_steps > 0 ? step % o->period_steps == 0
+                                : o->period_time > 0 ? time >= o->next_time - 1e-9 * w->dt : 1)
+            return 1;
+    }
+    return 0;
+}
+
 int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {
     floe_par *P = w->par;
     if (!P) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: the world is not split");
     int bad = 0;
     if (P->rank == 0 && mirror) {
         if (mirror->p.n != P->ntotal) bad = 1;
-        for (int k = 0; k < mirror->nobs && !bad; k++)
-            if (mirror->obs[k]->klass->needs_contacts) bad = 2;
         if (!bad && !mirror->prepared) bad = 3;
     }
     int any;
     MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof bad);
     if (any == 1) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: the mirror does not hold the split world's particles");
-    if (any == 2) return refuse(w, "an output that reads contacts");
     if (any == 3) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: prepare the mirror first (floe_world_prepare)");
     P->mirror = P->rank == 0 ? mirror : NULL;
-    int has = P->mirror != NULL, all_has;
-    MPI_Allreduce(&has, &all_has, 1, MPI_INT, MPI_MAX, P->comm);
-    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof has);
-    if (!all_has) P->mirror = NULL;
+    /* rank 0's word: whether it has a mirror (bit 0), whether the mirror has outputs that read
+     * contacts (bit 1) and whether one is due at the next step (bit 2): every rank then
+     * records its contacts at the steps they are read (contacts_wanted) */
+    int word = 0;
+    if (P->mirror) word = 1 | (mirror_reads_contacts(P->mirror) ? 2 : 0);
+    if (word & 2 && contacts_due_next(w, P->mirror)) word |= 4;
+    MPI_Bcast(&word, 1, MPI_INT, 0, P->comm);
+    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof word);
+    if (!(word & 1)) P->mirror = NULL;
+    w->par_contacts = (word & 2 ? 1 : 0) | (word & 4 ? 2 : 0);
     return FLOE_OK;
+}
+
+/* the contacts of the ranks' last evaluation, by global ids, into the mirror M (rank 0) in
+ * the order of the serial list (pairs by (gid_i, gid_j), the records of a pair in the
+ * evaluating rank's order: each pair is evaluated by one rank); M's contacts are marked
+ * unrecorded when a rank has none (not recorded at this evaluation, as a serial world's) */
+enum { CREC = 20 }; /* gid_i gid_j seq point3 n3 depth force3 fn energy branch3 r_eff m_eff */
+
+static int crec_cmp(const void *a, const void *b) {
+    const double *x = a, *y = b;
+    for (int k = 0; k < 3; k++)
+        if (x[k] != y[k]) return x[k] < y[k] ? -1 : 1;
+    return 0;
+}
+
+static int contacts_gather(floe_world *w, floe_par *P) {
+    const int nc = w->contacts_valid ? w->ncontacts : 0;
+    double *sb = malloc((size_t)(nc ? nc : 1) * CREC * sizeof *sb);
+    int *cnt = P->rank == 0 ? malloc((size_t)2 * P->size * sizeof *cnt) : NULL;
+    int bad = !sb || (P->rank == 0 && !cnt), flags[2] = {bad, !w->contacts_valid}, any[2];
+    MPI_Allreduce(flags, any, 2, MPI_INT, MPI_LOR, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof flags);
+    floe_world *M = P->mirror;
+    if (M) M->contacts_valid = 0;
+    if (any[0] || any[1]) { free(sb); free(cnt); return any[0] ? FLOE_ENOMEM : FLOE_OK; }
+    for (int k = 0; k < nc; k++) {
+        const floe_contact_rec *c = &w->contacts[k];
+        double *r = sb + (size_t)k * CREC;
+        r[0] = (double)gid_or(P, c->i);
+        r[1] = (double)gid_or(P, c->j);
+        r[2] = k;
+        memcpy(r + 3, c->point, 3 * sizeof *r);
+        memcpy(r + 6, c->n, 3 * sizeof *r);
+        r[9] = c->depth;
+        memcpy(r + 10, c->force, 3 * sizeof *r);
+        r[13] = c->fn;
+        r[14] = c->energy;
+        memcpy(r + 15, c->branch, 3 * sizeof *r);
+        r[18] = c->r_eff;
+        r[19] = c->m_eff;
+    }
+    int mine = nc * CREC, tot = 0;
+    MPI_Gather(&mine, 1, MPI_INT, cnt, 1, MPI_INT, 0, P->comm);
+    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof mine);
+    double *rb = NULL;
+    if (P->rank == 0) {
+        for (int r = 0; r < P->size; r++) { cnt[P->size + r] = tot; tot += cnt[r]; }
+        rb = malloc((size_t)(tot ? tot : 1) * sizeof *rb);
+    }
+    /* rank 0 without a buffer: every rank still takes part, none is sent */
+    int ok = P->rank != 0 || rb != NULL;
+    MPI_Bcast(&ok, 1, MPI_INT, 0, P->comm);
+    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof ok);
+    int rc = FLOE_OK;
+    if (ok) {
+        MPI_Gatherv(sb, mine, MPI_DOUBLE, rb, cnt, cnt ? cnt + P->size : NULL, MPI_DOUBLE, 0, P->comm);
+        floe_par_count_to_root(P, FLOE_COMM_OUTPUT, (long long)mine * sizeof *sb);
+    } else rc = FLOE_ENOMEM;
+    const int n = tot / CREC;
+    if (P->rank == 0 && ok && M) {
+        if (n > M->contacts_cap) {
+            floe_contact_rec *nb = realloc(M->contacts, (size_t)n * sizeof *nb);
+            if (!nb) rc = FLOE_ENOMEM;
+            else { M->contacts = nb; M->contacts_cap = n; }
+        }
+        if (!rc) {
+            qsort(rb, (size_t)n, CREC * sizeof *rb, crec_cmp);
+            for (int k = 0; k < n; k++) {
+                const double *r = rb + (size_t)k * CREC;
+                floe_contact_rec *c = &M->contacts[k];
+                c->i = (int)r[0];
+                c->j = (int)r[1];
+                memcpy(c->point, r + 3, 3 * sizeof *r);
+                memcpy(c->n, r + 6, 3 * sizeof *r);
+                c->depth = r[9];
+                memcpy(c->force, r + 10, 3 * sizeof *r);
+                c->fn = r[13];
+                c->energy = r[14];
+                memcpy(c->branch, r + 15, 3 * sizeof *r);
+                c->r_eff = r[18];
+                c->m_eff = r[19];
+            }
+            M->ncontacts = n;
+            M->contacts_valid = 1;
+        }
+    }
+    free(sb); free(cnt); free(rb);
+    return rc;
 }
 
 /* the owned particles' state by global id into the mirror (rank 0), the walls' forces summed */
@@ -541,6 +656,9 @@ static int mirror_gather(floe_world *w, floe_par *P) {
         M->dt = w->dt;
     }
     free(sb); free(wf); free(cnt); free(rb);
+    /* the contacts, when the mirror has outputs that read them (stress, contacts, force
+     * chains, coast load) */
+    if (w->par_contacts & 1) FLOE_TRY(contacts_gather(w, P));
     /* the beam bonds' state (broken flags, stresses: fracture_events, floe_sizes) */
     return floe_par_beams_gather(w, P, P->rank == 0 ? P->mirror : NULL);
 }
@@ -633,10 +751,17 @@ int floe_par_observe(floe_world *w, int force_all) {
     MPI_Bcast(&has, 1, MPI_INT, 0, P->comm);
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof has);
     if (!has) return FLOE_OK;
-    int due = P->rank == 0 ? force_all || mirror_due(w, P->mirror) : 0;
+    /* rank 0's word: the mirror is due now (bit 0), an output that reads contacts is due at
+     * the next step (bit 1: every rank records its contacts then) */
+    int due = 0;
+    if (P->rank == 0) {
+        due = force_all || mirror_due(w, P->mirror);
+        if (w->par_contacts & 1 && contacts_due_next(w, P->mirror)) due |= 2;
+    }
     MPI_Bcast(&due, 1, MPI_INT, 0, P->comm);
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof due);
-    if (!due) return FLOE_OK;
+    w->par_contacts = (w->par_contacts & 1) | (due & 2);
+    if (!(due & 1)) return FLOE_OK;
     floe_energy e;
     energy_sum(w, &e, FLOE_COMM_OUTPUT);
     int rc = mirror_gather(w, P), ok;
@@ -692,9 +817,6 @@ static int pair_cmp(const void *a, const void *b) {
         if (x[k] != y[k]) return x[k] < y[k] ? -1 : 1;
     return 0;
 }
-
-/* a local index (of this rank's world) as a global id, -1 kept */
-static int gid_or(const floe_par *P, int i) { return i >= 0 && i < P->nrep + P->nown + P->nghost ? (int)P->gid[i] : -1; }
 
 int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
     floe_par *P = w->par;

@@ -292,6 +292,8 @@ static int observer_due(const floe_world *w, const floe_observer *o) {
 /* contact records are kept only at force evaluations that an observer will read */
 int contacts_wanted(const floe_world *w) {
     if (w->record_contacts) return 1;
+    /* MPI: the mirror's outputs read the contacts gathered from every rank */
+    if (w->par_contacts && (w->par_contacts & 2 || w->last_step_of_run)) return 1;
     if (!w->obs_need_contacts) return 0;
     if (w->last_step_of_run) return 1; /* observers write the final state at the end */
     for (int k = 0; k < w->nobs; k++)

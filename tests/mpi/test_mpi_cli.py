@@ -7,7 +7,11 @@ tests/scenes/vtk_small.yaml (18 spheres falling, few ghosts: a rank's particle c
 changes at rebuilds) with K = 8, kinematic_wall.yaml (a moving wall, leapfrog) and
 settle_2d.yaml (a 2D world) with K = 3, bonded.yaml (a block of beam-bonded spheres
 breaking on the floor: 83 breaks) with K = 2 and 4, bonded_2d.yaml (a bonded 2D plate: 184
-breaks; floe_sizes reads the bonds gathered into rank 0's mirror) with K = 3, and compares
+breaks; floe_sizes reads the bonds gathered into rank 0's mirror) with K = 3, contacts.yaml
+(spheres and boxes squeezed by a moving wall; the outputs that read contacts: stress of every
+particle by steps and of the boxes by simulated time, the contacts' CSV in the serial list's
+order, force chains, the walls' tracker; rank 0's mirror reads the contacts gathered from every
+rank) with K = 2 and 4, and compares
 every output file: the CSV files (particles, energy, tracker, written by rank 0) and every
 number of every VTK frame (the vtk output's frames: a .pvtu and a piece per rank, read
 together and ordered by id) must agree within 1e-9 of the column's (file's) largest magnitude
@@ -31,7 +35,8 @@ SCENES = [(os.path.join(here, "settle.yaml"), (2, 4)),
           (os.path.join(here, "kinematic_wall.yaml"), (3,)),
           (os.path.join(here, "settle_2d.yaml"), (3,)),
           (os.path.join(here, "bonded.yaml"), (2, 4)),
-          (os.path.join(here, "bonded_2d.yaml"), (3,))]
+          (os.path.join(here, "bonded_2d.yaml"), (3,)),
+          (os.path.join(here, "contacts.yaml"), (2, 4))]
 TOL = 1e-9
 fails = 0
 
