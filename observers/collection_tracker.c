@@ -229,8 +229,8 @@ static size_t ct_state_size(const floe_observer *o);
 static void ct_save(const floe_observer *o, unsigned char *buf);
 static int ct_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n);
 static const floe_observer_class collection_tracker_class = {
-    2, "collection_tracker", NULL, ct_observe, ct_end, ct_destroy, 1,
-    ct_state_size, ct_save, ct_restore}; /* checkpoint hooks (end of file) */
+    3, "collection_tracker", NULL, ct_observe, ct_end, ct_destroy, 1,
+    ct_state_size, ct_save, ct_restore, 0}; /* checkpoint hooks (end of file) */
 
 int floe_collection_tracker_last(const floe_observer *o, double sigma[6], double *coord) {
     if (!o || o->klass != &collection_tracker_class) return FLOE_EINVAL;

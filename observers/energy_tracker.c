@@ -84,7 +84,7 @@ static int et_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
 }
 
 static const floe_observer_class energy_tracker_class = {
-    2, "energy_tracker", NULL, et_observe, et_end, et_destroy, 0, et_state_size, et_save, et_restore};
+    3, "energy_tracker", NULL, et_observe, et_end, et_destroy, 0, et_state_size, et_save, et_restore, 0};
 
 floe_observer *floe_energy_tracker_create(const char *path, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';

@@ -138,8 +138,8 @@ static int ig_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
     return floe_fw_series_state_restore(&((ice_grid *)o)->ser, w, buf, n);
 }
 
-static const floe_observer_class ice_grid_class = {2, "ice_grid", NULL, ig_observe, ig_end, ig_destroy, 0,
-    ig_state_size, ig_save, ig_restore};
+static const floe_observer_class ice_grid_class = {3, "ice_grid", NULL, ig_observe, ig_end, ig_destroy, 0,
+    ig_state_size, ig_save, ig_restore, 1};
 
 floe_observer *floe_ice_grid_create(const char *dir, const char *prefix, int dim, const double lo[2],
                                     const double hi[2], int nx, int ny, int samples, char *err, size_t errlen) {

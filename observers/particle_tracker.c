@@ -114,7 +114,7 @@ static int pt_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
 }
 
 static const floe_observer_class particle_tracker_class = {
-    2, "particle_tracker", pt_begin, pt_observe, pt_end, pt_destroy, 0, pt_state_size, pt_save, pt_restore};
+    3, "particle_tracker", pt_begin, pt_observe, pt_end, pt_destroy, 0, pt_state_size, pt_save, pt_restore, 1};
 
 floe_observer *floe_particle_tracker_create(const char *path, const int *ids, int n,
                                             char *err, size_t errlen) {

@@ -156,7 +156,8 @@ static inline __attribute__((always_inline)) void rotate_drift_iso(double *q, co
 /* the orientation of free particle i over dt */
 static inline void rotate_drift(floe_particles *p, int i, double dt) {
     double *q = p->q + 4 * i, *L = p->L + 3 * i, *om = p->w + 3 * i;
-    if (p->iso[i]) rotate_drift_iso(q, L, om, p->inv_iso[i], 0.5 * dt);
+    if (p->iso[i] == 2) for (int k = 0; k < 3; k++) om[k] = L[k] * p->inv_iso[i]; /* orientation unread */
+    else if (p->iso[i]) rotate_drift_iso(q, L, om, p->inv_iso[i], 0.5 * dt);
     else if (floe_v3_dot(L, L) > 0) rotate_drift_aniso(q, p->inertia + 3 * i, L, om, dt);
 }
 
@@ -249,7 +250,9 @@ static double drift_block(floe_particles *p, const drift_args *a, int i0, int i1
         /* rotation: L by the half kick, then the orientation over dt (the isotropic fast
          * path q <- exp(dt omega / 2) q without trig, or the midpoint rule) */
         floe_v3_axpy(LL + 3 * i, k1, T + 3 * i);
-        if (iso[i]) rotate_drift_iso(Q + 4 * i, LL + 3 * i, W + 3 * i, II[i], h);
+        if (iso[i] == 2) /* a round particle whose orientation nothing reads: omega only */
+            for (int k = 0; k < 3; k++) W[3 * i + k] = LL[3 * i + k] * II[i];
+        else if (iso[i]) rotate_drift_iso(Q + 4 * i, LL + 3 * i, W + 3 * i, II[i], h);
         else if (floe_v3_dot(LL + 3 * i, LL + 3 * i) > 0)
             rotate_drift_aniso(Q + 4 * i, p->inertia + 3 * i, LL + 3 * i, W + 3 * i, dt);
         /* body-force work over the step uses the drift displacement (exact for gravity

@@ -9,7 +9,7 @@
 #include "floe_registry.h"
 
 typedef struct floe_observer_class {
-    int version; /* 1, or 2 with the checkpoint hooks below */
+    int version; /* 1; 2 with the checkpoint hooks below; 3 with reads_orientation */
     const char *name;
     int (*begin)(floe_observer *o, floe_world *w);      /* optional */
     int (*observe)(floe_observer *o, floe_world *w);    /* required */
@@ -27,6 +27,11 @@ typedef struct floe_observer_class {
     size_t (*state_size)(const floe_observer *o);
     void (*save)(const floe_observer *o, unsigned char *buf);
     int (*restore)(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n);
+    /* version 3: 1 when the observer reads the particles' orientations (floe_particles_view
+     * q). The orientation of a round particle (a sphere, a disc) is integrated only when
+     * something reads it (floe_world_set_orientation): an observer of version 1 or 2 is taken
+     * to read it. */
+    int reads_orientation;
 } floe_observer_class;
 
 struct floe_observer {

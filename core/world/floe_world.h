@@ -259,6 +259,18 @@ int floe_world_set_particle_geometry(floe_world *w, int i, int geometry);
  * for dt negative or not finite. */
 int floe_world_set_dt(floe_world *w, double dt, int allow_unstable);
 
+/* The orientation of round particles (a sphere in 3D, a disc in 2D: geometry kind
+ * FLOE_GEOM_SPHERE) changes nothing in their motion; integrating it costs about a sixth of
+ * a sphere's step. FLOE_ORIENT_AUTO (the default): it is integrated only when something
+ * reads it: an observer that reads orientations (floe_observer_class.reads_orientation, and
+ * every observer of class version < 3), beam bonds (their bending reads it), an output of
+ * an MPI run that reads them; otherwise a free round particle keeps its orientation (its
+ * angular velocity and momentum are integrated as always). FLOE_ORIENT_ALWAYS: always (for
+ * a caller that reads floe_particles_view.q of spheres itself). Other particles' orientations
+ * are always integrated. Takes effect at once (also on a prepared world). */
+typedef enum floe_orientation_mode { FLOE_ORIENT_AUTO = 0, FLOE_ORIENT_ALWAYS = 1 } floe_orientation_mode;
+int floe_world_set_orientation(floe_world *w, int mode);
+
 /* Keep a record of every contact of the last step (point, normal, force), as stress
  * observers need; switched on automatically when such an observer is added. */
 int floe_world_record_contacts(floe_world *w, int on);

@@ -432,11 +432,36 @@ int floe_world_record_contacts(floe_world *w, int on) {
 
 int floe_world_contact_count(const floe_world *w) { return w->ncontacts; }
 
+/* whether round particles' orientations are integrated (floe_world_set_orientation): iso[i]
+ * is 2 for an isotropic free sphere (disc) whose orientation nothing reads (the integrators
+ * then leave its q), 1 for the other isotropic bodies, 0 otherwise */
+int observer_reads_orientation(const floe_observer *o) {
+    return o->klass->version < 3 || o->klass->reads_orientation;
+}
+
+void orientation_refresh(floe_world *w) {
+    int need = w->orient_mode != FLOE_ORIENT_AUTO || w->orient_extra || (w->beams && floe_beam_set_count(w->beams) > 0);
+    for (int k = 0; k < w->nobs && !need; k++) need = observer_reads_orientation(w->obs[k]);
+    floe_particles *p = &w->p;
+    for (int i = 0; i < p->n; i++)
+        if (p->iso[i]) p->iso[i] = !need && p->kind[i] == FLOE_GEOM_SPHERE ? 2 : 1;
+}
+
 int floe_world_add_observer(floe_world *w, floe_observer *o) {
     if (!o) return floe_world_error(w, FLOE_EINVAL, "observer is NULL");
     if (o->klass->needs_contacts) w->obs_need_contacts = 1;
     if (grow((void **)&w->obs, &w->obs_cap, w->nobs + 1, sizeof *w->obs)) return FLOE_ENOMEM;
     w->obs[w->nobs++] = o;
+    if (w->prepared) orientation_refresh(w);
+    return FLOE_OK;
+}
+
+int floe_world_set_orientation(floe_world *w, int mode) {
+    if (!w) return FLOE_EINVAL;
+    if (mode != FLOE_ORIENT_AUTO && mode != FLOE_ORIENT_ALWAYS)
+        return floe_world_error(w, FLOE_EINVAL, "orientation mode %d: FLOE_ORIENT_AUTO (0) or FLOE_ORIENT_ALWAYS (1)", mode);
+    w->orient_mode = mode;
+    if (w->prepared) orientation_refresh(w);
     return FLOE_OK;
 }
 

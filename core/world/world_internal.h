@@ -92,6 +92,9 @@ struct floe_world {
     int obs_need_contacts;    /* some observer reads w->contacts when it is due */
     int contacts_valid;       /* w->contacts holds every contact of the last evaluation */
     int last_step_of_run;     /* floe_world_run's final step: record for the end() flush */
+    int orient_mode;          /* floe_orientation_mode (floe_world_set_orientation) */
+    int orient_extra;         /* outputs outside w->obs read orientations (MPI: the pieces,
+                               * rank 0's mirror; set by core/parallel) */
     int par_contacts;         /* MPI (core/parallel): rank 0's mirror has outputs that read
                                * contacts: bit 0, the same on every rank; bit 1, one of them is
                                * due at the next step (floe_par_observe decides, every rank) */

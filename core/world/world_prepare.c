@@ -126,6 +126,7 @@ int prepare_store(floe_world *w) {
         p->inv_mass[i] = p->motion[i] == FLOE_FREE ? 1.0 / p->mass[i] : 0;
         L_from_omega(p->q + 4 * i, p->inertia + 3 * i, p->w + 3 * i, p->L + 3 * i);
     }
+    orientation_refresh(w);
     /* laws whose critical step assumes the thickest floe (Hopkins' thickness_max): no floe of
      * their materials may be thicker, or the step estimate would be unsafe */
     if (p->thick)

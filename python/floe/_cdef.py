@@ -38,6 +38,7 @@ int floe_world_set_pose(floe_world *w, int i, const double x[3], const double q[
 int floe_world_set_dt(floe_world *w, double dt, int allow_unstable);
 
 int floe_world_record_contacts(floe_world *w, int on);
+int floe_world_set_orientation(floe_world *w, int mode);
 int floe_world_contact_count(const floe_world *w);
 
 typedef struct floe_energy {

@@ -214,7 +214,9 @@ class World:
     def particles(self):
         """Every particle array of one view (floe_world_particles) as a Record: x, v, q,
         omega, L, f, torque, mass, inertia, radius, geometry, material, group, motion,
-        pieces, thickness; zero-copy and read-only, valid until particles are added."""
+        pieces, thickness; zero-copy and read-only, valid until particles are added.
+        The orientations q of spheres (discs) are integrated only when something reads them
+        (floe_world_set_orientation): call track_orientation() before stepping to read them."""
         view = self._view()
         return Record((name, self._field(view, name)) for name in PARTICLE_FIELDS)
 
@@ -228,6 +230,12 @@ class World:
         """Move particle i to centre x (m) and/or orientation q (w, x, y, z)
         (floe_world_set_pose; None keeps it)."""
         self.check(lib().floe_world_set_pose(self.ptr, int(i), _doubles(x, 3, "x"), _doubles(q, 4, "q")))
+
+    def track_orientation(self, always=True):
+        """Integrate the orientation of spheres and discs at every step (always=True,
+        FLOE_ORIENT_ALWAYS) or only when an observer, a beam bond or an output reads it
+        (False, FLOE_ORIENT_AUTO, the default): their motion is the same either way."""
+        self.check(lib().floe_world_set_orientation(self.ptr, 1 if always else 0))
 
     # ---- contacts ----
     def record_contacts(self, on=True):
