@@ -55,9 +55,10 @@ static void usage(FILE *f)
             "              tangential parts, outputs, PD materials, force providers, integrators and\n"
             "              packings) before the command; repeatable; scenes can list theirs under plugins:\n"
             "\n"
-            "Ctrl-C (SIGINT) or SIGTERM stops a run after the current step with every output\n"
-            "complete and a checkpoint written (exit 130 / 143; continue with --restart); a second\n"
-            "signal kills at once.\n"
+            "Ctrl-C (SIGINT), SIGTERM or SIGUSR1 stops a run after the current step with every\n"
+            "output complete and a checkpoint written (exit 130 / 143 / 138; continue with\n"
+            "--restart); a second signal kills at once. Under mpirun: signal mpirun with SIGUSR1\n"
+            "(it forwards it to every rank; SIGTERM is followed by SIGKILL after 1 s).\n"
             "Scene files are YAML, described in docs/scene-format.md.\n",
             prog, prog, prog, prog, prog, prog);
 }
@@ -77,9 +78,12 @@ static void fmt_duration(char *buf, size_t len, double s)
     else snprintf(buf, len, "%ld:%02ld", t / 60, t % 60);
 }
 
-/* SIGINT / SIGTERM during a run: the handler only records the signal; the progress callback
- * (called after every step) sees it and stops the run cleanly, so the observers finish the
- * frame they are writing and close their files. A second signal kills at once (SA_RESETHAND). */
+/* SIGINT / SIGTERM / SIGUSR1 during a run: the handler only records the signal; the progress
+ * callback (called after every step) sees it and stops the run cleanly, so the observers
+ * finish the frame they are writing and close their files. A second signal kills at once
+ * (SA_RESETHAND). Under MPI the ranks agree after every step on whether any has one (mpirun
+ * forwards SIGUSR1 to every rank; SIGTERM it forwards too, then kills the ranks after
+ * odls_base_sigkill_timeout, 1 s by default), so that all stop at the same step. */
 static volatile sig_atomic_t stop_signal = 0;
 
 static void on_stop_signal(int sig) { stop_signal = sig; }
@@ -93,6 +97,11 @@ static void install_stop_handlers(void)
     sa.sa_flags = SA_RESETHAND | SA_RESTART;
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGUSR1, &sa, NULL);
+}
+
+static const char *signal_name(int sig) {
+    return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : sig == SIGUSR1 ? "SIGUSR1" : "a signal";
 }
 
 typedef struct progress {
@@ -109,6 +118,7 @@ typedef struct progress {
     int failed;          /* a checkpoint could not be written (reported once) */
     int mpi;             /* under MPI: the checkpoint is collective (every rank calls it) */
     floe_world *full;    /* under MPI, rank 0: the unsplit world the state is gathered into */
+    int stopped;         /* under MPI: the signal the ranks agreed to stop on (0: none) */
     int loud;            /* prints its warning (rank 0 under MPI) */
 } progress;
 
@@ -131,8 +141,11 @@ static void write_checkpoint(progress *p, const floe_world *w)
 static int on_progress(const floe_world *w, long step, long nsteps, void *user)
 {
     progress *p = user;
-    if (stop_signal) {
-        write_checkpoint(p, w);
+    /* under MPI every rank takes part in the agreement at every step (one int) */
+    const int sig = p->mpi ? floe_parallel_agree(NULL, (int)stop_signal) : (int)stop_signal;
+    if (sig) {
+        p->stopped = sig;
+        write_checkpoint(p, w); /* collective under MPI */
         return 1;
     }
     if (p->every > 0 && floe_world_time(w) >= p->next && step < nsteps) {
@@ -227,12 +240,13 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
     vtk_pieces vp = {NULL, 0};
     const char *label = scene ? scene : "<demo>";
     /* checkpoints (docs/parallel.md): the serial file, written by rank 0 from the state gathered
-     * into an unsplit world it holds (the mirror), read by every rank at a restart */
-    const int ckpt_on = o->restart || o->ckpt_every > 0 || o->ckpt;
+     * into an unsplit world it holds (the mirror), read by every rank at a restart. Always on:
+     * a signal (SIGINT, SIGTERM, SIGUSR1) writes one too, so rank 0 holds the mirror and the
+     * scene's hash in every run */
     char ckpt_default[1200];
     snprintf(ckpt_default, sizeof ckpt_default, "%s/checkpoint.bin", o->outdir);
     uint64_t hash = 0;
-    int rc = ckpt_on && scene_hash(scene, &hash) ? FLOE_EIO : FLOE_OK;
+    int rc = scene_hash(scene, &hash) ? FLOE_EIO : FLOE_OK;
     if (rc != FLOE_OK) snprintf(err, sizeof err, "cannot read %s: %s", scene, strerror(errno));
     const char *text = scene ? NULL : floe_scene_default_demo();
     /* a restart: the outputs keep what the stopped run wrote (the pieces' series are created
@@ -245,7 +259,7 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
      * need rank 0's unsplit world even without them */
     const int need_mirror = rc == FLOE_OK && info.nobservers > vp.n;
     floe_scene_set_vtk_mode(FLOE_SCENE_VTK_SKIP, 0, 0, NULL, NULL);
-    if (rc == FLOE_OK && rank == 0 && (need_mirror || ckpt_on))
+    if (rc == FLOE_OK && rank == 0)
         rc = scene ? floe_scene_load(scene, o->outdir, &mirror, &info, err, sizeof err)
                    : floe_scene_load_string(text, "<demo>", o->outdir, &mirror, &info, err, sizeof err);
     floe_outputs_keep_existing(0);
@@ -352,15 +366,29 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
     pr.show = rank == 0 && !o->quiet && isatty(STDERR_FILENO);
     pr.t0 = pr.last = now_s();
     long step0 = floe_world_step_count(w);
+    install_stop_handlers();
     rc = floe_world_run(w, info.duration, on_progress, &pr);
     double wall = now_s() - pr.t0;
     if (pr.printed) fprintf(stderr, "\r%*s\r", 100, "");
-    if (rc != FLOE_OK) {
+    if (rc != FLOE_OK && !(pr.stopped && rc == FLOE_ESTOP)) {
         fprintf(stderr, "%s: error (rank %d): %s: %s (t = %g s, step %ld)\n", prog, rank, label,
                 floe_world_last_error(w), floe_world_time(w), floe_world_step_count(w));
         MPI_Abort(MPI_COMM_WORLD, 1);
     }
     rc = floe_world_parallel_finish(w);
+    if (pr.stopped && rc == FLOE_OK) { /* every rank stopped at the same step: outputs closed */
+        if (rank == 0) {
+            fprintf(stderr, "%s: %s: stopped by %s at t = %g s, step %ld\n", prog, label, signal_name(pr.stopped),
+                    floe_world_time(w), floe_world_step_count(w));
+            fprintf(stderr, "%s: outputs written so far are complete and in %s\n", prog, o->outdir);
+            if (!pr.failed)
+                fprintf(stderr, "%s: checkpoint written to %s; continue with: mpirun -np N %s run %s -o %s --restart %s\n",
+                        prog, pr.ckpt, prog, scene ? scene : "", o->outdir, pr.ckpt);
+        }
+        floe_world_destroy(w);
+        floe_world_destroy(mirror);
+        return 128 + pr.stopped;
+    }
     if (rc != FLOE_OK) {
         if (rank == 0) fprintf(stderr, "%s: error: %s: %s\n", prog, label, floe_world_last_error(w));
         floe_world_destroy(w);
@@ -497,7 +525,7 @@ static int cmd_run(const char *scene, const run_opts *o)
     if (stop_signal && rc != FLOE_OK) { /* a signal after the last step: the run is complete */
         int sig = (int)stop_signal;
         fprintf(stderr, "%s: %s: stopped by %s at t = %g s, step %ld%s%s\n", prog, label,
-                sig == SIGINT ? "SIGINT" : "SIGTERM", floe_world_time(w), floe_world_step_count(w),
+                signal_name(sig), floe_world_time(w), floe_world_step_count(w),
                 rc != FLOE_OK && rc != FLOE_ESTOP ? ": " : "",
                 rc != FLOE_OK && rc != FLOE_ESTOP ? floe_world_last_error(w) : "");
         fprintf(stderr, "%s: outputs written so far are complete and in %s\n", prog, outdir);

@@ -32,6 +32,12 @@ files, so a restarted run must also continue them without a frame missing or rep
      (no rank left waiting in a collective); under R > 1 also a file that only ranks 1..R-1
      cannot read (an MPMD launch gives them another path): every rank exits non-zero, rank 0
      says another rank could not read it and each failing rank why.
+ (f) SIGUSR1 and SIGTERM sent to the launcher during a longer run (20,000 steps), and under
+     R > 1 SIGUSR1 sent to one rank alone (the others never get it: without the agreement
+     after each step they would wait for it in the next collective): every rank
+     stops at the same step with the outputs complete and the checkpoint written (exit 138
+     after SIGUSR1); continued under R ranks (SIGUSR1) and serially (SIGTERM), the outputs
+     against the uninterrupted run within the tolerance.
  (e) the vtk output (tests/mpi/ckpt_vtk.yaml, ASCII frames every 250 steps, one at the
      checkpoint): written uninterrupted and with the checkpoint under R ranks, the same series;
      restarted under R ranks in a copy whose frames after the checkpoint were removed (the .pvd
@@ -55,10 +61,12 @@ Usage: test_mpi_ckpt.py FLOE MPIEXEC TESTS_MPI_DIR R
 """
 import os
 import shutil
+import signal
 import struct
 import subprocess
 import sys
 import tempfile
+import time
 import xml.etree.ElementTree as ET
 
 floe, mpiexec, here, R = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
@@ -178,6 +186,21 @@ def vtk_check(ref, out, k, what):
     fails += not ok
     print(f"  {'ok  ' if ok else 'FAIL'} {what}: last frame {po[-1][1]} ({nb} piece(s)): positions and velocities "
           f"differ by {'ids differ' if worst is None else f'{worst:.2e}'} of the scale (tol {TOL:g})")
+
+
+def children(pid):
+    """the processes whose parent is pid (from /proc: no procps needed)"""
+    out = []
+    for e in os.listdir("/proc"):
+        if e.isdigit():
+            try:
+                with open(f"/proc/{e}/stat") as f:
+                    st = f.read()
+            except OSError:
+                continue
+            if int(st[st.rindex(")") + 2:].split()[1]) == pid:
+                out.append(int(e))
+    return sorted(out)
 
 
 def restart(np_, src_dir, ckpt, dst_dir, scene=None):
@@ -365,6 +388,60 @@ with tempfile.TemporaryDirectory() as tmp:
         fails += not ok
         print(f"  {'ok  ' if ok else 'FAIL'} (e) the serial checkpoint with a vtk output restarted under 2 ranks "
               f"refused, the .pvd unchanged: {r.stderr.strip()[:240]}")
+
+    # (f) a signal during the run: SIGUSR1 to the launcher (mpirun forwards it to every rank)
+    #     and SIGTERM (mpirun forwards it too, then kills the ranks after 1 s): the ranks agree
+    #     after every step, stop at the same one, write the checkpoint and close the outputs;
+    #     the run continued from it (under R ranks after SIGUSR1, serially after SIGTERM)
+    #     against the uninterrupted run. The scene: ckpt.yaml run 20 times longer (20,000
+    #     steps), the signal sent once 10 energy rows (500 steps) are written.
+    with open(SCENE) as f:
+        long_text = f.read().replace("duration: 0.003", "duration: 0.06").replace(
+            "every: 250, file: particles.csv", "every: 2500, file: particles.csv")
+    LS = d("long.yaml")
+    with open(LS, "w") as f:
+        f.write(long_text)
+    run(R, ["-o", d("LA")], scene=LS)
+    cases = [(signal.SIGUSR1, "SIGUSR1", 138, R, False), (signal.SIGTERM, "SIGTERM", None, 1, False)]
+    if R > 1:  # one rank alone gets it (kill -USR1 of its pid): the others stop with it
+        cases.append((signal.SIGUSR1, "SIGUSR1", 138, R, True))
+    for sig, name, code, again, one in cases:
+        out = d("L" + name + ("1" if one else ""))
+        proc = subprocess.Popen(cmd_of(R, ["-o", out], scene=LS), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True)
+        t0 = time.time()
+        energy = os.path.join(out, "energy.csv")
+        while time.time() - t0 < 120 and proc.poll() is None:
+            if os.path.exists(energy) and sum(1 for _ in open(energy)) > 10:
+                break
+            time.sleep(0.02)
+        kids = children(proc.pid) if one else []
+        if one and not kids:
+            fails += 1
+            print("  FAIL (f) no rank process found under the launcher")
+        if kids:
+            os.kill(kids[-1], sig)
+        else:
+            proc.send_signal(sig)
+        try:
+            so, se = proc.communicate(timeout=120)
+        except subprocess.TimeoutExpired:  # a rank left waiting: the run never ends
+            for k in children(proc.pid):
+                os.kill(k, signal.SIGKILL)
+            proc.kill()
+            so, se = proc.communicate()
+            se = "timed out (120 s): " + se
+        ck = os.path.join(out, "checkpoint.bin")
+        ok = (proc.returncode != 0 and (code is None or proc.returncode == code) and f"stopped by {name}" in se
+              and os.path.exists(ck) and "complete" in se)
+        fails += not ok
+        print(f"  {'ok  ' if ok else 'FAIL'} (f) {name} {'to one rank' if one else 'to the launcher'} under {R} "
+              f"ranks: exit {proc.returncode}, "
+              f"{se.strip().splitlines()[0] if se.strip() else '(no message)'}")
+        if not os.path.exists(ck):
+            continue
+        run(again, ["-o", out, "--restart", ck], scene=LS)
+        compare(d("LA"), out, f"(f) stopped by {name} under {R} ranks, continued under {again}")
 
 if fails:
     sys.exit(f"FAIL: {fails} check(s)")
