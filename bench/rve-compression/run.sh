@@ -4,15 +4,23 @@
 # top-wall tracker, energy, vtk) against LIGGGHTS 3.8 on the peers' input (in.liggghts,
 # gen_data.py, top.stl: the shared peer benchmark dem-compress-rve), interleaved.
 #   REPS=3 FRACTION=1.0 FLOE_THREADS=1 bench/rve-compression/run.sh
-# FRACTION < 1 runs the first part of the loading only (both codes the same steps).
+#   RANKS=2 REPS=3 FRACTION=0.25 bench/rve-compression/run.sh   # both under mpirun -np 2
+# FRACTION < 1 runs the first part of the loading only (both codes the same steps). RANKS > 1:
+# floe's MPI build (its outputs gathered by rank 0, vtk as .pvtu pieces) and LIGGGHTS, both
+# under mpirun -np RANKS, one thread a rank.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
-REPS=${REPS:-3}; FRACTION=${FRACTION:-1.0}; FLOE_THREADS=${FLOE_THREADS:-1}
+REPS=${REPS:-3}; FRACTION=${FRACTION:-1.0}; FLOE_THREADS=${FLOE_THREADS:-1}; RANKS=${RANKS:-1}
+MPIRUN=()
+if (( RANKS > 1 )); then
+  FLOE_THREADS=1
+  MPIRUN=(mpirun --allow-run-as-root --oversubscribe --bind-to none -np "$RANKS")
+fi
 if [[ -z "${FLOE:-}" ]]; then
   bash "$root/scripts/install-deps.sh" --bench
-  build=${BUILD:-$root/build-bench}
-  cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DFLOE_BUILD_TESTS=OFF >/dev/null
+  if (( RANKS > 1 )); then mpi=ON; build=${BUILD:-$root/build-mpi-bench}; else mpi=OFF; build=${BUILD:-$root/build-bench}; fi
+  cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DFLOE_BUILD_TESTS=OFF -DFLOE_WITH_MPI=$mpi >/dev/null
   cmake --build "$build" -j"$(nproc)" --target floe_cli >/dev/null
   FLOE=$build/floe
 fi
@@ -24,18 +32,18 @@ grep -q "duration: $(python3 -c "print($steps * 5e-5)")" "$work/scene.yaml" || {
 median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
 : > "$work/f.txt"; : > "$work/l.txt"
 for r in $(seq "$REPS"); do
-  OMP_NUM_THREADS=$FLOE_THREADS "$FLOE" run "$work/scene.yaml" -o "$work/out" -t "$FLOE_THREADS" > "$work/floe.log" 2>&1 \
+  OMP_NUM_THREADS=$FLOE_THREADS "${MPIRUN[@]}" "$FLOE" run "$work/scene.yaml" -o "$work/out" -t "$FLOE_THREADS" > "$work/floe.log" 2>&1 \
     || { cat "$work/floe.log"; exit 1; }
   n=$(sed -n 's/.*particles: *\([0-9]*\).*/\1/p' "$work/floe.log" | head -1)
   wall=$(sed -n 's/.*wall time: *\([0-9.]*\) s.*/\1/p' "$work/floe.log" | head -1)
   pss=$(python3 -c "print(f'{16483*$steps/$wall:.3e}')")
-  echo "floe     rve: threads=$FLOE_THREADS steps=$steps loop_s=$wall particle_steps_per_s=$pss (particles line: ${n:-?})"
+  echo "floe     rve: ranks=$RANKS threads=$FLOE_THREADS steps=$steps loop_s=$wall particle_steps_per_s=$pss (particles line: ${n:-?})"
   echo "$pss" >> "$work/f.txt"
-  (cd "$work" && OMP_NUM_THREADS=1 liggghts -in "$here/in.liggghts" -var nsteps "$steps" -log "$work/lig.log" -echo none >/dev/null)
+  (cd "$work" && OMP_NUM_THREADS=1 "${MPIRUN[@]}" liggghts -in "$here/in.liggghts" -var nsteps "$steps" -log "$work/lig.log" -echo none >/dev/null)
   loop=$(sed -n 's/^Loop time of \([0-9.e+-]*\) .*/\1/p' "$work/lig.log" | tail -1)
   pss=$(python3 -c "print(f'{16483*$steps/$loop:.3e}')")
-  echo "liggghts rve: steps=$steps loop_s=$loop particle_steps_per_s=$pss"
+  echo "liggghts rve: ranks=$RANKS steps=$steps loop_s=$loop particle_steps_per_s=$pss"
   echo "$pss" >> "$work/l.txt"
 done
 f=$(median < "$work/f.txt"); l=$(median < "$work/l.txt")
-python3 -c "print(f'rve-compression medians of $REPS ($steps steps): floe {float(\"$f\"):.3e} particle-steps/s ($FLOE_THREADS thread(s)), LIGGGHTS {float(\"$l\"):.3e}, floe/LIGGGHTS = {float(\"$f\")/float(\"$l\"):.2f}')"
+python3 -c "print(f'rve-compression medians of $REPS ($steps steps): floe {float(\"$f\"):.3e} particle-steps/s ($RANKS rank(s), $FLOE_THREADS thread(s)), LIGGGHTS {float(\"$l\"):.3e}, floe/LIGGGHTS = {float(\"$f\")/float(\"$l\"):.2f}')"
