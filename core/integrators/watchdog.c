@@ -2,6 +2,7 @@
  * controller around it, then the energy watchdog and the observers) and floe_world_run;
  * the energy watchdog: a run that creates energy stops, naming the pair or PD body. */
 #include "integrator_parts.h"
+#include "floe_parallel.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -108,8 +109,10 @@ static int energy_watchdog(floe_world *w) {
         /* a contact: this step's worst, or the run's worst when the ledger as a whole went negative */
         int i = c_pair > tol ? w->wd_pair_i : w->wd_worst_i, j = c_pair > tol ? w->wd_pair_j : w->wd_worst_j;
         double d = c_pair > tol ? w->wd_pair_min : w->wd_worst;
-        const floe_contact_law *law = w->laws[p->material[i] * w->nmats + p->material[j]];
-        const int pdk = w->pd_of ? (w->pd_of[i] >= 0 ? w->pd_of[i] : w->pd_of[j]) : -1;
+        /* under MPI the run's worst contact may have left this rank since (index -1) */
+        const int here = i >= 0 && j >= 0 && i < p->n && j < p->n;
+        const floe_contact_law *law = here ? w->laws[p->material[i] * w->nmats + p->material[j]] : NULL;
+        const int pdk = here && w->pd_of ? (w->pd_of[i] >= 0 ? w->pd_of[i] : w->pd_of[j]) : -1;
         name[0] = 0;
         if (pdk >= 0) {
             char pn[80];
@@ -117,7 +120,8 @@ static int energy_watchdog(floe_world *w) {
             snprintf(name, sizeof name, ", a point of %s", pn);
         }
         snprintf(what, sizeof what, "the contact of particles %d and %d (bodies %d, %d%s; law %s) gave back %.3g J "
-                 "more than it received since it began", i, j, p->group[i], p->group[j], name,
+                 "more than it received since it began", (int)floe_world_parallel_gid(w, i), (int)floe_world_parallel_gid(w, j),
+                 here ? p->group[i] : -1, here ? p->group[j] : -1, name,
                  law ? law->klass->name : "?", -d);
         if (!cause[0] || pdk < 0)
             snprintf(cause, sizeof cause, "the contact law creates energy (negative damping, or unloading stiffer "

@@ -22,6 +22,33 @@ const char *floe_comm_kind_name(floe_comm_kind k) {
 
 int floe_parallel_available(void) { return 1; }
 
+/* a local index (of this rank's world) as a global id, -1 kept */
+static int gid_or(const floe_par *P, int i) { return i >= 0 && i < P->nrep + P->nown + P->nghost ? (int)P->gid[i] : -1; }
+
+/* the particle indices the run keeps for its messages (the watchdog's worst contacts, the
+ * detector's first non-converged pair) through a decomposition: global ids before the store
+ * changes (diag_save), local indices after (diag_load; -1 when the particle is no longer on
+ * this rank, and the messages then name no particle) */
+enum { NDIAG = 6 };
+static void diag_ptrs(floe_world *w, int *ix[NDIAG]) {
+    ix[0] = &w->wd_pair_i; ix[1] = &w->wd_pair_j; ix[2] = &w->wd_worst_i; ix[3] = &w->wd_worst_j;
+    ix[4] = &w->det.first_bad_i; ix[5] = &w->det.first_bad_j;
+}
+static void diag_save(floe_world *w, const floe_par *P, long long g[NDIAG]) {
+    int *ix[NDIAG];
+    diag_ptrs(w, ix);
+    for (int k = 0; k < NDIAG; k++) g[k] = gid_or(P, *ix[k]);
+}
+static void diag_load(floe_world *w, const floe_par *P, const long long g[NDIAG]) {
+    int *ix[NDIAG];
+    diag_ptrs(w, ix);
+    for (int k = 0; k < NDIAG; k++) *ix[k] = -1;
+    const int n = P->nrep + P->nown + P->nghost;
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < NDIAG; k++)
+            if (g[k] >= 0 && P->gid[i] == g[k]) *ix[k] = i;
+}
+
 /* ---- contact history by global ids ----
  * A pair is evaluated on the rank that owns its anchor: the bounded particle of the pair
  * with the lower global id (a wall is never the anchor: walls are on every rank). Its
@@ -152,9 +179,12 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
             const int an = f[0] >= 0 && f[1] >= 0 ? (P->gid[f[0]] < P->gid[f[1]] ? f[0] : f[1]) : f[0] >= 0 ? f[0] : f[1];
             hd[k] = an >= 0 ? dest[an - lo] : P->rank;
         }
+    long long diag[NDIAG];
+    diag_save(w, P, diag);
     if (!rc) rc = floe_par_beams_out(w, P, dest); /* beam bonds (par_beams.c) */
     if (!rc) rc = floe_par_migrate(w, P, dest);
     if (!rc) rc = floe_par_ghosts(w, P, w->nl.skin);
+    if (!rc) diag_load(w, P, diag);
     if (!rc) rc = floe_par_route(P, FLOE_COMM_MIGRATE, recs, hd, nrec, m, &in, &nin);
     if (!rc) rc = hist_import(w, P, in, nin);
     free(in); free(dest); free(hd); free(recs);
@@ -462,8 +492,6 @@ int floe_world_parallel_is_owned(const floe_world *w, int i) {
 
 /* ---- outputs through the mirror (rank 0) ---- */
 
-/* a local index (of this rank's world) as a global id, -1 kept */
-static int gid_or(const floe_par *P, int i) { return i >= 0 && i < P->nrep + P->nown + P->nghost ? (int)P->gid[i] : -1; }
 
 static int mirror_reads_contacts(const floe_world *M) {
     for (int k = 0; k < M->nobs; k++)
@@ -894,6 +922,20 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
     mn[0] = w->wd_pair_min; mn[1] = -w->eta_depth;
     MPI_Reduce(mn, mx, 2, MPI_DOUBLE, MPI_MIN, 0, P->comm);
     floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof mn);
+    /* the watchdog's worst contacts (this step's, the run's): the rank that holds the
+     * smallest, and the pair's global ids from every rank (rank 0 keeps that rank's) */
+    struct { double v; int r; } wl[2] = {{w->wd_pair_min, P->rank}, {w->wd_worst, P->rank}}, wg[2];
+    MPI_Reduce(wl, wg, 2, MPI_DOUBLE_INT, MPI_MINLOC, 0, P->comm);
+    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof wl);
+    int wid[4] = {gid_or(P, w->wd_pair_i), gid_or(P, w->wd_pair_j), gid_or(P, w->wd_worst_i), gid_or(P, w->wd_worst_j)};
+    int *wids = P->rank == 0 ? malloc((size_t)4 * P->size * sizeof *wids) : NULL;
+    int wok = P->rank != 0 || wids != NULL;
+    MPI_Bcast(&wok, 1, MPI_INT, 0, P->comm);
+    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof wok);
+    if (wok) {
+        MPI_Gather(wid, 4, MPI_INT, wids, 4, MPI_INT, 0, P->comm);
+        floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof wid);
+    }
     long dl[6 + FLOE_DETECT_HIST], ds[6 + FLOE_DETECT_HIST];
     const floe_detect_state *d = &w->det;
     dl[0] = d->calls; dl[1] = d->iterations; dl[2] = d->admm_calls; dl[3] = d->lp_calls; dl[4] = d->separated;
@@ -995,10 +1037,13 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
             energy_unpack(&full->energy, ss);
             full->elastic_contact = ss[7]; full->elastic_pd = ss[8]; full->wd_shadow = ss[9]; full->wd_shadow0 = ss[10];
             full->wd_pair_min = mx[0]; full->eta_depth = -mx[1];
-            full->wd_worst = w->wd_worst; full->wd_scale = w->wd_scale; full->wd_created = w->wd_created;
+            full->wd_worst = wg[1].v; full->wd_scale = w->wd_scale; full->wd_created = w->wd_created;
             full->wd_gscale = w->wd_gscale; full->wd_step = w->wd_step;
-            full->wd_pair_i = gid_or(P, w->wd_pair_i); full->wd_pair_j = gid_or(P, w->wd_pair_j);
-            full->wd_worst_i = gid_or(P, w->wd_worst_i); full->wd_worst_j = gid_or(P, w->wd_worst_j);
+            if (wids) {
+                const int *a = wids + 4 * wg[0].r, *b = wids + 4 * wg[1].r;
+                full->wd_pair_i = a[0]; full->wd_pair_j = a[1];
+                full->wd_worst_i = b[2]; full->wd_worst_j = b[3];
+            } else full->wd_pair_i = full->wd_pair_j = full->wd_worst_i = full->wd_worst_j = -1;
             memcpy(full->wd_msg, w->wd_msg, sizeof full->wd_msg);
             /* the statistics: the steps are every rank's; the detector's counts summed */
             full->st = w->st;
@@ -1013,7 +1058,7 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
             full->contacts_valid = 0;
         }
     }
-    free(rb[0]); free(rb[1]); free(wf); free(cnt);
+    free(rb[0]); free(rb[1]); free(wf); free(cnt); free(wids);
     MPI_Bcast(&rc, 1, MPI_INT, 0, P->comm);
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof rc);
     if (rc) return floe_world_error((floe_world *)w, rc, "MPI checkpoint: out of memory on rank 0");
