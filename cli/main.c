@@ -245,6 +245,9 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
      * scene's hash in every run */
     char ckpt_default[1200];
     snprintf(ckpt_default, sizeof ckpt_default, "%s/checkpoint.bin", o->outdir);
+    /* from now on a signal is a request to stop (mpirun may forward one while the ranks load
+     * and split the scene: the run then stops after its first step, with a checkpoint) */
+    install_stop_handlers();
     uint64_t hash = 0;
     int rc = scene_hash(scene, &hash) ? FLOE_EIO : FLOE_OK;
     if (rc != FLOE_OK) snprintf(err, sizeof err, "cannot read %s: %s", scene, strerror(errno));
@@ -366,7 +369,6 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
     pr.show = rank == 0 && !o->quiet && isatty(STDERR_FILENO);
     pr.t0 = pr.last = now_s();
     long step0 = floe_world_step_count(w);
-    install_stop_handlers();
     rc = floe_world_run(w, info.duration, on_progress, &pr);
     double wall = now_s() - pr.t0;
     if (pr.printed) fprintf(stderr, "\r%*s\r", 100, "");

@@ -136,7 +136,9 @@ static int cl_observe(floe_observer *o, floe_world *w) {
 static int cl_end(floe_observer *o, floe_world *w) {
     coast_load *c = (coast_load *)o;
     int rc = FLOE_OK;
-    if (!c->observed || c->last_step != floe_world_step_count(w)) rc = cl_write(c, w);
+    /* a flush after a failure or a stop may find no contacts recorded: nothing to add then */
+    if ((!c->observed || c->last_step != floe_world_step_count(w)) && floe_world_contacts(w, NULL) >= 0)
+        rc = cl_write(c, w);
     int rc2 = floe_fw_close(&c->out, w);
     return rc != FLOE_OK ? rc : rc2;
 }

@@ -13,6 +13,34 @@
 #include <string.h>
 #include <zoltan.h>
 
+int floe_par_gather_root(floe_par *P, int k, const double *sb, int n, double **out, int *tot) {
+    *out = NULL;
+    *tot = 0;
+    int *cnt = P->rank == 0 ? P->gcnt : NULL;
+    MPI_Gather(&n, 1, MPI_INT, cnt, 1, MPI_INT, 0, P->comm);
+    floe_par_count_to_root(P, k, sizeof n);
+    int nomem = 0;
+    double *rb = NULL;
+    if (P->rank == 0) {
+        long long t = 0;
+        for (int r = 0; r < P->size; r++) { cnt[P->size + r] = (int)t; t += cnt[r]; }
+        nomem = t > 0x7fffffff; /* MPI counts are ints */
+        if (!nomem) *tot = (int)t;
+        rb = nomem ? NULL : malloc((size_t)(*tot ? *tot : 1) * sizeof *rb);
+        nomem = !rb;
+    }
+    MPI_Bcast(&nomem, 1, MPI_INT, 0, P->comm);
+    floe_par_count_bcast(P, k, sizeof nomem);
+    if (nomem) {
+        *tot = 0;
+        return FLOE_ENOMEM;
+    }
+    MPI_Gatherv(sb, n, MPI_DOUBLE, rb, cnt, cnt ? cnt + P->size : NULL, MPI_DOUBLE, 0, P->comm);
+    floe_par_count_to_root(P, k, (long long)n * sizeof *sb);
+    *out = rb;
+    return FLOE_OK;
+}
+
 int floe_par_reserve(double **buf, size_t *cap, size_t n) {
     if (n <= *cap && *buf) return FLOE_OK;
     size_t nc = n ? n : 1;

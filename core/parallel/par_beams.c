@@ -175,26 +175,16 @@ int floe_par_beams_gather(floe_world *w, floe_par *P, floe_world *M) {
     double *recs = NULL, reach;
     int n = 0, rc = beams_export(w, P->gid, NULL, P->bpark, P->npark, &recs, &n, &reach);
     if (rc) n = 0;
-    int mine = n * m, *cnt = P->rank == 0 ? malloc((size_t)2 * P->size * sizeof *cnt) : NULL;
-    if (P->rank == 0 && !cnt) rc = FLOE_ENOMEM;
     int bad = rc != 0, anybad;
     MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_LOR, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof bad);
-    if (anybad) { free(recs); free(cnt); return floe_world_error(w, FLOE_ENOMEM, "MPI: gathering the beam bonds: out of memory"); }
-    MPI_Gather(&mine, 1, MPI_INT, cnt, 1, MPI_INT, 0, P->comm);
-    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof mine);
-    double *rb = NULL;
-    int tot = 0;
-    if (P->rank == 0) {
-        for (int r = 0; r < P->size; r++) { cnt[P->size + r] = tot; tot += cnt[r]; }
-        rb = malloc((size_t)(tot ? tot : 1) * sizeof *rb);
+    if (anybad) { free(recs); return floe_world_error(w, FLOE_ENOMEM, "MPI: gathering the beam bonds: out of memory"); }
+    double *rb;
+    int tot;
+    if (floe_par_gather_root(P, FLOE_COMM_OUTPUT, recs, n * m, &rb, &tot)) {
+        free(recs);
+        return floe_world_error(w, FLOE_ENOMEM, "MPI: gathering the beam bonds: out of memory on rank 0");
     }
-    int norb = P->rank == 0 && !rb; /* rank 0 out of memory: nobody sends */
-    MPI_Bcast(&norb, 1, MPI_INT, 0, P->comm);
-    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof norb);
-    if (norb) { free(recs); free(cnt); return floe_world_error(w, FLOE_ENOMEM, "MPI: gathering the beam bonds: out of memory on rank 0"); }
-    MPI_Gatherv(recs, mine, MPI_DOUBLE, rb, cnt, cnt ? cnt + P->size : NULL, MPI_DOUBLE, 0, P->comm);
-    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, (long long)mine * sizeof *recs);
     int miss = 0;
     if (P->rank == 0 && M && M->beams) {
         if (!rb || tot / m != floe_beam_set_count(M->beams)) miss = 1;
@@ -204,7 +194,7 @@ int floe_par_beams_gather(floe_world *w, floe_par *P, floe_world *M) {
             if (b < 0 || floe_beam_set_rec_put(M->beams, b, e + 2)) miss = 1;
         }
     }
-    free(recs); free(cnt); free(rb);
+    free(recs); free(rb);
     return miss ? floe_world_error(w, FLOE_EINVAL, "MPI outputs: the beam bonds gathered do not match the mirror's "
                                    "(another scene?)")
                 : FLOE_OK;

@@ -32,6 +32,7 @@ typedef struct floe_par {
      * them to rank r, from sdispl[r]); and those it receives (rcount, rdispl) */
     int *send_idx; int nsend, send_cap;
     int *scount, *sdispl, *rcount, *rdispl;
+    int *gcnt;               /* 2 size: counts and displacements of a gather to rank 0 */
     double *sbuf, *rbuf; size_t sbuf_cap, rbuf_cap;
     struct floe_world *mirror; /* rank 0 with outputs: the unsplit world whose observers write
                                   the gathered state (floe_world_parallel_outputs) */
@@ -67,6 +68,11 @@ void floe_par_count_all(floe_par *P, int k, long long bytes);
 /* decomp.c: the pieces, on the world's store */
 /* byte buffers of at least n doubles (0 or FLOE_ENOMEM) */
 int floe_par_reserve(double **buf, size_t *cap, size_t n);
+/* n doubles of every rank to rank 0 in rank order (MPI_Gatherv; traffic counted as kind k):
+ * rank 0 gets *out (malloc'ed, *tot doubles), the others NULL and 0. FLOE_ENOMEM on every
+ * rank when rank 0 cannot hold them (nothing is sent then; counts above INT_MAX included).
+ * Collective. */
+int floe_par_gather_root(floe_par *P, int k, const double *sb, int n, double **out, int *tot);
 /* the whole record of local particle i (FLOE_PAR_REC doubles: gid, then the state as
  * floe_par_pack_state writes it, then the constant fields) */
 void floe_par_pack(const floe_particles *p, int i, long long gid, double *r);

@@ -242,8 +242,11 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     MPI_Comm_rank(P->comm, &P->rank);
     MPI_Comm_size(P->comm, &P->size);
     const int S = P->size, n = p->n;
-    P->scount = malloc((size_t)4 * S * sizeof *P->scount);
-    if (P->scount) { P->sdispl = P->scount + S; P->rcount = P->scount + 2 * S; P->rdispl = P->scount + 3 * S; }
+    P->scount = malloc((size_t)6 * S * sizeof *P->scount);
+    if (P->scount) {
+        P->sdispl = P->scount + S; P->rcount = P->scount + 2 * S; P->rdispl = P->scount + 3 * S;
+        P->gcnt = P->scount + 4 * S;
+    }
     /* the same world on every rank? (count and a checksum of the positions) */
     double chk[2] = {n, 0}, chk0[2];
     for (int i = 0; i < n; i++)
@@ -417,28 +420,19 @@ int floe_world_parallel_gather(const floe_world *w, double *x, double *v, int N)
     }
     const int m = 7, lo = P->nrep, no = P->nown;
     double *sb = malloc((size_t)(no ? no : 1) * m * sizeof *sb);
-    int *cnt = P->rank == 0 ? malloc((size_t)2 * P->size * sizeof *cnt) : NULL;
-    int bad = !sb || (P->rank == 0 && !cnt), anybad;
+    int bad = !sb, anybad;
     MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_LOR, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof bad);
-    if (anybad) { free(sb); free(cnt); return FLOE_ENOMEM; }
+    if (anybad) { free(sb); return FLOE_ENOMEM; }
     for (int k = 0; k < no; k++) {
         double *r = sb + (size_t)k * m;
         r[0] = (double)P->gid[lo + k];
         memcpy(r + 1, w->p.x + 3 * (lo + k), 3 * sizeof *r);
         memcpy(r + 4, w->p.v + 3 * (lo + k), 3 * sizeof *r);
     }
-    int mine = no * m;
-    MPI_Gather(&mine, 1, MPI_INT, cnt, 1, MPI_INT, 0, P->comm);
-    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof mine);
-    double *rb = NULL;
-    int tot = 0;
-    if (P->rank == 0) {
-        for (int r = 0; r < P->size; r++) { cnt[P->size + r] = tot; tot += cnt[r]; }
-        rb = malloc((size_t)(tot ? tot : 1) * sizeof *rb);
-    }
-    MPI_Gatherv(sb, mine, MPI_DOUBLE, rb, cnt, cnt ? cnt + P->size : NULL, MPI_DOUBLE, 0, P->comm);
-    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, (long long)mine * sizeof *sb);
+    double *rb;
+    int tot;
+    const int rc = floe_par_gather_root(P, FLOE_COMM_OUTPUT, sb, no * m, &rb, &tot);
     if (P->rank == 0 && rb)
         for (int k = 0; k < tot / m; k++) {
             const double *r = rb + (size_t)k * m;
@@ -447,8 +441,8 @@ int floe_world_parallel_gather(const floe_world *w, double *x, double *v, int N)
             if (x) memcpy(x + 3 * g, r + 1, 3 * sizeof *x);
             if (v) memcpy(v + 3 * g, r + 4, 3 * sizeof *v);
         }
-    free(sb); free(cnt); free(rb);
-    return FLOE_OK;
+    free(sb); free(rb);
+    return rc;
 }
 
 int floe_world_parallel_comm(const floe_world *w, floe_comm_stats *out) {
@@ -507,9 +501,16 @@ static int contacts_due_next(const floe_world *w, const floe_world *M) {
     for (int k = 0; k < M->nobs; k++) {
         const floe_observer *o = M->obs[k];
         if (!o->klass->needs_contacts) continue;
-        if (o->period_steps > 0 ? step % o->period_steps == 0
-                                : o->period_time > 0 ? time >= o->next_time - 1e-9 * w->dt : 1)
-            return 1;
+        if (o->period_steps > 0) {
+            if (step % o->period_steps == 0) return 1;
+        } else if (o->period_time > 0) {
+            /* its next time after this step's observation (called after this, it advances
+             * next_time when due now, as observers_call does) */
+            double nt = o->next_time;
+            if (w->time >= nt - 1e-9 * w->dt)
+                while (nt <= w->time + 1e-9 * w->dt) nt += o->period_time;
+            if (time >= nt - 1e-9 * w->dt) return 1;
+        } else return 1;
     }
     return 0;
 }
@@ -562,14 +563,14 @@ static int crec_cmp(const void *a, const void *b) {
 
 static int contacts_gather(floe_world *w, floe_par *P) {
     const int nc = w->contacts_valid ? w->ncontacts : 0;
-    double *sb = malloc((size_t)(nc ? nc : 1) * CREC * sizeof *sb);
-    int *cnt = P->rank == 0 ? malloc((size_t)2 * P->size * sizeof *cnt) : NULL;
-    int bad = !sb || (P->rank == 0 && !cnt), flags[2] = {bad, !w->contacts_valid}, any[2];
+    /* a rank's records above INT_MAX doubles cannot be sent (MPI counts): out of memory */
+    double *sb = (long long)nc * CREC > 0x7fffffff ? NULL : malloc((size_t)(nc ? nc : 1) * CREC * sizeof *sb);
+    int flags[2] = {!sb, !w->contacts_valid}, any[2];
     MPI_Allreduce(flags, any, 2, MPI_INT, MPI_LOR, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof flags);
     floe_world *M = P->mirror;
     if (M) M->contacts_valid = 0;
-    if (any[0] || any[1]) { free(sb); free(cnt); return any[0] ? FLOE_ENOMEM : FLOE_OK; }
+    if (any[0] || any[1]) { free(sb); return any[0] ? FLOE_ENOMEM : FLOE_OK; }
     for (int k = 0; k < nc; k++) {
         const floe_contact_rec *c = &w->contacts[k];
         double *r = sb + (size_t)k * CREC;
@@ -586,25 +587,11 @@ static int contacts_gather(floe_world *w, floe_par *P) {
         r[18] = c->r_eff;
         r[19] = c->m_eff;
     }
-    int mine = nc * CREC, tot = 0;
-    MPI_Gather(&mine, 1, MPI_INT, cnt, 1, MPI_INT, 0, P->comm);
-    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof mine);
-    double *rb = NULL;
-    if (P->rank == 0) {
-        for (int r = 0; r < P->size; r++) { cnt[P->size + r] = tot; tot += cnt[r]; }
-        rb = malloc((size_t)(tot ? tot : 1) * sizeof *rb);
-    }
-    /* rank 0 without a buffer: every rank still takes part, none is sent */
-    int ok = P->rank != 0 || rb != NULL;
-    MPI_Bcast(&ok, 1, MPI_INT, 0, P->comm);
-    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof ok);
-    int rc = FLOE_OK;
-    if (ok) {
-        MPI_Gatherv(sb, mine, MPI_DOUBLE, rb, cnt, cnt ? cnt + P->size : NULL, MPI_DOUBLE, 0, P->comm);
-        floe_par_count_to_root(P, FLOE_COMM_OUTPUT, (long long)mine * sizeof *sb);
-    } else rc = FLOE_ENOMEM;
+    double *rb;
+    int tot;
+    int rc = floe_par_gather_root(P, FLOE_COMM_OUTPUT, sb, nc * CREC, &rb, &tot);
     const int n = tot / CREC;
-    if (P->rank == 0 && ok && M) {
+    if (P->rank == 0 && rb && M) {
         if (n > M->contacts_cap) {
             floe_contact_rec *nb = realloc(M->contacts, (size_t)n * sizeof *nb);
             if (!nb) rc = FLOE_ENOMEM;
@@ -631,8 +618,12 @@ static int contacts_gather(floe_world *w, floe_par *P) {
             M->contacts_valid = 1;
         }
     }
-    free(sb); free(cnt); free(rb);
-    return rc;
+    free(sb); free(rb);
+    /* rank 0 alone may have failed (its copy): every rank returns the same */
+    int all;
+    MPI_Allreduce(&rc, &all, 1, MPI_INT, MPI_MAX, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof rc);
+    return all;
 }
 
 /* the owned particles' state by global id into the mirror (rank 0), the walls' forces summed */
@@ -640,11 +631,10 @@ static int mirror_gather(floe_world *w, floe_par *P) {
     const int m = 1 + FLOE_PAR_FWD, lo = P->nrep, no = P->nown;
     double *sb = malloc((size_t)(no ? no : 1) * m * sizeof *sb);
     double *wf = malloc((size_t)(P->nrep ? P->nrep : 1) * 6 * sizeof *wf);
-    int *cnt = P->rank == 0 ? malloc((size_t)2 * P->size * sizeof *cnt) : NULL;
-    int bad = !sb || !wf || (P->rank == 0 && !cnt), anybad;
+    int bad = !sb || !wf, anybad;
     MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_LOR, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof bad);
-    if (anybad) { free(sb); free(wf); free(cnt); return FLOE_ENOMEM; }
+    if (anybad) { free(sb); free(wf); return FLOE_ENOMEM; }
     const floe_particles *p = &w->p;
     for (int k = 0; k < no; k++) {
         const int i = lo + k;
@@ -658,16 +648,9 @@ static int mirror_gather(floe_world *w, floe_par *P) {
     }
     if (P->nrep) MPI_Reduce(P->rank == 0 ? MPI_IN_PLACE : wf, wf, 6 * P->nrep, MPI_DOUBLE, MPI_SUM, 0, P->comm);
     floe_par_count_to_root(P, FLOE_COMM_OUTPUT, 6LL * P->nrep * sizeof *wf);
-    int mine = no * m, tot = 0;
-    MPI_Gather(&mine, 1, MPI_INT, cnt, 1, MPI_INT, 0, P->comm);
-    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof mine);
-    double *rb = NULL;
-    if (P->rank == 0) {
-        for (int r = 0; r < P->size; r++) { cnt[P->size + r] = tot; tot += cnt[r]; }
-        rb = malloc((size_t)(tot ? tot : 1) * sizeof *rb);
-    }
-    MPI_Gatherv(sb, mine, MPI_DOUBLE, rb, cnt, cnt ? cnt + P->size : NULL, MPI_DOUBLE, 0, P->comm);
-    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, (long long)mine * sizeof *sb);
+    double *rb;
+    int tot;
+    const int grc = floe_par_gather_root(P, FLOE_COMM_OUTPUT, sb, no * m, &rb, &tot);
     floe_world *M = P->mirror;
     if (P->rank == 0 && rb && M) {
         floe_particles *q = &M->p;
@@ -689,7 +672,8 @@ static int mirror_gather(floe_world *w, floe_par *P) {
         M->step = w->step;
         M->dt = w->dt;
     }
-    free(sb); free(wf); free(cnt); free(rb);
+    free(sb); free(wf); free(rb);
+    if (grc) return grc;
     /* the contacts, when the mirror has outputs that read them (stress, contacts, force
      * chains, coast load) */
     if (w->par_contacts & 1) FLOE_TRY(contacts_gather(w, P));
@@ -872,13 +856,12 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
     double *sp = malloc((size_t)(no ? no : 1) * mp * sizeof *sp);
     double *se = malloc((size_t)(nl->npairs ? nl->npairs : 1) * me * sizeof *se);
     double *wf = malloc((size_t)(P->nrep ? P->nrep : 1) * 6 * sizeof *wf);
-    int *cnt = P->rank == 0 ? malloc((size_t)4 * P->size * sizeof *cnt) : NULL;
-    if (!bad && (!sp || !se || !wf || (P->rank == 0 && !cnt))) bad = 3;
+    if (!bad && (!sp || !se || !wf)) bad = 3;
     int any;
     MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof bad);
     if (any) {
-        free(sp); free(se); free(wf); free(cnt);
+        free(sp); free(se); free(wf);
         return any == 3 ? floe_world_error((floe_world *)w, FLOE_ENOMEM, "MPI checkpoint: out of memory")
                : any == 1 ? floe_world_error((floe_world *)w, FLOE_EINVAL, "MPI checkpoint: rank 0 needs an unsplit, prepared "
                                             "world of the same scene to collect the state into")
@@ -948,24 +931,7 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
     double *rb[2] = {NULL, NULL};
     const double *sb[2] = {sp, se};
     int rc = FLOE_OK;
-    for (int s = 0; s < 2; s++) {
-        MPI_Gather(&mine[s], 1, MPI_INT, cnt, 1, MPI_INT, 0, P->comm);
-        floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof mine[s]);
-        int nomem = 0;
-        if (P->rank == 0) {
-            long long t = 0;
-            for (int r = 0; r < P->size; r++) { cnt[P->size + r] = (int)t; t += cnt[r]; }
-            if (t > 0x7fffffff) nomem = 1; /* MPI counts are ints */
-            tot[s] = (int)t;
-            rb[s] = nomem ? NULL : malloc((size_t)(tot[s] ? tot[s] : 1) * sizeof *rb[s]);
-            nomem = !rb[s];
-        }
-        MPI_Bcast(&nomem, 1, MPI_INT, 0, P->comm);
-        floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof nomem);
-        if (nomem) { rc = FLOE_ENOMEM; break; }
-        MPI_Gatherv(sb[s], mine[s], MPI_DOUBLE, rb[s], cnt, cnt ? cnt + P->size : NULL, MPI_DOUBLE, 0, P->comm);
-        floe_par_count_to_root(P, FLOE_COMM_OUTPUT, (long long)mine[s] * sizeof(double));
-    }
+    for (int s = 0; s < 2 && !rc; s++) rc = floe_par_gather_root(P, FLOE_COMM_OUTPUT, sb[s], mine[s], &rb[s], &tot[s]);
     free(sp); free(se);
     if (!rc && P->rank == 0) {
         floe_particles *q = &full->p;
@@ -1058,7 +1024,7 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
             full->contacts_valid = 0;
         }
     }
-    free(rb[0]); free(rb[1]); free(wf); free(cnt); free(wids);
+    free(rb[0]); free(rb[1]); free(wf); free(wids);
     MPI_Bcast(&rc, 1, MPI_INT, 0, P->comm);
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof rc);
     if (rc) return floe_world_error((floe_world *)w, rc, "MPI checkpoint: out of memory on rank 0");

@@ -442,6 +442,15 @@ int observer_reads_orientation(const floe_observer *o) {
 void orientation_refresh(floe_world *w) {
     int need = w->orient_mode != FLOE_ORIENT_AUTO || w->orient_extra || (w->beams && floe_beam_set_count(w->beams) > 0);
     for (int k = 0; k < w->nobs && !need; k++) need = observer_reads_orientation(w->obs[k]);
+    /* force providers other than these built-ins may read orientations (the ocean and wind
+     * drag place a floe's quadrature points with it, linear_drag takes L through it, a user
+     * provider reads floe_provider_ctx.q), and so may a body-force callback */
+    if (w->body_force) need = 1;
+    for (int k = 0; k < w->nprov + w->nuprov && !need; k++) {
+        const char *nm = (k < w->nprov ? w->prov[k] : w->uprov[k - w->nprov])->klass->name;
+        need = strcmp(nm, "body_forces") && strcmp(nm, "contacts") && strcmp(nm, "beam_bonds") && strcmp(nm, "pd_bonds") &&
+               strcmp(nm, "servo_walls");
+    }
     floe_particles *p = &w->p;
     for (int i = 0; i < p->n; i++)
         if (p->iso[i]) p->iso[i] = !need && p->kind[i] == FLOE_GEOM_SPHERE ? 2 : 1;

@@ -288,9 +288,10 @@ static void check_finish(floe_world *w, floe_world *ref) {
     const floe_comm_stats c = stats(w);
     long long want = 0, msgs = 0;
     if (size_ > 1) {
-        /* the word (root), the ledger (7 doubles), the allocation check, the result (all) */
-        want = (me == 0 ? 4 : 0) + 56 + 4 + 4;
-        msgs = (me == 0 ? 1 : 0) + 3;
+        /* the word (root), the ledger (7 doubles), the allocation check, the result (all);
+         * rank 0's word that it holds the gathered state (root) */
+        want = (me == 0 ? 8 : 0) + 56 + 4 + 4;
+        msgs = (me == 0 ? 2 : 0) + 3;
         if (me != 0) { /* the walls' forces, the count, the owned particles' state */
             want += 48LL * P->nrep + 4 + 184LL * P->nown;
             msgs += (P->nrep > 0) + 1 + (P->nown > 0);
