@@ -202,8 +202,6 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
             return refuse(w, what);
         }
     }
-    for (int i = 0; i < p->n; i++)
-        if (isfinite(p->radius[i]) && p->motion[i] != FLOE_FREE) return refuse(w, "a fixed or kinematic particle (other than a wall)");
     for (int k = 0; k < w->nmotions; k++) {
         const int i = w->motions[k].particle;
         if (i >= 0 && i < p->n && isfinite(p->radius[i])) return refuse(w, "a motion callback on a bounded particle");

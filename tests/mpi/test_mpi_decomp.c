@@ -194,6 +194,12 @@ static int impostor_forces(floe_provider *pv, floe_world *w, const struct floe_s
 static const floe_provider_class impostor_class = {.version = 1, .name = "linear_drag", .group = FLOE_GROUP_DEM,
                                                    .forces = impostor_forces};
 
+static void spin(double t, double v[3], double om[3], void *user) {
+    (void)t; (void)user;
+    v[0] = v[1] = v[2] = 0;
+    om[0] = om[1] = 0; om[2] = 1;
+}
+
 /* what is not supported yet is refused with FLOE_ENOTSUP and a message, on every rank */
 static void check_refusals(void) {
     for (int k = 0; k < 3; k++) {
@@ -209,8 +215,8 @@ static void check_refusals(void) {
             floe_particle_def p = floe_default_particle_def();
             p.geometry = g;
             p.x[0] = 0.003 * i;
-            if (k == 0 && i == 2) p.motion = FLOE_FIXED;
-            floe_world_add_particle(w, &p);
+            const int pi = floe_world_add_particle(w, &p);
+            if (k == 0 && i == 2) floe_world_set_motion(w, pi, spin, NULL);
         }
         if (k == 2) {
             floe_provider *pv = malloc(sizeof *pv);
@@ -219,7 +225,7 @@ static void check_refusals(void) {
         }
         int rc = floe_world_prepare(w);
         if (rc == 0) rc = floe_world_parallel_init(w, NULL);
-        const char *why[3] = {"a fixed sphere", "RK2", "a user's provider named linear_drag"};
+        const char *why[3] = {"a motion callback on a sphere", "RK2", "a user's provider named linear_drag"};
         CHECK(rc == FLOE_ENOTSUP && strstr(floe_world_last_error(w), "not supported yet"),
               "%s refused (rc %d: %s)", why[k], rc, floe_world_last_error(w));
         if (rank_ == 0) printf("  refused: %s\n", floe_world_last_error(w));
