@@ -188,7 +188,6 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     if (w->npd) return refuse(w, "a peridynamic body");
     if (w->cell) return refuse(w, "a periodic cell");
     if (w->nstates) return refuse(w, "a state object");
-    if (w->body_force) return refuse(w, "a body-force callback");
     if (w->nobs) return refuse(w, "an observer (outputs)");
     if (w->def.adaptive) return refuse(w, "the adaptive step");
     if (w->def.integrator != FLOE_VELOCITY_VERLET && w->def.integrator != FLOE_LEAPFROG) return refuse(w, "RK2");
