@@ -16,7 +16,11 @@
  * rank (MPI_Allgather) and summed in rank order, so the sum is the same to the bit
  * everywhere and every rank moves the wall alike; the controllers read the sums
  * (floe_servo_set_totals). The wall's own force stays each rank's part, so that the
- * boundary work summed over the ranks is the wall's work once. */
+ * boundary work summed over the ranks is the wall's work once.
+ *
+ * Kinematic bounded particles: their force at the step start (kin_old, written at the drift
+ * and read at the step's end, a decomposition between them) is set again from the force
+ * that travelled with them (floe_par_pp_in). */
 #include "par_hooks.h"
 #include "par_internal.h"
 #include "world_parts.h"

@@ -5,8 +5,9 @@
  * rank, in global-id order), owned particles [nrep, nrep + nown) in global-id order, ghosts
  * [nrep + nown, n) in the order received (by source rank, then the source's order). Ghosts
  * carry motion FLOE_FIXED so that the integrators leave them and the neighbour list pairs
- * them neither with each other nor with walls; their true motion is FLOE_FREE (floe refuses
- * other bounded particles under MPI). */
+ * them neither with each other nor with walls; their true motion shows in their mass: a
+ * ghost of a free particle has inv_mass > 0, one of a fixed or kinematic particle 0 (the list
+ * pairs the latter with no non-free owned particle, as in one process). */
 #ifndef FLOE_PAR_INTERNAL_H
 #define FLOE_PAR_INTERNAL_H
 
