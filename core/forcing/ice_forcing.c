@@ -3,9 +3,11 @@
  * their registry entries (kind "provider", named in a scene's `forces:`; a gridded field's
  * file is read when the provider is created). */
 #include "floe_forcing.h"
+#include "forcing_parts.h"
 #include "floe_view.h"
 #include "floe_registry.h"
 #include "particle_store.h"
+#include "world_internal.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -136,7 +138,8 @@ static int drag_forces(floe_provider *pv, floe_world *w, const struct floe_step_
         return floe_world_report_error(w, FLOE_EINVAL, "%s is for 2D floes (dimension: 2): it integrates the drag "
                                        "over each floe's area in the plane", d->name);
     const int fresh = d->last.n < p->n; /* no force held yet */
-    if (last_reserve(&d->last, p->n)) return floe_world_report_error(w, FLOE_ENOMEM, "%s: out of memory", d->name);
+    if (last_reserve(&d->last, p->n) || floe_world_pp_attach(w, &d->last.old, &d->last.n, 4))
+        return floe_world_report_error(w, FLOE_ENOMEM, "%s: out of memory", d->name);
     FLOE_TRY(field_covers_all(w, d->name, &d->d.field, p, !d->evaluated, ctx->time));
     d->evaluated = 1;
     /* every k-th step (and at prepare) the drag is integrated; in between it is held */
@@ -264,6 +267,12 @@ floe_provider *floe_drag_create(const char *name, const floe_drag_def *def, char
 
 /* ======================= Coriolis and tilt ======================= */
 
+static int coriolis_forces(floe_provider *pv, floe_world *w, const struct floe_step_ctx *ctx, floe_provider_out *out);
+
+int floe_forcing_is_per_particle(const floe_provider *pv) {
+    return pv && pv->klass && (pv->klass->forces == drag_forces || pv->klass->forces == coriolis_forces);
+}
+
 double floe_coriolis_parameter(double latitude_deg) { return 2 * FLOE_EARTH_OMEGA * sin(latitude_deg * M_PI / 180); }
 
 floe_coriolis_def floe_coriolis_default(void) {
@@ -284,7 +293,8 @@ typedef struct coriolis_pv {
 static int coriolis_forces(floe_provider *pv, floe_world *w, const struct floe_step_ctx *ctx, floe_provider_out *out) {
     coriolis_pv *c = (coriolis_pv *)pv;
     floe_particles *p = ctx->p;
-    if (last_reserve(&c->last, p->n)) return floe_world_report_error(w, FLOE_ENOMEM, "coriolis: out of memory");
+    if (last_reserve(&c->last, p->n) || floe_world_pp_attach(w, &c->last.old, &c->last.n, 4))
+        return floe_world_report_error(w, FLOE_ENOMEM, "coriolis: out of memory");
     if (c->d.tilt == FLOE_TILT_GEOSTROPHIC)
         FLOE_TRY(field_covers_all(w, "coriolis", &c->d.field, p, !c->evaluated, ctx->time));
     c->evaluated = 1;

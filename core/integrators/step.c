@@ -85,6 +85,7 @@ static int forces_advancing(floe_world *w) {
     floe_step_ctx c = ctx_step(w, contacts_wanted(w));
     int rc = floe_world_forces(w, &c, FLOE_GROUP_ALL);
     if (!rc && w->par) rc = floe_par_reverse(w); /* MPI: the ghosts' forces to their owners */
+    if (!rc && w->par) rc = floe_par_servo_totals(w); /* MPI: the servo walls' whole forces */
     return rc;
 }
 
@@ -380,6 +381,9 @@ int step_verlet(floe_world *w) {
                 red[b] = drift_block(p, &da, b * B, (b + 1) * B < n ? (b + 1) * B : n, &maxd2, &kin);
         for (int b = 0; b < nb; b++) wb += red[b];
     }
+    /* MPI: the servo walls' measures again (their controllers count the particles that
+     * reach them after this drift, as in one process) */
+    if (w->par) FLOE_TRY(floe_par_servo_totals(w));
     if (kin)
         for (int i = 0; i < n; i++) {
             if (motion[i] != FLOE_KINEMATIC) continue;

@@ -13,6 +13,10 @@
 int floe_par_refresh(floe_world *w, double maxd2, int have_xb);
 /* after a force evaluation: the forces and torques on ghosts added to their owners */
 int floe_par_reverse(floe_world *w);
+/* after a force evaluation's reverse sum (and at the split): the servo walls' measures
+ * summed over the ranks for their controllers, the same on every rank (par_forcing.c);
+ * nothing without servo walls */
+int floe_par_servo_totals(floe_world *w);
 /* after a step (force_all: every observer, the end): when the mirror's observers are due
  * (rank 0 decides, all follow), the state gathered into the mirror and its observers
  * called; nothing without a mirror */

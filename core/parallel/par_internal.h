@@ -5,8 +5,9 @@
  * rank, in global-id order), owned particles [nrep, nrep + nown) in global-id order, ghosts
  * [nrep + nown, n) in the order received (by source rank, then the source's order). Ghosts
  * carry motion FLOE_FIXED so that the integrators leave them and the neighbour list pairs
- * them neither with each other nor with walls; their true motion is FLOE_FREE (floe refuses
- * other bounded particles under MPI). */
+ * them neither with each other nor with walls; their true motion shows in their mass: a
+ * ghost of a free particle has inv_mass > 0, one of a fixed or kinematic particle 0 (the list
+ * pairs the latter with no non-free owned particle, as in one process). */
 #ifndef FLOE_PAR_INTERNAL_H
 #define FLOE_PAR_INTERNAL_H
 
@@ -49,6 +50,9 @@ typedef struct floe_par {
     int blost;               /* bonds whose anchor was not owned at the export (internal error) */
     double bout_reach, bond_reach;
     long nl_rebuilds;
+    /* the force stages' per-particle rows received at a decomposition (par_forcing.c):
+     * records gid + the rows of every registered array, until the new store exists */
+    double *ppin; int nppin;
 } floe_par;
 
 /* the traffic accounting (floe_comm_stats' conventions; nothing with one rank): */
@@ -116,6 +120,18 @@ int floe_par_beams_in(floe_world *w, floe_par *P);
 /* the bonds' records gathered on rank 0 into the mirror M's bonds (by global ids), for its
  * outputs; FLOE_EINVAL on rank 0 when they do not match M's bonds */
 int floe_par_beams_gather(floe_world *w, floe_par *P, struct floe_world *M);
+/* par_forcing.c: the force stages' per-particle arrays (world_internal.h pps) moved with
+ * their particles: at the split (newidx[old] = new local index or -1, nnew rows), at a
+ * decomposition (out: after RCB, before the migration, to dest of the owned particles; in:
+ * after the ghosts), and by global id into rank 0's unsplit world full at a checkpoint
+ * (collective; errors agreed by every rank) */
+/* 1 for a force provider that runs split (par_forcing.c): the world's body forces, contacts,
+ * beam bonds, servo walls, linear_drag, the ice drags and Coriolis (core/forcing) */
+int floe_par_provider_supported(const struct floe_provider *pv);
+int floe_par_pp_split(floe_world *w, const int *newidx, int nold, int nnew);
+int floe_par_pp_out(floe_world *w, floe_par *P, const int *dest);
+int floe_par_pp_in(floe_world *w, floe_par *P);
+int floe_par_pp_collect(floe_world *w, floe_par *P, struct floe_world *full);
 /* frees the state (Zoltan's too) */
 void floe_par_free(floe_par *P);
 

@@ -182,6 +182,7 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     long long diag[NDIAG];
     diag_save(w, P, diag);
     if (!rc) rc = floe_par_beams_out(w, P, dest); /* beam bonds (par_beams.c) */
+    if (!rc) rc = floe_par_pp_out(w, P, dest);    /* the force stages' rows (par_forcing.c) */
     if (!rc) rc = floe_par_migrate(w, P, dest);
     if (!rc) rc = floe_par_ghosts(w, P, w->nl.skin);
     if (!rc) diag_load(w, P, diag);
@@ -190,6 +191,7 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     free(in); free(dest); free(hd); free(recs);
     if (rc) return floe_world_error(w, rc, "MPI decomposition failed (out of memory or Zoltan)");
     FLOE_TRY(floe_par_beams_in(w, P)); /* its own message, agreed by every rank */
+    FLOE_TRY(floe_par_pp_in(w, P));    /* the same */
     w->nl.gid = P->gid;
     w->nl.own_hi = P->nrep + P->nown;
     rc = floe_world_nl_build(w);
@@ -216,22 +218,19 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     if (w->npd) return refuse(w, "a peridynamic body");
     if (w->cell) return refuse(w, "a periodic cell");
     if (w->nstates) return refuse(w, "a state object");
-    if (w->body_force) return refuse(w, "a body-force callback");
     if (w->nobs) return refuse(w, "an observer (outputs)");
     if (w->def.adaptive) return refuse(w, "the adaptive step");
     if (w->def.integrator != FLOE_VELOCITY_VERLET && w->def.integrator != FLOE_LEAPFROG) return refuse(w, "RK2");
-    /* the built-in providers that act per particle or per pair (a servo wall's controller
-     * reads the wall's force, which each rank holds only in part) */
+    /* the providers that run split (par_forcing.c): not a user's, whose loops and state are
+     * its own */
     for (int k = 0; k < w->nprov + w->nuprov; k++) {
-        const char *nm = (k < w->nprov ? w->prov[k] : w->uprov[k - w->nprov])->klass->name;
-        if (strcmp(nm, "body_forces") && strcmp(nm, "contacts") && strcmp(nm, "beam_bonds")) {
+        const floe_provider *pv = k < w->nprov ? w->prov[k] : w->uprov[k - w->nprov];
+        if (!floe_par_provider_supported(pv)) {
             char what[96];
-            snprintf(what, sizeof what, "the force provider %s", nm);
+            snprintf(what, sizeof what, "the force provider %s", pv->klass->name);
             return refuse(w, what);
         }
     }
-    for (int i = 0; i < p->n; i++)
-        if (isfinite(p->radius[i]) && p->motion[i] != FLOE_FREE) return refuse(w, "a fixed or kinematic particle (other than a wall)");
     for (int k = 0; k < w->nmotions; k++) {
         const int i = w->motions[k].particle;
         if (i >= 0 && i < p->n && isfinite(p->radius[i])) return refuse(w, "a motion callback on a bounded particle");
@@ -296,6 +295,8 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
         else {
             for (int k = 0; k < a; k++) floe_par_unpack(p, k, buf + (size_t)k * FLOE_PAR_REC, P->gid + k);
             p->n = a;
+            floe_servo_renumber(w, newidx);
+            if (floe_par_pp_split(w, newidx, n, a)) rc = FLOE_ENOMEM;
             for (int k = 0; k < w->nmotions; k++) {
                 const int i = w->motions[k].particle;
                 if (i >= 0 && i < n) w->motions[k].particle = newidx[i];
@@ -336,7 +337,7 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
             memset(w->p.t + 3 * i, 0, 3 * sizeof(double));
         }
     }
-    return FLOE_OK;
+    return floe_par_servo_totals(w); /* the servos' measures of the whole world, as at prepare */
 }
 
 int floe_world_parallel_rebuild(floe_world *w) {
@@ -1028,6 +1029,7 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
     MPI_Bcast(&rc, 1, MPI_INT, 0, P->comm);
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof rc);
     if (rc) return floe_world_error((floe_world *)w, rc, "MPI checkpoint: out of memory on rank 0");
+    FLOE_TRY(floe_par_pp_collect((floe_world *)w, P, P->rank == 0 ? full : NULL)); /* par_forcing.c */
     /* the beam bonds' state (broken flags, stresses), held by the ranks that anchor them */
     if (!w->beams) return FLOE_OK;
     rc = floe_par_beams_gather((floe_world *)w, P, P->rank == 0 ? full : NULL);

@@ -218,6 +218,7 @@ static int body_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx
             w->fb_old = fb;
             w->fb_n = n;
         }
+        if (floe_world_pp_attach(w, &w->fb_old, &w->fb_n, 6)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
         double wb = 0;
         for (int i = 0; i < n; i++) {
             if (p->motion[i] != FLOE_FREE) continue;

@@ -160,7 +160,11 @@ static int search_one(const nl_search *S, struct floe_nl_found *fd, int a) {
         for (int k = 0; k < cnt; k++) {
             const int b = fd->scr[k], j = bidx[b];
             if (p->radius[j] > p->radius[i] || (p->radius[j] == p->radius[i] && j <= i)) continue;
-            if (p->motion[i] != FLOE_FREE && p->motion[j] != FLOE_FREE) continue;
+            /* two particles that do not move under forces are never paired; a ghost (MPI) is
+             * stored FLOE_FIXED, its true motion is free when its mass is not infinite */
+            if (p->motion[i] != FLOE_FREE && p->motion[j] != FLOE_FREE &&
+                !(nl->gid && ((i >= nl->own_hi && p->inv_mass[i] > 0) || (j >= nl->own_hi && p->inv_mass[j] > 0))))
+                continue;
             /* MPI (core/parallel): a pair with a ghost is this rank's when its owned particle
              * has the lower global id; two ghosts are never paired */
             if (nl->gid && (i >= nl->own_hi || j >= nl->own_hi)) {

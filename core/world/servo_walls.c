@@ -29,6 +29,10 @@ typedef struct servo_wall {
     double delta_star;        /* the law's overlap at the contact force P A_c (0: unresolved) */
     double a_c;               /* wall area per contact, m^2 (2D: m) */
     int resolved;
+    /* under MPI (floe_servo_set_totals): the wall's normal force f.n and its contacts summed
+     * over the ranks, read by the controller in place of this rank's parts */
+    int have_tot;
+    double tot_fn, tot_nc;
 } servo_wall;
 
 typedef struct servo_set {
@@ -74,7 +78,7 @@ static double servo_area(const servo_wall *r) {
 
 static double servo_pressure(const servo_wall *r) {
     const double *f = r->w->p.f + 3 * (size_t)r->wall;
-    return -floe_v3_dot(f, r->n) / servo_area(r);
+    return -(r->have_tot ? r->tot_fn : floe_v3_dot(f, r->n)) / servo_area(r);
 }
 
 /* the normal force of the wall-particle law at depth d (a head-on contact at rest) */
@@ -222,7 +226,7 @@ static double servo_speed(const servo_wall *r) {
     else {
         /* the wall's stiffness: its n_c contacts at the secant stiffness f_s / delta_s of the
          * target; none: as fast as allowed */
-        int nc = servo_contacts(r);
+        int nc = r->have_tot ? (int)r->tot_nc : servo_contacts(r);
         v = nc ? FLOE_SERVO_BETA * r->delta_star * A * (p - P) / (nc * P * r->a_c * dt) : (p < P ? -vmax : vmax);
     }
     return v > vmax ? vmax : v < -vmax ? -vmax : v;
@@ -374,6 +378,40 @@ double floe_world_servo_area(const floe_world *w, int wall) {
 }
 
 int floe_world_is_servo_wall(const floe_world *w, int wall) { return servo_of(w, wall) != NULL; }
+
+int floe_servo_is_provider(const floe_provider *pv) { return pv && pv->klass == &servo_class; }
+
+int floe_servo_count(const floe_world *w) {
+    const servo_set *S = servo_set_of(w);
+    return S ? S->n : 0;
+}
+
+void floe_servo_partials(const floe_world *w, double *v) {
+    const servo_set *S = servo_set_of(w);
+    for (int k = 0; S && k < S->n; k++) {
+        const servo_wall *r = S->s[k];
+        v[2 * k] = floe_v3_dot(w->p.f + 3 * (size_t)r->wall, r->n);
+        v[2 * k + 1] = servo_contacts(r);
+    }
+}
+
+void floe_servo_set_totals(floe_world *w, const double *v) {
+    servo_set *S = servo_set_of(w);
+    for (int k = 0; S && k < S->n; k++) {
+        S->s[k]->have_tot = 1;
+        S->s[k]->tot_fn = v[2 * k];
+        S->s[k]->tot_nc = v[2 * k + 1];
+    }
+}
+
+void floe_servo_renumber(floe_world *w, const int *newidx) {
+    servo_set *S = servo_set_of(w);
+    for (int k = 0; S && k < S->n; k++) {
+        servo_wall *r = S->s[k];
+        r->wall = newidx[r->wall];
+        for (int b = 0; b < r->nbox; b++) r->box[b] = newidx[r->box[b]];
+    }
+}
 
 int floe_world_servo_check(floe_world *w, int wall) {
     servo_wall *r = servo_of(w, wall);

@@ -78,6 +78,8 @@ static int drag_forces(floe_provider *pv, floe_world *w, const struct floe_step_
         d->old = o;
         d->n = c.n;
     }
+    /* its rows move with their particles under MPI */
+    if (floe_world_pp_attach(w, &d->old, &d->n, 6)) return floe_world_error(w, FLOE_ENOMEM, "linear_drag: out of memory");
     double work = 0;
     for (int i = 0; i < c.n; i++) {
         if (c.motion[i] != FLOE_FREE) continue;
@@ -134,6 +136,8 @@ static const floe_provider_class drag_class = {
     .version = 1, .name = "linear_drag", .group = FLOE_GROUP_DEM, .forces = drag_forces,
     .critical_dt = drag_critical, .state_size = drag_state_size, .save = drag_save, .restore = drag_restore,
     .destroy = drag_destroy};
+
+int floe_linear_drag_is(const floe_provider *pv) { return pv && pv->klass == &drag_class; }
 
 static floe_provider *drag_create(const void *params, const floe_world *w, char *err, size_t errlen) {
     const drag_params *p = params;

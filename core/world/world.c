@@ -81,6 +81,14 @@ int grow(void **ptr, int *cap, int need, size_t sz) {
     return FLOE_OK;
 }
 
+int floe_world_pp_attach(floe_world *w, double **arr, int *n, int m) {
+    for (int k = 0; k < w->npps; k++)
+        if (w->pps[k].arr == arr) return FLOE_OK;
+    if (grow((void **)&w->pps, &w->pps_cap, w->npps + 1, sizeof *w->pps)) return FLOE_ENOMEM;
+    w->pps[w->npps++] = (struct floe_pp_state){arr, n, m};
+    return FLOE_OK;
+}
+
 floe_world *floe_world_create(const floe_world_def *def, char *err, size_t errlen) {
     const char *bad = NULL;
     if (def->dim != 2 && def->dim != 3) bad = "dim must be 2 or 3";
@@ -204,6 +212,7 @@ void floe_world_destroy(floe_world *w) {
     free(w->motion_idx);
     free(w->fb_old);
     free(w->kin_old);
+    free(w->pps);
     for (int i = 0; i < w->nstates; i++) {
         if (w->states[i]->klass->destroy) w->states[i]->klass->destroy(w->states[i]);
         else free(w->states[i]);

@@ -79,6 +79,11 @@ struct floe_world {
     floe_body_force_fn body_force; void *body_force_user;
     double *fb_old; int fb_n;   /* last callback force and torque per particle (6n) */
     double *kin_old;            /* force and torque of kinematic particles at the step start (6n) */
+    /* per-particle state of the force stages (the last forces of a trapezoid work, a held
+     * drag): arrays of m doubles a particle, indexed by local particle and grown by their
+     * owners, registered with floe_world_pp_attach so that the MPI decomposition moves each
+     * row with its particle (core/parallel/par_forcing.c); *n: the rows allocated */
+    struct floe_pp_state { double **arr; int *n; int m; } *pps; int npps, pps_cap;
     floe_state **states; int nstates, states_cap;
     floe_observer **obs; int nobs, obs_cap;
     floe_neighbor_list nl;
@@ -268,5 +273,9 @@ void floe_cell_path_end(floe_world *w);
 int floe_world_detect(floe_world *w, int i, int j, int sub, double *warm, floe_contact *c);
 int floe_world_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact *c);
 
+/* world.c: registers the per-particle array *arr (m doubles a particle, *n rows; the
+ * owner grows it and keeps *n up to date) of a force stage (pps above); once per array (a
+ * second call is nothing); FLOE_ENOMEM */
+int floe_world_pp_attach(floe_world *w, double **arr, int *n, int m);
 
 #endif

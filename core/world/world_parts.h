@@ -27,6 +27,19 @@
 
 /* world.c */
 int grow(void **ptr, int *cap, int need, size_t sz);
+/* servo_walls.c, for the MPI decomposition (core/parallel/par_forcing.c): the number of
+ * servo walls; their measures on this rank's particles (2 doubles a wall, in the servos'
+ * order: the normal force f.n on the wall, the free particles whose bounding sphere reaches
+ * it); the totals over the ranks, which the controllers then read in place of this rank's
+ * parts; the walls' indices renumbered at the split (newidx[old] = new, walls kept) */
+int floe_servo_count(const floe_world *w);
+/* servo_walls.c, user_providers.c: 1 when pv is the world's servo-wall provider, the
+ * built-in linear_drag (core/parallel/par_forcing.c runs them split over MPI ranks) */
+int floe_servo_is_provider(const floe_provider *pv);
+int floe_linear_drag_is(const floe_provider *pv);
+void floe_servo_partials(const floe_world *w, double *v);
+void floe_servo_set_totals(floe_world *w, const double *v);
+void floe_servo_renumber(floe_world *w, const int *newidx);
 /* timestep.c: every critical-step estimate into w->dte, w->dt_part, w->dt_crit */
 int estimate_dt(floe_world *w);
 /* world_prepare.c: the store's part of floe_world_prepare (core/integrators/driver.c runs

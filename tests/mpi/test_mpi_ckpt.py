@@ -27,6 +27,12 @@ files, so a restarted run must also continue them without a frame missing or rep
  at t = 0.6 ms): restarts under R ranks and serially against the serial run, same tolerance
  (without the bonds' gather at the checkpoint the file holds the bonds of rank 0's world as of
  its last output: energy.csv then differs by 3.3e-4 of the scale at 2 ranks, tried by hand).
+ Force providers (tests/mpi/sea_ice.yaml: drags, one held between its evaluations, and Coriolis;
+ servo.yaml: servo walls and a linear drag): the checkpoint written under R ranks restarted
+ under R ranks (2 for R = 1) and serially against the serial run, same tolerance (without the
+ providers' rows gathered at the checkpoint the file holds rank 0's world's rows as of its
+ prepare: sea_ice.yaml then differs by 1.4e-2 of the scale on particles.csv and servo.yaml by
+ 2.4e-5 on energy.csv at R = 2, tried by hand).
  (d) a missing and a corrupted checkpoint under R ranks: every rank exits non-zero (each
      rank's status is printed by a wrapper), rank 0 names the reason, within a time limit
      (no rank left waiting in a collective); under R > 1 also a file that only ranks 1..R-1
@@ -314,6 +320,18 @@ with tempfile.TemporaryDirectory() as tmp:
     compare(d("bS"), d("bB"), f"(a) beam bonds: restart under {R} vs serial", exact=(R == 1))
     restart(1, d("bA"), os.path.join(d("bC"), "checkpoint.bin"), d("bC"), scene=bd)
     compare(d("bS"), d("bC"), f"(b) beam bonds: {R}-rank checkpoint restarted serially vs serial", exact=(R == 1))
+    # force providers with per-particle state (tests/mpi/sea_ice.yaml: the ocean drag held
+    # between its evaluations every 3 steps, the drags' and Coriolis' last forces; servo.yaml:
+    # servo walls and a linear drag): the rows are gathered into the file by global id
+    # (core/parallel/par_forcing.c), the servos' sums taken again at the split
+    for k, sc, every in (("i", "sea_ice.yaml", "300.5"), ("s", "servo.yaml", "0.015")):
+        sp = os.path.join(here, sc)
+        run(1, ["-o", d(k + "S")], scene=sp)
+        run(R, ["-o", d(k + "A"), "--checkpoint-every", every], scene=sp)
+        restart(R if R > 1 else 2, d(k + "A"), os.path.join(d(k + "B"), "checkpoint.bin"), d(k + "B"), scene=sp)
+        compare(d(k + "S"), d(k + "B"), f"(a) {sc}: restart under {R if R > 1 else 2} vs serial")
+        restart(1, d(k + "A"), os.path.join(d(k + "C"), "checkpoint.bin"), d(k + "C"), scene=sp)
+        compare(d(k + "S"), d(k + "C"), f"(b) {sc}: {R}-rank checkpoint restarted serially vs serial", exact=(R == 1))
     # (d) bad input: every rank exits non-zero, rank 0 says why, nobody hangs
     bad = d("bad.bin")
     blob = bytearray(open(ck, "rb").read())

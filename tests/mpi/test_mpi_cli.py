@@ -21,7 +21,12 @@ The summary of settle.yaml under -np 2 carries the traffic line (floe_comm_stats
 reverse traffic is 48 B x the mean ghosts per rank (within the printed digits, 0.5 %), the
 ghost traffic between 176 and 312 B a ghost, the mean at most the largest rank's.
 
-Usage: test_mpi_cli.py FLOE MPIEXEC TESTS_MPI_DIR
+With SCENE:K1,K2 arguments after the folder, only those scenes (in TESTS_MPI_DIR) are run and
+compared, under the ranks given (the traffic line is left out): test_mpi_servo, test_mpi_drag
+and test_mpi_sea_ice (tests/CMakeLists.txt) run the force providers of
+core/parallel/par_forcing.c that way.
+
+Usage: test_mpi_cli.py FLOE MPIEXEC TESTS_MPI_DIR [SCENE:K1,K2 ...]
 """
 import os
 import re
@@ -37,6 +42,9 @@ SCENES = [(os.path.join(here, "settle.yaml"), (2, 4)),
           (os.path.join(here, "bonded.yaml"), (2, 4)),
           (os.path.join(here, "bonded_2d.yaml"), (3,)),
           (os.path.join(here, "contacts.yaml"), (2, 4))]
+if len(sys.argv) > 4:
+    SCENES = [(os.path.join(here, a.split(":")[0]), tuple(int(k) for k in a.split(":")[1].split(",")))
+              for a in sys.argv[4:]]
 TOL = 1e-9
 fails = 0
 
@@ -149,7 +157,8 @@ def check_comm_line():
     print(f"  {'ok  ' if ok else 'FAIL'} traffic line: {m.group(0)}")
 
 
-check_comm_line()
+if len(sys.argv) <= 4:
+    check_comm_line()
 for scene, ranks in SCENES:
   with tempfile.TemporaryDirectory() as tmp:
     ref = os.path.join(tmp, "np1")

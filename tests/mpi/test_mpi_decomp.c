@@ -185,6 +185,21 @@ static void check_comm(floe_world *w) {
     free(copies);
 }
 
+/* a user's provider that takes a built-in's name: refused all the same (its loops and state
+ * are its own; core/parallel/par_forcing.c knows the built-ins by their classes) */
+static int impostor_forces(floe_provider *pv, floe_world *w, const struct floe_step_ctx *ctx, floe_provider_out *out) {
+    (void)pv; (void)w; (void)ctx; (void)out;
+    return FLOE_OK;
+}
+static const floe_provider_class impostor_class = {.version = 1, .name = "linear_drag", .group = FLOE_GROUP_DEM,
+                                                   .forces = impostor_forces};
+
+static void spin(double t, double v[3], double om[3], void *user) {
+    (void)t; (void)user;
+    v[0] = v[1] = v[2] = 0;
+    om[0] = om[1] = 0; om[2] = 1;
+}
+
 /* what is not supported yet is refused with FLOE_ENOTSUP and a message, on every rank */
 static void check_refusals(void) {
     for (int k = 0; k < 3; k++) {
@@ -200,20 +215,17 @@ static void check_refusals(void) {
             floe_particle_def p = floe_default_particle_def();
             p.geometry = g;
             p.x[0] = 0.003 * i;
-            if (k == 0 && i == 2) p.motion = FLOE_FIXED;
-            floe_world_add_particle(w, &p);
+            const int pi = floe_world_add_particle(w, &p);
+            if (k == 0 && i == 2) floe_world_set_motion(w, pi, spin, NULL);
         }
         if (k == 2) {
-            double o[3] = {0, 0, -0.002}, n[3] = {0, 0, 1};
-            int wi = floe_world_add_wall(w, o, n, 0, FLOE_FIXED);
-            floe_servo_def sd = floe_default_servo_def();
-            sd.pressure = 100;
-            sd.area = 1e-4;
-            floe_world_add_servo_wall(w, wi, &sd);
+            floe_provider *pv = malloc(sizeof *pv);
+            pv->klass = &impostor_class;
+            floe_world_add_provider(w, pv); /* the world frees it */
         }
         int rc = floe_world_prepare(w);
         if (rc == 0) rc = floe_world_parallel_init(w, NULL);
-        const char *why[3] = {"a fixed sphere", "RK2", "a servo wall"};
+        const char *why[3] = {"a motion callback on a sphere", "RK2", "a user's provider named linear_drag"};
         CHECK(rc == FLOE_ENOTSUP && strstr(floe_world_last_error(w), "not supported yet"),
               "%s refused (rc %d: %s)", why[k], rc, floe_world_last_error(w));
         if (rank_ == 0) printf("  refused: %s\n", floe_world_last_error(w));
