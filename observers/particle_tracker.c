@@ -114,7 +114,8 @@ static int pt_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
 }
 
 static const floe_observer_class particle_tracker_class = {
-    3, "particle_tracker", pt_begin, pt_observe, pt_end, pt_destroy, 0, pt_state_size, pt_save, pt_restore, 1};
+    3, "particle_tracker", pt_begin, pt_observe, pt_end, pt_destroy, 0, pt_state_size, pt_save, pt_restore,
+    FLOE_OBSERVER_READS_LISTED};
 
 floe_observer *floe_particle_tracker_create(const char *path, const int *ids, int n,
                                             char *err, size_t errlen) {
@@ -147,5 +148,7 @@ floe_observer *floe_particle_tracker_create(const char *path, const int *ids, in
     }
     t->base.klass = &particle_tracker_class;
     t->base.period_steps = 1;
+    t->base.orient_ids = t->ids; /* it reads the orientations of these particles only */
+    t->base.norient_ids = n;
     return &t->base;
 }

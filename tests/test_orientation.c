@@ -7,9 +7,11 @@
  *    orientation changes nothing in its motion); the cube's orientation is integrated in both;
  *  - under ALWAYS a free sphere spinning at omega (no contact) turns by |omega| t: its
  *    quaternion is exp(t omega / 2) within 1e-6 (the integrator's error);
- *  - AUTO with an observer that reads orientations (the particle tracker), and AUTO with an
- *    observer of class version 2 (taken to read them): the same bits as ALWAYS, q included;
- *    an observer that does not read them (energy) leaves them;
+ *  - AUTO with an observer of class version 2 (taken to read them): the same bits as ALWAYS,
+ *    q included; an observer that does not read them (energy) leaves them; a particle
+ *    tracker reads the orientations of the particles it tracks only: tracking sphere 1, its
+ *    q is the bits of ALWAYS and sphere 2 keeps its orientation; tracking the floor and the
+ *    cube, every sphere keeps its orientation;
  *  - the mode switched on a prepared world takes effect at the next step; a bad mode is
  *    refused with FLOE_EINVAL. */
 #include "check.h"
@@ -121,16 +123,27 @@ int main(void) {
     /* observers: the tracker reads orientations, the energy tracker does not, version 2 is
      * taken to */
     char err[256];
-    floe_world *trk = scene(-1), *eng = scene(-1), *old = scene(-1);
-    const int ids[1] = {1};
+    floe_world *trk = scene(-1), *eng = scene(-1), *old = scene(-1), *trw = scene(-1);
+    const int ids[1] = {1}, ids_w[2] = {0, NS + 1};
     CHECK(floe_world_add_observer(trk, floe_particle_tracker_create("orientation_track.csv", ids, 1, err, sizeof err)) ==
               FLOE_OK,
           "tracker");
+    CHECK(floe_world_add_observer(trw, floe_particle_tracker_create("orientation_track_w.csv", ids_w, 2, err, sizeof err)) ==
+              FLOE_OK,
+          "tracker of the floor and the cube");
     CHECK(floe_world_add_observer(eng, floe_energy_tracker_create("orientation_energy.csv", err, sizeof err)) == FLOE_OK,
           "energy tracker");
     CHECK(floe_world_add_observer(old, v2_create()) == FLOE_OK, "a version-2 observer");
-    CHECK(run(trk, STEPS) == 0 && run(eng, STEPS) == 0 && run(old, STEPS) == 0, "runs with observers");
-    CHECK(same_bits(trk, all, 1), "AUTO with a tracker: the bits of ALWAYS, orientations included");
+    CHECK(run(trk, STEPS) == 0 && run(eng, STEPS) == 0 && run(old, STEPS) == 0 && run(trw, STEPS) == 0,
+          "runs with observers");
+    {
+        floe_particles_view a, b;
+        floe_world_particles(trk, &a);
+        floe_world_particles(all, &b);
+        CHECK(same_bits(trk, all, 0) && !memcmp(a.q + 4, b.q + 4, 4 * sizeof(double)) && q_is_identity(trk, 2),
+              "AUTO with a tracker of sphere 1: its orientation the bits of ALWAYS, sphere 2's left");
+    }
+    CHECK(same_bits(trw, aut, 1), "AUTO with a tracker of the floor and the cube: every sphere's orientation left");
     CHECK(same_bits(old, all, 1), "AUTO with a version-2 observer: the bits of ALWAYS, orientations included");
     CHECK(same_bits(eng, aut, 1) && q_is_identity(eng, 1), "AUTO with an energy tracker: orientations left");
 
@@ -146,8 +159,10 @@ int main(void) {
     floe_world_destroy(trk);
     floe_world_destroy(eng);
     floe_world_destroy(old);
+    floe_world_destroy(trw);
     floe_world_destroy(sw);
     remove("orientation_track.csv");
     remove("orientation_energy.csv");
+    remove("orientation_track_w.csv");
     return check_summary("test_orientation");
 }

@@ -537,7 +537,7 @@ int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {
     if (P->mirror) word = 1 | (mirror_reads_contacts(P->mirror) ? 2 : 0);
     if (word & 2 && contacts_due_next(w, P->mirror)) word |= 4;
     for (int k = 0; P->mirror && k < P->mirror->nobs; k++)
-        if (observer_reads_orientation(P->mirror->obs[k])) word |= 8; /* the split world integrates them */
+        if (observer_reads_orientation(P->mirror->obs[k], P->mirror)) word |= 8; /* the split world integrates them */
     MPI_Bcast(&word, 1, MPI_INT, 0, P->comm);
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof word);
     if (!(word & 1)) P->mirror = NULL;
@@ -736,7 +736,7 @@ int floe_world_parallel_add_output(floe_world *w, floe_observer *o) {
         return any == 1 ? refuse(w, "an output that reads contacts") : floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
     P->outs[P->nouts++] = o;
-    if (observer_reads_orientation(o)) { /* every rank adds the same outputs */
+    if (observer_reads_orientation(o, w)) { /* every rank adds the same outputs */
         w->orient_extra = 1;
         orientation_refresh(w);
     }

@@ -30,9 +30,12 @@ typedef struct floe_observer_class {
     /* version 3: 1 when the observer reads the particles' orientations (floe_particles_view
      * q). The orientation of a round particle (a sphere, a disc) is integrated only when
      * something reads it (floe_world_set_orientation): an observer of version 1 or 2 is taken
-     * to read it. */
+     * to read it. FLOE_OBSERVER_READS_LISTED: only the orientations of the particles the
+     * instance lists in floe_observer.orient_ids (a particle tracker). */
     int reads_orientation;
 } floe_observer_class;
+
+enum { FLOE_OBSERVER_READS_LISTED = 2 };
 
 struct floe_observer {
     const floe_observer_class *klass;
@@ -41,6 +44,10 @@ struct floe_observer {
     double next_time;       /* bookkeeping of the world */
     int ended;
     int begun;
+    /* read only when the class's reads_orientation is FLOE_OBSERVER_READS_LISTED: the world
+     * indices of the particles whose orientations it reads (the observer owns the array) */
+    const int *orient_ids;
+    int norient_ids;
 };
 
 /* Destroys an observer the world does not own (the world destroys those added to it). */

@@ -444,13 +444,23 @@ int floe_world_contact_count(const floe_world *w) { return w->ncontacts; }
 /* whether round particles' orientations are integrated (floe_world_set_orientation): iso[i]
  * is 2 for an isotropic free sphere (disc) whose orientation nothing reads (the integrators
  * then leave its q), 1 for the other isotropic bodies, 0 otherwise */
-int observer_reads_orientation(const floe_observer *o) {
-    return o->klass->version < 3 || o->klass->reads_orientation;
+/* whether observer o reads the orientation of a round particle of w (one it lists, for a
+ * FLOE_OBSERVER_READS_LISTED class) */
+int observer_reads_orientation(const floe_observer *o, const floe_world *w) {
+    if (o->klass->version < 3 || o->klass->reads_orientation == 1) return 1;
+    if (o->klass->reads_orientation != FLOE_OBSERVER_READS_LISTED) return 0;
+    const floe_particles *p = &w->p;
+    for (int k = 0; k < o->norient_ids; k++) {
+        int i = o->orient_ids[k];
+        if (i >= 0 && i < p->n && p->iso[i] && p->kind[i] == FLOE_GEOM_SPHERE) return 1;
+    }
+    return 0;
 }
 
 void orientation_refresh(floe_world *w) {
     int need = w->orient_mode != FLOE_ORIENT_AUTO || w->orient_extra || (w->beams && floe_beam_set_count(w->beams) > 0);
-    for (int k = 0; k < w->nobs && !need; k++) need = observer_reads_orientation(w->obs[k]);
+    for (int k = 0; k < w->nobs && !need; k++)
+        need = w->obs[k]->klass->reads_orientation != FLOE_OBSERVER_READS_LISTED && observer_reads_orientation(w->obs[k], w);
     /* force providers other than these built-ins may read orientations (the ocean and wind
      * drag place a floe's quadrature points with it, linear_drag takes L through it, a user
      * provider reads floe_provider_ctx.q), and so may a body-force callback */
@@ -463,6 +473,15 @@ void orientation_refresh(floe_world *w) {
     floe_particles *p = &w->p;
     for (int i = 0; i < p->n; i++)
         if (p->iso[i]) p->iso[i] = !need && p->kind[i] == FLOE_GEOM_SPHERE ? 2 : 1;
+    /* an observer that reads the orientations of the particles it lists (a tracker) */
+    for (int k = 0; k < w->nobs && !need; k++) {
+        const floe_observer *o = w->obs[k];
+        if (o->klass->version < 3 || o->klass->reads_orientation != FLOE_OBSERVER_READS_LISTED) continue;
+        for (int l = 0; l < o->norient_ids; l++) {
+            int i = o->orient_ids[l];
+            if (i >= 0 && i < p->n && p->iso[i]) p->iso[i] = 1;
+        }
+    }
 }
 
 int floe_world_add_observer(floe_world *w, floe_observer *o) {

@@ -56,7 +56,7 @@ void prepare_ledger(floe_world *w, double shadow);
 int prepare_observers(floe_world *w);
 int contacts_wanted(const floe_world *w);
 void orientation_refresh(floe_world *w);
-int observer_reads_orientation(const floe_observer *o);
+int observer_reads_orientation(const floe_observer *o, const floe_world *w);
 floe_step_ctx ctx_step(floe_world *w, int record);
 int observers_call(floe_world *w, int force_all);
 void providers_state_io(floe_world *w, unsigned char *buf, int save);
