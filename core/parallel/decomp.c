@@ -4,6 +4,7 @@
  * world-level sequence (par_world.c) calls these, never the reverse. */
 #include "par_internal.h"
 #include "floe_observer_base.h"
+#include "beam_set.h"
 
 #ifdef FLOE_HAVE_MPI
 #include <float.h>
@@ -381,19 +382,52 @@ static int *ghost_counts(const floe_par *P, int m) {
     return c;
 }
 
+/* what a ghost refresh carries (floe_par_forward_comm): the same on every rank (the laws,
+ * the beams and any_nonround are) */
+static void fwd_what(const floe_world *w, const floe_par *P, int *with_q, int *with_f) {
+    *with_q = P->any_nonround || (w->beams && floe_beam_set_count(w->beams) > 0);
+    int f = 0;
+    for (int k = 0; k < w->nmats * w->nmats && !f; k++) f = w->laws[k] && floe_contact_law_info(w->laws[k]).linear_gn > 0;
+    *with_f = f;
+}
+
+int floe_par_fwd_doubles(const floe_world *w, const floe_par *P) {
+    int wq, wf;
+    fwd_what(w, P, &wq, &wf);
+    return 9 + 4 * wq + 3 * wf;
+}
+
 int floe_par_forward_comm(floe_world *w, floe_par *P) {
     floe_particles *p = &w->p;
-    const int m = FLOE_PAR_FWD, S = P->size, g0 = P->nrep + P->nown;
+    int wq, wf;
+    fwd_what(w, P, &wq, &wf);
+    const int m = floe_par_fwd_doubles(w, P), S = P->size, g0 = P->nrep + P->nown;
     if (floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)P->nsend * m) ||
         floe_par_reserve(&P->rbuf, &P->rbuf_cap, (size_t)P->nghost * m))
         return FLOE_ENOMEM;
-    for (int k = 0; k < P->nsend; k++) floe_par_pack_state(p, P->send_idx[k], P->sbuf + (size_t)k * m);
+    for (int k = 0; k < P->nsend; k++) {
+        const int i = P->send_idx[k];
+        double *r = P->sbuf + (size_t)k * m;
+        memcpy(r, p->x + 3 * i, 3 * sizeof *r);
+        memcpy(r + 3, p->v + 3 * i, 3 * sizeof *r);
+        memcpy(r + 6, p->w + 3 * i, 3 * sizeof *r);
+        if (wq) memcpy(r + 9, p->q + 4 * i, 4 * sizeof *r);
+        if (wf) memcpy(r + 9 + 4 * wq, p->f + 3 * i, 3 * sizeof *r);
+    }
     int *c = ghost_counts(P, m);
     if (!c) return FLOE_ENOMEM;
     MPI_Alltoallv(P->sbuf, c, c + S, MPI_DOUBLE, P->rbuf, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->comm);
     floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, (long long)m * sizeof(double));
     free(c);
-    for (int k = 0; k < P->nghost; k++) floe_par_unpack_state(p, g0 + k, P->rbuf + (size_t)k * m);
+    for (int k = 0; k < P->nghost; k++) {
+        const int i = g0 + k;
+        const double *r = P->rbuf + (size_t)k * m;
+        memcpy(p->x + 3 * i, r, 3 * sizeof *r);
+        memcpy(p->v + 3 * i, r + 3, 3 * sizeof *r);
+        memcpy(p->w + 3 * i, r + 6, 3 * sizeof *r);
+        if (wq) memcpy(p->q + 4 * i, r + 9, 4 * sizeof *r);
+        if (wf) memcpy(p->f + 3 * i, r + 9 + 4 * wq, 3 * sizeof *r);
+    }
     return FLOE_OK;
 }
 

@@ -38,6 +38,8 @@ typedef struct floe_par {
     struct floe_world *mirror; /* rank 0 with outputs: the unsplit world whose observers write
                                   the gathered state (floe_world_parallel_outputs) */
     struct floe_observer **outs; int nouts; /* every rank's own outputs (floe_world_parallel_add_output) */
+    int any_nonround;        /* a bounded particle of the world is not a sphere (disc): the
+                                ghost refresh carries orientations (floe_par_forward_comm) */
     long rebuilds;           /* decompositions (RCB + migration + ghosts) */
     long long migrated;      /* particles this rank sent to another owner, over the run */
     floe_comm_stats traffic; /* the traffic (floe_world_parallel_comm) */
@@ -97,8 +99,13 @@ int floe_par_migrate(floe_world *w, floe_par *P, const int *dest);
  * of a rank's owned particles and the skin, reaches the box of that rank's owned centres is
  * sent to it as a ghost (appended at nrep + nown, motion FLOE_FIXED) */
 int floe_par_ghosts(floe_world *w, floe_par *P, double skin);
-/* refresh the ghosts from their owners (x v q w L f t) */
+/* refresh the ghosts from their owners: x v w always; q when a bounded particle is not round
+ * or beam bonds read it; f when a law has a linear dashpot (its end-of-step velocity reads
+ * the ghost's acceleration, pair_an_ext); a ghost's L and t are never read (the owner
+ * integrates it) */
 int floe_par_forward_comm(floe_world *w, floe_par *P);
+/* the doubles a ghost refresh carries a ghost: 9, + 4 (q), + 3 (f) */
+int floe_par_fwd_doubles(const floe_world *w, const floe_par *P);
 /* add the ghosts' forces and torques to their owners */
 int floe_par_reverse_comm(floe_world *w, floe_par *P);
 /* local index of global id g (-1: not here); sorted table of (gid, local) built by

@@ -263,6 +263,8 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     /* global ids = index; walls first, then this rank's block of the bounded particles */
     int nw = 0, nb = 0;
     for (int i = 0; i < n; i++) nw += !isfinite(p->radius[i]);
+    P->any_nonround = 0; /* the ranks hold the same world: the same answer everywhere */
+    for (int i = 0; i < n; i++) P->any_nonround |= isfinite(p->radius[i]) && p->kind[i] != FLOE_GEOM_SPHERE;
     nb = n - nw;
     const int k0 = (int)((long long)nb * P->rank / S), k1 = (int)((long long)nb * (P->rank + 1) / S);
     unsigned char *mine = calloc((size_t)(n ? n : 1), 1);

@@ -350,8 +350,9 @@ static int *owners(floe_world *w, int N) {
  * modulo 80: the last 24 go to the start; the order along x changes, so particles and
  * bonds change owner; no contact, so no history), then a rebuild. Expected on every rank:
  * migrate = 312 B a particle that leaves + 408 B a bond whose anchor leaves + 3 routes x
- * 4 B (counts) to every other rank; ghost = 176 B a ghost sent by the refresh before the
- * bonds are measured + 312 B a new ghost + (56 + 4) B to every other rank; reduce = 8 B
+ * 4 B (counts) to every other rank; ghost = fb B a ghost sent by the refresh before the
+ * bonds are measured (x v w q: 104 B; + f, 24 B, under a linear dashpot: floe_par_fwd_doubles)
+ + 312 B a new ghost + (56 + 4) B to every other rank; reduce = 8 B
  * (the longest bond) + 4 B (the bonds' hand-over agreed) + 8 B (the bonds' check); nothing
  * else. */
 static void traffic(void) {
@@ -380,11 +381,13 @@ static void traffic(void) {
     floe_world_parallel_comm(w, &c);
     const long long others = S - 1, nsend1 = P->nsend;
     const long long mig = S > 1 ? 312 * left + 408 * bleft + 3 * 4 * others : 0;
-    const long long gh = S > 1 ? 176 * nsend0 + 312 * nsend1 + 60 * others : 0, red = S > 1 ? 20 : 0;
+    const long long fb = 8LL * floe_par_fwd_doubles(w, P);
+    CHECK(fb == 104, "traffic: a ghost refresh carries x v w q with beam bonds (%lld B, expected 104)", fb);
+    const long long gh = S > 1 ? fb * nsend0 + 312 * nsend1 + 60 * others : 0, red = S > 1 ? 20 : 0;
     CHECK(c.bytes[FLOE_COMM_MIGRATE] == mig, "rank %d: migration %lld B, expected %lld (%lld particles x 312, %lld bonds x "
           "408)", rank_, c.bytes[FLOE_COMM_MIGRATE], mig, left, bleft);
-    CHECK(c.bytes[FLOE_COMM_GHOST] == gh, "rank %d: ghosts %lld B, expected %lld (%lld refreshed x 176, %lld new x 312)",
-          rank_, c.bytes[FLOE_COMM_GHOST], gh, nsend0, nsend1);
+    CHECK(c.bytes[FLOE_COMM_GHOST] == gh, "rank %d: ghosts %lld B, expected %lld (%lld refreshed x %lld, %lld new x 312)",
+          rank_, c.bytes[FLOE_COMM_GHOST], gh, nsend0, fb, nsend1);
     CHECK(c.bytes[FLOE_COMM_REDUCE] == red && c.bytes[FLOE_COMM_REVERSE] == 0 && c.bytes[FLOE_COMM_OUTPUT] == 0,
           "rank %d: reductions %lld B (expected %lld), nothing else", rank_, c.bytes[FLOE_COMM_REDUCE], red);
     long long tot[2] = {left, bleft};

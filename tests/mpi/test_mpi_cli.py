@@ -19,7 +19,7 @@ together and ordered by id) must agree within 1e-9 of the column's (file's) larg
 sums the contact forces in another order, nothing else differs.
 The summary of settle.yaml under -np 2 carries the traffic line (floe_comm_stats): the mean
 reverse traffic is 48 B x the mean ghosts per rank (within the printed digits, 0.5 %), the
-ghost traffic between 176 and 312 B a ghost, the mean at most the largest rank's.
+ghost traffic between 72 and 312 B a ghost, the mean at most the largest rank's.
 
 With SCENE:K1,K2 arguments after the folder, only those scenes (in TESTS_MPI_DIR) are run and
 compared, under the ranks given (the traffic line is left out): test_mpi_servo, test_mpi_drag
@@ -152,7 +152,7 @@ def check_comm_line():
         return
     mean, mx, msgs, gh, rev, mig, red, out, gpr, ppr, reb = (float(v) for v in m.groups())
     ok = (mean <= mx and gpr > 0 and ppr == 120.0 and abs(rev - 48 * gpr) <= 0.005 * rev
-          and 176 * gpr * 0.995 <= gh <= 312 * gpr * 1.005 + 60 and reb > 0 and red >= 4 and out > 0)
+          and 72 * gpr * 0.995 <= gh <= 312 * gpr * 1.005 + 60 and reb > 0 and red >= 4 and out > 0)
     fails += not ok
     print(f"  {'ok  ' if ok else 'FAIL'} traffic line: {m.group(0)}")
 

@@ -5,8 +5,9 @@
  * copy), splits it, and the test works out from the unsplit copy, the owners of every global
  * id and the ranks' boxes of owned centres (its own MPI calls, not counted) how many ghosts
  * each rank must send to each other rank, M[o][r]; then
- *   - ghost refresh (x3 v3 q4 w3 L3 f3 t3, 176 B a ghost): K refreshes send exactly
- *     K x 176 x sum_r M[me][r] bytes in K x #{r: M[me][r] > 0} messages, nothing else;
+ *   - ghost refresh (spheres under Hertz-Mindlin: x3 v3 w3, 72 B a ghost; orientations only
+ *     with other shapes or beam bonds, forces only under a linear dashpot): K refreshes send
+ *     exactly K x 72 x sum_r M[me][r] bytes in K x #{r: M[me][r] > 0} messages, nothing else;
  *   - reverse sum (f3 t3, 48 B a ghost): K x 48 x sum_o M[o][me] bytes, to #{o: M[o][me] > 0}
  *     ranks;
  *   - (after the steps below) a rebuild after a shift move (many particles change owner, a third of the list's pairs
@@ -17,7 +18,7 @@
  *     other rank;
  *   - 200 steps of a gas of fast spheres (a few rebuilds on the way): each step's reverse
  *     traffic is 48 B x this rank's ghosts at the step's end, the ghost traffic summed over
- *     the ranks 176 B (312 B at a rebuild, + 60 B x (ranks - 1) per rank) x the ghosts of all
+ *     the ranks 72 B (312 B at a rebuild, + 60 B x (ranks - 1) per rank) x the ghosts of all
  *     ranks, the reductions 4 B (whether to rebuild) + 80 B (the watchdog's ledger) a step, the
  *     outputs' word 4 B on rank 0; the step count and the mean loads;
  *   - the end of a run with a mirror (rank 0): the gathered state 184 B per owned particle
@@ -144,9 +145,11 @@ static void check_refresh(floe_world *w, const floe_world *ref) {
     floe_world_parallel_comm_reset(w);
     for (int k = 0; k < K; k++) floe_par_forward_comm(w, P);
     floe_comm_stats c = stats(w);
-    CHECK(c.bytes[FLOE_COMM_GHOST] == K * 176LL * send && c.messages[FLOE_COMM_GHOST] == K * smsg,
-          "rank %d: %d refreshes: ghost traffic %lld B in %lld messages, expected %lld B (%lld ghosts x 176 B) in %lld",
-          me, K, c.bytes[FLOE_COMM_GHOST], c.messages[FLOE_COMM_GHOST], K * 176LL * send, send, K * smsg);
+    CHECK(floe_par_fwd_doubles(w, P) == 9, "rank %d: a refresh of spheres without a linear dashpot carries x v w (%d doubles)",
+          me, floe_par_fwd_doubles(w, P));
+    CHECK(c.bytes[FLOE_COMM_GHOST] == K * 72LL * send && c.messages[FLOE_COMM_GHOST] == K * smsg,
+          "rank %d: %d refreshes: ghost traffic %lld B in %lld messages, expected %lld B (%lld ghosts x 72 B) in %lld",
+          me, K, c.bytes[FLOE_COMM_GHOST], c.messages[FLOE_COMM_GHOST], K * 72LL * send, send, K * smsg);
     CHECK(others_zero(&c, 1u << FLOE_COMM_GHOST), "rank %d: a refresh sends nothing else", me);
     floe_world_parallel_comm_reset(w);
     for (int k = 0; k < K; k++) floe_par_reverse_comm(w, P);
@@ -156,7 +159,7 @@ static void check_refresh(floe_world *w, const floe_world *ref) {
           c.bytes[FLOE_COMM_REVERSE], c.messages[FLOE_COMM_REVERSE], K * 48LL * recv, recv, K * rmsg);
     CHECK(others_zero(&c, 1u << FLOE_COMM_REVERSE), "rank %d: a reverse sum sends nothing else", me);
     if (me == 0)
-        printf("  refresh: rank 0 sends %lld ghosts (%lld B a refresh) to %lld ranks, holds %lld\n", send, 176 * send, smsg, recv);
+        printf("  refresh: rank 0 sends %lld ghosts (%lld B a refresh) to %lld ranks, holds %lld\n", send, 72 * send, smsg, recv);
     free(own); free(M); free(x);
 }
 
@@ -253,13 +256,13 @@ static void check_steps(floe_world *w) {
         /* over the ranks: every ghost held was sent once, by its owner */
         long long v[2] = {d[FLOE_COMM_GHOST] - (reb ? 60 * others : 0), gh};
         MPI_Allreduce(MPI_IN_PLACE, v, 2, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
-        ok_gh &= v[0] == (reb ? 312 : 176) * v[1];
+        ok_gh &= v[0] == (reb ? 312 : 72) * v[1];
         c0 = c;
     }
     CHECK(ok_rev, "rank %d: every step's reverse traffic is 48 B x the ghosts held", me);
     CHECK(ok_red, "rank %d: every step's reductions are 4 B (+ 80 B for the watchdog)", me);
     CHECK(ok_out, "rank %d: every step's output word is 4 B on rank 0, nothing elsewhere", me);
-    CHECK(ok_gh, "every step's ghost traffic over the ranks is 176 B (312 B at a rebuild) x all ghosts held");
+    CHECK(ok_gh, "every step's ghost traffic over the ranks is 72 B (312 B at a rebuild) x all ghosts held");
     floe_comm_stats c = stats(w);
     CHECK(c.steps == NSTEP && c.rebuilds == nreb, "rank %d: %ld steps counted (%d), %ld rebuilds (%d)", me, c.steps, NSTEP,
           c.rebuilds, nreb);

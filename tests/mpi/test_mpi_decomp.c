@@ -168,11 +168,16 @@ static void check_comm(floe_world *w) {
     floe_par *P = w->par;
     floe_particles *p = &w->p;
     const int g0 = P->nrep + P->nown, N = P->ntotal;
-    for (int i = P->nrep; i < g0; i++) floe_v3_set(p->f + 3 * i, (double)P->gid[i], 2.0 * P->gid[i], -1.0);
+    double *vsave = malloc((size_t)p->n * 3 * sizeof *vsave);
+    memcpy(vsave, p->v, (size_t)p->n * 3 * sizeof *vsave);
+    for (int i = P->nrep; i < g0; i++) floe_v3_set(p->v + 3 * i, (double)P->gid[i], 2.0 * P->gid[i], -1.0);
     floe_par_forward_comm(w, P);
     int fwd = 1;
-    for (int i = g0; i < p->n; i++) fwd &= p->f[3 * i] == (double)P->gid[i] && p->f[3 * i + 1] == 2.0 * P->gid[i];
-    CHECK(fwd, "rank %d: forward refresh: each of %d ghosts holds its owner's force", rank_, P->nghost);
+    for (int i = g0; i < p->n; i++) fwd &= p->v[3 * i] == (double)P->gid[i] && p->v[3 * i + 1] == 2.0 * P->gid[i];
+    CHECK(fwd, "rank %d: forward refresh: each of %d ghosts holds its owner's velocity", rank_, P->nghost);
+    memcpy(p->v, vsave, (size_t)p->n * 3 * sizeof *vsave);
+    floe_par_forward_comm(w, P);
+    free(vsave);
     /* reverse: ghosts carry 1, owners 0: each owner receives its number of ghost copies */
     for (int i = P->nrep; i < p->n; i++) floe_v3_set(p->f + 3 * i, i >= g0 ? 1.0 : 0.0, 0, 0);
     int *copies = calloc((size_t)(N > 0 ? N : 1), sizeof *copies);
