@@ -498,7 +498,7 @@ void floe_par_free(floe_par *P) {
     if (P->zz) Zoltan_Destroy(&P->zz);
     for (int k = 0; k < P->nouts; k++) floe_observer_destroy(P->outs[k]);
     free(P->outs);
-    free(P->bout); free(P->bin); free(P->bpark); free(P->ppin);
+    free(P->bout); free(P->bin); free(P->bpark); free(P->ppin); free(P->servo_buf);
     free(P->gid); free(P->send_idx); free(P->scount); free(P->sbuf); free(P->rbuf);
     MPI_Comm_free(&P->comm);
     free(P);

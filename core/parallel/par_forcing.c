@@ -233,12 +233,18 @@ int floe_par_servo_totals(floe_world *w) {
     const int ns = floe_servo_count(w);
     if (!P || !ns) return FLOE_OK;
     const int m = 2 * ns;
-    double *v = malloc((size_t)m * (1 + P->size) * sizeof *v);
-    int bad = !v, any = bad;
-    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
-    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof bad);
-    if (any) { free(v); return floe_world_error(w, FLOE_ENOMEM, "MPI servo walls: out of memory"); }
-    double *all = v + m;
+    const size_t need = (size_t)m * (1 + P->size);
+    if (P->servo_cap < need) {
+        /* the first call (the servo walls are the same on every rank: every rank is here):
+         * the buffer kept in P, its allocation agreed */
+        double *b = realloc(P->servo_buf, need * sizeof *b);
+        if (b) { P->servo_buf = b; P->servo_cap = need; }
+        int bad = !b, any = bad;
+        MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
+        floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof bad);
+        if (any) return floe_world_error(w, FLOE_ENOMEM, "MPI servo walls: out of memory");
+    }
+    double *v = P->servo_buf, *all = v + m;
     floe_servo_partials(w, v);
     MPI_Allgather(v, m, MPI_DOUBLE, all, m, MPI_DOUBLE, P->comm);
     floe_par_count_all(P, FLOE_COMM_REDUCE, (long long)m * sizeof *v);
@@ -249,7 +255,6 @@ int floe_par_servo_totals(floe_world *w) {
         v[k] = s;
     }
     floe_servo_set_totals(w, v);
-    free(v);
     return FLOE_OK;
 }
 

@@ -55,6 +55,9 @@ typedef struct floe_par {
     /* the force stages' per-particle rows received at a decomposition (par_forcing.c):
      * records gid + the rows of every registered array, until the new store exists */
     double *ppin; int nppin;
+    /* the servo walls' partial and gathered measures (floe_par_servo_totals): allocated at
+     * its first call (agreed then), kept */
+    double *servo_buf; size_t servo_cap;
 } floe_par;
 
 /* the traffic accounting (floe_comm_stats' conventions; nothing with one rank): */
