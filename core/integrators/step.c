@@ -231,15 +231,15 @@ typedef struct drift_args {
     double k1, dt, h, g[3];
     const double *xb; /* positions at the list build (NULL: none) */
 } drift_args;
-static double drift_block(floe_particles *p, const drift_args *a, int i0, int i1, double *maxd2, int *kin) {
+static double drift_block(floe_particles *p, const drift_args *a, int i0, int i1, double *maxd2, int *kin, int *bad) {
     /* restrict: within this block nothing else writes what they point to */
     double *restrict X = p->x, *restrict V = p->v, *restrict Q = p->q, *restrict W = p->w, *restrict LL = p->L;
     const unsigned char *restrict MO = p->motion, *restrict iso = p->iso;
     const double *restrict F = p->f, *restrict T = p->t, *restrict IM = p->inv_mass, *restrict M = p->mass;
-    const double *restrict II = p->inv_iso, *restrict XB = a->xb;
+    const double *restrict II = p->inv_iso, *restrict XB = a->xb, *restrict R = p->radius;
     const double k1 = a->k1, dt = a->dt, h = a->h, g0 = a->g[0], g1 = a->g[1], g2 = a->g[2];
     double wb = 0, md = *maxd2; /* locals: kept in registers */
-    int kn = 0;
+    int kn = 0, kb = 0;
     for (int i = i0; i < i1; i++) {
         const unsigned char mo = MO[i];
         if (mo != FLOE_FREE) { kn |= mo == FLOE_KINEMATIC; continue; }
@@ -247,6 +247,11 @@ static double drift_block(floe_particles *p, const drift_args *a, int i0, int i1
         const double im = IM[i];
         for (int k = 0; k < 3; k++) v[k] += k1 * im * F[3 * i + k];
         for (int k = 0; k < 3; k++) x[k] += dt * v[k];
+        /* the quick checks (the messages come after the forces, step_verlet): a particle
+         * that moved more than half its radius, or whose position or velocity is not finite
+         * (NaN fails every comparison) */
+        const double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * (dt * dt), lim = 0.5 * R[i];
+        kb |= !(d2 <= lim * lim) | !(fabs(x[0]) + fabs(x[1]) + fabs(x[2]) < INFINITY);
         if (XB) note_disp(x, XB + 3 * i, &md);
         /* rotation: L by the half kick, then the orientation over dt (the isotropic fast
          * path q <- exp(dt omega / 2) q without trig, or the midpoint rule) */
@@ -262,6 +267,7 @@ static double drift_block(floe_particles *p, const drift_args *a, int i0, int i1
     }
     *maxd2 = md;
     *kin |= kn;
+    *bad |= kb;
     return wb;
 }
 
@@ -274,11 +280,10 @@ typedef struct kick_args {
 } kick_args;
 static void kick_block(floe_particles *p, const kick_args *a, int i0, int i1, double out[4], int *bad) {
     double *restrict V = p->v, *restrict W = p->w, *restrict LL = p->L;
-    const double *restrict X = p->x, *restrict R = p->radius;
     const unsigned char *restrict MO = p->motion, *restrict iso = p->iso;
     const double *restrict F = p->f, *restrict T = p->t, *restrict IM = p->inv_mass, *restrict M = p->mass;
     const double *restrict II = p->inv_iso;
-    const double h = a->h, dt = a->dt;
+    const double h = a->h;
     const int leap = a->leap, shadow = a->shadow;
     double kt = 0, kr = 0, sh_iso = 0, sh = 0;
     int bad_i = *bad;
@@ -287,10 +292,6 @@ static void kick_block(floe_particles *p, const kick_args *a, int i0, int i1, do
         double *v = V + 3 * i, *L = LL + 3 * i, *om = W + 3 * i;
         const double *f = F + 3 * i, *t = T + 3 * i;
         const double im = IM[i];
-        /* the drift of this step was dt * v_half: a particle that moved more than half
-         * its radius, or whose state is not finite (NaN fails every comparison), is
-         * unstable */
-        const double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * dt * dt, lim = 0.5 * R[i];
         double ke, kre;
         if (iso[i]) {
             /* isotropic bodies: omega = L / I, and the shadow term's isotropic case
@@ -339,9 +340,9 @@ static void kick_block(floe_particles *p, const kick_args *a, int i0, int i1, do
         }
         kt += ke;
         kr += kre;
-        if (!(d2 <= lim * lim) || !(ke + kre < INFINITY) ||
-            !(fabs(X[3 * i]) + fabs(X[3 * i + 1]) + fabs(X[3 * i + 2]) < INFINITY))
-            if (i < bad_i) bad_i = i;
+        /* the drift's checks were made in drift_block; here the new velocities' (a force that
+         * is not finite) */
+        if (!(ke + kre < INFINITY) && i < bad_i) bad_i = i;
     }
     out[0] = kt; out[1] = kr; out[2] = sh_iso; out[3] = sh;
     *bad = bad_i;
@@ -362,6 +363,7 @@ int step_verlet(floe_world *w) {
     const unsigned char *motion = p->motion;
     const double g0 = w->def.gravity[0], g1 = w->def.gravity[1], g2 = w->def.gravity[2];
     int kin = 0; /* any kinematic particle */
+    int dbad = 0; /* a free particle failed the drift's quick checks */
     if (w->cell) FLOE_TRY(floe_cell_begin_step(w)); /* the cell's velocity gradient of this step */
     /* threads: blocks of FLOE_PAR_BLOCK particles, their sums added in block order (the same
      * bits for any number of threads, floe_par.h) */
@@ -373,12 +375,12 @@ int step_verlet(floe_world *w) {
     {
         const drift_args da = {k1, dt, h, {g0, g1, g2}, have_xb ? xb : NULL};
         if (nt > 1) {
-            FLOE_OMP(omp parallel for schedule(static) num_threads(nt) reduction(max: maxd2) reduction(|: kin))
+            FLOE_OMP(omp parallel for schedule(static) num_threads(nt) reduction(max: maxd2) reduction(|: kin, dbad))
             for (int b = 0; b < nb; b++)
-                red[b] = drift_block(p, &da, b * B, (b + 1) * B < n ? (b + 1) * B : n, &maxd2, &kin);
+                red[b] = drift_block(p, &da, b * B, (b + 1) * B < n ? (b + 1) * B : n, &maxd2, &kin, &dbad);
         } else
             for (int b = 0; b < nb; b++)
-                red[b] = drift_block(p, &da, b * B, (b + 1) * B < n ? (b + 1) * B : n, &maxd2, &kin);
+                red[b] = drift_block(p, &da, b * B, (b + 1) * B < n ? (b + 1) * B : n, &maxd2, &kin, &dbad);
         for (int b = 0; b < nb; b++) wb += red[b];
     }
     /* MPI: the servo walls' measures again (their controllers count the particles that
@@ -437,7 +439,9 @@ int step_verlet(floe_world *w) {
     if (kin)
         for (int i = 0; i < n; i++)
             if (motion[i] == FLOE_KINEMATIC) wbound += kinematic_close(w, i, h);
-    /* a particle failed the quick test: the checks with the message, from the first one on */
+    /* a particle failed the quick test: the checks with the message, from the first one on
+     * (one failed the drift's: from the start, a rebuild under MPI may have moved it) */
+    if (dbad) bad = 0;
     for (int i = bad; i < n; i++) {
         if (motion[i] != FLOE_FREE) continue;
         double xold[3];
