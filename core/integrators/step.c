@@ -411,6 +411,10 @@ int step_verlet(floe_world *w) {
      * may have changed */
     n = p->n;
     motion = p->motion;
+    /* ... and a kinematic particle may have arrived on this rank: its step's close (the
+     * boundary work, its velocity) is this rank's now (a rank without one at the drift
+     * skipped it, and its work was lost from the ledger) */
+    if (w->par) kin = 1;
     FLOE_TRY(forces_advancing(w));
     /* 4. second half kick (leapfrog: none; its kinetic energy is that of the synchronised
      * velocity v_{n+1/2} + dt/2 a_{n+1}) */
