@@ -511,6 +511,7 @@ static int prepare_quietly(floe_world *w, char *err, size_t errlen) {
     int rc = floe_world_prepare(w);
     w->nobs = nobs;
     if (rc) return floe_error_set(err, errlen, rc, "preparing the world failed: %s", w->err);
+    orientation_refresh(w); /* the prepare did not see the observers: those that read orientations */
     return FLOE_OK;
 }
 

@@ -277,14 +277,17 @@ static double drift_block(floe_particles *p, const drift_args *a, int i0, int i1
 typedef struct kick_args {
     double h, dt;
     int leap, shadow;
+    int recheck; /* MPI: the drift's quick checks again (a particle that failed them may have
+                    migrated to this rank in the rebuild between) */
 } kick_args;
 static void kick_block(floe_particles *p, const kick_args *a, int i0, int i1, double out[4], int *bad) {
     double *restrict V = p->v, *restrict W = p->w, *restrict LL = p->L;
+    const double *restrict X = p->x, *restrict R = p->radius;
     const unsigned char *restrict MO = p->motion, *restrict iso = p->iso;
     const double *restrict F = p->f, *restrict T = p->t, *restrict IM = p->inv_mass, *restrict M = p->mass;
     const double *restrict II = p->inv_iso;
-    const double h = a->h;
-    const int leap = a->leap, shadow = a->shadow;
+    const double h = a->h, dt = a->dt;
+    const int leap = a->leap, shadow = a->shadow, recheck = a->recheck;
     double kt = 0, kr = 0, sh_iso = 0, sh = 0;
     int bad_i = *bad;
     for (int i = i0; i < i1; i++) {
@@ -292,6 +295,11 @@ static void kick_block(floe_particles *p, const kick_args *a, int i0, int i1, do
         double *v = V + 3 * i, *L = LL + 3 * i, *om = W + 3 * i;
         const double *f = F + 3 * i, *t = T + 3 * i;
         const double im = IM[i];
+        if (recheck) { /* v is still the drift's v_half */
+            const double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * (dt * dt), lim = 0.5 * R[i];
+            if ((!(d2 <= lim * lim) || !(fabs(X[3 * i]) + fabs(X[3 * i + 1]) + fabs(X[3 * i + 2]) < INFINITY)) && i < bad_i)
+                bad_i = i;
+        }
         double ke, kre;
         if (iso[i]) {
             /* isotropic bodies: omega = L / I, and the shadow term's isotropic case
@@ -427,7 +435,7 @@ int step_verlet(floe_world *w) {
         const int nb2 = (n + B - 1) / B, nt2 = floe_world_loop_threads(w, n);
         double *red2 = floe_world_reduce_buf(w, 4 * (size_t)nb2);
         if (nb2 > 0 && !red2) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-        const kick_args ka = {h, dt, leap, shadow};
+        const kick_args ka = {h, dt, leap, shadow, w->par != NULL};
         if (nt2 > 1) {
             FLOE_OMP(omp parallel for schedule(static) num_threads(nt2) reduction(min: bad))
             for (int b = 0; b < nb2; b++)
@@ -444,8 +452,9 @@ int step_verlet(floe_world *w) {
         for (int i = 0; i < n; i++)
             if (motion[i] == FLOE_KINEMATIC) wbound += kinematic_close(w, i, h);
     /* a particle failed the quick test: the checks with the message, from the first one on
-     * (one failed the drift's: from the start, a rebuild under MPI may have moved it) */
-    if (dbad) bad = 0;
+     * (one failed the drift's: from the start; under MPI the kick checked again, on the rank
+     * that holds it after the rebuild) */
+    if (dbad && !w->par) bad = 0;
     for (int i = bad; i < n; i++) {
         if (motion[i] != FLOE_FREE) continue;
         double xold[3];

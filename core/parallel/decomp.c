@@ -4,7 +4,6 @@
  * world-level sequence (par_world.c) calls these, never the reverse. */
 #include "par_internal.h"
 #include "floe_observer_base.h"
-#include "beam_set.h"
 
 #ifdef FLOE_HAVE_MPI
 #include <float.h>
@@ -407,10 +406,11 @@ static int *ghost_counts(const floe_par *P, int m) {
     return c;
 }
 
-/* what a ghost refresh carries (floe_par_forward_comm): the same on every rank (the laws,
- * the beams and any_nonround are) */
+/* what a ghost refresh carries (floe_par_forward_comm): the same on every rank (the laws
+ * and any_nonround are; a rank's own beam count is not: any_nonround says whether the world
+ * had bonds at the split) */
 static void fwd_what(const floe_world *w, const floe_par *P, int *with_q, int *with_f) {
-    *with_q = P->any_nonround || (w->beams && floe_beam_set_count(w->beams) > 0);
+    *with_q = P->any_nonround;
     int f = 0;
     for (int k = 0; k < w->nmats * w->nmats && !f; k++) f = w->laws[k] && floe_contact_law_info(w->laws[k]).linear_gn > 0;
     *with_f = f;

@@ -242,7 +242,12 @@ int floe_par_servo_totals(floe_world *w) {
         int bad = !b, any = bad;
         MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
         floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof bad);
-        if (any) return floe_world_error(w, FLOE_ENOMEM, "MPI servo walls: out of memory");
+        if (any) { /* every rank the same: the next call agrees again */
+            free(P->servo_buf);
+            P->servo_buf = NULL;
+            P->servo_cap = 0;
+            return floe_world_error(w, FLOE_ENOMEM, "MPI servo walls: out of memory");
+        }
     }
     double *v = P->servo_buf, *all = v + m;
     floe_servo_partials(w, v);

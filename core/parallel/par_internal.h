@@ -38,8 +38,11 @@ typedef struct floe_par {
     struct floe_world *mirror; /* rank 0 with outputs: the unsplit world whose observers write
                                   the gathered state (floe_world_parallel_outputs) */
     struct floe_observer **outs; int nouts; /* every rank's own outputs (floe_world_parallel_add_output) */
-    int any_nonround;        /* a bounded particle of the world is not a sphere (disc): the
-                                ghost refresh carries orientations (floe_par_forward_comm) */
+    int any_nonround;        /* a bounded particle of the world is not a sphere (disc), or the
+                                world has beam bonds (their bending reads orientations): the
+                                ghost refresh carries orientations (floe_par_forward_comm).
+                                Set at the split from the whole world: the same on every rank
+                                (a rank's own bond count is not) */
     long rebuilds;           /* decompositions (RCB + migration + ghosts) */
     long long migrated;      /* particles this rank sent to another owner, over the run */
     floe_comm_stats traffic; /* the traffic (floe_world_parallel_comm) */

@@ -265,6 +265,7 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     for (int i = 0; i < n; i++) nw += !isfinite(p->radius[i]);
     P->any_nonround = 0; /* the ranks hold the same world: the same answer everywhere */
     for (int i = 0; i < n; i++) P->any_nonround |= isfinite(p->radius[i]) && p->kind[i] != FLOE_GEOM_SPHERE;
+    if (w->beams && floe_beam_set_count(w->beams) > 0) P->any_nonround = 1;
     nb = n - nw;
     const int k0 = (int)((long long)nb * P->rank / S), k1 = (int)((long long)nb * (P->rank + 1) / S);
     unsigned char *mine = calloc((size_t)(n ? n : 1), 1);
@@ -738,7 +739,9 @@ int floe_world_parallel_add_output(floe_world *w, floe_observer *o) {
         return any == 1 ? refuse(w, "an output that reads contacts") : floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
     P->outs[P->nouts++] = o;
-    if (observer_reads_orientation(o, w)) { /* every rank adds the same outputs */
+    /* every rank adds the same outputs: the class decides (one that lists particles reads
+     * local indices that differ by rank: taken to read) */
+    if (o->klass->version < 3 || o->klass->reads_orientation) {
         w->orient_extra = 1;
         orientation_refresh(w);
     }

@@ -447,8 +447,8 @@ int floe_world_contact_count(const floe_world *w) { return w->ncontacts; }
 /* whether observer o reads the orientation of a round particle of w (one it lists, for a
  * FLOE_OBSERVER_READS_LISTED class) */
 int observer_reads_orientation(const floe_observer *o, const floe_world *w) {
-    if (o->klass->version < 3 || o->klass->reads_orientation == 1) return 1;
-    if (o->klass->reads_orientation != FLOE_OBSERVER_READS_LISTED) return 0;
+    if (o->klass->version < 3) return 1; /* before the field: taken to read */
+    if (o->klass->reads_orientation != FLOE_OBSERVER_READS_LISTED) return o->klass->reads_orientation != 0;
     const floe_particles *p = &w->p;
     for (int k = 0; k < o->norient_ids; k++) {
         int i = o->orient_ids[k];
@@ -459,8 +459,10 @@ int observer_reads_orientation(const floe_observer *o, const floe_world *w) {
 
 void orientation_refresh(floe_world *w) {
     int need = w->orient_mode != FLOE_ORIENT_AUTO || w->orient_extra || (w->beams && floe_beam_set_count(w->beams) > 0);
-    for (int k = 0; k < w->nobs && !need; k++)
-        need = w->obs[k]->klass->reads_orientation != FLOE_OBSERVER_READS_LISTED && observer_reads_orientation(w->obs[k], w);
+    for (int k = 0; k < w->nobs && !need; k++) {
+        const floe_observer_class *c = w->obs[k]->klass;
+        need = c->version < 3 || (c->reads_orientation && c->reads_orientation != FLOE_OBSERVER_READS_LISTED);
+    }
     /* force providers other than these built-ins may read orientations (the ocean and wind
      * drag place a floe's quadrature points with it, linear_drag takes L through it, a user
      * provider reads floe_provider_ctx.q), and so may a body-force callback */

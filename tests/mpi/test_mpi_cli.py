@@ -6,7 +6,9 @@ with the MPI build's CLI on one process and under `mpirun -np K` (K = 2, 4), and
 tests/scenes/vtk_small.yaml (18 spheres falling, few ghosts: a rank's particle count
 changes at rebuilds) with K = 8, kinematic_wall.yaml (a moving wall, leapfrog) and
 settle_2d.yaml (a 2D world) with K = 3, bonded.yaml (a block of beam-bonded spheres
-breaking on the floor: 83 breaks) with K = 2 and 4, bonded_2d.yaml (a bonded 2D plate: 184
+breaking on the floor: 83 breaks) with K = 2 and 4, bonded_loose.yaml (the same block beside
+loose spheres: a rank without bonds; the ranks' ghost records must agree) with K = 2,
+bonded_2d.yaml (a bonded 2D plate: 184
 breaks; floe_sizes reads the bonds gathered into rank 0's mirror) with K = 3, contacts.yaml
 (spheres and boxes squeezed by a moving wall; the outputs that read contacts: stress of every
 particle by steps and of the boxes by simulated time, the contacts' CSV in the serial list's
@@ -40,6 +42,7 @@ SCENES = [(os.path.join(here, "settle.yaml"), (2, 4)),
           (os.path.join(here, "kinematic_wall.yaml"), (3,)),
           (os.path.join(here, "settle_2d.yaml"), (3,)),
           (os.path.join(here, "bonded.yaml"), (2, 4)),
+          (os.path.join(here, "bonded_loose.yaml"), (2,)),
           (os.path.join(here, "bonded_2d.yaml"), (3,)),
           (os.path.join(here, "contacts.yaml"), (2, 4))]
 if len(sys.argv) > 4:
