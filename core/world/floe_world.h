@@ -334,6 +334,10 @@ int floe_world_pd_region_points(const floe_world *w, int r);
 typedef struct floe_detect_stats {
     long evaluations;        /* LP/ADMM pair evaluations */
     long lp, admm;           /* of which polytope LP, ADMM */
+    long lp_halves;          /* polytope LP solves (a pair needs one or two halves) */
+    long lp_kept;            /* of which the previous step's basis was still optimal: no
+                                pivot (the resting-contact path, docs/models.md) */
+    long lp_cold;            /* of which started from the deepest vertex (no usable basis) */
     double iterations_mean;  /* iterations per evaluation (LP: pivots + 1, both halves) */
     int iterations_median, iterations_p99;
     long nonconverged;       /* ADMM evaluations stopped at max_iterations (a warning: the

@@ -1072,6 +1072,9 @@ static void par_merge_detect(floe_world *w, int nt) {
         W->admm_calls += d->admm_calls;
         W->lp_calls += d->lp_calls;
         W->separated += d->separated;
+        W->lp_halves += d->lp_halves;
+        W->lp_kept += d->lp_kept;
+        W->lp_cold += d->lp_cold;
         W->nonconverged += d->nonconverged;
         for (int q = 0; q < FLOE_DETECT_HIST; q++) W->hist[q] += d->hist[q];
     }
