@@ -580,7 +580,12 @@ static void manifold(const floe_detect_ctx *w, const shape_ref *a, const shape_r
     mf_set_extras(c, best, nb); /* the deepest vertex is the deepest point's share */
 }
 
+/* the warm slot of a polytope pair: the two halves' bases in 0..3 and 4..7, then 1 here if
+ * the pair touched at the last look (NaN otherwise; ADMM's slot, unused by the LP) */
+#define LP_TOUCHED 8
+
 static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+    if (warm) warm[LP_TOUCHED] = NAN;
     double x1[3], x2[3], s1, s2, n1[3], n2[3], g1 = 1, g2 = 1;
     int p1 = 0, p2 = 0;
     int rc = lp_half(w, a, b, warm, x1, &s1, n1, &g1, &p1);
@@ -611,6 +616,7 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
     }
     c->r_eff = a->r * b->r / (a->r + b->r);
     manifold(w, a, b, c);
+    if (warm) warm[LP_TOUCHED] = 1.0;
     return 1;
 }
 
@@ -693,13 +699,17 @@ static int sdf_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, 
 
 /* ---- any other convex pair: ADMM ---- */
 static int admm_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
-    if (separated_on_centre_line(a, b)) {
+    const int lp = is_polytope(a->g) && is_polytope(b->g);
+    /* a polytope pair that touched at the last look (LP_TOUCHED) goes to the LP at once:
+     * the LP itself says "apart" exactly, and for a resting contact the support test could
+     * only fail */
+    if (!(lp && warm && isfinite(warm[0]) && warm[LP_TOUCHED] == 1.0) && separated_on_centre_line(a, b)) {
         /* most list pairs of non-spherical grains: bounding spheres overlap, shapes apart */
         if (warm) warm[0] = warm[8] = NAN;
         w->det->separated++;
         return 0;
     }
-    if (is_polytope(a->g) && is_polytope(b->g)) return polytope_pair(w, a, b, warm, c);
+    if (lp) return polytope_pair(w, a, b, warm, c);
     if (sdf_only(a->g) || sdf_only(b->g)) return sdf_pair(w, a, b, warm, c);
     floe_pose pa = {a->g, {a->x[0], a->x[1], a->x[2]}, {a->q[0], a->q[1], a->q[2], a->q[3]}};
     floe_pose pb = {b->g, {b->x[0], b->x[1], b->x[2]}, {b->q[0], b->q[1], b->q[2], b->q[3]}};
