@@ -263,7 +263,7 @@ static int lp_scratch(floe_detect_ctx *w, int need) {
 
 /* one half: a's point deepest in b, in world coordinates */
 static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm4, double x[3], double *s,
-                   double n[3], double *gnorm, int *pivots) {
+                   double n[3], double *gnorm, int *pivots, int *face) {
     floe_polytope_view A, B;
     body_polytope(a->g, w->dim, &A);
     body_polytope(b->g, w->dim, &B);
@@ -300,6 +300,11 @@ static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, d
     *s = r.s;
     *gnorm = r.gnorm;
     *pivots = r.pivots + 1;
+    /* b's face of the largest multiplier: the face a presses on */
+    *face = 0;
+    double lb = -INFINITY;
+    for (int k = 0; k <= w->dim; k++)
+        if (basis[k] >= na && r.lambda[k] > lb) { lb = r.lambda[k]; *face = basis[k] - na; }
     return FLOE_OK;
 }
 
@@ -521,8 +526,8 @@ static void count_iterations(floe_detect_ctx *w, int it) {
 
 /* the vertices of a inside b, sign: +1 when a is particle i (the normal from i to j is then
  * minus b's outward face normal), -1 when a is j */
-static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double sign, mf_vertex *best,
-                        int *nb, int cap) {
+static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double sign, int first,
+                        mf_vertex *best, int *nb, int cap) {
     floe_polytope_view pa, pb; /* a's corners (2D: its z = 0 section), b's planes */
     body_polytope(a->g, w->dim, &pa);
     body_polytope(b->g, w->dim, &pb);
@@ -539,11 +544,14 @@ static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shap
         rel_apply(&map, V + 3 * v, Xb);
         if (floe_v3_dot(Xb, Xb) >= rb2) continue;
         if (w->dim == 2) Xb[2] = 0;
+        /* from the face a presses on (`first`, from the LP: most corners outside b are
+         * outside it); ties to the lowest face, as a loop from face 0 */
         double d = INFINITY;
         int f = -1;
-        for (int k = 0; k < np; k++) {
+        for (int q = 0; q < np; q++) {
+            const int k = q + first < np ? q + first : q + first - np;
             double s = P[4 * k + 3] - floe_v3_dot(P + 4 * k, Xb);
-            if (s < d) { d = s; f = k; }
+            if (s < d || (s == d && k < f)) { d = s; f = k; }
             if (!(d > 0)) break;
         }
         if (!(d > 0) || f < 0) continue;
@@ -571,12 +579,12 @@ static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shap
  * other, and a flat face rests on two (2D) or up to four (3D) springs. The gradient of
  * e(d_v) is the law's force at v along the nearest face's normal (exact: the vertex moves
  * with its body, the face with the other). This finds the 2nd .. K-th deepest vertices. */
-static void manifold(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, floe_contact *c) {
+static void manifold(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, int fb, int fa, floe_contact *c) {
     const int K = w->dim == 2 ? 2 : 4;
     mf_vertex best[4];
     int nb = 0;
-    mf_vertices(w, a, b, 1.0, best, &nb, K);
-    mf_vertices(w, b, a, -1.0, best, &nb, K);
+    mf_vertices(w, a, b, 1.0, fb, best, &nb, K);
+    mf_vertices(w, b, a, -1.0, fa, best, &nb, K);
     mf_set_extras(c, best, nb); /* the deepest vertex is the deepest point's share */
 }
 
@@ -588,14 +596,15 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
     if (warm) warm[LP_TOUCHED] = NAN;
     double x1[3], x2[3], s1, s2, n1[3], n2[3], g1 = 1, g2 = 1;
     int p1 = 0, p2 = 0;
-    int rc = lp_half(w, a, b, warm, x1, &s1, n1, &g1, &p1);
+    int fb = 0, fa = 0; /* the faces of b and of a the other presses on */
+    int rc = lp_half(w, a, b, warm, x1, &s1, n1, &g1, &p1, &fb);
     if (rc) return -rc;
     w->det->lp_calls++;
     if (!(s1 < 0)) {
         count_iterations(w, p1);
         return 0;
     }
-    rc = lp_half(w, b, a, warm ? warm + 4 : NULL, x2, &s2, n2, &g2, &p2);
+    rc = lp_half(w, b, a, warm ? warm + 4 : NULL, x2, &s2, n2, &g2, &p2, &fa);
     if (rc) return -rc;
     count_iterations(w, p1 + p2);
     if (!(s2 < 0)) return 0;
@@ -615,7 +624,7 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
         c->gscale = g2;
     }
     c->r_eff = a->r * b->r / (a->r + b->r);
-    manifold(w, a, b, c);
+    manifold(w, a, b, fb, fa, c);
     if (warm) warm[LP_TOUCHED] = 1.0;
     return 1;
 }
