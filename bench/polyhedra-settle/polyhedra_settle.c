@@ -14,7 +14,11 @@
  * ns per step divided by either (whole-step cost attributed to pairs); then the ratios.
  * WARMUP steps (default 0) run first, untimed: WARMUP = 40000 times a settled bed (the
  * grains fall for about 0.1 s of the 0.4 s; contacts_end and ke_end show it).
- *   polyhedra_settle [NSTEPS] [N] [WARMUP] */
+ * ONLY = "poly" skips the sphere run (for profiles of the polyhedra alone; no ratios).
+ * The polyhedra line ends with the LP's halves over the timed steps: how many, how many
+ * kept the previous step's basis without a pivot (the resting-contact fast path), how many
+ * started cold (docs/models.md, "Polytope pairs").
+ *   polyhedra_settle [NSTEPS] [N] [WARMUP] [ONLY] */
 #include "floe.h"
 #include <math.h>
 #include <stdio.h>
@@ -45,7 +49,7 @@ static void unit_vec(double n[3]) {
     n[0] = s * cos(a); n[1] = s * sin(a); n[2] = z;
 }
 
-typedef struct { double n, steps, loop, pairs, contacts, lp; int ncont_end; double ke; } result;
+typedef struct { double n, steps, loop, pairs, contacts, lp, halves, kept, cold; int ncont_end; double ke; } result;
 
 static const double R = 0.001, RHO = 2500;
 
@@ -106,7 +110,7 @@ static result run(floe_world *w, int n, long nsteps, long warmup) {
     floe_detect_stats ds;
     floe_neighbor_stats ns;
     floe_world_detect_stats(w, &ds);
-    long lp0 = ds.evaluations;
+    long lp0 = ds.evaluations, h0 = ds.lp_halves, k0 = ds.lp_kept, c0 = ds.lp_cold;
     double t0 = now();
     for (long s = 0; s < nsteps; s++) {
         if (floe_world_step(w)) { fprintf(stderr, "%s\n", floe_world_last_error(w)); exit(1); }
@@ -117,6 +121,9 @@ static result run(floe_world *w, int n, long nsteps, long warmup) {
     r.loop = now() - t0;
     floe_world_detect_stats(w, &ds);
     r.lp = (double)(ds.evaluations - lp0);
+    r.halves = (double)(ds.lp_halves - h0);
+    r.kept = (double)(ds.lp_kept - k0);
+    r.cold = (double)(ds.lp_cold - c0);
     r.ncont_end = floe_world_contact_count(w);
     floe_energy e = floe_world_energy(w);
     r.ke = e.kinetic_trans + e.kinetic_rot;
@@ -155,6 +162,7 @@ int main(int argc, char **argv) {
     long nsteps = argc > 1 ? atol(argv[1]) : 20000;
     int n = argc > 2 ? atoi(argv[2]) : 5000;
     long warmup = argc > 3 ? atol(argv[3]) : 0;
+    const int only_poly = argc > 4 && !strcmp(argv[4], "poly");
     setvbuf(stdout, NULL, _IOLBF, 0); /* each run's line as it ends */
     floe_geometry *shapes[NSHAPES];
     double req[NSHAPES];
@@ -176,14 +184,19 @@ int main(int argc, char **argv) {
     double dt = fmin(dtp, floe_world_dt(ws));
     floe_world_destroy(ws);
 
-    ws = build(0, n, dt, NULL, req);
-    result rs = run(ws, n, nsteps, warmup);
-    print("spheres", &rs, dt);
-    floe_world_destroy(ws);
+    result rs = {0};
+    if (!only_poly) {
+        ws = build(0, n, dt, NULL, req);
+        rs = run(ws, n, nsteps, warmup);
+        print("spheres", &rs, dt);
+        floe_world_destroy(ws);
+    }
     wp = build(1, n, dt, shapes, req);
     result rp = run(wp, n, nsteps, warmup);
     print("polyhedra", &rp, dt);
+    printf("lp_halves=%.3e lp_kept=%.3e lp_cold=%.3e\n", rp.halves, rp.kept, rp.cold);
     floe_world_destroy(wp);
+    if (only_poly) return 0;
     printf("ratio polyhedra/spheres: time per step %.2f, ns per pair evaluation %.2f, ns per contact %.2f\n",
            rp.loop / rs.loop, (rp.loop / rp.pairs) / (rs.loop / rs.pairs),
            (rp.loop / rp.contacts) / (rs.loop / rs.contacts));

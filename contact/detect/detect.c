@@ -67,6 +67,33 @@ static int sphere_sphere(floe_detect_ctx *w, const shape_ref *a, const shape_ref
     return 1;
 }
 
+/* the rotation matrix of a unit quaternion (body -> world) */
+static void q_matrix(double R[3][3], const double q[4]) {
+    const double w = q[0], x = q[1], y = q[2], z = q[3];
+    R[0][0] = 1 - 2 * (y * y + z * z); R[0][1] = 2 * (x * y - z * w); R[0][2] = 2 * (x * z + y * w);
+    R[1][0] = 2 * (x * y + z * w); R[1][1] = 1 - 2 * (x * x + z * z); R[1][2] = 2 * (y * z - x * w);
+    R[2][0] = 2 * (x * z - y * w); R[2][1] = 2 * (y * z + x * w); R[2][2] = 1 - 2 * (x * x + y * y);
+}
+
+/* the map from a's body frame to b's, Xb = M Xa + m (one matrix per pair half instead of
+ * two quaternion rotations per plane or corner) */
+typedef struct rel_map { double M[3][3], m[3]; } rel_map;
+
+static void rel_make(rel_map *f, const shape_ref *a, const shape_ref *b) {
+    double Ra[3][3], Rb[3][3], d[3];
+    q_matrix(Ra, a->q);
+    q_matrix(Rb, b->q);
+    floe_v3_sub(d, a->x, b->x);
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) f->M[i][j] = Rb[0][i] * Ra[0][j] + Rb[1][i] * Ra[1][j] + Rb[2][i] * Ra[2][j];
+        f->m[i] = Rb[0][i] * d[0] + Rb[1][i] * d[1] + Rb[2][i] * d[2];
+    }
+}
+
+static void rel_apply(const rel_map *f, const double X[3], double Y[3]) {
+    for (int i = 0; i < 3; i++) Y[i] = f->M[i][0] * X[0] + f->M[i][1] * X[1] + f->M[i][2] * X[2] + f->m[i];
+}
+
 static void plane_normal(const shape_ref *s, double nw[3]) {
     const double ez[3] = {0, 0, 1};
     floe_q_rotate(nw, s->q, ez);
@@ -144,15 +171,22 @@ static int vertices_plane(floe_detect_ctx *w, const shape_ref *a, const shape_re
         V = pv.v;
         nv = pv.nv;
     } else V = a->g->klass->vertices(a->g, &nv);
-    double nw[3], rel[3];
+    double nw[3], rel[3], nb_[3];
     plane_normal(b, nw);
     floe_v3_sub(rel, a->x, b->x);
-    if (floe_v3_dot(rel, nw) >= a->r) return 0;
+    const double h0 = floe_v3_dot(rel, nw); /* the centre's height above the plane */
+    if (h0 >= a->r) return 0;
+    /* a corner's height h0 + (R X).n = h0 + X.(R^T n): the wall's normal in a's frame once,
+     * the world corner only for those below */
+    floe_q_rotate_inv(nb_, a->q, nw);
     const int K = w->dim == 2 ? 2 : 4;
     mf_vertex best[4];
     int nb = 0;
     for (int v = 0; v < nv; v++) {
-        double X[3] = {V[3 * v], V[3 * v + 1], V[3 * v + 2]}, xw[3];
+        const double *X = V + 3 * v;
+        const double s0 = h0 + (X[0] * nb_[0] + X[1] * nb_[1] + X[2] * nb_[2]);
+        if (!(s0 < 0)) continue;
+        double xw[3];
         floe_q_rotate(xw, a->q, X);
         floe_v3_add(xw, xw, a->x);
         floe_v3_sub(rel, xw, b->x);
@@ -227,18 +261,9 @@ static int lp_scratch(floe_detect_ctx *w, int need) {
     return FLOE_OK;
 }
 
-static void plane_to_frame(const double P[4], const shape_ref *from, const shape_ref *to, double out[4]) {
-    /* n_to = R_to^T R_from n; d_to = d + n_world . (x_from - x_to) */
-    double nw[3], d[3];
-    floe_q_rotate(nw, from->q, P);
-    floe_q_rotate_inv(out, to->q, nw);
-    floe_v3_sub(d, from->x, to->x);
-    out[3] = P[3] + floe_v3_dot(nw, d);
-}
-
 /* one half: a's point deepest in b, in world coordinates */
 static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm4, double x[3], double *s,
-                   double n[3], double *gnorm, int *pivots) {
+                   double n[3], double *gnorm, int *pivots, int *face) {
     floe_polytope_view A, B;
     body_polytope(a->g, w->dim, &A);
     body_polytope(b->g, w->dim, &B);
@@ -246,12 +271,23 @@ static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, d
     const int na = A.np, nb = B.np, nva = A.nv;
     if (lp_scratch(w, 4 * nb)) return FLOE_ENOMEM;
     double *tb = w->det->scratch;
-    for (int k = 0; k < nb; k++) plane_to_frame(pb + 4 * k, b, a, tb + 4 * k);
+    /* b's planes in a's frame: n_a = M^T n_b, d_a = d_b - n_b . m with Xb = M Xa + m */
+    rel_map f;
+    rel_make(&f, a, b);
+    for (int k = 0; k < nb; k++) {
+        const double *P = pb + 4 * k;
+        double *o = tb + 4 * k;
+        for (int i = 0; i < 3; i++) o[i] = f.M[0][i] * P[0] + f.M[1][i] * P[1] + f.M[2][i] * P[2];
+        o[3] = P[3] - (P[0] * f.m[0] + P[1] * f.m[1] + P[2] * f.m[2]);
+    }
     floe_lp_problem P = {w->dim, pa, na, tb, nb, va, nva, fmin(a->r, b->r)};
     int basis[4];
     for (int k = 0; k < 4; k++) basis[k] = warm4 && isfinite(warm4[k]) ? (int)warm4[k] : -1;
     floe_lp_result r;
     int rc = floe_lp_deepest(&P, basis, &r);
+    w->det->lp_halves++;
+    w->det->lp_kept += r.warm && r.pivots == 0;
+    w->det->lp_cold += !r.warm;
     if (rc) {
         if (warm4) warm4[0] = NAN;
         return rc;
@@ -264,6 +300,11 @@ static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, d
     *s = r.s;
     *gnorm = r.gnorm;
     *pivots = r.pivots + 1;
+    /* b's face of the largest multiplier: the face a presses on */
+    *face = 0;
+    double lb = -INFINITY;
+    for (int k = 0; k <= w->dim; k++)
+        if (basis[k] >= na && r.lambda[k] > lb) { lb = r.lambda[k]; *face = basis[k] - na; }
     return FLOE_OK;
 }
 
@@ -485,29 +526,39 @@ static void count_iterations(floe_detect_ctx *w, int it) {
 
 /* the vertices of a inside b, sign: +1 when a is particle i (the normal from i to j is then
  * minus b's outward face normal), -1 when a is j */
-static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double sign, mf_vertex *best,
-                        int *nb, int cap) {
+static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double sign, int first,
+                        mf_vertex *best, int *nb, int cap) {
     floe_polytope_view pa, pb; /* a's corners (2D: its z = 0 section), b's planes */
     body_polytope(a->g, w->dim, &pa);
     body_polytope(b->g, w->dim, &pb);
     const double *V = pa.v, *P = pb.plane;
     const int nv = pa.nv, np = pb.np;
     if (!V || !P) return;
+    /* a's corners in b's frame by one matrix (rel_map); a corner outside one face of b is
+     * out (its depth, the least face distance, is then <= 0): the loop stops there */
+    rel_map map;
+    rel_make(&map, a, b);
+    const double rb2 = b->r * b->r;
     for (int v = 0; v < nv; v++) {
-        double X[3] = {V[3 * v], V[3 * v + 1], V[3 * v + 2]}, xw[3], rel[3], Xb[3];
-        floe_q_rotate(xw, a->q, X);
-        floe_v3_add(xw, xw, a->x);
-        floe_v3_sub(rel, xw, b->x);
-        if (floe_v3_dot(rel, rel) >= b->r * b->r) continue;
-        floe_q_rotate_inv(Xb, b->q, rel);
+        double Xb[3];
+        rel_apply(&map, V + 3 * v, Xb);
+        if (floe_v3_dot(Xb, Xb) >= rb2) continue;
         if (w->dim == 2) Xb[2] = 0;
+        /* from the face a presses on (`first`, from the LP: most corners outside b are
+         * outside it); ties to the lowest face, as a loop from face 0 */
         double d = INFINITY;
         int f = -1;
-        for (int k = 0; k < np; k++) {
+        for (int q = 0; q < np; q++) {
+            const int k = q + first < np ? q + first : q + first - np;
             double s = P[4 * k + 3] - floe_v3_dot(P + 4 * k, Xb);
-            if (s < d) { d = s; f = k; }
+            if (s < d || (s == d && k < f)) { d = s; f = k; }
+            if (!(d > 0)) break;
         }
         if (!(d > 0) || f < 0) continue;
+        /* the corner in the world */
+        double xw[3];
+        floe_q_rotate(xw, a->q, V + 3 * v);
+        floe_v3_add(xw, xw, a->x);
         mf_vertex m;
         m.d = d;
         floe_v3_copy(m.x, xw);
@@ -528,26 +579,32 @@ static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shap
  * other, and a flat face rests on two (2D) or up to four (3D) springs. The gradient of
  * e(d_v) is the law's force at v along the nearest face's normal (exact: the vertex moves
  * with its body, the face with the other). This finds the 2nd .. K-th deepest vertices. */
-static void manifold(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, floe_contact *c) {
+static void manifold(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, int fb, int fa, floe_contact *c) {
     const int K = w->dim == 2 ? 2 : 4;
     mf_vertex best[4];
     int nb = 0;
-    mf_vertices(w, a, b, 1.0, best, &nb, K);
-    mf_vertices(w, b, a, -1.0, best, &nb, K);
+    mf_vertices(w, a, b, 1.0, fb, best, &nb, K);
+    mf_vertices(w, b, a, -1.0, fa, best, &nb, K);
     mf_set_extras(c, best, nb); /* the deepest vertex is the deepest point's share */
 }
 
+/* the warm slot of a polytope pair: the two halves' bases in 0..3 and 4..7, then 1 here if
+ * the pair touched at the last look (NaN otherwise; ADMM's slot, unused by the LP) */
+#define LP_TOUCHED 8
+
 static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
+    if (warm) warm[LP_TOUCHED] = NAN;
     double x1[3], x2[3], s1, s2, n1[3], n2[3], g1 = 1, g2 = 1;
     int p1 = 0, p2 = 0;
-    int rc = lp_half(w, a, b, warm, x1, &s1, n1, &g1, &p1);
+    int fb = 0, fa = 0; /* the faces of b and of a the other presses on */
+    int rc = lp_half(w, a, b, warm, x1, &s1, n1, &g1, &p1, &fb);
     if (rc) return -rc;
     w->det->lp_calls++;
     if (!(s1 < 0)) {
         count_iterations(w, p1);
         return 0;
     }
-    rc = lp_half(w, b, a, warm ? warm + 4 : NULL, x2, &s2, n2, &g2, &p2);
+    rc = lp_half(w, b, a, warm ? warm + 4 : NULL, x2, &s2, n2, &g2, &p2, &fa);
     if (rc) return -rc;
     count_iterations(w, p1 + p2);
     if (!(s2 < 0)) return 0;
@@ -567,7 +624,8 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
         c->gscale = g2;
     }
     c->r_eff = a->r * b->r / (a->r + b->r);
-    manifold(w, a, b, c);
+    manifold(w, a, b, fb, fa, c);
+    if (warm) warm[LP_TOUCHED] = 1.0;
     return 1;
 }
 
@@ -650,13 +708,17 @@ static int sdf_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, 
 
 /* ---- any other convex pair: ADMM ---- */
 static int admm_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm, floe_contact *c) {
-    if (separated_on_centre_line(a, b)) {
+    const int lp = is_polytope(a->g) && is_polytope(b->g);
+    /* a polytope pair that touched at the last look (LP_TOUCHED) goes to the LP at once:
+     * the LP itself says "apart" exactly, and for a resting contact the support test could
+     * only fail */
+    if (!(lp && warm && isfinite(warm[0]) && warm[LP_TOUCHED] == 1.0) && separated_on_centre_line(a, b)) {
         /* most list pairs of non-spherical grains: bounding spheres overlap, shapes apart */
         if (warm) warm[0] = warm[8] = NAN;
         w->det->separated++;
         return 0;
     }
-    if (is_polytope(a->g) && is_polytope(b->g)) return polytope_pair(w, a, b, warm, c);
+    if (lp) return polytope_pair(w, a, b, warm, c);
     if (sdf_only(a->g) || sdf_only(b->g)) return sdf_pair(w, a, b, warm, c);
     floe_pose pa = {a->g, {a->x[0], a->x[1], a->x[2]}, {a->q[0], a->q[1], a->q[2], a->q[3]}};
     floe_pose pb = {b->g, {b->x[0], b->x[1], b->x[2]}, {b->q[0], b->q[1], b->q[2], b->q[3]}};

@@ -21,6 +21,8 @@ typedef struct floe_detect_state {
     long calls, iterations;      /* ADMM/LP pair evaluations and their iterations (pivots + 1) */
     long admm_calls, lp_calls;
     long separated;              /* pairs found apart by the support test before LP/ADMM */
+    long lp_halves, lp_kept, lp_cold; /* polytope LP halves; of which the previous basis was
+                                         kept without a pivot (resting contacts); started cold */
     long nonconverged;           /* ADMM evaluations that hit max_iter (a counted warning) */
     long hist[FLOE_DETECT_HIST]; /* iterations per evaluation (last bin: that many or more) */
     int cur_i, cur_j;

@@ -12,31 +12,66 @@
 #include "floe_polytope_lp.h"
 #include <string.h>
 
-/* solve M y = r (n <= 4) by Gaussian elimination with partial pivoting; 0 if singular */
-static int solve(int n, const double M[4][4], const double r[4], double y[4]) {
-    double a[4][5];
+/* LU factorisation with partial pivoting of M (n <= 4): P M = L U in place, perm[i] the row
+ * of M that is row i of P M; 0 if singular (a pivot below 1e-12). One factorisation gives
+ * the basis point (M y = h), the multipliers (M^T lam = e) and a pivot's edge (M d = -e_k). */
+typedef struct lu4 { double a[4][4]; int perm[4], n; } lu4;
+
+static int lu_factor(int n, const double M[4][4], lu4 *f) {
+    f->n = n;
     for (int i = 0; i < n; i++) {
-        for (int j = 0; j < n; j++) a[i][j] = M[i][j];
-        a[i][n] = r[i];
+        f->perm[i] = i;
+        for (int j = 0; j < n; j++) f->a[i][j] = M[i][j];
     }
     for (int c = 0; c < n; c++) {
         int p = c;
         for (int i = c + 1; i < n; i++)
-            if (fabs(a[i][c]) > fabs(a[p][c])) p = i;
-        if (fabs(a[p][c]) < 1e-12) return 0;
-        if (p != c)
-            for (int j = 0; j <= n; j++) { double t = a[c][j]; a[c][j] = a[p][j]; a[p][j] = t; }
+            if (fabs(f->a[i][c]) > fabs(f->a[p][c])) p = i;
+        if (fabs(f->a[p][c]) < 1e-12) return 0;
+        if (p != c) {
+            for (int j = 0; j < n; j++) { double t = f->a[c][j]; f->a[c][j] = f->a[p][j]; f->a[p][j] = t; }
+            int t = f->perm[c]; f->perm[c] = f->perm[p]; f->perm[p] = t;
+        }
         for (int i = c + 1; i < n; i++) {
-            double f = a[i][c] / a[c][c];
-            for (int j = c; j <= n; j++) a[i][j] -= f * a[c][j];
+            double l = f->a[i][c] / f->a[c][c];
+            f->a[i][c] = l;
+            for (int j = c + 1; j < n; j++) f->a[i][j] -= l * f->a[c][j];
         }
     }
-    for (int i = n - 1; i >= 0; i--) {
-        double s = a[i][n];
-        for (int j = i + 1; j < n; j++) s -= a[i][j] * y[j];
-        y[i] = s / a[i][i];
-    }
     return 1;
+}
+
+/* M y = r */
+static void lu_solve(const lu4 *f, const double r[4], double y[4]) {
+    const int n = f->n;
+    double z[4];
+    for (int i = 0; i < n; i++) {
+        double s = r[f->perm[i]];
+        for (int j = 0; j < i; j++) s -= f->a[i][j] * z[j];
+        z[i] = s;
+    }
+    for (int i = n - 1; i >= 0; i--) {
+        double s = z[i];
+        for (int j = i + 1; j < n; j++) s -= f->a[i][j] * y[j];
+        y[i] = s / f->a[i][i];
+    }
+}
+
+/* M^T y = r: U^T z = r, L^T v = z, y[perm[i]] = v[i] */
+static void lu_solve_t(const lu4 *f, const double r[4], double y[4]) {
+    const int n = f->n;
+    double z[4], v[4];
+    for (int i = 0; i < n; i++) {
+        double s = r[i];
+        for (int j = 0; j < i; j++) s -= f->a[j][i] * z[j];
+        z[i] = s / f->a[i][i];
+    }
+    for (int i = n - 1; i >= 0; i--) {
+        double s = z[i];
+        for (int j = i + 1; j < n; j++) s -= f->a[j][i] * v[j];
+        v[i] = s;
+    }
+    for (int i = 0; i < n; i++) y[f->perm[i]] = v[i];
 }
 
 /* row k of the LP in (x, s): A rows (a, 0) <= b, B rows (c, -1) <= d */
@@ -48,20 +83,27 @@ static void row(const floe_lp_problem *P, int k, double r[4], double *h) {
     *h = pl[3];
 }
 
-static int basis_point(const floe_lp_problem *P, const int *basis, double y[4]) {
-    int n = P->dim + 1;
-    double M[4][4], h[4];
+/* the basis rows' matrix and right-hand side, factorised; 0 if singular */
+static int basis_factor(const floe_lp_problem *P, const int *basis, lu4 *f, double h[4]) {
+    const int n = P->dim + 1;
+    double M[4][4];
     for (int i = 0; i < n; i++) row(P, basis[i], M[i], &h[i]);
-    return solve(n, M, h, y);
+    return lu_factor(n, M, f);
 }
 
+/* every row holds at y (within tol): p's faces a.x <= b, then p''s c.x - s <= d */
 static int feasible(const floe_lp_problem *P, const double y[4], double tol) {
-    int n = P->dim + 1, m = P->na + P->nb;
-    for (int k = 0; k < m; k++) {
-        double r[4], h, v = 0;
-        row(P, k, r, &h);
-        for (int i = 0; i < n; i++) v += r[i] * y[i];
-        if (v > h + tol) return 0;
+    const double *a = P->a, *b = P->b;
+    if (P->dim == 3) {
+        for (int k = 0; k < P->na; k++, a += 4)
+            if (a[0] * y[0] + a[1] * y[1] + a[2] * y[2] > a[3] + tol) return 0;
+        for (int k = 0; k < P->nb; k++, b += 4)
+            if (b[0] * y[0] + b[1] * y[1] + b[2] * y[2] - y[3] > b[3] + tol) return 0;
+    } else {
+        for (int k = 0; k < P->na; k++, a += 4)
+            if (a[0] * y[0] + a[1] * y[1] > a[3] + tol) return 0;
+        for (int k = 0; k < P->nb; k++, b += 4)
+            if (b[0] * y[0] + b[1] * y[1] - y[2] > b[3] + tol) return 0;
     }
     return 1;
 }
@@ -121,24 +163,30 @@ static int cold_basis(const floe_lp_problem *P, int *basis, double tol) {
 int floe_lp_deepest(const floe_lp_problem *P, int *basis, floe_lp_result *res) {
     const int dim = P->dim, n = dim + 1, m = P->na + P->nb;
     const double tol = 1e-12 * (P->scale > 0 ? P->scale : 1.0);
-    double y[4];
+    double y[4], h[4];
+    lu4 f;
     memset(res, 0, sizeof *res);
+    /* warm start: the previous optimum's rows, if they still meet at a feasible point (a
+     * resting contact: then usually still optimal, and the loop below stops at once) */
     int ok = basis[0] >= 0;
     for (int i = 0; ok && i < n; i++) ok = basis[i] >= 0 && basis[i] < m;
-    if (ok) ok = basis_point(P, basis, y) && feasible(P, y, 1e3 * tol);
+    if (ok) ok = basis_factor(P, basis, &f, h);
+    if (ok) {
+        lu_solve(&f, h, y);
+        ok = feasible(P, y, 1e3 * tol);
+    }
     res->warm = ok;
     if (!ok) {
-        if (!cold_basis(P, basis, 1e-9 * (P->scale > 0 ? P->scale : 1.0)) || !basis_point(P, basis, y))
+        if (!cold_basis(P, basis, 1e-9 * (P->scale > 0 ? P->scale : 1.0)) || !basis_factor(P, basis, &f, h))
             return FLOE_EINVAL;
+        lu_solve(&f, h, y);
     }
     int it;
     for (it = 0; it < 200; it++) {
-        double M[4][4], h[4], MT[4][4], lam[4], rhs[4] = {0, 0, 0, 0};
-        for (int i = 0; i < n; i++) row(P, basis[i], M[i], &h[i]);
-        for (int i = 0; i < n; i++)
-            for (int j = 0; j < n; j++) MT[i][j] = M[j][i];
+        double lam[4], rhs[4] = {0, 0, 0, 0};
+        if (it > 0 && !basis_factor(P, basis, &f, h)) return FLOE_EINVAL;
         rhs[n - 1] = -1.0;
-        if (!solve(n, MT, rhs, lam)) return FLOE_EINVAL;
+        lu_solve_t(&f, rhs, lam); /* M^T lam = (0, .., -1): the objective min s */
         /* leaving row: Bland (lowest row index among the negative multipliers) */
         int leave = -1;
         for (int i = 0; i < n; i++)
@@ -150,7 +198,7 @@ int floe_lp_deepest(const floe_lp_problem *P, int *basis, floe_lp_result *res) {
         /* edge direction: r_leave . d = -1, other basis rows stay tight */
         double e[4] = {0, 0, 0, 0}, d[4];
         e[leave] = -1.0;
-        if (!solve(n, M, e, d)) return FLOE_EINVAL;
+        lu_solve(&f, e, d);
         int enter = -1;
         double alpha = INFINITY;
         for (int k = 0; k < m; k++) {

@@ -121,19 +121,29 @@ static inline void omega_update(floe_particles *p, int i) {
 
 /* the orientation q of an anisotropic free body (principal moments I) over dt with its
  * angular momentum L: the midpoint rule of eq 23 by two fixed-point passes; om <- omega */
+/* omega = R diag(inv) R^T L (floe_omega_from_L with the moments' inverses taken once: five
+ * calls a step made fifteen divisions, a chain of latencies in a settled bed's profile) */
+static inline void omega_inv(const double q[4], const double inv[3], const double L[3], double om[3]) {
+    double Lb[3];
+    floe_q_rotate_inv(Lb, q, L);
+    for (int k = 0; k < 3; k++) Lb[k] *= inv[k];
+    floe_q_rotate(om, q, Lb);
+}
+
 static void rotate_drift_aniso(double *q, const double *I, const double *L, double *om, double dt) {
     const double h = 0.5 * dt;
-    double qm[4], omm[3], qn[4];
-    floe_omega_from_L(q, I, L, omm);
+    double qm[4], omm[3], qn[4], inv[3];
+    for (int k = 0; k < 3; k++) inv[k] = I[k] > 0 && isfinite(I[k]) ? 1.0 / I[k] : 0;
+    omega_inv(q, inv, L, omm);
     q_advance(qm, q, omm, h);
     for (int it = 0; it < 2; it++) {
-        floe_omega_from_L(qm, I, L, omm);
+        omega_inv(qm, inv, L, omm);
         q_advance(qm, q, omm, h);
     }
-    floe_omega_from_L(qm, I, L, omm);
+    omega_inv(qm, inv, L, omm);
     q_advance(qn, q, omm, dt);
     memcpy(q, qn, sizeof qn);
-    floe_omega_from_L(q, I, L, om);
+    omega_inv(q, inv, L, om);
 }
 
 /* the orientation of an isotropic free body (1/I = inv) over dt = 2h (eq 23 as the midpoint

@@ -340,6 +340,12 @@ typedef struct floe_detect_stats {
                                 contact used the last iterate) */
     int first_bad_i, first_bad_j; /* the first such pair and its step */
     long first_bad_step;
+    long lp_halves;          /* polytope LP solves (a pair needs one or two halves) */
+    long lp_kept;            /* of which the previous step's basis was still optimal: no
+                                pivot (the resting-contact path, docs/models.md) */
+    long lp_cold;            /* of which started from the deepest vertex (no usable basis);
+                                the three are this process's counts since the start (not
+                                kept in checkpoints, not summed over MPI ranks) */
 } floe_detect_stats;
 int floe_world_detect_stats(const floe_world *w, floe_detect_stats *out);
 

@@ -512,6 +512,9 @@ int floe_world_detect_stats(const floe_world *w, floe_detect_stats *o) {
     o->evaluations = d->calls;
     o->lp = d->lp_calls;
     o->admm = d->admm_calls;
+    o->lp_halves = d->lp_halves;
+    o->lp_kept = d->lp_kept;
+    o->lp_cold = d->lp_cold;
     o->nonconverged = d->nonconverged;
     o->first_bad_i = d->first_bad_i;
     o->first_bad_j = d->first_bad_j;

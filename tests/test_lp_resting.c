@@ -1,0 +1,220 @@
+/* test_lp_resting.c - the polytope LP's resting-contact path (docs/models.md, "Polytope
+ * pairs: the resting-contact path"): a pair's previous basis is kept when it is still
+ * feasible and optimal, and then the contact must be the one the full LP gives.
+ *  1. A settling run of 40 random polyhedra (14 planes each) with spins, in a walled box:
+ *     after every step, every pair whose bounding spheres overlap is detected twice at the
+ *     same poses, once warm (a basis per pair kept from the last step, as the world keeps
+ *     it) and once cold (no basis: the full LP from the deepest vertex). Both must agree on
+ *     touching or not; depth, point and every manifold vertex within 1e-10 x the grain size,
+ *     the normals and gscale within 1e-10. The warm calls must mostly keep their basis
+ *     (> 80 % of the LP halves without a pivot), or the path is not what was tested.
+ *  2. Negative control: a pair solved once, then one body turned by 0.3 .. 1 rad: the old
+ *     basis must not be kept (a pivot, or a cold start when its point is infeasible), both
+ *     cases must occur, and the result must be the cold solve's; unmoved, it is kept. */
+#include "floe.h"
+#include "world_internal.h"
+#include "floe_polytope_lp.h"
+#include "world_read.h"
+#include "check.h"
+#include <stdlib.h>
+#include <string.h>
+#define TEST_RNG_SEED 0x5EEDC0FFEE123457ull
+#include "test_rng.h"
+
+#define NP 40
+#define NPL 14
+static const double R = 0.01;
+
+static floe_geometry *grain(void) {
+    for (;;) {
+        double pl[4 * NPL];
+        for (int k = 0; k < NPL; k++) {
+            double *q = pl + 4 * k;
+            if (k < 6) { q[0] = q[1] = q[2] = 0; q[k / 2] = k % 2 ? -1 : 1; }
+            else rand_unit(q);
+            q[3] = R * uni(0.85, 1.15);
+        }
+        floe_geometry *g = floe_polyhedron_from_planes(pl, NPL, NULL, 0);
+        if (g) return g;
+    }
+}
+
+static double dist3(const double a[3], const double b[3]) {
+    double d[3];
+    floe_v3_sub(d, a, b);
+    return floe_v3_norm(d);
+}
+
+static void settling_run(void) {
+    floe_world_def def = floe_default_world_def();
+    def.gravity[2] = -9.81;
+    def.dt_safety = 0.5;
+    def.skin = 0.3 * R;
+    floe_world *w = floe_world_create(&def, NULL, 0);
+    floe_material m = {"m", 2500, 1e7, 0.3};
+    floe_world_add_material(w, &m);
+    /* mass ~ 2500 x (2R)^3 = 0.02 kg; kn: about 1 % overlap at rest under a few grains */
+    floe_world_set_law(w, 0, 0, floe_linear_law_create(2e4, 5e3, 0.5, 0.1, 0.5));
+    int g[4];
+    for (int s = 0; s < 4; s++) g[s] = floe_world_add_geometry(w, grain());
+    const double sp = 3.6 * R, L = 4 * sp;
+    for (int a = 0; a < 3; a++) {
+        double p0[3] = {0, 0, 0}, p1[3] = {0, 0, 0}, n0[3] = {0, 0, 0}, n1[3] = {0, 0, 0};
+        p1[a] = L; n0[a] = 1; n1[a] = -1;
+        floe_world_add_wall(w, p0, n0, 0, FLOE_FIXED);
+        if (a < 2) floe_world_add_wall(w, p1, n1, 0, FLOE_FIXED);
+    }
+    for (int i = 0; i < NP; i++) {
+        floe_particle_def p = floe_default_particle_def();
+        p.geometry = g[i % 4];
+        floe_v3_set(p.x, (i % 4 + 0.5) * sp + uni(-0.1, 0.1) * R, ((i / 4) % 4 + 0.5) * sp + uni(-0.1, 0.1) * R,
+                    (i / 16 + 0.5) * sp);
+        rand_quat(p.q);
+        for (int k = 0; k < 3; k++) { p.v[k] = uni(-0.1, 0.1); p.w[k] = uni(-20, 20); }
+        CHECK(floe_world_add_particle(w, &p) >= 0, "add particle: %s", floe_world_last_error(w));
+    }
+    CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
+    const int n = pview(w).n; /* the walls first, then the grains */
+    double *warm = malloc(sizeof(double) * (size_t)(n * n * FLOE_DETECT_WARM));
+    for (int k = 0; k < n * n * FLOE_DETECT_WARM; k++) warm[k] = NAN;
+    long walls = 0;
+    long compared = 0, touching = 0, mism_touch = 0, mism_val = 0, halves = 0, kept = 0, cold = 0, extras = 0;
+    double worst_x = 0, worst_n = 0, turned = 0;
+    floe_contact cf, cc;
+    const int nsteps = 8000;
+    for (int s = 0; s < nsteps; s++) {
+        CHECK(floe_world_step(w) == FLOE_OK, "step: %s", floe_world_last_error(w));
+        floe_particles_view v = pview(w);
+        for (int i = n - NP; i < n; i++) turned += floe_v3_norm(v.w + 3 * i) * floe_world_dt(w) / NP;
+        for (int i = 0; i < n; i++)
+            for (int j = i + 1; j < n; j++) {
+                double *wm = warm + (size_t)(i * n + j) * FLOE_DETECT_WARM;
+                const double ri = v.radius[i], rj = v.radius[j];
+                if (isinf(ri) && isinf(rj)) continue; /* two walls */
+                if (dist3(v.x + 3 * i, v.x + 3 * j) >= ri + rj) { /* apart: the next approach starts cold */
+                    wm[0] = NAN;
+                    continue;
+                }
+                floe_detect_stats d0 = dstats(w);
+                memset(&cf, 0, sizeof cf);
+                memset(&cc, 0, sizeof cc);
+                cf.gscale = cc.gscale = 1.0;
+                int rf = floe_world_detect(w, i, j, 0, wm, &cf);
+                floe_detect_stats d1 = dstats(w);
+                halves += d1.lp_halves - d0.lp_halves;
+                kept += d1.lp_kept - d0.lp_kept;
+                cold += d1.lp_cold - d0.lp_cold;
+                int rc = floe_world_detect(w, i, j, 0, NULL, &cc);
+                compared++;
+                if (rf != rc) {
+                    if (mism_touch++ < 5)
+                        printf("  step %d pair %d-%d: warm says %d, cold says %d (depths %.3e %.3e)\n", s, i, j, rf, rc,
+                               cf.depth, cc.depth);
+                    continue;
+                }
+                if (rf != 1) continue;
+                touching++;
+                walls += isinf(ri) || isinf(rj);
+                double ex = fmax(fabs(cf.depth - cc.depth), dist3(cf.point, cc.point)), en = dist3(cf.n, cc.n);
+                en = fmax(en, fabs(cf.gscale - cc.gscale));
+                int bad = cf.nextra != cc.nextra;
+                for (int e = 0; !bad && e < cf.nextra; e++) {
+                    ex = fmax(ex, fmax(fabs(cf.extra_depth[e] - cc.extra_depth[e]), dist3(cf.extra_point[e], cc.extra_point[e])));
+                    en = fmax(en, dist3(cf.extra_n[e], cc.extra_n[e]));
+                    extras++;
+                }
+                worst_x = fmax(worst_x, ex);
+                worst_n = fmax(worst_n, en);
+                if (bad || ex > 1e-10 * R || en > 1e-10) {
+                    if (mism_val++ < 5)
+                        printf("  step %d pair %d-%d: warm and cold differ: depth %.17g vs %.17g, point by %.3e, "
+                               "normal by %.3e, extras %d vs %d\n", s, i, j, cf.depth, cc.depth,
+                               dist3(cf.point, cc.point), dist3(cf.n, cc.n), cf.nextra, cc.nextra);
+                }
+            }
+    }
+    const double ke = floe_world_energy(w).kinetic_trans + floe_world_energy(w).kinetic_rot;
+    printf("  settling run, %d polyhedra, %d steps (mean turn %.1f rad, kinetic energy at the end %.2e J, %d "
+           "contacts): %ld pair detections compared warm against cold, %ld touching (%ld of them grain-wall, %ld "
+           "manifold vertices); "
+           "warm LP halves %ld, basis kept without a pivot %ld (%.1f %%), cold %ld; differ: touching %ld, values "
+           "%ld; worst point/depth difference %.2e x R, normal %.2e\n",
+           NP, nsteps, turned, ke, floe_world_contact_count(w), compared, touching, walls, extras, halves, kept,
+           halves ? 100.0 * kept / halves : 0.0, cold, mism_touch, mism_val, worst_x / R, worst_n);
+    CHECK(touching - walls > 20000, "settling run: enough touching pairs compared (%ld, bound 20000)", touching);
+    CHECK(turned > 1.0, "settling run: the grains turn (mean %.2f rad, bound 1)", turned);
+    CHECK(mism_touch == 0, "warm and full LP agree on touching: %ld differ", mism_touch);
+    CHECK(mism_val == 0, "warm and full LP contacts within 1e-10 R and 1e-10: %ld differ (worst %.2e R, %.2e)", mism_val,
+          worst_x / R, worst_n);
+    CHECK(halves > 0 && kept > 0.8 * halves, "resting path used: %ld of %ld warm halves kept their basis (bound 80 %%)",
+          kept, halves);
+    free(warm);
+    floe_world_destroy(w);
+}
+
+/* the LP of a's point deepest in b, b's planes in a's frame (as detect.c) */
+static int solve_half(const floe_geometry *ga, const floe_geometry *gb, const double xb[3], const double qb[4],
+                      int basis[4], floe_lp_result *r) {
+    floe_polytope_view A, B;
+    CHECK(floe_geometry_polytope(ga, 3, &A) && floe_geometry_polytope(gb, 3, &B), "polytope views");
+    double *tb = malloc(sizeof(double) * 4 * (size_t)B.np);
+    for (int k = 0; k < B.np; k++) { /* a sits at the origin, unrotated */
+        floe_q_rotate(tb + 4 * k, qb, B.plane + 4 * k);
+        tb[4 * k + 3] = B.plane[4 * k + 3] + floe_v3_dot(tb + 4 * k, xb);
+    }
+    floe_lp_problem P = {3, A.plane, A.np, tb, B.np, A.v, A.nv, R};
+    int rc = floe_lp_deepest(&P, basis, r);
+    free(tb);
+    return rc;
+}
+
+static void negative_control(void) {
+    int kept_same = 0, pivoted = 0, recold = 0, kept_moved = 0, agree = 0, trials = 200;
+    double worst = 0;
+    for (int t = 0; t < trials; t++) {
+        floe_geometry *ga = grain(), *gb = grain();
+        double u[3], xb[3], qb[4];
+        rand_unit(u);
+        for (int k = 0; k < 3; k++) xb[k] = 1.7 * R * u[k];
+        rand_quat(qb);
+        int basis[4] = {-1, -1, -1, -1}, b2[4];
+        floe_lp_result r0, r1, r2;
+        CHECK(solve_half(ga, gb, xb, qb, basis, &r0) == FLOE_OK, "cold solve");
+        memcpy(b2, basis, sizeof b2);
+        CHECK(solve_half(ga, gb, xb, qb, b2, &r1) == FLOE_OK, "warm solve, unmoved");
+        kept_same += r1.warm && r1.pivots == 0 && fabs(r1.s - r0.s) <= 1e-12 * R;
+        /* turn b by 0.3 .. 1 rad about a random axis */
+        double th[3], dq[4], q2[4];
+        rand_unit(th);
+        floe_v3_scale(th, uni(0.3, 1.0));
+        floe_q_from_rotvec(dq, th);
+        floe_q_mul(q2, dq, qb);
+        floe_q_normalize(q2);
+        memcpy(b2, basis, sizeof b2);
+        CHECK(solve_half(ga, gb, xb, q2, b2, &r1) == FLOE_OK, "warm solve, turned");
+        int c[4] = {-1, -1, -1, -1};
+        CHECK(solve_half(ga, gb, xb, q2, c, &r2) == FLOE_OK, "cold solve, turned");
+        if (r1.warm && r1.pivots == 0) kept_moved++;
+        else if (r1.warm) pivoted++;
+        else recold++;
+        double e = fmax(fabs(r1.s - r2.s), dist3(r1.x, r2.x));
+        worst = fmax(worst, e);
+        agree += e <= 1e-10 * R;
+        floe_geometry_destroy(ga);
+        floe_geometry_destroy(gb);
+    }
+    printf("  negative control, %d pairs: unmoved, basis kept %d; turned 0.3-1 rad: kept %d (still optimal), pivoted "
+           "from it %d, started cold (infeasible) %d; results equal to the cold solve %d (worst %.2e R)\n",
+           trials, kept_same, kept_moved, pivoted, recold, agree, worst / R);
+    CHECK(kept_same == trials, "unmoved pairs keep their basis: %d of %d", kept_same, trials);
+    CHECK(pivoted > trials / 10 && recold > trials / 10,
+          "a turned pair's old basis is given up, by pivots (%d) and by a cold start (%d), both > 10 %%", pivoted, recold);
+    CHECK(agree == trials, "after the basis changed the result is the cold LP's within 1e-10 R: %d of %d", agree, trials);
+}
+
+int main(void) {
+    setvbuf(stdout, NULL, _IOLBF, 0);
+    negative_control();
+    settling_run();
+    return check_summary("test_lp_resting");
+}
