@@ -119,8 +119,6 @@ static inline void omega_update(floe_particles *p, int i) {
     } else floe_omega_from_L(p->q + 4 * i, p->inertia + 3 * i, p->L + 3 * i, p->w + 3 * i);
 }
 
-/* the orientation q of an anisotropic free body (principal moments I) over dt with its
- * angular momentum L: the midpoint rule of eq 23 by two fixed-point passes; om <- omega */
 /* omega = R diag(inv) R^T L (floe_omega_from_L with the moments' inverses taken once: five
  * calls a step made fifteen divisions, a chain of latencies in a settled bed's profile) */
 static inline void omega_inv(const double q[4], const double inv[3], const double L[3], double om[3]) {
@@ -129,6 +127,9 @@ static inline void omega_inv(const double q[4], const double inv[3], const doubl
     for (int k = 0; k < 3; k++) Lb[k] *= inv[k];
     floe_q_rotate(om, q, Lb);
 }
+
+/* the orientation q of an anisotropic free body (principal moments I) over dt with its
+ * angular momentum L: the midpoint rule of eq 23 by two fixed-point passes; om <- omega */
 
 static void rotate_drift_aniso(double *q, const double *I, const double *L, double *om, double dt) {
     const double h = 0.5 * dt;
