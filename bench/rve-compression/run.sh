@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # bench/rve-compression: ParticLS §5.3 through the CLI (examples/rve-compression/scene.yaml,
-# 16,483 HCP spheres, linear spring-dashpot, a moving top wall, with its outputs: stress,
-# top-wall tracker, energy, vtk) against LIGGGHTS 3.8 on the peers' input (in.liggghts,
+# 16,483 HCP spheres, linear spring-dashpot, a moving top wall, with its outputs: stress
+# and the top-wall tracker, every 100 steps) against LIGGGHTS 3.8 on the peers' input (in.liggghts,
 # gen_data.py, top.stl: the shared peer benchmark dem-compress-rve), interleaved.
 #   REPS=3 FRACTION=1.0 FLOE_THREADS=1 bench/rve-compression/run.sh
 #   RANKS=2 REPS=3 FRACTION=0.25 bench/rve-compression/run.sh   # both under mpirun -np 2
