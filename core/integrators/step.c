@@ -238,6 +238,13 @@ static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb) {
 /* velocity Verlet's first half kick and drift of the free particles [i0, i1) (one block,
  * floe_par.h); returns their body-force work, raises *maxd2 (the largest squared
  * displacement since the list build) and sets *kin when a kinematic particle is met */
+/* the quick checks of a drift by dt at velocity v to position x (radius r): moved more than
+ * half the radius, or a position not finite (NaN fails every comparison): 1 = failed */
+static inline int drift_failed(const double v[3], const double x[3], double r, double dt) {
+    const double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * (dt * dt), lim = 0.5 * r;
+    return !(d2 <= lim * lim) | !(fabs(x[0]) + fabs(x[1]) + fabs(x[2]) < INFINITY);
+}
+
 typedef struct drift_args {
     double k1, dt, h, g[3];
     const double *xb; /* positions at the list build (NULL: none) */
@@ -261,8 +268,7 @@ static double drift_block(floe_particles *p, const drift_args *a, int i0, int i1
         /* the quick checks (the messages come after the forces, step_verlet): a particle
          * that moved more than half its radius, or whose position or velocity is not finite
          * (NaN fails every comparison) */
-        const double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * (dt * dt), lim = 0.5 * R[i];
-        kb |= !(d2 <= lim * lim) | !(fabs(x[0]) + fabs(x[1]) + fabs(x[2]) < INFINITY);
+        kb |= drift_failed(v, x, R[i], dt);
         if (XB) note_disp(x, XB + 3 * i, &md);
         /* rotation: L by the half kick, then the orientation over dt (the isotropic fast
          * path q <- exp(dt omega / 2) q without trig, or the midpoint rule) */
@@ -306,11 +312,7 @@ static void kick_block(floe_particles *p, const kick_args *a, int i0, int i1, do
         double *v = V + 3 * i, *L = LL + 3 * i, *om = W + 3 * i;
         const double *f = F + 3 * i, *t = T + 3 * i;
         const double im = IM[i];
-        if (recheck) { /* v is still the drift's v_half */
-            const double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * (dt * dt), lim = 0.5 * R[i];
-            if ((!(d2 <= lim * lim) || !(fabs(X[3 * i]) + fabs(X[3 * i + 1]) + fabs(X[3 * i + 2]) < INFINITY)) && i < bad_i)
-                bad_i = i;
-        }
+        if (recheck && drift_failed(v, X + 3 * i, R[i], dt) && i < bad_i) bad_i = i; /* v: still v_half */
         double ke, kre;
         if (iso[i]) {
             /* isotropic bodies: omega = L / I, and the shadow term's isotropic case

@@ -416,17 +416,19 @@ static void fwd_what(const floe_world *w, const floe_par *P, int *with_q, int *w
     *with_f = f;
 }
 
+static int fwd_len(int with_q, int with_f) { return 9 + 4 * with_q + 3 * with_f; }
+
 int floe_par_fwd_doubles(const floe_world *w, const floe_par *P) {
     int wq, wf;
     fwd_what(w, P, &wq, &wf);
-    return 9 + 4 * wq + 3 * wf;
+    return fwd_len(wq, wf);
 }
 
 int floe_par_forward_comm(floe_world *w, floe_par *P) {
     floe_particles *p = &w->p;
     int wq, wf;
     fwd_what(w, P, &wq, &wf);
-    const int m = floe_par_fwd_doubles(w, P), S = P->size, g0 = P->nrep + P->nown;
+    const int m = fwd_len(wq, wf), S = P->size, g0 = P->nrep + P->nown;
     if (floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)P->nsend * m) ||
         floe_par_reserve(&P->rbuf, &P->rbuf_cap, (size_t)P->nghost * m))
         return FLOE_ENOMEM;

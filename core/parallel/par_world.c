@@ -741,7 +741,7 @@ int floe_world_parallel_add_output(floe_world *w, floe_observer *o) {
     P->outs[P->nouts++] = o;
     /* every rank adds the same outputs: the class decides (one that lists particles reads
      * local indices that differ by rank: taken to read) */
-    if (o->klass->version < 3 || o->klass->reads_orientation) {
+    if (observer_orientation_claim(o)) {
         w->orient_extra = 1;
         orientation_refresh(w);
     }

@@ -444,11 +444,19 @@ int floe_world_contact_count(const floe_world *w) { return w->ncontacts; }
 /* whether round particles' orientations are integrated (floe_world_set_orientation): iso[i]
  * is 2 for an isotropic free sphere (disc) whose orientation nothing reads (the integrators
  * then leave its q), 1 for the other isotropic bodies, 0 otherwise */
+/* what o's class says it reads: 0 no orientation, 1 every one (also a class before version
+ * 3, which has no such field), FLOE_OBSERVER_READS_LISTED those it lists */
+int observer_orientation_claim(const floe_observer *o) {
+    const floe_observer_class *c = o->klass;
+    if (c->version < 3) return 1;
+    return c->reads_orientation == FLOE_OBSERVER_READS_LISTED ? FLOE_OBSERVER_READS_LISTED : c->reads_orientation != 0;
+}
+
 /* whether observer o reads the orientation of a round particle of w (one it lists, for a
  * FLOE_OBSERVER_READS_LISTED class) */
 int observer_reads_orientation(const floe_observer *o, const floe_world *w) {
-    if (o->klass->version < 3) return 1; /* before the field: taken to read */
-    if (o->klass->reads_orientation != FLOE_OBSERVER_READS_LISTED) return o->klass->reads_orientation != 0;
+    const int claim = observer_orientation_claim(o);
+    if (claim != FLOE_OBSERVER_READS_LISTED) return claim;
     const floe_particles *p = &w->p;
     for (int k = 0; k < o->norient_ids; k++) {
         int i = o->orient_ids[k];
@@ -459,10 +467,7 @@ int observer_reads_orientation(const floe_observer *o, const floe_world *w) {
 
 void orientation_refresh(floe_world *w) {
     int need = w->orient_mode != FLOE_ORIENT_AUTO || w->orient_extra || (w->beams && floe_beam_set_count(w->beams) > 0);
-    for (int k = 0; k < w->nobs && !need; k++) {
-        const floe_observer_class *c = w->obs[k]->klass;
-        need = c->version < 3 || (c->reads_orientation && c->reads_orientation != FLOE_OBSERVER_READS_LISTED);
-    }
+    for (int k = 0; k < w->nobs && !need; k++) need = observer_orientation_claim(w->obs[k]) == 1;
     /* force providers other than these built-ins may read orientations (the ocean and wind
      * drag place a floe's quadrature points with it, linear_drag takes L through it, a user
      * provider reads floe_provider_ctx.q), and so may a body-force callback */
@@ -478,7 +483,7 @@ void orientation_refresh(floe_world *w) {
     /* an observer that reads the orientations of the particles it lists (a tracker) */
     for (int k = 0; k < w->nobs && !need; k++) {
         const floe_observer *o = w->obs[k];
-        if (o->klass->version < 3 || o->klass->reads_orientation != FLOE_OBSERVER_READS_LISTED) continue;
+        if (observer_orientation_claim(o) != FLOE_OBSERVER_READS_LISTED) continue;
         for (int l = 0; l < o->norient_ids; l++) {
             int i = o->orient_ids[l];
             if (i >= 0 && i < p->n && p->iso[i]) p->iso[i] = 1;

@@ -14,6 +14,7 @@
 #define contacts_wanted floe_w_contacts_wanted
 #define orientation_refresh floe_w_orientation_refresh
 #define observer_reads_orientation floe_w_observer_reads_orientation
+#define observer_orientation_claim floe_w_observer_orientation_claim
 #define ctx_step floe_w_ctx_step
 #define estimate_dt floe_w_estimate_dt
 #define grow floe_w_grow
@@ -56,6 +57,7 @@ void prepare_ledger(floe_world *w, double shadow);
 int prepare_observers(floe_world *w);
 int contacts_wanted(const floe_world *w);
 void orientation_refresh(floe_world *w);
+int observer_orientation_claim(const floe_observer *o);
 int observer_reads_orientation(const floe_observer *o, const floe_world *w);
 floe_step_ctx ctx_step(floe_world *w, int record);
 int observers_call(floe_world *w, int force_all);
