@@ -81,9 +81,11 @@ static double pmb_c(const floe_pd_body *b) { return b->c; }
 
 /* The bond loops below run over the rows i (each bond k = (i, j) once, j > i) and add a
  * bond's force to j when they meet it and i's row sum at the end of row i. Threaded
- * (b->nthreads > 1, pd_par.h), the rows are computed in parallel with each bond's share of j
- * in P->g and each row's sums in P->row, and every point then gathers them in the order of
- * the serial loop (pd_gather): the same additions, the same bits. A bond that adds nothing
+ * (b->nthreads > 1, pd_par.h), the rows are computed in parallel, one part of consecutive
+ * blocks per thread: a point whose every row lies in one part (P->own) gets its shares where
+ * the serial loop adds them, from that part's thread; for the others (the parts' borders)
+ * each bond's share of j goes into P->g and each row's sums into P->row, and the point then
+ * gathers them in the order of the serial loop (pd_gather): the same additions, the same bits. A bond that adds nothing
  * stores +0 for a subtraction (x - +0 = x) and -0 for an addition (x + -0 = x), for every x.
  * Energies and broken counts are summed per block of FLOE_PD_ROW_BLOCK rows and the blocks in
  * order, on one thread too. */
@@ -92,7 +94,7 @@ void floe_pd_par_free(floe_pd_body *b)
 {
     if (!b || !b->par) return;
     floe_pd_par *P = b->par;
-    free(P->roff); free(P->rk); free(P->g); free(P->row); free(P->blk); free(P->blkn);
+    free(P->roff); free(P->rk); free(P->g); free(P->row); free(P->blk); free(P->blkn); free(P->own); free(P->border);
     free(P);
     b->par = NULL;
 }
@@ -123,7 +125,19 @@ static int pd_grow(void **ptr, size_t need, size_t *cap, size_t size)
 /* The buffers of a threaded evaluation, gs doubles per bond and rs per point, and the
  * reverse index (built again when the bonds changed); NULL when out of memory: the caller
  * then runs the serial loop, which gives the same bits. */
-static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs)
+/* the row whose bonds hold bond k (b->off ascending) */
+static int pd_row_of(const floe_pd_body *b, int64_t k)
+{
+    int lo = 0, hi = b->n - 1;
+    while (lo < hi) {
+        const int mid = lo + (hi - lo + 1) / 2;
+        if (b->off[mid] <= k) lo = mid;
+        else hi = mid - 1;
+    }
+    return lo;
+}
+
+static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs, int nt)
 {
     if (!b->par && !(b->par = calloc(1, sizeof *b->par))) return NULL;
     floe_pd_par *P = b->par;
@@ -145,6 +159,26 @@ static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs)
         P->rk = rk;
         P->n = n;
         P->nbond = nb;
+        P->part_blocks = 0; /* own[] below */
+    }
+    /* one part per thread: the border points (those a row of another part adds to) are few
+     * when the points are numbered layer by layer (a body's lattice), and a row's cost is
+     * nearly the same everywhere */
+    const int G = (nblk + nt - 1) / nt;
+    if (P->part_blocks != G) {
+        uint8_t *own = realloc(P->own, (size_t)(n > 0 ? n : 1));
+        if (own) P->own = own;
+        int *bd = own ? realloc(P->border, (size_t)(n > 0 ? n : 1) * sizeof *bd) : NULL;
+        if (!bd) return NULL;
+        P->border = bd;
+        P->nborder = 0;
+        const long span = (long)G * FLOE_PD_ROW_BLOCK;
+        for (int q = 0; q < n; q++) {
+            const int64_t e0 = P->roff[q], e1 = P->roff[q + 1];
+            own[q] = e0 == e1 || (pd_row_of(b, P->rk[e0]) / span == q / span && pd_row_of(b, P->rk[e1 - 1]) / span == q / span);
+            if (!own[q]) bd[P->nborder++] = q;
+        }
+        P->part_blocks = G;
     }
     size_t bc = (size_t)P->blk_cap;
     if (pd_grow((void **)&P->g, (size_t)gs * (size_t)(nb > 0 ? nb : 1), &P->g_cap, sizeof(double)) ||
@@ -240,8 +274,8 @@ static inline __attribute__((always_inline)) void pd_gather_f(const floe_pd_body
  * with alpha its candidate s00 - alpha s for both ends' s0, -INFINITY for none) into gb, the
  * row's force sum (and its own s0 candidate) into rb, stride 4 with alpha, else 3. */
 static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, const double *x, double *f, int i,
-                                                            double *s0n, double *gb, double *rb, int64_t *nbroken,
-                                                            const int alpha_on, const int per)
+                                                            double *s0n, double *gb, double *rb, const uint8_t *own,
+                                                            int64_t *nbroken, const int alpha_on, const int per)
 {
     const int32_t *img = per ? b->img : NULL;
     const double *H = per ? b->cellH : NULL;
@@ -256,10 +290,11 @@ static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, con
     const double xi0 = x[3 * (size_t)i], xi1 = x[3 * (size_t)i + 1], xi2 = x[3 * (size_t)i + 2];
     const double Vi = V[i];
     const double s0i = alpha_on ? s0[i] : 0.0;
-    double s0ni = alpha_on ? (gb ? -INFINITY : s0n[i]) : 0.0;
+    const int owni = !gb || own[i];
+    double s0ni = alpha_on ? (owni ? s0n[i] : -INFINITY) : 0.0;
     double fi0 = 0, fi1 = 0, fi2 = 0, ei = 0;
     for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
-        const int j = part[k];
+        const int j = part[k], ownj = !gb || own[j];
         double d0, d1, d2;
         pd_bond_vec(x, j, xi0, xi1, xi2, per, img, H, k, &d0, &d1, &d2);
         double r = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
@@ -274,7 +309,7 @@ static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, con
             if (alpha_on) {
                 t = s_c - alpha * s;
                 if (t > s0ni) s0ni = t;
-                if (!gb && t > s0n[j]) s0n[j] = t;
+                if (ownj && t > s0n[j]) s0n[j] = t;
                 sck = s0i < s0[j] ? s0i : s0[j];
             }
             if (s_c > 0 && s > sck) {
@@ -291,18 +326,18 @@ static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, con
             ei += 0.5 * c * s * s * L * w;
             g0 = fm * d0; g1 = fm * d1; g2 = fm * d2;
             fi0 += g0; fi1 += g1; fi2 += g2;
-            if (!gb) {
+            if (ownj) {
                 double *fj = f + 3 * (size_t)j;
                 fj[0] -= g0; fj[1] -= g1; fj[2] -= g2;
             }
         }
-        if (gb) {
+        if (!ownj) {
             double *q = gb + (size_t)st * (size_t)k;
             q[0] = g0; q[1] = g1; q[2] = g2;
             if (alpha_on) q[3] = t;
         }
     }
-    if (gb) {
+    if (!owni) {
         double *q = rb + (size_t)st * (size_t)i;
         q[0] = fi0; q[1] = fi1; q[2] = fi2;
         if (alpha_on) q[3] = s0ni;
@@ -319,7 +354,7 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
 {
     const int n = b->n, B = FLOE_PD_ROW_BLOCK, nblk = (n + B - 1) / B, st = alpha_on ? 4 : 3;
     const int nt = pd_threads(b);
-    floe_pd_par *P = nt > 1 ? pd_par_get(b, st, st) : NULL;
+    floe_pd_par *P = nt > 1 ? pd_par_get(b, st, st, nt) : NULL;
     double *s0n = alpha_on ? b->s0 + n : NULL;
     double energy = 0.0;
     int64_t nbroken = 0;
@@ -329,32 +364,42 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
         for (int c = 0; c < nblk; c++) {
             const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
             double eb = 0.0;
-            for (int i = c * B; i < i1; i++) eb += pmb_row(b, x, f, i, s0n, NULL, NULL, &nbroken, alpha_on, per);
+            for (int i = c * B; i < i1; i++) eb += pmb_row(b, x, f, i, s0n, NULL, NULL, NULL, &nbroken, alpha_on, per);
             energy += eb;
         }
         if (alpha_on)
             for (int i = 0; i < n; i++) b->s0[i] = s0n[i] == -INFINITY ? DBL_MAX : s0n[i];
     } else {
+        const uint8_t *own = P->own;
+        const int G = P->part_blocks, nparts = (nblk + G - 1) / G;
         FLOE_OMP(omp parallel num_threads(nt))
         {
-            FLOE_OMP(omp for schedule(dynamic, 1))
-            for (int c = 0; c < nblk; c++) {
-                const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
-                double eb = 0.0;
-                int64_t nbk = 0;
-                for (int i = c * B; i < i1; i++) eb += pmb_row(b, x, NULL, i, NULL, P->g, P->row, &nbk, alpha_on, per);
-                P->blk[c] = eb;
-                P->blkn[c] = nbk;
+            if (alpha_on) {
+                FLOE_OMP(omp for schedule(static))
+                for (int q = 0; q < n; q++)
+                    if (own[q]) s0n[q] = -INFINITY;
             }
-            /* the old s0 is read by the rows above and written below, after their barrier */
+            FLOE_OMP(omp for schedule(dynamic, 1))
+            for (int pt = 0; pt < nparts; pt++)
+                for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
+                    const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
+                    double eb = 0.0;
+                    int64_t nbk = 0;
+                    for (int i = c * B; i < i1; i++) eb += pmb_row(b, x, f, i, s0n, P->g, P->row, own, &nbk, alpha_on, per);
+                    P->blk[c] = eb;
+                    P->blkn[c] = nbk;
+                }
             FLOE_OMP(omp for schedule(static))
-            for (int q = 0; q < n; q++) {
+            for (int e = 0; e < P->nborder; e++) {
+                const int q = P->border[e];
                 double m;
                 pd_gather_f(b, P, q, f, st, alpha_on ? &m : NULL);
-                if (alpha_on) {
-                    s0n[q] = m;
-                    b->s0[q] = m == -INFINITY ? DBL_MAX : m;
-                }
+                if (alpha_on) s0n[q] = m;
+            }
+            /* the old s0 is read by the rows above and written below, after their barrier */
+            if (alpha_on) {
+                FLOE_OMP(omp for schedule(static))
+                for (int q = 0; q < n; q++) b->s0[q] = s0n[q] == -INFINITY ? DBL_MAX : s0n[q];
             }
         }
         for (int c = 0; c < nblk; c++) {
@@ -374,7 +419,8 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
  * returned energy is the stored elastic energy 1/2 c s_e^2 |xi| w; the plastic work is what
  * the world's ledger books as dissipated (it books -work - dE). Row i as pmb_row (stride 3). */
 static inline __attribute__((always_inline)) double plastic_row(floe_pd_body *b, const double *x, double *f, int i,
-                                                                double *gb, double *rb, int64_t *nbroken)
+                                                                double *gb, double *rb, const uint8_t *own,
+                                                                int64_t *nbroken)
 {
     const double c = b->c, s_c = b->s_c;
     const double syc = b->mat.yield_compression, syt = b->mat.yield_tension;
@@ -382,7 +428,7 @@ static inline __attribute__((always_inline)) double plastic_row(floe_pd_body *b,
     float *sp = b->splast;
     double fi[3] = {0, 0, 0}, ei = 0;
     for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
-        const int j = b->partner[k];
+        const int j = b->partner[k], ownj = !gb || own[j];
         double d[3], g[3] = {0, 0, 0};
         floe_pd_bond_vec(b, x, b->cellH, i, j, k, d);
         double r = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
@@ -406,13 +452,13 @@ static inline __attribute__((always_inline)) double plastic_row(floe_pd_body *b,
                 for (int a = 0; a < 3; a++) {
                     g[a] = fm * d[a];
                     fi[a] += g[a];
-                    if (!gb) f[3 * (size_t)j + a] -= g[a];
+                    if (ownj) f[3 * (size_t)j + a] -= g[a];
                 }
             }
         }
-        if (gb) memcpy(gb + 3 * (size_t)k, g, sizeof g);
+        if (!ownj) memcpy(gb + 3 * (size_t)k, g, sizeof g);
     }
-    if (gb) memcpy(rb + 3 * (size_t)i, fi, sizeof fi);
+    if (gb && !own[i]) memcpy(rb + 3 * (size_t)i, fi, sizeof fi);
     else
         for (int a = 0; a < 3; a++) f[3 * (size_t)i + a] += fi[a];
     return ei;
@@ -422,30 +468,33 @@ static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
 {
     const int n = b->n, B = FLOE_PD_ROW_BLOCK, nblk = (n + B - 1) / B;
     const int nt = pd_threads(b);
-    floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3) : NULL;
+    floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3, nt) : NULL;
     double energy = 0.0;
     int64_t nbroken = 0;
     if (!P) {
         for (int c = 0; c < nblk; c++) {
             const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
             double eb = 0.0;
-            for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, f, i, NULL, NULL, &nbroken);
+            for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, f, i, NULL, NULL, NULL, &nbroken);
             energy += eb;
         }
     } else {
+        const uint8_t *own = P->own;
+        const int G = P->part_blocks, nparts = (nblk + G - 1) / G;
         FLOE_OMP(omp parallel num_threads(nt))
         {
             FLOE_OMP(omp for schedule(dynamic, 1))
-            for (int c = 0; c < nblk; c++) {
-                const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
-                double eb = 0.0;
-                int64_t nbk = 0;
-                for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, NULL, i, P->g, P->row, &nbk);
-                P->blk[c] = eb;
-                P->blkn[c] = nbk;
-            }
+            for (int pt = 0; pt < nparts; pt++)
+                for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
+                    const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
+                    double eb = 0.0;
+                    int64_t nbk = 0;
+                    for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, f, i, P->g, P->row, own, &nbk);
+                    P->blk[c] = eb;
+                    P->blkn[c] = nbk;
+                }
             FLOE_OMP(omp for schedule(static))
-            for (int q = 0; q < n; q++) pd_gather_f(b, P, q, f, 3, NULL);
+            for (int e = 0; e < P->nborder; e++) pd_gather_f(b, P, P->border[e], f, 3, NULL);
         }
         for (int c = 0; c < nblk; c++) {
             energy += P->blk[c];
@@ -572,7 +621,7 @@ static inline void lps_weights(const floe_pd_body *b, int i, int j, int64_t k, d
  * p, mi of q) added as the loop meets them and i's row sums at its end; threaded the shares
  * into gb and the row sums into rb, stride 3 with the surface correction, else 1. */
 static inline __attribute__((always_inline)) int64_t lps_dil_row(floe_pd_body *b, const double *x, int i, double *gb,
-                                                                 double *rb, const int per)
+                                                                 double *rb, const uint8_t *own, const int per)
 {
     const int32_t *img = per ? b->img : NULL;
     const double *H = per ? b->cellH : NULL;
@@ -590,8 +639,8 @@ static inline __attribute__((always_inline)) int64_t lps_dil_row(floe_pd_body *b
     double ti = 0, pi = 0, mii = 0;
     for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
         double cj[3] = {-0.0, -0.0, -0.0}; /* j's shares (-0: none) */
+        const int j = part[k], ownj = !gb || own[j];
         if (!brk[k]) {
-            const int j = part[k];
             double d0, d1, d2;
             pd_bond_vec(x, j, xi[0], xi[1], xi[2], per, img, H, k, &d0, &d1, &d2);
             double L = len[k];
@@ -610,18 +659,18 @@ static inline __attribute__((always_inline)) int64_t lps_dil_row(floe_pd_body *b
                     cj[1] = aj * a * e * V[i];
                     mii += ai * a * L * V[j];
                     cj[2] = aj * a * L * V[i];
-                    if (!gb) { th[j] += cj[0]; p[j] += cj[1]; mi[j] += cj[2]; }
+                    if (ownj) { th[j] += cj[0]; p[j] += cj[1]; mi[j] += cj[2]; }
                 } else {
                     ti += a * e * V[j];
                     cj[0] = a * e * V[i];
-                    if (!gb) th[j] += cj[0];
+                    if (ownj) th[j] += cj[0];
                 }
             }
         }
-        if (gb)
+        if (!ownj)
             for (int c = 0; c < st; c++) gb[(size_t)st * (size_t)k + c] = cj[c];
     }
-    if (gb) {
+    if (gb && !own[i]) {
         double *r = rb + (size_t)st * (size_t)i;
         r[0] = ti;
         if (p) { r[1] = pi; r[2] = mii; }
@@ -651,33 +700,44 @@ static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, cons
     double *p = b->dten ? b->dten + 9 * (size_t)n : NULL, *mi = p ? p + n : NULL;
     const int st = p ? 3 : 1;
     const int nt = pd_threads(b);
-    floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3) : NULL;
+    floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3, nt) : NULL;
     int64_t nbroken = 0;
     if (!P) {
         for (int i = 0; i < n; i++) th[i] = 0;
         if (p)
             for (int i = 0; i < n; i++) p[i] = mi[i] = 0;
-        for (int i = 0; i < n; i++) nbroken += lps_dil_row(b, x, i, NULL, NULL, per);
+        for (int i = 0; i < n; i++) nbroken += lps_dil_row(b, x, i, NULL, NULL, NULL, per);
         for (int i = 0; i < n; i++) lps_dil_final(b, i);
         return nbroken;
     }
+    const uint8_t *own = P->own;
+    const int G = P->part_blocks, nparts = (nblk + G - 1) / G;
     FLOE_OMP(omp parallel num_threads(nt))
     {
-        FLOE_OMP(omp for schedule(dynamic, 1))
-        for (int c = 0; c < nblk; c++) {
-            const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
-            int64_t nbk = 0;
-            for (int i = c * B; i < i1; i++) nbk += lps_dil_row(b, x, i, P->g, P->row, per);
-            P->blkn[c] = nbk;
-        }
         FLOE_OMP(omp for schedule(static))
-        for (int q = 0; q < n; q++) {
+        for (int q = 0; q < n; q++)
+            if (own[q]) {
+                th[q] = 0;
+                if (p) p[q] = mi[q] = 0;
+            }
+        FLOE_OMP(omp for schedule(dynamic, 1))
+        for (int pt = 0; pt < nparts; pt++)
+            for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
+                const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
+                int64_t nbk = 0;
+                for (int i = c * B; i < i1; i++) nbk += lps_dil_row(b, x, i, P->g, P->row, own, per);
+                P->blkn[c] = nbk;
+            }
+        FLOE_OMP(omp for schedule(static))
+        for (int e = 0; e < P->nborder; e++) {
+            const int q = P->border[e];
             double v[3] = {0, 0, 0};
             pd_gather(b, P, q, v, st, st, 0, NULL);
             th[q] = v[0];
             if (p) { p[q] = v[1]; mi[q] = v[2]; }
-            lps_dil_final(b, q);
         }
+        FLOE_OMP(omp for schedule(static))
+        for (int q = 0; q < n; q++) lps_dil_final(b, q);
     }
     for (int c = 0; c < nblk; c++) nbroken += P->blkn[c];
     return nbroken;
@@ -716,7 +776,8 @@ static inline void lps_bond_t(const floe_pd_body *b, double kd, int i, int j, in
  * (000 eq 14); energy sum_i V_i W_i (000 eq 24). Broken bonds (stretch e/|xi| > s_c,
  * checked in the dilatation pass) drop out of theta and t. Row i as pmb_row (stride 3). */
 static inline __attribute__((always_inline)) double lps_row(const floe_pd_body *b, const double *x, double *f, int i,
-                                                            double kd, double *gb, double *rb, const int per)
+                                                            double kd, double *gb, double *rb, const uint8_t *own,
+                                                            const int per)
 {
     const int32_t *img = per ? b->img : NULL;
     const double *H = per ? b->cellH : NULL;
@@ -730,8 +791,8 @@ static inline __attribute__((always_inline)) double lps_row(const floe_pd_body *
     double fi0 = 0, fi1 = 0, fi2 = 0, ei = 0.5 * kd * th[i] * th[i] * Vi;
     for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
         double g0 = 0, g1 = 0, g2 = 0;
+        const int j = part[k], ownj = !gb || own[j];
         if (!brk[k]) {
-            const int j = part[k];
             double d0, d1, d2;
             pd_bond_vec(x, j, xi0, xi1, xi2, per, img, H, k, &d0, &d1, &d2);
             double r = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
@@ -743,18 +804,18 @@ static inline __attribute__((always_inline)) double lps_row(const floe_pd_body *
                 double fm = (tij + tji) * bv / r;
                 g0 = fm * d0; g1 = fm * d1; g2 = fm * d2;
                 fi0 += g0; fi1 += g1; fi2 += g2;
-                if (!gb) {
+                if (ownj) {
                     double *fj = f + 3 * (size_t)j;
                     fj[0] -= g0; fj[1] -= g1; fj[2] -= g2;
                 }
             }
         }
-        if (gb) {
+        if (!ownj) {
             double *q = gb + 3 * (size_t)k;
             q[0] = g0; q[1] = g1; q[2] = g2;
         }
     }
-    if (gb) {
+    if (gb && !own[i]) {
         double *q = rb + 3 * (size_t)i;
         q[0] = fi0; q[1] = fi1; q[2] = fi2;
     } else {
@@ -772,28 +833,31 @@ static inline double lps_forces_impl(floe_pd_body *b, const double *x, double *f
     const double kd = lps_kdil(b);
     b->nbroken += lps_dilatation(b, x);
     const int nt = pd_threads(b);
-    floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3) : NULL;
+    floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3, nt) : NULL;
     double energy = 0.0;
     if (!P) {
         for (int c = 0; c < nblk; c++) {
             const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
             double eb = 0.0;
-            for (int i = c * B; i < i1; i++) eb += lps_row(b, x, f, i, kd, NULL, NULL, per);
+            for (int i = c * B; i < i1; i++) eb += lps_row(b, x, f, i, kd, NULL, NULL, NULL, per);
             energy += eb;
         }
         return energy;
     }
+    const uint8_t *own = P->own;
+    const int G = P->part_blocks, nparts = (nblk + G - 1) / G;
     FLOE_OMP(omp parallel num_threads(nt))
     {
         FLOE_OMP(omp for schedule(dynamic, 1))
-        for (int c = 0; c < nblk; c++) {
-            const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
-            double eb = 0.0;
-            for (int i = c * B; i < i1; i++) eb += lps_row(b, x, NULL, i, kd, P->g, P->row, per);
-            P->blk[c] = eb;
-        }
+        for (int pt = 0; pt < nparts; pt++)
+            for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
+                const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
+                double eb = 0.0;
+                for (int i = c * B; i < i1; i++) eb += lps_row(b, x, f, i, kd, P->g, P->row, own, per);
+                P->blk[c] = eb;
+            }
         FLOE_OMP(omp for schedule(static))
-        for (int q = 0; q < n; q++) pd_gather_f(b, P, q, f, 3, NULL);
+        for (int e = 0; e < P->nborder; e++) pd_gather_f(b, P, P->border[e], f, 3, NULL);
     }
     for (int c = 0; c < nblk; c++) energy += P->blk[c];
     return energy;

@@ -10,7 +10,8 @@
  * the rows in parallel, each bond's share of j into g (per bond) and each row's sums into
  * row (per point), then every point gathers its shares in the serial loop's order: the bonds
  * whose partner it is in increasing k (the reverse index rk), its own row sum where the
- * serial loop adds it. Partial sums (energy, broken bonds) are per block of FLOE_PD_ROW_BLOCK
+ * serial loop adds it; a point whose every row lies in one part of the rows (floe_pd_par.own)
+ * is added to directly by that part's thread, in the same order. Partial sums (energy, broken bonds) are per block of FLOE_PD_ROW_BLOCK
  * rows, added in block order, also on one thread. */
 
 /* Rows per block: fixed (not the thread count's), and smaller than FLOE_PAR_BLOCK because a
@@ -25,6 +26,13 @@ typedef struct floe_pd_par {
     double *g; size_t g_cap;     /* per bond: its share of the partner (stride set by the loop) */
     double *row; size_t row_cap; /* per point: its row's sums */
     double *blk; int64_t *blkn; int blk_cap; /* per block of rows: energy, broken bonds */
+    /* parts of part_blocks consecutive blocks of rows, each on one thread in order; own[p]
+     * when every row that adds to p (its own, and those of the bonds whose partner it is)
+     * lies in p's part: that thread then adds to p directly, in the serial loop's order, and
+     * only the points on the parts' borders go through g, row and the gather */
+    uint8_t *own;
+    int *border, nborder; /* the points not owned, ascending: the gather's work, split evenly */
+    int part_blocks;
 } floe_pd_par;
 
 /* frees b->par (the bond arrays changed: pd_crack.c, floe_pd_make_periodic; or the body goes) */

@@ -26,6 +26,7 @@
 #include "floe.h"
 #include "floe_pd.h"
 #include "beam_set.h"
+#include "pd_par.h"
 #include "world_internal.h"
 
 #include <stdlib.h>
@@ -146,7 +147,7 @@ typedef struct run_out {
     unsigned char *flags; size_t nflags;
     floe_energy e;
     long long nbroken, nbroken_early;
-    int ncontacts, nbonds, threaded, images;
+    int ncontacts, nbonds, threaded, images, border, npts;
 } run_out;
 
 static int run(int kind, int threads, int steps, run_out *o) {
@@ -214,6 +215,9 @@ static int run(int kind, int threads, int steps, run_out *o) {
         o->nbonds = (int)b->nbond;
         o->threaded = b->par != NULL;
         o->images = b->img != NULL;
+        o->npts = b->n;
+        if (b->par && b->par->own) /* the points on the parts' borders: through the gather */
+            for (int q = 0; q < b->n; q++) o->border += !b->par->own[q];
     }
     o->e = floe_world_energy(w);
     o->ncontacts = floe_world_contact_count(w);
@@ -224,6 +228,7 @@ static int run(int kind, int threads, int steps, run_out *o) {
 #ifdef _OPENMP
 static void compare(int kind, int steps) {
     const char *what = names[kind];
+    const int beams = kind == BEAM_2D || kind == BEAM_3D;
     run_out ref, o;
     memset(&ref, 0, sizeof ref);
     CHECK(run(kind, 1, steps, &ref) == 0, "%s: one thread runs", what);
@@ -236,6 +241,9 @@ static void compare(int kind, int steps) {
         memset(&o, 0, sizeof o);
         CHECK(run(kind, t, steps, &o) == 0, "%s: %d threads run", what, t);
         CHECK(o.threaded, "%s: %d threads took the threaded path", what, t);
+        if (!beams) /* both ways of adding a bond's share: direct (owned points) and gathered */
+            CHECK(o.border > 0 && o.border < o.npts, "%s: %d threads: %d of %d points on the parts' borders", what, t,
+                  o.border, o.npts);
         CHECK(o.nstate == ref.nstate && !memcmp(o.state, ref.state, ref.nstate * sizeof(double)),
               "%s: %d threads: positions, velocities, forces (and state) bit-identical", what, t);
         CHECK(!memcmp(&o.e, &ref.e, sizeof o.e),
