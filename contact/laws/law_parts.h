@@ -6,6 +6,19 @@
 
 #include "floe_contact.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+/* x < 0 ? 0 : x, with NaN and -0 kept (MAXSD returns its second operand for a NaN or two
+ * zeros) */
+static inline double floe_clamp0(double x) {
+#if defined(__SSE2__)
+    return _mm_cvtsd_f64(_mm_max_sd(_mm_setzero_pd(), _mm_set_sd(x)));
+#else
+    return x < 0.0 ? 0.0 : x;
+#endif
+}
 
 #define FLOE_HM_DAMP_PREF 1.8257418583505538 /* 2 sqrt(5/6) */
 
@@ -18,8 +31,7 @@ static inline void floe_hertz_normal(double e_star, double beta, const floe_cont
     const double Sn = 2.0 * e_star * a;
     const double fel = (2.0 / 3.0) * Sn * d; /* 4/3 E* sqrt(R* d) d */
     const double gn = FLOE_HM_DAMP_PREF * beta * sqrt(Sn * c->m_eff);
-    double Fn = fel + gn * vn;
-    if (Fn < 0.0) Fn = 0.0;
+    const double Fn = floe_clamp0(fel + gn * vn);
     o->fn = Fn;
     o->fel = fel;
     o->kn = Sn;
@@ -159,7 +171,7 @@ static inline __attribute__((always_inline)) void floe_linear_normal_k(double kn
     const double hm = c->m_eff > 0.0 && isfinite(c->m_eff) ? 0.5 * dt / c->m_eff : 0.0;
     const double gph = gn * floe_linear_dashpot_phase(kn, gn, tension, c, hist, hm);
     double Fn = (fel + gph * (vn + 0.5 * dt * floe_linear_an_ext(c))) / (1.0 + gph * hm);
-    if (!tension) Fn = Fn < 0.0 ? 0.0 : Fn; /* a max, without a branch on the sign (NaN stays NaN) */
+    if (!tension) Fn = floe_clamp0(Fn);
     o->fn = Fn;
     o->fel = fel;
     o->kn = kn;
