@@ -354,6 +354,7 @@ int floe_par_refresh(floe_world *w, double maxd2, int have_xb) {
     /* a bond broke and the list was rebuilt in the force stage (forces.c): the ghosts were
      * chosen for the list of the last decomposition, so decompose again */
     if (w->beams && w->nl.rebuilds != P->nl_rebuilds) need = 1;
+    if (w->law_gen != w->nl_law_gen) need = 1; /* a law set since the build (step.c rebuild_if_needed) */
     MPI_Allreduce(&need, &any, 1, MPI_INT, MPI_LOR, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof need);
     if (any) return par_rebuild(w, P, NULL, 0);

@@ -127,6 +127,9 @@ static int search_one(const nl_search *S, struct floe_nl_found *fd, int a) {
     const double *bx = S->bx;
     const int mr = cell ? 1 : 0, mz = cell && dim == 3 ? 1 : 0;
     const int i = bidx[a];
+    /* a particle that touches nothing present searches for nothing (world.c inert_materials);
+     * those that may touch it skip it in the exclusion (world_exclude) */
+    if (nl->inert && nl->inert[p->material[i]]) return FLOE_OK;
     const double reach = 2 * p->radius[i] + S->skin;
     for (int m0 = -mr; m0 <= mr; m0++)
       for (int m1 = -mr; m1 <= mr; m1++)

@@ -156,8 +156,40 @@ int floe_world_loop_threads(const floe_world *w, long items) {
     return floe_world_threads(w);
 }
 
+/* the materials whose particles touch nothing in the store (the law "none" with every
+ * material present, walls included) into w->inert; NULL when there are none such */
+static const unsigned char *inert_materials(floe_world *w) {
+    const int nm = w->nmats, n = w->p.n;
+    int any_none = 0;
+    for (int k = 0; k < nm * nm && !any_none; k++) any_none = floe_contact_law_no_contact(w->laws[k]);
+    w->nl_any_none = any_none;
+    if (!any_none || nm <= 0) return NULL;
+    if (2 * nm > w->inert_cap) {
+        unsigned char *t = realloc(w->inert, (size_t)(2 * nm));
+        if (!t) return NULL; /* the search then pairs them, and the stage skips their pairs */
+        w->inert = t;
+        w->inert_cap = 2 * nm;
+    }
+    unsigned char *present = w->inert + nm, *inert = w->inert;
+    memset(present, 0, (size_t)nm);
+    for (int i = 0; i < n; i++) {
+        const int m = w->p.material[i];
+        if (m >= 0 && m < nm) present[m] = 1;
+    }
+    int any = 0;
+    for (int a = 0; a < nm; a++) {
+        inert[a] = 1;
+        for (int b = 0; b < nm && inert[a]; b++)
+            if (present[b] && !floe_contact_law_no_contact(w->laws[a * nm + b])) inert[a] = 0;
+        any |= inert[a];
+    }
+    return any ? inert : NULL;
+}
+
 int floe_world_nl_build(floe_world *w) {
     int nt = floe_world_loop_threads(w, w->p.n);
+    w->nl.inert = inert_materials(w);
+    w->nl_law_gen = w->law_gen;
     /* the search calls the providers' excludes from every thread: a user's on one thread
      * (floe_provider.h does not ask it to be thread-safe) */
     for (int k = 0; k < w->nprov && nt > 1; k++)
@@ -208,6 +240,7 @@ void floe_world_destroy(floe_world *w) {
     for (int i = 0; i < w->nlaws_owned; i++) floe_contact_law_destroy(w->law_owned[i]);
     free(w->law_owned);
     free(w->laws);
+    free(w->inert);
     free(w->motions);
     free(w->motion_idx);
     free(w->fb_old);
@@ -272,6 +305,7 @@ int floe_world_set_law(floe_world *w, int a, int b, floe_contact_law *law) {
     w->law_owned[w->nlaws_owned++] = law;
     w->laws[a * w->nmats + b] = law;
     w->laws[b * w->nmats + a] = law;
+    w->law_gen++;
     return FLOE_OK;
 }
 

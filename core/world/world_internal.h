@@ -63,6 +63,9 @@ typedef struct floe_neighbor_list {
      * gid NULL: serial */
     const long long *gid;
     int own_hi;
+    /* optional, per material: 1 when its particles touch nothing present (the law "none"
+     * with every material of the store): they search for no pairs (floe_world_nl_build) */
+    const unsigned char *inert;
 } floe_neighbor_list;
 
 struct floe_world {
@@ -73,6 +76,11 @@ struct floe_world {
     int pieces_seen, any_pieces; /* geoms[0 .. pieces_seen) looked at: any of them a compound */
     floe_material *mats; int nmats, mats_cap;
     floe_contact_law **laws;  /* nmats x nmats (symmetric, owned once via law_owned) */
+    /* pairs under the law "none" stay out of the list (world_exclude, nl.inert): a law set
+     * after a build makes the next step rebuild (law_gen != nl_law_gen) */
+    long law_gen, nl_law_gen;
+    unsigned char *inert; int inert_cap;
+    int nl_any_none; /* a law "none" at the last build: world_exclude looks the pair's law up */
     floe_contact_law **law_owned; int nlaws_owned, law_owned_cap;
     floe_motion_cb *motions; int nmotions, motions_cap;
     int *motion_idx; int motion_idx_n, motion_idx_cnt; /* particle -> motion callback (world.c) */
