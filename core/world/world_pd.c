@@ -35,8 +35,8 @@ int floe_pd_pair_excluded(const floe_world *w, int i, int j) {
     return b->len[k] < w->p.radius[i] + w->p.radius[j];
 }
 
-/* the pairs that never enter the contact list: pairs under the law "none", bonded PD family members (pd_exclude) and particles held by
- * an intact beam bond */
+/* the pairs that never enter the contact list: pairs under the law "none", bonded PD
+ * family members (pd_exclude) and particles held by an intact beam bond */
 static int world_exclude(const void *ctx, int i, int j) {
     const floe_world *w = ctx;
     /* a pair under the law "none" (the stage would skip it): cheaper than a bond's lookup */
