@@ -146,8 +146,8 @@ static void test_none(void)
 /* pairs under "none" stay out of the neighbour list (a material that touches nothing
  * searches for none); a law set after the list was built rebuilds it at the next step: two
  * spheres at rest overlapping by 20 um feel nothing under "none", then the linear law's
- * kn d as soon as it is set (the list due for a rebuild: law_gen; another condition also
- * rebuilt it at that step when the law_gen check was taken out, not established which) */
+ * kn d as soon as it is set (without the rebuild on law_gen they would wait for a drift of
+ * half the skin: never, at rest; the pair then stays unlisted: tried) */
 static void test_none_then_law(void)
 {
     int a, b;
