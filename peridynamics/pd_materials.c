@@ -95,6 +95,7 @@ void floe_pd_par_free(floe_pd_body *b)
     if (!b || !b->par) return;
     floe_pd_par *P = b->par;
     free(P->roff); free(P->rk); free(P->g); free(P->row); free(P->blk); free(P->blkn); free(P->own); free(P->border);
+    free(P->gslot); free(P->bslot); free(P->bsplit);
     free(P);
     b->par = NULL;
 }
@@ -144,7 +145,13 @@ static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs, int nt)
     const int n = b->n;
     const int64_t nb = b->nbond;
     const int nblk = (n + FLOE_PD_ROW_BLOCK - 1) / FLOE_PD_ROW_BLOCK;
-    if (!P->roff || P->n != n || P->nbond != nb) {
+    /* two parts per thread, handed out in order (dynamic): the border points (those a row of
+     * another part adds to) are few when the points are numbered layer by layer (a body's
+     * lattice); measured on bench/pd-impact with 2 threads, 4 parts ran 1.15-1.25x faster than
+     * 2 (a region breaking unbalances them) and 1.1-1.2x faster than 8 (more border) */
+    const int G = (nblk + 2 * nt - 1) / (2 * nt);
+    /* the reverse index (kept only while the parts are cut: its bond list is freed after) */
+    if (!P->roff || P->n != n || P->nbond != nb || (P->part_blocks != G && !P->rk)) {
         free(P->roff); /* a failure below leaves the index unbuilt */
         free(P->rk);
         P->roff = P->rk = NULL;
@@ -161,28 +168,49 @@ static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs, int nt)
         P->nbond = nb;
         P->part_blocks = 0; /* own[] below */
     }
-    /* two parts per thread, handed out in order (dynamic): the border points (those a row of
-     * another part adds to) are few when the points are numbered layer by layer (a body's
-     * lattice); measured on bench/pd-impact with 2 threads, 4 parts ran 1.15-1.25x faster than
-     * 2 (a region breaking unbalances them) and 1.1-1.2x faster than 8 (more border) */
-    const int G = (nblk + 2 * nt - 1) / (2 * nt);
     if (P->part_blocks != G) {
+        P->part_blocks = 0; /* until all of it is built */
+        if (nb > INT32_MAX) return NULL; /* slots are int32: the serial loop then */
         uint8_t *own = realloc(P->own, (size_t)(n > 0 ? n : 1));
         if (own) P->own = own;
         int *bd = own ? realloc(P->border, (size_t)(n > 0 ? n : 1) * sizeof *bd) : NULL;
-        if (!bd) return NULL;
-        P->border = bd;
+        if (bd) P->border = bd;
+        int32_t *gslot = bd ? realloc(P->gslot, (size_t)(nb > 0 ? nb : 1) * sizeof *gslot) : NULL;
+        if (gslot) P->gslot = gslot;
+        int64_t *bslot = gslot ? realloc(P->bslot, (size_t)(n + 1) * sizeof *bslot) : NULL;
+        if (bslot) P->bslot = bslot;
+        int64_t *bsplit = bslot ? realloc(P->bsplit, (size_t)(n > 0 ? n : 1) * sizeof *bsplit) : NULL;
+        if (!bsplit) return NULL;
+        P->bsplit = bsplit;
         P->nborder = 0;
         const long span = (long)G * FLOE_PD_ROW_BLOCK;
+        const int64_t *roff = P->roff, *rk = P->rk;
         for (int q = 0; q < n; q++) {
-            const int64_t e0 = P->roff[q], e1 = P->roff[q + 1];
-            own[q] = e0 == e1 || (pd_row_of(b, P->rk[e0]) / span == q / span && pd_row_of(b, P->rk[e1 - 1]) / span == q / span);
+            const int64_t e0 = roff[q], e1 = roff[q + 1];
+            own[q] = e0 == e1 || (pd_row_of(b, rk[e0]) / span == q / span && pd_row_of(b, rk[e1 - 1]) / span == q / span);
             if (!own[q]) bd[P->nborder++] = q;
         }
+        /* the border points' bonds in slots, point by point in the gather's order */
+        for (int64_t k = 0; k < nb; k++) gslot[k] = -1;
+        int64_t ns = 0;
+        for (int e = 0; e < P->nborder; e++) {
+            const int q = bd[e];
+            bslot[e] = ns;
+            bsplit[e] = -1;
+            for (int64_t t = roff[q]; t < roff[q + 1]; t++) {
+                if (bsplit[e] < 0 && rk[t] >= b->off[q]) bsplit[e] = ns;
+                gslot[rk[t]] = (int32_t)ns++;
+            }
+            if (bsplit[e] < 0) bsplit[e] = ns;
+        }
+        bslot[P->nborder] = ns;
+        P->nslot = ns;
         P->part_blocks = G;
+        free(P->rk); /* 8 B a bond: the slots took its place */
+        P->rk = NULL;
     }
     size_t bc = (size_t)P->blk_cap;
-    if (pd_grow((void **)&P->g, (size_t)gs * (size_t)(nb > 0 ? nb : 1), &P->g_cap, sizeof(double)) ||
+    if (pd_grow((void **)&P->g, (size_t)gs * (size_t)(P->nslot > 0 ? P->nslot : 1), &P->g_cap, sizeof(double)) ||
         pd_grow((void **)&P->row, (size_t)rs * (size_t)(n > 0 ? n : 1), &P->row_cap, sizeof(double)))
         return NULL;
     if ((size_t)nblk > bc) {
@@ -219,24 +247,23 @@ static inline __attribute__((always_inline)) void pd_bond_vec(const double *x, i
  * bonds of the rows below q, before those of rows above (none: every partner is above its
  * row). With mx (PMB alpha) the shares' and the row's slot gs is a maximum (first of equal
  * values, as the serial loop keeps it), into *mx from -INFINITY. */
-static inline __attribute__((always_inline)) void pd_gather(const floe_pd_body *b, const floe_pd_par *P, int q,
-                                                            double *v, const int gs, const int st, const int sub,
-                                                            double *mx)
+static inline __attribute__((always_inline)) void pd_gather(const floe_pd_par *P, int eb, double *v, const int gs,
+                                                            const int st, const int sub, double *mx)
 {
-    const int64_t k0 = b->off[q], e1 = P->roff[q + 1];
-    const int64_t *rk = P->rk;
+    const int q = P->border[eb];
+    const int64_t split = P->bsplit[eb], e1 = P->bslot[eb + 1];
     const double *row = P->row + (size_t)st * (size_t)q;
     double m = -INFINITY;
-    int64_t e = P->roff[q];
-    for (; e < e1 && rk[e] < k0; e++) {
-        const double *g = P->g + (size_t)st * (size_t)rk[e];
+    int64_t e = P->bslot[eb];
+    for (; e < split; e++) {
+        const double *g = P->g + (size_t)st * (size_t)e;
         for (int c = 0; c < gs; c++) v[c] = sub ? v[c] - g[c] : v[c] + g[c];
         if (mx && g[gs] > m) m = g[gs];
     }
     for (int c = 0; c < gs; c++) v[c] += row[c];
     if (mx && row[gs] > m) m = row[gs];
     for (; e < e1; e++) {
-        const double *g = P->g + (size_t)st * (size_t)rk[e];
+        const double *g = P->g + (size_t)st * (size_t)e;
         for (int c = 0; c < gs; c++) v[c] = sub ? v[c] - g[c] : v[c] + g[c];
         if (mx && g[gs] > m) m = g[gs];
     }
@@ -244,11 +271,12 @@ static inline __attribute__((always_inline)) void pd_gather(const floe_pd_body *
 }
 
 /* f[q] after a threaded force loop: f minus the bonds' shares, plus the row sum */
-static inline __attribute__((always_inline)) void pd_gather_f(const floe_pd_body *b, const floe_pd_par *P, int q,
-                                                              double *f, const int st, double *mx)
+static inline __attribute__((always_inline)) void pd_gather_f(const floe_pd_par *P, int eb, double *f, const int st,
+                                                              double *mx)
 {
+    const int q = P->border[eb];
     double v[3] = {f[3 * (size_t)q], f[3 * (size_t)q + 1], f[3 * (size_t)q + 2]};
-    pd_gather(b, P, q, v, 3, st, 1, mx);
+    pd_gather(P, eb, v, 3, st, 1, mx);
     f[3 * (size_t)q] = v[0];
     f[3 * (size_t)q + 1] = v[1];
     f[3 * (size_t)q + 2] = v[2];
@@ -276,7 +304,8 @@ static inline __attribute__((always_inline)) void pd_gather_f(const floe_pd_body
  * row's force sum (and its own s0 candidate) into rb, stride 4 with alpha, else 3. */
 static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, const double *x, double *f, int i,
                                                             double *s0n, double *gb, double *rb, const uint8_t *own,
-                                                            int64_t *nbroken, const int alpha_on, const int per)
+                                                            const int32_t *gslot, int64_t *nbroken, const int alpha_on,
+                                                            const int per)
 {
     const int32_t *img = per ? b->img : NULL;
     const double *H = per ? b->cellH : NULL;
@@ -333,7 +362,7 @@ static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, con
             }
         }
         if (!ownj) {
-            double *q = gb + (size_t)st * (size_t)k;
+            double *q = gb + (size_t)st * (size_t)gslot[k];
             q[0] = g0; q[1] = g1; q[2] = g2;
             if (alpha_on) q[3] = t;
         }
@@ -365,7 +394,7 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
         for (int c = 0; c < nblk; c++) {
             const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
             double eb = 0.0;
-            for (int i = c * B; i < i1; i++) eb += pmb_row(b, x, f, i, s0n, NULL, NULL, NULL, &nbroken, alpha_on, per);
+            for (int i = c * B; i < i1; i++) eb += pmb_row(b, x, f, i, s0n, NULL, NULL, NULL, NULL, &nbroken, alpha_on, per);
             energy += eb;
         }
         if (alpha_on)
@@ -386,16 +415,15 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
                     const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
                     double eb = 0.0;
                     int64_t nbk = 0;
-                    for (int i = c * B; i < i1; i++) eb += pmb_row(b, x, f, i, s0n, P->g, P->row, own, &nbk, alpha_on, per);
+                    for (int i = c * B; i < i1; i++) eb += pmb_row(b, x, f, i, s0n, P->g, P->row, own, P->gslot, &nbk, alpha_on, per);
                     P->blk[c] = eb;
                     P->blkn[c] = nbk;
                 }
             FLOE_OMP(omp for schedule(static))
             for (int e = 0; e < P->nborder; e++) {
-                const int q = P->border[e];
                 double m;
-                pd_gather_f(b, P, q, f, st, alpha_on ? &m : NULL);
-                if (alpha_on) s0n[q] = m;
+                pd_gather_f(P, e, f, st, alpha_on ? &m : NULL);
+                if (alpha_on) s0n[P->border[e]] = m;
             }
             /* the old s0 is read by the rows above and written below, after their barrier */
             if (alpha_on) {
@@ -421,7 +449,7 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
  * the world's ledger books as dissipated (it books -work - dE). Row i as pmb_row (stride 3). */
 static inline __attribute__((always_inline)) double plastic_row(floe_pd_body *b, const double *x, double *f, int i,
                                                                 double *gb, double *rb, const uint8_t *own,
-                                                                int64_t *nbroken)
+                                                                const int32_t *gslot, int64_t *nbroken)
 {
     const double c = b->c, s_c = b->s_c;
     const double syc = b->mat.yield_compression, syt = b->mat.yield_tension;
@@ -457,7 +485,7 @@ static inline __attribute__((always_inline)) double plastic_row(floe_pd_body *b,
                 }
             }
         }
-        if (!ownj) memcpy(gb + 3 * (size_t)k, g, sizeof g);
+        if (!ownj) memcpy(gb + 3 * (size_t)gslot[k], g, sizeof g);
     }
     if (gb && !own[i]) memcpy(rb + 3 * (size_t)i, fi, sizeof fi);
     else
@@ -476,7 +504,7 @@ static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
         for (int c = 0; c < nblk; c++) {
             const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
             double eb = 0.0;
-            for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, f, i, NULL, NULL, NULL, &nbroken);
+            for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, f, i, NULL, NULL, NULL, NULL, &nbroken);
             energy += eb;
         }
     } else {
@@ -490,12 +518,12 @@ static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
                     const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
                     double eb = 0.0;
                     int64_t nbk = 0;
-                    for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, f, i, P->g, P->row, own, &nbk);
+                    for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, f, i, P->g, P->row, own, P->gslot, &nbk);
                     P->blk[c] = eb;
                     P->blkn[c] = nbk;
                 }
             FLOE_OMP(omp for schedule(static))
-            for (int e = 0; e < P->nborder; e++) pd_gather_f(b, P, P->border[e], f, 3, NULL);
+            for (int e = 0; e < P->nborder; e++) pd_gather_f(P, e, f, 3, NULL);
         }
         for (int c = 0; c < nblk; c++) {
             energy += P->blk[c];
@@ -622,7 +650,8 @@ static inline void lps_weights(const floe_pd_body *b, int i, int j, int64_t k, d
  * p, mi of q) added as the loop meets them and i's row sums at its end; threaded the shares
  * into gb and the row sums into rb, stride 3 with the surface correction, else 1. */
 static inline __attribute__((always_inline)) int64_t lps_dil_row(floe_pd_body *b, const double *x, int i, double *gb,
-                                                                 double *rb, const uint8_t *own, const int per)
+                                                                 double *rb, const uint8_t *own, const int32_t *gslot,
+                                                                 const int per)
 {
     const int32_t *img = per ? b->img : NULL;
     const double *H = per ? b->cellH : NULL;
@@ -669,7 +698,7 @@ static inline __attribute__((always_inline)) int64_t lps_dil_row(floe_pd_body *b
             }
         }
         if (!ownj)
-            for (int c = 0; c < st; c++) gb[(size_t)st * (size_t)k + c] = cj[c];
+            for (int c = 0; c < st; c++) gb[(size_t)st * (size_t)gslot[k] + c] = cj[c];
     }
     if (gb && !own[i]) {
         double *r = rb + (size_t)st * (size_t)i;
@@ -707,7 +736,7 @@ static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, cons
         for (int i = 0; i < n; i++) th[i] = 0;
         if (p)
             for (int i = 0; i < n; i++) p[i] = mi[i] = 0;
-        for (int i = 0; i < n; i++) nbroken += lps_dil_row(b, x, i, NULL, NULL, NULL, per);
+        for (int i = 0; i < n; i++) nbroken += lps_dil_row(b, x, i, NULL, NULL, NULL, NULL, per);
         for (int i = 0; i < n; i++) lps_dil_final(b, i);
         return nbroken;
     }
@@ -726,14 +755,14 @@ static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, cons
             for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
                 const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
                 int64_t nbk = 0;
-                for (int i = c * B; i < i1; i++) nbk += lps_dil_row(b, x, i, P->g, P->row, own, per);
+                for (int i = c * B; i < i1; i++) nbk += lps_dil_row(b, x, i, P->g, P->row, own, P->gslot, per);
                 P->blkn[c] = nbk;
             }
         FLOE_OMP(omp for schedule(static))
         for (int e = 0; e < P->nborder; e++) {
             const int q = P->border[e];
             double v[3] = {0, 0, 0};
-            pd_gather(b, P, q, v, st, st, 0, NULL);
+            pd_gather(P, e, v, st, st, 0, NULL);
             th[q] = v[0];
             if (p) { p[q] = v[1]; mi[q] = v[2]; }
         }
@@ -778,7 +807,7 @@ static inline void lps_bond_t(const floe_pd_body *b, double kd, int i, int j, in
  * checked in the dilatation pass) drop out of theta and t. Row i as pmb_row (stride 3). */
 static inline __attribute__((always_inline)) double lps_row(const floe_pd_body *b, const double *x, double *f, int i,
                                                             double kd, double *gb, double *rb, const uint8_t *own,
-                                                            const int per)
+                                                            const int32_t *gslot, const int per)
 {
     const int32_t *img = per ? b->img : NULL;
     const double *H = per ? b->cellH : NULL;
@@ -812,7 +841,7 @@ static inline __attribute__((always_inline)) double lps_row(const floe_pd_body *
             }
         }
         if (!ownj) {
-            double *q = gb + 3 * (size_t)k;
+            double *q = gb + 3 * (size_t)gslot[k];
             q[0] = g0; q[1] = g1; q[2] = g2;
         }
     }
@@ -840,7 +869,7 @@ static inline double lps_forces_impl(floe_pd_body *b, const double *x, double *f
         for (int c = 0; c < nblk; c++) {
             const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
             double eb = 0.0;
-            for (int i = c * B; i < i1; i++) eb += lps_row(b, x, f, i, kd, NULL, NULL, NULL, per);
+            for (int i = c * B; i < i1; i++) eb += lps_row(b, x, f, i, kd, NULL, NULL, NULL, NULL, per);
             energy += eb;
         }
         return energy;
@@ -854,11 +883,11 @@ static inline double lps_forces_impl(floe_pd_body *b, const double *x, double *f
             for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
                 const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
                 double eb = 0.0;
-                for (int i = c * B; i < i1; i++) eb += lps_row(b, x, f, i, kd, P->g, P->row, own, per);
+                for (int i = c * B; i < i1; i++) eb += lps_row(b, x, f, i, kd, P->g, P->row, own, P->gslot, per);
                 P->blk[c] = eb;
             }
         FLOE_OMP(omp for schedule(static))
-        for (int e = 0; e < P->nborder; e++) pd_gather_f(b, P, P->border[e], f, 3, NULL);
+        for (int e = 0; e < P->nborder; e++) pd_gather_f(P, e, f, 3, NULL);
     }
     for (int c = 0; c < nblk; c++) energy += P->blk[c];
     return energy;

@@ -23,7 +23,7 @@ typedef struct floe_pd_par {
     int64_t *roff, *rk;   /* the bonds whose partner is p: rk[roff[p] .. roff[p + 1]), ascending */
     int n;                /* points and bonds the reverse index was built for */
     int64_t nbond;
-    double *g; size_t g_cap;     /* per bond: its share of the partner (stride set by the loop) */
+    double *g; size_t g_cap;     /* per border bond: its share of the partner (stride set by the loop) */
     double *row; size_t row_cap; /* per point: its row's sums */
     double *blk; int64_t *blkn; int blk_cap; /* per block of rows: energy, broken bonds */
     /* parts of part_blocks consecutive blocks of rows, each on one thread in order; own[p]
@@ -32,6 +32,10 @@ typedef struct floe_pd_par {
      * only the points on the parts' borders go through g, row and the gather */
     uint8_t *own;
     int *border, nborder; /* the points not owned, ascending: the gather's work, split evenly */
+    /* g holds the shares of the bonds whose partner is a border point only, border point e's
+     * in slots [bslot[e], bslot[e + 1]) in increasing bond index, those of the rows below its
+     * own before bsplit[e]; gslot[k] is bond k's slot (-1: its partner is owned) */
+    int32_t *gslot; int64_t *bslot, *bsplit, nslot;
     int part_blocks;
 } floe_pd_par;
 

@@ -154,12 +154,15 @@ static int run(int kind, int threads, int steps, run_out *o) {
     const int beams = kind == BEAM_2D || kind == BEAM_3D;
     floe_world *w = beams ? beam_world(kind) : pd_world(kind);
     if (!w) return 1;
-    if (floe_world_set_threads(w, threads) || floe_world_prepare(w)) {
+    /* threads < 0: 2, 4, 1 and 3 threads by quarters of the run (the parts cut again) */
+    const int seq[4] = {2, 4, 1, 3};
+    if (floe_world_set_threads(w, threads < 0 ? seq[0] : threads) || floe_world_prepare(w)) {
         fprintf(stderr, "%s\n", floe_world_last_error(w));
         floe_world_destroy(w);
         return 1;
     }
     for (int s = 0; s < steps; s++) {
+        if (threads < 0 && s % (steps / 4) == 0 && s / (steps / 4) < 4) floe_world_set_threads(w, seq[s / (steps / 4)]);
         if (floe_world_step(w)) {
             fprintf(stderr, "step %d: %s\n", s, floe_world_last_error(w));
             floe_world_destroy(w);
@@ -252,6 +255,15 @@ static void compare(int kind, int steps) {
         CHECK(o.nbroken == ref.nbroken && o.nflags == ref.nflags && !memcmp(o.flags, ref.flags, ref.nflags),
               "%s: %d threads: the same bonds broken (%lld vs %lld)", what, t, o.nbroken, ref.nbroken);
         CHECK(o.ncontacts == ref.ncontacts, "%s: %d threads: contacts %d vs %d", what, t, o.ncontacts, ref.ncontacts);
+        free(o.state);
+        free(o.flags);
+    }
+    if (!beams) { /* the thread count changed during the run */
+        memset(&o, 0, sizeof o);
+        CHECK(run(kind, -1, steps, &o) == 0, "%s: 2, 4, 1, 3 threads in turn run", what);
+        CHECK(o.nstate == ref.nstate && !memcmp(o.state, ref.state, ref.nstate * sizeof(double)) &&
+                  !memcmp(&o.e, &ref.e, sizeof o.e) && o.nbroken == ref.nbroken,
+              "%s: 2, 4, 1, 3 threads in turn: the same bits as one", what);
         free(o.state);
         free(o.flags);
     }
