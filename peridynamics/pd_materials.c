@@ -85,8 +85,8 @@ static double pmb_c(const floe_pd_body *b) { return b->c; }
  * blocks per thread: a point whose every row lies in one part (P->own) gets its shares where
  * the serial loop adds them, from that part's thread; for the others (the parts' borders)
  * each bond's share of j goes into P->g and each row's sums into P->row, and the point then
- * gathers them in the order of the serial loop (pd_gather): the same additions, the same bits. A bond that adds nothing
- * stores +0 for a subtraction (x - +0 = x) and -0 for an addition (x + -0 = x), for every x.
+ * gathers them in the order of the serial loop (pd_gather): the same additions, the same
+ * bits. A bond that adds nothing stores +0 for a subtraction (x - +0 = x) and -0 for an addition (x + -0 = x), for every x.
  * Energies and broken counts are summed per block of FLOE_PD_ROW_BLOCK rows and the blocks in
  * order, on one thread too. */
 
@@ -123,9 +123,6 @@ static int pd_grow(void **ptr, size_t need, size_t *cap, size_t size)
     return 0;
 }
 
-/* The buffers of a threaded evaluation, gs doubles per bond and rs per point, and the
- * reverse index (built again when the bonds changed); NULL when out of memory: the caller
- * then runs the serial loop, which gives the same bits. */
 /* the row whose bonds hold bond k (b->off ascending) */
 static int pd_row_of(const floe_pd_body *b, int64_t k)
 {
@@ -138,6 +135,10 @@ static int pd_row_of(const floe_pd_body *b, int64_t k)
     return lo;
 }
 
+/* The buffers of a threaded evaluation on nt threads: the parts, the owned and border
+ * points, gs doubles per border bond and rs per point (cut again when the bonds or the
+ * thread count changed); NULL when out of memory: the caller then runs the serial loop,
+ * which gives the same bits. */
 static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs, int nt)
 {
     if (!b->par && !(b->par = calloc(1, sizeof *b->par))) return NULL;
@@ -241,8 +242,9 @@ static inline __attribute__((always_inline)) void pd_bond_vec(const double *x, i
     }
 }
 
-/* Point q's sums in the serial loop's order: v[0 .. gs) (from v's values: f, or 0) gets the
- * shares of the bonds whose partner q is, in increasing k, added (sub = 0) or subtracted
+/* Border point q = P->border[eb]'s sums in the serial loop's order: v[0 .. gs) (from v's
+ * values: f, or 0) gets the shares of the bonds whose partner q is (its slots), in
+ * increasing k, added (sub = 0) or subtracted
  * (sub = 1), and q's own row sums row[0 .. gs) where the serial loop adds them: after the
  * bonds of the rows below q, before those of rows above (none: every partner is above its
  * row). With mx (PMB alpha) the shares' and the row's slot gs is a maximum (first of equal
