@@ -148,10 +148,21 @@ static void test_none(void)
  * spheres at rest overlapping by 20 um feel nothing under "none", then the linear law's
  * kn d as soon as it is set (without the rebuild on law_gen they would wait for a drift of
  * half the skin: never, at rest; the pair then stays unlisted: tried) */
-static void test_none_then_law(void)
+static void test_none_then_law(int other)
 {
     int a, b;
     floe_world *w = two_spheres(floe_no_contact_law_create(), -2e-5, 0.0, 0.2, &a, &b);
+    if (other) { /* a sphere of a second material, 1 m away, that material 0 touches: 0 is not
+                  * inert, its spheres search, and the pair under "none" is left out itself */
+        floe_material m1 = {"other", 2500, 1e7, 0.25};
+        const int mat1 = floe_world_add_material(w, &m1);
+        CHECK(floe_world_set_law(w, 0, mat1, floe_linear_law_create(1e3, 0, 0, 0, 0)) == FLOE_OK, "law 0-1");
+        floe_particle_def pd = floe_default_particle_def();
+        pd.geometry = 0;
+        pd.material = mat1;
+        floe_v3_set(pd.x, 1.0, 0, 0);
+        CHECK(floe_world_add_particle(w, &pd) >= 0, "the other sphere");
+    }
     CHECK(floe_world_set_dt(w, 1e-5, 0) == FLOE_OK, "dt: %s", floe_world_last_error(w)); /* the law's period ~3e-3 s */
     CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
     const long rb0 = w->nl.rebuilds;
@@ -160,8 +171,8 @@ static void test_none_then_law(void)
     floe_particle_state sa, sb;
     floe_world_get_particle(w, a, &sa);
     CHECK(sa.f[0] == 0 && floe_world_contact_count(w) == 0, "none: no force before the law (f %g)", sa.f[0]);
-    CHECK(w->nl.npairs == 0, "none: the pair is not listed (%d entries, law gen %ld, built at %ld)", w->nl.npairs,
-          w->law_gen, w->nl_law_gen);
+    CHECK(w->nl.npairs == 0, "none (%s): the pair is not listed (%d entries)",
+          other ? "a searching material" : "an inert material", w->nl.npairs);
     const double kn = 1e3;
     CHECK(floe_world_set_law(w, 0, 0, floe_linear_law_create(kn, 0, 0, 0, 0)) == FLOE_OK, "set_law");
     CHECK(w->law_gen != w->nl_law_gen, "set_law: the list is due for a rebuild");
@@ -283,7 +294,8 @@ int main(void)
     test_formula();
     test_world();
     test_none();
-    test_none_then_law();
+    test_none_then_law(0);
+    test_none_then_law(1);
     test_pd_blocks();
     test_scene();
     return check_summary("test_short_range");

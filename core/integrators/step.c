@@ -219,7 +219,7 @@ static void advance_clock(floe_world *w) {
 
 static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb) {
     if (w->par) return floe_par_refresh(w, maxd2, have_xb); /* MPI: all ranks, ghosts (core/parallel) */
-    /* a law set since the build: pairs under the law "none" were left out (world_exclude) */
+    /* a law set since the build: pairs under the law "none" were left out (neighbor.c) */
     if (w->law_gen != w->nl_law_gen || (w->cell ? floe_nl_needs_rebuild_cell(&w->nl, &w->p)
                 : floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0))) {
         int rc = floe_world_nl_build(w);

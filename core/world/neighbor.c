@@ -127,9 +127,11 @@ static int search_one(const nl_search *S, struct floe_nl_found *fd, int a) {
     const double *bx = S->bx;
     const int mr = cell ? 1 : 0, mz = cell && dim == 3 ? 1 : 0;
     const int i = bidx[a];
-    /* a particle that touches nothing present searches for nothing (world.c inert_materials);
-     * those that may touch it skip it in the exclusion (world_exclude) */
+    /* the law "none" (world.c inert_materials): a particle that touches nothing present
+     * searches for nothing; the others skip the pairs under it, before the exclusions (a PD
+     * bond's lookup) */
     if (nl->inert && nl->inert[p->material[i]]) return FLOE_OK;
+    const unsigned char *none_i = nl->none ? nl->none + (size_t)p->material[i] * nl->nmat : NULL;
     const double reach = 2 * p->radius[i] + S->skin;
     for (int m0 = -mr; m0 <= mr; m0++)
       for (int m1 = -mr; m1 <= mr; m1++)
@@ -163,6 +165,7 @@ static int search_one(const nl_search *S, struct floe_nl_found *fd, int a) {
         for (int k = 0; k < cnt; k++) {
             const int b = fd->scr[k], j = bidx[b];
             if (p->radius[j] > p->radius[i] || (p->radius[j] == p->radius[i] && j <= i)) continue;
+            if (none_i && none_i[p->material[j]]) continue;
             /* two particles that do not move under forces are never paired; a ghost (MPI) is
              * stored FLOE_FIXED, its true motion is free when its mass is not infinite */
             if (p->motion[i] != FLOE_FREE && p->motion[j] != FLOE_FREE &&

@@ -156,39 +156,41 @@ int floe_world_loop_threads(const floe_world *w, long items) {
     return floe_world_threads(w);
 }
 
-/* the materials whose particles touch nothing in the store (the law "none" with every
- * material present, walls included) into w->inert; NULL when there are none such */
-static const unsigned char *inert_materials(floe_world *w) {
+/* the list's view of the law "none" (floe_neighbor_list.none, .inert): the pairs of
+ * materials under it, and the materials whose particles touch nothing in the store (the law
+ * "none" with every material present, walls included); both NULL when no law is "none" */
+static void inert_materials(floe_world *w) {
     const int nm = w->nmats, n = w->p.n;
+    w->nl.none = w->nl.inert = NULL;
+    w->nl.nmat = nm;
     int any_none = 0;
     for (int k = 0; k < nm * nm && !any_none; k++) any_none = floe_contact_law_no_contact(w->laws[k]);
-    w->nl_any_none = any_none;
-    if (!any_none || nm <= 0) return NULL;
-    if (2 * nm > w->inert_cap) {
-        unsigned char *t = realloc(w->inert, (size_t)(2 * nm));
-        if (!t) return NULL; /* the search then pairs them, and the stage skips their pairs */
+    if (!any_none) return;
+    if (nm * nm + 2 * nm > w->inert_cap) {
+        unsigned char *t = realloc(w->inert, (size_t)(nm * nm + 2 * nm));
+        if (!t) return; /* the search then pairs them, and the stage skips their pairs */
         w->inert = t;
-        w->inert_cap = 2 * nm;
+        w->inert_cap = nm * nm + 2 * nm;
     }
-    unsigned char *present = w->inert + nm, *inert = w->inert;
+    unsigned char *inert = w->inert, *present = inert + nm, *none = present + nm;
+    for (int k = 0; k < nm * nm; k++) none[k] = (unsigned char)floe_contact_law_no_contact(w->laws[k]);
     memset(present, 0, (size_t)nm);
     for (int i = 0; i < n; i++) {
         const int m = w->p.material[i];
         if (m >= 0 && m < nm) present[m] = 1;
     }
-    int any = 0;
     for (int a = 0; a < nm; a++) {
         inert[a] = 1;
         for (int b = 0; b < nm && inert[a]; b++)
-            if (present[b] && !floe_contact_law_no_contact(w->laws[a * nm + b])) inert[a] = 0;
-        any |= inert[a];
+            if (present[b] && !none[a * nm + b]) inert[a] = 0;
     }
-    return any ? inert : NULL;
+    w->nl.none = none;
+    w->nl.inert = inert;
 }
 
 int floe_world_nl_build(floe_world *w) {
     int nt = floe_world_loop_threads(w, w->p.n);
-    w->nl.inert = inert_materials(w);
+    inert_materials(w);
     w->nl_law_gen = w->law_gen;
     /* the search calls the providers' excludes from every thread: a user's on one thread
      * (floe_provider.h does not ask it to be thread-safe) */

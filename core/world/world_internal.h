@@ -63,9 +63,11 @@ typedef struct floe_neighbor_list {
      * gid NULL: serial */
     const long long *gid;
     int own_hi;
-    /* optional, per material: 1 when its particles touch nothing present (the law "none"
-     * with every material of the store): they search for no pairs (floe_world_nl_build) */
-    const unsigned char *inert;
+    /* optional (set by floe_world_nl_build when a law is "none"): none[a * nmat + b] = 1 for
+     * the materials a, b under the law "none", whose pairs are never listed; inert[a] = 1 when
+     * a's particles touch nothing present: they search for no pairs */
+    const unsigned char *none, *inert;
+    int nmat;
 } floe_neighbor_list;
 
 struct floe_world {
@@ -79,8 +81,7 @@ struct floe_world {
     /* pairs under the law "none" stay out of the list (world_exclude, nl.inert): a law set
      * after a build makes the next step rebuild (law_gen != nl_law_gen) */
     long law_gen, nl_law_gen;
-    unsigned char *inert; int inert_cap;
-    int nl_any_none; /* a law "none" at the last build: world_exclude looks the pair's law up */
+    unsigned char *inert; int inert_cap; /* nl.none and nl.inert (world.c inert_materials) */
     floe_contact_law **law_owned; int nlaws_owned, law_owned_cap;
     floe_motion_cb *motions; int nmotions, motions_cap;
     int *motion_idx; int motion_idx_n, motion_idx_cnt; /* particle -> motion callback (world.c) */

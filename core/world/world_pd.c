@@ -35,12 +35,10 @@ int floe_pd_pair_excluded(const floe_world *w, int i, int j) {
     return b->len[k] < w->p.radius[i] + w->p.radius[j];
 }
 
-/* the pairs that never enter the contact list: pairs under the law "none", bonded PD
- * family members (pd_exclude) and particles held by an intact beam bond */
+/* the pairs that never enter the contact list: bonded PD family members (pd_exclude) and
+ * particles held by an intact beam bond (pairs under the law "none": neighbor.c) */
 static int world_exclude(const void *ctx, int i, int j) {
     const floe_world *w = ctx;
-    /* a pair under the law "none" (the stage would skip it): cheaper than a bond's lookup */
-    if (w->nl_any_none && floe_contact_law_no_contact(w->laws[w->p.material[i] * w->nmats + w->p.material[j]])) return 1;
     if (w->nprov) { /* the providers that hold pairs (PD families, beam bonds, ...) */
         for (int k = 0; k < w->nprov; k++) {
             const floe_provider *pv = w->prov[k];
