@@ -1019,24 +1019,48 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         ps->hit = hit;
         ps->adj_gen = nl->gen;
         ps->adj_np = n;
-        ps->part_blocks = 0; /* own[] below */
+        ps->pb_nt = 0; /* parts and own[] below */
     }
-    /* parts of about nb / (4 nt) blocks (a few per thread: the dynamic schedule balances
-     * them), at most 64 blocks (32,768 entries: a large list whose work is uneven, as a
-     * projectile's impact region in bench/pd-impact, stays balanced); a particle is owned
-     * by a part when every entry it is i or j of lies in it: the thread of that part is then
-     * its only writer, and adds its forces in list order */
-    int G = nb > 4 * nt ? (nb + 4 * nt - 1) / (4 * nt) : 1;
-    if (G > 64) G = 64;
-    if (ps->part_blocks != G) {
-        unsigned char *own = realloc(ps->own, (size_t)(n ? n : 1));
+    /* one part per thread: a run of blocks that one thread takes in order, the same thread
+     * every evaluation (a schedule by hand, not dynamic), so that the particles of a part stay
+     * in that core's caches from one step to the next. Handed out dynamically (a few parts per
+     * thread, as before 2026-12-03), a part and its particles' cache lines moved between the
+     * cores from step to step: the §5.3 RVE on two threads ran 1.17x faster with these
+     * (bench/RESULTS.md, "Issue 14, session 7"). The parts are cut at a build so that each
+     * gets the same estimated work: the rows of a run of particles, each particle 4 (its
+     * share of the integrator's loops), each entry of its row 1 (the bounding-sphere test) and
+     * 16 more when the pair touches (its history carried over from the last build: a touching
+     * sphere pair costs about 16 tests); the cut at the nearest block. A particle is owned by
+     * a part when every entry it is i or j of lies in it: the thread of that part is then its
+     * only writer, and adds its forces in list order */
+    if (ps->pb_nt != nt || ps->pb_nb != nb || ps->pb_gen != nl->gen) {
+        int *pb = realloc(ps->pb, (size_t)(nt + 1) * sizeof *pb);
+        unsigned char *own = pb ? realloc(ps->own, (size_t)(n ? n : 1)) : NULL;
+        if (pb) ps->pb = pb;
         if (!own) return FLOE_ENOMEM;
         ps->own = own;
+        const unsigned char *touching = nl->touching;
+        const int *row = ps->row, B = FLOE_PAR_BLOCK;
+        double tot = 4.0 * n;
+        for (int k = 0; k < npairs; k++) tot += 1.0 + 16.0 * (touching[k] != 0);
+        /* part t starts at the row of the first particle before which the work reaches t / nt
+         * of the whole, rounded to the nearest block */
+        pb[0] = 0;
+        double acc = 0;
+        int t = 1;
+        for (int i = 0; i < n && t < nt; i++) {
+            acc += 4.0;
+            for (int k = row[i]; k < row[i + 1]; k++) acc += 1.0 + 16.0 * (touching[k] != 0);
+            for (; t < nt && acc >= tot * t / nt; t++) {
+                const int bt = (row[i + 1] + B / 2) / B;
+                pb[t] = bt > nb ? nb : bt < pb[t - 1] ? pb[t - 1] : bt;
+            }
+        }
+        for (; t <= nt; t++) pb[t] = nb;
         /* flags a failed evaluation left (no gather ran) would make a particle owned now
          * gather its buffered entries again */
         memset(ps->hit, 0, (size_t)(n ? n : 1));
-        const int *row = ps->row, *off = ps->adj_off, *adj = ps->adj;
-        const long span = (long)G * FLOE_PAR_BLOCK;
+        const int *off = ps->adj_off, *adj = ps->adj;
         for (int i = 0; i < n; i++) {
             int lo = INT_MAX, hi = -1;
             if (row[i + 1] > row[i]) { lo = row[i]; hi = row[i + 1] - 1; }
@@ -1044,9 +1068,16 @@ static int par_prepare(floe_world *w, int nt, int nb) {
                 if (adj[off[i]] < lo) lo = adj[off[i]];
                 if (adj[off[i + 1] - 1] > hi) hi = adj[off[i + 1] - 1];
             }
-            own[i] = hi < 0 || lo / span == hi / span;
+            int same = 1;
+            if (hi >= 0) { /* no part boundary between the blocks of lo and hi */
+                const int blo = lo / FLOE_PAR_BLOCK, bhi = hi / FLOE_PAR_BLOCK;
+                for (int q = 1; q < nt && same; q++) same = !(blo < pb[q] && pb[q] <= bhi);
+            }
+            own[i] = (unsigned char)same;
         }
-        ps->part_blocks = G;
+        ps->pb_nt = nt;
+        ps->pb_nb = nb;
+        ps->pb_gen = nl->gen;
     }
     for (int t = 0; t < nt; t++) { /* the detection statistics of this evaluation, per thread */
         floe_detect_state *d = &ps->det[t];
@@ -1164,14 +1195,11 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
             te.dctx = &td;
             floe_world_error_to(ps->err[t], sizeof ps->err[t]);
             int failed = 0;
-            /* parts (runs of ps->part_blocks blocks) handed out in increasing order (dynamic):
-             * the lowest failed block is still the first error, and a dense region does not
-             * hold one thread back; a part's blocks in order on one thread, which applies the
-             * forces of the particles it owns (ps->own) directly */
-            const int G = ps->part_blocks, nparts = (nb + G - 1) / G;
-            FLOE_OMP(omp for schedule(dynamic, 1))
-            for (int part = 0; part < nparts; part++)
-            for (int b = part * G; b < (part + 1) * G && b < nb; b++) {
+            /* thread t's part: its blocks in order (par_prepare); the lowest failed block of
+             * all threads is the first error */
+            const int nth = floe_par_nthreads();
+            for (int part = t; part < nt; part += nth)
+            for (int b = ps->pb[part]; b < ps->pb[part + 1]; b++) {
                 if (failed) continue; /* this thread's first error is the one its blocks met first */
                 /* the block's sums on this thread's stack (blocks side by side in ps->blk share
                  * cache lines: updated per pair, they bounced between the cores) */
@@ -1471,8 +1499,9 @@ const floe_provider_class floe_pd_provider_class = {
  * After an RK2 midpoint probe the copy of the probe is kept: the contact history (its last
  * force) was put back to the step's start, and the accelerations must be of the same
  * evaluation. */
-static int dashpot_accelerations(floe_world *w, const floe_step_ctx *ctx) {
+static int dashpot_accelerations(floe_world *w, const floe_step_ctx *ctx, int *dash) {
     const floe_particles *p = &w->p;
+    *dash = 0;
     int want = 0;
     for (int k = 0; k < w->nmats * w->nmats && !want; k++)
         want = w->laws[k] && floe_contact_law_info(w->laws[k]).linear_gn > 0;
@@ -1487,11 +1516,28 @@ static int dashpot_accelerations(floe_world *w, const floe_step_ctx *ctx) {
         w->dash_a = t;
         w->dash_cap = n3;
     }
-    if (!keep)
-        for (int i = 0; i < p->n; i++)
-            for (int a = 0; a < 3; a++) w->dash_a[3 * i + a] = p->f[3 * i + a] * p->inv_mass[i];
     w->dash_on = 1;
+    *dash = !keep; /* forces_clear computes them */
     return FLOE_OK;
+}
+
+/* the DEM group's start: the accelerations of the last evaluation into dash_a (dash: from
+ * dashpot_accelerations), then the forces and torques cleared (on threads: the serial
+ * loop and memset were a tenth of a threaded RVE step on one core) */
+static void forces_clear(floe_world *w, int dash) {
+    floe_particles *p = &w->p;
+    const int n = p->n, B = FLOE_PAR_BLOCK, nb = (n + B - 1) / B, nt = floe_world_loop_threads(w, n);
+    double *f = p->f, *t = p->t, *da = w->dash_a;
+    const double *im = p->inv_mass;
+    FLOE_OMP(omp parallel for schedule(static) num_threads(nt) if (nt > 1))
+    for (int b = 0; b < nb; b++) {
+        const int i0 = b * B, i1 = i0 + B < n ? i0 + B : n;
+        if (dash)
+            for (int i = i0; i < i1; i++)
+                for (int a = 0; a < 3; a++) da[3 * i + a] = f[3 * i + a] * im[i];
+        memset(f + 3 * (size_t)i0, 0, (size_t)(i1 - i0) * 3 * sizeof(double));
+        memset(t + 3 * (size_t)i0, 0, (size_t)(i1 - i0) * 3 * sizeof(double));
+    }
 }
 
 int floe_world_forces(floe_world *w, const floe_step_ctx *ctx, int groups) {
@@ -1500,11 +1546,9 @@ int floe_world_forces(floe_world *w, const floe_step_ctx *ctx, int groups) {
     const int stepping = ctx->stepping;
     floe_provider_out od = {0, 0, 0, 0}, op = {0, 0, 0, 0};
     if (groups & FLOE_GROUP_DEM) {
-        FLOE_TRY(dashpot_accelerations(w, ctx));
-        if (n > 0) {
-            memset(p->f, 0, (size_t)n * 3 * sizeof(double));
-            memset(p->t, 0, (size_t)n * 3 * sizeof(double));
-        }
+        int dash;
+        FLOE_TRY(dashpot_accelerations(w, ctx, &dash));
+        if (n > 0) forces_clear(w, dash);
         w->ncontacts = 0;
     }
     for (int k = 0; k < w->nprov; k++) {

@@ -202,9 +202,12 @@ typedef struct floe_par_scratch {
     int *adj, *adj_off; size_t adj_cap; int adj_np; long adj_gen; /* per particle: the entries it is
                                                        j of, in list order (adj_off: n + 1 offsets) */
     int *row;                                        /* n + 1: entries [row[i], row[i+1]) have pi = i */
-    unsigned char *own; int part_blocks;             /* per particle: every entry of it lies in one part
-                                                       of part_blocks blocks (its thread adds its forces
-                                                       directly; forces.c par_prepare) */
+    unsigned char *own;                              /* per particle: every entry of it lies in one part
+                                                       (its thread adds its forces directly; forces.c
+                                                       par_prepare) */
+    int *pb; int pb_nt, pb_nb; long pb_gen;          /* the parts: part t is blocks [pb[t], pb[t+1]) on
+                                                       thread t, cut for pb_nt threads and pb_nb blocks
+                                                       of the list of build pb_gen (par_prepare) */
     struct stage_acc *blk; int blk_cap;              /* per block (forces.c) */
     floe_detect_state *det; int ndet;                /* per thread */
     char (*err)[1024]; int *fail_b, *fail_rc; int nerr;
