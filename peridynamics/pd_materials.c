@@ -146,11 +146,15 @@ static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs, int nt)
     const int n = b->n;
     const int64_t nb = b->nbond;
     const int nblk = (n + FLOE_PD_ROW_BLOCK - 1) / FLOE_PD_ROW_BLOCK;
-    /* two parts per thread, handed out in order (dynamic): the border points (those a row of
-     * another part adds to) are few when the points are numbered layer by layer (a body's
-     * lattice); measured on bench/pd-impact with 2 threads, 4 parts ran 1.15-1.25x faster than
-     * 2 (a region breaking unbalances them) and 1.1-1.2x faster than 8 (more border) */
-    const int G = (nblk + 2 * nt - 1) / (2 * nt);
+    /* one part per thread, the same thread's at every evaluation (schedule(static) below):
+     * its points' cache lines stay in that core's caches from one step to the next. The
+     * border points (those a row of another part adds to) are few when the points are
+     * numbered layer by layer (a body's lattice). Until session 7 there were two parts per
+     * thread handed out dynamically (on bench/pd-impact 1.15-1.25x faster than one part per
+     * thread on the dynamic schedule, a breaking region unbalancing them); the fixed parts ran
+     * pd-impact's 2-thread steps 1.0-1.25x faster than those (bench/RESULTS.md, "Issue 14,
+     * session 7"): moving a part between the cores cost more than the imbalance */
+    const int G = (nblk + nt - 1) / nt;
     /* the reverse index (kept only while the parts are cut: its bond list is freed after) */
     if (!P->roff || P->n != n || P->nbond != nb || (P->part_blocks != G && !P->rk)) {
         free(P->roff); /* a failure below leaves the index unbuilt */
@@ -411,7 +415,7 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
                 for (int q = 0; q < n; q++)
                     if (own[q]) s0n[q] = -INFINITY;
             }
-            FLOE_OMP(omp for schedule(dynamic, 1))
+            FLOE_OMP(omp for schedule(static))
             for (int pt = 0; pt < nparts; pt++)
                 for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
                     const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
@@ -514,7 +518,7 @@ static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
         const int G = P->part_blocks, nparts = (nblk + G - 1) / G;
         FLOE_OMP(omp parallel num_threads(nt))
         {
-            FLOE_OMP(omp for schedule(dynamic, 1))
+            FLOE_OMP(omp for schedule(static))
             for (int pt = 0; pt < nparts; pt++)
                 for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
                     const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
@@ -752,7 +756,7 @@ static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, cons
                 th[q] = 0;
                 if (p) p[q] = mi[q] = 0;
             }
-        FLOE_OMP(omp for schedule(dynamic, 1))
+        FLOE_OMP(omp for schedule(static))
         for (int pt = 0; pt < nparts; pt++)
             for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
                 const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
@@ -880,7 +884,7 @@ static inline double lps_forces_impl(floe_pd_body *b, const double *x, double *f
     const int G = P->part_blocks, nparts = (nblk + G - 1) / G;
     FLOE_OMP(omp parallel num_threads(nt))
     {
-        FLOE_OMP(omp for schedule(dynamic, 1))
+        FLOE_OMP(omp for schedule(static))
         for (int pt = 0; pt < nparts; pt++)
             for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
                 const int i1 = (c + 1) * B < n ? (c + 1) * B : n;

@@ -16,8 +16,8 @@
 
 /* Rows per block: fixed (not the thread count's), and smaller than FLOE_PAR_BLOCK because a
  * row holds tens of bonds (about 14 in 2D, 60 in 3D at a horizon of 3 dx): a body of 5,000
- * points gives its threads 40 blocks to share, not 10. The blocks are also the threads'
- * unit of work (handed out in increasing order). */
+ * points gives its threads 40 blocks to share, not 10. A thread's part is a run of them
+ * (pd_materials.c pd_par_get). */
 #define FLOE_PD_ROW_BLOCK 128
 typedef struct floe_pd_par {
     int64_t *roff, *rk;   /* the bonds whose partner is p: rk[roff[p] .. roff[p + 1]), ascending */
