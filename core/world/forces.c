@@ -955,6 +955,14 @@ static void acc_merge(floe_world *w, stage_acc *tot, const stage_acc *a) {
     if (a->wd_min < w->wd_worst) { w->wd_worst = a->wd_min; w->wd_worst_i = a->wd_i; w->wd_worst_j = a->wd_j; }
 }
 
+/* the estimated work of entry k for cutting the threads' parts (par_prepare): the bounding-
+ * sphere test 1, a touching pair of spheres 16 more, any other touching pair (a wall, a
+ * shape's detection: contact_pair) 48 more */
+static inline double part_weight(const floe_particles *p, const floe_neighbor_list *nl, int k) {
+    if (!nl->touching[k]) return 1.0;
+    return p->kind[nl->pi[k]] == FLOE_GEOM_SPHERE && p->kind[nl->pj[k]] == FLOE_GEOM_SPHERE ? 17.0 : 49.0;
+}
+
 /* the buffers for nt threads, nb blocks, the list's entries and n particles; the particles'
  * entries rebuilt after each list build */
 static int par_prepare(floe_world *w, int nt, int nb) {
@@ -1028,9 +1036,8 @@ static int par_prepare(floe_world *w, int nt, int nb) {
      * cores from step to step: the §5.3 RVE on two threads ran 1.17x faster with these
      * (bench/RESULTS.md, "Issue 14, session 7"). The parts are cut at a build so that each
      * gets the same estimated work: the rows of a run of particles, each particle 4 (its
-     * share of the integrator's loops), each entry of its row 1 (the bounding-sphere test) and
-     * 16 more when the pair touches (its history carried over from the last build: a touching
-     * sphere pair costs about 16 tests); the cut at the nearest block. A particle is owned by
+     * share of the integrator's loops), each entry of its row by part_weight (its touching flag
+     * carried over from the last build); the cut at the nearest block. A particle is owned by
      * a part when every entry it is i or j of lies in it: the thread of that part is then its
      * only writer, and adds its forces in list order */
     if (ps->pb_nt != nt || ps->pb_nb != nb || ps->pb_gen != nl->gen) {
@@ -1039,10 +1046,9 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         if (pb) ps->pb = pb;
         if (!own) return FLOE_ENOMEM;
         ps->own = own;
-        const unsigned char *touching = nl->touching;
         const int *row = ps->row, B = FLOE_PAR_BLOCK;
         double tot = 4.0 * n;
-        for (int k = 0; k < npairs; k++) tot += 1.0 + 16.0 * (touching[k] != 0);
+        for (int k = 0; k < npairs; k++) tot += part_weight(&w->p, nl, k);
         /* part t starts at the row of the first particle before which the work reaches t / nt
          * of the whole, rounded to the nearest block */
         pb[0] = 0;
@@ -1050,7 +1056,7 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         int t = 1;
         for (int i = 0; i < n && t < nt; i++) {
             acc += 4.0;
-            for (int k = row[i]; k < row[i + 1]; k++) acc += 1.0 + 16.0 * (touching[k] != 0);
+            for (int k = row[i]; k < row[i + 1]; k++) acc += part_weight(&w->p, nl, k);
             for (; t < nt && acc >= tot * t / nt; t++) {
                 const int bt = (row[i + 1] + B / 2) / B;
                 pb[t] = bt > nb ? nb : bt < pb[t - 1] ? pb[t - 1] : bt;
