@@ -1033,7 +1033,7 @@ static int par_prepare(floe_world *w, int nt, int nb) {
      * every evaluation (a schedule by hand, not dynamic), so that the particles of a part stay
      * in that core's caches from one step to the next. Handed out dynamically (a few parts per
      * thread, as before 2026-12-03), a part and its particles' cache lines moved between the
-     * cores from step to step: the §5.3 RVE on two threads ran 1.17x faster with these
+     * cores from step to step: the §5.3 RVE on two threads ran 1.16-1.21x faster with these
      * (bench/RESULTS.md, "Issue 14, session 7"). The parts are cut at a build so that each
      * gets the same estimated work: the rows of a run of particles, each particle 4 (its
      * share of the integrator's loops), each entry of its row by part_weight (its touching flag
@@ -1528,8 +1528,9 @@ static int dashpot_accelerations(floe_world *w, const floe_step_ctx *ctx, int *d
 }
 
 /* the DEM group's start: the accelerations of the last evaluation into dash_a (dash: from
- * dashpot_accelerations), then the forces and torques cleared (on threads: the serial
- * loop and memset were a tenth of a threaded RVE step on one core) */
+ * dashpot_accelerations), then the forces and torques cleared; on the threads, each its even
+ * share of the particles, as the integrator's loops (one thread clearing them all pulled
+ * every particle's force into its core's caches, for the other thread to pull back) */
 static void forces_clear(floe_world *w, int dash) {
     floe_particles *p = &w->p;
     const int n = p->n, B = FLOE_PAR_BLOCK, nb = (n + B - 1) / B, nt = floe_world_loop_threads(w, n);
