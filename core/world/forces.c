@@ -1040,7 +1040,7 @@ static int par_prepare(floe_world *w, int nt, int nb) {
      * carried over from the last build); the cut at the nearest block. A particle is owned by
      * a part when every entry it is i or j of lies in it: the thread of that part is then its
      * only writer, and adds its forces in list order */
-    if (ps->pb_nt != nt || ps->pb_nb != nb || ps->pb_gen != nl->gen) {
+    if (ps->pb_nt != nt || ps->pb[nt] != nb || ps->pb_gen != nl->gen) {
         int *pb = realloc(ps->pb, (size_t)(nt + 1) * sizeof *pb);
         unsigned char *own = pb ? realloc(ps->own, (size_t)(n ? n : 1)) : NULL;
         if (pb) ps->pb = pb;
@@ -1082,7 +1082,6 @@ static int par_prepare(floe_world *w, int nt, int nb) {
             own[i] = (unsigned char)same;
         }
         ps->pb_nt = nt;
-        ps->pb_nb = nb;
         ps->pb_gen = nl->gen;
     }
     for (int t = 0; t < nt; t++) { /* the detection statistics of this evaluation, per thread */

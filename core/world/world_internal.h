@@ -205,9 +205,10 @@ typedef struct floe_par_scratch {
     unsigned char *own;                              /* per particle: every entry of it lies in one part
                                                        (its thread adds its forces directly; forces.c
                                                        par_prepare) */
-    int *pb; int pb_nt, pb_nb; long pb_gen;          /* the parts: part t is blocks [pb[t], pb[t+1]) on
-                                                       thread t, cut for pb_nt threads and pb_nb blocks
-                                                       of the list of build pb_gen (par_prepare) */
+    int *pb; int pb_nt; long pb_gen;                 /* the parts: part t is blocks [pb[t], pb[t+1]) on
+                                                       thread t, cut for pb_nt threads (pb[pb_nt]: the
+                                                       blocks) and the list of build pb_gen
+                                                       (par_prepare); pb_nt 0: not cut */
     struct stage_acc *blk; int blk_cap;              /* per block (forces.c) */
     floe_detect_state *det; int ndet;                /* per thread */
     char (*err)[1024]; int *fail_b, *fail_rc; int nerr;
