@@ -212,8 +212,8 @@ static int nl_reserve(floe_neighbor_list *nl, size_t need) {
 
 /* The found entries of every thread into the list, sorted by (i, j, piece pair, image): a
  * counting sort by i, then each row by the rest (the order does not depend on which thread
- * found what, nor in which order). */
-static int nl_collect(floe_neighbor_list *nl, int n, int nt) {
+ * found what, nor in which order). *rowp: the rows' offsets, n + 1 (the caller frees). */
+static int nl_collect(floe_neighbor_list *nl, int n, int nt, int **rowp) {
     size_t tot = 0;
     for (int t = 0; t < nt; t++) tot += nl->found[t].n / 4;
     FLOE_TRY(nl_reserve(nl, tot ? tot : 1));
@@ -277,7 +277,7 @@ static int nl_collect(floe_neighbor_list *nl, int n, int nt) {
         }
     }
     free(tmp);
-    free(row);
+    *rowp = row;
     return FLOE_OK;
 }
 
@@ -286,10 +286,111 @@ static uint64_t entry_hash(uint64_t key, int sub, int img) {
     return mix(key ^ ((uint64_t)(uint32_t)sub * 0x9E3779B97F4A7C15ULL) ^ ((uint64_t)(uint32_t)img << 17));
 }
 
+/* the list's entries strictly in order (i, j, piece pair, image), as nl_collect leaves them */
+static int nl_sorted(const floe_neighbor_list *nl) {
+    const int *pi = nl->pi, *pj = nl->pj, *sub = nl->sub, *img = nl->img;
+    for (int k = 1; k < nl->npairs; k++) {
+        if (pi[k - 1] != pi[k]) {
+            if (pi[k - 1] > pi[k]) return 0;
+            continue;
+        }
+        const int a[3] = {pj[k - 1], sub[k - 1], img ? img[k - 1] : 0}, b[3] = {pj[k], sub[k], img ? img[k] : 0};
+        if (!entry_less(a, b)) return 0;
+    }
+    return nl->npairs == 0 || pi[0] >= 0;
+}
+
+/* the last build's list, taken from the list while the next is built: its history carries
+ * over by merging each particle's old and new rows */
+typedef struct nl_old {
+    int *pi, *pj, *sub, *img, npairs;
+    double *hist, *warm;
+    unsigned char *touching;
+} nl_old;
+
+/* the history of the new entries of particles [i0, i1) (rows row[]) from the old list's
+ * (rows orow[]): an entry kept (touching, or a warm start) when the old row has its (j, piece
+ * pair, image), zero otherwise (warm starts NaN) */
+static void nl_merge_rows(floe_neighbor_list *nl, const nl_old *o, const int *row, const int *orow, int i0, int i1,
+                          int use_warm_old) {
+    const int W = FLOE_DETECT_WARM, H = FLOE_MAX_HISTORY;
+    for (int i = i0; i < i1; i++) {
+        int a = orow[i];
+        const int ae = orow[i + 1];
+        for (int k = row[i]; k < row[i + 1]; k++) {
+            const int key[3] = {nl->pj[k], nl->sub[k], nl->img && nl->cell ? nl->img[k] : 0};
+            int hit = 0;
+            for (; a < ae; a++) {
+                const int cur[3] = {o->pj[a], o->sub[a], o->img ? o->img[a] : 0};
+                if (!entry_less(cur, key)) {
+                    hit = !entry_less(key, cur) &&
+                          (o->touching[a] || (use_warm_old && isfinite(o->warm[(size_t)a * W])));
+                    break;
+                }
+            }
+            double *h = nl->hist + (size_t)k * H;
+            if (hit) {
+                memcpy(h, o->hist + (size_t)a * H, H * sizeof(double));
+                nl->touching[k] = o->touching[a];
+            } else {
+                memset(h, 0, H * sizeof(double));
+                nl->touching[k] = 0;
+            }
+            if (nl->use_warm) {
+                double *wk = nl->warm + (size_t)k * W;
+                if (hit && use_warm_old) memcpy(wk, o->warm + (size_t)a * W, W * sizeof(double));
+                else
+                    for (int q = 0; q < W; q++) wk[q] = NAN;
+            }
+        }
+    }
+}
+
+/* the first particle in [0, n) whose row starts at or after entry e (n: none) */
+static int first_row_from(const int *row, int n, long e) {
+    int lo = 0, hi = n;
+    while (lo < hi) {
+        const int mid = lo + (hi - lo) / 2;
+        if (row[mid] < e) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo;
+}
+
+/* the old list back in place of a new one that failed (the caller empties it) */
+static void nl_old_restore(floe_neighbor_list *nl, nl_old *o, int ocap) {
+    if (!o->pi) return;
+    free(nl->pi); free(nl->pj); free(nl->sub); free(nl->img); free(nl->hist); free(nl->warm); free(nl->touching);
+    nl->pi = o->pi; nl->pj = o->pj; nl->sub = o->sub; nl->img = o->img;
+    nl->hist = o->hist; nl->warm = o->warm; nl->touching = o->touching;
+    nl->cap = ocap;
+    memset(o, 0, sizeof *o);
+}
+
+static void nl_old_free(nl_old *o) {
+    free(o->pi); free(o->pj); free(o->sub); free(o->img); free(o->hist); free(o->warm); free(o->touching);
+    memset(o, 0, sizeof *o);
+}
+
 int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int leaf_size) {
     int n = p->n;
     nl->gen++;
-    /* keep the history of touching pairs */
+    /* keep the history of touching pairs: a list in order (every build's) is set aside and
+     * merged row by row with the new one afterwards; another (MPI's imported history,
+     * core/parallel hist_import) goes through a hash of its entries */
+    nl_old old = {0};
+    const int ocap = nl->cap;
+    const int merge = nl->npairs > 0 && nl->hist && nl->touching && nl_sorted(nl);
+    const int W = FLOE_DETECT_WARM, use_warm = nl->use_warm && nl->warm;
+    if (merge) {
+        old = (nl_old){nl->pi, nl->pj, nl->sub, nl->img, nl->npairs, nl->hist, use_warm ? nl->warm : NULL, nl->touching};
+        if (!use_warm) free(nl->warm); /* no warm starts kept: a new array if the list wants one */
+        nl->pi = nl->pj = nl->sub = nl->img = NULL;
+        nl->hist = nl->warm = NULL;
+        nl->touching = NULL;
+        nl->cap = 0;
+        nl->npairs = 0;
+    }
     int nold = 0;
     uint64_t *okeys = NULL;
     double *ohist = NULL, *owarm = NULL;
@@ -298,7 +399,6 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     const int *img_old = nl->img && nl->npairs ? nl->img : NULL;
     unsigned char *otouch = NULL;
     int hcap = 0;
-    const int W = FLOE_DETECT_WARM, use_warm = nl->use_warm && nl->warm;
     /* kept: touching pairs (shear history) and pairs with a warm start */
 #define KEEP(k) (nl->touching[k] || (use_warm && isfinite(nl->warm[(size_t)(k) * W])))
     for (int k = 0; k < nl->npairs; k++) nold += KEEP(k) != 0;
@@ -360,6 +460,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     nl->walls = malloc((nw ? nw : 1) * sizeof(int));
     if (!bidx || !bx || !nl->walls || (cell && !bsh) || nt > nl->nfound) {
         free(bidx); free(bx); free(bsh); free(okeys); free(ohist); free(osub); free(oimg); free(otouch); free(owarm);
+        nl_old_restore(nl, &old, ocap);
         return FLOE_ENOMEM;
     }
     for (int t = 0; t < nt; t++) {
@@ -442,7 +543,8 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     free(bidx);
     free(bsh);
     /* deterministic order, cache friendly: sorted by (i, j, piece pair, image) */
-    if (rc == FLOE_OK) rc = nl_collect(nl, n, nt);
+    int *row = NULL;
+    if (rc == FLOE_OK) rc = nl_collect(nl, n, nt, &row);
     for (int t = 0; t < nt; t++) { /* 16 bytes per entry: not kept between builds */
         free(nl->found[t].e);
         nl->found[t].e = NULL;
@@ -461,7 +563,27 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             else nl->warm = wm;
         }
     }
-    if (rc == FLOE_OK) {
+    int *orow = rc == FLOE_OK && merge ? malloc((size_t)(n + 1) * sizeof *orow) : NULL;
+    if (merge && !orow) rc = FLOE_ENOMEM;
+    if (rc == FLOE_OK && merge) {
+        /* the old rows of particles [0, n] (an old row of a particle since removed: none) */
+        for (int i = 0, k = 0; i <= n; i++) {
+            while (k < old.npairs && old.pi[k] < i) k++;
+            orow[i] = k;
+        }
+        const int uw = old.warm != NULL;
+        if (nt > 1) {
+            /* rows in nt runs of about the same number of entries: thread t's from the first
+             * row that starts at or after t / nt of the entries */
+            FLOE_OMP(omp parallel for schedule(static, 1) num_threads(nt))
+            for (int t = 0; t < nt; t++) {
+                const int i0 = t == 0 ? 0 : first_row_from(row, n, (long)nl->npairs * t / nt);
+                const int i1 = t == nt - 1 ? n : first_row_from(row, n, (long)nl->npairs * (t + 1) / nt);
+                nl_merge_rows(nl, &old, row, orow, i0, i1, uw);
+            }
+        } else
+            nl_merge_rows(nl, &old, row, orow, 0, n, uw);
+    } else if (rc == FLOE_OK) {
         memset(nl->hist, 0, (size_t)nl->npairs * FLOE_MAX_HISTORY * sizeof(double));
         memset(nl->touching, 0, nl->npairs);
         if (nl->use_warm)
@@ -484,6 +606,10 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
                 }
             }
         }
+    }
+    free(row);
+    free(orow);
+    if (rc == FLOE_OK) {
         double *xb = nl->n_build == n && nl->x_build ? nl->x_build : realloc(nl->x_build, (size_t)(n ? n : 1) * 3 * sizeof(double));
         double *rb = xb ? realloc(nl->r_build, (size_t)(n ? n : 1) * sizeof(double)) : NULL;
         if (xb) nl->x_build = xb;
@@ -512,8 +638,10 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     free(otouch);
     free(owarm);
     if (rc) { /* leave a consistent (empty) list: the caller reports the error */
+        nl_old_restore(nl, &old, ocap);
         nl->npairs = 0;
         nl->n_build = 0;
     }
+    nl_old_free(&old);
     return rc;
 }
