@@ -392,17 +392,37 @@ int step_verlet(floe_world *w) {
     const int B = FLOE_PAR_BLOCK, nb = (n + B - 1) / B, nt = floe_world_loop_threads(w, n);
     double *red = floe_world_reduce_buf(w, (size_t)nb);
     if (nb > 0 && !red) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    /* the blocks that hold a kinematic particle (NULL: the loops over them look at every
+     * particle) */
+    const int n0 = n;
+    unsigned char *kinb = NULL;
+    if (nb > 0 && (size_t)nb <= w->kinb_cap) kinb = w->kinb;
+    else if (nb > 0) {
+        unsigned char *t = realloc(w->kinb, (size_t)nb);
+        if (t) {
+            w->kinb = kinb = t;
+            w->kinb_cap = (size_t)nb;
+        }
+    }
     /* 1. first half kick + drift (eq 22), rotation by the midpoint rule (eq 23); then the
      * kinematic particles at their prescribed velocity */
     {
         const drift_args da = {k1, dt, h, {g0, g1, g2}, have_xb ? xb : NULL};
         if (nt > 1) {
             FLOE_OMP(omp parallel for schedule(static) num_threads(nt) reduction(max: maxd2) reduction(|: kin, dbad))
-            for (int b = 0; b < nb; b++)
-                red[b] = drift_block(p, &da, b * B, (b + 1) * B < n ? (b + 1) * B : n, &maxd2, &kin, &dbad);
+            for (int b = 0; b < nb; b++) {
+                int kb = 0;
+                red[b] = drift_block(p, &da, b * B, (b + 1) * B < n ? (b + 1) * B : n, &maxd2, &kb, &dbad);
+                if (kinb) kinb[b] = (unsigned char)kb;
+                kin |= kb;
+            }
         } else
-            for (int b = 0; b < nb; b++)
-                red[b] = drift_block(p, &da, b * B, (b + 1) * B < n ? (b + 1) * B : n, &maxd2, &kin, &dbad);
+            for (int b = 0; b < nb; b++) {
+                int kb = 0;
+                red[b] = drift_block(p, &da, b * B, (b + 1) * B < n ? (b + 1) * B : n, &maxd2, &kb, &dbad);
+                if (kinb) kinb[b] = (unsigned char)kb;
+                kin |= kb;
+            }
         for (int b = 0; b < nb; b++) wb += red[b];
     }
     /* MPI: the servo walls' measures again (their controllers count the particles that
@@ -410,6 +430,10 @@ int step_verlet(floe_world *w) {
     if (w->par) FLOE_TRY(floe_par_servo_totals(w));
     if (kin)
         for (int i = 0; i < n; i++) {
+            if (kinb && !kinb[i / B]) { /* no kinematic particle in this block */
+                i = (i / B + 1) * B - 1;
+                continue;
+            }
             if (motion[i] != FLOE_KINEMATIC) continue;
             double *x = p->x + 3 * i, *q = p->q + 4 * i;
             /* keep the force of the step's start for the trapezoid work of the boundary */
@@ -462,9 +486,15 @@ int step_verlet(floe_world *w) {
             kt += rb[0]; kr += rb[1]; sh_iso += rb[2]; sh += rb[3];
         }
     }
+    /* (the drift's blocks still: without MPI a rebuild keeps the particles) */
     if (kin)
-        for (int i = 0; i < n; i++)
+        for (int i = 0; i < n; i++) {
+            if (kinb && !w->par && n == n0 && !kinb[i / B]) {
+                i = (i / B + 1) * B - 1;
+                continue;
+            }
             if (motion[i] == FLOE_KINEMATIC) wbound += kinematic_close(w, i, h);
+        }
     /* a particle failed the quick test: the checks with the message, from the first one on
      * (one failed the drift's: from the start; under MPI the kick checked again, on the rank
      * that holds it after the rebuild) */

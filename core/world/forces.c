@@ -348,9 +348,11 @@ static inline __attribute__((always_inline)) void pair_apply(floe_particles *p, 
         double *b = acc->pf + 9 * (size_t)k;
         for (int a = 0; a < 3; a++) { b[a] = F[a]; b[3 + a] = ti[a]; b[6 + a] = tj[a]; }
         acc->act[k] = 1;
-        /* two threads may mark the same particle: the same value, a relaxed atomic store */
-        if (!oi) __atomic_store_n(acc->hit + i, (unsigned char)1, __ATOMIC_RELAXED);
-        if (!oj) __atomic_store_n(acc->hit + j, (unsigned char)1, __ATOMIC_RELAXED);
+        /* two threads may mark the same particle: the same value, a relaxed atomic store, made
+         * only when not yet marked (a wall met by both threads' contacts: a store per entry
+         * moved its flag's cache line between the cores at every entry) */
+        if (!oi && !__atomic_load_n(acc->hit + i, __ATOMIC_RELAXED)) __atomic_store_n(acc->hit + i, (unsigned char)1, __ATOMIC_RELAXED);
+        if (!oj && !__atomic_load_n(acc->hit + j, __ATOMIC_RELAXED)) __atomic_store_n(acc->hit + j, (unsigned char)1, __ATOMIC_RELAXED);
         return;
     }
     for (int a = 0; a < 3; a++) {

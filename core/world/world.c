@@ -247,6 +247,7 @@ void floe_world_destroy(floe_world *w) {
     free(w->motion_idx);
     free(w->fb_old);
     free(w->kin_old);
+    free(w->kinb);
     free(w->pps);
     for (int i = 0; i < w->nstates; i++) {
         if (w->states[i]->klass->destroy) w->states[i]->klass->destroy(w->states[i]);

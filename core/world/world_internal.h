@@ -88,6 +88,8 @@ struct floe_world {
     floe_body_force_fn body_force; void *body_force_user;
     double *fb_old; int fb_n;   /* last callback force and torque per particle (6n) */
     double *kin_old;            /* force and torque of kinematic particles at the step start (6n) */
+    unsigned char *kinb; size_t kinb_cap; /* velocity Verlet: per block of particles, any kinematic
+                                             one in it (step.c; its loops over them skip the rest) */
     /* per-particle state of the force stages (the last forces of a trapezoid work, a held
      * drag): arrays of m doubles a particle, indexed by local particle and grown by their
      * owners, registered with floe_world_pp_attach so that the MPI decomposition moves each
