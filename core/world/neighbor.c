@@ -300,49 +300,63 @@ static int nl_sorted(const floe_neighbor_list *nl) {
     return nl->npairs == 0 || pi[0] >= 0;
 }
 
-/* the last build's list, taken from the list while the next is built: its history carries
- * over by merging each particle's old and new rows */
+/* the last build's entries (i, j, piece pair, image), taken from the list while the next is
+ * built; their history stays in the list's arrays and moves in place to the new entries */
 typedef struct nl_old {
     int *pi, *pj, *sub, *img, npairs;
-    double *hist, *warm;
-    unsigned char *touching;
 } nl_old;
 
-/* the history of the new entries of particles [i0, i1) (rows row[]) from the old list's
- * (rows orow[]): an entry kept (touching, or a warm start) when the old row has its (j, piece
- * pair, image), zero otherwise (warm starts NaN) */
-static void nl_merge_rows(floe_neighbor_list *nl, const nl_old *o, const int *row, const int *orow, int i0, int i1,
-                          int use_warm_old) {
-    const int W = FLOE_DETECT_WARM, H = FLOE_MAX_HISTORY;
+/* src[k] for the new entries of particles [i0, i1) (rows row[]): the old entry (rows orow[])
+ * with the same (j, piece pair, image) whose history is kept (touching, or a warm start; the
+ * list's arrays still hold the old history), -1 for none. Both lists in order: src increases. */
+static void nl_match_rows(const floe_neighbor_list *nl, const nl_old *o, const int *row, const int *orow, int i0,
+                          int i1, int use_warm, int *src) {
+    const int W = FLOE_DETECT_WARM;
     for (int i = i0; i < i1; i++) {
         int a = orow[i];
         const int ae = orow[i + 1];
         for (int k = row[i]; k < row[i + 1]; k++) {
             const int key[3] = {nl->pj[k], nl->sub[k], nl->img && nl->cell ? nl->img[k] : 0};
-            int hit = 0;
+            int s = -1;
             for (; a < ae; a++) {
                 const int cur[3] = {o->pj[a], o->sub[a], o->img ? o->img[a] : 0};
                 if (!entry_less(cur, key)) {
-                    hit = !entry_less(key, cur) &&
-                          (o->touching[a] || (use_warm_old && isfinite(o->warm[(size_t)a * W])));
+                    if (!entry_less(key, cur) && (nl->touching[a] || (use_warm && isfinite(nl->warm[(size_t)a * W]))))
+                        s = a;
                     break;
                 }
             }
-            double *h = nl->hist + (size_t)k * H;
-            if (hit) {
-                memcpy(h, o->hist + (size_t)a * H, H * sizeof(double));
-                nl->touching[k] = o->touching[a];
-            } else {
-                memset(h, 0, H * sizeof(double));
-                nl->touching[k] = 0;
-            }
-            if (nl->use_warm) {
-                double *wk = nl->warm + (size_t)k * W;
-                if (hit && use_warm_old) memcpy(wk, o->warm + (size_t)a * W, W * sizeof(double));
-                else
-                    for (int q = 0; q < W; q++) wk[q] = NAN;
-            }
+            src[k] = s;
         }
+    }
+}
+
+/* entry s's history, touching flag and warm start (warm: the list keeps them) to entry k */
+static inline void nl_move_one(floe_neighbor_list *nl, int k, int s, int warm) {
+    const int W = FLOE_DETECT_WARM, H = FLOE_MAX_HISTORY;
+    memcpy(nl->hist + (size_t)k * H, nl->hist + (size_t)s * H, H * sizeof(double));
+    nl->touching[k] = nl->touching[s];
+    if (warm) memcpy(nl->warm + (size_t)k * W, nl->warm + (size_t)s * W, W * sizeof(double));
+}
+
+/* the kept histories to their new entries, in place (the arrays hold max(old, new) entries):
+ * src increases, so an entry that moves down (src[k] > k) never reads a place another moving
+ * down has written when they go in increasing k, nor one moving up (src[k] < k) in decreasing
+ * k, and neither kind reads what the other writes; the new entries without history last.
+ * warm_old: the old warm starts are kept (else every new one is NaN) */
+static void nl_move_history(floe_neighbor_list *nl, const int *src, int np, int warm_old) {
+    const int W = FLOE_DETECT_WARM, H = FLOE_MAX_HISTORY;
+    for (int k = 0; k < np; k++)
+        if (src[k] > k) nl_move_one(nl, k, src[k], warm_old);
+    for (int k = np - 1; k >= 0; k--)
+        if (src[k] >= 0 && src[k] < k) nl_move_one(nl, k, src[k], warm_old);
+    for (int k = 0; k < np; k++) {
+        if (src[k] < 0) {
+            memset(nl->hist + (size_t)k * H, 0, H * sizeof(double));
+            nl->touching[k] = 0;
+        }
+        if (nl->use_warm && (src[k] < 0 || !warm_old))
+            for (int q = 0; q < W; q++) nl->warm[(size_t)k * W + q] = NAN;
     }
 }
 
@@ -357,37 +371,34 @@ static int first_row_from(const int *row, int n, long e) {
     return lo;
 }
 
-/* the old list back in place of a new one that failed (the caller empties it) */
+/* the old entries back in place of new ones that failed (the caller empties the list) */
 static void nl_old_restore(floe_neighbor_list *nl, nl_old *o, int ocap) {
     if (!o->pi) return;
-    free(nl->pi); free(nl->pj); free(nl->sub); free(nl->img); free(nl->hist); free(nl->warm); free(nl->touching);
+    free(nl->pi); free(nl->pj); free(nl->sub); free(nl->img);
     nl->pi = o->pi; nl->pj = o->pj; nl->sub = o->sub; nl->img = o->img;
-    nl->hist = o->hist; nl->warm = o->warm; nl->touching = o->touching;
     nl->cap = ocap;
     memset(o, 0, sizeof *o);
 }
 
 static void nl_old_free(nl_old *o) {
-    free(o->pi); free(o->pj); free(o->sub); free(o->img); free(o->hist); free(o->warm); free(o->touching);
+    free(o->pi); free(o->pj); free(o->sub); free(o->img);
     memset(o, 0, sizeof *o);
 }
 
 int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int leaf_size) {
     int n = p->n;
     nl->gen++;
-    /* keep the history of touching pairs: a list in order (every build's) is set aside and
-     * merged row by row with the new one afterwards; another (MPI's imported history,
+    /* keep the history of touching pairs: the entries of a list in order (every build's) are
+     * set aside, matched row by row with the new ones afterwards, and their history moved in
+     * place (no second copy of it); a list in another order (MPI's imported history,
      * core/parallel hist_import) goes through a hash of its entries */
     nl_old old = {0};
     const int ocap = nl->cap;
     const int merge = nl->npairs > 0 && nl->hist && nl->touching && nl_sorted(nl);
     const int W = FLOE_DETECT_WARM, use_warm = nl->use_warm && nl->warm;
     if (merge) {
-        old = (nl_old){nl->pi, nl->pj, nl->sub, nl->img, nl->npairs, nl->hist, use_warm ? nl->warm : NULL, nl->touching};
-        if (!use_warm) free(nl->warm); /* no warm starts kept: a new array if the list wants one */
+        old = (nl_old){nl->pi, nl->pj, nl->sub, nl->img, nl->npairs};
         nl->pi = nl->pj = nl->sub = nl->img = NULL;
-        nl->hist = nl->warm = NULL;
-        nl->touching = NULL;
         nl->cap = 0;
         nl->npairs = 0;
     }
@@ -550,8 +561,11 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
         nl->found[t].e = NULL;
         nl->found[t].cap = nl->found[t].n = 0;
     }
+    /* the history's arrays for the new entries (merge: for the old ones too until they moved) */
+    const size_t np_old = merge ? (size_t)old.npairs : 0;
     if (rc == FLOE_OK) {
         size_t np = nl->npairs ? nl->npairs : 1;
+        if (np < np_old) np = np_old;
         double *h = realloc(nl->hist, np * FLOE_MAX_HISTORY * sizeof(double));
         unsigned char *t = h ? realloc(nl->touching, np) : NULL;
         if (h) nl->hist = h;
@@ -564,14 +578,14 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
         }
     }
     int *orow = rc == FLOE_OK && merge ? malloc((size_t)(n + 1) * sizeof *orow) : NULL;
-    if (merge && !orow) rc = FLOE_ENOMEM;
+    int *src = orow ? malloc((size_t)(nl->npairs ? nl->npairs : 1) * sizeof *src) : NULL;
+    if (merge && rc == FLOE_OK && !src) rc = FLOE_ENOMEM;
     if (rc == FLOE_OK && merge) {
         /* the old rows of particles [0, n] (an old row of a particle since removed: none) */
         for (int i = 0, k = 0; i <= n; i++) {
             while (k < old.npairs && old.pi[k] < i) k++;
             orow[i] = k;
         }
-        const int uw = old.warm != NULL;
         if (nt > 1) {
             /* rows in nt runs of about the same number of entries: thread t's from the first
              * row that starts at or after t / nt of the entries */
@@ -579,10 +593,22 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             for (int t = 0; t < nt; t++) {
                 const int i0 = t == 0 ? 0 : first_row_from(row, n, (long)nl->npairs * t / nt);
                 const int i1 = t == nt - 1 ? n : first_row_from(row, n, (long)nl->npairs * (t + 1) / nt);
-                nl_merge_rows(nl, &old, row, orow, i0, i1, uw);
+                nl_match_rows(nl, &old, row, orow, i0, i1, use_warm, src);
             }
         } else
-            nl_merge_rows(nl, &old, row, orow, 0, n, uw);
+            nl_match_rows(nl, &old, row, orow, 0, n, use_warm, src);
+        nl_move_history(nl, src, nl->npairs, use_warm);
+        if ((size_t)nl->npairs < np_old) { /* fewer entries: the arrays shrink (a smaller block keeps its start) */
+            const size_t np = nl->npairs ? nl->npairs : 1;
+            double *h = realloc(nl->hist, np * FLOE_MAX_HISTORY * sizeof(double));
+            unsigned char *t = realloc(nl->touching, np);
+            if (h) nl->hist = h;
+            if (t) nl->touching = t;
+            if (nl->use_warm) {
+                double *wm = realloc(nl->warm, np * FLOE_DETECT_WARM * sizeof(double));
+                if (wm) nl->warm = wm;
+            }
+        }
     } else if (rc == FLOE_OK) {
         memset(nl->hist, 0, (size_t)nl->npairs * FLOE_MAX_HISTORY * sizeof(double));
         memset(nl->touching, 0, nl->npairs);
@@ -609,6 +635,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     }
     free(row);
     free(orow);
+    free(src);
     if (rc == FLOE_OK) {
         double *xb = nl->n_build == n && nl->x_build ? nl->x_build : realloc(nl->x_build, (size_t)(n ? n : 1) * 3 * sizeof(double));
         double *rb = xb ? realloc(nl->r_build, (size_t)(n ? n : 1) * sizeof(double)) : NULL;
