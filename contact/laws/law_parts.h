@@ -62,13 +62,18 @@ static inline void floe_mindlin_tangential(double g_star, double tdr, double mu,
     const double ft2 = floe_v3_dot(Ft, Ft);
     *diss += gt * vt2 * dt;
     const double half_inv_kt = 0.5 / kt;
-    if (ft2 > limit * limit) {
-        const double ftmag = sqrt(ft2);
-        const double e_before = floe_v3_dot(S, S) * half_inv_kt;
-        floe_v3_scale(Ft, limit / ftmag);
-        for (int k = 0; k < 3; ++k) S[k] = Ft[k] + gt * vt[k];
-        *diss += e_before - floe_v3_dot(S, S) * half_inv_kt;
+    /* sliding or not without a branch (as floe_coulomb_k: the branches' values selected) */
+    const int slip = ft2 > limit * limit;
+    const double ftmag = sqrt(ft2), e_before = floe_v3_dot(S, S) * half_inv_kt, sc = limit / ftmag;
+    double Fl[3], Ss[3];
+    for (int k = 0; k < 3; ++k) Fl[k] = Ft[k] * sc;
+    for (int k = 0; k < 3; ++k) Ss[k] = Fl[k] + gt * vt[k];
+    const double dslip = e_before - floe_v3_dot(Ss, Ss) * half_inv_kt;
+    for (int k = 0; k < 3; ++k) {
+        Ft[k] = slip ? Fl[k] : Ft[k];
+        S[k] = slip ? Ss[k] : S[k];
     }
+    *diss = slip ? *diss + dslip : *diss;
     *energy += floe_v3_dot(S, S) * half_inv_kt;
     Fs[0] = S[0]; Fs[1] = S[1]; Fs[2] = S[2];
 }
@@ -85,20 +90,26 @@ static inline __attribute__((always_inline)) void floe_coulomb_k(const floe_cont
     floe_v3_axpy(Ft, -ks, s);
     floe_v3_axpy(Ft, -gs, c->vt);
     const double vt2 = floe_v3_dot(c->vt, c->vt), limit = mu * fabs(Fn), ft2 = floe_v3_dot(Ft, Ft);
-    if (ft2 > limit * limit) {
-        const double ratio = limit / sqrt(ft2);
-        floe_v3_scale(Ft, ratio);
-        if (ks > 0.0) {
-            const double e_before = 0.5 * ks * floe_v3_dot(s, s), minus_inv_ks = -1.0 / ks;
-            for (int k = 0; k < 3; ++k) s[k] = (Ft[k] + gs * c->vt[k]) * minus_inv_ks;
-            *diss += gs * vt2 * dt + (e_before - 0.5 * ks * floe_v3_dot(s, s));
-        } else {
-            floe_v3_set(s, 0.0, 0.0, 0.0);
-            *diss += ratio * gs * vt2 * dt;
-        }
+    /* sliding or not, without a branch: in a dense bed contacts stick and slip at random, and
+     * a mispredicted branch per contact cost more than the slip's arithmetic done always (the
+     * values selected are those of the branches, so the same bits) */
+    const int slip = ft2 > limit * limit;
+    const double ratio = limit / sqrt(ft2); /* read only when slipping: ft2 > 0 then */
+    double Fs[3], ss[3], dslip;
+    for (int k = 0; k < 3; ++k) Fs[k] = Ft[k] * ratio;
+    if (ks > 0.0) {
+        const double e_before = 0.5 * ks * floe_v3_dot(s, s), minus_inv_ks = -1.0 / ks;
+        for (int k = 0; k < 3; ++k) ss[k] = (Fs[k] + gs * c->vt[k]) * minus_inv_ks;
+        dslip = gs * vt2 * dt + (e_before - 0.5 * ks * floe_v3_dot(ss, ss));
     } else {
-        *diss += gs * vt2 * dt;
+        floe_v3_set(ss, 0.0, 0.0, 0.0);
+        dslip = ratio * gs * vt2 * dt;
     }
+    for (int k = 0; k < 3; ++k) {
+        Ft[k] = slip ? Fs[k] : Ft[k];
+        s[k] = slip ? ss[k] : s[k];
+    }
+    *diss += slip ? dslip : gs * vt2 * dt;
 }
 
 /* the other forces' rate of change of vn (floe_contact.an_ext); 0 at dt = 0 (prepare,

@@ -13,11 +13,13 @@
 static inline int floe_par_max_threads(void) { return omp_get_max_threads(); }
 static inline int floe_par_thread(void) { return omp_get_thread_num(); }
 static inline int floe_par_nthreads(void) { return omp_get_num_threads(); }
+static inline double floe_par_wtime(void) { return omp_get_wtime(); } /* seconds, for balancing */
 #else
 #define FLOE_OMP(x)
 static inline int floe_par_max_threads(void) { return 1; }
 static inline int floe_par_thread(void) { return 0; }
 static inline int floe_par_nthreads(void) { return 1; }
+static inline double floe_par_wtime(void) { return 0.0; }
 #endif
 
 /* items (particles, pairs) per reduction block: fixed, so that the partial sums and their

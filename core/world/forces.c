@@ -981,6 +981,15 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         ps->blk = t;
         ps->blk_cap = nb;
     }
+    if (nb > ps->bt_cap) {
+        double *bs = realloc(ps->bs, (size_t)nb * sizeof *bs);
+        if (bs) ps->bs = bs;
+        double *bt = bs ? realloc(ps->bt, (size_t)nb * sizeof *bt) : NULL;
+        if (!bt) return FLOE_ENOMEM;
+        ps->bt = bt;
+        ps->bt_cap = nb;
+        ps->bt_nb = 0;
+    }
     if (nt > ps->ndet) {
         floe_detect_state *d = realloc(ps->det, (size_t)nt * sizeof *d);
         if (!d) return FLOE_ENOMEM;
@@ -1042,29 +1051,44 @@ static int par_prepare(floe_world *w, int nt, int nb) {
      * carried over from the last build); the cut at the nearest block. A particle is owned by
      * a part when every entry it is i or j of lies in it: the thread of that part is then its
      * only writer, and adds its forces in list order */
-    if (ps->pb_nt != nt || ps->pb[nt] != nb || ps->pb_gen != nl->gen) {
+    const int same = ps->pb_nt == nt && ps->pb[nt] == nb && ps->pb_gen == nl->gen;
+    if (!same || ps->recut) {
         int *pb = realloc(ps->pb, (size_t)(nt + 1) * sizeof *pb);
         unsigned char *own = pb ? realloc(ps->own, (size_t)(n ? n : 1)) : NULL;
         if (pb) ps->pb = pb;
         if (!own) return FLOE_ENOMEM;
         ps->own = own;
         const int *row = ps->row, B = FLOE_PAR_BLOCK;
-        double tot = 4.0 * n;
-        for (int k = 0; k < npairs; k++) tot += part_weight(&w->p, nl, k);
-        /* part t starts at the row of the first particle before which the work reaches t / nt
-         * of the whole, rounded to the nearest block */
         pb[0] = 0;
-        double acc = 0;
         int t = 1;
-        for (int i = 0; i < n && t < nt; i++) {
-            acc += 4.0;
-            for (int k = row[i]; k < row[i + 1]; k++) acc += part_weight(&w->p, nl, k);
-            for (; t < nt && acc >= tot * t / nt; t++) {
-                const int bt = (row[i + 1] + B / 2) / B;
-                pb[t] = bt > nb ? nb : bt < pb[t - 1] ? pb[t - 1] : bt;
+        if (same && ps->bt_nb == nb) {
+            /* the same list: cut again by the blocks' measured times (balance_parts) */
+            double tot = 0, acc = 0;
+            for (int b = 0; b < nb; b++) tot += ps->bt[b];
+            for (int b = 0; b < nb && t < nt; b++) {
+                acc += ps->bt[b];
+                for (; t < nt && acc >= tot * t / nt; t++) {
+                    const int bt = acc - tot * t / nt < 0.5 * ps->bt[b] ? b + 1 : b;
+                    pb[t] = bt < pb[t - 1] ? pb[t - 1] : bt;
+                }
+            }
+        } else {
+            double tot = 4.0 * n;
+            for (int k = 0; k < npairs; k++) tot += part_weight(&w->p, nl, k);
+            /* part t starts at the row of the first particle before which the work reaches t / nt
+             * of the whole, rounded to the nearest block */
+            double acc = 0;
+            for (int i = 0; i < n && t < nt; i++) {
+                acc += 4.0;
+                for (int k = row[i]; k < row[i + 1]; k++) acc += part_weight(&w->p, nl, k);
+                for (; t < nt && acc >= tot * t / nt; t++) {
+                    const int bt = (row[i + 1] + B / 2) / B;
+                    pb[t] = bt > nb ? nb : bt < pb[t - 1] ? pb[t - 1] : bt;
+                }
             }
         }
         for (; t <= nt; t++) pb[t] = nb;
+        ps->recut = 0;
         /* flags a failed evaluation left (no gather ran) would make a particle owned now
          * gather its buffered entries again */
         memset(ps->hit, 0, (size_t)(n ? n : 1));
@@ -1099,6 +1123,32 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         ps->fail_rc[t] = 0;
     }
     return FLOE_OK;
+}
+
+/* The parts' balance: the estimated work of par_prepare's cut misses what it does not model
+ * (a law's own cost, contacts made since the build, the caches), so each block's stage time is
+ * measured and smoothed (bt; a sample at most 3x the smoothed time: a preempted thread's block
+ * does not move the cut), and when the slowest part takes more than 5 % above the mean the
+ * next evaluation cuts the parts again by these times (the list's blocks unchanged; a new list
+ * is cut by the estimate first). Which thread adds which force never changes the bits
+ * (pair_apply, the gather): a cut by measured times keeps the results those of one thread. */
+static void balance_parts(floe_par_scratch *ps, int nt, int nb) {
+    if (ps->bt_nb != nb) {
+        memcpy(ps->bt, ps->bs, (size_t)nb * sizeof *ps->bt);
+        ps->bt_nb = nb;
+    } else
+        for (int b = 0; b < nb; b++) {
+            const double s = ps->bs[b], cap = 3.0 * ps->bt[b];
+            ps->bt[b] = 0.75 * ps->bt[b] + 0.25 * (ps->bt[b] > 0 && s > cap ? cap : s);
+        }
+    double tot = 0, worst = 0;
+    for (int t = 0; t < nt; t++) {
+        double T = 0;
+        for (int b = ps->pb[t]; b < ps->pb[t + 1]; b++) T += ps->bt[b];
+        tot += T;
+        if (T > worst) worst = T;
+    }
+    ps->recut = worst > 1.05 * tot / nt;
 }
 
 /* the threads' detection statistics into the world's, as one thread would have left them */
@@ -1217,9 +1267,11 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
                 la.hit = ps->hit;
                 la.own = ps->own;
                 const int k0 = b * B, k1 = k0 + B < npairs ? k0 + B : npairs;
+                const double t0 = floe_par_wtime();
                 memset(ps->act + k0, 0, (size_t)(k1 - k0));
                 int rc = stage_block(w, ctx, &te, k0, k1, nl->cand + k0, &la);
                 ps->blk[b] = la;
+                ps->bs[b] = floe_par_wtime() - t0;
                 if (rc) {
                     failed = 1;
                     ps->fail_b[t] = b;
@@ -1238,6 +1290,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
             return ps->fail_rc[tf];
         }
         for (int b = 0; b < nb; b++) acc_merge(w, &tot, &ps->blk[b]);
+        balance_parts(ps, nt, nb);
         /* each particle's forces, in list order as one thread adds them (pair_apply) */
         const int n = p->n, *off = ps->adj_off, *adj = ps->adj, *row = ps->row;
         const double *pf = ps->pf;

@@ -135,7 +135,7 @@ int floe_world_threads(const floe_world *w) { return w->nthreads > 0 ? w->nthrea
 
 void floe_par_scratch_free(floe_par_scratch *ps) {
     if (!ps) return;
-    free(ps->pf); free(ps->act); free(ps->hit); free(ps->adj); free(ps->adj_off); free(ps->row); free(ps->own); free(ps->pb); free(ps->blk);
+    free(ps->pf); free(ps->act); free(ps->hit); free(ps->adj); free(ps->adj_off); free(ps->row); free(ps->own); free(ps->pb); free(ps->blk); free(ps->bs); free(ps->bt);
     for (int t = 0; t < ps->ndet; t++) free(ps->det[t].scratch);
     free(ps->det); free(ps->err); free(ps->fail_b); free(ps->fail_rc);
     free(ps);

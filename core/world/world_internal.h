@@ -212,6 +212,11 @@ typedef struct floe_par_scratch {
                                                        blocks) and the list of build pb_gen
                                                        (par_prepare); pb_nt 0: not cut */
     struct stage_acc *blk; int blk_cap;              /* per block (forces.c) */
+    double *bs, *bt; int bt_cap, bt_nb;              /* per block: its stage time at the last
+                                                       evaluation (s) and smoothed, for bt_nb
+                                                       blocks (0: none yet); recut: the parts are
+                                                       cut by bt at the next evaluation */
+    int recut;
     floe_detect_state *det; int ndet;                /* per thread */
     char (*err)[1024]; int *fail_b, *fail_rc; int nerr;
 } floe_par_scratch;
