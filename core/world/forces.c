@@ -1297,8 +1297,14 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
         const unsigned char *act = ps->act;
         unsigned char *hit = ps->hit;
         double *f = p->f, *tq = p->t;
-        FLOE_OMP(omp parallel for schedule(static) num_threads(nt))
-        for (int i = 0; i < n; i++) {
+        /* in chunks handed out from the end: the walls (the last particles) gather the most
+         * entries (a side wall of the RVE: a few thousand), and the thread that takes them
+         * first leaves the rest to the other */
+        const int GC = FLOE_PAR_BLOCK, nch = (n + GC - 1) / GC;
+        FLOE_OMP(omp parallel for schedule(dynamic, 1) num_threads(nt))
+        for (int q = 0; q < nch; q++) {
+          const int c = nch - 1 - q, ie = (c + 1) * GC < n ? (c + 1) * GC : n;
+          for (int i = c * GC; i < ie; i++) {
             if (!hit[i]) continue; /* no force on it this evaluation */
             hit[i] = 0;
             double fi[3] = {f[3 * i], f[3 * i + 1], f[3 * i + 2]}, ti[3] = {tq[3 * i], tq[3 * i + 1], tq[3 * i + 2]};
@@ -1323,6 +1329,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
                 for (int a = 0; a < 3; a++) { fi[a] -= bk[a]; ti[a] += bk[6 + a]; }
             }
             for (int a = 0; a < 3; a++) { f[3 * i + a] = fi[a]; tq[3 * i + a] = ti[a]; }
+          }
         }
     }
     w->ncontacts += (int)tot.ncontacts;
