@@ -13,15 +13,20 @@
 #include <stdlib.h>
 #include <string.h>
 
-static int push_contact(floe_world *w, const floe_contact *c, const floe_contact_result *r, const double l[3]) {
-    if (w->ncontacts == w->contacts_cap) {
-        int nc = w->contacts_cap ? 2 * w->contacts_cap : 1024;
-        floe_contact_rec *t = realloc(w->contacts, (size_t)nc * sizeof *t);
+/* a record to the world's contacts, or (threads: sink) to its part's, which the stage
+ * appends to the world's in part order, the order of one thread */
+static int push_contact(floe_world *w, floe_rec_sink *sink, const floe_contact *c, const floe_contact_result *r,
+                        const double l[3]) {
+    floe_contact_rec **buf = sink ? &sink->r : &w->contacts;
+    int *cnt = sink ? &sink->n : &w->ncontacts, *cap = sink ? &sink->cap : &w->contacts_cap;
+    if (*cnt == *cap) {
+        int nc = *cap ? 2 * *cap : 1024;
+        floe_contact_rec *t = realloc(*buf, (size_t)nc * sizeof *t);
         if (!t) return FLOE_ENOMEM;
-        w->contacts = t;
-        w->contacts_cap = nc;
+        *buf = t;
+        *cap = nc;
     }
-    floe_contact_rec *k = &w->contacts[w->ncontacts++];
+    floe_contact_rec *k = &(*buf)[(*cnt)++];
     k->i = c->i; k->j = c->j;
     memcpy(k->point, c->point, sizeof k->point);
     memcpy(k->n, c->n, sizeof k->n);
@@ -323,6 +328,7 @@ struct stage_acc {
     unsigned char *act;
     unsigned char *hit;      /* per particle: some entry of it has a force (the gather skips the rest) */
     const unsigned char *own; /* per particle: all its entries lie in one part (floe_par_scratch.own) */
+    floe_rec_sink *rs;        /* threads, recording: the part's contact records (NULL: the world's) */
 };
 typedef struct stage_acc stage_acc;
 
@@ -548,7 +554,7 @@ static inline __attribute__((always_inline)) int pair_book(floe_world *w, const 
         floe_v3_add(rec.force, rec.force, fx);
         rec.fn += c->fn_extra;
         rec.energy += ex;
-        if (push_contact(w, c, &rec, l)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        if (push_contact(w, acc->rs, c, &rec, l)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
     return FLOE_OK;
 }
@@ -1224,9 +1230,9 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
         nl->cand_cap = nl->npairs;
     }
     /* blocks of FLOE_PAR_BLOCK entries, their sums added in block order: one thread or many,
-     * the same bits (floe_par.h); recording the contacts keeps one thread (their order) */
+     * the same bits (floe_par.h); recorded contacts in list order (per part, then joined) */
     const int npairs = nl->npairs, B = FLOE_PAR_BLOCK, nb = (npairs + B - 1) / B;
-    int nt = ctx->record ? 1 : floe_world_loop_threads(w, npairs);
+    int nt = floe_world_loop_threads(w, npairs);
     if (nt > nb) nt = nb;
     stage_acc tot;
     memset(&tot, 0, sizeof tot);
@@ -1244,6 +1250,14 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
             return floe_world_error(w, prc, prc == FLOE_ENOMEM ? "out of memory (threads' buffers)"
                                                                : "internal: the neighbour list is not sorted by its first particle");
         floe_par_scratch *ps = w->thr;
+        if (ctx->record && nt > ps->nrs) {
+            floe_rec_sink *rs = realloc(ps->rs, (size_t)nt * sizeof *rs);
+            if (!rs) return floe_world_error(w, FLOE_ENOMEM, "out of memory (threads' buffers)");
+            memset(rs + ps->nrs, 0, (size_t)(nt - ps->nrs) * sizeof *rs);
+            ps->rs = rs;
+            ps->nrs = nt;
+        }
+        for (int t = 0; ctx->record && t < nt; t++) ps->rs[t].n = 0;
         FLOE_OMP(omp parallel num_threads(nt))
         {
             const int t = floe_par_thread();
@@ -1266,6 +1280,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
                 la.act = ps->act;
                 la.hit = ps->hit;
                 la.own = ps->own;
+                la.rs = ctx->record ? &ps->rs[part] : NULL;
                 const int k0 = b * B, k1 = k0 + B < npairs ? k0 + B : npairs;
                 const double t0 = floe_par_wtime();
                 memset(ps->act + k0, 0, (size_t)(k1 - k0));
@@ -1291,6 +1306,21 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
         }
         for (int b = 0; b < nb; b++) acc_merge(w, &tot, &ps->blk[b]);
         balance_parts(ps, nt, nb);
+        if (ctx->record) { /* the parts' records joined in part order: the list's order */
+            int nrec = 0;
+            for (int t = 0; t < nt; t++) nrec += ps->rs[t].n;
+            if (nrec > w->contacts_cap) {
+                floe_contact_rec *r = realloc(w->contacts, (size_t)nrec * sizeof *r);
+                if (!r) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+                w->contacts = r;
+                w->contacts_cap = nrec;
+            }
+            for (int t = 0; t < nt; t++) {
+                if (ps->rs[t].n)
+                    memcpy(w->contacts + w->ncontacts, ps->rs[t].r, (size_t)ps->rs[t].n * sizeof *ps->rs[t].r);
+                w->ncontacts += ps->rs[t].n;
+            }
+        }
         /* each particle's forces, in list order as one thread adds them (pair_apply) */
         const int n = p->n, *off = ps->adj_off, *adj = ps->adj, *row = ps->row;
         const double *pf = ps->pf;

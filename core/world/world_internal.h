@@ -198,6 +198,12 @@ int floe_world_loop_threads(const floe_world *w, long items);
  * each thread's first error and reports the one a serial run would have met first */
 void floe_world_error_to(char *buf, size_t len);
 /* the threaded contact stage's buffers (forces.c), kept across evaluations by the world */
+/* the contact records of one part of the threaded stage (forces.c) */
+typedef struct floe_rec_sink {
+    floe_contact_rec *r;
+    int n, cap;
+} floe_rec_sink;
+
 typedef struct floe_par_scratch {
     double *pf; unsigned char *act; size_t pf_cap, act_cap; /* per entry: force on i, torques of i, j */
     unsigned char *hit;                              /* per particle: a force to gather */
@@ -217,6 +223,7 @@ typedef struct floe_par_scratch {
                                                        blocks (0: none yet); recut: the parts are
                                                        cut by bt at the next evaluation */
     int recut;
+    floe_rec_sink *rs; int nrs;                      /* per part: its contact records (recording) */
     floe_detect_state *det; int ndet;                /* per thread */
     char (*err)[1024]; int *fail_b, *fail_rc; int nerr;
 } floe_par_scratch;
