@@ -213,37 +213,13 @@ static int nl_reserve(floe_neighbor_list *nl, size_t need) {
 /* The found entries of every thread into the list, sorted by (i, j, piece pair, image): a
  * counting sort by i, then each row by the rest (the order does not depend on which thread
  * found what, nor in which order). *rowp: the rows' offsets, n + 1 (the caller frees). */
-static int nl_collect(floe_neighbor_list *nl, int n, int nt, int **rowp) {
-    size_t tot = 0;
-    for (int t = 0; t < nt; t++) tot += nl->found[t].n / 4;
-    FLOE_TRY(nl_reserve(nl, tot ? tot : 1));
-    int *row = calloc((size_t)n + 1, sizeof *row);
-    if (!row) return FLOE_ENOMEM;
-    for (int t = 0; t < nt; t++) {
-        const int *e = nl->found[t].e;
-        for (size_t q = 0; q < nl->found[t].n; q += 4) row[e[q] + 1]++;
-    }
-    for (int i = 0; i < n; i++) row[i + 1] += row[i];
-    /* scatter (row[i] advances to the row's end, then is moved back) */
-    int *pj = nl->pj, *sub = nl->sub, *img = nl->cell ? nl->img : NULL, *pi = nl->pi;
-    for (int t = 0; t < nt; t++) {
-        const int *e = nl->found[t].e;
-        for (size_t q = 0; q < nl->found[t].n; q += 4) {
-            const int k = row[e[q]]++;
-            pi[k] = e[q];
-            pj[k] = e[q + 1];
-            sub[k] = e[q + 2];
-            if (img) img[k] = e[q + 3];
-        }
-    }
-    for (int i = n; i > 0; i--) row[i] = row[i - 1];
-    row[0] = 0;
-    nl->npairs = (int)tot;
-    /* each row by (j, sub, img): insertion sort (a sphere's row is a few entries), qsort
-     * for the long rows of compound bodies */
+/* rows [i0, i1) each in order by (j, piece pair, image): insertion sort (a sphere's row is
+ * a few entries), qsort for the long rows of compound bodies */
+static int nl_sort_rows(floe_neighbor_list *nl, const int *row, int i0, int i1) {
+    int *pj = nl->pj, *sub = nl->sub, *img = nl->cell ? nl->img : NULL;
     int *tmp = NULL;
     size_t tcap = 0;
-    for (int i = 0; i < n; i++) {
+    for (int i = i0; i < i1; i++) {
         const int k0 = row[i], m = row[i + 1] - k0;
         if (m < 2) continue;
         if (m <= 24) {
@@ -262,7 +238,7 @@ static int nl_collect(floe_neighbor_list *nl, int n, int nt, int **rowp) {
         } else {
             if ((size_t)m * 3 > tcap) {
                 int *t2 = realloc(tmp, (size_t)m * 3 * sizeof *t2);
-                if (!t2) { free(tmp); free(row); return FLOE_ENOMEM; }
+                if (!t2) { free(tmp); return FLOE_ENOMEM; }
                 tmp = t2;
                 tcap = (size_t)m * 3;
             }
@@ -277,6 +253,97 @@ static int nl_collect(floe_neighbor_list *nl, int n, int nt, int **rowp) {
         }
     }
     free(tmp);
+    return FLOE_OK;
+}
+
+/* the first particle in [0, n) whose row starts at or after entry e (n: none) */
+static int first_row_from(const int *row, int n, long e) {
+    int lo = 0, hi = n;
+    while (lo < hi) {
+        const int mid = lo + (hi - lo) / 2;
+        if (row[mid] < e) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo;
+}
+
+static int nl_collect(floe_neighbor_list *nl, int n, int nt, int **rowp) {
+    size_t tot = 0;
+    for (int t = 0; t < nt; t++) tot += nl->found[t].n / 4;
+    FLOE_TRY(nl_reserve(nl, tot ? tot : 1));
+    int *row = calloc((size_t)n + 1, sizeof *row);
+    if (!row) return FLOE_ENOMEM;
+    int *pj = nl->pj, *sub = nl->sub, *img = nl->cell ? nl->img : NULL, *pi = nl->pi;
+    /* threads (a few): each counts and scatters its own buffer through its own offsets per
+     * row (nt counts per particle); the rows' sort then gives the order of one thread */
+    int *cnt = nt > 1 && nt <= 8 && tot >= 4096 ? calloc((size_t)nt * ((size_t)n + 1), sizeof *cnt) : NULL;
+    if (cnt) {
+        FLOE_OMP(omp parallel for schedule(static, 1) num_threads(nt))
+        for (int t = 0; t < nt; t++) {
+            int *c = cnt + (size_t)t * ((size_t)n + 1);
+            const int *e = nl->found[t].e;
+            for (size_t q = 0; q < nl->found[t].n; q += 4) c[e[q]]++;
+        }
+        int acc = 0;
+        for (int i = 0; i < n; i++) {
+            row[i] = acc;
+            for (int t = 0; t < nt; t++) { /* thread t's first slot in row i */
+                int *c = cnt + (size_t)t * ((size_t)n + 1) + i;
+                const int m = *c;
+                *c = acc;
+                acc += m;
+            }
+        }
+        row[n] = acc;
+        FLOE_OMP(omp parallel for schedule(static, 1) num_threads(nt))
+        for (int t = 0; t < nt; t++) {
+            int *c = cnt + (size_t)t * ((size_t)n + 1);
+            const int *e = nl->found[t].e;
+            for (size_t q = 0; q < nl->found[t].n; q += 4) {
+                const int k = c[e[q]]++;
+                pi[k] = e[q];
+                pj[k] = e[q + 1];
+                sub[k] = e[q + 2];
+                if (img) img[k] = e[q + 3];
+            }
+        }
+        free(cnt);
+    } else {
+        for (int t = 0; t < nt; t++) {
+            const int *e = nl->found[t].e;
+            for (size_t q = 0; q < nl->found[t].n; q += 4) row[e[q] + 1]++;
+        }
+        for (int i = 0; i < n; i++) row[i + 1] += row[i];
+        /* scatter (row[i] advances to the row's end, then is moved back) */
+        for (int t = 0; t < nt; t++) {
+            const int *e = nl->found[t].e;
+            for (size_t q = 0; q < nl->found[t].n; q += 4) {
+                const int k = row[e[q]]++;
+                pi[k] = e[q];
+                pj[k] = e[q + 1];
+                sub[k] = e[q + 2];
+                if (img) img[k] = e[q + 3];
+            }
+        }
+        for (int i = n; i > 0; i--) row[i] = row[i - 1];
+        row[0] = 0;
+    }
+    nl->npairs = (int)tot;
+    int rc = FLOE_OK;
+    if (nt > 1 && tot >= 4096) {
+        /* rows in nt runs of about the same number of entries */
+        FLOE_OMP(omp parallel for schedule(static, 1) num_threads(nt) reduction(|: rc))
+        for (int t = 0; t < nt; t++) {
+            const int i0 = t == 0 ? 0 : first_row_from(row, n, (long)tot * t / nt);
+            const int i1 = t == nt - 1 ? n : first_row_from(row, n, (long)tot * (t + 1) / nt);
+            rc |= nl_sort_rows(nl, row, i0, i1);
+        }
+    } else
+        rc = nl_sort_rows(nl, row, 0, n);
+    if (rc) {
+        free(row);
+        return FLOE_ENOMEM;
+    }
     *rowp = row;
     return FLOE_OK;
 }
@@ -358,17 +425,6 @@ static void nl_move_history(floe_neighbor_list *nl, const int *src, int np, int 
         if (nl->use_warm && (src[k] < 0 || !warm_old))
             for (int q = 0; q < W; q++) nl->warm[(size_t)k * W + q] = NAN;
     }
-}
-
-/* the first particle in [0, n) whose row starts at or after entry e (n: none) */
-static int first_row_from(const int *row, int n, long e) {
-    int lo = 0, hi = n;
-    while (lo < hi) {
-        const int mid = lo + (hi - lo) / 2;
-        if (row[mid] < e) lo = mid + 1;
-        else hi = mid;
-    }
-    return lo;
 }
 
 /* the old entries back in place of new ones that failed (the caller empties the list) */
