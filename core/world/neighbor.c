@@ -267,6 +267,14 @@ static int first_row_from(const int *row, int n, long e) {
     return lo;
 }
 
+/* found entry e (i, j, piece pair, image) into slot k of the list */
+static inline void put_entry(int *pi, int *pj, int *sub, int *img, int k, const int *e) {
+    pi[k] = e[0];
+    pj[k] = e[1];
+    sub[k] = e[2];
+    if (img) img[k] = e[3];
+}
+
 static int nl_collect(floe_neighbor_list *nl, int n, int nt, int **rowp) {
     size_t tot = 0;
     for (int t = 0; t < nt; t++) tot += nl->found[t].n / 4;
@@ -299,13 +307,7 @@ static int nl_collect(floe_neighbor_list *nl, int n, int nt, int **rowp) {
         for (int t = 0; t < nt; t++) {
             int *c = cnt + (size_t)t * ((size_t)n + 1);
             const int *e = nl->found[t].e;
-            for (size_t q = 0; q < nl->found[t].n; q += 4) {
-                const int k = c[e[q]]++;
-                pi[k] = e[q];
-                pj[k] = e[q + 1];
-                sub[k] = e[q + 2];
-                if (img) img[k] = e[q + 3];
-            }
+            for (size_t q = 0; q < nl->found[t].n; q += 4) put_entry(pi, pj, sub, img, c[e[q]]++, e + q);
         }
         free(cnt);
     } else {
@@ -317,13 +319,7 @@ static int nl_collect(floe_neighbor_list *nl, int n, int nt, int **rowp) {
         /* scatter (row[i] advances to the row's end, then is moved back) */
         for (int t = 0; t < nt; t++) {
             const int *e = nl->found[t].e;
-            for (size_t q = 0; q < nl->found[t].n; q += 4) {
-                const int k = row[e[q]]++;
-                pi[k] = e[q];
-                pj[k] = e[q + 1];
-                sub[k] = e[q + 2];
-                if (img) img[k] = e[q + 3];
-            }
+            for (size_t q = 0; q < nl->found[t].n; q += 4) put_entry(pi, pj, sub, img, row[e[q]]++, e + q);
         }
         for (int i = n; i > 0; i--) row[i] = row[i - 1];
         row[0] = 0;
