@@ -1,7 +1,8 @@
 /* test_neighbor.c - the Verlet neighbour list: every pair whose bounding spheres are
  * closer than the skin is listed (versus brute force) for mixed sizes, tiny (1e-6 m) and
  * huge (1e3 m, offset 1e6 m) domains; the shear history of touching pairs survives a
- * rebuild; a moving wall does work that the energy ledger books. */
+ * rebuild, and a settling pile's positions do not depend on how often the list is rebuilt;
+ * a moving wall does work that the energy ledger books. */
 #include "floe.h"
 #include "world_internal.h" /* internal: unit test of the neighbour list (core/world/neighbor.c: floe_nl_*, the Verlet skin) */
 #include "check.h"
@@ -86,6 +87,64 @@ int main(void) {
         floe_world_destroy(w);
     }
     CHECK(fabs(fx[0] - fx[1]) < 1e-12, "rebuilding every step must not change the result (%g vs %g)", fx[0], fx[1]);
+
+    /* a settling pile (Hertz-Mindlin with friction, a floor and a side wall): the list is
+     * rebuilt at nearly every step with a tiny skin and a few times with a wide one; the
+     * touching pairs and their histories carry over (the rows matched, the histories moved
+     * in place as entries come and go), and a pair's force is added in the list's order of
+     * the touching entries either way, so every position must agree to the last bit */
+    {
+        double *xs[2] = {NULL, NULL};
+        long reb[2] = {0, 0};
+        int np = 0, nc[2] = {0, 0};
+        for (int run = 0; run < 2; run++) {
+            floe_world_def d = floe_default_world_def();
+            d.gravity[2] = -9.81;
+            d.gravity[0] = -2.0; /* leaning on the side wall: contacts slide on it */
+            d.dt = 2e-6;
+            d.skin = run == 0 ? 1e-7 : 8e-4;
+            floe_world *w = floe_world_create(&d, NULL, 0);
+            floe_material m = {"g", 2500, 5e7, 0.3};
+            floe_world_add_material(w, &m);
+            floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5));
+            int g = floe_world_add_geometry(w, floe_sphere_create(0.001));
+            double o[3] = {0, 0, 0}, nz[3] = {0, 0, 1}, nx[3] = {1, 0, 0};
+            floe_world_add_wall(w, o, nz, 0, FLOE_FIXED);
+            floe_world_add_wall(w, o, nx, 0, FLOE_FIXED);
+            unsigned sd = 11;
+            for (int k = 0; k < 8; k++)
+                for (int j = 0; j < 8; j++)
+                    for (int i = 0; i < 8; i++) {
+                        floe_particle_def p = floe_default_particle_def();
+                        p.geometry = g;
+                        floe_v3_set(p.x, 0.0012 + 0.002005 * i + 2e-5 * rnd(&sd), 0.0012 + 0.002005 * j + 2e-5 * rnd(&sd),
+                                    0.0012 + 0.002005 * k);
+                        floe_world_add_particle(w, &p);
+                    }
+            CHECK(floe_world_prepare(w) == FLOE_OK, "prepare the pile");
+            for (int s = 0; s < 15000; s++)
+                if (floe_world_step(w) != FLOE_OK) {
+                    CHECK(0, "step %d of the pile: %s", s, floe_world_last_error(w));
+                    break;
+                }
+            floe_neighbor_stats ns;
+            floe_world_neighbor_stats(w, &ns);
+            reb[run] = ns.rebuilds;
+            nc[run] = floe_world_contact_count(w);
+            np = w->p.n;
+            xs[run] = malloc(3 * (size_t)np * sizeof(double));
+            memcpy(xs[run], w->p.x, 3 * (size_t)np * sizeof(double));
+            floe_world_destroy(w);
+        }
+        printf("  settling pile: rebuilds %ld (skin 1e-7 m) and %ld (skin 8e-4 m), contacts %d and %d\n", reb[0], reb[1],
+               nc[0], nc[1]);
+        CHECK(reb[0] > 20 * reb[1] && reb[0] > 500, "the tiny skin must rebuild far more often (%ld vs %ld)", reb[0], reb[1]);
+        CHECK(nc[0] > 300 && nc[0] == nc[1], "the pile must settle into the same contacts (%d vs %d)", nc[0], nc[1]);
+        CHECK(memcmp(xs[0], xs[1], 3 * (size_t)np * sizeof(double)) == 0,
+              "positions must be the same bits whatever the rebuild frequency");
+        free(xs[0]);
+        free(xs[1]);
+    }
 
     /* a piston (kinematic wall) compresses a sphere onto the floor: its work is booked */
     {
