@@ -210,9 +210,6 @@ static int nl_reserve(floe_neighbor_list *nl, size_t need) {
     return FLOE_OK;
 }
 
-/* The found entries of every thread into the list, sorted by (i, j, piece pair, image): a
- * counting sort by i, then each row by the rest (the order does not depend on which thread
- * found what, nor in which order). *rowp: the rows' offsets, n + 1 (the caller frees). */
 /* rows [i0, i1) each in order by (j, piece pair, image): insertion sort (a sphere's row is
  * a few entries), qsort for the long rows of compound bodies */
 static int nl_sort_rows(floe_neighbor_list *nl, const int *row, int i0, int i1) {
@@ -267,6 +264,13 @@ static int first_row_from(const int *row, int n, long e) {
     return lo;
 }
 
+/* thread t's run of rows [*i0, *i1) of nt, about the same number of the tot entries each:
+ * from the first row that starts at or after t / nt of them */
+static void row_run(const int *row, int n, long tot, int t, int nt, int *i0, int *i1) {
+    *i0 = t == 0 ? 0 : first_row_from(row, n, tot * t / nt);
+    *i1 = t == nt - 1 ? n : first_row_from(row, n, tot * (t + 1) / nt);
+}
+
 /* found entry e (i, j, piece pair, image) into slot k of the list */
 static inline void put_entry(int *pi, int *pj, int *sub, int *img, int k, const int *e) {
     pi[k] = e[0];
@@ -275,6 +279,9 @@ static inline void put_entry(int *pi, int *pj, int *sub, int *img, int k, const 
     if (img) img[k] = e[3];
 }
 
+/* The found entries of every thread into the list, sorted by (i, j, piece pair, image): a
+ * counting sort by i, then each row by the rest (the order does not depend on which thread
+ * found what, nor in which order). *rowp: the rows' offsets, n + 1 (the caller frees). */
 static int nl_collect(floe_neighbor_list *nl, int n, int nt, int **rowp) {
     size_t tot = 0;
     for (int t = 0; t < nt; t++) tot += nl->found[t].n / 4;
@@ -330,8 +337,8 @@ static int nl_collect(floe_neighbor_list *nl, int n, int nt, int **rowp) {
         /* rows in nt runs of about the same number of entries */
         FLOE_OMP(omp parallel for schedule(static, 1) num_threads(nt) reduction(|: rc))
         for (int t = 0; t < nt; t++) {
-            const int i0 = t == 0 ? 0 : first_row_from(row, n, (long)tot * t / nt);
-            const int i1 = t == nt - 1 ? n : first_row_from(row, n, (long)tot * (t + 1) / nt);
+            int i0, i1;
+            row_run(row, n, (long)tot, t, nt, &i0, &i1);
             rc |= nl_sort_rows(nl, row, i0, i1);
         }
     } else
@@ -639,12 +646,11 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             orow[i] = k;
         }
         if (nt > 1) {
-            /* rows in nt runs of about the same number of entries: thread t's from the first
-             * row that starts at or after t / nt of the entries */
+            /* rows in nt runs of about the same number of entries */
             FLOE_OMP(omp parallel for schedule(static, 1) num_threads(nt))
             for (int t = 0; t < nt; t++) {
-                const int i0 = t == 0 ? 0 : first_row_from(row, n, (long)nl->npairs * t / nt);
-                const int i1 = t == nt - 1 ? n : first_row_from(row, n, (long)nl->npairs * (t + 1) / nt);
+                int i0, i1;
+                row_run(row, n, nl->npairs, t, nt, &i0, &i1);
                 nl_match_rows(nl, &old, row, orow, i0, i1, use_warm, src);
             }
         } else
