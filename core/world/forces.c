@@ -756,72 +756,130 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
  * dissipation sums, the couples' work: the law has none) and without the call through the
  * law's table; the same operations otherwise, so the same bits (tests/test_sphere_path.c).
  * (dx, dy, dz) = x_j - x_i, dist its length (> 0), depth <= the smaller radius, r_eff =
- * r_i r_j / (r_i + r_j), m_eff = 1 / (1/m_i + 1/m_j). */
-static inline __attribute__((always_inline)) int sphere_fused(floe_world *w, const floe_step_ctx *ctx,
-                                                              const stage_env *env, int k, stage_acc *acc,
-                                                              int i, int j, double dx, double dy, double dz,
-                                                              double dist, double depth, double r_eff, double m_eff,
-                                                              const floe_contact_law *law, double *hist) {
-    floe_particles *p = env->p;
-    floe_contact cc; /* the fields the kernel reads */
-    floe_contact *c = &cc;
-    const double inv = 1.0 / dist, rad_i = p->radius[i], rad_j = p->radius[j];
-    const double *xa = p->x + 3 * i, *xb = p->x + 3 * j;
-    floe_v3_set(c->n, dx * inv, dy * inv, dz * inv);
-    const double *n = c->n;
-    c->depth = depth;
-    c->r_eff = r_eff;
-    c->fn_extra = 0.0;
-    /* the lever arms to the mid point of the two surface points (sphere_contact) */
-    double ri[3], rj[3], ui[3], uj[3];
-    for (int a = 0; a < 3; a++) {
-        const double x1 = xa[a] + rad_i * n[a], x2 = xb[a] - rad_j * n[a], pt = 0.5 * (x1 + x2);
-        ri[a] = pt - xa[a];
-        rj[a] = pt - xb[a];
-    }
-    const double *wi = p->w + 3 * i, *wj = p->w + 3 * j, *vi = p->v + 3 * i, *vj = p->v + 3 * j;
-    floe_v3_cross(ui, wi, ri);
-    floe_v3_cross(uj, wj, rj);
-    for (int a = 0; a < 3; a++) c->vr[a] = (vi[a] + ui[a]) - (vj[a] + uj[a]);
-    c->vn = floe_v3_dot(c->vr, n);
-    if (env->track) {
-        double e = fabs(c->vn) * w->dt / rmin(rad_i, rad_j);
-        if (e > acc->eta_d) acc->eta_d = e;
-    }
-    for (int a = 0; a < 3; a++) c->vt[a] = c->vr[a] - c->vn * n[a];
-    c->m_eff = m_eff;
-    c->dt = env->stepping ? ctx->dt : ctx->hist_dt;
-    double F[3], energy, diss;
-    if (law->klass == &floe_hertz_mindlin_law_class)
-        floe_hm_kernel((const floe_hertz_mindlin_law *)law, c, hist, F, &energy, &diss);
-    else {
-        c->gscale = 1.0;
-        c->an_ext = w->dash_on ? pair_an_ext(w, p, i, j, c, hist) : 0.0;
-        floe_linear_kernel((const floe_linear_law *)law, c, hist, F, &energy, &diss);
-    }
-    (void)diss;
-    hist[FLOE_TWIST_SLOT] = 0.0;
-    double ti[3], tj[3], Ti[3], Tj[3];
-    floe_v3_cross(ti, ri, F);
-    floe_v3_cross(tj, rj, F);
-    for (int a = 0; a < 3; a++) { /* + the law's couples, zero (as sphere_pair adds them) */
-        Ti[a] = ti[a] + 0.0;
-        Tj[a] = -tj[a] + 0.0;
-    }
-    pair_apply(p, acc, k, i, j, F, Ti, Tj);
+ * r_i r_j / (r_i + r_j), m_eff = 1 / (1/m_i + 1/m_j). In two parts: the force (its lever
+ * arms, the law, the torques: nothing summed, so the entries of a batch go through it one
+ * after the other before any is booked, sph_flush) and the book (the particles' sums and the
+ * ledger, in list order). */
+typedef struct sph_out {
+    double F[3], Ti[3], Tj[3], energy;
+} sph_out;
+
+/* A batch of entries for the fused kernel, all under one law (sph_flush). */
+#define SPH_BATCH 16
+typedef struct sph_batch {
+    int n;
+    const floe_contact_law *law;
+    int k[SPH_BATCH], i[SPH_BATCH], j[SPH_BATCH];
+    double dx[SPH_BATCH], dy[SPH_BATCH], dz[SPH_BATCH], dist[SPH_BATCH], depth[SPH_BATCH], reff[SPH_BATCH],
+        meff[SPH_BATCH];
+} sph_batch;
+
+/* the book of entry k: the particles' sums and the ledger, in list order */
+static inline __attribute__((always_inline)) void sphere_fused_book(const stage_env *env, int k, stage_acc *acc,
+                                                                   int i, int j, double *hist, const sph_out *o,
+                                                                   const floe_contact *c) {
+    pair_apply(env->p, acc, k, i, j, o->F, o->Ti, o->Tj);
+    const double energy = o->energy;
     acc->elastic += energy;
     if (env->stepping) { /* pair_book's ledger: (F_old + F_new)/2 . dx less the change of energy */
         double fav[3];
-        for (int a = 0; a < 3; a++) fav[a] = 0.5 * (F[a] + hist[FLOE_FORCE_SLOT + a]);
+        for (int a = 0; a < 3; a++) fav[a] = 0.5 * (o->F[a] + hist[FLOE_FORCE_SLOT + a]);
         const double dk = -floe_v3_dot(fav, c->vr) * c->dt - (energy - hist[FLOE_ENERGY_SLOT]);
         acc->diss += dk;
         hist[FLOE_DISS_SLOT] += dk;
         acc_life(acc, i, j, hist[FLOE_DISS_SLOT] + energy);
     }
     hist[FLOE_ENERGY_SLOT] = energy;
-    memcpy(hist + FLOE_FORCE_SLOT, F, 3 * sizeof(double));
+    memcpy(hist + FLOE_FORCE_SLOT, o->F, 3 * sizeof(double));
     acc->ncontacts++;
-    return FLOE_OK;
+}
+
+/* The batch's entries through the fused kernel in stages, each stage over every entry before
+ * the next: the geometry and velocities, the normal force, the tangential force, the torques,
+ * then the books in list order. One entry's pair body run after the other kept a single chain
+ * of dependent operations (square roots, divisions) in flight; the entries of a batch are
+ * independent until their books, so a short stage over all of them lets the processor overlap
+ * them. Each entry sees the operations of the single pair body in its order: the same bits. */
+static inline __attribute__((always_inline)) void sph_flush(floe_world *w, const floe_step_ctx *ctx,
+                                                           const stage_env *env, stage_acc *acc, sph_batch *b) {
+    floe_particles *p = env->p;
+    const int nb = b->n;
+    const floe_contact_law *law = b->law;
+    floe_contact cc[SPH_BATCH];
+    floe_normal_force nf[SPH_BATCH];
+    sph_out o[SPH_BATCH];
+    double *hist[SPH_BATCH], ri[SPH_BATCH][3], rj[SPH_BATCH][3];
+    const double cdt = env->stepping ? ctx->dt : ctx->hist_dt;
+    for (int q = 0; q < nb; q++) {
+        const int i = b->i[q], j = b->j[q];
+        floe_contact *c = cc + q;
+        hist[q] = env->nl->hist + (size_t)b->k[q] * FLOE_MAX_HISTORY;
+        const double inv = 1.0 / b->dist[q], rad_i = p->radius[i], rad_j = p->radius[j];
+        const double *xa = p->x + 3 * i, *xb = p->x + 3 * j;
+        floe_v3_set(c->n, b->dx[q] * inv, b->dy[q] * inv, b->dz[q] * inv);
+        const double *n = c->n;
+        c->depth = b->depth[q];
+        c->r_eff = b->reff[q];
+        c->fn_extra = 0.0;
+        /* the lever arms to the mid point of the two surface points (sphere_contact) */
+        double ui[3], uj[3];
+        for (int a = 0; a < 3; a++) {
+            const double x1 = xa[a] + rad_i * n[a], x2 = xb[a] - rad_j * n[a], pt = 0.5 * (x1 + x2);
+            ri[q][a] = pt - xa[a];
+            rj[q][a] = pt - xb[a];
+        }
+        const double *wi = p->w + 3 * i, *wj = p->w + 3 * j, *vi = p->v + 3 * i, *vj = p->v + 3 * j;
+        floe_v3_cross(ui, wi, ri[q]);
+        floe_v3_cross(uj, wj, rj[q]);
+        for (int a = 0; a < 3; a++) c->vr[a] = (vi[a] + ui[a]) - (vj[a] + uj[a]);
+        c->vn = floe_v3_dot(c->vr, n);
+        if (env->track) {
+            double e = fabs(c->vn) * w->dt / rmin(rad_i, rad_j);
+            if (e > acc->eta_d) acc->eta_d = e;
+        }
+        for (int a = 0; a < 3; a++) c->vt[a] = c->vr[a] - c->vn * n[a];
+        c->m_eff = b->meff[q];
+        c->dt = cdt;
+    }
+    if (law->klass == &floe_hertz_mindlin_law_class) {
+        /* floe_hm_kernel, stage by stage */
+        const floe_hertz_mindlin_law *H = (const floe_hertz_mindlin_law *)law;
+        for (int q = 0; q < nb; q++) floe_hertz_normal(H->e_star, H->damping_ratio, cc + q, nf + q);
+        for (int q = 0; q < nb; q++) {
+            double Ft[3], energy = nf[q].energy, diss = nf[q].diss;
+            floe_mindlin_tangential(H->g_star, H->tangent_damping_ratio, H->mu, cc + q, nf + q, hist[q], Ft,
+                                    &energy, &diss);
+            for (int a = 0; a < 3; ++a) o[q].F[a] = -nf[q].fn * cc[q].n[a] + Ft[a];
+            o[q].energy = energy;
+        }
+    } else {
+        /* floe_linear_kernel, stage by stage */
+        const floe_linear_law *L = (const floe_linear_law *)law;
+        for (int q = 0; q < nb; q++) {
+            cc[q].gscale = 1.0;
+            cc[q].an_ext = w->dash_on ? pair_an_ext(w, p, b->i[q], b->j[q], cc + q, hist[q]) : 0.0;
+        }
+        for (int q = 0; q < nb; q++) floe_linear_normal_k(L->kn, L->gn, L->tension, cc + q, hist[q], nf + q);
+        for (int q = 0; q < nb; q++) {
+            const double Fn = nf[q].fn;
+            double d = nf[q].diss, Ft[3];
+            floe_coulomb_k(cc + q, L->ks, L->gs, L->mu, fabs(Fn) + cc[q].fn_extra, hist[q], Ft, &d);
+            for (int a = 0; a < 3; ++a) o[q].F[a] = -Fn * cc[q].n[a] + Ft[a];
+            o[q].energy = nf[q].energy + 0.5 * L->ks * floe_v3_dot(hist[q], hist[q]);
+        }
+    }
+    for (int q = 0; q < nb; q++) {
+        hist[q][FLOE_TWIST_SLOT] = 0.0;
+        double ti[3], tj[3];
+        floe_v3_cross(ti, ri[q], o[q].F);
+        floe_v3_cross(tj, rj[q], o[q].F);
+        for (int a = 0; a < 3; a++) { /* + the law's couples, zero (as sphere_pair adds them) */
+            o[q].Ti[a] = ti[a] + 0.0;
+            o[q].Tj[a] = -tj[a] + 0.0;
+        }
+    }
+    for (int q = 0; q < nb; q++) sphere_fused_book(env, b->k[q], acc, b->i[q], b->j[q], hist[q], o + q, cc + q);
+    b->n = 0;
 }
 
 /* Entry k when both particles are spheres, under a law that needs no overlap area: the
@@ -829,7 +887,8 @@ static inline __attribute__((always_inline)) int sphere_fused(floe_world *w, con
  * other shapes (warm starts, pieces, the manifold, the ridge scale) and inlined into the
  * stage's loop; a settled bed of 20,000 spheres spends most of its step here. */
 static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, const floe_step_ctx *ctx,
-                                                             const stage_env *env, int k, stage_acc *acc) {
+                                                             const stage_env *env, int k, stage_acc *acc,
+                                                             sph_batch *b) {
     floe_particles *p = env->p;
     floe_neighbor_list *nl = env->nl;
     const int i = nl->pi[k], j = nl->pj[k];
@@ -839,7 +898,10 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
     const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2], rs = rad_i + rad_j;
     const double d2 = dx * dx + dy * dy + dz * dz;
     if (!(d2 < rs * rs)) {
-        if (nl->touching[k]) pair_release(w, p, nl, k, i, j, env->stepping, acc, env, xb);
+        if (nl->touching[k]) {
+            if (b->n) sph_flush(w, ctx, env, acc, b); /* the sums in list order */
+            pair_release(w, p, nl, k, i, j, env->stepping, acc, env, xb);
+        }
         return FLOE_OK;
     }
     const floe_contact_law *law = w->laws[p->material[i] * env->nm + p->material[j]];
@@ -850,10 +912,25 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
         const double dist = sqrt(d2), depth = rs - dist, im = p->inv_mass[i] + p->inv_mass[j];
         /* else the checks below and the law's own, with their messages (depth 0 by rounding:
          * the law resets its spring) */
-        if (dist > 0 && depth > 0 && depth <= rmin(rad_i, rad_j) && im > 0 && im < INFINITY)
-            return sphere_fused(w, ctx, env, k, acc, i, j, dx, dy, dz, dist, depth, rad_i * rad_j / rs, 1.0 / im,
-                                law, hist);
+        if (dist > 0 && depth > 0 && depth <= rmin(rad_i, rad_j) && im > 0 && im < INFINITY) {
+            if (b->n && b->law != law) sph_flush(w, ctx, env, acc, b);
+            const int q = b->n++;
+            /* what the batch's stages read of this entry, on its way while the batch fills */
+            const char *hk = (const char *)hist;
+            __builtin_prefetch(hk);
+            __builtin_prefetch(hk + FLOE_MAX_HISTORY * sizeof(double) - 1);
+            __builtin_prefetch(p->v + 3 * j);
+            __builtin_prefetch(p->w + 3 * j);
+            if (w->dash_on) __builtin_prefetch(w->dash_a + 3 * (size_t)j);
+            b->law = law;
+            b->k[q] = k; b->i[q] = i; b->j[q] = j;
+            b->dx[q] = dx; b->dy[q] = dy; b->dz[q] = dz;
+            b->dist[q] = dist; b->depth[q] = depth; b->reff[q] = rad_i * rad_j / rs; b->meff[q] = 1.0 / im;
+            if (b->n == SPH_BATCH) sph_flush(w, ctx, env, acc, b);
+            return FLOE_OK;
+        }
     }
+    if (b->n) sph_flush(w, ctx, env, acc, b);
     floe_contact c;
     c.gscale = 1.0;
     c.nextra = 0;
@@ -937,13 +1014,20 @@ static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env 
         }
     /* spheres under a point law: the lean body (sphere_pair); every other entry the general one */
     const unsigned char *kind = p->kind;
-    if (!env->any_pieces && !env->any_overlap && !env->any_floe)
+    if (!env->any_pieces && !env->any_overlap && !env->any_floe) {
+        sph_batch b;
+        b.n = 0;
+        b.law = NULL;
         for (int q = 0; q < nc; q++) {
             const int k = cand[q];
-            if (kind[pi[k]] == FLOE_GEOM_SPHERE && kind[pj[k]] == FLOE_GEOM_SPHERE) FLOE_TRY(sphere_pair(w, ctx, env, k, acc));
-            else FLOE_TRY(contact_pair(w, ctx, env, k, acc));
+            if (kind[pi[k]] == FLOE_GEOM_SPHERE && kind[pj[k]] == FLOE_GEOM_SPHERE) FLOE_TRY(sphere_pair(w, ctx, env, k, acc, &b));
+            else {
+                if (b.n) sph_flush(w, ctx, env, acc, &b);
+                FLOE_TRY(contact_pair(w, ctx, env, k, acc));
+            }
         }
-    else
+        if (b.n) sph_flush(w, ctx, env, acc, &b);
+    } else
         for (int q = 0; q < nc; q++) FLOE_TRY(contact_pair(w, ctx, env, cand[q], acc));
     return FLOE_OK;
 }
