@@ -486,33 +486,39 @@ int floe_par_reverse_comm(floe_world *w, floe_par *P) {
     return FLOE_OK;
 }
 
-typedef struct { long long g; int loc; } gl_pair;
-static int cmp_gl(const void *a, const void *b) {
-    const gl_pair *x = a, *y = b;
-    return (x->g > y->g) - (x->g < y->g);
+/* the slot where id g starts its probe (Fibonacci hashing: ids are dense and ordered, the
+ * multiplier spreads neighbours apart) */
+static inline int index_slot(long long g, int mask) {
+    return (int)(((unsigned long long)g * 0x9E3779B97F4A7C15ull) >> 32) & mask;
 }
 
 int floe_par_index_build(const floe_par *P, int n, floe_par_index *ix) {
-    gl_pair *t = malloc((size_t)(n ? n : 1) * sizeof *t);
-    ix->key = malloc((size_t)(n ? n : 1) * sizeof *ix->key);
-    ix->loc = malloc((size_t)(n ? n : 1) * sizeof *ix->loc);
-    if (!t || !ix->key || !ix->loc) { free(t); floe_par_index_free(ix); return FLOE_ENOMEM; }
-    for (int i = 0; i < n; i++) { t[i].g = P->gid[i]; t[i].loc = i; }
-    qsort(t, n, sizeof *t, cmp_gl);
-    for (int i = 0; i < n; i++) { ix->key[i] = t[i].g; ix->loc[i] = t[i].loc; }
+    int cap = 16;
+    while (cap < 2 * n) cap *= 2;
+    ix->key = malloc((size_t)cap * sizeof *ix->key);
+    ix->loc = malloc((size_t)cap * sizeof *ix->loc);
+    if (!ix->key || !ix->loc) { floe_par_index_free(ix); return FLOE_ENOMEM; }
     ix->n = n;
-    free(t);
+    ix->mask = cap - 1;
+    for (int s = 0; s < cap; s++) ix->key[s] = -1;
+    for (int i = 0; i < n; i++) {
+        const long long g = P->gid[i];
+        if (g < 0) continue;
+        int s = index_slot(g, ix->mask);
+        while (ix->key[s] >= 0 && ix->key[s] != g) s = (s + 1) & ix->mask;
+        if (ix->key[s] < 0) { ix->key[s] = g; ix->loc[s] = i; }
+    }
     return FLOE_OK;
 }
 
 int floe_par_index_find(const floe_par_index *ix, long long g) {
-    int a = 0, b = ix->n;
-    while (a < b) {
-        int c = (a + b) / 2;
-        if (ix->key[c] < g) a = c + 1;
-        else b = c;
+    if (!ix->n || g < 0) return -1;
+    int s = index_slot(g, ix->mask);
+    while (ix->key[s] >= 0) {
+        if (ix->key[s] == g) return ix->loc[s];
+        s = (s + 1) & ix->mask;
     }
-    return a < ix->n && ix->key[a] == g ? ix->loc[a] : -1;
+    return -1;
 }
 
 void floe_par_index_free(floe_par_index *ix) {

@@ -126,7 +126,7 @@ int floe_par_beams_in(floe_world *w, floe_par *P) {
     const int m = brec_len(), n = P->nbin, own_hi = P->nrep + P->nown;
     double *in = P->bin;
     int rc = FLOE_OK, bad = P->blost ? 1 : 0;
-    floe_par_index ix = {NULL, NULL, 0};
+    floe_par_index ix = {0};
     int *ii = malloc((size_t)(n ? n : 1) * sizeof *ii), *jj = malloc((size_t)(n ? n : 1) * sizeof *jj);
     double *keep = malloc((size_t)(n ? n : 1) * m * sizeof *keep);
     double *park = malloc((size_t)(n ? n : 1) * m * sizeof *park);

@@ -133,7 +133,7 @@ int floe_par_pp_in(floe_world *w, floe_par *P) {
     if (!w->npps) return FLOE_OK;
     const int m = 1 + pp_width(w), own_hi = P->nrep + P->nown;
     double **fresh = malloc((size_t)(w->npps > 0 ? w->npps : 1) * sizeof *fresh);
-    floe_par_index ix = {NULL, NULL, 0};
+    floe_par_index ix = {0};
     int rc = !fresh || pp_alloc(w, w->p.n, fresh) ? FLOE_ENOMEM : FLOE_OK, lost = 0;
     if (!rc && floe_par_index_build(P, w->p.n, &ix)) {
         for (int k = 0; k < w->npps; k++) free(fresh[k]);

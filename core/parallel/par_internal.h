@@ -114,9 +114,10 @@ int floe_par_forward_comm(floe_world *w, floe_par *P);
 int floe_par_fwd_doubles(const floe_world *w, const floe_par *P);
 /* add the ghosts' forces and torques to their owners */
 int floe_par_reverse_comm(floe_world *w, floe_par *P);
-/* local index of global id g (-1: not here); sorted table of (gid, local) built by
- * floe_par_index */
-typedef struct floe_par_index { long long *key; int *loc; int n; } floe_par_index;
+/* local index of global id g (-1: not here), from a hash table of the local particles' ids
+ * (open addressing, at most half full; the first of equal ids kept) built by
+ * floe_par_index_build over locals [0, n) */
+typedef struct floe_par_index { long long *key; int *loc; int n, mask; } floe_par_index;
 int floe_par_index_build(const floe_par *P, int n, floe_par_index *ix);
 int floe_par_index_find(const floe_par_index *ix, long long g);
 void floe_par_index_free(floe_par_index *ix);

@@ -102,6 +102,57 @@ static int grow_int(int **a, int n) {
     return FLOE_OK;
 }
 
+/* the imported entries (pi < n) in the order a build leaves its list, (i, j, piece pair): the
+ * next build then carries their history over by its row merge (core/world/neighbor.c), not
+ * through a hash of every entry. Rows by a counting sort on i, each row by insertion (a few
+ * entries). Equal entries (none expected) stay, and the build takes the hash path. */
+static int hist_sort(floe_neighbor_list *nl, int n, int use_warm) {
+    const int np = nl->npairs, H = FLOE_MAX_HISTORY, W = FLOE_DETECT_WARM;
+    if (np < 2) return FLOE_OK;
+    int *start = calloc((size_t)n + 1, sizeof *start), *ord = malloc((size_t)np * sizeof *ord);
+    int *pi = malloc((size_t)np * sizeof *pi), *pj = malloc((size_t)np * sizeof *pj);
+    int *sub = malloc((size_t)np * sizeof *sub);
+    unsigned char *t = malloc((size_t)np);
+    double *h = malloc((size_t)np * H * sizeof *h), *wm = use_warm ? malloc((size_t)np * W * sizeof *wm) : NULL;
+    int rc = start && ord && pi && pj && sub && t && h && (!use_warm || wm) ? FLOE_OK : FLOE_ENOMEM;
+    for (int k = 0; !rc && k < np; k++)
+        if (nl->pi[k] < 0 || nl->pi[k] >= n) rc = FLOE_EINVAL; /* cannot happen: left unsorted */
+    if (!rc) {
+        for (int k = 0; k < np; k++) start[nl->pi[k] + 1]++;
+        for (int i = 0; i < n; i++) start[i + 1] += start[i];
+        for (int k = 0; k < np; k++) ord[start[nl->pi[k]]++] = k;
+        for (int i = n; i > 0; i--) start[i] = start[i - 1]; /* back to the rows' starts */
+        start[0] = 0;
+        for (int i = 0; i < n; i++)
+            for (int a = start[i] + 1; a < start[i + 1]; a++) {
+                const int k = ord[a];
+                int b = a;
+                while (b > start[i] && (nl->pj[ord[b - 1]] > nl->pj[k] ||
+                                        (nl->pj[ord[b - 1]] == nl->pj[k] && nl->sub[ord[b - 1]] > nl->sub[k]))) {
+                    ord[b] = ord[b - 1];
+                    b--;
+                }
+                ord[b] = k;
+            }
+        for (int a = 0; a < np; a++) {
+            const int k = ord[a];
+            pi[a] = nl->pi[k];
+            pj[a] = nl->pj[k];
+            sub[a] = nl->sub[k];
+            t[a] = nl->touching[k];
+            memcpy(h + (size_t)a * H, nl->hist + (size_t)k * H, H * sizeof *h);
+            if (use_warm) memcpy(wm + (size_t)a * W, nl->warm + (size_t)k * W, W * sizeof *wm);
+        }
+        free(nl->pi); free(nl->pj); free(nl->sub); free(nl->touching); free(nl->hist);
+        nl->pi = pi; nl->pj = pj; nl->sub = sub; nl->touching = t; nl->hist = h;
+        nl->cap = np;
+        if (use_warm) { free(nl->warm); nl->warm = wm; }
+        pi = pj = sub = NULL; t = NULL; h = wm = NULL;
+    }
+    free(start); free(ord); free(pi); free(pj); free(sub); free(t); free(h); free(wm);
+    return rc == FLOE_EINVAL ? FLOE_OK : rc;
+}
+
 /* the received history entries written as the list's previous pairs in the new local
  * indices, so that floe_nl_build keeps them as it keeps the history across any rebuild */
 static int hist_import(floe_world *w, floe_par *P, const double *in, int nin) {
@@ -144,7 +195,7 @@ static int hist_import(floe_world *w, floe_par *P, const double *in, int nin) {
     nl->img = NULL;
     nl->npairs = cnt;
     nl->gen++; /* a new list: the threads' per-particle index is rebuilt (forces.c) */
-    return FLOE_OK;
+    return hist_sort(nl, w->p.n, use_warm);
 }
 
 /* the decomposition again: RCB of the owned centres, the history of the pairs whose anchor
@@ -161,24 +212,21 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     int nin = 0;
     if (!dest || !hd) rc = FLOE_ENOMEM;
     if (!rc) rc = floe_par_rcb(w, P, dest);
+    floe_par_index ix = {0};
+    if (!rc) rc = floe_par_index_build(P, hi, &ix);
     if (!rc) /* each entry to its anchor's new owner: the owned particle of the pair with the
-              * lower id (the owned particles are in gid order; walls and ghosts are not among them) */
+              * lower id (walls and ghosts are not among the owned [lo, hi)) */
         for (int k = 0; k < nrec; k++) {
             const double *e = recs + (size_t)k * m;
             int f[2];
             for (int s = 0; s < 2; s++) {
-                const long long g = (long long)e[s];
-                int a = lo, b = hi;
-                while (a < b) {
-                    int c = (a + b) / 2;
-                    if (P->gid[c] < g) a = c + 1;
-                    else b = c;
-                }
-                f[s] = a < hi && P->gid[a] == g ? a : -1;
+                const int a = floe_par_index_find(&ix, (long long)e[s]);
+                f[s] = a >= lo && a < hi ? a : -1;
             }
             const int an = f[0] >= 0 && f[1] >= 0 ? (P->gid[f[0]] < P->gid[f[1]] ? f[0] : f[1]) : f[0] >= 0 ? f[0] : f[1];
             hd[k] = an >= 0 ? dest[an - lo] : P->rank;
         }
+    floe_par_index_free(&ix);
     long long diag[NDIAG];
     diag_save(w, P, diag);
     if (!rc) rc = floe_par_beams_out(w, P, dest); /* beam bonds (par_beams.c) */
