@@ -5,6 +5,7 @@
 # gen_data.py, top.stl: the shared peer benchmark dem-compress-rve), interleaved.
 #   REPS=3 FRACTION=1.0 FLOE_THREADS=1 bench/rve-compression/run.sh
 #   RANKS=2 REPS=3 FRACTION=0.25 bench/rve-compression/run.sh   # both under mpirun -np 2
+#   BIND=core RANKS=2 ...   # both codes' ranks pinned to cores (default: --bind-to none)
 # FRACTION < 1 runs the first part of the loading only (both codes the same steps). RANKS > 1:
 # floe's MPI build (its outputs gathered by rank 0, vtk as .pvtu pieces) and LIGGGHTS, both
 # under mpirun -np RANKS, one thread a rank.
@@ -15,7 +16,9 @@ REPS=${REPS:-3}; FRACTION=${FRACTION:-1.0}; FLOE_THREADS=${FLOE_THREADS:-1}; RAN
 MPIRUN=()
 if (( RANKS > 1 )); then
   FLOE_THREADS=1
-  MPIRUN=(mpirun --allow-run-as-root --oversubscribe --bind-to none -np "$RANKS")
+  # BIND=core pins each rank (of both codes) to a core (OpenMPI's own default for np <= 2);
+  # the default none leaves the placement to the kernel, as the earlier sessions measured
+  MPIRUN=(mpirun --allow-run-as-root --oversubscribe --bind-to "${BIND:-none}" -np "$RANKS")
 fi
 if [[ -z "${FLOE:-}" ]]; then
   bash "$root/scripts/install-deps.sh" --bench
