@@ -378,7 +378,7 @@ typedef struct stage_env {
     const floe_cell_state *cell; /* periodic cell (NULL: none): images, affine velocities */
     const int *img;              /* the list's image codes (with a cell) */
     int fused;                   /* sphere pairs under a built-in law may take its fused kernel
-                                    (sphere_fused: no contacts recorded, no cell, no growth) */
+                                    (sph_flush: no contacts recorded, no cell, no growth) */
 } stage_env;
 
 /* periodic cell: j's image xs = x_j + H n of entry k (xs untouched and x_j returned when the
@@ -756,10 +756,10 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
  * dissipation sums, the couples' work: the law has none) and without the call through the
  * law's table; the same operations otherwise, so the same bits (tests/test_sphere_path.c).
  * (dx, dy, dz) = x_j - x_i, dist its length (> 0), depth <= the smaller radius, r_eff =
- * r_i r_j / (r_i + r_j), m_eff = 1 / (1/m_i + 1/m_j). In two parts: the force (its lever
- * arms, the law, the torques: nothing summed, so the entries of a batch go through it one
- * after the other before any is booked, sph_flush) and the book (the particles' sums and the
- * ledger, in list order). */
+ * r_i r_j / (r_i + r_j), m_eff = 1 / (1/m_i + 1/m_j). The entries go in batches (sph_batch,
+ * sph_flush): the forces (lever arms, the law in its two stages, law_kernels.h, the torques:
+ * nothing summed) stage by stage over the batch, then each entry's book (sphere_fused_book:
+ * the particles' sums and the ledger) in list order. */
 typedef struct sph_out {
     double F[3], Ti[3], Tj[3], energy;
 } sph_out;
@@ -846,11 +846,8 @@ static inline __attribute__((always_inline)) void sph_flush(floe_world *w, const
         const floe_hertz_mindlin_law *H = (const floe_hertz_mindlin_law *)law;
         for (int q = 0; q < nb; q++) floe_hertz_normal(H->e_star, H->damping_ratio, cc + q, nf + q);
         for (int q = 0; q < nb; q++) {
-            double Ft[3], energy = nf[q].energy, diss = nf[q].diss;
-            floe_mindlin_tangential(H->g_star, H->tangent_damping_ratio, H->mu, cc + q, nf + q, hist[q], Ft,
-                                    &energy, &diss);
-            for (int a = 0; a < 3; ++a) o[q].F[a] = -nf[q].fn * cc[q].n[a] + Ft[a];
-            o[q].energy = energy;
+            double diss;
+            floe_hm_kernel_t(H, cc + q, nf + q, hist[q], o[q].F, &o[q].energy, &diss);
         }
     } else {
         /* floe_linear_kernel, stage by stage */
@@ -861,11 +858,8 @@ static inline __attribute__((always_inline)) void sph_flush(floe_world *w, const
         }
         for (int q = 0; q < nb; q++) floe_linear_normal_k(L->kn, L->gn, L->tension, cc + q, hist[q], nf + q);
         for (int q = 0; q < nb; q++) {
-            const double Fn = nf[q].fn;
-            double d = nf[q].diss, Ft[3];
-            floe_coulomb_k(cc + q, L->ks, L->gs, L->mu, fabs(Fn) + cc[q].fn_extra, hist[q], Ft, &d);
-            for (int a = 0; a < 3; ++a) o[q].F[a] = -Fn * cc[q].n[a] + Ft[a];
-            o[q].energy = nf[q].energy + 0.5 * L->ks * floe_v3_dot(hist[q], hist[q]);
+            double diss;
+            floe_linear_kernel_t(L, cc + q, nf + q, hist[q], o[q].F, &o[q].energy, &diss);
         }
     }
     for (int q = 0; q < nb; q++) {
