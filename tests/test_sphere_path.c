@@ -7,7 +7,11 @@
  *     compound body far above them sends every list entry through the general body
  *     (contact_pair): positions, velocities, angular velocities, forces, torques and the
  *     energy ledger equal bit for bit;
- *     the same for the linear law with dashpots (the fused kernels of both laws);
+ *     the same for the linear law with dashpots (the fused kernels of both laws), and for
+ *     two materials whose spheres alternate, under three laws (Hertz-Mindlin for each
+ *     material with itself, two different objects, the linear law between them): the
+ *     fused path's batches of entries (sph_flush) end at every change of law, and the
+ *     sums still come in list order;
  *  2. every sphere-wall contact the stage recorded (the inline kernel, seen from i) against
  *     detection's own answer for the pair (floe_world_probe_contact): normal, depth and
  *     point equal bit for bit, for walls before and after the sphere in the pair. */
@@ -33,11 +37,17 @@ static floe_world *scene(int with_compound, int linear) {
     char err[256];
     floe_world *w = floe_world_create(&def, err, sizeof err);
     if (!w) return NULL;
-    floe_material m = {"glass", 2500, 1e7, 0.3};
+    floe_material m = {"glass", 2500, 1e7, 0.3}, m2 = {"rubber", 1200, 5e6, 0.4};
     floe_world_add_material(w, &m);
-    /* Hertz-Mindlin, or the linear law with dashpots (its an_ext from the accelerations) */
-    floe_world_set_law(w, 0, 0, linear ? floe_linear_law_create(200, 100, 0.02, 0.01, 0.5)
-                                       : floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5));
+    /* Hertz-Mindlin, or the linear law with dashpots (its an_ext from the accelerations);
+     * linear = 2: two materials under three laws */
+    floe_world_set_law(w, 0, 0, linear == 1 ? floe_linear_law_create(200, 100, 0.02, 0.01, 0.5)
+                                            : floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5));
+    if (linear == 2) {
+        floe_world_add_material(w, &m2);
+        floe_world_set_law(w, 1, 1, floe_hertz_mindlin_law_create(&m2, &m2, 0.7, 0.3));
+        floe_world_set_law(w, 0, 1, floe_linear_law_create(150, 80, 0.02, 0.01, 0.4));
+    }
     const double L = 0.02, H = 0.06;
     double nf[3] = {0.08, -0.05, 1.0}, p0[3] = {0, 0, 0};
     floe_world_add_wall(w, p0, nf, 0, FLOE_FIXED); /* tilted floor */
@@ -53,6 +63,7 @@ static floe_world *scene(int with_compound, int linear) {
     for (int k = 0; k < NS; k++) {
         floe_particle_def p = floe_default_particle_def();
         p.geometry = g[k % 3];
+        if (linear == 2) p.material = k % 2;
         int a = k % 7, b = (k / 7) % 7, c = k / 49;
         floe_v3_set(p.x, 0.0022 + 0.0023 * a + 0.00005 * urand(), 0.0022 + 0.0023 * b + 0.00005 * urand(),
                     0.0025 + 0.0023 * c + 0.00005 * urand());
@@ -79,7 +90,7 @@ static int same(const double *a, const double *b, int n) { return memcmp(a, b, (
 /* 1. the same bits, sphere by sphere, from the lean (fused) and the general body; returns
  * world a (spheres only) stepped, for part 2 */
 static floe_world *compare_paths(int linear) {
-    const char *law = linear ? "linear" : "hertz_mindlin";
+    const char *law = linear == 2 ? "three laws" : linear ? "linear" : "hertz_mindlin";
     floe_world *a = scene(0, linear), *b = scene(1, linear);
     CHECK(a && b, "%s: worlds created", law);
     if (!a || !b) return NULL;
@@ -120,6 +131,8 @@ static floe_world *compare_paths(int linear) {
 int main(void) {
     floe_world *lin = compare_paths(1);
     floe_world_destroy(lin);
+    floe_world *mix = compare_paths(2);
+    floe_world_destroy(mix);
     floe_world *a = compare_paths(0);
     if (!a) return check_summary("test_sphere_path");
     int rc;
