@@ -493,6 +493,8 @@ static inline int index_slot(long long g, int mask) {
 }
 
 int floe_par_index_build(const floe_par *P, int n, floe_par_index *ix) {
+    ix->key = NULL; ix->loc = NULL; ix->n = 0;
+    if (n > (1 << 29)) return FLOE_ENOMEM; /* the table's slots are ints */
     int cap = 16;
     while (cap < 2 * n) cap *= 2;
     ix->key = malloc((size_t)cap * sizeof *ix->key);
