@@ -10,7 +10,11 @@
  *     (> 80 % of the LP halves without a pivot), or the path is not what was tested.
  *  2. Negative control: a pair solved once, then one body turned by 0.3 .. 1 rad: the old
  *     basis must not be kept (a pivot, or a cold start when its point is infeasible), both
- *     cases must occur, and the result must be the cold solve's; unmoved, it is kept. */
+ *     cases must occur, and the result must be the cold solve's; unmoved, it is kept.
+ *  3. The lazy problem (floe_lp_problem.b_body: p''s planes in its own frame and the map, as
+ *     detect.c gives it) against the same planes mapped first: at 400 poses, warm (kept, or
+ *     needing a pivot or a cold start) and cold, the same basis, point, value, normal and
+ *     multipliers to the bit. */
 #include "floe.h"
 #include "world_internal.h"
 #include "floe_polytope_lp.h"
@@ -162,7 +166,7 @@ static int solve_half(const floe_geometry *ga, const floe_geometry *gb, const do
         floe_q_rotate(tb + 4 * k, qb, B.plane + 4 * k);
         tb[4 * k + 3] = B.plane[4 * k + 3] + floe_v3_dot(tb + 4 * k, xb);
     }
-    floe_lp_problem P = {3, A.plane, A.np, tb, B.np, A.v, A.nv, R};
+    floe_lp_problem P = {3, A.plane, A.np, tb, B.np, A.v, A.nv, R, NULL, NULL};
     int rc = floe_lp_deepest(&P, basis, r);
     free(tb);
     return rc;
@@ -212,9 +216,80 @@ static void negative_control(void) {
     CHECK(agree == trials, "after the basis changed the result is the cold LP's within 1e-10 R: %d of %d", agree, trials);
 }
 
+/* part 3: b's planes mapped by (M, m) (Xb = M x + m) as the lazy problem maps them */
+static void map_planes(const double *map, const double *pl, int np, double *out) {
+    const double *M = map, *m = map + 9;
+    for (int k = 0; k < np; k++) {
+        const double *Q = pl + 4 * k;
+        double *o = out + 4 * k;
+        for (int i = 0; i < 3; i++) o[i] = M[i] * Q[0] + M[3 + i] * Q[1] + M[6 + i] * Q[2];
+        o[3] = Q[3] - (Q[0] * m[0] + Q[1] * m[1] + Q[2] * m[2]);
+    }
+}
+
+static void lazy_equals_full(void) {
+    int poses = 400, same = 0, lazy_kept = 0, lazy_full = 0;
+    for (int t = 0; t < poses; t++) {
+        floe_geometry *ga = grain(), *gb = grain();
+        floe_polytope_view A, B;
+        CHECK(floe_geometry_polytope(ga, 3, &A) && floe_geometry_polytope(gb, 3, &B), "polytope views");
+        double *tb = malloc(sizeof(double) * 4 * (size_t)B.np), *buf = malloc(sizeof(double) * 4 * (size_t)B.np);
+        int basis0[4] = {-1, -1, -1, -1};
+        for (int pass = 0; pass < 3; pass++) {
+            /* b at 1.7 R in a random direction, turned; pass 1: the same pose (the basis
+             * kept), pass 2: another pose from pass 1's basis (pivots or a cold start) */
+            static double map[12];
+            if (pass != 1) {
+                double u[3], q[4], Rb[3][3];
+                rand_unit(u);
+                rand_quat(q);
+                for (int c = 0; c < 3; c++) {
+                    double e[3] = {0, 0, 0}, col[3];
+                    e[c] = 1;
+                    floe_q_rotate(col, q, e);
+                    for (int r = 0; r < 3; r++) Rb[r][c] = col[r];
+                }
+                /* Xb = Rb^T (x - xb), xb = 1.7 R u (a at the origin, unrotated) */
+                for (int i = 0; i < 3; i++) {
+                    map[9 + i] = 0;
+                    for (int j = 0; j < 3; j++) {
+                        map[3 * i + j] = Rb[j][i];
+                        map[9 + i] -= Rb[j][i] * 1.7 * R * u[j];
+                    }
+                }
+            }
+            map_planes(map, B.plane, B.np, tb);
+            floe_lp_problem F = {3, A.plane, A.np, tb, B.np, A.v, A.nv, R, NULL, NULL};
+            floe_lp_problem L = {3, A.plane, A.np, buf, B.np, A.v, A.nv, R, B.plane, map};
+            int bf[4], bl[4];
+            memcpy(bf, basis0, sizeof bf);
+            memcpy(bl, basis0, sizeof bl);
+            floe_lp_result rf, rl;
+            const int rcf = floe_lp_deepest(&F, bf, &rf), rcl = floe_lp_deepest(&L, bl, &rl);
+            const int eq = rcf == rcl && !memcmp(bf, bl, sizeof bf) && rf.warm == rl.warm && rf.pivots == rl.pivots &&
+                           !memcmp(rf.x, rl.x, sizeof rf.x) && !memcmp(&rf.s, &rl.s, sizeof rf.s) &&
+                           !memcmp(rf.normal, rl.normal, sizeof rf.normal) && !memcmp(&rf.gnorm, &rl.gnorm, sizeof rf.gnorm) &&
+                           !memcmp(rf.lambda, rl.lambda, sizeof rf.lambda);
+            same += eq;
+            lazy_kept += rl.warm && rl.pivots == 0;
+            lazy_full += !(rl.warm && rl.pivots == 0);
+            memcpy(basis0, bf, sizeof bf);
+        }
+        free(tb);
+        free(buf);
+        floe_geometry_destroy(ga);
+        floe_geometry_destroy(gb);
+    }
+    printf("  lazy problem, %d solves: the same bits as the mapped planes' in %d; basis kept %d, full problem %d\n",
+           3 * poses, same, lazy_kept, lazy_full);
+    CHECK(same == 3 * poses, "lazy and mapped problems give the same bits: %d of %d", same, 3 * poses);
+    CHECK(lazy_kept > poses / 2 && lazy_full > poses, "both lazy paths taken: kept %d, full %d", lazy_kept, lazy_full);
+}
+
 int main(void) {
     setvbuf(stdout, NULL, _IOLBF, 0);
     negative_control();
+    lazy_equals_full();
     settling_run();
     return check_summary("test_lp_resting");
 }

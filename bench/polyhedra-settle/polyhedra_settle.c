@@ -14,6 +14,9 @@
  * ns per step divided by either (whole-step cost attributed to pairs); then the ratios.
  * WARMUP steps (default 0) run first, untimed: WARMUP = 40000 times a settled bed (the
  * grains fall for about 0.1 s of the 0.4 s; contacts_end and ke_end show it).
+ * With FLOE_BENCH_CKPT=path the warmed-up worlds are saved to path.N.WARMUP.spheres and
+ * .polyhedra on the first run and loaded on the next: A/B runs of a settled bed skip the
+ * warm-up (the checkpoint holds the state, not the code: rebuild it when the physics changes).
  * ONLY = "poly" skips the sphere run (for profiles of the polyhedra alone; no ratios).
  * The polyhedra line ends with the LP's halves over the timed steps: how many, how many
  * kept the previous step's basis without a pivot (the resting-contact fast path), how many
@@ -56,7 +59,9 @@ static const double R = 0.001, RHO = 2500;
 /* build the world: poly = 1 polyhedra, 0 spheres; dt = 0 automatic */
 static double RB = 0; /* largest bounding radius of the grains */
 
-static floe_world *build(int poly, int n, double dt, floe_geometry **shapes, double *req) {
+/* ck: a checkpoint of the warmed-up world to load instead of preparing it (when the file
+ * exists; *loaded set), else NULL */
+static floe_world *build(int poly, int n, double dt, floe_geometry **shapes, double *req, const char *ck, int *loaded) {
     floe_world_def def = floe_default_world_def();
     def.dt = dt;
     def.dt_safety = 0.5;
@@ -98,13 +103,29 @@ static floe_world *build(int poly, int n, double dt, floe_geometry **shapes, dou
         for (int a = 0; a < 3; a++) p.q[1 + a] = sin(ang / 2) * ax[a];
         if (floe_world_add_particle(w, &p) < 0) { fprintf(stderr, "%s\n", floe_world_last_error(w)); exit(1); }
     }
+    FILE *f = ck ? fopen(ck, "rb") : NULL;
+    if (loaded) *loaded = f != NULL;
+    if (f) {
+        fclose(f);
+        if (floe_world_checkpoint_load(w, ck, 0, poly ? "polyhedra" : "spheres", err, sizeof err)) {
+            fprintf(stderr, "%s: %s\n", ck, err);
+            exit(1);
+        }
+        return w;
+    }
     if (floe_world_prepare(w)) { fprintf(stderr, "%s\n", floe_world_last_error(w)); exit(1); }
     return w;
 }
 
-static result run(floe_world *w, int n, long nsteps, long warmup) {
+/* warmup untimed steps (then saved to ck, if given), nsteps timed */
+static result run(floe_world *w, int n, long nsteps, long warmup, const char *ck, const char *name) {
     for (long s = 0; s < warmup; s++) /* untimed: the bed forms */
         if (floe_world_step(w)) { fprintf(stderr, "%s\n", floe_world_last_error(w)); exit(1); }
+    char err[256];
+    if (ck && warmup > 0 && floe_world_checkpoint_save(w, ck, 0, name, err, sizeof err)) {
+        fprintf(stderr, "%s: %s\n", ck, err);
+        exit(1);
+    }
     result r = {0};
     r.n = n; r.steps = nsteps;
     floe_detect_stats ds;
@@ -176,23 +197,31 @@ int main(int argc, char **argv) {
     printf("grains: %d shapes from %d planes, largest bounding radius %.3e m, volume-equivalent radii %.3e..%.3e m\n",
            NSHAPES, NPLANES, RB, req[0], req[NSHAPES - 1]);
     /* the same dt for both: 0.2 x the smaller automatic estimate */
-    floe_world *wp = build(1, n, 0, shapes, req);
+    floe_world *wp = build(1, n, 0, shapes, req, NULL, NULL);
     double dtp = floe_world_dt(wp);
     floe_world_destroy(wp); /* owns the shapes: rebuild them below */
     if (make_grains(shapes)) return 1;
-    floe_world *ws = build(0, n, 0, NULL, req);
+    floe_world *ws = build(0, n, 0, NULL, req, NULL, NULL);
     double dt = fmin(dtp, floe_world_dt(ws));
     floe_world_destroy(ws);
 
+    /* FLOE_BENCH_CKPT=path with WARMUP > 0: the warmed-up worlds in path.spheres and
+     * path.polyhedra, written by the first run and loaded by the next (same N and WARMUP) */
+    const char *ckb = getenv("FLOE_BENCH_CKPT");
+    char cks[1024], ckp[1024];
+    snprintf(cks, sizeof cks, "%s.%d.%ld.spheres", ckb ? ckb : "", n, warmup);
+    snprintf(ckp, sizeof ckp, "%s.%d.%ld.polyhedra", ckb ? ckb : "", n, warmup);
+    const int use_ck = ckb && *ckb && warmup > 0;
+    int loaded = 0;
     result rs = {0};
     if (!only_poly) {
-        ws = build(0, n, dt, NULL, req);
-        rs = run(ws, n, nsteps, warmup);
+        ws = build(0, n, dt, NULL, req, use_ck ? cks : NULL, &loaded);
+        rs = run(ws, n, nsteps, loaded ? 0 : warmup, use_ck && !loaded ? cks : NULL, "spheres");
         print("spheres", &rs, dt);
         floe_world_destroy(ws);
     }
-    wp = build(1, n, dt, shapes, req);
-    result rp = run(wp, n, nsteps, warmup);
+    wp = build(1, n, dt, shapes, req, use_ck ? ckp : NULL, &loaded);
+    result rp = run(wp, n, nsteps, loaded ? 0 : warmup, use_ck && !loaded ? ckp : NULL, "polyhedra");
     print("polyhedra", &rp, dt);
     printf("lp_halves=%.3e lp_kept=%.3e lp_cold=%.3e\n", rp.halves, rp.kept, rp.cold);
     floe_world_destroy(wp);

@@ -261,9 +261,9 @@ static int lp_scratch(floe_detect_ctx *w, int need) {
     return FLOE_OK;
 }
 
-/* one half: a's point deepest in b, in world coordinates */
-static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double *warm4, double x[3], double *s,
-                   double n[3], double *gnorm, int *pivots, int *face) {
+/* one half: a's point deepest in b, in world coordinates (f: the map from a's frame to b's) */
+static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, const rel_map *f, double *warm4,
+                   double x[3], double *s, double n[3], double *gnorm, int *pivots, int *face) {
     floe_polytope_view A, B;
     body_polytope(a->g, w->dim, &A);
     body_polytope(b->g, w->dim, &B);
@@ -271,16 +271,20 @@ static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, d
     const int na = A.np, nb = B.np, nva = A.nv;
     if (lp_scratch(w, 4 * nb)) return FLOE_ENOMEM;
     double *tb = w->det->scratch;
-    /* b's planes in a's frame: n_a = M^T n_b, d_a = d_b - n_b . m with Xb = M Xa + m */
-    rel_map f;
-    rel_make(&f, a, b);
-    for (int k = 0; k < nb; k++) {
-        const double *P = pb + 4 * k;
-        double *o = tb + 4 * k;
-        for (int i = 0; i < 3; i++) o[i] = f.M[0][i] * P[0] + f.M[1][i] * P[1] + f.M[2][i] * P[2];
-        o[3] = P[3] - (P[0] * f.m[0] + P[1] * f.m[1] + P[2] * f.m[2]);
-    }
-    floe_lp_problem P = {w->dim, pa, na, tb, nb, va, nva, fmin(a->r, b->r)};
+    /* b's planes in a's frame: n_a = M^T n_b, d_a = d_b - n_b . m with Xb = M Xa + m; the LP
+     * maps them into tb when it needs them all (3D; a warm basis that stays optimal reads its
+     * own rows only) */
+    floe_lp_problem P = {w->dim, pa, na, tb, nb, va, nva, fmin(a->r, b->r), NULL, NULL};
+    if (w->dim == 3) {
+        P.b_body = pb;
+        P.map = &f->M[0][0];
+    } else
+        for (int k = 0; k < nb; k++) {
+            const double *Q = pb + 4 * k;
+            double *o = tb + 4 * k;
+            for (int i = 0; i < 3; i++) o[i] = f->M[0][i] * Q[0] + f->M[1][i] * Q[1] + f->M[2][i] * Q[2];
+            o[3] = Q[3] - (Q[0] * f->m[0] + Q[1] * f->m[1] + Q[2] * f->m[2]);
+        }
     int basis[4];
     for (int k = 0; k < 4; k++) basis[k] = warm4 && isfinite(warm4[k]) ? (int)warm4[k] : -1;
     floe_lp_result r;
@@ -526,8 +530,8 @@ static void count_iterations(floe_detect_ctx *w, int it) {
 
 /* the vertices of a inside b, sign: +1 when a is particle i (the normal from i to j is then
  * minus b's outward face normal), -1 when a is j */
-static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double sign, int first,
-                        mf_vertex *best, int *nb, int cap) {
+static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, const rel_map *mp,
+                        double sign, int first, mf_vertex *best, int *nb, int cap) {
     floe_polytope_view pa, pb; /* a's corners (2D: its z = 0 section), b's planes */
     body_polytope(a->g, w->dim, &pa);
     body_polytope(b->g, w->dim, &pb);
@@ -536,35 +540,63 @@ static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shap
     if (!V || !P) return;
     /* a's corners in b's frame by one matrix (rel_map); a corner outside one face of b is
      * out (its depth, the least face distance, is then <= 0): the loop stops there */
-    rel_map map;
-    rel_make(&map, a, b);
+    const rel_map map = *mp;
     const double rb2 = b->r * b->r;
-    for (int v = 0; v < nv; v++) {
-        double Xb[3];
-        rel_apply(&map, V + 3 * v, Xb);
-        if (floe_v3_dot(Xb, Xb) >= rb2) continue;
-        if (w->dim == 2) Xb[2] = 0;
-        /* from the face a presses on (`first`, from the LP: most corners outside b are
-         * outside it); ties to the lowest face, as a loop from face 0 */
-        double d = INFINITY;
-        int f = -1;
-        for (int q = 0; q < np; q++) {
-            const int k = q + first < np ? q + first : q + first - np;
-            double s = P[4 * k + 3] - floe_v3_dot(P + 4 * k, Xb);
-            if (s < d || (s == d && k < f)) { d = s; f = k; }
-            if (!(d > 0)) break;
+    /* 3D: the face `first` in a's frame, n.Xb <= d as na.V <= ca: a corner clearly outside it
+     * (by more than round-off, eps) is out without its map into b's frame; the others take
+     * the exact test below, so the corners kept are the same. A resting contact keeps a few
+     * corners of the dozens: the map of each was a fifth of a settled bed's step */
+    const int cull = w->dim == 3 && first >= 0 && first < np;
+    double na[3] = {0, 0, 0}, ca = 0;
+    if (cull) {
+        const double *pf = P + 4 * first;
+        for (int i = 0; i < 3; i++) na[i] = map.M[0][i] * pf[0] + map.M[1][i] * pf[1] + map.M[2][i] * pf[2];
+        ca = pf[3] - (pf[0] * map.m[0] + pf[1] * map.m[1] + pf[2] * map.m[2]);
+    }
+    const double eps = 1e-9 * (a->r + b->r);
+    /* the corners not culled, in order, a chunk at a time (the test without a branch: which
+     * corners pass is data, a branch per corner was mispredicted) */
+    int keep[64];
+    for (int v0 = 0; v0 < nv; v0 += 64) {
+        const int v1 = v0 + 64 < nv ? v0 + 64 : nv;
+        int nk = 0;
+        if (cull)
+            for (int v = v0; v < v1; v++) {
+                const double *X = V + 3 * v;
+                keep[nk] = v;
+                nk += !(ca - (na[0] * X[0] + na[1] * X[1] + na[2] * X[2]) < -eps);
+            }
+        else
+            for (int v = v0; v < v1; v++) keep[nk++] = v;
+        for (int q0 = 0; q0 < nk; q0++) {
+            const int v = keep[q0];
+            const double *X = V + 3 * v;
+            double Xb[3];
+            rel_apply(&map, X, Xb);
+            if (floe_v3_dot(Xb, Xb) >= rb2) continue;
+            if (w->dim == 2) Xb[2] = 0;
+            /* from the face a presses on (`first`, from the LP: most corners outside b are
+             * outside it); ties to the lowest face, as a loop from face 0 */
+            double d = INFINITY;
+            int f = -1;
+            for (int q = 0; q < np; q++) {
+                const int k = q + first < np ? q + first : q + first - np;
+                double s = P[4 * k + 3] - floe_v3_dot(P + 4 * k, Xb);
+                if (s < d || (s == d && k < f)) { d = s; f = k; }
+                if (!(d > 0)) break;
+            }
+            if (!(d > 0) || f < 0) continue;
+            /* the corner in the world */
+            double xw[3];
+            floe_q_rotate(xw, a->q, V + 3 * v);
+            floe_v3_add(xw, xw, a->x);
+            mf_vertex m;
+            m.d = d;
+            floe_v3_copy(m.x, xw);
+            floe_q_rotate(m.n, b->q, P + 4 * f);
+            floe_v3_scale(m.n, -sign);
+            mf_insert(best, nb, cap, &m);
         }
-        if (!(d > 0) || f < 0) continue;
-        /* the corner in the world */
-        double xw[3];
-        floe_q_rotate(xw, a->q, V + 3 * v);
-        floe_v3_add(xw, xw, a->x);
-        mf_vertex m;
-        m.d = d;
-        floe_v3_copy(m.x, xw);
-        floe_q_rotate(m.n, b->q, P + 4 * f);
-        floe_v3_scale(m.n, -sign);
-        mf_insert(best, nb, cap, &m);
     }
 }
 
@@ -579,12 +611,13 @@ static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shap
  * other, and a flat face rests on two (2D) or up to four (3D) springs. The gradient of
  * e(d_v) is the law's force at v along the nearest face's normal (exact: the vertex moves
  * with its body, the face with the other). This finds the 2nd .. K-th deepest vertices. */
-static void manifold(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, int fb, int fa, floe_contact *c) {
+static void manifold(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, const rel_map *fab,
+                     const rel_map *fba, int fb, int fa, floe_contact *c) {
     const int K = w->dim == 2 ? 2 : 4;
     mf_vertex best[4];
     int nb = 0;
-    mf_vertices(w, a, b, 1.0, fb, best, &nb, K);
-    mf_vertices(w, b, a, -1.0, fa, best, &nb, K);
+    mf_vertices(w, a, b, fab, 1.0, fb, best, &nb, K);
+    mf_vertices(w, b, a, fba, -1.0, fa, best, &nb, K);
     mf_set_extras(c, best, nb); /* the deepest vertex is the deepest point's share */
 }
 
@@ -597,14 +630,17 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
     double x1[3], x2[3], s1, s2, n1[3], n2[3], g1 = 1, g2 = 1;
     int p1 = 0, p2 = 0;
     int fb = 0, fa = 0; /* the faces of b and of a the other presses on */
-    int rc = lp_half(w, a, b, warm, x1, &s1, n1, &g1, &p1, &fb);
+    rel_map fab, fba; /* the maps between the frames, each for its LP half and manifold pass */
+    rel_make(&fab, a, b);
+    int rc = lp_half(w, a, b, &fab, warm, x1, &s1, n1, &g1, &p1, &fb);
     if (rc) return -rc;
     w->det->lp_calls++;
     if (!(s1 < 0)) {
         count_iterations(w, p1);
         return 0;
     }
-    rc = lp_half(w, b, a, warm ? warm + 4 : NULL, x2, &s2, n2, &g2, &p2, &fa);
+    rel_make(&fba, b, a);
+    rc = lp_half(w, b, a, &fba, warm ? warm + 4 : NULL, x2, &s2, n2, &g2, &p2, &fa);
     if (rc) return -rc;
     count_iterations(w, p1 + p2);
     if (!(s2 < 0)) return 0;
@@ -624,7 +660,7 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
         c->gscale = g2;
     }
     c->r_eff = a->r * b->r / (a->r + b->r);
-    manifold(w, a, b, fb, fa, c);
+    manifold(w, a, b, &fab, &fba, fb, fa, c);
     if (warm) warm[LP_TOUCHED] = 1.0;
     return 1;
 }

@@ -17,7 +17,7 @@
  * the basis point (M y = h), the multipliers (M^T lam = e) and a pivot's edge (M d = -e_k). */
 typedef struct lu4 { double a[4][4]; int perm[4], n; } lu4;
 
-static int lu_factor(int n, const double M[4][4], lu4 *f) {
+static inline __attribute__((always_inline)) int lu_factor(int n, const double M[4][4], lu4 *f) {
     f->n = n;
     for (int i = 0; i < n; i++) {
         f->perm[i] = i;
@@ -42,8 +42,7 @@ static int lu_factor(int n, const double M[4][4], lu4 *f) {
 }
 
 /* M y = r */
-static void lu_solve(const lu4 *f, const double r[4], double y[4]) {
-    const int n = f->n;
+static inline __attribute__((always_inline)) void lu_solve_n(const lu4 *f, const double r[4], double y[4], const int n) {
     double z[4];
     for (int i = 0; i < n; i++) {
         double s = r[f->perm[i]];
@@ -58,8 +57,7 @@ static void lu_solve(const lu4 *f, const double r[4], double y[4]) {
 }
 
 /* M^T y = r: U^T z = r, L^T v = z, y[perm[i]] = v[i] */
-static void lu_solve_t(const lu4 *f, const double r[4], double y[4]) {
-    const int n = f->n;
+static inline __attribute__((always_inline)) void lu_solve_t_n(const lu4 *f, const double r[4], double y[4], const int n) {
     double z[4], v[4];
     for (int i = 0; i < n; i++) {
         double s = r[i];
@@ -73,6 +71,9 @@ static void lu_solve_t(const lu4 *f, const double r[4], double y[4]) {
     }
     for (int i = 0; i < n; i++) y[f->perm[i]] = v[i];
 }
+
+static void lu_solve(const lu4 *f, const double r[4], double y[4]) { lu_solve_n(f, r, y, f->n); }
+static void lu_solve_t(const lu4 *f, const double r[4], double y[4]) { lu_solve_t_n(f, r, y, f->n); }
 
 /* row k of the LP in (x, s): A rows (a, 0) <= b, B rows (c, -1) <= d */
 static void row(const floe_lp_problem *P, int k, double r[4], double *h) {
@@ -160,7 +161,72 @@ static int cold_basis(const floe_lp_problem *P, int *basis, double tol) {
     return 1;
 }
 
+/* plane k of p' in p's frame from its own (floe_lp_problem.b_body, map) */
+static inline void b_plane(const floe_lp_problem *P, int k, double o[4]) {
+    const double *Q = P->b_body + 4 * k, *M = P->map, *m = P->map + 9;
+    for (int i = 0; i < 3; i++) o[i] = M[i] * Q[0] + M[3 + i] * Q[1] + M[6 + i] * Q[2];
+    o[3] = Q[3] - (Q[0] * m[0] + Q[1] * m[1] + Q[2] * m[2]);
+}
+
+static void lp_finish(const floe_lp_problem *P, const int *basis, const double y[4], const double (*brow)[4],
+                      floe_lp_result *res);
+
+/* The lazy problem's warm start (b_body): 1 when the given basis is feasible and optimal (res
+ * set, no pivot), 0 when the full problem must be solved. The basis rows are those of the
+ * full problem (the same planes, the same factorisation: the same result); the other rows of
+ * p' are checked at y's point mapped into p''s frame. */
+static int lp_warm_lazy(const floe_lp_problem *P, const int *basis, floe_lp_result *res) {
+    const int n = 4, na = P->na, m = na + P->nb;
+    const double tol = 1e-12 * (P->scale > 0 ? P->scale : 1.0), ftol = 1e3 * tol;
+    double M[4][4], h[4], brow[4][4], y[4];
+    for (int i = 0; i < n; i++) {
+        const int k = basis[i];
+        if (k < 0 || k >= m) return 0;
+        if (k < na) {
+            const double *pl = P->a + 4 * k;
+            for (int c = 0; c < 3; c++) M[i][c] = pl[c];
+            M[i][3] = 0.0;
+            h[i] = pl[3];
+        } else {
+            b_plane(P, k - na, brow[i]);
+            for (int c = 0; c < 3; c++) M[i][c] = brow[i][c];
+            M[i][3] = -1.0;
+            h[i] = brow[i][3];
+        }
+    }
+    lu4 f; /* n = 4 known here: the factorisation and solves unrolled (the same operations) */
+    if (!lu_factor(4, M, &f)) return 0;
+    lu_solve_n(&f, h, y, 4);
+    const double *a = P->a;
+    for (int k = 0; k < na; k++, a += 4)
+        if (a[0] * y[0] + a[1] * y[1] + a[2] * y[2] > a[3] + ftol) return 0;
+    const double *Mm = P->map, *mm = P->map + 9;
+    double X[3];
+    for (int i = 0; i < 3; i++) X[i] = Mm[3 * i] * y[0] + Mm[3 * i + 1] * y[1] + Mm[3 * i + 2] * y[2] + mm[i];
+    const double *b = P->b_body;
+    for (int k = 0; k < P->nb; k++, b += 4)
+        if (b[0] * X[0] + b[1] * X[1] + b[2] * X[2] - y[3] > b[3] + ftol) return 0;
+    double lam[4], rhs[4] = {0, 0, 0, -1.0};
+    lu_solve_t_n(&f, rhs, lam, 4);
+    for (int i = 0; i < n; i++)
+        if (lam[i] < -1e-12) return 0; /* a pivot: the full problem */
+    memset(res, 0, sizeof *res);
+    res->warm = 1;
+    memcpy(res->lambda, lam, sizeof lam);
+    lp_finish(P, basis, y, (const double (*)[4])brow, res);
+    return 1;
+}
+
 int floe_lp_deepest(const floe_lp_problem *P, int *basis, floe_lp_result *res) {
+    if (P->b_body) {
+        if (P->dim == 3 && basis[0] >= 0 && lp_warm_lazy(P, basis, res)) return FLOE_OK;
+        floe_lp_problem F = *P; /* every row: p''s planes into the buffer */
+        double *bb = (double *)P->b;
+        for (int k = 0; k < P->nb; k++) b_plane(P, k, bb + 4 * k);
+        F.b_body = NULL;
+        F.map = NULL;
+        return floe_lp_deepest(&F, basis, res);
+    }
     const int dim = P->dim, n = dim + 1, m = P->na + P->nb;
     const double tol = 1e-12 * (P->scale > 0 ? P->scale : 1.0);
     double y[4], h[4];
@@ -219,6 +285,15 @@ int floe_lp_deepest(const floe_lp_problem *P, int *basis, floe_lp_result *res) {
     }
     res->pivots = it;
     if (it >= 200) return FLOE_EINVAL;
+    lp_finish(P, basis, y, NULL, res);
+    return FLOE_OK;
+}
+
+/* the optimum's point, value and normal from the basis, y and res->lambda (brow: the basis
+ * rows' planes of p' in p's frame, or NULL: P->b's) */
+static void lp_finish(const floe_lp_problem *P, const int *basis, const double y[4], const double (*brow)[4],
+                      floe_lp_result *res) {
+    const int dim = P->dim, n = dim + 1;
     for (int i = 0; i < dim; i++) res->x[i] = y[i];
     if (dim == 2) res->x[2] = 0.0;
     res->s = y[n - 1];
@@ -226,7 +301,7 @@ int floe_lp_deepest(const floe_lp_problem *P, int *basis, floe_lp_result *res) {
     double g[3] = {0, 0, 0};
     for (int i = 0; i < n; i++) {
         if (basis[i] < P->na) continue;
-        const double *c = P->b + 4 * (basis[i] - P->na);
+        const double *c = brow ? brow[i] : P->b + 4 * (basis[i] - P->na);
         for (int k = 0; k < dim; k++) g[k] += res->lambda[i] * c[k];
     }
     double gn = floe_v3_norm(g);
@@ -239,11 +314,10 @@ int floe_lp_deepest(const floe_lp_problem *P, int *basis, floe_lp_result *res) {
             if (basis[i] >= P->na && (best < 0 || res->lambda[i] > res->lambda[best])) best = i;
         floe_v3_set(g, 0, 0, 0);
         if (best >= 0)
-            for (int k = 0; k < dim; k++) g[k] = P->b[4 * (basis[best] - P->na) + k];
+            for (int k = 0; k < dim; k++) g[k] = brow ? brow[best][k] : P->b[4 * (basis[best] - P->na) + k];
         double gb = floe_v3_norm(g);
         if (gb > 0) floe_v3_scale(g, 1.0 / gb);
         res->gnorm = 1.0;
     }
     floe_v3_copy(res->normal, g);
-    return FLOE_OK;
 }
