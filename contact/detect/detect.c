@@ -539,7 +539,7 @@ static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shap
     const int nv = pa.nv, np = pb.np;
     if (!V || !P) return;
     /* a's corners in b's frame by one matrix (rel_map); a corner outside one face of b is
-     * out (its depth, the least face distance, is then <= 0): the loop stops there */
+     * out (its depth, the least face distance, is then <= 0) */
     const rel_map map = *mp;
     const double rb2 = b->r * b->r;
     /* 3D: the face `first` in a's frame, n.Xb <= d as na.V <= ca: a corner clearly outside it
@@ -575,15 +575,16 @@ static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shap
             rel_apply(&map, X, Xb);
             if (floe_v3_dot(Xb, Xb) >= rb2) continue;
             if (w->dim == 2) Xb[2] = 0;
-            /* from the face a presses on (`first`, from the LP: most corners outside b are
-             * outside it); ties to the lowest face, as a loop from face 0 */
+            /* its depth, the least face distance, and that face (ties to the lowest), over
+             * every face without a branch (the culled corners were the most of those
+             * outside; a branch per face was mispredicted) */
             double d = INFINITY;
             int f = -1;
-            for (int q = 0; q < np; q++) {
-                const int k = q + first < np ? q + first : q + first - np;
-                double s = P[4 * k + 3] - floe_v3_dot(P + 4 * k, Xb);
-                if (s < d || (s == d && k < f)) { d = s; f = k; }
-                if (!(d > 0)) break;
+            for (int k = 0; k < np; k++) {
+                const double s = P[4 * k + 3] - floe_v3_dot(P + 4 * k, Xb);
+                const int take = s < d;
+                d = take ? s : d;
+                f = take ? k : f;
             }
             if (!(d > 0) || f < 0) continue;
             /* the corner in the world */

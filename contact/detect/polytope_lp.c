@@ -197,15 +197,18 @@ static int lp_warm_lazy(const floe_lp_problem *P, const int *basis, floe_lp_resu
     lu4 f; /* n = 4 known here: the factorisation and solves unrolled (the same operations) */
     if (!lu_factor(4, M, &f)) return 0;
     lu_solve_n(&f, h, y, 4);
+    /* every row tested, without an exit per row (the same decisions; the loops vectorise) */
     const double *a = P->a;
-    for (int k = 0; k < na; k++, a += 4)
-        if (a[0] * y[0] + a[1] * y[1] + a[2] * y[2] > a[3] + ftol) return 0;
+    int bad = 0;
+    for (int k = 0; k < na; k++)
+        bad |= a[4 * k] * y[0] + a[4 * k + 1] * y[1] + a[4 * k + 2] * y[2] > a[4 * k + 3] + ftol;
     const double *Mm = P->map, *mm = P->map + 9;
     double X[3];
     for (int i = 0; i < 3; i++) X[i] = Mm[3 * i] * y[0] + Mm[3 * i + 1] * y[1] + Mm[3 * i + 2] * y[2] + mm[i];
     const double *b = P->b_body;
-    for (int k = 0; k < P->nb; k++, b += 4)
-        if (b[0] * X[0] + b[1] * X[1] + b[2] * X[2] - y[3] > b[3] + ftol) return 0;
+    for (int k = 0; k < P->nb; k++)
+        bad |= b[4 * k] * X[0] + b[4 * k + 1] * X[1] + b[4 * k + 2] * X[2] - y[3] > b[4 * k + 3] + ftol;
+    if (bad) return 0;
     double lam[4], rhs[4] = {0, 0, 0, -1.0};
     lu_solve_t_n(&f, rhs, lam, 4);
     for (int i = 0; i < n; i++)
