@@ -271,20 +271,10 @@ static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, c
     const int na = A.np, nb = B.np, nva = A.nv;
     if (lp_scratch(w, 4 * nb)) return FLOE_ENOMEM;
     double *tb = w->det->scratch;
-    /* b's planes in a's frame: n_a = M^T n_b, d_a = d_b - n_b . m with Xb = M Xa + m; the LP
-     * maps them into tb when it needs them all (3D; a warm basis that stays optimal reads its
-     * own rows only) */
-    floe_lp_problem P = {w->dim, pa, na, tb, nb, va, nva, fmin(a->r, b->r), NULL, NULL};
-    if (w->dim == 3) {
-        P.b_body = pb;
-        P.map = &f->M[0][0];
-    } else
-        for (int k = 0; k < nb; k++) {
-            const double *Q = pb + 4 * k;
-            double *o = tb + 4 * k;
-            for (int i = 0; i < 3; i++) o[i] = f->M[0][i] * Q[0] + f->M[1][i] * Q[1] + f->M[2][i] * Q[2];
-            o[3] = Q[3] - (Q[0] * f->m[0] + Q[1] * f->m[1] + Q[2] * f->m[2]);
-        }
+    /* b's planes in a's frame (n_a = M^T n_b, d_a = d_b - n_b . m with Xb = M Xa + m): the LP
+     * maps them into tb when it needs them all (a warm basis that stays optimal in 3D reads
+     * its own rows only) */
+    floe_lp_problem P = {w->dim, pa, na, tb, nb, va, nva, fmin(a->r, b->r), pb, &f->M[0][0]};
     int basis[4];
     for (int k = 0; k < 4; k++) basis[k] = warm4 && isfinite(warm4[k]) ? (int)warm4[k] : -1;
     floe_lp_result r;

@@ -14,11 +14,11 @@ typedef struct floe_lp_problem {
     const double *va;   /* nva vertices of p (3 doubles each, world), for the cold start */
     int nva;
     double scale;       /* length scale for tolerances (the particle size) */
-    /* optional, 3D (NULL: b holds p''s planes): p''s planes in its own frame, b_body, and the
+    /* optional (NULL: b holds p''s planes): p''s planes in its own frame, b_body, and the
      * map from p's frame into it, map = (M row-major, m): X' = M x + m. b is then a buffer of
-     * nb planes that the LP fills (n = M^T n', d = d' - n'.m) only when it needs every row (a
-     * pivot or a cold start); a warm basis that stays optimal reads its own rows alone and
-     * checks the others at the point mapped into p''s frame */
+     * nb planes that the LP fills (n = M^T n', d = d' - n'.m) when it needs every row (2D; in
+     * 3D a pivot or a cold start); in 3D a warm basis that stays optimal reads its own rows
+     * alone and checks the others at the point mapped into p''s frame */
     const double *b_body;
     const double *map;
 } floe_lp_problem;
