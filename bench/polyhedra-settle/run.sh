@@ -5,6 +5,9 @@
 # pair evaluation and ns per contact, and the polyhedra/spheres ratios.
 #   REPS=3 STEPS=2000 N=5000 bench/polyhedra-settle/run.sh
 #   REPS=1 STEPS=2000 WARMUP=40000 bench/polyhedra-settle/run.sh    # the settled bed (~30 min)
+#   FLOE_BENCH_CKPT=/tmp/poly.ckpt REPS=3 STEPS=2000 WARMUP=40000 bench/polyhedra-settle/run.sh
+#     # the first run saves both warmed-up beds (/tmp/poly.ckpt.N.WARMUP.spheres, .polyhedra),
+#     # the others load them: the settled bed in about a minute a run
 # The library is built without CGAL/assimp (not needed: the grains are built from planes),
 # in its own build folder (BUILD, default build-bench-poly), Release -O3 -march=native.
 set -euo pipefail
