@@ -102,57 +102,6 @@ static int grow_int(int **a, int n) {
     return FLOE_OK;
 }
 
-/* the imported entries (pi < n) in the order a build leaves its list, (i, j, piece pair): the
- * next build then carries their history over by its row merge (core/world/neighbor.c), not
- * through a hash of every entry. Rows by a counting sort on i, each row by insertion (a few
- * entries). Equal entries (none expected) stay, and the build takes the hash path. */
-static int hist_sort(floe_neighbor_list *nl, int n, int use_warm) {
-    const int np = nl->npairs, H = FLOE_MAX_HISTORY, W = FLOE_DETECT_WARM;
-    if (np < 2) return FLOE_OK;
-    int *start = calloc((size_t)n + 1, sizeof *start), *ord = malloc((size_t)np * sizeof *ord);
-    int *pi = malloc((size_t)np * sizeof *pi), *pj = malloc((size_t)np * sizeof *pj);
-    int *sub = malloc((size_t)np * sizeof *sub);
-    unsigned char *t = malloc((size_t)np);
-    double *h = malloc((size_t)np * H * sizeof *h), *wm = use_warm ? malloc((size_t)np * W * sizeof *wm) : NULL;
-    int rc = start && ord && pi && pj && sub && t && h && (!use_warm || wm) ? FLOE_OK : FLOE_ENOMEM;
-    for (int k = 0; !rc && k < np; k++)
-        if (nl->pi[k] < 0 || nl->pi[k] >= n) rc = FLOE_EINVAL; /* cannot happen: left unsorted */
-    if (!rc) {
-        for (int k = 0; k < np; k++) start[nl->pi[k] + 1]++;
-        for (int i = 0; i < n; i++) start[i + 1] += start[i];
-        for (int k = 0; k < np; k++) ord[start[nl->pi[k]]++] = k;
-        for (int i = n; i > 0; i--) start[i] = start[i - 1]; /* back to the rows' starts */
-        start[0] = 0;
-        for (int i = 0; i < n; i++)
-            for (int a = start[i] + 1; a < start[i + 1]; a++) {
-                const int k = ord[a];
-                int b = a;
-                while (b > start[i] && (nl->pj[ord[b - 1]] > nl->pj[k] ||
-                                        (nl->pj[ord[b - 1]] == nl->pj[k] && nl->sub[ord[b - 1]] > nl->sub[k]))) {
-                    ord[b] = ord[b - 1];
-                    b--;
-                }
-                ord[b] = k;
-            }
-        for (int a = 0; a < np; a++) {
-            const int k = ord[a];
-            pi[a] = nl->pi[k];
-            pj[a] = nl->pj[k];
-            sub[a] = nl->sub[k];
-            t[a] = nl->touching[k];
-            memcpy(h + (size_t)a * H, nl->hist + (size_t)k * H, H * sizeof *h);
-            if (use_warm) memcpy(wm + (size_t)a * W, nl->warm + (size_t)k * W, W * sizeof *wm);
-        }
-        free(nl->pi); free(nl->pj); free(nl->sub); free(nl->touching); free(nl->hist);
-        nl->pi = pi; nl->pj = pj; nl->sub = sub; nl->touching = t; nl->hist = h;
-        nl->cap = np;
-        if (use_warm) { free(nl->warm); nl->warm = wm; }
-        pi = pj = sub = NULL; t = NULL; h = wm = NULL;
-    }
-    free(start); free(ord); free(pi); free(pj); free(sub); free(t); free(h); free(wm);
-    return rc == FLOE_EINVAL ? FLOE_OK : rc;
-}
-
 /* the received history entries written as the list's previous pairs in the new local
  * indices, so that floe_nl_build keeps them as it keeps the history across any rebuild */
 static int hist_import(floe_world *w, floe_par *P, const double *in, int nin) {
@@ -195,7 +144,9 @@ static int hist_import(floe_world *w, floe_par *P, const double *in, int nin) {
     nl->img = NULL;
     nl->npairs = cnt;
     nl->gen++; /* a new list: the threads' per-particle index is rebuilt (forces.c) */
-    return hist_sort(nl, w->p.n, use_warm);
+    /* in the order a build leaves its list: the next build carries the history by its row
+     * merge, not through a hash of every entry */
+    return floe_nl_sort(nl, w->p.n);
 }
 
 /* the decomposition again: RCB of the owned centres, the history of the pairs whose anchor

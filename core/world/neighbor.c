@@ -370,6 +370,59 @@ static int nl_sorted(const floe_neighbor_list *nl) {
     return nl->npairs == 0 || pi[0] >= 0;
 }
 
+/* Rows by a counting sort on i, each row by insertion on (j, piece pair, image), entry_less
+ * (a row holds a few entries); equal entries (none expected) keep their order, and the next
+ * build then takes the hash path (nl_sorted). */
+int floe_nl_sort(floe_neighbor_list *nl, int n) {
+    const int np = nl->npairs, H = FLOE_MAX_HISTORY, W = FLOE_DETECT_WARM, use_warm = nl->use_warm && nl->warm;
+    if (np < 2) return FLOE_OK;
+    for (int k = 0; k < np; k++)
+        if (nl->pi[k] < 0 || nl->pi[k] >= n) return FLOE_OK; /* cannot happen: left unsorted */
+    int *start = calloc((size_t)n + 1, sizeof *start), *ord = malloc((size_t)np * sizeof *ord);
+    int *pi = malloc((size_t)np * sizeof *pi), *pj = malloc((size_t)np * sizeof *pj);
+    int *sub = malloc((size_t)np * sizeof *sub), *img = nl->img ? malloc((size_t)np * sizeof *img) : NULL;
+    unsigned char *t = malloc((size_t)np);
+    double *h = malloc((size_t)np * H * sizeof *h), *wm = use_warm ? malloc((size_t)np * W * sizeof *wm) : NULL;
+    int rc = start && ord && pi && pj && sub && (!nl->img || img) && t && h && (!use_warm || wm) ? FLOE_OK : FLOE_ENOMEM;
+    if (!rc) {
+        for (int k = 0; k < np; k++) start[nl->pi[k] + 1]++;
+        for (int i = 0; i < n; i++) start[i + 1] += start[i];
+        for (int k = 0; k < np; k++) ord[start[nl->pi[k]]++] = k;
+        for (int i = n; i > 0; i--) start[i] = start[i - 1]; /* back to the rows' starts */
+        start[0] = 0;
+        for (int i = 0; i < n; i++)
+            for (int a = start[i] + 1; a < start[i + 1]; a++) {
+                const int k = ord[a], key[3] = {nl->pj[k], nl->sub[k], nl->img ? nl->img[k] : 0};
+                int b = a;
+                while (b > start[i]) {
+                    const int c = ord[b - 1], cur[3] = {nl->pj[c], nl->sub[c], nl->img ? nl->img[c] : 0};
+                    if (!entry_less(key, cur)) break;
+                    ord[b] = c;
+                    b--;
+                }
+                ord[b] = k;
+            }
+        for (int a = 0; a < np; a++) {
+            const int k = ord[a];
+            pi[a] = nl->pi[k];
+            pj[a] = nl->pj[k];
+            sub[a] = nl->sub[k];
+            if (img) img[a] = nl->img[k];
+            t[a] = nl->touching[k];
+            memcpy(h + (size_t)a * H, nl->hist + (size_t)k * H, H * sizeof *h);
+            if (use_warm) memcpy(wm + (size_t)a * W, nl->warm + (size_t)k * W, W * sizeof *wm);
+        }
+        free(nl->pi); free(nl->pj); free(nl->sub); free(nl->touching); free(nl->hist);
+        nl->pi = pi; nl->pj = pj; nl->sub = sub; nl->touching = t; nl->hist = h;
+        if (img) { free(nl->img); nl->img = img; }
+        nl->cap = np;
+        if (use_warm) { free(nl->warm); nl->warm = wm; }
+        pi = pj = sub = img = NULL; t = NULL; h = wm = NULL;
+    }
+    free(start); free(ord); free(pi); free(pj); free(sub); free(img); free(t); free(h); free(wm);
+    return rc;
+}
+
 /* the last build's entries (i, j, piece pair, image), taken from the list while the next is
  * built; their history stays in the list's arrays and moves in place to the new entries */
 typedef struct nl_old {

@@ -282,6 +282,11 @@ int floe_nl_needs_rebuild(const floe_neighbor_list *nl, const floe_particles *p)
 int floe_nl_needs_rebuild_after_drift(const floe_neighbor_list *nl, const floe_particles *p, double maxd2,
                                       int growth);
 int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int leaf_size);
+/* the entries (first particle < n) put in the order a build leaves them, (i, j, piece pair,
+ * image), with their history, touching flags and warm starts: the next build then carries
+ * the history by its row merge, not a hash of every entry (MPI's imported history,
+ * core/parallel). Entries out of range: left as they are (FLOE_OK); FLOE_ENOMEM */
+int floe_nl_sort(floe_neighbor_list *nl, int n);
 /* the world's list rebuilt from its particles, its search on the world's threads */
 int floe_world_nl_build(floe_world *w);
 
