@@ -166,7 +166,7 @@ static int solve_half(const floe_geometry *ga, const floe_geometry *gb, const do
         floe_q_rotate(tb + 4 * k, qb, B.plane + 4 * k);
         tb[4 * k + 3] = B.plane[4 * k + 3] + floe_v3_dot(tb + 4 * k, xb);
     }
-    floe_lp_problem P = {3, A.plane, A.np, tb, B.np, A.v, A.nv, R, NULL, NULL};
+    floe_lp_problem P = {3, A.plane, A.np, tb, B.np, A.v, A.nv, R, NULL, NULL, NULL};
     int rc = floe_lp_deepest(&P, basis, r);
     free(tb);
     return rc;
@@ -247,8 +247,8 @@ static void lazy_equals_full(void) {
                     }
                 }
             }
-            floe_lp_problem F = {3, A.plane, A.np, tb, B.np, A.v, A.nv, R, NULL, NULL};
-            floe_lp_problem L = {3, A.plane, A.np, buf, B.np, A.v, A.nv, R, B.plane, map};
+            floe_lp_problem F = {3, A.plane, A.np, tb, B.np, A.v, A.nv, R, NULL, NULL, NULL};
+            floe_lp_problem L = {3, A.plane, A.np, NULL, B.np, A.v, A.nv, R, B.plane, map, buf};
             {   /* the mapped planes as the library maps them: a cold lazy solve maps them all
                  * into its buffer (one formula, one compilation: the comparison is of the
                  * paths, not of two compilations of the map) */

@@ -265,7 +265,7 @@ static double dp_reference(const body *a, const body *b, double n[3], int *defin
 static double lp_scratch[4 * 80];
 static int lp_half(const body *a, const body *b, int *basis, double *s, double n[3]) {
     for (int k = 0; k < b->np; k++) plane_to(b->plane + 4 * k, &b->pose, &a->pose, lp_scratch + 4 * k);
-    floe_lp_problem P = {3, a->plane, a->np, lp_scratch, b->np, a->vb, a->nv, 1.0, NULL, NULL};
+    floe_lp_problem P = {3, a->plane, a->np, lp_scratch, b->np, a->vb, a->nv, 1.0, NULL, NULL, NULL};
     floe_lp_result r;
     int rc = floe_lp_deepest(&P, basis, &r);
     if (rc) return rc;

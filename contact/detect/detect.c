@@ -274,7 +274,7 @@ static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, c
     /* b's planes in a's frame (n_a = M^T n_b, d_a = d_b - n_b . m with Xb = M Xa + m): the LP
      * maps them into tb when it needs them all (a warm basis that stays optimal in 3D reads
      * its own rows only) */
-    floe_lp_problem P = {w->dim, pa, na, tb, nb, va, nva, fmin(a->r, b->r), pb, &f->M[0][0]};
+    floe_lp_problem P = {w->dim, pa, na, NULL, nb, va, nva, fmin(a->r, b->r), pb, &f->M[0][0], tb};
     int basis[4];
     for (int k = 0; k < 4; k++) basis[k] = warm4 && isfinite(warm4[k]) ? (int)warm4[k] : -1;
     floe_lp_result r;

@@ -15,12 +15,13 @@ typedef struct floe_lp_problem {
     int nva;
     double scale;       /* length scale for tolerances (the particle size) */
     /* optional (NULL: b holds p''s planes): p''s planes in its own frame, b_body, and the
-     * map from p's frame into it, map = (M row-major, m): X' = M x + m. b is then a buffer of
+     * map from p's frame into it, map = (M row-major, m): X' = M x + m, with b_buf, room for
      * nb planes that the LP fills (n = M^T n', d = d' - n'.m) when it needs every row (2D; in
-     * 3D a pivot or a cold start); in 3D a warm basis that stays optimal reads its own rows
-     * alone and checks the others at the point mapped into p''s frame */
+     * 3D a pivot or a cold start); b is then unread. In 3D a warm basis that stays optimal
+     * reads its own rows alone and checks the others at the point mapped into p''s frame */
     const double *b_body;
     const double *map;
+    double *b_buf;
 } floe_lp_problem;
 
 typedef struct floe_lp_result {

@@ -75,13 +75,17 @@ static inline __attribute__((always_inline)) void lu_solve_t_n(const lu4 *f, con
 static void lu_solve(const lu4 *f, const double r[4], double y[4]) { lu_solve_n(f, r, y, f->n); }
 static void lu_solve_t(const lu4 *f, const double r[4], double y[4]) { lu_solve_t_n(f, r, y, f->n); }
 
-/* row k of the LP in (x, s): A rows (a, 0) <= b, B rows (c, -1) <= d */
-static void row(const floe_lp_problem *P, int k, double r[4], double *h) {
-    int n = P->dim + 1;
-    const double *pl = k < P->na ? P->a + 4 * k : P->b + 4 * (k - P->na);
-    for (int i = 0; i < P->dim; i++) r[i] = pl[i];
-    r[n - 1] = k < P->na ? 0.0 : -1.0;
+/* the LP's row of plane pl in (x, s): an A row (a, 0) <= b, a B row (c, -1) <= d */
+static inline void plane_row(const double *pl, int is_b, int dim, double r[4], double *h) {
+    for (int i = 0; i < dim; i++) r[i] = pl[i];
+    r[dim] = is_b ? -1.0 : 0.0;
     *h = pl[3];
+}
+
+/* row k of the LP: A rows 0..na-1, then B rows */
+static void row(const floe_lp_problem *P, int k, double r[4], double *h) {
+    const int is_b = k >= P->na;
+    plane_row(is_b ? P->b + 4 * (k - P->na) : P->a + 4 * k, is_b, P->dim, r, h);
 }
 
 /* the basis rows' matrix and right-hand side, factorised; 0 if singular */
@@ -182,16 +186,10 @@ static int lp_warm_lazy(const floe_lp_problem *P, const int *basis, floe_lp_resu
     for (int i = 0; i < n; i++) {
         const int k = basis[i];
         if (k < 0 || k >= m) return 0;
-        if (k < na) {
-            const double *pl = P->a + 4 * k;
-            for (int c = 0; c < 3; c++) M[i][c] = pl[c];
-            M[i][3] = 0.0;
-            h[i] = pl[3];
-        } else {
+        if (k < na) plane_row(P->a + 4 * k, 0, 3, M[i], &h[i]);
+        else {
             b_plane(P, k - na, brow[i]);
-            for (int c = 0; c < 3; c++) M[i][c] = brow[i][c];
-            M[i][3] = -1.0;
-            h[i] = brow[i][3];
+            plane_row(brow[i], 1, 3, M[i], &h[i]);
         }
     }
     lu4 f; /* n = 4 known here: the factorisation and solves unrolled (the same operations) */
@@ -224,8 +222,8 @@ int floe_lp_deepest(const floe_lp_problem *P, int *basis, floe_lp_result *res) {
     if (P->b_body) {
         if (P->dim == 3 && basis[0] >= 0 && lp_warm_lazy(P, basis, res)) return FLOE_OK;
         floe_lp_problem F = *P; /* every row: p''s planes into the buffer */
-        double *bb = (double *)P->b;
-        for (int k = 0; k < P->nb; k++) b_plane(P, k, bb + 4 * k);
+        for (int k = 0; k < P->nb; k++) b_plane(P, k, P->b_buf + 4 * k);
+        F.b = P->b_buf;
         F.b_body = NULL;
         F.map = NULL;
         return floe_lp_deepest(&F, basis, res);
