@@ -281,6 +281,12 @@ static void test_packing_errors(void)
     expect_error("stress group", t, loc_of(t, "2}", 0), "group", NULL);
     t = BASE_MATS ONE_BODY "outputs:\n  - {type: vtk, every: 0}\n";
     expect_error("every 0", t, loc_of(t, "0}", 0), "every", NULL);
+    /* a registered output that fails after its parameters were read: the parameters are
+     * freed with the loader (a leak the fuzzer found, seen by the sanitizer build) */
+    t = BASE_MATS ONE_BODY "outputs:\n  - {type: contacts, every: 0}\n";
+    expect_error("registered output, every 0", t, loc_of(t, "0}", 0), "every", NULL);
+    t = BASE_MATS ONE_BODY "outputs:\n  - {type: energy, every: 5}\n  - {type: contacts, interval: -1}\n";
+    expect_error("registered output, second, bad interval", t, loc_of(t, "-1}", 0), "interval", NULL);
     t = BASE_MATS ONE_BODY "outputs:\n  - {type: vtk, every: 10, interval: 0.1}\n";
     expect_error("every and interval", t, NULL, "not both", NULL);
     t = BASE_MATS ONE_BODY "outputs:\n  - {type: energy, prefix: e}\n";

@@ -910,7 +910,8 @@ int floe_scene_load_ex(const char *path, const char *text, const char *outdir, i
     free(s.law_at);
     free(s.entry_first);
     free(s.entry_count);
-    for (int i = 0; i < s.nouts; i++) free(s.outs[i].uparams);
+    /* every allocated entry: one that failed half-way holds its parameters too */
+    for (int i = 0; i < s.outs_cap; i++) free(s.outs[i].uparams);
     free(s.outs);
     if (rc != FLOE_OK) {
         if (s.w) floe_world_destroy(s.w);

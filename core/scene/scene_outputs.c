@@ -64,6 +64,7 @@ int sc_parse_outputs(sc *s, struct fy_node *seq, struct fy_node *key, const char
     int n = fy_node_sequence_item_count(seq);
     s->outs = calloc((size_t)(n ? n : 1), sizeof *s->outs);
     if (!s->outs) return sc_fail(s, FLOE_ENOMEM, key, "out of memory");
+    s->outs_cap = n ? n : 1;
     if (with_outputs && n > 0 && sc_mkdir_p(outdir) != 0)
         return sc_fail(s, FLOE_EIO, key, "cannot create the output directory '%s': %s", outdir,
                        strerror(errno));

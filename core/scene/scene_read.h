@@ -112,6 +112,7 @@ typedef struct sc {
     int *entry_first, *entry_count; /* particle range of each body entry */
     sc_output *outs;
     int nouts;
+    int outs_cap; /* entries allocated in outs (each one's uparams freed with the loader, parsed or not) */
     double duration, dt_given, safety;
     int dt_auto;
     int grow_particle[8];
