@@ -82,6 +82,52 @@ static inline void plane_row(const double *pl, int is_b, int dim, double r[4], d
     *h = pl[3];
 }
 
+/* A 3D basis solved in closed form (no LU): the rows (r_i, e_i) with e_i = 0 (p's faces) or
+ * -1 (p''s), M y = h and M^T lam = (0, 0, 0, -1). Subtracting the first B row (c, d) from
+ * the other B rows leaves three equations in x alone, R x = g (rows a_i | c_j - c, right-hand
+ * sides b_i | d_j - d), solved by Cramer's rule with the cofactor rows u_k (one division);
+ * then s = c.x - d. The multipliers: sum lam_i r_i = 0 and the B rows' sum to 1, so with lam_c
+ * = 1 - (the others' B multipliers), R^T z = -c: z_k = -u_k.c / det. 0 if there is no B row
+ * or |det| < 1e-12 (singular: the caller takes the LU path). Every basis kind (a corner of p
+ * on a face of p', edge on edge, face on a corner) the same way. */
+static inline int basis_solve3(const double M[4][4], const double h[4], double y[4], double lam[4]) {
+    int ib = -1, o[3], no = 0;
+    for (int i = 0; i < 4; i++) {
+        if (M[i][3] != 0.0 && ib < 0) ib = i;
+        else if (no < 3) o[no++] = i;
+    }
+    if (ib < 0 || no != 3) return 0;
+    const double *c = M[ib];
+    double r[3][3], g[3];
+    for (int k = 0; k < 3; k++) {
+        const double *q = M[o[k]];
+        if (q[3] != 0.0) {
+            for (int i = 0; i < 3; i++) r[k][i] = q[i] - c[i];
+            g[k] = h[o[k]] - h[ib];
+        } else {
+            for (int i = 0; i < 3; i++) r[k][i] = q[i];
+            g[k] = h[o[k]];
+        }
+    }
+    double u[3][3];
+    floe_v3_cross(u[0], r[1], r[2]);
+    floe_v3_cross(u[1], r[2], r[0]);
+    floe_v3_cross(u[2], r[0], r[1]);
+    const double det = floe_v3_dot(r[0], u[0]);
+    if (!(fabs(det) >= 1e-12)) return 0;
+    const double inv = 1.0 / det;
+    for (int i = 0; i < 3; i++) y[i] = (g[0] * u[0][i] + g[1] * u[1][i] + g[2] * u[2][i]) * inv;
+    y[3] = c[0] * y[0] + c[1] * y[1] + c[2] * y[2] - h[ib];
+    double lc = 1.0;
+    for (int k = 0; k < 3; k++) {
+        const double z = -floe_v3_dot(u[k], c) * inv;
+        lam[o[k]] = z;
+        if (M[o[k]][3] != 0.0) lc -= z;
+    }
+    lam[ib] = lc;
+    return 1;
+}
+
 /* row k of the LP: A rows 0..na-1, then B rows */
 static void row(const floe_lp_problem *P, int k, double r[4], double *h) {
     const int is_b = k >= P->na;
@@ -192,9 +238,8 @@ static int lp_warm_lazy(const floe_lp_problem *P, const int *basis, floe_lp_resu
             plane_row(brow[i], 1, 3, M[i], &h[i]);
         }
     }
-    lu4 f; /* n = 4 known here: the factorisation and solves unrolled (the same operations) */
-    if (!lu_factor(4, M, &f)) return 0;
-    lu_solve_n(&f, h, y, 4);
+    double lam[4];
+    if (!basis_solve3(M, h, y, lam)) return 0;
     /* every row tested, without an exit per row (the same decisions; the loops vectorise) */
     const double *a = P->a;
     int bad = 0;
@@ -207,8 +252,6 @@ static int lp_warm_lazy(const floe_lp_problem *P, const int *basis, floe_lp_resu
     for (int k = 0; k < P->nb; k++)
         bad |= b[4 * k] * X[0] + b[4 * k + 1] * X[1] + b[4 * k + 2] * X[2] - y[3] > b[4 * k + 3] + ftol;
     if (bad) return 0;
-    double lam[4], rhs[4] = {0, 0, 0, -1.0};
-    lu_solve_t_n(&f, rhs, lam, 4);
     for (int i = 0; i < n; i++)
         if (lam[i] < -1e-12) return 0; /* a pivot: the full problem */
     memset(res, 0, sizeof *res);
@@ -237,6 +280,18 @@ int floe_lp_deepest(const floe_lp_problem *P, int *basis, floe_lp_result *res) {
      * resting contact: then usually still optimal, and the loop below stops at once) */
     int ok = basis[0] >= 0;
     for (int i = 0; ok && i < n; i++) ok = basis[i] >= 0 && basis[i] < m;
+    if (ok && dim == 3) { /* kept as it is (the lazy path's test, the same operations) */
+        double M[4][4], lam[4];
+        for (int i = 0; i < n; i++) row(P, basis[i], M[i], &h[i]);
+        int kept = basis_solve3(M, h, y, lam) && feasible(P, y, 1e3 * tol);
+        for (int i = 0; kept && i < n; i++) kept = lam[i] >= -1e-12;
+        if (kept) {
+            res->warm = 1;
+            memcpy(res->lambda, lam, sizeof lam);
+            lp_finish(P, basis, y, NULL, res);
+            return FLOE_OK;
+        }
+    }
     if (ok) ok = basis_factor(P, basis, &f, h);
     if (ok) {
         lu_solve(&f, h, y);

@@ -469,8 +469,11 @@ static int sc_add_growth(sc *s, const sc_common *c, int particle, struct fy_node
         return sc_fail(s, FLOE_EINVAL, at, "%s: could not create the growing radius of particle %d",
                        what, particle);
     int r = floe_world_add_state(s->w, st);
-    if (r != FLOE_OK)
+    if (r != FLOE_OK) { /* not taken: still ours */
+        if (st->klass->destroy) st->klass->destroy(st);
+        else free(st);
         return sc_fail(s, r < 0 ? -r : r, at, "%s: %s", what, floe_world_last_error(s->w));
+    }
     if (s->ngrow_listed < (int)(sizeof s->grow_particle / sizeof s->grow_particle[0]))
         s->grow_particle[s->ngrow_listed++] = particle;
     s->nstates++;

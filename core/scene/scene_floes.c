@@ -332,7 +332,8 @@ int sc_floe_field(sc *s, struct fy_node *e, int entry, const char *what)
         floe_v3_copy(d.x, pg->frame_x);
         memcpy(d.q, pg->frame_q, sizeof d.q);
         int gi = floe_world_add_geometry(s->w, g);
-        if (gi < 0) {
+        if (gi < 0) { /* not taken: still ours */
+            floe_geometry_destroy(g);
             rc = sc_fail(s, -gi, fk, "%s: floe %d: %s", f, k, floe_world_last_error(s->w));
             break;
         }

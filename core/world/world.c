@@ -427,8 +427,12 @@ int floe_world_add_wall(floe_world *w, const double pt[3], const double n[3], in
     double nn = floe_v3_norm(n);
     if (!(nn > 0) || !isfinite(nn)) return -floe_world_error(w, FLOE_EINVAL, "wall: normal must be non-zero");
     if (motion == FLOE_FREE) return -floe_world_error(w, FLOE_EINVAL, "wall: motion must be fixed or kinematic");
-    int g = floe_world_add_geometry(w, floe_plane_create());
-    if (g < 0) return g;
+    floe_geometry *pg = floe_plane_create();
+    int g = floe_world_add_geometry(w, pg);
+    if (g < 0) { /* not taken: still ours */
+        floe_geometry_destroy(pg);
+        return g;
+    }
     floe_particle_def d = floe_default_particle_def();
     d.geometry = g;
     d.material = material;
