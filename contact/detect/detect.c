@@ -558,16 +558,19 @@ static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shap
             }
         else
             for (int v = v0; v < v1; v++) keep[nk++] = v;
+        /* each corner kept: its depth, the least face distance, and that face (ties to the
+         * lowest), over every face; it is in when that depth is positive and it lies in b's
+         * bounding sphere. Without a branch (which corners are in is data: a branch per
+         * corner or per face was mispredicted); the few in are then placed in the world */
+        int in[64], fin[64];
+        double din[64];
+        int ni = 0;
         for (int q0 = 0; q0 < nk; q0++) {
             const int v = keep[q0];
-            const double *X = V + 3 * v;
             double Xb[3];
-            rel_apply(&map, X, Xb);
-            if (floe_v3_dot(Xb, Xb) >= rb2) continue;
+            rel_apply(&map, V + 3 * v, Xb);
+            const int inside_r = floe_v3_dot(Xb, Xb) < rb2;
             if (w->dim == 2) Xb[2] = 0;
-            /* its depth, the least face distance, and that face (ties to the lowest), over
-             * every face without a branch (the culled corners were the most of those
-             * outside; a branch per face was mispredicted) */
             double d = INFINITY;
             int f = -1;
             for (int k = 0; k < np; k++) {
@@ -576,15 +579,21 @@ static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shap
                 d = take ? s : d;
                 f = take ? k : f;
             }
-            if (!(d > 0) || f < 0) continue;
+            in[ni] = v;
+            din[ni] = d;
+            fin[ni] = f;
+            ni += inside_r & (d > 0) & (f >= 0);
+        }
+        for (int q = 0; q < ni; q++) {
+            const int v = in[q];
             /* the corner in the world */
             double xw[3];
             floe_q_rotate(xw, a->q, V + 3 * v);
             floe_v3_add(xw, xw, a->x);
             mf_vertex m;
-            m.d = d;
+            m.d = din[q];
             floe_v3_copy(m.x, xw);
-            floe_q_rotate(m.n, b->q, P + 4 * f);
+            floe_q_rotate(m.n, b->q, P + 4 * fin[q]);
             floe_v3_scale(m.n, -sign);
             mf_insert(best, nb, cap, &m);
         }
@@ -659,7 +668,7 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
 /* separated along the line of centres (support functions): a cheap exact "no contact" */
 static int separated_on_centre_line(const shape_ref *a, const shape_ref *b) {
     if (!a->g->klass->support || !b->g->klass->support) return 0;
-    double d[3], da[3], db[3], sa[3], sb[3], xa[3], xb[3];
+    double d[3], da[3], db[3], sa[3], sb[3];
     floe_v3_sub(d, b->x, a->x);
     double n = floe_v3_norm(d);
     if (!(n > 0)) return 0;
@@ -669,10 +678,9 @@ static int separated_on_centre_line(const shape_ref *a, const shape_ref *b) {
     floe_q_rotate_inv(db, b->q, d);
     a->g->klass->support(a->g, da, sa);
     b->g->klass->support(b->g, db, sb);
-    floe_q_rotate(xa, a->q, sa);
-    floe_q_rotate(xb, b->q, sb);
-    /* extent of a towards b and of b towards a, along the unit centre line -d */
-    return -floe_v3_dot(xa, d) + floe_v3_dot(xb, d) < n ? 1 : 0;
+    /* the extent of a towards b and of b towards a along the unit centre line, each in its
+     * own frame (a rotation keeps the dot product: no rotation back to the world) */
+    return floe_v3_dot(sa, da) + floe_v3_dot(sb, db) < n ? 1 : 0;
 }
 
 static void note_nonconverged(floe_detect_ctx *w) {
