@@ -7,14 +7,19 @@
  *     it) and once cold (no basis: the full LP from the deepest vertex). Both must agree on
  *     touching or not; depth, point and every manifold vertex within 1e-10 x the grain size,
  *     the normals and gscale within 1e-10. The warm calls must mostly keep their basis
- *     (> 80 % of the LP halves without a pivot), or the path is not what was tested.
+ *     (> 80 % of the LP halves without a pivot), or the path is not what was tested. The
+ *     world's own contacts of each step (its contact stage, with the separation cache) must
+ *     be exactly the pairs the cold detection finds touching, and the cache must have found
+ *     most of the pairs apart.
  *  2. Negative control: a pair solved once, then one body turned by 0.3 .. 1 rad: the old
  *     basis must not be kept (a pivot, or a cold start when its point is infeasible), both
  *     cases must occur, and the result must be the cold solve's; unmoved, it is kept.
  *  3. The lazy problem (floe_lp_problem.b_body: p''s planes in its own frame and the map, as
  *     detect.c gives it) against the same planes mapped first (by the library's own map, a
  *     cold lazy solve's buffer): at 400 poses, warm (kept, or needing a pivot or a cold
- *     start) and cold, the same basis, point, value, normal and multipliers to the bit. */
+ *     start) and cold, the same basis, point, value, normal and multipliers to the bit.
+ *  4. The separation cache against moves by the API that the list does not see (a turn, a
+ *     move, a new shape): the next step finds the contact (sep_cache_moves). */
 #include "floe.h"
 #include "world_internal.h"
 #include "floe_polytope_lp.h"
@@ -78,7 +83,10 @@ static void settling_run(void) {
         CHECK(floe_world_add_particle(w, &p) >= 0, "add particle: %s", floe_world_last_error(w));
     }
     CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
+    floe_world_record_contacts(w, 1);
     const int n = pview(w).n; /* the walls first, then the grains */
+    unsigned char *inw = malloc((size_t)(n * n)); /* the world's own contacts of the step */
+    long mism_world = 0, sep = 0, sepc = 0; /* the world's steps' pairs found apart, by the cache */
     double *warm = malloc(sizeof(double) * (size_t)(n * n * FLOE_DETECT_WARM));
     for (int k = 0; k < n * n * FLOE_DETECT_WARM; k++) warm[k] = NAN;
     long walls = 0;
@@ -87,9 +95,19 @@ static void settling_run(void) {
     floe_contact cf, cc;
     const int nsteps = 8000;
     for (int s = 0; s < nsteps; s++) {
+        const floe_detect_stats sa = dstats(w);
         CHECK(floe_world_step(w) == FLOE_OK, "step: %s", floe_world_last_error(w));
+        const floe_detect_stats sb = dstats(w);
+        sep += sb.separated - sa.separated;
+        sepc += sb.sep_cached - sa.sep_cached;
         floe_particles_view v = pview(w);
         for (int i = n - NP; i < n; i++) turned += floe_v3_norm(v.w + 3 * i) * floe_world_dt(w) / NP;
+        memset(inw, 0, (size_t)(n * n));
+        for (int c = 0; c < w->ncontacts; c++) {
+            const int a = w->contacts[c].i < w->contacts[c].j ? w->contacts[c].i : w->contacts[c].j;
+            const int b = w->contacts[c].i ^ w->contacts[c].j ^ a;
+            inw[a * n + b] = 1;
+        }
         for (int i = 0; i < n; i++)
             for (int j = i + 1; j < n; j++) {
                 double *wm = warm + (size_t)(i * n + j) * FLOE_DETECT_WARM;
@@ -97,6 +115,7 @@ static void settling_run(void) {
                 if (isinf(ri) && isinf(rj)) continue; /* two walls */
                 if (dist3(v.x + 3 * i, v.x + 3 * j) >= ri + rj) { /* apart: the next approach starts cold */
                     wm[0] = NAN;
+                    mism_world += inw[i * n + j];
                     continue;
                 }
                 floe_detect_stats d0 = dstats(w);
@@ -110,6 +129,11 @@ static void settling_run(void) {
                 cold += d1.lp_cold - d0.lp_cold;
                 int rc = floe_world_detect(w, i, j, 0, NULL, &cc);
                 compared++;
+                /* the world's step (its contact stage, with the separation cache) found the
+                 * same pairs touching as the cold detection at the same poses */
+                if ((rc == 1) != inw[i * n + j] && mism_world++ < 5)
+                    printf("  step %d pair %d-%d: the world's step says %d, cold detection %d\n", s, i, j,
+                           inw[i * n + j], rc);
                 if (rf != rc) {
                     if (mism_touch++ < 5)
                         printf("  step %d pair %d-%d: warm says %d, cold says %d (depths %.3e %.3e)\n", s, i, j, rf, rc,
@@ -138,6 +162,13 @@ static void settling_run(void) {
             }
     }
     const double ke = floe_world_energy(w).kinetic_trans + floe_world_energy(w).kinetic_rot;
+    printf("  settling run: the world's contacts against cold detection: %ld differ; pairs found apart "
+           "before the LP %ld, by the separation cache %ld (%.1f %%)\n", mism_world, sep, sepc,
+           sep ? 100.0 * sepc / sep : 0.0);
+    CHECK(mism_world == 0, "the world's step and cold detection agree on the touching pairs: %ld differ", mism_world);
+    CHECK(sep > 10000 && sepc > sep / 2, "the separation cache is used: %ld of %ld pairs found apart (bound half)",
+          sepc, sep);
+    free(inw);
     printf("  settling run, %d polyhedra, %d steps (mean turn %.1f rad, kinetic energy at the end %.2e J, %d "
            "contacts): %ld pair detections compared warm against cold, %ld touching (%ld of them grain-wall, %ld "
            "manifold vertices); "
@@ -282,10 +313,69 @@ static void lazy_equals_full(void) {
     CHECK(lazy_kept > poses / 2 && lazy_full > poses, "both lazy paths taken: kept %d, full %d", lazy_kept, lazy_full);
 }
 
+/* 4. The separation cache against moves the list does not see: two bars 1 x 0.1 x 0.1 side
+ * by side, 0.2 apart (their bounding spheres overlap), no gravity. Steps with the pair apart
+ * must keep it in the cache; then bar B is turned about z (its end dips 0.002 into A), or
+ * moved 0.205 towards A, or given a box 0.51 wide (mode 2: 0.005 into A) by the API, within the list's
+ * skin (no rebuild). The next step must find the contact: the cache's bound covers turns,
+ * moves and new shapes (a bound without its turn term keeps the pair apart in mode 0, one
+ * without |dx| in mode 1; a new shape also rebuilds the list, which empties the cache). */
+static void sep_cache_moves(void) {
+    static const char *what[3] = {"turned", "moved", "new shape"};
+    for (int mode = 0; mode < 3; mode++) {
+        floe_world_def def = floe_default_world_def();
+        def.dt = 1e-5;
+        def.skin = 1.0;
+        floe_world *w = floe_world_create(&def, NULL, 0);
+        floe_material m = {"m", 1000, 1e6, 0.3};
+        floe_world_add_material(w, &m);
+        floe_world_set_law(w, 0, 0, floe_linear_law_create(1e3, 0, 0.5, 0.0, 0.5));
+        const int g = floe_world_add_geometry(w, floe_box_create(1.0, 0.1, 0.1));
+        const int g2 = floe_world_add_geometry(w, floe_box_create(1.0, 0.51, 0.1));
+        floe_particle_def a = floe_default_particle_def(), b = floe_default_particle_def();
+        a.geometry = b.geometry = g;
+        floe_v3_set(b.x, 0, 0.3, 0);
+        CHECK(floe_world_add_particle(w, &a) == 0 && floe_world_add_particle(w, &b) == 1, "sep cache: add bars");
+        CHECK(floe_world_prepare(w) == FLOE_OK, "sep cache: prepare: %s", floe_world_last_error(w));
+        const floe_detect_stats d0 = dstats(w);
+        for (int s = 0; s < 5; s++) CHECK(floe_world_step(w) == FLOE_OK, "sep cache: step: %s", floe_world_last_error(w));
+        const floe_detect_stats d1 = dstats(w);
+        CHECK(floe_world_contact_count(w) == 0 && d1.sep_cached - d0.sep_cached >= 4,
+              "sep cache (%s): apart, and kept in the cache (%ld of %ld steps)", what[mode],
+              d1.sep_cached - d0.sep_cached, d1.separated - d0.separated);
+        floe_particles_view v = pview(w);
+        double x[3] = {v.x[3], v.x[4], v.x[5]};
+        if (mode == 0) {
+            /* turn by alpha: B's lower corner (-0.5, -0.05) goes to y = 0.3 - 0.5 sin a - 0.05 cos a,
+             * 0.002 below A's top face y = 0.05 */
+            double lo = 0.1, hi = 0.7;
+            for (int it = 0; it < 60; it++) {
+                const double al = 0.5 * (lo + hi), y = 0.3 - 0.5 * sin(al) - 0.05 * cos(al);
+                if (y > 0.048) lo = al; else hi = al;
+            }
+            const double al = 0.5 * (lo + hi), q[4] = {cos(0.5 * al), 0, 0, sin(0.5 * al)};
+            CHECK(floe_world_set_pose(w, 1, NULL, q) == FLOE_OK, "sep cache: turn: %s", floe_world_last_error(w));
+        } else if (mode == 1) {
+            x[1] -= 0.205;
+            CHECK(floe_world_set_pose(w, 1, x, NULL) == FLOE_OK, "sep cache: move: %s", floe_world_last_error(w));
+        } else {
+            CHECK(floe_world_set_particle_geometry(w, 1, g2) == FLOE_OK, "sep cache: shape: %s", floe_world_last_error(w));
+        }
+        const long rb = w->nl.rebuilds;
+        CHECK(floe_world_step(w) == FLOE_OK, "sep cache: step after the change: %s", floe_world_last_error(w));
+        printf("  separation cache, bar %s (list rebuilt: %s): %d contact(s) at the next step\n", what[mode],
+               w->nl.rebuilds != rb ? "yes" : "no", floe_world_contact_count(w));
+        CHECK(floe_world_contact_count(w) == 1, "sep cache: the bar %s touches at the next step (%d contacts)",
+              what[mode], floe_world_contact_count(w));
+        floe_world_destroy(w);
+    }
+}
+
 int main(void) {
     setvbuf(stdout, NULL, _IOLBF, 0);
     negative_control();
     lazy_equals_full();
+    sep_cache_moves();
     settling_run();
     return check_summary("test_lp_resting");
 }

@@ -276,7 +276,8 @@ static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, c
      * its own rows only) */
     floe_lp_problem P = {w->dim, pa, na, NULL, nb, va, nva, fmin(a->r, b->r), pb, &f->M[0][0], tb};
     int basis[4];
-    for (int k = 0; k < 4; k++) basis[k] = warm4 && isfinite(warm4[k]) ? (int)warm4[k] : -1;
+    const int have = warm4 && isfinite(warm4[0]);
+    for (int k = 0; k < 4; k++) basis[k] = have && isfinite(warm4[k]) ? (int)warm4[k] : -1;
     floe_lp_result r;
     int rc = floe_lp_deepest(&P, basis, &r);
     w->det->lp_halves++;
@@ -621,6 +622,13 @@ static void manifold(const floe_detect_ctx *w, const shape_ref *a, const shape_r
     mf_set_extras(c, best, nb); /* the deepest vertex is the deepest point's share */
 }
 
+/* the separation cache (docs/models.md): a lower bound of the distance between a and b (not
+ * positive: none), kept with the pair's motion bound now, less a margin for its round-off */
+static void sep_keep(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, double gap) {
+    w->sep[0] = gap > 0 ? gap - 1e-9 * (a->r + b->r) : NAN;
+    w->sep[1] = w->motion;
+}
+
 /* the warm slot of a polytope pair: the two halves' bases in 0..3 and 4..7, then 1 here if
  * the pair touched at the last look (NaN otherwise; ADMM's slot, unused by the LP) */
 #define LP_TOUCHED 8
@@ -636,6 +644,9 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
     if (rc) return -rc;
     w->det->lp_calls++;
     if (!(s1 < 0)) {
+        /* apart: s1 = min over a of the largest plane distance of b, at most the distance
+         * from a to b (each plane's distance bounds a point's distance from b outside it) */
+        if (w->sep) sep_keep(w, a, b, s1);
         count_iterations(w, p1);
         return 0;
     }
@@ -643,7 +654,10 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
     rc = lp_half(w, b, a, &fba, warm ? warm + 4 : NULL, x2, &s2, n2, &g2, &p2, &fa);
     if (rc) return -rc;
     count_iterations(w, p1 + p2);
-    if (!(s2 < 0)) return 0;
+    if (!(s2 < 0)) {
+        if (w->sep) sep_keep(w, a, b, s2);
+        return 0;
+    }
     floe_v3_copy(c->x1, x1);
     floe_v3_copy(c->x2, x2);
     /* the deeper half sets depth, normal and the point the force acts at (the deepest
@@ -665,13 +679,15 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
     return 1;
 }
 
-/* separated along the line of centres (support functions): a cheap exact "no contact" */
-static int separated_on_centre_line(const shape_ref *a, const shape_ref *b) {
-    if (!a->g->klass->support || !b->g->klass->support) return 0;
+/* the gap between a and b along the line of centres (support functions): no point of a is
+ * closer to a point of b than this, so a positive gap is a cheap exact "no contact"; -1
+ * without support functions or with coincident centres */
+static double centre_line_gap(const shape_ref *a, const shape_ref *b) {
+    if (!a->g->klass->support || !b->g->klass->support) return -1.0;
     double d[3], da[3], db[3], sa[3], sb[3];
     floe_v3_sub(d, b->x, a->x);
     double n = floe_v3_norm(d);
-    if (!(n > 0)) return 0;
+    if (!(n > 0)) return -1.0;
     floe_v3_scale(d, 1.0 / n);
     floe_q_rotate_inv(da, a->q, d);
     floe_v3_scale(d, -1.0);
@@ -680,7 +696,7 @@ static int separated_on_centre_line(const shape_ref *a, const shape_ref *b) {
     b->g->klass->support(b->g, db, sb);
     /* the extent of a towards b and of b towards a along the unit centre line, each in its
      * own frame (a rotation keeps the dot product: no rotation back to the world) */
-    return floe_v3_dot(sa, da) + floe_v3_dot(sb, db) < n ? 1 : 0;
+    return n - (floe_v3_dot(sa, da) + floe_v3_dot(sb, db));
 }
 
 static void note_nonconverged(floe_detect_ctx *w) {
@@ -747,11 +763,23 @@ static int admm_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b,
     /* a polytope pair that touched at the last look (LP_TOUCHED) goes to the LP at once:
      * the LP itself says "apart" exactly, and for a resting contact the support test could
      * only fail */
-    if (!(lp && warm && isfinite(warm[0]) && warm[LP_TOUCHED] == 1.0) && separated_on_centre_line(a, b)) {
-        /* most list pairs of non-spherical grains: bounding spheres overlap, shapes apart */
-        if (warm) warm[0] = warm[8] = NAN;
-        w->det->separated++;
-        return 0;
+    if (!(lp && warm && isfinite(warm[0]) && warm[LP_TOUCHED] == 1.0)) {
+        /* most list pairs of non-spherical grains: bounding spheres overlap, shapes apart.
+         * The separation cache: a gap g measured at the pair's motion bound m0 stays open
+         * while the bodies' points have moved less than g since (motion - m0 < g) */
+        double *sc = w->sep;
+        if (sc && w->motion - sc[1] + 1e-9 * w->motion < sc[0]) { /* + the bound's own round-off */
+            w->det->sep_cached++; /* the warm state as the evaluation that found it apart left it */
+            w->det->separated++;
+            return 0;
+        }
+        const double gap = centre_line_gap(a, b);
+        if (sc) sep_keep(w, a, b, gap);
+        if (gap > 0) {
+            if (warm) warm[0] = warm[8] = NAN;
+            w->det->separated++;
+            return 0;
+        }
     }
     if (lp) return polytope_pair(w, a, b, warm, c);
     if (sdf_only(a->g) || sdf_only(b->g)) return sdf_pair(w, a, b, warm, c);

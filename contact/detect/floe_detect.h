@@ -20,7 +20,8 @@ typedef struct floe_detect_state {
     double *scratch; int scratch_cap;
     long calls, iterations;      /* ADMM/LP pair evaluations and their iterations (pivots + 1) */
     long admm_calls, lp_calls;
-    long separated;              /* pairs found apart by the support test before LP/ADMM */
+    long separated;              /* pairs found apart before LP/ADMM (support test or separation cache) */
+    long sep_cached;             /* of those, by the separation cache (a gap still open) without a test */
     long lp_halves, lp_kept, lp_cold; /* polytope LP halves; of which the previous basis was
                                          kept without a pivot (resting contacts); started cold */
     long nonconverged;           /* ADMM evaluations that hit max_iter (a counted warning) */
@@ -44,6 +45,12 @@ typedef struct floe_detect_ctx {
     int dim;
     long step;
     floe_detect_state *det;
+    /* optional, the separation cache (docs/models.md, "Polytope pairs: the separation
+     * cache"): sep, this pair's two doubles (a gap, the pair's motion bound when it was
+     * measured; NaN: none), and motion, the pair's motion bound now (the two bodies' sums
+     * of |dx| + radius x turned angle since the cache was reset). NULL: no cache */
+    double *sep;
+    double motion;
 } floe_detect_ctx;
 
 /* fills c (x1, x2, n, depth, point, r_eff, i, j) for piece pair `sub` (FLOE_SUB) of the two

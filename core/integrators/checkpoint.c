@@ -260,6 +260,7 @@ static void save_neighbors(const floe_world *w, obuf *b) {
 static int resize(void **ptr, size_t n) { return floe_resize(ptr, n, 1); }
 static int restore_neighbors(floe_world *w, ibuf *r, char *err, size_t errlen) {
     floe_neighbor_list *nl = &w->nl;
+    w->sep_n = -1; /* the list's entries are replaced: the separation cache starts again */
     int k[4];
     GET(r, k); GET(r, nl->skin); GET(r, nl->rebuilds);
     const int np = k[0], warm = k[1], nb = k[2], nwl = k[3];

@@ -346,6 +346,12 @@ typedef struct floe_detect_stats {
     long lp_cold;            /* of which started from the deepest vertex (no usable basis);
                                 the three are this process's counts since the start (not
                                 kept in checkpoints, not summed over MPI ranks) */
+    long separated;          /* candidate pairs of convex shapes found apart before LP/ADMM
+                                (bounding spheres overlap, shapes do not): by the support
+                                test, or by the separation cache */
+    long sep_cached;         /* of which by the separation cache: a gap found by the support
+                                test or the LP that the bodies' motion since cannot have
+                                closed (docs/models.md; this process's count, like lp_halves) */
 } floe_detect_stats;
 int floe_world_detect_stats(const floe_world *w, floe_detect_stats *out);
 

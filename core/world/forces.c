@@ -182,12 +182,12 @@ static int detect_pair_at(const floe_world *w, floe_detect_ctx *ctx, int i, int 
 }
 
 int floe_world_detect(floe_world *w, int i, int j, int sub, double *warm, floe_contact *c) {
-    floe_detect_ctx ctx = {w->def.dim, w->step, &w->det};
+    floe_detect_ctx ctx = {.dim = w->def.dim, .step = w->step, .det = &w->det};
     return detect_pair(w, &ctx, i, j, sub, warm, c);
 }
 
 int floe_world_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact *c) {
-    floe_detect_ctx ctx = {w->def.dim, w->step, &w->det};
+    floe_detect_ctx ctx = {.dim = w->def.dim, .step = w->step, .det = &w->det};
     floe_body_ref bi = body_ref(w, i), bj = body_ref(w, j);
     return floe_detect_overlap(&ctx, &bi, &bj, sub, NULL, c);
 }
@@ -572,6 +572,10 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     const int any_none = env->any_none, any_pieces = env->any_pieces, any_overlap = env->any_overlap;
     floe_detect_ctx dctx = *env->dctx;
     int i = nl->pi[k], j = nl->pj[k], sub = any_pieces ? nl->sub[k] : 0; /* 0 unless compound */
+    if (w->sep_on) { /* the separation cache: this entry's gap, the pair's motion bound */
+        dctx.sep = w->sep_pair + 2 * (size_t)k;
+        dctx.motion = w->sep_d[i] + w->sep_d[j];
+    }
     if (any_none && floe_contact_law_no_contact(w->laws[p->material[i] * nm + p->material[j]])) return FLOE_OK;
     double *warm = nl->use_warm ? nl->warm + (size_t)k * FLOE_DETECT_WARM : NULL;
     floe_contact c;
@@ -1246,6 +1250,7 @@ static void par_merge_detect(floe_world *w, int nt) {
         W->admm_calls += d->admm_calls;
         W->lp_calls += d->lp_calls;
         W->separated += d->separated;
+        W->sep_cached += d->sep_cached;
         W->lp_halves += d->lp_halves;
         W->lp_kept += d->lp_kept;
         W->lp_cold += d->lp_cold;
@@ -1270,6 +1275,75 @@ static void par_merge_detect(floe_world *w, int nt) {
         }
 }
 
+/* The separation cache's motion bounds (floe_world.sep_*; docs/models.md, "Polytope pairs:
+ * the separation cache"). Each evaluation adds to every particle's bound how far any of its
+ * points can have moved since the last: |dx| + radius x (a bound of the angle it turned) +
+ * |dr|. The angle between unit quaternions q and q0 is 4 asin(c / 2), c = |q -+ q0| (the
+ * sign of the nearer), and asin(u) <= u / sqrt(1 - u^2): at most 2c / sqrt(1 - c^2 / 4). A
+ * particle whose geometry changed gets an infinite bound (its pairs are tested). A new
+ * list, a restore (sep_n = -1) or a new particle count starts every bound again at 0 with
+ * no gap kept. Only scenes with boxes, convex or compound shapes, without a periodic cell
+ * (images move with the cell) or MPI (ghosts change places) keep the cache. */
+static int sep_update(floe_world *w) {
+    const floe_particles *p = &w->p;
+    const floe_neighbor_list *nl = &w->nl;
+    const int n = p->n, np = nl->npairs;
+    if (w->cell || w->par) {
+        w->sep_on = 0;
+        return FLOE_OK;
+    }
+    if (n != w->sep_n || nl->gen != w->sep_gen || np != w->sep_np || !w->sep_d) {
+        int want = 0;
+        for (int i = 0; i < n && !want; i++)
+            want = p->kind[i] == FLOE_GEOM_BOX || p->kind[i] == FLOE_GEOM_USER || p->kind[i] == FLOE_GEOM_COMPOUND;
+        w->sep_on = 0;
+        w->sep_n = n;
+        w->sep_gen = nl->gen;
+        w->sep_np = np;
+        if (!want) return FLOE_OK;
+        if (floe_resize((void **)&w->sep_d, (size_t)n, sizeof(double)) ||
+            floe_resize((void **)&w->sep_pose, (size_t)n, 8 * sizeof(double)) ||
+            floe_resize((void **)&w->sep_geom, (size_t)n, sizeof(int)) ||
+            floe_resize((void **)&w->sep_pair, (size_t)np, 2 * sizeof(double))) {
+            w->sep_n = -1;
+            return floe_world_error(w, FLOE_ENOMEM, "out of memory (separation cache)");
+        }
+        for (int i = 0; i < n; i++) {
+            double *s = w->sep_pose + 8 * (size_t)i;
+            w->sep_d[i] = 0.0;
+            memcpy(s, p->x + 3 * (size_t)i, 3 * sizeof(double));
+            memcpy(s + 3, p->q + 4 * (size_t)i, 4 * sizeof(double));
+            s[7] = p->radius[i];
+            w->sep_geom[i] = p->geom[i];
+        }
+        for (size_t k = 0; k < 2 * (size_t)np; k++) w->sep_pair[k] = NAN;
+        w->sep_on = 1;
+        return FLOE_OK;
+    }
+    if (!w->sep_on) return FLOE_OK;
+    for (int i = 0; i < n; i++) {
+        double *s = w->sep_pose + 8 * (size_t)i;
+        const double *x = p->x + 3 * (size_t)i, *q = p->q + 4 * (size_t)i;
+        const double r = p->radius[i];
+        const double dx = x[0] - s[0], dy = x[1] - s[1], dz = x[2] - s[2];
+        const double dot = q[0] * s[3] + q[1] * s[4] + q[2] * s[5] + q[3] * s[6], sg = dot < 0 ? -1.0 : 1.0;
+        double c2 = 0;
+        for (int a = 0; a < 4; a++) {
+            const double e = q[a] - sg * s[3 + a];
+            c2 += e * e;
+        }
+        const double c = sqrt(c2), den = 1.0 - 0.25 * c2;
+        const double turn = den > 0.25 ? 2.0 * c / sqrt(den) : 4.0; /* c <= sqrt(2) for unit q: den >= 0.5 */
+        const double rr = r > s[7] ? r : s[7];
+        w->sep_d[i] += sqrt(dx * dx + dy * dy + dz * dz) + rr * turn + fabs(r - s[7]);
+        if (p->geom[i] != w->sep_geom[i]) w->sep_d[i] = INFINITY;
+        memcpy(s, x, 3 * sizeof(double));
+        memcpy(s + 3, q, 4 * sizeof(double));
+        s[7] = r;
+    }
+    return FLOE_OK;
+}
+
 static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, floe_provider_out *out) {
     (void)pv;
     floe_particles *p = ctx->p;
@@ -1277,10 +1351,11 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     const int track = ctx->track_depth;
     w->ncontacts = 0;
     if (stepping) w->wd_pair_min = 0; /* the watchdog's worst contact of this evaluation */
+    FLOE_TRY(sep_update(w));
     const int any_growth = w->nstates > 0; /* only state objects set rdot */
     floe_neighbor_list *nl = &w->nl;
     const int nm = w->nmats;
-    floe_detect_ctx dctx = {w->def.dim, w->step, &w->det};
+    floe_detect_ctx dctx = {.dim = w->def.dim, .step = w->step, .det = &w->det};
     /* pairs under the law "none" are skipped; most scenes have none, and then the law of a
      * pair is looked up only when it touches (a load per pair saved on the sphere path) */
     int any_none = 0;
@@ -1340,7 +1415,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
         {
             const int t = floe_par_thread();
             stage_env te = env;
-            floe_detect_ctx td = {w->def.dim, w->step, &ps->det[t]};
+            floe_detect_ctx td = {.dim = w->def.dim, .step = w->step, .det = &ps->det[t]};
             te.dctx = &td;
             floe_world_error_to(ps->err[t], sizeof ps->err[t]);
             int failed = 0;

@@ -116,6 +116,8 @@ int floe_world_memory(const floe_world *w, floe_memory_stats *o) {
         o->neighbor_list += (size_t)nl->cap * (9 * sizeof(double) + 1 + sizeof(int)) +
                             (size_t)p->cap * (2 * sizeof(int) + 1);
     o->contacts = (size_t)w->contacts_cap * sizeof(floe_contact_info);
+    if (w->sep_d) /* the separation cache */
+        o->neighbor_list += (size_t)w->sep_n * (9 * sizeof(double) + sizeof(int)) + (size_t)w->sep_np * 2 * sizeof(double);
     return FLOE_OK;
 }
 

@@ -251,6 +251,10 @@ void floe_world_destroy(floe_world *w) {
     free(w->kin_old);
     free(w->kinb);
     free(w->pps);
+    free(w->sep_d);
+    free(w->sep_pose);
+    free(w->sep_pair);
+    free(w->sep_geom);
     for (int i = 0; i < w->nstates; i++) {
         if (w->states[i]->klass->destroy) w->states[i]->klass->destroy(w->states[i]);
         else free(w->states[i]);
@@ -563,6 +567,8 @@ int floe_world_detect_stats(const floe_world *w, floe_detect_stats *o) {
     o->lp_halves = d->lp_halves;
     o->lp_kept = d->lp_kept;
     o->lp_cold = d->lp_cold;
+    o->separated = d->separated;
+    o->sep_cached = d->sep_cached;
     o->nonconverged = d->nonconverged;
     o->first_bad_i = d->first_bad_i;
     o->first_bad_j = d->first_bad_j;

@@ -117,6 +117,15 @@ struct floe_world {
     int finished;
     floe_energy energy;
     floe_detect_state det;     /* detect.c's statistics and scratch (floe_detect_ctx.det) */
+    /* the separation cache (forces.c sep_update; floe_detect_ctx.sep), only in scenes with
+     * boxes, convex or compound shapes, without a periodic cell or MPI: per particle its
+     * motion bound (the sum of |dx| + radius x turned angle + |dr| over the evaluations since
+     * the reset) and its pose then (x, q, radius: 8 doubles); per list entry a gap and the
+     * pair's bound when it was measured. Reset at each list build and restore (sep_n = -1) */
+    double *sep_d, *sep_pose, *sep_pair;
+    int *sep_geom;
+    int sep_n, sep_np, sep_on;
+    long sep_gen;
     /* peridynamic bodies (peridynamics/floe_pd.h): body k's points are the particles
      * pd_first[k] .. pd_first[k] + n - 1; nothing is allocated without PD bodies */
     struct floe_pd_body **pd; int *pd_first; int npd, pd_cap;
