@@ -420,6 +420,44 @@ static int restore_cell(floe_world *w, ibuf *r, char *err, size_t errlen) {
     return FLOE_OK;
 }
 
+/* the separation cache (forces.c sep_update), when the world keeps one: each particle's
+ * motion bound and pose, each list entry's gap, so that a restored run skips the same pairs
+ * as the run that saved it (the same bits). Optional: without it the cache starts again
+ * empty, which changes no answer, only which apart pairs are tested again */
+static void save_sep(const floe_world *w, obuf *b) {
+    const int k[2] = {w->sep_n, w->sep_np};
+    PUT(b, k);
+    put(b, w->sep_d, (size_t)w->sep_n * sizeof(double));
+    put(b, w->sep_pose, 8 * (size_t)w->sep_n * sizeof(double));
+    put(b, w->sep_geom, (size_t)w->sep_n * sizeof(int));
+    put(b, w->sep_pair, 2 * (size_t)w->sep_np * sizeof(double));
+}
+static int restore_sep(floe_world *w, ibuf *r, char *err, size_t errlen) {
+    int k[2] = {-1, -1};
+    GET(r, k);
+    if (r->bad || k[0] != w->p.n || k[1] != w->nl.npairs)
+        return floe_error_set(err, errlen, FLOE_EINVAL, "section SEPC does not match this world (%d particles, %d list "
+                              "entries; here %d, %d)", k[0], k[1], w->p.n, w->nl.npairs);
+    const size_t n = (size_t)k[0], np = (size_t)k[1];
+    int rc = resize((void **)&w->sep_d, n * sizeof(double));
+    if (!rc) rc = resize((void **)&w->sep_pose, 8 * n * sizeof(double));
+    if (!rc) rc = resize((void **)&w->sep_geom, n * sizeof(int));
+    if (!rc) rc = resize((void **)&w->sep_pair, 2 * np * sizeof(double));
+    if (rc) return floe_error_set(err, errlen, FLOE_ENOMEM, "out of memory");
+    get(r, w->sep_d, n * sizeof(double));
+    get(r, w->sep_pose, 8 * n * sizeof(double));
+    get(r, w->sep_geom, n * sizeof(int));
+    get(r, w->sep_pair, 2 * np * sizeof(double));
+    if (r->bad) return floe_error_set(err, errlen, FLOE_EINVAL, "section SEPC is short");
+    /* the restored list's entries (NLST, restored before): the cache goes on from here */
+    w->sep_n = k[0];
+    w->sep_np = k[1];
+    w->sep_gen = w->nl.gen;
+    w->sep_on = 1;
+    return FLOE_OK;
+}
+#define TAG_SEPC TAG('S', 'E', 'P', 'C')
+
 static int always(const floe_world *w) { (void)w; return 1; }
 static int has_beams(const floe_world *w) { return w->beams != NULL; }
 
@@ -444,6 +482,11 @@ static void save_sections(const floe_world *w, obuf *b) {
         if (!sections[k].want(w)) continue;
         size_t at = sec_begin(b, sections[k].tag);
         sections[k].save(w, b);
+        sec_end(b, at);
+    }
+    if (w->sep_on && w->sep_n == w->p.n && w->sep_np == w->nl.npairs && w->sep_gen == w->nl.gen) {
+        size_t at = sec_begin(b, TAG_SEPC); /* optional: read if present (restore_sections) */
+        save_sep(w, b);
         sec_end(b, at);
     }
 }
@@ -498,6 +541,11 @@ static int restore_sections(floe_world *w, const unsigned char *p, const sec_ind
         if (at < 0) continue;
         ibuf r = {p + ix->at[at], ix->len[at], 0, 0};
         FLOE_TRY(sections[k].restore(w, &r, err, errlen));
+    }
+    const int sat = find_section(ix, TAG_SEPC); /* optional (save_sep) */
+    if (sat >= 0) {
+        ibuf r = {p + ix->at[sat], ix->len[sat], 0, 0};
+        FLOE_TRY(restore_sep(w, &r, err, errlen));
     }
     /* the contact records are those of the prepare's evaluation: none until the next step */
     w->ncontacts = 0;
