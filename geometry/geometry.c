@@ -223,6 +223,22 @@ double floe_geometry_lipschitz(const floe_geometry *g, int pairs, double a_out[3
 }
 
 int floe_geometry_check(const floe_geometry *g, char *err, size_t errlen) {
+    if (g->klass->polytope) {
+        /* the exact paths read the face planes as the SDF (the largest plane distance) and
+         * as bounds of distance (docs/models.md, the separation cache): unit normals */
+        const int dim = g->klass->dimension && g->klass->dimension(g) == 2 ? 2 : 3;
+        floe_polytope_view pv = {0};
+        g->klass->polytope(g, dim, &pv);
+        for (int k = 0; pv.plane && k < pv.np; k++) {
+            const double *n = pv.plane + 4 * k, len = floe_v3_norm(n);
+            if (!(fabs(len - 1.0) <= 1e-9) || !isfinite(n[3])) {
+                floe_set_err(err, errlen, "shape '%s': face plane %d of its polytope has a normal of length %.17g "
+                             "(offset %g): the planes must be unit outward normals n and offsets d, inside "
+                             "n.x <= d (floe_polytope_view)", g->klass->name ? g->klass->name : "custom", k, len, n[3]);
+                return FLOE_EINVAL;
+            }
+        }
+    }
     if (g->klass->check) return g->klass->check(g, err, errlen);
     if (g->klass->project) return FLOE_OK; /* its own projection: the SDF is the class's business */
     double a[3], b[3], L = floe_geometry_lipschitz(g, FLOE_SDF_LIPSCHITZ_PAIRS, a, b);

@@ -487,7 +487,27 @@ static void test_dimension(void) {
     floe_world_destroy(w);
 }
 
+/* face planes that are not unit normals are refused when the shape is added (the LP reads
+ * them as distances: the SDF, and the separation cache's gaps) */
+static void test_plane_norms(void) {
+    for (int dim = 2; dim <= 3; dim++) {
+        floe_world_def d = floe_default_world_def();
+        d.dim = dim;
+        floe_world *w = floe_world_create(&d, NULL, 0);
+        floe_geometry *g = tri_prism_create(dim, 0.05, 0.03, 0.07);
+        tri_prism *t = (tri_prism *)g;
+        for (int k = 0; k < 4; k++) t->plane[4 * 1 + k] *= 1.5; /* one side: a normal of length 1.5 */
+        const int gi = floe_world_add_geometry(w, g);
+        CHECK(gi < 0 && strstr(floe_world_last_error(w), "face plane 1") && strstr(floe_world_last_error(w), "unit"),
+              "%dD: a user polytope with a face normal of length 1.5 is refused (%d: %s)", dim, gi,
+              floe_world_last_error(w));
+        if (gi < 0) floe_geometry_destroy(g); /* not taken */
+        floe_world_destroy(w);
+    }
+}
+
 int main(void) {
+    test_plane_norms();
     for (int dim = 2; dim <= 3; dim++) {
         test_polytope(dim, 0, 0);
         test_polytope(dim, 1, 0);
