@@ -382,12 +382,14 @@ static int restore_stag(floe_world *w, ibuf *r, char *err, size_t errlen) {
 /* ---- the state: sections in order (the observers' are the file's, below) ----
  * To add a part of the world: a save and a restore function and one line here (a new tag;
  * `want` says when the world has that part: the section is then required in a checkpoint
- * and refused in one of a world without it). */
+ * and refused in one of a world without it; an `optional` part is written when wanted and
+ * read when present, a cache the world can rebuild). */
 typedef struct section {
     uint32_t tag;
     int (*want)(const floe_world *w);
     void (*save)(const floe_world *w, obuf *b);
     int (*restore)(floe_world *w, ibuf *r, char *err, size_t errlen);
+    int optional;
 } section;
 
 /* the periodic cell (floe_cell.h): its whole state, and the list's images and its cell at
@@ -456,23 +458,26 @@ static int restore_sep(floe_world *w, ibuf *r, char *err, size_t errlen) {
     w->sep_on = 1;
     return FLOE_OK;
 }
-#define TAG_SEPC TAG('S', 'E', 'P', 'C')
+static int has_sep(const floe_world *w) {
+    return w->sep_on && w->sep_n == w->p.n && w->sep_np == w->nl.npairs && w->sep_gen == w->nl.gen;
+}
 
 static int always(const floe_world *w) { (void)w; return 1; }
 static int has_beams(const floe_world *w) { return w->beams != NULL; }
 
 /* restore order: state objects first (set() may rescale mass and momentum, put back after) */
 static const section sections[] = {
-    {TAG('S', 'O', 'B', 'J'), always, save_states, restore_states},
-    {TAG('P', 'A', 'R', 'T'), always, save_particles, restore_particles},
-    {TAG('N', 'L', 'S', 'T'), always, save_neighbors, restore_neighbors},
-    {TAG('C', 'E', 'L', 'L'), has_cell, save_cell, restore_cell},
-    {TAG('P', 'R', 'O', 'V'), always, save_providers, restore_providers},
-    {TAG('B', 'E', 'A', 'M'), has_beams, save_beams, restore_beams},
-    {TAG('S', 'T', 'A', 'G'), staggered, save_stag, restore_stag},
-    {TAG('C', 'L', 'O', 'K'), always, save_clock, restore_clock},
-    {TAG('E', 'N', 'R', 'G'), always, save_energy, restore_energy},
-    {TAG('S', 'T', 'A', 'T'), always, save_stats, restore_stats},
+    {TAG('S', 'O', 'B', 'J'), always, save_states, restore_states, 0},
+    {TAG('P', 'A', 'R', 'T'), always, save_particles, restore_particles, 0},
+    {TAG('N', 'L', 'S', 'T'), always, save_neighbors, restore_neighbors, 0},
+    {TAG('C', 'E', 'L', 'L'), has_cell, save_cell, restore_cell, 0},
+    {TAG('P', 'R', 'O', 'V'), always, save_providers, restore_providers, 0},
+    {TAG('B', 'E', 'A', 'M'), has_beams, save_beams, restore_beams, 0},
+    {TAG('S', 'T', 'A', 'G'), staggered, save_stag, restore_stag, 0},
+    {TAG('C', 'L', 'O', 'K'), always, save_clock, restore_clock, 0},
+    {TAG('E', 'N', 'R', 'G'), always, save_energy, restore_energy, 0},
+    {TAG('S', 'T', 'A', 'T'), always, save_stats, restore_stats, 0},
+    {TAG('S', 'E', 'P', 'C'), has_sep, save_sep, restore_sep, 1}, /* after NLST: its entries */
 };
 #define NSECTIONS (sizeof sections / sizeof *sections)
 #define TAG_OBSV TAG('O', 'B', 'S', 'V')
@@ -482,11 +487,6 @@ static void save_sections(const floe_world *w, obuf *b) {
         if (!sections[k].want(w)) continue;
         size_t at = sec_begin(b, sections[k].tag);
         sections[k].save(w, b);
-        sec_end(b, at);
-    }
-    if (w->sep_on && w->sep_n == w->p.n && w->sep_np == w->nl.npairs && w->sep_gen == w->nl.gen) {
-        size_t at = sec_begin(b, TAG_SEPC); /* optional: read if present (restore_sections) */
-        save_sep(w, b);
         sec_end(b, at);
     }
 }
@@ -535,17 +535,12 @@ static int restore_sections(floe_world *w, const unsigned char *p, const sec_ind
     for (size_t k = 0; k < NSECTIONS; k++) {
         const int want = sections[k].want(w), at = find_section(ix, sections[k].tag);
         char nm[5];
-        if (want != (at >= 0))
+        if (!sections[k].optional && want != (at >= 0))
             return floe_error_set(err, errlen, FLOE_EINVAL, "section %s is %s the checkpoint but this world %s it: another scene",
                         tag_name(sections[k].tag, nm), at >= 0 ? "in" : "missing from", at >= 0 ? "does not need" : "needs");
         if (at < 0) continue;
         ibuf r = {p + ix->at[at], ix->len[at], 0, 0};
         FLOE_TRY(sections[k].restore(w, &r, err, errlen));
-    }
-    const int sat = find_section(ix, TAG_SEPC); /* optional (save_sep) */
-    if (sat >= 0) {
-        ibuf r = {p + ix->at[sat], ix->len[sat], 0, 0};
-        FLOE_TRY(restore_sep(w, &r, err, errlen));
     }
     /* the contact records are those of the prepare's evaluation: none until the next step */
     w->ncontacts = 0;
