@@ -121,7 +121,8 @@ struct floe_world {
      * boxes, convex or compound shapes, without a periodic cell or MPI: per particle its
      * motion bound (the sum of |dx| + radius x turned angle + |dr| over the evaluations since
      * the reset) and its pose then (x, q, radius: 8 doubles); per list entry a gap and the
-     * pair's bound when it was measured. Reset at each list build and restore (sep_n = -1) */
+     * pair's bound when it was measured. Reset at each list build; a checkpoint carries it
+     * (section SEPC), a restore without it resets it (sep_n = -1) */
     double *sep_d, *sep_pose, *sep_pair;
     int *sep_geom;
     int sep_n, sep_np, sep_on;
