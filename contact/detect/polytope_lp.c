@@ -17,7 +17,7 @@
  * the basis point (M y = h), the multipliers (M^T lam = e) and a pivot's edge (M d = -e_k). */
 typedef struct lu4 { double a[4][4]; int perm[4], n; } lu4;
 
-static inline __attribute__((always_inline)) int lu_factor(int n, const double M[4][4], lu4 *f) {
+static int lu_factor(int n, const double M[4][4], lu4 *f) {
     f->n = n;
     for (int i = 0; i < n; i++) {
         f->perm[i] = i;
@@ -42,7 +42,8 @@ static inline __attribute__((always_inline)) int lu_factor(int n, const double M
 }
 
 /* M y = r */
-static inline __attribute__((always_inline)) void lu_solve_n(const lu4 *f, const double r[4], double y[4], const int n) {
+static void lu_solve(const lu4 *f, const double r[4], double y[4]) {
+    const int n = f->n;
     double z[4];
     for (int i = 0; i < n; i++) {
         double s = r[f->perm[i]];
@@ -57,7 +58,8 @@ static inline __attribute__((always_inline)) void lu_solve_n(const lu4 *f, const
 }
 
 /* M^T y = r: U^T z = r, L^T v = z, y[perm[i]] = v[i] */
-static inline __attribute__((always_inline)) void lu_solve_t_n(const lu4 *f, const double r[4], double y[4], const int n) {
+static void lu_solve_t(const lu4 *f, const double r[4], double y[4]) {
+    const int n = f->n;
     double z[4], v[4];
     for (int i = 0; i < n; i++) {
         double s = r[i];
@@ -72,8 +74,6 @@ static inline __attribute__((always_inline)) void lu_solve_t_n(const lu4 *f, con
     for (int i = 0; i < n; i++) y[f->perm[i]] = v[i];
 }
 
-static void lu_solve(const lu4 *f, const double r[4], double y[4]) { lu_solve_n(f, r, y, f->n); }
-static void lu_solve_t(const lu4 *f, const double r[4], double y[4]) { lu_solve_t_n(f, r, y, f->n); }
 
 /* the LP's row of plane pl in (x, s): an A row (a, 0) <= b, a B row (c, -1) <= d */
 static inline void plane_row(const double *pl, int is_b, int dim, double r[4], double *h) {
