@@ -79,14 +79,26 @@ static void q_matrix(double R[3][3], const double q[4]) {
  * two quaternion rotations per plane or corner) */
 typedef struct rel_map { double M[3][3], m[3]; } rel_map;
 
-static void rel_make(rel_map *f, const shape_ref *a, const shape_ref *b) {
-    double Ra[3][3], Rb[3][3], d[3];
+static void rel_make(rel_map *f, const shape_ref *a, const shape_ref *b, double Ra[3][3]) {
+    double Rb[3][3], d[3];
     q_matrix(Ra, a->q);
     q_matrix(Rb, b->q);
     floe_v3_sub(d, a->x, b->x);
     for (int i = 0; i < 3; i++) {
         for (int j = 0; j < 3; j++) f->M[i][j] = Rb[0][i] * Ra[0][j] + Rb[1][i] * Ra[1][j] + Rb[2][i] * Ra[2][j];
         f->m[i] = Rb[0][i] * d[0] + Rb[1][i] * d[1] + Rb[2][i] * d[2];
+    }
+}
+
+/* the map back, from b's frame to a's (f from rel_make(f, a, b, Ra)): M^T and Ra^T (xb - xa),
+ * the same operations as rel_make(g, b, a) (the products commute, the sums keep their
+ * order, xb - xa is -(xa - xb) exactly): the same bits without the two rotation matrices */
+static void rel_back(rel_map *g, const rel_map *f, const double Ra[3][3], const shape_ref *a, const shape_ref *b) {
+    double d[3];
+    floe_v3_sub(d, b->x, a->x);
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) g->M[i][j] = f->M[j][i];
+        g->m[i] = Ra[0][i] * d[0] + Ra[1][i] * d[1] + Ra[2][i] * d[2];
     }
 }
 
@@ -639,7 +651,8 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
     int p1 = 0, p2 = 0;
     int fb = 0, fa = 0; /* the faces of b and of a the other presses on */
     rel_map fab, fba; /* the maps between the frames, each for its LP half and manifold pass */
-    rel_make(&fab, a, b);
+    double Ra[3][3];
+    rel_make(&fab, a, b, Ra);
     int rc = lp_half(w, a, b, &fab, warm, x1, &s1, n1, &g1, &p1, &fb);
     if (rc) return -rc;
     w->det->lp_calls++;
@@ -650,7 +663,7 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
         count_iterations(w, p1);
         return 0;
     }
-    rel_make(&fba, b, a);
+    rel_back(&fba, &fab, Ra, a, b);
     rc = lp_half(w, b, a, &fba, warm ? warm + 4 : NULL, x2, &s2, n2, &g2, &p2, &fa);
     if (rc) return -rc;
     count_iterations(w, p1 + p2);
@@ -767,14 +780,9 @@ static int admm_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b,
         /* most list pairs of non-spherical grains: bounding spheres overlap, shapes apart.
          * The separation cache: a gap g measured at the pair's motion bound m0 stays open
          * while the bodies' points have moved less than g since (motion - m0 < g) */
-        double *sc = w->sep;
-        if (sc && w->motion - sc[1] + 1e-9 * w->motion < sc[0]) { /* + the bound's own round-off */
-            w->det->sep_cached++; /* the warm state as the evaluation that found it apart left it */
-            w->det->separated++;
-            return 0;
-        }
+        if (floe_detect_sep_holds(w)) return 0; /* the warm state as the evaluation that found it apart left it */
         const double gap = centre_line_gap(a, b);
-        if (sc) sep_keep(w, a, b, gap);
+        if (w->sep) sep_keep(w, a, b, gap);
         if (gap > 0) {
             if (warm) warm[0] = warm[8] = NAN;
             w->det->separated++;
