@@ -78,31 +78,53 @@ static inline void floe_mindlin_tangential(double g_star, double tdr, double mu,
     Fs[0] = S[0]; Fs[1] = S[1]; Fs[2] = S[2];
 }
 
-/* Coulomb friction with a shear spring (ParticLS eqs 17-18): see floe_contact.h and the
- * linear law's header comment (linear_law.c) for the steps and the energy bookkeeping. */
+/* Coulomb friction with a shear spring (ParticLS eqs 17-18), in two parts that a batch of
+ * contacts can run apart (law_kernels.h floe_linear_kernel_batch): the trial, the spring s
+ * advanced and the force it and the dashpot give, with the Coulomb limit mu |Fn| and |Ft|^2;
+ * then, for a contact that slips (|Ft| > limit), the force onto the limit and the spring to
+ * match (minus_inv_ks = -1 / ks; no spring: s = 0). */
+static inline __attribute__((always_inline)) void floe_coulomb_trial(const floe_contact *c, double ks, double gs,
+                                                                      double mu, double Fn, double *s, double Ft[3],
+                                                                      double *limit, double *ft2) {
+    floe_contact_rotate_history(s, c->n);
+    floe_v3_axpy(s, c->dt, c->vt);
+    floe_v3_set(Ft, 0.0, 0.0, 0.0);
+    floe_v3_axpy(Ft, -ks, s);
+    floe_v3_axpy(Ft, -gs, c->vt);
+    *limit = mu * fabs(Fn);
+    *ft2 = floe_v3_dot(Ft, Ft);
+}
+
+static inline __attribute__((always_inline)) void floe_coulomb_slip(const double vt[3], double ks, double gs,
+                                                                     double minus_inv_ks, double ratio,
+                                                                     const double Ft[3], double Fs[3], double ss[3]) {
+    for (int k = 0; k < 3; ++k) Fs[k] = Ft[k] * ratio;
+    if (ks > 0.0)
+        for (int k = 0; k < 3; ++k) ss[k] = (Fs[k] + gs * vt[k]) * minus_inv_ks;
+    else
+        floe_v3_set(ss, 0.0, 0.0, 0.0);
+}
+
+/* The two parts on one contact: see floe_contact.h and the linear law's header comment
+ * (linear_law.c) for the steps and the energy bookkeeping. */
 static inline __attribute__((always_inline)) void floe_coulomb_k(const floe_contact *c, double ks, double gs, double mu,
                                                                   double Fn, double *s, double Ft[3], double *diss)
 {
     const double dt = c->dt;
-    floe_contact_rotate_history(s, c->n);
-    floe_v3_axpy(s, dt, c->vt);
-    floe_v3_set(Ft, 0.0, 0.0, 0.0);
-    floe_v3_axpy(Ft, -ks, s);
-    floe_v3_axpy(Ft, -gs, c->vt);
-    const double vt2 = floe_v3_dot(c->vt, c->vt), limit = mu * fabs(Fn), ft2 = floe_v3_dot(Ft, Ft);
+    double limit, ft2;
+    floe_coulomb_trial(c, ks, gs, mu, Fn, s, Ft, &limit, &ft2);
+    const double vt2 = floe_v3_dot(c->vt, c->vt);
     /* sliding or not, without a branch: in a dense bed contacts stick and slip at random, and
      * a mispredicted branch per contact cost more than the slip's arithmetic done always (the
      * values selected are those of the branches, so the same bits) */
     const int slip = ft2 > limit * limit;
     const double ratio = limit / sqrt(ft2); /* read only when slipping: ft2 > 0 then */
     double Fs[3], ss[3], dslip;
-    for (int k = 0; k < 3; ++k) Fs[k] = Ft[k] * ratio;
+    floe_coulomb_slip(c->vt, ks, gs, ks > 0.0 ? -1.0 / ks : 0.0, ratio, Ft, Fs, ss);
     if (ks > 0.0) {
-        const double e_before = 0.5 * ks * floe_v3_dot(s, s), minus_inv_ks = -1.0 / ks;
-        for (int k = 0; k < 3; ++k) ss[k] = (Fs[k] + gs * c->vt[k]) * minus_inv_ks;
+        const double e_before = 0.5 * ks * floe_v3_dot(s, s);
         dslip = gs * vt2 * dt + (e_before - 0.5 * ks * floe_v3_dot(ss, ss));
     } else {
-        floe_v3_set(ss, 0.0, 0.0, 0.0);
         dslip = ratio * gs * vt2 * dt;
     }
     for (int k = 0; k < 3; ++k) {

@@ -770,7 +770,7 @@ typedef struct sph_out {
 } sph_out;
 
 /* A batch of entries for the fused kernel, all under one law (sph_flush). */
-#define SPH_BATCH 16
+#define SPH_BATCH FLOE_KERNEL_BATCH
 typedef struct sph_batch {
     int n;
     const floe_contact_law *law;
@@ -862,9 +862,11 @@ static inline __attribute__((always_inline)) void sph_flush(floe_world *w, const
             cc[q].an_ext = w->dash_on ? pair_an_ext(w, p, b->i[q], b->j[q], cc + q, hist[q]) : 0.0;
         }
         for (int q = 0; q < nb; q++) floe_linear_normal_k(L->kn, L->gn, L->tension, cc + q, hist[q], nf + q);
+        double F[SPH_BATCH][3], en[SPH_BATCH];
+        floe_linear_kernel_batch(L, nb, cc, nf, hist, F, en);
         for (int q = 0; q < nb; q++) {
-            double diss;
-            floe_linear_kernel_t(L, cc + q, nf + q, hist[q], o[q].F, &o[q].energy, &diss);
+            floe_v3_copy(o[q].F, F[q]);
+            o[q].energy = en[q];
         }
     }
     for (int q = 0; q < nb; q++) {
