@@ -274,11 +274,10 @@ static int lp_scratch(floe_detect_ctx *w, int need) {
 }
 
 /* one half: a's point deepest in b, in world coordinates (f: the map from a's frame to b's) */
-static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, const rel_map *f, double *warm4,
-                   double x[3], double *s, double n[3], double *gnorm, int *pivots, int *face) {
-    floe_polytope_view A, B;
-    body_polytope(a->g, w->dim, &A);
-    body_polytope(b->g, w->dim, &B);
+static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, const floe_polytope_view *pva,
+                   const floe_polytope_view *pvb, const rel_map *f, double *warm4, double x[3], double *s, double n[3],
+                   double *gnorm, int *pivots, int *face) {
+    const floe_polytope_view A = *pva, B = *pvb; /* a's and b's planes and corners */
     const double *pa = A.plane, *pb = B.plane, *va = A.v;
     const int na = A.np, nb = B.np, nva = A.nv;
     if (lp_scratch(w, 4 * nb)) return FLOE_ENOMEM;
@@ -533,11 +532,10 @@ static void count_iterations(floe_detect_ctx *w, int it) {
 
 /* the vertices of a inside b, sign: +1 when a is particle i (the normal from i to j is then
  * minus b's outward face normal), -1 when a is j */
-static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, const rel_map *mp,
-                        double sign, int first, mf_vertex *best, int *nb, int cap) {
-    floe_polytope_view pa, pb; /* a's corners (2D: its z = 0 section), b's planes */
-    body_polytope(a->g, w->dim, &pa);
-    body_polytope(b->g, w->dim, &pb);
+static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b,
+                        const floe_polytope_view *pva, const floe_polytope_view *pvb, const rel_map *mp, double sign,
+                        int first, mf_vertex *best, int *nb, int cap) {
+    const floe_polytope_view pa = *pva, pb = *pvb; /* a's corners (2D: its z = 0 section), b's planes */
     const double *V = pa.v, *P = pb.plane;
     const int nv = pa.nv, np = pb.np;
     if (!V || !P) return;
@@ -624,13 +622,14 @@ static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shap
  * other, and a flat face rests on two (2D) or up to four (3D) springs. The gradient of
  * e(d_v) is the law's force at v along the nearest face's normal (exact: the vertex moves
  * with its body, the face with the other). This finds the 2nd .. K-th deepest vertices. */
-static void manifold(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, const rel_map *fab,
-                     const rel_map *fba, int fb, int fa, floe_contact *c) {
+static void manifold(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, const floe_polytope_view *pva,
+                     const floe_polytope_view *pvb, const rel_map *fab, const rel_map *fba, int fb, int fa,
+                     floe_contact *c) {
     const int K = w->dim == 2 ? 2 : 4;
     mf_vertex best[4];
     int nb = 0;
-    mf_vertices(w, a, b, fab, 1.0, fb, best, &nb, K);
-    mf_vertices(w, b, a, fba, -1.0, fa, best, &nb, K);
+    mf_vertices(w, a, b, pva, pvb, fab, 1.0, fb, best, &nb, K);
+    mf_vertices(w, b, a, pvb, pva, fba, -1.0, fa, best, &nb, K);
     mf_set_extras(c, best, nb); /* the deepest vertex is the deepest point's share */
 }
 
@@ -653,7 +652,10 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
     rel_map fab, fba; /* the maps between the frames, each for its LP half and manifold pass */
     double Ra[3][3];
     rel_make(&fab, a, b, Ra);
-    int rc = lp_half(w, a, b, &fab, warm, x1, &s1, n1, &g1, &p1, &fb);
+    floe_polytope_view va, vb; /* each body's planes and corners, fetched once for the pair */
+    body_polytope(a->g, w->dim, &va);
+    body_polytope(b->g, w->dim, &vb);
+    int rc = lp_half(w, a, b, &va, &vb, &fab, warm, x1, &s1, n1, &g1, &p1, &fb);
     if (rc) return -rc;
     w->det->lp_calls++;
     if (!(s1 < 0)) {
@@ -664,7 +666,7 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
         return 0;
     }
     rel_back(&fba, &fab, Ra, a, b);
-    rc = lp_half(w, b, a, &fba, warm ? warm + 4 : NULL, x2, &s2, n2, &g2, &p2, &fa);
+    rc = lp_half(w, b, a, &vb, &va, &fba, warm ? warm + 4 : NULL, x2, &s2, n2, &g2, &p2, &fa);
     if (rc) return -rc;
     count_iterations(w, p1 + p2);
     if (!(s2 < 0)) {
@@ -687,7 +689,7 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
         c->gscale = g2;
     }
     c->r_eff = a->r * b->r / (a->r + b->r);
-    manifold(w, a, b, &fab, &fba, fb, fa, c);
+    manifold(w, a, b, &va, &vb, &fab, &fba, fb, fa, c);
     if (warm) warm[LP_TOUCHED] = 1.0;
     return 1;
 }
