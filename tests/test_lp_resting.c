@@ -29,24 +29,13 @@
 #include <string.h>
 #define TEST_RNG_SEED 0x5EEDC0FFEE123457ull
 #include "test_rng.h"
+#include "poly_box.h"
 
 #define NP 40
 #define NPL 14
 static const double R = 0.01;
 
-static floe_geometry *grain(void) {
-    for (;;) {
-        double pl[4 * NPL];
-        for (int k = 0; k < NPL; k++) {
-            double *q = pl + 4 * k;
-            if (k < 6) { q[0] = q[1] = q[2] = 0; q[k / 2] = k % 2 ? -1 : 1; }
-            else rand_unit(q);
-            q[3] = R * uni(0.85, 1.15);
-        }
-        floe_geometry *g = floe_polyhedron_from_planes(pl, NPL, NULL, 0);
-        if (g) return g;
-    }
-}
+static floe_geometry *grain(void) { return poly_grain(R, NPL); }
 
 static double dist3(const double a[3], const double b[3]) {
     double d[3];
@@ -66,22 +55,7 @@ static void settling_run(void) {
     floe_world_set_law(w, 0, 0, floe_linear_law_create(2e4, 5e3, 0.5, 0.1, 0.5));
     int g[4];
     for (int s = 0; s < 4; s++) g[s] = floe_world_add_geometry(w, grain());
-    const double sp = 3.6 * R, L = 4 * sp;
-    for (int a = 0; a < 3; a++) {
-        double p0[3] = {0, 0, 0}, p1[3] = {0, 0, 0}, n0[3] = {0, 0, 0}, n1[3] = {0, 0, 0};
-        p1[a] = L; n0[a] = 1; n1[a] = -1;
-        floe_world_add_wall(w, p0, n0, 0, FLOE_FIXED);
-        if (a < 2) floe_world_add_wall(w, p1, n1, 0, FLOE_FIXED);
-    }
-    for (int i = 0; i < NP; i++) {
-        floe_particle_def p = floe_default_particle_def();
-        p.geometry = g[i % 4];
-        floe_v3_set(p.x, (i % 4 + 0.5) * sp + uni(-0.1, 0.1) * R, ((i / 4) % 4 + 0.5) * sp + uni(-0.1, 0.1) * R,
-                    (i / 16 + 0.5) * sp);
-        rand_quat(p.q);
-        for (int k = 0; k < 3; k++) { p.v[k] = uni(-0.1, 0.1); p.w[k] = uni(-20, 20); }
-        CHECK(floe_world_add_particle(w, &p) >= 0, "add particle: %s", floe_world_last_error(w));
-    }
+    poly_box_fill(w, NP, g, 4, R);
     CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
     floe_world_record_contacts(w, 1);
     const int n = pview(w).n; /* the walls first, then the grains */

@@ -459,7 +459,7 @@ static int restore_sep(floe_world *w, ibuf *r, char *err, size_t errlen) {
     return FLOE_OK;
 }
 static int has_sep(const floe_world *w) {
-    return w->sep_on && w->sep_n == w->p.n && w->sep_np == w->nl.npairs && w->sep_gen == w->nl.gen;
+    return w->sep_on && floe_world_sep_current(w);
 }
 
 static int always(const floe_world *w) { (void)w; return 1; }

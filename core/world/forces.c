@@ -47,6 +47,36 @@ static int push_contact(floe_world *w, floe_rec_sink *sink, const floe_contact *
  * summed as a force on i (fx) with its torques about the centres (tx_i, tx_j), and their
  * energy (ex); their loads in fe and their sum in c->fn_extra. Also the deepest point's
  * elastic load f0 and the load centre of all the points (centre). */
+/* A manifold spring under a built-in law without the law's call: the operations of its
+ * force function at vn = 0, dt = 0 and an empty history (what manifold_springs hands it),
+ * less those that add zeros: the normal force of the depth alone, clamped as the law clamps
+ * it, along -n, and its energy; the same values. 0 (nothing set) for other laws and for
+ * inputs the law itself refuses or treats apart (Hertz-Mindlin's checks, a depth not > 0):
+ * the caller calls the law then. */
+static inline int spring_builtin(const floe_contact_law *law, const floe_contact *ce, floe_contact_result *re) {
+    const double d = ce->depth;
+    double fn, energy;
+    if (!(d > 0.0)) return 0;
+    if (law->klass == &floe_linear_law_class) { /* floe_linear_normal_k: (kn d + gn 0) / (1 + gn 0) */
+        const floe_linear_law *L = (const floe_linear_law *)law;
+        const double fel = L->kn * d;
+        fn = L->tension ? fel : floe_clamp0(fel);
+        energy = 0.5 * L->kn * d * d;
+    } else if (law->klass == &floe_hertz_mindlin_law_class) { /* floe_hertz_normal, vn = 0 */
+        const floe_hertz_mindlin_law *H = (const floe_hertz_mindlin_law *)law;
+        const double m = ce->m_eff, R = ce->r_eff;
+        if (!(m > 0.0) || !isfinite(m) || !(R > 0.0) || !isfinite(R)) return 0;
+        const double Sn = 2.0 * H->e_star * sqrt(R * d), fel = (2.0 / 3.0) * Sn * d;
+        fn = floe_clamp0(fel);
+        energy = 0.4 * fel * d;
+    } else
+        return 0;
+    re->fn = fn;
+    for (int k = 0; k < 3; k++) re->force[k] = -fn * ce->n[k];
+    re->energy = energy;
+    return 1;
+}
+
 static int manifold_springs(floe_world *w, const floe_contact_law *law, floe_contact *c, const double *xa,
                             const double *xb, double *fe, double *f0, double centre[3], double fx[3], double tx_i[3],
                             double tx_j[3], double *ex) {
@@ -63,18 +93,21 @@ static int manifold_springs(floe_world *w, const floe_contact_law *law, floe_con
     ce.fn_extra = 0.0;
     ce.dt = 0.0; /* elastic only: no implicit dashpot factor, no history advanced */
     for (int e = -1; e < c->nextra; e++) {
-        double he[FLOE_MAX_HISTORY] = {0}, arm[3], t[3];
+        double arm[3], t[3];
         if (e >= 0) {
             ce.depth = c->extra_depth[e];
             floe_v3_copy(ce.n, c->extra_n[e]);
             floe_v3_copy(ce.point, c->extra_point[e]);
         }
         floe_contact_result re;
-        memset(&re, 0, sizeof re);
-        int rc = law->klass->force(law, &ce, he, &re);
-        if (rc)
-            return floe_world_error(w, rc, "contact law %s failed for particles %d and %d at a manifold vertex: %s",
-                                    law->klass->name, c->i, c->j, floe_strerror(rc));
+        if (!spring_builtin(law, &ce, &re)) {
+            double he[FLOE_MAX_HISTORY] = {0};
+            memset(&re, 0, sizeof re);
+            int rc = law->klass->force(law, &ce, he, &re);
+            if (rc)
+                return floe_world_error(w, rc, "contact law %s failed for particles %d and %d at a manifold vertex: %s",
+                                        law->klass->name, c->i, c->j, floe_strerror(rc));
+        }
         const double fn = fmax(re.fn, 0.0);
         ftot += fn;
         floe_v3_axpy(centre, fn, ce.point);
@@ -1303,7 +1336,7 @@ static int sep_update(floe_world *w) {
         w->sep_on = 0;
         return FLOE_OK;
     }
-    if (n != w->sep_n || nl->gen != w->sep_gen || np != w->sep_np || !w->sep_d) {
+    if (!floe_world_sep_current(w)) {
         int want = 0;
         for (int i = 0; i < n && !want; i++)
             want = p->kind[i] == FLOE_GEOM_BOX || p->kind[i] == FLOE_GEOM_USER || p->kind[i] == FLOE_GEOM_COMPOUND;

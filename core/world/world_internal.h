@@ -310,6 +310,13 @@ int floe_nl_needs_rebuild_cell(const floe_neighbor_list *nl, const floe_particle
 int floe_cell_path_begin(floe_world *w, const double de[9], double max_rate, const int *stress_mask, long *nsteps);
 void floe_cell_path_end(floe_world *w);
 
+/* the separation cache's arrays are those of the world's particles and list now (their
+ * count, the list's entries and build): forces.c sep_update starts it again otherwise, and a
+ * checkpoint writes it only then (core/integrators/checkpoint.c, section SEPC) */
+static inline int floe_world_sep_current(const floe_world *w) {
+    return w->sep_d && w->sep_n == w->p.n && w->sep_np == w->nl.npairs && w->sep_gen == w->nl.gen;
+}
+
 /* detection of the pair (i, j), piece pair sub, at the particles' current poses
  * (contact/detect/floe_detect.h); for tests and diagnostics */
 int floe_world_detect(floe_world *w, int i, int j, int sub, double *warm, floe_contact *c);
