@@ -41,12 +41,6 @@ static int push_contact(floe_world *w, floe_rec_sink *sink, const floe_contact *
 }
 
 
-/* The springs of a contact manifold's extra vertices (floe_contact.h): the law's elastic
- * force and energy at each vertex's depth (a call with no relative motion, no history and
- * a zero step),
- * summed as a force on i (fx) with its torques about the centres (tx_i, tx_j), and their
- * energy (ex); their loads in fe and their sum in c->fn_extra. Also the deepest point's
- * elastic load f0 and the load centre of all the points (centre). */
 /* A manifold spring under a built-in law without the law's call: the operations of its
  * force function at vn = 0, dt = 0 and an empty history (what manifold_springs hands it),
  * less those that add zeros: the normal force of the depth alone, clamped as the law clamps
@@ -77,6 +71,12 @@ static inline int spring_builtin(const floe_contact_law *law, const floe_contact
     return 1;
 }
 
+/* The springs of a contact manifold's extra vertices (floe_contact.h): the law's elastic
+ * force and energy at each vertex's depth (a call with no relative motion, no history and
+ * a zero step; spring_builtin for the built-in laws), summed as a force on i (fx) with its
+ * torques about the centres (tx_i, tx_j), and their energy (ex); their loads in fe and their
+ * sum in c->fn_extra. Also the deepest point's elastic load f0 and the load centre of all
+ * the points (centre). */
 static int manifold_springs(floe_world *w, const floe_contact_law *law, floe_contact *c, const double *xa,
                             const double *xb, double *fe, double *f0, double centre[3], double fx[3], double tx_i[3],
                             double tx_j[3], double *ex) {
@@ -1010,6 +1010,16 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
     return pair_book(w, ctx, env, i, j, &c, &res, zero, 0.0, hist, acc, xb);
 }
 
+/* the warm slot and the history of the convex pair two candidates ahead of q, on their way
+ * (a settled polyhedra bed: 7 % of the step waited for them; sphere scenes have no slot) */
+static inline void prefetch_ahead(const floe_neighbor_list *nl, const int *cand, int q, int nc) {
+    if (q + 2 >= nc || !nl->use_warm) return;
+    const size_t k2 = (size_t)cand[q + 2];
+    __builtin_prefetch(nl->warm + k2 * FLOE_DETECT_WARM);
+    __builtin_prefetch(nl->warm + k2 * FLOE_DETECT_WARM + 8);
+    __builtin_prefetch(nl->hist + k2 * FLOE_MAX_HISTORY);
+}
+
 /* One block of entries [k0, k1): the entries whose bounding spheres may touch go to cand
  * (the block's own part of the list's scratch), then each through its evaluation. */
 static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env *env, int k0, int k1, int *cand,
@@ -1057,20 +1067,16 @@ static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env 
             if (kind[pi[k]] == FLOE_GEOM_SPHERE && kind[pj[k]] == FLOE_GEOM_SPHERE) FLOE_TRY(sphere_pair(w, ctx, env, k, acc, &b));
             else {
                 if (b.n) sph_flush(w, ctx, env, acc, &b);
-                if (q + 2 < nc && nl->use_warm) {
-                    /* the warm slot and the history of a convex pair two ahead, on their way
-                     * (a settled polyhedra bed: 7 % of the step waited for them) */
-                    const size_t k2 = (size_t)cand[q + 2];
-                    __builtin_prefetch(nl->warm + k2 * FLOE_DETECT_WARM);
-                    __builtin_prefetch(nl->warm + k2 * FLOE_DETECT_WARM + 8);
-                    __builtin_prefetch(nl->hist + k2 * FLOE_MAX_HISTORY);
-                }
+                prefetch_ahead(nl, cand, q, nc);
                 FLOE_TRY(contact_pair(w, ctx, env, k, acc));
             }
         }
         if (b.n) sph_flush(w, ctx, env, acc, &b);
     } else
-        for (int q = 0; q < nc; q++) FLOE_TRY(contact_pair(w, ctx, env, cand[q], acc));
+        for (int q = 0; q < nc; q++) {
+            prefetch_ahead(nl, cand, q, nc);
+            FLOE_TRY(contact_pair(w, ctx, env, cand[q], acc));
+        }
     return FLOE_OK;
 }
 
