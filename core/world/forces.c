@@ -41,33 +41,30 @@ static int push_contact(floe_world *w, floe_rec_sink *sink, const floe_contact *
 }
 
 
-/* A manifold spring under a built-in law without the law's call: the operations of its
- * force function at vn = 0, dt = 0 and an empty history (what manifold_springs hands it),
- * less those that add zeros: the normal force of the depth alone, clamped as the law clamps
- * it, along -n, and its energy; the same values. 0 (nothing set) for other laws and for
- * inputs the law itself refuses or treats apart (Hertz-Mindlin's checks, a depth not > 0):
- * the caller calls the law then. */
+/* A manifold spring under a built-in law without the law's call through its class: the
+ * law's own normal kernel (floe_linear_normal_k, floe_hertz_normal) at the spring's contact,
+ * which manifold_springs gives vn = 0 and dt = 0 (the dashpot adds zeros, no history is
+ * read or advanced), the force along -n and its energy: the values of the law's force
+ * function by construction (tests/test_manifold_springs checks the bits). 0 (nothing set)
+ * for other laws and for inputs the law itself refuses or treats apart (Hertz-Mindlin's
+ * checks, a depth not > 0): the caller calls the law then. */
 static inline int spring_builtin(const floe_contact_law *law, const floe_contact *ce, floe_contact_result *re) {
-    const double d = ce->depth;
-    double fn, energy;
-    if (!(d > 0.0)) return 0;
-    if (law->klass == &floe_linear_law_class) { /* floe_linear_normal_k: (kn d + gn 0) / (1 + gn 0) */
+    floe_normal_force nf;
+    if (!(ce->depth > 0.0)) return 0;
+    if (law->klass == &floe_linear_law_class) {
         const floe_linear_law *L = (const floe_linear_law *)law;
-        const double fel = L->kn * d;
-        fn = L->tension ? fel : floe_clamp0(fel);
-        energy = 0.5 * L->kn * d * d;
-    } else if (law->klass == &floe_hertz_mindlin_law_class) { /* floe_hertz_normal, vn = 0 */
+        double h[FLOE_MAX_HISTORY] = {0}; /* untouched at dt = 0 (floe_linear_dashpot_phase) */
+        floe_linear_normal_k(L->kn, L->gn, L->tension, ce, h, &nf);
+    } else if (law->klass == &floe_hertz_mindlin_law_class) {
         const floe_hertz_mindlin_law *H = (const floe_hertz_mindlin_law *)law;
-        const double m = ce->m_eff, R = ce->r_eff;
+        const double m = ce->m_eff, R = ce->r_eff; /* the law's own checks */
         if (!(m > 0.0) || !isfinite(m) || !(R > 0.0) || !isfinite(R)) return 0;
-        const double Sn = 2.0 * H->e_star * sqrt(R * d), fel = (2.0 / 3.0) * Sn * d;
-        fn = floe_clamp0(fel);
-        energy = 0.4 * fel * d;
+        floe_hertz_normal(H->e_star, H->damping_ratio, ce, &nf);
     } else
         return 0;
-    re->fn = fn;
-    for (int k = 0; k < 3; k++) re->force[k] = -fn * ce->n[k];
-    re->energy = energy;
+    re->fn = nf.fn;
+    for (int k = 0; k < 3; k++) re->force[k] = -nf.fn * ce->n[k];
+    re->energy = nf.energy;
     return 1;
 }
 
