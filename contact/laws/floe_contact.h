@@ -175,16 +175,23 @@ extern const floe_contact_law_class floe_hertz_mindlin_law_class;
  * keeping its length, so that it follows the rigid rotation of the contact frame
  * (LIGGGHTS/LAMMPS). For the usual small turn, 1/sqrt(1 - q) is expanded to second order
  * in q = (s.n)^2/|s|^2 (relative error < 1e-12 for q < 1e-4); a spring parallel to n has
- * no direction left and is zeroed. For use inside contact laws. */
+ * no direction left and is zeroed; a zero spring stays zero. For use inside contact laws.
+ * Without a branch (each case computed, the one that applies selected) and without calls,
+ * so that a loop over contacts runs it in vector lanes (the world's sphere batches). */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
 static inline void floe_contact_rotate_history(double s[3], const double n[3]) {
-    double mag2 = floe_v3_dot(s, s);
-    if (mag2 == 0.0) return;
-    double sn = floe_v3_dot(s, n);
-    floe_v3_axpy(s, -sn, n);
-    double p2 = mag2 - sn * sn, q = sn * sn / mag2;
-    if (q < 1e-4) floe_v3_scale(s, 1.0 + q * (0.5 + 0.375 * q));
-    else if (p2 > 1e-24 * mag2) floe_v3_scale(s, sqrt(mag2 / floe_v3_dot(s, s)));
-    else floe_v3_set(s, 0.0, 0.0, 0.0);
+    const double mag2 = s[0] * s[0] + s[1] * s[1] + s[2] * s[2], sn = s[0] * n[0] + s[1] * n[1] + s[2] * n[2];
+    double t[3];
+    for (int k = 0; k < 3; k++) t[k] = s[k] + -sn * n[k];
+    const double p2 = mag2 - sn * sn, q = sn * sn / mag2;
+    const double small = 1.0 + q * (0.5 + 0.375 * q), big = sqrt(mag2 / (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]));
+    const int keep = mag2 == 0.0, is_small = q < 1e-4, is_big = p2 > 1e-24 * mag2;
+    for (int k = 0; k < 3; k++) {
+        const double ts = t[k] * small, tb = t[k] * big;
+        s[k] = keep ? s[k] : is_small ? ts : is_big ? tb : 0.0;
+    }
 }
 
 /* Constructors (caller owns the result, or the world after floe_world_set_law). */

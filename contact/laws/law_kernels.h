@@ -8,9 +8,6 @@
 
 #include "law_parts.h"
 
-/* The most contacts a batch kernel takes (floe_linear_kernel_batch;
- * forces.c's SPH_BATCH). */
-#define FLOE_KERNEL_BATCH 16
 
 /* Each kernel also in its two stages, the normal force (floe_hertz_normal,
  * floe_linear_normal_k) and then the rest (floe_hm_kernel_t, floe_linear_kernel_t: the
@@ -54,42 +51,6 @@ static inline __attribute__((always_inline)) void floe_linear_kernel_t(const flo
     for (int k = 0; k < 3; ++k) F[k] = -Fn * c->n[k] + Ft[k];
     *energy = nf->energy + 0.5 * L->ks * floe_v3_dot(hist, hist);
     *diss = d;
-}
-
-/* floe_linear_kernel_t over nb <= FLOE_KERNEL_BATCH contacts (the world's sphere stage,
- * forces.c sph_flush): each contact's operations are floe_linear_kernel_t's (floe_coulomb_trial
- * and, when it slips, floe_coulomb_slip: the same bits), but the slip's square root and
- * division only for the contacts that slip, listed (without a branch) after the trials.
- * floe_coulomb_k takes them for every contact, to select without a branch; on the RVE of
- * ParticLS 5.3 this batch form was 3 % faster. (The same form for Hertz-Mindlin was 30 %
- * slower on dem-settle's settled bed, not understood: it keeps floe_hm_kernel_t.) The losses
- * are not returned (the world's ledger books them from the work and the stored energy).
- * hist[q] is contact q's history, F[q] and energy[q] its force on i and stored energy. */
-static inline __attribute__((always_inline)) void floe_linear_kernel_batch(const floe_linear_law *L, int nb,
-                                                                            const floe_contact *cc,
-                                                                            const floe_normal_force *nf,
-                                                                            double *const *hist, double (*F)[3],
-                                                                            double *energy) {
-    const double ks = L->ks, gs = L->gs, mu = L->mu;
-    const double minus_inv_ks = ks > 0.0 ? -1.0 / ks : 0.0;
-    double Ft[FLOE_KERNEL_BATCH][3], lim[FLOE_KERNEL_BATCH], ft2s[FLOE_KERNEL_BATCH];
-    int sl[FLOE_KERNEL_BATCH], ns = 0;
-    for (int q = 0; q < nb; q++) {
-        floe_coulomb_trial(cc + q, ks, gs, mu, fabs(nf[q].fn) + cc[q].fn_extra, hist[q], Ft[q], lim + q, ft2s + q);
-        sl[ns] = q;
-        ns += ft2s[q] > lim[q] * lim[q];
-    }
-    for (int t = 0; t < ns; t++) {
-        const int q = sl[t];
-        double Fs[3];
-        floe_coulomb_slip(cc[q].vt, ks, gs, minus_inv_ks, lim[q] / sqrt(ft2s[q]), Ft[q], Fs, hist[q]);
-        floe_v3_copy(Ft[q], Fs);
-    }
-    for (int q = 0; q < nb; q++) {
-        const double Fn = nf[q].fn;
-        for (int k = 0; k < 3; ++k) F[q][k] = -Fn * cc[q].n[k] + Ft[q][k];
-        energy[q] = nf[q].energy + 0.5 * ks * floe_v3_dot(hist[q], hist[q]);
-    }
 }
 
 static inline __attribute__((always_inline)) double floe_linear_kernel(const floe_linear_law *L, const floe_contact *c,

@@ -22,87 +22,121 @@ static inline double floe_clamp0(double x) {
 
 #define FLOE_HM_DAMP_PREF 1.8257418583505538 /* 2 sqrt(5/6) */
 
+/* floe_v3_dot and floe_v3_cross for the lane forms, always inlined (in the world's large
+ * contact stage the compiler stopped inlining floe_base.h's, and a call in a lane loop keeps
+ * it scalar); the same operations */
+static inline __attribute__((always_inline)) double floe_dot3_l(const double a[3], const double b[3]) {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+static inline __attribute__((always_inline)) void floe_cross3_l(double r[3], const double a[3], const double b[3]) {
+    const double x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2], z = a[0] * b[1] - a[1] * b[0];
+    r[0] = x; r[1] = y; r[2] = z;
+}
+
 /* Hertz normal force with the restitution-calibrated dashpot (003 eqs 15-21, 000 eq 36):
  * Sn = 2 E* sqrt(R* d), Fel = 2/3 Sn d, gn = 2 sqrt(5/6) beta sqrt(Sn m*), Fn = max(Fel +
  * gn vn, 0), stored energy 2/5 Fel d. Depth > 0, R*, m* > 0 finite (the caller checks). */
-static inline void floe_hertz_normal(double e_star, double beta, const floe_contact *c, floe_normal_force *o) {
-    const double d = c->depth, vn = c->vn;
-    const double a = sqrt(c->r_eff * d);
+static inline __attribute__((always_inline)) void floe_hertz_normal_lane(double e_star, double beta, double d,
+                                                                      double vn, double r_eff, double m_eff,
+                                                                      double *fn, double *fel_out, double *Sn_out,
+                                                                      double *gn_out, double *energy) {
+    const double a = sqrt(r_eff * d);
     const double Sn = 2.0 * e_star * a;
     const double fel = (2.0 / 3.0) * Sn * d; /* 4/3 E* sqrt(R* d) d */
-    const double gn = FLOE_HM_DAMP_PREF * beta * sqrt(Sn * c->m_eff);
-    const double Fn = floe_clamp0(fel + gn * vn);
+    const double gn = FLOE_HM_DAMP_PREF * beta * sqrt(Sn * m_eff);
+    const double Fn = fel + gn * vn;
+    *fn = 0.0 > Fn ? 0.0 : Fn; /* floe_clamp0 (NaN and -0 kept), without a branch */
+    *fel_out = fel;
+    *Sn_out = Sn;
+    *gn_out = gn;
+    *energy = 0.4 * fel * d;
+}
+
+static inline void floe_hertz_normal(double e_star, double beta, const floe_contact *c, floe_normal_force *o) {
+    double Fn, fel, Sn, gn, energy;
+    floe_hertz_normal_lane(e_star, beta, c->depth, c->vn, c->r_eff, c->m_eff, &Fn, &fel, &Sn, &gn, &energy);
     o->fn = Fn;
     o->fel = fel;
     o->kn = Sn;
     o->gn = gn;
-    o->diss = (Fn - fel) * vn * c->dt;
-    o->energy = 0.4 * fel * d;
+    o->diss = (Fn - fel) * c->vn * c->dt;
+    o->energy = energy;
 }
 
 /* Mindlin tangential spring kt = 8 G* sqrt(R* d) on the stored force Fs (history[0..2],
  * rotated with the contact frame), dashpot gt = gn sqrt(4 G* / E*) (tdr) from the normal
  * dashpot, Coulomb limit mu (Fn + fn_extra); adds the spring energy |Fs|^2 / (2 kt) to
  * *energy and the dashpot and slip losses to *diss. */
-static inline void floe_mindlin_tangential(double g_star, double tdr, double mu, const floe_contact *c,
-                                           const floe_normal_force *nf, double *Fs, double Ft[3], double *energy,
-                                           double *diss) {
-    const double dt = c->dt;
-    const double kt = 8.0 * g_star * sqrt(c->r_eff * c->depth);
-    const double gt = nf->gn * tdr; /* sqrt(kt m) = sqrt(Sn m) sqrt(4 G* / E*) */
-    const double vt[3] = {c->vt[0], c->vt[1], c->vt[2]};
-    /* the stored force in registers, written back once: updated in place in the history, its
-     * element stores were read back by a vector load (a store-forwarding stall per contact) */
-    double S[3] = {Fs[0], Fs[1], Fs[2]};
-    floe_contact_rotate_history(S, c->n);
-    floe_v3_axpy(S, -kt * dt, vt);
+static inline __attribute__((always_inline)) void floe_mindlin_tangential_lane(double g_star, double tdr, double mu,
+                                                                            double dt, double r_eff, double depth,
+                                                                            const double n[3], const double vt_in[3],
+                                                                            double gn, double fn, double fn_extra,
+                                                                            double S[3], double Ft[3], double *energy,
+                                                                            double *diss) {
+    const double kt = 8.0 * g_star * sqrt(r_eff * depth);
+    const double gt = gn * tdr; /* sqrt(kt m) = sqrt(Sn m) sqrt(4 G* / E*) */
+    const double vt[3] = {vt_in[0], vt_in[1], vt_in[2]};
+    floe_contact_rotate_history(S, n);
+    for (int k = 0; k < 3; ++k) S[k] += -kt * dt * vt[k]; /* floe_v3_axpy(S, -kt dt, vt) */
     for (int k = 0; k < 3; ++k) Ft[k] = S[k] - gt * vt[k];
-    const double vt2 = floe_v3_dot(vt, vt);
-    const double limit = mu * (nf->fn + c->fn_extra); /* + the manifold's other springs */
-    const double ft2 = floe_v3_dot(Ft, Ft);
+    const double vt2 = floe_dot3_l(vt, vt);
+    const double limit = mu * (fn + fn_extra); /* + the manifold's other springs */
+    const double ft2 = floe_dot3_l(Ft, Ft);
     *diss += gt * vt2 * dt;
     const double half_inv_kt = 0.5 / kt;
     /* sliding or not without a branch (as floe_coulomb_k: the branches' values selected) */
     const int slip = ft2 > limit * limit;
-    const double ftmag = sqrt(ft2), e_before = floe_v3_dot(S, S) * half_inv_kt, sc = limit / ftmag;
+    const double ftmag = sqrt(ft2), e_before = floe_dot3_l(S, S) * half_inv_kt, sc = limit / ftmag;
     double Fl[3], Ss[3];
     for (int k = 0; k < 3; ++k) Fl[k] = Ft[k] * sc;
     for (int k = 0; k < 3; ++k) Ss[k] = Fl[k] + gt * vt[k];
-    const double dslip = e_before - floe_v3_dot(Ss, Ss) * half_inv_kt;
+    const double dslip = e_before - floe_dot3_l(Ss, Ss) * half_inv_kt;
     for (int k = 0; k < 3; ++k) {
         Ft[k] = slip ? Fl[k] : Ft[k];
         S[k] = slip ? Ss[k] : S[k];
     }
-    *diss = slip ? *diss + dslip : *diss;
-    *energy += floe_v3_dot(S, S) * half_inv_kt;
+    const double dd = *diss + dslip;
+    *diss = slip ? dd : *diss;
+    *energy += floe_dot3_l(S, S) * half_inv_kt;
+}
+
+static inline void floe_mindlin_tangential(double g_star, double tdr, double mu, const floe_contact *c,
+                                           const floe_normal_force *nf, double *Fs, double Ft[3], double *energy,
+                                           double *diss) {
+    /* the stored force in registers, written back once: updated in place in the history, its
+     * element stores were read back by a vector load (a store-forwarding stall per contact) */
+    double S[3] = {Fs[0], Fs[1], Fs[2]};
+    floe_mindlin_tangential_lane(g_star, tdr, mu, c->dt, c->r_eff, c->depth, c->n, c->vt, nf->gn, nf->fn, c->fn_extra,
+                                 S, Ft, energy, diss);
     Fs[0] = S[0]; Fs[1] = S[1]; Fs[2] = S[2];
 }
 
 /* Coulomb friction with a shear spring (ParticLS eqs 17-18), in two parts that a batch of
- * contacts can run apart (law_kernels.h floe_linear_kernel_batch): the trial, the spring s
- * advanced and the force it and the dashpot give, with the Coulomb limit mu |Fn| and |Ft|^2;
- * then, for a contact that slips (|Ft| > limit), the force onto the limit and the spring to
- * match (minus_inv_ks = -1 / ks; no spring: s = 0). */
-static inline __attribute__((always_inline)) void floe_coulomb_trial(const floe_contact *c, double ks, double gs,
-                                                                      double mu, double Fn, double *s, double Ft[3],
-                                                                      double *limit, double *ft2) {
-    floe_contact_rotate_history(s, c->n);
-    floe_v3_axpy(s, c->dt, c->vt);
-    floe_v3_set(Ft, 0.0, 0.0, 0.0);
-    floe_v3_axpy(Ft, -ks, s);
-    floe_v3_axpy(Ft, -gs, c->vt);
+ * contacts runs in lanes (core/world/forces.c sph_flush_lanes): the trial, the spring s
+ * (rotated with the contact frame, floe_contact_rotate_history) advanced by vt dt and the force
+ * it and the dashpot give, with the Coulomb limit mu |Fn| and |Ft|^2; then the force onto
+ * the limit and the spring to match (minus_inv_ks = -1 / ks; no spring: s = 0), which the
+ * caller keeps for a contact that slips (|Ft| > limit). Neither has a branch. */
+static inline __attribute__((always_inline)) void floe_coulomb_trial(const double n[3], const double vt[3], double dt,
+                                                                      double ks, double gs, double mu, double Fn,
+                                                                      double *s, double Ft[3], double *limit,
+                                                                      double *ft2) {
+    floe_contact_rotate_history(s, n);
+    for (int k = 0; k < 3; ++k) s[k] += dt * vt[k];
+    for (int k = 0; k < 3; ++k) Ft[k] = 0.0 + -ks * s[k];
+    for (int k = 0; k < 3; ++k) Ft[k] += -gs * vt[k];
     *limit = mu * fabs(Fn);
-    *ft2 = floe_v3_dot(Ft, Ft);
+    *ft2 = floe_dot3_l(Ft, Ft);
 }
 
 static inline __attribute__((always_inline)) void floe_coulomb_slip(const double vt[3], double ks, double gs,
                                                                      double minus_inv_ks, double ratio,
                                                                      const double Ft[3], double Fs[3], double ss[3]) {
     for (int k = 0; k < 3; ++k) Fs[k] = Ft[k] * ratio;
-    if (ks > 0.0)
-        for (int k = 0; k < 3; ++k) ss[k] = (Fs[k] + gs * vt[k]) * minus_inv_ks;
-    else
-        floe_v3_set(ss, 0.0, 0.0, 0.0);
+    for (int k = 0; k < 3; ++k) {
+        const double v = (Fs[k] + gs * vt[k]) * minus_inv_ks;
+        ss[k] = ks > 0.0 ? v : 0.0;
+    }
 }
 
 /* The two parts on one contact: see floe_contact.h and the linear law's header comment
@@ -112,7 +146,7 @@ static inline __attribute__((always_inline)) void floe_coulomb_k(const floe_cont
 {
     const double dt = c->dt;
     double limit, ft2;
-    floe_coulomb_trial(c, ks, gs, mu, Fn, s, Ft, &limit, &ft2);
+    floe_coulomb_trial(c->n, c->vt, dt, ks, gs, mu, Fn, s, Ft, &limit, &ft2);
     const double vt2 = floe_v3_dot(c->vt, c->vt);
     /* sliding or not, without a branch: in a dense bed contacts stick and slip at random, and
      * a mispredicted branch per contact cost more than the slip's arithmetic done always (the
@@ -136,9 +170,10 @@ static inline __attribute__((always_inline)) void floe_coulomb_k(const floe_cont
 
 /* the other forces' rate of change of vn (floe_contact.an_ext); 0 at dt = 0 (prepare,
  * refresh: the dashpot sees vn itself) and when not finite */
-static inline double floe_linear_an_ext(const floe_contact *c) {
-    return c->dt > 0.0 && isfinite(c->an_ext) ? c->an_ext : 0.0;
+static inline __attribute__((always_inline)) double floe_linear_an_ext_v(double dt, double an_ext) {
+    return (dt > 0.0) & (fabs(an_ext) < INFINITY) ? an_ext : 0.0; /* isfinite, without a branch */
 }
+static inline double floe_linear_an_ext(const floe_contact *c) { return floe_linear_an_ext_v(c->dt, c->an_ext); }
 
 /* Onset and release of the dashpot (issue 10 B). The dashpot force jumps by gn vn when
  * the contact begins and (with tension) when it ends, inside a step. Velocity Verlet
@@ -167,50 +202,68 @@ static inline double floe_linear_an_ext(const floe_contact *c) {
  * 14 % estimated for the ParticLS §5.3 RVE). Lagging the whole acceleration instead (this contact's own force
  * too) is unstable from 0.6-0.8 of the critical step (a chain of 20 masses: spectral radius
  * 2.1 at the critical step, zeta 0.3); the implicit own term keeps it stable up to it. */
+/* In lane form (the world's vectorised sphere batch, forces.c): the scalars of one contact, *h3 its
+ * history[3] (written back whatever the case), each case's value computed and the one that
+ * applies selected, without a branch (the same values as the cases taken one by one; the
+ * divisions of the cases not taken are done and dropped). */
+static inline __attribute__((always_inline)) double floe_linear_phase_lane(double kn, double gn, int tension, double d,
+                                                                        double vn, double dt, double an_ext,
+                                                                        double hm, double *h3)
+{
+    const double h = *h3;
+    const int live = dt > 0.0; /* else prepare: nothing advances, the factor is 1 */
+    /* the first evaluation (h == 0): the contact began d / vn ago */
+    const double r = d / (vn * dt);
+    const double f_first = (vn > 0.0) & (d <= 2.0 * vn * dt) ? 0.5 + (r < 1.0 ? r : 1.0) : 1.0;
+    /* later ones: the part of this evaluation's window that the previous one already
+     * covered, when it took itself for the last one and the contact went on */
+    const double covered = h - 1.0;
+    /* the overlap's rate over the next drift: v_{n+3/2} = v_{n+1/2} + dt (a_ext - Fn / m*) */
+    const double ae = floe_linear_an_ext_v(dt, an_ext);
+    const double fn = (kn * d + gn * (vn + 0.5 * dt * ae)) / (1.0 + gn * hm), vnext = vn + dt * ae - 2.0 * hm * fn;
+    const int last = (tension != 0) & (vn < 0.0) & (vnext < 0.0) & (d < -vnext * dt);
+    const double f_last = 0.5 + d / (-vnext * dt), f = last ? f_last : 1.0;
+    const double h_next = last ? 1.0 + (f - 1.0 > 0.0 ? f - 1.0 : 0.0) : 1.0;
+    const double f_next = f - covered > 0.0 ? f - covered : 0.0; /* fmax(., 0) (NaN: 0), inline */
+    const int first = h == 0.0;
+    *h3 = live ? (first ? 1.0 : h_next) : h;
+    return live ? (first ? f_first : f_next) : 1.0;
+}
+
 static inline double floe_linear_dashpot_phase(double kn, double gn, int tension, const floe_contact *c, double *hist, double hm)
 {
-    const double d = c->depth, vn = c->vn, dt = c->dt;
-    if (!(dt > 0.0)) return 1.0; /* prepare: nothing advances */
-    if (hist[3] == 0.0) { /* first evaluation: the contact began d / vn ago */
-        hist[3] = 1.0;
-        if (!(vn > 0.0 && d <= 2.0 * vn * dt)) return 1.0;
-        const double r = d / (vn * dt);
-        return 0.5 + (r < 1.0 ? r : 1.0); /* fmin(r, 1), without the library call */
-    }
-    /* the part of this evaluation's window that the previous one already covered, when it
-     * took itself for the last one and the contact went on */
-    const double covered = hist[3] - 1.0;
-    double f = 1.0;
-    hist[3] = 1.0;
-    if (tension && vn < 0.0) {
-        /* the overlap's rate over the next drift: v_{n+3/2} = v_{n+1/2} + dt (a_ext - Fn / m*) */
-        const double ae = floe_linear_an_ext(c);
-        const double fn = (kn * d + gn * (vn + 0.5 * dt * ae)) / (1.0 + gn * hm), vnext = vn + dt * ae - 2.0 * hm * fn;
-        if (vnext < 0.0 && d < -vnext * dt) {
-            f = 0.5 + d / (-vnext * dt);
-            hist[3] = 1.0 + (f - 1.0 > 0.0 ? f - 1.0 : 0.0);
-        }
-    }
-    return f - covered > 0.0 ? f - covered : 0.0; /* fmax(., 0) (NaN: 0), inline */
+    return floe_linear_phase_lane(kn, gn, tension, c->depth, c->vn, c->dt, c->an_ext, hm, hist + 3);
+}
+
+/* floe_linear_normal_k in lane form: the contact's depth, vn, dt, m_eff and an_ext; *h3 its
+ * history[3]; the normal force into *fn, the elastic force into *fel, the stored energy into
+ * *energy (no branch: the vectorised sphere batch runs it over a batch's contacts at once) */
+static inline __attribute__((always_inline)) void floe_linear_normal_lane(double kn, double gn, int tension, double d,
+                                                                       double vn, double dt, double m_eff,
+                                                                       double an_ext, double *h3, double *fn,
+                                                                       double *fel_out, double *energy) {
+    const double fel = kn * d;
+    /* the dashpot at the velocity of the step's end (floe_linear_dashpot_phase) */
+    const double hm_v = 0.5 * dt / m_eff, hm = (m_eff > 0.0) & (m_eff < INFINITY) ? hm_v : 0.0;
+    const double gph = gn * floe_linear_phase_lane(kn, gn, tension, d, vn, dt, an_ext, hm, h3);
+    const double Fn = (fel + gph * (vn + 0.5 * dt * floe_linear_an_ext_v(dt, an_ext))) / (1.0 + gph * hm);
+    *fn = (tension != 0) | !(0.0 > Fn) ? Fn : 0.0; /* floe_clamp0 unless tension (NaN and -0 kept) */
+    *fel_out = fel;
+    *energy = 0.5 * kn * d * d;
 }
 
 static inline __attribute__((always_inline)) void floe_linear_normal_k(double kn, double gn, int tension,
                                                                   const floe_contact *c, double *hist,
                                                                   floe_normal_force *o)
 {
-    const double d = c->depth, vn = c->vn, dt = c->dt;
-    const double fel = kn * d;
-    /* the dashpot at the velocity of the step's end (floe_linear_dashpot_phase) */
-    const double hm = c->m_eff > 0.0 && isfinite(c->m_eff) ? 0.5 * dt / c->m_eff : 0.0;
-    const double gph = gn * floe_linear_dashpot_phase(kn, gn, tension, c, hist, hm);
-    double Fn = (fel + gph * (vn + 0.5 * dt * floe_linear_an_ext(c))) / (1.0 + gph * hm);
-    if (!tension) Fn = floe_clamp0(Fn);
+    double Fn, fel, energy;
+    floe_linear_normal_lane(kn, gn, tension, c->depth, c->vn, c->dt, c->m_eff, c->an_ext, hist + 3, &Fn, &fel, &energy);
     o->fn = Fn;
     o->fel = fel;
     o->kn = kn;
     o->gn = gn;
-    o->diss = (Fn - fel) * vn * dt; /* damping force actually applied times vn dt */
-    o->energy = 0.5 * kn * d * d;
+    o->diss = (Fn - fel) * c->vn * c->dt; /* damping force actually applied times vn dt */
+    o->energy = energy;
 }
 
 /* Linear spring-dashpot normal force kn d + gn vn with the onset/release treatment of the

@@ -409,6 +409,8 @@ typedef struct stage_env {
     const int *img;              /* the list's image codes (with a cell) */
     int fused;                   /* sphere pairs under a built-in law may take its fused kernel
                                     (sph_flush: no contacts recorded, no cell, no growth) */
+    const floe_contact_law *law1; /* the one law of a world with one material (else NULL): the
+                                     sphere path skips the lookup by materials */
 } stage_env;
 
 /* periodic cell: j's image xs = x_j + H n of entry k (xs untouched and x_j returned when the
@@ -792,34 +794,38 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
  * law's table; the same operations otherwise, so the same bits (tests/test_sphere_path.c).
  * (dx, dy, dz) = x_j - x_i, dist its length (> 0), depth <= the smaller radius, r_eff =
  * r_i r_j / (r_i + r_j), m_eff = 1 / (1/m_i + 1/m_j). The entries go in batches (sph_batch,
- * sph_flush): the forces (lever arms, the law in its two stages, law_kernels.h, the torques:
- * nothing summed) stage by stage over the batch, then each entry's book (sphere_fused_book:
- * the particles' sums and the ledger) in list order. */
+ * sph_flush_lanes): the forces (lever arms, the law's stages, the torques: nothing summed)
+ * stage by stage over the batch in lanes, then each entry's book (sphere_fused_book: the
+ * particles' sums and the ledger) in list order. */
 typedef struct sph_out {
     double F[3], Ti[3], Tj[3], energy;
 } sph_out;
 
-/* A batch of entries for the fused kernel, all under one law (sph_flush). */
-#define SPH_BATCH FLOE_KERNEL_BATCH
+/* A batch of entries for the fused kernel, all under one law (sph_flush_lanes). */
+#define SPH_BATCH 16
 typedef struct sph_batch {
     int n;
     const floe_contact_law *law;
     int k[SPH_BATCH], i[SPH_BATCH], j[SPH_BATCH];
     double dx[SPH_BATCH], dy[SPH_BATCH], dz[SPH_BATCH], dist[SPH_BATCH], depth[SPH_BATCH], reff[SPH_BATCH],
         meff[SPH_BATCH];
+    /* the lanes' inputs (sph_flush_lanes), gathered as each entry joins: the radii, 1/m_i +
+     * 1/m_j, the centres, velocities and spins, a_i - a_j (w->dash_a), the history's spring,
+     * dashpot phase, last force and stored energy */
+    double ra[SPH_BATCH], rb[SPH_BATCH], im[SPH_BATCH], xa[3][SPH_BATCH], xb[3][SPH_BATCH], vi[3][SPH_BATCH],
+        vj[3][SPH_BATCH], wi[3][SPH_BATCH], wj[3][SPH_BATCH], aij[3][SPH_BATCH], s[3][SPH_BATCH], h3[SPH_BATCH],
+        fo[3][SPH_BATCH], eo[SPH_BATCH];
 } sph_batch;
 
-/* the book of entry k: the particles' sums and the ledger, in list order */
+/* the book of entry k: the particles' sums and the ledger, in list order; dk the work the
+ * contact did less the change of its stored energy (pair_book's ledger) */
 static inline __attribute__((always_inline)) void sphere_fused_book(const stage_env *env, int k, stage_acc *acc,
                                                                    int i, int j, double *hist, const sph_out *o,
-                                                                   const floe_contact *c) {
+                                                                   double dk) {
     pair_apply(env->p, acc, k, i, j, o->F, o->Ti, o->Tj);
     const double energy = o->energy;
     acc->elastic += energy;
-    if (env->stepping) { /* pair_book's ledger: (F_old + F_new)/2 . dx less the change of energy */
-        double fav[3];
-        for (int a = 0; a < 3; a++) fav[a] = 0.5 * (o->F[a] + hist[FLOE_FORCE_SLOT + a]);
-        const double dk = -floe_v3_dot(fav, c->vr) * c->dt - (energy - hist[FLOE_ENERGY_SLOT]);
+    if (env->stepping) { /* pair_book's ledger: dk from the lanes (sph_flush_lanes) */
         acc->diss += dk;
         hist[FLOE_DISS_SLOT] += dk;
         acc_life(acc, i, j, hist[FLOE_DISS_SLOT] + energy);
@@ -829,88 +835,193 @@ static inline __attribute__((always_inline)) void sphere_fused_book(const stage_
     acc->ncontacts++;
 }
 
-/* The batch's entries through the fused kernel in stages, each stage over every entry before
- * the next: the geometry and velocities, the normal force, the tangential force, the torques,
- * then the books in list order. One entry's pair body run after the other kept a single chain
- * of dependent operations (square roots, divisions) in flight; the entries of a batch are
- * independent until their books, so a short stage over all of them lets the processor overlap
- * them. Each entry sees the operations of the single pair body in its order: the same bits. */
+/* entry q's inputs to the lanes (sph_flush_lanes), as it joins the batch; lin: the linear
+ * law's too (the dashpot's phase and a_i - a_j, the last force) */
+static inline __attribute__((always_inline)) void sph_lane_gather(const floe_world *w, const floe_particles *p,
+                                                                 sph_batch *b, int q, int i, int j,
+                                                                 const double *hist, double rad_i, double rad_j,
+                                                                 double im, int lin) {
+    b->ra[q] = rad_i;
+    b->rb[q] = rad_j;
+    b->im[q] = im;
+    for (int a = 0; a < 3; a++) {
+        b->xa[a][q] = p->x[3 * i + a];
+        b->xb[a][q] = p->x[3 * j + a];
+        b->vi[a][q] = p->v[3 * i + a];
+        b->vj[a][q] = p->v[3 * j + a];
+        b->wi[a][q] = p->w[3 * i + a];
+        b->wj[a][q] = p->w[3 * j + a];
+        b->s[a][q] = hist[a];
+        b->fo[a][q] = hist[FLOE_FORCE_SLOT + a];
+    }
+    b->eo[q] = hist[FLOE_ENERGY_SLOT];
+    if (!lin) return;
+    b->h3[q] = hist[3];
+    const int dash = w->dash_on;
+    for (int a = 0; a < 3; a++) b->aij[a][q] = dash ? w->dash_a[3 * (size_t)i + a] - w->dash_a[3 * (size_t)j + a] : 0.0;
+}
+
+/* A batch in lanes: every stage's operations on arrays of the batch's contacts, one array
+ * per quantity, so that the compiler runs each stage over 8 contacts at a time (AVX-512; 4
+ * with AVX2) where the scalar stages before ran one contact after the other: the geometry
+ * and velocities with the other forces' normal acceleration (pair_an_ext), then the law's
+ * normal force and tangential spring (floe_hertz_normal_lane and floe_mindlin_tangential_lane,
+ * or floe_linear_normal_lane, floe_coulomb_trial and floe_coulomb_slip: every case computed
+ * and the one that applies selected, without a branch) and the torques; then the books in
+ * list order. The inputs are the batch's arrays (sph_lane_gather, as each entry joined; the
+ * lanes past nb hold an earlier batch's entries or zeros, their results are dropped). Each
+ * lane does the scalar operations in their order (no contraction in ISO C): the same bits
+ * as the law's own force function (tests/test_sphere_path.c). Out of line: inlined at each
+ * flush of stage_block, some copies stayed scalar (the RVE 1.5x slower). The ParticLS 5.3
+ * RVE 14 % and dem-settle 8 % faster on one thread (bench/RESULTS.md, issue 14 session 13). */
+#define SL SPH_BATCH
+static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_step_ctx *ctx,
+                                                                  const stage_env *env, stage_acc *acc, sph_batch *b) {
+    const floe_linear_law *L = (const floe_linear_law *)b->law; /* read unless hm */
+    const int hm = b->law->klass == &floe_hertz_mindlin_law_class;
+    const int nb = b->n, dash = w->dash_on && !hm, tension = hm ? 0 : L->tension;
+    const double dt = env->stepping ? ctx->dt : ctx->hist_dt;
+    /* the batch's arrays (sph_lane_gather), all SL lanes: those past nb hold an earlier
+     * batch's entries or zeros, their results dropped */
+    const double *dist = b->dist, *depth = b->depth, *meff = b->meff, *reff = b->reff, *RI = b->ra, *RJ = b->rb, *IM = b->im, *H3i = b->h3;
+    const double *D[3] = {b->dx, b->dy, b->dz};
+    double (*XA)[SL] = b->xa, (*XB)[SL] = b->xb, (*VI)[SL] = b->vi, (*VJ)[SL] = b->vj, (*WI)[SL] = b->wi,
+           (*WJ)[SL] = b->wj, (*AIJ)[SL] = b->aij, (*FO)[SL] = b->fo;
+    double S[3][SL], H3[SL];
+    const double kn = hm ? 0 : L->kn, gn = hm ? 0 : L->gn, ks = hm ? 0 : L->ks, gs = hm ? 0 : L->gs, mu = hm ? 0 : L->mu;
+    const double minus_inv_ks = ks > 0.0 ? -1.0 / ks : 0.0;
+    /* geometry, velocities, the other forces' normal acceleration */
+    double N[3][SL], Ri[3][SL], Rj[3][SL], VR[3][SL], VT[3][SL], VN[SL], AN[SL], ETA[SL];
+    const double wdt = w->dt;
+    for (int q = 0; q < SL; q++) {
+        const double inv = 1.0 / dist[q];
+        double n[3], ri[3], rj[3], wi[3], wj[3], ui[3], uj[3], vr[3];
+        for (int a = 0; a < 3; a++) n[a] = D[a][q] * inv;
+        for (int a = 0; a < 3; a++) { /* the lever arms to the mid point of the two surface points */
+            const double x1 = XA[a][q] + RI[q] * n[a], x2 = XB[a][q] - RJ[q] * n[a], pt = 0.5 * (x1 + x2);
+            ri[a] = pt - XA[a][q];
+            rj[a] = pt - XB[a][q];
+            wi[a] = WI[a][q];
+            wj[a] = WJ[a][q];
+        }
+        floe_cross3_l(ui, wi, ri);
+        floe_cross3_l(uj, wj, rj);
+        for (int a = 0; a < 3; a++) vr[a] = (VI[a][q] + ui[a]) - (VJ[a][q] + uj[a]);
+        const double vn = floe_dot3_l(vr, n);
+        for (int a = 0; a < 3; a++) {
+            N[a][q] = n[a];
+            Ri[a][q] = ri[a];
+            Rj[a][q] = rj[a];
+            VR[a][q] = vr[a];
+            VT[a][q] = vr[a] - vn * n[a];
+        }
+        VN[q] = vn;
+        ETA[q] = fabs(vn) * wdt / (RI[q] < RJ[q] ? RI[q] : RJ[q]); /* adaptive steps: read when env->track */
+        /* pair_an_ext with gscale 1 */
+        const double an = AIJ[0][q] * n[0] + AIJ[1][q] * n[1] + AIJ[2][q] * n[2];
+        const double fo = FO[0][q] * n[0] + FO[1][q] * n[1] + FO[2][q] * n[2];
+        AN[q] = dash ? an - fo * IM[q] : 0.0;
+    }
+    /* the normal force, the tangential spring, the force and torques */
+    double F[3][SL], TI[3][SL], TJ[3][SL], E[SL];
+    if (hm) { /* floe_hm_kernel: floe_hertz_normal, floe_mindlin_tangential */
+        const floe_hertz_mindlin_law *H = (const floe_hertz_mindlin_law *)b->law;
+        const double e_star = H->e_star, beta = H->damping_ratio, g_star = H->g_star, tdr = H->tangent_damping_ratio,
+                     mu_h = H->mu;
+        for (int q = 0; q < SL; q++) {
+            double fn, fel, Sn, gnq, en, diss = 0.0, s[3], n[3], vt[3], Ft[3], f[3], ri[3], rj[3], ti[3], tj[3];
+            floe_hertz_normal_lane(e_star, beta, depth[q], VN[q], reff[q], meff[q], &fn, &fel, &Sn, &gnq, &en);
+            for (int a = 0; a < 3; a++) {
+                s[a] = b->s[a][q];
+                n[a] = N[a][q];
+                vt[a] = VT[a][q];
+            }
+            floe_mindlin_tangential_lane(g_star, tdr, mu_h, dt, reff[q], depth[q], n, vt, gnq, fn, 0.0, s, Ft, &en, &diss);
+            for (int a = 0; a < 3; a++) {
+                f[a] = -fn * n[a] + Ft[a];
+                S[a][q] = s[a];
+                F[a][q] = f[a];
+                ri[a] = Ri[a][q];
+                rj[a] = Rj[a][q];
+            }
+            E[q] = en;
+            floe_cross3_l(ti, ri, f);
+            floe_cross3_l(tj, rj, f);
+            for (int a = 0; a < 3; a++) { /* + the law's couples, zero (as sphere_pair adds them) */
+                TI[a][q] = ti[a] + 0.0;
+                TJ[a][q] = -tj[a] + 0.0;
+            }
+        }
+    } else
+    for (int q = 0; q < SL; q++) {
+        double fn, fel, en, h3 = H3i[q];
+        floe_linear_normal_lane(kn, gn, tension, depth[q], VN[q], dt, meff[q], AN[q], &h3, &fn, &fel, &en);
+        H3[q] = h3;
+        double s[3], n[3], vt[3], Ft[3];
+        for (int a = 0; a < 3; a++) {
+            s[a] = b->s[a][q];
+            n[a] = N[a][q];
+            vt[a] = VT[a][q];
+        }
+        double lim, ft2, fs[3], ss[3];
+        floe_coulomb_trial(n, vt, dt, ks, gs, mu, fabs(fn) + 0.0, s, Ft, &lim, &ft2); /* + fn_extra, 0 */
+        /* floe_coulomb_slip's values where it slips */
+        const int slip = ft2 > lim * lim;
+        floe_coulomb_slip(vt, ks, gs, minus_inv_ks, lim / sqrt(ft2), Ft, fs, ss);
+        double f[3], ri[3], rj[3], ti[3], tj[3];
+        for (int a = 0; a < 3; a++) {
+            Ft[a] = slip ? fs[a] : Ft[a];
+            s[a] = slip ? ss[a] : s[a];
+        }
+        for (int a = 0; a < 3; a++) {
+            f[a] = -fn * n[a] + Ft[a];
+            S[a][q] = s[a];
+            F[a][q] = f[a];
+            ri[a] = Ri[a][q];
+            rj[a] = Rj[a][q];
+        }
+        E[q] = en + 0.5 * ks * floe_dot3_l(s, s);
+        floe_cross3_l(ti, ri, f);
+        floe_cross3_l(tj, rj, f);
+        for (int a = 0; a < 3; a++) { /* + the law's couples, zero (as sphere_pair adds them) */
+            TI[a][q] = ti[a] + 0.0;
+            TJ[a][q] = -tj[a] + 0.0;
+        }
+    }
+    /* the ledger's work less the change of stored energy: (F_old + F_new)/2 . vr dt - dE */
+    double DK[SL];
+    for (int q = 0; q < SL; q++) {
+        double fav[3], vr[3];
+        for (int a = 0; a < 3; a++) {
+            fav[a] = 0.5 * (F[a][q] + FO[a][q]);
+            vr[a] = VR[a][q];
+        }
+        DK[q] = -floe_dot3_l(fav, vr) * dt - (E[q] - b->eo[q]);
+    }
+    if (env->track) /* the largest overlap change over the step, relative to the size (a max: any order) */
+        for (int q = 0; q < nb; q++)
+            if (ETA[q] > acc->eta_d) acc->eta_d = ETA[q];
+    for (int q = 0; q < nb; q++) {
+        double *h = env->nl->hist + (size_t)b->k[q] * FLOE_MAX_HISTORY;
+        for (int a = 0; a < 3; a++) h[a] = S[a][q];
+        if (!hm) h[3] = H3[q];
+        h[FLOE_TWIST_SLOT] = 0.0;
+        sph_out o;
+        for (int a = 0; a < 3; a++) {
+            o.F[a] = F[a][q];
+            o.Ti[a] = TI[a][q];
+            o.Tj[a] = TJ[a][q];
+        }
+        o.energy = E[q];
+        sphere_fused_book(env, b->k[q], acc, b->i[q], b->j[q], h, &o, DK[q]);
+    }
+    b->n = 0;
+}
+#undef SL
+
 static inline __attribute__((always_inline)) void sph_flush(floe_world *w, const floe_step_ctx *ctx,
                                                            const stage_env *env, stage_acc *acc, sph_batch *b) {
-    floe_particles *p = env->p;
-    const int nb = b->n;
-    const floe_contact_law *law = b->law;
-    floe_contact cc[SPH_BATCH];
-    floe_normal_force nf[SPH_BATCH];
-    sph_out o[SPH_BATCH];
-    double *hist[SPH_BATCH], ri[SPH_BATCH][3], rj[SPH_BATCH][3];
-    const double cdt = env->stepping ? ctx->dt : ctx->hist_dt;
-    for (int q = 0; q < nb; q++) {
-        const int i = b->i[q], j = b->j[q];
-        floe_contact *c = cc + q;
-        hist[q] = env->nl->hist + (size_t)b->k[q] * FLOE_MAX_HISTORY;
-        const double inv = 1.0 / b->dist[q], rad_i = p->radius[i], rad_j = p->radius[j];
-        const double *xa = p->x + 3 * i, *xb = p->x + 3 * j;
-        floe_v3_set(c->n, b->dx[q] * inv, b->dy[q] * inv, b->dz[q] * inv);
-        const double *n = c->n;
-        c->depth = b->depth[q];
-        c->r_eff = b->reff[q];
-        c->fn_extra = 0.0;
-        /* the lever arms to the mid point of the two surface points (sphere_contact) */
-        double ui[3], uj[3];
-        for (int a = 0; a < 3; a++) {
-            const double x1 = xa[a] + rad_i * n[a], x2 = xb[a] - rad_j * n[a], pt = 0.5 * (x1 + x2);
-            ri[q][a] = pt - xa[a];
-            rj[q][a] = pt - xb[a];
-        }
-        const double *wi = p->w + 3 * i, *wj = p->w + 3 * j, *vi = p->v + 3 * i, *vj = p->v + 3 * j;
-        floe_v3_cross(ui, wi, ri[q]);
-        floe_v3_cross(uj, wj, rj[q]);
-        for (int a = 0; a < 3; a++) c->vr[a] = (vi[a] + ui[a]) - (vj[a] + uj[a]);
-        c->vn = floe_v3_dot(c->vr, n);
-        if (env->track) {
-            double e = fabs(c->vn) * w->dt / rmin(rad_i, rad_j);
-            if (e > acc->eta_d) acc->eta_d = e;
-        }
-        for (int a = 0; a < 3; a++) c->vt[a] = c->vr[a] - c->vn * n[a];
-        c->m_eff = b->meff[q];
-        c->dt = cdt;
-    }
-    if (law->klass == &floe_hertz_mindlin_law_class) {
-        /* floe_hm_kernel, stage by stage */
-        const floe_hertz_mindlin_law *H = (const floe_hertz_mindlin_law *)law;
-        for (int q = 0; q < nb; q++) floe_hertz_normal(H->e_star, H->damping_ratio, cc + q, nf + q);
-        for (int q = 0; q < nb; q++) {
-            double diss;
-            floe_hm_kernel_t(H, cc + q, nf + q, hist[q], o[q].F, &o[q].energy, &diss);
-        }
-    } else {
-        /* floe_linear_kernel, stage by stage */
-        const floe_linear_law *L = (const floe_linear_law *)law;
-        for (int q = 0; q < nb; q++) {
-            cc[q].gscale = 1.0;
-            cc[q].an_ext = w->dash_on ? pair_an_ext(w, p, b->i[q], b->j[q], cc + q, hist[q]) : 0.0;
-        }
-        for (int q = 0; q < nb; q++) floe_linear_normal_k(L->kn, L->gn, L->tension, cc + q, hist[q], nf + q);
-        double F[SPH_BATCH][3], en[SPH_BATCH];
-        floe_linear_kernel_batch(L, nb, cc, nf, hist, F, en);
-        for (int q = 0; q < nb; q++) {
-            floe_v3_copy(o[q].F, F[q]);
-            o[q].energy = en[q];
-        }
-    }
-    for (int q = 0; q < nb; q++) {
-        hist[q][FLOE_TWIST_SLOT] = 0.0;
-        double ti[3], tj[3];
-        floe_v3_cross(ti, ri[q], o[q].F);
-        floe_v3_cross(tj, rj[q], o[q].F);
-        for (int a = 0; a < 3; a++) { /* + the law's couples, zero (as sphere_pair adds them) */
-            o[q].Ti[a] = ti[a] + 0.0;
-            o[q].Tj[a] = -tj[a] + 0.0;
-        }
-    }
-    for (int q = 0; q < nb; q++) sphere_fused_book(env, b->k[q], acc, b->i[q], b->j[q], hist[q], o + q, cc + q);
-    b->n = 0;
+    sph_flush_lanes(w, ctx, env, acc, b);
 }
 
 /* Entry k when both particles are spheres, under a law that needs no overlap area: the
@@ -935,7 +1046,7 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
         }
         return FLOE_OK;
     }
-    const floe_contact_law *law = w->laws[p->material[i] * env->nm + p->material[j]];
+    const floe_contact_law *law = env->law1 ? env->law1 : w->laws[p->material[i] * env->nm + p->material[j]];
     if (env->any_none && floe_contact_law_no_contact(law)) return FLOE_OK;
     double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
     nl->touching[k] = 1;
@@ -946,13 +1057,8 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
         if (dist > 0 && depth > 0 && depth <= rmin(rad_i, rad_j) && im > 0 && im < INFINITY) {
             if (b->n && b->law != law) sph_flush(w, ctx, env, acc, b);
             const int q = b->n++;
-            /* what the batch's stages read of this entry, on its way while the batch fills */
-            const char *hk = (const char *)hist;
-            __builtin_prefetch(hk);
-            __builtin_prefetch(hk + FLOE_MAX_HISTORY * sizeof(double) - 1);
-            __builtin_prefetch(p->v + 3 * j);
-            __builtin_prefetch(p->w + 3 * j);
-            if (w->dash_on) __builtin_prefetch(w->dash_a + 3 * (size_t)j);
+            /* the lanes' inputs now (stage_block prefetched them 8 entries ahead) */
+            sph_lane_gather(w, p, b, q, i, j, hist, rad_i, rad_j, im, law->klass == &floe_linear_law_class);
             b->law = law;
             b->k[q] = k; b->i[q] = i; b->j[q] = j;
             b->dx[q] = dx; b->dy[q] = dy; b->dz[q] = dz;
@@ -1057,10 +1163,19 @@ static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env 
     const unsigned char *kind = p->kind;
     if (!env->any_pieces && !env->any_overlap && !env->any_floe) {
         sph_batch b;
-        b.n = 0;
-        b.law = NULL;
+        memset(&b, 0, sizeof b); /* the lanes past a batch's end read zeros (sph_flush_lanes) */
+        const double *dash_a = w->dash_on ? w->dash_a : NULL;
         for (int q = 0; q < nc; q++) {
             const int k = cand[q];
+            if (q + 8 < nc) { /* what sph_lane_gather reads of the entry 8 ahead */
+                const size_t k8 = (size_t)cand[q + 8], j8 = (size_t)pj[k8];
+                const char *hk = (const char *)(nl->hist + k8 * FLOE_MAX_HISTORY);
+                __builtin_prefetch(hk);
+                __builtin_prefetch(hk + FLOE_MAX_HISTORY * sizeof(double) - 1);
+                __builtin_prefetch(p->v + 3 * j8);
+                __builtin_prefetch(p->w + 3 * j8);
+                if (dash_a) __builtin_prefetch(dash_a + 3 * j8);
+            }
             if (kind[pi[k]] == FLOE_GEOM_SPHERE && kind[pj[k]] == FLOE_GEOM_SPHERE) FLOE_TRY(sphere_pair(w, ctx, env, k, acc, &b));
             else {
                 if (b.n) sph_flush(w, ctx, env, acc, &b);
@@ -1422,7 +1537,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     const stage_env env = {p,         nl,         &dctx,       stepping, track,
                            any_growth, nm,        any_none,    any_pieces, any_overlap,
                            any_floe,  w->def.dim == 2 && any_overlap, w->cell, w->cell ? nl->img : NULL,
-                           !ctx->record && !w->cell && !any_growth};
+                           !ctx->record && !w->cell && !any_growth, nm == 1 ? w->laws[0] : NULL};
     if (nl->npairs > nl->cand_cap) {
         int *c = realloc(nl->cand, (size_t)nl->npairs * sizeof *c);
         if (!c) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
