@@ -875,6 +875,29 @@ static inline __attribute__((always_inline)) void sph_lane_gather(const floe_wor
  * flush of stage_block, some copies stayed scalar (the RVE 1.5x slower). The ParticLS 5.3
  * RVE 14 % and dem-settle 8 % faster on one thread (bench/RESULTS.md, issue 14 session 13). */
 #define SL SPH_BATCH
+/* lane q's results: the force -Fn n + Ft on i, the spring s, the energy, and the torques
+ * about the centres from the lever arms Ri, Rj (+ the law's couples, zero, as sphere_pair
+ * adds them) */
+static inline __attribute__((always_inline)) void lane_out(int q, double fn, const double n[3], const double Ft[3],
+                                                          const double s[3], double energy, double (*Ri)[SL],
+                                                          double (*Rj)[SL], double (*S)[SL], double (*F)[SL],
+                                                          double (*TI)[SL], double (*TJ)[SL], double *E) {
+    double f[3], ri[3], rj[3], ti[3], tj[3];
+    for (int a = 0; a < 3; a++) {
+        f[a] = -fn * n[a] + Ft[a];
+        S[a][q] = s[a];
+        F[a][q] = f[a];
+        ri[a] = Ri[a][q];
+        rj[a] = Rj[a][q];
+    }
+    E[q] = energy;
+    floe_cross3_l(ti, ri, f);
+    floe_cross3_l(tj, rj, f);
+    for (int a = 0; a < 3; a++) {
+        TI[a][q] = ti[a] + 0.0;
+        TJ[a][q] = -tj[a] + 0.0;
+    }
+}
 static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_step_ctx *ctx,
                                                                   const stage_env *env, stage_acc *acc, sph_batch *b) {
     const floe_linear_law *L = (const floe_linear_law *)b->law; /* read unless hm */
@@ -929,7 +952,7 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         const double e_star = H->e_star, beta = H->damping_ratio, g_star = H->g_star, tdr = H->tangent_damping_ratio,
                      mu_h = H->mu;
         for (int q = 0; q < SL; q++) {
-            double fn, fel, Sn, gnq, en, diss = 0.0, s[3], n[3], vt[3], Ft[3], f[3], ri[3], rj[3], ti[3], tj[3];
+            double fn, fel, Sn, gnq, en, diss = 0.0, s[3], n[3], vt[3], Ft[3];
             floe_hertz_normal_lane(e_star, beta, depth[q], VN[q], reff[q], meff[q], &fn, &fel, &Sn, &gnq, &en);
             for (int a = 0; a < 3; a++) {
                 s[a] = b->s[a][q];
@@ -937,20 +960,7 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
                 vt[a] = VT[a][q];
             }
             floe_mindlin_tangential_lane(g_star, tdr, mu_h, dt, reff[q], depth[q], n, vt, gnq, fn, 0.0, s, Ft, &en, &diss);
-            for (int a = 0; a < 3; a++) {
-                f[a] = -fn * n[a] + Ft[a];
-                S[a][q] = s[a];
-                F[a][q] = f[a];
-                ri[a] = Ri[a][q];
-                rj[a] = Rj[a][q];
-            }
-            E[q] = en;
-            floe_cross3_l(ti, ri, f);
-            floe_cross3_l(tj, rj, f);
-            for (int a = 0; a < 3; a++) { /* + the law's couples, zero (as sphere_pair adds them) */
-                TI[a][q] = ti[a] + 0.0;
-                TJ[a][q] = -tj[a] + 0.0;
-            }
+            lane_out(q, fn, n, Ft, s, en, Ri, Rj, S, F, TI, TJ, E);
         }
     } else
     for (int q = 0; q < SL; q++) {
@@ -968,25 +978,11 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         /* floe_coulomb_slip's values where it slips */
         const int slip = ft2 > lim * lim;
         floe_coulomb_slip(vt, ks, gs, minus_inv_ks, lim / sqrt(ft2), Ft, fs, ss);
-        double f[3], ri[3], rj[3], ti[3], tj[3];
         for (int a = 0; a < 3; a++) {
             Ft[a] = slip ? fs[a] : Ft[a];
             s[a] = slip ? ss[a] : s[a];
         }
-        for (int a = 0; a < 3; a++) {
-            f[a] = -fn * n[a] + Ft[a];
-            S[a][q] = s[a];
-            F[a][q] = f[a];
-            ri[a] = Ri[a][q];
-            rj[a] = Rj[a][q];
-        }
-        E[q] = en + 0.5 * ks * floe_dot3_l(s, s);
-        floe_cross3_l(ti, ri, f);
-        floe_cross3_l(tj, rj, f);
-        for (int a = 0; a < 3; a++) { /* + the law's couples, zero (as sphere_pair adds them) */
-            TI[a][q] = ti[a] + 0.0;
-            TJ[a][q] = -tj[a] + 0.0;
-        }
+        lane_out(q, fn, n, Ft, s, en + 0.5 * ks * floe_dot3_l(s, s), Ri, Rj, S, F, TI, TJ, E);
     }
     /* the ledger's work less the change of stored energy: (F_old + F_new)/2 . vr dt - dE */
     double DK[SL];
