@@ -10,7 +10,7 @@
  *     the same for the linear law with dashpots (the fused kernels of both laws), and for
  *     two materials whose spheres alternate, under three laws (Hertz-Mindlin for each
  *     material with itself, two different objects, the linear law between them): the
- *     fused path's batches of entries (sph_flush) end at every change of law, and the
+ *     fused path's batches of entries (sph_flush_lanes) end at every change of law, and the
  *     sums still come in list order; and Hertz-Mindlin under adaptive steps (the stage
  *     measures each contact's overlap change: the batches' lanes too);
  *  2. every sphere-wall contact the stage recorded (the inline kernel, seen from i) against

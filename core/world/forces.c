@@ -408,7 +408,7 @@ typedef struct stage_env {
     const floe_cell_state *cell; /* periodic cell (NULL: none): images, affine velocities */
     const int *img;              /* the list's image codes (with a cell) */
     int fused;                   /* sphere pairs under a built-in law may take its fused kernel
-                                    (sph_flush: no contacts recorded, no cell, no growth) */
+                                    (sph_flush_lanes: no contacts recorded, no cell, no growth) */
     const floe_contact_law *law1; /* the one law of a world with one material (else NULL): the
                                      sphere path skips the lookup by materials */
 } stage_env;
@@ -807,8 +807,7 @@ typedef struct sph_batch {
     int n;
     const floe_contact_law *law;
     int k[SPH_BATCH], i[SPH_BATCH], j[SPH_BATCH];
-    double dx[SPH_BATCH], dy[SPH_BATCH], dz[SPH_BATCH], dist[SPH_BATCH], depth[SPH_BATCH], reff[SPH_BATCH],
-        meff[SPH_BATCH];
+    double dx[SPH_BATCH], dy[SPH_BATCH], dz[SPH_BATCH], d2[SPH_BATCH];
     /* the lanes' inputs (sph_flush_lanes), gathered as each entry joins: the radii, 1/m_i +
      * 1/m_j, the centres, velocities and spins, a_i - a_j (w->dash_a), the history's spring,
      * dashpot phase, last force and stored energy */
@@ -906,13 +905,23 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
     const double dt = env->stepping ? ctx->dt : ctx->hist_dt;
     /* the batch's arrays (sph_lane_gather), all SL lanes: those past nb hold an earlier
      * batch's entries or zeros, their results dropped */
-    const double *dist = b->dist, *depth = b->depth, *meff = b->meff, *reff = b->reff, *RI = b->ra, *RJ = b->rb, *IM = b->im, *H3i = b->h3;
+    const double *RI = b->ra, *RJ = b->rb, *IM = b->im, *H3i = b->h3;
     const double *D[3] = {b->dx, b->dy, b->dz};
     double (*XA)[SL] = b->xa, (*XB)[SL] = b->xb, (*VI)[SL] = b->vi, (*VJ)[SL] = b->vj, (*WI)[SL] = b->wi,
            (*WJ)[SL] = b->wj, (*AIJ)[SL] = b->aij, (*FO)[SL] = b->fo;
     double S[3][SL], H3[SL];
     const double kn = hm ? 0 : L->kn, gn = hm ? 0 : L->gn, ks = hm ? 0 : L->ks, gs = hm ? 0 : L->gs, mu = hm ? 0 : L->mu;
     const double minus_inv_ks = ks > 0.0 ? -1.0 / ks : 0.0;
+    /* dist = |x_j - x_i|, depth = r_i + r_j - dist, r_eff = r_i r_j / (r_i + r_j), m_eff =
+     * 1 / (1/m_i + 1/m_j) */
+    double dist[SL], depth[SL], reff[SL], meff[SL];
+    for (int q = 0; q < SL; q++) {
+        const double rs = RI[q] + RJ[q];
+        dist[q] = sqrt(b->d2[q]);
+        depth[q] = rs - dist[q];
+        reff[q] = RI[q] * RJ[q] / rs;
+        meff[q] = 1.0 / IM[q];
+    }
     /* geometry, velocities, the other forces' normal acceleration */
     double N[3][SL], Ri[3][SL], Rj[3][SL], VR[3][SL], VT[3][SL], VN[SL], AN[SL], ETA[SL];
     const double wdt = w->dt;
@@ -1015,11 +1024,6 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
 }
 #undef SL
 
-static inline __attribute__((always_inline)) void sph_flush(floe_world *w, const floe_step_ctx *ctx,
-                                                           const stage_env *env, stage_acc *acc, sph_batch *b) {
-    sph_flush_lanes(w, ctx, env, acc, b);
-}
-
 /* Entry k when both particles are spheres, under a law that needs no overlap area: the
  * operations of contact_pair in the same order (the same bits), without the branches of
  * other shapes (warm starts, pieces, the manifold, the ridge scale) and inlined into the
@@ -1037,7 +1041,7 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
     const double d2 = dx * dx + dy * dy + dz * dz;
     if (!(d2 < rs * rs)) {
         if (nl->touching[k]) {
-            if (b->n) sph_flush(w, ctx, env, acc, b); /* the sums in list order */
+            if (b->n) sph_flush_lanes(w, ctx, env, acc, b); /* the sums in list order */
             pair_release(w, p, nl, k, i, j, env->stepping, acc, env, xb);
         }
         return FLOE_OK;
@@ -1047,23 +1051,30 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
     double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
     nl->touching[k] = 1;
     if (env->fused && (law->klass == &floe_hertz_mindlin_law_class || law->klass == &floe_linear_law_class)) {
-        const double dist = sqrt(d2), depth = rs - dist, im = p->inv_mass[i] + p->inv_mass[j];
-        /* else the checks below and the law's own, with their messages (depth 0 by rounding:
-         * the law resets its spring) */
-        if (dist > 0 && depth > 0 && depth <= rmin(rad_i, rad_j) && im > 0 && im < INFINITY) {
-            if (b->n && b->law != law) sph_flush(w, ctx, env, acc, b);
+        const double im = p->inv_mass[i] + p->inv_mass[j], rmn = rmin(rad_i, rad_j), rmx = rs - rmn;
+        /* dist = |x_j - x_i| > 0, depth = rs - dist in (0, the smaller radius]: decided from d2
+         * alone when it is clearly so (margins of 1e-9, far above the rounding of the square
+         * root and of rs - dist), so that the square root goes to the lanes with the rest; at
+         * the edges, by the square root itself. Else the checks below and the law's own, with
+         * their messages (depth 0 by rounding: the law resets its spring) */
+        int in = d2 > 0 && d2 < rs * rs * (1 - 1e-9) && d2 > rmx * rmx * (1 + 3e-9);
+        if (!in) {
+            const double dist = sqrt(d2), depth = rs - dist;
+            in = dist > 0 && depth > 0 && depth <= rmn;
+        }
+        if (in && im > 0 && im < INFINITY) {
+            if (b->n && b->law != law) sph_flush_lanes(w, ctx, env, acc, b);
             const int q = b->n++;
             /* the lanes' inputs now (stage_block prefetched them 8 entries ahead) */
             sph_lane_gather(w, p, b, q, i, j, hist, rad_i, rad_j, im, law->klass == &floe_linear_law_class);
             b->law = law;
             b->k[q] = k; b->i[q] = i; b->j[q] = j;
-            b->dx[q] = dx; b->dy[q] = dy; b->dz[q] = dz;
-            b->dist[q] = dist; b->depth[q] = depth; b->reff[q] = rad_i * rad_j / rs; b->meff[q] = 1.0 / im;
-            if (b->n == SPH_BATCH) sph_flush(w, ctx, env, acc, b);
+            b->dx[q] = dx; b->dy[q] = dy; b->dz[q] = dz; b->d2[q] = d2;
+            if (b->n == SPH_BATCH) sph_flush_lanes(w, ctx, env, acc, b);
             return FLOE_OK;
         }
     }
-    if (b->n) sph_flush(w, ctx, env, acc, b);
+    if (b->n) sph_flush_lanes(w, ctx, env, acc, b);
     floe_contact c;
     c.gscale = 1.0;
     c.nextra = 0;
@@ -1174,12 +1185,12 @@ static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env 
             }
             if (kind[pi[k]] == FLOE_GEOM_SPHERE && kind[pj[k]] == FLOE_GEOM_SPHERE) FLOE_TRY(sphere_pair(w, ctx, env, k, acc, &b));
             else {
-                if (b.n) sph_flush(w, ctx, env, acc, &b);
+                if (b.n) sph_flush_lanes(w, ctx, env, acc, &b);
                 prefetch_ahead(nl, cand, q, nc);
                 FLOE_TRY(contact_pair(w, ctx, env, k, acc));
             }
         }
-        if (b.n) sph_flush(w, ctx, env, acc, &b);
+        if (b.n) sph_flush_lanes(w, ctx, env, acc, &b);
     } else
         for (int q = 0; q < nc; q++) {
             prefetch_ahead(nl, cand, q, nc);
