@@ -1,18 +1,16 @@
-/* law_kernels.h - the built-in laws' force kernels for the world's sphere path
- * (core/world/forces.c): inline, so that a pair of spheres under a fused law pays no call,
- * no result struct and none of the law's own dissipation sums (the world's ledger books the
- * dissipation from the work and the stored energy). One copy of each formula: the laws'
- * force functions (hertz_mindlin.c, linear_law.c) are these kernels too. */
+/* law_kernels.h - the built-in laws' force kernels on one contact (hertz_mindlin.c,
+ * linear_law.c), from the parts in law_parts.h. The world's sphere batches
+ * (core/world/forces.c, sph_flush_lanes) call those parts' lane forms directly, over 16
+ * contacts at a time: one copy of each formula for both. */
 #ifndef FLOE_LAW_KERNELS_H
 #define FLOE_LAW_KERNELS_H
 
 #include "law_parts.h"
 
 
-/* Each kernel also in its two stages, the normal force (floe_hertz_normal,
- * floe_linear_normal_k) and then the rest (floe_hm_kernel_t, floe_linear_kernel_t: the
- * tangential force, the total force and energy), for a caller that runs each stage over
- * several contacts (core/world/forces.c, sph_flush). */
+/* Each kernel in its two stages, the normal force (floe_hertz_normal, floe_linear_normal_k)
+ * and then the rest (floe_hm_kernel_t, floe_linear_kernel_t: the tangential force, the total
+ * force and energy). */
 
 /* Hertz-Mindlin (hertz_mindlin.c) on a contact whose depth > 0, n, vn, vt, r_eff and m_eff
  * (finite, > 0), dt and fn_extra are set: the force on i into F, the stored energy into
