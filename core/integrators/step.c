@@ -252,11 +252,12 @@ static inline int drift_failed(const double v[3], const double x[3], double r, d
  * come in particle order from the lanes' arrays, so the bits are those of one particle
  * after the other. Spheres are most of a granular scene: the two loops were a third of a
  * falling dem-settle bed's step. run_len: how many of the IL particles from i are free and
- * isotropic (of iso 2, the orientation unread, if need2), up to the first that is not. */
+ * isotropic (with the iso flag of particle i, if same), up to the first that is not. */
 #define IL 16
-static inline int run_len(const unsigned char *MO, const unsigned char *iso, int i, int need2) {
+static inline int run_len(const unsigned char *MO, const unsigned char *iso, int i, int same) {
+    const unsigned char s = iso[i];
     int q = 0;
-    while (q < IL && MO[i + q] == FLOE_FREE && (need2 ? iso[i + q] == 2 : iso[i + q] != 0)) q++;
+    while (q < IL && MO[i + q] == FLOE_FREE && iso[i + q] != 0 && (!same || iso[i + q] == s)) q++;
     return q;
 }
 
@@ -264,19 +265,22 @@ typedef struct drift_args {
     double k1, dt, h, g[3];
     const double *xb; /* positions at the list build (NULL: none) */
 } drift_args;
-/* drift_block's case iso 2 for a run of IL particles, in lanes (the arrays from the run's
+/* drift_block's isotropic case for a run of IL particles, in lanes (the arrays from the run's
  * first particle): the body-force work, the squared displacement since the list build (XB;
- * NULL: 0) and the quick checks per particle, for the caller to take in order. (Iso 1, the
- * orientation advanced as well, was tried in lanes and changed the bits of a PD scene's
- * orientations in the last digit: not understood, left to the scalar case.) */
-static __attribute__((noinline)) void drift_lanes(double *restrict X, double *restrict V, double *restrict W,
-                                                  double *restrict LL, const double *restrict F,
-                                                  const double *restrict T, const double *restrict IM,
-                                                  const double *restrict M, const double *restrict II,
-                                                  const double *restrict R, const double *restrict XB,
-                                                  const drift_args *a, double *restrict WB, double *restrict D2,
-                                                  int *restrict FB) {
-    const double k1 = a->k1, dt = a->dt, g0 = a->g[0], g1 = a->g[1], g2 = a->g[2];
+ * NULL: 0) and the quick checks per particle, for the caller to take in order; Q (iso 1:
+ * the orientation read; NULL for iso 2) advanced as rotate_drift_iso does, its operations in
+ * their order and its branch (no turn: q untouched, not renormalised) a select. Not the same
+ * bits as the scalar case in every digit: GCC 12's basic-block vectoriser fuses the scalar
+ * case's quaternion product into a vfmaddsub (a fused multiply-add, against ISO C's
+ * -ffp-contract=off), which drift_lanes_rot is kept from doing (no-tree-slp-vectorize): a
+ * turning particle's orientation may differ in the last digit from before (session 14). */
+static inline __attribute__((always_inline)) void drift_lanes_body(
+    double *restrict X, double *restrict V, double *restrict W, double *restrict LL, const double *restrict F,
+    const double *restrict T, const double *restrict IM, const double *restrict M, const double *restrict II,
+    const double *restrict R, const double *restrict XB, const drift_args *a, double *restrict WB,
+    double *restrict D2, int *restrict FB, double *restrict Q, const int rot) {
+    const double k1 = a->k1, dt = a->dt, h = a->h, g0 = a->g[0], g1 = a->g[1], g2 = a->g[2];
+    double TH[3][IL];
     for (int q = 0; q < IL; q++) {
         const double im = IM[q], ii = II[q];
         /* the loops over k of the scalar case, written out */
@@ -292,7 +296,24 @@ static __attribute__((noinline)) void drift_lanes(double *restrict X, double *re
         LL[3 * q] = L0; LL[3 * q + 1] = L1; LL[3 * q + 2] = L2;
         W[3 * q] = L0 * ii; W[3 * q + 1] = L1 * ii; W[3 * q + 2] = L2 * ii;
         WB[q] = dt * (M[q] * (g0 * v0 + g1 * v1 + g2 * v2));
+        TH[0][q] = h * (L0 * ii); /* rotate_drift_iso's theta = h omega */
+        TH[1][q] = h * (L1 * ii);
+        TH[2][q] = h * (L2 * ii);
     }
+    if (rot)
+        for (int q = 0; q < IL; q++) {
+            /* rotate_drift_iso: q <- exp(theta) q to second order, then renormalised to first */
+            const double t0 = TH[0][q], t1 = TH[1][q], t3 = TH[2][q];
+            const double t2 = t0 * t0 + t1 * t1 + t3 * t3, c = 1 - 0.5 * t2;
+            const double b0 = Q[4 * q], b1 = Q[4 * q + 1], b2 = Q[4 * q + 2], b3 = Q[4 * q + 3];
+            const double qw = c * b0 - t0 * b1 - t1 * b2 - t3 * b3, qx = c * b1 + t0 * b0 + t1 * b3 - t3 * b2,
+                         qy = c * b2 - t0 * b3 + t1 * b0 + t3 * b1, qz = c * b3 + t0 * b2 - t1 * b1 + t3 * b0;
+            const double s2 = qw * qw + qx * qx + qy * qy + qz * qz, sc = 1.5 - 0.5 * s2;
+            Q[4 * q] = t2 > 0 ? qw * sc : b0;
+            Q[4 * q + 1] = t2 > 0 ? qx * sc : b1;
+            Q[4 * q + 2] = t2 > 0 ? qy * sc : b2;
+            Q[4 * q + 3] = t2 > 0 ? qz * sc : b3;
+        }
     if (XB)
         for (int q = 0; q < IL; q++) {
             const double dx = X[3 * q] - XB[3 * q], dy = X[3 * q + 1] - XB[3 * q + 1], dz = X[3 * q + 2] - XB[3 * q + 2];
@@ -301,6 +322,20 @@ static __attribute__((noinline)) void drift_lanes(double *restrict X, double *re
     else
         for (int q = 0; q < IL; q++) D2[q] = 0.0;
 }
+/* the two cases each in its own function (a test of Q inside the loop kept it scalar); the
+ * orientation's loop stays scalar (GCC finds no vector type for its stride-4 group) */
+#define DRIFT_LANES_ARGS                                                                                             \
+    double *restrict X, double *restrict V, double *restrict W, double *restrict LL, const double *restrict F,    \
+        const double *restrict T, const double *restrict IM, const double *restrict M, const double *restrict II, \
+        const double *restrict R, const double *restrict XB, const drift_args *a, double *restrict WB,            \
+        double *restrict D2, int *restrict FB
+static __attribute__((noinline)) void drift_lanes(DRIFT_LANES_ARGS) {
+    drift_lanes_body(X, V, W, LL, F, T, IM, M, II, R, XB, a, WB, D2, FB, NULL, 0);
+}
+static __attribute__((noinline, optimize("no-tree-slp-vectorize"))) void drift_lanes_rot(DRIFT_LANES_ARGS, double *restrict Q) {
+    drift_lanes_body(X, V, W, LL, F, T, IM, M, II, R, XB, a, WB, D2, FB, Q, 1);
+}
+#undef DRIFT_LANES_ARGS
 
 /* kick_block's isotropic case (velocity Verlet) for a run of IL particles, in lanes: the
  * kinetic energies and the shadow term's isotropic part per particle */
@@ -337,7 +372,8 @@ static double drift_block(floe_particles *p, const drift_args *a, int i0, int i1
     int next = i0; /* the first particle a run may start at */
     for (int i = i0; i < i1; i++) {
         while (i >= next && i + IL <= i1) {
-            /* a run of round particles whose orientation nothing reads (iso 2), in lanes */
+            /* a run of round particles (iso 2, orientation unread; or iso 1, advanced too), in
+             * lanes */
             const int n = run_len(MO, iso, i, 1);
             if (n < IL) { /* particle i + n breaks it: one by one up to there */
                 next = i + n + 1;
@@ -346,8 +382,12 @@ static double drift_block(floe_particles *p, const drift_args *a, int i0, int i1
             double WB[IL], D2[IL];
             int FB[IL];
             const size_t o3 = 3 * (size_t)i;
-            drift_lanes(X + o3, V + o3, W + o3, LL + o3, F + o3, T + o3, IM + i, M + i, II + i, R + i, XB ? XB + o3 : NULL, a,
-                        WB, D2, FB);
+            const double *xb = XB ? XB + o3 : NULL;
+            if (iso[i] == 1)
+                drift_lanes_rot(X + o3, V + o3, W + o3, LL + o3, F + o3, T + o3, IM + i, M + i, II + i, R + i, xb, a, WB, D2,
+                                FB, Q + 4 * (size_t)i);
+            else
+                drift_lanes(X + o3, V + o3, W + o3, LL + o3, F + o3, T + o3, IM + i, M + i, II + i, R + i, xb, a, WB, D2, FB);
             for (int q = 0; q < IL; q++) {
                 kb |= FB[q];
                 if (XB && D2[q] > md) md = D2[q]; /* note_disp */
