@@ -300,20 +300,28 @@ static inline __attribute__((always_inline)) void drift_lanes_body(
         TH[1][q] = h * (L1 * ii);
         TH[2][q] = h * (L2 * ii);
     }
-    if (rot)
+    if (rot) {
+        /* the orientations into arrays by component, advanced, and back: three loops the
+         * compiler vectorises (one loop over Q's groups of four it did not) */
+        double B[4][IL], O[4][IL];
+        for (int q = 0; q < IL; q++)
+            for (int k = 0; k < 4; k++) B[k][q] = Q[4 * q + k];
         for (int q = 0; q < IL; q++) {
             /* rotate_drift_iso: q <- exp(theta) q to second order, then renormalised to first */
             const double t0 = TH[0][q], t1 = TH[1][q], t3 = TH[2][q];
             const double t2 = t0 * t0 + t1 * t1 + t3 * t3, c = 1 - 0.5 * t2;
-            const double b0 = Q[4 * q], b1 = Q[4 * q + 1], b2 = Q[4 * q + 2], b3 = Q[4 * q + 3];
+            const double b0 = B[0][q], b1 = B[1][q], b2 = B[2][q], b3 = B[3][q];
             const double qw = c * b0 - t0 * b1 - t1 * b2 - t3 * b3, qx = c * b1 + t0 * b0 + t1 * b3 - t3 * b2,
                          qy = c * b2 - t0 * b3 + t1 * b0 + t3 * b1, qz = c * b3 + t0 * b2 - t1 * b1 + t3 * b0;
             const double s2 = qw * qw + qx * qx + qy * qy + qz * qz, sc = 1.5 - 0.5 * s2;
-            Q[4 * q] = t2 > 0 ? qw * sc : b0;
-            Q[4 * q + 1] = t2 > 0 ? qx * sc : b1;
-            Q[4 * q + 2] = t2 > 0 ? qy * sc : b2;
-            Q[4 * q + 3] = t2 > 0 ? qz * sc : b3;
+            O[0][q] = t2 > 0 ? qw * sc : b0;
+            O[1][q] = t2 > 0 ? qx * sc : b1;
+            O[2][q] = t2 > 0 ? qy * sc : b2;
+            O[3][q] = t2 > 0 ? qz * sc : b3;
         }
+        for (int q = 0; q < IL; q++)
+            for (int k = 0; k < 4; k++) Q[4 * q + k] = O[k][q];
+    }
     if (XB)
         for (int q = 0; q < IL; q++) {
             const double dx = X[3 * q] - XB[3 * q], dy = X[3 * q + 1] - XB[3 * q + 1], dz = X[3 * q + 2] - XB[3 * q + 2];
@@ -322,8 +330,7 @@ static inline __attribute__((always_inline)) void drift_lanes_body(
     else
         for (int q = 0; q < IL; q++) D2[q] = 0.0;
 }
-/* the two cases each in its own function (a test of Q inside the loop kept it scalar); the
- * orientation's loop stays scalar (GCC finds no vector type for its stride-4 group) */
+/* the two cases each in its own function (a test of Q inside the loop kept it scalar) */
 #define DRIFT_LANES_ARGS                                                                                             \
     double *restrict X, double *restrict V, double *restrict W, double *restrict LL, const double *restrict F,    \
         const double *restrict T, const double *restrict IM, const double *restrict M, const double *restrict II, \
