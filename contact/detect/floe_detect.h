@@ -77,17 +77,23 @@ int floe_detect(floe_detect_ctx *ctx, const floe_body_ref *a, const floe_body_re
  * warm (may be NULL): the pair's slot, where warm[0] caches a separating line. */
 int floe_detect_overlap(const floe_detect_ctx *ctx, const floe_body_ref *a, const floe_body_ref *b, int sub,
                         double *warm, floe_contact *c);
+/* the height of a point xs above the plane through xp with normal nw = q_p (0, 0, 1) (into
+ * nw): a sphere of radius r there touches the plane when it is below r */
+static inline double floe_plane_height(const double xs[3], const double xp[3], const double qp[4], double nw[3]) {
+    const double ez[3] = {0, 0, 1};
+    double d[3];
+    floe_q_rotate(nw, qp, ez);
+    floe_v3_sub(d, xs, xp);
+    return floe_v3_dot(d, nw);
+}
 /* A sphere (centre xs, radius r) against a wall (a plane body at xp, orientation qp: the
  * half-space z <= 0 of its frame): 1 and c filled seen from the sphere (x1 on the sphere, x2
  * on the wall, n from the sphere into the wall, the midpoint as the point) if they touch,
  * else 0. Inline: detection's sphere-plane pair and the world's sphere path share it. */
 static inline int floe_sphere_plane_contact(const double xs[3], double r, const double xp[3], const double qp[4],
                                             floe_contact *c) {
-    const double ez[3] = {0, 0, 1};
-    double nw[3], d[3];
-    floe_q_rotate(nw, qp, ez);
-    floe_v3_sub(d, xs, xp);
-    const double s = floe_v3_dot(d, nw);
+    double nw[3];
+    const double s = floe_plane_height(xs, xp, qp, nw);
     if (s >= r) return 0;
     floe_v3_set(c->n, -nw[0], -nw[1], -nw[2]);
     c->depth = r - s;

@@ -1130,7 +1130,7 @@ static inline void prefetch_ahead(const floe_neighbor_list *nl, const int *cand,
     __builtin_prefetch(nl->hist + k2 * FLOE_MAX_HISTORY);
 }
 
-/* A sphere and a wall (a plane) apart (floe_sphere_plane_contact's own test, s >= r): the
+/* A sphere and a wall (a plane) apart (floe_sphere_plane_contact's own test): the
  * wall's entries pass the bounding test (its radius is infinite), and most of them, those of
  * the particles within the list's reach of the wall that do not touch it, need nothing; the
  * general path (contact_pair) cost a settling bed 6 % of its step, and each such entry ended
@@ -1145,11 +1145,8 @@ static inline int sphere_wall_apart(const floe_particles *p, const unsigned char
         pl = i;
     } else
         return 0;
-    const double ez[3] = {0, 0, 1};
-    double nw[3], d[3];
-    floe_q_rotate(nw, p->q + 4 * pl, ez);
-    floe_v3_sub(d, p->x + 3 * sph, p->x + 3 * pl);
-    return floe_v3_dot(d, nw) >= p->radius[sph];
+    double nw[3];
+    return floe_plane_height(p->x + 3 * sph, p->x + 3 * pl, p->q + 4 * pl, nw) >= p->radius[sph];
 }
 
 /* One block of entries [k0, k1): the entries whose bounding spheres may touch go to cand
