@@ -814,6 +814,11 @@ typedef struct sph_batch {
     double ra[SPH_BATCH], rb[SPH_BATCH], im[SPH_BATCH], xa[3][SPH_BATCH], xb[3][SPH_BATCH], vi[3][SPH_BATCH],
         vj[3][SPH_BATCH], wi[3][SPH_BATCH], wj[3][SPH_BATCH], aij[3][SPH_BATCH], s[3][SPH_BATCH], h3[SPH_BATCH],
         fo[3][SPH_BATCH], eo[SPH_BATCH];
+    /* a batch of sphere-wall entries (sphere_wall_pair; wall = 1): their geometry as
+     * floe_sphere_plane_contact finds it, seen from i: the normal, the depth, r_eff (the
+     * sphere's radius) and the contact point */
+    int wall;
+    double wn[3][SPH_BATCH], wdep[SPH_BATCH], wreff[SPH_BATCH], wpt[3][SPH_BATCH];
 } sph_batch;
 
 /* the book of entry k: the particles' sums and the ledger, in list order; dk the work the
@@ -914,46 +919,73 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
     const double minus_inv_ks = ks > 0.0 ? -1.0 / ks : 0.0;
     /* dist = |x_j - x_i|, depth = r_i + r_j - dist, r_eff = r_i r_j / (r_i + r_j), m_eff =
      * 1 / (1/m_i + 1/m_j) */
-    double dist[SL], depth[SL], reff[SL], meff[SL];
-    for (int q = 0; q < SL; q++) {
-        const double rs = RI[q] + RJ[q];
-        dist[q] = sqrt(b->d2[q]);
-        depth[q] = rs - dist[q];
-        reff[q] = RI[q] * RJ[q] / rs;
-        meff[q] = 1.0 / IM[q];
-    }
+    double depth[SL], reff[SL], meff[SL];
     /* geometry, velocities, the other forces' normal acceleration */
     double N[3][SL], Ri[3][SL], Rj[3][SL], VR[3][SL], VT[3][SL], VN[SL], AN[SL], ETA[SL];
     const double wdt = w->dt;
-    for (int q = 0; q < SL; q++) {
-        const double inv = 1.0 / dist[q];
-        double n[3], ri[3], rj[3], wi[3], wj[3], ui[3], uj[3], vr[3];
-        for (int a = 0; a < 3; a++) n[a] = D[a][q] * inv;
-        for (int a = 0; a < 3; a++) { /* the lever arms to the mid point of the two surface points */
-            const double x1 = XA[a][q] + RI[q] * n[a], x2 = XB[a][q] - RJ[q] * n[a], pt = 0.5 * (x1 + x2);
-            ri[a] = pt - XA[a][q];
-            rj[a] = pt - XB[a][q];
-            wi[a] = WI[a][q];
-            wj[a] = WJ[a][q];
+    /* lane q's kinematics from its normal n and contact point pt (the lever arms, the relative
+     * velocity at the point and its parts, the overlap change, pair_an_ext with gscale 1) */
+#define LANE_KIN(q, n, pt)                                                                                      \
+    do {                                                                                                        \
+        double ri_[3], rj_[3], wi_[3], wj_[3], ui_[3], uj_[3], vr_[3];                                          \
+        for (int a = 0; a < 3; a++) {                                                                           \
+            ri_[a] = (pt)[a] - XA[a][q];                                                                        \
+            rj_[a] = (pt)[a] - XB[a][q];                                                                        \
+            wi_[a] = WI[a][q];                                                                                  \
+            wj_[a] = WJ[a][q];                                                                                  \
+        }                                                                                                       \
+        floe_cross3_l(ui_, wi_, ri_);                                                                           \
+        floe_cross3_l(uj_, wj_, rj_);                                                                           \
+        for (int a = 0; a < 3; a++) vr_[a] = (VI[a][q] + ui_[a]) - (VJ[a][q] + uj_[a]);                         \
+        const double vn_ = floe_dot3_l(vr_, n);                                                                 \
+        for (int a = 0; a < 3; a++) {                                                                           \
+            N[a][q] = (n)[a];                                                                                   \
+            Ri[a][q] = ri_[a];                                                                                  \
+            Rj[a][q] = rj_[a];                                                                                  \
+            VR[a][q] = vr_[a];                                                                                  \
+            VT[a][q] = vr_[a] - vn_ * (n)[a];                                                                   \
+        }                                                                                                       \
+        VN[q] = vn_;                                                                                            \
+        ETA[q] = fabs(vn_) * wdt / (RI[q] < RJ[q] ? RI[q] : RJ[q]); /* adaptive steps: read when env->track */ \
+        const double an_ = AIJ[0][q] * (n)[0] + AIJ[1][q] * (n)[1] + AIJ[2][q] * (n)[2];                        \
+        const double fo_ = FO[0][q] * (n)[0] + FO[1][q] * (n)[1] + FO[2][q] * (n)[2];                           \
+        AN[q] = dash ? an_ - fo_ * IM[q] : 0.0;                                                                 \
+    } while (0)
+    if (b->wall) { /* sphere-wall entries: the geometry found as they joined */
+        for (int q = 0; q < SL; q++) {
+            depth[q] = b->wdep[q];
+            reff[q] = b->wreff[q];
+            meff[q] = 1.0 / IM[q];
         }
-        floe_cross3_l(ui, wi, ri);
-        floe_cross3_l(uj, wj, rj);
-        for (int a = 0; a < 3; a++) vr[a] = (VI[a][q] + ui[a]) - (VJ[a][q] + uj[a]);
-        const double vn = floe_dot3_l(vr, n);
-        for (int a = 0; a < 3; a++) {
-            N[a][q] = n[a];
-            Ri[a][q] = ri[a];
-            Rj[a][q] = rj[a];
-            VR[a][q] = vr[a];
-            VT[a][q] = vr[a] - vn * n[a];
+        for (int q = 0; q < SL; q++) {
+            double n[3], pt[3];
+            for (int a = 0; a < 3; a++) {
+                n[a] = b->wn[a][q];
+                pt[a] = b->wpt[a][q];
+            }
+            LANE_KIN(q, n, pt);
         }
-        VN[q] = vn;
-        ETA[q] = fabs(vn) * wdt / (RI[q] < RJ[q] ? RI[q] : RJ[q]); /* adaptive steps: read when env->track */
-        /* pair_an_ext with gscale 1 */
-        const double an = AIJ[0][q] * n[0] + AIJ[1][q] * n[1] + AIJ[2][q] * n[2];
-        const double fo = FO[0][q] * n[0] + FO[1][q] * n[1] + FO[2][q] * n[2];
-        AN[q] = dash ? an - fo * IM[q] : 0.0;
+    } else {
+        double dist[SL];
+        for (int q = 0; q < SL; q++) {
+            const double rs = RI[q] + RJ[q];
+            dist[q] = sqrt(b->d2[q]);
+            depth[q] = rs - dist[q];
+            reff[q] = RI[q] * RJ[q] / rs;
+            meff[q] = 1.0 / IM[q];
+        }
+        for (int q = 0; q < SL; q++) {
+            const double inv = 1.0 / dist[q];
+            double n[3], pt[3];
+            for (int a = 0; a < 3; a++) n[a] = D[a][q] * inv;
+            for (int a = 0; a < 3; a++) { /* the mid point of the two surface points */
+                const double x1 = XA[a][q] + RI[q] * n[a], x2 = XB[a][q] - RJ[q] * n[a];
+                pt[a] = 0.5 * (x1 + x2);
+            }
+            LANE_KIN(q, n, pt);
+        }
     }
+#undef LANE_KIN
     /* the normal force, the tangential spring, the force and torques */
     double F[3][SL], TI[3][SL], TJ[3][SL], E[SL];
     if (hm) { /* floe_hm_kernel: floe_hertz_normal, floe_mindlin_tangential */
@@ -1056,17 +1088,21 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
          * alone when it is clearly so (margins of 1e-9, far above the rounding of the square
          * root and of rs - dist), so that the square root goes to the lanes with the rest; at
          * the edges, by the square root itself. Else the checks below and the law's own, with
-         * their messages (depth 0 by rounding: the law resets its spring) */
-        int in = d2 > 0 && d2 < rs * rs * (1 - 1e-9) && d2 > rmx * rmx * (1 + 3e-9);
+         * their messages (Hertz-Mindlin at depth 0 by rounding: the law resets its spring).
+         * The linear law has no branch on the depth: depth <= 0 by rounding (d2 < rs^2 with
+         * dist = rs, the touching neighbours of a lattice) is for the lanes as for the law */
+        const int lin = law->klass == &floe_linear_law_class;
+        int in = d2 > 0 && (lin || d2 < rs * rs * (1 - 1e-9)) && d2 > rmx * rmx * (1 + 3e-9);
         if (!in) {
             const double dist = sqrt(d2), depth = rs - dist;
-            in = dist > 0 && depth > 0 && depth <= rmn;
+            in = dist > 0 && (depth > 0 || lin) && depth <= rmn;
         }
         if (in && im > 0 && im < INFINITY) {
-            if (b->n && b->law != law) sph_flush_lanes(w, ctx, env, acc, b);
+            if (b->n && (b->law != law || b->wall)) sph_flush_lanes(w, ctx, env, acc, b);
+            b->wall = 0;
             const int q = b->n++;
             /* the lanes' inputs now (stage_block prefetched them 8 entries ahead) */
-            sph_lane_gather(w, p, b, q, i, j, hist, rad_i, rad_j, im, law->klass == &floe_linear_law_class);
+            sph_lane_gather(w, p, b, q, i, j, hist, rad_i, rad_j, im, lin);
             b->law = law;
             b->k[q] = k; b->i[q] = i; b->j[q] = j;
             b->dx[q] = dx; b->dy[q] = dy; b->dz[q] = dz; b->d2[q] = d2;
@@ -1130,23 +1166,54 @@ static inline void prefetch_ahead(const floe_neighbor_list *nl, const int *cand,
     __builtin_prefetch(nl->hist + k2 * FLOE_MAX_HISTORY);
 }
 
-/* A sphere and a wall (a plane) apart (floe_sphere_plane_contact's own test): the
- * wall's entries pass the bounding test (its radius is infinite), and most of them, those of
- * the particles within the list's reach of the wall that do not touch it, need nothing; the
- * general path (contact_pair) cost a settling bed 6 % of its step, and each such entry ended
- * a batch of sphere pairs early. Untouched before: nothing to release either. */
-static inline int sphere_wall_apart(const floe_particles *p, const unsigned char *kind, int i, int j) {
-    int sph, pl;
-    if (kind[i] == FLOE_GEOM_SPHERE && kind[j] == FLOE_GEOM_PLANE) {
-        sph = i;
-        pl = j;
-    } else if (kind[i] == FLOE_GEOM_PLANE && kind[j] == FLOE_GEOM_SPHERE) {
-        sph = j;
-        pl = i;
-    } else
-        return 0;
+/* Entry k of a sphere and a wall (a plane; particles of kind sph_i, sph_j): floe_sphere_plane_contact's
+ * test and geometry, seen from i as contact_pair sees it. Apart and untouched before (most
+ * wall entries: the wall's bounding radius is infinite, so all of them pass the filter):
+ * nothing. Touching, under a built-in law fused in lanes (stage_env.fused), with a depth the
+ * law takes (0 < depth <= the sphere's diameter) and a free sphere: the entry joins a batch of
+ * wall entries (sph_flush_lanes, b->wall), which runs the operations of contact_pair and the
+ * law in their order (the same bits, tests/test_sphere_path.c). Anything else (a release, an
+ * error with its message, another law): contact_pair. A settled bed of 20,000 spheres in a
+ * box spent 7 % of its step on its walls' contacts through contact_pair and the law's table. */
+static __attribute__((noinline)) int sphere_wall_pair(floe_world *w, const floe_step_ctx *ctx,
+                                                                  const stage_env *env, int k, stage_acc *acc,
+                                                                  sph_batch *b) {
+    floe_particles *p = env->p;
+    floe_neighbor_list *nl = env->nl;
+    const int i = nl->pi[k], j = nl->pj[k];
+    const int sph = p->kind[i] == FLOE_GEOM_SPHERE ? i : j, pl = sph == i ? j : i;
+    const double r = p->radius[sph], *xs = p->x + 3 * sph;
     double nw[3];
-    return floe_plane_height(p->x + 3 * sph, p->x + 3 * pl, p->q + 4 * pl, nw) >= p->radius[sph];
+    const double s = floe_plane_height(xs, p->x + 3 * pl, p->q + 4 * pl, nw);
+    if (s >= r && !nl->touching[k]) return FLOE_OK; /* apart, nothing to release */
+    if (s < r && env->fused) {
+        const floe_contact_law *law = env->law1 ? env->law1 : w->laws[p->material[i] * env->nm + p->material[j]];
+        if (env->any_none && floe_contact_law_no_contact(law)) return FLOE_OK;
+        const double depth = r - s, im = p->inv_mass[i] + p->inv_mass[j];
+        if ((law->klass == &floe_hertz_mindlin_law_class || law->klass == &floe_linear_law_class) && depth > 0 &&
+            depth <= 2 * r && im > 0 && im < INFINITY) {
+            double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
+            nl->touching[k] = 1;
+            if (b->n && (b->law != law || !b->wall)) sph_flush_lanes(w, ctx, env, acc, b);
+            b->wall = 1;
+            const int q = b->n++;
+            sph_lane_gather(w, p, b, q, i, j, hist, p->radius[i], p->radius[j], im, law->klass == &floe_linear_law_class);
+            b->law = law;
+            b->k[q] = k; b->i[q] = i; b->j[q] = j;
+            /* floe_sphere_plane_contact: n = -nw from the sphere into the wall (nw seen from
+             * i when the wall is i), the midpoint of x1 = xs - r nw and x2 = xs - s nw */
+            for (int a = 0; a < 3; a++) {
+                b->wn[a][q] = sph == i ? -nw[a] : nw[a];
+                b->wpt[a][q] = 0.5 * ((xs[a] - r * nw[a]) + (xs[a] - s * nw[a]));
+            }
+            b->wdep[q] = depth;
+            b->wreff[q] = r;
+            if (b->n == SPH_BATCH) sph_flush_lanes(w, ctx, env, acc, b);
+            return FLOE_OK;
+        }
+    }
+    if (b->n) sph_flush_lanes(w, ctx, env, acc, b);
+    return contact_pair(w, ctx, env, k, acc);
 }
 
 /* One block of entries [k0, k1): the entries whose bounding spheres may touch go to cand
@@ -1203,8 +1270,9 @@ static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env 
                 if (dash_a) __builtin_prefetch(dash_a + 3 * j8);
             }
             if (kind[pi[k]] == FLOE_GEOM_SPHERE && kind[pj[k]] == FLOE_GEOM_SPHERE) FLOE_TRY(sphere_pair(w, ctx, env, k, acc, &b));
-            else if (!touching[k] && !env->img && sphere_wall_apart(p, kind, pi[k], pj[k]))
-                continue; /* nothing to do, and the batch goes on */
+            else if (!env->img && ((kind[pi[k]] == FLOE_GEOM_SPHERE && kind[pj[k]] == FLOE_GEOM_PLANE) ||
+                                   (kind[pi[k]] == FLOE_GEOM_PLANE && kind[pj[k]] == FLOE_GEOM_SPHERE)))
+                FLOE_TRY(sphere_wall_pair(w, ctx, env, k, acc, &b));
             else {
                 if (b.n) sph_flush_lanes(w, ctx, env, acc, &b);
                 prefetch_ahead(nl, cand, q, nc);
