@@ -814,10 +814,11 @@ typedef struct sph_batch {
     double ra[SPH_BATCH], rb[SPH_BATCH], im[SPH_BATCH], xa[3][SPH_BATCH], xb[3][SPH_BATCH], vi[3][SPH_BATCH],
         vj[3][SPH_BATCH], wi[3][SPH_BATCH], wj[3][SPH_BATCH], aij[3][SPH_BATCH], s[3][SPH_BATCH], h3[SPH_BATCH],
         fo[3][SPH_BATCH], eo[SPH_BATCH];
-    /* a batch of sphere-wall entries (sphere_wall_pair; wall = 1): their geometry as
-     * floe_sphere_plane_contact finds it, seen from i: the normal, the depth, r_eff (the
-     * sphere's radius) and the contact point */
-    int wall;
+    /* sphere-wall entries (sphere_wall_pair; wall[q] = 1) among the sphere pairs, in list
+     * order: their geometry as floe_sphere_plane_contact finds it, seen from i: the normal,
+     * the depth, r_eff (the sphere's radius) and the contact point */
+    int nwall;
+    unsigned char wall[SPH_BATCH];
     double wn[3][SPH_BATCH], wdep[SPH_BATCH], wreff[SPH_BATCH], wpt[3][SPH_BATCH];
 } sph_batch;
 
@@ -951,17 +952,24 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         const double fo_ = FO[0][q] * (n)[0] + FO[1][q] * (n)[1] + FO[2][q] * (n)[2];                           \
         AN[q] = dash ? an_ - fo_ * IM[q] : 0.0;                                                                 \
     } while (0)
-    if (b->wall) { /* sphere-wall entries: the geometry found as they joined */
+    if (b->nwall) { /* sphere-wall entries among them: their geometry found as they joined */
+        double dist[SL];
         for (int q = 0; q < SL; q++) {
-            depth[q] = b->wdep[q];
-            reff[q] = b->wreff[q];
+            const double rs = RI[q] + RJ[q];
+            const int wl = b->wall[q];
+            dist[q] = sqrt(b->d2[q]);
+            depth[q] = wl ? b->wdep[q] : rs - dist[q];
+            reff[q] = wl ? b->wreff[q] : RI[q] * RJ[q] / rs;
             meff[q] = 1.0 / IM[q];
         }
         for (int q = 0; q < SL; q++) {
+            const double inv = 1.0 / dist[q];
+            const int wl = b->wall[q];
             double n[3], pt[3];
             for (int a = 0; a < 3; a++) {
-                n[a] = b->wn[a][q];
-                pt[a] = b->wpt[a][q];
+                const double ns = D[a][q] * inv, x1 = XA[a][q] + RI[q] * ns, x2 = XB[a][q] - RJ[q] * ns;
+                n[a] = wl ? b->wn[a][q] : ns;
+                pt[a] = wl ? b->wpt[a][q] : 0.5 * (x1 + x2);
             }
             LANE_KIN(q, n, pt);
         }
@@ -1053,6 +1061,10 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         sphere_fused_book(env, b->k[q], acc, b->i[q], b->j[q], h, &o, DK[q]);
     }
     b->n = 0;
+    if (b->nwall) { /* the lanes past the next batch's end read sphere lanes' zeros */
+        memset(b->wall, 0, sizeof b->wall);
+        b->nwall = 0;
+    }
 }
 #undef SL
 
@@ -1098,9 +1110,9 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
             in = dist > 0 && (depth > 0 || lin) && depth <= rmn;
         }
         if (in && im > 0 && im < INFINITY) {
-            if (b->n && (b->law != law || b->wall)) sph_flush_lanes(w, ctx, env, acc, b);
-            b->wall = 0;
+            if (b->n && b->law != law) sph_flush_lanes(w, ctx, env, acc, b);
             const int q = b->n++;
+            b->wall[q] = 0;
             /* the lanes' inputs now (stage_block prefetched them 8 entries ahead) */
             sph_lane_gather(w, p, b, q, i, j, hist, rad_i, rad_j, im, lin);
             b->law = law;
@@ -1166,15 +1178,17 @@ static inline void prefetch_ahead(const floe_neighbor_list *nl, const int *cand,
     __builtin_prefetch(nl->hist + k2 * FLOE_MAX_HISTORY);
 }
 
-/* Entry k of a sphere and a wall (a plane; particles of kind sph_i, sph_j): floe_sphere_plane_contact's
+/* Entry k of a sphere and a wall (a plane): floe_sphere_plane_contact's
  * test and geometry, seen from i as contact_pair sees it. Apart and untouched before (most
  * wall entries: the wall's bounding radius is infinite, so all of them pass the filter):
  * nothing. Touching, under a built-in law fused in lanes (stage_env.fused), with a depth the
- * law takes (0 < depth <= the sphere's diameter) and a free sphere: the entry joins a batch of
- * wall entries (sph_flush_lanes, b->wall), which runs the operations of contact_pair and the
- * law in their order (the same bits, tests/test_sphere_path.c). Anything else (a release, an
- * error with its message, another law): contact_pair. A settled bed of 20,000 spheres in a
- * box spent 7 % of its step on its walls' contacts through contact_pair and the law's table. */
+ * law takes (0 < depth <= the sphere's diameter) and a free sphere: the entry joins the batch
+ * of sphere pairs in list order (sph_flush_lanes, b->wall[q]), which runs the operations of
+ * contact_pair and the law in their order (the same bits, tests/test_sphere_path.c). Anything
+ * else (a release, an error with its message, another law): contact_pair. A settled bed of
+ * 20,000 spheres in a box spent 7 % of its step on its walls' contacts through contact_pair
+ * and the law's table. The walls' entries lie among the spheres' in the list (the ParticLS
+ * 5.3 RVE: a wall entry every 50): a batch of their own would end the spheres' at each. */
 static __attribute__((noinline)) int sphere_wall_pair(floe_world *w, const floe_step_ctx *ctx,
                                                                   const stage_env *env, int k, stage_acc *acc,
                                                                   sph_batch *b) {
@@ -1194,9 +1208,12 @@ static __attribute__((noinline)) int sphere_wall_pair(floe_world *w, const floe_
             depth <= 2 * r && im > 0 && im < INFINITY) {
             double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
             nl->touching[k] = 1;
-            if (b->n && (b->law != law || !b->wall)) sph_flush_lanes(w, ctx, env, acc, b);
-            b->wall = 1;
+            if (b->n && b->law != law) sph_flush_lanes(w, ctx, env, acc, b);
             const int q = b->n++;
+            b->wall[q] = 1;
+            b->nwall++;
+            b->d2[q] = 1.0; /* the sphere pairs' geometry, computed for every lane, is dropped */
+            b->dx[q] = b->dy[q] = b->dz[q] = 0.0;
             sph_lane_gather(w, p, b, q, i, j, hist, p->radius[i], p->radius[j], im, law->klass == &floe_linear_law_class);
             b->law = law;
             b->k[q] = k; b->i[q] = i; b->j[q] = j;
