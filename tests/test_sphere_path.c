@@ -146,6 +146,19 @@ static floe_world *compare_paths(int linear) {
           "%s: energy ledger differs: K %.17g vs %.17g, elastic %.17g vs %.17g, dissipated %.17g vs %.17g", law,
           ea.kinetic_trans, eb.kinetic_trans, ea.elastic, eb.elastic, ea.dissipated, eb.dissipated);
     CHECK(ea.dissipated > 0, "%s: the dashpots and friction dissipate (%g J)", law, ea.dissipated);
+    /* one step more, recorded: the lanes' records (sphere_fused_book) against contact_pair's */
+    floe_world_record_contacts(a, 1);
+    floe_world_record_contacts(b, 1);
+    rc = floe_world_step(a);
+    if (!rc) rc = floe_world_step(b);
+    const floe_contact_info *ca = NULL, *cb = NULL;
+    const int na = floe_world_contacts(a, &ca), nb = floe_world_contacts(b, &cb);
+    int rdiff = na == nb ? 0 : -1;
+    for (int k = 0; k < na && k < nb; k++) rdiff += memcmp(ca + k, cb + k, sizeof *ca) != 0;
+    printf("  %s: recorded contacts %d and %d, differing %d\n", law, na, nb, rdiff);
+    CHECK(rc == 0 && na > 0 && rdiff == 0, "%s: the records of the lean and the general body differ (%d of %d, %d)", law,
+          rdiff, na, nb);
+    floe_world_record_contacts(a, 0);
     floe_world_destroy(b);
     return a;
 }

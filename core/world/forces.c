@@ -359,6 +359,7 @@ struct stage_acc {
     unsigned char *hit;      /* per particle: some entry of it has a force (the gather skips the rest) */
     const unsigned char *own; /* per particle: all its entries lie in one part (floe_par_scratch.own) */
     floe_rec_sink *rs;        /* threads, recording: the part's contact records (NULL: the world's) */
+    int oom;                  /* a record of the lanes' books found no memory (stage_block reports it) */
 };
 typedef struct stage_acc stage_acc;
 
@@ -408,9 +409,10 @@ typedef struct stage_env {
     const floe_cell_state *cell; /* periodic cell (NULL: none): images, affine velocities */
     const int *img;              /* the list's image codes (with a cell) */
     int fused;                   /* sphere pairs under a built-in law may take its fused kernel
-                                    (sph_flush_lanes: no contacts recorded, no cell, no growth) */
+                                    (sph_flush_lanes: no cell, no growth) */
     const floe_contact_law *law1; /* the one law of a world with one material (else NULL): the
                                      sphere path skips the lookup by materials */
+    int record;                  /* contacts recorded at this evaluation (ctx->record) */
 } stage_env;
 
 /* periodic cell: j's image xs = x_j + H n of entry k (xs untouched and x_j returned when the
@@ -787,9 +789,9 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
 }
 
 /* A pair of spheres under Hertz-Mindlin or the linear law, fused (stage_env.fused):
- * sphere_pair + the law's force function (law_kernels.h) +
- * pair_book for an evaluation that records no contact, in a cell-less world without growth,
- * less what that case never reads (the relative spin, the law's result struct and its
+ * sphere_pair + the law's force function (law_kernels.h) + pair_book (and its record of the
+ * contact when the evaluation records them) in a cell-less world without growth, less what
+ * that case never reads (the relative spin, the law's result struct and its
  * dissipation sums, the couples' work: the law has none) and without the call through the
  * law's table; the same operations otherwise, so the same bits (tests/test_sphere_path.c).
  * (dx, dy, dz) = x_j - x_i, dist its length (> 0), depth <= the smaller radius, r_eff =
@@ -799,6 +801,8 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
  * particles' sums and the ledger) in list order. */
 typedef struct sph_out {
     double F[3], Ti[3], Tj[3], energy;
+    /* recording (stage_env.record): the contact as contact_pair records it */
+    double point[3], n[3], depth, fn, branch[3], r_eff, m_eff;
 } sph_out;
 
 /* A batch of entries for the fused kernel, all under one law (sph_flush_lanes). */
@@ -818,13 +822,14 @@ typedef struct sph_batch {
      * order: their geometry as floe_sphere_plane_contact finds it, seen from i: the normal,
      * the depth, r_eff (the sphere's radius) and the contact point */
     int nwall;
-    unsigned char wall[SPH_BATCH];
+    double wall[SPH_BATCH]; /* 1 or 0 (a double: the flush's loops select by it in vector lanes) */
     double wn[3][SPH_BATCH], wdep[SPH_BATCH], wreff[SPH_BATCH], wpt[3][SPH_BATCH];
 } sph_batch;
 
 /* the book of entry k: the particles' sums and the ledger, in list order; dk the work the
  * contact did less the change of its stored energy (pair_book's ledger) */
-static inline __attribute__((always_inline)) void sphere_fused_book(const stage_env *env, int k, stage_acc *acc,
+static inline __attribute__((always_inline)) void sphere_fused_book(floe_world *w, const stage_env *env, int k,
+                                                                   stage_acc *acc,
                                                                    int i, int j, double *hist, const sph_out *o,
                                                                    double dk) {
     pair_apply(env->p, acc, k, i, j, o->F, o->Ti, o->Tj);
@@ -837,7 +842,26 @@ static inline __attribute__((always_inline)) void sphere_fused_book(const stage_
     }
     hist[FLOE_ENERGY_SLOT] = energy;
     memcpy(hist + FLOE_FORCE_SLOT, o->F, 3 * sizeof(double));
-    acc->ncontacts++;
+    if (!env->record) {
+        acc->ncontacts++;
+        return;
+    }
+    /* pair_book's record: the manifold's force, fn_extra and energy (zeros) added as it adds them */
+    floe_contact c;
+    floe_contact_result r;
+    c.i = i;
+    c.j = j;
+    for (int a = 0; a < 3; a++) {
+        c.point[a] = o->point[a];
+        c.n[a] = o->n[a];
+        r.force[a] = o->F[a] + 0.0;
+    }
+    c.depth = o->depth;
+    c.r_eff = o->r_eff;
+    c.m_eff = o->m_eff;
+    r.fn = o->fn + 0.0;
+    r.energy = energy + 0.0;
+    if (push_contact(w, acc->rs, &c, &r, o->branch)) acc->oom = 1;
 }
 
 /* entry q's inputs to the lanes (sph_flush_lanes), as it joins the batch; lin: the linear
@@ -922,7 +946,7 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
      * 1 / (1/m_i + 1/m_j) */
     double depth[SL], reff[SL], meff[SL];
     /* geometry, velocities, the other forces' normal acceleration */
-    double N[3][SL], Ri[3][SL], Rj[3][SL], VR[3][SL], VT[3][SL], VN[SL], AN[SL], ETA[SL];
+    double N[3][SL], Ri[3][SL], Rj[3][SL], VR[3][SL], VT[3][SL], VN[SL], AN[SL], ETA[SL], PT[3][SL], FN[SL];
     const double wdt = w->dt;
     /* lane q's kinematics from its normal n and contact point pt (the lever arms, the relative
      * velocity at the point and its parts, the overlap change, pair_an_ext with gscale 1) */
@@ -941,6 +965,7 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         const double vn_ = floe_dot3_l(vr_, n);                                                                 \
         for (int a = 0; a < 3; a++) {                                                                           \
             N[a][q] = (n)[a];                                                                                   \
+            PT[a][q] = (pt)[a];                                                                                 \
             Ri[a][q] = ri_[a];                                                                                  \
             Rj[a][q] = rj_[a];                                                                                  \
             VR[a][q] = vr_[a];                                                                                  \
@@ -956,7 +981,7 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         double dist[SL];
         for (int q = 0; q < SL; q++) {
             const double rs = RI[q] + RJ[q];
-            const int wl = b->wall[q];
+            const int wl = b->wall[q] != 0.0;
             dist[q] = sqrt(b->d2[q]);
             depth[q] = wl ? b->wdep[q] : rs - dist[q];
             reff[q] = wl ? b->wreff[q] : RI[q] * RJ[q] / rs;
@@ -964,7 +989,7 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         }
         for (int q = 0; q < SL; q++) {
             const double inv = 1.0 / dist[q];
-            const int wl = b->wall[q];
+            const int wl = b->wall[q] != 0.0;
             double n[3], pt[3];
             for (int a = 0; a < 3; a++) {
                 const double ns = D[a][q] * inv, x1 = XA[a][q] + RI[q] * ns, x2 = XB[a][q] - RJ[q] * ns;
@@ -1010,6 +1035,7 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
             }
             floe_mindlin_tangential_lane(g_star, tdr, mu_h, dt, reff[q], depth[q], n, vt, gnq, fn, 0.0, s, Ft, &en, &diss);
             lane_out(q, fn, n, Ft, s, en, Ri, Rj, S, F, TI, TJ, E);
+            FN[q] = fn;
         }
     } else
     for (int q = 0; q < SL; q++) {
@@ -1032,6 +1058,7 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
             s[a] = slip ? ss[a] : s[a];
         }
         lane_out(q, fn, n, Ft, s, en + 0.5 * ks * floe_dot3_l(s, s), Ri, Rj, S, F, TI, TJ, E);
+        FN[q] = fn;
     }
     /* the ledger's work less the change of stored energy: (F_old + F_new)/2 . vr dt - dE */
     double DK[SL];
@@ -1058,7 +1085,18 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
             o.Tj[a] = TJ[a][q];
         }
         o.energy = E[q];
-        sphere_fused_book(env, b->k[q], acc, b->i[q], b->j[q], h, &o, DK[q]);
+        if (env->record) { /* the contact as contact_pair records it */
+            for (int a = 0; a < 3; a++) {
+                o.point[a] = PT[a][q];
+                o.n[a] = N[a][q];
+                o.branch[a] = XB[a][q] - XA[a][q];
+            }
+            o.depth = depth[q];
+            o.fn = FN[q];
+            o.r_eff = reff[q];
+            o.m_eff = meff[q];
+        }
+        sphere_fused_book(w, env, b->k[q], acc, b->i[q], b->j[q], h, &o, DK[q]);
     }
     b->n = 0;
     if (b->nwall) { /* the lanes past the next batch's end read sphere lanes' zeros */
@@ -1112,7 +1150,7 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
         if (in && im > 0 && im < INFINITY) {
             if (b->n && b->law != law) sph_flush_lanes(w, ctx, env, acc, b);
             const int q = b->n++;
-            b->wall[q] = 0;
+            b->wall[q] = 0.0;
             /* the lanes' inputs now (stage_block prefetched them 8 entries ahead) */
             sph_lane_gather(w, p, b, q, i, j, hist, rad_i, rad_j, im, lin);
             b->law = law;
@@ -1210,7 +1248,7 @@ static __attribute__((noinline)) int sphere_wall_pair(floe_world *w, const floe_
             nl->touching[k] = 1;
             if (b->n && b->law != law) sph_flush_lanes(w, ctx, env, acc, b);
             const int q = b->n++;
-            b->wall[q] = 1;
+            b->wall[q] = 1.0;
             b->nwall++;
             b->d2[q] = 1.0; /* the sphere pairs' geometry, computed for every lane, is dropped */
             b->dx[q] = b->dy[q] = b->dz[q] = 0.0;
@@ -1297,6 +1335,7 @@ static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env 
             }
         }
         if (b.n) sph_flush_lanes(w, ctx, env, acc, &b);
+        if (acc->oom) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     } else
         for (int q = 0; q < nc; q++) {
             prefetch_ahead(nl, cand, q, nc);
@@ -1650,7 +1689,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     const stage_env env = {p,         nl,         &dctx,       stepping, track,
                            any_growth, nm,        any_none,    any_pieces, any_overlap,
                            any_floe,  w->def.dim == 2 && any_overlap, w->cell, w->cell ? nl->img : NULL,
-                           !ctx->record && !w->cell && !any_growth, nm == 1 ? w->laws[0] : NULL};
+                           !w->cell && !any_growth, nm == 1 ? w->laws[0] : NULL, ctx->record};
     if (nl->npairs > nl->cand_cap) {
         int *c = realloc(nl->cand, (size_t)nl->npairs * sizeof *c);
         if (!c) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
