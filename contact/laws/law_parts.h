@@ -171,7 +171,7 @@ static inline __attribute__((always_inline)) void floe_coulomb_k(const floe_cont
 /* the other forces' rate of change of vn (floe_contact.an_ext); 0 at dt = 0 (prepare,
  * refresh: the dashpot sees vn itself) and when not finite */
 static inline __attribute__((always_inline)) double floe_linear_an_ext_v(double dt, double an_ext) {
-    return (dt > 0.0) & (fabs(an_ext) < INFINITY) ? an_ext : 0.0; /* isfinite, without a branch */
+    return ((dt > 0.0) & (fabs(an_ext) < INFINITY)) ? an_ext : 0.0; /* isfinite, without a branch */
 }
 static inline double floe_linear_an_ext(const floe_contact *c) { return floe_linear_an_ext_v(c->dt, c->an_ext); }
 
@@ -214,7 +214,7 @@ static inline __attribute__((always_inline)) double floe_linear_phase_lane(doubl
     const int live = dt > 0.0; /* else prepare: nothing advances, the factor is 1 */
     /* the first evaluation (h == 0): the contact began d / vn ago */
     const double r = d / (vn * dt);
-    const double f_first = (vn > 0.0) & (d <= 2.0 * vn * dt) ? 0.5 + (r < 1.0 ? r : 1.0) : 1.0;
+    const double f_first = ((vn > 0.0) & (d <= 2.0 * vn * dt)) ? 0.5 + (r < 1.0 ? r : 1.0) : 1.0;
     /* later ones: the part of this evaluation's window that the previous one already
      * covered, when it took itself for the last one and the contact went on */
     const double covered = h - 1.0;
@@ -244,10 +244,10 @@ static inline __attribute__((always_inline)) void floe_linear_normal_lane(double
                                                                        double *fel_out, double *energy) {
     const double fel = kn * d;
     /* the dashpot at the velocity of the step's end (floe_linear_dashpot_phase) */
-    const double hm_v = 0.5 * dt / m_eff, hm = (m_eff > 0.0) & (m_eff < INFINITY) ? hm_v : 0.0;
+    const double hm_v = 0.5 * dt / m_eff, hm = ((m_eff > 0.0) & (m_eff < INFINITY)) ? hm_v : 0.0;
     const double gph = gn * floe_linear_phase_lane(kn, gn, tension, d, vn, dt, an_ext, hm, h3);
     const double Fn = (fel + gph * (vn + 0.5 * dt * floe_linear_an_ext_v(dt, an_ext))) / (1.0 + gph * hm);
-    *fn = (tension != 0) | !(0.0 > Fn) ? Fn : 0.0; /* floe_clamp0 unless tension (NaN and -0 kept) */
+    *fn = ((tension != 0) | !(0.0 > Fn)) ? Fn : 0.0; /* floe_clamp0 unless tension (NaN and -0 kept) */
     *fel_out = fel;
     *energy = 0.5 * kn * d * d;
 }
