@@ -339,7 +339,12 @@ static inline __attribute__((always_inline)) void drift_lanes_body(
 static __attribute__((noinline)) void drift_lanes(DRIFT_LANES_ARGS) {
     drift_lanes_body(X, V, W, LL, F, T, IM, M, II, R, XB, a, WB, D2, FB, NULL, 0);
 }
-static __attribute__((noinline, optimize("no-tree-slp-vectorize"))) void drift_lanes_rot(DRIFT_LANES_ARGS, double *restrict Q) {
+#if defined(__clang__) /* GCC's optimize attribute; clang ignores it with a warning */
+#define FLOE_NO_SLP
+#else
+#define FLOE_NO_SLP , optimize("no-tree-slp-vectorize")
+#endif
+static __attribute__((noinline FLOE_NO_SLP)) void drift_lanes_rot(DRIFT_LANES_ARGS, double *restrict Q) {
     drift_lanes_body(X, V, W, LL, F, T, IM, M, II, R, XB, a, WB, D2, FB, Q, 1);
 }
 #undef DRIFT_LANES_ARGS
@@ -451,7 +456,7 @@ static void kick_block(floe_particles *p, const kick_args *a, int i0, int i1, do
     const int leap = a->leap, shadow = a->shadow, recheck = a->recheck;
     double kt = 0, kr = 0, sh_iso = 0, sh = 0;
     int bad_i = *bad;
-    int next = recheck || leap ? i1 : i0; /* the first particle a run may start at */
+    int next = leap ? i1 : i0; /* the first particle a run may start at */
     for (int i = i0; i < i1; i++) {
         while (i >= next && i + IL <= i1) {
             /* a run of isotropic free bodies, in lanes (the isotropic case below) */
@@ -462,6 +467,9 @@ static void kick_block(floe_particles *p, const kick_args *a, int i0, int i1, do
             }
             double KE[IL], KR[IL], SH[IL];
             const size_t o3 = 3 * (size_t)i;
+            if (recheck) /* MPI: the drift's checks on v_half, before the kick (bad_i is a minimum) */
+                for (int q = 0; q < IL; q++)
+                    if (drift_failed(V + o3 + 3 * q, X + o3 + 3 * q, R[i + q], dt) && i + q < bad_i) bad_i = i + q;
             kick_lanes(V + o3, W + o3, LL + o3, F + o3, T + o3, IM + i, M + i, II + i, h, KE, KR, SH);
             for (int q = 0; q < IL; q++) {
                 sh_iso += SH[q];

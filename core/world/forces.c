@@ -1223,7 +1223,7 @@ static inline void prefetch_ahead(const floe_neighbor_list *nl, const int *cand,
  * else (a release, an error with its message, another law): contact_pair. A settled bed of
  * 20,000 spheres in a box spent 7 % of its step on its walls' contacts through contact_pair
  * and the law's table. The walls' entries lie among the spheres' in the list (the ParticLS
- * 5.3 RVE: a wall entry every 50): a batch of their own would end the spheres' at each. */
+ * 5.3 RVE: one in about 40 contacts): a batch of their own would end the spheres' at each. */
 static __attribute__((noinline)) int sphere_wall_pair(floe_world *w, const floe_step_ctx *ctx,
                                                                   const stage_env *env, int k, stage_acc *acc,
                                                                   sph_batch *b) {
@@ -1232,13 +1232,13 @@ static __attribute__((noinline)) int sphere_wall_pair(floe_world *w, const floe_
     const int i = nl->pi[k], j = nl->pj[k];
     const int sph = p->kind[i] == FLOE_GEOM_SPHERE ? i : j, pl = sph == i ? j : i;
     const double r = p->radius[sph], *xs = p->x + 3 * sph;
-    double nw[3];
-    const double s = floe_plane_height(xs, p->x + 3 * pl, p->q + 4 * pl, nw);
-    if (s >= r && !nl->touching[k]) return FLOE_OK; /* apart, nothing to release */
-    if (s < r && env->fused) {
+    floe_contact c;
+    const int hit = floe_sphere_plane_contact(xs, r, p->x + 3 * pl, p->q + 4 * pl, &c);
+    if (!hit && !nl->touching[k]) return FLOE_OK; /* apart, nothing to release */
+    if (hit && env->fused) {
         const floe_contact_law *law = env->law1 ? env->law1 : w->laws[p->material[i] * env->nm + p->material[j]];
         if (env->any_none && floe_contact_law_no_contact(law)) return FLOE_OK;
-        const double depth = r - s, im = p->inv_mass[i] + p->inv_mass[j];
+        const double depth = c.depth, im = p->inv_mass[i] + p->inv_mass[j];
         if ((law->klass == &floe_hertz_mindlin_law_class || law->klass == &floe_linear_law_class) && depth > 0 &&
             depth <= 2 * r && im > 0 && im < INFINITY) {
             double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
@@ -1252,14 +1252,14 @@ static __attribute__((noinline)) int sphere_wall_pair(floe_world *w, const floe_
             sph_lane_gather(w, p, b, q, i, j, hist, p->radius[i], p->radius[j], im, law->klass == &floe_linear_law_class);
             b->law = law;
             b->k[q] = k; b->i[q] = i; b->j[q] = j;
-            /* floe_sphere_plane_contact: n = -nw from the sphere into the wall (nw seen from
-             * i when the wall is i), the midpoint of x1 = xs - r nw and x2 = xs - s nw */
+            /* the geometry seen from i: n from the sphere into the wall, flipped when the
+             * wall is i (as contact_pair swaps the roles back) */
             for (int a = 0; a < 3; a++) {
-                b->wn[a][q] = sph == i ? -nw[a] : nw[a];
-                b->wpt[a][q] = 0.5 * ((xs[a] - r * nw[a]) + (xs[a] - s * nw[a]));
+                b->wn[a][q] = sph == i ? c.n[a] : -c.n[a];
+                b->wpt[a][q] = c.point[a];
             }
             b->wdep[q] = depth;
-            b->wreff[q] = r;
+            b->wreff[q] = c.r_eff;
             if (b->n == SPH_BATCH) sph_flush_lanes(w, ctx, env, acc, b);
             return FLOE_OK;
         }
