@@ -51,6 +51,10 @@ static void usage(FILE *f)
             "              that wrote it; the outputs go on as if the run had not stopped\n"
             "              (docs/checkpoints.md). Under mpirun too: the file is the serial one, written\n"
             "              by rank 0, and continues under any number of ranks (docs/parallel.md)\n"
+            "  --balance weights|time  under mpirun: the ranks' shares of the bisection (docs/parallel.md):\n"
+            "              equal shares of the estimated work (weights, the default: a run repeats to\n"
+            "              the last bit) or sized by each rank's measured speed (time: a slower or\n"
+            "              busier core gets less; runs agree within round-off). Serial runs: no effect\n"
             "  --plugin F  load the plugin F (a shared library registering shapes, laws, normal and\n"
             "              tangential parts, outputs, PD materials, force providers, integrators and\n"
             "              packings) before the command; repeatable; scenes can list theirs under plugins:\n"
@@ -196,6 +200,7 @@ typedef struct run_opts {
     const char *ckpt;       /* the checkpoint file (NULL: OUTDIR/checkpoint.bin) */
     const char *restart;    /* continue from this checkpoint */
     int threads;            /* -t N (0: OpenMP's default) */
+    int balance;            /* --balance: FLOE_BALANCE_WEIGHTS or _TIME (under mpirun) */
 } run_opts;
 
 #ifdef FLOE_HAVE_MPI
@@ -331,6 +336,7 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
         rc = floe_world_prepare(w);
     }
     if (rc == FLOE_OK) rc = floe_world_parallel_init(w, NULL);
+    if (rc == FLOE_OK) rc = floe_world_parallel_set_balance(w, (floe_balance)o->balance);
     /* rank 0's mirror: a failed prepare is reported here and refused by every rank below */
     if (rc == FLOE_OK && mirror && !o->restart && floe_world_prepare(mirror) != FLOE_OK)
         fprintf(stderr, "%s: error: %s: %s\n", prog, label, floe_world_last_error(mirror));
@@ -359,7 +365,8 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
     if (rank == 0 && !o->quiet) {
         printf("%s", info.summary);
         printf("output:     %s\n", o->outdir);
-        printf("mpi:        %d ranks (recursive coordinate bisection)\n", size);
+        printf("mpi:        %d ranks (recursive coordinate bisection, %s)\n", size,
+               o->balance == FLOE_BALANCE_TIME ? "shares by measured speed" : "equal shares of the estimated work");
         if (o->restart)
             printf("restart:    %s at t = %g s, step %ld\n", o->restart, floe_world_time(w), floe_world_step_count(w));
         if (pr.every > 0) printf("checkpoint: %s every %g s (written by rank 0)\n", pr.ckpt, pr.every);
@@ -409,6 +416,7 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
     floe_world_parallel_comm(w, &cs);
     const double st = cs.steps > 0 ? (double)cs.steps : 1.0;
     double mine[FLOE_COMM_KINDS + 4], sum[FLOE_COMM_KINDS + 4], mx = 0;
+    double ft[2] = {cs.force_seconds, -cs.force_seconds}, ftx[2] = {0, 0}, ftsum = 0;
     mine[FLOE_COMM_KINDS] = 0;
     mine[FLOE_COMM_KINDS + 1] = 0;
     for (int k = 0; k < FLOE_COMM_KINDS; k++) {
@@ -420,6 +428,9 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
     mine[FLOE_COMM_KINDS + 3] = cs.owned_steps / st;
     MPI_Reduce(mine, sum, FLOE_COMM_KINDS + 4, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
     MPI_Reduce(mine + FLOE_COMM_KINDS, &mx, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
+    /* the ranks' own work: their seconds in force evaluations, largest, smallest and mean */
+    MPI_Reduce(ft, ftx, 2, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
+    MPI_Reduce(ft, &ftsum, 1, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
     if (rank == 0 && !o->quiet) {
         long steps = floe_world_step_count(w) - step0;
         const double cur = e.kinetic_trans + e.kinetic_rot + e.elastic;
@@ -438,6 +449,8 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
                sum[FLOE_COMM_REVERSE] / size, sum[FLOE_COMM_MIGRATE] / size, sum[FLOE_COMM_REDUCE] / size,
                sum[FLOE_COMM_OUTPUT] / size, sum[FLOE_COMM_KINDS + 2] / size, sum[FLOE_COMM_KINDS + 3] / size,
                cs.rebuilds);
+        printf("  force time/rank:    %.3f s mean, %.3f s max, %.3f s min (max/mean %.3f: the load imbalance)\n",
+               ftsum / size, ftx[0], -ftx[1], ftsum > 0 ? ftx[0] * size / ftsum : 1.0);
         printf("  contacts (current): %d\n", (int)red[0]);
         printf("  energy balance err: %.3g (relative)\n",
                (cur + e.dissipated - e.initial - e.work_body - e.work_boundary) / scale);
@@ -821,6 +834,14 @@ static int cli_main(int argc, char **argv)
                     return 2;
                 }
                 ro.threads = (int)v;
+                i++;
+            } else if (!strcmp(a, "--balance")) {
+                const char *v = i + 1 < argc ? argv[i + 1] : "";
+                if (strcmp(v, "weights") && strcmp(v, "time")) {
+                    fprintf(stderr, "%s: --balance takes 'weights' or 'time' (got '%s')\n", prog, v);
+                    return 2;
+                }
+                ro.balance = !strcmp(v, "time") ? FLOE_BALANCE_TIME : FLOE_BALANCE_WEIGHTS;
                 i++;
             } else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
                 usage(stdout);

@@ -10,6 +10,8 @@
 #                                                 1, 2, 4 ranks; strong: 20k spheres at 1, 2, 4
 #   RANKS="1 2" PER_RANK="2500" STRONG=20000 STEPS=1000 bench/mpi-scaling/run.sh
 #   FLOE=/path/to/floe ...                        an MPI build's CLI (skips the build)
+#   BALANCE=time ...                              the ranks' shares by measured speed (floe run
+#                                                 --balance; default weights)
 #   BUILD=dir ...                                 where to build (default build-mpi-bench)
 #
 # Prints one line per run (series, ranks, particles, steps, wall time of the stepping loop,
@@ -84,7 +86,7 @@ run() { # series ranks n
   [[ $r -gt $cores ]] && label="$r(oversubscribed:${cores}c)"
   local out=$work/out_${series}_${r}_$n log=$work/log_${series}_${r}_$n.txt
   # shellcheck disable=SC2086 (MPIFLAGS: several words)
-  "$MPIRUN" $MPIFLAGS -np "$r" "$FLOE" run "$yaml" -o "$out" -t 1 > "$log" 2>&1 || true
+  "$MPIRUN" $MPIFLAGS -np "$r" "$FLOE" run "$yaml" -o "$out" -t 1 --balance "${BALANCE:-weights}" > "$log" 2>&1 || true
   grep -q "run finished" "$log" || { cat "$log"; echo "run failed: $series $r ranks $n particles" >&2; exit 1; }
   python3 - "$series" "$label" "$np" "$log" <<'EOF' | tee -a "$work/table.txt"
 import re, sys

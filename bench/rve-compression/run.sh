@@ -6,6 +6,8 @@
 #   REPS=3 FRACTION=1.0 FLOE_THREADS=1 bench/rve-compression/run.sh
 #   RANKS=2 REPS=3 FRACTION=0.25 bench/rve-compression/run.sh   # both under mpirun -np 2
 #   BIND=core RANKS=2 ...   # both codes' ranks pinned to cores (default: --bind-to none)
+#   BALANCE=time RANKS=2 ...   # floe's shares by measured speed (floe run --balance; default
+#                              # weights: equal shares of the estimated work)
 # FRACTION < 1 runs the first part of the loading only (both codes the same steps). RANKS > 1:
 # floe's MPI build (its outputs gathered by rank 0, vtk as .pvtu pieces) and LIGGGHTS, both
 # under mpirun -np RANKS, one thread a rank.
@@ -13,9 +15,10 @@ set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
 REPS=${REPS:-3}; FRACTION=${FRACTION:-1.0}; FLOE_THREADS=${FLOE_THREADS:-1}; RANKS=${RANKS:-1}
-MPIRUN=()
+MPIRUN=(); BAL=()
 if (( RANKS > 1 )); then
   FLOE_THREADS=1
+  BAL=(--balance "${BALANCE:-weights}")
   # BIND=core pins each rank (of both codes) to a core (OpenMPI's own default for np <= 2);
   # the default none leaves the placement to the kernel, as the earlier sessions measured
   MPIRUN=(mpirun --allow-run-as-root --oversubscribe --bind-to "${BIND:-none}" -np "$RANKS")
@@ -35,7 +38,7 @@ grep -q "duration: $(python3 -c "print($steps * 5e-5)")" "$work/scene.yaml" || {
 median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
 : > "$work/f.txt"; : > "$work/l.txt"
 for r in $(seq "$REPS"); do
-  OMP_NUM_THREADS=$FLOE_THREADS "${MPIRUN[@]}" "$FLOE" run "$work/scene.yaml" -o "$work/out" -t "$FLOE_THREADS" > "$work/floe.log" 2>&1 \
+  OMP_NUM_THREADS=$FLOE_THREADS "${MPIRUN[@]}" "$FLOE" run "$work/scene.yaml" -o "$work/out" -t "$FLOE_THREADS" "${BAL[@]}" > "$work/floe.log" 2>&1 \
     || { cat "$work/floe.log"; exit 1; }
   n=$(sed -n 's/.*particles: *\([0-9]*\).*/\1/p' "$work/floe.log" | head -1)
   wall=$(sed -n 's/.*wall time: *\([0-9.]*\) s.*/\1/p' "$work/floe.log" | head -1)

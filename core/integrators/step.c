@@ -83,7 +83,9 @@ static double kinematic_close(floe_world *w, int i, double h) {
 /* forces at the end of a step, with the history and the ledger advancing */
 static int forces_advancing(floe_world *w) {
     floe_step_ctx c = ctx_step(w, contacts_wanted(w));
+    const double t0 = w->par ? floe_par_clock() : 0.0;
     int rc = floe_world_forces(w, &c, FLOE_GROUP_ALL);
+    if (w->par) floe_par_force_time(w, floe_par_clock() - t0); /* MPI: this rank's own work */
     if (!rc && w->par) rc = floe_par_reverse(w); /* MPI: the ghosts' forces to their owners */
     if (!rc && w->par) rc = floe_par_servo_totals(w); /* MPI: the servo walls' whole forces */
     return rc;

@@ -218,6 +218,59 @@ static float *rcb_weights(const floe_world *w, const floe_par *P) {
     return wt;
 }
 
+/* FLOE_BALANCE_TIME: each rank's seconds per unit of weight since the last cut (its force
+ * evaluations' time over its weights' sum: the same list, the same touching flags), averaged
+ * with the previous measure (half each: a single noisy interval moves the cut by half as
+ * much), gathered; the parts' target sizes are the ranks' speeds (1 / cost) over their sum,
+ * kept within [1/4, 4] of the even share, the same on every rank. Before any measure, or if a
+ * rank has none (no weights, no time), the sizes stay as they were. */
+int floe_par_set_balance(floe_par *P, int mode) {
+    const int S = P->size;
+    if (!P->cost) {
+        P->cost = calloc(2 * (size_t)S, sizeof *P->cost);
+        P->bal_ids = malloc(2 * (size_t)S * sizeof *P->bal_ids);
+        P->bal_sz = malloc((size_t)S * sizeof *P->bal_sz);
+        if (!P->cost || !P->bal_ids || !P->bal_sz) {
+            free(P->cost); free(P->bal_ids); free(P->bal_sz);
+            P->cost = NULL; P->bal_ids = NULL; P->bal_sz = NULL;
+            return FLOE_ENOMEM;
+        }
+        for (int r = 0; r < S; r++) { P->bal_ids[r] = r; P->bal_ids[S + r] = 0; }
+    }
+    if (mode == FLOE_BALANCE_WEIGHTS && P->balance != mode && P->zz) { /* back to even shares */
+        for (int r = 0; r < S; r++) { P->bal_sz[r] = 1.0f / (float)S; P->cost[r] = 0; }
+        Zoltan_LB_Set_Part_Sizes(P->zz, 1, S, P->bal_ids, P->bal_ids + S, P->bal_sz);
+    }
+    P->balance = mode;
+    return FLOE_OK;
+}
+
+static void time_shares(floe_par *P, const float *wts) {
+    const int S = P->size;
+    double ws = 0, *all = P->cost + S;
+    if (wts)
+        for (int k = 0; k < P->nown; k++) ws += wts[k];
+    else
+        ws = P->nown;
+    const double mine = ws > 0 && P->busy > 0 ? P->busy / ws : 0.0;
+    MPI_Allgather(&mine, 1, MPI_DOUBLE, all, 1, MPI_DOUBLE, P->comm);
+    floe_par_count(P, FLOE_COMM_REDUCE, (long long)(S - 1) * (long long)sizeof mine, S - 1);
+    for (int r = 0; r < S; r++)
+        if (!(all[r] > 0 && all[r] < INFINITY)) return;
+    double sum = 0, tot = 0;
+    for (int r = 0; r < S; r++) {
+        P->cost[r] = P->cost[r] > 0 ? 0.5 * (P->cost[r] + all[r]) : all[r];
+        sum += 1.0 / P->cost[r];
+    }
+    for (int r = 0; r < S; r++) {
+        const double even = 1.0 / S, share = (1.0 / P->cost[r]) / sum;
+        all[r] = fmin(fmax(share, 0.25 * even), 4.0 * even);
+        tot += all[r];
+    }
+    for (int r = 0; r < S; r++) P->bal_sz[r] = (float)(all[r] / tot);
+    Zoltan_LB_Set_Part_Sizes(P->zz, 1, S, P->bal_ids, P->bal_ids + S, P->bal_sz);
+}
+
 int floe_par_rcb(floe_world *w, floe_par *P, int *dest) {
     for (int k = 0; k < P->nown; k++) dest[k] = P->rank;
     if (P->size == 1) return FLOE_OK;
@@ -236,6 +289,8 @@ int floe_par_rcb(floe_world *w, floe_par *P, int *dest) {
         Zoltan_Set_Param(P->zz, "KEEP_CUTS", "1");
     }
     float *wts = rcb_weights(w, P);
+    if (P->balance == FLOE_BALANCE_TIME) time_shares(P, wts);
+    P->busy = 0; /* the measure starts again with the new cut */
     zctx z = {w, P, wts};
     Zoltan_Set_Num_Obj_Fn(P->zz, z_num_obj, &z);
     Zoltan_Set_Obj_List_Fn(P->zz, z_obj_list, &z);
@@ -534,7 +589,7 @@ void floe_par_free(floe_par *P) {
     for (int k = 0; k < P->nouts; k++) floe_observer_destroy(P->outs[k]);
     free(P->outs);
     free(P->bout); free(P->bin); free(P->bpark); free(P->ppin); free(P->servo_buf);
-    free(P->gid); free(P->send_idx); free(P->scount); free(P->sbuf); free(P->rbuf);
+    free(P->gid); free(P->send_idx); free(P->scount); free(P->sbuf); free(P->rbuf); free(P->cost); free(P->bal_ids); free(P->bal_sz);
     MPI_Comm_free(&P->comm);
     free(P);
 }

@@ -32,6 +32,19 @@ int floe_world_parallel_init(floe_world *w, const void *comm);
  * every rebuild; a serial world: nothing */
 int floe_world_parallel_rebuild(floe_world *w);
 
+/* How the bisection weighs the ranks' shares (docs/parallel.md, "Load balance"):
+ * FLOE_BALANCE_WEIGHTS (the default): equal shares of the estimated work (1 per particle,
+ * 0.1 per list entry, 1.3 per end of a touching contact); every run of the same scene on the
+ * same ranks decomposes alike, so its results repeat to the last bit.
+ * FLOE_BALANCE_TIME: each rank's share of that estimate is sized by its measured speed (the
+ * seconds its force evaluations took per unit of estimated work since the last
+ * decomposition, averaged with the previous measure), as LAMMPS' `balance weight time`: a
+ * rank on a slower or busier core gets less. The cut then depends on the timings: runs agree
+ * only within round-off. Set it after floe_world_parallel_init (collective: the same mode on
+ * every rank); it takes effect at the next decomposition. A serial world: nothing. */
+typedef enum floe_balance { FLOE_BALANCE_WEIGHTS = 0, FLOE_BALANCE_TIME = 1 } floe_balance;
+int floe_world_parallel_set_balance(floe_world *w, floe_balance mode);
+
 /* Outputs of a split world: rank 0 passes mirror, an unsplit copy of the world built from
  * the same scene with its observers (outputs) attached; the other ranks pass NULL. After
  * every step whose observers are due, the owned particles' state (x v q w L f t, the walls'
@@ -150,6 +163,9 @@ typedef struct floe_comm_stats {
     long rebuilds;                       /* decompositions among them (the split's included) */
     double owned_steps, ghost_steps;     /* sums over those steps of the particles owned and the
                                           * ghosts held at the step's end */
+    double force_seconds;                /* this rank's wall seconds in force evaluations (its
+                                          * own work between the exchanges: the ranks'
+                                          * spread is the load imbalance) */
 } floe_comm_stats;
 
 /* this rank's traffic since the split or the last reset (a serial world: zeros); not

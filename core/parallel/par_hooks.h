@@ -11,6 +11,10 @@
  * history by global ids, floe_nl_build); otherwise the ghosts are refreshed from their
  * owners */
 int floe_par_refresh(floe_world *w, double maxd2, int have_xb);
+/* a clock for the force evaluations' time (seconds; 0 without MPI), and the seconds one took
+ * on this rank (the load balance's measure, floe_world_parallel_set_balance) */
+double floe_par_clock(void);
+void floe_par_force_time(floe_world *w, double seconds);
 /* after a force evaluation: the forces and torques on ghosts added to their owners */
 int floe_par_reverse(floe_world *w);
 /* after a force evaluation's reverse sum (and at the split): the servo walls' measures

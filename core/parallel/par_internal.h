@@ -61,8 +61,19 @@ typedef struct floe_par {
     /* the servo walls' partial and gathered measures (floe_par_servo_totals): allocated at
      * its first call (agreed then), kept */
     double *servo_buf; size_t servo_cap;
+    /* the load balance (floe_world_parallel_set_balance): the mode; this rank's seconds in
+     * force evaluations since the last decomposition; under FLOE_BALANCE_TIME, each rank's
+     * measured seconds per unit of RCB weight (smoothed over decompositions; 0: none yet) */
+    int balance;
+    double busy;
+    double *cost;            /* 2 size: the costs, then a gather's scratch */
+    int *bal_ids;            /* 2 size: the parts 0 .. size - 1, then the weight index 0 each */
+    float *bal_sz;           /* size: the parts' target sizes */
 } floe_par;
 
+/* the load balance's mode (floe_world_parallel_set_balance; its scratch allocated at the
+ * first call): FLOE_OK or FLOE_ENOMEM */
+int floe_par_set_balance(floe_par *P, int mode);
 /* the traffic accounting (floe_comm_stats' conventions; nothing with one rank): */
 /* bytes in msgs messages of kind k */
 void floe_par_count(floe_par *P, int k, long long bytes, long long msgs);

@@ -361,6 +361,19 @@ int floe_par_refresh(floe_world *w, double maxd2, int have_xb) {
     return rc ? floe_world_error(w, rc, "out of memory") : FLOE_OK;
 }
 
+double floe_par_clock(void) { return MPI_Wtime(); }
+void floe_par_force_time(floe_world *w, double seconds) {
+    w->par->busy += seconds;
+    w->par->traffic.force_seconds += seconds;
+}
+
+int floe_world_parallel_set_balance(floe_world *w, floe_balance mode) {
+    if (mode != FLOE_BALANCE_WEIGHTS && mode != FLOE_BALANCE_TIME)
+        return floe_world_error(w, FLOE_EINVAL, "MPI decomposition: unknown balance mode %d", (int)mode);
+    if (!w->par) return FLOE_OK;
+    return floe_par_set_balance(w->par, mode) ? floe_world_error(w, FLOE_ENOMEM, "out of memory") : FLOE_OK;
+}
+
 int floe_par_reverse(floe_world *w) {
     int rc = floe_par_reverse_comm(w, w->par);
     return rc ? floe_world_error(w, rc, "out of memory") : FLOE_OK;
@@ -1095,6 +1108,13 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
 int floe_world_parallel_rebuild(floe_world *w) { (void)w; return FLOE_OK; }
 int floe_par_refresh(floe_world *w, double maxd2, int have_xb) { (void)w; (void)maxd2; (void)have_xb; return FLOE_OK; }
 int floe_par_reverse(floe_world *w) { (void)w; return FLOE_OK; }
+double floe_par_clock(void) { return 0.0; }
+void floe_par_force_time(floe_world *w, double seconds) { (void)w; (void)seconds; }
+int floe_world_parallel_set_balance(floe_world *w, floe_balance mode) {
+    if (mode != FLOE_BALANCE_WEIGHTS && mode != FLOE_BALANCE_TIME)
+        return floe_world_error(w, FLOE_EINVAL, "MPI decomposition: unknown balance mode %d", (int)mode);
+    return FLOE_OK;
+}
 int floe_par_observe(floe_world *w, int force_all) { (void)w; (void)force_all; return FLOE_OK; }
 int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {
     (void)mirror;

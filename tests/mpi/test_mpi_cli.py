@@ -19,9 +19,11 @@ number of every VTK frame (the vtk output's frames: a .pvtu and a piece per rank
 together and ordered by id) must agree within 1e-9 of the column's (file's) largest magnitude
 (a text column, the mode of a break in fracture_events.csv, must be equal): the split run
 sums the contact forces in another order, nothing else differs.
-The summary of settle.yaml under -np 2 carries the traffic line (floe_comm_stats): the mean
+settle.yaml also runs under -np 2 with --balance time (the cuts by measured speed), compared
+the same way. The summary of settle.yaml under -np 2 carries the traffic line (floe_comm_stats): the mean
 reverse traffic is 48 B x the mean ghosts per rank (within the printed digits, 0.5 %), the
-ghost traffic between 72 and 312 B a ghost, the mean at most the largest rank's.
+ghost traffic between 72 and 312 B a ghost, the mean at most the largest rank's; and the
+force time line (mean between the smallest and the largest). `--balance fast` is refused.
 
 With SCENE:K1,K2 arguments after the folder, only those scenes (in TESTS_MPI_DIR) are run and
 compared, under the ranks given (the traffic line is left out): test_mpi_servo, test_mpi_drag
@@ -52,8 +54,8 @@ TOL = 1e-9
 fails = 0
 
 
-def run(scene, outdir, np_):
-    cmd = [floe, "run", scene, "-o", outdir, "-q"]
+def run(scene, outdir, np_, extra=()):
+    cmd = [floe, "run", scene, "-o", outdir, "-q"] + list(extra)
     if np_ > 1:
         cmd = [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", str(np_)] + cmd
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
@@ -158,6 +160,16 @@ def check_comm_line():
           and 72 * gpr * 0.995 <= gh <= 312 * gpr * 1.005 + 60 and reb > 0 and red >= 4 and out > 0)
     fails += not ok
     print(f"  {'ok  ' if ok else 'FAIL'} traffic line: {m.group(0)}")
+    # the ranks' force time: mean between the smallest and the largest, their ratio printed
+    m = re.search(r"force time/rank: +([0-9.]+) s mean, ([0-9.]+) s max, ([0-9.]+) s min \(max/mean ([0-9.]+)", r.stdout)
+    ok = bool(m) and 0 < float(m.group(3)) <= float(m.group(1)) <= float(m.group(2)) and float(m.group(4)) >= 1.0
+    fails += not ok
+    print(f"  {'ok  ' if ok else 'FAIL'} force time line: {m.group(0) if m else r.stdout}")
+    # --balance takes weights or time, nothing else
+    r = subprocess.run([floe, "run", scene, "--balance", "fast"], capture_output=True, text=True, timeout=60)
+    ok = r.returncode == 2 and "--balance takes 'weights' or 'time'" in r.stderr
+    fails += not ok
+    print(f"  {'ok  ' if ok else 'FAIL'} --balance fast refused: exit {r.returncode}, {r.stderr.strip()}")
 
 
 if len(sys.argv) <= 4:
@@ -166,10 +178,14 @@ for scene, ranks in SCENES:
   with tempfile.TemporaryDirectory() as tmp:
     ref = os.path.join(tmp, "np1")
     run(scene, ref, 1)
-    for k in ranks:
-        out = os.path.join(tmp, f"np{k}")
-        run(scene, out, k)
-        print(f"{os.path.basename(scene)}: mpirun -np {k} against one process:")
+    # settle.yaml at -np 2 also under --balance time (cuts by the ranks' measured speeds)
+    variants = [(k, ()) for k in ranks]
+    if len(sys.argv) <= 4 and os.path.basename(scene) == "settle.yaml":
+        variants.append((2, ("--balance", "time")))
+    for k, extra in variants:
+        out = os.path.join(tmp, f"np{k}{'_'.join(extra)}")
+        run(scene, out, k, extra)
+        print(f"{os.path.basename(scene)}: mpirun -np {k} {' '.join(extra)} against one process:")
         files = sorted(os.listdir(ref))
         # the vtk output under mpirun: PREFIX_NNNNNN.pvtu and a piece per rank for each serial
         # PREFIX_NNNNNN.vtu (test_mpi_pvtu.py checks the pieces themselves)

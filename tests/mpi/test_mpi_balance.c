@@ -1,0 +1,140 @@
+/* test_mpi_balance.c - the load balance by measured time (floe_world_parallel_set_balance,
+ * core/parallel/decomp.c time_shares, docs/parallel.md "Load balance"), run under mpirun with
+ * 1, 2 and 4 ranks (tests/CMakeLists.txt). A loose lattice of equal spheres (no contacts:
+ * every particle weighs about the same, so a rank's share of the weights is its share of the
+ * particles):
+ *   - the modes: an unknown one refused (FLOE_EINVAL, with a message);
+ *   - a rank that measures twice the others' seconds per unit of weight (its force time set
+ *     by hand before a decomposition: timings of a real run are not repeatable) gets the
+ *     share its speed gives, 1/2 / (1/2 + S - 1) of the particles (1/3 with 2 ranks), within
+ *     Zoltan's bisection tolerance; the others share the rest evenly; every particle is owned
+ *     by exactly one rank;
+ *   - the next measure (equal costs) is averaged with the last: the slow rank's share moves
+ *     half way back (cost 1.5: 2/3 / (2/3 + S - 1));
+ *   - back to FLOE_BALANCE_WEIGHTS: even shares again;
+ *   - a run of 300 steps under the time balance (the real timings, cuts at every rebuild)
+ *     ends with the same kinetic energy as under the weights within 1e-9 (the decompositions
+ *     differ: only round-off may), and the force time it measured is positive. */
+#include "floe.h"
+#include "world_internal.h"
+#include "par_internal.h"
+#include "../check.h"
+#include "mpi_common.h"
+#include <math.h>
+#include <stdlib.h>
+
+static const double L = 0.03;
+enum { NS = 12 }; /* 1728 spheres */
+
+static floe_world *build(void) {
+    floe_world_def d = floe_default_world_def();
+    d.dim = 3; d.dt = 1e-6;
+    d.gravity[2] = -9.81;
+    d.energy_check = FLOE_CHECK_OFF;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    mpi_test_add_glass(w, 1e7);
+    const int g = floe_world_add_geometry(w, floe_sphere_create(0.0004));
+    mpi_test_box_walls(w, L, L, L, 0, 6);
+    const double h = L / NS;
+    unsigned s = 4242;
+    for (int a = 0; a < NS; a++)
+        for (int b = 0; b < NS; b++)
+            for (int c = 0; c < NS; c++) {
+                floe_particle_def p = floe_default_particle_def();
+                p.geometry = g;
+                p.material = 0;
+                double j[3];
+                for (int k = 0; k < 3; k++) { s = s * 1103515245u + 12345u; j[k] = (s >> 8) / 16777216.0 - 0.5; }
+                floe_v3_set(p.x, (a + 0.5) * h, (b + 0.5) * h, (c + 0.5) * h);
+                floe_v3_set(p.v, 0.2 * j[0], 0.2 * j[1], 0.2 * j[2]);
+                floe_world_add_particle(w, &p);
+            }
+    if (floe_world_prepare(w)) { fprintf(stderr, "prepare: %s\n", floe_world_last_error(w)); exit(2); }
+    return w;
+}
+
+/* this rank's owned count after a decomposition with its force time set to `cost` seconds per
+ * owned particle (every rank the same time per particle times its factor) */
+static int decompose_with_cost(floe_world *w, double cost) {
+    w->par->busy = cost * w->par->nown;
+    const int rc = floe_world_parallel_rebuild(w);
+    CHECK(rc == 0, "rebuild: %s", rc ? floe_world_last_error(w) : "");
+    int own, gh;
+    floe_world_parallel_counts(w, &own, &gh);
+    return own;
+}
+
+/* the owned counts of every rank gathered; every particle owned once */
+static void gather_owned(int own, int *all) {
+    MPI_Allgather(&own, 1, MPI_INT, all, 1, MPI_INT, MPI_COMM_WORLD);
+    long tot = 0;
+    for (int r = 0; r < size_; r++) tot += all[r];
+    CHECK(tot == NS * NS * NS, "owned in all: %ld of %d", tot, NS * NS * NS);
+}
+
+/* rank 0's share and the others' against the speeds' shares, within 10 % (Zoltan's default
+ * imbalance tolerance; the lattice's cuts come out exact) */
+static void check_shares(const int *all, double slow, const char *when) {
+    const double N = NS * NS * NS, s0 = (1.0 / slow) / (1.0 / slow + (size_ - 1));
+    const double want0 = size_ == 1 ? N : s0 * N, want = size_ == 1 ? N : (1 - s0) * N / (size_ - 1);
+    if (rank_ == 0) {
+        printf("  %s: owned", when);
+        for (int r = 0; r < size_; r++) printf(" %d", all[r]);
+        printf(" (want %.0f, then %.0f each)\n", want0, want);
+    }
+    CHECK(fabs(all[0] - want0) <= 0.1 * want0, "%s: rank 0 owns %d, want %.0f", when, all[0], want0);
+    for (int r = 1; r < size_; r++)
+        CHECK(fabs(all[r] - want) <= 0.1 * want, "%s: rank %d owns %d, want %.0f", when, r, all[r], want);
+}
+
+static double kinetic_after(floe_balance mode, int steps, double *force_s) {
+    floe_world *w = build();
+    int rc = floe_world_parallel_init(w, NULL);
+    if (!rc) rc = floe_world_parallel_set_balance(w, mode);
+    for (int k = 0; !rc && k < steps; k++) rc = floe_world_step(w);
+    CHECK(rc == 0, "run: %s", rc ? floe_world_last_error(w) : "");
+    floe_energy e;
+    floe_world_parallel_energy(w, &e);
+    floe_comm_stats cs;
+    floe_world_parallel_comm(w, &cs);
+    *force_s = cs.force_seconds;
+    floe_world_destroy(w);
+    return e.kinetic_trans + e.kinetic_rot;
+}
+
+int main(int argc, char **argv) {
+    mpi_test_init(&argc, &argv);
+    floe_world *w = build();
+    int rc = floe_world_parallel_init(w, NULL);
+    CHECK(rc == 0, "split: %s", rc ? floe_world_last_error(w) : "");
+    CHECK(floe_world_parallel_set_balance(w, (floe_balance)7) == FLOE_EINVAL, "an unknown mode is refused");
+    CHECK(strstr(floe_world_last_error(w), "balance mode") != NULL, "its message: %s", floe_world_last_error(w));
+    if (rc == 0) {
+        int all[64];
+        rc = floe_world_parallel_set_balance(w, FLOE_BALANCE_TIME);
+        CHECK(rc == 0, "time balance: %s", rc ? floe_world_last_error(w) : "");
+        if (size_ <= 64 && rc == 0) {
+            /* rank 0 twice as slow per unit of weight */
+            gather_owned(decompose_with_cost(w, rank_ == 0 ? 2e-6 : 1e-6), all);
+            check_shares(all, 2.0, "rank 0 at twice the cost");
+            /* equal costs now: the smoothed cost of rank 0 is 1.5 */
+            gather_owned(decompose_with_cost(w, 1e-6), all);
+            check_shares(all, 1.5, "then equal costs (averaged)");
+            /* the weights again: even shares */
+            rc = floe_world_parallel_set_balance(w, FLOE_BALANCE_WEIGHTS);
+            CHECK(rc == 0, "weights balance: %s", rc ? floe_world_last_error(w) : "");
+            gather_owned(decompose_with_cost(w, rank_ == 0 ? 5e-6 : 1e-6), all);
+            check_shares(all, 1.0, "weights (the time ignored)");
+        }
+    }
+    floe_world_destroy(w);
+    /* a run under each mode: the same physics within round-off */
+    double fw, ft;
+    const double kw = kinetic_after(FLOE_BALANCE_WEIGHTS, 300, &fw), kt = kinetic_after(FLOE_BALANCE_TIME, 300, &ft);
+    if (rank_ == 0) printf("  300 steps: kinetic energy %.17g (weights) %.17g (time)\n", kw, kt);
+    CHECK(kw > 0 && fabs(kt - kw) <= 1e-9 * kw, "kinetic energy: %.17g under time, %.17g under weights", kt, kw);
+    CHECK(ft > 0 && fw > 0, "force time measured: %g, %g s", ft, fw);
+    int fails = mpi_test_failed("test_mpi_balance");
+    MPI_Finalize();
+    return fails ? 1 : 0;
+}
