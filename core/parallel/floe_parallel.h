@@ -33,12 +33,12 @@ int floe_world_parallel_init(floe_world *w, const void *comm);
 int floe_world_parallel_rebuild(floe_world *w);
 
 /* How the bisection weighs the ranks' shares (docs/parallel.md, "Load balance"):
- * FLOE_BALANCE_WEIGHTS (the default): equal shares of the estimated work (1 per particle,
- * 0.1 per list entry, 1.3 per end of a touching contact); every run of the same scene on the
- * same ranks decomposes alike, so its results repeat to the last bit.
+ * FLOE_BALANCE_WEIGHTS (the default): equal shares of the estimated work (a particle weighs
+ * 1, + 0.1 per list entry it is in, 1.3 instead for an entry in contact); every run of the
+ * same scene on the same ranks decomposes alike, so its results repeat to the last bit.
  * FLOE_BALANCE_TIME: each rank's share of that estimate is sized by its measured speed (the
- * seconds its force evaluations took per unit of estimated work since the last
- * decomposition, averaged with the previous measure), as LAMMPS' `balance weight time`: a
+ * seconds of its own work, force evaluations and outputs, per unit of estimated work since
+ * the last decomposition, averaged with the previous measure), as LAMMPS' `balance weight time`: a
  * rank on a slower or busier core gets less. The cut then depends on the timings: runs agree
  * only within round-off. Set it after floe_world_parallel_init (collective: the same mode on
  * every rank); it takes effect at the next decomposition. A serial world: nothing. */

@@ -61,8 +61,9 @@ typedef struct floe_par {
     /* the servo walls' partial and gathered measures (floe_par_servo_totals): allocated at
      * its first call (agreed then), kept */
     double *servo_buf; size_t servo_cap;
-    /* the load balance (floe_world_parallel_set_balance): the mode; this rank's seconds in
-     * force evaluations since the last decomposition; under FLOE_BALANCE_TIME, each rank's
+    /* the load balance (floe_world_parallel_set_balance): the mode; this rank's seconds of
+     * its own work since the last decomposition (force evaluations, and its outputs' and rank
+     * 0's mirror observers' evaluations: what the others wait for); under FLOE_BALANCE_TIME, each rank's
      * measured seconds per unit of RCB weight (smoothed over decompositions; 0: none yet) */
     int balance;
     double busy;

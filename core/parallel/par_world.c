@@ -815,7 +815,11 @@ int floe_par_observe(floe_world *w, int force_all) {
     P->traffic.steps++;
     P->traffic.owned_steps += P->nown;
     P->traffic.ghost_steps += P->nghost;
+    /* the outputs' own work (this rank's pieces; rank 0's observers on the mirror below) is
+     * work the other ranks wait for: it counts in the load balance's measure (P->busy) */
+    double t0 = MPI_Wtime();
     FLOE_TRY(outputs_call(w, P, force_all));
+    P->busy += MPI_Wtime() - t0;
     int has = P->mirror != NULL;
     MPI_Bcast(&has, 1, MPI_INT, 0, P->comm);
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof has);
@@ -835,9 +839,11 @@ int floe_par_observe(floe_world *w, int force_all) {
     energy_sum(w, &e, FLOE_COMM_OUTPUT);
     int rc = mirror_gather(w, P), ok;
     if (P->rank == 0 && !rc) {
+        t0 = MPI_Wtime();
         P->mirror->energy = e;
         rc = observers_call(P->mirror, force_all);
         if (rc) floe_world_error(w, rc, "%s", floe_world_last_error(P->mirror));
+        P->busy += MPI_Wtime() - t0;
     }
     MPI_Allreduce(&rc, &ok, 1, MPI_INT, MPI_MAX, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof rc);
