@@ -6,7 +6,12 @@
  * (memcmp, tolerance 0):
  *   A. 1,200 spheres of three radii and 60 boxes (the polytope LP, warm starts) settling in
  *      a walled box under gravity, Hertz-Mindlin with friction, 400 steps;
- *   B. the same spheres only (the sphere path), leapfrog, 400 steps.
+ *   B. the same spheres only (the sphere path), leapfrog, 400 steps;
+ *   C. A again with the particle loops' parts (floe_loop_split: the drift's and the kick's
+ *      blocks per thread, cut by measured speed) moved to a random cut after every step.
+ * And floe_loop_split itself: even at first; a thread at twice the seconds per block gets
+ * a third of the blocks; a measure within 5 % keeps the cut; a new block count cuts evenly
+ * again; every part keeps at least one block.
  * Built without OpenMP, the test checks that a request for 2 threads is refused and skips. */
 #include "check.h"
 #include "floe.h"
@@ -74,7 +79,7 @@ typedef struct run_out {
     int nl_threads;        /* the threads of its last build's search */
 } run_out;
 
-static int run(int boxes, int leapfrog, int threads, int steps, run_out *o) {
+static int run(int boxes, int leapfrog, int threads, int steps, run_out *o, int skew) {
     floe_world *w = build(boxes, leapfrog);
     if (!w) return 1;
     if (floe_world_set_threads(w, threads) || floe_world_prepare(w)) {
@@ -83,12 +88,20 @@ static int run(int boxes, int leapfrog, int threads, int steps, run_out *o) {
         return 1;
     }
     if (threads == 1) printf("dt %g s\n", floe_world_dt(w));
-    for (int s = 0; s < steps; s++)
+    unsigned long long seed = 99;
+    for (int s = 0; s < steps; s++) {
         if (floe_world_step(w)) {
             fprintf(stderr, "step %d: %s\n", s, floe_world_last_error(w));
             floe_world_destroy(w);
             return 1;
         }
+        floe_loop_split *ls = &w->ls;
+        if (skew && ls->nt > 1 && ls->nb >= ls->nt) /* any increasing cut, a block at least each */
+            for (int t = 1; t < ls->nt; t++) {
+                const int lo = ls->cut[t - 1] + 1, hi = ls->nb - (ls->nt - t);
+                ls->cut[t] = lo + (int)(urand(&seed) * (hi - lo + 1));
+            }
+    }
     const floe_particles *p = &w->p;
     const size_t n = (size_t)p->n;
     o->nstate = n * (3 + 3 + 4 + 3 + 3 + 3 + 3);
@@ -120,16 +133,41 @@ static int run(int boxes, int leapfrog, int threads, int steps, run_out *o) {
     return 0;
 }
 
+/* floe_loop_split's cuts (unused without OpenMP) */
+static __attribute__((unused)) void check_loop_split(void) {
+    floe_world *w = build(0, 0);
+    const int *c = floe_loop_split_cuts(w, 2, 40);
+    CHECK(c && c[0] == 0 && c[1] == 20 && c[2] == 40, "loop split: even at first (%d)", c ? c[1] : -1);
+    w->ls.sec[0] = 20e-6;
+    w->ls.sec[1] = 40e-6; /* thread 1 at twice the seconds per block */
+    floe_loop_split_update(w);
+    CHECK(w->ls.cut[1] == 27, "loop split: the slower thread's part is its speed's share, 13 of 40 (cut %d)", w->ls.cut[1]);
+    w->ls.sec[0] = 27e-6;
+    w->ls.sec[1] = 26e-6; /* now within 5 %: kept */
+    floe_loop_split_update(w);
+    CHECK(w->ls.cut[1] == 27, "loop split: a balanced measure keeps the cut (%d)", w->ls.cut[1]);
+    c = floe_loop_split_cuts(w, 2, 50);
+    CHECK(c && c[1] == 25, "loop split: a new block count cuts evenly again (%d)", c ? c[1] : -1);
+    c = floe_loop_split_cuts(w, 4, 4);
+    const double sec[4] = {1e-6, 1e-6, 1e-6, 1e-4};
+    memcpy(w->ls.sec, sec, sizeof sec);
+    floe_loop_split_update(w);
+    int ok = c && w->ls.cut[0] == 0 && w->ls.cut[4] == 4;
+    for (int t = 0; t < 4; t++) ok &= w->ls.cut[t + 1] == w->ls.cut[t] + 1;
+    CHECK(ok, "loop split: every part keeps a block (4 parts of 4 blocks, one part 100x slower)");
+    floe_world_destroy(w);
+}
+
 /* unused without OpenMP (main skips) */
-static __attribute__((unused)) void compare(const char *what, int boxes, int leapfrog, int steps) {
+static __attribute__((unused)) void compare(const char *what, int boxes, int leapfrog, int steps, int skew) {
     run_out ref, o;
     memset(&ref, 0, sizeof ref);
-    CHECK(run(boxes, leapfrog, 1, steps, &ref) == 0, "%s: one thread runs", what);
+    CHECK(run(boxes, leapfrog, 1, steps, &ref, 0) == 0, "%s: one thread runs", what);
     CHECK(ref.ncontacts > 200, "%s: a dense packing (%d contacts)", what, ref.ncontacts);
     CHECK(!ref.threaded, "%s: one thread keeps the serial path", what);
     for (int t = 2; t <= 4; t++) {
         memset(&o, 0, sizeof o);
-        CHECK(run(boxes, leapfrog, t, steps, &o) == 0, "%s: %d threads run", what, t);
+        CHECK(run(boxes, leapfrog, t, steps, &o, skew) == 0, "%s: %d threads run", what, t);
         CHECK(o.threaded, "%s: %d threads took the threaded path", what, t);
         CHECK(o.nstate == ref.nstate && !memcmp(o.state, ref.state, ref.nstate * sizeof(double)),
               "%s: %d threads: positions, velocities, orientations, momenta, forces, torques bit-identical", what, t);
@@ -159,8 +197,10 @@ int main(void) {
     printf("built without OpenMP: skipped\n");
     return check_fail_ ? 1 : 77;
 #else
-    compare("spheres and boxes, velocity Verlet", 1, 0, 400);
-    compare("spheres, leapfrog", 0, 1, 400);
+    compare("spheres and boxes, velocity Verlet", 1, 0, 400, 0);
+    compare("spheres, leapfrog", 0, 1, 400, 0);
+    compare("spheres and boxes, the particle loops' parts moved at every step", 1, 0, 400, 1);
+    check_loop_split();
     return check_summary("test_threads");
 #endif
 }

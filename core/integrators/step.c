@@ -582,12 +582,24 @@ int step_verlet(floe_world *w) {
     {
         const drift_args da = {k1, dt, h, {g0, g1, g2}, have_xb ? xb : NULL};
         if (nt > 1) {
-            FLOE_OMP(omp parallel for schedule(static) num_threads(nt) reduction(max: maxd2) reduction(|: kin, dbad))
-            for (int b = 0; b < nb; b++) {
-                int kb = 0;
-                red[b] = drift_block(p, &da, b * B, (b + 1) * B < n ? (b + 1) * B : n, &maxd2, &kb, &dbad);
-                if (kinb) kinb[b] = (unsigned char)kb;
-                kin |= kb;
+            /* the threads' parts by their measured speeds (floe_loop_split; NULL: evenly) */
+            const int *cut = floe_loop_split_cuts(w, nt, nb);
+            double *sec = w->ls.sec;
+            FLOE_OMP(omp parallel num_threads(nt) reduction(max: maxd2) reduction(|: kin, dbad))
+            {
+                const int nth = floe_par_nthreads();
+                for (int part = floe_par_thread(); part < nt; part += nth) {
+                    const double t0 = floe_par_wtime();
+                    const int b0 = cut ? cut[part] : (int)((long long)nb * part / nt);
+                    const int b1 = cut ? cut[part + 1] : (int)((long long)nb * (part + 1) / nt);
+                    for (int b = b0; b < b1; b++) {
+                        int kb = 0;
+                        red[b] = drift_block(p, &da, b * B, (b + 1) * B < n ? (b + 1) * B : n, &maxd2, &kb, &dbad);
+                        if (kinb) kinb[b] = (unsigned char)kb;
+                        kin |= kb;
+                    }
+                    if (cut) sec[part] += floe_par_wtime() - t0;
+                }
             }
         } else
             for (int b = 0; b < nb; b++) {
@@ -648,9 +660,21 @@ int step_verlet(floe_world *w) {
         if (nb2 > 0 && !red2) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
         const kick_args ka = {h, dt, leap, shadow, w->par != NULL};
         if (nt2 > 1) {
-            FLOE_OMP(omp parallel for schedule(static) num_threads(nt2) reduction(min: bad))
-            for (int b = 0; b < nb2; b++)
-                kick_block(p, &ka, b * B, (b + 1) * B < n ? (b + 1) * B : n, red2 + 4 * (size_t)b, &bad);
+            const int *cut = floe_loop_split_cuts(w, nt2, nb2); /* the drift's parts */
+            double *sec = w->ls.sec;
+            FLOE_OMP(omp parallel num_threads(nt2) reduction(min: bad))
+            {
+                const int nth = floe_par_nthreads();
+                for (int part = floe_par_thread(); part < nt2; part += nth) {
+                    const double t0 = floe_par_wtime();
+                    const int b0 = cut ? cut[part] : (int)((long long)nb2 * part / nt2);
+                    const int b1 = cut ? cut[part + 1] : (int)((long long)nb2 * (part + 1) / nt2);
+                    for (int b = b0; b < b1; b++)
+                        kick_block(p, &ka, b * B, (b + 1) * B < n ? (b + 1) * B : n, red2 + 4 * (size_t)b, &bad);
+                    if (cut) sec[part] += floe_par_wtime() - t0;
+                }
+            }
+            floe_loop_split_update(w);
         } else
             for (int b = 0; b < nb2; b++)
                 kick_block(p, &ka, b * B, (b + 1) * B < n ? (b + 1) * B : n, red2 + 4 * (size_t)b, &bad);

@@ -153,6 +153,62 @@ double *floe_world_reduce_buf(floe_world *w, size_t n) {
     return w->red;
 }
 
+const int *floe_loop_split_cuts(floe_world *w, int nt, int nb) {
+    floe_loop_split *s = &w->ls;
+    if (nt < 1) return NULL;
+    if (nt > s->cap) {
+        int *c = realloc(s->cut, (size_t)(nt + 1) * sizeof *c);
+        if (c) s->cut = c;
+        double *a = c ? realloc(s->spb, (size_t)nt * sizeof *a) : NULL;
+        if (a) s->spb = a;
+        double *t = a ? realloc(s->sec, (size_t)nt * sizeof *t) : NULL;
+        if (!t) return NULL;
+        s->sec = t;
+        s->cap = nt;
+        s->nt = 0; /* cut anew */
+    }
+    if (s->nt != nt || s->nb != nb) { /* evenly, as schedule(static) */
+        for (int t = 0; t <= nt; t++) s->cut[t] = (int)((long long)nb * t / nt);
+        for (int t = 0; t < nt; t++) s->spb[t] = s->sec[t] = 0.0;
+        s->nt = nt;
+        s->nb = nb;
+    }
+    return s->cut;
+}
+
+void floe_loop_split_update(floe_world *w) {
+    floe_loop_split *s = &w->ls;
+    const int nt = s->nt;
+    if (nt < 2 || s->nb < nt) return;
+    double tot_speed = 0, worst = 0, mean = 0;
+    int ok = 1;
+    for (int t = 0; t < nt; t++) {
+        const int nbt = s->cut[t + 1] - s->cut[t];
+        if (nbt > 0 && s->sec[t] > 0) {
+            const double m = s->sec[t] / nbt;
+            s->spb[t] = s->spb[t] > 0 ? 0.75 * s->spb[t] + 0.25 * m : m;
+        }
+        s->sec[t] = 0.0;
+        ok &= s->spb[t] > 0;
+        if (!ok) continue;
+        tot_speed += 1.0 / s->spb[t];
+        const double T = nbt * s->spb[t];
+        mean += T / nt;
+        if (T > worst) worst = T;
+    }
+    if (!ok || !(worst > 1.05 * mean)) return;
+    /* cut again: part t gets its speed's share of the blocks (at least one each) */
+    double acc = 0;
+    s->cut[0] = 0;
+    for (int t = 0; t < nt; t++) {
+        acc += (1.0 / s->spb[t]) / tot_speed;
+        int c = t == nt - 1 ? s->nb : (int)(acc * s->nb + 0.5);
+        if (c < s->cut[t] + 1) c = s->cut[t] + 1;
+        if (c > s->nb - (nt - 1 - t)) c = s->nb - (nt - 1 - t);
+        s->cut[t + 1] = c;
+    }
+}
+
 int floe_world_loop_threads(const floe_world *w, long items) {
     if (items < w->par_grain) return 1;
     return floe_world_threads(w);
@@ -237,6 +293,7 @@ void floe_world_destroy(floe_world *w) {
     if (!w) return;
     floe_par_scratch_free(w->thr);
     free(w->red);
+    free(w->ls.cut); free(w->ls.spb); free(w->ls.sec);
     particles_free(&w->p);
     for (int i = 0; i < w->ngeoms; i++) floe_geometry_destroy(w->geoms[i]);
     free(w->geoms);

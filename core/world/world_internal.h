@@ -70,6 +70,19 @@ typedef struct floe_neighbor_list {
     int nmat;
 } floe_neighbor_list;
 
+/* The particle loops' split over threads (the drift and the kick, core/integrators/step.c):
+ * part t takes the blocks [cut[t], cut[t + 1]) of nb, in order; the parts' sizes follow the
+ * threads' measured seconds per block (two cores need not run at one speed: the VM's two
+ * vCPUs differ by up to 1.6x at these loops, bench/RESULTS.md issue 14 session 16). Which
+ * thread updates which particle never changes the bits (each block's sums are added in block
+ * order). */
+typedef struct floe_loop_split {
+    int nt, nb, cap; /* the split below is for nt parts over nb blocks */
+    int *cut;        /* nt + 1 */
+    double *spb;     /* per part: seconds per block, smoothed (0: not measured yet) */
+    double *sec;     /* per part: seconds of this step's loops so far */
+} floe_loop_split;
+
 struct floe_world {
     floe_world_def def;
     char err[1024];
@@ -194,6 +207,7 @@ struct floe_world {
     int par_grain;            /* loops over fewer items run on one thread (the same bits either way) */
     struct floe_par_scratch *thr; /* the threaded contact stage's buffers (forces.c); NULL until used */
     double *red; size_t red_cap;  /* per-block partial sums of threaded loops (floe_world_reduce_buf) */
+    floe_loop_split ls;           /* the drift's and the kick's parts (floe_loop_split_cuts) */
     /* MPI domain decomposition (core/parallel/par_internal.h); NULL: serial. Freed through
      * par_free by floe_world_destroy */
     struct floe_par *par;
@@ -202,6 +216,14 @@ struct floe_world {
 
 /* scratch for n per-block partial sums (NULL: out of memory), kept by the world */
 double *floe_world_reduce_buf(floe_world *w, size_t n);
+/* the parts of a particle loop over nb blocks on nt threads (floe_loop_split; NULL: out of
+ * memory, split evenly then): even at first and whenever nt or nb changes, then cut again by
+ * floe_loop_split_update */
+const int *floe_loop_split_cuts(floe_world *w, int nt, int nb);
+/* after the step's particle loops (every part's seconds in w->ls.sec): the seconds per block
+ * smoothed (a quarter of each new measure), and when the slowest part is predicted to take
+ * 5 % more than the mean, the parts cut again in proportion to the threads' speeds */
+void floe_loop_split_update(floe_world *w);
 /* threads for a loop over `items` items (1 below the grain or without OpenMP) */
 int floe_world_loop_threads(const floe_world *w, long items);
 /* errors of the calling thread go to buf (NULL: back to the world's): a threaded stage keeps
