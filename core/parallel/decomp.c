@@ -218,12 +218,8 @@ static float *rcb_weights(const floe_world *w, const floe_par *P) {
     return wt;
 }
 
-/* FLOE_BALANCE_TIME: each rank's seconds per unit of weight since the last cut (its force
- * evaluations' time over its weights' sum: the same list, the same touching flags), averaged
- * with the previous measure (half each: a single noisy interval moves the cut by half as
- * much), gathered; the parts' target sizes are the ranks' speeds (1 / cost) over their sum,
- * kept within [1/4, 4] of the even share, the same on every rank. Before any measure, or if a
- * rank has none (no weights, no time), the sizes stay as they were. */
+/* the balance's mode; its scratch at the first call; back to even shares when the weights
+ * take over again */
 int floe_par_set_balance(floe_par *P, int mode) {
     const int S = P->size;
     if (!P->cost) {
@@ -245,6 +241,13 @@ int floe_par_set_balance(floe_par *P, int mode) {
     return FLOE_OK;
 }
 
+/* FLOE_BALANCE_TIME: each rank's seconds per unit of weight since the last cut (the seconds
+ * of its own work, P->busy: force evaluations and outputs, over its weights' sum: the same
+ * list, the same touching flags), averaged with the previous measure (half each: a single
+ * noisy interval moves the cut by half as much), gathered; the parts' target sizes are the
+ * ranks' speeds (1 / cost) over their sum, kept within [1/4, 4] of the even share, the same on
+ * every rank. Before any measure, or if a rank has none (no weights, no time), the sizes stay
+ * as they were. */
 static void time_shares(floe_par *P, const float *wts) {
     const int S = P->size;
     double ws = 0, *all = P->cost + S;
@@ -589,7 +592,8 @@ void floe_par_free(floe_par *P) {
     for (int k = 0; k < P->nouts; k++) floe_observer_destroy(P->outs[k]);
     free(P->outs);
     free(P->bout); free(P->bin); free(P->bpark); free(P->ppin); free(P->servo_buf);
-    free(P->gid); free(P->send_idx); free(P->scount); free(P->sbuf); free(P->rbuf); free(P->cost); free(P->bal_ids); free(P->bal_sz);
+    free(P->gid); free(P->send_idx); free(P->scount); free(P->sbuf); free(P->rbuf);
+    free(P->cost); free(P->bal_ids); free(P->bal_sz);
     MPI_Comm_free(&P->comm);
     free(P);
 }

@@ -6,6 +6,7 @@
  * folder: it calls none of them. The driver (prepare, step, run, the integrators, the
  * energy watchdog) is the layer above: core/integrators (docs/architecture.md). */
 #include "world_internal.h"
+#include "alloc_util.h"
 #include "floe_par.h"
 #include "floe_pd.h"
 #include "beam_set.h"
@@ -157,13 +158,10 @@ const int *floe_loop_split_cuts(floe_world *w, int nt, int nb) {
     floe_loop_split *s = &w->ls;
     if (nt < 1) return NULL;
     if (nt > s->cap) {
-        int *c = realloc(s->cut, (size_t)(nt + 1) * sizeof *c);
-        if (c) s->cut = c;
-        double *a = c ? realloc(s->spb, (size_t)nt * sizeof *a) : NULL;
-        if (a) s->spb = a;
-        double *t = a ? realloc(s->sec, (size_t)nt * sizeof *t) : NULL;
-        if (!t) return NULL;
-        s->sec = t;
+        if (floe_resize((void **)&s->cut, (size_t)nt + 1, sizeof *s->cut) ||
+            floe_resize((void **)&s->spb, (size_t)nt, sizeof *s->spb) ||
+            floe_resize((void **)&s->sec, (size_t)nt, sizeof *s->sec))
+            return NULL;
         s->cap = nt;
         s->nt = 0; /* cut anew */
     }
