@@ -32,6 +32,7 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: %s run [SCENE] [-o OUTDIR] [-q] [-t N] [--checkpoint-every T] [--checkpoint FILE] [--restart FILE]\n"
+            "                [--balance weights|time]\n"
             "                                        run a scene (no SCENE: the built-in demo)\n"
             "       %s check SCENE                   load and prepare a scene, print its summary\n"
             "       %s info                          version, build and the registered components\n"
