@@ -590,8 +590,8 @@ int step_verlet(floe_world *w) {
                 const int nth = floe_par_nthreads();
                 for (int part = floe_par_thread(); part < nt; part += nth) {
                     const double t0 = floe_par_wtime();
-                    const int b0 = cut ? cut[part] : (int)((long long)nb * part / nt);
-                    const int b1 = cut ? cut[part + 1] : (int)((long long)nb * (part + 1) / nt);
+                    int b0, b1;
+                    floe_loop_split_range(cut, nb, nt, part, &b0, &b1);
                     for (int b = b0; b < b1; b++) {
                         int kb = 0;
                         red[b] = drift_block(p, &da, b * B, (b + 1) * B < n ? (b + 1) * B : n, &maxd2, &kb, &dbad);
@@ -667,8 +667,8 @@ int step_verlet(floe_world *w) {
                 const int nth = floe_par_nthreads();
                 for (int part = floe_par_thread(); part < nt2; part += nth) {
                     const double t0 = floe_par_wtime();
-                    const int b0 = cut ? cut[part] : (int)((long long)nb2 * part / nt2);
-                    const int b1 = cut ? cut[part + 1] : (int)((long long)nb2 * (part + 1) / nt2);
+                    int b0, b1;
+                    floe_loop_split_range(cut, nb2, nt2, part, &b0, &b1);
                     for (int b = b0; b < b1; b++)
                         kick_block(p, &ka, b * B, (b + 1) * B < n ? (b + 1) * B : n, red2 + 4 * (size_t)b, &bad);
                     if (cut) sec[part] += floe_par_wtime() - t0;

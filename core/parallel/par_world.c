@@ -18,6 +18,12 @@ const char *floe_comm_kind_name(floe_comm_kind k) {
     return (int)k >= 0 && k < FLOE_COMM_KINDS ? names[k] : "?";
 }
 
+/* floe_world_parallel_set_balance's mode, in both builds */
+static int balance_check(floe_world *w, floe_balance mode) {
+    if (mode == FLOE_BALANCE_WEIGHTS || mode == FLOE_BALANCE_TIME) return FLOE_OK;
+    return floe_world_error(w, FLOE_EINVAL, "MPI decomposition: unknown balance mode %d", (int)mode);
+}
+
 #ifdef FLOE_HAVE_MPI
 
 int floe_parallel_available(void) { return 1; }
@@ -368,9 +374,8 @@ void floe_par_force_time(floe_world *w, double seconds) {
 }
 
 int floe_world_parallel_set_balance(floe_world *w, floe_balance mode) {
-    if (mode != FLOE_BALANCE_WEIGHTS && mode != FLOE_BALANCE_TIME)
-        return floe_world_error(w, FLOE_EINVAL, "MPI decomposition: unknown balance mode %d", (int)mode);
-    if (!w->par) return FLOE_OK;
+    const int rc = balance_check(w, mode);
+    if (rc || !w->par) return rc;
     return floe_par_set_balance(w->par, mode) ? floe_world_error(w, FLOE_ENOMEM, "out of memory") : FLOE_OK;
 }
 
@@ -1117,9 +1122,7 @@ int floe_par_reverse(floe_world *w) { (void)w; return FLOE_OK; }
 double floe_par_clock(void) { return 0.0; }
 void floe_par_force_time(floe_world *w, double seconds) { (void)w; (void)seconds; }
 int floe_world_parallel_set_balance(floe_world *w, floe_balance mode) {
-    if (mode != FLOE_BALANCE_WEIGHTS && mode != FLOE_BALANCE_TIME)
-        return floe_world_error(w, FLOE_EINVAL, "MPI decomposition: unknown balance mode %d", (int)mode);
-    return FLOE_OK;
+    return balance_check(w, mode);
 }
 int floe_par_observe(floe_world *w, int force_all) { (void)w; (void)force_all; return FLOE_OK; }
 int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {

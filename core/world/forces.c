@@ -1603,14 +1603,7 @@ static int sep_update(floe_world *w) {
         w->sep_on = 0;
         return FLOE_OK;
     }
-    if (!floe_world_sep_current(w)) {
-        /* this list was looked at already and holds no such shape (no cache allocated): not
-         * again at every evaluation (an O(n) scan of the kinds, serial: 3 % of a
-         * 20,000-sphere step) */
-        if (!w->sep_d && w->sep_n == n && w->sep_np == np && w->sep_gen == nl->gen) {
-            w->sep_on = 0;
-            return FLOE_OK;
-        }
+    if (!floe_world_sep_seen(w)) { /* a new list: its kinds scanned once (O(n), serial) */
         int want = 0;
         for (int i = 0; i < n && !want; i++)
             want = p->kind[i] == FLOE_GEOM_BOX || p->kind[i] == FLOE_GEOM_USER || p->kind[i] == FLOE_GEOM_COMPOUND;

@@ -224,6 +224,12 @@ const int *floe_loop_split_cuts(floe_world *w, int nt, int nb);
  * smoothed (a quarter of each new measure), and when the slowest part is predicted to take
  * 5 % more than the mean, the parts cut again in proportion to the threads' speeds */
 void floe_loop_split_update(floe_world *w);
+/* part `part`'s blocks [*b0, *b1) of nb blocks on nt parts: by the cut, or evenly when cut is
+ * NULL (as schedule(static)) */
+static inline void floe_loop_split_range(const int *cut, int nb, int nt, int part, int *b0, int *b1) {
+    *b0 = cut ? cut[part] : (int)((long long)nb * part / nt);
+    *b1 = cut ? cut[part + 1] : (int)((long long)nb * (part + 1) / nt);
+}
 /* threads for a loop over `items` items (1 below the grain or without OpenMP) */
 int floe_world_loop_threads(const floe_world *w, long items);
 /* errors of the calling thread go to buf (NULL: back to the world's): a threaded stage keeps
@@ -332,11 +338,16 @@ int floe_nl_needs_rebuild_cell(const floe_neighbor_list *nl, const floe_particle
 int floe_cell_path_begin(floe_world *w, const double de[9], double max_rate, const int *stress_mask, long *nsteps);
 void floe_cell_path_end(floe_world *w);
 
-/* the separation cache's arrays are those of the world's particles and list now (their
- * count, the list's entries and build): forces.c sep_update starts it again otherwise, and a
- * checkpoint writes it only then (core/integrators/checkpoint.c, section SEPC) */
+/* the separation cache was set up for the world's particles and list now (their count, the
+ * list's entries and build; sep_on says whether it is kept: a list without a box, convex or
+ * compound shape keeps none): forces.c sep_update scans the kinds again only otherwise.
+ * ..._current: and its arrays exist, which a checkpoint writes only then
+ * (core/integrators/checkpoint.c, section SEPC) */
+static inline int floe_world_sep_seen(const floe_world *w) {
+    return w->sep_n == w->p.n && w->sep_np == w->nl.npairs && w->sep_gen == w->nl.gen;
+}
 static inline int floe_world_sep_current(const floe_world *w) {
-    return w->sep_d && w->sep_n == w->p.n && w->sep_np == w->nl.npairs && w->sep_gen == w->nl.gen;
+    return w->sep_d && floe_world_sep_seen(w);
 }
 
 /* detection of the pair (i, j), piece pair sub, at the particles' current poses
