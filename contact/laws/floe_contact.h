@@ -9,15 +9,23 @@
 #include "floe_base.h"
 #include "floe_registry.h"
 
-#define FLOE_MAX_HISTORY 10  /* doubles of per-contact state kept per pair */
-#define FLOE_LAW_HISTORY 4   /* of which a law may use history[0 .. 3]; the world keeps the
-                                previous force (slots 4-6), stored energy (slot 7) and the
-                                energy dissipated since the contact began (slot 8) there for
-                                its energy ledger and watchdog */
-#define FLOE_FORCE_SLOT 4
-#define FLOE_ENERGY_SLOT 7
-#define FLOE_DISS_SLOT 8
-#define FLOE_TWIST_SLOT 9    /* the relative twist angle of a contact manifold (3D polytopes) */
+/* A list entry's history (the world's, core/world/neighbor.c): the world's ledger first,
+ * then the law's state, then the manifold's twist:
+ *   [0..2] the previous force on i, [3] the stored energy, [4] the energy dissipated since
+ *   the contact began (the energy ledger and watchdog);
+ *   [5..8] the law's history[0 .. history_size - 1] (a law sees a pointer to slot 5);
+ *   [9] the relative twist angle of a contact manifold (3D polytopes).
+ * A world whose laws keep at most 3 doubles and whose shapes are only spheres and planes
+ * (no manifold) keeps entries of FLOE_HIST_COMPACT doubles (one 64-byte cache line), any
+ * other FLOE_MAX_HISTORY: the slots' places are the same in both. */
+#define FLOE_MAX_HISTORY 10  /* doubles of per-contact state kept per pair (at most) */
+#define FLOE_HIST_COMPACT 8  /* ... in a world without manifolds whose laws keep <= 3 */
+#define FLOE_LAW_HISTORY 4   /* doubles a law may keep (floe_contact_law_class.history_size) */
+#define FLOE_FORCE_SLOT 0
+#define FLOE_ENERGY_SLOT 3
+#define FLOE_DISS_SLOT 4
+#define FLOE_LAW_SLOT 5
+#define FLOE_TWIST_SLOT 9
 
 typedef struct floe_material {
     char name[64];

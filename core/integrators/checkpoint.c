@@ -242,12 +242,12 @@ static void save_neighbors(const floe_world *w, obuf *b) {
     const floe_neighbor_list *nl = &w->nl;
     const size_t np = (size_t)nl->npairs;
     const int warm = nl->use_warm && nl->warm != NULL;
-    const int k[4] = {nl->npairs, warm, nl->n_build, nl->nwalls};
+    const int k[5] = {nl->npairs, warm, nl->n_build, nl->nwalls, nl->hs};
     PUT(b, k); PUT(b, nl->skin); PUT(b, nl->rebuilds);
     put(b, nl->pi, np * sizeof(int));
     put(b, nl->pj, np * sizeof(int));
     put(b, nl->sub, np * sizeof(int));
-    put(b, nl->hist, np * FLOE_MAX_HISTORY * sizeof(double));
+    put(b, nl->hist, np * (size_t)nl->hs * sizeof(double));
     put(b, nl->touching, np);
     if (warm) put(b, nl->warm, np * FLOE_DETECT_WARM * sizeof(double));
     put(b, nl->x_build, 3 * (size_t)nl->n_build * sizeof(double));
@@ -261,9 +261,12 @@ static int resize(void **ptr, size_t n) { return floe_resize(ptr, n, 1); }
 static int restore_neighbors(floe_world *w, ibuf *r, char *err, size_t errlen) {
     floe_neighbor_list *nl = &w->nl;
     w->sep_n = -1; /* the list's entries are replaced: the separation cache starts again */
-    int k[4];
+    int k[5];
     GET(r, k); GET(r, nl->skin); GET(r, nl->rebuilds);
-    const int np = k[0], warm = k[1], nb = k[2], nwl = k[3];
+    const int np = k[0], warm = k[1], nb = k[2], nwl = k[3], hs = k[4];
+    if (!r->bad && hs != FLOE_HIST_COMPACT && hs != FLOE_MAX_HISTORY)
+        return floe_error_set(err, errlen, FLOE_EINVAL, "section NLST: %d doubles of history per entry (%d or %d here)", hs,
+                              FLOE_HIST_COMPACT, FLOE_MAX_HISTORY);
     if (r->bad || np < 0 || nb != w->p.n || nwl < 0 || nwl > w->p.n)
         return floe_error_set(err, errlen, FLOE_EINVAL, "section NLST does not match this world (%d particles at the build, %d "
                     "here)", nb, w->p.n);
@@ -273,7 +276,7 @@ static int restore_neighbors(floe_world *w, ibuf *r, char *err, size_t errlen) {
     int rc = resize((void **)&nl->pi, n * sizeof(int));
     if (!rc) rc = resize((void **)&nl->pj, n * sizeof(int));
     if (!rc) rc = resize((void **)&nl->sub, n * sizeof(int));
-    if (!rc) rc = resize((void **)&nl->hist, n * FLOE_MAX_HISTORY * sizeof(double));
+    if (!rc) rc = resize((void **)&nl->hist, n * (size_t)hs * sizeof(double));
     if (!rc) rc = resize((void **)&nl->touching, n);
     if (!rc && nl->use_warm) rc = resize((void **)&nl->warm, n * FLOE_DETECT_WARM * sizeof(double));
     if (!rc) rc = resize((void **)&nl->x_build, 3 * (size_t)nb * sizeof(double));
@@ -282,13 +285,14 @@ static int restore_neighbors(floe_world *w, ibuf *r, char *err, size_t errlen) {
     if (!rc) rc = resize((void **)&nl->q_walls, 4 * (size_t)nwl * sizeof(double));
     if (rc) return floe_error_set(err, errlen, FLOE_ENOMEM, "out of memory");
     nl->npairs = nl->cap = np;
+    nl->hs = hs; /* (the next build or prepare restrides it if this world needs another) */
     nl->gen++; /* a new list: the threads' per-particle index is rebuilt (forces.c) */
     nl->n_build = nb;
     nl->nwalls = nwl;
     get(r, nl->pi, n * sizeof(int));
     get(r, nl->pj, n * sizeof(int));
     get(r, nl->sub, n * sizeof(int));
-    get(r, nl->hist, n * FLOE_MAX_HISTORY * sizeof(double));
+    get(r, nl->hist, n * (size_t)hs * sizeof(double));
     get(r, nl->touching, n);
     if (warm) get(r, nl->warm, n * FLOE_DETECT_WARM * sizeof(double));
     else if (nl->use_warm)
@@ -306,6 +310,9 @@ static int restore_neighbors(floe_world *w, ibuf *r, char *err, size_t errlen) {
             nl->npairs = nl->n_build = 0;
             return floe_error_set(err, errlen, FLOE_EINVAL, "section NLST: pair %d (%d, %d) out of range", a, nl->pi[a], nl->pj[a]);
         }
+    w->err[0] = 0;
+    if (floe_world_hist_layout(w)) /* this world's stride (the same for the scene that wrote it) */
+        return floe_error_set(err, errlen, FLOE_ENOMEM, "%s", w->err);
     return FLOE_OK;
 }
 

@@ -142,6 +142,7 @@ int floe_world_prepare(floe_world *w) {
     if (w->prepared) return FLOE_OK;
     w->err[0] = 0;
     FLOE_TRY(prepare_store(w));
+    FLOE_TRY(floe_world_hist_layout(w)); /* the list's history stride, for these laws and shapes */
     FLOE_TRY(choose_dt(w));
     FLOE_TRY(floe_cell_prepare(w)); /* a periodic cell's checks; the list sees its images */
     if (w->step == 0) w->lf_dt_prev = 0; /* leapfrog: the velocities given are synchronised */

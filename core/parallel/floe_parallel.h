@@ -142,7 +142,7 @@ typedef enum floe_comm_kind {
     FLOE_COMM_REVERSE, /* the forces and torques on ghosts summed back to their owners (6 doubles a
                         * ghost, every step) */
     FLOE_COMM_MIGRATE, /* at rebuilds: owned particles to their new owners (39 doubles each), the
-                        * contact history of the pairs they anchor (4 + FLOE_MAX_HISTORY doubles
+                        * contact history of the pairs they anchor (4 + 8 or 10 doubles
                         * a pair, + FLOE_DETECT_WARM with warm starts), the counts of both (1 int
                         * to every rank, twice) */
     FLOE_COMM_REDUCE,  /* reductions: whether any rank rebuilds (1 int a step), the energy

@@ -59,9 +59,9 @@ static void diag_load(floe_world *w, const floe_par *P, const long long g[NDIAG]
  * A pair is evaluated on the rank that owns its anchor: the bounded particle of the pair
  * with the lower global id (a wall is never the anchor: walls are on every rank). Its
  * history travels with the anchor. Record: gid_a gid_b (list order) sub touching
- * hist[FLOE_MAX_HISTORY] warm[FLOE_DETECT_WARM] (warm only when the list keeps warm starts). */
+ * hist[nl.hs] warm[FLOE_DETECT_WARM] (warm only when the list keeps warm starts). */
 static int hist_len(const floe_world *w) {
-    return 4 + FLOE_MAX_HISTORY + (w->nl.use_warm && w->nl.warm ? FLOE_DETECT_WARM : 0);
+    return 4 + w->nl.hs + (w->nl.use_warm && w->nl.warm ? FLOE_DETECT_WARM : 0);
 }
 
 static long long anchor_of(const floe_particles *p, const long long *gid, int i, int j) {
@@ -93,8 +93,8 @@ static int hist_export(const floe_world *w, const long long *gid, const unsigned
         e[1] = (double)gid[j];
         e[2] = nl->sub[k];
         e[3] = nl->touching[k];
-        memcpy(e + 4, nl->hist + (size_t)k * FLOE_MAX_HISTORY, FLOE_MAX_HISTORY * sizeof *e);
-        if (use_warm) memcpy(e + 4 + FLOE_MAX_HISTORY, nl->warm + (size_t)k * FLOE_DETECT_WARM, FLOE_DETECT_WARM * sizeof *e);
+        memcpy(e + 4, nl->hist + (size_t)k * nl->hs, (size_t)nl->hs * sizeof *e);
+        if (use_warm) memcpy(e + 4 + nl->hs, nl->warm + (size_t)k * FLOE_DETECT_WARM, FLOE_DETECT_WARM * sizeof *e);
     }
     *out = r;
     *nout = cnt;
@@ -122,7 +122,7 @@ static int hist_import(floe_world *w, floe_par *P, const double *in, int nin) {
         }
         nl->cap = nin;
     }
-    double *h = realloc(nl->hist, (size_t)(nin ? nin : 1) * FLOE_MAX_HISTORY * sizeof *h);
+    double *h = realloc(nl->hist, (size_t)(nin ? nin : 1) * nl->hs * sizeof *h);
     unsigned char *t = h ? realloc(nl->touching, (size_t)(nin ? nin : 1)) : NULL;
     if (h) nl->hist = h;
     if (t) nl->touching = t;
@@ -141,8 +141,8 @@ static int hist_import(floe_world *w, floe_par *P, const double *in, int nin) {
         nl->pj[cnt] = j;
         nl->sub[cnt] = (int)e[2];
         nl->touching[cnt] = (unsigned char)e[3];
-        memcpy(nl->hist + (size_t)cnt * FLOE_MAX_HISTORY, e + 4, FLOE_MAX_HISTORY * sizeof *e);
-        if (use_warm) memcpy(nl->warm + (size_t)cnt * FLOE_DETECT_WARM, e + 4 + FLOE_MAX_HISTORY, FLOE_DETECT_WARM * sizeof *e);
+        memcpy(nl->hist + (size_t)cnt * nl->hs, e + 4, (size_t)nl->hs * sizeof *e);
+        if (use_warm) memcpy(nl->warm + (size_t)cnt * FLOE_DETECT_WARM, e + 4 + nl->hs, FLOE_DETECT_WARM * sizeof *e);
         cnt++;
     }
     floe_par_index_free(&ix);
@@ -904,7 +904,7 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
     const floe_neighbor_list *nl = &w->nl;
     const int lo = P->nrep, no = P->nown, use_warm = nl->use_warm && nl->warm != NULL;
     const int mp = 1 + FLOE_PAR_FWD + 4;                                 /* gid, state, x_build, r_build */
-    const int me = 4 + FLOE_MAX_HISTORY + (use_warm ? FLOE_DETECT_WARM : 0); /* gid_i gid_j sub touching hist warm */
+    const int me = 4 + nl->hs + (use_warm ? FLOE_DETECT_WARM : 0); /* gid_i gid_j sub touching hist warm */
     /* the full world must be an unsplit, prepared copy of this world's scene (rank 0) */
     int bad = 0;
     if (P->rank == 0) {
@@ -944,8 +944,8 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
         e[1] = (double)P->gid[nl->pj[k]];
         e[2] = nl->sub[k];
         e[3] = nl->touching[k];
-        memcpy(e + 4, nl->hist + (size_t)k * FLOE_MAX_HISTORY, FLOE_MAX_HISTORY * sizeof *e);
-        if (use_warm) memcpy(e + 4 + FLOE_MAX_HISTORY, nl->warm + (size_t)k * FLOE_DETECT_WARM, FLOE_DETECT_WARM * sizeof *e);
+        memcpy(e + 4, nl->hist + (size_t)k * nl->hs, (size_t)nl->hs * sizeof *e);
+        if (use_warm) memcpy(e + 4 + nl->hs, nl->warm + (size_t)k * FLOE_DETECT_WARM, FLOE_DETECT_WARM * sizeof *e);
     }
     for (int i = 0; i < P->nrep; i++) {
         memcpy(wf + 6 * i, p->f + 3 * i, 3 * sizeof *wf);
@@ -1001,7 +1001,7 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
         int r2 = floe_resize((void **)&fl->pi, (size_t)ne * sizeof(int), 1);
         if (!r2) r2 = floe_resize((void **)&fl->pj, (size_t)ne * sizeof(int), 1);
         if (!r2) r2 = floe_resize((void **)&fl->sub, (size_t)ne * sizeof(int), 1);
-        if (!r2) r2 = floe_resize((void **)&fl->hist, (size_t)ne * FLOE_MAX_HISTORY * sizeof(double), 1);
+        if (!r2) r2 = floe_resize((void **)&fl->hist, (size_t)ne * nl->hs * sizeof(double), 1);
         if (!r2) r2 = floe_resize((void **)&fl->touching, (size_t)ne, 1);
         if (!r2 && fl->use_warm) r2 = floe_resize((void **)&fl->warm, (size_t)ne * FLOE_DETECT_WARM * sizeof(double), 1);
         if (!r2) r2 = floe_resize((void **)&fl->x_build, 3 * (size_t)N * sizeof(double), 1);
@@ -1016,13 +1016,14 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
                 fl->pj[k] = (int)e[1];
                 fl->sub[k] = (int)e[2];
                 fl->touching[k] = (unsigned char)e[3];
-                memcpy(fl->hist + (size_t)k * FLOE_MAX_HISTORY, e + 4, FLOE_MAX_HISTORY * sizeof *e);
+                memcpy(fl->hist + (size_t)k * nl->hs, e + 4, (size_t)nl->hs * sizeof *e);
                 if (fl->use_warm) {
-                    if (use_warm) memcpy(fl->warm + (size_t)k * FLOE_DETECT_WARM, e + 4 + FLOE_MAX_HISTORY, FLOE_DETECT_WARM * sizeof *e);
+                    if (use_warm) memcpy(fl->warm + (size_t)k * FLOE_DETECT_WARM, e + 4 + nl->hs, FLOE_DETECT_WARM * sizeof *e);
                     else for (int a = 0; a < FLOE_DETECT_WARM; a++) fl->warm[(size_t)k * FLOE_DETECT_WARM + a] = NAN;
                 }
             }
             fl->npairs = fl->cap = ne;
+            fl->hs = nl->hs; /* the same scene's stride */
             fl->gen++;
             free(fl->img);
             fl->img = NULL;

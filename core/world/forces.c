@@ -482,7 +482,7 @@ static __attribute__((noinline, cold)) int pair_law_failed(floe_world *w, const 
  * half a step; the history is reset (ParticLS §3.1) */
 static inline void pair_release(floe_world *w, const floe_particles *p, floe_neighbor_list *nl, int k, int i, int j,
                                 int stepping, stage_acc *acc, const stage_env *env, const double *xb) {
-    double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
+    double *hist = nl->hist + (size_t)k * nl->hs;
     if (stepping) {
         double vr[3];
         floe_v3_sub(vr, p->v + 3 * i, p->v + 3 * j);
@@ -498,7 +498,7 @@ static inline void pair_release(floe_world *w, const floe_particles *p, floe_nei
         acc->diss += dk;
         acc_life(acc, i, j, hist[FLOE_DISS_SLOT] + dk);
     }
-    memset(hist, 0, FLOE_MAX_HISTORY * sizeof(double));
+    memset(hist, 0, (size_t)nl->hs * sizeof(double));
     nl->touching[k] = 0;
 }
 
@@ -684,7 +684,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     if (r < 0)
         return floe_world_error(w, -r, "no contact detector for particles %d and %d (%s-%s)", i, j,
                                 w->geoms[p->geom[i]]->klass->name, w->geoms[p->geom[j]]->klass->name);
-    double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
+    double *hist = nl->hist + (size_t)k * nl->hs;
     if (r == 0) {
         if (nl->touching[k]) pair_release(w, p, nl, k, i, j, stepping, acc, env, xb);
         return FLOE_OK;
@@ -745,7 +745,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     }
     floe_contact_result res;
     memset(&res, 0, sizeof res);
-    int rc = law->klass->force(law, &c, hist, &res);
+    int rc = law->klass->force(law, &c, hist + FLOE_LAW_SLOT, &res);
     if (rc) return pair_law_failed(w, law, rc, i, j, &c);
     if (c.gscale != 1.0) { /* depth growing slower than along n (polytope ridges) */
         floe_v3_scale(res.force, c.gscale);
@@ -765,7 +765,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
         floe_v3_copy(c.vr, vr_point); /* the ledger: the work of res.force at the point */
         manifold_couples(law, &c, w->def.dim, res.fn, fe, centre, hist + FLOE_TWIST_SLOT, &res);
     } else {
-        hist[FLOE_TWIST_SLOT] = 0.0;
+        if (nl->hs > FLOE_TWIST_SLOT) hist[FLOE_TWIST_SLOT] = 0.0;
     }
     double ti[3], tj[3], F[3], Ti[3], Tj[3];
     floe_v3_cross(ti, ri, res.force);
@@ -880,12 +880,12 @@ static inline __attribute__((always_inline)) void sph_lane_gather(const floe_wor
         b->vj[a][q] = p->v[3 * j + a];
         b->wi[a][q] = p->w[3 * i + a];
         b->wj[a][q] = p->w[3 * j + a];
-        b->s[a][q] = hist[a];
+        b->s[a][q] = hist[FLOE_LAW_SLOT + a];
         b->fo[a][q] = hist[FLOE_FORCE_SLOT + a];
     }
     b->eo[q] = hist[FLOE_ENERGY_SLOT];
     if (!lin) return;
-    b->h3[q] = hist[3];
+    b->h3[q] = hist[FLOE_LAW_SLOT + 3];
     const int dash = w->dash_on;
     for (int a = 0; a < 3; a++) b->aij[a][q] = dash ? w->dash_a[3 * (size_t)i + a] - w->dash_a[3 * (size_t)j + a] : 0.0;
 }
@@ -932,6 +932,7 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
     const floe_linear_law *L = (const floe_linear_law *)b->law; /* read unless hm */
     const int hm = b->law->klass == &floe_hertz_mindlin_law_class;
     const int nb = b->n, dash = w->dash_on && !hm, tension = hm ? 0 : L->tension;
+    const size_t hs = (size_t)env->nl->hs;
     const double dt = env->stepping ? ctx->dt : ctx->hist_dt;
     /* the batch's arrays (sph_lane_gather), all SL lanes: those past nb hold an earlier
      * batch's entries or zeros, their results dropped */
@@ -1074,10 +1075,10 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         for (int q = 0; q < nb; q++)
             if (ETA[q] > acc->eta_d) acc->eta_d = ETA[q];
     for (int q = 0; q < nb; q++) {
-        double *h = env->nl->hist + (size_t)b->k[q] * FLOE_MAX_HISTORY;
-        for (int a = 0; a < 3; a++) h[a] = S[a][q];
-        if (!hm) h[3] = H3[q];
-        h[FLOE_TWIST_SLOT] = 0.0;
+        double *h = env->nl->hist + (size_t)b->k[q] * hs;
+        for (int a = 0; a < 3; a++) h[FLOE_LAW_SLOT + a] = S[a][q];
+        if (!hm) h[FLOE_LAW_SLOT + 3] = H3[q];
+        if (hs > FLOE_TWIST_SLOT) h[FLOE_TWIST_SLOT] = 0.0;
         sph_out o;
         for (int a = 0; a < 3; a++) {
             o.F[a] = F[a][q];
@@ -1127,7 +1128,7 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
     }
     const floe_contact_law *law = env->law1 ? env->law1 : w->laws[p->material[i] * env->nm + p->material[j]];
     if (env->any_none && floe_contact_law_no_contact(law)) return FLOE_OK;
-    double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
+    double *hist = nl->hist + (size_t)k * nl->hs;
     nl->touching[k] = 1;
     if (env->fused && (law->klass == &floe_hertz_mindlin_law_class || law->klass == &floe_linear_law_class)) {
         const double im = p->inv_mass[i] + p->inv_mass[j], rmn = rmin(rad_i, rad_j), rmx = rs - rmn;
@@ -1188,9 +1189,9 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
     c.an_ext = w->dash_on ? pair_an_ext(w, p, i, j, &c, hist) : 0.0;
     floe_contact_result res;
     memset(&res, 0, sizeof res);
-    int rc = law->klass->force(law, &c, hist, &res);
+    int rc = law->klass->force(law, &c, hist + FLOE_LAW_SLOT, &res);
     if (rc) return pair_law_failed(w, law, rc, i, j, &c);
-    hist[FLOE_TWIST_SLOT] = 0.0;
+    if (nl->hs > FLOE_TWIST_SLOT) hist[FLOE_TWIST_SLOT] = 0.0;
     double ti[3], tj[3], Ti[3], Tj[3];
     floe_v3_cross(ti, ri, res.force);
     floe_v3_cross(tj, rj, res.force);
@@ -1210,7 +1211,7 @@ static inline void prefetch_ahead(const floe_neighbor_list *nl, const int *cand,
     const size_t k2 = (size_t)cand[q + 2];
     __builtin_prefetch(nl->warm + k2 * FLOE_DETECT_WARM);
     __builtin_prefetch(nl->warm + k2 * FLOE_DETECT_WARM + 8);
-    __builtin_prefetch(nl->hist + k2 * FLOE_MAX_HISTORY);
+    __builtin_prefetch(nl->hist + k2 * nl->hs);
 }
 
 /* Entry k of a sphere and a wall (a plane): floe_sphere_plane_contact's test and geometry,
@@ -1241,7 +1242,7 @@ static __attribute__((noinline)) int sphere_wall_pair(floe_world *w, const floe_
         const double depth = c.depth, im = p->inv_mass[i] + p->inv_mass[j];
         if ((law->klass == &floe_hertz_mindlin_law_class || law->klass == &floe_linear_law_class) && depth > 0 &&
             depth <= 2 * r && im > 0 && im < INFINITY) {
-            double *hist = nl->hist + (size_t)k * FLOE_MAX_HISTORY;
+            double *hist = nl->hist + (size_t)k * nl->hs;
             nl->touching[k] = 1;
             if (b->n && b->law != law) sph_flush_lanes(w, ctx, env, acc, b);
             const int q = b->n++;
@@ -1314,9 +1315,9 @@ static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env 
             const int k = cand[q];
             if (q + 8 < nc) { /* what sph_lane_gather reads of the entry 8 ahead */
                 const size_t k8 = (size_t)cand[q + 8], j8 = (size_t)pj[k8];
-                const char *hk = (const char *)(nl->hist + k8 * FLOE_MAX_HISTORY);
+                const char *hk = (const char *)(nl->hist + k8 * nl->hs);
                 __builtin_prefetch(hk);
-                __builtin_prefetch(hk + FLOE_MAX_HISTORY * sizeof(double) - 1);
+                __builtin_prefetch(hk + nl->hs * sizeof(double) - 1);
                 __builtin_prefetch(p->v + 3 * j8);
                 __builtin_prefetch(p->w + 3 * j8);
                 if (dash_a) __builtin_prefetch(dash_a + 3 * j8);
@@ -1842,18 +1843,18 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
 /* its state: the pairs' history and touching flags (the list itself is the world's) */
 static size_t contact_state_size(const floe_provider *pv, const floe_world *w) {
     (void)pv;
-    return (size_t)w->nl.npairs * (FLOE_MAX_HISTORY * sizeof(double) + 1);
+    return (size_t)w->nl.npairs * ((size_t)w->nl.hs * sizeof(double) + 1);
 }
 static void contact_save(const floe_provider *pv, const floe_world *w, unsigned char *buf) {
     (void)pv;
-    const size_t np = (size_t)w->nl.npairs, nh = np * FLOE_MAX_HISTORY * sizeof(double);
+    const size_t np = (size_t)w->nl.npairs, nh = np * (size_t)w->nl.hs * sizeof(double);
     if (!np) return;
     memcpy(buf, w->nl.hist, nh);
     memcpy(buf + nh, w->nl.touching, np);
 }
 static void contact_restore(floe_provider *pv, floe_world *w, const unsigned char *buf) {
     (void)pv;
-    const size_t np = (size_t)w->nl.npairs, nh = np * FLOE_MAX_HISTORY * sizeof(double);
+    const size_t np = (size_t)w->nl.npairs, nh = np * (size_t)w->nl.hs * sizeof(double);
     if (!np) return;
     memcpy(w->nl.hist, buf, nh);
     memcpy(w->nl.touching, buf + nh, np);

@@ -12,6 +12,29 @@
 
 int floe_nl_init(floe_neighbor_list *nl) {
     memset(nl, 0, sizeof *nl);
+    nl->hs = FLOE_MAX_HISTORY;
+    return FLOE_OK;
+}
+
+int floe_nl_set_stride(floe_neighbor_list *nl, int hs) {
+    if (hs == nl->hs) return FLOE_OK;
+    if (nl->hist) {
+        /* every entry's slots kept where both layouts have them (floe_contact.h: the same
+         * places), the new ones zero */
+        const size_t np = nl->npairs > 0 ? (size_t)nl->npairs : 1;
+        const int c = hs < nl->hs ? hs : nl->hs;
+        double *h = malloc(np * (size_t)hs * sizeof *h);
+        if (!h) return FLOE_ENOMEM;
+        for (size_t k = 0; k < np; k++) {
+            double *d = h + k * (size_t)hs;
+            if (k < (size_t)nl->npairs) memcpy(d, nl->hist + k * (size_t)nl->hs, (size_t)c * sizeof *d);
+            else memset(d, 0, (size_t)c * sizeof *d);
+            if (hs > c) memset(d + c, 0, (size_t)(hs - c) * sizeof *d);
+        }
+        free(nl->hist);
+        nl->hist = h;
+    }
+    nl->hs = hs;
     return FLOE_OK;
 }
 
@@ -374,7 +397,7 @@ static int nl_sorted(const floe_neighbor_list *nl) {
  * (a row holds a few entries); equal entries (none expected) keep their order, and the next
  * build then takes the hash path (nl_sorted). */
 int floe_nl_sort(floe_neighbor_list *nl, int n) {
-    const int np = nl->npairs, H = FLOE_MAX_HISTORY, W = FLOE_DETECT_WARM, use_warm = nl->use_warm && nl->warm;
+    const int np = nl->npairs, H = nl->hs, W = FLOE_DETECT_WARM, use_warm = nl->use_warm && nl->warm;
     if (np < 2) return FLOE_OK;
     for (int k = 0; k < np; k++)
         if (nl->pi[k] < 0 || nl->pi[k] >= n) return FLOE_OK; /* cannot happen: left unsorted */
@@ -456,7 +479,7 @@ static void nl_match_rows(const floe_neighbor_list *nl, const nl_old *o, const i
 
 /* entry s's history, touching flag and warm start (warm: the list keeps them) to entry k */
 static inline void nl_move_one(floe_neighbor_list *nl, int k, int s, int warm) {
-    const int W = FLOE_DETECT_WARM, H = FLOE_MAX_HISTORY;
+    const int W = FLOE_DETECT_WARM, H = nl->hs;
     memcpy(nl->hist + (size_t)k * H, nl->hist + (size_t)s * H, H * sizeof(double));
     nl->touching[k] = nl->touching[s];
     if (warm) memcpy(nl->warm + (size_t)k * W, nl->warm + (size_t)s * W, W * sizeof(double));
@@ -468,7 +491,7 @@ static inline void nl_move_one(floe_neighbor_list *nl, int k, int s, int warm) {
  * k, and neither kind reads what the other writes; the new entries without history last.
  * warm_old: the old warm starts are kept (else every new one is NaN) */
 static void nl_move_history(floe_neighbor_list *nl, const int *src, int np, int warm_old) {
-    const int W = FLOE_DETECT_WARM, H = FLOE_MAX_HISTORY;
+    const int W = FLOE_DETECT_WARM, H = nl->hs;
     for (int k = 0; k < np; k++)
         if (src[k] > k) nl_move_one(nl, k, src[k], warm_old);
     for (int k = np - 1; k >= 0; k--)
@@ -508,6 +531,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     const int ocap = nl->cap;
     const int merge = nl->npairs > 0 && nl->hist && nl->touching && nl_sorted(nl);
     const int W = FLOE_DETECT_WARM, use_warm = nl->use_warm && nl->warm;
+    const size_t HS = (size_t)nl->hs; /* doubles of history per entry */
     if (merge) {
         old = (nl_old){nl->pi, nl->pj, nl->sub, nl->img, nl->npairs};
         nl->pi = nl->pj = nl->sub = nl->img = NULL;
@@ -532,7 +556,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
         osub = malloc(hcap * sizeof *osub);
         oimg = malloc(hcap * sizeof *oimg);
         otouch = malloc(hcap);
-        ohist = malloc((size_t)hcap * FLOE_MAX_HISTORY * sizeof *ohist);
+        ohist = malloc((size_t)hcap * HS * sizeof *ohist);
         owarm = use_warm ? malloc((size_t)hcap * W * sizeof *owarm) : NULL;
         if (!okeys || !osub || !oimg || !otouch || !ohist || (use_warm && !owarm)) {
             free(okeys); free(osub); free(oimg); free(otouch); free(ohist); free(owarm);
@@ -549,8 +573,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             osub[h] = nl->sub[k];
             oimg[h] = im;
             otouch[h] = nl->touching[k];
-            memcpy(ohist + h * FLOE_MAX_HISTORY, nl->hist + (size_t)k * FLOE_MAX_HISTORY,
-                   FLOE_MAX_HISTORY * sizeof(double));
+            memcpy(ohist + h * HS, nl->hist + (size_t)k * HS, HS * sizeof(double));
             if (use_warm) memcpy(owarm + h * W, nl->warm + (size_t)k * W, W * sizeof(double));
         }
     }
@@ -678,7 +701,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     if (rc == FLOE_OK) {
         size_t np = nl->npairs ? nl->npairs : 1;
         if (np < np_old) np = np_old;
-        double *h = realloc(nl->hist, np * FLOE_MAX_HISTORY * sizeof(double));
+        double *h = realloc(nl->hist, np * HS * sizeof(double));
         unsigned char *t = h ? realloc(nl->touching, np) : NULL;
         if (h) nl->hist = h;
         if (t) nl->touching = t;
@@ -711,7 +734,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
         nl_move_history(nl, src, nl->npairs, use_warm);
         if ((size_t)nl->npairs < np_old) { /* fewer entries: the arrays shrink (a smaller block keeps its start) */
             const size_t np = nl->npairs ? nl->npairs : 1;
-            double *h = realloc(nl->hist, np * FLOE_MAX_HISTORY * sizeof(double));
+            double *h = realloc(nl->hist, np * HS * sizeof(double));
             unsigned char *t = realloc(nl->touching, np);
             if (h) nl->hist = h;
             if (t) nl->touching = t;
@@ -721,7 +744,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             }
         }
     } else if (rc == FLOE_OK) {
-        memset(nl->hist, 0, (size_t)nl->npairs * FLOE_MAX_HISTORY * sizeof(double));
+        memset(nl->hist, 0, (size_t)nl->npairs * HS * sizeof(double));
         memset(nl->touching, 0, nl->npairs);
         if (nl->use_warm)
             for (size_t k = 0; k < (size_t)nl->npairs * FLOE_DETECT_WARM; k++) nl->warm[k] = NAN;
@@ -734,8 +757,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
                 while (okeys[h] != UINT64_MAX && (okeys[h] != key || osub[h] != nl->sub[k] || oimg[h] != im))
                     h = (h + 1) & (hcap - 1);
                 if (okeys[h] == key) {
-                    memcpy(nl->hist + (size_t)k * FLOE_MAX_HISTORY, ohist + h * FLOE_MAX_HISTORY,
-                           FLOE_MAX_HISTORY * sizeof(double));
+                    memcpy(nl->hist + (size_t)k * HS, ohist + h * HS, HS * sizeof(double));
                     nl->touching[k] = otouch[h];
                     if (owarm && nl->use_warm)
                         memcpy(nl->warm + (size_t)k * FLOE_DETECT_WARM, owarm + h * FLOE_DETECT_WARM,

@@ -101,7 +101,7 @@ int floe_world_memory(const floe_world *w, floe_memory_stats *o) {
      * under a page per array (world.c particles_reserve) */
     const size_t per_particle = (7 * 3 + 4 + 5) * sizeof(double) + 4 * sizeof(int) + 3;
     /* per pair: pi pj sub, history, touching, warm starts when in use */
-    const size_t per_pair = 3 * sizeof(int) + FLOE_MAX_HISTORY * sizeof(double) + 1 +
+    const size_t per_pair = 3 * sizeof(int) + (size_t)nl->hs * sizeof(double) + 1 +
                             (nl->use_warm ? FLOE_DETECT_WARM * sizeof(double) : 0);
     o->particle_capacity = p->cap;
     o->pair_capacity = nl->cap;

@@ -244,7 +244,26 @@ static void inert_materials(floe_world *w) {
     w->nl.inert = inert;
 }
 
+int floe_world_hist_layout(floe_world *w) {
+    if (!w->hs_need || w->hs_law_gen != w->law_gen || w->hs_ngeoms != w->ngeoms) {
+        const int nm2 = w->nmats * w->nmats;
+        int need = FLOE_HIST_COMPACT;
+        for (int k = 0; k < nm2 && need < FLOE_MAX_HISTORY; k++)
+            if (w->laws[k] && w->laws[k]->klass->history_size > FLOE_HIST_COMPACT - FLOE_LAW_SLOT) need = FLOE_MAX_HISTORY;
+        for (int g = 0; g < w->ngeoms && need < FLOE_MAX_HISTORY; g++) {
+            const floe_geometry_kind kd = w->geoms[g]->klass->kind;
+            if (kd != FLOE_GEOM_SPHERE && kd != FLOE_GEOM_PLANE) need = FLOE_MAX_HISTORY; /* a manifold's twist */
+        }
+        w->hs_need = need;
+        w->hs_law_gen = w->law_gen;
+        w->hs_ngeoms = w->ngeoms;
+    }
+    const int rc = floe_nl_set_stride(&w->nl, w->hs_need);
+    return rc ? floe_world_error(w, rc, "out of memory (contact history)") : FLOE_OK;
+}
+
 int floe_world_nl_build(floe_world *w) {
+    FLOE_TRY(floe_world_hist_layout(w));
     int nt = floe_world_loop_threads(w, w->p.n);
     inert_materials(w);
     w->nl_law_gen = w->law_gen;
@@ -361,6 +380,13 @@ int floe_world_set_law(floe_world *w, int a, int b, floe_contact_law *law) {
     if (a < 0 || b < 0 || a >= w->nmats || b >= w->nmats) {
         floe_contact_law_destroy(law);
         return floe_world_error(w, FLOE_EINVAL, "set_law: material index out of range");
+    }
+    if (law->klass->history_size < 0 || law->klass->history_size > FLOE_LAW_HISTORY) {
+        const int hsz = law->klass->history_size;
+        const char *nm = law->klass->name;
+        floe_contact_law_destroy(law);
+        return floe_world_error(w, FLOE_EINVAL, "set_law: the law %s keeps %d doubles of history per contact "
+                                "(floe_contact_law_class.history_size: 0 to %d)", nm ? nm : "?", hsz, FLOE_LAW_HISTORY);
     }
     if (grow((void **)&w->law_owned, &w->law_owned_cap, w->nlaws_owned + 1, sizeof *w->law_owned)) {
         floe_contact_law_destroy(law);

@@ -33,7 +33,9 @@ typedef struct floe_neighbor_list {
     double *warm;            /* npairs * FLOE_DETECT_WARM warm-start state (ADMM/LP), allocated
                                 only when the scene has such pairs (use_warm) */
     int use_warm;
-    double *hist;            /* npairs * FLOE_MAX_HISTORY */
+    double *hist;            /* npairs * hs: each entry's history (floe_contact.h) */
+    int hs;                  /* doubles per entry: FLOE_MAX_HISTORY, or FLOE_HIST_COMPACT where
+                                the world's laws and shapes allow (floe_world_hist_layout) */
     unsigned char *touching; /* pair was in contact last step */
     int *cand; int cand_cap; /* scratch of the contact stage: the entries whose bounding
                                 spheres overlap (forces.c) */
@@ -94,6 +96,9 @@ struct floe_world {
     /* pairs under the law "none" stay out of the list (world_exclude, nl.inert): a law set
      * after a build makes the next step rebuild (law_gen != nl_law_gen) */
     long law_gen, nl_law_gen;
+    /* the history stride the laws and shapes need (floe_world_hist_layout), for law_gen
+     * hs_law_gen and geoms[0 .. hs_ngeoms) (hs_need 0: not yet looked at) */
+    int hs_need, hs_ngeoms; long hs_law_gen;
     unsigned char *inert; int inert_cap; /* nl.none and nl.inert (world.c inert_materials) */
     floe_contact_law **law_owned; int nlaws_owned, law_owned_cap;
     floe_motion_cb *motions; int nmotions, motions_cap;
@@ -320,6 +325,9 @@ int floe_nl_needs_rebuild(const floe_neighbor_list *nl, const floe_particles *p)
 int floe_nl_needs_rebuild_after_drift(const floe_neighbor_list *nl, const floe_particles *p, double maxd2,
                                       int growth);
 int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int leaf_size);
+/* each entry's history to hs doubles (floe_contact.h: the slots both layouts have are kept,
+ * the others zero); FLOE_ENOMEM leaves the list as it was */
+int floe_nl_set_stride(floe_neighbor_list *nl, int hs);
 /* the entries (first particle < n) put in the order a build leaves them, (i, j, piece pair,
  * image), with their history, touching flags and warm starts: the next build then carries
  * the history by its row merge, not a hash of every entry (MPI's imported history,
@@ -327,6 +335,11 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
 int floe_nl_sort(floe_neighbor_list *nl, int n);
 /* the world's list rebuilt from its particles, its search on the world's threads */
 int floe_world_nl_build(floe_world *w);
+/* the list's history stride this world's laws and shapes need (floe_contact.h:
+ * FLOE_HIST_COMPACT when every law keeps at most 3 doubles and every shape is a sphere or a
+ * plane, else FLOE_MAX_HISTORY), the list's entries restrided when it differs. Looked at
+ * again only when a law or a geometry was added. Before each build and each contact stage */
+int floe_world_hist_layout(floe_world *w);
 
 /* the periodic cell (core/world/cell.c): checks at prepare (what a cell refuses, its width),
  * the step's velocity gradient (servo, strain path) before the drift, the affine map of the

@@ -78,7 +78,6 @@ import xml.etree.ElementTree as ET
 floe, mpiexec, here, R = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
 SCENE = os.path.join(here, "ckpt.yaml")
 TOL = 1e-9
-MAX_HISTORY = 10  # FLOE_MAX_HISTORY (contact/laws/floe_contact.h)
 EVERY = "0.0015"
 R2 = {1: 2, 2: 4, 4: 2}.get(R, 2)
 fails = 0
@@ -224,15 +223,16 @@ def zero_history(src, dst):
     pos += 4 + n + 8
     n = struct.unpack_from("<I", b, pos)[0]
     pos += 4 + n
-    zeroed = 0
+    zeroed, hs = 0, 10
     while pos < len(b):
         tag = bytes(b[pos:pos + 4]).decode()
         ln = struct.unpack_from("<Q", b, pos + 4)[0]
         body = pos + 12
         if tag == "NLST":
-            npairs = struct.unpack_from("<i", b, body)[0]
-            h = body + 16 + 8 + 8 + 3 * 4 * npairs
-            b[h:h + 8 * MAX_HISTORY * npairs] = bytes(8 * MAX_HISTORY * npairs)
+            # npairs, warm, n_build, nwalls, history doubles per entry (8 or 10)
+            npairs, hs = struct.unpack_from("<i", b, body)[0], struct.unpack_from("<i", b, body + 16)[0]
+            h = body + 20 + 8 + 8 + 3 * 4 * npairs
+            b[h:h + 8 * hs * npairs] = bytes(8 * hs * npairs)
             zeroed = npairs
         elif tag == "PROV":
             q = body
@@ -245,7 +245,7 @@ def zero_history(src, dst):
                 m = struct.unpack_from("<Q", b, q)[0]
                 q += 8
                 if name == "contacts":
-                    b[q:q + 8 * MAX_HISTORY * zeroed] = bytes(8 * MAX_HISTORY * zeroed)
+                    b[q:q + 8 * hs * zeroed] = bytes(8 * hs * zeroed)
                 q += m
         elif tag == "END ":
             break

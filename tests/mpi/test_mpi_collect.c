@@ -133,7 +133,7 @@ static void compare(int convex, int K, int M, int min_touching, double xtol, dou
         CHECK(same && touching >= min_touching, "%s: the collected list is the unsplit one entry for entry (%d entries, %d touching, "
               ">= %d asked)", tag, b->npairs, touching, min_touching);
         if (same) {
-            double hs, dh = maxdiff(a->hist, b->hist, a->npairs * FLOE_MAX_HISTORY, &hs), xbs;
+            double hs, dh = maxdiff(a->hist, b->hist, a->npairs * a->hs, &hs), xbs;
             double dxb = maxdiff(a->x_build, b->x_build, 3 * (6 + 0), NULL);
             dxb = fmax(dxb, maxdiff(a->x_build + 18, b->x_build + 18, 3 * (N - 6), &xbs));
             printf("  history: largest difference %.2e of the largest entry %.3g; build positions %.2e of the side\n",

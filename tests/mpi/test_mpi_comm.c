@@ -13,7 +13,7 @@
  *   - (after the steps below) a rebuild after a shift move (many particles change owner, a third of the list's pairs
  *     marked touching so that history travels): migration = 312 B per particle that left this
  *     rank + the history records of the touching pairs whose anchor left (4 +
- *     FLOE_MAX_HISTORY doubles each) + two count exchanges (4 B to each other rank); ghosts =
+ *     8 or 10 doubles each) + two count exchanges (4 B to each other rank); ghosts =
  *     312 B per new ghost sent (M after the move) + the box (56 B) and a count (4 B) to each
  *     other rank;
  *   - 200 steps of a gas of fast spheres (a few rebuilds on the way): each step's reverse
@@ -176,7 +176,7 @@ static void check_rebuild(floe_world *w, const floe_world *ref) {
         }
     floe_neighbor_list *nl = &w->nl;
     for (int k = 0; k < nl->npairs; k++) nl->touching[k] = k % 3 == 0;
-    const int hl = 4 + FLOE_MAX_HISTORY + (nl->use_warm && nl->warm ? FLOE_DETECT_WARM : 0);
+    const int hl = 4 + nl->hs + (nl->use_warm && nl->warm ? FLOE_DETECT_WARM : 0);
     int *before = owners(w);
     /* the kept entries (touching, or a warm start) whose anchor (lower gid of two bounded
      * particles, else the bounded one) this rank owns, by anchor gid */

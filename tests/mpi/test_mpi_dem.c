@@ -101,7 +101,7 @@ static int run(floe_world *w, long from, long n, stats *st) {
 }
 
 /* the contact history of the touching pairs a world evaluates: records of HR doubles,
- * (gid_a * N + gid_b, piece pair, hist[FLOE_MAX_HISTORY]) */
+ * (gid_a * N + gid_b, piece pair, hist[FLOE_MAX_HISTORY]: nl->hs, zeros after) */
 enum { HR = 2 + FLOE_MAX_HISTORY };
 static double *history(const floe_world *w, int N, int *n) {
     const floe_neighbor_list *nl = &w->nl;
@@ -113,7 +113,8 @@ static double *history(const floe_world *w, int N, int *n) {
         double *e = r + (size_t)m++ * HR;
         e[0] = (double)(a * N + b);
         e[1] = nl->sub[k];
-        memcpy(e + 2, nl->hist + (size_t)k * FLOE_MAX_HISTORY, FLOE_MAX_HISTORY * sizeof *e);
+        memset(e + 2, 0, FLOE_MAX_HISTORY * sizeof *e); /* the world keeps nl->hs of them */
+        memcpy(e + 2, nl->hist + (size_t)k * nl->hs, (size_t)nl->hs * sizeof *e);
     }
     *n = m;
     return r;
