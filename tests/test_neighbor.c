@@ -2,7 +2,8 @@
  * closer than the skin is listed (versus brute force) for mixed sizes, tiny (1e-6 m) and
  * huge (1e3 m, offset 1e6 m) domains; the shear history of touching pairs survives a
  * rebuild, and a settling pile's positions do not depend on how often the list is rebuilt;
- * a moving wall does work that the energy ledger books. */
+ * a moving wall does work that the energy ledger books; the history's stride (8 or 10
+ * doubles per entry) follows the world's shapes and laws, kept bit for bit across a restride. */
 #include "floe.h"
 #include "world_internal.h" /* internal: unit test of the neighbour list (core/world/neighbor.c: floe_nl_*, the Verlet skin) */
 #include "check.h"
@@ -144,6 +145,90 @@ int main(void) {
               "positions must be the same bits whatever the rebuild frequency");
         free(xs[0]);
         free(xs[1]);
+    }
+
+    /* the history's stride (floe_contact.h): a world of spheres and planes under
+     * Hertz-Mindlin keeps 8 doubles per entry, one with a box shape 10; a shape added in the
+     * middle of a run restrides the entries, keeping every slot: the run then goes on to the
+     * same bits as one that had the box from the start (the pile above, leaning on the side
+     * wall, so its springs are loaded) */
+    {
+        double *xs[2] = {NULL, NULL};
+        int np = 0, hs_mid[2] = {0, 0}, hs_end[2] = {0, 0}, kept = 1, touching = 0;
+        for (int run = 0; run < 2; run++) {
+            floe_world_def d = floe_default_world_def();
+            d.gravity[2] = -9.81;
+            d.gravity[0] = -2.0;
+            d.dt = 2e-6;
+            floe_world *w = floe_world_create(&d, NULL, 0);
+            floe_material m = {"g", 2500, 5e7, 0.3};
+            floe_world_add_material(w, &m);
+            floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5));
+            int g = floe_world_add_geometry(w, floe_sphere_create(0.001));
+            if (run == 1) floe_world_add_geometry(w, floe_box_create(0.001, 0.001, 0.001)); /* no particle has it */
+            double o[3] = {0, 0, 0}, nz[3] = {0, 0, 1}, nx[3] = {1, 0, 0};
+            floe_world_add_wall(w, o, nz, 0, FLOE_FIXED);
+            floe_world_add_wall(w, o, nx, 0, FLOE_FIXED);
+            unsigned sd = 5;
+            for (int k = 0; k < 5; k++)
+                for (int j = 0; j < 5; j++)
+                    for (int i = 0; i < 5; i++) {
+                        floe_particle_def p = floe_default_particle_def();
+                        p.geometry = g;
+                        floe_v3_set(p.x, 0.0012 + 0.002005 * i + 2e-5 * rnd(&sd), 0.0012 + 0.002005 * j + 2e-5 * rnd(&sd),
+                                    0.0012 + 0.002005 * k);
+                        floe_world_add_particle(w, &p);
+                    }
+            CHECK(floe_world_prepare(w) == FLOE_OK, "prepare the stride pile");
+            for (int s = 0; s < 8000 && floe_world_step(w) == FLOE_OK; s++) continue;
+            hs_mid[run] = w->nl.hs;
+            if (run == 0) { /* the box shape now: 8 -> 10 doubles per entry, the slots kept */
+                const int n8 = w->nl.npairs;
+                double *h8 = malloc((size_t)(n8 ? n8 : 1) * 8 * sizeof *h8);
+                memcpy(h8, w->nl.hist, (size_t)n8 * 8 * sizeof *h8);
+                floe_world_add_geometry(w, floe_box_create(0.001, 0.001, 0.001));
+                CHECK(floe_world_hist_layout(w) == FLOE_OK, "restride: %s", floe_world_last_error(w));
+                for (int k = 0; k < n8; k++) {
+                    touching += w->nl.touching[k];
+                    kept &= memcmp(w->nl.hist + 10 * (size_t)k, h8 + 8 * (size_t)k, 8 * sizeof *h8) == 0 &&
+                            w->nl.hist[10 * (size_t)k + 8] == 0 && w->nl.hist[10 * (size_t)k + 9] == 0;
+                }
+                free(h8);
+            }
+            for (int s = 0; s < 4000 && floe_world_step(w) == FLOE_OK; s++) continue;
+            hs_end[run] = w->nl.hs;
+            np = w->p.n;
+            xs[run] = malloc(3 * (size_t)np * sizeof(double));
+            memcpy(xs[run], w->p.x, 3 * (size_t)np * sizeof(double));
+            floe_world_destroy(w);
+        }
+        printf("  history stride: %d doubles (spheres, planes), %d with a box shape; %d touching entries restrided\n",
+               hs_mid[0], hs_mid[1], touching);
+        CHECK(hs_mid[0] == FLOE_HIST_COMPACT && hs_mid[1] == FLOE_MAX_HISTORY && hs_end[0] == FLOE_MAX_HISTORY &&
+              hs_end[1] == FLOE_MAX_HISTORY, "strides %d, %d, then %d, %d", hs_mid[0], hs_mid[1], hs_end[0], hs_end[1]);
+        CHECK(kept && touching > 50, "the restride must keep every entry's 8 slots and zero the new ones (%d touching)",
+              touching);
+        CHECK(memcmp(xs[0], xs[1], 3 * (size_t)np * sizeof(double)) == 0,
+              "a run restrided in its middle must go on to the bits of one at 10 doubles throughout");
+        free(xs[0]);
+        free(xs[1]);
+
+        /* a law that asks for more history than an entry holds is refused */
+        floe_world_def d = floe_default_world_def();
+        floe_world *w = floe_world_create(&d, NULL, 0);
+        floe_material m = {"g", 2500, 5e7, 0.3};
+        floe_world_add_material(w, &m);
+        static floe_contact_law_class big;
+        big = floe_hertz_mindlin_law_class;
+        big.name = "big_history";
+        big.history_size = FLOE_LAW_HISTORY + 1;
+        floe_contact_law *law = floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5);
+        law->klass = &big;
+        const int rc = floe_world_set_law(w, 0, 0, law);
+        printf("  a law keeping %d doubles: %s\n", big.history_size, floe_world_last_error(w));
+        CHECK(rc == FLOE_EINVAL && strstr(floe_world_last_error(w), "big_history keeps 5 doubles"),
+              "set_law must refuse history_size 5 by name (rc %d)", rc);
+        floe_world_destroy(w);
     }
 
     /* a piston (kinematic wall) compresses a sphere onto the floor: its work is booked */
