@@ -1,8 +1,9 @@
 /* memory.c - bytes per particle of a sphere scene: N spheres on a simple cubic lattice
  * (touching neighbours at 1 % overlap, so every particle has contacts and history),
  * Hertz-Mindlin, prepared and stepped 10 times; prints the resident memory growth per
- * particle and the part of it that the particle store, neighbour list and contact
- * records account for.   bench_memory [N [STEPS]]   (default 1000000, 0)
+ * particle, its peak (VmHWM, which the store's growth while particles are added and the
+ * list's build reach), and the part of it that the particle store, neighbour list and
+ * contact records account for.   bench_memory [N [STEPS]]   (default 1000000, 0)
  * With STEPS > 0 it then times STEPS more steps and prints particle-steps/s: the cost per
  * particle-step against N (every particle in contact with its 6 lattice neighbours). */
 #include "floe.h"
@@ -14,6 +15,17 @@ static double now(void) {
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return t.tv_sec + 1e-9 * t.tv_nsec;
+}
+
+/* the peak resident size so far (VmHWM), bytes */
+static size_t rss_peak(void) {
+    FILE *f = fopen("/proc/self/status", "r");
+    char line[256];
+    long kb = 0;
+    while (f && fgets(line, sizeof line, f))
+        if (sscanf(line, "VmHWM: %ld kB", &kb) == 1) break;
+    if (f) fclose(f);
+    return (size_t)kb * 1024;
 }
 
 static size_t rss(void) {
@@ -50,9 +62,10 @@ int main(int argc, char **argv) {
     floe_world_memory(w, &ms);
     floe_world_neighbor_stats(w, &ns);
     double store = (double)ms.particles / n, nl = (double)ms.neighbor_list / n, cont = (double)ms.contacts / n;
-    printf("memory: N=%ld spheres, %d candidate pairs, %d contacts: RSS %.0f B/particle "
+    printf("memory: N=%ld spheres, %d candidate pairs, %d contacts: RSS %.0f B/particle, peak %.0f "
            "(particle store %.0f, neighbour list + history %.0f, contact records %.0f)\n",
-           n, ns.pairs, floe_world_contact_count(w), (double)(r1 - r0) / n, store, nl, cont);
+           n, ns.pairs, floe_world_contact_count(w), (double)(r1 - r0) / n, (double)(rss_peak() - r0) / n, store, nl,
+           cont);
     if (steps > 0) {
         double t0 = now();
         for (long s = 0; s < steps; s++)

@@ -663,6 +663,9 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
         }
         for (int t = 0; t < nt && rc == FLOE_OK; t++) rc = nl->found[t].rc;
     }
+    /* the tree serves this search only: not kept between builds (28 B a particle and its nodes) */
+    floe_kdtree_destroy(nl->tree);
+    nl->tree = NULL;
     if (rc == FLOE_OK) {
         double *qw = realloc(nl->q_walls, (size_t)(nl->nwalls ? nl->nwalls : 1) * 4 * sizeof(double));
         if (!qw) rc = FLOE_ENOMEM;

@@ -22,7 +22,7 @@ typedef floe_contact_info floe_contact_rec;
 
 /* Neighbour list with Verlet skin and per-pair history kept across rebuilds. */
 typedef struct floe_neighbor_list {
-    floe_kdtree *tree;
+    floe_kdtree *tree;       /* during a build's search only (NULL otherwise) */
     int npairs, cap;
     int *pi, *pj;            /* candidate pairs, i < j, walls included */
     int *sub;                /* piece pair FLOE_SUB(a, b) of compound bodies (0 otherwise) */
