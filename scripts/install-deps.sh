@@ -15,7 +15,7 @@ pkgs+=(clang)                # the scene fuzzer (scripts/fuzz.sh, libFuzzer)
 pkgs+=(python3-matplotlib)   # scripts/plot_fsd.py (floe size distribution PNG; its test skips without)
 pkgs+=(python3-numpy python3-cffi python3-pytest)   # the Python package python/ (FLOE_BUILD_PYTHON)
 if [[ "${1:-}" == "--bench" ]]; then
-  pkgs+=(g++ libnanoflann-dev liggghts)
+  pkgs+=(g++ libnanoflann-dev liggghts time)   # time: GNU time, peak RSS in bench/memory
 fi
 if [[ $(id -u) -eq 0 ]]; then SUDO=(); else SUDO=(sudo); fi
 missing=()
