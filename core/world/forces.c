@@ -1270,7 +1270,7 @@ static __attribute__((noinline)) int sphere_wall_pair(floe_world *w, const floe_
 }
 
 /* One block of entries [k0, k1): the entries whose bounding spheres may touch go to cand
- * (the block's own part of the list's scratch), then each through its evaluation. */
+ * (k1 - k0 <= FLOE_PAR_BLOCK places: the calling thread's buffer), then each through its evaluation. */
 static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env *env, int k0, int k1, int *cand,
                        stage_acc *acc) {
     const floe_neighbor_list *nl = env->nl;
@@ -1688,12 +1688,6 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
                            any_growth, nm,        any_none,    any_pieces, any_overlap,
                            any_floe,  w->def.dim == 2 && any_overlap, w->cell, w->cell ? nl->img : NULL,
                            !w->cell && !any_growth, nm == 1 ? w->laws[0] : NULL, ctx->record};
-    if (nl->npairs > nl->cand_cap) {
-        int *c = realloc(nl->cand, (size_t)nl->npairs * sizeof *c);
-        if (!c) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-        nl->cand = c;
-        nl->cand_cap = nl->npairs;
-    }
     /* blocks of FLOE_PAR_BLOCK entries, their sums added in block order: one thread or many,
      * the same bits (floe_par.h); recorded contacts in list order (per part, then joined) */
     const int npairs = nl->npairs, B = FLOE_PAR_BLOCK, nb = (npairs + B - 1) / B;
@@ -1702,11 +1696,12 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     stage_acc tot;
     memset(&tot, 0, sizeof tot);
     if (nt <= 1) {
+        int cand[FLOE_PAR_BLOCK]; /* a block's candidates (stage_block), on the stack: 2 KiB, hot */
         for (int b = 0; b < nb; b++) {
             stage_acc a;
             memset(&a, 0, sizeof a);
             const int k0 = b * B, k1 = k0 + B < npairs ? k0 + B : npairs;
-            FLOE_TRY(stage_block(w, ctx, &env, k0, k1, nl->cand + k0, &a));
+            FLOE_TRY(stage_block(w, ctx, &env, k0, k1, cand, &a));
             acc_merge(w, &tot, &a);
         }
     } else {
@@ -1726,6 +1721,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
         FLOE_OMP(omp parallel num_threads(nt))
         {
             const int t = floe_par_thread();
+            int cand[FLOE_PAR_BLOCK]; /* this thread's block's candidates (stage_block) */
             stage_env te = env;
             floe_detect_ctx td = {.dim = w->def.dim, .step = w->step, .det = &ps->det[t]};
             te.dctx = &td;
@@ -1749,7 +1745,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
                 const int k0 = b * B, k1 = k0 + B < npairs ? k0 + B : npairs;
                 const double t0 = floe_par_wtime();
                 memset(ps->act + k0, 0, (size_t)(k1 - k0));
-                int rc = stage_block(w, ctx, &te, k0, k1, nl->cand + k0, &la);
+                int rc = stage_block(w, ctx, &te, k0, k1, cand, &la);
                 ps->blk[b] = la;
                 ps->bs[b] = floe_par_wtime() - t0;
                 if (rc) {

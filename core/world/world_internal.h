@@ -37,8 +37,6 @@ typedef struct floe_neighbor_list {
     int hs;                  /* doubles per entry: FLOE_MAX_HISTORY, or FLOE_HIST_COMPACT where
                                 the world's laws and shapes allow (floe_world_hist_layout) */
     unsigned char *touching; /* pair was in contact last step */
-    int *cand; int cand_cap; /* scratch of the contact stage: the entries whose bounding
-                                spheres overlap (forces.c) */
     double *x_build;         /* 3n positions at the last build */
     double *r_build;         /* n bounding radii at the last build */
     double *q_walls;         /* 4 per wall: orientation at the last build */
