@@ -50,7 +50,7 @@ void floe_nl_free(floe_neighbor_list *nl) {
     free(nl->found);
     floe_kdtree_destroy(nl->tree);
     free(nl->pi); free(nl->pj); free(nl->sub); free(nl->img); free(nl->warm); free(nl->hist); free(nl->touching);
-    free(nl->x_build); free(nl->walls); free(nl->scratch); free(nl->r_build); free(nl->q_walls);
+    free(nl->x_build); free(nl->walls); free(nl->r_build); free(nl->q_walls);
     memset(nl, 0, sizeof *nl);
 }
 

@@ -109,7 +109,7 @@ int floe_world_memory(const floe_world *w, floe_memory_stats *o) {
     o->particles = (size_t)p->cap * per_particle + (p->block ? 20 * 4096 : 0) +
                    (p->thick ? (size_t)p->cap * sizeof(double) : 0);
     o->neighbor_list = (size_t)nl->cap * per_pair + (size_t)nl->n_build * 4 * sizeof(double) +
-                       (size_t)nl->nwalls * (sizeof(int) + 4 * sizeof(double)) + (size_t)nl->scratch_cap * sizeof(int);
+                       (size_t)nl->nwalls * (sizeof(int) + 4 * sizeof(double));
     /* threads: the contact stage's per-entry forces, flags and the particles' entry lists
      * (forces.c par_prepare), once the list is large enough to be threaded */
     if (floe_world_loop_threads(w, nl->cap) > 1)

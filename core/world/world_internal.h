@@ -45,7 +45,6 @@ typedef struct floe_neighbor_list {
     long rebuilds;
     long gen;                /* builds so far, failed ones included (threads' pair index, forces.c) */
     int *walls; int nwalls;  /* particles with unbounded geometry (planes) */
-    int *scratch; int scratch_cap;
     /* threads of the build's search (neighbor.c; set by the world: floe_world_loop_threads)
      * and their buffers of found entries (freed after each build) and tree-query scratch */
     int threads;
