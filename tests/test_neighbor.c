@@ -12,6 +12,36 @@
 
 static double rnd(unsigned *s) { *s = *s * 1664525u + 1013904223u; return (*s >> 8) / 16777216.0; }
 
+/* a pile of side^3 spheres (r = 1 mm, Hertz-Mindlin with friction) above a floor, leaning
+ * on a side wall (gravity tilted: contacts slide on it), skin as given (0: the default);
+ * box: a box shape registered too, which no particle has. Not prepared */
+static floe_world *leaning_pile(int side, double skin, unsigned seed, int box) {
+    floe_world_def d = floe_default_world_def();
+    d.gravity[2] = -9.81;
+    d.gravity[0] = -2.0;
+    d.dt = 2e-6;
+    d.skin = skin;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material m = {"g", 2500, 5e7, 0.3};
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5));
+    int g = floe_world_add_geometry(w, floe_sphere_create(0.001));
+    if (box) floe_world_add_geometry(w, floe_box_create(0.001, 0.001, 0.001));
+    double o[3] = {0, 0, 0}, nz[3] = {0, 0, 1}, nx[3] = {1, 0, 0};
+    floe_world_add_wall(w, o, nz, 0, FLOE_FIXED);
+    floe_world_add_wall(w, o, nx, 0, FLOE_FIXED);
+    for (int k = 0; k < side; k++)
+        for (int j = 0; j < side; j++)
+            for (int i = 0; i < side; i++) {
+                floe_particle_def p = floe_default_particle_def();
+                p.geometry = g;
+                floe_v3_set(p.x, 0.0012 + 0.002005 * i + 2e-5 * rnd(&seed), 0.0012 + 0.002005 * j + 2e-5 * rnd(&seed),
+                            0.0012 + 0.002005 * k);
+                floe_world_add_particle(w, &p);
+            }
+    return w;
+}
+
 static void check_pairs(const char *what, double scale, double offset, int n) {
     floe_particles p;
     memset(&p, 0, sizeof p);
@@ -99,29 +129,7 @@ int main(void) {
         long reb[2] = {0, 0};
         int np = 0, nc[2] = {0, 0};
         for (int run = 0; run < 2; run++) {
-            floe_world_def d = floe_default_world_def();
-            d.gravity[2] = -9.81;
-            d.gravity[0] = -2.0; /* leaning on the side wall: contacts slide on it */
-            d.dt = 2e-6;
-            d.skin = run == 0 ? 1e-7 : 8e-4;
-            floe_world *w = floe_world_create(&d, NULL, 0);
-            floe_material m = {"g", 2500, 5e7, 0.3};
-            floe_world_add_material(w, &m);
-            floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5));
-            int g = floe_world_add_geometry(w, floe_sphere_create(0.001));
-            double o[3] = {0, 0, 0}, nz[3] = {0, 0, 1}, nx[3] = {1, 0, 0};
-            floe_world_add_wall(w, o, nz, 0, FLOE_FIXED);
-            floe_world_add_wall(w, o, nx, 0, FLOE_FIXED);
-            unsigned sd = 11;
-            for (int k = 0; k < 8; k++)
-                for (int j = 0; j < 8; j++)
-                    for (int i = 0; i < 8; i++) {
-                        floe_particle_def p = floe_default_particle_def();
-                        p.geometry = g;
-                        floe_v3_set(p.x, 0.0012 + 0.002005 * i + 2e-5 * rnd(&sd), 0.0012 + 0.002005 * j + 2e-5 * rnd(&sd),
-                                    0.0012 + 0.002005 * k);
-                        floe_world_add_particle(w, &p);
-                    }
+            floe_world *w = leaning_pile(8, run == 0 ? 1e-7 : 8e-4, 11, 0);
             CHECK(floe_world_prepare(w) == FLOE_OK, "prepare the pile");
             for (int s = 0; s < 15000; s++)
                 if (floe_world_step(w) != FLOE_OK) {
@@ -156,29 +164,7 @@ int main(void) {
         double *xs[2] = {NULL, NULL};
         int np = 0, hs_mid[2] = {0, 0}, hs_end[2] = {0, 0}, kept = 1, touching = 0;
         for (int run = 0; run < 2; run++) {
-            floe_world_def d = floe_default_world_def();
-            d.gravity[2] = -9.81;
-            d.gravity[0] = -2.0;
-            d.dt = 2e-6;
-            floe_world *w = floe_world_create(&d, NULL, 0);
-            floe_material m = {"g", 2500, 5e7, 0.3};
-            floe_world_add_material(w, &m);
-            floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5));
-            int g = floe_world_add_geometry(w, floe_sphere_create(0.001));
-            if (run == 1) floe_world_add_geometry(w, floe_box_create(0.001, 0.001, 0.001)); /* no particle has it */
-            double o[3] = {0, 0, 0}, nz[3] = {0, 0, 1}, nx[3] = {1, 0, 0};
-            floe_world_add_wall(w, o, nz, 0, FLOE_FIXED);
-            floe_world_add_wall(w, o, nx, 0, FLOE_FIXED);
-            unsigned sd = 5;
-            for (int k = 0; k < 5; k++)
-                for (int j = 0; j < 5; j++)
-                    for (int i = 0; i < 5; i++) {
-                        floe_particle_def p = floe_default_particle_def();
-                        p.geometry = g;
-                        floe_v3_set(p.x, 0.0012 + 0.002005 * i + 2e-5 * rnd(&sd), 0.0012 + 0.002005 * j + 2e-5 * rnd(&sd),
-                                    0.0012 + 0.002005 * k);
-                        floe_world_add_particle(w, &p);
-                    }
+            floe_world *w = leaning_pile(5, 0, 5, run == 1); /* run 1: a box shape no particle has */
             CHECK(floe_world_prepare(w) == FLOE_OK, "prepare the stride pile");
             for (int s = 0; s < 8000 && floe_world_step(w) == FLOE_OK; s++) continue;
             hs_mid[run] = w->nl.hs;
