@@ -285,7 +285,7 @@ static int restore_neighbors(floe_world *w, ibuf *r, char *err, size_t errlen) {
     if (!rc) rc = resize((void **)&nl->q_walls, 4 * (size_t)nwl * sizeof(double));
     if (rc) return floe_error_set(err, errlen, FLOE_ENOMEM, "out of memory");
     nl->npairs = nl->cap = np;
-    nl->hs = hs; /* (the next build or prepare restrides it if this world needs another) */
+    nl->hs = hs; /* (restrided at the end of this function if this world needs another) */
     nl->gen++; /* a new list: the threads' per-particle index is rebuilt (forces.c) */
     nl->n_build = nb;
     nl->nwalls = nwl;
