@@ -118,13 +118,12 @@ static void fill_array(const vtk_writer *v, const floe_world *w, int k, int m, v
     case A_DAMAGE: { /* peridynamic points: local damage (003 eq 7); other particles 0 */
         for (int a = 0; a < m; a++) f64[a] = 0.0;
         for (int b = 0; b < npd; b++) {
-            int f0 = 0;
-            const floe_pd_body *pb = floe_world_pd_body(w, b, &f0);
+            const floe_pd_body *pb = floe_world_pd_body(w, b, NULL);
             if (!pb) continue;
             double *phi = malloc((size_t)pb->n * sizeof *phi);
             if (!phi || floe_pd_damage(pb, phi) != FLOE_OK) { free(phi); continue; }
             for (int a = 0; a < m; a++) {
-                int i = v->idx[a] - f0;
+                int i = floe_world_pd_point(w, b, v->idx[a]);
                 if (i >= 0 && i < pb->n) f64[a] = phi[i];
             }
             free(phi);
@@ -135,19 +134,18 @@ static void fill_array(const vtk_writer *v, const floe_world *w, int k, int m, v
                         * with the body's G and lambda (PMB: nu = 1/4, G = lambda = 0.6 K) */
         for (int a = 0; a < m; a++) f64[a] = 0.0;
         for (int b = 0; b < npd; b++) {
-            int f0 = 0;
-            const floe_pd_body *pb = floe_world_pd_body(w, b, &f0);
+            const floe_pd_body *pb = floe_world_pd_body(w, b, NULL);
             if (!pb) continue;
             double K = pb->mat.K, G = pb->mat.model == FLOE_PD_LPS ? pb->mat.G : 0.6 * K;
             if (pb->mat.model != FLOE_PD_LPS && !(K > 0) && pb->mat.E > 0) G = 0.4 * pb->mat.E; /* 2D PMB */
             double lam = pb->mat.model == FLOE_PD_LPS ? K - 2.0 * G / 3.0 : G;
             double *vm = malloc((size_t)pb->n * sizeof *vm);
-            if (!vm || floe_pd_correspondence(pb, p->x + 3 * (size_t)f0, G, lam, NULL, NULL, NULL, vm, NULL) != FLOE_OK) {
+            if (!vm || floe_pd_correspondence(pb, floe_world_pd_positions(w, b), G, lam, NULL, NULL, NULL, vm, NULL) != FLOE_OK) {
                 free(vm);
                 continue;
             }
             for (int a = 0; a < m; a++) {
-                int i = v->idx[a] - f0;
+                int i = floe_world_pd_point(w, b, v->idx[a]);
                 if (i >= 0 && i < pb->n) f64[a] = vm[i];
             }
             free(vm);
@@ -158,19 +156,18 @@ static void fill_array(const vtk_writer *v, const floe_world *w, int k, int m, v
     case A_STRAIN: { /* peridynamic points: Green-Lagrange strain (000 eq 28, row-major 3x3) */
         for (int a = 0; a < m * nc; a++) f64[a] = 0.0;
         for (int b = 0; b < npd; b++) {
-            int f0 = 0;
-            const floe_pd_body *pb = floe_world_pd_body(w, b, &f0);
+            const floe_pd_body *pb = floe_world_pd_body(w, b, NULL);
             if (!pb) continue;
             double *E = NULL;
             if (k == A_STRAIN) {
                 E = malloc((size_t)pb->n * 9 * sizeof *E);
-                if (!E || floe_pd_correspondence(pb, p->x + 3 * (size_t)f0, 1.0, 1.0, NULL, E, NULL, NULL, NULL) != FLOE_OK) {
+                if (!E || floe_pd_correspondence(pb, floe_world_pd_positions(w, b), 1.0, 1.0, NULL, E, NULL, NULL, NULL) != FLOE_OK) {
                     free(E);
                     continue;
                 }
             }
             for (int a = 0; a < m; a++) {
-                int i = v->idx[a] - f0;
+                int i = floe_world_pd_point(w, b, v->idx[a]);
                 if (i < 0 || i >= pb->n) continue;
                 for (int c = 0; c < nc; c++)
                     f64[(size_t)a * nc + c] = k == A_STRAIN ? E[9 * (size_t)i + c] : p->f[3 * (size_t)v->idx[a] + c] / pb->V[i];

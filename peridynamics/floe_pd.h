@@ -197,7 +197,15 @@ struct floe_pd_body {
      * count. par: their buffers (pd_materials.c), NULL until a threaded evaluation.         */
     int nthreads;
     struct floe_pd_par *par;
+    /* a body split over MPI ranks (core/parallel/par_pd.c; NULL: the whole body is here):
+     * per point FLOE_PD_OWNED, FLOE_PD_GHOST (here, another rank's) or 0 (not here). The
+     * PMB bond loop (serial then) evaluates the bonds with an owned end whose two ends are
+     * here, counts a bond's energy and breakage on the rank that owns its row's point (the
+     * end of lower index: each once over the ranks) and keeps s0 of the owned points; the
+     * caller keeps the forces of its owned points. Set and owned by the world's split. */
+    const uint8_t *split;
 };
+enum { FLOE_PD_OWNED = 1, FLOE_PD_GHOST = 2 };
 
 /* The bond vector of bond k = (i, j): d = x_j - x_i, plus the shift H n of j's image when
  * the bond crosses a periodic cell's faces (H = cellH0 for the reference X, *cellH for the

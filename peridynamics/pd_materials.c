@@ -311,7 +311,7 @@ static inline __attribute__((always_inline)) void pd_gather_f(const floe_pd_par 
 static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, const double *x, double *f, int i,
                                                             double *s0n, double *gb, double *rb, const uint8_t *own,
                                                             const int32_t *gslot, int64_t *nbroken, const int alpha_on,
-                                                            const int per)
+                                                            const int per, const uint8_t *sm)
 {
     const int32_t *img = per ? b->img : NULL;
     const double *H = per ? b->cellH : NULL;
@@ -329,8 +329,11 @@ static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, con
     const int owni = !gb || own[i];
     double s0ni = alpha_on ? (owni ? s0n[i] : -INFINITY) : 0.0;
     double fi0 = 0, fi1 = 0, fi2 = 0, ei = 0;
+    /* a body split over MPI ranks (sm, serial): the bonds with an owned end, both ends here */
+    const int smi = sm ? sm[i] : FLOE_PD_OWNED;
     for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
         const int j = part[k], ownj = !gb || own[j];
+        if (sm && (!sm[j] || (smi != FLOE_PD_OWNED && sm[j] != FLOE_PD_OWNED))) continue;
         double d0, d1, d2;
         pd_bond_vec(x, j, xi0, xi1, xi2, per, img, H, k, &d0, &d1, &d2);
         double r = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
@@ -350,7 +353,7 @@ static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, con
             }
             if (s_c > 0 && s > sck) {
                 brk[k] = 1;
-                (*nbroken)++;
+                *nbroken += smi == FLOE_PD_OWNED; /* split: counted by the rank of its row */
                 /* LAMMPS' order with alpha: the bond's force of this evaluation is applied,
                  * then it breaks */
                 if ((!comp || s >= 0) && !alpha_on) on = 0;
@@ -359,7 +362,7 @@ static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, con
         if (on && r > 0) {
             double w = (double)vfac[k] * (scorr ? (double)scorr[k] : 1.0) * Vi * V[j];
             double fm = c * s * w / r;
-            ei += 0.5 * c * s * s * L * w;
+            if (smi == FLOE_PD_OWNED) ei += 0.5 * c * s * s * L * w; /* split: on the row's rank */
             g0 = fm * d0; g1 = fm * d1; g2 = fm * d2;
             fi0 += g0; fi1 += g1; fi2 += g2;
             if (ownj) {
@@ -389,7 +392,8 @@ static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, con
 static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f, const int alpha_on, const int per)
 {
     const int n = b->n, B = FLOE_PD_ROW_BLOCK, nblk = (n + B - 1) / B, st = alpha_on ? 4 : 3;
-    const int nt = pd_threads(b);
+    const uint8_t *sm = b->split;
+    const int nt = sm ? 1 : pd_threads(b); /* a split body: serial */
     floe_pd_par *P = nt > 1 ? pd_par_get(b, st, st, nt) : NULL;
     double *s0n = alpha_on ? b->s0 + n : NULL;
     double energy = 0.0;
@@ -400,11 +404,18 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
         for (int c = 0; c < nblk; c++) {
             const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
             double eb = 0.0;
-            for (int i = c * B; i < i1; i++) eb += pmb_row(b, x, f, i, s0n, NULL, NULL, NULL, NULL, &nbroken, alpha_on, per);
+            if (sm)
+                for (int i = c * B; i < i1; i++) {
+                    if (sm[i]) eb += pmb_row(b, x, f, i, s0n, NULL, NULL, NULL, NULL, &nbroken, alpha_on, per, sm);
+                }
+            else
+                for (int i = c * B; i < i1; i++)
+                    eb += pmb_row(b, x, f, i, s0n, NULL, NULL, NULL, NULL, &nbroken, alpha_on, per, NULL);
             energy += eb;
         }
-        if (alpha_on)
-            for (int i = 0; i < n; i++) b->s0[i] = s0n[i] == -INFINITY ? DBL_MAX : s0n[i];
+        if (alpha_on) /* split: the owned points' (a ghost's comes from its owner) */
+            for (int i = 0; i < n; i++)
+                if (!sm || sm[i] == FLOE_PD_OWNED) b->s0[i] = s0n[i] == -INFINITY ? DBL_MAX : s0n[i];
     } else {
         const uint8_t *own = P->own;
         const int G = P->part_blocks, nparts = (nblk + G - 1) / G;
@@ -421,7 +432,8 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
                     const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
                     double eb = 0.0;
                     int64_t nbk = 0;
-                    for (int i = c * B; i < i1; i++) eb += pmb_row(b, x, f, i, s0n, P->g, P->row, own, P->gslot, &nbk, alpha_on, per);
+                    for (int i = c * B; i < i1; i++)
+                        eb += pmb_row(b, x, f, i, s0n, P->g, P->row, own, P->gslot, &nbk, alpha_on, per, NULL);
                     P->blk[c] = eb;
                     P->blkn[c] = nbk;
                 }

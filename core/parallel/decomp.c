@@ -409,9 +409,11 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
         const double *b = boxes + 7 * r;
         if (r == P->rank || !(b[0] <= b[3])) continue;
         for (int i = lo; i < hi; i++) {
-            /* beam bonds: the partner of a bond anchored on r is within the bond's length of
-             * one of r's centres (bond_reach: the longest, par_beams.c) */
-            if (!(box_dist(p->x + 3 * i, b, b + 3, dim) <= fmax(p->radius[i] + b[6], P->bond_reach) + skin)) continue;
+            /* beam bonds and PD bonds: the partner of a bond evaluated on r is within the
+             * bond's length of one of r's centres (bond_reach, pd_reach: the longest,
+             * par_beams.c and par_pd.c) */
+            if (!(box_dist(p->x + 3 * i, b, b + 3, dim) <= fmax(p->radius[i] + b[6], fmax(P->bond_reach, P->pd_reach)) + skin))
+                continue;
             if (P->nsend == P->send_cap) {
                 int nc = P->send_cap ? 2 * P->send_cap : 256;
                 int *t = realloc(P->send_idx, (size_t)nc * sizeof *t);
@@ -594,6 +596,7 @@ void floe_par_free(floe_par *P) {
     free(P->bout); free(P->bin); free(P->bpark); free(P->ppin); free(P->servo_buf);
     free(P->gid); free(P->send_idx); free(P->scount); free(P->sbuf); free(P->rbuf);
     free(P->cost); free(P->bal_ids); free(P->bal_sz);
+    floe_pd_split_free(P->pd_split); /* PD bodies' split (par_pd.c) */
     MPI_Comm_free(&P->comm);
     free(P);
 }

@@ -33,7 +33,7 @@
 
 int floe_par_provider_supported(const floe_provider *pv) {
     const char *nm = pv->klass->name;
-    return !strcmp(nm, "body_forces") || !strcmp(nm, "contacts") || !strcmp(nm, "beam_bonds") ||
+    return !strcmp(nm, "body_forces") || !strcmp(nm, "contacts") || !strcmp(nm, "beam_bonds") || !strcmp(nm, "pd_bonds") ||
            floe_servo_is_provider(pv) || floe_linear_drag_is(pv) || floe_forcing_is_per_particle(pv);
 }
 

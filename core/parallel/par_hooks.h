@@ -26,7 +26,8 @@ int floe_par_servo_totals(floe_world *w);
  * called; nothing without a mirror */
 int floe_par_observe(floe_world *w, int force_all);
 /* the energy watchdog's inputs summed over the ranks (the most negative pair dissipation:
- * the minimum) */
-void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min);
+ * the minimum; pdd: the PD bodies' npd dissipations, in place) */
+void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min,
+                              double *pdd, int npd);
 
 #endif

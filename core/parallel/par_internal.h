@@ -70,6 +70,10 @@ typedef struct floe_par {
     double *cost;            /* 2 size: the costs, then a gather's scratch */
     int *bal_ids;            /* 2 size: the parts 0 .. size - 1, then the weight index 0 each */
     float *bal_sz;           /* size: the parts' target sizes */
+    /* PD bodies (par_pd.c): the split's per-body index and masks (w->pd_split points here),
+     * the halo's reach for their bonds (the longest acting bond at the last decomposition) */
+    struct floe_pd_split *pd_split;
+    double pd_reach;
 } floe_par;
 
 /* the load balance's mode (floe_world_parallel_set_balance; its scratch allocated at the
@@ -146,6 +150,21 @@ int floe_par_beams_in(floe_world *w, floe_par *P);
 /* the bonds' records gathered on rank 0 into the mirror M's bonds (by global ids), for its
  * outputs; FLOE_EINVAL on rank 0 when they do not match M's bonds */
 int floe_par_beams_gather(floe_world *w, floe_par *P, struct floe_world *M);
+/* par_pd.c: PD bodies split over the ranks (docs/parallel.md, "PD bodies across ranks").
+ * unsupported: 1 and what (for the refusal) when the world's PD bodies cannot run split.
+ * split_reach: at the split, before the store is reordered: the halo's reach from the whole
+ * world. sync: at a decomposition, before the migration: the broken flags, s0 and last bond
+ * forces made whole on every rank, the halo's reach measured. index: after the ghosts: each
+ * body's local points, masks and pd_of (FLOE_EINVAL on every rank when an intact bond of an
+ * owned point lost its other point). s0_refresh: after a ghost refresh, the ghosts' s0 from
+ * their owners (alpha). gather: the bodies' state into rank 0's unsplit world M (outputs,
+ * checkpoints). All collective. */
+int floe_par_pd_unsupported(const floe_world *w, char *what, size_t len);
+int floe_par_pd_split_reach(floe_world *w, floe_par *P);
+int floe_par_pd_sync(floe_world *w, floe_par *P);
+int floe_par_pd_index(floe_world *w, floe_par *P);
+int floe_par_pd_s0_refresh(floe_world *w, floe_par *P);
+int floe_par_pd_gather(floe_world *w, floe_par *P, struct floe_world *M);
 /* par_forcing.c: the force stages' per-particle arrays (world_internal.h pps) moved with
  * their particles: at the split (newidx[old] = new local index or -1, nnew rows), at a
  * decomposition (out: after RCB, before the migration, to dest of the owned particles; in:

@@ -168,6 +168,7 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     double *in = NULL;
     int nin = 0;
     if (!dest || !hd) rc = FLOE_ENOMEM;
+    if (!rc) rc = floe_par_pd_sync(w, P) ? FLOE_EINVAL : FLOE_OK; /* PD bodies: made whole before the migration */
     if (!rc) rc = floe_par_rcb(w, P, dest);
     floe_par_index ix = {0};
     if (!rc) rc = floe_par_index_build(P, hi, &ix);
@@ -197,6 +198,7 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     if (rc) return floe_world_error(w, rc, "MPI decomposition failed (out of memory or Zoltan)");
     FLOE_TRY(floe_par_beams_in(w, P)); /* its own message, agreed by every rank */
     FLOE_TRY(floe_par_pp_in(w, P));    /* the same */
+    FLOE_TRY(floe_par_pd_index(w, P)); /* PD bodies: their points here (before the list's exclusions) */
     w->nl.gid = P->gid;
     w->nl.own_hi = P->nrep + P->nown;
     rc = floe_world_nl_build(w);
@@ -220,7 +222,8 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     if (!w->prepared)
         return floe_world_error(w, FLOE_EINVAL, "MPI decomposition: prepare the world first (floe_world_prepare)");
     floe_particles *p = &w->p;
-    if (w->npd) return refuse(w, "a peridynamic body");
+    char pdwhy[160];
+    if (floe_par_pd_unsupported(w, pdwhy, sizeof pdwhy)) return refuse(w, pdwhy);
     if (w->cell) return refuse(w, "a periodic cell");
     if (w->nstates) return refuse(w, "a state object");
     if (w->nobs) return refuse(w, "an observer (outputs)");
@@ -286,6 +289,7 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
         }
         rc = hist_export(w, gid0, mine, 0, 0, &recs, &nrec);
         if (!rc) rc = floe_par_beams_split(w, P, mine); /* beam bonds: those anchored here */
+        if (!rc) rc = floe_par_pd_split_reach(w, P);    /* PD bonds: the halo's reach */
     }
     if (!rc) {
         int a = 0;
@@ -338,6 +342,11 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
         memset(&w->energy, 0, sizeof w->energy);
         w->wd_shadow = w->wd_shadow0 = 0;
         w->elastic_contact = w->elastic_pd = 0;
+        /* the PD bodies' ledger terms: each rank books its share of the bonds from here */
+        for (int b = 0; b < w->npd; b++) {
+            w->pd_eold[b] = 0;
+            if (b < w->pd_diss_n) w->pd_diss[b] = 0;
+        }
         /* a wall's force is the sum of the ranks' parts (the boundary work of a kinematic
          * wall uses it at the next step): the whole of it stays on rank 0 */
         for (int i = 0; i < P->nrep; i++) {
@@ -364,6 +373,7 @@ int floe_par_refresh(floe_world *w, double maxd2, int have_xb) {
     floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof need);
     if (any) return par_rebuild(w, P, NULL, 0);
     int rc = floe_par_forward_comm(w, P);
+    if (!rc) rc = floe_par_pd_s0_refresh(w, P); /* PD with alpha: the ghosts' s0 */
     return rc ? floe_world_error(w, rc, "out of memory") : FLOE_OK;
 }
 
@@ -384,6 +394,9 @@ int floe_par_reverse(floe_world *w) {
     return rc ? floe_world_error(w, rc, "out of memory") : FLOE_OK;
 }
 
+/* PD bodies whose dissipation rides with the watchdog's sum (floe_par_watchdog_values) */
+#define FLOE_PAR_WD_PD 8
+
 static void energy_pack(const floe_energy *e, double *v) {
     v[0] = e->kinetic_trans; v[1] = e->kinetic_rot; v[2] = e->elastic; v[3] = e->work_body;
     v[4] = e->work_boundary; v[5] = e->dissipated; v[6] = e->initial;
@@ -393,16 +406,25 @@ static void energy_unpack(floe_energy *e, const double *v) {
     e->work_boundary = v[4]; e->dissipated = v[5]; e->initial = v[6];
 }
 
-void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min) {
-    double v[9], s[9];
+void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min,
+                              double *pdd, int npd) {
+    double v[9 + FLOE_PAR_WD_PD], s[9 + FLOE_PAR_WD_PD];
     energy_pack(e, v);
     v[7] = *shadow;
     v[8] = *shadow0;
-    MPI_Allreduce(v, s, 9, MPI_DOUBLE, MPI_SUM, w->par->comm);
-    floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, sizeof v);
+    /* the PD bodies' dissipation with the rest (a scene with more bodies: a second sum) */
+    const int nin = npd <= FLOE_PAR_WD_PD ? npd : 0;
+    for (int k = 0; k < nin; k++) v[9 + k] = pdd[k];
+    MPI_Allreduce(v, s, 9 + nin, MPI_DOUBLE, MPI_SUM, w->par->comm);
+    floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, (9 + nin) * (long long)sizeof(double));
     energy_unpack(e, s);
     *shadow = s[7];
     *shadow0 = s[8];
+    for (int k = 0; k < nin; k++) pdd[k] = s[9 + k];
+    if (npd > nin) {
+        MPI_Allreduce(MPI_IN_PLACE, pdd, npd, MPI_DOUBLE, MPI_SUM, w->par->comm);
+        floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, npd * (long long)sizeof(double));
+    }
     double pm = *pair_min;
     MPI_Allreduce(&pm, pair_min, 1, MPI_DOUBLE, MPI_MIN, w->par->comm);
     floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, sizeof pm);
@@ -728,7 +750,9 @@ static int mirror_gather(floe_world *w, floe_par *P) {
      * chains, coast load) */
     if (w->par_contacts & 1) FLOE_TRY(contacts_gather(w, P));
     /* the beam bonds' state (broken flags, stresses: fracture_events, floe_sizes) */
-    return floe_par_beams_gather(w, P, P->rank == 0 ? P->mirror : NULL);
+    FLOE_TRY(floe_par_beams_gather(w, P, P->rank == 0 ? P->mirror : NULL));
+    /* the PD bodies' (broken flags: damage, fracture events) */
+    return floe_par_pd_gather(w, P, P->rank == 0 ? P->mirror : NULL);
 }
 
 static int output_due(const floe_world *w, const floe_observer *o) {
@@ -1088,6 +1112,7 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof rc);
     if (rc) return floe_world_error((floe_world *)w, rc, "MPI checkpoint: out of memory on rank 0");
     FLOE_TRY(floe_par_pp_collect((floe_world *)w, P, P->rank == 0 ? full : NULL)); /* par_forcing.c */
+    FLOE_TRY(floe_par_pd_gather((floe_world *)w, P, P->rank == 0 ? full : NULL));  /* par_pd.c */
     /* the beam bonds' state (broken flags, stresses), held by the ranks that anchor them */
     if (!w->beams) return FLOE_OK;
     rc = floe_par_beams_gather((floe_world *)w, P, P->rank == 0 ? full : NULL);
@@ -1140,8 +1165,9 @@ int floe_world_parallel_add_output(floe_world *w, floe_observer *o) {
     floe_observer_destroy(o);
     return floe_world_error(w, FLOE_ENOTSUP, "MPI outputs: floe was built without MPI");
 }
-void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min) {
-    (void)w; (void)e; (void)shadow; (void)shadow0; (void)pair_min;
+void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min,
+                              double *pdd, int npd) {
+    (void)w; (void)e; (void)shadow; (void)shadow0; (void)pair_min; (void)pdd; (void)npd;
 }
 int floe_world_parallel_energy(const floe_world *w, floe_energy *out) { *out = w->energy; return FLOE_OK; }
 int floe_world_parallel_sum(const floe_world *w, double *v, int n) { (void)w; (void)v; (void)n; return FLOE_OK; }

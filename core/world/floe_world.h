@@ -290,6 +290,12 @@ int floe_world_add_pd_body(floe_world *w, struct floe_pd_body *body, int materia
 /* Number of PD bodies and body k (NULL if out of range). */
 int floe_world_pd_body_count(const floe_world *w);
 struct floe_pd_body *floe_world_pd_body(const floe_world *w, int k, int *first);
+/* The index in PD body k of particle i (its point), or -1 when i is not one of its points;
+ * and the body's point positions, contiguous (3 n; under MPI, floe_parallel.h, the points on
+ * this rank gathered at the last force evaluation: an absent point's entry is stale). Both
+ * work split or not (a split world's particle indices are not the body's order). */
+int floe_world_pd_point(const floe_world *w, int k, int i);
+const double *floe_world_pd_positions(const floe_world *w, int k);
 
 /* Boundary regions of a PD body (issue #4; ParticLS §5.4 eq 37). The points of PD body
  * `body` whose REFERENCE position X lies in the region (sdf(X, sdf_user) <= 0, or, when sdf

@@ -1921,20 +1921,31 @@ static int pd_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, 
     /* Ledger: the work of the bond forces over the step (trapezoid, as for contacts) minus
      * the change of the stored energy is dissipated; for intact bonds it is the integration
      * error only, a breaking bond releases its energy there. */
+    if (w->pd_split) floe_pd_split_gather(w); /* MPI: the points here, contiguous per body */
     for (int b = 0, off = 0; b < w->npd; b++) {
         floe_pd_body *pb = w->pd[b];
         int f0 = w->pd_first[b], np = pb->n;
         double *fold = w->pd_fold + 3 * (size_t)off, *fnew = w->pd_fnew + 3 * (size_t)off;
         memset(fnew, 0, (size_t)3 * np * sizeof *fnew);
-        double e = floe_pd_forces(pb, p->x + 3 * (size_t)f0, fnew);
+        double e = floe_pd_forces(pb, floe_pd_positions(w, b), fnew);
         /* the forces onto the particles and their work, summed per block of points in block
          * order (the same bits threaded or not) */
         const int B = FLOE_PAR_BLOCK, nblk = (np + B - 1) / B, ntl = floe_world_loop_threads(w, np);
-        double *pf = p->f + 3 * (size_t)f0;
-        double *red = ntl > 1 && nblk > 1 ? floe_world_reduce_buf(w, (size_t)nblk) : NULL;
-        const double *vel = p->v + 3 * (size_t)f0;
+        double *pf = w->pd_split ? NULL : p->f + 3 * (size_t)f0;
+        double *red = ntl > 1 && nblk > 1 && !w->pd_split ? floe_world_reduce_buf(w, (size_t)nblk) : NULL;
+        const double *vel = w->pd_split ? NULL : p->v + 3 * (size_t)f0;
         double wk = 0;
-        if (red) {
+        if (w->pd_split) { /* MPI: the owned points' forces (a ghost's owner has its own) */
+            const int *loc = w->pd_split->loc[b];
+            const uint8_t *own = w->pd_split->mask[b];
+            for (int q = 0; q < np; q++)
+                if (own[q] == FLOE_PD_OWNED)
+                    for (int a = 0; a < 3; a++) {
+                        const size_t i = 3 * (size_t)loc[q] + a;
+                        p->f[i] += fnew[3 * q + a];
+                        wk += (fnew[3 * q + a] + fold[3 * q + a]) * p->v[i];
+                    }
+        } else if (red) {
             FLOE_OMP(omp parallel for schedule(static) num_threads(ntl))
             for (int c = 0; c < nblk; c++)
                 red[c] = pd_ledger_block(fnew, fold, pf, vel, c * B, (c + 1) * B < np ? (c + 1) * B : np);

@@ -245,7 +245,6 @@ int estimate_dt(floe_world *w) {
      * tests/test_pd.c), as floe_pd_dt_nodal; and the CFL step of 000 eqs 41-42 per body */
     for (int k = 0; k < w->npd; k++) {
         const floe_pd_body *b = w->pd[k];
-        const int f0 = w->pd_first[k];
         double *sum = calloc((size_t)b->n, sizeof *sum);
         if (!sum) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
         double c = b->ops->bond_micromodulus(b);
@@ -257,14 +256,15 @@ int estimate_dt(floe_world *w) {
                 sum[j] += s * b->V[i];
             }
         for (int i = 0; i < b->n; i++) {
-            if (!(sum[i] > 0) || p->motion[f0 + i] != FLOE_FREE) continue;
+            const int pi = floe_pd_particle(w, k, i); /* (MPI: -1 when not on this rank) */
+            if (pi < 0 || !(sum[i] > 0) || p->motion[pi] != FLOE_FREE) continue;
             double dn = sqrt(2.0 * b->mat.rho / sum[i]);
-            dt_note(d, FLOE_DT_PD_NODAL, dn, f0 + i);
-            if (dn < dp[f0 + i]) dp[f0 + i] = dn;
+            dt_note(d, FLOE_DT_PD_NODAL, dn, pi);
+            if (dn < dp[pi]) dp[pi] = dn;
         }
         free(sum);
         double dc = floe_pd_dt_cfl(b);
-        if (dc > 0) dt_note(d, FLOE_DT_PD_CFL, dc, f0);
+        if (dc > 0) dt_note(d, FLOE_DT_PD_CFL, dc, floe_pd_particle(w, k, 0));
     }
     if (w->beams) { /* beam bonds */
         d->limits[FLOE_DT_BEAM] = 1;

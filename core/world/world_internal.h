@@ -3,6 +3,8 @@
 #ifndef FLOE_WORLD_INTERNAL_H
 #define FLOE_WORLD_INTERNAL_H
 
+#include <stdint.h>
+
 #include "floe_world.h"
 #include "floe_view.h"
 #include "floe_state.h"
@@ -155,6 +157,10 @@ struct floe_world {
     struct floe_pd_bc_rec **pd_bc; int npd_bc, pd_bc_cap;
     long long *pd_nbroken_seen; /* npd: broken bonds of each body when the contact list was
                                    last checked for newly broken pairs (floe_pd_after_forces) */
+    /* PD bodies of a world split over MPI ranks (core/parallel/par_pd.c fills it at every
+     * decomposition; NULL unsplit): pd_first[k] is then the global id of body k's first
+     * point, and a point's body-local index its global id less that */
+    struct floe_pd_split *pd_split;
     /* time integration (core/integrators, issue #5): critical-step estimates, integrators,
      * adaptive steps, staggered PD-DEM; scratch only when a scheme needs it */
     floe_dt_estimates dte;    /* at prepare */
@@ -298,6 +304,33 @@ typedef struct floe_pd_bc_rec {
  * list lacks it (the world then rebuilds the list); the pairs of a PD body that never
  * enter the contact list (bonded family members; floe_world_add_pd_body). */
 double floe_pd_bc_forces(floe_world *w);
+/* A world's PD bodies split over MPI ranks (w->pd_split): per body, the local particle of
+ * each point (-1: not on this rank), the bond loop's mask (floe_pd_body.split: owned, ghost
+ * or absent) and its positions gathered from the store (3 n; an absent point's never read) */
+typedef struct floe_pd_split {
+    const long long *gid;    /* per local particle (the decomposition's) */
+    int **loc;
+    uint8_t **mask;
+    double **xb;
+    int nbody;
+} floe_pd_split;
+/* body-local index of particle i of PD body b (i's body is b) */
+static inline int floe_pd_local(const floe_world *w, int b, int i) {
+    return (int)((w->pd_split ? w->pd_split->gid[i] : (long long)i) - w->pd_first[b]);
+}
+/* local particle of point q of PD body b, -1 when not on this rank */
+static inline int floe_pd_particle(const floe_world *w, int b, int q) {
+    return w->pd_split ? w->pd_split->loc[b][q] : w->pd_first[b] + q;
+}
+/* the positions of PD body b's points, contiguous (split: gathered, floe_pd_split_gather) */
+static inline const double *floe_pd_positions(const floe_world *w, int b) {
+    return w->pd_split ? w->pd_split->xb[b] : w->p.x + 3 * (size_t)w->pd_first[b];
+}
+/* a split's arrays for the world's PD bodies (NULL: out of memory), and their release */
+floe_pd_split *floe_pd_split_new(const floe_world *w);
+void floe_pd_split_free(floe_pd_split *S);
+/* split: every PD body's present points' positions into xb (before its bond loop) */
+void floe_pd_split_gather(floe_world *w);
 int floe_pd_broken_pairs_reachable(floe_world *w);
 int floe_pd_pair_excluded(const floe_world *w, int i, int j);
 /* the families of PD body b (index k) through the periodic cell's images (world_pd.c) */

@@ -22,12 +22,12 @@
 int floe_pd_pair_excluded(const floe_world *w, int i, int j) {
     int bi = w->pd_of[i];
     if (bi < 0 || bi != w->pd_of[j]) return 0;
-    int f = w->pd_first[bi];
+    const int li = floe_pd_local(w, bi, i), lj = floe_pd_local(w, bi, j);
     const floe_pd_body *b = w->pd[bi];
-    int64_t k = floe_pd_bond_index(b, i - f, j - f);
+    int64_t k = floe_pd_bond_index(b, li, lj);
     if (k < 0) { /* not bonded (a pre-crack's faces, floe_pd_add_crack): as a broken pair */
         double d[3];
-        floe_v3_sub(d, b->X + 3 * (size_t)(j - f), b->X + 3 * (size_t)(i - f));
+        floe_v3_sub(d, b->X + 3 * (size_t)lj, b->X + 3 * (size_t)li);
         return floe_v3_norm(d) < w->p.radius[i] + w->p.radius[j];
     }
     if (!b->broken[k]) return 1;
@@ -59,11 +59,11 @@ static int world_exclude_image(const void *ctx, int i, int j, const int n[3]) {
     if (!w->npd) return 0;
     int bi = w->pd_of[i];
     if (bi < 0 || bi != w->pd_of[j]) return 0;
-    int f = w->pd_first[bi];
+    const int li = floe_pd_local(w, bi, i), lj = floe_pd_local(w, bi, j);
     const floe_pd_body *b = w->pd[bi];
-    if (floe_pd_bond_index(b, i - f, j - f) >= 0) return floe_pd_pair_excluded(w, i, j);
+    if (floe_pd_bond_index(b, li, lj) >= 0) return floe_pd_pair_excluded(w, i, j);
     double d[3];
-    floe_v3_sub(d, b->X + 3 * (size_t)(j - f), b->X + 3 * (size_t)(i - f));
+    floe_v3_sub(d, b->X + 3 * (size_t)lj, b->X + 3 * (size_t)li);
     for (int r = 0; r < 3; r++) d[r] += b->cellH0[3 * r] * n[0] + b->cellH0[3 * r + 1] * n[1] + b->cellH0[3 * r + 2] * n[2];
     return floe_v3_norm(d) < w->p.radius[i] + w->p.radius[j];
 }
@@ -103,12 +103,12 @@ int floe_pd_broken_pairs_reachable(floe_world *w) {
         if ((long long)pb->nbroken == w->pd_nbroken_seen[b]) continue;
         w->pd_nbroken_seen[b] = (long long)pb->nbroken;
         if (rebuild || !pd_broken_pairs_touch(pb)) continue;
-        int f0 = w->pd_first[b];
         double skin = w->nl.skin;
         for (int i = 0; i < pb->n && !rebuild; i++)
             for (int64_t k = pb->off[i]; k < pb->off[i + 1]; k++) {
                 if (!pb->broken[k]) continue;
-                int a = f0 + i, c = f0 + pb->partner[k];
+                int a = floe_pd_particle(w, b, i), c = floe_pd_particle(w, b, pb->partner[k]);
+                if (a < 0 || c < 0) continue; /* split: not both here (the pair's rank sees it) */
                 double rr = p->radius[a] + p->radius[c];
                 if (pb->len[k] < rr) continue; /* excluded (overlap in the reference) */
                 if (p->motion[a] != FLOE_FREE && p->motion[c] != FLOE_FREE) continue;
@@ -238,6 +238,57 @@ int floe_world_add_pd_body(floe_world *w, struct floe_pd_body *body, int materia
     if (first) *first = n0;
     w->prepared = 0;
     return FLOE_OK;
+}
+
+floe_pd_split *floe_pd_split_new(const floe_world *w) {
+    floe_pd_split *S = calloc(1, sizeof *S);
+    if (!S) return NULL;
+    S->nbody = w->npd;
+    S->loc = calloc((size_t)(w->npd ? w->npd : 1), sizeof *S->loc);
+    S->mask = calloc((size_t)(w->npd ? w->npd : 1), sizeof *S->mask);
+    S->xb = calloc((size_t)(w->npd ? w->npd : 1), sizeof *S->xb);
+    int bad = !S->loc || !S->mask || !S->xb;
+    for (int b = 0; b < w->npd && !bad; b++) {
+        const size_t n = (size_t)w->pd[b]->n;
+        S->loc[b] = malloc(n * sizeof **S->loc);
+        S->mask[b] = calloc(n, 1);
+        S->xb[b] = calloc(3 * n, sizeof **S->xb);
+        bad = !S->loc[b] || !S->mask[b] || !S->xb[b];
+    }
+    if (bad) {
+        floe_pd_split_free(S);
+        return NULL;
+    }
+    return S;
+}
+
+void floe_pd_split_free(floe_pd_split *S) {
+    if (!S) return;
+    for (int b = 0; b < S->nbody; b++) {
+        if (S->loc) free(S->loc[b]);
+        if (S->mask) free(S->mask[b]);
+        if (S->xb) free(S->xb[b]);
+    }
+    free(S->loc); free(S->mask); free(S->xb);
+    free(S);
+}
+
+void floe_pd_split_gather(floe_world *w) {
+    const floe_pd_split *S = w->pd_split;
+    for (int b = 0; b < w->npd; b++) {
+        const int *loc = S->loc[b];
+        double *xb = S->xb[b];
+        for (int q = 0; q < w->pd[b]->n; q++)
+            if (loc[q] >= 0) memcpy(xb + 3 * (size_t)q, w->p.x + 3 * (size_t)loc[q], 3 * sizeof *xb);
+    }
+}
+
+int floe_world_pd_point(const floe_world *w, int k, int i) {
+    if (k < 0 || k >= w->npd || i < 0 || i >= w->p.n || !w->pd_of || i >= w->pd_npts_alloc || w->pd_of[i] != k) return -1;
+    return floe_pd_local(w, k, i);
+}
+const double *floe_world_pd_positions(const floe_world *w, int k) {
+    return k >= 0 && k < w->npd ? floe_pd_positions(w, k) : NULL;
 }
 
 int floe_world_pd_body_count(const floe_world *w) { return w->npd; }

@@ -1,0 +1,306 @@
+/* par_pd.c - peridynamic bodies of a world split over MPI ranks (docs/parallel.md, "PD
+ * bodies across ranks").
+ *
+ * A PD body's points are particles like any other: owned by the rank whose subdomain holds
+ * them, migrated, sent as ghosts. Every rank keeps the body's bond arrays whole (it read the
+ * whole scene), and its bond loop (peridynamics/pd_materials.c, floe_pd_body.split) runs
+ * the bonds with an owned end whose two points are here, in the serial loop's order: an
+ * owned point's force is the unsplit loop's to the bit, and a bond between two ranks is
+ * evaluated on both from the same positions, so both break it at the same evaluation. Its
+ * energy and breakage count on the rank that owns its row's point (the end of lower index),
+ * once over the ranks. The halo reaches the longest acting bond (P->pd_reach, measured at
+ * every decomposition; the skin covers the motion until the next one), so every acting bond
+ * of an owned point has its other point here (checked at every decomposition: never a
+ * silent loss).
+ *
+ * What a rank does not evaluate goes stale on it: the broken flags of bonds with no owned
+ * end, the s0 and last bond forces of points it does not own. At every decomposition, before
+ * the migration, they are made whole on every rank (flags OR-ed, the owners' values summed
+ * with zeros elsewhere), so that a point arriving at a new owner finds them right. With
+ * alpha (LAMMPS' per-point critical stretch) the ghosts' s0 come from their owners at every
+ * ghost refresh.
+ *
+ * Supported: PMB (constant s_c or alpha; surface correction; broken_tension_only either way)
+ * in the monolithic scheme, with fixed and constant-velocity boundary regions (their points'
+ * motion). Refused with a message: LPS and user materials (their bond loop reads a
+ * neighbour's dilatation: a second exchange inside the loop), plastic bonds, body-force
+ * regions, the staggered scheme. The bond arrays whole on every rank and the
+ * decomposition's O(bonds) reductions are this first version's limits (docs/parallel.md). */
+#include "floe_parallel.h"
+#include "par_internal.h"
+#include "world_parts.h"
+#include "floe_pd.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifdef FLOE_HAVE_MPI
+
+int floe_par_pd_unsupported(const floe_world *w, char *what, size_t len) {
+    if (!w->npd) return 0;
+    if (w->def.pd_dem == FLOE_PD_DEM_STAGGERED) {
+        snprintf(what, len, "the staggered PD-DEM scheme (pd_dem: monolithic runs split)");
+        return 1;
+    }
+    /* fixed and constant-velocity regions are their points' motion (it travels with them;
+     * a ramped one is a motion callback, refused with those) */
+    for (int q = 0; q < w->npd_bc; q++)
+        if (w->pd_bc[q]->def.kind == FLOE_PD_BC_BODY_FORCE) {
+            snprintf(what, len, "a PD body-force region");
+            return 1;
+        }
+    for (int b = 0; b < w->npd; b++) {
+        const floe_pd_body *pb = w->pd[b];
+        if (pb->mat.model != FLOE_PD_PMB) {
+            snprintf(what, len, "a PD body of material %s (PD bodies split over ranks: pmb)", pb->ops && pb->ops->name ? pb->ops->name : "?");
+            return 1;
+        }
+        if (pb->splast) {
+            snprintf(what, len, "a PD body with plastic bonds (yield_compression, yield_tension)");
+            return 1;
+        }
+        if (pb->img) {
+            snprintf(what, len, "a PD body bonded through a periodic cell");
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* 1 when bond k of body b acts at this state: intact, or broken and pushing back in
+ * compression (broken_tension_only) */
+static int bond_may_act(const floe_pd_body *b, int64_t k) {
+    return !b->broken[k] || (b->mat.model == FLOE_PD_PMB && b->mat.broken_tension_only);
+}
+
+/* the longest acting bond of body b with an owned end, from positions x (3 n, only the
+ * points with own[q] != 0 read; own NULL: every point here and owned) */
+static double body_reach(const floe_pd_body *b, const double *x, const uint8_t *own) {
+    double L = 0;
+    for (int i = 0; i < b->n; i++)
+        for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
+            const int j = b->partner[k];
+            if (!bond_may_act(b, k)) continue;
+            if (own && (!own[i] || !own[j] || (own[i] != FLOE_PD_OWNED && own[j] != FLOE_PD_OWNED))) continue;
+            double d[3];
+            floe_v3_sub(d, x + 3 * (size_t)j, x + 3 * (size_t)i);
+            const double r = floe_v3_norm(d);
+            if (b->broken[k] && !(r < b->len[k])) continue; /* broken and stretched: nothing */
+            if (r > L) L = r;
+        }
+    return L;
+}
+
+int floe_par_pd_split_reach(floe_world *w, floe_par *P) {
+    double L = 0;
+    for (int b = 0; b < w->npd; b++) L = fmax(L, body_reach(w->pd[b], w->p.x + 3 * (size_t)w->pd_first[b], NULL));
+    P->pd_reach = L; /* the same on every rank: each holds the whole world */
+    return FLOE_OK;
+}
+
+int floe_par_pd_index(floe_world *w, floe_par *P) {
+    if (!w->npd) return FLOE_OK;
+    floe_particles *p = &w->p;
+    int rc = FLOE_OK;
+    if (!P->pd_split && !(P->pd_split = floe_pd_split_new(w))) rc = FLOE_ENOMEM;
+    if (!rc) {
+        int *po = realloc(w->pd_of, (size_t)(p->n ? p->n : 1) * sizeof *po);
+        if (!po) rc = FLOE_ENOMEM;
+        else {
+            w->pd_of = po;
+            w->pd_npts_alloc = p->n;
+        }
+    }
+    int bad = 0;
+    if (!rc) {
+        floe_pd_split *S = P->pd_split;
+        S->gid = P->gid;
+        const int hi = P->nrep + P->nown;
+        for (int b = 0; b < w->npd; b++) {
+            memset(S->mask[b], 0, (size_t)w->pd[b]->n);
+            for (int q = 0; q < w->pd[b]->n; q++) S->loc[b][q] = -1;
+        }
+        for (int i = 0; i < p->n; i++) {
+            const long long g = P->gid[i];
+            w->pd_of[i] = -1;
+            for (int b = 0; b < w->npd; b++)
+                if (g >= w->pd_first[b] && g < w->pd_first[b] + w->pd[b]->n) {
+                    const int q = (int)(g - w->pd_first[b]);
+                    w->pd_of[i] = b;
+                    S->loc[b][q] = i;
+                    S->mask[b][q] = i >= P->nrep && i < hi ? FLOE_PD_OWNED : FLOE_PD_GHOST;
+                    break;
+                }
+        }
+        /* every acting bond with an owned end has both points here (the halo's promise) */
+        for (int b = 0; b < w->npd && !bad; b++) {
+            const floe_pd_body *pb = w->pd[b];
+            const uint8_t *m = S->mask[b];
+            for (int i = 0; i < pb->n && !bad; i++)
+                for (int64_t k = pb->off[i]; k < pb->off[i + 1]; k++) {
+                    const int j = pb->partner[k];
+                    if ((m[i] == FLOE_PD_OWNED || m[j] == FLOE_PD_OWNED) && (!m[i] || !m[j]) && !pb->broken[k]) {
+                        bad = 1;
+                        break;
+                    }
+                }
+            w->pd[b]->split = S->mask[b];
+        }
+        w->pd_split = S;
+    }
+    int mine[2] = {rc, bad}, all[2];
+    MPI_Allreduce(mine, all, 2, MPI_INT, MPI_MAX, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof mine);
+    if (all[0]) return floe_world_error(w, all[0], "MPI decomposition: PD bodies: out of memory");
+    if (all[1])
+        return floe_world_error(w, FLOE_EINVAL, "MPI decomposition: internal: an intact PD bond's point is not on the rank "
+                                "that evaluates it (docs/parallel.md)");
+    return FLOE_OK;
+}
+
+/* 1 when body b keeps a per-point s0 (alpha) */
+static int has_s0(const floe_pd_body *b) { return b->s0 && b->s_c > 0; }
+
+int floe_par_pd_sync(floe_world *w, floe_par *P) {
+    const floe_pd_split *S = P->pd_split;
+    if (!w->npd || !S) return FLOE_OK;
+    double L = 0;
+    /* the ghosts at their present state (the halo's reach reads them): one more refresh per
+     * decomposition, only in a world with PD bodies */
+    if (floe_par_forward_comm(w, P)) return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: out of memory");
+    floe_pd_split_gather(w);
+    for (int b = 0, off = 0; b < w->npd; off += w->pd[b]->n, b++) {
+        floe_pd_body *pb = w->pd[b];
+        const uint8_t *m = S->mask[b];
+        const size_t n = (size_t)pb->n;
+        /* the broken flags: a bond breaks once and never heals */
+        if (pb->nbond > 0) {
+            MPI_Allreduce(MPI_IN_PLACE, pb->broken, (int)pb->nbond, MPI_BYTE, MPI_BOR, P->comm);
+            floe_par_count_allreduce(P, FLOE_COMM_MIGRATE, pb->nbond);
+        }
+        /* the owners' s0 and last bond forces (the ledger's trapezoid) */
+        const int ns = has_s0(pb) ? 1 : 0, mv = 3 + ns;
+        double *v = malloc(n * mv * sizeof *v);
+        int bad = !v, any;
+        MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
+        if (any) { free(v); return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: PD bodies: out of memory"); }
+        double *fold = w->pd_fold + 3 * (size_t)off;
+        for (size_t q = 0; q < n; q++) {
+            const int o = m[q] == FLOE_PD_OWNED;
+            for (int a = 0; a < 3; a++) v[q * mv + a] = o ? fold[3 * q + a] : 0.0;
+            if (ns) v[q * mv + 3] = o ? pb->s0[q] : 0.0;
+        }
+        MPI_Allreduce(MPI_IN_PLACE, v, (int)(n * mv), MPI_DOUBLE, MPI_SUM, P->comm);
+        floe_par_count_allreduce(P, FLOE_COMM_MIGRATE, (long long)(n * mv * sizeof *v));
+        for (size_t q = 0; q < n; q++) {
+            for (int a = 0; a < 3; a++) fold[3 * q + a] = v[q * mv + a];
+            if (ns) pb->s0[q] = v[q * mv + 3];
+        }
+        free(v);
+        /* the halo's reach: the longest acting bond with an owned end, now */
+        L = fmax(L, body_reach(pb, S->xb[b], m));
+    }
+    MPI_Allreduce(&L, &P->pd_reach, 1, MPI_DOUBLE, MPI_MAX, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof L);
+    return FLOE_OK;
+}
+
+int floe_par_pd_s0_refresh(floe_world *w, floe_par *P) {
+    int any = 0;
+    for (int b = 0; b < w->npd; b++) any |= has_s0(w->pd[b]);
+    if (!any || !P->pd_split) return FLOE_OK; /* the same on every rank: the same scene */
+    const int S = P->size, g0 = P->nrep + P->nown;
+    double *sb = malloc((size_t)(P->nsend ? P->nsend : 1) * sizeof *sb);
+    double *rb = malloc((size_t)(P->nghost ? P->nghost : 1) * sizeof *rb);
+    int *c = malloc((size_t)4 * S * sizeof *c);
+    int bad = !sb || !rb || !c, anybad;
+    MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_LOR, P->comm);
+    if (anybad) { free(sb); free(rb); free(c); return FLOE_ENOMEM; }
+    for (int k = 0; k < P->nsend; k++) {
+        const int i = P->send_idx[k], b = w->pd_of[i];
+        sb[k] = b >= 0 && has_s0(w->pd[b]) ? w->pd[b]->s0[floe_pd_local(w, b, i)] : 0.0;
+    }
+    for (int r = 0; r < S; r++) {
+        c[r] = P->scount[r]; c[S + r] = P->sdispl[r];
+        c[2 * S + r] = P->rcount[r]; c[3 * S + r] = P->rdispl[r];
+    }
+    MPI_Alltoallv(sb, c, c + S, MPI_DOUBLE, rb, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->comm);
+    floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, sizeof(double));
+    for (int k = 0; k < P->nghost; k++) {
+        const int i = g0 + k, b = w->pd_of[i];
+        if (b >= 0 && has_s0(w->pd[b])) w->pd[b]->s0[floe_pd_local(w, b, i)] = rb[k];
+    }
+    free(sb); free(rb); free(c);
+    return FLOE_OK;
+}
+
+int floe_par_pd_gather(floe_world *w, floe_par *P, floe_world *M) {
+    if (!w->npd) return FLOE_OK;
+    int miss = 0;
+    if (P->rank == 0 && M && M->npd != w->npd) miss = 1;
+    MPI_Bcast(&miss, 1, MPI_INT, 0, P->comm);
+    if (miss) return floe_world_error(w, FLOE_EINVAL, "MPI: the PD bodies gathered do not match the mirror's (another scene?)");
+    const floe_pd_split *S = P->pd_split;
+    const int root = P->rank == 0 && M;
+    /* the ledger's per-body terms: sums */
+    double *e = malloc((size_t)2 * w->npd * sizeof *e);
+    int bad = !e, anybad;
+    MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_LOR, P->comm);
+    if (anybad) { free(e); return floe_world_error(w, FLOE_ENOMEM, "MPI: gathering the PD bodies: out of memory"); }
+    for (int b = 0; b < w->npd; b++) {
+        e[2 * b] = w->pd_eold[b];
+        e[2 * b + 1] = b < w->pd_diss_n ? w->pd_diss[b] : 0.0;
+    }
+    MPI_Reduce(P->rank == 0 ? MPI_IN_PLACE : e, e, 2 * w->npd, MPI_DOUBLE, MPI_SUM, 0, P->comm);
+    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, 2LL * w->npd * sizeof *e);
+    if (root)
+        for (int b = 0; b < w->npd; b++) {
+            M->pd_eold[b] = e[2 * b];
+            if (b < M->pd_diss_n) M->pd_diss[b] = e[2 * b + 1];
+        }
+    free(e);
+    for (int b = 0, off = 0; b < w->npd; off += w->pd[b]->n, b++) {
+        floe_pd_body *pb = w->pd[b], *mb = root ? M->pd[b] : NULL;
+        if (root && (mb->n != pb->n || mb->nbond != pb->nbond)) miss = 1;
+        MPI_Bcast(&miss, 1, MPI_INT, 0, P->comm);
+        if (miss) return floe_world_error(w, FLOE_EINVAL, "MPI: the PD bodies gathered do not match the mirror's (another scene?)");
+        const size_t n = (size_t)pb->n;
+        if (pb->nbond > 0) {
+            MPI_Reduce(pb->broken, root ? mb->broken : NULL, (int)pb->nbond, MPI_BYTE, MPI_BOR, 0, P->comm);
+            floe_par_count_to_root(P, FLOE_COMM_OUTPUT, pb->nbond);
+        }
+        const int ns = has_s0(pb) ? 1 : 0, mv = 3 + ns;
+        double *v = malloc(n * mv * sizeof *v);
+        bad = !v;
+        MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_LOR, P->comm);
+        if (anybad) { free(v); return floe_world_error(w, FLOE_ENOMEM, "MPI: gathering the PD bodies: out of memory"); }
+        const uint8_t *m = S ? S->mask[b] : NULL;
+        const double *fold = w->pd_fold + 3 * (size_t)off;
+        for (size_t q = 0; q < n; q++) {
+            const int o = !m || m[q] == FLOE_PD_OWNED;
+            for (int a = 0; a < 3; a++) v[q * mv + a] = o ? fold[3 * q + a] : 0.0;
+            if (ns) v[q * mv + 3] = o ? pb->s0[q] : 0.0;
+        }
+        MPI_Reduce(P->rank == 0 ? MPI_IN_PLACE : v, v, (int)(n * mv), MPI_DOUBLE, MPI_SUM, 0, P->comm);
+        floe_par_count_to_root(P, FLOE_COMM_OUTPUT, (long long)(n * mv * sizeof *v));
+        if (root) {
+            double *mf = M->pd_fold + 3 * (size_t)off;
+            int64_t nb = 0;
+            for (size_t q = 0; q < n; q++) {
+                for (int a = 0; a < 3; a++) mf[3 * q + a] = v[q * mv + a];
+                if (ns && mb->s0) mb->s0[q] = v[q * mv + 3];
+            }
+            for (int64_t k = 0; k < mb->nbond; k++) nb += mb->broken[k];
+            mb->nbroken = nb;
+            M->pd_nbroken_seen[b] = (long long)nb;
+        }
+        free(v);
+    }
+    return FLOE_OK;
+}
+
+#else
+typedef int floe_par_pd_unused; /* ISO C: a translation unit is not empty */
+#endif

@@ -1,0 +1,142 @@
+/* test_pd_split.c - a PMB body split over ranks (floe_pd_body.split, the bond loop that an
+ * MPI decomposition runs, core/parallel/par_pd.c), simulated in one process: R copies of
+ * the body, each with its points marked owned (a slab along x), ghost (bonded to an owned
+ * point) or absent. Between evaluations the ghosts' s0 (alpha) comes from their owners, as
+ * the ranks' exchange does. Over 12 evaluations of a bar pulled apart (bonds break in the
+ * neck, alpha on and off, R = 2 and 3):
+ *   - every owned point's force is the unsplit loop's to the bit (its bonds in the same order);
+ *   - every bond with an owned end has the unsplit loop's broken flag;
+ *   - the ranks' energies and broken counts add up to the unsplit ones (energy: the sum's
+ *     order differs, rel. 1e-12; counts exactly);
+ *   - an owned point's s0 is the unsplit one to the bit. */
+#include "check.h"
+#include "floe_pd.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define NX 12
+#define NY 4
+#define NZ 4
+
+static floe_pd_body *bar(double alpha)
+{
+    floe_pd_region r;
+    memset(&r, 0, sizeof r);
+    r.dim = 3;
+    r.dx = 1e-3;
+    r.horizon_factor = 3.015;
+    r.lo[0] = r.lo[1] = r.lo[2] = 0;
+    r.hi[0] = NX * 1e-3; r.hi[1] = NY * 1e-3; r.hi[2] = NZ * 1e-3;
+    floe_pd_body *b = NULL;
+    CHECK(floe_pd_body_create(&b, &r) == FLOE_OK, "create");
+    floe_pd_material m = floe_pd_material_pmb(2200, 1.49e10, 2e-3);
+    m.alpha = alpha;
+    CHECK(floe_pd_set_material(b, &m) == FLOE_OK, "material");
+    return b;
+}
+
+/* the positions of evaluation e: the bar stretched along x, more in its neck (x near the
+ * middle), with a small shear wobble so that bonds differ */
+static void place(const floe_pd_body *b, int e, double *x)
+{
+    const double L = NX * 1e-3;
+    for (int i = 0; i < b->n; i++) {
+        const double *X = b->X + 3 * i;
+        const double u = X[0] / L - 0.5, neck = exp(-40 * u * u);
+        x[3 * i] = X[0] * (1 + 4e-4 * e) + (u > 0 ? 1 : -1) * 6e-6 * e * neck * (1 + 0.3 * sin(7 * X[1] / 1e-3));
+        x[3 * i + 1] = X[1] + 2e-7 * e * sin(3 * X[0] / 1e-3);
+        x[3 * i + 2] = X[2] - 1e-7 * e * cos(5 * X[1] / 1e-3);
+    }
+}
+
+static void run(int R, double alpha)
+{
+    floe_pd_body *full = bar(alpha), *part[3];
+    const int n = full->n;
+    int *owner = malloc(n * sizeof *owner);
+    uint8_t *mask[3];
+    for (int i = 0; i < n; i++) {
+        int o = (int)(full->X[3 * i] / (NX * 1e-3) * R);
+        owner[i] = o < R ? o : R - 1;
+    }
+    for (int r = 0; r < R; r++) {
+        part[r] = bar(alpha);
+        mask[r] = calloc(n, 1);
+        for (int i = 0; i < n; i++)
+            if (owner[i] == r) mask[r][i] = FLOE_PD_OWNED;
+        /* the ghosts: every point bonded to an owned one (the halo reaches the horizon) */
+        for (int i = 0; i < n; i++)
+            for (int64_t k = full->off[i]; k < full->off[i + 1]; k++) {
+                const int j = full->partner[k];
+                if (mask[r][i] == FLOE_PD_OWNED && !mask[r][j]) mask[r][j] = FLOE_PD_GHOST;
+                if (mask[r][j] == FLOE_PD_OWNED && !mask[r][i]) mask[r][i] = FLOE_PD_GHOST;
+            }
+        part[r]->split = mask[r];
+    }
+    double *x = malloc(3 * n * sizeof *x), *f = malloc(3 * n * sizeof *f), *g = malloc(3 * n * sizeof *g);
+    int fbits = 1, flags = 1, s0bits = 1, ghosts = 0;
+    int64_t broke = 0;
+    double erel = 0;
+    for (int i = 0; i < n; i++) ghosts += mask[0][i] == FLOE_PD_GHOST;
+    for (int e = 0; e < 12; e++) {
+        place(full, e, x);
+        memset(f, 0, 3 * n * sizeof *f);
+        const double ef = floe_pd_forces(full, x, f);
+        double es = 0;
+        int64_t nb = 0;
+        for (int r = 0; r < R; r++) {
+            memset(g, 0, 3 * n * sizeof *g);
+            /* a ghost's position is its owner's; an absent point's is never read */
+            double *xr = malloc(3 * n * sizeof *xr);
+            for (int i = 0; i < n; i++)
+                for (int a = 0; a < 3; a++) xr[3 * i + a] = mask[r][i] ? x[3 * i + a] : NAN;
+            es += floe_pd_forces(part[r], xr, g);
+            free(xr);
+            nb += part[r]->nbroken;
+            for (int i = 0; i < n; i++)
+                if (mask[r][i] == FLOE_PD_OWNED) {
+                    fbits &= memcmp(g + 3 * i, f + 3 * i, 3 * sizeof *g) == 0;
+                    if (alpha > 0) s0bits &= part[r]->s0[i] == full->s0[i];
+                }
+            for (int i = 0; i < n; i++)
+                for (int64_t k = full->off[i]; k < full->off[i + 1]; k++)
+                    if (mask[r][i] == FLOE_PD_OWNED || mask[r][full->partner[k]] == FLOE_PD_OWNED)
+                        flags &= part[r]->broken[k] == full->broken[k];
+        }
+        /* the ghosts' s0 from their owners (the ranks' exchange) */
+        if (alpha > 0)
+            for (int r = 0; r < R; r++)
+                for (int i = 0; i < n; i++)
+                    if (mask[r][i] == FLOE_PD_GHOST) part[r]->s0[i] = part[owner[i]]->s0[i];
+        CHECK(nb == full->nbroken, "R %d alpha %g evaluation %d: broken bonds summed over the ranks %lld, unsplit %lld",
+              R, alpha, e, (long long)nb, (long long)full->nbroken);
+        const double rel = fabs(es - ef) / fabs(ef);
+        if (rel > erel) erel = rel;
+        broke = full->nbroken;
+    }
+    printf("R %d alpha %g: %d points, %d ghosts on rank 0, %lld bonds, %lld broken after 12 evaluations, "
+           "energy rel. err %.2e\n", R, alpha, n, ghosts, (long long)full->nbond, (long long)broke, erel);
+    CHECK(broke > 20 && broke < full->nbond / 2, "some bonds break in the neck (%lld)", (long long)broke);
+    CHECK(fbits, "R %d alpha %g: every owned point's force is the unsplit one to the bit", R, alpha);
+    CHECK(flags, "R %d alpha %g: every bond with an owned end has the unsplit broken flag", R, alpha);
+    CHECK(s0bits, "R %d alpha %g: every owned point's s0 is the unsplit one to the bit", R, alpha);
+    CHECK(erel <= 1e-12, "R %d alpha %g: the ranks' energies add up to the unsplit energy (rel. %.2e)", R, alpha, erel);
+    for (int r = 0; r < R; r++) {
+        floe_pd_body_destroy(part[r]);
+        free(mask[r]);
+    }
+    floe_pd_body_destroy(full);
+    free(owner); free(x); free(f); free(g);
+}
+
+int main(void)
+{
+    run(2, 0.0);
+    run(3, 0.0);
+    run(2, 0.25);
+    run(3, 0.25);
+    return check_summary("test_pd_split");
+}
