@@ -199,11 +199,16 @@ struct floe_pd_body {
     struct floe_pd_par *par;
     /* a body split over MPI ranks (core/parallel/par_pd.c; NULL: the whole body is here):
      * per point FLOE_PD_OWNED, FLOE_PD_GHOST (here, another rank's) or 0 (not here). The
-     * PMB bond loop (serial then) evaluates the bonds with an owned end whose two ends are
+     * PMB and LPS bond loops (serial then) evaluate the bonds with an owned end whose two ends are
      * here, counts a bond's energy and breakage on the rank that owns its row's point (the
      * end of lower index: each once over the ranks) and keeps s0 of the owned points; the
      * caller keeps the forces of its owned points. Set and owned by the world's split. */
     const uint8_t *split;
+    /* LPS on a split body: called between the dilatation pass and the force pass, it gives
+     * the ghosts their owners' theta (and q, with the surface correction): a ghost's own
+     * sums lack the bonds its rank does not hold. Set with split (NULL otherwise). */
+    void (*split_sync)(struct floe_pd_body *b, void *ctx);
+    void *split_ctx;
 };
 enum { FLOE_PD_OWNED = 1, FLOE_PD_GHOST = 2 };
 
@@ -308,6 +313,7 @@ double floe_pd_forces_nobreak(floe_pd_body *b, const double *x, double *f);
  * c s beta V_i V_j M, LPS (t_ij + t_ji) beta V_i V_j M (a fresh dilatation pass). For
  * stress fluxes and observers. FLOE_ENOMEM never (LPS uses the body's theta array). */
 typedef void (*floe_pd_bond_visit_fn)(int i, int j, int64_t k, const double fij[3], void *user);
+/* (FLOE_ENOTSUP for a user material and for a body split over MPI ranks) */
 int floe_pd_bond_forces(floe_pd_body *b, const double *x, floe_pd_bond_visit_fn fn, void *user);
 
 /* Local damage phi_i = 1 - sum_j mu beta V_j / sum_j beta V_j (003 eq 7) into phi[n].

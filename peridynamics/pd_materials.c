@@ -669,7 +669,7 @@ static inline void lps_weights(const floe_pd_body *b, int i, int j, int64_t k, d
  * into gb and the row sums into rb, stride 3 with the surface correction, else 1. */
 static inline __attribute__((always_inline)) int64_t lps_dil_row(floe_pd_body *b, const double *x, int i, double *gb,
                                                                  double *rb, const uint8_t *own, const int32_t *gslot,
-                                                                 const int per)
+                                                                 const int per, const uint8_t *sm)
 {
     const int32_t *img = per ? b->img : NULL;
     const double *H = per ? b->cellH : NULL;
@@ -685,9 +685,11 @@ static inline __attribute__((always_inline)) int64_t lps_dil_row(floe_pd_body *b
     int64_t nbroken = 0;
     const double *xi = x + 3 * (size_t)i;
     double ti = 0, pi = 0, mii = 0;
+    const int smi = sm ? sm[i] : FLOE_PD_OWNED; /* split: as pmb_row */
     for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
         double cj[3] = {-0.0, -0.0, -0.0}; /* j's shares (-0: none) */
         const int j = part[k], ownj = !gb || own[j];
+        if (sm && (!sm[j] || (smi != FLOE_PD_OWNED && sm[j] != FLOE_PD_OWNED))) continue;
         if (!brk[k]) {
             double d0, d1, d2;
             pd_bond_vec(x, j, xi[0], xi[1], xi[2], per, img, H, k, &d0, &d1, &d2);
@@ -695,7 +697,7 @@ static inline __attribute__((always_inline)) int64_t lps_dil_row(floe_pd_body *b
             double e = sqrt(d0 * d0 + d1 * d1 + d2 * d2) - L;
             if (s_c > 0 && e > s_c * L) {
                 brk[k] = 1;
-                nbroken++;
+                nbroken += smi == FLOE_PD_OWNED; /* split: counted by the rank of its row */
             } else {
                 double a = (wb ? wb[k] : 1.0) * L * (double)vfac[k];
                 if (p) {
@@ -747,15 +749,22 @@ static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, cons
     double *th = b->theta;
     double *p = b->dten ? b->dten + 9 * (size_t)n : NULL, *mi = p ? p + n : NULL;
     const int st = p ? 3 : 1;
-    const int nt = pd_threads(b);
+    const uint8_t *sm = b->split;
+    const int nt = sm ? 1 : pd_threads(b); /* a split body: serial */
     floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3, nt) : NULL;
     int64_t nbroken = 0;
     if (!P) {
         for (int i = 0; i < n; i++) th[i] = 0;
         if (p)
             for (int i = 0; i < n; i++) p[i] = mi[i] = 0;
-        for (int i = 0; i < n; i++) nbroken += lps_dil_row(b, x, i, NULL, NULL, NULL, NULL, per);
+        if (sm) {
+            for (int i = 0; i < n; i++)
+                if (sm[i]) nbroken += lps_dil_row(b, x, i, NULL, NULL, NULL, NULL, per, sm);
+        } else
+            for (int i = 0; i < n; i++) nbroken += lps_dil_row(b, x, i, NULL, NULL, NULL, NULL, per, NULL);
         for (int i = 0; i < n; i++) lps_dil_final(b, i);
+        /* split: the ghosts' sums lack the bonds this rank does not hold: their owners' */
+        if (sm && b->split_sync) b->split_sync(b, b->split_ctx);
         return nbroken;
     }
     const uint8_t *own = P->own;
@@ -773,7 +782,7 @@ static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, cons
             for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
                 const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
                 int64_t nbk = 0;
-                for (int i = c * B; i < i1; i++) nbk += lps_dil_row(b, x, i, P->g, P->row, own, P->gslot, per);
+                for (int i = c * B; i < i1; i++) nbk += lps_dil_row(b, x, i, P->g, P->row, own, P->gslot, per, NULL);
                 P->blkn[c] = nbk;
             }
         FLOE_OMP(omp for schedule(static))
@@ -825,7 +834,7 @@ static inline void lps_bond_t(const floe_pd_body *b, double kd, int i, int j, in
  * checked in the dilatation pass) drop out of theta and t. Row i as pmb_row (stride 3). */
 static inline __attribute__((always_inline)) double lps_row(const floe_pd_body *b, const double *x, double *f, int i,
                                                             double kd, double *gb, double *rb, const uint8_t *own,
-                                                            const int32_t *gslot, const int per)
+                                                            const int32_t *gslot, const int per, const uint8_t *sm)
 {
     const int32_t *img = per ? b->img : NULL;
     const double *H = per ? b->cellH : NULL;
@@ -837,9 +846,11 @@ static inline __attribute__((always_inline)) double lps_row(const floe_pd_body *
     const double xi0 = x[3 * (size_t)i], xi1 = x[3 * (size_t)i + 1], xi2 = x[3 * (size_t)i + 2];
     const double Vi = V[i];
     double fi0 = 0, fi1 = 0, fi2 = 0, ei = 0.5 * kd * th[i] * th[i] * Vi;
+    const int smi = sm ? sm[i] : FLOE_PD_OWNED; /* split: as pmb_row */
     for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
         double g0 = 0, g1 = 0, g2 = 0;
         const int j = part[k], ownj = !gb || own[j];
+        if (sm && (!sm[j] || (smi != FLOE_PD_OWNED && sm[j] != FLOE_PD_OWNED))) continue;
         if (!brk[k]) {
             double d0, d1, d2;
             pd_bond_vec(x, j, xi0, xi1, xi2, per, img, H, k, &d0, &d1, &d2);
@@ -871,8 +882,9 @@ static inline __attribute__((always_inline)) double lps_row(const floe_pd_body *
         f[3 * (size_t)i + 1] += fi1;
         f[3 * (size_t)i + 2] += fi2;
     }
-    /* theta_j's k theta^2/2 V_j term is added when the loop reaches j */
-    return ei;
+    /* theta_j's k theta^2/2 V_j term is added when the loop reaches j; split: the energy of
+     * the row's rank */
+    return smi == FLOE_PD_OWNED ? ei : 0.0;
 }
 
 static inline double lps_forces_impl(floe_pd_body *b, const double *x, double *f, const int per)
@@ -880,14 +892,19 @@ static inline double lps_forces_impl(floe_pd_body *b, const double *x, double *f
     const int n = b->n, B = FLOE_PD_ROW_BLOCK, nblk = (n + B - 1) / B;
     const double kd = lps_kdil(b);
     b->nbroken += lps_dilatation(b, x);
-    const int nt = pd_threads(b);
+    const uint8_t *sm = b->split;
+    const int nt = sm ? 1 : pd_threads(b); /* a split body: serial */
     floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3, nt) : NULL;
     double energy = 0.0;
     if (!P) {
         for (int c = 0; c < nblk; c++) {
             const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
             double eb = 0.0;
-            for (int i = c * B; i < i1; i++) eb += lps_row(b, x, f, i, kd, NULL, NULL, NULL, NULL, per);
+            if (sm) {
+                for (int i = c * B; i < i1; i++)
+                    if (sm[i]) eb += lps_row(b, x, f, i, kd, NULL, NULL, NULL, NULL, per, sm);
+            } else
+                for (int i = c * B; i < i1; i++) eb += lps_row(b, x, f, i, kd, NULL, NULL, NULL, NULL, per, NULL);
             energy += eb;
         }
         return energy;
@@ -901,7 +918,7 @@ static inline double lps_forces_impl(floe_pd_body *b, const double *x, double *f
             for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
                 const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
                 double eb = 0.0;
-                for (int i = c * B; i < i1; i++) eb += lps_row(b, x, f, i, kd, P->g, P->row, own, P->gslot, per);
+                for (int i = c * B; i < i1; i++) eb += lps_row(b, x, f, i, kd, P->g, P->row, own, P->gslot, per, NULL);
                 P->blk[c] = eb;
             }
         FLOE_OMP(omp for schedule(static))
@@ -1080,6 +1097,7 @@ int floe_pd_bond_forces(floe_pd_body *b, const double *x, floe_pd_bond_visit_fn 
 {
     if (!b || !b->ops || !x || !fn) return FLOE_EINVAL;
     if (b->mat.model == FLOE_PD_USER) return FLOE_ENOTSUP; /* its bond forces are its own */
+    if (b->split) return FLOE_ENOTSUP; /* split over MPI ranks: not every bond is here */
     const int lps = b->mat.model == FLOE_PD_LPS;
     const double kd = lps ? lps_kdil(b) : 0.0;
     if (lps) { /* a fresh dilatation pass, without breaking bonds */

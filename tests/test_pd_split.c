@@ -8,7 +8,10 @@
  *   - every bond with an owned end has the unsplit loop's broken flag;
  *   - the ranks' energies and broken counts add up to the unsplit ones (energy: the sum's
  *     order differs, rel. 1e-12; counts exactly);
- *   - an owned point's s0 is the unsplit one to the bit. */
+ *   - an owned point's s0 is the unsplit one to the bit.
+ * LPS (plain and with the surface correction) the same way, the ghosts' theta and q given
+ * between the passes (split_sync) as the ranks' exchange gives them; an owned point's theta
+ * and q are the unsplit ones to the bit. */
 #include "check.h"
 #include "floe_pd.h"
 
@@ -21,7 +24,7 @@
 #define NY 4
 #define NZ 4
 
-static floe_pd_body *bar(double alpha)
+static floe_pd_body *bar(double alpha, int lps, int corr)
 {
     floe_pd_region r;
     memset(&r, 0, sizeof r);
@@ -32,10 +35,29 @@ static floe_pd_body *bar(double alpha)
     r.hi[0] = NX * 1e-3; r.hi[1] = NY * 1e-3; r.hi[2] = NZ * 1e-3;
     floe_pd_body *b = NULL;
     CHECK(floe_pd_body_create(&b, &r) == FLOE_OK, "create");
-    floe_pd_material m = floe_pd_material_pmb(2200, 1.49e10, 2e-3);
+    floe_pd_material m = lps ? floe_pd_material_lps(2200, 1.49e10, 8.9e9, 2e-3, FLOE_PD_W_GAUSS)
+                             : floe_pd_material_pmb(2200, 1.49e10, 2e-3);
     m.alpha = alpha;
     CHECK(floe_pd_set_material(b, &m) == FLOE_OK, "material");
+    if (corr) CHECK(floe_pd_surface_correction(b) == FLOE_OK, "surface correction");
     return b;
+}
+
+/* the ranks' exchange between the LPS passes (floe_pd_body.split_sync): a ghost's theta and
+ * q as its owner has them after its dilatation pass. The ranks run one after the other
+ * here, so the values come from the unsplit body, evaluated first at the same positions;
+ * that the owners' own values are those is checked after each evaluation (bits) */
+typedef struct sim { floe_pd_body **part; const floe_pd_body *full; uint8_t **mask; int n, R; } sim;
+static void sync_ghosts(floe_pd_body *b, void *ctx)
+{
+    const sim *S = ctx;
+    int r = 0;
+    while (S->part[r] != b) r++;
+    for (int i = 0; i < S->n; i++)
+        if (S->mask[r][i] == FLOE_PD_GHOST) {
+            b->theta[i] = S->full->theta[i];
+            if (b->dten) b->dten[9 * (size_t)S->n + i] = S->full->dten[9 * (size_t)S->n + i];
+        }
 }
 
 /* the positions of evaluation e: the bar stretched along x, more in its neck (x near the
@@ -52,9 +74,9 @@ static void place(const floe_pd_body *b, int e, double *x)
     }
 }
 
-static void run(int R, double alpha)
+static void run(int R, double alpha, int lps, int corr)
 {
-    floe_pd_body *full = bar(alpha), *part[3];
+    floe_pd_body *full = bar(alpha, lps, corr), *part[3];
     const int n = full->n;
     int *owner = malloc(n * sizeof *owner);
     uint8_t *mask[3];
@@ -63,7 +85,7 @@ static void run(int R, double alpha)
         owner[i] = o < R ? o : R - 1;
     }
     for (int r = 0; r < R; r++) {
-        part[r] = bar(alpha);
+        part[r] = bar(alpha, lps, corr);
         mask[r] = calloc(n, 1);
         for (int i = 0; i < n; i++)
             if (owner[i] == r) mask[r][i] = FLOE_PD_OWNED;
@@ -76,6 +98,11 @@ static void run(int R, double alpha)
             }
         part[r]->split = mask[r];
     }
+    sim sm = {part, full, mask, n, R};
+    for (int r = 0; r < R && lps; r++) {
+        part[r]->split_sync = sync_ghosts;
+        part[r]->split_ctx = &sm;
+    }
     double *x = malloc(3 * n * sizeof *x), *f = malloc(3 * n * sizeof *f), *g = malloc(3 * n * sizeof *g);
     int fbits = 1, flags = 1, s0bits = 1, ghosts = 0;
     int64_t broke = 0;
@@ -87,19 +114,24 @@ static void run(int R, double alpha)
         const double ef = floe_pd_forces(full, x, f);
         double es = 0;
         int64_t nb = 0;
+        /* a ghost's position is its owner's; an absent point's is never read */
+        double *xr[3];
+        for (int r = 0; r < R; r++) {
+            xr[r] = malloc(3 * n * sizeof *xr[r]);
+            for (int i = 0; i < n; i++)
+                for (int a = 0; a < 3; a++) xr[r][3 * i + a] = mask[r][i] ? x[3 * i + a] : NAN;
+        }
         for (int r = 0; r < R; r++) {
             memset(g, 0, 3 * n * sizeof *g);
-            /* a ghost's position is its owner's; an absent point's is never read */
-            double *xr = malloc(3 * n * sizeof *xr);
-            for (int i = 0; i < n; i++)
-                for (int a = 0; a < 3; a++) xr[3 * i + a] = mask[r][i] ? x[3 * i + a] : NAN;
-            es += floe_pd_forces(part[r], xr, g);
-            free(xr);
+            es += floe_pd_forces(part[r], xr[r], g);
+            free(xr[r]);
             nb += part[r]->nbroken;
             for (int i = 0; i < n; i++)
                 if (mask[r][i] == FLOE_PD_OWNED) {
                     fbits &= memcmp(g + 3 * i, f + 3 * i, 3 * sizeof *g) == 0;
                     if (alpha > 0) s0bits &= part[r]->s0[i] == full->s0[i];
+                    if (lps) s0bits &= part[r]->theta[i] == full->theta[i] &&
+                                       (!full->dten || part[r]->dten[9 * n + i] == full->dten[9 * n + i]);
                 }
             for (int i = 0; i < n; i++)
                 for (int64_t k = full->off[i]; k < full->off[i + 1]; k++)
@@ -117,12 +149,14 @@ static void run(int R, double alpha)
         if (rel > erel) erel = rel;
         broke = full->nbroken;
     }
-    printf("R %d alpha %g: %d points, %d ghosts on rank 0, %lld bonds, %lld broken after 12 evaluations, "
-           "energy rel. err %.2e\n", R, alpha, n, ghosts, (long long)full->nbond, (long long)broke, erel);
+    printf("%s%s R %d alpha %g: %d points, %d ghosts on rank 0, %lld bonds, %lld broken after 12 evaluations, "
+           "energy rel. err %.2e\n", lps ? "LPS" : "PMB", corr ? " corrected" : "", R, alpha, n, ghosts,
+           (long long)full->nbond, (long long)broke, erel);
     CHECK(broke > 20 && broke < full->nbond / 2, "some bonds break in the neck (%lld)", (long long)broke);
     CHECK(fbits, "R %d alpha %g: every owned point's force is the unsplit one to the bit", R, alpha);
     CHECK(flags, "R %d alpha %g: every bond with an owned end has the unsplit broken flag", R, alpha);
-    CHECK(s0bits, "R %d alpha %g: every owned point's s0 is the unsplit one to the bit", R, alpha);
+    CHECK(s0bits, "R %d alpha %g: every owned point's s0 (PMB alpha) or theta and q (LPS) is the unsplit one to the bit",
+          R, alpha);
     CHECK(erel <= 1e-12, "R %d alpha %g: the ranks' energies add up to the unsplit energy (rel. %.2e)", R, alpha, erel);
     for (int r = 0; r < R; r++) {
         floe_pd_body_destroy(part[r]);
@@ -134,9 +168,11 @@ static void run(int R, double alpha)
 
 int main(void)
 {
-    run(2, 0.0);
-    run(3, 0.0);
-    run(2, 0.25);
-    run(3, 0.25);
+    run(2, 0.0, 0, 0);
+    run(3, 0.0, 0, 0);
+    run(2, 0.25, 0, 0);
+    run(3, 0.25, 0, 1);
+    run(2, 0.0, 1, 0);
+    run(3, 0.0, 1, 1);
     return check_summary("test_pd_split");
 }

@@ -597,6 +597,7 @@ void floe_par_free(floe_par *P) {
     free(P->gid); free(P->send_idx); free(P->scount); free(P->sbuf); free(P->rbuf);
     free(P->cost); free(P->bal_ids); free(P->bal_sz);
     floe_pd_split_free(P->pd_split); /* PD bodies' split (par_pd.c) */
+    free(P->pd_counts);
     MPI_Comm_free(&P->comm);
     free(P);
 }

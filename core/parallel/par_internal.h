@@ -74,6 +74,7 @@ typedef struct floe_par {
      * the halo's reach for their bonds (the longest acting bond at the last decomposition) */
     struct floe_pd_split *pd_split;
     double pd_reach;
+    int *pd_counts;          /* 4 size: the LPS exchange's counts beyond FLOE_PAR_PD_SYNC_RANKS */
 } floe_par;
 
 /* the load balance's mode (floe_world_parallel_set_balance; its scratch allocated at the
@@ -159,6 +160,7 @@ int floe_par_beams_gather(floe_world *w, floe_par *P, struct floe_world *M);
  * owned point lost its other point). s0_refresh: after a ghost refresh, the ghosts' s0 from
  * their owners (alpha). gather: the bodies' state into rank 0's unsplit world M (outputs,
  * checkpoints). All collective. */
+#define FLOE_PAR_PD_SYNC_RANKS 64
 int floe_par_pd_unsupported(const floe_world *w, char *what, size_t len);
 int floe_par_pd_split_reach(floe_world *w, floe_par *P);
 int floe_par_pd_sync(floe_world *w, floe_par *P);

@@ -20,11 +20,14 @@
  * alpha (LAMMPS' per-point critical stretch) the ghosts' s0 come from their owners at every
  * ghost refresh.
  *
+ * LPS reads the other end's dilatation (and q): between its two passes the ghosts get their
+ * owners' (lps_theta_sync, one more exchange a step and body).
+ *
  * Supported: PMB (constant s_c or alpha; surface correction; broken_tension_only either way)
- * in the monolithic scheme, with fixed and constant-velocity boundary regions (their points'
- * motion). Refused with a message: LPS and user materials (their bond loop reads a
- * neighbour's dilatation: a second exchange inside the loop), plastic bonds, body-force
- * regions, the staggered scheme. The bond arrays whole on every rank and the
+ * and LPS (either influence, with or without the surface correction) in the monolithic
+ * scheme, with fixed and constant-velocity boundary regions (their points' motion).
+ * Refused with a message: user materials (their loops are their own), plastic bonds,
+ * body-force regions, the staggered scheme. The bond arrays whole on every rank and the
  * decomposition's O(bonds) reductions are this first version's limits (docs/parallel.md). */
 #include "floe_parallel.h"
 #include "par_internal.h"
@@ -53,8 +56,9 @@ int floe_par_pd_unsupported(const floe_world *w, char *what, size_t len) {
         }
     for (int b = 0; b < w->npd; b++) {
         const floe_pd_body *pb = w->pd[b];
-        if (pb->mat.model != FLOE_PD_PMB) {
-            snprintf(what, len, "a PD body of material %s (PD bodies split over ranks: pmb)", pb->ops && pb->ops->name ? pb->ops->name : "?");
+        if (pb->mat.model != FLOE_PD_PMB && pb->mat.model != FLOE_PD_LPS) {
+            snprintf(what, len, "a PD body of material %s (PD bodies split over ranks: pmb, lps)",
+                     pb->ops && pb->ops->name ? pb->ops->name : "?");
             return 1;
         }
         if (pb->splast) {
@@ -69,25 +73,34 @@ int floe_par_pd_unsupported(const floe_world *w, char *what, size_t len) {
     return 0;
 }
 
-/* 1 when bond k of body b acts at this state: intact, or broken and pushing back in
- * compression (broken_tension_only) */
-static int bond_may_act(const floe_pd_body *b, int64_t k) {
-    return !b->broken[k] || (b->mat.model == FLOE_PD_PMB && b->mat.broken_tension_only);
+/* at least n doubles in *buf (capacity *cap): 0 or FLOE_ENOMEM */
+static int grow_buf(double **buf, size_t *cap, size_t n) {
+    if (n <= *cap) return FLOE_OK;
+    double *t = realloc(*buf, n * sizeof *t);
+    if (!t) return FLOE_ENOMEM;
+    *buf = t;
+    *cap = n;
+    return FLOE_OK;
 }
 
-/* the longest acting bond of body b with an owned end, from positions x (3 n, only the
- * points with own[q] != 0 read; own NULL: every point here and owned) */
+/* the halo's reach for body b: the longest intact bond with an owned end, from positions x
+ * (3 n; own NULL: every point here and owned), and, where broken bonds push back in
+ * compression (broken_tension_only), their reference length: such a bond acts only within
+ * it, wherever its points are now */
 static double body_reach(const floe_pd_body *b, const double *x, const uint8_t *own) {
+    const int comp = b->mat.model == FLOE_PD_PMB && b->mat.broken_tension_only;
     double L = 0;
     for (int i = 0; i < b->n; i++)
         for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
             const int j = b->partner[k];
-            if (!bond_may_act(b, k)) continue;
-            if (own && (!own[i] || !own[j] || (own[i] != FLOE_PD_OWNED && own[j] != FLOE_PD_OWNED))) continue;
-            double d[3];
+            if (own && own[i] != FLOE_PD_OWNED && own[j] != FLOE_PD_OWNED) continue;
+            if (b->broken[k]) {
+                if (comp && b->len[k] > L) L = b->len[k];
+                continue;
+            }
+            double d[3]; /* intact: both points here (checked at each decomposition) */
             floe_v3_sub(d, x + 3 * (size_t)j, x + 3 * (size_t)i);
             const double r = floe_v3_norm(d);
-            if (b->broken[k] && !(r < b->len[k])) continue; /* broken and stretched: nothing */
             if (r > L) L = r;
         }
     return L;
@@ -98,6 +111,40 @@ int floe_par_pd_split_reach(floe_world *w, floe_par *P) {
     for (int b = 0; b < w->npd; b++) L = fmax(L, body_reach(w->pd[b], w->p.x + 3 * (size_t)w->pd_first[b], NULL));
     P->pd_reach = L; /* the same on every rank: each holds the whole world */
     return FLOE_OK;
+}
+
+/* LPS (floe_pd_body.split_sync, between the dilatation and force passes of body b): the
+ * owners' theta, and q with the surface correction, to the ghosts. Every rank's body b
+ * calls it at the same evaluation (the same scene): collective. */
+static void lps_theta_sync(floe_pd_body *pb, void *ctx) {
+    floe_world *w = ctx;
+    floe_par *P = w->par;
+    floe_pd_split *S = P->pd_split;
+    int b = 0;
+    while (b < w->npd && w->pd[b] != pb) b++;
+    const int R = P->size, g0 = P->nrep + P->nown, m = pb->dten ? 2 : 1;
+    const double *q = pb->dten ? pb->dten + 9 * (size_t)pb->n : NULL;
+    for (int k = 0; k < P->nsend; k++) {
+        const int i = P->send_idx[k], mine = w->pd_of[i] == b;
+        const int l = mine ? floe_pd_local(w, b, i) : 0;
+        S->tx[(size_t)m * k] = mine ? pb->theta[l] : 0.0;
+        if (q) S->tx[(size_t)m * k + 1] = mine ? q[l] : 0.0;
+    }
+    int c[4 * FLOE_PAR_PD_SYNC_RANKS], *cc = R <= FLOE_PAR_PD_SYNC_RANKS ? c : P->pd_counts;
+    for (int r = 0; r < R; r++) {
+        cc[r] = m * P->scount[r]; cc[R + r] = m * P->sdispl[r];
+        cc[2 * R + r] = m * P->rcount[r]; cc[3 * R + r] = m * P->rdispl[r];
+    }
+    MPI_Alltoallv(S->tx, cc, cc + R, MPI_DOUBLE, S->rx, cc + 2 * R, cc + 3 * R, MPI_DOUBLE, P->comm);
+    floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, m * (long long)sizeof(double));
+    double *qq = pb->dten ? pb->dten + 9 * (size_t)pb->n : NULL;
+    for (int k = 0; k < P->nghost; k++) {
+        const int i = g0 + k;
+        if (w->pd_of[i] != b) continue;
+        const int l = floe_pd_local(w, b, i);
+        pb->theta[l] = S->rx[(size_t)m * k];
+        if (qq) qq[l] = S->rx[(size_t)m * k + 1];
+    }
 }
 
 int floe_par_pd_index(floe_world *w, floe_par *P) {
@@ -147,8 +194,18 @@ int floe_par_pd_index(floe_world *w, floe_par *P) {
                     }
                 }
             w->pd[b]->split = S->mask[b];
+            if (pb->mat.model == FLOE_PD_LPS) {
+                w->pd[b]->split_sync = lps_theta_sync;
+                w->pd[b]->split_ctx = w;
+            }
         }
         w->pd_split = S;
+        /* the LPS exchange's buffers, and its counts beyond FLOE_PAR_PD_SYNC_RANKS ranks */
+        if (grow_buf(&S->tx, &S->tx_cap, 2 * (size_t)P->nsend) || grow_buf(&S->rx, &S->rx_cap, 2 * (size_t)P->nghost))
+            rc = FLOE_ENOMEM;
+        if (!rc && P->size > FLOE_PAR_PD_SYNC_RANKS && !P->pd_counts &&
+            !(P->pd_counts = malloc((size_t)4 * P->size * sizeof *P->pd_counts)))
+            rc = FLOE_ENOMEM;
     }
     int mine[2] = {rc, bad}, all[2];
     MPI_Allreduce(mine, all, 2, MPI_INT, MPI_MAX, P->comm);

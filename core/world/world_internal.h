@@ -313,6 +313,10 @@ typedef struct floe_pd_split {
     uint8_t **mask;
     double **xb;
     int nbody;
+    /* LPS: the theta (and q) exchange's buffers, 2 doubles a ghost sent and received (sized
+     * at each decomposition, so that the exchange inside the bond loop allocates nothing) */
+    double *tx, *rx;
+    size_t tx_cap, rx_cap;
 } floe_pd_split;
 /* body-local index of particle i of PD body b (i's body is b) */
 static inline int floe_pd_local(const floe_world *w, int b, int i) {

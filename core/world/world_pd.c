@@ -270,6 +270,7 @@ void floe_pd_split_free(floe_pd_split *S) {
         if (S->xb) free(S->xb[b]);
     }
     free(S->loc); free(S->mask); free(S->xb);
+    free(S->tx); free(S->rx);
     free(S);
 }
 

@@ -18,8 +18,11 @@ on one process and under `mpirun -np 2` and `-np 4`, with an ASCII vtk output ad
     spheres, fracturing there: its points migrate between ranks at rebuilds, and the broken
     flags, s0 and last bond forces must follow them) at -np 2 and 4 the same way, frames
     every 125 us, the last with more than 300 damaged points;
-  - refusals, each with a message naming what, before any step (exit non-zero): an LPS body,
-    the staggered scheme, a body-force region.
+  - LPS (the surface-corrected dilatation, the ghosts' theta and q from their owners between
+    the two passes): the struck disc at -np 2 and the flying disc at -np 2 and 4, the same
+    checks;
+  - refusals, each with a message naming what, before any step (exit non-zero): plastic
+    bonds, the staggered scheme, a body-force region.
 
 Usage: test_mpi_pd.py FLOE MPIEXEC TESTS_MPI_DIR
 """
@@ -31,6 +34,10 @@ import sys
 import tempfile
 
 floe, mpiexec, here = sys.argv[1], sys.argv[2], sys.argv[3]
+PMB_PD = "{model: pmb, density: 2200, bulk_modulus: 1.49e10, fracture_energy: 60, alpha: 0.25}"
+LPS_PD = "{model: lps, density: 2200, bulk_modulus: 1.49e10, shear_modulus: 8.9e9, fracture_energy: 60}"
+PMB_FLY = "{model: pmb, density: 2200, bulk_modulus: 1.49e10, fracture_energy: 120, alpha: 0.25}"
+LPS_FLY = "{model: lps, density: 2200, bulk_modulus: 1.49e10, shear_modulus: 8.9e9, fracture_energy: 120}"
 TOL = 1e-9
 fails = 0
 
@@ -130,19 +137,28 @@ def main():
         run(noalpha, d("c2"), 2)
         compare_csv(d("c1"), d("c2"), "constant s_c, -np 2")
         compare_frames(d("c1"), d("c2"), "constant s_c, -np 2")
-        # migration: the flying disc
-        fly = d("pd_fly.yaml")
-        open(fly, "w").write(with_vtk(open(os.path.join(here, "pd_fly.yaml")).read(), "125.0e-6"))
-        run(fly, d("f1"), 1)
-        for np_ in (2, 4):
-            run(fly, d(f"f{np_}"), np_)
-            compare_csv(d("f1"), d(f"f{np_}"), f"flying disc, -np {np_}")
-            compare_frames(d("f1"), d(f"f{np_}"), f"flying disc, -np {np_}")
+        # migration: the flying disc, PMB and LPS
+        fsrc = with_vtk(open(os.path.join(here, "pd_fly.yaml")).read(), "125.0e-6")
+        for tag, text in (("", fsrc), (" LPS", fsrc.replace(PMB_FLY, LPS_FLY))):
+            fly = d(f"pd_fly{tag.strip()}.yaml")
+            open(fly, "w").write(text)
+            run(fly, d(f"f1{tag.strip()}"), 1)
+            for np_ in (2, 4):
+                run(fly, d(f"f{np_}{tag.strip()}"), np_)
+                compare_csv(d(f"f1{tag.strip()}"), d(f"f{np_}{tag.strip()}"), f"flying disc{tag}, -np {np_}")
+                compare_frames(d(f"f1{tag.strip()}"), d(f"f{np_}{tag.strip()}"), f"flying disc{tag}, -np {np_}")
+        # LPS (the ghosts' dilatation from their owners between the passes), the struck disc
+        lps = d("pd_lps.yaml")
+        open(lps, "w").write(vtk.replace(PMB_PD, LPS_PD))
+        run(lps, d("l1"), 1)
+        run(lps, d("l2"), 2)
+        compare_csv(d("l1"), d("l2"), "LPS, -np 2")
+        compare_frames(d("l1"), d("l2"), "LPS, -np 2")
         # refusals before any step
         cases = [
-            ("lps", src.replace("{model: pmb, density: 2200, bulk_modulus: 1.49e10, fracture_energy: 60, alpha: 0.25}",
-                                "{model: lps, density: 2200, bulk_modulus: 1.49e10, shear_modulus: 8.9e9}"),
-             "material lps"),
+            ("plastic bonds", src.replace(PMB_PD, "{model: pmb, density: 2200, bulk_modulus: 1.49e10, "
+                                                  "fracture_energy: 60, yield_compression: 0.002}"),
+             "plastic bonds"),
             ("staggered", src.replace("time: {duration: 30.0e-6, safety: 0.5}",
                                       "time: {duration: 30.0e-6, safety: 0.5, pd_dem: {scheme: staggered}}"),
              "staggered"),
