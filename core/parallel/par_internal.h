@@ -74,7 +74,7 @@ typedef struct floe_par {
      * the halo's reach for their bonds (the longest acting bond at the last decomposition) */
     struct floe_pd_split *pd_split;
     double pd_reach;
-    int *pd_counts;          /* 4 size: the LPS exchange's counts beyond FLOE_PAR_PD_SYNC_RANKS */
+    int *pd_counts;          /* 4 size: the PD ghost exchanges' counts beyond FLOE_PAR_PD_SYNC_RANKS */
 } floe_par;
 
 /* the load balance's mode (floe_world_parallel_set_balance; its scratch allocated at the

@@ -34,6 +34,7 @@
 #include "world_parts.h"
 #include "floe_pd.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -67,6 +68,10 @@ int floe_par_pd_unsupported(const floe_world *w, char *what, size_t len) {
         }
         if (pb->img) {
             snprintf(what, len, "a PD body bonded through a periodic cell");
+            return 1;
+        }
+        if (pb->nbond > INT_MAX || 4 * (int64_t)pb->n > INT_MAX) { /* the decompositions' reductions */
+            snprintf(what, len, "a PD body of more than %d bonds or %d points", INT_MAX, INT_MAX / 4);
             return 1;
         }
     }
@@ -113,6 +118,20 @@ int floe_par_pd_split_reach(floe_world *w, floe_par *P) {
     return FLOE_OK;
 }
 
+/* m doubles a ghost from its owner: S->tx (m per entry of the send list, packed by the
+ * caller) into S->rx (m per ghost, in the ghosts' order); the buffers sized at the
+ * decomposition (floe_par_pd_index, m <= 2): nothing allocated, no other collective */
+static void ghost_exchange(floe_par *P, floe_pd_split *S, int m) {
+    const int R = P->size;
+    int c[4 * FLOE_PAR_PD_SYNC_RANKS], *cc = R <= FLOE_PAR_PD_SYNC_RANKS ? c : P->pd_counts;
+    for (int r = 0; r < R; r++) {
+        cc[r] = m * P->scount[r]; cc[R + r] = m * P->sdispl[r];
+        cc[2 * R + r] = m * P->rcount[r]; cc[3 * R + r] = m * P->rdispl[r];
+    }
+    MPI_Alltoallv(S->tx, cc, cc + R, MPI_DOUBLE, S->rx, cc + 2 * R, cc + 3 * R, MPI_DOUBLE, P->comm);
+    floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, m * (long long)sizeof(double));
+}
+
 /* LPS (floe_pd_body.split_sync, between the dilatation and force passes of body b): the
  * owners' theta, and q with the surface correction, to the ghosts. Every rank's body b
  * calls it at the same evaluation (the same scene): collective. */
@@ -122,7 +141,7 @@ static void lps_theta_sync(floe_pd_body *pb, void *ctx) {
     floe_pd_split *S = P->pd_split;
     int b = 0;
     while (b < w->npd && w->pd[b] != pb) b++;
-    const int R = P->size, g0 = P->nrep + P->nown, m = pb->dten ? 2 : 1;
+    const int g0 = P->nrep + P->nown, m = pb->dten ? 2 : 1;
     const double *q = pb->dten ? pb->dten + 9 * (size_t)pb->n : NULL;
     for (int k = 0; k < P->nsend; k++) {
         const int i = P->send_idx[k], mine = w->pd_of[i] == b;
@@ -130,13 +149,7 @@ static void lps_theta_sync(floe_pd_body *pb, void *ctx) {
         S->tx[(size_t)m * k] = mine ? pb->theta[l] : 0.0;
         if (q) S->tx[(size_t)m * k + 1] = mine ? q[l] : 0.0;
     }
-    int c[4 * FLOE_PAR_PD_SYNC_RANKS], *cc = R <= FLOE_PAR_PD_SYNC_RANKS ? c : P->pd_counts;
-    for (int r = 0; r < R; r++) {
-        cc[r] = m * P->scount[r]; cc[R + r] = m * P->sdispl[r];
-        cc[2 * R + r] = m * P->rcount[r]; cc[3 * R + r] = m * P->rdispl[r];
-    }
-    MPI_Alltoallv(S->tx, cc, cc + R, MPI_DOUBLE, S->rx, cc + 2 * R, cc + 3 * R, MPI_DOUBLE, P->comm);
-    floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, m * (long long)sizeof(double));
+    ghost_exchange(P, S, m);
     double *qq = pb->dten ? pb->dten + 9 * (size_t)pb->n : NULL;
     for (int k = 0; k < P->nghost; k++) {
         const int i = g0 + k;
@@ -200,7 +213,7 @@ int floe_par_pd_index(floe_world *w, floe_par *P) {
             }
         }
         w->pd_split = S;
-        /* the LPS exchange's buffers, and its counts beyond FLOE_PAR_PD_SYNC_RANKS ranks */
+        /* the ghost exchanges' buffers (LPS, alpha), and their counts beyond FLOE_PAR_PD_SYNC_RANKS ranks */
         if (grow_buf(&S->tx, &S->tx_cap, 2 * (size_t)P->nsend) || grow_buf(&S->rx, &S->rx_cap, 2 * (size_t)P->nghost))
             rc = FLOE_ENOMEM;
         if (!rc && P->size > FLOE_PAR_PD_SYNC_RANKS && !P->pd_counts &&
@@ -268,28 +281,17 @@ int floe_par_pd_s0_refresh(floe_world *w, floe_par *P) {
     int any = 0;
     for (int b = 0; b < w->npd; b++) any |= has_s0(w->pd[b]);
     if (!any || !P->pd_split) return FLOE_OK; /* the same on every rank: the same scene */
-    const int S = P->size, g0 = P->nrep + P->nown;
-    double *sb = malloc((size_t)(P->nsend ? P->nsend : 1) * sizeof *sb);
-    double *rb = malloc((size_t)(P->nghost ? P->nghost : 1) * sizeof *rb);
-    int *c = malloc((size_t)4 * S * sizeof *c);
-    int bad = !sb || !rb || !c, anybad;
-    MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_LOR, P->comm);
-    if (anybad) { free(sb); free(rb); free(c); return FLOE_ENOMEM; }
+    floe_pd_split *S = P->pd_split;
+    const int g0 = P->nrep + P->nown;
     for (int k = 0; k < P->nsend; k++) {
         const int i = P->send_idx[k], b = w->pd_of[i];
-        sb[k] = b >= 0 && has_s0(w->pd[b]) ? w->pd[b]->s0[floe_pd_local(w, b, i)] : 0.0;
+        S->tx[k] = b >= 0 && has_s0(w->pd[b]) ? w->pd[b]->s0[floe_pd_local(w, b, i)] : 0.0;
     }
-    for (int r = 0; r < S; r++) {
-        c[r] = P->scount[r]; c[S + r] = P->sdispl[r];
-        c[2 * S + r] = P->rcount[r]; c[3 * S + r] = P->rdispl[r];
-    }
-    MPI_Alltoallv(sb, c, c + S, MPI_DOUBLE, rb, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->comm);
-    floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, sizeof(double));
+    ghost_exchange(P, S, 1);
     for (int k = 0; k < P->nghost; k++) {
         const int i = g0 + k, b = w->pd_of[i];
-        if (b >= 0 && has_s0(w->pd[b])) w->pd[b]->s0[floe_pd_local(w, b, i)] = rb[k];
+        if (b >= 0 && has_s0(w->pd[b])) w->pd[b]->s0[floe_pd_local(w, b, i)] = S->rx[k];
     }
-    free(sb); free(rb); free(c);
     return FLOE_OK;
 }
 
@@ -324,8 +326,10 @@ int floe_par_pd_gather(floe_world *w, floe_par *P, floe_world *M) {
         MPI_Bcast(&miss, 1, MPI_INT, 0, P->comm);
         if (miss) return floe_world_error(w, FLOE_EINVAL, "MPI: the PD bodies gathered do not match the mirror's (another scene?)");
         const size_t n = (size_t)pb->n;
-        if (pb->nbond > 0) {
-            MPI_Reduce(pb->broken, root ? mb->broken : NULL, (int)pb->nbond, MPI_BYTE, MPI_BOR, 0, P->comm);
+        if (pb->nbond > 0) { /* (rank 0 without a world to fill: into its own, already whole there) */
+            uint8_t *dst = root ? mb->broken : P->rank == 0 ? pb->broken : NULL;
+            MPI_Reduce(P->rank == 0 && !root ? MPI_IN_PLACE : pb->broken, dst, (int)pb->nbond, MPI_BYTE, MPI_BOR, 0,
+                       P->comm);
             floe_par_count_to_root(P, FLOE_COMM_OUTPUT, pb->nbond);
         }
         const int ns = has_s0(pb) ? 1 : 0, mv = 3 + ns;

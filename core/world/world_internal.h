@@ -313,8 +313,9 @@ typedef struct floe_pd_split {
     uint8_t **mask;
     double **xb;
     int nbody;
-    /* LPS: the theta (and q) exchange's buffers, 2 doubles a ghost sent and received (sized
-     * at each decomposition, so that the exchange inside the bond loop allocates nothing) */
+    /* the ghost exchanges of LPS's theta (and q) and alpha's s0: up to 2 doubles a ghost sent
+     * and received (sized at each decomposition, so that an exchange, inside the bond loop
+     * for LPS, allocates nothing) */
     double *tx, *rx;
     size_t tx_cap, rx_cap;
 } floe_pd_split;
