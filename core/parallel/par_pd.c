@@ -183,16 +183,21 @@ int floe_par_pd_index(floe_world *w, floe_par *P) {
             for (int q = 0; q < w->pd[b]->n; q++) S->loc[b][q] = -1;
         }
         for (int i = 0; i < p->n; i++) {
+            /* the body whose ids hold g: the last first id <= g (bodies take ids in order) */
             const long long g = P->gid[i];
+            int lo = 0, up = w->npd;
+            while (lo < up) {
+                const int mid = (lo + up) / 2;
+                if (w->pd_first[mid] <= g) lo = mid + 1;
+                else up = mid;
+            }
+            const int b = lo - 1;
             w->pd_of[i] = -1;
-            for (int b = 0; b < w->npd; b++)
-                if (g >= w->pd_first[b] && g < w->pd_first[b] + w->pd[b]->n) {
-                    const int q = (int)(g - w->pd_first[b]);
-                    w->pd_of[i] = b;
-                    S->loc[b][q] = i;
-                    S->mask[b][q] = i >= P->nrep && i < hi ? FLOE_PD_OWNED : FLOE_PD_GHOST;
-                    break;
-                }
+            if (b < 0 || g >= w->pd_first[b] + w->pd[b]->n) continue;
+            const int q = (int)(g - w->pd_first[b]);
+            w->pd_of[i] = b;
+            S->loc[b][q] = i;
+            S->mask[b][q] = i >= P->nrep && i < hi ? FLOE_PD_OWNED : FLOE_PD_GHOST;
         }
         /* every acting bond with an owned end has both points here (the halo's promise) */
         for (int b = 0; b < w->npd && !bad; b++) {
