@@ -467,15 +467,18 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
  * the world's ledger books as dissipated (it books -work - dE). Row i as pmb_row (stride 3). */
 static inline __attribute__((always_inline)) double plastic_row(floe_pd_body *b, const double *x, double *f, int i,
                                                                 double *gb, double *rb, const uint8_t *own,
-                                                                const int32_t *gslot, int64_t *nbroken)
+                                                                const int32_t *gslot, int64_t *nbroken,
+                                                                const uint8_t *sm)
 {
     const double c = b->c, s_c = b->s_c;
     const double syc = b->mat.yield_compression, syt = b->mat.yield_tension;
     const int comp = b->mat.broken_tension_only;
     float *sp = b->splast;
     double fi[3] = {0, 0, 0}, ei = 0;
+    const int smi = sm ? sm[i] : FLOE_PD_OWNED; /* split: as pmb_row */
     for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
         const int j = b->partner[k], ownj = !gb || own[j];
+        if (sm && (!sm[j] || (smi != FLOE_PD_OWNED && sm[j] != FLOE_PD_OWNED))) continue;
         double d[3], g[3] = {0, 0, 0};
         floe_pd_bond_vec(b, x, b->cellH, i, j, k, d);
         double r = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
@@ -485,7 +488,7 @@ static inline __attribute__((always_inline)) double plastic_row(floe_pd_body *b,
             on = comp && !(s >= 0);
         } else if (s_c > 0 && s > s_c) {
             b->broken[k] = 1;
-            (*nbroken)++;
+            *nbroken += smi == FLOE_PD_OWNED; /* split: counted by the rank of its row */
             on = comp && !(s >= 0);
         }
         if (on) {
@@ -495,7 +498,7 @@ static inline __attribute__((always_inline)) double plastic_row(floe_pd_body *b,
             if (r > 0) {
                 double w = (double)b->vfac[k] * (b->scorr ? (double)b->scorr[k] : 1.0) * b->V[i] * b->V[j];
                 double fm = c * se * w / r;
-                ei += 0.5 * c * se * se * L * w;
+                if (smi == FLOE_PD_OWNED) ei += 0.5 * c * se * se * L * w; /* split: on the row's rank */
                 for (int a = 0; a < 3; a++) {
                     g[a] = fm * d[a];
                     fi[a] += g[a];
@@ -514,7 +517,8 @@ static inline __attribute__((always_inline)) double plastic_row(floe_pd_body *b,
 static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
 {
     const int n = b->n, B = FLOE_PD_ROW_BLOCK, nblk = (n + B - 1) / B;
-    const int nt = pd_threads(b);
+    const uint8_t *sm = b->split;
+    const int nt = sm ? 1 : pd_threads(b); /* a split body: serial */
     floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3, nt) : NULL;
     double energy = 0.0;
     int64_t nbroken = 0;
@@ -522,7 +526,11 @@ static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
         for (int c = 0; c < nblk; c++) {
             const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
             double eb = 0.0;
-            for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, f, i, NULL, NULL, NULL, NULL, &nbroken);
+            if (sm) {
+                for (int i = c * B; i < i1; i++)
+                    if (sm[i]) eb += plastic_row(b, x, f, i, NULL, NULL, NULL, NULL, &nbroken, sm);
+            } else
+                for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, f, i, NULL, NULL, NULL, NULL, &nbroken, NULL);
             energy += eb;
         }
     } else {
@@ -536,7 +544,7 @@ static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
                     const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
                     double eb = 0.0;
                     int64_t nbk = 0;
-                    for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, f, i, P->g, P->row, own, P->gslot, &nbk);
+                    for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, f, i, P->g, P->row, own, P->gslot, &nbk, NULL);
                     P->blk[c] = eb;
                     P->blkn[c] = nbk;
                 }

@@ -9,7 +9,8 @@
  *   - the ranks' energies and broken counts add up to the unsplit ones (energy: the sum's
  *     order differs, rel. 1e-12; counts exactly);
  *   - an owned point's s0 is the unsplit one to the bit.
- * LPS (plain and with the surface correction) the same way, the ghosts' theta and q given
+ * Plastic PMB bonds (yield in compression and tension): every bond with an owned end has the
+ * unsplit plastic stretch. LPS (plain and with the surface correction) the same way, the ghosts' theta and q given
  * between the passes (split_sync) as the ranks' exchange gives them; an owned point's theta
  * and q are the unsplit ones to the bit. */
 #include "check.h"
@@ -24,7 +25,7 @@
 #define NY 4
 #define NZ 4
 
-static floe_pd_body *bar(double alpha, int lps, int corr)
+static floe_pd_body *bar(double alpha, int lps, int corr, double yield)
 {
     floe_pd_region r;
     memset(&r, 0, sizeof r);
@@ -38,6 +39,7 @@ static floe_pd_body *bar(double alpha, int lps, int corr)
     floe_pd_material m = lps ? floe_pd_material_lps(2200, 1.49e10, 8.9e9, 2e-3, FLOE_PD_W_GAUSS)
                              : floe_pd_material_pmb(2200, 1.49e10, 2e-3);
     m.alpha = alpha;
+    m.yield_compression = m.yield_tension = yield; /* plastic bonds (PMB, not with alpha) */
     CHECK(floe_pd_set_material(b, &m) == FLOE_OK, "material");
     if (corr) CHECK(floe_pd_surface_correction(b) == FLOE_OK, "surface correction");
     return b;
@@ -74,9 +76,9 @@ static void place(const floe_pd_body *b, int e, double *x)
     }
 }
 
-static void run(int R, double alpha, int lps, int corr)
+static void run(int R, double alpha, int lps, int corr, double yield)
 {
-    floe_pd_body *full = bar(alpha, lps, corr), *part[3];
+    floe_pd_body *full = bar(alpha, lps, corr, yield), *part[3];
     const int n = full->n;
     int *owner = malloc(n * sizeof *owner);
     uint8_t *mask[3];
@@ -85,7 +87,7 @@ static void run(int R, double alpha, int lps, int corr)
         owner[i] = o < R ? o : R - 1;
     }
     for (int r = 0; r < R; r++) {
-        part[r] = bar(alpha, lps, corr);
+        part[r] = bar(alpha, lps, corr, yield);
         mask[r] = calloc(n, 1);
         for (int i = 0; i < n; i++)
             if (owner[i] == r) mask[r][i] = FLOE_PD_OWNED;
@@ -135,8 +137,10 @@ static void run(int R, double alpha, int lps, int corr)
                 }
             for (int i = 0; i < n; i++)
                 for (int64_t k = full->off[i]; k < full->off[i + 1]; k++)
-                    if (mask[r][i] == FLOE_PD_OWNED || mask[r][full->partner[k]] == FLOE_PD_OWNED)
+                    if (mask[r][i] == FLOE_PD_OWNED || mask[r][full->partner[k]] == FLOE_PD_OWNED) {
                         flags &= part[r]->broken[k] == full->broken[k];
+                        if (yield > 0) flags &= part[r]->splast[k] == full->splast[k];
+                    }
         }
         /* the ghosts' s0 from their owners (the ranks' exchange) */
         if (alpha > 0)
@@ -149,12 +153,18 @@ static void run(int R, double alpha, int lps, int corr)
         if (rel > erel) erel = rel;
         broke = full->nbroken;
     }
-    printf("%s%s R %d alpha %g: %d points, %d ghosts on rank 0, %lld bonds, %lld broken after 12 evaluations, "
-           "energy rel. err %.2e\n", lps ? "LPS" : "PMB", corr ? " corrected" : "", R, alpha, n, ghosts,
+    printf("%s%s%s R %d alpha %g: %d points, %d ghosts on rank 0, %lld bonds, %lld broken after 12 evaluations, "
+           "energy rel. err %.2e\n", lps ? "LPS" : "PMB", corr ? " corrected" : "", yield > 0 ? " plastic" : "", R, alpha, n, ghosts,
            (long long)full->nbond, (long long)broke, erel);
     CHECK(broke > 20 && broke < full->nbond / 2, "some bonds break in the neck (%lld)", (long long)broke);
     CHECK(fbits, "R %d alpha %g: every owned point's force is the unsplit one to the bit", R, alpha);
-    CHECK(flags, "R %d alpha %g: every bond with an owned end has the unsplit broken flag", R, alpha);
+    CHECK(flags, "R %d alpha %g: every bond with an owned end has the unsplit broken flag (and plastic stretch)", R, alpha);
+    if (yield > 0) {
+        int64_t yielded = 0;
+        for (int64_t k = 0; k < full->nbond; k++) yielded += full->splast[k] != 0.0f;
+        printf("  plastic: %lld bonds yielded\n", (long long)yielded);
+        CHECK(yielded > 50, "plastic: bonds yield (%lld)", (long long)yielded);
+    }
     CHECK(s0bits, "R %d alpha %g: every owned point's s0 (PMB alpha) or theta and q (LPS) is the unsplit one to the bit",
           R, alpha);
     CHECK(erel <= 1e-12, "R %d alpha %g: the ranks' energies add up to the unsplit energy (rel. %.2e)", R, alpha, erel);
@@ -168,11 +178,12 @@ static void run(int R, double alpha, int lps, int corr)
 
 int main(void)
 {
-    run(2, 0.0, 0, 0);
-    run(3, 0.0, 0, 0);
-    run(2, 0.25, 0, 0);
-    run(3, 0.25, 0, 1);
-    run(2, 0.0, 1, 0);
-    run(3, 0.0, 1, 1);
+    run(2, 0.0, 0, 0, 0);
+    run(3, 0.0, 0, 0, 0);
+    run(2, 0.25, 0, 0, 0);
+    run(3, 0.25, 0, 1, 0);
+    run(2, 0.0, 0, 0, 5e-4);
+    run(2, 0.0, 1, 0, 0);
+    run(3, 0.0, 1, 1, 0);
     return check_summary("test_pd_split");
 }

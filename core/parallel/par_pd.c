@@ -14,20 +14,20 @@
  * silent loss).
  *
  * What a rank does not evaluate goes stale on it: the broken flags of bonds with no owned
- * end, the s0 and last bond forces of points it does not own. At every decomposition, before
- * the migration, they are made whole on every rank (flags OR-ed, the owners' values summed
- * with zeros elsewhere), so that a point arriving at a new owner finds them right. With
+ * end, the s0 and last bond forces of points it does not own, the plastic stretches of bonds
+ * whose row's point it does not own. At every decomposition, before the migration, they are
+ * made whole on every rank (flags OR-ed, the owners' values summed with zeros elsewhere), so that a point arriving at a new owner finds them right. With
  * alpha (LAMMPS' per-point critical stretch) the ghosts' s0 come from their owners at every
  * ghost refresh.
  *
  * LPS reads the other end's dilatation (and q): between its two passes the ghosts get their
  * owners' (lps_theta_sync, one more exchange a step and body).
  *
- * Supported: PMB (constant s_c or alpha; surface correction; broken_tension_only either way)
- * and LPS (either influence, with or without the surface correction) in the monolithic
+ * Supported: PMB (constant s_c or alpha, or plastic bonds; surface correction;
+ * broken_tension_only either way) and LPS (either influence, with or without the surface correction) in the monolithic
  * scheme, with fixed and constant-velocity boundary regions (their points' motion).
- * Refused with a message: user materials (their loops are their own), plastic bonds,
- * body-force regions, the staggered scheme. The bond arrays whole on every rank and the
+ * Refused with a message: user materials (their loops are their own), body-force regions,
+ * the staggered scheme. The bond arrays whole on every rank and the
  * decomposition's O(bonds) reductions are this first version's limits (docs/parallel.md). */
 #include "floe_parallel.h"
 #include "par_internal.h"
@@ -60,10 +60,6 @@ int floe_par_pd_unsupported(const floe_world *w, char *what, size_t len) {
         if (pb->mat.model != FLOE_PD_PMB && pb->mat.model != FLOE_PD_LPS) {
             snprintf(what, len, "a PD body of material %s (PD bodies split over ranks: pmb, lps)",
                      pb->ops && pb->ops->name ? pb->ops->name : "?");
-            return 1;
-        }
-        if (pb->splast) {
-            snprintf(what, len, "a PD body with plastic bonds (yield_compression, yield_tension)");
             return 1;
         }
         if (pb->img) {
@@ -238,6 +234,32 @@ int floe_par_pd_index(floe_world *w, floe_par *P) {
 /* 1 when body b keeps a per-point s0 (alpha) */
 static int has_s0(const floe_pd_body *b) { return b->s0 && b->s_c > 0; }
 
+/* body b's state as its owners hold it, zeros elsewhere, to be summed over the ranks (own
+ * NULL: all here): per point its last bond force and s0 (alpha), 3 or 4 doubles, then with
+ * plastic bonds the plastic stretch of each bond whose row's point is owned (nbond floats);
+ * NULL when out of memory */
+static double *owned_values(const floe_world *w, const floe_pd_body *pb, int b, int off, const uint8_t *own) {
+    (void)b;
+    const size_t n = (size_t)pb->n;
+    const int ns = has_s0(pb) ? 1 : 0, mv = 3 + ns;
+    double *v = malloc(n * mv * sizeof *v + (pb->splast ? (size_t)pb->nbond * sizeof(float) : 0) + 1);
+    if (!v) return NULL;
+    const double *fold = w->pd_fold + 3 * (size_t)off;
+    for (size_t q = 0; q < n; q++) {
+        const int o = !own || own[q] == FLOE_PD_OWNED;
+        for (int a = 0; a < 3; a++) v[q * mv + a] = o ? fold[3 * q + a] : 0.0;
+        if (ns) v[q * mv + 3] = o ? pb->s0[q] : 0.0;
+    }
+    if (pb->splast) {
+        float *sp = (float *)(v + n * mv);
+        for (int i = 0; i < pb->n; i++) {
+            const int o = !own || own[i] == FLOE_PD_OWNED;
+            for (int64_t k = pb->off[i]; k < pb->off[i + 1]; k++) sp[k] = o ? pb->splast[k] : 0.0f;
+        }
+    }
+    return v;
+}
+
 int floe_par_pd_sync(floe_world *w, floe_par *P) {
     const floe_pd_split *S = P->pd_split;
     if (!w->npd || !S) return FLOE_OK;
@@ -255,24 +277,25 @@ int floe_par_pd_sync(floe_world *w, floe_par *P) {
             MPI_Allreduce(MPI_IN_PLACE, pb->broken, (int)pb->nbond, MPI_BYTE, MPI_BOR, P->comm);
             floe_par_count_allreduce(P, FLOE_COMM_MIGRATE, pb->nbond);
         }
-        /* the owners' s0 and last bond forces (the ledger's trapezoid) */
+        /* the owners' s0 and last bond forces (the ledger's trapezoid), the plastic stretches
+         * of the rows' owners */
         const int ns = has_s0(pb) ? 1 : 0, mv = 3 + ns;
-        double *v = malloc(n * mv * sizeof *v);
+        double *v = owned_values(w, pb, b, off, m);
         int bad = !v, any;
         MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
         if (any) { free(v); return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: PD bodies: out of memory"); }
-        double *fold = w->pd_fold + 3 * (size_t)off;
-        for (size_t q = 0; q < n; q++) {
-            const int o = m[q] == FLOE_PD_OWNED;
-            for (int a = 0; a < 3; a++) v[q * mv + a] = o ? fold[3 * q + a] : 0.0;
-            if (ns) v[q * mv + 3] = o ? pb->s0[q] : 0.0;
-        }
         MPI_Allreduce(MPI_IN_PLACE, v, (int)(n * mv), MPI_DOUBLE, MPI_SUM, P->comm);
         floe_par_count_allreduce(P, FLOE_COMM_MIGRATE, (long long)(n * mv * sizeof *v));
+        if (pb->splast) {
+            MPI_Allreduce(MPI_IN_PLACE, (float *)(v + n * mv), (int)pb->nbond, MPI_FLOAT, MPI_SUM, P->comm);
+            floe_par_count_allreduce(P, FLOE_COMM_MIGRATE, pb->nbond * (long long)sizeof(float));
+        }
+        double *fold = w->pd_fold + 3 * (size_t)off;
         for (size_t q = 0; q < n; q++) {
             for (int a = 0; a < 3; a++) fold[3 * q + a] = v[q * mv + a];
             if (ns) pb->s0[q] = v[q * mv + 3];
         }
+        if (pb->splast) memcpy(pb->splast, v + n * mv, (size_t)pb->nbond * sizeof(float));
         free(v);
         /* the halo's reach: the longest acting bond with an owned end, now */
         L = fmax(L, body_reach(pb, S->xb[b], m));
@@ -338,19 +361,17 @@ int floe_par_pd_gather(floe_world *w, floe_par *P, floe_world *M) {
             floe_par_count_to_root(P, FLOE_COMM_OUTPUT, pb->nbond);
         }
         const int ns = has_s0(pb) ? 1 : 0, mv = 3 + ns;
-        double *v = malloc(n * mv * sizeof *v);
+        double *v = owned_values(w, pb, b, off, S ? S->mask[b] : NULL);
         bad = !v;
         MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_LOR, P->comm);
         if (anybad) { free(v); return floe_world_error(w, FLOE_ENOMEM, "MPI: gathering the PD bodies: out of memory"); }
-        const uint8_t *m = S ? S->mask[b] : NULL;
-        const double *fold = w->pd_fold + 3 * (size_t)off;
-        for (size_t q = 0; q < n; q++) {
-            const int o = !m || m[q] == FLOE_PD_OWNED;
-            for (int a = 0; a < 3; a++) v[q * mv + a] = o ? fold[3 * q + a] : 0.0;
-            if (ns) v[q * mv + 3] = o ? pb->s0[q] : 0.0;
-        }
         MPI_Reduce(P->rank == 0 ? MPI_IN_PLACE : v, v, (int)(n * mv), MPI_DOUBLE, MPI_SUM, 0, P->comm);
         floe_par_count_to_root(P, FLOE_COMM_OUTPUT, (long long)(n * mv * sizeof *v));
+        float *sp = (float *)(v + n * mv);
+        if (pb->splast) {
+            MPI_Reduce(P->rank == 0 ? MPI_IN_PLACE : sp, sp, (int)pb->nbond, MPI_FLOAT, MPI_SUM, 0, P->comm);
+            floe_par_count_to_root(P, FLOE_COMM_OUTPUT, pb->nbond * (long long)sizeof(float));
+        }
         if (root) {
             double *mf = M->pd_fold + 3 * (size_t)off;
             int64_t nb = 0;
@@ -358,6 +379,7 @@ int floe_par_pd_gather(floe_world *w, floe_par *P, floe_world *M) {
                 for (int a = 0; a < 3; a++) mf[3 * q + a] = v[q * mv + a];
                 if (ns && mb->s0) mb->s0[q] = v[q * mv + 3];
             }
+            if (pb->splast && mb->splast) memcpy(mb->splast, sp, (size_t)pb->nbond * sizeof(float));
             for (int64_t k = 0; k < mb->nbond; k++) nb += mb->broken[k];
             mb->nbroken = nb;
             M->pd_nbroken_seen[b] = (long long)nb;
