@@ -238,8 +238,7 @@ static int has_s0(const floe_pd_body *b) { return b->s0 && b->s_c > 0; }
  * NULL: all here): per point its last bond force and s0 (alpha), 3 or 4 doubles, then with
  * plastic bonds the plastic stretch of each bond whose row's point is owned (nbond floats);
  * NULL when out of memory */
-static double *owned_values(const floe_world *w, const floe_pd_body *pb, int b, int off, const uint8_t *own) {
-    (void)b;
+static double *owned_values(const floe_world *w, const floe_pd_body *pb, int off, const uint8_t *own) {
     const size_t n = (size_t)pb->n;
     const int ns = has_s0(pb) ? 1 : 0, mv = 3 + ns;
     double *v = malloc(n * mv * sizeof *v + (pb->splast ? (size_t)pb->nbond * sizeof(float) : 0) + 1);
@@ -280,7 +279,7 @@ int floe_par_pd_sync(floe_world *w, floe_par *P) {
         /* the owners' s0 and last bond forces (the ledger's trapezoid), the plastic stretches
          * of the rows' owners */
         const int ns = has_s0(pb) ? 1 : 0, mv = 3 + ns;
-        double *v = owned_values(w, pb, b, off, m);
+        double *v = owned_values(w, pb, off, m);
         int bad = !v, any;
         MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
         if (any) { free(v); return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: PD bodies: out of memory"); }
@@ -327,6 +326,8 @@ int floe_par_pd_gather(floe_world *w, floe_par *P, floe_world *M) {
     if (!w->npd) return FLOE_OK;
     int miss = 0;
     if (P->rank == 0 && M && M->npd != w->npd) miss = 1;
+    for (int b = 0; !miss && P->rank == 0 && M && b < w->npd; b++)
+        if (M->pd[b]->n != w->pd[b]->n || M->pd[b]->nbond != w->pd[b]->nbond) miss = 1;
     MPI_Bcast(&miss, 1, MPI_INT, 0, P->comm);
     if (miss) return floe_world_error(w, FLOE_EINVAL, "MPI: the PD bodies gathered do not match the mirror's (another scene?)");
     const floe_pd_split *S = P->pd_split;
@@ -350,9 +351,6 @@ int floe_par_pd_gather(floe_world *w, floe_par *P, floe_world *M) {
     free(e);
     for (int b = 0, off = 0; b < w->npd; off += w->pd[b]->n, b++) {
         floe_pd_body *pb = w->pd[b], *mb = root ? M->pd[b] : NULL;
-        if (root && (mb->n != pb->n || mb->nbond != pb->nbond)) miss = 1;
-        MPI_Bcast(&miss, 1, MPI_INT, 0, P->comm);
-        if (miss) return floe_world_error(w, FLOE_EINVAL, "MPI: the PD bodies gathered do not match the mirror's (another scene?)");
         const size_t n = (size_t)pb->n;
         if (pb->nbond > 0) { /* (rank 0 without a world to fill: into its own, already whole there) */
             uint8_t *dst = root ? mb->broken : P->rank == 0 ? pb->broken : NULL;
@@ -361,7 +359,7 @@ int floe_par_pd_gather(floe_world *w, floe_par *P, floe_world *M) {
             floe_par_count_to_root(P, FLOE_COMM_OUTPUT, pb->nbond);
         }
         const int ns = has_s0(pb) ? 1 : 0, mv = 3 + ns;
-        double *v = owned_values(w, pb, b, off, S ? S->mask[b] : NULL);
+        double *v = owned_values(w, pb, off, S ? S->mask[b] : NULL);
         bad = !v;
         MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_LOR, P->comm);
         if (anybad) { free(v); return floe_world_error(w, FLOE_ENOMEM, "MPI: gathering the PD bodies: out of memory"); }

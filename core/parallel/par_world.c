@@ -168,7 +168,8 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     double *in = NULL;
     int nin = 0;
     if (!dest || !hd) rc = FLOE_ENOMEM;
-    if (!rc) rc = floe_par_pd_sync(w, P) ? FLOE_EINVAL : FLOE_OK; /* PD bodies: made whole before the migration */
+    /* PD bodies: made whole before the migration (its own message, agreed by every rank) */
+    if (!rc && (rc = floe_par_pd_sync(w, P)) != FLOE_OK) { free(dest); free(hd); free(recs); return rc; }
     if (!rc) rc = floe_par_rcb(w, P, dest);
     floe_par_index ix = {0};
     if (!rc) rc = floe_par_index_build(P, hi, &ix);
