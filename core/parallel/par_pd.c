@@ -49,12 +49,9 @@ int floe_par_pd_unsupported(const floe_world *w, char *what, size_t len) {
         return 1;
     }
     /* fixed and constant-velocity regions are their points' motion (it travels with them;
-     * a ramped one is a motion callback, refused with those) */
-    for (int q = 0; q < w->npd_bc; q++)
-        if (w->pd_bc[q]->def.kind == FLOE_PD_BC_BODY_FORCE) {
-            snprintf(what, len, "a PD body-force region");
-            return 1;
-        }
+     * a ramped one is a motion callback, refused with those); a body-force region's points
+     * take its force on their owners' ranks, its last forces made whole at each
+     * decomposition (regions_pack) */
     for (int b = 0; b < w->npd; b++) {
         const floe_pd_body *pb = w->pd[b];
         if (pb->mat.model != FLOE_PD_PMB && pb->mat.model != FLOE_PD_LPS) {
@@ -259,6 +256,61 @@ static double *owned_values(const floe_world *w, const floe_pd_body *pb, int off
     return v;
 }
 
+/* the body-force regions' last forces (the ledger's trapezoid work, world_pd.c
+ * floe_pd_bc_forces): 3 doubles a region point, regions in order */
+static size_t regions_len(const floe_world *w) {
+    size_t n = 0;
+    for (int r = 0; r < w->npd_bc; r++)
+        if (w->pd_bc[r]->fold) n += 3 * (size_t)w->pd_bc[r]->n;
+    return n;
+}
+
+/* ... as the points' owners hold them, zeros elsewhere (S NULL: all here), to be summed over
+ * the ranks */
+static void regions_pack(const floe_world *w, const floe_pd_split *S, double *v) {
+    for (int r = 0; r < w->npd_bc; r++) {
+        const floe_pd_bc_rec *R = w->pd_bc[r];
+        if (!R->fold) continue;
+        const int f0 = w->pd_first[R->body];
+        for (int a = 0; a < R->n; a++, v += 3) {
+            const int o = !S || S->mask[R->body][R->pts[a] - f0] == FLOE_PD_OWNED;
+            for (int k = 0; k < 3; k++) v[k] = o ? R->fold[3 * a + k] : 0.0;
+        }
+    }
+}
+
+static void regions_unpack(floe_world *w, const double *v) {
+    for (int r = 0; r < w->npd_bc; r++) {
+        floe_pd_bc_rec *R = w->pd_bc[r];
+        if (!R->fold) continue;
+        memcpy(R->fold, v, 3 * (size_t)R->n * sizeof *v);
+        v += 3 * (size_t)R->n;
+    }
+}
+
+/* the regions made whole on every rank (to root only: into M on rank 0, M NULL elsewhere),
+ * the same collective on every rank; FLOE_OK or FLOE_ENOMEM agreed */
+static int regions_sum(floe_world *w, floe_par *P, floe_world *M, int to_root) {
+    const size_t n = regions_len(w);
+    if (!n) return FLOE_OK;
+    double *v = malloc(n * sizeof *v);
+    int bad = !v, any;
+    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
+    if (any) { free(v); return FLOE_ENOMEM; }
+    regions_pack(w, P->pd_split, v);
+    if (to_root) {
+        MPI_Reduce(P->rank == 0 ? MPI_IN_PLACE : v, v, (int)n, MPI_DOUBLE, MPI_SUM, 0, P->comm);
+        floe_par_count_to_root(P, FLOE_COMM_OUTPUT, (long long)(n * sizeof *v));
+        if (M) regions_unpack(M, v);
+    } else {
+        MPI_Allreduce(MPI_IN_PLACE, v, (int)n, MPI_DOUBLE, MPI_SUM, P->comm);
+        floe_par_count_allreduce(P, FLOE_COMM_MIGRATE, (long long)(n * sizeof *v));
+        regions_unpack(w, v);
+    }
+    free(v);
+    return FLOE_OK;
+}
+
 int floe_par_pd_sync(floe_world *w, floe_par *P) {
     const floe_pd_split *S = P->pd_split;
     if (!w->npd || !S) return FLOE_OK;
@@ -299,6 +351,7 @@ int floe_par_pd_sync(floe_world *w, floe_par *P) {
         /* the halo's reach: the longest acting bond with an owned end, now */
         L = fmax(L, body_reach(pb, S->xb[b], m));
     }
+    if (regions_sum(w, P, NULL, 0)) return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: PD regions: out of memory");
     MPI_Allreduce(&L, &P->pd_reach, 1, MPI_DOUBLE, MPI_MAX, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof L);
     return FLOE_OK;
@@ -328,6 +381,9 @@ int floe_par_pd_gather(floe_world *w, floe_par *P, floe_world *M) {
     if (P->rank == 0 && M && M->npd != w->npd) miss = 1;
     for (int b = 0; !miss && P->rank == 0 && M && b < w->npd; b++)
         if (M->pd[b]->n != w->pd[b]->n || M->pd[b]->nbond != w->pd[b]->nbond) miss = 1;
+    if (P->rank == 0 && M && !miss && M->npd_bc != w->npd_bc) miss = 1;
+    for (int r = 0; !miss && P->rank == 0 && M && r < w->npd_bc; r++)
+        if (M->pd_bc[r]->n != w->pd_bc[r]->n || !M->pd_bc[r]->fold != !w->pd_bc[r]->fold) miss = 1;
     MPI_Bcast(&miss, 1, MPI_INT, 0, P->comm);
     if (miss) return floe_world_error(w, FLOE_EINVAL, "MPI: the PD bodies gathered do not match the mirror's (another scene?)");
     const floe_pd_split *S = P->pd_split;
@@ -337,6 +393,10 @@ int floe_par_pd_gather(floe_world *w, floe_par *P, floe_world *M) {
     int bad = !e, anybad;
     MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_LOR, P->comm);
     if (anybad) { free(e); return floe_world_error(w, FLOE_ENOMEM, "MPI: gathering the PD bodies: out of memory"); }
+    if (regions_sum(w, P, root ? M : NULL, 1)) {
+        free(e);
+        return floe_world_error(w, FLOE_ENOMEM, "MPI: gathering the PD regions: out of memory");
+    }
     for (int b = 0; b < w->npd; b++) {
         e[2 * b] = w->pd_eold[b];
         e[2 * b + 1] = b < w->pd_diss_n ? w->pd_diss[b] : 0.0;

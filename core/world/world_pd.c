@@ -360,6 +360,7 @@ int floe_world_pd_region(floe_world *w, int body, const floe_pd_bc *bc) {
     else if (!bc->sdf)
         for (int k = 0; k < 3 && !bad; k++)
             if (!(bc->lo[k] <= bc->hi[k])) bad = "the box needs lo <= hi on every axis";
+    if (!bad && w->pd_split) bad = "regions are added before the run is split over MPI ranks";
     if (bad) return -floe_world_error(w, FLOE_EINVAL, "PD region %d: %s", w->npd_bc, bad);
     const floe_pd_body *pb = w->pd[body];
     const int f0 = w->pd_first[body];
@@ -454,13 +455,17 @@ double floe_pd_bc_forces(floe_world *w) {
         const int f0 = w->pd_first[r->body];
         double b[3], s = pd_ramp(&r->def, t, NULL);
         for (int k = 0; k < 3; k++) b[k] = s * r->def.value[k];
+        /* MPI (a split body): each region point on the rank that owns it; the others' last
+         * forces stay as they are, made whole at each decomposition (core/parallel/par_pd.c) */
+        const uint8_t *own = w->pd_split ? w->pd_split->mask[r->body] : NULL;
         for (int a = 0; a < r->n; a++) {
-            int i = r->pts[a];
+            const int q = r->pts[a] - f0, i = floe_pd_particle(w, r->body, q);
+            if (own && own[q] != FLOE_PD_OWNED) continue;
             double *old = r->fold + 3 * a;
             if (p->motion[i] != FLOE_FREE) { floe_v3_set(old, 0, 0, 0); continue; }
-            double V = pb->V[i - f0], f[3];
+            double V = pb->V[q], f[3];
             double bi[3] = {b[0], b[1], b[2]}; /* each point's callback gets the ramped value */
-            if (r->def.force_fn) r->def.force_fn(t, pb->X + 3 * (size_t)(i - f0), bi, r->def.force_user);
+            if (r->def.force_fn) r->def.force_fn(t, pb->X + 3 * (size_t)q, bi, r->def.force_user);
             for (int k = 0; k < 3; k++) f[k] = bi[k] * V;
             if (w->def.dim == 2) f[2] = 0;
             floe_v3_add(p->f + 3 * i, p->f + 3 * i, f);

@@ -33,8 +33,9 @@ files, so a restarted run must also continue them without a frame missing or rep
  providers' rows gathered at the checkpoint the file holds rank 0's world's rows as of its
  prepare: sea_ice.yaml then differs by 1.4e-2 of the scale on particles.csv and servo.yaml by
  2.4e-5 on energy.csv at R = 2, tried by hand). PD bodies (tests/mpi/pd_fly.yaml, a disc
- fracturing around the checkpoint): the same two restarts (without the bodies' state gathered
- into the file: particles.csv 0.15 and energy.csv 1.1e-4 of the scale off at R = 2, tried by
+ fracturing around the checkpoint, half of it under a body-force region): the same two restarts
+ (without the bodies' state gathered into the file: particles.csv 0.15 and energy.csv 1.1e-4
+ of the scale off at R = 2; without the region's last forces: energy.csv 2.4e-7; tried by
  hand).
  (d) a missing and a corrupted checkpoint under R ranks: every rank exits non-zero (each
      rank's status is printed by a wrapper), rank 0 names the reason, within a time limit
