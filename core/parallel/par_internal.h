@@ -154,8 +154,10 @@ int floe_par_beams_gather(floe_world *w, floe_par *P, struct floe_world *M);
 /* par_pd.c: PD bodies split over the ranks (docs/parallel.md, "PD bodies across ranks").
  * unsupported: 1 and what (for the refusal) when the world's PD bodies cannot run split.
  * split_reach: at the split, before the store is reordered: the halo's reach from the whole
- * world. sync: at a decomposition, before the migration: the broken flags, s0 and last bond
- * forces made whole on every rank, the halo's reach measured. index: after the ghosts: each
+ * world. sync: at a decomposition, before the bisection: the bonds broken since the last one
+ * sent to every rank, the plastic stretches and the body-force regions' last forces made
+ * whole, the halo's reach measured. out: after the bisection, before the migration: the
+ * leaving points' last bond forces and s0 to their new owners. index: after the ghosts: each
  * body's local points, masks and pd_of (FLOE_EINVAL on every rank when an intact bond of an
  * owned point lost its other point). s0_refresh: after a ghost refresh, the ghosts' s0 from
  * their owners (alpha). gather: the bodies' state into rank 0's unsplit world M (outputs,
@@ -164,6 +166,7 @@ int floe_par_beams_gather(floe_world *w, floe_par *P, struct floe_world *M);
 int floe_par_pd_unsupported(const floe_world *w, char *what, size_t len);
 int floe_par_pd_split_reach(floe_world *w, floe_par *P);
 int floe_par_pd_sync(floe_world *w, floe_par *P);
+int floe_par_pd_out(floe_world *w, floe_par *P, const int *dest);
 int floe_par_pd_index(floe_world *w, floe_par *P);
 int floe_par_pd_s0_refresh(floe_world *w, floe_par *P);
 int floe_par_pd_gather(floe_world *w, floe_par *P, struct floe_world *M);

@@ -311,6 +311,60 @@ static int regions_sum(floe_world *w, floe_par *P, floe_world *M, int to_root) {
     return FLOE_OK;
 }
 
+/* the bonds broken since the last decomposition, to every rank: each is reported by the rank
+ * that owns its row's point (that rank evaluated it at every evaluation since: the halo's
+ * promise), as a global bond id (the bodies' bonds numbered in order), gathered by every
+ * rank and set there; the flags then equal the snapshot S->snap everywhere. O(breaks) on
+ * the wire (the flags were an MPI_Allreduce(BOR) of every bond until session 19); the scan of
+ * the owned rows is local */
+static int flags_sync(floe_world *w, floe_par *P) {
+    floe_pd_split *S = P->pd_split;
+    const int R = P->size;
+    long long nnew = 0, base = 0;
+    for (int b = 0; b < w->npd; b++) {
+        const floe_pd_body *pb = w->pd[b];
+        const uint8_t *m = S->mask[b], *sn = S->snap[b];
+        for (int i = 0; i < pb->n; i++)
+            if (m[i] == FLOE_PD_OWNED)
+                for (int64_t k = pb->off[i]; k < pb->off[i + 1]; k++) nnew += pb->broken[k] & !sn[k];
+    }
+    long long *mine = malloc((size_t)(nnew ? nnew : 1) * sizeof *mine);
+    int *cd = malloc((size_t)2 * R * sizeof *cd);
+    int bad = !mine || !cd || nnew > INT_MAX, any;
+    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof bad);
+    if (any) { free(mine); free(cd); return FLOE_ENOMEM; }
+    int cnt = 0;
+    for (int b = 0; b < w->npd; base += w->pd[b]->nbond, b++) {
+        const floe_pd_body *pb = w->pd[b];
+        const uint8_t *m = S->mask[b], *sn = S->snap[b];
+        for (int i = 0; i < pb->n; i++)
+            if (m[i] == FLOE_PD_OWNED)
+                for (int64_t k = pb->off[i]; k < pb->off[i + 1]; k++)
+                    if (pb->broken[k] && !sn[k]) mine[cnt++] = base + k;
+    }
+    MPI_Allgather(&cnt, 1, MPI_INT, cd, 1, MPI_INT, P->comm);
+    floe_par_count_all(P, FLOE_COMM_MIGRATE, sizeof cnt);
+    long long tot = 0;
+    for (int r = 0; r < R; r++) { cd[R + r] = (int)tot; tot += cd[r]; }
+    long long *all = tot <= INT_MAX ? malloc((size_t)(tot ? tot : 1) * sizeof *all) : NULL;
+    bad = !all;
+    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof bad);
+    if (any) { free(mine); free(cd); free(all); return FLOE_ENOMEM; }
+    MPI_Allgatherv(mine, cnt, MPI_LONG_LONG, all, cd, cd + R, MPI_LONG_LONG, P->comm);
+    floe_par_count_all(P, FLOE_COMM_MIGRATE, (long long)cnt * (long long)sizeof *mine);
+    for (long long e = 0; e < tot; e++) {
+        long long g = all[e];
+        int b = 0;
+        while (b < w->npd - 1 && g >= w->pd[b]->nbond) { g -= w->pd[b]->nbond; b++; }
+        w->pd[b]->broken[g] = 1;
+        S->snap[b][g] = 1;
+    }
+    free(mine); free(cd); free(all);
+    return FLOE_OK;
+}
+
 int floe_par_pd_sync(floe_world *w, floe_par *P) {
     const floe_pd_split *S = P->pd_split;
     if (!w->npd || !S) return FLOE_OK;
@@ -319,41 +373,87 @@ int floe_par_pd_sync(floe_world *w, floe_par *P) {
      * decomposition, only in a world with PD bodies */
     if (floe_par_forward_comm(w, P)) return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: out of memory");
     floe_pd_split_gather(w);
-    for (int b = 0, off = 0; b < w->npd; off += w->pd[b]->n, b++) {
+    /* the broken flags: a bond breaks once and never heals */
+    if (flags_sync(w, P)) return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: PD bodies: out of memory");
+    for (int b = 0; b < w->npd; b++) {
         floe_pd_body *pb = w->pd[b];
         const uint8_t *m = S->mask[b];
-        const size_t n = (size_t)pb->n;
-        /* the broken flags: a bond breaks once and never heals */
-        if (pb->nbond > 0) {
-            MPI_Allreduce(MPI_IN_PLACE, pb->broken, (int)pb->nbond, MPI_BYTE, MPI_BOR, P->comm);
-            floe_par_count_allreduce(P, FLOE_COMM_MIGRATE, pb->nbond);
-        }
-        /* the owners' s0 and last bond forces (the ledger's trapezoid), the plastic stretches
-         * of the rows' owners */
-        const int ns = has_s0(pb) ? 1 : 0, mv = 3 + ns;
-        double *v = owned_values(w, pb, off, m);
-        int bad = !v, any;
-        MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
-        if (any) { free(v); return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: PD bodies: out of memory"); }
-        MPI_Allreduce(MPI_IN_PLACE, v, (int)(n * mv), MPI_DOUBLE, MPI_SUM, P->comm);
-        floe_par_count_allreduce(P, FLOE_COMM_MIGRATE, (long long)(n * mv * sizeof *v));
-        if (pb->splast) {
-            MPI_Allreduce(MPI_IN_PLACE, (float *)(v + n * mv), (int)pb->nbond, MPI_FLOAT, MPI_SUM, P->comm);
+        /* plastic bonds: the plastic stretches of the rows' owners, a sum with zeros
+         * elsewhere (O(bonds): every yielding bond's changes at every evaluation) */
+        if (pb->splast && pb->nbond > 0) {
+            float *sp = malloc((size_t)pb->nbond * sizeof *sp);
+            int bad = !sp, any;
+            MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
+            if (any) { free(sp); return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: PD bodies: out of memory"); }
+            for (int i = 0; i < pb->n; i++)
+                for (int64_t k = pb->off[i]; k < pb->off[i + 1]; k++) sp[k] = m[i] == FLOE_PD_OWNED ? pb->splast[k] : 0.0f;
+            MPI_Allreduce(MPI_IN_PLACE, sp, (int)pb->nbond, MPI_FLOAT, MPI_SUM, P->comm);
             floe_par_count_allreduce(P, FLOE_COMM_MIGRATE, pb->nbond * (long long)sizeof(float));
+            memcpy(pb->splast, sp, (size_t)pb->nbond * sizeof *sp);
+            free(sp);
         }
-        double *fold = w->pd_fold + 3 * (size_t)off;
-        for (size_t q = 0; q < n; q++) {
-            for (int a = 0; a < 3; a++) fold[3 * q + a] = v[q * mv + a];
-            if (ns) pb->s0[q] = v[q * mv + 3];
-        }
-        if (pb->splast) memcpy(pb->splast, v + n * mv, (size_t)pb->nbond * sizeof(float));
-        free(v);
         /* the halo's reach: the longest acting bond with an owned end, now */
         L = fmax(L, body_reach(pb, S->xb[b], m));
     }
     if (regions_sum(w, P, NULL, 0)) return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: PD regions: out of memory");
     MPI_Allreduce(&L, &P->pd_reach, 1, MPI_DOUBLE, MPI_MAX, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof L);
+    return FLOE_OK;
+}
+
+/* body b's first point in w->pd_fold (the bodies' points in order) */
+static size_t fold_off(const floe_world *w, int b) {
+    size_t o = 0;
+    for (int c = 0; c < b; c++) o += (size_t)w->pd[c]->n;
+    return o;
+}
+
+/* each owned PD point leaving (dest, from the bisection) takes its last bond force (the
+ * ledger's trapezoid) and its s0 (alpha) to its new owner: O(points moved). Its ghosts get
+ * their s0 after the ghosts are chosen (floe_par_pd_s0_refresh) */
+int floe_par_pd_out(floe_world *w, floe_par *P, const int *dest) {
+    const floe_pd_split *S = P->pd_split;
+    if (!w->npd || !S) return FLOE_OK; /* the first split: every rank holds the same */
+    const int lo = P->nrep, hi = P->nrep + P->nown, M = 5; /* gid, fold, s0 */
+    int nl = 0;
+    for (int i = lo; i < hi; i++) nl += w->pd_of[i] >= 0 && dest[i - lo] != P->rank;
+    double *it = malloc((size_t)(nl ? nl : 1) * M * sizeof *it);
+    int *dd = malloc((size_t)(nl ? nl : 1) * sizeof *dd);
+    int bad = !it || !dd, any;
+    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof bad);
+    if (any) { free(it); free(dd); return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: PD bodies: out of memory"); }
+    int k = 0;
+    for (int i = lo; i < hi; i++) {
+        const int b = w->pd_of[i];
+        if (b < 0 || dest[i - lo] == P->rank) continue;
+        const int q = floe_pd_local(w, b, i);
+        const double *fo = w->pd_fold + 3 * ((size_t)fold_off(w, b) + q);
+        double *r = it + (size_t)k * M;
+        r[0] = (double)P->gid[i];
+        r[1] = fo[0]; r[2] = fo[1]; r[3] = fo[2];
+        r[4] = has_s0(w->pd[b]) ? w->pd[b]->s0[q] : 0.0;
+        dd[k++] = dest[i - lo];
+    }
+    double *in = NULL;
+    int nin = 0;
+    int rc = floe_par_route(P, FLOE_COMM_MIGRATE, it, dd, nl, M, &in, &nin);
+    free(it); free(dd);
+    bad = rc != FLOE_OK;
+    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof bad);
+    if (any) { free(in); return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: PD bodies: out of memory"); }
+    for (int e = 0; e < nin; e++) {
+        const double *r = in + (size_t)e * M;
+        const long long g = (long long)r[0];
+        int b = w->npd - 1; /* the body whose ids hold g: the last first id <= g */
+        while (b > 0 && w->pd_first[b] > g) b--;
+        const int q = (int)(g - w->pd_first[b]);
+        double *fo = w->pd_fold + 3 * ((size_t)fold_off(w, b) + q);
+        fo[0] = r[1]; fo[1] = r[2]; fo[2] = r[3];
+        if (has_s0(w->pd[b])) w->pd[b]->s0[q] = r[4];
+    }
+    free(in);
     return FLOE_OK;
 }
 

@@ -188,6 +188,7 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     floe_par_index_free(&ix);
     long long diag[NDIAG];
     diag_save(w, P, diag);
+    if (!rc && (rc = floe_par_pd_out(w, P, dest)) != FLOE_OK) { free(in); free(dest); free(hd); free(recs); return rc; }
     if (!rc) rc = floe_par_beams_out(w, P, dest); /* beam bonds (par_beams.c) */
     if (!rc) rc = floe_par_pp_out(w, P, dest);    /* the force stages' rows (par_forcing.c) */
     if (!rc) rc = floe_par_migrate(w, P, dest);
@@ -200,6 +201,7 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     FLOE_TRY(floe_par_beams_in(w, P)); /* its own message, agreed by every rank */
     FLOE_TRY(floe_par_pp_in(w, P));    /* the same */
     FLOE_TRY(floe_par_pd_index(w, P)); /* PD bodies: their points here (before the list's exclusions) */
+    if (floe_par_pd_s0_refresh(w, P)) return floe_world_error(w, FLOE_ENOMEM, "out of memory"); /* alpha: the new ghosts' s0 */
     w->nl.gid = P->gid;
     w->nl.own_hi = P->nrep + P->nown;
     rc = floe_world_nl_build(w);

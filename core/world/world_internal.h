@@ -312,6 +312,9 @@ typedef struct floe_pd_split {
     int **loc;
     uint8_t **mask;
     double **xb;
+    uint8_t **snap;          /* per body: the broken flags as every rank held them after the
+                              * last decomposition (par_pd.c flags_sync sends the bonds broken
+                              * since) */
     int nbody;
     /* the ghost exchanges of LPS's theta (and q) and alpha's s0: up to 2 doubles a ghost sent
      * and received (sized at each decomposition, so that an exchange, inside the bond loop

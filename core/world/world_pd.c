@@ -247,13 +247,17 @@ floe_pd_split *floe_pd_split_new(const floe_world *w) {
     S->loc = calloc((size_t)(w->npd ? w->npd : 1), sizeof *S->loc);
     S->mask = calloc((size_t)(w->npd ? w->npd : 1), sizeof *S->mask);
     S->xb = calloc((size_t)(w->npd ? w->npd : 1), sizeof *S->xb);
-    int bad = !S->loc || !S->mask || !S->xb;
+    S->snap = calloc((size_t)(w->npd ? w->npd : 1), sizeof *S->snap);
+    int bad = !S->loc || !S->mask || !S->xb || !S->snap;
     for (int b = 0; b < w->npd && !bad; b++) {
-        const size_t n = (size_t)w->pd[b]->n;
+        const floe_pd_body *pb = w->pd[b];
+        const size_t n = (size_t)pb->n, nb = (size_t)(pb->nbond > 0 ? pb->nbond : 1);
         S->loc[b] = malloc(n * sizeof **S->loc);
         S->mask[b] = calloc(n, 1);
         S->xb[b] = calloc(3 * n, sizeof **S->xb);
-        bad = !S->loc[b] || !S->mask[b] || !S->xb[b];
+        S->snap[b] = malloc(nb); /* the flags now: every rank holds the same at the split */
+        bad = !S->loc[b] || !S->mask[b] || !S->xb[b] || !S->snap[b];
+        if (!bad && pb->nbond > 0) memcpy(S->snap[b], pb->broken, (size_t)pb->nbond);
     }
     if (bad) {
         floe_pd_split_free(S);
@@ -268,8 +272,9 @@ void floe_pd_split_free(floe_pd_split *S) {
         if (S->loc) free(S->loc[b]);
         if (S->mask) free(S->mask[b]);
         if (S->xb) free(S->xb[b]);
+        if (S->snap) free(S->snap[b]);
     }
-    free(S->loc); free(S->mask); free(S->xb);
+    free(S->loc); free(S->mask); free(S->xb); free(S->snap);
     free(S->tx); free(S->rx);
     free(S);
 }
