@@ -328,14 +328,14 @@ static int flags_sync(floe_world *w, floe_par *P) {
             if (m[i] == FLOE_PD_OWNED)
                 for (int64_t k = pb->off[i]; k < pb->off[i + 1]; k++) nnew += pb->broken[k] & !sn[k];
     }
-    long long *mine = malloc((size_t)(nnew ? nnew : 1) * sizeof *mine);
-    int *cd = malloc((size_t)2 * R * sizeof *cd);
-    int bad = !mine || !cd || nnew > INT_MAX, any;
-    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
-    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof bad);
-    if (any) { free(mine); free(cd); return FLOE_ENOMEM; }
+    /* the lists' counts (-1: a rank out of memory, said to all by the gather itself) and
+     * the ids, on the stack when few (a decomposition usually finds none or a few) */
+    enum { FEW = 256 };
+    long long few_mine[FEW], few_all[FEW];
+    int cdv[2 * FLOE_PAR_PD_SYNC_RANKS], *cd = R <= FLOE_PAR_PD_SYNC_RANKS ? cdv : P->pd_counts;
+    long long *mine = nnew <= FEW ? few_mine : nnew <= INT_MAX ? malloc((size_t)nnew * sizeof *mine) : NULL;
     int cnt = 0;
-    for (int b = 0; b < w->npd; base += w->pd[b]->nbond, b++) {
+    for (int b = 0; mine && b < w->npd; base += w->pd[b]->nbond, b++) {
         const floe_pd_body *pb = w->pd[b];
         const uint8_t *m = S->mask[b], *sn = S->snap[b];
         for (int i = 0; i < pb->n; i++)
@@ -343,15 +343,29 @@ static int flags_sync(floe_world *w, floe_par *P) {
                 for (int64_t k = pb->off[i]; k < pb->off[i + 1]; k++)
                     if (pb->broken[k] && !sn[k]) mine[cnt++] = base + k;
     }
-    MPI_Allgather(&cnt, 1, MPI_INT, cd, 1, MPI_INT, P->comm);
-    floe_par_count_all(P, FLOE_COMM_MIGRATE, sizeof cnt);
+    const int said = mine ? cnt : -1;
+    MPI_Allgather(&said, 1, MPI_INT, cd, 1, MPI_INT, P->comm);
+    floe_par_count_all(P, FLOE_COMM_MIGRATE, sizeof said);
     long long tot = 0;
-    for (int r = 0; r < R; r++) { cd[R + r] = (int)tot; tot += cd[r]; }
-    long long *all = tot <= INT_MAX ? malloc((size_t)(tot ? tot : 1) * sizeof *all) : NULL;
-    bad = !all;
-    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
-    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof bad);
-    if (any) { free(mine); free(cd); free(all); return FLOE_ENOMEM; }
+    int bad = 0;
+    for (int r = 0; r < R; r++) {
+        bad |= cd[r] < 0;
+        cd[R + r] = (int)tot;
+        tot += cd[r] > 0 ? cd[r] : 0;
+    }
+    long long *all = NULL;
+    if (!bad && tot > FEW) { /* the same tot on every rank: agree on the allocation */
+        all = tot <= INT_MAX ? malloc((size_t)tot * sizeof *all) : NULL;
+        int mb = !all;
+        MPI_Allreduce(&mb, &bad, 1, MPI_INT, MPI_LOR, P->comm);
+        floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof mb);
+    } else
+        all = few_all;
+    if (bad) {
+        if (mine != few_mine) free(mine);
+        if (all != few_all) free(all);
+        return FLOE_ENOMEM;
+    }
     MPI_Allgatherv(mine, cnt, MPI_LONG_LONG, all, cd, cd + R, MPI_LONG_LONG, P->comm);
     floe_par_count_all(P, FLOE_COMM_MIGRATE, (long long)cnt * (long long)sizeof *mine);
     for (long long e = 0; e < tot; e++) {
@@ -361,7 +375,8 @@ static int flags_sync(floe_world *w, floe_par *P) {
         w->pd[b]->broken[g] = 1;
         S->snap[b][g] = 1;
     }
-    free(mine); free(cd); free(all);
+    if (mine != few_mine) free(mine);
+    if (all != few_all) free(all);
     return FLOE_OK;
 }
 
@@ -419,12 +434,9 @@ int floe_par_pd_out(floe_world *w, floe_par *P, const int *dest) {
     for (int i = lo; i < hi; i++) nl += w->pd_of[i] >= 0 && dest[i - lo] != P->rank;
     double *it = malloc((size_t)(nl ? nl : 1) * M * sizeof *it);
     int *dd = malloc((size_t)(nl ? nl : 1) * sizeof *dd);
-    int bad = !it || !dd, any;
-    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
-    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof bad);
-    if (any) { free(it); free(dd); return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: PD bodies: out of memory"); }
-    int k = 0;
-    for (int i = lo; i < hi; i++) {
+    const int nomem = !it || !dd; /* (then nothing sent; the failure agreed after the route) */
+    int k = 0, any;
+    for (int i = lo; i < hi && !nomem; i++) {
         const int b = w->pd_of[i];
         if (b < 0 || dest[i - lo] == P->rank) continue;
         const int q = floe_pd_local(w, b, i);
@@ -437,9 +449,9 @@ int floe_par_pd_out(floe_world *w, floe_par *P, const int *dest) {
     }
     double *in = NULL;
     int nin = 0;
-    int rc = floe_par_route(P, FLOE_COMM_MIGRATE, it, dd, nl, M, &in, &nin);
+    int rc = floe_par_route(P, FLOE_COMM_MIGRATE, it, dd, k, M, &in, &nin);
     free(it); free(dd);
-    bad = rc != FLOE_OK;
+    const int bad = nomem || rc != FLOE_OK;
     MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof bad);
     if (any) { free(in); return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: PD bodies: out of memory"); }
