@@ -329,11 +329,21 @@ static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, con
     const int owni = !gb || own[i];
     double s0ni = alpha_on ? (owni ? s0n[i] : -INFINITY) : 0.0;
     double fi0 = 0, fi1 = 0, fi2 = 0, ei = 0;
-    /* a body split over MPI ranks (sm, serial): the bonds with an owned end, both ends here */
+    /* a body split over MPI ranks (sm): the bonds with an owned end, both ends here (the serial
+     * loop calls no row of an absent point; the threaded one calls every row, and a bond left
+     * out writes "no share" into its slot, so that a border point's gather adds nothing for
+     * it, as the serial loop does) */
     const int smi = sm ? sm[i] : FLOE_PD_OWNED;
     for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
         const int j = part[k], ownj = !gb || own[j];
-        if (sm && (!sm[j] || (smi != FLOE_PD_OWNED && sm[j] != FLOE_PD_OWNED))) continue;
+        if (sm && (!smi || !sm[j] || (smi != FLOE_PD_OWNED && sm[j] != FLOE_PD_OWNED))) {
+            if (!ownj) { /* threaded: the slot says "no share" (0, and -inf for the max) */
+                double *q = gb + (size_t)st * (size_t)gslot[k];
+                q[0] = q[1] = q[2] = 0.0;
+                if (alpha_on) q[3] = -INFINITY;
+            }
+            continue;
+        }
         double d0, d1, d2;
         pd_bond_vec(x, j, xi0, xi1, xi2, per, img, H, k, &d0, &d1, &d2);
         double r = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
@@ -393,7 +403,7 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
 {
     const int n = b->n, B = FLOE_PD_ROW_BLOCK, nblk = (n + B - 1) / B, st = alpha_on ? 4 : 3;
     const uint8_t *sm = b->split;
-    const int nt = sm ? 1 : pd_threads(b); /* a split body: serial */
+    const int nt = pd_threads(b);
     floe_pd_par *P = nt > 1 ? pd_par_get(b, st, st, nt) : NULL;
     double *s0n = alpha_on ? b->s0 + n : NULL;
     double energy = 0.0;
@@ -433,7 +443,7 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
                     double eb = 0.0;
                     int64_t nbk = 0;
                     for (int i = c * B; i < i1; i++)
-                        eb += pmb_row(b, x, f, i, s0n, P->g, P->row, own, P->gslot, &nbk, alpha_on, per, NULL);
+                        eb += pmb_row(b, x, f, i, s0n, P->g, P->row, own, P->gslot, &nbk, alpha_on, per, sm);
                     P->blk[c] = eb;
                     P->blkn[c] = nbk;
                 }
@@ -444,9 +454,10 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
                 if (alpha_on) s0n[P->border[e]] = m;
             }
             /* the old s0 is read by the rows above and written below, after their barrier */
-            if (alpha_on) {
+            if (alpha_on) { /* split: the owned points' (a ghost's comes from its owner) */
                 FLOE_OMP(omp for schedule(static))
-                for (int q = 0; q < n; q++) b->s0[q] = s0n[q] == -INFINITY ? DBL_MAX : s0n[q];
+                for (int q = 0; q < n; q++)
+                    if (!sm || sm[q] == FLOE_PD_OWNED) b->s0[q] = s0n[q] == -INFINITY ? DBL_MAX : s0n[q];
             }
         }
         for (int c = 0; c < nblk; c++) {
@@ -478,8 +489,11 @@ static inline __attribute__((always_inline)) double plastic_row(floe_pd_body *b,
     const int smi = sm ? sm[i] : FLOE_PD_OWNED; /* split: as pmb_row */
     for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
         const int j = b->partner[k], ownj = !gb || own[j];
-        if (sm && (!sm[j] || (smi != FLOE_PD_OWNED && sm[j] != FLOE_PD_OWNED))) continue;
         double d[3], g[3] = {0, 0, 0};
+        if (sm && (!smi || !sm[j] || (smi != FLOE_PD_OWNED && sm[j] != FLOE_PD_OWNED))) {
+            if (!ownj) memcpy(gb + 3 * (size_t)gslot[k], g, sizeof g); /* threaded: no share */
+            continue;
+        }
         floe_pd_bond_vec(b, x, b->cellH, i, j, k, d);
         double r = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         double L = b->len[k], s = (r - L) / L;
@@ -518,7 +532,7 @@ static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
 {
     const int n = b->n, B = FLOE_PD_ROW_BLOCK, nblk = (n + B - 1) / B;
     const uint8_t *sm = b->split;
-    const int nt = sm ? 1 : pd_threads(b); /* a split body: serial */
+    const int nt = pd_threads(b);
     floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3, nt) : NULL;
     double energy = 0.0;
     int64_t nbroken = 0;
@@ -544,7 +558,7 @@ static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
                     const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
                     double eb = 0.0;
                     int64_t nbk = 0;
-                    for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, f, i, P->g, P->row, own, P->gslot, &nbk, NULL);
+                    for (int i = c * B; i < i1; i++) eb += plastic_row(b, x, f, i, P->g, P->row, own, P->gslot, &nbk, sm);
                     P->blk[c] = eb;
                     P->blkn[c] = nbk;
                 }
@@ -697,7 +711,11 @@ static inline __attribute__((always_inline)) int64_t lps_dil_row(floe_pd_body *b
     for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
         double cj[3] = {-0.0, -0.0, -0.0}; /* j's shares (-0: none) */
         const int j = part[k], ownj = !gb || own[j];
-        if (sm && (!sm[j] || (smi != FLOE_PD_OWNED && sm[j] != FLOE_PD_OWNED))) continue;
+        if (sm && (!smi || !sm[j] || (smi != FLOE_PD_OWNED && sm[j] != FLOE_PD_OWNED))) {
+            if (!ownj) /* threaded: no share */
+                for (int c = 0; c < st; c++) gb[(size_t)st * (size_t)gslot[k] + c] = cj[c];
+            continue;
+        }
         if (!brk[k]) {
             double d0, d1, d2;
             pd_bond_vec(x, j, xi[0], xi[1], xi[2], per, img, H, k, &d0, &d1, &d2);
@@ -758,7 +776,7 @@ static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, cons
     double *p = b->dten ? b->dten + 9 * (size_t)n : NULL, *mi = p ? p + n : NULL;
     const int st = p ? 3 : 1;
     const uint8_t *sm = b->split;
-    const int nt = sm ? 1 : pd_threads(b); /* a split body: serial */
+    const int nt = pd_threads(b);
     floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3, nt) : NULL;
     int64_t nbroken = 0;
     if (!P) {
@@ -790,7 +808,7 @@ static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, cons
             for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
                 const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
                 int64_t nbk = 0;
-                for (int i = c * B; i < i1; i++) nbk += lps_dil_row(b, x, i, P->g, P->row, own, P->gslot, per, NULL);
+                for (int i = c * B; i < i1; i++) nbk += lps_dil_row(b, x, i, P->g, P->row, own, P->gslot, per, sm);
                 P->blkn[c] = nbk;
             }
         FLOE_OMP(omp for schedule(static))
@@ -805,6 +823,8 @@ static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, cons
         for (int q = 0; q < n; q++) lps_dil_final(b, q);
     }
     for (int c = 0; c < nblk; c++) nbroken += P->blkn[c];
+    /* split: the ghosts' sums from their owners (collective: outside the threads) */
+    if (sm && b->split_sync) b->split_sync(b, b->split_ctx);
     return nbroken;
 }
 
@@ -858,7 +878,13 @@ static inline __attribute__((always_inline)) double lps_row(const floe_pd_body *
     for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
         double g0 = 0, g1 = 0, g2 = 0;
         const int j = part[k], ownj = !gb || own[j];
-        if (sm && (!sm[j] || (smi != FLOE_PD_OWNED && sm[j] != FLOE_PD_OWNED))) continue;
+        if (sm && (!smi || !sm[j] || (smi != FLOE_PD_OWNED && sm[j] != FLOE_PD_OWNED))) {
+            if (!ownj) { /* threaded: no share */
+                double *q = gb + 3 * (size_t)gslot[k];
+                q[0] = q[1] = q[2] = 0.0;
+            }
+            continue;
+        }
         if (!brk[k]) {
             double d0, d1, d2;
             pd_bond_vec(x, j, xi0, xi1, xi2, per, img, H, k, &d0, &d1, &d2);
@@ -901,7 +927,7 @@ static inline double lps_forces_impl(floe_pd_body *b, const double *x, double *f
     const double kd = lps_kdil(b);
     b->nbroken += lps_dilatation(b, x);
     const uint8_t *sm = b->split;
-    const int nt = sm ? 1 : pd_threads(b); /* a split body: serial */
+    const int nt = pd_threads(b);
     floe_pd_par *P = nt > 1 ? pd_par_get(b, 3, 3, nt) : NULL;
     double energy = 0.0;
     if (!P) {
@@ -926,7 +952,7 @@ static inline double lps_forces_impl(floe_pd_body *b, const double *x, double *f
             for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
                 const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
                 double eb = 0.0;
-                for (int i = c * B; i < i1; i++) eb += lps_row(b, x, f, i, kd, P->g, P->row, own, P->gslot, per, NULL);
+                for (int i = c * B; i < i1; i++) eb += lps_row(b, x, f, i, kd, P->g, P->row, own, P->gslot, per, sm);
                 P->blk[c] = eb;
             }
         FLOE_OMP(omp for schedule(static))

@@ -12,7 +12,8 @@
  * Plastic PMB bonds (yield in compression and tension): every bond with an owned end has the
  * unsplit plastic stretch. LPS (plain and with the surface correction) the same way, the ghosts' theta and q given
  * between the passes (split_sync) as the ranks' exchange gives them; an owned point's theta
- * and q are the unsplit ones to the bit. */
+ * and q are the unsplit ones to the bit. Each case with one thread a rank and with two (the
+ * threaded loops: a left-out bond's slot says "no share"). */
 #include "check.h"
 #include "floe_pd.h"
 
@@ -76,7 +77,26 @@ static void place(const floe_pd_body *b, int e, double *x)
     }
 }
 
-static void run(int R, double alpha, int lps, int corr, double yield)
+/* rank r's points: its owned ones, and as ghosts every point bonded to one of them by a bond
+ * that acts (intact, or broken but pushing back in compression: PMB's broken_tension_only),
+ * as the halo promises (docs/parallel.md); the others absent (their positions NaN below), so
+ * that a bond whose other point is absent is left out as on a rank */
+static void build_masks(const floe_pd_body *full, const int *owner, int R, uint8_t **mask)
+{
+    const int keep_broken = full->mat.model == FLOE_PD_PMB && full->mat.broken_tension_only;
+    for (int r = 0; r < R; r++) {
+        for (int i = 0; i < full->n; i++) mask[r][i] = owner[i] == r ? FLOE_PD_OWNED : 0;
+        for (int i = 0; i < full->n; i++)
+            for (int64_t k = full->off[i]; k < full->off[i + 1]; k++) {
+                const int j = full->partner[k];
+                if (full->broken[k] && !keep_broken) continue;
+                if (mask[r][i] == FLOE_PD_OWNED && !mask[r][j]) mask[r][j] = FLOE_PD_GHOST;
+                if (mask[r][j] == FLOE_PD_OWNED && !mask[r][i]) mask[r][i] = FLOE_PD_GHOST;
+            }
+    }
+}
+
+static void run(int R, double alpha, int lps, int corr, double yield, int threads, int tension_only)
 {
     floe_pd_body *full = bar(alpha, lps, corr, yield), *part[3];
     const int n = full->n;
@@ -86,19 +106,13 @@ static void run(int R, double alpha, int lps, int corr, double yield)
         int o = (int)(full->X[3 * i] / (NX * 1e-3) * R);
         owner[i] = o < R ? o : R - 1;
     }
+    full->mat.broken_tension_only = tension_only;
     for (int r = 0; r < R; r++) {
         part[r] = bar(alpha, lps, corr, yield);
+        part[r]->mat.broken_tension_only = tension_only;
         mask[r] = calloc(n, 1);
-        for (int i = 0; i < n; i++)
-            if (owner[i] == r) mask[r][i] = FLOE_PD_OWNED;
-        /* the ghosts: every point bonded to an owned one (the halo reaches the horizon) */
-        for (int i = 0; i < n; i++)
-            for (int64_t k = full->off[i]; k < full->off[i + 1]; k++) {
-                const int j = full->partner[k];
-                if (mask[r][i] == FLOE_PD_OWNED && !mask[r][j]) mask[r][j] = FLOE_PD_GHOST;
-                if (mask[r][j] == FLOE_PD_OWNED && !mask[r][i]) mask[r][i] = FLOE_PD_GHOST;
-            }
         part[r]->split = mask[r];
+        part[r]->nthreads = threads; /* the split bond loops on threads (OpenMP builds) */
     }
     sim sm = {part, full, mask, n, R};
     for (int r = 0; r < R && lps; r++) {
@@ -109,8 +123,16 @@ static void run(int R, double alpha, int lps, int corr, double yield)
     int fbits = 1, flags = 1, s0bits = 1, ghosts = 0;
     int64_t broke = 0;
     double erel = 0;
+    build_masks(full, owner, R, mask);
     for (int i = 0; i < n; i++) ghosts += mask[0][i] == FLOE_PD_GHOST;
+    int absent = 0; /* partners of owned points left out, summed over the evaluations */
     for (int e = 0; e < 12; e++) {
+        build_masks(full, owner, R, mask); /* before this evaluation's breaks */
+        for (int r = 0; r < R; r++)
+            for (int i = 0; i < n; i++)
+                for (int64_t k = full->off[i]; k < full->off[i + 1]; k++)
+                    absent += (mask[r][i] == FLOE_PD_OWNED && !mask[r][full->partner[k]]) ||
+                              (mask[r][full->partner[k]] == FLOE_PD_OWNED && !mask[r][i]);
         place(full, e, x);
         memset(f, 0, 3 * n * sizeof *f);
         const double ef = floe_pd_forces(full, x, f);
@@ -153,9 +175,11 @@ static void run(int R, double alpha, int lps, int corr, double yield)
         if (rel > erel) erel = rel;
         broke = full->nbroken;
     }
-    printf("%s%s%s R %d alpha %g: %d points, %d ghosts on rank 0, %lld bonds, %lld broken after 12 evaluations, "
-           "energy rel. err %.2e\n", lps ? "LPS" : "PMB", corr ? " corrected" : "", yield > 0 ? " plastic" : "", R, alpha, n, ghosts,
-           (long long)full->nbond, (long long)broke, erel);
+    printf("%s%s%s%s R %d alpha %g, %d thread%s a rank: %d points, %d ghosts on rank 0 at the start, %lld bonds, %lld broken after "
+           "12 evaluations, %d bonds of owned points to absent points left out, energy rel. err %.2e\n",
+           tension_only || lps ? "" : "(broken bonds inert) ", lps ? "LPS" : "PMB", corr ? " corrected" : "", yield > 0 ? " plastic" : "", R, alpha, threads, threads > 1 ? "s" : "", n, ghosts,
+           (long long)full->nbond, (long long)broke, absent, erel);
+    if (lps || !tension_only) CHECK(absent > 100, "broken bonds' partners leave the halo (%d left out)", absent);
     CHECK(broke > 20 && broke < full->nbond / 2, "some bonds break in the neck (%lld)", (long long)broke);
     CHECK(fbits, "R %d alpha %g: every owned point's force is the unsplit one to the bit", R, alpha);
     CHECK(flags, "R %d alpha %g: every bond with an owned end has the unsplit broken flag (and plastic stretch)", R, alpha);
@@ -178,12 +202,16 @@ static void run(int R, double alpha, int lps, int corr, double yield)
 
 int main(void)
 {
-    run(2, 0.0, 0, 0, 0);
-    run(3, 0.0, 0, 0, 0);
-    run(2, 0.25, 0, 0, 0);
-    run(3, 0.25, 0, 1, 0);
-    run(2, 0.0, 0, 0, 5e-4);
-    run(2, 0.0, 1, 0, 0);
-    run(3, 0.0, 1, 1, 0);
+    for (int t = 1; t <= 2; t++) { /* one thread a rank, then two (the threaded loops' parts) */
+        run(2, 0.0, 0, 0, 0, t, 1);
+        run(3, 0.0, 0, 0, 0, t, 1);
+        run(2, 0.25, 0, 0, 0, t, 1);
+        run(3, 0.25, 0, 1, 0, t, 1);
+        run(2, 0.0, 0, 0, 5e-4, t, 1);
+        run(2, 0.25, 0, 0, 0, t, 0); /* broken bonds inert: their partners leave the halo */
+        run(2, 0.0, 0, 0, 5e-4, t, 0);
+        run(2, 0.0, 1, 0, 0, t, 1);
+        run(3, 0.0, 1, 1, 0, t, 1);
+    }
     return check_summary("test_pd_split");
 }
