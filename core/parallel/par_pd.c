@@ -87,7 +87,7 @@ static int grow_buf(double **buf, size_t *cap, size_t n) {
  * it, wherever its points are now */
 static double body_reach(const floe_pd_body *b, const double *x, const uint8_t *own) {
     const int comp = b->mat.model == FLOE_PD_PMB && b->mat.broken_tension_only;
-    double L = 0;
+    double L = 0, L2 = 0; /* (squares compared: one root at the end, the same value) */
     for (int i = 0; i < b->n; i++)
         for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
             const int j = b->partner[k];
@@ -98,10 +98,10 @@ static double body_reach(const floe_pd_body *b, const double *x, const uint8_t *
             }
             double d[3]; /* intact: both points here (checked at each decomposition) */
             floe_v3_sub(d, x + 3 * (size_t)j, x + 3 * (size_t)i);
-            const double r = floe_v3_norm(d);
-            if (r > L) L = r;
+            const double r2 = floe_v3_dot(d, d);
+            if (r2 > L2) L2 = r2;
         }
-    return L;
+    return fmax(L, sqrt(L2));
 }
 
 int floe_par_pd_split_reach(floe_world *w, floe_par *P) {
