@@ -52,7 +52,7 @@ static void unit_vec(double n[3]) {
     n[0] = s * cos(a); n[1] = s * sin(a); n[2] = z;
 }
 
-typedef struct { double n, steps, loop, pairs, contacts, lp, halves, kept, cold, sep, sepc; int ncont_end; double ke; } result;
+typedef struct { double n, steps, loop, pairs, contacts, lp, halves, kept, cold, sep, sepc, mfc; int ncont_end; double ke; } result;
 
 static const double R = 0.001, RHO = 2500;
 
@@ -132,7 +132,7 @@ static result run(floe_world *w, int n, long nsteps, long warmup, const char *ck
     floe_neighbor_stats ns;
     floe_world_detect_stats(w, &ds);
     long lp0 = ds.evaluations, h0 = ds.lp_halves, k0 = ds.lp_kept, c0 = ds.lp_cold, s0 = ds.separated,
-         sc0 = ds.sep_cached;
+         sc0 = ds.sep_cached, mc0 = ds.manifold_cached;
     double t0 = now();
     for (long s = 0; s < nsteps; s++) {
         if (floe_world_step(w)) { fprintf(stderr, "%s\n", floe_world_last_error(w)); exit(1); }
@@ -148,6 +148,7 @@ static result run(floe_world *w, int n, long nsteps, long warmup, const char *ck
     r.cold = (double)(ds.lp_cold - c0);
     r.sep = (double)(ds.separated - s0);
     r.sepc = (double)(ds.sep_cached - sc0);
+    r.mfc = (double)(ds.manifold_cached - mc0);
     r.ncont_end = floe_world_contact_count(w);
     floe_energy e = floe_world_energy(w);
     r.ke = e.kinetic_trans + e.kinetic_rot;
@@ -226,8 +227,8 @@ int main(int argc, char **argv) {
     wp = build(1, n, dt, shapes, req, use_ck ? ckp : NULL, &loaded);
     result rp = run(wp, n, nsteps, loaded ? 0 : warmup, use_ck && !loaded ? ckp : NULL, "polyhedra");
     print("polyhedra", &rp, dt);
-    printf("lp_halves=%.3e lp_kept=%.3e lp_cold=%.3e separated=%.3e sep_cached=%.3e\n", rp.halves, rp.kept, rp.cold,
-           rp.sep, rp.sepc);
+    printf("lp_halves=%.3e lp_kept=%.3e lp_cold=%.3e separated=%.3e sep_cached=%.3e manifold_cached=%.3e\n", rp.halves,
+           rp.kept, rp.cold, rp.sep, rp.sepc, rp.mfc);
     floe_world_destroy(wp);
     if (only_poly) return 0;
     printf("ratio polyhedra/spheres: time per step %.2f, ns per pair evaluation %.2f, ns per contact %.2f\n",

@@ -18,6 +18,7 @@
 #include "floe_admm.h"
 #include "floe_polytope_lp.h"
 #include "floe_overlap.h"
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -530,6 +531,43 @@ static void count_iterations(floe_detect_ctx *w, int it) {
     w->det->hist[it < FLOE_DETECT_HIST - 1 ? it : FLOE_DETECT_HIST - 1]++;
 }
 
+/* corner X of a (a's frame) against b: 1 when it is inside (its depth, the least face
+ * distance, positive, ties to the lowest face, and within b's bounding sphere), its depth
+ * and that face in *d, *f. Without a branch (which corners are in is data: a branch per
+ * corner or per face was mispredicted) */
+static inline int mf_corner_in(const floe_detect_ctx *w, const rel_map *map, const double *X, const double *P, int np,
+                               double rb2, double *d, int *f) {
+    double Xb[3];
+    rel_apply(map, X, Xb);
+    const int inside_r = floe_v3_dot(Xb, Xb) < rb2;
+    if (w->dim == 2) Xb[2] = 0;
+    double dd = INFINITY;
+    int ff = -1;
+    for (int k = 0; k < np; k++) {
+        const double s = P[4 * k + 3] - floe_v3_dot(P + 4 * k, Xb);
+        const int take = s < dd;
+        dd = take ? s : dd;
+        ff = take ? k : ff;
+    }
+    *d = dd;
+    *f = ff;
+    return inside_r & (dd > 0) & (ff >= 0);
+}
+
+/* corner X of a inside b at depth d on b's face pl, into the manifold's candidates */
+static inline void mf_place(const shape_ref *a, const shape_ref *b, const double *X, const double *pl, double d,
+                            double sign, mf_vertex *best, int *nb, int cap) {
+    double xw[3]; /* the corner in the world */
+    floe_q_rotate(xw, a->q, X);
+    floe_v3_add(xw, xw, a->x);
+    mf_vertex m;
+    m.d = d;
+    floe_v3_copy(m.x, xw);
+    floe_q_rotate(m.n, b->q, pl);
+    floe_v3_scale(m.n, -sign);
+    mf_insert(best, nb, cap, &m);
+}
+
 /* the vertices of a inside b, sign: +1 when a is particle i (the normal from i to j is then
  * minus b's outward face normal), -1 when a is j */
 static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b,
@@ -578,37 +616,60 @@ static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shap
         int ni = 0;
         for (int q0 = 0; q0 < nk; q0++) {
             const int v = keep[q0];
-            double Xb[3];
-            rel_apply(&map, V + 3 * v, Xb);
-            const int inside_r = floe_v3_dot(Xb, Xb) < rb2;
-            if (w->dim == 2) Xb[2] = 0;
-            double d = INFINITY;
-            int f = -1;
-            for (int k = 0; k < np; k++) {
-                const double s = P[4 * k + 3] - floe_v3_dot(P + 4 * k, Xb);
-                const int take = s < d;
-                d = take ? s : d;
-                f = take ? k : f;
-            }
             in[ni] = v;
-            din[ni] = d;
-            fin[ni] = f;
-            ni += inside_r & (d > 0) & (f >= 0);
+            ni += mf_corner_in(w, &map, V + 3 * v, P, np, rb2, &din[ni], &fin[ni]);
         }
-        for (int q = 0; q < ni; q++) {
-            const int v = in[q];
-            /* the corner in the world */
-            double xw[3];
-            floe_q_rotate(xw, a->q, V + 3 * v);
-            floe_v3_add(xw, xw, a->x);
-            mf_vertex m;
-            m.d = din[q];
-            floe_v3_copy(m.x, xw);
-            floe_q_rotate(m.n, b->q, P + 4 * fin[q]);
-            floe_v3_scale(m.n, -sign);
-            mf_insert(best, nb, cap, &m);
-        }
+        for (int q = 0; q < ni; q++) mf_place(a, b, V + 3 * in[q], P + 4 * fin[q], din[q], sign, best, nb, cap);
     }
+}
+
+/* the same for the corners idx[0 .. n) of a only (ascending: the order above), when the
+ * pair's corner cache says the others are out (manifold) */
+static void mf_vertices_of(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b,
+                           const floe_polytope_view *pva, const floe_polytope_view *pvb, const rel_map *mp, double sign,
+                           const int *idx, int n, mf_vertex *best, int *nb, int cap) {
+    const double *V = pva->v, *P = pvb->plane;
+    const double rb2 = b->r * b->r;
+    for (int q = 0; q < n; q++) {
+        double d;
+        int f;
+        if (mf_corner_in(w, mp, V + 3 * idx[q], P, pvb->np, rb2, &d, &f))
+            mf_place(a, b, V + 3 * idx[q], P + 4 * f, d, sign, best, nb, cap);
+    }
+}
+
+/* The corner cache of a resting polytope pair (3D): the corners of a that may be inside b
+ * until the pair has moved by more than *M: every corner whose distance from b is below
+ * delta (by a lower bound: its largest face violation over that face's normal's length; a
+ * corner inside counts as distance 0), into idx (ascending, at most cap), *M the least such
+ * bound of the others (INFINITY: none). A corner further than M from b stays outside while
+ * the two bodies' points have moved less than M in all (the separation cache's argument,
+ * forces.c sep_update), so the corners in idx are the only ones the manifold needs. -1 when
+ * more than cap corners are that near. */
+static int mf_near(const floe_polytope_view *pva, const floe_polytope_view *pvb, const rel_map *mp, double delta, int *idx,
+                   int cap, double *M) {
+    const double *V = pva->v, *P = pvb->plane;
+    const int nv = pva->nv, np = pvb->np;
+    int n = 0;
+    double lo = INFINITY;
+    if (!V || !P || np <= 0) return -1;
+    for (int v = 0; v < nv; v++) {
+        double Xb[3];
+        rel_apply(mp, V + 3 * v, Xb);
+        double g = 0.0; /* the distance's lower bound */
+        for (int k = 0; k < np; k++) {
+            const double *pk = P + 4 * k, nn = sqrt(floe_v3_dot(pk, pk));
+            const double viol = floe_v3_dot(pk, Xb) - pk[3];
+            if (viol > 0 && nn > 0 && viol / nn > g) g = viol / nn;
+        }
+        if (g < delta) {
+            if (n == cap) return -1;
+            idx[n++] = v;
+        } else if (g < lo)
+            lo = g;
+    }
+    *M = lo;
+    return n;
 }
 
 /* The contact manifold of a polytope pair (docs/models.md, "Contact manifold"). The stored
@@ -622,14 +683,68 @@ static void mf_vertices(const floe_detect_ctx *w, const shape_ref *a, const shap
  * other, and a flat face rests on two (2D) or up to four (3D) springs. The gradient of
  * e(d_v) is the law's force at v along the nearest face's normal (exact: the vertex moves
  * with its body, the face with the other). This finds the 2nd .. K-th deepest vertices. */
-static void manifold(const floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, const floe_polytope_view *pva,
+/* The corner cache (3D, a pair with a warm slot and the separation cache): mf_near's corners
+ * of both bodies in the pair's warm slot, from MF_SLOT on: the pair's motion bound when they
+ * were found (m0, also in the separation cache's slot, whose gap is then MF_MARK: a slot
+ * reset by a new list, an RK2 restore of one of the two or a pair found apart never
+ * matches), the margin M, the two counts, then the indices, 4 of 13 bits in each double. While
+ * the pair has moved less than M since (the separation cache's test) the manifold tests only
+ * those corners: the same corners are inside, found in the same order, so the same bits. */
+#define MF_SLOT 9
+#define MF_MARK (-1.0)
+#define MF_CAP 16          /* corners kept, both bodies */
+#define MF_NEAR 2e-3       /* corners nearer than this x (r_a + r_b) are kept */
+
+static int mf_cache_holds(const floe_detect_ctx *w, const double *warm) {
+    const double *sc = w->sep, *m = warm + MF_SLOT;
+    return sc && sc[0] == MF_MARK && m[0] == sc[1] && w->motion - m[0] + 1e-9 * w->motion < m[1];
+}
+
+static void mf_cache_get(const double *warm, int *idx, int *na, int *nb) {
+    const double *m = warm + MF_SLOT;
+    const int c = (int)m[2];
+    *na = c & 31;
+    *nb = c >> 5;
+    for (int k = 0; k < *na + *nb; k++) idx[k] = (int)(((int64_t)m[3 + k / 4] >> (13 * (k % 4))) & 8191);
+}
+
+static void mf_cache_put(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, const floe_polytope_view *pva,
+                         const floe_polytope_view *pvb, const rel_map *fab, const rel_map *fba, double *warm) {
+    int idx[MF_CAP];
+    double Ma, Mb;
+    const double delta = MF_NEAR * (a->r + b->r);
+    const int na = pva->nv < 8192 && pvb->nv < 8192 ? mf_near(pva, pvb, fab, delta, idx, MF_CAP, &Ma) : -1;
+    const int nb = na >= 0 ? mf_near(pvb, pva, fba, delta, idx + na, MF_CAP - na, &Mb) : -1;
+    if (nb < 0) return; /* too many near corners: no cache (the separation slot stays NaN) */
+    double *m = warm + MF_SLOT;
+    int64_t pk[4] = {0, 0, 0, 0};
+    for (int k = 0; k < na + nb; k++) pk[k / 4] |= (int64_t)idx[k] << (13 * (k % 4));
+    m[0] = w->motion;
+    m[1] = fmin(Ma, Mb);
+    m[2] = na + 32 * nb;
+    for (int k = 0; k < 4; k++) m[3 + k] = (double)pk[k];
+    w->sep[0] = MF_MARK;
+    w->sep[1] = w->motion;
+}
+
+static void manifold(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, const floe_polytope_view *pva,
                      const floe_polytope_view *pvb, const rel_map *fab, const rel_map *fba, int fb, int fa,
-                     floe_contact *c) {
+                     double *warm, floe_contact *c) {
     const int K = w->dim == 2 ? 2 : 4;
     mf_vertex best[4];
     int nb = 0;
-    mf_vertices(w, a, b, pva, pvb, fab, 1.0, fb, best, &nb, K);
-    mf_vertices(w, b, a, pvb, pva, fba, -1.0, fa, best, &nb, K);
+    const int cc = w->dim == 3 && warm && w->sep && !w->no_corner_cache;
+    if (cc && mf_cache_holds(w, warm)) {
+        int idx[MF_CAP], na, nbb;
+        mf_cache_get(warm, idx, &na, &nbb);
+        mf_vertices_of(w, a, b, pva, pvb, fab, 1.0, idx, na, best, &nb, K);
+        mf_vertices_of(w, b, a, pvb, pva, fba, -1.0, idx + na, nbb, best, &nb, K);
+        w->det->mf_cached++;
+    } else {
+        mf_vertices(w, a, b, pva, pvb, fab, 1.0, fb, best, &nb, K);
+        mf_vertices(w, b, a, pvb, pva, fba, -1.0, fa, best, &nb, K);
+        if (cc) mf_cache_put(w, a, b, pva, pvb, fab, fba, warm);
+    }
     mf_set_extras(c, best, nb); /* the deepest vertex is the deepest point's share */
 }
 
@@ -689,7 +804,7 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
         c->gscale = g2;
     }
     c->r_eff = a->r * b->r / (a->r + b->r);
-    manifold(w, a, b, &va, &vb, &fab, &fba, fb, fa, c);
+    manifold(w, a, b, &va, &vb, &fab, &fba, fb, fa, warm, c);
     if (warm) warm[LP_TOUCHED] = 1.0;
     return 1;
 }

@@ -22,6 +22,7 @@ typedef struct floe_detect_state {
     long admm_calls, lp_calls;
     long separated;              /* pairs found apart before LP/ADMM (support test or separation cache) */
     long sep_cached;             /* of those, by the separation cache (a gap still open) without a test */
+    long mf_cached;              /* polytope manifolds from their corner cache (detect.c manifold) */
     long lp_halves, lp_kept, lp_cold; /* polytope LP halves; of which the previous basis was
                                          kept without a pivot (resting contacts); started cold */
     long nonconverged;           /* ADMM evaluations that hit max_iter (a counted warning) */
@@ -51,6 +52,7 @@ typedef struct floe_detect_ctx {
      * of |dx| + radius x turned angle since the cache was reset). NULL: no cache */
     double *sep;
     double motion;
+    int no_corner_cache; /* 1: polytope manifolds test every corner (detect.c manifold; tests) */
 } floe_detect_ctx;
 
 /* The separation cache's test (docs/models.md): 1 (and counted) when this pair's kept gap is

@@ -358,6 +358,8 @@ typedef struct floe_detect_stats {
     long sep_cached;         /* of which by the separation cache: a gap found by the support
                                 test or the LP that the bodies' motion since cannot have
                                 closed (docs/models.md; this process's count, like lp_halves) */
+    long manifold_cached;    /* polytope contact manifolds that tested only the corners their
+                                corner cache kept (docs/models.md; this process's count) */
 } floe_detect_stats;
 int floe_world_detect_stats(const floe_world *w, floe_detect_stats *out);
 

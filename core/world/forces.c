@@ -1563,6 +1563,7 @@ static void par_merge_detect(floe_world *w, int nt) {
         W->lp_calls += d->lp_calls;
         W->separated += d->separated;
         W->sep_cached += d->sep_cached;
+        W->mf_cached += d->mf_cached;
         W->lp_halves += d->lp_halves;
         W->lp_kept += d->lp_kept;
         W->lp_cold += d->lp_cold;
@@ -1667,7 +1668,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     const int any_growth = w->nstates > 0; /* only state objects set rdot */
     floe_neighbor_list *nl = &w->nl;
     const int nm = w->nmats;
-    floe_detect_ctx dctx = {.dim = w->def.dim, .step = w->step, .det = &w->det};
+    floe_detect_ctx dctx = {.dim = w->def.dim, .step = w->step, .det = &w->det, .no_corner_cache = w->mf_cache_off};
     /* pairs under the law "none" are skipped; most scenes have none, and then the law of a
      * pair is looked up only when it touches (a load per pair saved on the sphere path) */
     int any_none = 0;

@@ -650,6 +650,7 @@ int floe_world_detect_stats(const floe_world *w, floe_detect_stats *o) {
     o->lp_cold = d->lp_cold;
     o->separated = d->separated;
     o->sep_cached = d->sep_cached;
+    o->manifold_cached = d->mf_cached;
     o->nonconverged = d->nonconverged;
     o->first_bad_i = d->first_bad_i;
     o->first_bad_j = d->first_bad_j;

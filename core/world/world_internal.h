@@ -143,6 +143,7 @@ struct floe_world {
     double *sep_d, *sep_pose, *sep_pair;
     int *sep_geom;
     int sep_n, sep_np, sep_on;
+    int mf_cache_off;         /* 1: polytope manifolds without their corner cache (tests: the same bits) */
     long sep_gen;
     /* peridynamic bodies (peridynamics/floe_pd.h): body k's points are the particles
      * pd_first[k] .. pd_first[k] + n - 1; nothing is allocated without PD bodies */
