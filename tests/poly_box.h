@@ -1,10 +1,14 @@
 /* poly_box.h - tests' random polyhedral grains and a walled box of them (test_lp_resting,
- * test_manifold_springs). Include after test_rng.h and check.h.
+ * test_manifold_springs, test_manifold_cache). Include after test_rng.h and check.h.
  *   poly_grain(R, npl): a convex grain, the intersection of npl half-spaces (the first six
  *     axis-aligned, the rest random normals), offsets R (1 +- 0.15);
  *   poly_box_fill(w, np, g, ng, R): five fixed walls (a floor and four sides, 4 x 3.6 R wide)
  *     and np grains of the ng geometries g (in turn) on a jittered lattice 3.6 R apart, with
- *     random orientations, velocities up to 0.1 m/s and spins up to 20 rad/s. */
+ *     random orientations, velocities up to 0.1 m/s and spins up to 20 rad/s;
+ *   poly_box_new(R, m): a world under gravity (safety 0.5, skin 0.3 R) with the one material
+ *     m (NULL when it cannot be made);
+ *   poly_box_world(w, R, np, npl, law): on such a world, the contact law, 3 grain shapes of
+ *     npl planes, the box of np grains, prepared; w, or NULL after a failed check. */
 #ifndef FLOE_TEST_POLY_BOX_H
 #define FLOE_TEST_POLY_BOX_H
 #include "floe.h"
@@ -41,5 +45,25 @@ static void poly_box_fill(floe_world *w, int np, const int *g, int ng, double R)
         for (int k = 0; k < 3; k++) { p.v[k] = uni(-0.1, 0.1); p.w[k] = uni(-20, 20); }
         CHECK(floe_world_add_particle(w, &p) >= 0, "add particle: %s", floe_world_last_error(w));
     }
+}
+
+static inline floe_world *poly_box_new(double R, const floe_material *m) {
+    floe_world_def def = floe_default_world_def();
+    def.gravity[2] = -9.81;
+    def.dt_safety = 0.5;
+    def.skin = 0.3 * R;
+    floe_world *w = floe_world_create(&def, NULL, 0);
+    if (w) floe_world_add_material(w, m);
+    return w;
+}
+
+static inline floe_world *poly_box_world(floe_world *w, double R, int np, int npl, floe_contact_law *law) {
+    CHECK(law && floe_world_set_law(w, 0, 0, law) == FLOE_OK, "set law: %s", floe_world_last_error(w));
+    int g[3];
+    for (int s = 0; s < 3; s++) g[s] = floe_world_add_geometry(w, poly_grain(R, npl));
+    poly_box_fill(w, np, g, 3, R);
+    const int ok = floe_world_prepare(w) == FLOE_OK;
+    CHECK(ok, "prepare: %s", floe_world_last_error(w));
+    return ok ? w : NULL;
 }
 #endif

@@ -44,13 +44,10 @@ static double dist3(const double a[3], const double b[3]) {
 }
 
 static void settling_run(void) {
-    floe_world_def def = floe_default_world_def();
-    def.gravity[2] = -9.81;
-    def.dt_safety = 0.5;
-    def.skin = 0.3 * R;
-    floe_world *w = floe_world_create(&def, NULL, 0);
     floe_material m = {"m", 2500, 1e7, 0.3};
-    floe_world_add_material(w, &m);
+    floe_world *w = poly_box_new(R, &m);
+    CHECK(w != NULL, "world");
+    if (!w) return;
     /* mass ~ 2500 x (2R)^3 = 0.02 kg; kn: about 1 % overlap at rest under a few grains */
     floe_world_set_law(w, 0, 0, floe_linear_law_create(2e4, 5e3, 0.5, 0.1, 0.5));
     int g[4];

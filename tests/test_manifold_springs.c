@@ -70,23 +70,13 @@ static floe_contact_law *wrap(floe_contact_law *inner) {
  * poses and velocities every time (the generator restarts) */
 static floe_world *scene(int hm, int wrapped_law) {
     rng_s = TEST_RNG_SEED;
-    floe_world_def def = floe_default_world_def();
-    def.gravity[2] = -9.81;
-    def.dt_safety = 0.5;
-    def.skin = 0.3 * R;
-    floe_world *w = floe_world_create(&def, NULL, 0);
-    if (!w) return NULL;
     floe_material m = {"m", 2500, 1e7, 0.3};
-    floe_world_add_material(w, &m);
+    floe_world *w = poly_box_new(R, &m);
+    if (!w) return NULL;
     floe_contact_law *law = hm ? floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5)
                                : floe_linear_law_create(2e4, 5e3, 0.5, 0.1, 0.5);
     if (wrapped_law) law = wrap(law);
-    CHECK(law && floe_world_set_law(w, 0, 0, law) == FLOE_OK, "set law: %s", floe_world_last_error(w));
-    int g[3];
-    for (int s = 0; s < 3; s++) g[s] = floe_world_add_geometry(w, poly_grain(R, NPL));
-    poly_box_fill(w, NP, g, 3, R);
-    CHECK(floe_world_prepare(w) == FLOE_OK, "prepare: %s", floe_world_last_error(w));
-    return w;
+    return poly_box_world(w, R, NP, NPL, law);
 }
 
 static int same(const double *a, const double *b, int n) { return memcmp(a, b, sizeof(double) * (size_t)n) == 0; }
