@@ -645,22 +645,26 @@ static void mf_vertices_of(const floe_detect_ctx *w, const shape_ref *a, const s
  * bound of the others (INFINITY: none). A corner further than M from b stays outside while
  * the two bodies' points have moved less than M in all (the separation cache's argument,
  * forces.c sep_update), so the corners in idx are the only ones the manifold needs. -1 when
- * more than cap corners are that near. */
+ * more than cap corners are that near (or b has more than 256 faces). */
 static int mf_near(const floe_polytope_view *pva, const floe_polytope_view *pvb, const rel_map *mp, double delta, int *idx,
                    int cap, double *M) {
     const double *V = pva->v, *P = pvb->plane;
     const int nv = pva->nv, np = pvb->np;
     int n = 0;
     double lo = INFINITY;
-    if (!V || !P || np <= 0) return -1;
+    if (!V || !P || np <= 0 || np > 256) return -1;
+    double inv[256]; /* each face normal's 1 / length (0 for a zero normal) */
+    for (int k = 0; k < np; k++) {
+        const double nn = sqrt(floe_v3_dot(P + 4 * k, P + 4 * k));
+        inv[k] = nn > 0 ? 1.0 / nn : 0.0;
+    }
     for (int v = 0; v < nv; v++) {
         double Xb[3];
         rel_apply(mp, V + 3 * v, Xb);
         double g = 0.0; /* the distance's lower bound */
         for (int k = 0; k < np; k++) {
-            const double *pk = P + 4 * k, nn = sqrt(floe_v3_dot(pk, pk));
-            const double viol = floe_v3_dot(pk, Xb) - pk[3];
-            if (viol > 0 && nn > 0 && viol / nn > g) g = viol / nn;
+            const double viol = (floe_v3_dot(P + 4 * k, Xb) - P[4 * k + 3]) * inv[k];
+            if (viol > g) g = viol;
         }
         if (g < delta) {
             if (n == cap) return -1;

@@ -231,6 +231,15 @@ int floe_par_pd_index(floe_world *w, floe_par *P) {
 /* 1 when body b keeps a per-point s0 (alpha) */
 static int has_s0(const floe_pd_body *b) { return b->s0 && b->s_c > 0; }
 
+/* the plastic stretch of each bond whose row's point is owned (own NULL: every one), zeros
+ * elsewhere, into sp (nbond floats): the rows' owners' values, to be summed over the ranks */
+static void splast_owned(const floe_pd_body *pb, const uint8_t *own, float *sp) {
+    for (int i = 0; i < pb->n; i++) {
+        const int o = !own || own[i] == FLOE_PD_OWNED;
+        for (int64_t k = pb->off[i]; k < pb->off[i + 1]; k++) sp[k] = o ? pb->splast[k] : 0.0f;
+    }
+}
+
 /* body b's state as its owners hold it, zeros elsewhere, to be summed over the ranks (own
  * NULL: all here): per point its last bond force and s0 (alpha), 3 or 4 doubles, then with
  * plastic bonds the plastic stretch of each bond whose row's point is owned (nbond floats);
@@ -246,13 +255,7 @@ static double *owned_values(const floe_world *w, const floe_pd_body *pb, int off
         for (int a = 0; a < 3; a++) v[q * mv + a] = o ? fold[3 * q + a] : 0.0;
         if (ns) v[q * mv + 3] = o ? pb->s0[q] : 0.0;
     }
-    if (pb->splast) {
-        float *sp = (float *)(v + n * mv);
-        for (int i = 0; i < pb->n; i++) {
-            const int o = !own || own[i] == FLOE_PD_OWNED;
-            for (int64_t k = pb->off[i]; k < pb->off[i + 1]; k++) sp[k] = o ? pb->splast[k] : 0.0f;
-        }
-    }
+    if (pb->splast) splast_owned(pb, own, (float *)(v + n * mv));
     return v;
 }
 
@@ -400,8 +403,7 @@ int floe_par_pd_sync(floe_world *w, floe_par *P) {
             int bad = !sp, any;
             MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
             if (any) { free(sp); return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: PD bodies: out of memory"); }
-            for (int i = 0; i < pb->n; i++)
-                for (int64_t k = pb->off[i]; k < pb->off[i + 1]; k++) sp[k] = m[i] == FLOE_PD_OWNED ? pb->splast[k] : 0.0f;
+            splast_owned(pb, m, sp);
             MPI_Allreduce(MPI_IN_PLACE, sp, (int)pb->nbond, MPI_FLOAT, MPI_SUM, P->comm);
             floe_par_count_allreduce(P, FLOE_COMM_MIGRATE, pb->nbond * (long long)sizeof(float));
             memcpy(pb->splast, sp, (size_t)pb->nbond * sizeof *sp);
