@@ -15,9 +15,16 @@
  *     measures each contact's overlap change: the batches' lanes too);
  *  2. every sphere-wall contact the stage recorded (the inline kernel, seen from i) against
  *     detection's own answer for the pair (floe_world_probe_contact): normal, depth and
- *     point equal bit for bit, for walls before and after the sphere in the pair. */
+ *     point equal bit for bit, for walls before and after the sphere in the pair;
+ *  3. a periodic cell (tilted, sheared at a rate, its diagonal held by the stress servo):
+ *     216 spheres of three sizes colliding through the faces, the lanes against the general
+ *     body (world_internal.h lanes_off), Hertz-Mindlin and the linear law: particles, the
+ *     ledger (the cell's work in work_boundary), the cell's vectors (the servo reads the
+ *     contacts' virial and stiffness sums) and the records (image branch vectors) equal bit
+ *     for bit. */
 #include "check.h"
 #include "floe.h"
+#include "world_internal.h"
 #include <math.h>
 #include <string.h>
 
@@ -163,7 +170,106 @@ static floe_world *compare_paths(int linear) {
     return a;
 }
 
+/* 3. a periodic cell: 6 x 6 x 6 spheres on a cubic lattice with gaps (spacing 2.6 mm, radii
+ * 0.8, 1.0 and 1.2 mm), random velocities; the cell tiles the lattice, tilted in xy, sheared
+ * at 2 /s (xy), its diagonal held at -5 Pa by the servo (at most 10 /s: it is not clamped once
+ * contacts form, so the lanes' stiffness sums steer it) */
+static floe_world *cell_scene(int linear, int lanes_off) {
+    floe_world_def def = floe_default_world_def();
+    def.dt = 5e-6;
+    def.skin = 0.0002;
+    char err[256];
+    floe_world *w = floe_world_create(&def, err, sizeof err);
+    if (!w) return NULL;
+    floe_material m = {"glass", 2500, 1e7, 0.3};
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, linear ? floe_linear_law_create(200, 100, 0.02, 0.01, 0.5)
+                                       : floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5));
+    const double d = 0.0026, Lc = 6 * d;
+    const double H[9] = {Lc, 0.1 * Lc, 0, 0, Lc, 0, 0, 0, Lc}, o[3] = {0, 0, 0};
+    floe_world_set_cell(w, o, H);
+    floe_cell_control c = floe_default_cell_control();
+    for (int a = 0; a < 3; a++) {
+        c.mode[4 * a] = FLOE_CELL_STRESS;
+        c.stress[4 * a] = -5.0;
+    }
+    c.rate[1] = 2.0;
+    c.max_rate = 10.0;
+    floe_world_cell_set_control(w, &c);
+    rng_state = 777;
+    int g[3] = {floe_world_add_geometry(w, floe_sphere_create(0.0008)), floe_world_add_geometry(w, floe_sphere_create(0.001)),
+                floe_world_add_geometry(w, floe_sphere_create(0.0012))};
+    for (int k = 0; k < 216; k++) {
+        floe_particle_def p = floe_default_particle_def();
+        p.geometry = g[k % 3];
+        const int a = k % 6, b = (k / 6) % 6, cc = k / 36;
+        floe_v3_set(p.x, (a + 0.5) * d + 0.1 * (b + 0.5) * d, (b + 0.5) * d, (cc + 0.5) * d);
+        floe_v3_set(p.v, 0.2 * (urand() - 0.5), 0.2 * (urand() - 0.5), 0.2 * (urand() - 0.5));
+        floe_v3_set(p.w, 20 * (urand() - 0.5), 20 * (urand() - 0.5), 20 * (urand() - 0.5));
+        floe_world_add_particle(w, &p);
+    }
+    w->lanes_off = lanes_off;
+    return w;
+}
+
+static void compare_cell(int linear) {
+    const char *law = linear ? "periodic cell, linear" : "periodic cell, hertz_mindlin";
+    floe_world *a = cell_scene(linear, 0), *b = cell_scene(linear, 1);
+    CHECK(a && b, "%s: worlds created", law);
+    if (!a || !b) { floe_world_destroy(a); floe_world_destroy(b); return; }
+    int rc = floe_world_prepare(a);
+    if (!rc) rc = floe_world_prepare(b);
+    CHECK(rc == 0, "%s: prepare: %s", law, floe_world_last_error(a));
+    long contacts = 0, images = 0;
+    for (int s = 0; s < 4000 && !rc; s++) {
+        rc = floe_world_step(a);
+        if (!rc) rc = floe_world_step(b);
+        if (!rc && s % 100 == 0) {
+            contacts += floe_world_contact_count(a);
+            for (int k = 0; k < a->nl.npairs; k++) images += a->nl.touching[k] && a->nl.img && a->nl.img[k];
+        }
+    }
+    CHECK(rc == 0, "%s: 4,000 steps: %s", law, rc ? floe_world_last_error(a) : "");
+    int diff = 0;
+    for (int i = 0; i < 216; i++) {
+        floe_particle_state pa, pb;
+        floe_world_get_particle(a, i, &pa);
+        floe_world_get_particle(b, i, &pb);
+        diff += !(same(pa.x, pb.x, 3) && same(pa.v, pb.v, 3) && same(pa.w, pb.w, 3) && same(pa.f, pb.f, 3) &&
+                  same(pa.torque, pb.torque, 3));
+    }
+    double Ha[9], Hb[9];
+    floe_world_cell(a, NULL, Ha);
+    floe_world_cell(b, NULL, Hb);
+    floe_energy ea = floe_world_energy(a), eb = floe_world_energy(b);
+    printf("  %s: spheres differing between the lanes and the general body: %d of 216 (contacts summed over 40 "
+           "samples %ld, through the faces %ld; H_zz %.6g of %.6g; work of the cell %.3g J)\n",
+           law, diff, contacts, images, Ha[8], 6 * 0.0026, ea.work_boundary);
+    CHECK(diff == 0, "%s: %d spheres differ between the lanes and the general body", law, diff);
+    CHECK(contacts > 200 && images > 20, "%s: contacts, some through the faces (%ld, %ld)", law, contacts, images);
+    CHECK(same(Ha, Hb, 9) && Ha[8] != 6 * 0.0026, "%s: the servo moved the cell, the same in both (H_zz %.17g, %.17g)",
+          law, Ha[8], Hb[8]);
+    CHECK(ea.kinetic_trans == eb.kinetic_trans && ea.elastic == eb.elastic && ea.dissipated == eb.dissipated &&
+              ea.work_boundary == eb.work_boundary && ea.work_boundary != 0,
+          "%s: ledger differs: elastic %.17g vs %.17g, dissipated %.17g vs %.17g, cell's work %.17g vs %.17g", law,
+          ea.elastic, eb.elastic, ea.dissipated, eb.dissipated, ea.work_boundary, eb.work_boundary);
+    floe_world_record_contacts(a, 1);
+    floe_world_record_contacts(b, 1);
+    rc = floe_world_step(a);
+    if (!rc) rc = floe_world_step(b);
+    const floe_contact_info *ca = NULL, *cb = NULL;
+    const int na = floe_world_contacts(a, &ca), nb = floe_world_contacts(b, &cb);
+    int rdiff = na == nb ? 0 : -1;
+    for (int k = 0; k < na && k < nb; k++) rdiff += memcmp(ca + k, cb + k, sizeof *ca) != 0;
+    printf("  %s: recorded contacts %d and %d, differing %d\n", law, na, nb, rdiff);
+    CHECK(rc == 0 && na > 0 && rdiff == 0, "%s: the records differ (%d of %d, %d)", law, rdiff, na, nb);
+    floe_world_destroy(a);
+    floe_world_destroy(b);
+}
+
 int main(void) {
+    compare_cell(0);
+    compare_cell(1);
     floe_world *lin = compare_paths(1);
     floe_world_destroy(lin);
     /* the lattice: pairs at depth 0 (or -1 ulp) by rounding, with d2 < (r_i + r_j)^2, take the

@@ -559,7 +559,13 @@ int step_verlet(floe_world *w) {
     const double g0 = w->def.gravity[0], g1 = w->def.gravity[1], g2 = w->def.gravity[2];
     int kin = 0; /* any kinematic particle */
     int dbad = 0; /* a free particle failed the drift's quick checks */
-    if (w->cell) FLOE_TRY(floe_cell_begin_step(w)); /* the cell's velocity gradient of this step */
+    if (w->cell) { /* the cell's velocity gradient of this step (MPI: the servo's stress summed
+                    * over the ranks) */
+        double sg[9];
+        int given = 0;
+        if (w->par) FLOE_TRY(floe_par_cell_stress(w, sg, &given));
+        FLOE_TRY(floe_cell_begin_step(w, given ? sg : NULL));
+    }
     /* threads: blocks of FLOE_PAR_BLOCK particles, their sums added in block order (the same
      * bits for any number of threads, floe_par.h) */
     const int B = FLOE_PAR_BLOCK, nb = (n + B - 1) / B, nt = floe_world_loop_threads(w, n);

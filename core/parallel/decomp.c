@@ -191,7 +191,11 @@ static void z_geom_multi(void *data, int ngid, int nlid, int nobj, ZOLTAN_ID_PTR
     const zctx *z = data;
     for (int k = 0; k < nobj; k++) {
         const int i = z->P->nrep + (int)lids[k];
-        for (int a = 0; a < ndim; a++) geom[(size_t)k * ndim + a] = z->w->p.x[3 * i + a];
+        double y[3];
+        /* a periodic cell: the centre wrapped into it (positions are never wrapped) */
+        if (z->w->cell) floe_world_cell_wrap(z->w, z->w->p.x + 3 * i, y);
+        else memcpy(y, z->w->p.x + 3 * i, sizeof y);
+        for (int a = 0; a < ndim; a++) geom[(size_t)k * ndim + a] = y[a];
     }
     *ierr = ZOLTAN_OK;
 }
@@ -384,23 +388,73 @@ static double box_dist(const double *x, const double *lo, const double *hi, int 
     return sqrt(d2);
 }
 
+/* a periodic cell: the copies y + H m (m in {-1, 0, 1}^dim) of a centre y wrapped into the
+ * cell (fractional coordinates s) that come within reach of the cell, at most 27; the first
+ * is y itself */
+static int cell_copies(const floe_cell_state *c, int dim, const double *y, const double wd[3], double reach,
+                       double out[27][3]) {
+    double d[3], s[3];
+    for (int r = 0; r < 3; r++) d[r] = y[r] - c->o[r];
+    for (int r = 0; r < 3; r++) s[r] = c->Hinv[3 * r] * d[0] + c->Hinv[3 * r + 1] * d[1] + c->Hinv[3 * r + 2] * d[2];
+    memcpy(out[0], y, 3 * sizeof *y);
+    int n = 1;
+    const int mz = dim == 3 ? 1 : 0;
+    for (int m0 = -1; m0 <= 1; m0++)
+        for (int m1 = -1; m1 <= 1; m1++)
+            for (int m2 = -mz; m2 <= mz; m2++) {
+                const int m[3] = {m0, m1, m2};
+                if (!(m0 | m1 | m2)) continue;
+                int far = 0;
+                for (int r = 0; r < dim && !far; r++) {
+                    const double f = s[r] + m[r];
+                    far = f * wd[r] < -reach || (f - 1) * wd[r] > reach;
+                }
+                if (far) continue;
+                for (int r = 0; r < 3; r++)
+                    out[n][r] = y[r] + c->H[3 * r] * m0 + c->H[3 * r + 1] * m1 + c->H[3 * r + 2] * m2;
+                n++;
+            }
+    return n;
+}
+
 int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
     floe_particles *p = &w->p;
     const int S = P->size, dim = w->def.dim, lo = P->nrep, hi = P->nrep + P->nown;
+    const floe_cell_state *cell = w->cell;
+    /* a periodic cell: the owned centres wrapped into it (the bisection cut the wrapped
+     * centres), their copies across the faces tested below; otherwise the centres */
+    double *y = NULL;
+    if (cell) {
+        y = malloc((size_t)(hi > lo ? hi - lo : 1) * 3 * sizeof *y);
+        if (!y) return FLOE_ENOMEM;
+        for (int i = lo; i < hi; i++) floe_world_cell_wrap(w, p->x + 3 * i, y + 3 * (i - lo));
+    }
+#define CENTRE(i) (cell ? y + 3 * ((i) - lo) : p->x + 3 * (i))
     /* each rank's box of owned centres and its largest bounding radius; an empty rank an
      * empty box (lo > hi: nothing reaches it) */
     double mine[7] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY, 0};
     for (int i = lo; i < hi; i++) {
+        const double *x = CENTRE(i);
         for (int a = 0; a < 3; a++) {
-            if (p->x[3 * i + a] < mine[a]) mine[a] = p->x[3 * i + a];
-            if (p->x[3 * i + a] > mine[3 + a]) mine[3 + a] = p->x[3 * i + a];
+            if (x[a] < mine[a]) mine[a] = x[a];
+            if (x[a] > mine[3 + a]) mine[3 + a] = x[a];
         }
         if (p->radius[i] > mine[6]) mine[6] = p->radius[i];
     }
     double *boxes = malloc((size_t)S * 7 * sizeof *boxes);
-    if (!boxes) return FLOE_ENOMEM;
+    if (!boxes) { free(y); return FLOE_ENOMEM; }
     MPI_Allgather(mine, 7, MPI_DOUBLE, boxes, 7, MPI_DOUBLE, P->comm);
     floe_par_count_all(P, FLOE_COMM_GHOST, 7 * sizeof(double));
+    /* a periodic cell: the widest reach of any pair (the copies that can matter) and the
+     * cell's widths */
+    double wd[3] = {INFINITY, INFINITY, INFINITY}, reach = 0;
+    if (cell) {
+        floe_world_cell_widths(w, wd);
+        double rmax = 0, rall = 0;
+        for (int i = lo; i < hi; i++) rmax = fmax(rmax, p->radius[i]);
+        for (int r = 0; r < S; r++) rall = fmax(rall, boxes[7 * r + 6]);
+        reach = fmax(rmax + rall, fmax(P->bond_reach, P->pd_reach)) + skin;
+    }
     /* the send lists, grouped by destination */
     P->nsend = 0;
     for (int r = 0; r < S; r++) {
@@ -412,12 +466,19 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
             /* beam bonds and PD bonds: the partner of a bond evaluated on r is within the
              * bond's length of one of r's centres (bond_reach, pd_reach: the longest,
              * par_beams.c and par_pd.c) */
-            if (!(box_dist(p->x + 3 * i, b, b + 3, dim) <= fmax(p->radius[i] + b[6], fmax(P->bond_reach, P->pd_reach)) + skin))
-                continue;
+            const double lim = fmax(p->radius[i] + b[6], fmax(P->bond_reach, P->pd_reach)) + skin;
+            int near = 0;
+            if (cell) { /* sent once, whichever copy comes near: r's list finds each image */
+                double cp[27][3];
+                const int nc = cell_copies(cell, dim, CENTRE(i), wd, reach, cp);
+                for (int c = 0; c < nc && !near; c++) near = box_dist(cp[c], b, b + 3, dim) <= lim;
+            } else
+                near = box_dist(p->x + 3 * i, b, b + 3, dim) <= lim;
+            if (!near) continue;
             if (P->nsend == P->send_cap) {
                 int nc = P->send_cap ? 2 * P->send_cap : 256;
                 int *t = realloc(P->send_idx, (size_t)nc * sizeof *t);
-                if (!t) { free(boxes); return FLOE_ENOMEM; }
+                if (!t) { free(boxes); free(y); return FLOE_ENOMEM; }
                 P->send_idx = t;
                 P->send_cap = nc;
             }
@@ -425,7 +486,9 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
             P->scount[r]++;
         }
     }
+#undef CENTRE
     free(boxes);
+    free(y);
     MPI_Alltoall(P->scount, 1, MPI_INT, P->rcount, 1, MPI_INT, P->comm);
     floe_par_count_all(P, FLOE_COMM_GHOST, sizeof(int));
     int nr = 0;

@@ -21,6 +21,11 @@ int floe_par_reverse(floe_world *w);
  * summed over the ranks for their controllers, the same on every rank (par_forcing.c);
  * nothing without servo walls */
 int floe_par_servo_totals(floe_world *w);
+/* a periodic cell with a stress-controlled component (the servo), before the step's velocity
+ * gradient: the cell's stress (the contacts' virial, the free particles' kinetic part) summed
+ * over the ranks into sigma, the servo's stiffness sums into the cell's kdiag, the same on
+ * every rank; *given 0 (sigma untouched) when nothing needs it */
+int floe_par_cell_stress(floe_world *w, double sigma[9], int *given);
 /* after a step (force_all: every observer, the end): when the mirror's observers are due
  * (rank 0 decides, all follow), the state gathered into the mirror and its observers
  * called; nothing without a mirror */

@@ -44,6 +44,12 @@
 
 int floe_par_pd_unsupported(const floe_world *w, char *what, size_t len) {
     if (!w->npd) return 0;
+    /* the cell's stress sums the bonds' virial (forces.c pd_vir_visit): a split body
+     * evaluates its bonds across the cuts on both sides */
+    if (w->cell) {
+        snprintf(what, len, "a PD body in a periodic cell");
+        return 1;
+    }
     if (w->def.pd_dem == FLOE_PD_DEM_STAGGERED) {
         snprintf(what, len, "the staggered PD-DEM scheme (pd_dem: monolithic runs split)");
         return 1;
@@ -57,10 +63,6 @@ int floe_par_pd_unsupported(const floe_world *w, char *what, size_t len) {
         if (pb->mat.model != FLOE_PD_PMB && pb->mat.model != FLOE_PD_LPS) {
             snprintf(what, len, "a PD body of material %s (PD bodies split over ranks: pmb, lps)",
                      pb->ops && pb->ops->name ? pb->ops->name : "?");
-            return 1;
-        }
-        if (pb->img) {
-            snprintf(what, len, "a PD body bonded through a periodic cell");
             return 1;
         }
         if (pb->nbond > INT_MAX || 4 * (int64_t)pb->n > INT_MAX) { /* the decompositions' reductions */

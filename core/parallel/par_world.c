@@ -58,10 +58,13 @@ static void diag_load(floe_world *w, const floe_par *P, const long long g[NDIAG]
 /* ---- contact history by global ids ----
  * A pair is evaluated on the rank that owns its anchor: the bounded particle of the pair
  * with the lower global id (a wall is never the anchor: walls are on every rank). Its
- * history travels with the anchor. Record: gid_a gid_b (list order) sub touching
- * hist[nl.hs] warm[FLOE_DETECT_WARM] (warm only when the list keeps warm starts). */
+ * history travels with the anchor. Record: gid_a gid_b (list order) sub touching [image]
+ * hist[nl.hs] warm[FLOE_DETECT_WARM] (the image code of j with a periodic cell: positions are
+ * never wrapped, so a pair's image is the same on every rank; warm only when the list keeps
+ * warm starts). */
+static int hist_head(const floe_world *w) { return w->cell ? 5 : 4; }
 static int hist_len(const floe_world *w) {
-    return 4 + w->nl.hs + (w->nl.use_warm && w->nl.warm ? FLOE_DETECT_WARM : 0);
+    return hist_head(w) + w->nl.hs + (w->nl.use_warm && w->nl.warm ? FLOE_DETECT_WARM : 0);
 }
 
 static long long anchor_of(const floe_particles *p, const long long *gid, int i, int j) {
@@ -75,7 +78,7 @@ static int hist_export(const floe_world *w, const long long *gid, const unsigned
                        double **out, int *nout) {
     const floe_neighbor_list *nl = &w->nl;
     const floe_particles *p = &w->p;
-    const int m = hist_len(w), use_warm = nl->use_warm && nl->warm;
+    const int m = hist_len(w), h0 = hist_head(w), use_warm = nl->use_warm && nl->warm;
     int cnt = 0;
     double *r = malloc((size_t)(nl->npairs ? nl->npairs : 1) * m * sizeof *r);
     if (!r) return FLOE_ENOMEM;
@@ -93,8 +96,9 @@ static int hist_export(const floe_world *w, const long long *gid, const unsigned
         e[1] = (double)gid[j];
         e[2] = nl->sub[k];
         e[3] = nl->touching[k];
-        memcpy(e + 4, nl->hist + (size_t)k * nl->hs, (size_t)nl->hs * sizeof *e);
-        if (use_warm) memcpy(e + 4 + nl->hs, nl->warm + (size_t)k * FLOE_DETECT_WARM, FLOE_DETECT_WARM * sizeof *e);
+        if (h0 > 4) e[4] = nl->img ? nl->img[k] : 0;
+        memcpy(e + h0, nl->hist + (size_t)k * nl->hs, (size_t)nl->hs * sizeof *e);
+        if (use_warm) memcpy(e + h0 + nl->hs, nl->warm + (size_t)k * FLOE_DETECT_WARM, FLOE_DETECT_WARM * sizeof *e);
     }
     *out = r;
     *nout = cnt;
@@ -112,7 +116,7 @@ static int grow_int(int **a, int n) {
  * indices, so that floe_nl_build keeps them as it keeps the history across any rebuild */
 static int hist_import(floe_world *w, floe_par *P, const double *in, int nin) {
     floe_neighbor_list *nl = &w->nl;
-    const int m = hist_len(w), use_warm = nl->use_warm && nl->warm;
+    const int m = hist_len(w), h0 = hist_head(w), use_warm = nl->use_warm && nl->warm;
     floe_par_index ix;
     if (floe_par_index_build(P, w->p.n, &ix)) return FLOE_ENOMEM;
     if (nin > nl->cap) {
@@ -121,6 +125,11 @@ static int hist_import(floe_world *w, floe_par *P, const double *in, int nin) {
             return FLOE_ENOMEM;
         }
         nl->cap = nin;
+    }
+    /* a periodic cell: the images, as long as the list's other arrays (neighbor.c) */
+    if (w->cell && grow_int(&nl->img, nl->cap)) {
+        floe_par_index_free(&ix);
+        return FLOE_ENOMEM;
     }
     double *h = realloc(nl->hist, (size_t)(nin ? nin : 1) * nl->hs * sizeof *h);
     unsigned char *t = h ? realloc(nl->touching, (size_t)(nin ? nin : 1)) : NULL;
@@ -141,13 +150,16 @@ static int hist_import(floe_world *w, floe_par *P, const double *in, int nin) {
         nl->pj[cnt] = j;
         nl->sub[cnt] = (int)e[2];
         nl->touching[cnt] = (unsigned char)e[3];
-        memcpy(nl->hist + (size_t)cnt * nl->hs, e + 4, (size_t)nl->hs * sizeof *e);
-        if (use_warm) memcpy(nl->warm + (size_t)cnt * FLOE_DETECT_WARM, e + 4 + nl->hs, FLOE_DETECT_WARM * sizeof *e);
+        if (w->cell) nl->img[cnt] = (int)e[4];
+        memcpy(nl->hist + (size_t)cnt * nl->hs, e + h0, (size_t)nl->hs * sizeof *e);
+        if (use_warm) memcpy(nl->warm + (size_t)cnt * FLOE_DETECT_WARM, e + h0 + nl->hs, FLOE_DETECT_WARM * sizeof *e);
         cnt++;
     }
     floe_par_index_free(&ix);
-    free(nl->img); /* no periodic cells under MPI */
-    nl->img = NULL;
+    if (!w->cell) {
+        free(nl->img);
+        nl->img = NULL;
+    }
     nl->npairs = cnt;
     nl->gen++; /* a new list: the threads' per-particle index is rebuilt (forces.c) */
     /* in the order a build leaves its list: the next build carries the history by its row
@@ -227,7 +239,6 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     floe_particles *p = &w->p;
     char pdwhy[160];
     if (floe_par_pd_unsupported(w, pdwhy, sizeof pdwhy)) return refuse(w, pdwhy);
-    if (w->cell) return refuse(w, "a periodic cell");
     if (w->nstates) return refuse(w, "a state object");
     if (w->nobs) return refuse(w, "an observer (outputs)");
     if (w->def.adaptive) return refuse(w, "the adaptive step");
@@ -356,6 +367,13 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
             memset(w->p.f + 3 * i, 0, 3 * sizeof(double));
             memset(w->p.t + 3 * i, 0, 3 * sizeof(double));
         }
+        /* a periodic cell's sums over the contacts (the whole world's at prepare): the servo's
+         * first step sums them over the ranks (floe_par_cell_stress) */
+        if (w->cell) {
+            memset(w->cell->virial, 0, sizeof w->cell->virial);
+            memset(w->cell->pd_virial, 0, sizeof w->cell->pd_virial);
+            memset(w->cell->kdiag, 0, sizeof w->cell->kdiag);
+        }
     }
     return floe_par_servo_totals(w); /* the servos' measures of the whole world, as at prepare */
 }
@@ -367,7 +385,10 @@ int floe_world_parallel_rebuild(floe_world *w) {
 
 int floe_par_refresh(floe_world *w, double maxd2, int have_xb) {
     floe_par *P = w->par;
-    int need = floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0), any = 0;
+    /* a periodic cell: the test that discounts the cell's affine map (step.c rebuild_if_needed) */
+    int need = w->cell ? floe_nl_needs_rebuild_cell(&w->nl, &w->p)
+                       : floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0),
+        any = 0;
     /* a bond broke and the list was rebuilt in the force stage (forces.c): the ghosts were
      * chosen for the list of the last decomposition, so decompose again */
     if (w->beams && w->nl.rebuilds != P->nl_rebuilds) need = 1;
@@ -395,6 +416,41 @@ int floe_world_parallel_set_balance(floe_world *w, floe_balance mode) {
 int floe_par_reverse(floe_world *w) {
     int rc = floe_par_reverse_comm(w, w->par);
     return rc ? floe_world_error(w, rc, "out of memory") : FLOE_OK;
+}
+
+int floe_par_cell_stress(floe_world *w, double sigma[9], int *given) {
+    floe_cell_state *c = w->cell;
+    floe_par *P = w->par;
+    *given = 0;
+    if (!c || !c->want_kdiag) return FLOE_OK; /* only the servo reads it at each step */
+    /* this rank's contacts' virial (the contacts it evaluates), its owned free particles'
+     * sum of m v (x) v (ghosts are stored fixed), the servo's stiffness sums, whether its
+     * last evaluation set them */
+    double v[37], s[37];
+    memcpy(v, c->virial, 9 * sizeof *v);
+    memcpy(v + 9, c->pd_virial, 9 * sizeof *v);
+    memcpy(v + 18, c->kdiag, 9 * sizeof *v);
+    memset(v + 27, 0, 9 * sizeof *v);
+    const floe_particles *p = &w->p;
+    for (int i = P->nrep; i < P->nrep + P->nown; i++) {
+        if (p->motion[i] != FLOE_FREE) continue;
+        const double *u = p->v + 3 * i, m = p->mass[i];
+        for (int a = 0; a < 3; a++)
+            for (int b = 0; b < 3; b++) v[27 + 3 * a + b] += m * u[a] * u[b];
+    }
+    v[36] = c->valid ? 0 : 1;
+    MPI_Allreduce(v, s, 37, MPI_DOUBLE, MPI_SUM, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof v);
+    memcpy(c->kdiag, s + 18, sizeof c->kdiag); /* the servo's stiffness: the whole cell's */
+    const double V = floe_world_cell_volume(w);
+    /* floe_world_cell_stress's sum: an evaluation missing on some rank gives 0, as there */
+    for (int a = 0; a < 3; a++)
+        for (int b = 0; b < 3; b++)
+            sigma[3 * a + b] = s[36] > 0 ? 0.0
+                                         : 0.5 * (s[3 * a + b] + s[3 * b + a] + s[9 + 3 * a + b] + s[9 + 3 * b + a]) / V -
+                                               s[27 + 3 * a + b] / V;
+    *given = 1;
+    return FLOE_OK;
 }
 
 /* PD bodies whose dissipation rides with the watchdog's sum (floe_par_watchdog_values) */
@@ -746,6 +802,7 @@ static int mirror_gather(floe_world *w, floe_par *P) {
         M->time = w->time;
         M->step = w->step;
         M->dt = w->dt;
+        if (w->cell && M->cell) *M->cell = *w->cell; /* its vectors (the outputs' volume, the wrap) */
     }
     free(sb); free(wf); free(rb);
     if (grc) return grc;
@@ -916,11 +973,11 @@ int floe_world_parallel_finish(floe_world *w) {
 
 /* ---- the whole state on rank 0 (checkpoints: floe_world_parallel_collect) ---- */
 
-/* entries sorted by (gid_i, gid_j, piece pair): the serial list's order (its rows by i,
- * each row by (j, piece pair)); a wall pair is ordered by index as any other */
+/* entries sorted by (gid_i, gid_j, piece pair, image): the serial list's order (its rows by
+ * i, each row by (j, piece pair, image)); a wall pair is ordered by index as any other */
 static int pair_cmp(const void *a, const void *b) {
     const double *x = a, *y = b;
-    for (int k = 0; k < 3; k++)
+    for (int k = 0; k < 4; k++)
         if (x[k] != y[k]) return x[k] < y[k] ? -1 : 1;
     return 0;
 }
@@ -931,7 +988,7 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
     const floe_neighbor_list *nl = &w->nl;
     const int lo = P->nrep, no = P->nown, use_warm = nl->use_warm && nl->warm != NULL;
     const int mp = 1 + FLOE_PAR_FWD + 4;                                 /* gid, state, x_build, r_build */
-    const int me = 4 + nl->hs + (use_warm ? FLOE_DETECT_WARM : 0); /* gid_i gid_j sub touching hist warm */
+    const int me = 5 + nl->hs + (use_warm ? FLOE_DETECT_WARM : 0); /* gid_i gid_j sub image touching hist warm */
     /* the full world must be an unsplit, prepared copy of this world's scene (rank 0) */
     int bad = 0;
     if (P->rank == 0) {
@@ -970,9 +1027,10 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
         e[0] = (double)P->gid[nl->pi[k]];
         e[1] = (double)P->gid[nl->pj[k]];
         e[2] = nl->sub[k];
-        e[3] = nl->touching[k];
-        memcpy(e + 4, nl->hist + (size_t)k * nl->hs, (size_t)nl->hs * sizeof *e);
-        if (use_warm) memcpy(e + 4 + nl->hs, nl->warm + (size_t)k * FLOE_DETECT_WARM, FLOE_DETECT_WARM * sizeof *e);
+        e[3] = w->cell && nl->img ? nl->img[k] : 0;
+        e[4] = nl->touching[k];
+        memcpy(e + 5, nl->hist + (size_t)k * nl->hs, (size_t)nl->hs * sizeof *e);
+        if (use_warm) memcpy(e + 5 + nl->hs, nl->warm + (size_t)k * FLOE_DETECT_WARM, FLOE_DETECT_WARM * sizeof *e);
     }
     for (int i = 0; i < P->nrep; i++) {
         memcpy(wf + 6 * i, p->f + 3 * i, 3 * sizeof *wf);
@@ -982,13 +1040,22 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
     floe_par_count_to_root(P, FLOE_COMM_OUTPUT, 6LL * P->nrep * sizeof *wf);
     /* the ledger and the watchdog's per-rank terms: sums (the pair dissipation's minimum, the
      * largest depth rate); the detection counters summed */
-    double sv[11], ss[11], mn[2], mx[2];
+    double sv[11], ss[11], mn[3], mx[3];
     energy_pack(&w->energy, sv);
     sv[7] = w->elastic_contact; sv[8] = w->elastic_pd; sv[9] = w->wd_shadow; sv[10] = w->wd_shadow0;
     MPI_Reduce(sv, ss, 11, MPI_DOUBLE, MPI_SUM, 0, P->comm);
     floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof sv);
-    mn[0] = w->wd_pair_min; mn[1] = -w->eta_depth;
-    MPI_Reduce(mn, mx, 2, MPI_DOUBLE, MPI_MIN, 0, P->comm);
+    /* a periodic cell's sums over the contacts (its servo's first step after a restart) */
+    double cv[27], cs[27];
+    if (w->cell) {
+        memcpy(cv, w->cell->virial, 9 * sizeof *cv);
+        memcpy(cv + 9, w->cell->pd_virial, 9 * sizeof *cv);
+        memcpy(cv + 18, w->cell->kdiag, 9 * sizeof *cv);
+        MPI_Reduce(cv, cs, 27, MPI_DOUBLE, MPI_SUM, 0, P->comm);
+        floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof cv);
+    }
+    mn[0] = w->wd_pair_min; mn[1] = -w->eta_depth; mn[2] = -nl->rmax_b; /* the largest radius at the builds */
+    MPI_Reduce(mn, mx, 3, MPI_DOUBLE, MPI_MIN, 0, P->comm);
     floe_par_count_to_root(P, FLOE_COMM_OUTPUT, sizeof mn);
     /* the watchdog's worst contacts (this step's, the run's): the rank that holds the
      * smallest, and the pair's global ids from every rank (rank 0 keeps that rank's) */
@@ -1030,6 +1097,7 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
         if (!r2) r2 = floe_resize((void **)&fl->sub, (size_t)ne * sizeof(int), 1);
         if (!r2) r2 = floe_resize((void **)&fl->hist, (size_t)ne * nl->hs * sizeof(double), 1);
         if (!r2) r2 = floe_resize((void **)&fl->touching, (size_t)ne, 1);
+        if (!r2 && w->cell) r2 = floe_resize((void **)&fl->img, (size_t)ne * sizeof(int), 1);
         if (!r2 && fl->use_warm) r2 = floe_resize((void **)&fl->warm, (size_t)ne * FLOE_DETECT_WARM * sizeof(double), 1);
         if (!r2) r2 = floe_resize((void **)&fl->x_build, 3 * (size_t)N * sizeof(double), 1);
         if (!r2) r2 = floe_resize((void **)&fl->r_build, (size_t)N * sizeof(double), 1);
@@ -1042,18 +1110,21 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
                 fl->pi[k] = (int)e[0];
                 fl->pj[k] = (int)e[1];
                 fl->sub[k] = (int)e[2];
-                fl->touching[k] = (unsigned char)e[3];
-                memcpy(fl->hist + (size_t)k * nl->hs, e + 4, (size_t)nl->hs * sizeof *e);
+                if (w->cell) fl->img[k] = (int)e[3];
+                fl->touching[k] = (unsigned char)e[4];
+                memcpy(fl->hist + (size_t)k * nl->hs, e + 5, (size_t)nl->hs * sizeof *e);
                 if (fl->use_warm) {
-                    if (use_warm) memcpy(fl->warm + (size_t)k * FLOE_DETECT_WARM, e + 4 + nl->hs, FLOE_DETECT_WARM * sizeof *e);
+                    if (use_warm) memcpy(fl->warm + (size_t)k * FLOE_DETECT_WARM, e + 5 + nl->hs, FLOE_DETECT_WARM * sizeof *e);
                     else for (int a = 0; a < FLOE_DETECT_WARM; a++) fl->warm[(size_t)k * FLOE_DETECT_WARM + a] = NAN;
                 }
             }
             fl->npairs = fl->cap = ne;
             fl->hs = nl->hs; /* the same scene's stride */
             fl->gen++;
-            free(fl->img);
-            fl->img = NULL;
+            if (!w->cell) {
+                free(fl->img);
+                fl->img = NULL;
+            }
             fl->n_build = N;
             fl->skin = nl->skin;
             fl->rebuilds = nl->rebuilds;
@@ -1080,6 +1151,16 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
             }
             fl->nwalls = nwl;
             for (int a = 0; a < nwl; a++) fl->walls[a] = (int)P->gid[nl->walls[a]];
+            /* a periodic cell: the same on every rank, its sums over the contacts the ranks' */
+            if (w->cell && full->cell) {
+                *full->cell = *w->cell;
+                memcpy(full->cell->virial, cs, 9 * sizeof *cs);
+                memcpy(full->cell->pd_virial, cs + 9, 9 * sizeof *cs);
+                memcpy(full->cell->kdiag, cs + 18, 9 * sizeof *cs);
+                memcpy(fl->Hb, nl->Hb, sizeof fl->Hb);
+                fl->rmax_b = -mx[2];
+                fl->cell = full->cell;
+            }
             memcpy(fl->q_walls, nl->q_walls, 4 * (size_t)nwl * sizeof(double));
             /* the clock and the integrator's memory: the same on every rank */
             full->time = w->time; full->dt = w->dt; full->t0 = w->t0; full->dt_crit = w->dt_crit;
@@ -1148,6 +1229,11 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
 int floe_world_parallel_rebuild(floe_world *w) { (void)w; return FLOE_OK; }
 int floe_par_refresh(floe_world *w, double maxd2, int have_xb) { (void)w; (void)maxd2; (void)have_xb; return FLOE_OK; }
 int floe_par_reverse(floe_world *w) { (void)w; return FLOE_OK; }
+int floe_par_cell_stress(floe_world *w, double sigma[9], int *given) {
+    (void)w; (void)sigma;
+    *given = 0;
+    return FLOE_OK;
+}
 double floe_par_clock(void) { return 0.0; }
 void floe_par_force_time(floe_world *w, double seconds) { (void)w; (void)seconds; }
 int floe_world_parallel_set_balance(floe_world *w, floe_balance mode) {

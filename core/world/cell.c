@@ -288,7 +288,7 @@ static double servo_rate(const floe_world *w, const floe_cell_state *c, const do
     return r > mr ? mr : r < -mr ? -mr : r;
 }
 
-int floe_cell_begin_step(floe_world *w) {
+int floe_cell_begin_step(floe_world *w, const double *sigma) {
     floe_cell_state *c = w->cell;
     const double dt = w->dt;
     double L[9];
@@ -311,7 +311,8 @@ int floe_cell_begin_step(floe_world *w) {
     for (int k = 0; k < 9; k++) any |= c->ctl.mode[k] == FLOE_CELL_STRESS && (!c->path || c->path_mask[k]);
     if (any) {
         double sig[9];
-        if (floe_world_cell_stress(w, sig, NULL) != FLOE_OK) memset(sig, 0, sizeof sig);
+        if (sigma) memcpy(sig, sigma, sizeof sig); /* MPI: the whole cell's, summed over the ranks */
+        else if (floe_world_cell_stress(w, sig, NULL) != FLOE_OK) memset(sig, 0, sizeof sig);
         for (int k = 0; k < 9; k++)
             if (c->ctl.mode[k] == FLOE_CELL_STRESS && (!c->path || c->path_mask[k])) L[k] = servo_rate(w, c, sig, k);
     }

@@ -409,7 +409,7 @@ typedef struct stage_env {
     const floe_cell_state *cell; /* periodic cell (NULL: none): images, affine velocities */
     const int *img;              /* the list's image codes (with a cell) */
     int fused;                   /* sphere pairs under a built-in law may take its fused kernel
-                                    (sph_flush_lanes: no cell, no growth) */
+                                    (sph_flush_lanes: no growth) */
     const floe_contact_law *law1; /* the one law of a world with one material (else NULL): the
                                      sphere path skips the lookup by materials */
     int record;                  /* contacts recorded at this evaluation (ctx->record) */
@@ -864,10 +864,11 @@ static inline __attribute__((always_inline)) void sphere_fused_book(floe_world *
     if (push_contact(w, acc->rs, &c, &r, o->branch)) acc->oom = 1;
 }
 
-/* entry q's inputs to the lanes (sph_flush_lanes), as it joins the batch; lin: the linear
- * law's too (the dashpot's phase and a_i - a_j, the last force) */
+/* entry q's inputs to the lanes (sph_flush_lanes), as it joins the batch (xb: j's centre,
+ * or its image's in a periodic cell); lin: the linear law's too (the dashpot's phase and
+ * a_i - a_j, the last force) */
 static inline __attribute__((always_inline)) void sph_lane_gather(const floe_world *w, const floe_particles *p,
-                                                                 sph_batch *b, int q, int i, int j,
+                                                                 sph_batch *b, int q, int i, int j, const double *xb,
                                                                  const double *hist, double rad_i, double rad_j,
                                                                  double im, int lin) {
     b->ra[q] = rad_i;
@@ -875,7 +876,7 @@ static inline __attribute__((always_inline)) void sph_lane_gather(const floe_wor
     b->im[q] = im;
     for (int a = 0; a < 3; a++) {
         b->xa[a][q] = p->x[3 * i + a];
-        b->xb[a][q] = p->x[3 * j + a];
+        b->xb[a][q] = xb[a];
         b->vi[a][q] = p->v[3 * i + a];
         b->vj[a][q] = p->v[3 * j + a];
         b->wi[a][q] = p->w[3 * i + a];
@@ -949,6 +950,12 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
     /* geometry, velocities, the other forces' normal acceleration */
     double N[3][SL], Ri[3][SL], Rj[3][SL], VR[3][SL], VT[3][SL], VN[SL], AN[SL], ETA[SL], PT[3][SL], FN[SL];
     const double wdt = w->dt;
+    /* a periodic cell: the mean field's velocity of i relative to j's image, -L l with l =
+     * (dx, dy, dz) (pair_affine_sub's operations; selected, so a world without a cell keeps
+     * its bits) */
+    static const double L0[9];
+    const int cel = env->cell != NULL;
+    const double *LC = cel ? env->cell->L : L0;
     /* lane q's kinematics from its normal n and contact point pt (the lever arms, the relative
      * velocity at the point and its parts, the overlap change, pair_an_ext with gscale 1) */
 #define LANE_KIN(q, n, pt)                                                                                      \
@@ -962,7 +969,11 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         }                                                                                                       \
         floe_cross3_l(ui_, wi_, ri_);                                                                           \
         floe_cross3_l(uj_, wj_, rj_);                                                                           \
-        for (int a = 0; a < 3; a++) vr_[a] = (VI[a][q] + ui_[a]) - (VJ[a][q] + uj_[a]);                         \
+        for (int a = 0; a < 3; a++) {                                                                           \
+            const double v_ = (VI[a][q] + ui_[a]) - (VJ[a][q] + uj_[a]);                                       \
+            const double la_ = LC[3 * a] * D[0][q] + LC[3 * a + 1] * D[1][q] + LC[3 * a + 2] * D[2][q];        \
+            vr_[a] = cel ? v_ - la_ : v_;                                                                       \
+        }                                                                                                       \
         const double vn_ = floe_dot3_l(vr_, n);                                                                 \
         for (int a = 0; a < 3; a++) {                                                                           \
             N[a][q] = (n)[a];                                                                                   \
@@ -1086,6 +1097,27 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
             o.Tj[a] = TJ[a][q];
         }
         o.energy = E[q];
+        if (cel) { /* pair_book's sums of a periodic cell, in list order */
+            const double l[3] = {D[0][q], D[1][q], D[2][q]};
+            double ft[3];
+            for (int a = 0; a < 3; a++) ft[a] = o.F[a] + 0.0; /* + the manifold's force, 0 */
+            for (int a = 0; a < 3; a++)
+                for (int c = 0; c < 3; c++) acc->vir[3 * a + c] += l[a] * ft[c];
+            if (env->cell->want_kdiag) {
+                double kn = 0, cn = 0;
+                if (b->law->klass->stiffness) b->law->klass->stiffness(b->law, reff[q], meff[q], depth[q], &kn, &cn);
+                for (int a = 0; a < 3; a++)
+                    for (int c = 0; c < 3; c++) acc->kdiag[3 * a + c] += kn * N[a][q] * N[a][q] * l[c] * l[c];
+            }
+            if (env->stepping) { /* the work of the cell's deformation on the contact: fav . L l dt */
+                double fav[3], la[3];
+                for (int a = 0; a < 3; a++) {
+                    fav[a] = 0.5 * (F[a][q] + FO[a][q]);
+                    la[a] = LC[3 * a] * l[0] + LC[3 * a + 1] * l[1] + LC[3 * a + 2] * l[2];
+                }
+                acc->wgrow += floe_v3_dot(fav, la) * dt;
+            }
+        }
         if (env->record) { /* the contact as contact_pair records it */
             for (int a = 0; a < 3; a++) {
                 o.point[a] = PT[a][q];
@@ -1150,7 +1182,7 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
             const int q = b->n++;
             b->wall[q] = 0.0;
             /* the lanes' inputs now (stage_block prefetched them 8 entries ahead) */
-            sph_lane_gather(w, p, b, q, i, j, hist, rad_i, rad_j, im, lin);
+            sph_lane_gather(w, p, b, q, i, j, xb, hist, rad_i, rad_j, im, lin);
             b->law = law;
             b->k[q] = k; b->i[q] = i; b->j[q] = j;
             b->dx[q] = dx; b->dy[q] = dy; b->dz[q] = dz; b->d2[q] = d2;
@@ -1250,7 +1282,8 @@ static __attribute__((noinline)) int sphere_wall_pair(floe_world *w, const floe_
             b->nwall++;
             b->d2[q] = 1.0; /* the sphere pairs' geometry, computed for every lane, is dropped */
             b->dx[q] = b->dy[q] = b->dz[q] = 0.0;
-            sph_lane_gather(w, p, b, q, i, j, hist, p->radius[i], p->radius[j], im, law->klass == &floe_linear_law_class);
+            sph_lane_gather(w, p, b, q, i, j, p->x + 3 * j, hist, p->radius[i], p->radius[j], im,
+                            law->klass == &floe_linear_law_class);
             b->law = law;
             b->k[q] = k; b->i[q] = i; b->j[q] = j;
             /* the geometry seen from i: n from the sphere into the wall, flipped when the
@@ -1688,7 +1721,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     const stage_env env = {p,         nl,         &dctx,       stepping, track,
                            any_growth, nm,        any_none,    any_pieces, any_overlap,
                            any_floe,  w->def.dim == 2 && any_overlap, w->cell, w->cell ? nl->img : NULL,
-                           !w->cell && !any_growth, nm == 1 ? w->laws[0] : NULL, ctx->record};
+                           !any_growth && !w->lanes_off, nm == 1 ? w->laws[0] : NULL, ctx->record};
     /* blocks of FLOE_PAR_BLOCK entries, their sums added in block order: one thread or many,
      * the same bits (floe_par.h); recorded contacts in list order (per part, then joined) */
     const int npairs = nl->npairs, B = FLOE_PAR_BLOCK, nb = (npairs + B - 1) / B;

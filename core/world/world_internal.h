@@ -144,6 +144,8 @@ struct floe_world {
     int *sep_geom;
     int sep_n, sep_np, sep_on;
     int mf_cache_off;         /* 1: polytope manifolds without their corner cache (tests: the same bits) */
+    int lanes_off;            /* 1: sphere pairs through the general pair body, not the fused lanes
+                                 (tests: the same bits) */
     long sep_gen;
     /* peridynamic bodies (peridynamics/floe_pd.h): body k's points are the particles
      * pd_first[k] .. pd_first[k] + n - 1; nothing is allocated without PD bodies */
@@ -384,7 +386,9 @@ int floe_world_hist_layout(floe_world *w);
  * the step's velocity gradient (servo, strain path) before the drift, the affine map of the
  * particles and the cell after it, and the rebuild test that discounts the affine motion */
 int floe_cell_prepare(floe_world *w);
-int floe_cell_begin_step(floe_world *w);
+/* sigma: the cell's stress given (MPI: summed over the ranks, floe_par_cell_stress), NULL: this
+ * world's own (floe_world_cell_stress) */
+int floe_cell_begin_step(floe_world *w, const double *sigma);
 int floe_cell_after_drift(floe_world *w, double dt);
 int floe_nl_needs_rebuild_cell(const floe_neighbor_list *nl, const floe_particles *p);
 int floe_cell_path_begin(floe_world *w, const double de[9], double max_rate, const int *stress_mask, long *nsteps);

@@ -332,7 +332,11 @@ with tempfile.TemporaryDirectory() as tmp:
     # a wall of fixed spheres from t = 0.43 ms, the checkpoint at 0.46 ms): their broken
     # flags, s0 and last bond forces gathered into the file by the ranks that own the points
     # (par_pd.c)
-    for k, sc, every in (("i", "sea_ice.yaml", "300.5"), ("s", "servo.yaml", "0.015"), ("p", "pd_fly.yaml", "0.00046")):
+    # A periodic cell (tests/mpi/periodic_servo.yaml: a jammed lattice held by the cell's
+    # stress servo and sheared, the checkpoint at t = 0.05 s): the cell (its vectors, the
+    # servo's sums over the ranks' contacts) and the images of the list's entries in the file
+    for k, sc, every in (("i", "sea_ice.yaml", "300.5"), ("s", "servo.yaml", "0.015"), ("p", "pd_fly.yaml", "0.00046"),
+                         ("z", "periodic_servo.yaml", "0.05")):
         sp = os.path.join(here, sc)
         run(1, ["-o", d(k + "S")], scene=sp)
         run(R, ["-o", d(k + "A"), "--checkpoint-every", every], scene=sp)

@@ -29,7 +29,7 @@ on one process and under `mpirun -np 2` and `-np 4`, with an ASCII vtk output ad
     positions and CSV outputs within 1e-4 of the scale (the plastic stretch is a float; a
     serial run started one ulp away differs as much: below);
   - refusals, each with a message naming what, before any step (exit non-zero): the
-    staggered scheme.
+    staggered scheme, a PD body in a periodic cell.
 
 Usage: test_mpi_pd.py FLOE MPIEXEC TESTS_MPI_DIR
 """
@@ -180,6 +180,13 @@ def main():
             ("staggered", src.replace("time: {duration: 30.0e-6, safety: 0.5}",
                                       "time: {duration: 30.0e-6, safety: 0.5, pd_dem: {scheme: staggered}}"),
              "staggered"),
+            # a PD body in a periodic cell (the cell's stress sums the bonds' virial; a split body
+            # evaluates the bonds across its cuts on both sides): the disc free in a cell
+            ("periodic cell", src.replace("    boundary:\n      - {region: {box: {min: [-1, -1, -1], max: [1, 1, 0.002]}}, "
+                                          "fixed: true}\n", "")
+                                 .replace("gravity: [0, 0, 0]\n", "gravity: [0, 0, 0]\n"
+                                          "cell: {size: [0.06, 0.06, 0.06], origin: [-0.03, -0.03, -0.02]}\n"),
+             "a PD body in a periodic cell"),
         ]
         for name, text, needle in cases:
             sc = d(name.replace(" ", "_") + ".yaml")
