@@ -14,7 +14,10 @@ threaded):
   - periodic: the same packing in a periodic cell shortened along z (image pairs, the
     cell's virial and the stress output);
   - settle: 2,500 random spheres of two sizes falling on a floor, Hertz-Mindlin with
-    friction (history across list rebuilds), energy and vtk outputs.
+    friction (history across list rebuilds), a linear drag, energy and vtk outputs;
+  - sea ice: 2,600 polygon floes driven by a wind, an ocean vortex (its drag integrated
+    every 3 steps and held between) and Coriolis with the sea-surface tilt, Hopkins
+    contacts: the forcing providers' particle loops run threaded.
 Each run, restarted on 2 threads from its last checkpoint, ends with the same files.
 Also: -t 0 and -t x are refused (exit 2). Prints "N passed, N failed"."""
 import filecmp
@@ -92,9 +95,33 @@ bodies:
      region: {min: [0, 0, 0.0], max: [0.03, 0.03, 0.012]}, velocity: [0.05, 0, -0.3], count: 1500, seed: 5}
   - {packing: random, shape: {sphere: {radius: 0.0005}}, material: glass,
      region: {min: [0, 0, 0.012], max: [0.03, 0.03, 0.02]}, velocity: [0, 0.05, -0.3], count: 1000, seed: 6}
+forces:
+  - {type: linear_drag, c: 2.0}
 outputs:
   - {type: energy, every: 20, file: energy.csv}
   - {type: vtk, interval: 0.005}
+"""
+
+SEAICE = """name: threads-sea-ice
+dimension: 2
+mass_2d: area
+time: {duration: 300}
+gravity: [0, 0]
+materials:
+  - {name: ice, density: 920, young: 6e6, poisson: 0.3}
+laws:
+  - {materials: [ice, ice], model: hopkins, young: 6e6, friction: 0.3, thickness_max: 1.0}
+bodies:
+  - floe_field: {region: {min: [-20000, -20000], max: [20000, 20000]}, count: 2600, lloyd: 1,
+                 concentration: 0.9, seed: 3, thickness: 1.0}
+    material: ice
+forces:
+  - {type: wind_drag, velocity: [10, 2]}
+  - {type: ocean_drag, field: vortex, speed: 0.5, length: 15000, center: [0, 0, 0], every: 3}
+  - {type: coriolis, f: 1.4e-4, tilt: geostrophic, field: vortex, speed: 0.3, length: 15000, center: [0, 0, 0]}
+outputs:
+  - {type: energy, every: 10, file: energy.csv}
+  - {type: csv, every: 50, file: floes.csv}
 """
 
 
@@ -123,14 +150,15 @@ def main():
             check(rc == 1 and "FLOE_WITH_OPENMP" in err, "without OpenMP -t 2 is refused naming the option: %s" % err)
             print("built without OpenMP: skipped")
             sys.exit(1 if counts["failed"] else 77)
-        for name, text in (("walled", WALLED), ("periodic", PERIODIC), ("settle", SETTLE)):
+        for name, text, every in (("walled", WALLED, "0.01"), ("periodic", PERIODIC, "0.01"), ("settle", SETTLE, "0.01"),
+                                  ("sea-ice", SEAICE, "200")):
             scene = os.path.join(tmp, name + ".yaml")
             with open(scene, "w") as f:
                 f.write(text)
             ref = None
             for t in (1, 2, 3):
                 o = os.path.join(tmp, "%s_t%d" % (name, t))
-                rc, out, err = run([cli, "run", scene, "-o", o, "-t", str(t), "--checkpoint-every", "0.01"], cwd=tmp)
+                rc, out, err = run([cli, "run", scene, "-o", o, "-t", str(t), "--checkpoint-every", every], cwd=tmp)
                 if not check(rc == 0, "%s -t %d: exit %d: %s" % (name, t, rc, err)):
                     break
                 if t > 1:

@@ -131,6 +131,43 @@ static void drag_floe(const drag_pv *d, const floe_area_quadrature *q, const dou
     out[2] = tz;
 }
 
+/* one block of particles [i0, i1): their drag (integrated, or held), its work in sums[0] */
+typedef struct drag_job {
+    const drag_pv *d;
+    const struct floe_step_ctx *ctx;
+    floe_particles *p;
+    int hold;
+} drag_job;
+static void drag_block(void *jv, int i0, int i1, double *sums) {
+    const drag_job *jb = jv;
+    const drag_pv *d = jb->d;
+    const struct floe_step_ctx *ctx = jb->ctx;
+    floe_particles *p = jb->p;
+    double work = 0;
+    for (int i = i0; i < i1; i++) {
+        if (p->motion[i] != FLOE_FREE) continue;
+        double fr[3];
+        if (jb->hold) {
+            const double *o = d->last.old + 4 * (size_t)i;
+            fr[0] = o[0];
+            fr[1] = o[1];
+            fr[2] = o[3];
+        } else /* its geometry's quadrature built before the blocks (drag_forces) */
+            drag_floe(d, d->quad + p->geom[i], p->x + 3 * i, p->v + 3 * i, p->w + 3 * i, p->q + 4 * i, ctx->time, fr);
+        p->f[3 * i] += fr[0];
+        p->f[3 * i + 1] += fr[1];
+        p->t[3 * i + 2] += fr[2];
+        if (ctx->probe) continue;
+        double *o = d->last.old + 4 * (size_t)i;
+        const double *v = p->v + 3 * i;
+        work += 0.5 * ctx->dt * ((fr[0] + o[0]) * v[0] + (fr[1] + o[1]) * v[1] + (fr[2] + o[3]) * p->w[3 * i + 2]);
+        o[0] = fr[0];
+        o[1] = fr[1];
+        o[3] = fr[2];
+    }
+    sums[0] = work;
+}
+
 static int drag_forces(floe_provider *pv, floe_world *w, const struct floe_step_ctx *ctx, floe_provider_out *out) {
     drag_pv *d = (drag_pv *)pv;
     floe_particles *p = ctx->p;
@@ -144,31 +181,16 @@ static int drag_forces(floe_provider *pv, floe_world *w, const struct floe_step_
     d->evaluated = 1;
     /* every k-th step (and at prepare) the drag is integrated; in between it is held */
     const int hold = d->d.every > 1 && !fresh && ctx->stepping && floe_world_step_count(w) % d->d.every != 0;
-    double work = 0;
-    for (int i = 0; i < p->n; i++) {
-        if (p->motion[i] != FLOE_FREE) continue;
-        double fr[3];
-        if (hold) {
-            const double *o = d->last.old + 4 * (size_t)i;
-            fr[0] = o[0];
-            fr[1] = o[1];
-            fr[2] = o[3];
-        } else {
-            const floe_area_quadrature *q = drag_quad(d, w, p->geom[i]);
-            if (!q) return FLOE_EINVAL;
-            drag_floe(d, q, p->x + 3 * i, p->v + 3 * i, p->w + 3 * i, p->q + 4 * i, ctx->time, fr);
-        }
-        p->f[3 * i] += fr[0];
-        p->f[3 * i + 1] += fr[1];
-        p->t[3 * i + 2] += fr[2];
-        if (ctx->probe) continue;
-        double *o = d->last.old + 4 * (size_t)i;
-        const double *v = p->v + 3 * i;
-        work += 0.5 * ctx->dt * ((fr[0] + o[0]) * v[0] + (fr[1] + o[1]) * v[1] + (fr[2] + o[3]) * p->w[3 * i + 2]);
-        o[0] = fr[0];
-        o[1] = fr[1];
-        o[3] = fr[2];
+    /* the free floes' quadratures, built here (serially) so that the blocks only read them */
+    for (int i = 0; i < p->n && !hold; i++) {
+        const int g = p->geom[i];
+        if (p->motion[i] == FLOE_FREE && (g >= d->nquad || !d->quad[g].n) && !drag_quad(d, w, g)) return FLOE_EINVAL;
     }
+    /* the floes in blocks on the world's threads (the same bits for any number) */
+    drag_job jb = {d, ctx, p, hold};
+    double work;
+    if (floe_world_blocks(w, p->n, 1, drag_block, &jb, &work))
+        return floe_world_report_error(w, FLOE_ENOMEM, "%s: out of memory", d->name);
     /* the fluid's work on the floes: external (a wind puts energy in, still water takes it) */
     if (ctx->stepping) out->work_boundary += work;
     return FLOE_OK;
@@ -290,24 +312,21 @@ typedef struct coriolis_pv {
     int evaluated;             /* 1 after the first evaluation (prepare) */
 } coriolis_pv;
 
-static int coriolis_forces(floe_provider *pv, floe_world *w, const struct floe_step_ctx *ctx, floe_provider_out *out) {
-    coriolis_pv *c = (coriolis_pv *)pv;
-    floe_particles *p = ctx->p;
-    if (last_reserve(&c->last, p->n) || floe_world_pp_attach(w, &c->last.old, &c->last.n, 4))
-        return floe_world_report_error(w, FLOE_ENOMEM, "coriolis: out of memory");
-    if (c->d.tilt == FLOE_TILT_GEOSTROPHIC)
-        FLOE_TRY(field_covers_all(w, "coriolis", &c->d.field, p, !c->evaluated, ctx->time));
-    c->evaluated = 1;
-    const double f = c->d.f;
-    /* velocity Verlet: the Cayley rotation over the step, a = -i f u / (1 + i f dt / 2) in
-     * complex form (u = v - U_g), so that v_{n+3/2} = v_{n+1/2} + dt a turns u by
-     * 2 atan(f dt / 2) with its length kept */
-    const int cayley = floe_world_definition(w)->integrator == FLOE_VELOCITY_VERLET;
-    const double ph = cayley ? 0.5 * f * ctx->dt : 0, den = 1 + ph * ph;
-    const double gx = c->d.tilt == FLOE_TILT_SLOPE ? -c->d.g * c->d.slope[0] : 0;
-    const double gy = c->d.tilt == FLOE_TILT_SLOPE ? -c->d.g * c->d.slope[1] : 0;
+/* one block of particles [i0, i1): their Coriolis and tilt forces, their work in sums[0] */
+typedef struct coriolis_job {
+    const coriolis_pv *c;
+    const struct floe_step_ctx *ctx;
+    floe_particles *p;
+    double ph, den, gx, gy;
+} coriolis_job;
+static void coriolis_block(void *jv, int i0, int i1, double *sums) {
+    const coriolis_job *jb = jv;
+    const coriolis_pv *c = jb->c;
+    const struct floe_step_ctx *ctx = jb->ctx;
+    floe_particles *p = jb->p;
+    const double f = c->d.f, ph = jb->ph, den = jb->den, gx = jb->gx, gy = jb->gy;
     double work = 0;
-    for (int i = 0; i < p->n; i++) {
+    for (int i = i0; i < i1; i++) {
         if (p->motion[i] != FLOE_FREE) continue;
         const double *v = p->v + 3 * i, m = p->mass[i];
         double ug[3] = {0, 0, 0};
@@ -324,6 +343,30 @@ static int coriolis_forces(floe_provider *pv, floe_world *w, const struct floe_s
         o[0] = fx;
         o[1] = fy;
     }
+    sums[0] = work;
+}
+
+static int coriolis_forces(floe_provider *pv, floe_world *w, const struct floe_step_ctx *ctx, floe_provider_out *out) {
+    coriolis_pv *c = (coriolis_pv *)pv;
+    floe_particles *p = ctx->p;
+    if (last_reserve(&c->last, p->n) || floe_world_pp_attach(w, &c->last.old, &c->last.n, 4))
+        return floe_world_report_error(w, FLOE_ENOMEM, "coriolis: out of memory");
+    if (c->d.tilt == FLOE_TILT_GEOSTROPHIC)
+        FLOE_TRY(field_covers_all(w, "coriolis", &c->d.field, p, !c->evaluated, ctx->time));
+    c->evaluated = 1;
+    const double f = c->d.f;
+    /* velocity Verlet: the Cayley rotation over the step, a = -i f u / (1 + i f dt / 2) in
+     * complex form (u = v - U_g), so that v_{n+3/2} = v_{n+1/2} + dt a turns u by
+     * 2 atan(f dt / 2) with its length kept */
+    const int cayley = floe_world_definition(w)->integrator == FLOE_VELOCITY_VERLET;
+    const double ph = cayley ? 0.5 * f * ctx->dt : 0, den = 1 + ph * ph;
+    const double gx = c->d.tilt == FLOE_TILT_SLOPE ? -c->d.g * c->d.slope[0] : 0;
+    const double gy = c->d.tilt == FLOE_TILT_SLOPE ? -c->d.g * c->d.slope[1] : 0;
+    /* the floes in blocks on the world's threads (the same bits for any number) */
+    coriolis_job jb = {c, ctx, p, ph, den, gx, gy};
+    double work;
+    if (floe_world_blocks(w, p->n, 1, coriolis_block, &jb, &work))
+        return floe_world_report_error(w, FLOE_ENOMEM, "coriolis: out of memory");
     if (ctx->stepping) out->work_boundary += work;
     return FLOE_OK;
 }

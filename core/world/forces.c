@@ -790,8 +790,8 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
 
 /* A pair of spheres under Hertz-Mindlin or the linear law, fused (stage_env.fused):
  * sphere_pair + the law's force function (law_kernels.h) + pair_book (and its record of the
- * contact when the evaluation records them) in a cell-less world without growth, less what
- * that case never reads (the relative spin, the law's result struct and its
+ * contact when the evaluation records them, and a periodic cell's sums) in a world without
+ * growth, less what that case never reads (the relative spin, the law's result struct and its
  * dissipation sums, the couples' work: the law has none) and without the call through the
  * law's table; the same operations otherwise, so the same bits (tests/test_sphere_path.c).
  * (dx, dy, dz) = x_j - x_i, dist its length (> 0), depth <= the smaller radius, r_eff =

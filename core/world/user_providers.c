@@ -68,6 +68,39 @@ typedef struct drag {
     int n;
 } drag;
 
+/* one block of particles [i0, i1): their drag, its work over the step in sums[0] */
+typedef struct drag_job {
+    const drag *d;
+    floe_provider_ctx c;
+} drag_job;
+static void drag_block(void *ctx, int i0, int i1, double *sums) {
+    const drag_job *jb = ctx;
+    const drag *d = jb->d;
+    const floe_provider_ctx *c = &jb->c;
+    double work = 0;
+    for (int i = i0; i < i1; i++) {
+        if (c->motion[i] != FLOE_FREE) continue;
+        const double *v = c->v + 3 * (size_t)i, *om = c->w + 3 * (size_t)i, *q = c->q + 4 * (size_t)i;
+        const double *I = c->inertia + 3 * (size_t)i;
+        double f[3], t[3], wb[3], Lb[3], L[3];
+        floe_q_rotate_inv(wb, q, om); /* the angular momentum I w, through the body frame */
+        for (int a = 0; a < 3; a++) Lb[a] = I[a] * wb[a];
+        floe_q_rotate(L, q, Lb);
+        for (int a = 0; a < 3; a++) {
+            f[a] = -d->c * c->mass[i] * v[a];
+            t[a] = -d->c_r * L[a];
+            c->f[3 * (size_t)i + a] += f[a];
+            c->t[3 * (size_t)i + a] += t[a];
+        }
+        if (c->probe) continue;
+        double *old = d->old + 6 * (size_t)i;
+        for (int a = 0; a < 3; a++) work += 0.5 * c->dt * ((f[a] + old[a]) * v[a] + (t[a] + old[3 + a]) * om[a]);
+        memcpy(old, f, sizeof f);
+        memcpy(old + 3, t, sizeof t);
+    }
+    sums[0] = work;
+}
+
 static int drag_forces(floe_provider *pv, floe_world *w, const struct floe_step_ctx *sc, floe_provider_out *out) {
     drag *d = (drag *)pv;
     floe_provider_ctx c = floe_provider_ctx_of(sc);
@@ -80,27 +113,11 @@ static int drag_forces(floe_provider *pv, floe_world *w, const struct floe_step_
     }
     /* its rows move with their particles under MPI */
     if (floe_world_pp_attach(w, &d->old, &d->n, 6)) return floe_world_error(w, FLOE_ENOMEM, "linear_drag: out of memory");
-    double work = 0;
-    for (int i = 0; i < c.n; i++) {
-        if (c.motion[i] != FLOE_FREE) continue;
-        const double *v = c.v + 3 * (size_t)i, *om = c.w + 3 * (size_t)i, *q = c.q + 4 * (size_t)i;
-        const double *I = c.inertia + 3 * (size_t)i;
-        double f[3], t[3], wb[3], Lb[3], L[3];
-        floe_q_rotate_inv(wb, q, om); /* the angular momentum I w, through the body frame */
-        for (int a = 0; a < 3; a++) Lb[a] = I[a] * wb[a];
-        floe_q_rotate(L, q, Lb);
-        for (int a = 0; a < 3; a++) {
-            f[a] = -d->c * c.mass[i] * v[a];
-            t[a] = -d->c_r * L[a];
-            c.f[3 * (size_t)i + a] += f[a];
-            c.t[3 * (size_t)i + a] += t[a];
-        }
-        if (c.probe) continue;
-        double *old = d->old + 6 * (size_t)i;
-        for (int a = 0; a < 3; a++) work += 0.5 * c.dt * ((f[a] + old[a]) * v[a] + (t[a] + old[3 + a]) * om[a]);
-        memcpy(old, f, sizeof f);
-        memcpy(old + 3, t, sizeof t);
-    }
+    /* the particles in blocks on the world's threads (the same bits for any number) */
+    drag_job jb = {d, c};
+    double work;
+    if (floe_world_blocks(w, c.n, 1, drag_block, &jb, &work))
+        return floe_world_error(w, FLOE_ENOMEM, "linear_drag: out of memory");
     if (c.stepping) out->dissipated -= work; /* the drag's work is negative: dissipated */
     return FLOE_OK;
 }

@@ -212,6 +212,23 @@ int floe_world_loop_threads(const floe_world *w, long items) {
     return floe_world_threads(w);
 }
 
+int floe_world_blocks(floe_world *w, int n, int nsum, floe_block_fn fn, void *ctx, double *sum) {
+    const int B = FLOE_PAR_BLOCK, nb = n > 0 ? (n + B - 1) / B : 0, m = nsum > 0 ? nsum : 1;
+    for (int k = 0; k < nsum; k++) sum[k] = 0.0;
+    if (nb == 0) return FLOE_OK;
+    double *red = floe_world_reduce_buf(w, (size_t)nb * m);
+    if (!red) return FLOE_ENOMEM;
+    const int nt = floe_world_loop_threads(w, n);
+    if (nt > 1) {
+        FLOE_OMP(omp parallel for num_threads(nt) schedule(static))
+        for (int b = 0; b < nb; b++) fn(ctx, b * B, b + 1 == nb ? n : (b + 1) * B, red + (size_t)b * m);
+    } else
+        for (int b = 0; b < nb; b++) fn(ctx, b * B, b + 1 == nb ? n : (b + 1) * B, red + (size_t)b * m);
+    for (int b = 0; b < nb; b++)
+        for (int k = 0; k < nsum; k++) sum[k] += red[(size_t)b * m + k];
+    return FLOE_OK;
+}
+
 /* the list's view of the law "none" (floe_neighbor_list.none, .inert): the pairs of
  * materials under it, and the materials whose particles touch nothing in the store (the law
  * "none" with every material present, walls included); both NULL when no law is "none" */

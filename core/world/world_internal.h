@@ -243,6 +243,13 @@ static inline void floe_loop_split_range(const int *cut, int nb, int nt, int par
 }
 /* threads for a loop over `items` items (1 below the grain or without OpenMP) */
 int floe_world_loop_threads(const floe_world *w, long items);
+/* A particle loop on the world's threads (the forcing providers): fn(ctx, i0, i1, sums) over
+ * the blocks [i0, i1) of FLOE_PAR_BLOCK particles of [0, n), each block writing its nsum
+ * (1-4) partial sums, which are added in block order into sum: the same bits for any number
+ * of threads (one block: the plain running sum). fn writes only its block's particles' rows.
+ * FLOE_ENOMEM (nothing run) when the blocks' scratch cannot be had. */
+typedef void (*floe_block_fn)(void *ctx, int i0, int i1, double *sums);
+int floe_world_blocks(floe_world *w, int n, int nsum, floe_block_fn fn, void *ctx, double *sum);
 /* errors of the calling thread go to buf (NULL: back to the world's): a threaded stage keeps
  * each thread's first error and reports the one a serial run would have met first */
 void floe_world_error_to(char *buf, size_t len);
