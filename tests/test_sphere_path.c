@@ -114,6 +114,21 @@ static floe_world *scene(int with_compound, int linear) {
 
 static int same(const double *a, const double *b, int n) { return memcmp(a, b, (size_t)n * sizeof(double)) == 0; }
 
+/* one step more of both worlds, their contacts recorded: the same records, bit for bit */
+static void same_records_step(floe_world *a, floe_world *b, const char *law) {
+    floe_world_record_contacts(a, 1);
+    floe_world_record_contacts(b, 1);
+    int rc = floe_world_step(a);
+    if (!rc) rc = floe_world_step(b);
+    const floe_contact_info *ca = NULL, *cb = NULL;
+    const int na = floe_world_contacts(a, &ca), nb = floe_world_contacts(b, &cb);
+    int rdiff = na == nb ? 0 : -1;
+    for (int k = 0; k < na && k < nb; k++) rdiff += memcmp(ca + k, cb + k, sizeof *ca) != 0;
+    printf("  %s: recorded contacts %d and %d, differing %d\n", law, na, nb, rdiff);
+    CHECK(rc == 0 && na > 0 && rdiff == 0, "%s: the records of the lanes and the general body differ (%d of %d, %d)",
+          law, rdiff, na, nb);
+}
+
 /* 1. the same bits, sphere by sphere, from the lean (fused) and the general body; returns
  * world a (spheres only) stepped, for part 2 */
 static floe_world *compare_paths(int linear) {
@@ -154,17 +169,7 @@ static floe_world *compare_paths(int linear) {
           ea.kinetic_trans, eb.kinetic_trans, ea.elastic, eb.elastic, ea.dissipated, eb.dissipated);
     CHECK(ea.dissipated > 0, "%s: the dashpots and friction dissipate (%g J)", law, ea.dissipated);
     /* one step more, recorded: the lanes' records (sphere_fused_book) against contact_pair's */
-    floe_world_record_contacts(a, 1);
-    floe_world_record_contacts(b, 1);
-    rc = floe_world_step(a);
-    if (!rc) rc = floe_world_step(b);
-    const floe_contact_info *ca = NULL, *cb = NULL;
-    const int na = floe_world_contacts(a, &ca), nb = floe_world_contacts(b, &cb);
-    int rdiff = na == nb ? 0 : -1;
-    for (int k = 0; k < na && k < nb; k++) rdiff += memcmp(ca + k, cb + k, sizeof *ca) != 0;
-    printf("  %s: recorded contacts %d and %d, differing %d\n", law, na, nb, rdiff);
-    CHECK(rc == 0 && na > 0 && rdiff == 0, "%s: the records of the lean and the general body differ (%d of %d, %d)", law,
-          rdiff, na, nb);
+    same_records_step(a, b, law);
     floe_world_record_contacts(a, 0);
     floe_world_destroy(b);
     return a;
@@ -253,16 +258,7 @@ static void compare_cell(int linear) {
               ea.work_boundary == eb.work_boundary && ea.work_boundary != 0,
           "%s: ledger differs: elastic %.17g vs %.17g, dissipated %.17g vs %.17g, cell's work %.17g vs %.17g", law,
           ea.elastic, eb.elastic, ea.dissipated, eb.dissipated, ea.work_boundary, eb.work_boundary);
-    floe_world_record_contacts(a, 1);
-    floe_world_record_contacts(b, 1);
-    rc = floe_world_step(a);
-    if (!rc) rc = floe_world_step(b);
-    const floe_contact_info *ca = NULL, *cb = NULL;
-    const int na = floe_world_contacts(a, &ca), nb = floe_world_contacts(b, &cb);
-    int rdiff = na == nb ? 0 : -1;
-    for (int k = 0; k < na && k < nb; k++) rdiff += memcmp(ca + k, cb + k, sizeof *ca) != 0;
-    printf("  %s: recorded contacts %d and %d, differing %d\n", law, na, nb, rdiff);
-    CHECK(rc == 0 && na > 0 && rdiff == 0, "%s: the records differ (%d of %d, %d)", law, rdiff, na, nb);
+    same_records_step(a, b, law);
     floe_world_destroy(a);
     floe_world_destroy(b);
 }
