@@ -191,6 +191,7 @@ static void kinetic_stress(const floe_world *w, double V, double K[9]) {
 int floe_world_cell_stress(const floe_world *w, double sigma[9], double kinetic[9]) {
     const floe_cell_state *c = w->cell;
     if (!c) return FLOE_EINVAL;
+    if (w->par) return FLOE_ENOTSUP; /* MPI: this rank's contacts only (the step's servo sums them) */
     if (!c->valid) return FLOE_EINVAL;
     double V = det3(c->H), K[9];
     kinetic_stress(w, V, K);
@@ -203,6 +204,7 @@ int floe_world_cell_stress(const floe_world *w, double sigma[9], double kinetic[
 }
 
 int floe_world_tangent_contact(const floe_world *w, double volume, double D[81]) {
+    if (w->par) return FLOE_ENOTSUP; /* MPI: this rank's contacts only */
     const floe_contact_info *cs;
     int nc = floe_world_contacts(w, &cs);
     if (nc < 0) return FLOE_EINVAL;

@@ -76,7 +76,10 @@ int floe_world_cell_velocity_gradient(const floe_world *w, double L[9]);
 
 /* Homogenised stress of the cell at the last force evaluation (the formula above, Pa;
  * sigma[3 a + b], symmetric part); kinetic: the kinetic part alone (may be NULL). FLOE_EINVAL
- * without a cell or before prepare. */
+ * without a cell or before prepare. FLOE_ENOTSUP on a world split over MPI ranks (each holds
+ * its own contacts: the step's servo sums them over the ranks; the `stress` output, through
+ * rank 0's mirror, has the whole cell's); so do floe_world_refresh_forces,
+ * floe_world_tangent_contact and floe_world_cell_measures. */
 int floe_world_cell_stress(const floe_world *w, double sigma[9], double kinetic[9]);
 
 /* Evaluate the forces again at the present state, advancing nothing (no history, no

@@ -2200,6 +2200,8 @@ int floe_compute_forces(floe_world *w) {
 /* floe_cell.h: the forces again at the present state, the contacts recorded */
 int floe_world_refresh_forces(floe_world *w) {
     if (!w->prepared) return floe_world_error(w, FLOE_EINVAL, "refresh: prepare the world first");
+    /* MPI: an evaluation outside the step would leave the ghosts' forces unsent to their owners */
+    if (w->par) return floe_world_error(w, FLOE_ENOTSUP, "refresh: not on a world split over MPI ranks (docs/periodic.md)");
     const int keep = w->record_contacts;
     w->record_contacts = 1;
     int rc = floe_compute_forces(w);
