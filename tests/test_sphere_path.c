@@ -25,6 +25,7 @@
 #include "check.h"
 #include "floe.h"
 #include "world_internal.h"
+#include "sheared_cell.h"
 #include <math.h>
 #include <string.h>
 
@@ -190,25 +191,14 @@ static floe_world *cell_scene(int linear, int lanes_off) {
     floe_world_add_material(w, &m);
     floe_world_set_law(w, 0, 0, linear ? floe_linear_law_create(200, 100, 0.02, 0.01, 0.5)
                                        : floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5));
-    const double d = 0.0026, Lc = 6 * d;
-    const double H[9] = {Lc, 0.1 * Lc, 0, 0, Lc, 0, 0, 0, Lc}, o[3] = {0, 0, 0};
-    floe_world_set_cell(w, o, H);
-    floe_cell_control c = floe_default_cell_control();
-    for (int a = 0; a < 3; a++) {
-        c.mode[4 * a] = FLOE_CELL_STRESS;
-        c.stress[4 * a] = -5.0;
-    }
-    c.rate[1] = 2.0;
-    c.max_rate = 10.0;
-    floe_world_cell_set_control(w, &c);
+    sheared_cell_set(w, 6, 0.0026);
     rng_state = 777;
     int g[3] = {floe_world_add_geometry(w, floe_sphere_create(0.0008)), floe_world_add_geometry(w, floe_sphere_create(0.001)),
                 floe_world_add_geometry(w, floe_sphere_create(0.0012))};
     for (int k = 0; k < 216; k++) {
         floe_particle_def p = floe_default_particle_def();
         p.geometry = g[k % 3];
-        const int a = k % 6, b = (k / 6) % 6, cc = k / 36;
-        floe_v3_set(p.x, (a + 0.5) * d + 0.1 * (b + 0.5) * d, (b + 0.5) * d, (cc + 0.5) * d);
+        sheared_cell_site(k, 6, 0.0026, p.x);
         floe_v3_set(p.v, 0.2 * (urand() - 0.5), 0.2 * (urand() - 0.5), 0.2 * (urand() - 0.5));
         floe_v3_set(p.w, 20 * (urand() - 0.5), 20 * (urand() - 0.5), 20 * (urand() - 0.5));
         floe_world_add_particle(w, &p);

@@ -16,6 +16,7 @@
 #include "floe.h"
 #include "../check.h"
 #include "mpi_common.h"
+#include "../sheared_cell.h"
 #include <math.h>
 #include <stdlib.h>
 
@@ -29,25 +30,15 @@ static floe_world *build(void) {
     d.skin = 0.0002;
     floe_world *w = floe_world_create(&d, NULL, 0);
     mpi_test_add_glass(w, 1e7);
-    const double H[9] = {LC, 0.1 * LC, 0, 0, LC, 0, 0, 0, LC}, o[3] = {0, 0, 0};
-    floe_world_set_cell(w, o, H);
-    floe_cell_control c = floe_default_cell_control();
-    for (int a = 0; a < 3; a++) {
-        c.mode[4 * a] = FLOE_CELL_STRESS;
-        c.stress[4 * a] = -5.0;
-    }
-    c.rate[1] = 2.0;
-    c.max_rate = 10.0;
-    floe_world_cell_set_control(w, &c);
+    sheared_cell_set(w, NS, SP);
     const int g = floe_world_add_geometry(w, floe_sphere_create(0.001));
     unsigned s = 4242;
     for (int k = 0; k < NS * NS * NS; k++) {
         floe_particle_def p = floe_default_particle_def();
         p.geometry = g;
-        const int a = k % NS, b = (k / NS) % NS, cc = k / (NS * NS);
         double j[6];
         for (int q = 0; q < 6; q++) { s = s * 1103515245u + 12345u; j[q] = (s >> 8) / 16777216.0 - 0.5; }
-        floe_v3_set(p.x, (a + 0.5) * SP + 0.1 * (b + 0.5) * SP, (b + 0.5) * SP, (cc + 0.5) * SP);
+        sheared_cell_site(k, NS, SP, p.x);
         floe_v3_set(p.v, 0.2 * j[0], 0.2 * j[1], 0.2 * j[2]);
         floe_v3_set(p.w, 20 * j[3], 20 * j[4], 20 * j[5]);
         floe_world_add_particle(w, &p);
