@@ -168,7 +168,7 @@ static int cl_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
 }
 
 static const floe_observer_class coast_load_class = {3, "coast_load", cl_begin, cl_observe, cl_end, cl_destroy, 1,
-    cl_state_size, cl_save, cl_restore, 0};
+    cl_state_size, cl_save, cl_restore, 0, NULL, NULL};
 
 floe_observer *floe_coast_load_create(const char *path, int dim, int body, int group, double length, char *err,
                                       size_t errlen) {

@@ -53,6 +53,7 @@
 #include "floe_observer.h"
 #include "file_writer.h"
 #include "floe_cell.h"
+#include "floe_parallel.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -63,8 +64,6 @@ typedef struct collection_tracker {
     floe_file_writer out;
     int group;
     double volume;
-    unsigned char *member;
-    int member_cap;
     floe_collection_stats last;
     long last_step;
     int observed;
@@ -72,35 +71,16 @@ typedef struct collection_tracker {
 
 static const floe_observer_class collection_tracker_class;
 
-static int is_wall(const floe_world *w, const floe_particles_view *p, int i) {
-    if (!isfinite(p->radius[i])) return 1;
-    return floe_world_particle_kind(w, i) == FLOE_GEOM_PLANE;
-}
-
-static int is_member(const floe_world *w, const floe_particles_view *p, int group, int i) {
-    if (is_wall(w, p, i)) return 0;
-    if (group < 0) return !p->motion || p->motion[i] == FLOE_FREE;
-    return p->group && p->group[i] == group;
-}
-
-/* member: scratch of p->n bytes; contacts: the world's nc contacts of this step */
-static void stress_eval(const floe_world *w, const floe_particles_view *p, const floe_contact_info *contacts,
-                        int nc, int group, double volume, unsigned char *member, floe_collection_stats *out) {
-    int n = p->n, dim = p->dim;
+/* the stats of the collection from its sums (floe_world_collection_sums: one world's, or the
+ * ranks' reduced) */
+static void stats_finish(const floe_world *w, int dim, const double s[FLOE_COLLECTION_SUMS], double volume,
+                         floe_collection_stats *out) {
     memset(out, 0, sizeof *out);
     out->time = floe_world_time(w);
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int i = 0; i < n; i++) {
-        member[i] = (unsigned char)is_member(w, p, group, i);
-        if (!member[i]) continue;
-        out->particles++;
-        double r = p->radius[i];
-        for (int a = 0; a < 3; a++) {
-            double x = p->x[3 * i + a];
-            if (x - r < lo[a]) lo[a] = x - r;
-            if (x + r > hi[a]) hi[a] = x + r;
-        }
-    }
+    out->particles = (int)s[9];
+    out->contacts = (int)s[10];
+    out->wall_contacts = (int)s[11];
+    const double *lo = s + 12, *hi = s + 15;
     double V = volume;
     const int periodic = floe_world_cell(w, NULL, NULL);
     if (!(V > 0) && periodic) V = floe_world_cell_volume(w); /* the periodic cell's */
@@ -113,41 +93,14 @@ static void stress_eval(const floe_world *w, const floe_particles_view *p, const
             V = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
     }
     out->volume = V;
-
-    double s[3][3] = {{0}};
-    for (int c = 0; c < nc; c++) {
-        const floe_contact_info *rc = &contacts[c];
-        int i = rc->i, j = rc->j;
-        if (i < 0 || j < 0 || i >= n || j >= n) continue;
-        int mi = member[i], mj = member[j];
-        double l[3], f[3];
-        if (mi && mj) {
-            if (periodic) floe_v3_copy(l, rc->branch);    /* d_ij = x_j' - x_i to j's image */
-            else floe_v3_sub(l, p->x + 3 * j, p->x + 3 * i); /* d_ij = x_j - x_i */
-            floe_v3_copy(f, rc->force);                   /* force on i (from j) */
-            out->contacts++;
-        } else if (mi) {
-            floe_v3_sub(l, rc->point, p->x + 3 * i);
-            floe_v3_copy(f, rc->force);
-            out->wall_contacts++;
-        } else if (mj) {
-            floe_v3_sub(l, rc->point, p->x + 3 * j);
-            f[0] = -rc->force[0]; f[1] = -rc->force[1]; f[2] = -rc->force[2];
-            out->wall_contacts++;
-        } else {
-            continue;
-        }
-        for (int a = 0; a < 3; a++)
-            for (int b = 0; b < 3; b++) s[a][b] += l[a] * f[b];
-    }
     if (V > 0) {
         double iv = 1.0 / V;
-        out->sigma[0] = s[0][0] * iv;
-        out->sigma[1] = s[1][1] * iv;
-        out->sigma[2] = s[2][2] * iv;
-        out->sigma[3] = 0.5 * (s[0][1] + s[1][0]) * iv;
-        out->sigma[4] = 0.5 * (s[0][2] + s[2][0]) * iv;
-        out->sigma[5] = 0.5 * (s[1][2] + s[2][1]) * iv;
+        out->sigma[0] = s[0] * iv;
+        out->sigma[1] = s[4] * iv;
+        out->sigma[2] = s[8] * iv;
+        out->sigma[3] = 0.5 * (s[1] + s[3]) * iv;
+        out->sigma[4] = 0.5 * (s[2] + s[6]) * iv;
+        out->sigma[5] = 0.5 * (s[5] + s[7]) * iv;
     }
     out->coordination = out->particles > 0 ? 2.0 * out->contacts / out->particles : 0.0;
 }
@@ -155,34 +108,25 @@ static void stress_eval(const floe_world *w, const floe_particles_view *p, const
 int floe_collection_stress(const floe_world *w, int group, double volume,
                            floe_collection_stats *out) {
     if (!w || !out) return FLOE_EINVAL;
-    const floe_contact_info *contacts;
-    int nc = floe_world_contacts(w, &contacts);
-    if (nc < 0) return FLOE_EINVAL; /* floe_world_record_contacts(w, 1) first */
+    int rank = 0, size = 1;
+    floe_world_parallel_rank(w, &rank, &size);
+    if (size > 1) return FLOE_ENOTSUP; /* a split world: this rank's share (the outputs reduce it) */
+    double s[FLOE_COLLECTION_SUMS];
+    FLOE_TRY(floe_world_collection_sums(w, group, s)); /* FLOE_EINVAL: contacts not recorded */
     floe_particles_view p;
     FLOE_TRY(floe_world_particles(w, &p));
-    unsigned char *member = malloc(p.n > 0 ? (size_t)p.n : 1);
-    if (!member) return FLOE_ENOMEM;
-    stress_eval(w, &p, contacts, nc, group, volume, member, out);
-    free(member);
+    stats_finish(w, p.dim, s, volume, out);
     return FLOE_OK;
 }
 
 /* contacts recorded at this step (a flush after a failure may have none) */
 static int has_contacts(const floe_world *w) { return floe_world_contacts(w, NULL) >= 0; }
 
-static int ct_write(collection_tracker *t, floe_world *w) {
+/* the row of the sums s (this world's, or the ranks' reduced) */
+static int ct_write_sums(collection_tracker *t, floe_world *w, const double *s) {
     floe_particles_view p;
     FLOE_TRY(floe_world_particles(w, &p));
-    const floe_contact_info *contacts;
-    int nc = floe_world_contacts(w, &contacts);
-    if (nc < 0) return FLOE_OK;
-    if (t->member_cap < p.n) {
-        unsigned char *m = realloc(t->member, (size_t)p.n);
-        if (!m) return floe_world_report_error(w, FLOE_ENOMEM, "collection tracker: out of memory");
-        t->member = m;
-        t->member_cap = p.n;
-    }
-    stress_eval(w, &p, contacts, nc, t->group, t->volume, t->member, &t->last);
+    stats_finish(w, p.dim, s, t->volume, &t->last);
     const floe_collection_stats *st = &t->last;
     {
         /* a NaN or infinity is never written: the row is refused, naming the value */
@@ -203,6 +147,14 @@ static int ct_write(collection_tracker *t, floe_world *w) {
     return floe_fw_flush(&t->out, w);
 }
 
+static int ct_write(collection_tracker *t, floe_world *w) {
+    double s[FLOE_COLLECTION_SUMS];
+    const int rc = floe_world_collection_sums(w, t->group, s);
+    if (rc == FLOE_EINVAL) return FLOE_OK; /* no contacts recorded */
+    if (rc) return floe_world_report_error(w, rc, "collection tracker: out of memory");
+    return ct_write_sums(t, w, s);
+}
+
 static int ct_observe(floe_observer *o, floe_world *w) {
     collection_tracker *t = (collection_tracker *)o;
     if (t->observed && t->last_step == floe_world_step_count(w)) return FLOE_OK;
@@ -221,16 +173,29 @@ static int ct_end(floe_observer *o, floe_world *w) {
 static void ct_destroy(floe_observer *o) {
     collection_tracker *t = (collection_tracker *)o;
     floe_fw_free(&t->out);
-    free(t->member);
     free(t);
 }
 
 static size_t ct_state_size(const floe_observer *o);
 static void ct_save(const floe_observer *o, unsigned char *buf);
 static int ct_restore(floe_observer *o, floe_world *w, const unsigned char *buf, size_t n);
+/* under MPI (version 4): the ranks' sums reduced on rank 0 instead of every contact gathered */
+static int ct_split_request(const floe_observer *o, floe_split_request *req) {
+    req->kind = FLOE_SPLIT_COLLECTION;
+    req->group = ((const collection_tracker *)o)->group;
+    return FLOE_OK;
+}
+
+static int ct_observe_sums(floe_observer *o, floe_world *w, const double *sums) {
+    collection_tracker *t = (collection_tracker *)o;
+    if (t->observed && t->last_step == floe_world_step_count(w)) return FLOE_OK;
+    return ct_write_sums(t, w, sums);
+}
+
 static const floe_observer_class collection_tracker_class = {
-    3, "collection_tracker", NULL, ct_observe, ct_end, ct_destroy, 1,
-    ct_state_size, ct_save, ct_restore, 0}; /* checkpoint hooks (end of file) */
+    4, "collection_tracker", NULL, ct_observe, ct_end, ct_destroy, 1,
+    ct_state_size, ct_save, ct_restore, 0, /* checkpoint hooks (end of file) */
+    ct_split_request, ct_observe_sums};
 
 int floe_collection_tracker_last(const floe_observer *o, double sigma[6], double *coord) {
     if (!o || o->klass != &collection_tracker_class) return FLOE_EINVAL;

@@ -99,7 +99,7 @@ static int cc_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
 }
 
 static const floe_observer_class contact_csv_class = {3, "contacts", NULL, cc_observe, cc_end, cc_destroy, 1,
-    cc_state_size, cc_save, cc_restore, 0};
+    cc_state_size, cc_save, cc_restore, 0, NULL, NULL};
 
 floe_observer *floe_contact_csv_create(const char *path, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';
@@ -229,7 +229,7 @@ static int fc_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
 }
 
 static const floe_observer_class force_chains_class = {3, "force_chains", NULL, fc_observe, fc_end, fc_destroy, 1,
-    fc_state_size, fc_save, fc_restore, 0};
+    fc_state_size, fc_save, fc_restore, 0, NULL, NULL};
 
 floe_observer *floe_force_chains_create(const char *dir, const char *prefix, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';

@@ -90,7 +90,7 @@ static int cw_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
 }
 
 static const floe_observer_class csv_writer_class = {
-    3, "csv_writer", NULL, cw_observe, cw_end, cw_destroy, 0, cw_state_size, cw_save, cw_restore, 0};
+    3, "csv_writer", NULL, cw_observe, cw_end, cw_destroy, 0, cw_state_size, cw_save, cw_restore, 0, NULL, NULL};
 
 floe_observer *floe_csv_writer_create(const char *path, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';

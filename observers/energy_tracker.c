@@ -83,8 +83,16 @@ static int et_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
     return floe_fw_state_restore(&t->out, w, &t->last_step, &t->observed, buf);
 }
 
+/* under MPI (version 4): the ledger is summed over the ranks; nothing is gathered */
+static int et_split_request(const floe_observer *o, floe_split_request *req) {
+    (void)o;
+    req->kind = FLOE_SPLIT_CLOCK;
+    return FLOE_OK;
+}
+
 static const floe_observer_class energy_tracker_class = {
-    3, "energy_tracker", NULL, et_observe, et_end, et_destroy, 0, et_state_size, et_save, et_restore, 0};
+    4, "energy_tracker", NULL, et_observe, et_end, et_destroy, 0, et_state_size, et_save, et_restore, 0,
+    et_split_request, NULL};
 
 floe_observer *floe_energy_tracker_create(const char *path, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';

@@ -88,7 +88,9 @@ typedef struct floe_collection_stats {
 } floe_collection_stats;
 
 /* Evaluate the homogenised stress of a group of the world now (no observer needed).
- * group -1 = every free particle with a bounded radius; volume <= 0 = bounding box. */
+ * group -1 = every free particle with a bounded radius; volume <= 0 = bounding box.
+ * FLOE_EINVAL when the contacts were not recorded; FLOE_ENOTSUP on a world split over MPI
+ * ranks (floe_world_collection_sums gives a rank's share). */
 int floe_collection_stress(const floe_world *w, int group, double volume,
                            floe_collection_stats *out);
 /* Last values computed by a collection tracker: sigma (xx, yy, zz, xy, xz, yz, Pa) and

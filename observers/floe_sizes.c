@@ -133,7 +133,7 @@ static int fs_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
 }
 
 static const floe_observer_class floe_sizes_class = {3, "floe_sizes", NULL, fs_observe, fs_end, fs_destroy, 0,
-    fs_state_size, fs_save, fs_restore, 0};
+    fs_state_size, fs_save, fs_restore, 0, NULL, NULL};
 
 floe_observer *floe_sizes_create(const char *path, int dim, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';

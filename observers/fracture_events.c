@@ -129,7 +129,7 @@ static int fe_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
 }
 
 static const floe_observer_class fracture_events_class = {3, "fracture_events", NULL, fe_observe, fe_end, fe_destroy,
-                                                          0, fe_state_size, fe_save, fe_restore, 0};
+                                                          0, fe_state_size, fe_save, fe_restore, 0, NULL, NULL};
 
 floe_observer *floe_fracture_events_create(const char *path, char *err, size_t errlen) {
     if (err && errlen) err[0] = '\0';

@@ -131,7 +131,7 @@ static int gf_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
 }
 
 static const floe_observer_class gate_flux_class = {3, "gate_flux", NULL, gf_observe, gf_end, gf_destroy, 0,
-                                                    gf_state_size, gf_save, gf_restore, 0};
+                                                    gf_state_size, gf_save, gf_restore, 0, NULL, NULL};
 
 floe_observer *floe_gate_flux_create(const char *path, int dim, const double a[2], const double b[2], char *err,
                                      size_t errlen) {

@@ -139,7 +139,7 @@ static int ig_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
 }
 
 static const floe_observer_class ice_grid_class = {3, "ice_grid", NULL, ig_observe, ig_end, ig_destroy, 0,
-    ig_state_size, ig_save, ig_restore, 1};
+    ig_state_size, ig_save, ig_restore, 1, NULL, NULL};
 
 floe_observer *floe_ice_grid_create(const char *dir, const char *prefix, int dim, const double lo[2],
                                     const double hi[2], int nx, int ny, int samples, char *err, size_t errlen) {

@@ -435,7 +435,7 @@ static int ow_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
 }
 
 static const floe_observer_class outline_writer_class = {
-    3, "outline_writer", NULL, ow_observe, ow_end, ow_destroy, 0, ow_state_size, ow_save, ow_restore, 1};
+    3, "outline_writer", NULL, ow_observe, ow_end, ow_destroy, 0, ow_state_size, ow_save, ow_restore, 1, NULL, NULL};
 
 floe_observer *floe_outline_writer_create(const char *dir, const char *prefix, int dim, int segments, int ascii,
                                           char *err, size_t errlen) {

@@ -113,9 +113,18 @@ static int pt_restore(floe_observer *o, floe_world *w, const unsigned char *buf,
     return floe_fw_state_restore(&t->out, w, &t->last_step, &t->observed, buf);
 }
 
+/* under MPI (version 4): only the listed particles are brought to rank 0 */
+static int pt_split_request(const floe_observer *o, floe_split_request *req) {
+    const particle_tracker *t = (const particle_tracker *)o;
+    req->kind = FLOE_SPLIT_PARTICLES;
+    req->ids = t->ids;
+    req->nids = t->n;
+    return FLOE_OK;
+}
+
 static const floe_observer_class particle_tracker_class = {
-    3, "particle_tracker", pt_begin, pt_observe, pt_end, pt_destroy, 0, pt_state_size, pt_save, pt_restore,
-    FLOE_OBSERVER_READS_LISTED};
+    4, "particle_tracker", pt_begin, pt_observe, pt_end, pt_destroy, 0, pt_state_size, pt_save, pt_restore,
+    FLOE_OBSERVER_READS_LISTED, pt_split_request, NULL};
 
 floe_observer *floe_particle_tracker_create(const char *path, const int *ids, int n,
                                             char *err, size_t errlen) {

@@ -469,9 +469,9 @@ static int vw_piece_restore(floe_observer *o, floe_world *w, const unsigned char
 }
 
 static const floe_observer_class vtk_writer_class = {
-    3, "vtk_writer", NULL, vw_observe, vw_end, vw_destroy, 0, vw_state_size, vw_save, vw_restore, 1};
+    3, "vtk_writer", NULL, vw_observe, vw_end, vw_destroy, 0, vw_state_size, vw_save, vw_restore, 1, NULL, NULL};
 static const floe_observer_class vtk_piece_class = {
-    3, "vtk_writer", NULL, vw_observe, vw_end, vw_destroy, 0, vw_state_size, vw_save, vw_piece_restore, 1};
+    3, "vtk_writer", NULL, vw_observe, vw_end, vw_destroy, 0, vw_state_size, vw_save, vw_piece_restore, 1, NULL, NULL};
 
 int floe_vtk_writer_set_ascii(floe_observer *o, int ascii) {
     if (!o || (o->klass != &vtk_writer_class && o->klass != &vtk_piece_class)) return FLOE_EINVAL;

@@ -5,6 +5,7 @@
  * and rejects and redoes it with a shorter step when the error measures pass their
  * tolerances. Nothing here names an integrator. */
 #include "integrator_parts.h"
+#include "floe_parallel.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -155,16 +156,21 @@ int step_adaptive(floe_world *w, int (*inner)(floe_world *w)) {
             w->dt = dt;
         }
         double lim = 0.5 * w->nl.skin;
-        if (predicted_disp2(w, dt) > lim * lim) {
-            int rc = floe_world_nl_build(w);
-            if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
+        /* MPI (docs/parallel.md, "Adaptive steps"): every rank decides alike, and a rebuild is a
+         * decomposition (the particles may change owner) */
+        if (floe_par_any(w, predicted_disp2(w, dt) > lim * lim)) {
+            int rc = w->par ? floe_world_parallel_rebuild(w) : floe_world_nl_build(w);
+            if (rc) return w->par ? rc : floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
         }
         FLOE_TRY(snapshot_io(w, 1));
         const long rb = w->nl.rebuilds;
         w->track_depth = 1;
         int rc = inner(w);
         w->track_depth = 0;
-        const int undoable = w->nl.rebuilds == rb;
+        /* MPI: a failed trial stops the run (a rank that failed inside the step is not where
+         * the others wait); only the measures' rejections are redone, agreed over the ranks */
+        if (rc && w->par) return rc;
+        const int undoable = !floe_par_any(w, w->nl.rebuilds != rb);
         double eta_v = 0, eta_d = w->eta_depth;
         if (!rc) {
             const double *v0 = w->snap->d + 3 * (size_t)p->n; /* after x (states first) */
@@ -178,6 +184,10 @@ int step_adaptive(floe_world *w, int (*inner)(floe_world *w)) {
                 double e = floe_v3_norm(dv) * dt / p->radius[i];
                 if (e > eta_v) eta_v = e;
             }
+        }
+        if (w->par) { /* the largest over the ranks' owned particles and contacts */
+            eta_v = floe_par_max(w, eta_v);
+            eta_d = floe_par_max(w, eta_d);
         }
         /* step factor from the criterion: eta_v grows as dt^2 (a dt^2), eta_d as dt */
         double fv = eta_v > 0 ? sqrt(tv / eta_v) : INFINITY, fd = eta_d > 0 ? td / eta_d : INFINITY;

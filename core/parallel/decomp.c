@@ -392,7 +392,7 @@ static double box_dist(const double *x, const double *lo, const double *hi, int 
  * cell (fractional coordinates s) that come within reach of the cell, at most 27; the first
  * is y itself */
 static int cell_copies(const floe_cell_state *c, int dim, const double *y, const double wd[3], double reach,
-                       double out[27][3]) {
+                       double (*out)[3]) {
     double d[3], s[3];
     for (int r = 0; r < 3; r++) d[r] = y[r] - c->o[r];
     for (int r = 0; r < 3; r++) s[r] = c->Hinv[3 * r] * d[0] + c->Hinv[3 * r + 1] * d[1] + c->Hinv[3 * r + 2] * d[2];
@@ -455,6 +455,27 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
         for (int r = 0; r < S; r++) rall = fmax(rall, boxes[7 * r + 6]);
         reach = fmax(rmax + rall, fmax(P->bond_reach, P->pd_reach)) + skin;
     }
+    /* a periodic cell: each owned centre's copies (cell_copies), once for every destination:
+     * those of particle i at cpx[cpat[i - lo] .. cpat[i - lo + 1]) */
+    double (*cpx)[3] = NULL;
+    int *cpat = NULL;
+    if (cell) {
+        cpat = malloc((size_t)(hi - lo + 1) * sizeof *cpat);
+        int cap = 2 * (hi - lo) + 27, n = 0;
+        cpx = malloc((size_t)cap * sizeof *cpx);
+        for (int i = lo; cpat && cpx && i < hi; i++) {
+            if (n + 27 > cap) {
+                cap *= 2;
+                double (*t)[3] = realloc(cpx, (size_t)cap * sizeof *t);
+                if (!t) { free(cpx); cpx = NULL; break; }
+                cpx = t;
+            }
+            cpat[i - lo] = n;
+            n += cell_copies(cell, dim, CENTRE(i), wd, reach, cpx + n);
+        }
+        if (!cpat || !cpx) { free(cpat); free(cpx); free(boxes); free(y); return FLOE_ENOMEM; }
+        cpat[hi - lo] = n;
+    }
     /* the send lists, grouped by destination */
     P->nsend = 0;
     for (int r = 0; r < S; r++) {
@@ -469,16 +490,14 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
             const double lim = fmax(p->radius[i] + b[6], fmax(P->bond_reach, P->pd_reach)) + skin;
             int near = 0;
             if (cell) { /* sent once, whichever copy comes near: r's list finds each image */
-                double cp[27][3];
-                const int nc = cell_copies(cell, dim, CENTRE(i), wd, reach, cp);
-                for (int c = 0; c < nc && !near; c++) near = box_dist(cp[c], b, b + 3, dim) <= lim;
+                for (int c = cpat[i - lo]; c < cpat[i - lo + 1] && !near; c++) near = box_dist(cpx[c], b, b + 3, dim) <= lim;
             } else
                 near = box_dist(p->x + 3 * i, b, b + 3, dim) <= lim;
             if (!near) continue;
             if (P->nsend == P->send_cap) {
                 int nc = P->send_cap ? 2 * P->send_cap : 256;
                 int *t = realloc(P->send_idx, (size_t)nc * sizeof *t);
-                if (!t) { free(boxes); free(y); return FLOE_ENOMEM; }
+                if (!t) { free(boxes); free(y); free(cpat); free(cpx); return FLOE_ENOMEM; }
                 P->send_idx = t;
                 P->send_cap = nc;
             }
@@ -489,6 +508,8 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
 #undef CENTRE
     free(boxes);
     free(y);
+    free(cpat);
+    free(cpx);
     MPI_Alltoall(P->scount, 1, MPI_INT, P->rcount, 1, MPI_INT, P->comm);
     floe_par_count_all(P, FLOE_COMM_GHOST, sizeof(int));
     int nr = 0;
@@ -508,8 +529,16 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
     floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, (long long)m * sizeof(double));
     free(sc);
     if (par_room(w, P, hi + nr)) return FLOE_ENOMEM;
+    if (nr > P->gmotion_cap) {
+        unsigned char *g = realloc(P->gmotion, (size_t)nr);
+        if (!g) return FLOE_ENOMEM;
+        P->gmotion = g;
+        P->gmotion_cap = nr;
+    }
+    w->gmotion = P->gmotion;
     for (int k = 0; k < nr; k++) {
         floe_par_unpack(p, hi + k, P->rbuf + (size_t)k * m, P->gid + hi + k);
+        P->gmotion[k] = p->motion[hi + k];
         p->motion[hi + k] = FLOE_FIXED; /* a copy: the owner integrates it */
     }
     P->nghost = nr;
@@ -661,6 +690,7 @@ void floe_par_free(floe_par *P) {
     free(P->cost); free(P->bal_ids); free(P->bal_sz);
     floe_pd_split_free(P->pd_split); /* PD bodies' split (par_pd.c) */
     free(P->pd_counts);
+    free(P->gmotion); free(P->mkind); free(P->mgroup); free(P->mids_at); free(P->mids); free(P->mdue); free(P->red_buf);
     MPI_Comm_free(&P->comm);
     free(P);
 }

@@ -75,6 +75,13 @@ typedef struct floe_par {
     struct floe_pd_split *pd_split;
     double pd_reach;
     int *pd_counts;          /* 4 size: the PD ghost exchanges' counts beyond FLOE_PAR_PD_SYNC_RANKS */
+    /* each ghost's motion on its owner (w->gmotion points here; the ghost is FLOE_FIXED) */
+    unsigned char *gmotion; int gmotion_cap;
+    /* rank 0's mirror observers as every rank knows them (floe_world_parallel_outputs): their
+     * count, and per observer its split kind (0: gathered; floe_observer_class.split_request),
+     * group and its ids (ids[ids_at[k] .. ids_at[k + 1])); the reduced outputs' buffers */
+    int nmobs, *mkind, *mgroup, *mids_at, *mdue; long long *mids;
+    double *red_buf; size_t red_cap;
 } floe_par;
 
 /* the load balance's mode (floe_world_parallel_set_balance; its scratch allocated at the

@@ -241,7 +241,6 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     if (floe_par_pd_unsupported(w, pdwhy, sizeof pdwhy)) return refuse(w, pdwhy);
     if (w->nstates) return refuse(w, "a state object");
     if (w->nobs) return refuse(w, "an observer (outputs)");
-    if (w->def.adaptive) return refuse(w, "the adaptive step");
     if (w->def.integrator != FLOE_VELOCITY_VERLET && w->def.integrator != FLOE_LEAPFROG) return refuse(w, "RK2");
     /* the providers that run split (par_forcing.c): not a user's, whose loops and state are
      * its own */
@@ -378,6 +377,22 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     return floe_par_servo_totals(w); /* the servos' measures of the whole world, as at prepare */
 }
 
+double floe_par_max(floe_world *w, double v) {
+    if (!w->par) return v;
+    double m;
+    MPI_Allreduce(&v, &m, 1, MPI_DOUBLE, MPI_MAX, w->par->comm);
+    floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, sizeof v);
+    return m;
+}
+
+int floe_par_any(floe_world *w, int yes) {
+    if (!w->par) return yes;
+    int any;
+    MPI_Allreduce(&yes, &any, 1, MPI_INT, MPI_LOR, w->par->comm);
+    floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, sizeof yes);
+    return any;
+}
+
 int floe_world_parallel_rebuild(floe_world *w) {
     if (!w->par) return FLOE_OK;
     return par_rebuild(w, w->par, NULL, 0);
@@ -431,24 +446,14 @@ int floe_par_cell_stress(floe_world *w, double sigma[9], int *given) {
     memcpy(v + 9, c->pd_virial, 9 * sizeof *v);
     memcpy(v + 18, c->kdiag, 9 * sizeof *v);
     memset(v + 27, 0, 9 * sizeof *v);
-    const floe_particles *p = &w->p;
-    for (int i = P->nrep; i < P->nrep + P->nown; i++) {
-        if (p->motion[i] != FLOE_FREE) continue;
-        const double *u = p->v + 3 * i, m = p->mass[i];
-        for (int a = 0; a < 3; a++)
-            for (int b = 0; b < 3; b++) v[27 + 3 * a + b] += m * u[a] * u[b];
-    }
+    floe_cell_mvv(&w->p, P->nrep, P->nrep + P->nown, v + 27);
     v[36] = c->valid ? 0 : 1;
     MPI_Allreduce(v, s, 37, MPI_DOUBLE, MPI_SUM, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof v);
     memcpy(c->kdiag, s + 18, sizeof c->kdiag); /* the servo's stiffness: the whole cell's */
-    const double V = floe_world_cell_volume(w);
-    /* floe_world_cell_stress's sum: an evaluation missing on some rank gives 0, as there */
-    for (int a = 0; a < 3; a++)
-        for (int b = 0; b < 3; b++)
-            sigma[3 * a + b] = s[36] > 0 ? 0.0
-                                         : 0.5 * (s[3 * a + b] + s[3 * b + a] + s[9 + 3 * a + b] + s[9 + 3 * b + a]) / V -
-                                               s[27 + 3 * a + b] / V;
+    /* floe_world_cell_stress's: an evaluation missing on some rank gives 0, as there */
+    if (s[36] > 0) memset(sigma, 0, 9 * sizeof *sigma);
+    else floe_cell_stress_of(s, s + 9, s + 27, floe_world_cell_volume(w), sigma);
     *given = 1;
     return FLOE_OK;
 }
@@ -597,10 +602,12 @@ static int mirror_reads_contacts(const floe_world *M) {
 }
 
 /* an output of M that reads contacts is due after the next step (the clock of step.c's
- * advance_clock; the adaptive step is refused under MPI, so dt is the next step's) */
+ * advance_clock) */
 static int contacts_due_next(const floe_world *w, const floe_world *M) {
     const long step = w->step + 1;
-    const double time = w->t0 + (double)(step - w->step0) * w->dt;
+    /* adaptive steps: the next step is at most dt_next (the end of the run, a rejection shorten
+     * it), so an output this time does not reach is not due */
+    const double time = w->def.adaptive ? w->time + w->dt_next : w->t0 + (double)(step - w->step0) * w->dt;
     for (int k = 0; k < M->nobs; k++) {
         const floe_observer *o = M->obs[k];
         if (!o->klass->needs_contacts) continue;
@@ -617,6 +624,8 @@ static int contacts_due_next(const floe_world *w, const floe_world *M) {
     }
     return 0;
 }
+
+static int split_requests(floe_world *w, floe_par *P);
 
 int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {
     floe_par *P = w->par;
@@ -648,7 +657,7 @@ int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {
         w->orient_extra = 1;
         orientation_refresh(w);
     }
-    return FLOE_OK;
+    return split_requests(w, P);
 }
 
 /* the contacts of the ranks' last evaluation, by global ids, into the mirror M (rank 0) in
@@ -757,8 +766,16 @@ static int contacts_gather(floe_world *w, floe_par *P) {
     return all;
 }
 
+/* the mirror's clock and cell (rank 0) */
+static void mirror_clock(const floe_world *w, floe_world *M) {
+    M->time = w->time;
+    M->step = w->step;
+    M->dt = w->dt;
+    if (w->cell && M->cell) *M->cell = *w->cell; /* its vectors (the outputs' volume, the wrap) */
+}
+
 /* the owned particles' state by global id into the mirror (rank 0), the walls' forces summed */
-static int mirror_gather(floe_world *w, floe_par *P) {
+static int mirror_gather(floe_world *w, floe_par *P, int contacts) {
     const int m = 1 + FLOE_PAR_FWD, lo = P->nrep, no = P->nown;
     double *sb = malloc((size_t)(no ? no : 1) * m * sizeof *sb);
     double *wf = malloc((size_t)(P->nrep ? P->nrep : 1) * 6 * sizeof *wf);
@@ -799,31 +816,203 @@ static int mirror_gather(floe_world *w, floe_par *P) {
             memcpy(q->f + 3 * g, wf + 6 * i, 3 * sizeof(double));
             memcpy(q->t + 3 * g, wf + 6 * i + 3, 3 * sizeof(double));
         }
-        M->time = w->time;
-        M->step = w->step;
-        M->dt = w->dt;
-        if (w->cell && M->cell) *M->cell = *w->cell; /* its vectors (the outputs' volume, the wrap) */
+        mirror_clock(w, M);
     }
     free(sb); free(wf); free(rb);
     if (grc) return grc;
     /* the contacts, when the mirror has outputs that read them (stress, contacts, force
      * chains, coast load) */
-    if (w->par_contacts & 1) FLOE_TRY(contacts_gather(w, P));
+    if (contacts && w->par_contacts & 1) FLOE_TRY(contacts_gather(w, P));
     /* the beam bonds' state (broken flags, stresses: fracture_events, floe_sizes) */
     FLOE_TRY(floe_par_beams_gather(w, P, P->rank == 0 ? P->mirror : NULL));
     /* the PD bodies' (broken flags: damage, fracture events) */
     return floe_par_pd_gather(w, P, P->rank == 0 ? P->mirror : NULL);
 }
 
+/* ---- outputs reduced over the ranks (docs/parallel.md, "Outputs reduced over the ranks") ---- */
+
+/* o's split kind (floe_observer_class.split_request; 0: gathered) */
+static int split_kind(const floe_observer *o, floe_split_request *rq) {
+    memset(rq, 0, sizeof *rq);
+    if (o->klass->version < 4 || !o->klass->split_request || o->klass->split_request(o, rq) != FLOE_OK) return 0;
+    switch (rq->kind) {
+    case FLOE_SPLIT_CLOCK: return rq->kind;
+    case FLOE_SPLIT_PARTICLES: return rq->nids >= 0 && (rq->ids || !rq->nids) ? rq->kind : 0;
+    case FLOE_SPLIT_COLLECTION: return o->klass->observe_sums && rq->group >= -1 ? rq->kind : 0;
+    }
+    return 0;
+}
+
+/* rank 0's mirror observers' split requests, to every rank */
+static int split_requests(floe_world *w, floe_par *P) {
+    floe_world *M = P->mirror;
+    free(P->mkind); free(P->mgroup); free(P->mids_at); free(P->mids); free(P->mdue);
+    P->mkind = P->mgroup = P->mids_at = P->mdue = NULL;
+    P->mids = NULL;
+    P->nmobs = 0;
+    int head[2] = {0, 0}; /* observers, ids */
+    if (M) {
+        head[0] = M->nobs;
+        for (int k = 0; k < M->nobs; k++) {
+            floe_split_request rq;
+            if (split_kind(M->obs[k], &rq) == FLOE_SPLIT_PARTICLES) head[1] += rq.nids;
+        }
+    }
+    MPI_Bcast(head, 2, MPI_INT, 0, P->comm);
+    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof head);
+    const int n = head[0];
+    int *ib = malloc((size_t)(3 * n + 1) * sizeof *ib);
+    P->mids = malloc((size_t)(head[1] ? head[1] : 1) * sizeof *P->mids);
+    P->mkind = malloc((size_t)(n ? n : 1) * sizeof *P->mkind);
+    P->mgroup = malloc((size_t)(n ? n : 1) * sizeof *P->mgroup);
+    P->mids_at = malloc((size_t)(n + 1) * sizeof *P->mids_at);
+    P->mdue = malloc((size_t)(n ? n : 1) * sizeof *P->mdue);
+    int bad = !ib || !P->mids || !P->mkind || !P->mgroup || !P->mids_at || !P->mdue, any;
+    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof bad);
+    if (any) { free(ib); return floe_world_error(w, FLOE_ENOMEM, "MPI outputs: out of memory"); }
+    if (M) { /* kind, group, first id of each; the ids */
+        int at = 0;
+        for (int k = 0; k < n; k++) {
+            floe_split_request rq;
+            const int kind = split_kind(M->obs[k], &rq);
+            ib[3 * k] = kind;
+            ib[3 * k + 1] = rq.group;
+            ib[3 * k + 2] = at;
+            if (kind == FLOE_SPLIT_PARTICLES)
+                for (int q = 0; q < rq.nids; q++) P->mids[at++] = rq.ids[q];
+        }
+        ib[3 * n] = at;
+    }
+    MPI_Bcast(ib, 3 * n + 1, MPI_INT, 0, P->comm);
+    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, (long long)(3 * n + 1) * sizeof *ib);
+    if (head[1]) MPI_Bcast(P->mids, head[1], MPI_LONG_LONG, 0, P->comm);
+    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, (long long)head[1] * sizeof *P->mids);
+    for (int k = 0; k < n; k++) {
+        P->mkind[k] = ib[3 * k];
+        P->mgroup[k] = ib[3 * k + 1];
+        P->mids_at[k] = ib[3 * k + 2];
+    }
+    P->mids_at[n] = ib[3 * n];
+    P->nmobs = n;
+    free(ib);
+    return FLOE_OK;
+}
+
+enum { SPLIT_PSTATE = 19 }; /* a listed particle's x3 v3 w3 q4 f3 t3 */
+
+/* the due reduced outputs (due[k] for the mirror's observer k): every rank's share summed
+ * (the boxes by minimum) on rank 0, which writes the collections' rows (observe_sums) and the
+ * listed particles' state into the mirror (their outputs then observe it as usual).
+ * Collective; the same return on every rank */
+static int split_outputs(floe_world *w, floe_par *P, const int *due) {
+    enum { CS = FLOE_COLLECTION_SUMS };
+    long long nsum = 0, nmin = 0;
+    int need_ix = 0;
+    for (int k = 0; k < P->nmobs; k++) {
+        if (!due[k]) continue;
+        if (P->mkind[k] == FLOE_SPLIT_COLLECTION) { nsum += 13; nmin += 6; } /* 12 sums + "not recorded" */
+        if (P->mkind[k] == FLOE_SPLIT_PARTICLES) {
+            nsum += (long long)SPLIT_PSTATE * (P->mids_at[k + 1] - P->mids_at[k]);
+            need_ix = 1;
+        }
+    }
+    if (!nsum && !nmin) return FLOE_OK; /* the same on every rank */
+    floe_par_index ix = {0};
+    int bad = nsum + nmin > 0x7fffffff || floe_par_reserve(&P->red_buf, &P->red_cap, (size_t)(nsum + nmin)) ||
+              (need_ix && floe_par_index_build(P, P->nrep + P->nown, &ix));
+    double *sb = P->red_buf, *mb = sb + nsum;
+    const floe_particles *p = &w->p;
+    long long at = 0, am = 0;
+    for (int k = 0; !bad && k < P->nmobs; k++) {
+        if (!due[k]) continue;
+        if (P->mkind[k] == FLOE_SPLIT_COLLECTION) {
+            double cs[CS];
+            const int rc = floe_world_collection_sums(w, P->mgroup[k], cs);
+            if (rc == FLOE_ENOMEM) bad = 1;
+            if (rc) { /* not recorded here: flagged, nothing added */
+                for (int q = 0; q < 12; q++) cs[q] = 0;
+                for (int a = 0; a < 3; a++) { cs[12 + a] = INFINITY; cs[15 + a] = -INFINITY; }
+            }
+            memcpy(sb + at, cs, 12 * sizeof *sb);
+            sb[at + 12] = rc != FLOE_OK;
+            for (int a = 0; a < 3; a++) { mb[am + a] = cs[12 + a]; mb[am + 3 + a] = -cs[15 + a]; }
+            at += 13;
+            am += 6;
+        } else if (P->mkind[k] == FLOE_SPLIT_PARTICLES) {
+            for (int q = P->mids_at[k]; q < P->mids_at[k + 1]; q++, at += SPLIT_PSTATE) {
+                double *r = sb + at;
+                memset(r, 0, SPLIT_PSTATE * sizeof *r);
+                const int i = floe_par_index_find(&ix, P->mids[q]);
+                if (i < 0) continue;                        /* owned elsewhere */
+                const int mine = i >= P->nrep || P->rank == 0; /* a wall's position is rank 0's */
+                if (mine) {
+                    memcpy(r, p->x + 3 * i, 3 * sizeof *r);
+                    memcpy(r + 3, p->v + 3 * i, 3 * sizeof *r);
+                    memcpy(r + 6, p->w + 3 * i, 3 * sizeof *r);
+                    memcpy(r + 9, p->q + 4 * i, 4 * sizeof *r);
+                }
+                memcpy(r + 13, p->f + 3 * i, 3 * sizeof *r); /* a wall's force: every rank's share */
+                memcpy(r + 16, p->t + 3 * i, 3 * sizeof *r);
+            }
+        }
+    }
+    floe_par_index_free(&ix);
+    int any;
+    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof bad);
+    if (any) return floe_world_error(w, FLOE_ENOMEM, "MPI outputs: out of memory");
+    const int root = P->rank == 0;
+    if (nsum) MPI_Reduce(root ? MPI_IN_PLACE : sb, sb, (int)nsum, MPI_DOUBLE, MPI_SUM, 0, P->comm);
+    if (nmin) MPI_Reduce(root ? MPI_IN_PLACE : mb, mb, (int)nmin, MPI_DOUBLE, MPI_MIN, 0, P->comm);
+    floe_par_count_to_root(P, FLOE_COMM_OUTPUT, (nsum + nmin) * (long long)sizeof *sb);
+    floe_world *M = P->mirror;
+    int rc = FLOE_OK;
+    if (root && M) {
+        mirror_clock(w, M);
+        floe_particles *q = &M->p;
+        at = am = 0;
+        for (int k = 0; !rc && k < P->nmobs; k++) {
+            if (!due[k]) continue;
+            if (P->mkind[k] == FLOE_SPLIT_COLLECTION) {
+                double cs[CS];
+                memcpy(cs, sb + at, 12 * sizeof *cs);
+                for (int a = 0; a < 3; a++) { cs[12 + a] = mb[am + a]; cs[15 + a] = -mb[am + 3 + a]; }
+                floe_observer *o = M->obs[k];
+                if (sb[at + 12] != 0) M->contacts_valid = 0; /* some rank did not record: no row */
+                else { /* every rank recorded its contacts */
+                    M->err[0] = 0;
+                    rc = o->klass->observe_sums(o, M, cs);
+                    if (rc) floe_world_error(w, rc, "output %s failed at step %ld: %s", o->klass->name, w->step,
+                                             M->err[0] ? M->err : floe_strerror(rc));
+                }
+                at += 13;
+                am += 6;
+            } else if (P->mkind[k] == FLOE_SPLIT_PARTICLES) {
+                for (int j = P->mids_at[k]; j < P->mids_at[k + 1]; j++, at += SPLIT_PSTATE) {
+                    const long long g = P->mids[j];
+                    if (g < 0 || g >= q->n) continue;
+                    const double *r = sb + at;
+                    memcpy(q->x + 3 * g, r, 3 * sizeof *r);
+                    memcpy(q->v + 3 * g, r + 3, 3 * sizeof *r);
+                    memcpy(q->w + 3 * g, r + 6, 3 * sizeof *r);
+                    memcpy(q->q + 4 * g, r + 9, 4 * sizeof *r);
+                    memcpy(q->f + 3 * g, r + 13, 3 * sizeof *r);
+                    memcpy(q->t + 3 * g, r + 16, 3 * sizeof *r);
+                }
+            }
+        }
+    }
+    int all;
+    MPI_Allreduce(&rc, &all, 1, MPI_INT, MPI_MAX, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof rc);
+    if (all && !rc) return floe_world_error(w, all, "an output failed on rank 0");
+    return all;
+}
+
 static int output_due(const floe_world *w, const floe_observer *o) {
     return o->period_steps > 0 ? w->step % o->period_steps == 0
                                : o->period_time > 0 ? w->time >= o->next_time - 1e-9 * w->dt : 1;
-}
-
-static int mirror_due(const floe_world *w, const floe_world *M) {
-    for (int k = 0; k < M->nobs; k++)
-        if (output_due(w, M->obs[k])) return 1;
-    return 0;
 }
 
 /* one call of an output's observe (end: its end), its message prefixed with its name */
@@ -898,6 +1087,44 @@ int floe_world_parallel_own_outputs(const floe_world *w, floe_observer *const **
     return w && w->par ? w->par->nouts : 0;
 }
 
+/* the mirror's due observers (due[k]; end: their ends, every one): the ledger summed, the
+ * reduced outputs' shares (split_outputs), then the state gathered when an observer without a
+ * split kind is due (the contacts with it when one of those reads them), and rank 0's
+ * observers called. Collective; the same return on every rank */
+static int mirror_observe(floe_world *w, floe_par *P, const int *due, int force_all, int end) {
+    floe_energy e;
+    energy_sum(w, &e, FLOE_COMM_OUTPUT);
+    if (P->mirror) P->mirror->energy = e;
+    int gather = end, contacts = end;
+    for (int k = 0; k < P->nmobs; k++)
+        if (due[k] && !P->mkind[k]) {
+            gather = 1;
+            if (P->mirror && P->mirror->obs[k]->klass->needs_contacts) contacts = 1;
+        }
+    if (gather && !end) { /* only rank 0 holds the observers */
+        MPI_Bcast(&contacts, 1, MPI_INT, 0, P->comm);
+        floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof contacts);
+    }
+    int rc = split_outputs(w, P, due), ok;
+    if (!rc && gather) rc = mirror_gather(w, P, contacts);
+    if (P->rank == 0 && !rc) {
+        const double t0 = MPI_Wtime();
+        mirror_clock(w, P->mirror); /* gathered or not, the observers' clock */
+        if (end) {
+            P->mirror->last_step_of_run = 1;
+            rc = floe_world_finish(P->mirror);
+        } else {
+            rc = observers_call(P->mirror, force_all);
+        }
+        if (rc) floe_world_error(w, rc, "%s", floe_world_last_error(P->mirror));
+        P->busy += MPI_Wtime() - t0;
+    }
+    MPI_Allreduce(&rc, &ok, 1, MPI_INT, MPI_MAX, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof rc);
+    if (ok && !rc) return floe_world_error(w, ok, "an output failed on rank 0");
+    return ok;
+}
+
 int floe_par_observe(floe_world *w, int force_all) {
     floe_par *P = w->par;
     /* the step's end: the traffic's step count and the mean loads */
@@ -914,30 +1141,24 @@ int floe_par_observe(floe_world *w, int force_all) {
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof has);
     if (!has) return FLOE_OK;
     /* rank 0's word: the mirror is due now (bit 0), an output that reads contacts is due at
-     * the next step (bit 1: every rank records its contacts then) */
-    int due = 0;
+     * the next step (bit 1: every rank records its contacts then); when due, which of the
+     * mirror's observers are (due[k]) */
+    const int n = P->nmobs;
+    int word = 0, dd[64], *due = n <= 64 ? dd : P->mdue;
     if (P->rank == 0) {
-        due = force_all || mirror_due(w, P->mirror);
-        if (w->par_contacts & 1 && contacts_due_next(w, P->mirror)) due |= 2;
+        for (int k = 0; k < n; k++) {
+            due[k] = force_all || output_due(w, P->mirror->obs[k]);
+            word |= due[k];
+        }
+        if (w->par_contacts & 1 && contacts_due_next(w, P->mirror)) word |= 2;
     }
-    MPI_Bcast(&due, 1, MPI_INT, 0, P->comm);
-    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof due);
-    w->par_contacts = (w->par_contacts & 1) | (due & 2);
-    if (!(due & 1)) return FLOE_OK;
-    floe_energy e;
-    energy_sum(w, &e, FLOE_COMM_OUTPUT);
-    int rc = mirror_gather(w, P), ok;
-    if (P->rank == 0 && !rc) {
-        t0 = MPI_Wtime();
-        P->mirror->energy = e;
-        rc = observers_call(P->mirror, force_all);
-        if (rc) floe_world_error(w, rc, "%s", floe_world_last_error(P->mirror));
-        P->busy += MPI_Wtime() - t0;
-    }
-    MPI_Allreduce(&rc, &ok, 1, MPI_INT, MPI_MAX, P->comm);
-    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof rc);
-    if (ok && !rc) return floe_world_error(w, ok, "an output failed on rank 0");
-    return ok;
+    MPI_Bcast(&word, 1, MPI_INT, 0, P->comm);
+    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof word);
+    w->par_contacts = (w->par_contacts & 1) | (word & 2);
+    if (!(word & 1)) return FLOE_OK;
+    MPI_Bcast(due, n, MPI_INT, 0, P->comm);
+    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, (long long)n * sizeof *due);
+    return mirror_observe(w, P, due, force_all, 0);
 }
 
 int floe_world_parallel_finish(floe_world *w) {
@@ -957,17 +1178,11 @@ int floe_world_parallel_finish(floe_world *w) {
     MPI_Bcast(&has, 1, MPI_INT, 0, P->comm);
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof has);
     if (!has) return orc;
-    floe_energy e;
-    energy_sum(w, &e, FLOE_COMM_OUTPUT);
-    int rc = mirror_gather(w, P), all;
-    if (P->rank == 0 && !rc) {
-        P->mirror->energy = e;
-        P->mirror->last_step_of_run = 1;
-        rc = floe_world_finish(P->mirror);
-        if (rc) floe_world_error(w, rc, "%s", floe_world_last_error(P->mirror));
-    }
-    MPI_Allreduce(&rc, &all, 1, MPI_INT, MPI_MAX, P->comm);
-    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof rc);
+    /* every reduced output called (each writes the final state unless it has at this step),
+     * then the whole state gathered for the others' ends */
+    int dd[64], *due = P->nmobs <= 64 ? dd : P->mdue;
+    for (int k = 0; k < P->nmobs; k++) due[k] = P->mkind[k] != 0;
+    const int all = mirror_observe(w, P, due, 0, 1);
     return orc ? orc : all;
 }
 
@@ -1229,6 +1444,8 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
 int floe_world_parallel_rebuild(floe_world *w) { (void)w; return FLOE_OK; }
 int floe_par_refresh(floe_world *w, double maxd2, int have_xb) { (void)w; (void)maxd2; (void)have_xb; return FLOE_OK; }
 int floe_par_reverse(floe_world *w) { (void)w; return FLOE_OK; }
+double floe_par_max(floe_world *w, double v) { (void)w; return v; }
+int floe_par_any(floe_world *w, int yes) { (void)w; return yes; }
 int floe_par_cell_stress(floe_world *w, double sigma[9], int *given) {
     (void)w; (void)sigma;
     *given = 0;

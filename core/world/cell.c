@@ -175,17 +175,20 @@ int floe_world_cell_velocity_gradient(const floe_world *w, double L[9]) {
     return FLOE_OK;
 }
 
-/* the kinetic part -(1/V) sum m v (x) v of the free particles (v: the fluctuation) */
-static void kinetic_stress(const floe_world *w, double V, double K[9]) {
-    const floe_particles *p = &w->p;
-    memset(K, 0, 9 * sizeof(double));
-    for (int i = 0; i < p->n; i++) {
+void floe_cell_mvv(const floe_particles *p, int lo, int hi, double mvv[9]) {
+    for (int i = lo; i < hi; i++) {
         if (p->motion[i] != FLOE_FREE) continue;
         const double *v = p->v + 3 * i, m = p->mass[i];
         for (int a = 0; a < 3; a++)
-            for (int b = 0; b < 3; b++) K[3 * a + b] -= m * v[a] * v[b];
+            for (int b = 0; b < 3; b++) mvv[3 * a + b] += m * v[a] * v[b];
     }
-    for (int k = 0; k < 9; k++) K[k] /= V;
+}
+
+void floe_cell_stress_of(const double vir[9], const double pvir[9], const double mvv[9], double V, double sigma[9]) {
+    for (int a = 0; a < 3; a++)
+        for (int b = 0; b < 3; b++)
+            sigma[3 * a + b] =
+                0.5 * (vir[3 * a + b] + vir[3 * b + a] + pvir[3 * a + b] + pvir[3 * b + a]) / V - mvv[3 * a + b] / V;
 }
 
 int floe_world_cell_stress(const floe_world *w, double sigma[9], double kinetic[9]) {
@@ -193,13 +196,12 @@ int floe_world_cell_stress(const floe_world *w, double sigma[9], double kinetic[
     if (!c) return FLOE_EINVAL;
     if (w->par) return FLOE_ENOTSUP; /* MPI: this rank's contacts only (the step's servo sums them) */
     if (!c->valid) return FLOE_EINVAL;
-    double V = det3(c->H), K[9];
-    kinetic_stress(w, V, K);
-    for (int a = 0; a < 3; a++)
-        for (int b = 0; b < 3; b++)
-            sigma[3 * a + b] = 0.5 * (c->virial[3 * a + b] + c->virial[3 * b + a] + c->pd_virial[3 * a + b] +
-                                      c->pd_virial[3 * b + a]) / V + K[3 * a + b];
-    if (kinetic) memcpy(kinetic, K, sizeof K);
+    const double V = det3(c->H);
+    double mvv[9] = {0};
+    floe_cell_mvv(&w->p, 0, w->p.n, mvv);
+    floe_cell_stress_of(c->virial, c->pd_virial, mvv, V, sigma);
+    if (kinetic)
+        for (int k = 0; k < 9; k++) kinetic[k] = -mvv[k] / V; /* the kinetic part -(1/V) sum m v (x) v */
     return FLOE_OK;
 }
 

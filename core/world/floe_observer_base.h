@@ -8,8 +8,17 @@
 #include "floe_world.h"
 #include "floe_registry.h"
 
+/* an output's cheaper way under MPI (version 4, split_request below) */
+enum { FLOE_SPLIT_CLOCK = 1, FLOE_SPLIT_PARTICLES = 2, FLOE_SPLIT_COLLECTION = 3 };
+typedef struct floe_split_request {
+    int kind;       /* FLOE_SPLIT_* */
+    int group;      /* FLOE_SPLIT_COLLECTION: the group (-1: every free particle) */
+    const int *ids; /* FLOE_SPLIT_PARTICLES: nids world indices */
+    int nids;
+} floe_split_request;
+
 typedef struct floe_observer_class {
-    int version; /* 1; 2 with the checkpoint hooks below; 3 with reads_orientation */
+    int version; /* 1; 2 with the checkpoint hooks below; 3 with reads_orientation; 4 with split_request */
     const char *name;
     int (*begin)(floe_observer *o, floe_world *w);      /* optional */
     int (*observe)(floe_observer *o, floe_world *w);    /* required */
@@ -33,7 +42,24 @@ typedef struct floe_observer_class {
      * to read it. FLOE_OBSERVER_READS_LISTED: only the orientations of the particles the
      * instance lists in floe_observer.orient_ids (a particle tracker). */
     int reads_orientation;
+    /* version 4, optional (docs/parallel.md, "Outputs reduced over the ranks"): under MPI the
+     * observers live on rank 0's unsplit mirror of the world, and by default every particle's
+     * state (and every contact, for a class that reads them) is gathered to rank 0 before an
+     * observation. split_request tells a cheaper way: FLOE_OK with *req filled in takes it
+     * (anything else keeps the gather). Its kinds:
+     *   FLOE_SPLIT_CLOCK: observe reads only the clock and the energy ledger (summed over the
+     *     ranks): nothing is gathered;
+     *   FLOE_SPLIT_PARTICLES: observe reads the state (x v w q f t) of the particles listed in
+     *     req->ids (world indices, walls included; the array must live as long as o): those
+     *     alone are brought to rank 0;
+     *   FLOE_SPLIT_COLLECTION: every rank computes floe_world_collection_sums(w, req->group)
+     *     over its share, and rank 0 calls observe_sums with the sums over the ranks (the box
+     *     reduced by minimum and maximum) instead of observe. It is not called when some rank
+     *     did not record its contacts at that step (observe then sees none either). */
+    int (*split_request)(const floe_observer *o, floe_split_request *req);
+    int (*observe_sums)(floe_observer *o, floe_world *w, const double *sums);
 } floe_observer_class;
+
 
 enum { FLOE_OBSERVER_READS_LISTED = 2 };
 

@@ -57,6 +57,21 @@ typedef struct floe_contact_info {
  * on when they are due). The count alone is floe_world_contact_count. */
 int floe_world_contacts(const floe_world *w, const floe_contact_info **out);
 
+/* The sums behind a collection's homogenised stress (observers/collection_tracker.c has the
+ * formula, ParticLS eq 24 as the Love-Weber average): the members are the particles of group
+ * g >= 0, or every free particle (group -1), walls never; the contacts those of the last force
+ * evaluation. s[3 a + b] (a, b = 0..2) = sum of l_a f_b over the contacts that touch a member
+ * (the branch vector between two members, the member's centre to the contact point
+ * otherwise); s[9] the members, s[10] the member-member contacts, s[11] the others touching a
+ * member; s[12..14] the members' bounding box low corner, s[15..17] its high corner (each
+ * member inflated by its bounding radius; +-infinity when there is none). On a world split
+ * over MPI ranks (floe_parallel.h) these are this rank's share: its own particles and the
+ * contacts it evaluated (each pair is evaluated by one rank), so the sums over the ranks (the
+ * minimum and maximum for the box) are the whole world's. FLOE_EINVAL when the contacts were
+ * not recorded (floe_world_contacts), FLOE_ENOMEM. */
+enum { FLOE_COLLECTION_SUMS = 18 };
+int floe_world_collection_sums(const floe_world *w, int group, double s[FLOE_COLLECTION_SUMS]);
+
 /* The world's geometries: how many, and geometry k (NULL out of range). A particle's is
  * floe_world_geometry_at(w, view.geometry[i]); floe_world_particle_geometry does both. */
 int floe_world_geometry_count(const floe_world *w);

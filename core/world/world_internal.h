@@ -222,6 +222,9 @@ struct floe_world {
     /* MPI domain decomposition (core/parallel/par_internal.h); NULL: serial. Freed through
      * par_free by floe_world_destroy */
     struct floe_par *par;
+    /* a split world's ghosts (from nl.own_hi on): each one's motion on its owner (a ghost is
+     * FLOE_FIXED here: its owner integrates it), set by core/parallel at each decomposition */
+    const unsigned char *gmotion;
     void (*par_free)(struct floe_par *par);
 };
 
@@ -396,6 +399,12 @@ int floe_cell_prepare(floe_world *w);
 /* sigma: the cell's stress given (MPI: summed over the ranks, floe_par_cell_stress), NULL: this
  * world's own (floe_world_cell_stress) */
 int floe_cell_begin_step(floe_world *w, const double *sigma);
+/* the cell's stress from its sums (floe_world_cell_stress; MPI: the ranks' sums, floe_par_cell_stress):
+ * the contacts' virial vir, the PD bonds' pvir, the free particles' sum of m v (x) v mvv (the
+ * fluctuation), the volume V; sigma = sym(vir + pvir) / V - mvv / V */
+void floe_cell_stress_of(const double vir[9], const double pvir[9], const double mvv[9], double V, double sigma[9]);
+/* mvv += the sum of m v (x) v over the free particles of [lo, hi) */
+void floe_cell_mvv(const floe_particles *p, int lo, int hi, double mvv[9]);
 int floe_cell_after_drift(floe_world *w, double dt);
 int floe_nl_needs_rebuild_cell(const floe_neighbor_list *nl, const floe_particles *p);
 int floe_cell_path_begin(floe_world *w, const double de[9], double max_rate, const int *stress_mask, long *nsteps);

@@ -279,6 +279,71 @@ static void check_steps(floe_world *w) {
     }
 }
 
+/* outputs reduced over the ranks (docs/parallel.md): a mirror whose observers are a
+ * collection's stress (every step), the energy (every step) and a tracker of a wall and two
+ * spheres (every 2 steps) gathers nothing: each step's output traffic is the words (rank 0:
+ * whether it holds a mirror, whether it is due, which observers are), the ledger, three
+ * checks and the reduced sums (13 + 6 doubles for the stress, 19 a tracked particle), whatever
+ * the number of particles */
+static void check_reduced(void) {
+    const int me = rank_, NSTEP = 6;
+    floe_world *M = NULL, *w = build();
+    if (floe_world_parallel_init(w, NULL)) {
+        CHECK(0, "split: %s", floe_world_last_error(w));
+        floe_world_destroy(w);
+        return;
+    }
+    char path[3][96];
+    const char *names[3] = {"stress", "energy", "track"};
+    for (int k = 0; k < 3; k++) snprintf(path[k], sizeof path[k], "/tmp/floe_test_mpi_comm_%d_%s.csv", size_, names[k]);
+    if (me == 0) {
+        M = build();
+        const int ids[3] = {0, 100, 700}; /* a wall (the walls come first), two spheres */
+        char err[256];
+        floe_observer *o[3] = {floe_collection_tracker_create(path[0], -1, 0, err, sizeof err),
+                               floe_energy_tracker_create(path[1], err, sizeof err),
+                               floe_particle_tracker_create(path[2], ids, 3, err, sizeof err)};
+        for (int k = 0; k < 3; k++) {
+            CHECK(o[k] != NULL, "output %s: %s", names[k], err);
+            if (!o[k]) continue;
+            o[k]->period_steps = k == 2 ? 2 : 1;
+            floe_world_add_observer(M, o[k]);
+        }
+    }
+    int rc = floe_world_parallel_outputs(w, M);
+    CHECK(rc == 0, "outputs: %s", rc ? floe_world_last_error(w) : "");
+    floe_world_parallel_comm_reset(w);
+    long long got = 0, want = 0;
+    for (int s = 0; s < NSTEP && rc == 0; s++) {
+        rc = floe_world_step(w);
+        CHECK(rc == 0, "step %d: %s", s, rc ? floe_world_last_error(w) : "");
+        if (size_ == 1) continue;
+        const long step = floe_world_step_count(w);
+        want += me == 0 ? 4 + 4 + 3 * 4 + 56 + 3 * 4 : 56 + 3 * 4 + 8 * (13 + 6) + (step % 2 == 0 ? 8 * 19 * 3 : 0);
+    }
+    const floe_comm_stats c = stats(w);
+    got = c.bytes[FLOE_COMM_OUTPUT];
+    CHECK(got == want, "rank %d: reduced outputs sent %lld B over %d steps, expected %lld B (nothing gathered)", me,
+          got, NSTEP, want);
+    /* detach the mirror (its files closed with it) */
+    rc = floe_world_parallel_outputs(w, NULL);
+    CHECK(rc == 0, "outputs detached: %s", rc ? floe_world_last_error(w) : "");
+    if (me == 0) {
+        floe_world_finish(M);
+        floe_world_destroy(M);
+        const int rows[3] = {NSTEP, NSTEP, 3 * NSTEP / 2}; /* data rows (the tracker: 3 a row block) */
+        for (int k = 0; k < 3; k++) {
+            FILE *f = fopen(path[k], "r");
+            int n = -1, ch; /* the header is not a row */
+            while (f && (ch = fgetc(f)) != EOF) n += ch == '\n';
+            if (f) fclose(f);
+            CHECK(n >= rows[k], "%s: %d rows after %d steps (at least %d)", names[k], n, NSTEP, rows[k]);
+            remove(path[k]);
+        }
+    }
+    floe_world_destroy(w);
+}
+
 /* the end of a run with rank 0's mirror (no observers): the state gathered once */
 static void check_finish(floe_world *w, floe_world *ref) {
     const int me = rank_;
@@ -321,6 +386,7 @@ int main(int argc, char **argv) {
         check_steps(w);
         check_rebuild(w, ref);
         check_finish(w, ref);
+        check_reduced();
     }
     int all = mpi_test_failed("test_mpi_comm");
     floe_world_destroy(w);

@@ -73,9 +73,9 @@ static void cnt_destroy(floe_observer *o) {
     if (c->destroyed) *c->destroyed = 1;
     free(c);
 }
-static const floe_observer_class cnt_class = {1, "counter", NULL, cnt_observe, cnt_end, cnt_destroy, 0, NULL, NULL, NULL, 0};
+static const floe_observer_class cnt_class = {1, "counter", NULL, cnt_observe, cnt_end, cnt_destroy, 0, NULL, NULL, NULL, 0, NULL, NULL};
 static const floe_observer_class cnt_contacts_class = {1, "counter_contacts", NULL, cnt_observe, cnt_end, cnt_destroy, 1,
-                                                       NULL, NULL, NULL, 0};
+                                                       NULL, NULL, NULL, 0, NULL, NULL};
 
 static counter *counter_new(const floe_observer_class *k, long every, double period) {
     counter *c = calloc(1, sizeof *c);
