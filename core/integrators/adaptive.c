@@ -158,7 +158,9 @@ int step_adaptive(floe_world *w, int (*inner)(floe_world *w)) {
         double lim = 0.5 * w->nl.skin;
         /* MPI (docs/parallel.md, "Adaptive steps"): every rank decides alike, and a rebuild is a
          * decomposition (the particles may change owner) */
-        if (floe_par_any(w, predicted_disp2(w, dt) > lim * lim)) {
+        double need = predicted_disp2(w, dt) > lim * lim;
+        floe_par_max(w, &need, 1);
+        if (need > 0) {
             int rc = w->par ? floe_world_parallel_rebuild(w) : floe_world_nl_build(w);
             if (rc) return w->par ? rc : floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
         }
@@ -170,9 +172,11 @@ int step_adaptive(floe_world *w, int (*inner)(floe_world *w)) {
         /* MPI: a failed trial stops the run (a rank that failed inside the step is not where
          * the others wait); only the measures' rejections are redone, agreed over the ranks */
         if (rc && w->par) return rc;
-        const int undoable = !floe_par_any(w, w->nl.rebuilds != rb);
         double eta_v = 0, eta_d = w->eta_depth;
-        if (!rc) {
+        /* MPI: a decomposition inside the trial (rare: the test above predicts the drift)
+         * reordered the store, so the saved velocities no longer match; the trial is accepted
+         * and the next step follows eta_d alone */
+        if (!rc && !(w->par && w->nl.rebuilds != rb)) {
             const double *v0 = w->snap->d + 3 * (size_t)p->n; /* after x (states first) */
             size_t so = 0;
             for (int s = 0; s < w->nstates; s++) so += w->states[s]->klass->size(w->states[s]);
@@ -185,10 +189,13 @@ int step_adaptive(floe_world *w, int (*inner)(floe_world *w)) {
                 if (e > eta_v) eta_v = e;
             }
         }
-        if (w->par) { /* the largest over the ranks' owned particles and contacts */
-            eta_v = floe_par_max(w, eta_v);
-            eta_d = floe_par_max(w, eta_d);
-        }
+        /* MPI: whether any rank rebuilt, the largest measures over the ranks' owned particles
+         * and contacts */
+        double m[3] = {w->nl.rebuilds != rb, eta_v, eta_d};
+        floe_par_max(w, m, 3);
+        const int undoable = m[0] == 0;
+        eta_v = m[1];
+        eta_d = m[2];
         /* step factor from the criterion: eta_v grows as dt^2 (a dt^2), eta_d as dt */
         double fv = eta_v > 0 ? sqrt(tv / eta_v) : INFINITY, fd = eta_d > 0 ? td / eta_d : INFINITY;
         double f = 0.9 * fmin(fv, fd);

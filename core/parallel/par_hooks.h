@@ -35,10 +35,9 @@ int floe_par_observe(floe_world *w, int force_all);
 void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min,
                               double *pdd, int npd);
 
-/* the adaptive step (core/integrators/adaptive.c) on a split world: v's largest value over
- * the ranks; whether any rank says yes (the same on every rank; v and yes themselves without
- * MPI or a split) */
-double floe_par_max(floe_world *w, double v);
-int floe_par_any(floe_world *w, int yes);
+/* the adaptive step (core/integrators/adaptive.c) on a split world: v[0 .. n) replaced by
+ * their largest values over the ranks, the same on every rank (untouched without MPI or a
+ * split) */
+void floe_par_max(floe_world *w, double *v, int n);
 
 #endif

@@ -377,20 +377,10 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     return floe_par_servo_totals(w); /* the servos' measures of the whole world, as at prepare */
 }
 
-double floe_par_max(floe_world *w, double v) {
-    if (!w->par) return v;
-    double m;
-    MPI_Allreduce(&v, &m, 1, MPI_DOUBLE, MPI_MAX, w->par->comm);
-    floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, sizeof v);
-    return m;
-}
-
-int floe_par_any(floe_world *w, int yes) {
-    if (!w->par) return yes;
-    int any;
-    MPI_Allreduce(&yes, &any, 1, MPI_INT, MPI_LOR, w->par->comm);
-    floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, sizeof yes);
-    return any;
+void floe_par_max(floe_world *w, double *v, int n) {
+    if (!w->par || n <= 0) return;
+    MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_MAX, w->par->comm);
+    floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, (long long)n * sizeof *v);
 }
 
 int floe_world_parallel_rebuild(floe_world *w) {
@@ -899,7 +889,9 @@ static int split_requests(floe_world *w, floe_par *P) {
     return FLOE_OK;
 }
 
-enum { SPLIT_PSTATE = 19 }; /* a listed particle's x3 v3 w3 q4 f3 t3 */
+/* a listed particle's state as floe_par_pack_state writes it (x v q w L f t), its force and
+ * torque from SPLIT_FT on */
+enum { SPLIT_PSTATE = FLOE_PAR_FWD, SPLIT_FT = 16 };
 
 /* the due reduced outputs (due[k] for the mirror's observer k): every rank's share summed
  * (the boxes by minimum) on rank 0, which writes the collections' rows (observe_sums) and the
@@ -944,16 +936,10 @@ static int split_outputs(floe_world *w, floe_par *P, const int *due) {
                 double *r = sb + at;
                 memset(r, 0, SPLIT_PSTATE * sizeof *r);
                 const int i = floe_par_index_find(&ix, P->mids[q]);
-                if (i < 0) continue;                        /* owned elsewhere */
-                const int mine = i >= P->nrep || P->rank == 0; /* a wall's position is rank 0's */
-                if (mine) {
-                    memcpy(r, p->x + 3 * i, 3 * sizeof *r);
-                    memcpy(r + 3, p->v + 3 * i, 3 * sizeof *r);
-                    memcpy(r + 6, p->w + 3 * i, 3 * sizeof *r);
-                    memcpy(r + 9, p->q + 4 * i, 4 * sizeof *r);
-                }
-                memcpy(r + 13, p->f + 3 * i, 3 * sizeof *r); /* a wall's force: every rank's share */
-                memcpy(r + 16, p->t + 3 * i, 3 * sizeof *r);
+                if (i < 0) continue; /* owned elsewhere */
+                floe_par_pack_state(p, i, r);
+                /* a wall's force and torque are every rank's share, the rest rank 0's */
+                if (i < P->nrep && P->rank != 0) memset(r, 0, SPLIT_FT * sizeof *r);
             }
         }
     }
@@ -992,13 +978,7 @@ static int split_outputs(floe_world *w, floe_par *P, const int *due) {
                 for (int j = P->mids_at[k]; j < P->mids_at[k + 1]; j++, at += SPLIT_PSTATE) {
                     const long long g = P->mids[j];
                     if (g < 0 || g >= q->n) continue;
-                    const double *r = sb + at;
-                    memcpy(q->x + 3 * g, r, 3 * sizeof *r);
-                    memcpy(q->v + 3 * g, r + 3, 3 * sizeof *r);
-                    memcpy(q->w + 3 * g, r + 6, 3 * sizeof *r);
-                    memcpy(q->q + 4 * g, r + 9, 4 * sizeof *r);
-                    memcpy(q->f + 3 * g, r + 13, 3 * sizeof *r);
-                    memcpy(q->t + 3 * g, r + 16, 3 * sizeof *r);
+                    floe_par_unpack_state(q, (int)g, sb + at);
                 }
             }
         }
@@ -1444,8 +1424,7 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
 int floe_world_parallel_rebuild(floe_world *w) { (void)w; return FLOE_OK; }
 int floe_par_refresh(floe_world *w, double maxd2, int have_xb) { (void)w; (void)maxd2; (void)have_xb; return FLOE_OK; }
 int floe_par_reverse(floe_world *w) { (void)w; return FLOE_OK; }
-double floe_par_max(floe_world *w, double v) { (void)w; return v; }
-int floe_par_any(floe_world *w, int yes) { (void)w; return yes; }
+void floe_par_max(floe_world *w, double *v, int n) { (void)w; (void)v; (void)n; }
 int floe_par_cell_stress(floe_world *w, double sigma[9], int *given) {
     (void)w; (void)sigma;
     *given = 0;

@@ -283,7 +283,7 @@ static void check_steps(floe_world *w) {
  * collection's stress (every step), the energy (every step) and a tracker of a wall and two
  * spheres (every 2 steps) gathers nothing: each step's output traffic is the words (rank 0:
  * whether it holds a mirror, whether it is due, which observers are), the ledger, three
- * checks and the reduced sums (13 + 6 doubles for the stress, 19 a tracked particle), whatever
+ * checks and the reduced sums (13 + 6 doubles for the stress, 22 a tracked particle), whatever
  * the number of particles */
 static void check_reduced(void) {
     const int me = rank_, NSTEP = 6;
@@ -319,7 +319,7 @@ static void check_reduced(void) {
         CHECK(rc == 0, "step %d: %s", s, rc ? floe_world_last_error(w) : "");
         if (size_ == 1) continue;
         const long step = floe_world_step_count(w);
-        want += me == 0 ? 4 + 4 + 3 * 4 + 56 + 3 * 4 : 56 + 3 * 4 + 8 * (13 + 6) + (step % 2 == 0 ? 8 * 19 * 3 : 0);
+        want += me == 0 ? 4 + 4 + 3 * 4 + 56 + 3 * 4 : 56 + 3 * 4 + 8 * (13 + 6) + (step % 2 == 0 ? 8 * 22 * 3 : 0);
     }
     const floe_comm_stats c = stats(w);
     got = c.bytes[FLOE_COMM_OUTPUT];
