@@ -47,15 +47,18 @@ int floe_world_parallel_set_balance(floe_world *w, floe_balance mode);
 
 /* Outputs of a split world: rank 0 passes mirror, an unsplit copy of the world built from
  * the same scene with its observers (outputs) attached; the other ranks pass NULL. After
- * every step whose observers are due, the owned particles' state (x v q w L f t, the walls'
- * forces summed) and the summed energy ledger are gathered into the mirror and its
- * observers called, so that the files are those of a serial run. The mirror is prepared
- * here, and finished by floe_world_parallel_finish; the caller destroys it. Observers that
- * read contacts (stress, contacts, force chains, coast load) get the contacts of every rank:
- * the ranks record theirs at the steps one is due (rank 0 says which, a step ahead) and send
- * them, by global ids, in the serial list's order. Collective. */
+ * every step whose observers are due, the summed energy ledger goes to the mirror and its
+ * observers are called, so that the files are those of a serial run. An observer whose
+ * class says how (version 4, split_request: the stress, energy and tracker outputs) gets
+ * what it reads reduced over the ranks; for the others the owned particles' state (x v q w
+ * L f t, the walls' forces summed) is gathered into the mirror, and for those that read
+ * contacts (contacts, force chains, coast load) the contacts of every rank too: the ranks
+ * record theirs at the steps one is due (rank 0 says which, a step ahead) and send them, by
+ * global ids, in the serial list's order. The observers' kinds are read here: one added to
+ * the mirror later is gathered for. The mirror is prepared here, and finished by
+ * floe_world_parallel_finish; the caller destroys it. Collective. */
 int floe_world_parallel_outputs(floe_world *w, floe_world *mirror);
-/* the end of a run: the final state into the mirror, its observers' end (files closed);
+/* the end of a run: the final state into the mirror (gathered), its observers' end (files closed);
  * a world without a mirror: nothing. Collective. */
 int floe_world_parallel_finish(floe_world *w);
 

@@ -828,7 +828,8 @@ static int split_kind(const floe_observer *o, floe_split_request *rq) {
     switch (rq->kind) {
     case FLOE_SPLIT_CLOCK: return rq->kind;
     case FLOE_SPLIT_PARTICLES: return rq->nids >= 0 && (rq->ids || !rq->nids) ? rq->kind : 0;
-    case FLOE_SPLIT_COLLECTION: return o->klass->observe_sums && rq->group >= -1 ? rq->kind : 0;
+    case FLOE_SPLIT_COLLECTION: /* its sums read the ranks' contacts: recorded only for a class that needs them */
+        return o->klass->observe_sums && o->klass->needs_contacts && rq->group >= -1 ? rq->kind : 0;
     }
     return 0;
 }
@@ -865,7 +866,8 @@ static int split_requests(floe_world *w, floe_par *P) {
         int at = 0;
         for (int k = 0; k < n; k++) {
             floe_split_request rq;
-            const int kind = split_kind(M->obs[k], &rq);
+            int kind = split_kind(M->obs[k], &rq);
+            if (kind == FLOE_SPLIT_PARTICLES && at + rq.nids > head[1]) kind = 0; /* its list changed since: gathered */
             ib[3 * k] = kind;
             ib[3 * k + 1] = rq.group;
             ib[3 * k + 2] = at;
@@ -893,6 +895,22 @@ static int split_requests(floe_world *w, floe_par *P) {
  * torque from SPLIT_FT on */
 enum { SPLIT_PSTATE = FLOE_PAR_FWD, SPLIT_FT = 16 };
 
+/* the local index of global id g among the walls and the owned particles (each range sorted
+ * by global id, par_internal.h), -1 when it is not one of them */
+static int local_of(const floe_par *P, long long g) {
+    const int ranges[2][2] = {{0, P->nrep}, {P->nrep, P->nrep + P->nown}};
+    for (int r = 0; r < 2; r++) {
+        int lo = ranges[r][0], hi = ranges[r][1];
+        while (lo < hi) {
+            const int mid = lo + (hi - lo) / 2;
+            if (P->gid[mid] < g) lo = mid + 1;
+            else hi = mid;
+        }
+        if (lo < ranges[r][1] && P->gid[lo] == g) return lo;
+    }
+    return -1;
+}
+
 /* the due reduced outputs (due[k] for the mirror's observer k): every rank's share summed
  * (the boxes by minimum) on rank 0, which writes the collections' rows (observe_sums) and the
  * listed particles' state into the mirror (their outputs then observe it as usual).
@@ -900,19 +918,15 @@ enum { SPLIT_PSTATE = FLOE_PAR_FWD, SPLIT_FT = 16 };
 static int split_outputs(floe_world *w, floe_par *P, const int *due) {
     enum { CS = FLOE_COLLECTION_SUMS };
     long long nsum = 0, nmin = 0;
-    int need_ix = 0;
     for (int k = 0; k < P->nmobs; k++) {
         if (!due[k]) continue;
         if (P->mkind[k] == FLOE_SPLIT_COLLECTION) { nsum += 13; nmin += 6; } /* 12 sums + "not recorded" */
         if (P->mkind[k] == FLOE_SPLIT_PARTICLES) {
             nsum += (long long)SPLIT_PSTATE * (P->mids_at[k + 1] - P->mids_at[k]);
-            need_ix = 1;
         }
     }
     if (!nsum && !nmin) return FLOE_OK; /* the same on every rank */
-    floe_par_index ix = {0};
-    int bad = nsum + nmin > 0x7fffffff || floe_par_reserve(&P->red_buf, &P->red_cap, (size_t)(nsum + nmin)) ||
-              (need_ix && floe_par_index_build(P, P->nrep + P->nown, &ix));
+    int bad = nsum + nmin > 0x7fffffff || floe_par_reserve(&P->red_buf, &P->red_cap, (size_t)(nsum + nmin));
     double *sb = P->red_buf, *mb = sb + nsum;
     const floe_particles *p = &w->p;
     long long at = 0, am = 0;
@@ -933,17 +947,19 @@ static int split_outputs(floe_world *w, floe_par *P, const int *due) {
             am += 6;
         } else if (P->mkind[k] == FLOE_SPLIT_PARTICLES) {
             for (int q = P->mids_at[k]; q < P->mids_at[k + 1]; q++, at += SPLIT_PSTATE) {
+                /* -0.0, the sum's identity: the owner's values come through the sum unchanged,
+                 * -0.0 included */
                 double *r = sb + at;
-                memset(r, 0, SPLIT_PSTATE * sizeof *r);
-                const int i = floe_par_index_find(&ix, P->mids[q]);
+                for (int c = 0; c < SPLIT_PSTATE; c++) r[c] = -0.0;
+                const int i = local_of(P, P->mids[q]);
                 if (i < 0) continue; /* owned elsewhere */
                 floe_par_pack_state(p, i, r);
                 /* a wall's force and torque are every rank's share, the rest rank 0's */
-                if (i < P->nrep && P->rank != 0) memset(r, 0, SPLIT_FT * sizeof *r);
+                if (i < P->nrep && P->rank != 0)
+                    for (int c = 0; c < SPLIT_FT; c++) r[c] = -0.0;
             }
         }
     }
-    floe_par_index_free(&ix);
     int any;
     MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_LOR, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof bad);
@@ -955,6 +971,7 @@ static int split_outputs(floe_world *w, floe_par *P, const int *due) {
     floe_world *M = P->mirror;
     int rc = FLOE_OK;
     if (root && M) {
+        const double t0 = MPI_Wtime(); /* rank 0's own work (the load balance's measure) */
         mirror_clock(w, M);
         floe_particles *q = &M->p;
         at = am = 0;
@@ -982,6 +999,7 @@ static int split_outputs(floe_world *w, floe_par *P, const int *due) {
                 }
             }
         }
+        P->busy += MPI_Wtime() - t0;
     }
     int all;
     MPI_Allreduce(&rc, &all, 1, MPI_INT, MPI_MAX, P->comm);
@@ -1067,20 +1085,20 @@ int floe_world_parallel_own_outputs(const floe_world *w, floe_observer *const **
     return w && w->par ? w->par->nouts : 0;
 }
 
-/* the mirror's due observers (due[k]; end: their ends, every one): the ledger summed, the
- * reduced outputs' shares (split_outputs), then the state gathered when an observer without a
- * split kind is due (the contacts with it when one of those reads them), and rank 0's
- * observers called. Collective; the same return on every rank */
-static int mirror_observe(floe_world *w, floe_par *P, const int *due, int force_all, int end) {
+/* the mirror's due observers (due[k]; more: an observer added to the mirror after
+ * floe_world_parallel_outputs is due, gathered for; end: their ends, every one): the ledger
+ * summed, the reduced outputs' shares (split_outputs), then the state gathered when an
+ * observer without a split kind is due (the contacts with it when one of those reads them),
+ * and rank 0's observers called. Collective; the same return on every rank */
+static int mirror_observe(floe_world *w, floe_par *P, const int *due, int more, int force_all, int end) {
     floe_energy e;
     energy_sum(w, &e, FLOE_COMM_OUTPUT);
     if (P->mirror) P->mirror->energy = e;
-    int gather = end, contacts = end;
-    for (int k = 0; k < P->nmobs; k++)
-        if (due[k] && !P->mkind[k]) {
-            gather = 1;
-            if (P->mirror && P->mirror->obs[k]->klass->needs_contacts) contacts = 1;
-        }
+    int gather = end || more, contacts = end;
+    for (int k = 0; P->mirror && k < P->mirror->nobs; k++) /* rank 0: the late ones too */
+        if (k >= P->nmobs ? more && (force_all || output_due(w, P->mirror->obs[k])) : due[k] && !P->mkind[k])
+            contacts |= P->mirror->obs[k]->klass->needs_contacts;
+    for (int k = 0; k < P->nmobs; k++) gather |= due[k] && !P->mkind[k];
     if (gather && !end) { /* only rank 0 holds the observers */
         MPI_Bcast(&contacts, 1, MPI_INT, 0, P->comm);
         floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof contacts);
@@ -1124,12 +1142,15 @@ int floe_par_observe(floe_world *w, int force_all) {
      * the next step (bit 1: every rank records its contacts then); when due, which of the
      * mirror's observers are (due[k]) */
     const int n = P->nmobs;
-    int word = 0, dd[64], *due = n <= 64 ? dd : P->mdue;
+    int word = 0, *due = P->mdue;
     if (P->rank == 0) {
         for (int k = 0; k < n; k++) {
             due[k] = force_all || output_due(w, P->mirror->obs[k]);
             word |= due[k];
         }
+        /* observers added after floe_world_parallel_outputs: gathered for (bit 2) */
+        for (int k = n; k < P->mirror->nobs; k++)
+            if (force_all || output_due(w, P->mirror->obs[k])) word |= 1 | 4;
         if (w->par_contacts & 1 && contacts_due_next(w, P->mirror)) word |= 2;
     }
     MPI_Bcast(&word, 1, MPI_INT, 0, P->comm);
@@ -1138,7 +1159,7 @@ int floe_par_observe(floe_world *w, int force_all) {
     if (!(word & 1)) return FLOE_OK;
     MPI_Bcast(due, n, MPI_INT, 0, P->comm);
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, (long long)n * sizeof *due);
-    return mirror_observe(w, P, due, force_all, 0);
+    return mirror_observe(w, P, due, word & 4, force_all, 0);
 }
 
 int floe_world_parallel_finish(floe_world *w) {
@@ -1160,9 +1181,9 @@ int floe_world_parallel_finish(floe_world *w) {
     if (!has) return orc;
     /* every reduced output called (each writes the final state unless it has at this step),
      * then the whole state gathered for the others' ends */
-    int dd[64], *due = P->nmobs <= 64 ? dd : P->mdue;
+    int *due = P->mdue;
     for (int k = 0; k < P->nmobs; k++) due[k] = P->mkind[k] != 0;
-    const int all = mirror_observe(w, P, due, 0, 1);
+    const int all = mirror_observe(w, P, due, 0, 0, 1);
     return orc ? orc : all;
 }
 

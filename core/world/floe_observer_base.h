@@ -49,13 +49,14 @@ typedef struct floe_observer_class {
      * (anything else keeps the gather). Its kinds:
      *   FLOE_SPLIT_CLOCK: observe reads only the clock and the energy ledger (summed over the
      *     ranks): nothing is gathered;
-     *   FLOE_SPLIT_PARTICLES: observe reads the state (x v w q f t) of the particles listed in
-     *     req->ids (world indices, walls included; the array must live as long as o): those
-     *     alone are brought to rank 0;
+     *   FLOE_SPLIT_PARTICLES: observe reads the state (x v q w L f t) of the particles listed in
+     *     req->ids (world indices, walls included; read when floe_world_parallel_outputs
+     *     runs): those alone are brought to rank 0;
      *   FLOE_SPLIT_COLLECTION: every rank computes floe_world_collection_sums(w, req->group)
      *     over its share, and rank 0 calls observe_sums with the sums over the ranks (the box
      *     reduced by minimum and maximum) instead of observe. It is not called when some rank
-     *     did not record its contacts at that step (observe then sees none either). */
+     *     did not record its contacts at that step (observe then sees none either). Taken
+     *     only by a class with needs_contacts (the ranks record contacts for those). */
     int (*split_request)(const floe_observer *o, floe_split_request *req);
     int (*observe_sums)(floe_observer *o, floe_world *w, const double *sums);
 } floe_observer_class;

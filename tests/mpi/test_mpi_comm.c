@@ -325,6 +325,22 @@ static void check_reduced(void) {
     got = c.bytes[FLOE_COMM_OUTPUT];
     CHECK(got == want, "rank %d: reduced outputs sent %lld B over %d steps, expected %lld B (nothing gathered)", me,
           got, NSTEP, want);
+    /* an observer added to the mirror after floe_world_parallel_outputs: gathered for */
+    char late[96];
+    snprintf(late, sizeof late, "/tmp/floe_test_mpi_comm_%d_late.csv", size_);
+    if (me == 0) {
+        char err[256];
+        floe_observer *o = floe_energy_tracker_create(late, err, sizeof err);
+        CHECK(o != NULL, "late output: %s", err);
+        if (o) {
+            o->period_steps = 1;
+            floe_world_add_observer(M, o);
+        }
+    }
+    for (int s = 0; s < 2 && rc == 0; s++) {
+        rc = floe_world_step(w);
+        CHECK(rc == 0, "late step %d: %s", s, rc ? floe_world_last_error(w) : "");
+    }
     /* detach the mirror (its files closed with it) */
     rc = floe_world_parallel_outputs(w, NULL);
     CHECK(rc == 0, "outputs detached: %s", rc ? floe_world_last_error(w) : "");
@@ -340,6 +356,12 @@ static void check_reduced(void) {
             CHECK(n >= rows[k], "%s: %d rows after %d steps (at least %d)", names[k], n, NSTEP, rows[k]);
             remove(path[k]);
         }
+        FILE *f = fopen(late, "r");
+        int n = -1, ch;
+        while (f && (ch = fgetc(f)) != EOF) n += ch == '\n';
+        if (f) fclose(f);
+        CHECK(n == 2, "the output added late wrote %d rows over 2 steps (2)", n);
+        remove(late);
     }
     floe_world_destroy(w);
 }
