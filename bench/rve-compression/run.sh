@@ -9,7 +9,7 @@
 #   BALANCE=time RANKS=2 ...   # floe's shares by measured speed (floe run --balance; default
 #                              # weights: equal shares of the estimated work)
 # FRACTION < 1 runs the first part of the loading only (both codes the same steps). RANKS > 1:
-# floe's MPI build (its outputs gathered by rank 0, vtk as .pvtu pieces) and LIGGGHTS, both
+# floe's MPI build (its stress, tracker and energy reduced over the ranks, vtk as .pvtu pieces) and LIGGGHTS, both
 # under mpirun -np RANKS, one thread a rank.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
