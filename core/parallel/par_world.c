@@ -377,11 +377,14 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     return floe_par_servo_totals(w); /* the servos' measures of the whole world, as at prepare */
 }
 
-void floe_par_max(floe_world *w, double *v, int n) {
+/* v[0 .. n) reduced in place over the ranks by op (a split world; counted as reduce traffic) */
+static void reduce_in_place(const floe_world *w, double *v, int n, MPI_Op op) {
     if (!w->par || n <= 0) return;
-    MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_MAX, w->par->comm);
+    MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, op, w->par->comm);
     floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, (long long)n * sizeof *v);
 }
+
+void floe_par_max(floe_world *w, double *v, int n) { reduce_in_place(w, v, n, MPI_MAX); }
 
 int floe_world_parallel_rebuild(floe_world *w) {
     if (!w->par) return FLOE_OK;
@@ -501,9 +504,7 @@ int floe_world_parallel_energy(const floe_world *w, floe_energy *out) {
 }
 
 int floe_world_parallel_sum(const floe_world *w, double *v, int n) {
-    if (!w->par || n <= 0) return FLOE_OK;
-    MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_SUM, w->par->comm);
-    floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, (long long)n * sizeof *v);
+    reduce_in_place(w, v, n, MPI_SUM);
     return FLOE_OK;
 }
 
