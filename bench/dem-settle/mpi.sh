@@ -13,13 +13,9 @@ REPS=${REPS:-3}; STEPS=${STEPS:-5000}; RANKS=${RANKS:-"1 2"}
 MPIRUN=${MPIRUN:-mpirun}
 MPIFLAGS=${MPIFLAGS:-"--allow-run-as-root --oversubscribe --bind-to none"}
 cores=$(nproc)
-if [[ -z "${FLOE:-}" ]]; then
-  bash "$root/scripts/install-deps.sh" --bench
-  build=${BUILD:-$root/build-mpi-bench}
-  cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DFLOE_BUILD_TESTS=OFF -DFLOE_WITH_MPI=ON >/dev/null
-  cmake --build "$build" -j"$cores" --target floe_cli >/dev/null
-  FLOE=$build/floe
-fi
+. "$root/bench/lib.sh"
+[[ -n "${FLOE:-}" ]] || bash "$root/scripts/install-deps.sh" --bench
+floe_mpi_cli
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 export OMP_NUM_THREADS=1
 python3 "$here/gen_data.py" "$work/settle.data" >/dev/null

@@ -29,12 +29,8 @@ STEPS=${STEPS:-5000}
 MPIRUN=${MPIRUN:-mpirun}
 MPIFLAGS=${MPIFLAGS:-"--allow-run-as-root --oversubscribe --bind-to none"}
 cores=$(nproc)
-if [[ -z "${FLOE:-}" ]]; then
-  build=${BUILD:-$root/build-mpi-bench}
-  cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DFLOE_BUILD_TESTS=OFF -DFLOE_WITH_MPI=ON >/dev/null
-  cmake --build "$build" -j"$cores" --target floe_cli >/dev/null
-  FLOE=$build/floe
-fi
+. "$root/bench/lib.sh"
+floe_mpi_cli
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 export OMP_NUM_THREADS=1
 

@@ -14,12 +14,8 @@ root=$(cd "$here/../.." && pwd)
 REPS=${REPS:-3}; DURATION=${DURATION:-0.25}; PDURATION=${PDURATION:-0.1}
 MPIRUN=${MPIRUN:-mpirun}
 MPIFLAGS=${MPIFLAGS:-"--allow-run-as-root --oversubscribe --bind-to none"}
-if [[ -z "${FLOE:-}" ]]; then
-  build=${BUILD:-$root/build-mpi-bench}
-  cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DFLOE_BUILD_TESTS=OFF -DFLOE_WITH_MPI=ON >/dev/null
-  cmake --build "$build" -j"$(nproc)" --target floe_cli >/dev/null
-  FLOE=$build/floe
-fi
+. "$root/bench/lib.sh"
+floe_mpi_cli
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 sed "s/^  duration: .*/  duration: $DURATION/" "$root/examples/rve-compression/scene.yaml" > "$work/walled.yaml"
 sed "s/^  duration: .*/  duration: $PDURATION/" "$root/examples/rve-compression/periodic.yaml" > "$work/periodic.yaml"
