@@ -220,7 +220,7 @@ static void advance_clock(floe_world *w) {
 }
 
 static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb) {
-    if (w->par) return floe_par_refresh(w, maxd2, have_xb); /* MPI: all ranks, ghosts (core/parallel) */
+    if (w->par) return floe_par_refresh(w, maxd2, have_xb, 0); /* MPI: all ranks, ghosts (core/parallel) */
     /* a law set since the build: pairs under the law "none" were left out (neighbor.c) */
     if (w->law_gen != w->nl_law_gen || (w->cell ? floe_nl_needs_rebuild_cell(&w->nl, &w->p)
                 : floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0))) {
@@ -736,8 +736,12 @@ static int rk2_midpoint_forces(floe_world *w, double h) {
     providers_state_io(w, w->pbuf, 1);
     floe_step_ctx c = {&w->p, w->def.dim, 0, w->time, w->dt, h, 1, 0, 0};
     long rb = nl->rebuilds;
+    const double t0 = w->par ? floe_par_clock() : 0.0;
     int rc = floe_world_forces(w, &c, FLOE_GROUP_ALL);
     w->st.force_evaluations++;
+    if (w->par) floe_par_force_time(w, floe_par_clock() - t0); /* MPI: as forces_advancing */
+    if (!rc && w->par) rc = floe_par_reverse(w);
+    if (!rc && w->par) rc = floe_par_servo_totals(w);
     if (rc) return rc;
     if (nl->rebuilds != rb) return floe_world_error(w, FLOE_EINVAL, "internal: neighbour list rebuilt at the RK2 midpoint");
     providers_state_io(w, w->pbuf, 0);
@@ -753,6 +757,9 @@ static int rk2_midpoint_forces(floe_world *w, double h) {
  * enters the next step's midpoint, where an O(dt) error costs O(dt^3) locally. */
 int step_rk2(floe_world *w) {
     floe_particles *p = &w->p;
+    /* MPI: the decomposition that the last step's end left pending (its rebuild kept every
+     * particle's owner: this step's scratch below is indexed by the owned particles) */
+    if (w->par) FLOE_TRY(floe_par_start(w));
     const int n = p->n;
     const double dt = w->dt, h = 0.5 * dt, t_n = w->time;
     double *b = ibuf_reserve(w, 16 * (size_t)(n ? n : 1));
@@ -782,7 +789,8 @@ int step_rk2(floe_world *w) {
         memcpy(q, qn, sizeof qn);
         if (p->motion[i] == FLOE_FREE) omega_update(p, i);
     }
-    /* 2. forces at the midpoint */
+    /* 2. forces at the midpoint (MPI: the ghosts' midpoint state from their owners) */
+    if (w->par) FLOE_TRY(floe_par_ghost_update(w));
     w->time = t_n + h;
     int rc = rk2_midpoint_forces(w, h);
     w->time = t_n;
@@ -809,11 +817,16 @@ int step_rk2(floe_world *w) {
     }
     FLOE_TRY(advance_states(w, dt));
     advance_clock(w);
-    FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
+    /* MPI: a rebuild keeps the owners (and so the indices of x0 .. fm); the decomposition
+     * waits for the next step's start */
+    if (w->par) FLOE_TRY(floe_par_refresh(w, maxd2, have_xb, 1));
+    else FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
     FLOE_TRY(forces_advancing(w));
-    /* 4. v_{n+1} = v_n + dt F_mid / m, L_{n+1} = L_n + dt T_mid */
+    /* 4. v_{n+1} = v_n + dt F_mid / m, L_{n+1} = L_n + dt T_mid (MPI: the walls and the owned
+     * particles, whose indices the rebuild kept; the ghosts are new) */
     double kt = 0, kr = 0, wbound = 0;
-    for (int i = 0; i < n; i++) {
+    const int nend = w->par ? w->nl.own_hi : n;
+    for (int i = 0; i < nend; i++) {
         if (p->motion[i] != FLOE_FREE) {
             if (p->motion[i] == FLOE_KINEMATIC) wbound += kinematic_close(w, i, h);
             continue;

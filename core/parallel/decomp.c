@@ -610,6 +610,18 @@ int floe_par_forward_comm(floe_world *w, floe_par *P) {
     return FLOE_OK;
 }
 
+int floe_par_forward_rows(floe_par *P, double *a, int m) {
+    const int S = P->size, g0 = P->nrep + P->nown;
+    if (floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)P->nsend * m)) return FLOE_ENOMEM;
+    for (int k = 0; k < P->nsend; k++) memcpy(P->sbuf + (size_t)k * m, a + (size_t)P->send_idx[k] * m, (size_t)m * sizeof *a);
+    int *c = ghost_counts(P, m);
+    if (!c) return FLOE_ENOMEM;
+    MPI_Alltoallv(P->sbuf, c, c + S, MPI_DOUBLE, a + (size_t)g0 * m, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->comm);
+    floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, (long long)m * sizeof(double));
+    free(c);
+    return FLOE_OK;
+}
+
 int floe_par_reverse_comm(floe_world *w, floe_par *P) {
     floe_particles *p = &w->p;
     const int m = 6, S = P->size, g0 = P->nrep + P->nown;

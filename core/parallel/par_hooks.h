@@ -10,7 +10,16 @@
  * in step.c's rebuild_if_needed), all rebuild when one does (RCB, migration, ghosts,
  * history by global ids, floe_nl_build); otherwise the ghosts are refreshed from their
  * owners */
-int floe_par_refresh(floe_world *w, double maxd2, int have_xb);
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb, int keep);
+/* keep (RK2, whose scratch is indexed by the owned particles across its step): a rebuild
+ * keeps every particle with its owner (new ghosts and list only) and leaves the
+ * decomposition pending; floe_par_start does it before the next step, floe_par_pending says
+ * whether one is pending (the same on every rank) */
+int floe_par_start(floe_world *w);
+int floe_par_pending(const floe_world *w);
+/* the ghosts' positions, velocities (and orientations, forces where the laws read them)
+ * from their owners, without a rebuild (RK2's midpoint) */
+int floe_par_ghost_update(floe_world *w);
 /* a clock for the force evaluations' time (seconds; 0 without MPI), and the seconds one took
  * on this rank (the load balance's measure, floe_world_parallel_set_balance) */
 double floe_par_clock(void);

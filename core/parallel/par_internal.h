@@ -55,6 +55,9 @@ typedef struct floe_par {
     int blost;               /* bonds whose anchor was not owned at the export (internal error) */
     double bout_reach, bond_reach;
     long nl_rebuilds;
+    /* an RK2 step rebuilt its list keeping every particle's owner (its scratch is indexed by
+     * the owned particles): the decomposition is done before the next step (floe_par_start) */
+    int pending;
     /* the force stages' per-particle rows received at a decomposition (par_forcing.c):
      * records gid + the rows of every registered array, until the new store exists */
     double *ppin; int nppin;
@@ -138,6 +141,8 @@ int floe_par_forward_comm(floe_world *w, floe_par *P);
 int floe_par_fwd_doubles(const floe_world *w, const floe_par *P);
 /* add the ghosts' forces and torques to their owners */
 int floe_par_reverse_comm(floe_world *w, floe_par *P);
+/* the owners' rows a[i * m .. i * m + m) copied to their ghosts' rows (a holds p->n rows) */
+int floe_par_forward_rows(floe_par *P, double *a, int m);
 /* local index of global id g (-1: not here), from a hash table of the local particles' ids
  * (open addressing, at most half full; the first of equal ids kept) built by
  * floe_par_index_build over locals [0, n) */

@@ -169,8 +169,10 @@ static int hist_import(floe_world *w, floe_par *P, const double *in, int nin) {
 
 /* the decomposition again: RCB of the owned centres, the history of the pairs whose anchor
  * leaves routed to its new owner (pend: entries exported before, at the split), migration,
- * ghosts, the neighbour list */
-static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
+ * ghosts, the neighbour list. keep: no bisection, every particle stays with its owner (the
+ * walls and owned particles keep their local indices; the ghosts and the list are new) and
+ * the decomposition is left pending for the next step's start */
+static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend, int keep) {
     const int m = hist_len(w), lo = P->nrep, hi = P->nrep + P->nown;
     double *recs = pend;
     int nrec = npend, rc = FLOE_OK;
@@ -182,7 +184,11 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     if (!dest || !hd) rc = FLOE_ENOMEM;
     /* PD bodies: made whole before the migration (its own message, agreed by every rank) */
     if (!rc && (rc = floe_par_pd_sync(w, P)) != FLOE_OK) { free(dest); free(hd); free(recs); return rc; }
-    if (!rc) rc = floe_par_rcb(w, P, dest);
+    if (!rc) {
+        if (keep)
+            for (int k = 0; k < P->nown; k++) dest[k] = P->rank;
+        else rc = floe_par_rcb(w, P, dest);
+    }
     floe_par_index ix = {0};
     if (!rc) rc = floe_par_index_build(P, hi, &ix);
     if (!rc) /* each entry to its anchor's new owner: the owned particle of the pair with the
@@ -216,9 +222,11 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     if (floe_par_pd_s0_refresh(w, P)) return floe_world_error(w, FLOE_ENOMEM, "out of memory"); /* alpha: the new ghosts' s0 */
     w->nl.gid = P->gid;
     w->nl.own_hi = P->nrep + P->nown;
+    w->nl.rep_hi = P->nrep;
     rc = floe_world_nl_build(w);
     if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
     P->nl_rebuilds = w->nl.rebuilds;
+    P->pending = keep;
     P->rebuilds++;
     P->traffic.rebuilds++;
     return FLOE_OK;
@@ -239,9 +247,15 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     floe_particles *p = &w->p;
     char pdwhy[160];
     if (floe_par_pd_unsupported(w, pdwhy, sizeof pdwhy)) return refuse(w, pdwhy);
-    if (w->nstates) return refuse(w, "a state object");
+    for (int k = 0; k < w->nstates; k++)
+        if (!floe_state_splits(w->states[k])) {
+            char what[96];
+            snprintf(what, sizeof what, "the user state object %s", w->states[k]->klass->name);
+            return refuse(w, what);
+        }
     if (w->nobs) return refuse(w, "an observer (outputs)");
-    if (w->def.integrator != FLOE_VELOCITY_VERLET && w->def.integrator != FLOE_LEAPFROG) return refuse(w, "RK2");
+    if (w->def.integrator != FLOE_VELOCITY_VERLET && w->def.integrator != FLOE_LEAPFROG && w->def.integrator != FLOE_RK2)
+        return refuse(w, "a user integrator");
     /* the providers that run split (par_forcing.c): not a user's, whose loops and state are
      * its own */
     for (int k = 0; k < w->nprov + w->nuprov; k++) {
@@ -348,7 +362,7 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     }
     w->par = P;
     w->par_free = floe_par_free;
-    FLOE_TRY(par_rebuild(w, P, recs, nrec));
+    FLOE_TRY(par_rebuild(w, P, recs, nrec, 0));
     /* the ledger: the values at prepare (the whole world) stay on rank 0; the others start
      * from nothing but their own kinetic energy */
     if (P->rank != 0) {
@@ -388,10 +402,16 @@ void floe_par_max(floe_world *w, double *v, int n) { reduce_in_place(w, v, n, MP
 
 int floe_world_parallel_rebuild(floe_world *w) {
     if (!w->par) return FLOE_OK;
-    return par_rebuild(w, w->par, NULL, 0);
+    return par_rebuild(w, w->par, NULL, 0, 0);
 }
 
-int floe_par_refresh(floe_world *w, double maxd2, int have_xb) {
+int floe_par_start(floe_world *w) {
+    return w->par && w->par->pending ? par_rebuild(w, w->par, NULL, 0, 0) : FLOE_OK;
+}
+
+int floe_par_pending(const floe_world *w) { return w->par && w->par->pending; }
+
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb, int keep) {
     floe_par *P = w->par;
     /* a periodic cell: the test that discounts the cell's affine map (step.c rebuild_if_needed) */
     int need = w->cell ? floe_nl_needs_rebuild_cell(&w->nl, &w->p)
@@ -403,7 +423,26 @@ int floe_par_refresh(floe_world *w, double maxd2, int have_xb) {
     if (w->law_gen != w->nl_law_gen) need = 1; /* a law set since the build (step.c rebuild_if_needed) */
     MPI_Allreduce(&need, &any, 1, MPI_INT, MPI_LOR, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof need);
-    if (any) return par_rebuild(w, P, NULL, 0);
+    if (!any) return floe_par_ghost_update(w);
+    FLOE_TRY(par_rebuild(w, P, NULL, 0, keep));
+    /* an RK2 step's end keeps its midpoint probe's accelerations for the linear dashpots
+     * (forces.c dashpot_accelerations): the new ghosts take their owners' */
+    if (keep && w->dash_on && w->dash_keep) {
+        const size_t n3 = 3 * (size_t)w->p.n;
+        int bad = 0;
+        if (n3 > w->dash_cap) {
+            double *t = realloc(w->dash_a, n3 * sizeof *t);
+            if (t) { w->dash_a = t; w->dash_cap = n3; }
+            else bad = 1;
+        }
+        if (!bad) bad = floe_par_forward_rows(P, w->dash_a, 3);
+        if (bad) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
+    return FLOE_OK;
+}
+
+int floe_par_ghost_update(floe_world *w) {
+    floe_par *P = w->par;
     int rc = floe_par_forward_comm(w, P);
     if (!rc) rc = floe_par_pd_s0_refresh(w, P); /* PD with alpha: the ghosts' s0 */
     return rc ? floe_world_error(w, rc, "out of memory") : FLOE_OK;
@@ -766,6 +805,29 @@ static void mirror_clock(const floe_world *w, floe_world *M) {
 }
 
 /* the owned particles' state by global id into the mirror (rank 0), the walls' forces summed */
+/* the state objects' values into the unsplit world M (rank 0: the mirror, or the world a
+ * checkpoint collects into), before the particles' state is unpacked there: every rank keeps
+ * and advances every state object alike (state.c), so rank 0's are the run's. A growing
+ * radius sets M's geometry, radius and growth rate (and with its mass scales M's mass, which
+ * the split world scaled step by step: the same within round-off); M's ledger is kept */
+static int mirror_states(const floe_world *w, floe_world *M) {
+    const int ns = w->nstates < M->nstates ? w->nstates : M->nstates;
+    const floe_energy ledger = M->energy; /* a set books work (a grown mass): the run's is booked */
+    for (int k = 0; k < ns; k++) {
+        floe_state *s = w->states[k], *t = M->states[k];
+        const size_t m = s->klass->size(s);
+        if (t->klass != s->klass || t->klass->size(t) != m) continue;
+        double buf[16], *y = m <= 16 ? buf : malloc(m * sizeof *y);
+        if (!y) return FLOE_ENOMEM;
+        s->klass->get(s, y);
+        const int rc = t->klass->set(t, M, y);
+        if (y != buf) free(y);
+        if (rc) return rc;
+    }
+    M->energy = ledger;
+    return FLOE_OK;
+}
+
 static int mirror_gather(floe_world *w, floe_par *P, int contacts) {
     const int m = 1 + FLOE_PAR_FWD, lo = P->nrep, no = P->nown;
     double *sb = malloc((size_t)(no ? no : 1) * m * sizeof *sb);
@@ -791,7 +853,9 @@ static int mirror_gather(floe_world *w, floe_par *P, int contacts) {
     int tot;
     const int grc = floe_par_gather_root(P, FLOE_COMM_OUTPUT, sb, no * m, &rb, &tot);
     floe_world *M = P->mirror;
+    int src = 0;
     if (P->rank == 0 && rb && M) {
+        src = mirror_states(w, M);
         floe_particles *q = &M->p;
         for (int k = 0; k < tot / m; k++) {
             const double *r = rb + (size_t)k * m;
@@ -811,6 +875,7 @@ static int mirror_gather(floe_world *w, floe_par *P, int contacts) {
     }
     free(sb); free(wf); free(rb);
     if (grc) return grc;
+    if (src) return floe_world_error(w, src, "MPI outputs: a state object could not be set on the mirror");
     /* the contacts, when the mirror has outputs that read them (stress, contacts, force
      * chains, coast load) */
     if (contacts && w->par_contacts & 1) FLOE_TRY(contacts_gather(w, P));
@@ -1345,7 +1410,10 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
             fl->n_build = N;
             fl->skin = nl->skin;
             fl->rebuilds = nl->rebuilds;
-            /* the particles: the owners' state and build positions by global id */
+            /* the state objects (a growing radius: the geometry and the radius), then the
+             * particles: the owners' state and build positions by global id */
+            const int srs = mirror_states(w, full);
+            if (srs) rc = srs;
             for (int k = 0; k < tot[0] / mp; k++) {
                 const double *r = rb[0] + (size_t)k * mp;
                 const long long g = (long long)r[0];
@@ -1411,7 +1479,8 @@ int floe_world_parallel_collect(const floe_world *w, floe_world *full) {
     free(rb[0]); free(rb[1]); free(wf); free(wids);
     MPI_Bcast(&rc, 1, MPI_INT, 0, P->comm);
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof rc);
-    if (rc) return floe_world_error((floe_world *)w, rc, "MPI checkpoint: out of memory on rank 0");
+    if (rc) return floe_world_error((floe_world *)w, rc, rc == FLOE_ENOMEM ? "MPI checkpoint: out of memory on rank 0"
+                                                                           : "MPI checkpoint: a state object could not be set");
     FLOE_TRY(floe_par_pp_collect((floe_world *)w, P, P->rank == 0 ? full : NULL)); /* par_forcing.c */
     FLOE_TRY(floe_par_pd_gather((floe_world *)w, P, P->rank == 0 ? full : NULL));  /* par_pd.c */
     /* the beam bonds' state (broken flags, stresses), held by the ranks that anchor them */
@@ -1444,7 +1513,13 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
                             "-DFLOE_WITH_MPI=ON)");
 }
 int floe_world_parallel_rebuild(floe_world *w) { (void)w; return FLOE_OK; }
-int floe_par_refresh(floe_world *w, double maxd2, int have_xb) { (void)w; (void)maxd2; (void)have_xb; return FLOE_OK; }
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb, int keep) {
+    (void)w; (void)maxd2; (void)have_xb; (void)keep;
+    return FLOE_OK;
+}
+int floe_par_ghost_update(floe_world *w) { (void)w; return FLOE_OK; }
+int floe_par_start(floe_world *w) { (void)w; return FLOE_OK; }
+int floe_par_pending(const floe_world *w) { (void)w; return 0; }
 int floe_par_reverse(floe_world *w) { (void)w; return FLOE_OK; }
 void floe_par_max(floe_world *w, double *v, int n) { (void)w; (void)v; (void)n; }
 int floe_par_cell_stress(floe_world *w, double sigma[9], int *given) {

@@ -5,10 +5,15 @@
 
 typedef struct growing_radius {
     floe_state base;
-    int particle;
+    int particle; /* the world's index at creation: the global id on a split world */
+    int geom;     /* its own sphere (the same index on every rank of a split world) */
     double rate;
     int update_mass;
     double R0;
+    /* the local index of the particle on a split world, found again after each rebuild */
+    long cached_rebuilds;
+    const long long *cached_gid;
+    int cached_local;
 } growing_radius;
 
 static size_t gr_size(const floe_state *s) { (void)s; return 1; }
@@ -16,6 +21,35 @@ static void gr_get_w(const floe_state *s, const floe_world *w, double *y);
 
 static floe_sphere *gr_sphere(const floe_world *w, int i) {
     return (floe_sphere *)w->geoms[w->p.geom[i]];
+}
+
+/* The particle's local index: itself in one process; on a world split over MPI ranks
+ * (docs/parallel.md: every rank keeps every state object and advances it alike) the wall,
+ * owned or ghost copy of it on this rank, -1 where the rank holds none. The local indices
+ * change only at a rebuild: the search (binary over the owned range, sorted by global id;
+ * linear over the ghosts) runs once after each. */
+static int gr_local(growing_radius *g, const floe_world *w) {
+    const floe_neighbor_list *nl = &w->nl;
+    if (!nl->gid) return g->particle < w->p.n ? g->particle : -1;
+    if (g->cached_gid == nl->gid && g->cached_rebuilds == nl->rebuilds) return g->cached_local;
+    const long long id = g->particle;
+    int at = -1;
+    const int ranges[2][2] = {{0, nl->rep_hi}, {nl->rep_hi, nl->own_hi}}; /* walls, owned */
+    for (int r = 0; r < 2 && at < 0; r++) {
+        int lo = ranges[r][0], hi = ranges[r][1];
+        while (lo < hi) {
+            const int mid = lo + (hi - lo) / 2;
+            if (nl->gid[mid] < id) lo = mid + 1;
+            else hi = mid;
+        }
+        if (lo < ranges[r][1] && nl->gid[lo] == id) at = lo;
+    }
+    for (int i = nl->own_hi; at < 0 && i < w->p.n; i++)
+        if (nl->gid[i] == id) at = i;
+    g->cached_gid = nl->gid;
+    g->cached_rebuilds = nl->rebuilds;
+    g->cached_local = at;
+    return at;
 }
 
 /* The radius lives in the particle's own sphere geometry; get() needs the world, so the
@@ -27,7 +61,7 @@ typedef struct growing_radius_w {
 
 static void gr_get_w(const floe_state *s, const floe_world *w, double *y) {
     const growing_radius *g = (const growing_radius *)s;
-    y[0] = gr_sphere(w, g->particle)->radius;
+    y[0] = ((const floe_sphere *)w->geoms[g->geom])->radius;
 }
 
 static void gr_get_real(const floe_state *s, double *y) {
@@ -39,13 +73,14 @@ static int gr_set(floe_state *s, floe_world *w, const double *y) {
     growing_radius *g = (growing_radius *)s;
     if (!(y[0] > 0) || !isfinite(y[0]))
         return floe_world_error(w, FLOE_EUNSTABLE, "growing radius of particle %d became %g", g->particle, y[0]);
-    floe_sphere *sp = gr_sphere(w, g->particle);
+    floe_sphere *sp = (floe_sphere *)w->geoms[g->geom];
     double r_old = sp->radius;
     sp->radius = y[0];
-    w->p.radius[g->particle] = y[0];
-    w->p.rdot[g->particle] = g->rate; /* for the energy ledger: growth does work */
+    const int i = gr_local(g, w);
+    if (i < 0) return FLOE_OK; /* a split world: not on this rank (its geometry is) */
+    w->p.radius[i] = y[0];
+    w->p.rdot[i] = g->rate; /* for the energy ledger: growth does work */
     if (g->update_mass && w->prepared) {
-        int i = g->particle;
         double r = y[0] / r_old, s = w->def.dim == 2 && w->def.mass_2d_area ? r * r : r * r * r;
         double m = w->p.mass[i] * s;
         double scale = s * r * r; /* inertia ~ m R^2 */
@@ -57,13 +92,16 @@ static int gr_set(floe_state *s, floe_world *w, const double *y) {
         double ke_t = 0.5 * (m - w->p.mass[i]) * floe_v3_dot(v, v);
         double ke_r = 0.5 * (scale - 1) * floe_v3_dot(L, om);
         w->p.mass[i] = m;
-        if (w->p.motion[i] == FLOE_FREE) w->p.inv_mass[i] = 1.0 / m;
+        /* a ghost (split world) is FLOE_FIXED here: its owner's motion decides */
+        const int own = !w->nl.gid || i < w->nl.own_hi;
+        const int free_ = (own ? w->p.motion[i] : w->gmotion[i - w->nl.own_hi]) == FLOE_FREE;
+        if (free_) w->p.inv_mass[i] = 1.0 / m;
         for (int k = 0; k < 3; k++) {
             w->p.inertia[3 * i + k] *= scale;
             L[k] *= scale;
         }
         floe_particle_inv_iso_update(&w->p, i);
-        if (w->p.motion[i] == FLOE_FREE) w->energy.work_boundary += ke_t + ke_r;
+        if (free_ && own) w->energy.work_boundary += ke_t + ke_r; /* the owner books the work */
     }
     return FLOE_OK;
 }
@@ -91,6 +129,8 @@ floe_state *floe_growing_radius_create(floe_world *w, int particle, double rate,
     if (!g) return NULL;
     g->g.base.klass = &growing_radius_class;
     g->g.particle = particle;
+    g->g.geom = gi;
+    g->g.cached_local = -1;
     g->g.rate = rate;
     g->g.update_mass = update_mass;
     g->g.R0 = ((floe_sphere *)own)->radius;
@@ -131,3 +171,7 @@ floe_state *floe_scalar_state_create(double y0, floe_scalar_rhs_fn f, void *user
 }
 
 double floe_scalar_state_value(const floe_state *s) { return ((const scalar_state *)s)->y; }
+
+int floe_state_splits(const floe_state *s) {
+    return s->klass == &growing_radius_class || s->klass == &scalar_state_class;
+}

@@ -61,9 +61,10 @@ typedef struct floe_neighbor_list {
     /* MPI domain decomposition (core/parallel, docs/parallel.md): particles from own_hi on are
      * ghosts; a pair of a ghost and an owned particle is listed only when the owned one has
      * the lower global id gid[] (the other rank lists it otherwise), ghost pairs never.
-     * gid NULL: serial */
+     * gid NULL: serial. Walls (replicated on every rank) are [0, rep_hi), the owned particles
+     * [rep_hi, own_hi), each range sorted by gid */
     const long long *gid;
-    int own_hi;
+    int own_hi, rep_hi;
     /* optional (set by floe_world_nl_build when a law is "none"): none[a * nmat + b] = 1 for
      * the materials a, b under the law "none", whose pairs are never listed; inert[a] = 1 when
      * a's particles touch nothing present: they search for no pairs */
@@ -227,6 +228,11 @@ struct floe_world {
     const unsigned char *gmotion;
     void (*par_free)(struct floe_par *par);
 };
+
+/* 1 when state object s runs on a world split over MPI ranks (state.c: the built-in
+ * classes, which every rank keeps and advances alike; a user's class may read particles by
+ * index, which a split renumbers) */
+int floe_state_splits(const floe_state *s);
 
 /* scratch for n per-block partial sums (NULL: out of memory), kept by the world */
 double *floe_world_reduce_buf(floe_world *w, size_t n);

@@ -36,7 +36,8 @@ files, so a restarted run must also continue them without a frame missing or rep
  fracturing around the checkpoint, half of it under a body-force region): the same two restarts
  (without the bodies' state gathered into the file: particles.csv 0.15 and energy.csv 1.1e-4
  of the scale off at R = 2; without the region's last forces: energy.csv 2.4e-7; tried by
- hand).
+ hand). RK2 with growing radii (tests/mpi/rk2_grow.yaml, three growing spheres, two with
+ their mass; the checkpoint at t = 5 ms): the same two restarts.
  (d) a missing and a corrupted checkpoint under R ranks: every rank exits non-zero (each
      rank's status is printed by a wrapper), rank 0 names the reason, within a time limit
      (no rank left waiting in a collective); under R > 1 also a file that only ranks 1..R-1
@@ -335,8 +336,11 @@ with tempfile.TemporaryDirectory() as tmp:
     # A periodic cell (tests/mpi/periodic_servo.yaml: a jammed lattice held by the cell's
     # stress servo and sheared, the checkpoint at t = 0.05 s): the cell (its vectors, the
     # servo's sums over the ranks' contacts) and the images of the list's entries in the file
+    # RK2 with growing radii (tests/mpi/rk2_grow.yaml, the checkpoint at t = 5 ms): the state
+    # objects' radii (and masses) set on rank 0's world from the ranks' (par_world.c
+    # mirror_states), the linear dashpots' accelerations
     for k, sc, every in (("i", "sea_ice.yaml", "300.5"), ("s", "servo.yaml", "0.015"), ("p", "pd_fly.yaml", "0.00046"),
-                         ("z", "periodic_servo.yaml", "0.05")):
+                         ("z", "periodic_servo.yaml", "0.05"), ("g", "rk2_grow.yaml", "0.0051")):
         sp = os.path.join(here, sc)
         run(1, ["-o", d(k + "S")], scene=sp)
         run(R, ["-o", d(k + "A"), "--checkpoint-every", every], scene=sp)

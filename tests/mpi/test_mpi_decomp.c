@@ -205,12 +205,23 @@ static void spin(double t, double v[3], double om[3], void *user) {
     om[0] = om[1] = 0; om[2] = 1;
 }
 
-/* what is not supported yet is refused with FLOE_ENOTSUP and a message, on every rank */
+/* a user's state object: it may read particles by index, which the split renumbers */
+static size_t us_size(const floe_state *s) { (void)s; return 1; }
+static void us_get(const floe_state *s, double *y) { (void)s; y[0] = 0; }
+static int us_set(floe_state *s, floe_world *w, const double *y) { (void)s; (void)w; (void)y; return FLOE_OK; }
+static int us_rhs(const floe_state *s, const floe_world *w, double t, const double *y, double *dydt) {
+    (void)s; (void)w; (void)t; (void)y;
+    dydt[0] = 0;
+    return FLOE_OK;
+}
+static const floe_state_class user_state_class = {1, "user_temperature", us_size, us_get, us_set, us_rhs, NULL};
+
+/* what is not supported yet is refused with FLOE_ENOTSUP and a message, on every rank (RK2
+ * and the built-in state objects run split since session 22: tests/mpi/rk2_grow.yaml) */
 static void check_refusals(void) {
     for (int k = 0; k < 3; k++) {
         floe_world_def d = floe_default_world_def();
         d.dt = 1e-6;
-        if (k == 1) d.integrator = FLOE_RK2;
         floe_world *w = floe_world_create(&d, NULL, 0);
         floe_material m = mpi_test_glass(1e7);
         floe_world_add_material(w, &m);
@@ -223,6 +234,11 @@ static void check_refusals(void) {
             const int pi = floe_world_add_particle(w, &p);
             if (k == 0 && i == 2) floe_world_set_motion(w, pi, spin, NULL);
         }
+        if (k == 1) {
+            floe_state *st = malloc(sizeof *st);
+            st->klass = &user_state_class;
+            floe_world_add_state(w, st); /* the world frees it */
+        }
         if (k == 2) {
             floe_provider *pv = malloc(sizeof *pv);
             pv->klass = &impostor_class;
@@ -230,7 +246,7 @@ static void check_refusals(void) {
         }
         int rc = floe_world_prepare(w);
         if (rc == 0) rc = floe_world_parallel_init(w, NULL);
-        const char *why[3] = {"a motion callback on a sphere", "RK2", "a user's provider named linear_drag"};
+        const char *why[3] = {"a motion callback on a sphere", "a user's state object", "a user's provider named linear_drag"};
         CHECK(rc == FLOE_ENOTSUP && strstr(floe_world_last_error(w), "not supported yet"),
               "%s refused (rc %d: %s)", why[k], rc, floe_world_last_error(w));
         if (rank_ == 0) printf("  refused: %s\n", floe_world_last_error(w));
