@@ -23,7 +23,10 @@ struct floe_state {
 
 /* Radius of a sphere particle growing as dR/dt = rate (ParticLS §5.2). The particle must
  * own its sphere geometry (the state clones it on creation). Mass and inertia stay those
- * of the initial particle unless update_mass is 1. */
+ * of the initial particle unless update_mass is 1. On a world split over MPI ranks every
+ * rank keeps it (keyed by the particle's index at creation, its global id) and sets its
+ * own copy of the particle, owned or ghost; a user's state class is refused there
+ * (docs/parallel.md, "RK2 steps and state objects"). */
 floe_state *floe_growing_radius_create(floe_world *w, int particle, double rate, int update_mass);
 /* Generic scalar ODE dy/dt = f(t, y, user) for tests and user models. */
 typedef double (*floe_scalar_rhs_fn)(double t, double y, void *user);
