@@ -17,7 +17,9 @@ threaded):
     friction (history across list rebuilds), a linear drag, energy and vtk outputs;
   - sea ice: 2,600 polygon floes driven by a wind, an ocean vortex (its drag integrated
     every 3 steps and held between) and Coriolis with the sea-surface tilt, Hopkins
-    contacts: the forcing providers' particle loops run threaded.
+    contacts: the forcing providers' particle loops run threaded;
+  - walled-rk2: the walled scene under RK2 for 120 steps (two force evaluations a step; its
+    own particle loops run on one thread).
 Each run, restarted on 2 threads from its last checkpoint, ends with the same files.
 Also: -t 0 and -t x are refused (exit 2). Prints "N passed, N failed"."""
 import filecmp
@@ -150,8 +152,11 @@ def main():
             check(rc == 1 and "FLOE_WITH_OPENMP" in err, "without OpenMP -t 2 is refused naming the option: %s" % err)
             print("built without OpenMP: skipped")
             sys.exit(1 if counts["failed"] else 77)
+        # RK2 (its midpoint probe, whose dashpot accelerations the end evaluation keeps)
+        rk2 = WALLED.replace("time: {duration: 0.015, dt: 5.0e-5}", "time: {duration: 0.006, dt: 5.0e-5, integrator: rk2}")
+        check(rk2 != WALLED, "the RK2 variant of the walled scene was made")
         for name, text, every in (("walled", WALLED, "0.01"), ("periodic", PERIODIC, "0.01"), ("settle", SETTLE, "0.01"),
-                                  ("sea-ice", SEAICE, "200")):
+                                  ("sea-ice", SEAICE, "200"), ("walled-rk2", rk2, "0.004")):
             scene = os.path.join(tmp, name + ".yaml")
             with open(scene, "w") as f:
                 f.write(text)
