@@ -227,6 +227,9 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend, int 
     if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
     P->nl_rebuilds = w->nl.rebuilds;
     P->pending = keep;
+    /* the arrays of the whole world (at the split) or of a larger share, shrunk to this
+     * rank's part (docs/parallel.md, "Memory per rank") */
+    if (floe_world_trim(w)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     P->rebuilds++;
     P->traffic.rebuilds++;
     return FLOE_OK;
@@ -671,6 +674,13 @@ int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {
     if (any == 1) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: the mirror does not hold the split world's particles");
     if (any == 3) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: prepare the mirror first (floe_world_prepare)");
     P->mirror = P->rank == 0 ? mirror : NULL;
+    /* the mirror is never stepped: its list of the whole world (built at its prepare, stale
+     * from the first step on) is dropped; a checkpoint's collect fills it whole
+     * (floe_world_parallel_collect), the outputs read the gathered contacts */
+    if (P->mirror && !P->mirror->par) {
+        floe_nl_drop_entries(&P->mirror->nl);
+        (void)floe_world_trim(P->mirror);
+    }
     /* rank 0's word: whether it has a mirror (bit 0), whether the mirror has outputs that read
      * contacts (bit 1) and whether one is due at the next step (bit 2): every rank then
      * records its contacts at the steps they are read (contacts_wanted) */

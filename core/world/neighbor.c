@@ -54,6 +54,15 @@ void floe_nl_free(floe_neighbor_list *nl) {
     memset(nl, 0, sizeof *nl);
 }
 
+void floe_nl_drop_entries(floe_neighbor_list *nl) {
+    free(nl->pi); free(nl->pj); free(nl->sub); free(nl->img); free(nl->warm); free(nl->hist); free(nl->touching);
+    nl->pi = nl->pj = nl->sub = nl->img = NULL;
+    nl->warm = nl->hist = NULL;
+    nl->touching = NULL;
+    nl->npairs = nl->cap = 0;
+    nl->gen++;
+}
+
 int floe_nl_needs_rebuild_after_drift(const floe_neighbor_list *nl, const floe_particles *p, double maxd2,
                                       int growth) {
     if (!nl->x_build || nl->n_build != p->n) return 1;
@@ -230,6 +239,19 @@ static int nl_reserve(floe_neighbor_list *nl, size_t need) {
         floe_resize((void **)&nl->sub, nc, sizeof(int)) || (nl->cell && floe_resize((void **)&nl->img, nc, sizeof(int))))
         return FLOE_ENOMEM;
     nl->cap = (int)nc;
+    return FLOE_OK;
+}
+
+int floe_nl_trim(floe_neighbor_list *nl) {
+    const size_t fit = (size_t)nl->npairs + (size_t)nl->npairs / 4 + 1024;
+    if ((size_t)nl->cap <= fit + fit / 2) return FLOE_OK;
+    /* shrinking keeps the contents (realloc); an array whose shrink fails keeps its larger
+     * size, so every one holds at least fit entries either way */
+    (void)floe_resize((void **)&nl->pi, fit, sizeof(int));
+    (void)floe_resize((void **)&nl->pj, fit, sizeof(int));
+    (void)floe_resize((void **)&nl->sub, fit, sizeof(int));
+    if (nl->img) (void)floe_resize((void **)&nl->img, fit, sizeof(int));
+    nl->cap = (int)fit;
     return FLOE_OK;
 }
 

@@ -14,6 +14,9 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include <string.h>
 #include "world_parts.h"
 #include "error_text.h"
@@ -435,10 +438,17 @@ int floe_world_add_geometry(floe_world *w, floe_geometry *g) {
  * loops, which stream a dozen of them, paid the loads' false dependence on earlier stores
  * to another array (4K aliasing) and competed for one L1 set (bench/RESULTS.md,
  * "The store in one block"). */
+static int particles_layout(floe_particles *p, int nc);
+
 static int particles_reserve(floe_particles *p, int need) {
     if (need <= p->cap) return FLOE_OK;
     int nc = p->cap ? p->cap : 64;
     while (nc < need) nc *= 2;
+    return particles_layout(p, nc);
+}
+
+/* the store's block at capacity nc (>= p->n), the particles moved into it */
+static int particles_layout(floe_particles *p, int nc) {
     enum { PAGE = 4096, STAGGER = 320 };
     size_t off[20], total = 0;
     int nf = 0;
@@ -477,6 +487,17 @@ static int particles_reserve(floe_particles *p, int need) {
 }
 
 int floe_world_reserve_particles(floe_world *w, int need) { return particles_reserve(&w->p, need); }
+
+int floe_world_trim(floe_world *w) {
+    floe_particles *p = &w->p;
+    const int fit = p->n + p->n / 4 + 64;
+    int rc = p->cap > fit + fit / 2 ? particles_layout(p, fit) : FLOE_OK;
+    if (!rc) rc = floe_nl_trim(&w->nl);
+#ifdef __GLIBC__
+    malloc_trim(0); /* the freed pages back to the system (glibc keeps small ones in its heap) */
+#endif
+    return rc;
+}
 
 int floe_world_add_particle(floe_world *w, const floe_particle_def *d) {
     if (d->geometry < 0 || d->geometry >= w->ngeoms)

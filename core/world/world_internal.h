@@ -296,6 +296,12 @@ void floe_par_scratch_free(floe_par_scratch *ps);
 
 /* room for at least need particles in the store (world.c; contents kept) */
 int floe_world_reserve_particles(floe_world *w, int need);
+/* the store and the neighbour list's arrays shrunk to their contents and a quarter more
+ * where they hold more than half as much again, and the freed memory returned to the
+ * system: after
+ * a world split over MPI ranks keeps its part (core/parallel). FLOE_ENOMEM leaves them as
+ * they were */
+int floe_world_trim(floe_world *w);
 
 /* The staged force evaluation (core/world/forces.c, floe_provider.h): the providers of the
  * groups (FLOE_GROUP_DEM: body forces, beam bonds, contacts; FLOE_GROUP_PD: PD bonds) in
@@ -390,6 +396,12 @@ int floe_nl_set_stride(floe_neighbor_list *nl, int hs);
  * the history by its row merge, not a hash of every entry (MPI's imported history,
  * core/parallel). Entries out of range: left as they are (FLOE_OK); FLOE_ENOMEM */
 int floe_nl_sort(floe_neighbor_list *nl, int n);
+/* the entries' index arrays shrunk to npairs and a quarter more where their capacity is more
+ * than half as much again (a shrink that fails keeps the array: always FLOE_OK) */
+int floe_nl_trim(floe_neighbor_list *nl);
+/* the entries and their history freed (npairs 0): a world that is never stepped and whose
+ * list is filled whole when needed (rank 0's mirror of a split world, core/parallel) */
+void floe_nl_drop_entries(floe_neighbor_list *nl);
 /* the world's list rebuilt from its particles, its search on the world's threads */
 int floe_world_nl_build(floe_world *w);
 /* the list's history stride this world's laws and shapes need (floe_contact.h:

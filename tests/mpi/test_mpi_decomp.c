@@ -263,6 +263,12 @@ int main(int argc, char **argv) {
     CHECK(rc == 0, "split: %s", rc ? floe_world_last_error(w) : "");
     if (rc == 0) {
         check_split(w, ref, "after the split");
+        /* the store and the list hold this rank's part, not the whole world's they were
+         * allocated for (floe_world_trim; before it, 2,048 particles' room on every rank) */
+        const int fit = w->p.n + w->p.n / 4 + 64, pfit = w->nl.npairs + w->nl.npairs / 4 + 1024;
+        CHECK(w->p.cap <= fit + fit / 2 && w->nl.cap <= pfit + pfit / 2,
+              "the split store trimmed: room for %d particles (%d here, %d in the world), %d entries (%d)", w->p.cap,
+              w->p.n, ref->p.n, w->nl.cap, w->nl.npairs);
         /* shift the upper half of the box by L/2 along x and the lower half by L/2 along y
          * (periodically): whatever the cuts, many particles change subdomain (a shift move
          * would not do: Zoltan renumbers the parts to keep particles where they are) */
