@@ -39,19 +39,25 @@ static void q_advance(double out[4], const double q[4], const double om[3], doub
 
 /* motion callback of particle i: an index particle -> callback, rebuilt when callbacks or
  * particles were added (a linear scan per particle would cost O(k^2) per step for k
- * ramped PD boundary points); the first callback set for a particle wins */
+ * ramped PD boundary points), and on a world split over MPI ranks after each decomposition
+ * (core/parallel sets motion_idx_n to -1: a callback's particle is found by its global id
+ * on the rank that owns it now); the first callback set for a particle wins */
+static int motion_local(const floe_world *w, int k) {
+    return w->nl.gid ? floe_world_local_of(w, w->motions[k].gid, 0) : w->motions[k].particle;
+}
+
 static int motion_of(floe_world *w, int i) {
     if (w->motion_idx_n != w->p.n || w->motion_idx_cnt != w->nmotions) {
         int *t = realloc(w->motion_idx, (size_t)(w->p.n > 0 ? w->p.n : 1) * sizeof *t);
         if (!t) { /* out of memory: fall back to the scan */
             for (int k = 0; k < w->nmotions; k++)
-                if (w->motions[k].particle == i) return k;
+                if (motion_local(w, k) == i) return k;
             return -1;
         }
         w->motion_idx = t;
         for (int k = 0; k < w->p.n; k++) t[k] = -1;
         for (int k = w->nmotions - 1; k >= 0; k--) {
-            int pi = w->motions[k].particle;
+            int pi = motion_local(w, k);
             if (pi >= 0 && pi < w->p.n) t[pi] = k;
         }
         w->motion_idx_n = w->p.n;

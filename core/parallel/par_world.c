@@ -227,6 +227,7 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend, int 
     if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
     P->nl_rebuilds = w->nl.rebuilds;
     P->pending = keep;
+    w->motion_idx_n = -1; /* the motion callbacks' particles found again (step.c motion_of) */
     /* the arrays of the whole world (at the split) or of a larger share, shrunk to this
      * rank's part (docs/parallel.md, "Memory per rank") */
     if (floe_world_trim(w)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
@@ -268,10 +269,6 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
             snprintf(what, sizeof what, "the force provider %s", pv->klass->name);
             return refuse(w, what);
         }
-    }
-    for (int k = 0; k < w->nmotions; k++) {
-        const int i = w->motions[k].particle;
-        if (i >= 0 && i < p->n && isfinite(p->radius[i])) return refuse(w, "a motion callback on a bounded particle");
     }
     floe_par *P = calloc(1, sizeof *P);
     if (!P) return floe_world_error(w, FLOE_ENOMEM, "out of memory");

@@ -30,26 +30,12 @@ static floe_sphere *gr_sphere(const floe_world *w, int i) {
  * linear over the ghosts) runs once after each. */
 static int gr_local(growing_radius *g, const floe_world *w) {
     const floe_neighbor_list *nl = &w->nl;
-    if (!nl->gid) return g->particle < w->p.n ? g->particle : -1;
+    if (!nl->gid) return floe_world_local_of(w, g->particle, 0);
     if (g->cached_gid == nl->gid && g->cached_rebuilds == nl->rebuilds) return g->cached_local;
-    const long long id = g->particle;
-    int at = -1;
-    const int ranges[2][2] = {{0, nl->rep_hi}, {nl->rep_hi, nl->own_hi}}; /* walls, owned */
-    for (int r = 0; r < 2 && at < 0; r++) {
-        int lo = ranges[r][0], hi = ranges[r][1];
-        while (lo < hi) {
-            const int mid = lo + (hi - lo) / 2;
-            if (nl->gid[mid] < id) lo = mid + 1;
-            else hi = mid;
-        }
-        if (lo < ranges[r][1] && nl->gid[lo] == id) at = lo;
-    }
-    for (int i = nl->own_hi; at < 0 && i < w->p.n; i++)
-        if (nl->gid[i] == id) at = i;
     g->cached_gid = nl->gid;
     g->cached_rebuilds = nl->rebuilds;
-    g->cached_local = at;
-    return at;
+    g->cached_local = floe_world_local_of(w, g->particle, 1);
+    return g->cached_local;
 }
 
 /* The radius lives in the particle's own sphere geometry; get() needs the world, so the

@@ -488,6 +488,24 @@ static int particles_layout(floe_particles *p, int nc) {
 
 int floe_world_reserve_particles(floe_world *w, int need) { return particles_reserve(&w->p, need); }
 
+int floe_world_local_of(const floe_world *w, long long id, int ghosts) {
+    const floe_neighbor_list *nl = &w->nl;
+    if (!nl->gid) return id >= 0 && id < w->p.n ? (int)id : -1;
+    const int ranges[2][2] = {{0, nl->rep_hi}, {nl->rep_hi, nl->own_hi}}; /* walls, owned */
+    for (int r = 0; r < 2; r++) {
+        int lo = ranges[r][0], hi = ranges[r][1];
+        while (lo < hi) {
+            const int mid = lo + (hi - lo) / 2;
+            if (nl->gid[mid] < id) lo = mid + 1;
+            else hi = mid;
+        }
+        if (lo < ranges[r][1] && nl->gid[lo] == id) return lo;
+    }
+    for (int i = nl->own_hi; ghosts && i < w->p.n; i++)
+        if (nl->gid[i] == id) return i;
+    return -1;
+}
+
 int floe_world_trim(floe_world *w) {
     floe_particles *p = &w->p;
     const int fit = p->n + p->n / 4 + 64;
@@ -579,7 +597,7 @@ int floe_world_set_motion(floe_world *w, int i, floe_motion_fn fn, void *user) {
     if (i < 0 || i >= w->p.n) return floe_world_error(w, FLOE_EINVAL, "set_motion: particle %d out of range", i);
     if (!fn) return floe_world_error(w, FLOE_EINVAL, "set_motion: the motion function is NULL");
     if (grow((void **)&w->motions, &w->motions_cap, w->nmotions + 1, sizeof *w->motions)) return FLOE_ENOMEM;
-    w->motions[w->nmotions++] = (floe_motion_cb){i, fn, user};
+    w->motions[w->nmotions++] = (floe_motion_cb){i, fn, user, w->nl.gid ? w->nl.gid[i] : i};
     w->p.motion[i] = FLOE_KINEMATIC;
     w->p.inv_mass[i] = 0;   /* no longer moved by forces (also when called after prepare) */
     w->prepared = 0;

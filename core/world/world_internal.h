@@ -17,7 +17,10 @@
 #include "periodic_state.h"
 
 
-typedef struct floe_motion_cb { int particle; floe_motion_fn fn; void *user; } floe_motion_cb;
+/* a motion callback: particle is its local index (renumbered at an MPI split; -1 when on
+ * another rank), gid its index in the unsplit world (where a split world finds it after a
+ * migration, step.c motion_of) */
+typedef struct floe_motion_cb { int particle; floe_motion_fn fn; void *user; long long gid; } floe_motion_cb;
 
 /* One active contact of the current step (the public floe_contact_info, floe_view.h). */
 typedef floe_contact_info floe_contact_rec;
@@ -296,6 +299,11 @@ void floe_par_scratch_free(floe_par_scratch *ps);
 
 /* room for at least need particles in the store (world.c; contents kept) */
 int floe_world_reserve_particles(floe_world *w, int need);
+/* the local index of the particle whose index in the unsplit world is id: itself in one
+ * process; on a world split over MPI ranks its wall or owned copy (binary search of the two
+ * ranges, each sorted by global id), with ghosts 1 also a ghost copy (a scan), -1 when this
+ * rank holds none */
+int floe_world_local_of(const floe_world *w, long long id, int ghosts);
 /* the store and the neighbour list's arrays shrunk to their contents and a quarter more
  * where they hold more than half as much again, and the freed memory returned to the
  * system: after

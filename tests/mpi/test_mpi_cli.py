@@ -50,7 +50,8 @@ SCENES = [(os.path.join(here, "settle.yaml"), (2, 4)),
           (os.path.join(here, "contacts.yaml"), (2, 4)),
           (os.path.join(here, "adaptive.yaml"), (2, 3)),
           (os.path.join(here, "rk2_grow.yaml"), (2, 3)),
-          (os.path.join(here, "rk2_adaptive.yaml"), (2,))]
+          (os.path.join(here, "rk2_adaptive.yaml"), (2,)),
+          (os.path.join(here, "pd_pull.yaml"), (2, 3))]
 if len(sys.argv) > 4:
     SCENES = [(os.path.join(here, a.split(":")[0]), tuple(int(k) for k in a.split(":")[1].split(",")))
               for a in sys.argv[4:]]
