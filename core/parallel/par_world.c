@@ -230,7 +230,7 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend, int 
     w->motion_idx_n = -1; /* the motion callbacks' particles found again (step.c motion_of) */
     /* the arrays of the whole world (at the split) or of a larger share, shrunk to this
      * rank's part (docs/parallel.md, "Memory per rank") */
-    if (floe_world_trim(w)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    floe_world_trim(w);
     P->rebuilds++;
     P->traffic.rebuilds++;
     return FLOE_OK;
@@ -676,7 +676,7 @@ int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {
      * (floe_world_parallel_collect), the outputs read the gathered contacts */
     if (P->mirror && !P->mirror->par) {
         floe_nl_drop_entries(&P->mirror->nl);
-        (void)floe_world_trim(P->mirror);
+        floe_world_trim(P->mirror);
     }
     /* rank 0's word: whether it has a mirror (bit 0), whether the mirror has outputs that read
      * contacts (bit 1) and whether one is due at the next step (bit 2): every rank then
@@ -811,7 +811,6 @@ static void mirror_clock(const floe_world *w, floe_world *M) {
     if (w->cell && M->cell) *M->cell = *w->cell; /* its vectors (the outputs' volume, the wrap) */
 }
 
-/* the owned particles' state by global id into the mirror (rank 0), the walls' forces summed */
 /* the state objects' values into the unsplit world M (rank 0: the mirror, or the world a
  * checkpoint collects into), before the particles' state is unpacked there: every rank keeps
  * and advances every state object alike (state.c), so rank 0's are the run's. A growing
@@ -835,6 +834,7 @@ static int mirror_states(const floe_world *w, floe_world *M) {
     return FLOE_OK;
 }
 
+/* the owned particles' state by global id into the mirror (rank 0), the walls' forces summed */
 static int mirror_gather(floe_world *w, floe_par *P, int contacts) {
     const int m = 1 + FLOE_PAR_FWD, lo = P->nrep, no = P->nown;
     double *sb = malloc((size_t)(no ? no : 1) * m * sizeof *sb);

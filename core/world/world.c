@@ -506,15 +506,14 @@ int floe_world_local_of(const floe_world *w, long long id, int ghosts) {
     return -1;
 }
 
-int floe_world_trim(floe_world *w) {
+void floe_world_trim(floe_world *w) {
     floe_particles *p = &w->p;
     const int fit = p->n + p->n / 4 + 64;
-    int rc = p->cap > fit + fit / 2 ? particles_layout(p, fit) : FLOE_OK;
-    if (!rc) rc = floe_nl_trim(&w->nl);
+    if (p->cap > fit + fit / 2) (void)particles_layout(p, fit); /* out of memory: the block kept */
+    floe_nl_trim(&w->nl);
 #ifdef __GLIBC__
     malloc_trim(0); /* the freed pages back to the system (glibc keeps small ones in its heap) */
 #endif
-    return rc;
 }
 
 int floe_world_add_particle(floe_world *w, const floe_particle_def *d) {
