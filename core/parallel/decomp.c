@@ -561,11 +561,15 @@ static int *ghost_counts(const floe_par *P, int m) {
 /* what a ghost refresh carries (floe_par_forward_comm): the same on every rank (the laws
  * and any_nonround are; a rank's own beam count is not: any_nonround says whether the world
  * had bonds at the split) */
-static void fwd_what(const floe_world *w, const floe_par *P, int *with_q, int *with_f) {
-    *with_q = P->any_nonround;
+int floe_par_laws_dashpot(const floe_world *w) {
     int f = 0;
     for (int k = 0; k < w->nmats * w->nmats && !f; k++) f = w->laws[k] && floe_contact_law_info(w->laws[k]).linear_gn > 0;
-    *with_f = f;
+    return f;
+}
+
+static void fwd_what(const floe_world *w, const floe_par *P, int *with_q, int *with_f) {
+    *with_q = P->any_nonround;
+    *with_f = floe_par_laws_dashpot(w);
 }
 
 static int fwd_len(int with_q, int with_f) { return 9 + 4 * with_q + 3 * with_f; }
@@ -616,7 +620,7 @@ int floe_par_forward_rows(floe_par *P, double *a, int m) {
     for (int k = 0; k < P->nsend; k++) memcpy(P->sbuf + (size_t)k * m, a + (size_t)P->send_idx[k] * m, (size_t)m * sizeof *a);
     int *c = ghost_counts(P, m);
     if (!c) return FLOE_ENOMEM;
-    MPI_Alltoallv(P->sbuf, c, c + S, MPI_DOUBLE, a + (size_t)g0 * m, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->comm);
+    MPI_Alltoallv(P->sbuf, c, c + S, MPI_DOUBLE, a ? a + (size_t)g0 * m : NULL, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->comm);
     floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, (long long)m * sizeof(double));
     free(c);
     return FLOE_OK;

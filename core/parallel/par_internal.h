@@ -141,7 +141,11 @@ int floe_par_forward_comm(floe_world *w, floe_par *P);
 int floe_par_fwd_doubles(const floe_world *w, const floe_par *P);
 /* add the ghosts' forces and torques to their owners */
 int floe_par_reverse_comm(floe_world *w, floe_par *P);
-/* the owners' rows a[i * m .. i * m + m) copied to their ghosts' rows (a holds p->n rows) */
+/* 1 when a law of the world has a linear dashpot (its end-of-step velocity reads the
+ * particles' last accelerations, forces.c pair_an_ext): the same on every rank */
+int floe_par_laws_dashpot(const floe_world *w);
+/* the owners' rows a[i * m .. i * m + m) copied to their ghosts' rows (a holds p->n rows;
+ * NULL on a rank that holds no particle). Collective */
 int floe_par_forward_rows(floe_par *P, double *a, int m);
 /* local index of global id g (-1: not here), from a hash table of the local particles' ids
  * (open addressing, at most half full; the first of equal ids kept) built by

@@ -230,7 +230,7 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend, int 
     w->motion_idx_n = -1; /* the motion callbacks' particles found again (step.c motion_of) */
     /* the arrays of the whole world (at the split) or of a larger share, shrunk to this
      * rank's part (docs/parallel.md, "Memory per rank") */
-    floe_world_trim(w);
+    floe_world_trim(w, 0);
     P->rebuilds++;
     P->traffic.rebuilds++;
     return FLOE_OK;
@@ -426,8 +426,9 @@ int floe_par_refresh(floe_world *w, double maxd2, int have_xb, int keep) {
     if (!any) return floe_par_ghost_update(w);
     FLOE_TRY(par_rebuild(w, P, NULL, 0, keep));
     /* an RK2 step's end keeps its midpoint probe's accelerations for the linear dashpots
-     * (forces.c dashpot_accelerations): the new ghosts take their owners' */
-    if (keep && w->dash_on && w->dash_keep) {
+     * (forces.c dashpot_accelerations): the new ghosts take their owners'. Decided from what
+     * every rank holds alike (dash_on is 0 on a rank without particles) */
+    if (keep && w->dash_keep && floe_par_laws_dashpot(w)) {
         const size_t n3 = 3 * (size_t)w->p.n;
         int bad = 0;
         if (n3 > w->dash_cap) {
@@ -671,12 +672,13 @@ int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {
     if (any == 1) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: the mirror does not hold the split world's particles");
     if (any == 3) return floe_world_error(w, FLOE_EINVAL, "MPI outputs: prepare the mirror first (floe_world_prepare)");
     P->mirror = P->rank == 0 ? mirror : NULL;
-    /* the mirror is never stepped: its list of the whole world (built at its prepare, stale
-     * from the first step on) is dropped; a checkpoint's collect fills it whole
+    /* the mirror is never stepped: its list's entries and their history (the whole world's,
+     * built at its prepare, stale from the first step on) are dropped; a checkpoint's collect
+     * fills them whole
      * (floe_world_parallel_collect), the outputs read the gathered contacts */
     if (P->mirror && !P->mirror->par) {
         floe_nl_drop_entries(&P->mirror->nl);
-        floe_world_trim(P->mirror);
+        floe_world_trim(P->mirror, 1);
     }
     /* rank 0's word: whether it has a mirror (bit 0), whether the mirror has outputs that read
      * contacts (bit 1) and whether one is due at the next step (bit 2): every rank then
@@ -882,14 +884,16 @@ static int mirror_gather(floe_world *w, floe_par *P, int contacts) {
     }
     free(sb); free(wf); free(rb);
     if (grc) return grc;
-    if (src) return floe_world_error(w, src, "MPI outputs: a state object could not be set on the mirror");
     /* the contacts, when the mirror has outputs that read them (stress, contacts, force
      * chains, coast load) */
     if (contacts && w->par_contacts & 1) FLOE_TRY(contacts_gather(w, P));
     /* the beam bonds' state (broken flags, stresses: fracture_events, floe_sizes) */
     FLOE_TRY(floe_par_beams_gather(w, P, P->rank == 0 ? P->mirror : NULL));
     /* the PD bodies' (broken flags: damage, fracture events) */
-    return floe_par_pd_gather(w, P, P->rank == 0 ? P->mirror : NULL);
+    FLOE_TRY(floe_par_pd_gather(w, P, P->rank == 0 ? P->mirror : NULL));
+    /* a state object that could not be set on the mirror (rank 0 only): after the
+     * collectives above, which every rank reaches alike */
+    return src ? floe_world_error(w, src, "MPI outputs: a state object could not be set on the mirror") : FLOE_OK;
 }
 
 /* ---- outputs reduced over the ranks (docs/parallel.md, "Outputs reduced over the ranks") ---- */

@@ -242,9 +242,9 @@ static int nl_reserve(floe_neighbor_list *nl, size_t need) {
     return FLOE_OK;
 }
 
-void floe_nl_trim(floe_neighbor_list *nl) {
+int floe_nl_trim(floe_neighbor_list *nl) {
     const size_t fit = (size_t)nl->npairs + (size_t)nl->npairs / 4 + 1024;
-    if ((size_t)nl->cap <= fit + fit / 2) return;
+    if ((size_t)nl->cap <= fit + fit / 2) return 0;
     /* shrinking keeps the contents (realloc); an array whose shrink fails keeps its larger
      * size, so every one holds at least fit entries either way */
     (void)floe_resize((void **)&nl->pi, fit, sizeof(int));
@@ -252,6 +252,7 @@ void floe_nl_trim(floe_neighbor_list *nl) {
     (void)floe_resize((void **)&nl->sub, fit, sizeof(int));
     if (nl->img) (void)floe_resize((void **)&nl->img, fit, sizeof(int));
     nl->cap = (int)fit;
+    return 1;
 }
 
 /* rows [i0, i1) each in order by (j, piece pair, image): insertion sort (a sphere's row is

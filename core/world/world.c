@@ -463,6 +463,15 @@ static int particles_layout(floe_particles *p, int nc) {
     FIELDS(LAY);
     char *b = malloc(total);
     if (!b) return FLOE_ENOMEM;
+    if (p->thick) { /* floes' thickness: its own allocation, present only when used (before
+                     * the move: a failure leaves the store as it was) */
+        double *t = realloc(p->thick, (size_t)nc * sizeof *t);
+        if (!t) {
+            free(b);
+            return FLOE_ENOMEM;
+        }
+        p->thick = t;
+    }
     nf = 0;
 #define MOVE(field, k) do { \
         void *dst_ = b + off[nf++]; \
@@ -472,14 +481,6 @@ static int particles_layout(floe_particles *p, int nc) {
 #undef MOVE
 #undef LAY
 #undef FIELDS
-    if (p->thick) { /* floes' thickness: its own allocation, present only when used */
-        double *t = realloc(p->thick, (size_t)nc * sizeof *t);
-        if (!t) {
-            free(b);
-            return FLOE_ENOMEM;
-        }
-        p->thick = t;
-    }
     free(p->block);
     p->block = b;
     p->cap = nc;
@@ -506,13 +507,16 @@ int floe_world_local_of(const floe_world *w, long long id, int ghosts) {
     return -1;
 }
 
-void floe_world_trim(floe_world *w) {
+void floe_world_trim(floe_world *w, int released) {
     floe_particles *p = &w->p;
     const int fit = p->n + p->n / 4 + 64;
-    if (p->cap > fit + fit / 2) (void)particles_layout(p, fit); /* out of memory: the block kept */
-    floe_nl_trim(&w->nl);
+    /* out of memory: the larger block is kept */
+    if (p->cap > fit + fit / 2 && particles_layout(p, fit) == FLOE_OK) released = 1;
+    if (floe_nl_trim(&w->nl)) released = 1;
 #ifdef __GLIBC__
-    malloc_trim(0); /* the freed pages back to the system (glibc keeps small ones in its heap) */
+    if (released) malloc_trim(0); /* the freed pages back to the system (glibc keeps some in its heap) */
+#else
+    (void)released;
 #endif
 }
 

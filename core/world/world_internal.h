@@ -305,10 +305,11 @@ int floe_world_reserve_particles(floe_world *w, int need);
  * rank holds none */
 int floe_world_local_of(const floe_world *w, long long id, int ghosts);
 /* the store and the neighbour list's arrays shrunk to their contents and a quarter more
- * where they hold more than half as much again, and the freed memory returned to the
- * system: after a world split over MPI ranks keeps its part (core/parallel). A shrink that
- * finds no memory keeps the larger arrays */
-void floe_world_trim(floe_world *w);
+ * where they hold more than half as much again, and, when that shrank something or the
+ * caller freed memory itself (released), the freed memory returned to the system: after a
+ * world split over MPI ranks keeps its part (core/parallel). A shrink that finds no memory
+ * keeps the larger arrays */
+void floe_world_trim(floe_world *w, int released);
 
 /* The staged force evaluation (core/world/forces.c, floe_provider.h): the providers of the
  * groups (FLOE_GROUP_DEM: body forces, beam bonds, contacts; FLOE_GROUP_PD: PD bonds) in
@@ -404,8 +405,8 @@ int floe_nl_set_stride(floe_neighbor_list *nl, int hs);
  * core/parallel). Entries out of range: left as they are (FLOE_OK); FLOE_ENOMEM */
 int floe_nl_sort(floe_neighbor_list *nl, int n);
 /* the entries' index arrays shrunk to npairs and a quarter more where their capacity is more
- * than half as much again (a shrink that fails keeps the array) */
-void floe_nl_trim(floe_neighbor_list *nl);
+ * than half as much again (a shrink that fails keeps the array); 1 when it shrank them */
+int floe_nl_trim(floe_neighbor_list *nl);
 /* the entries and their history freed (npairs 0): a world that is never stepped and whose
  * list is filled whole when needed (rank 0's mirror of a split world, core/parallel) */
 void floe_nl_drop_entries(floe_neighbor_list *nl);

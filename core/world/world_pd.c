@@ -442,7 +442,7 @@ int floe_world_pd_region(floe_world *w, int body, const floe_pd_bc *bc) {
             if (kind == FLOE_PD_BC_FIXED) floe_v3_set(p->v + 3 * i, 0, 0, 0);
             else floe_v3_copy(p->v + 3 * i, v);
             if (w->def.dim == 2) p->v[3 * i + 2] = 0;
-            if (timed) w->motions[w->nmotions++] = (floe_motion_cb){i, pd_bc_motion, r, i};
+            if (timed) w->motions[w->nmotions++] = (floe_motion_cb){i, pd_bc_motion, r, w->nl.gid ? w->nl.gid[i] : i};
         }
         w->prepared = 0;
     }
