@@ -972,21 +972,6 @@ static int split_requests(floe_world *w, floe_par *P) {
  * torque from SPLIT_FT on */
 enum { SPLIT_PSTATE = FLOE_PAR_FWD, SPLIT_FT = 16 };
 
-/* the local index of global id g among the walls and the owned particles (each range sorted
- * by global id, par_internal.h), -1 when it is not one of them */
-static int local_of(const floe_par *P, long long g) {
-    const int ranges[2][2] = {{0, P->nrep}, {P->nrep, P->nrep + P->nown}};
-    for (int r = 0; r < 2; r++) {
-        int lo = ranges[r][0], hi = ranges[r][1];
-        while (lo < hi) {
-            const int mid = lo + (hi - lo) / 2;
-            if (P->gid[mid] < g) lo = mid + 1;
-            else hi = mid;
-        }
-        if (lo < ranges[r][1] && P->gid[lo] == g) return lo;
-    }
-    return -1;
-}
 
 /* the due reduced outputs (due[k] for the mirror's observer k): every rank's share summed
  * (the boxes by minimum) on rank 0, which writes the collections' rows (observe_sums) and the
@@ -1028,7 +1013,7 @@ static int split_outputs(floe_world *w, floe_par *P, const int *due) {
                  * -0.0 included */
                 double *r = sb + at;
                 for (int c = 0; c < SPLIT_PSTATE; c++) r[c] = -0.0;
-                const int i = local_of(P, P->mids[q]);
+                const int i = floe_world_local_of(w, P->mids[q], 0); /* a wall or owned here */
                 if (i < 0) continue; /* owned elsewhere */
                 floe_par_pack_state(p, i, r);
                 /* a wall's force and torque are every rank's share, the rest rank 0's */
