@@ -86,15 +86,22 @@ static double kinematic_close(floe_world *w, int i, double h) {
     return wb;
 }
 
+/* every provider's forces on every particle; under MPI, this rank's force time is booked
+ * (its own work, for the balance), the ghosts' forces are summed to their owners and the
+ * servo walls take their whole forces */
+static int forces_all(floe_world *w, floe_step_ctx *c) {
+    const double t0 = w->par ? floe_par_clock() : 0.0;
+    int rc = floe_world_forces(w, c, FLOE_GROUP_ALL);
+    if (w->par) floe_par_force_time(w, floe_par_clock() - t0);
+    if (!rc && w->par) rc = floe_par_reverse(w);
+    if (!rc && w->par) rc = floe_par_servo_totals(w);
+    return rc;
+}
+
 /* forces at the end of a step, with the history and the ledger advancing */
 static int forces_advancing(floe_world *w) {
     floe_step_ctx c = ctx_step(w, contacts_wanted(w));
-    const double t0 = w->par ? floe_par_clock() : 0.0;
-    int rc = floe_world_forces(w, &c, FLOE_GROUP_ALL);
-    if (w->par) floe_par_force_time(w, floe_par_clock() - t0); /* MPI: this rank's own work */
-    if (!rc && w->par) rc = floe_par_reverse(w); /* MPI: the ghosts' forces to their owners */
-    if (!rc && w->par) rc = floe_par_servo_totals(w); /* MPI: the servo walls' whole forces */
-    return rc;
+    return forces_all(w, &c);
 }
 
 static int check_particle(floe_world *w, int i, const double xold[3]) {
@@ -742,12 +749,8 @@ static int rk2_midpoint_forces(floe_world *w, double h) {
     providers_state_io(w, w->pbuf, 1);
     floe_step_ctx c = {&w->p, w->def.dim, 0, w->time, w->dt, h, 1, 0, 0};
     long rb = nl->rebuilds;
-    const double t0 = w->par ? floe_par_clock() : 0.0;
-    int rc = floe_world_forces(w, &c, FLOE_GROUP_ALL);
+    int rc = forces_all(w, &c);
     w->st.force_evaluations++;
-    if (w->par) floe_par_force_time(w, floe_par_clock() - t0); /* MPI: as forces_advancing */
-    if (!rc && w->par) rc = floe_par_reverse(w);
-    if (!rc && w->par) rc = floe_par_servo_totals(w);
     if (rc) return rc;
     if (nl->rebuilds != rb) return floe_world_error(w, FLOE_EINVAL, "internal: neighbour list rebuilt at the RK2 midpoint");
     providers_state_io(w, w->pbuf, 0);

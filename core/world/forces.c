@@ -1938,9 +1938,23 @@ static int pd_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, 
     /* threads for each body's bond loops (pd_materials.c: the same bits for any count) */
     for (int k = 0; k < w->npd; k++) w->pd[k]->nthreads = floe_world_loop_threads(w, (long)w->pd[k]->nbond);
     if (ctx->probe) { /* RK2 midpoint: the bond forces without breakage, nothing booked */
-        for (int k = 0; k < w->npd; k++) {
-            int f0 = w->pd_first[k];
-            floe_pd_forces_nobreak(w->pd[k], p->x + 3 * (size_t)f0, p->f + 3 * (size_t)f0);
+        if (w->pd_split) floe_pd_split_gather(w); /* MPI: the points here, contiguous per body */
+        for (int k = 0, off = 0; k < w->npd; k++) {
+            const int np = w->pd[k]->n;
+            if (w->pd_split) { /* MPI: the owned points' forces, as below */
+                double *fnew = w->pd_fnew + 3 * (size_t)off; /* scratch until the step's evaluation */
+                memset(fnew, 0, (size_t)3 * np * sizeof *fnew);
+                floe_pd_forces_nobreak(w->pd[k], floe_pd_positions(w, k), fnew);
+                const int *loc = w->pd_split->loc[k];
+                const uint8_t *own = w->pd_split->mask[k];
+                for (int q = 0; q < np; q++)
+                    if (own[q] == FLOE_PD_OWNED)
+                        for (int a = 0; a < 3; a++) p->f[3 * (size_t)loc[q] + a] += fnew[3 * q + a];
+            } else {
+                const int f0 = w->pd_first[k];
+                floe_pd_forces_nobreak(w->pd[k], p->x + 3 * (size_t)f0, p->f + 3 * (size_t)f0);
+            }
+            off += np;
         }
         return FLOE_OK;
     }

@@ -28,6 +28,9 @@ on one process and under `mpirun -np 2` and `-np 4`, with an ASCII vtk output ad
     decompositions as the flags are): the flying disc at -np 2 and 4, the damage equal, the
     positions and CSV outputs within 1e-4 of the scale (the plastic stretch is a float; a
     serial run started one ulp away differs as much: below);
+  - RK2 (the midpoint probe's bond forces on the owned points), PMB and LPS, the struck
+    disc at -np 2, the same checks (a probe that read the split store as one body's block
+    made the watchdog stop the run at its first step);
   - refusals, each with a message naming what, before any step (exit non-zero): the
     staggered scheme, a PD body in a periodic cell.
 
@@ -175,6 +178,15 @@ def main():
         run(lps, d("l2"), 2)
         compare_csv(d("l1"), d("l2"), "LPS, -np 2")
         compare_frames(d("l1"), d("l2"), "LPS, -np 2")
+        # RK2: the midpoint probe's bond forces (without breakage) on the owned points, as the
+        # step's evaluation puts them (PMB; LPS with its dilatation exchange inside the probe)
+        for tag, text in (("PMB", vtk), ("LPS", vtk.replace(PMB_PD, LPS_PD))):
+            rk = d(f"pd_rk2_{tag}.yaml")
+            open(rk, "w").write(text.replace("safety: 0.5}", "safety: 0.5, integrator: rk2}", 1))
+            run(rk, d(f"k1{tag}"), 1)
+            run(rk, d(f"k2{tag}"), 2)
+            compare_csv(d(f"k1{tag}"), d(f"k2{tag}"), f"RK2 {tag}, -np 2")
+            compare_frames(d(f"k1{tag}"), d(f"k2{tag}"), f"RK2 {tag}, -np 2")
         # refusals before any step
         cases = [
             ("staggered", src.replace("time: {duration: 30.0e-6, safety: 0.5}",
