@@ -369,20 +369,26 @@ static int restore_beams(floe_world *w, ibuf *r, char *err, size_t errlen) {
 }
 
 /* the staggered PD-DEM scheme's forces kept between steps and the start of its PD cycle
- * (core/integrators/step.c: w->ibuf, 5 x 3n) */
+ * (core/integrators/step.c: the rows w->stag): written as the 5 blocks of 3n doubles of
+ * format 4 (F_C, its torques, F_PD, the cycle's start positions, the true velocities) */
 static int staggered(const floe_world *w) { return w->def.pd_dem == FLOE_PD_DEM_STAGGERED && w->npd > 0; }
+static const int stag_part[5] = {STAG_FS, STAG_TS, STAG_FPD, STAG_XS, STAG_VT};
 static void save_stag(const floe_world *w, obuf *b) {
-    uint64_t m = 15 * (size_t)w->p.n;
-    if (w->ibuf_cap < m) m = 0;
+    const int n = w->p.n, have = w->stag && w->stag_n >= n;
+    uint64_t m = have ? 15 * (size_t)n : 0;
     PUT(b, m);
-    put(b, w->ibuf, m * sizeof(double));
+    for (int k = 0; have && k < 5; k++)
+        for (int i = 0; i < n; i++) put(b, w->stag + (size_t)i * STAG_W + stag_part[k], 3 * sizeof(double));
 }
 static int restore_stag(floe_world *w, ibuf *r, char *err, size_t errlen) {
     uint64_t m = 0;
     GET(r, m);
-    if (r->bad || m != 15 * (uint64_t)w->p.n || m > w->ibuf_cap || m * sizeof(double) > r->len - r->pos)
+    const int n = w->p.n;
+    if (r->bad || m != 15 * (uint64_t)n || m * sizeof(double) > r->len - r->pos)
         return floe_error_set(err, errlen, FLOE_EINVAL, "section STAG does not match this world");
-    get(r, w->ibuf, m * sizeof(double));
+    if (!stag_rows(w)) return floe_error_set(err, errlen, FLOE_ENOMEM, "section STAG: out of memory");
+    for (int k = 0; k < 5; k++)
+        for (int i = 0; i < n; i++) get(r, w->stag + (size_t)i * STAG_W + stag_part[k], 3 * sizeof(double));
     return FLOE_OK;
 }
 

@@ -10,8 +10,8 @@
 
 /* the energy of the closing half kick (shadow_term, step.c) over every free particle, from
  * the forces in p->f, p->t (velocity Verlet and leapfrog: the half kick h F / m) or the
- * staggered groups fs, ts, fpd; 0 for a class without a closing half kick (RK2) */
-static double shadow_energy(const floe_world *w, const double *fs, const double *ts, const double *fpd) {
+ * staggered groups fs, ts, fpd (particle i's at stride * i); 0 for a class without a closing half kick (RK2) */
+static double shadow_energy(const floe_world *w, const double *fs, const double *ts, const double *fpd, int stride) {
     const floe_particles *p = &w->p;
     const floe_integrator_class *ic = floe_integrator_class_of(w->def.integrator);
     if (!(ic->flags & FLOE_INTEGRATOR_HALF_KICK) && !fpd) return 0;
@@ -21,9 +21,9 @@ static double shadow_energy(const floe_world *w, const double *fs, const double 
         if (p->motion[i] != FLOE_FREE) continue;
         double dv[3], dL[3];
         for (int k = 0; k < 3; k++) {
-            dv[k] = h * p->inv_mass[i] * fs[3 * i + k];
-            if (fpd && w->pd_every == 1 && w->pd_of && w->pd_of[i] >= 0) dv[k] += hp * p->inv_mass[i] * fpd[3 * i + k];
-            dL[k] = h * ts[3 * i + k];
+            dv[k] = h * p->inv_mass[i] * fs[(size_t)stride * i + k];
+            if (fpd && w->pd_every == 1 && w->pd_of && w->pd_of[i] >= 0) dv[k] += hp * p->inv_mass[i] * fpd[(size_t)stride * i + k];
+            dL[k] = h * ts[(size_t)stride * i + k];
         }
         e += shadow_term(p, i, dv, dL);
     }
@@ -157,8 +157,9 @@ int floe_world_prepare(floe_world *w) {
     {
         const floe_particles *p = &w->p;
         const int stag = w->def.pd_dem == FLOE_PD_DEM_STAGGERED && w->npd;
-        const size_t n3 = 3 * (size_t)p->n;
-        prepare_ledger(w, stag ? shadow_energy(w, w->ibuf, w->ibuf + n3, w->ibuf + 2 * n3) : shadow_energy(w, p->f, p->t, NULL));
+        const double *r = w->stag;
+        prepare_ledger(w, stag ? shadow_energy(w, r + STAG_FS, r + STAG_TS, r + STAG_FPD, STAG_W)
+                               : shadow_energy(w, p->f, p->t, NULL, 3));
     }
     return prepare_observers(w);
 }

@@ -13,6 +13,7 @@
 #define step_rk2 floe_i_step_rk2
 #define step_staggered floe_i_step_staggered
 #define stag_split_forces floe_i_stag_split_forces
+#define stag_rows floe_i_stag_rows
 #define shadow_term floe_i_shadow_term
 #define step_once floe_i_step_once
 #define step_adaptive floe_i_step_adaptive
@@ -24,6 +25,13 @@ int step_rk2(floe_world *w);
 int step_staggered(floe_world *w);
 /* step.c: the staggered scheme's first forces (F_C, then F_PD, p->f = their sum) */
 int stag_split_forces(floe_world *w, const floe_step_ctx *ctx);
+/* step.c: the staggered scheme's row of each particle (w->stag): F_C, its torque, F_PD (kept
+ * between steps), the start position of a PD point's cycle, its true velocity while the
+ * contact laws read its mean one */
+enum { STAG_FS = 0, STAG_TS = 3, STAG_FPD = 6, STAG_XS = 9, STAG_VT = 12, STAG_W = 15 };
+/* the rows for every particle here (new rows zero), registered with the world at the first
+ * call (they travel with their particles under MPI); NULL: out of memory (the error set) */
+double *stag_rows(floe_world *w);
 /* step.c: energy of the closing half kick of free particle i (the watchdog's conserved form) */
 double shadow_term(const floe_particles *p, int i, const double dv[3], const double dL[3]);
 /* integrators.c: one step of the world's scheme (the staggered PD-DEM scheme when chosen

@@ -870,79 +870,138 @@ int step_rk2(floe_world *w) {
  * kicks of k dt / 2 around every k steps of velocity Verlet with F_C. This is the
  * impulse form of multiple time stepping (r-RESPA, Tuckerman, Berne and Martyna 1992):
  * symmetric, second order and symplectic, and with m = k = 1 it is velocity Verlet (the
- * monolithic scheme) with the two groups evaluated separately. The scratch w->ibuf holds
- * F_C, its torques and F_PD between steps (3n each), then the start positions and the
- * true velocities of the PD points (3n each). */
+ * monolithic scheme) with the two groups evaluated separately. Each particle's row of
+ * w->stag (STAG_W doubles, stag_rows) holds F_C, its torque and F_PD between steps, the
+ * start position of a PD point's cycle and its true velocity while the contact laws read
+ * its mean one. The rows are registered with the world (floe_world_pp_attach), so that
+ * under MPI each travels with its particle at every decomposition and is gathered for a
+ * checkpoint. Under MPI the loops run over the owned particles [0, own_hi) (the ghosts
+ * take their owners' positions and velocities at each refresh); the PD group writes the
+ * owned points' forces only (forces.c pd_stage), the contact group's forces on ghosts are
+ * summed to their owners (stag_forces). */
+
+/* the rows for every particle here (new rows zero), registered at the first call; NULL:
+ * out of memory (the error set) */
+double *stag_rows(floe_world *w) {
+    const int n = w->p.n;
+    if (w->stag_n < n || !w->stag) {
+        const int cap = n > 0 ? n : 1;
+        double *t = realloc(w->stag, (size_t)cap * STAG_W * sizeof *t);
+        if (!t) {
+            floe_world_error(w, FLOE_ENOMEM, "out of memory");
+            return NULL;
+        }
+        const int old = w->stag ? w->stag_n : 0;
+        memset(t + (size_t)old * STAG_W, 0, (size_t)(cap - old) * STAG_W * sizeof *t);
+        w->stag = t;
+        w->stag_n = cap;
+    }
+    if (floe_world_pp_attach(w, &w->stag, &w->stag_n, STAG_W)) {
+        floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        return NULL;
+    }
+    return w->stag;
+}
+
+/* the particles this rank integrates: all, or under MPI the walls and the owned ones */
+static int stag_nend(const floe_world *w) { return w->par ? w->nl.own_hi : w->p.n; }
+
+/* is particle i a PD point (any body)? */
+static inline int stag_pd(const int *pd_of, int i) { return pd_of[i] >= 0; }
 
 static void stag_zero_pd_forces(floe_world *w) {
-    for (int k = 0; k < w->npd; k++)
-        memset(w->p.f + 3 * (size_t)w->pd_first[k], 0, 3 * (size_t)w->pd[k]->n * sizeof(double));
+    const int nend = stag_nend(w), *pd_of = w->pd_of;
+    for (int i = 0; i < nend; i++)
+        if (stag_pd(pd_of, i)) memset(w->p.f + 3 * (size_t)i, 0, 3 * sizeof(double));
+}
+
+/* the forces of one group (MPI: this rank's force time booked; the contact group's forces on
+ * ghosts summed to their owners, with the servo walls' totals; the PD group writes owned
+ * points only) */
+static int stag_forces(floe_world *w, const floe_step_ctx *ctx, int group) {
+    const double t0 = w->par ? floe_par_clock() : 0.0;
+    int rc = floe_world_forces(w, ctx, group);
+    if (w->par) floe_par_force_time(w, floe_par_clock() - t0);
+    if (!rc && w->par && group == FLOE_GROUP_DEM) rc = floe_par_reverse(w);
+    if (!rc && w->par && group == FLOE_GROUP_DEM) rc = floe_par_servo_totals(w);
+    return rc;
 }
 
 /* evaluate F_C then F_PD at the present state (prepare), p->f = their sum */
 int stag_split_forces(floe_world *w, const floe_step_ctx *ctx) {
     floe_particles *p = &w->p;
-    const size_t n3 = 3 * (size_t)p->n;
-    double *b = ibuf_reserve(w, 5 * (n3 ? n3 : 3));
-    if (!b) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-    double *fs = b, *ts = b + n3, *fpd = b + 2 * n3;
-    FLOE_TRY(floe_world_forces(w, ctx, FLOE_GROUP_DEM));
-    memcpy(fs, p->f, n3 * sizeof *fs);
-    memcpy(ts, p->t, n3 * sizeof *ts);
-    memset(p->f, 0, n3 * sizeof *p->f);
-    FLOE_TRY(floe_world_forces(w, ctx, FLOE_GROUP_PD));
-    memcpy(fpd, p->f, n3 * sizeof *fpd);
-    for (size_t a = 0; a < n3; a++) p->f[a] = fs[a] + fpd[a];
-    memcpy(p->t, ts, n3 * sizeof *ts);
+    if (!stag_rows(w)) return FLOE_ENOMEM;
+    FLOE_TRY(stag_forces(w, ctx, FLOE_GROUP_DEM));
+    const int n = p->n;
+    double *r = stag_rows(w);
+    if (!r) return FLOE_ENOMEM;
+    for (int i = 0; i < n; i++) {
+        memcpy(r + (size_t)i * STAG_W + STAG_FS, p->f + 3 * (size_t)i, 3 * sizeof(double));
+        memcpy(r + (size_t)i * STAG_W + STAG_TS, p->t + 3 * (size_t)i, 3 * sizeof(double));
+    }
+    memset(p->f, 0, 3 * (size_t)n * sizeof *p->f);
+    FLOE_TRY(stag_forces(w, ctx, FLOE_GROUP_PD));
+    for (int i = 0; i < n; i++) {
+        double *ri = r + (size_t)i * STAG_W;
+        memcpy(ri + STAG_FPD, p->f + 3 * (size_t)i, 3 * sizeof(double));
+        for (int a = 0; a < 3; a++) p->f[3 * (size_t)i + a] = ri[STAG_FS + a] + ri[STAG_FPD + a];
+        memcpy(p->t + 3 * (size_t)i, ri + STAG_TS, 3 * sizeof(double));
+    }
     return FLOE_OK;
 }
 
-/* PD bond forces at the present positions into fpd, with the PD points moving at their
- * mean velocity (x - xs) / span for the ledger's trapezoid work over that span */
-static int stag_pd_forces(floe_world *w, double span, const double *xs, double *vt, double *fpd, int mean_velocity) {
+/* PD bond forces at the present positions into the rows' fpd, with the PD points moving at
+ * their mean velocity (x - xs) / span for the ledger's trapezoid work over that span */
+static int stag_pd_forces(floe_world *w, double span, int mean_velocity) {
     floe_particles *p = &w->p;
-    for (int k = 0; k < w->npd; k++)
-        for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++)
-            if (mean_velocity) {
-                memcpy(vt + 3 * i, p->v + 3 * i, 3 * sizeof(double));
-                for (int a = 0; a < 3; a++) p->v[3 * i + a] = (p->x[3 * i + a] - xs[3 * i + a]) / span;
+    const int nend = stag_nend(w), *pd_of = w->pd_of;
+    double *r = w->stag;
+    if (mean_velocity)
+        for (int i = 0; i < nend; i++)
+            if (stag_pd(pd_of, i)) {
+                double *ri = r + (size_t)i * STAG_W;
+                memcpy(ri + STAG_VT, p->v + 3 * i, 3 * sizeof(double));
+                for (int a = 0; a < 3; a++) p->v[3 * i + a] = (p->x[3 * i + a] - ri[STAG_XS + a]) / span;
             }
     stag_zero_pd_forces(w);
     floe_step_ctx c = ctx_step(w, 0);
     c.dt = c.hist_dt = span; /* the PD step spans the cycle */
-    int rc = floe_world_forces(w, &c, FLOE_GROUP_PD);
-    for (int k = 0; k < w->npd; k++) {
-        size_t f0 = 3 * (size_t)w->pd_first[k], m = 3 * (size_t)w->pd[k]->n;
-        memcpy(fpd + f0, p->f + f0, m * sizeof *fpd);
-        if (mean_velocity) memcpy(p->v + f0, vt + f0, m * sizeof *vt);
-    }
+    int rc = stag_forces(w, &c, FLOE_GROUP_PD);
+    for (int i = 0; i < nend; i++)
+        if (stag_pd(pd_of, i)) {
+            double *ri = r + (size_t)i * STAG_W;
+            memcpy(ri + STAG_FPD, p->f + 3 * i, 3 * sizeof(double));
+            if (mean_velocity) memcpy(p->v + 3 * i, ri + STAG_VT, 3 * sizeof(double));
+        }
     return rc;
 }
 
 int step_staggered(floe_world *w) {
     floe_particles *p = &w->p;
-    const int n = p->n, m = w->pd_sub, ke = w->pd_every;
-    const size_t n3 = 3 * (size_t)n;
+    const int m = w->pd_sub, ke = w->pd_every;
     const double dt = w->dt, h = 0.5 * dt, K = ke * dt;
-    double *b = ibuf_reserve(w, 5 * (n3 ? n3 : 3));
-    if (!b) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-    double *fs = b, *ts = b + n3, *fpd = b + 2 * n3, *xs = b + 3 * n3, *vt = b + 4 * n3;
+    /* MPI: a decomposition left pending (none is: only RK2 keeps its owners) */
+    if (w->par) FLOE_TRY(floe_par_start(w));
+    int nend = stag_nend(w);
+    double *r = stag_rows(w);
+    if (!r) return FLOE_ENOMEM;
     const long cyc = ke > 1 ? w->pd_cycle % ke : 0;
     const int pd_start = ke > 1 && cyc % ke == 0, pd_end = ke > 1 && (cyc + 1) % ke == 0;
     const int *pd_of = w->pd_of;
     double wb = 0, maxd2 = 0;
+#define ROW(i) (r + (size_t)(i) * STAG_W)
     /* PD every k-th step: the opening half kick of a PD cycle */
     if (pd_start)
-        for (int k = 0; k < w->npd; k++)
-            for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++) {
-                memcpy(xs + 3 * i, p->x + 3 * i, 3 * sizeof(double));
-                if (p->motion[i] == FLOE_FREE) floe_v3_axpy(p->v + 3 * i, 0.5 * K * p->inv_mass[i], fpd + 3 * i);
+        for (int i = 0; i < nend; i++)
+            if (stag_pd(pd_of, i)) {
+                memcpy(ROW(i) + STAG_XS, p->x + 3 * i, 3 * sizeof(double));
+                if (p->motion[i] == FLOE_FREE) floe_v3_axpy(p->v + 3 * i, 0.5 * K * p->inv_mass[i], ROW(i) + STAG_FPD);
             }
     /* 1. half kick with F_C; drift of everything except the PD points that sub-cycle */
-    for (int i = 0; i < n; i++) {
+    for (int i = 0; i < nend; i++) {
         double *x = p->x + 3 * i, *v = p->v + 3 * i;
-        const int sub = ke == 1 && pd_of[i] >= 0;
-        if (sub) memcpy(xs + 3 * i, x, 3 * sizeof(double)); /* fixed points too: step 3 reads it */
+        const int sub = ke == 1 && stag_pd(pd_of, i);
+        if (sub) memcpy(ROW(i) + STAG_XS, x, 3 * sizeof(double)); /* fixed points too: step 3 reads it */
         if (p->motion[i] == FLOE_FIXED) continue;
         if (p->motion[i] == FLOE_KINEMATIC) {
             memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
@@ -954,92 +1013,107 @@ int step_staggered(floe_world *w) {
             memcpy(p->q + 4 * i, qn, sizeof qn);
             continue;
         }
-        floe_v3_axpy(v, h * p->inv_mass[i], fs + 3 * i);
-        floe_v3_axpy(p->L + 3 * i, h, ts + 3 * i);
+        floe_v3_axpy(v, h * p->inv_mass[i], ROW(i) + STAG_FS);
+        floe_v3_axpy(p->L + 3 * i, h, ROW(i) + STAG_TS);
         rotate_drift(p, i, dt);
         if (!sub) {
             floe_v3_axpy(x, dt, v);
             wb += dt * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
         }
     }
-    /* 2. dt_PD = dt / m: m velocity Verlet sub-steps of the PD points with F_PD */
+    /* 2. dt_PD = dt / m: m velocity Verlet sub-steps of the PD points with F_PD (MPI: the
+     * ghosts take their owners' new positions before each evaluation) */
     if (ke == 1) {
         const double d = dt / m, hd = 0.5 * d;
         for (int s = 0; s < m; s++) {
-            for (int k = 0; k < w->npd; k++)
-                for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++) {
-                    double *v = p->v + 3 * i;
-                    if (p->motion[i] == FLOE_FIXED) continue;
-                    if (p->motion[i] == FLOE_FREE) floe_v3_axpy(v, hd * p->inv_mass[i], fpd + 3 * i);
-                    floe_v3_axpy(p->x + 3 * i, d, v);
-                    if (p->motion[i] == FLOE_FREE) wb += d * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
-                }
-            FLOE_TRY(stag_pd_forces(w, d, xs, vt, fpd, 0));
+            for (int i = 0; i < nend; i++) {
+                if (!stag_pd(pd_of, i) || p->motion[i] == FLOE_FIXED) continue;
+                double *v = p->v + 3 * i;
+                if (p->motion[i] == FLOE_FREE) floe_v3_axpy(v, hd * p->inv_mass[i], ROW(i) + STAG_FPD);
+                floe_v3_axpy(p->x + 3 * i, d, v);
+                if (p->motion[i] == FLOE_FREE) wb += d * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
+            }
+            if (w->par) FLOE_TRY(floe_par_ghost_update(w));
+            FLOE_TRY(stag_pd_forces(w, d, 0));
             if (s == m - 1) break; /* the last sub-step closes with the final kick below */
-            for (int k = 0; k < w->npd; k++)
-                for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++)
-                    if (p->motion[i] == FLOE_FREE) floe_v3_axpy(p->v + 3 * i, hd * p->inv_mass[i], fpd + 3 * i);
+            for (int i = 0; i < nend; i++)
+                if (stag_pd(pd_of, i) && p->motion[i] == FLOE_FREE)
+                    floe_v3_axpy(p->v + 3 * i, hd * p->inv_mass[i], ROW(i) + STAG_FPD);
         }
     }
     FLOE_TRY(advance_states(w, dt));
     advance_clock(w);
     w->pd_cycle++;
-    const double *xb = w->nl.x_build;
-    const int have_xb = xb && w->nl.n_build == n;
-    if (have_xb)
-        for (int i = 0; i < n; i++)
-            if (p->motion[i] != FLOE_FIXED) note_disp(p->x + 3 * i, xb + 3 * i, &maxd2);
-    FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
     /* 3. F_C at the new positions; sub-cycled PD points move at their mean velocity over
      * the step for the contact laws (the tangential spring grows by the displacement) and
-     * the ledger */
+     * the ledger: set before the rebuild, so that under MPI the ghosts take it with their
+     * positions, the true one (vt) travelling in the rows with a migrating point */
     if (ke == 1)
-        for (int k = 0; k < w->npd; k++)
-            for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++) {
-                memcpy(vt + 3 * i, p->v + 3 * i, 3 * sizeof(double));
-                for (int a = 0; a < 3; a++) p->v[3 * i + a] = (p->x[3 * i + a] - xs[3 * i + a]) / dt;
+        for (int i = 0; i < nend; i++)
+            if (stag_pd(pd_of, i)) {
+                double *ri = ROW(i);
+                memcpy(ri + STAG_VT, p->v + 3 * i, 3 * sizeof(double));
+                for (int a = 0; a < 3; a++) p->v[3 * i + a] = (p->x[3 * i + a] - ri[STAG_XS + a]) / dt;
             }
+    {
+        const int n = p->n;
+        const double *xb = w->nl.x_build;
+        const int have_xb = xb && w->nl.n_build == n;
+        if (have_xb)
+            for (int i = 0; i < n; i++)
+                if (p->motion[i] != FLOE_FIXED) note_disp(p->x + 3 * i, xb + 3 * i, &maxd2);
+        FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
+    }
+    /* MPI: a decomposition migrates particles (the store, the rows and pd_of are new) */
+    nend = stag_nend(w);
+    r = w->stag;
+    pd_of = w->pd_of;
     floe_step_ctx c = ctx_step(w, contacts_wanted(w));
-    int rc = floe_world_forces(w, &c, FLOE_GROUP_DEM);
+    int rc = stag_forces(w, &c, FLOE_GROUP_DEM);
     if (ke == 1)
-        for (int k = 0; k < w->npd; k++)
-            memcpy(p->v + 3 * (size_t)w->pd_first[k], vt + 3 * (size_t)w->pd_first[k], 3 * (size_t)w->pd[k]->n * sizeof *vt);
+        for (int i = 0; i < nend; i++)
+            if (stag_pd(pd_of, i)) memcpy(p->v + 3 * i, ROW(i) + STAG_VT, 3 * sizeof(double));
     if (rc) return rc;
-    memcpy(fs, p->f, n3 * sizeof *fs);
-    memcpy(ts, p->t, n3 * sizeof *ts);
+    for (int i = 0; i < nend; i++) {
+        memcpy(ROW(i) + STAG_FS, p->f + 3 * i, 3 * sizeof(double));
+        memcpy(ROW(i) + STAG_TS, p->t + 3 * i, 3 * sizeof(double));
+    }
     /* PD every k-th step: the closing evaluation and half kick of the cycle */
     if (pd_end) {
-        FLOE_TRY(stag_pd_forces(w, K, xs, vt, fpd, 1));
-        for (int k = 0; k < w->npd; k++)
-            for (int i = w->pd_first[k]; i < w->pd_first[k] + w->pd[k]->n; i++)
-                if (p->motion[i] == FLOE_FREE) floe_v3_axpy(p->v + 3 * i, 0.5 * K * p->inv_mass[i], fpd + 3 * i);
+        FLOE_TRY(stag_pd_forces(w, K, 1));
+        for (int i = 0; i < nend; i++)
+            if (stag_pd(pd_of, i) && p->motion[i] == FLOE_FREE)
+                floe_v3_axpy(p->v + 3 * i, 0.5 * K * p->inv_mass[i], ROW(i) + STAG_FPD);
     }
     /* 4. closing half kick with F_C; p->f = F_C + F_PD for the observers */
-    for (size_t a = 0; a < n3; a++) p->f[a] = fs[a] + fpd[a];
+    for (int i = 0; i < nend; i++)
+        for (int a = 0; a < 3; a++) p->f[3 * i + a] = ROW(i)[STAG_FS + a] + ROW(i)[STAG_FPD + a];
     double kt = 0, kr = 0, wbound = 0, sh = 0;
     const int shadow = w->def.energy_check != FLOE_CHECK_OFF;
-    for (int i = 0; i < n; i++) {
+    for (int i = 0; i < nend; i++) {
         if (p->motion[i] != FLOE_FREE) {
             if (p->motion[i] == FLOE_KINEMATIC) wbound += kinematic_close(w, i, h);
             continue;
         }
+        const double *fs = ROW(i) + STAG_FS, *ts = ROW(i) + STAG_TS, *fpd = ROW(i) + STAG_FPD;
+        const int subi = ke == 1 && stag_pd(pd_of, i);
         double *v = p->v + 3 * i, *L = p->L + 3 * i, im = p->inv_mass[i];
         if (shadow) { /* the closing kicks: the last PD sub-step's and F_C's */
             double dv[3], dL[3];
             for (int k = 0; k < 3; k++) {
-                dv[k] = h * im * fs[3 * i + k] + (ke == 1 && pd_of[i] >= 0 ? 0.5 * dt / m * im * fpd[3 * i + k] : 0);
-                dL[k] = h * ts[3 * i + k];
+                dv[k] = h * im * fs[k] + (subi ? 0.5 * dt / m * im * fpd[k] : 0);
+                dL[k] = h * ts[k];
             }
             sh += shadow_term(p, i, dv, dL);
         }
         double xold[3], d2;
-        if (ke == 1 && pd_of[i] >= 0) memcpy(xold, xs + 3 * i, sizeof xold);
+        if (subi) memcpy(xold, ROW(i) + STAG_XS, sizeof xold);
         else for (int k = 0; k < 3; k++) xold[k] = p->x[3 * i + k] - dt * v[k];
         d2 = (p->x[3 * i] - xold[0]) * (p->x[3 * i] - xold[0]) + (p->x[3 * i + 1] - xold[1]) * (p->x[3 * i + 1] - xold[1]) +
              (p->x[3 * i + 2] - xold[2]) * (p->x[3 * i + 2] - xold[2]);
-        if (ke == 1 && pd_of[i] >= 0) floe_v3_axpy(v, 0.5 * dt / m * im, fpd + 3 * i); /* last PD sub-step */
-        floe_v3_axpy(v, h * im, fs + 3 * i);
-        floe_v3_axpy(L, h, ts + 3 * i);
+        if (subi) floe_v3_axpy(v, 0.5 * dt / m * im, fpd); /* last PD sub-step */
+        floe_v3_axpy(v, h * im, fs);
+        floe_v3_axpy(L, h, ts);
         omega_update(p, i);
         double kin = 0.5 * p->mass[i] * floe_v3_dot(v, v), kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
         kt += kin;
@@ -1050,6 +1124,7 @@ int step_staggered(floe_world *w) {
             if (rc2) return rc2;
         }
     }
+#undef ROW
     w->wd_shadow = sh;
     w->energy.kinetic_trans = kt;
     w->energy.kinetic_rot = kr;

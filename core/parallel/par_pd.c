@@ -50,10 +50,6 @@ int floe_par_pd_unsupported(const floe_world *w, char *what, size_t len) {
         snprintf(what, len, "a PD body in a periodic cell");
         return 1;
     }
-    if (w->def.pd_dem == FLOE_PD_DEM_STAGGERED) {
-        snprintf(what, len, "the staggered PD-DEM scheme (pd_dem: monolithic runs split)");
-        return 1;
-    }
     /* fixed and constant-velocity regions are their points' motion (it travels with them;
      * a ramped one is a motion callback, refused with those); a body-force region's points
      * take its force on their owners' ranks, its last forces made whole at each

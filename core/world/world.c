@@ -361,6 +361,7 @@ void floe_world_destroy(floe_world *w) {
     free(w->det.scratch);
     free(w->dt_part);
     free(w->ibuf);
+    free(w->stag);
     free(w->dash_a);
     if (w->snap && w->snap_free) w->snap_free(w->snap); /* the adaptive controller's (core/integrators) */
     if (w->par && w->par_free) w->par_free(w->par);     /* the decomposition's (core/parallel) */

@@ -173,7 +173,9 @@ struct floe_world {
     floe_dt_estimates dte;    /* at prepare */
     double *dt_part;          /* n: critical estimate of each particle (limiting kinds) */
     double lf_dt_prev;        /* leapfrog: the previous step (0: velocities synchronised) */
-    double *ibuf; size_t ibuf_cap; /* integrator scratch (RK2 start state, staggered forces) */
+    double *ibuf; size_t ibuf_cap; /* integrator scratch (RK2's start state) */
+    double *stag; int stag_n;      /* the staggered PD-DEM scheme's rows (core/integrators/step.c
+                                      stag_rows; registered as a force stage's pps), stag_n rows */
     double *dash_a; size_t dash_cap; /* 3n: each particle's acceleration f / m of the last force
                                    evaluation, copied from p->f as an evaluation begins when a
                                    linear dashpot asks for it (forces.c, floe_contact.an_ext) */

@@ -31,8 +31,11 @@ on one process and under `mpirun -np 2` and `-np 4`, with an ASCII vtk output ad
   - RK2 (the midpoint probe's bond forces on the owned points), PMB and LPS, the struck
     disc at -np 2, the same checks (a probe that read the split store as one body's block
     made the watchdog stop the run at its first step);
-  - refusals, each with a message naming what, before any step (exit non-zero): the
-    staggered scheme, a PD body in a periodic cell.
+  - the staggered PD-DEM scheme (its per-particle rows travel with their particles): the
+    struck disc with substeps 3 at -np 2 and 4 and every 3 at -np 2, the flying disc (points
+    migrating) with substeps 2 at -np 2 and 4 and every 2 at -np 3, the same checks;
+  - refusals, each with a message naming what, before any step (exit non-zero): a PD body
+    in a periodic cell.
 
 Usage: test_mpi_pd.py FLOE MPIEXEC TESTS_MPI_DIR
 """
@@ -187,11 +190,27 @@ def main():
             run(rk, d(f"k2{tag}"), 2)
             compare_csv(d(f"k1{tag}"), d(f"k2{tag}"), f"RK2 {tag}, -np 2")
             compare_frames(d(f"k1{tag}"), d(f"k2{tag}"), f"RK2 {tag}, -np 2")
+        # the staggered PD-DEM scheme: its rows (F_C, F_PD, the cycle's start, the true
+        # velocity) travel with their particles; the PD points sub-cycle (substeps: the ghosts
+        # refreshed before each PD evaluation) or take F_PD every k steps (every)
+        for tag, text, ranks in (
+                ("substeps 3", vtk.replace("safety: 0.5}", "safety: 0.5, pd_dem: {scheme: staggered, substeps: 3}}", 1),
+                 (2, 4)),
+                ("every 3", vtk.replace("safety: 0.5}", "safety: 0.15, pd_dem: {scheme: staggered, every: 3}}", 1), (2,)),
+                ("flying disc, substeps 2", fsrc.replace("safety: 0.5}", "safety: 0.5, pd_dem: {scheme: staggered, "
+                                                         "substeps: 2}}", 1), (2, 4)),
+                ("flying disc, every 2", fsrc.replace("safety: 0.5}", "safety: 0.25, pd_dem: {scheme: staggered, "
+                                                      "every: 2}}", 1), (3,))):
+            key = "st_" + tag.replace(" ", "_").replace(",", "")
+            sc = d(key + ".yaml")
+            open(sc, "w").write(text)
+            run(sc, d(key + "_1"), 1)
+            for np_ in ranks:
+                run(sc, d(f"{key}_{np_}"), np_)
+                compare_csv(d(key + "_1"), d(f"{key}_{np_}"), f"staggered {tag}, -np {np_}")
+                compare_frames(d(key + "_1"), d(f"{key}_{np_}"), f"staggered {tag}, -np {np_}")
         # refusals before any step
         cases = [
-            ("staggered", src.replace("time: {duration: 30.0e-6, safety: 0.5}",
-                                      "time: {duration: 30.0e-6, safety: 0.5, pd_dem: {scheme: staggered}}"),
-             "staggered"),
             # a PD body in a periodic cell (the cell's stress sums the bonds' virial; a split body
             # evaluates the bonds across its cuts on both sides): the disc free in a cell
             ("periodic cell", src.replace("    boundary:\n      - {region: {box: {min: [-1, -1, -1], max: [1, 1, 0.002]}}, "
