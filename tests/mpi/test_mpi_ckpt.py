@@ -37,7 +37,9 @@ files, so a restarted run must also continue them without a frame missing or rep
  (without the bodies' state gathered into the file: particles.csv 0.15 and energy.csv 1.1e-4
  of the scale off at R = 2; without the region's last forces: energy.csv 2.4e-7; tried by
  hand). RK2 with growing radii (tests/mpi/rk2_grow.yaml, three growing spheres, two with
- their mass; the checkpoint at t = 5 ms): the same two restarts.
+ their mass; the checkpoint at t = 5 ms): the same two restarts. The staggered PD-DEM scheme
+ (pd_fly.yaml with F_PD every 2 steps, the checkpoint inside a PD cycle): the same two
+ restarts.
  (d) a missing and a corrupted checkpoint under R ranks: every rank exits non-zero (each
      rank's status is printed by a wrapper), rank 0 names the reason, within a time limit
      (no rank left waiting in a collective); under R > 1 also a file that only ranks 1..R-1
@@ -339,15 +341,21 @@ with tempfile.TemporaryDirectory() as tmp:
     # RK2 with growing radii (tests/mpi/rk2_grow.yaml, the checkpoint at t = 5 ms): the state
     # objects' radii (and masses) set on rank 0's world from the ranks' (par_world.c
     # mirror_states), the linear dashpots' accelerations
+    # The staggered PD-DEM scheme (the flying disc with F_PD every 2 steps; the checkpoint at
+    # t = 0.46 ms falls inside a PD cycle): its per-particle rows (F_C, F_PD, the cycle's start
+    # positions) are gathered into the file and restored under R' ranks.
+    stag = d("pd_fly_stag.yaml")
+    open(stag, "w").write(open(os.path.join(here, "pd_fly.yaml")).read().replace(
+        "safety: 0.5}", "safety: 0.25, pd_dem: {scheme: staggered, every: 2}}", 1))
     for k, sc, every in (("i", "sea_ice.yaml", "300.5"), ("s", "servo.yaml", "0.015"), ("p", "pd_fly.yaml", "0.00046"),
-                         ("z", "periodic_servo.yaml", "0.05"), ("g", "rk2_grow.yaml", "0.0051")):
+                         ("z", "periodic_servo.yaml", "0.05"), ("g", "rk2_grow.yaml", "0.0051"), ("t", stag, "0.00046")):
         sp = os.path.join(here, sc)
         run(1, ["-o", d(k + "S")], scene=sp)
         run(R, ["-o", d(k + "A"), "--checkpoint-every", every], scene=sp)
         restart(R if R > 1 else 2, d(k + "A"), os.path.join(d(k + "B"), "checkpoint.bin"), d(k + "B"), scene=sp)
-        compare(d(k + "S"), d(k + "B"), f"(a) {sc}: restart under {R if R > 1 else 2} vs serial")
+        compare(d(k + "S"), d(k + "B"), f"(a) {os.path.basename(sc)}: restart under {R if R > 1 else 2} vs serial")
         restart(1, d(k + "A"), os.path.join(d(k + "C"), "checkpoint.bin"), d(k + "C"), scene=sp)
-        compare(d(k + "S"), d(k + "C"), f"(b) {sc}: {R}-rank checkpoint restarted serially vs serial", exact=(R == 1))
+        compare(d(k + "S"), d(k + "C"), f"(b) {os.path.basename(sc)}: {R}-rank checkpoint restarted serially vs serial", exact=(R == 1))
     # (d) bad input: every rank exits non-zero, rank 0 says why, nobody hangs
     bad = d("bad.bin")
     blob = bytearray(open(ck, "rb").read())
