@@ -313,7 +313,9 @@ double floe_pd_forces_nobreak(floe_pd_body *b, const double *x, double *f);
  * c s beta V_i V_j M, LPS (t_ij + t_ji) beta V_i V_j M (a fresh dilatation pass). For
  * stress fluxes and observers. FLOE_ENOMEM never (LPS uses the body's theta array). */
 typedef void (*floe_pd_bond_visit_fn)(int i, int j, int64_t k, const double fij[3], void *user);
-/* (FLOE_ENOTSUP for a user material and for a body split over MPI ranks) */
+/* (FLOE_ENOTSUP for a user material. A body split over MPI ranks: the bonds whose row point,
+ * the end of lower index, this rank owns: each bond once over the ranks; LPS's dilatation pass
+ * exchanges with the other ranks, so every rank calls it for the body) */
 int floe_pd_bond_forces(floe_pd_body *b, const double *x, floe_pd_bond_visit_fn fn, void *user);
 
 /* Local damage phi_i = 1 - sum_j mu beta V_j / sum_j beta V_j (003 eq 7) into phi[n].

@@ -1131,7 +1131,10 @@ int floe_pd_bond_forces(floe_pd_body *b, const double *x, floe_pd_bond_visit_fn 
 {
     if (!b || !b->ops || !x || !fn) return FLOE_EINVAL;
     if (b->mat.model == FLOE_PD_USER) return FLOE_ENOTSUP; /* its bond forces are its own */
-    if (b->split) return FLOE_ENOTSUP; /* split over MPI ranks: not every bond is here */
+    /* split over MPI ranks: the bonds of the rows whose point this rank owns, their partner
+     * here (every bond of the body once over the ranks); LPS's dilatation pass below calls
+     * the split's exchange: every rank calls this for every body */
+    const uint8_t *sm = b->split;
     const int lps = b->mat.model == FLOE_PD_LPS;
     const double kd = lps ? lps_kdil(b) : 0.0;
     if (lps) { /* a fresh dilatation pass, without breaking bonds */
@@ -1140,9 +1143,11 @@ int floe_pd_bond_forces(floe_pd_body *b, const double *x, floe_pd_bond_visit_fn 
         lps_dilatation(b, x);
         b->s_c = s_c;
     }
-    for (int i = 0; i < b->n; i++)
+    for (int i = 0; i < b->n; i++) {
+        if (sm && sm[i] != FLOE_PD_OWNED) continue;
         for (int64_t k = b->off[i]; k < b->off[i + 1]; k++) {
             int j = b->partner[k];
+            if (sm && !sm[j]) continue; /* (an intact bond's partner is always here: par_pd.c) */
             double d[3];
             floe_pd_bond_vec(b, x, b->cellH, i, j, k, d);
             double r = floe_v3_norm(d), L = b->len[k], s = (r - L) / L;
@@ -1160,5 +1165,6 @@ int floe_pd_bond_forces(floe_pd_body *b, const double *x, floe_pd_bond_visit_fn 
             double f[3] = {fm * d[0] / r, fm * d[1] / r, fm * d[2] / r};
             fn(i, j, k, f, user);
         }
+    }
     return FLOE_OK;
 }

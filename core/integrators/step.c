@@ -976,6 +976,33 @@ static int stag_pd_forces(floe_world *w, double span, int mean_velocity) {
     return rc;
 }
 
+/* step 1 of particle i (rows r): the half kick with F_C and the drift, except a PD point
+ * that sub-cycles (ke == 1); its body-force work returned */
+static double stag_open(floe_world *w, double *r, const int *pd_of, int i, int ke, double dt) {
+    floe_particles *p = &w->p;
+    const double h = 0.5 * dt;
+    double *x = p->x + 3 * i, *v = p->v + 3 * i, *ri = r + (size_t)i * STAG_W;
+    const int sub = ke == 1 && stag_pd(pd_of, i);
+    if (sub) memcpy(ri + STAG_XS, x, 3 * sizeof(double)); /* fixed points too: step 3 reads it */
+    if (p->motion[i] == FLOE_FIXED) return 0.0;
+    if (p->motion[i] == FLOE_KINEMATIC) {
+        memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
+        memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
+        kinematic_velocity(w, i, w->time + h);
+        if (!sub) floe_v3_axpy(x, dt, v);
+        double qn[4];
+        q_advance(qn, p->q + 4 * i, p->w + 3 * i, dt);
+        memcpy(p->q + 4 * i, qn, sizeof qn);
+        return 0.0;
+    }
+    floe_v3_axpy(v, h * p->inv_mass[i], ri + STAG_FS);
+    floe_v3_axpy(p->L + 3 * i, h, ri + STAG_TS);
+    rotate_drift(p, i, dt);
+    if (sub) return 0.0;
+    floe_v3_axpy(x, dt, v);
+    return dt * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
+}
+
 int step_staggered(floe_world *w) {
     floe_particles *p = &w->p;
     const int m = w->pd_sub, ke = w->pd_every;
@@ -997,29 +1024,14 @@ int step_staggered(floe_world *w) {
                 memcpy(ROW(i) + STAG_XS, p->x + 3 * i, 3 * sizeof(double));
                 if (p->motion[i] == FLOE_FREE) floe_v3_axpy(p->v + 3 * i, 0.5 * K * p->inv_mass[i], ROW(i) + STAG_FPD);
             }
-    /* 1. half kick with F_C; drift of everything except the PD points that sub-cycle */
-    for (int i = 0; i < nend; i++) {
-        double *x = p->x + 3 * i, *v = p->v + 3 * i;
-        const int sub = ke == 1 && stag_pd(pd_of, i);
-        if (sub) memcpy(ROW(i) + STAG_XS, x, 3 * sizeof(double)); /* fixed points too: step 3 reads it */
-        if (p->motion[i] == FLOE_FIXED) continue;
-        if (p->motion[i] == FLOE_KINEMATIC) {
-            memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
-            memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
-            kinematic_velocity(w, i, w->time + h);
-            if (!sub) floe_v3_axpy(x, dt, v);
-            double qn[4];
-            q_advance(qn, p->q + 4 * i, p->w + 3 * i, dt);
-            memcpy(p->q + 4 * i, qn, sizeof qn);
-            continue;
-        }
-        floe_v3_axpy(v, h * p->inv_mass[i], ROW(i) + STAG_FS);
-        floe_v3_axpy(p->L + 3 * i, h, ROW(i) + STAG_TS);
-        rotate_drift(p, i, dt);
-        if (!sub) {
-            floe_v3_axpy(x, dt, v);
-            wb += dt * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
-        }
+    /* 1. half kick with F_C; drift of everything except the PD points that sub-cycle. MPI:
+     * the walls [0, rep_hi) last, after the servo walls' measures are summed over the ranks
+     * (as velocity Verlet does: their controllers count the particles after this drift) */
+    const int lo = w->par ? w->nl.rep_hi : 0;
+    for (int i = lo; i < nend; i++) wb += stag_open(w, r, pd_of, i, ke, dt);
+    if (w->par) {
+        FLOE_TRY(floe_par_servo_totals(w));
+        for (int i = 0; i < lo; i++) wb += stag_open(w, r, pd_of, i, ke, dt);
     }
     /* 2. dt_PD = dt / m: m velocity Verlet sub-steps of the PD points with F_PD (MPI: the
      * ghosts take their owners' new positions before each evaluation) */
@@ -1054,6 +1066,15 @@ int step_staggered(floe_world *w) {
                 double *ri = ROW(i);
                 memcpy(ri + STAG_VT, p->v + 3 * i, 3 * sizeof(double));
                 for (int a = 0; a < 3; a++) p->v[3 * i + a] = (p->x[3 * i + a] - ri[STAG_XS + a]) / dt;
+            }
+    /* MPI: a decomposition sets a kinematic particle's force at the step start (kin_old)
+     * from the force that travels with it (floe_par_pp_in); a sub-cycled point's p->f holds
+     * its last sub-step's F_PD now: the step start's put back (the contact group clears it) */
+    if (w->par && ke == 1)
+        for (int i = 0; i < nend; i++)
+            if (p->motion[i] == FLOE_KINEMATIC) {
+                memcpy(p->f + 3 * i, w->kin_old + 6 * i, 3 * sizeof(double));
+                memcpy(p->t + 3 * i, w->kin_old + 6 * i + 3, 3 * sizeof(double));
             }
     {
         const int n = p->n;

@@ -24,10 +24,12 @@
  * owners' (lps_theta_sync, one more exchange a step and body).
  *
  * Supported: PMB (constant s_c or alpha, or plastic bonds; surface correction;
- * broken_tension_only either way) and LPS (either influence, with or without the surface correction) in the monolithic
- * scheme, with fixed and constant-velocity boundary regions (their points' motion).
- * Refused with a message: user materials (their loops are their own), body-force regions,
- * the staggered scheme. The bond arrays whole on every rank and the
+ * broken_tension_only either way) and LPS (either influence, with or without the surface
+ * correction) in the monolithic and the staggered scheme (core/integrators/step.c, its rows
+ * moving with their points), with boundary regions of every kind (fixed, velocity and
+ * displacement regions are their points' motion; a body-force region acts on the owners).
+ * Refused with a message: user materials (their loops are their own), a body in a periodic
+ * cell. The bond arrays whole on every rank and the
  * decomposition's O(bonds) reductions are this first version's limits (docs/parallel.md). */
 #include "floe_parallel.h"
 #include "par_internal.h"
@@ -44,12 +46,6 @@
 
 int floe_par_pd_unsupported(const floe_world *w, char *what, size_t len) {
     if (!w->npd) return 0;
-    /* the cell's stress sums the bonds' virial (forces.c pd_vir_visit): a split body
-     * evaluates its bonds across the cuts on both sides */
-    if (w->cell) {
-        snprintf(what, len, "a PD body in a periodic cell");
-        return 1;
-    }
     /* fixed and constant-velocity regions are their points' motion (it travels with them;
      * a ramped one is a motion callback, refused with those); a body-force region's points
      * take its force on their owners' ranks, its last forces made whole at each

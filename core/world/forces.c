@@ -2005,7 +2005,7 @@ static int pd_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, 
             double v0[9];
             memcpy(v0, vc.vir, sizeof v0);
             vc.b = pb;
-            vc.x = p->x + 3 * (size_t)f0;
+            vc.x = floe_pd_positions(w, b); /* MPI: the points here (each rank its owned rows' bonds) */
             int rc = floe_pd_bond_forces(pb, vc.x, pd_vir_visit, &vc);
             if (rc != FLOE_OK)
                 return floe_world_error(w, rc, "PD body %d: its bond forces for the cell's stress: %s", b, floe_strerror(rc));
