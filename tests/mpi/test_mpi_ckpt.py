@@ -39,7 +39,8 @@ files, so a restarted run must also continue them without a frame missing or rep
  hand). RK2 with growing radii (tests/mpi/rk2_grow.yaml, three growing spheres, two with
  their mass; the checkpoint at t = 5 ms): the same two restarts. The staggered PD-DEM scheme
  (pd_fly.yaml with F_PD every 2 steps, the checkpoint inside a PD cycle): the same two
- restarts.
+ restarts. A PD body in a periodic cell (tests/mpi/pd_cell.yaml, its servo reading the bonds'
+ virial, the checkpoint at t = 20.1 us): the same two restarts.
  (d) a missing and a corrupted checkpoint under R ranks: every rank exits non-zero (each
      rank's status is printed by a wrapper), rank 0 names the reason, within a time limit
      (no rank left waiting in a collective); under R > 1 also a file that only ranks 1..R-1
@@ -348,7 +349,8 @@ with tempfile.TemporaryDirectory() as tmp:
     open(stag, "w").write(open(os.path.join(here, "pd_fly.yaml")).read().replace(
         "safety: 0.5}", "safety: 0.25, pd_dem: {scheme: staggered, every: 2}}", 1))
     for k, sc, every in (("i", "sea_ice.yaml", "300.5"), ("s", "servo.yaml", "0.015"), ("p", "pd_fly.yaml", "0.00046"),
-                         ("z", "periodic_servo.yaml", "0.05"), ("g", "rk2_grow.yaml", "0.0051"), ("t", stag, "0.00046")):
+                         ("z", "periodic_servo.yaml", "0.05"), ("g", "rk2_grow.yaml", "0.0051"), ("t", stag, "0.00046"),
+                         ("q", "pd_cell.yaml", "0.0000201")):
         sp = os.path.join(here, sc)
         run(1, ["-o", d(k + "S")], scene=sp)
         run(R, ["-o", d(k + "A"), "--checkpoint-every", every], scene=sp)
