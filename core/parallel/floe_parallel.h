@@ -23,7 +23,8 @@ int floe_parallel_available(void);
 /* Split the prepared world over the ranks of comm (a pointer to an MPI_Comm; NULL: MPI_COMM_WORLD),
  * which must hold the same world on every rank (same particles, in the same order; global id =
  * index at this call). What is not yet supported is refused with FLOE_ENOTSUP and a message
- * (docs/parallel.md, "Not yet"): PD bodies in a periodic cell, PD bodies of a user material, user state classes, user providers and integrators, and
+ * (docs/parallel.md, "Not yet"): PD bodies of a user material, user state classes, user
+ * providers and integrators, and
  * observers added to w itself (outputs go through floe_world_parallel_outputs). */
 int floe_world_parallel_init(floe_world *w, const void *comm);
 

@@ -28,8 +28,9 @@
  * correction) in the monolithic and the staggered scheme (core/integrators/step.c, its rows
  * moving with their points), with boundary regions of every kind (fixed, velocity and
  * displacement regions are their points' motion; a body-force region acts on the owners).
- * Refused with a message: user materials (their loops are their own), a body in a periodic
- * cell. The bond arrays whole on every rank and the
+ * In a periodic cell each rank sums the virial of the bonds whose row point it owns
+ * (floe_pd_bond_forces). Refused with a message: user materials (their loops are their
+ * own). The bond arrays whole on every rank and the
  * decomposition's O(bonds) reductions are this first version's limits (docs/parallel.md). */
 #include "floe_parallel.h"
 #include "par_internal.h"
@@ -47,7 +48,8 @@
 int floe_par_pd_unsupported(const floe_world *w, char *what, size_t len) {
     if (!w->npd) return 0;
     /* fixed and constant-velocity regions are their points' motion (it travels with them;
-     * a ramped one is a motion callback, refused with those); a body-force region's points
+     * a ramped one is a motion callback, which follows its point by global id); a body-force
+     * region's points
      * take its force on their owners' ranks, its last forces made whole at each
      * decomposition (regions_pack) */
     for (int b = 0; b < w->npd; b++) {
