@@ -18,8 +18,10 @@ threaded):
   - sea ice: 2,600 polygon floes driven by a wind, an ocean vortex (its drag integrated
     every 3 steps and held between) and Coriolis with the sea-surface tilt, Hopkins
     contacts: the forcing providers' particle loops run threaded;
-  - walled-rk2: the walled scene under RK2 for 120 steps (two force evaluations a step; its
-    own particle loops run on one thread).
+  - walled-rk2: the walled scene under RK2 for 120 steps (two force evaluations a step);
+  - settle-rk2: the settling spheres under RK2 (its particle loops on the threads: 2,500
+    particles, above the loops' grain; the probe's history saved and put back by a threaded
+    copy).
 Each run, restarted on 2 threads from its last checkpoint, ends with the same files.
 Also: -t 0 and -t x are refused (exit 2). Prints "N passed, N failed"."""
 import filecmp
@@ -155,8 +157,11 @@ def main():
         # RK2 (its midpoint probe, whose dashpot accelerations the end evaluation keeps)
         rk2 = WALLED.replace("time: {duration: 0.015, dt: 5.0e-5}", "time: {duration: 0.006, dt: 5.0e-5, integrator: rk2}")
         check(rk2 != WALLED, "the RK2 variant of the walled scene was made")
+        # RK2's particle loops on the threads: 2,500 spheres, above the loops' grain
+        rk2s = SETTLE.replace("time: {duration: 0.02, safety: 0.5}", "time: {duration: 0.008, safety: 0.5, integrator: rk2}")
+        check(rk2s != SETTLE, "the RK2 variant of the settling scene was made")
         for name, text, every in (("walled", WALLED, "0.01"), ("periodic", PERIODIC, "0.01"), ("settle", SETTLE, "0.01"),
-                                  ("sea-ice", SEAICE, "200"), ("walled-rk2", rk2, "0.004")):
+                                  ("sea-ice", SEAICE, "200"), ("walled-rk2", rk2, "0.004"), ("settle-rk2", rk2s, "0.005")):
             scene = os.path.join(tmp, name + ".yaml")
             with open(scene, "w") as f:
                 f.write(text)

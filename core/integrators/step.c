@@ -757,6 +757,87 @@ static int rk2_midpoint_forces(floe_world *w, double h) {
     return FLOE_OK;
 }
 
+/* RK2's particle loops on the world's threads (floe_world_blocks: blocks of FLOE_PAR_BLOCK
+ * particles, each block's sums from its first particle on, the blocks' sums in block order:
+ * the same bits for any number of threads); the kinematic particles (their motion callbacks)
+ * and the checks with a message on one thread, in index order, after the blocks */
+typedef struct rk2_ctx {
+    floe_world *w;
+    double h, dt;
+    const double *x0, *v0, *q0, *fm, *xb;
+    double *L0, *md; /* md: each block's largest squared displacement since the build */
+    int *bad;        /* each block's first free particle that failed the quick checks */
+} rk2_ctx;
+
+/* 1. the midpoint state of the free particles (the fixed ones stay, the kinematic ones after) */
+static void rk2_mid_block(void *ctx, int i0, int i1, double *sums) {
+    const rk2_ctx *c = ctx;
+    floe_particles *p = &c->w->p;
+    const double h = c->h;
+    sums[0] = 0.0;
+    for (int i = i0; i < i1; i++) {
+        if (p->motion[i] != FLOE_FREE) continue;
+        double *x = p->x + 3 * i, *v = p->v + 3 * i, *q = p->q + 4 * i;
+        const double im = p->inv_mass[i];
+        floe_v3_axpy(x, h, v);
+        for (int k = 0; k < 3; k++) v[k] += h * im * p->f[3 * i + k];
+        floe_v3_axpy(p->L + 3 * i, h, p->t + 3 * i);
+        double qn[4];
+        q_advance(qn, q, p->w + 3 * i, h);
+        memcpy(q, qn, sizeof qn);
+        omega_update(p, i);
+    }
+}
+
+/* 3. the drift from the start with the midpoint velocities; sums: the body-force work */
+static void rk2_end_block(void *ctx, int i0, int i1, double *sums) {
+    const rk2_ctx *c = ctx;
+    floe_particles *p = &c->w->p;
+    const double dt = c->dt, *g = c->w->def.gravity;
+    double wb = 0, md = 0;
+    for (int i = i0; i < i1; i++) {
+        if (p->motion[i] == FLOE_FIXED) continue;
+        double *x = p->x + 3 * i;
+        for (int k = 0; k < 3; k++) x[k] = c->x0[3 * i + k] + dt * p->v[3 * i + k];
+        q_advance(p->q + 4 * i, c->q0 + 4 * i, p->w + 3 * i, dt);
+        if (c->xb) note_disp(x, c->xb + 3 * i, &md);
+        if (p->motion[i] == FLOE_FREE) {
+            wb += dt * (p->mass[i] * floe_v3_dot(g, p->v + 3 * i));
+            for (int k = 0; k < 3; k++) c->L0[3 * i + k] += dt * p->t[3 * i + k]; /* L_{n+1} */
+        }
+    }
+    c->md[i0 / FLOE_PAR_BLOCK] = md;
+    sums[0] = wb;
+}
+
+/* 4. the free particles' v_{n+1}, L_{n+1}; sums: their kinetic energies */
+static void rk2_close_block(void *ctx, int i0, int i1, double *sums) {
+    const rk2_ctx *c = ctx;
+    floe_particles *p = &c->w->p;
+    const double dt = c->dt;
+    double kt = 0, kr = 0;
+    int bad = INT_MAX;
+    for (int i = i0; i < i1; i++) {
+        if (p->motion[i] != FLOE_FREE) continue;
+        double *v = p->v + 3 * i, *L = p->L + 3 * i, im = p->inv_mass[i];
+        double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * dt * dt, lim = 0.5 * p->radius[i];
+        for (int k = 0; k < 3; k++) {
+            v[k] = c->v0[3 * i + k] + dt * im * c->fm[3 * i + k];
+            L[k] = c->L0[3 * i + k];
+        }
+        omega_update(p, i);
+        double ke = 0.5 * p->mass[i] * floe_v3_dot(v, v), kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
+        kt += ke;
+        kr += kre;
+        if (bad == INT_MAX && (!(d2 <= lim * lim) || !(ke + kre < INFINITY) ||
+                               !(fabs(p->x[3 * i]) + fabs(p->x[3 * i + 1]) + fabs(p->x[3 * i + 2]) < INFINITY)))
+            bad = i;
+    }
+    c->bad[i0 / FLOE_PAR_BLOCK] = bad;
+    sums[0] = kt;
+    sums[1] = kr;
+}
+
 /* Explicit midpoint RK2 for the particles (ParticLS eq 21 with y = (x, v, q, L)):
  *   y_mid = y_n + dt/2 f(y_n);  y_{n+1} = y_n + dt f(y_mid).
  * The force at the end of the step, f(y_{n+1}), is evaluated with the midpoint velocities
@@ -774,29 +855,27 @@ int step_rk2(floe_world *w) {
     double *b = ibuf_reserve(w, 16 * (size_t)(n ? n : 1));
     if (!b) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     double *x0 = b, *v0 = b + 3 * (size_t)n, *L0 = b + 6 * (size_t)n, *q0 = b + 9 * (size_t)n;
-    memcpy(x0, p->x, 3 * (size_t)n * sizeof *x0);
-    memcpy(v0, p->v, 3 * (size_t)n * sizeof *v0);
-    memcpy(L0, p->L, 3 * (size_t)n * sizeof *L0);
-    memcpy(q0, p->q, 4 * (size_t)n * sizeof *q0);
-    /* 1. the midpoint state */
+    floe_world_copy(w, x0, p->x, 3 * (size_t)n * sizeof *x0);
+    floe_world_copy(w, v0, p->v, 3 * (size_t)n * sizeof *v0);
+    floe_world_copy(w, L0, p->L, 3 * (size_t)n * sizeof *L0);
+    floe_world_copy(w, q0, p->q, 4 * (size_t)n * sizeof *q0);
+    /* 1. the midpoint state: the free particles on the threads, then the kinematic ones */
+    const int nbk = (n + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK;
+    {
+        rk2_ctx c = {w, h, dt, x0, v0, q0, NULL, NULL, L0, NULL, NULL};
+        double s0;
+        if (floe_world_blocks(w, n, 1, rk2_mid_block, &c, &s0)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
     for (int i = 0; i < n; i++) {
+        if (p->motion[i] != FLOE_KINEMATIC) continue;
         double *x = p->x + 3 * i, *v = p->v + 3 * i, *q = p->q + 4 * i;
-        if (p->motion[i] == FLOE_FIXED) continue;
-        if (p->motion[i] == FLOE_KINEMATIC) {
-            memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
-            memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
-            kinematic_velocity(w, i, t_n + h);
-            floe_v3_axpy(x, h, v);
-        } else {
-            double im = p->inv_mass[i];
-            floe_v3_axpy(x, h, v);
-            for (int k = 0; k < 3; k++) v[k] += h * im * p->f[3 * i + k];
-            floe_v3_axpy(p->L + 3 * i, h, p->t + 3 * i);
-        }
+        memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
+        memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
+        kinematic_velocity(w, i, t_n + h);
+        floe_v3_axpy(x, h, v);
         double qn[4];
         q_advance(qn, q, p->w + 3 * i, h);
         memcpy(q, qn, sizeof qn);
-        if (p->motion[i] == FLOE_FREE) omega_update(p, i);
     }
     /* 2. forces at the midpoint (MPI: the ghosts' midpoint state from their owners) */
     if (w->par) FLOE_TRY(floe_par_ghost_update(w));
@@ -807,22 +886,22 @@ int step_rk2(floe_world *w) {
     b = w->ibuf; /* the midpoint's scratch may have moved it */
     x0 = b; v0 = b + 3 * (size_t)n; L0 = b + 6 * (size_t)n; q0 = b + 9 * (size_t)n;
     double *fm = b + 13 * (size_t)n; /* F_mid */
-    memcpy(fm, p->f, 3 * (size_t)n * sizeof *fm);
+    floe_world_copy(w, fm, p->f, 3 * (size_t)n * sizeof *fm);
     /* 3. x_{n+1} = x_n + dt v_mid, q_{n+1} = exp(dt w_mid) q_n; v, w stay at the midpoint
      * values for the forces at the end; v_{n+1}, L_{n+1} from the midpoint forces */
     double wb = 0, maxd2 = 0;
     const double *xb = w->nl.x_build;
     const int have_xb = xb && w->nl.n_build == n;
-    for (int i = 0; i < n; i++) {
-        if (p->motion[i] == FLOE_FIXED) continue;
-        double *x = p->x + 3 * i;
-        for (int k = 0; k < 3; k++) x[k] = x0[3 * i + k] + dt * p->v[3 * i + k];
-        q_advance(p->q + 4 * i, q0 + 4 * i, p->w + 3 * i, dt);
-        if (have_xb) note_disp(x, xb + 3 * i, &maxd2);
-        if (p->motion[i] == FLOE_FREE) {
-            wb += dt * (p->mass[i] * floe_v3_dot(w->def.gravity, p->v + 3 * i));
-            for (int k = 0; k < 3; k++) L0[3 * i + k] += dt * p->t[3 * i + k]; /* L_{n+1} */
-        }
+    {
+        /* the blocks' largest displacements since the build */
+        double *md = malloc((size_t)(nbk > 0 ? nbk : 1) * sizeof *md);
+        if (!md) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        rk2_ctx c = {w, h, dt, x0, v0, q0, fm, have_xb ? xb : NULL, L0, md, NULL};
+        int rcb = floe_world_blocks(w, n, 1, rk2_end_block, &c, &wb);
+        for (int k = 0; k < nbk && !rcb; k++)
+            if (md[k] > maxd2) maxd2 = md[k];
+        free(md);
+        if (rcb) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
     FLOE_TRY(advance_states(w, dt));
     advance_clock(w);
@@ -835,22 +914,28 @@ int step_rk2(floe_world *w) {
      * particles, whose indices the rebuild kept; the ghosts are new) */
     double kt = 0, kr = 0, wbound = 0;
     const int nend = w->par ? w->nl.own_hi : n;
-    for (int i = 0; i < nend; i++) {
-        if (p->motion[i] != FLOE_FREE) {
+    {
+        const int nbe = (nend + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK;
+        int *bad = malloc((size_t)(nbe > 0 ? nbe : 1) * sizeof *bad);
+        if (!bad) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        rk2_ctx c = {w, h, dt, x0, v0, q0, fm, NULL, L0, NULL, bad};
+        double s2[2];
+        if (floe_world_blocks(w, nend, 2, rk2_close_block, &c, s2)) {
+            free(bad);
+            return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        }
+        kt = s2[0];
+        kr = s2[1];
+        for (int i = 0; i < nend; i++)
             if (p->motion[i] == FLOE_KINEMATIC) wbound += kinematic_close(w, i, h);
-            continue;
-        }
-        double *v = p->v + 3 * i, *L = p->L + 3 * i, im = p->inv_mass[i];
-        double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * dt * dt, lim = 0.5 * p->radius[i];
-        for (int k = 0; k < 3; k++) {
-            v[k] = v0[3 * i + k] + dt * im * fm[3 * i + k];
-            L[k] = L0[3 * i + k];
-        }
-        omega_update(p, i);
-        double ke = 0.5 * p->mass[i] * floe_v3_dot(v, v), kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
-        kt += ke;
-        kr += kre;
-        if (!(d2 <= lim * lim) || !(ke + kre < INFINITY) || !(fabs(p->x[3 * i]) + fabs(p->x[3 * i + 1]) + fabs(p->x[3 * i + 2]) < INFINITY)) {
+        /* a particle failed the quick checks: the checks with the message, in index order
+         * from the first such block on */
+        int first = INT_MAX;
+        for (int k = 0; k < nbe; k++)
+            if (bad[k] < first) first = bad[k];
+        free(bad);
+        for (int i = first; i < nend; i++) {
+            if (p->motion[i] != FLOE_FREE) continue;
             int rc2 = check_particle(w, i, x0 + 3 * i);
             if (rc2) return rc2;
         }

@@ -1879,14 +1879,14 @@ static void contact_save(const floe_provider *pv, const floe_world *w, unsigned 
     (void)pv;
     const size_t np = (size_t)w->nl.npairs, nh = np * (size_t)w->nl.hs * sizeof(double);
     if (!np) return;
-    memcpy(buf, w->nl.hist, nh);
+    floe_world_copy(w, buf, w->nl.hist, nh); /* RK2's probe: twice a step, the list's size */
     memcpy(buf + nh, w->nl.touching, np);
 }
 static void contact_restore(floe_provider *pv, floe_world *w, const unsigned char *buf) {
     (void)pv;
     const size_t np = (size_t)w->nl.npairs, nh = np * (size_t)w->nl.hs * sizeof(double);
     if (!np) return;
-    memcpy(w->nl.hist, buf, nh);
+    floe_world_copy(w, w->nl.hist, buf, nh);
     memcpy(w->nl.touching, buf + nh, np);
 }
 const floe_provider_class floe_contact_provider_class = {

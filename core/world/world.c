@@ -232,6 +232,21 @@ int floe_world_blocks(floe_world *w, int n, int nsum, floe_block_fn fn, void *ct
     return FLOE_OK;
 }
 
+void floe_world_copy(const floe_world *w, void *dst, const void *src, size_t bytes) {
+    const size_t grain = (size_t)1 << 20; /* below 1 MiB a copy on one thread */
+    const int nt = bytes >= 2 * grain ? floe_world_threads(w) : 1;
+    if (nt <= 1) {
+        memcpy(dst, src, bytes);
+        return;
+    }
+    const size_t chunk = ((bytes + (size_t)nt - 1) / (size_t)nt + 63) & ~(size_t)63;
+    FLOE_OMP(omp parallel for num_threads(nt) schedule(static))
+    for (int t = 0; t < nt; t++) {
+        const size_t a = (size_t)t * chunk, b = a + chunk < bytes ? a + chunk : bytes;
+        if (a < b) memcpy((char *)dst + a, (const char *)src + a, b - a);
+    }
+}
+
 /* the list's view of the law "none" (floe_neighbor_list.none, .inert): the pairs of
  * materials under it, and the materials whose particles touch nothing in the store (the law
  * "none" with every material present, walls included); both NULL when no law is "none" */

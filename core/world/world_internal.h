@@ -255,6 +255,8 @@ static inline void floe_loop_split_range(const int *cut, int nb, int nt, int par
     *b0 = cut ? cut[part] : (int)((long long)nb * part / nt);
     *b1 = cut ? cut[part + 1] : (int)((long long)nb * (part + 1) / nt);
 }
+/* memcpy on the world's threads (from 2 MiB on: one chunk a thread; the same bytes) */
+void floe_world_copy(const floe_world *w, void *dst, const void *src, size_t bytes);
 /* threads for a loop over `items` items (1 below the grain or without OpenMP) */
 int floe_world_loop_threads(const floe_world *w, long items);
 /* A particle loop on the world's threads (the forcing providers): fn(ctx, i0, i1, sums) over
