@@ -866,6 +866,9 @@ int step_rk2(floe_world *w) {
         double s0;
         if (floe_world_blocks(w, n, 1, rk2_mid_block, &c, &s0)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
+    /* MPI: the servo walls' measures at the free particles' midpoint (their controllers count
+     * the particles that reach them, as in one process, where the walls come after the bodies) */
+    if (w->par) FLOE_TRY(floe_par_servo_totals(w));
     for (int i = 0; i < n; i++) {
         if (p->motion[i] != FLOE_KINEMATIC) continue;
         double *x = p->x + 3 * i, *v = p->v + 3 * i, *q = p->q + 4 * i;

@@ -233,7 +233,7 @@ int floe_world_blocks(floe_world *w, int n, int nsum, floe_block_fn fn, void *ct
 }
 
 void floe_world_copy(const floe_world *w, void *dst, const void *src, size_t bytes) {
-    const size_t grain = (size_t)1 << 20; /* below 1 MiB a copy on one thread */
+    const size_t grain = (size_t)1 << 20; /* below 2 grains a copy on one thread */
     const int nt = bytes >= 2 * grain ? floe_world_threads(w) : 1;
     if (nt <= 1) {
         memcpy(dst, src, bytes);
