@@ -20,8 +20,9 @@ threaded):
     contacts: the forcing providers' particle loops run threaded;
   - walled-rk2: the walled scene under RK2 for 120 steps (two force evaluations a step);
   - settle-rk2: the settling spheres under RK2 (its particle loops on the threads: 2,500
-    particles, above the loops' grain; the probe's history saved and put back by a threaded
-    copy).
+    particles, above the loops' grain);
+  - pd-staggered: tests/mpi/pd.yaml's struck disc at a finer spacing (3,542 PD points) under
+    the staggered PD-DEM scheme with 2 sub-steps (its particle loops on the threads).
 Each run, restarted on 2 threads from its last checkpoint, ends with the same files.
 Also: -t 0 and -t x are refused (exit 2). Prints "N passed, N failed"."""
 import filecmp
@@ -160,8 +161,16 @@ def main():
         # RK2's particle loops on the threads: 2,500 spheres, above the loops' grain
         rk2s = SETTLE.replace("time: {duration: 0.02, safety: 0.5}", "time: {duration: 0.008, safety: 0.5, integrator: rk2}")
         check(rk2s != SETTLE, "the RK2 variant of the settling scene was made")
+        # the staggered PD-DEM scheme's particle loops on the threads: the struck disc of
+        # tests/mpi/pd.yaml at a finer spacing (3,542 points, above the loops' grain), 2 sub-steps
+        pd = open(os.path.join(sys.argv[2], "mpi", "pd.yaml")).read()
+        stag = pd.replace("spacing: 0.0016", "spacing: 0.0011").replace(
+            "time: {duration: 30.0e-6, safety: 0.5}",
+            "time: {duration: 15.0e-6, safety: 0.5, pd_dem: {scheme: staggered, substeps: 2}}")
+        check(stag.count("0.0011") == 1 and "staggered" in stag, "the staggered variant of the struck disc was made")
         for name, text, every in (("walled", WALLED, "0.01"), ("periodic", PERIODIC, "0.01"), ("settle", SETTLE, "0.01"),
-                                  ("sea-ice", SEAICE, "200"), ("walled-rk2", rk2, "0.004"), ("settle-rk2", rk2s, "0.005")):
+                                  ("sea-ice", SEAICE, "200"), ("walled-rk2", rk2, "0.004"), ("settle-rk2", rk2s, "0.005"),
+                                  ("pd-staggered", stag, "7.0e-6")):
             scene = os.path.join(tmp, name + ".yaml")
             with open(scene, "w") as f:
                 f.write(text)

@@ -997,12 +997,6 @@ static int stag_nend(const floe_world *w) { return w->par ? w->nl.own_hi : w->p.
 /* is particle i a PD point (any body)? */
 static inline int stag_pd(const int *pd_of, int i) { return pd_of[i] >= 0; }
 
-static void stag_zero_pd_forces(floe_world *w) {
-    const int nend = stag_nend(w), *pd_of = w->pd_of;
-    for (int i = 0; i < nend; i++)
-        if (stag_pd(pd_of, i)) memset(w->p.f + 3 * (size_t)i, 0, 3 * sizeof(double));
-}
-
 /* the forces of one group (MPI: this rank's force time booked; the contact group's forces on
  * ghosts summed to their owners, with the servo walls' totals; the PD group writes owned
  * points only) */
@@ -1038,57 +1032,195 @@ int stag_split_forces(floe_world *w, const floe_step_ctx *ctx) {
     return FLOE_OK;
 }
 
+/* The scheme's particle loops on the world's threads, as RK2's (floe_world_blocks: blocks of
+ * FLOE_PAR_BLOCK particles, each block's sums in block order: the same bits for any number of
+ * threads); the kinematic particles (their motion callbacks), the boundary work and the checks
+ * with a message on one thread after the blocks. One context for every loop: `a` is the
+ * loop's time factor. */
+typedef struct stag_ctx {
+    floe_world *w;
+    double *r;          /* the rows */
+    const int *pd_of;
+    double dt, a;
+    int ke, m, op;      /* op: what stag_b_pd does */
+    int *bad;           /* stag_b_close: each block's first free particle failing the quick checks */
+    double *xo;         /* ... and its position at the step's start (3 a block) */
+} stag_ctx;
+
+static int stag_blocks(floe_world *w, int n, int nsum, floe_block_fn fn, stag_ctx *c, double *sum) {
+    double dummy[4];
+    if (floe_world_blocks(w, n, nsum, fn, c, sum ? sum : dummy)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    return FLOE_OK;
+}
+
+/* the PD points' loops (op): 0 the opening kick of a PD cycle (xs = x; a free point's v += a
+ * F_PD / m), 1 a sub-step's closing kick (free: v += a F_PD / m), 2 the mean velocity over the
+ * span a (vt = v, v = (x - xs) / a), 3 the true velocity back (v = vt), 4 the forces cleared,
+ * 5 F_PD from p->f */
+static void stag_b_pd(void *ctx, int i0, int i1, double *sums) {
+    const stag_ctx *c = ctx;
+    floe_particles *p = &c->w->p;
+    const double a = c->a;
+    sums[0] = 0.0;
+    for (int i = i0; i < i1; i++) {
+        if (!stag_pd(c->pd_of, i)) continue;
+        double *ri = c->r + (size_t)i * STAG_W, *v = p->v + 3 * i;
+        switch (c->op) {
+        case 0:
+            memcpy(ri + STAG_XS, p->x + 3 * i, 3 * sizeof(double));
+            if (p->motion[i] == FLOE_FREE) floe_v3_axpy(v, a * p->inv_mass[i], ri + STAG_FPD);
+            break;
+        case 1:
+            if (p->motion[i] == FLOE_FREE) floe_v3_axpy(v, a * p->inv_mass[i], ri + STAG_FPD);
+            break;
+        case 2:
+            memcpy(ri + STAG_VT, v, 3 * sizeof(double));
+            for (int k = 0; k < 3; k++) v[k] = (p->x[3 * i + k] - ri[STAG_XS + k]) / a;
+            break;
+        case 3: memcpy(v, ri + STAG_VT, 3 * sizeof(double)); break;
+        case 4: memset(p->f + 3 * (size_t)i, 0, 3 * sizeof(double)); break;
+        default: memcpy(ri + STAG_FPD, p->f + 3 * i, 3 * sizeof(double)); break;
+        }
+    }
+}
+
 /* PD bond forces at the present positions into the rows' fpd, with the PD points moving at
  * their mean velocity (x - xs) / span for the ledger's trapezoid work over that span */
 static int stag_pd_forces(floe_world *w, double span, int mean_velocity) {
-    floe_particles *p = &w->p;
-    const int nend = stag_nend(w), *pd_of = w->pd_of;
-    double *r = w->stag;
-    if (mean_velocity)
-        for (int i = 0; i < nend; i++)
-            if (stag_pd(pd_of, i)) {
-                double *ri = r + (size_t)i * STAG_W;
-                memcpy(ri + STAG_VT, p->v + 3 * i, 3 * sizeof(double));
-                for (int a = 0; a < 3; a++) p->v[3 * i + a] = (p->x[3 * i + a] - ri[STAG_XS + a]) / span;
-            }
-    stag_zero_pd_forces(w);
-    floe_step_ctx c = ctx_step(w, 0);
-    c.dt = c.hist_dt = span; /* the PD step spans the cycle */
-    int rc = stag_forces(w, &c, FLOE_GROUP_PD);
-    for (int i = 0; i < nend; i++)
-        if (stag_pd(pd_of, i)) {
-            double *ri = r + (size_t)i * STAG_W;
-            memcpy(ri + STAG_FPD, p->f + 3 * i, 3 * sizeof(double));
-            if (mean_velocity) memcpy(p->v + 3 * i, ri + STAG_VT, 3 * sizeof(double));
-        }
-    return rc;
+    const int nend = stag_nend(w);
+    stag_ctx c = {w, w->stag, w->pd_of, w->dt, span, w->pd_every, w->pd_sub, 2, NULL, NULL};
+    if (mean_velocity) FLOE_TRY(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
+    c.op = 4; /* the PD points' forces cleared */
+    FLOE_TRY(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
+    floe_step_ctx fc = ctx_step(w, 0);
+    fc.dt = fc.hist_dt = span; /* the PD step spans the cycle */
+    int rc = stag_forces(w, &fc, FLOE_GROUP_PD);
+    c.op = 5; /* F_PD into the rows */
+    int rc2 = stag_blocks(w, nend, 1, stag_b_pd, &c, NULL);
+    if (mean_velocity && !rc2) {
+        c.op = 3;
+        rc2 = stag_blocks(w, nend, 1, stag_b_pd, &c, NULL);
+    }
+    return rc ? rc : rc2;
 }
 
-/* step 1 of particle i (rows r): the half kick with F_C and the drift, except a PD point
- * that sub-cycles (ke == 1); its body-force work returned */
-static double stag_open(floe_world *w, double *r, const int *pd_of, int i, int ke, double dt) {
+/* step 1 of the free and fixed particles: the half kick with F_C and the drift, except a PD
+ * point that sub-cycles (ke == 1; its start position kept, whatever its motion); sums: the
+ * body-force work */
+static void stag_b_open(void *ctx, int i0, int i1, double *sums) {
+    const stag_ctx *c = ctx;
+    floe_world *w = c->w;
     floe_particles *p = &w->p;
-    const double h = 0.5 * dt;
-    double *x = p->x + 3 * i, *v = p->v + 3 * i, *ri = r + (size_t)i * STAG_W;
-    const int sub = ke == 1 && stag_pd(pd_of, i);
-    if (sub) memcpy(ri + STAG_XS, x, 3 * sizeof(double)); /* fixed points too: step 3 reads it */
-    if (p->motion[i] == FLOE_FIXED) return 0.0;
-    if (p->motion[i] == FLOE_KINEMATIC) {
-        memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
-        memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
-        kinematic_velocity(w, i, w->time + h);
-        if (!sub) floe_v3_axpy(x, dt, v);
-        double qn[4];
-        q_advance(qn, p->q + 4 * i, p->w + 3 * i, dt);
-        memcpy(p->q + 4 * i, qn, sizeof qn);
-        return 0.0;
+    const double dt = c->dt, h = 0.5 * dt;
+    double wb = 0;
+    for (int i = i0; i < i1; i++) {
+        double *x = p->x + 3 * i, *v = p->v + 3 * i, *ri = c->r + (size_t)i * STAG_W;
+        const int sub = c->ke == 1 && stag_pd(c->pd_of, i);
+        if (sub) memcpy(ri + STAG_XS, x, 3 * sizeof(double)); /* fixed points too: step 3 reads it */
+        if (p->motion[i] != FLOE_FREE) continue;
+        floe_v3_axpy(v, h * p->inv_mass[i], ri + STAG_FS);
+        floe_v3_axpy(p->L + 3 * i, h, ri + STAG_TS);
+        rotate_drift(p, i, dt);
+        if (sub) continue;
+        floe_v3_axpy(x, dt, v);
+        wb += dt * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
     }
-    floe_v3_axpy(v, h * p->inv_mass[i], ri + STAG_FS);
-    floe_v3_axpy(p->L + 3 * i, h, ri + STAG_TS);
-    rotate_drift(p, i, dt);
-    if (sub) return 0.0;
-    floe_v3_axpy(x, dt, v);
-    return dt * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
+    sums[0] = wb;
+}
+
+/* a sub-step of the PD points that are not fixed (a = its length): the free ones' opening
+ * kick with F_PD, the drift; sums: the body-force work */
+static void stag_b_sub(void *ctx, int i0, int i1, double *sums) {
+    const stag_ctx *c = ctx;
+    floe_world *w = c->w;
+    floe_particles *p = &w->p;
+    const double d = c->a, hd = 0.5 * d;
+    double wb = 0;
+    for (int i = i0; i < i1; i++) {
+        if (!stag_pd(c->pd_of, i) || p->motion[i] == FLOE_FIXED) continue;
+        double *v = p->v + 3 * i;
+        if (p->motion[i] == FLOE_FREE) floe_v3_axpy(v, hd * p->inv_mass[i], c->r + (size_t)i * STAG_W + STAG_FPD);
+        floe_v3_axpy(p->x + 3 * i, d, v);
+        if (p->motion[i] == FLOE_FREE) wb += d * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
+    }
+    sums[0] = wb;
+}
+
+/* after the contact group: F_C and its torque into the rows (and with sub-steps the PD points'
+ * true velocities back) */
+static void stag_b_rows(void *ctx, int i0, int i1, double *sums) {
+    const stag_ctx *c = ctx;
+    floe_particles *p = &c->w->p;
+    sums[0] = 0.0;
+    for (int i = i0; i < i1; i++) {
+        double *ri = c->r + (size_t)i * STAG_W;
+        if (c->ke == 1 && stag_pd(c->pd_of, i)) memcpy(p->v + 3 * i, ri + STAG_VT, 3 * sizeof(double));
+        memcpy(ri + STAG_FS, p->f + 3 * i, 3 * sizeof(double));
+        memcpy(ri + STAG_TS, p->t + 3 * i, 3 * sizeof(double));
+    }
+}
+
+/* 4. p->f = F_C + F_PD; the free particles' closing kicks; sums: kinetic energies, the shadow
+ * term (a = 1 when the watchdog reads it) */
+static void stag_b_close(void *ctx, int i0, int i1, double *sums) {
+    const stag_ctx *c = ctx;
+    floe_particles *p = &c->w->p;
+    const double dt = c->dt, h = 0.5 * dt;
+    const int m = c->m, shadow = c->a != 0.0;
+    double kt = 0, kr = 0, sh = 0;
+    int bad = INT_MAX;
+    double xb[3] = {0, 0, 0};
+    for (int i = i0; i < i1; i++) {
+        const double *ri = c->r + (size_t)i * STAG_W, *fs = ri + STAG_FS, *ts = ri + STAG_TS, *fpd = ri + STAG_FPD;
+        for (int a = 0; a < 3; a++) p->f[3 * i + a] = fs[a] + fpd[a];
+        if (p->motion[i] != FLOE_FREE) continue;
+        const int subi = c->ke == 1 && stag_pd(c->pd_of, i);
+        double *v = p->v + 3 * i, *L = p->L + 3 * i, im = p->inv_mass[i];
+        if (shadow) { /* the closing kicks: the last PD sub-step's and F_C's */
+            double dv[3], dL[3];
+            for (int k = 0; k < 3; k++) {
+                dv[k] = h * im * fs[k] + (subi ? 0.5 * dt / m * im * fpd[k] : 0);
+                dL[k] = h * ts[k];
+            }
+            sh += shadow_term(p, i, dv, dL);
+        }
+        double xold[3], d2;
+        if (subi) memcpy(xold, ri + STAG_XS, sizeof xold);
+        else for (int k = 0; k < 3; k++) xold[k] = p->x[3 * i + k] - dt * v[k];
+        d2 = (p->x[3 * i] - xold[0]) * (p->x[3 * i] - xold[0]) + (p->x[3 * i + 1] - xold[1]) * (p->x[3 * i + 1] - xold[1]) +
+             (p->x[3 * i + 2] - xold[2]) * (p->x[3 * i + 2] - xold[2]);
+        if (subi) floe_v3_axpy(v, 0.5 * dt / m * im, fpd); /* last PD sub-step */
+        floe_v3_axpy(v, h * im, fs);
+        floe_v3_axpy(L, h, ts);
+        omega_update(p, i);
+        double kin = 0.5 * p->mass[i] * floe_v3_dot(v, v), kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
+        kt += kin;
+        kr += kre;
+        const double lim = 0.5 * p->radius[i];
+        if (bad == INT_MAX && (!(d2 <= lim * lim) || !(kin + kre < INFINITY))) {
+            bad = i;
+            memcpy(xb, xold, sizeof xb);
+        }
+    }
+    const int b = i0 / FLOE_PAR_BLOCK;
+    c->bad[b] = bad;
+    memcpy(c->xo + 3 * (size_t)b, xb, sizeof xb);
+    sums[0] = kt;
+    sums[1] = kr;
+    sums[2] = sh;
+}
+
+/* step 1 of kinematic particle i: its force at the step start kept, its velocity from its
+ * motion at the half step, the drift (a PD point that sub-cycles drifts in the sub-steps) */
+static void stag_kinematic_open(floe_world *w, int i, int ke, const int *pd_of, double dt) {
+    floe_particles *p = &w->p;
+    memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
+    memcpy(w->kin_old + 6 * i + 3, p->t + 3 * i, 3 * sizeof(double));
+    kinematic_velocity(w, i, w->time + 0.5 * dt);
+    if (!(ke == 1 && stag_pd(pd_of, i))) floe_v3_axpy(p->x + 3 * i, dt, p->v + 3 * i);
+    double qn[4];
+    q_advance(qn, p->q + 4 * i, p->w + 3 * i, dt);
+    memcpy(p->q + 4 * i, qn, sizeof qn);
 }
 
 int step_staggered(floe_world *w) {
@@ -1102,43 +1234,35 @@ int step_staggered(floe_world *w) {
     if (!r) return FLOE_ENOMEM;
     const long cyc = ke > 1 ? w->pd_cycle % ke : 0;
     const int pd_start = ke > 1 && cyc % ke == 0, pd_end = ke > 1 && (cyc + 1) % ke == 0;
-    const int *pd_of = w->pd_of;
-    double wb = 0, maxd2 = 0;
-#define ROW(i) (r + (size_t)(i) * STAG_W)
+    double wb = 0, maxd2 = 0, s1;
+    stag_ctx c = {w, r, w->pd_of, dt, 0.0, ke, m, 0, NULL, NULL};
     /* PD every k-th step: the opening half kick of a PD cycle */
-    if (pd_start)
-        for (int i = 0; i < nend; i++)
-            if (stag_pd(pd_of, i)) {
-                memcpy(ROW(i) + STAG_XS, p->x + 3 * i, 3 * sizeof(double));
-                if (p->motion[i] == FLOE_FREE) floe_v3_axpy(p->v + 3 * i, 0.5 * K * p->inv_mass[i], ROW(i) + STAG_FPD);
-            }
-    /* 1. half kick with F_C; drift of everything except the PD points that sub-cycle. MPI:
-     * the walls [0, rep_hi) last, after the servo walls' measures are summed over the ranks
-     * (as velocity Verlet does: their controllers count the particles after this drift) */
-    const int lo = w->par ? w->nl.rep_hi : 0;
-    for (int i = lo; i < nend; i++) wb += stag_open(w, r, pd_of, i, ke, dt);
-    if (w->par) {
-        FLOE_TRY(floe_par_servo_totals(w));
-        for (int i = 0; i < lo; i++) wb += stag_open(w, r, pd_of, i, ke, dt);
+    if (pd_start) {
+        c.op = 0;
+        c.a = 0.5 * K;
+        FLOE_TRY(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
     }
+    /* 1. half kick with F_C; drift of everything except the PD points that sub-cycle; then
+     * the kinematic particles (MPI: after the servo walls' measures are summed over the
+     * ranks: their controllers count the free particles after this drift, as in one process) */
+    FLOE_TRY(stag_blocks(w, nend, 1, stag_b_open, &c, &wb));
+    if (w->par) FLOE_TRY(floe_par_servo_totals(w));
+    for (int i = 0; i < nend; i++)
+        if (p->motion[i] == FLOE_KINEMATIC) stag_kinematic_open(w, i, ke, c.pd_of, dt);
     /* 2. dt_PD = dt / m: m velocity Verlet sub-steps of the PD points with F_PD (MPI: the
      * ghosts take their owners' new positions before each evaluation) */
     if (ke == 1) {
-        const double d = dt / m, hd = 0.5 * d;
+        const double d = dt / m;
         for (int s = 0; s < m; s++) {
-            for (int i = 0; i < nend; i++) {
-                if (!stag_pd(pd_of, i) || p->motion[i] == FLOE_FIXED) continue;
-                double *v = p->v + 3 * i;
-                if (p->motion[i] == FLOE_FREE) floe_v3_axpy(v, hd * p->inv_mass[i], ROW(i) + STAG_FPD);
-                floe_v3_axpy(p->x + 3 * i, d, v);
-                if (p->motion[i] == FLOE_FREE) wb += d * (p->mass[i] * floe_v3_dot(w->def.gravity, v));
-            }
+            c.a = d;
+            FLOE_TRY(stag_blocks(w, nend, 1, stag_b_sub, &c, &s1));
+            wb += s1;
             if (w->par) FLOE_TRY(floe_par_ghost_update(w));
             FLOE_TRY(stag_pd_forces(w, d, 0));
             if (s == m - 1) break; /* the last sub-step closes with the final kick below */
-            for (int i = 0; i < nend; i++)
-                if (stag_pd(pd_of, i) && p->motion[i] == FLOE_FREE)
-                    floe_v3_axpy(p->v + 3 * i, hd * p->inv_mass[i], ROW(i) + STAG_FPD);
+            c.op = 1;
+            c.a = 0.5 * d;
+            FLOE_TRY(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
         }
     }
     FLOE_TRY(advance_states(w, dt));
@@ -1148,13 +1272,11 @@ int step_staggered(floe_world *w) {
      * the step for the contact laws (the tangential spring grows by the displacement) and
      * the ledger: set before the rebuild, so that under MPI the ghosts take it with their
      * positions, the true one (vt) travelling in the rows with a migrating point */
-    if (ke == 1)
-        for (int i = 0; i < nend; i++)
-            if (stag_pd(pd_of, i)) {
-                double *ri = ROW(i);
-                memcpy(ri + STAG_VT, p->v + 3 * i, 3 * sizeof(double));
-                for (int a = 0; a < 3; a++) p->v[3 * i + a] = (p->x[3 * i + a] - ri[STAG_XS + a]) / dt;
-            }
+    if (ke == 1) {
+        c.op = 2;
+        c.a = dt;
+        FLOE_TRY(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
+    }
     /* MPI: a decomposition sets a kinematic particle's force at the step start (kin_old)
      * from the force that travels with it (floe_par_pp_in); a sub-cycled point's p->f holds
      * its last sub-step's F_PD now: the step start's put back (the contact group clears it) */
@@ -1175,68 +1297,51 @@ int step_staggered(floe_world *w) {
     }
     /* MPI: a decomposition migrates particles (the store, the rows and pd_of are new) */
     nend = stag_nend(w);
-    r = w->stag;
-    pd_of = w->pd_of;
-    floe_step_ctx c = ctx_step(w, contacts_wanted(w));
-    int rc = stag_forces(w, &c, FLOE_GROUP_DEM);
-    if (ke == 1)
-        for (int i = 0; i < nend; i++)
-            if (stag_pd(pd_of, i)) memcpy(p->v + 3 * i, ROW(i) + STAG_VT, 3 * sizeof(double));
-    if (rc) return rc;
-    for (int i = 0; i < nend; i++) {
-        memcpy(ROW(i) + STAG_FS, p->f + 3 * i, 3 * sizeof(double));
-        memcpy(ROW(i) + STAG_TS, p->t + 3 * i, 3 * sizeof(double));
+    c.r = r = w->stag;
+    c.pd_of = w->pd_of;
+    floe_step_ctx fc = ctx_step(w, contacts_wanted(w));
+    int rc = stag_forces(w, &fc, FLOE_GROUP_DEM);
+    if (rc) {
+        if (ke == 1) { /* the true velocities back before the error returns */
+            c.op = 3;
+            stag_blocks(w, nend, 1, stag_b_pd, &c, NULL);
+        }
+        return rc;
     }
+    FLOE_TRY(stag_blocks(w, nend, 1, stag_b_rows, &c, NULL));
     /* PD every k-th step: the closing evaluation and half kick of the cycle */
     if (pd_end) {
         FLOE_TRY(stag_pd_forces(w, K, 1));
-        for (int i = 0; i < nend; i++)
-            if (stag_pd(pd_of, i) && p->motion[i] == FLOE_FREE)
-                floe_v3_axpy(p->v + 3 * i, 0.5 * K * p->inv_mass[i], ROW(i) + STAG_FPD);
+        c.op = 1;
+        c.a = 0.5 * K;
+        FLOE_TRY(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
     }
-    /* 4. closing half kick with F_C; p->f = F_C + F_PD for the observers */
-    for (int i = 0; i < nend; i++)
-        for (int a = 0; a < 3; a++) p->f[3 * i + a] = ROW(i)[STAG_FS + a] + ROW(i)[STAG_FPD + a];
-    double kt = 0, kr = 0, wbound = 0, sh = 0;
-    const int shadow = w->def.energy_check != FLOE_CHECK_OFF;
-    for (int i = 0; i < nend; i++) {
-        if (p->motion[i] != FLOE_FREE) {
-            if (p->motion[i] == FLOE_KINEMATIC) wbound += kinematic_close(w, i, h);
-            continue;
-        }
-        const double *fs = ROW(i) + STAG_FS, *ts = ROW(i) + STAG_TS, *fpd = ROW(i) + STAG_FPD;
-        const int subi = ke == 1 && stag_pd(pd_of, i);
-        double *v = p->v + 3 * i, *L = p->L + 3 * i, im = p->inv_mass[i];
-        if (shadow) { /* the closing kicks: the last PD sub-step's and F_C's */
-            double dv[3], dL[3];
-            for (int k = 0; k < 3; k++) {
-                dv[k] = h * im * fs[k] + (subi ? 0.5 * dt / m * im * fpd[k] : 0);
-                dL[k] = h * ts[k];
-            }
-            sh += shadow_term(p, i, dv, dL);
-        }
-        double xold[3], d2;
-        if (subi) memcpy(xold, ROW(i) + STAG_XS, sizeof xold);
-        else for (int k = 0; k < 3; k++) xold[k] = p->x[3 * i + k] - dt * v[k];
-        d2 = (p->x[3 * i] - xold[0]) * (p->x[3 * i] - xold[0]) + (p->x[3 * i + 1] - xold[1]) * (p->x[3 * i + 1] - xold[1]) +
-             (p->x[3 * i + 2] - xold[2]) * (p->x[3 * i + 2] - xold[2]);
-        if (subi) floe_v3_axpy(v, 0.5 * dt / m * im, fpd); /* last PD sub-step */
-        floe_v3_axpy(v, h * im, fs);
-        floe_v3_axpy(L, h, ts);
-        omega_update(p, i);
-        double kin = 0.5 * p->mass[i] * floe_v3_dot(v, v), kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
-        kt += kin;
-        kr += kre;
-        double lim = 0.5 * p->radius[i];
-        if (!(d2 <= lim * lim) || !(kin + kre < INFINITY)) {
-            int rc2 = check_particle(w, i, xold);
-            if (rc2) return rc2;
-        }
+    /* 4. closing half kick with F_C; p->f = F_C + F_PD for the observers; the kinematic
+     * particles' step close, then the checks with a message (a block's first particle that
+     * failed the quick ones) */
+    const int nbe = (nend + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK;
+    int *bad = malloc((size_t)(nbe > 0 ? nbe : 1) * sizeof *bad);
+    double *xo = malloc((size_t)(nbe > 0 ? nbe : 1) * 3 * sizeof *xo), s3[3] = {0, 0, 0};
+    if (!bad || !xo) {
+        free(bad);
+        free(xo);
+        return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
-#undef ROW
-    w->wd_shadow = sh;
-    w->energy.kinetic_trans = kt;
-    w->energy.kinetic_rot = kr;
+    c.bad = bad;
+    c.xo = xo;
+    c.a = w->def.energy_check != FLOE_CHECK_OFF ? 1.0 : 0.0;
+    rc = stag_blocks(w, nend, 3, stag_b_close, &c, s3);
+    double wbound = 0;
+    for (int i = 0; !rc && i < nend; i++)
+        if (p->motion[i] == FLOE_KINEMATIC) wbound += kinematic_close(w, i, h);
+    for (int b = 0; !rc && b < nbe; b++)
+        if (bad[b] != INT_MAX) rc = check_particle(w, bad[b], xo + 3 * (size_t)b);
+    free(bad);
+    free(xo);
+    if (rc) return rc;
+    w->wd_shadow = s3[2];
+    w->energy.kinetic_trans = s3[0];
+    w->energy.kinetic_rot = s3[1];
     w->energy.work_body += wb;
     w->energy.work_boundary += wbound;
     return FLOE_OK;
