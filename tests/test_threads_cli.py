@@ -22,7 +22,9 @@ threaded):
   - settle-rk2: the settling spheres under RK2 (its particle loops on the threads: 2,500
     particles, above the loops' grain);
   - pd-staggered: tests/mpi/pd.yaml's struck disc at a finer spacing (3,542 PD points) under
-    the staggered PD-DEM scheme with 2 sub-steps (its particle loops on the threads).
+    the staggered PD-DEM scheme with 2 sub-steps (its particle loops on the threads), and
+    with F_PD every 2 steps; pd-pull-staggered: tests/mpi/pd_pull.yaml with 3,072 spheres
+    (its kinematic PD points' motion callbacks), 2 sub-steps.
 Each run, restarted on 2 threads from its last checkpoint, ends with the same files.
 Also: -t 0 and -t x are refused (exit 2). Prints "N passed, N failed"."""
 import filecmp
@@ -168,9 +170,22 @@ def main():
             "time: {duration: 30.0e-6, safety: 0.5}",
             "time: {duration: 15.0e-6, safety: 0.5, pd_dem: {scheme: staggered, substeps: 2}}")
         check(stag.count("0.0011") == 1 and "staggered" in stag, "the staggered variant of the struck disc was made")
+        # ... with F_PD every 2 steps (the cycle's kicks, the mean velocity over the cycle)
+        stag2 = stag.replace("safety: 0.5, pd_dem: {scheme: staggered, substeps: 2}}",
+                             "safety: 0.25, pd_dem: {scheme: staggered, every: 2}}")
+        check(stag2 != stag, "the every-2 variant was made")
+        # ... and tests/mpi/pd_pull.yaml with its sphere cloud grown to 3,072 (3,744 particles):
+        # ramped velocity and displacement regions (kinematic PD points, their motion callbacks
+        # on one thread after the blocks), 2 sub-steps
+        pull = open(os.path.join(sys.argv[2], "mpi", "pd_pull.yaml")).read().replace(
+            "counts: [4, 8, 24]", "counts: [8, 16, 24]").replace(
+            "time: {duration: 120.0e-6, safety: 0.5}",
+            "time: {duration: 30.0e-6, safety: 0.5, pd_dem: {scheme: staggered, substeps: 2}}")
+        check("[8, 16, 24]" in pull and "staggered" in pull, "the staggered variant of the pulled bar was made")
         for name, text, every in (("walled", WALLED, "0.01"), ("periodic", PERIODIC, "0.01"), ("settle", SETTLE, "0.01"),
                                   ("sea-ice", SEAICE, "200"), ("walled-rk2", rk2, "0.004"), ("settle-rk2", rk2s, "0.005"),
-                                  ("pd-staggered", stag, "7.0e-6")):
+                                  ("pd-staggered", stag, "7.0e-6"), ("pd-staggered-every", stag2, "7.0e-6"),
+                                  ("pd-pull-staggered", pull, "1.5e-5")):
             scene = os.path.join(tmp, name + ".yaml")
             with open(scene, "w") as f:
                 f.write(text)

@@ -104,6 +104,17 @@ static int forces_advancing(floe_world *w) {
     return forces_all(w, &c);
 }
 
+/* 1 when check_particle below fails for particle i (its conditions, without the message):
+ * for the threaded loops, which call it only for the particles this says fail */
+static int particle_fails(const floe_particles *p, int i, const double xold[3]) {
+    const double *x = p->x + 3 * i, *v = p->v + 3 * i, *om = p->w + 3 * i;
+    for (int k = 0; k < 3; k++)
+        if (!isfinite(x[k]) || !isfinite(v[k]) || !isfinite(om[k])) return 1;
+    double d[3];
+    floe_v3_sub(d, x, xold);
+    return floe_v3_norm(d) > 0.5 * p->radius[i];
+}
+
 static int check_particle(floe_world *w, int i, const double xold[3]) {
     floe_particles *p = &w->p;
     const double *x = p->x + 3 * i, *v = p->v + 3 * i, *om = p->w + 3 * i;
@@ -1095,13 +1106,15 @@ static int stag_pd_forces(floe_world *w, double span, int mean_velocity) {
     floe_step_ctx fc = ctx_step(w, 0);
     fc.dt = fc.hist_dt = span; /* the PD step spans the cycle */
     int rc = stag_forces(w, &fc, FLOE_GROUP_PD);
-    c.op = 5; /* F_PD into the rows */
-    int rc2 = stag_blocks(w, nend, 1, stag_b_pd, &c, NULL);
+    double dummy;
+    c.op = 5; /* F_PD into the rows (the forces' error, if any, keeps its message) */
+    int rc2 = floe_world_blocks(w, nend, 1, stag_b_pd, &c, &dummy);
     if (mean_velocity && !rc2) {
         c.op = 3;
-        rc2 = stag_blocks(w, nend, 1, stag_b_pd, &c, NULL);
+        rc2 = floe_world_blocks(w, nend, 1, stag_b_pd, &c, &dummy);
     }
-    return rc ? rc : rc2;
+    if (!rc && rc2) rc = floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    return rc;
 }
 
 /* step 1 of the free and fixed particles: the half kick with F_C and the drift, except a PD
@@ -1161,7 +1174,8 @@ static void stag_b_rows(void *ctx, int i0, int i1, double *sums) {
 }
 
 /* 4. p->f = F_C + F_PD; the free particles' closing kicks; sums: kinetic energies, the shadow
- * term (a = 1 when the watchdog reads it) */
+ * term (a = 1 when the watchdog reads it); bad, xo: the block's first particle that fails the
+ * checks (check_particle) */
 static void stag_b_close(void *ctx, int i0, int i1, double *sums) {
     const stag_ctx *c = ctx;
     floe_particles *p = &c->w->p;
@@ -1196,8 +1210,11 @@ static void stag_b_close(void *ctx, int i0, int i1, double *sums) {
         double kin = 0.5 * p->mass[i] * floe_v3_dot(v, v), kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
         kt += kin;
         kr += kre;
+        /* the quick checks, then check_particle's own: the first particle of the block that
+         * fails it, with its start position (as the serial loop called it for each one the
+         * quick checks flagged, in order) */
         const double lim = 0.5 * p->radius[i];
-        if (bad == INT_MAX && (!(d2 <= lim * lim) || !(kin + kre < INFINITY))) {
+        if (bad == INT_MAX && (!(d2 <= lim * lim) || !(kin + kre < INFINITY)) && particle_fails(p, i, xold)) {
             bad = i;
             memcpy(xb, xold, sizeof xb);
         }
@@ -1302,9 +1319,10 @@ int step_staggered(floe_world *w) {
     floe_step_ctx fc = ctx_step(w, contacts_wanted(w));
     int rc = stag_forces(w, &fc, FLOE_GROUP_DEM);
     if (rc) {
-        if (ke == 1) { /* the true velocities back before the error returns */
+        if (ke == 1) { /* the true velocities back before the error returns (its message kept) */
+            double dummy;
             c.op = 3;
-            stag_blocks(w, nend, 1, stag_b_pd, &c, NULL);
+            (void)floe_world_blocks(w, nend, 1, stag_b_pd, &c, &dummy);
         }
         return rc;
     }
