@@ -1294,15 +1294,6 @@ int step_staggered(floe_world *w) {
         c.a = dt;
         FLOE_TRY(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
     }
-    /* MPI: a decomposition sets a kinematic particle's force at the step start (kin_old)
-     * from the force that travels with it (floe_par_pp_in); a sub-cycled point's p->f holds
-     * its last sub-step's F_PD now: the step start's put back (the contact group clears it) */
-    if (w->par && ke == 1)
-        for (int i = 0; i < nend; i++)
-            if (p->motion[i] == FLOE_KINEMATIC) {
-                memcpy(p->f + 3 * i, w->kin_old + 6 * i, 3 * sizeof(double));
-                memcpy(p->t + 3 * i, w->kin_old + 6 * i + 3, 3 * sizeof(double));
-            }
     {
         const int n = p->n;
         const double *xb = w->nl.x_build;

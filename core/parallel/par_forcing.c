@@ -19,8 +19,8 @@
  * boundary work summed over the ranks is the wall's work once.
  *
  * Kinematic bounded particles: their force at the step start (kin_old, written at the drift
- * and read at the step's end, a decomposition between them) is set again from the force
- * that travelled with them (floe_par_pp_in). */
+ * and read at the step's end, a decomposition between them) is one of these rows
+ * (world_prepare.c prepare_state registers it). */
 #include "par_hooks.h"
 #include "par_internal.h"
 #include "world_parts.h"
@@ -120,16 +120,6 @@ int floe_par_pp_out(floe_world *w, floe_par *P, const int *dest) {
 /* after the ghosts: the arrays rebuilt for the new store (p->n rows; ghosts' rows zero, never
  * read: ghosts are not free) from the rows received, the walls' rows kept */
 int floe_par_pp_in(floe_world *w, floe_par *P) {
-    /* a kinematic particle's force at the step start (kin_old: written at the drift, read at
-     * the step's end, with this decomposition between them) is its force of the last
-     * evaluation, which travelled with it in its record: set again for the owned ones (the
-     * walls keep their local indices and rows; par_room grew kin_old to the store) */
-    if (w->kin_old)
-        for (int i = P->nrep; i < P->nrep + P->nown; i++)
-            if (w->p.motion[i] == FLOE_KINEMATIC) {
-                memcpy(w->kin_old + 6 * (size_t)i, w->p.f + 3 * (size_t)i, 3 * sizeof(double));
-                memcpy(w->kin_old + 6 * (size_t)i + 3, w->p.t + 3 * (size_t)i, 3 * sizeof(double));
-            }
     if (!w->npps) return FLOE_OK;
     const int m = 1 + pp_width(w), own_hi = P->nrep + P->nown;
     double **fresh = malloc((size_t)(w->npps > 0 ? w->npps : 1) * sizeof *fresh);

@@ -341,17 +341,6 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
                 if (i >= 0 && i < n) w->motions[k].particle = newidx[i];
             }
             w->motion_idx_n = -1;
-            /* the kinematic walls' forces at the step start, moved with them */
-            if (w->kin_old) {
-                double *ko = malloc((size_t)n * 6 * sizeof *ko);
-                if (!ko) rc = FLOE_ENOMEM;
-                else {
-                    for (int i = 0; i < n; i++)
-                        if (newidx[i] >= 0) memcpy(ko + 6 * newidx[i], w->kin_old + 6 * i, 6 * sizeof *ko);
-                    free(w->kin_old);
-                    w->kin_old = ko;
-                }
-            }
         }
     }
     free(mine); free(newidx); free(gid0); free(buf);

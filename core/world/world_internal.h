@@ -108,7 +108,9 @@ struct floe_world {
     int *motion_idx; int motion_idx_n, motion_idx_cnt; /* particle -> motion callback (world.c) */
     floe_body_force_fn body_force; void *body_force_user;
     double *fb_old; int fb_n;   /* last callback force and torque per particle (6n) */
-    double *kin_old;            /* force and torque of kinematic particles at the step start (6n) */
+    double *kin_old; int kin_old_n; /* force and torque of kinematic particles at the step start
+                                       (6 a particle, kin_old_n rows; a pps row: under MPI it moves
+                                       with its particle at a decomposition inside a step) */
     unsigned char *kinb; size_t kinb_cap; /* velocity Verlet: per block of particles, any kinematic
                                              one in it (step.c; its loops over them skip the rest) */
     /* per-particle state of the force stages (the last forces of a trapezoid work, a held

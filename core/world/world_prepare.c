@@ -229,6 +229,10 @@ int prepare_state(floe_world *w) {
         double *ko = realloc(w->kin_old, (size_t)(p->n ? p->n : 1) * 6 * sizeof(double));
         if (!ko) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
         w->kin_old = ko;
+        w->kin_old_n = p->n;
+        /* written at a step's start and read at its end, with an MPI decomposition between
+         * them: registered as a per-particle row, so that it travels with its particle */
+        if (floe_world_pp_attach(w, &w->kin_old, &w->kin_old_n, 6)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
     /* the watchdog's floor on the energy scale: every free particle lifted by its size
      * against gravity (a resting pile has little kinetic energy, yet that is the energy
