@@ -274,14 +274,13 @@ static void test_breakage(void) {
 
 /* a small lattice beam (21 x 4 nodes, end sections held vertically) under a sudden load
  * that cracks it: the implicit run with downdates equals the one that refactors */
-static floe_newmark *lattice_beam(int refactor, double beta, double dt) {
+static floe_newmark *lattice_beam_n(int refactor, double beta, double dt, int nx, int ny, double strength) {
     floe_newmark_def d = floe_newmark_default_def();
     d.beta = beta;
     d.dt = dt;
     d.refactor_on_break = refactor;
     d.damping_ratio = 0.05;
     floe_newmark *s = floe_newmark_create(&d, NULL, 0);
-    const int nx = 21, ny = 4;
     const double h = 0.05, E = 30e9, rho = 2400;
     for (int j = 0; j < ny; j++)
         for (int i = 0; i < nx; i++) {
@@ -300,8 +299,8 @@ static floe_newmark *lattice_beam(int refactor, double beta, double dt) {
     for (int j = 0; j < ny; j++)
         for (int i = 0; i < nx; i++) {
             int a = j * nx + i;
-            if (i + 1 < nx) floe_newmark_add_bond(s, a, a + 1, &sec, 3e6 + 0.05e6 * floe_beam_normal(&rng), INFINITY);
-            if (j + 1 < ny) floe_newmark_add_bond(s, a, a + nx, &sec, 3e6 + 0.05e6 * floe_beam_normal(&rng), INFINITY);
+            if (i + 1 < nx) floe_newmark_add_bond(s, a, a + 1, &sec, strength + 0.05e6 * floe_beam_normal(&rng), INFINITY);
+            if (j + 1 < ny) floe_newmark_add_bond(s, a, a + nx, &sec, strength + 0.05e6 * floe_beam_normal(&rng), INFINITY);
         }
     for (int j = 0; j < ny; j++) {
         floe_newmark_fix(s, j * nx, FLOE_NM_UY | (j == 0 ? FLOE_NM_UX : 0));
@@ -312,6 +311,73 @@ static floe_newmark *lattice_beam(int refactor, double beta, double dt) {
         floe_newmark_set_load(s, (ny - 1) * nx + i, f, NULL);
     }
     return s;
+}
+
+static floe_newmark *lattice_beam(int refactor, double beta, double dt) { return lattice_beam_n(refactor, beta, dt, 21, 4, 3e6); }
+
+/* the threaded solver (floe_newmark_set_threads) gives the same bits for 1, 2 and 3 threads:
+ * a beam of 2,400 bonds and 3,630 dofs (above the loops' grain) cracking under its load,
+ * explicit (the accepting bond pass, the node loops, the breaks) and implicit (K a_n, the
+ * trial and the accepting passes, the step cuts) */
+static void test_threads(void) {
+    floe_newmark *probe = lattice_beam_n(0, 0.0, 0.5, 121, 10, 1e6);
+    double dtc = floe_newmark_critical_dt(probe);
+    floe_newmark_destroy(probe);
+    const double betas[2] = {0.0, 0.25}, dts[2] = {0.5 * dtc, 2e-4};
+    const long steps[2] = {3000, 60};
+    for (int m = 0; m < 2; m++) {
+        floe_newmark *s[3] = {NULL, NULL, NULL};
+        int rc[3], nth[3] = {1, 2, 3}, refused = 0;
+        for (int t = 0; t < 3; t++) {
+            s[t] = lattice_beam_n(0, betas[m], dts[m], 121, 10, 1e6);
+            int r = floe_newmark_set_threads(s[t], nth[t]);
+            if (r == FLOE_ENOTSUP) {
+                CHECK(strstr(floe_newmark_last_error(s[t]), "FLOE_WITH_OPENMP") != NULL, "the refusal names the option: %s",
+                      floe_newmark_last_error(s[t]));
+                refused = 1;
+                break;
+            }
+            rc[t] = FLOE_OK;
+            for (long k = 0; k < steps[m] && rc[t] == FLOE_OK; k++) rc[t] = floe_newmark_step(s[t]);
+        }
+        if (refused) {
+            printf("  threads: OpenMP not built in, the comparison skipped\n");
+            for (int t = 0; t < 3; t++) floe_newmark_destroy(s[t]);
+            return;
+        }
+        floe_newmark_stats st[3];
+        int same = 1, nb = floe_newmark_bond_count(s[0]);
+        for (int t = 0; t < 3; t++) {
+            CHECK(rc[t] == FLOE_OK, "%s beam on %d threads: %s", m ? "implicit" : "explicit", nth[t], floe_newmark_last_error(s[t]));
+            floe_newmark_get_stats(s[t], &st[t]);
+        }
+        for (int t = 1; t < 3; t++) {
+            for (int i = 0; i < floe_newmark_node_count(s[0]); i++) {
+                double a[4][3], b[4][3];
+                floe_newmark_get(s[0], i, a[0], a[1], a[2], a[3]);
+                floe_newmark_get(s[t], i, b[0], b[1], b[2], b[3]);
+                same &= !memcmp(a, b, sizeof a);
+            }
+            for (int k = 0; k < nb; k++) {
+                int x, y;
+                double ta, tb, sa, sb, ua, ub;
+                floe_newmark_bond_state(s[0], k, &x, &ta, &sa, &ua);
+                floe_newmark_bond_state(s[t], k, &y, &tb, &sb, &ub);
+                same &= x == y && !memcmp(&ta, &tb, sizeof ta) && !memcmp(&sa, &sb, sizeof sa) && !memcmp(&ua, &ub, sizeof ua);
+            }
+            same &= st[t].broken == st[0].broken && st[t].steps == st[0].steps && st[t].cuts == st[0].cuts &&
+                    !memcmp(&st[t].energy_elastic, &st[0].energy_elastic, sizeof(double)) &&
+                    !memcmp(&st[t].energy_kinetic, &st[0].energy_kinetic, sizeof(double)) &&
+                    !memcmp(&st[t].work_external, &st[0].work_external, sizeof(double)) &&
+                    !memcmp(&st[t].dissipated, &st[0].dissipated, sizeof(double));
+        }
+        printf("  threads, %s lattice beam (%d bonds, %ld steps, %ld cuts): %d bonds broken on 1 thread\n",
+               m ? "implicit" : "explicit", nb, st[0].steps, st[0].cuts, st[0].broken);
+        CHECK(st[0].broken >= 2, "the %s beam cracks (%d bonds), so the breaks run threaded too", m ? "implicit" : "explicit",
+              st[0].broken);
+        CHECK(same, "%s: 1, 2 and 3 threads give the same bits (nodes, bonds, energies)", m ? "implicit" : "explicit");
+        for (int t = 0; t < 3; t++) floe_newmark_destroy(s[t]);
+    }
 }
 
 static void test_downdate(void) {
@@ -392,6 +458,7 @@ int main(void) {
     test_static_cantilever();
     test_breakage();
     test_downdate();
+    test_threads();
     test_errors();
     return check_summary("test_newmark");
 }

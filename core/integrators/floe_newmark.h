@@ -106,6 +106,10 @@ enum {
     FLOE_NM_ALL = 63
 };
 int floe_newmark_fix(floe_newmark *s, int i, unsigned mask);
+/* Threads for the solver's bond and node loops (OpenMP; 0, the default: OpenMP's default,
+ * OMP_NUM_THREADS). The results are the same bits for any count (docs/parallel.md). A count
+ * above 1 in a build without OpenMP (FLOE_WITH_OPENMP=OFF) is refused (FLOE_ENOTSUP). */
+int floe_newmark_set_threads(floe_newmark *s, int nthreads);
 /* Constant external force (N) and moment (N m) on node i, times the load factor. */
 int floe_newmark_set_load(floe_newmark *s, int i, const double f[3], const double moment[3]);
 /* Load factor lambda(t): f_e(t) = lambda(t) F (default 1). */
@@ -119,7 +123,8 @@ int floe_newmark_set_initial(floe_newmark *s, int i, const double u[3], const do
 /* Build the system of a prepared world: one node per particle (walls and fixed or
  * kinematic particles are fully supported nodes), the world's intact beam bonds with their
  * sections and strengths, gravity as the load, the particles' velocities. The node index
- * is the particle index. NULL with a message in err on failure. */
+ * is the particle index; the solver takes the world's threads (floe_world_set_threads). NULL
+ * with a message in err on failure. */
 floe_newmark *floe_newmark_from_world(floe_world *w, const floe_newmark_def *def, char *err, size_t errlen);
 
 /* Assemble, factor, initial acceleration from eq 15 at t = 0 (called by step if needed).

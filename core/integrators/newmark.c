@@ -49,7 +49,19 @@ floe_newmark *floe_newmark_create(const floe_newmark_def *def, char *err, size_t
     s->nd = def->dim == 2 ? 3 : 6;
     s->st.t_first_break = -1;
     s->ablk_epoch = -1;
+    s->inc_epoch = -1;
     return s;
+}
+
+int floe_newmark_set_threads(floe_newmark *s, int nthreads) {
+    if (nthreads < 0) return nm_error(s, FLOE_EINVAL, "threads: %d (0 for OpenMP's default, or >= 1)", nthreads);
+#ifndef _OPENMP
+    if (nthreads > 1)
+        return nm_error(s, FLOE_ENOTSUP, "threads: %d asked, but floe was built without OpenMP (configure with "
+                        "-DFLOE_WITH_OPENMP=ON)", nthreads);
+#endif
+    s->nthreads = nthreads;
+    return FLOE_OK;
 }
 
 static void free_arrays(floe_newmark *s) {
@@ -84,6 +96,7 @@ void floe_newmark_destroy(floe_newmark *s) {
     free(s->eq);
     free(s->cblk);
     free(s->ablk);
+    free(s->inc_off); free(s->inc); free(s->gdf); free(s->bsum); free(s->bbrk); free(s->bflag); free(s->vsum);
 #ifdef FLOE_HAVE_CHOLMOD
     free_cholmod(s);
 #endif
@@ -268,51 +281,168 @@ static inline void local_stress(const nm_bond *b, int dim, const double *f, doub
     } else floe_beam_stress(&b->s, dim, f, sigma, tau);
 }
 
-/* out = K g over the intact bonds */
-#if defined(__GNUC__)
-__attribute__((unused))
-#endif
-static void k_apply(floe_newmark *s, const double *g, double *out) {
-    memset(out, 0, (size_t)s->nd * s->n * sizeof *out);
-    double ul[12], fl[12];
-    for (int k = 0; k < s->nb; k++) {
-        nm_bond *b = &s->b[k];
-        if (b->broken) continue;
-        to_local(s, b, g, ul);
-        local_apply(b, s->dim, ul, fl);
-        add_global(s, b, fl, 1.0, out);
-    }
-}
-
-/* trial increments dfl = K_loc T^T du of every intact bond, their global sum into kd, the
- * trial stresses, and the change of stored energy (returned) */
-static double bonds_trial(floe_newmark *s, const double *du, double *kd) {
-    double t0 = now_s();
-    memset(kd, 0, (size_t)s->nd * s->n * sizeof *kd);
-    const int n2 = 2 * s->nd;
-    double ul[12], f[12], de = 0;
-    for (int k = 0; k < s->nb; k++) {
-        nm_bond *b = &s->b[k];
-        if (b->broken) continue;
-        to_local(s, b, du, ul);
-        local_apply(b, s->dim, ul, b->dfl);
-        add_global(s, b, b->dfl, 1.0, kd);
-        for (int c = 0; c < n2; c++) {
-            f[c] = b->fl[c] + b->dfl[c];
-            de += (b->fl[c] + 0.5 * b->dfl[c]) * ul[c];
-        }
-        local_stress(b, s->dim, f, &b->sig_tr, &b->tau_tr);
-    }
-    s->st.seconds_bonds += now_s() - t0;
-    return de;
-}
-
 static double bond_ratio(const nm_bond *b, double sig, double tau) {
     double r = 0;
     if (isfinite(b->sig_lim)) r = b->sig_lim > 0 ? sig / b->sig_lim : (sig > 0 ? INFINITY : 0);
     if (isfinite(b->tau_lim)) r = fmax(r, b->tau_lim > 0 ? tau / b->tau_lim : (tau > 0 ? INFINITY : 0));
     return r;
 }
+
+/* ---- the bond passes (threads: docs/parallel.md, "What runs threaded") ---- */
+
+/* gd = T fl: a bond's local end forces in global components (add_global's arithmetic) */
+static inline void ends_global(const floe_newmark *s, const nm_bond *b, const double *fl, double *gd) {
+    const double *R = b->R;
+    if (s->nd == 3)
+        for (int e = 0; e < 2; e++) {
+            const double *f = fl + 3 * e;
+            double *q = gd + 3 * e;
+            q[0] = R[0] * f[0] + R[3] * f[1];
+            q[1] = R[1] * f[0] + R[4] * f[1];
+            q[2] = f[2];
+        }
+    else
+        for (int e = 0; e < 2; e++) {
+            const double *f = fl + 6 * e;
+            double *q = gd + 6 * e;
+            for (int c = 0; c < 3; c++) {
+                q[c] = R[c] * f[0] + R[3 + c] * f[1] + R[6 + c] * f[2];
+                q[3 + c] = R[c] * f[3] + R[3 + c] * f[4] + R[6 + c] * f[5];
+            }
+        }
+}
+
+/* every node's intact bonds in bond order (entries 2 k + e), for the gathers; rebuilt when
+ * bonds break (the epoch) */
+static int build_incidence(floe_newmark *s) {
+    if (s->inc_epoch == s->epoch && s->inc_off) return FLOE_OK;
+    int *off = realloc(s->inc_off, (size_t)(s->n + 1) * sizeof *off);
+    if (off) s->inc_off = off;
+    int *in = off ? realloc(s->inc, (size_t)(s->nb > 0 ? 2 * s->nb : 1) * sizeof *in) : NULL;
+    if (in) s->inc = in;
+    if (!off || !in) return nm_error(s, FLOE_ENOMEM, "out of memory");
+    memset(off, 0, (size_t)(s->n + 1) * sizeof *off);
+    for (int k = 0; k < s->nb; k++)
+        if (!s->b[k].broken) { off[s->b[k].i]++; off[s->b[k].j]++; }
+    int at = 0;
+    for (int i = 0; i < s->n; i++) { const int c = off[i]; off[i] = at; at += c; }
+    off[s->n] = at;
+    for (int k = 0; k < s->nb; k++) /* in bond order: each node's entries ascend */
+        if (!s->b[k].broken) { in[off[s->b[k].i]++] = 2 * k; in[off[s->b[k].j]++] = 2 * k + 1; }
+    for (int i = s->n; i > 0; i--) off[i] = off[i - 1]; /* the fill moved each start to the next's */
+    off[0] = 0;
+    s->inc_epoch = s->epoch;
+    return FLOE_OK;
+}
+
+/* out = the sum over each node's intact bonds of their ends' forces (gdf), in bond order */
+static void gather_nodes(floe_newmark *s, double *out) {
+    const int nd = s->nd, n = s->n, nt = nm_threads(s, (long)nd * n);
+    const int *off = s->inc_off, *in = s->inc;
+    const double *gdf = s->gdf;
+    FLOE_OMP(omp parallel for num_threads(nt) schedule(static))
+    for (int i = 0; i < n; i++) {
+        double acc[6] = {0, 0, 0, 0, 0, 0};
+        for (int p = off[i]; p < off[i + 1]; p++) {
+            const double *g = gdf + (size_t)nd * in[p];
+            for (int c = 0; c < nd; c++) acc[c] += g[c];
+        }
+        for (int c = 0; c < nd; c++) out[(size_t)nd * i + c] = acc[c];
+    }
+}
+
+enum { NM_APPLY, NM_TRIAL, NM_ACCEPT };
+
+/* one pass over the intact bonds with the global vector g, out = the nodes' sums:
+ *   NM_APPLY  out = K g;
+ *   NM_TRIAL  the trial increments dfl = K_loc T^T g, out = their sum (kd), the trial
+ *             stresses; *de = the change of stored energy;
+ *   NM_ACCEPT the same, and the trial accepted at once (fl += dfl, the stresses), the bonds at
+ *             or above their strength flagged (bflag, bbrk): the explicit step, which never
+ *             redoes a trial */
+static int bond_pass(floe_newmark *s, const double *g, double *out, int mode, double *de) {
+    double t0 = now_s();
+    FLOE_TRY(build_incidence(s));
+    const int nb = s->nb, n2 = 2 * s->nd, dim = s->dim, B = FLOE_PAR_BLOCK;
+    const int nblk = (nb + B - 1) / B, nt = nm_threads(s, nb), nd = s->nd;
+    nm_bond *bonds = s->b;
+    double *gdf = s->gdf, *bsum = s->bsum;
+    int *bbrk = s->bbrk;
+    unsigned char *bflag = s->bflag;
+    /* one thread: each bond's ends added to out at once, in bond order, from the same values
+     * the gather adds in the same order (the same bits, without gdf's traffic) */
+    const int scatter = nt == 1;
+    if (scatter) memset(out, 0, (size_t)nd * s->n * sizeof *out);
+    FLOE_OMP(omp parallel for num_threads(nt) schedule(static))
+    for (int blk = 0; blk < nblk; blk++) {
+        const int k1 = (blk + 1) * B < nb ? (blk + 1) * B : nb;
+        double sum = 0, ul[12], f[12], g12[12];
+        int brk = 0;
+        for (int k = blk * B; k < k1; k++) {
+            nm_bond *b = &bonds[k];
+            if (b->broken) continue;
+            double *gd = scatter ? g12 : gdf + (size_t)n2 * k;
+            to_local(s, b, g, ul);
+            if (mode == NM_APPLY) local_apply(b, dim, ul, f);
+            else local_apply(b, dim, ul, b->dfl);
+            ends_global(s, b, mode == NM_APPLY ? f : b->dfl, gd);
+            if (scatter)
+                for (int c = 0; c < nd; c++) {
+                    out[(size_t)nd * b->i + c] += gd[c];
+                    out[(size_t)nd * b->j + c] += gd[nd + c];
+                }
+            if (mode == NM_APPLY) continue;
+            for (int c = 0; c < n2; c++) {
+                f[c] = b->fl[c] + b->dfl[c];
+                sum += (b->fl[c] + 0.5 * b->dfl[c]) * ul[c];
+            }
+            local_stress(b, dim, f, &b->sig_tr, &b->tau_tr);
+            if (mode == NM_ACCEPT) {
+                for (int c = 0; c < n2; c++) b->fl[c] = f[c];
+                b->sigma = b->sig_tr;
+                b->tau = b->tau_tr;
+                bflag[k] = bond_ratio(b, b->sigma, b->tau) >= 1;
+                brk += bflag[k];
+            }
+        }
+        bsum[blk] = sum;
+        bbrk[blk] = brk;
+    }
+    if (!scatter) gather_nodes(s, out);
+    if (de) {
+        double e = 0;
+        for (int blk = 0; blk < nblk; blk++) e += bsum[blk];
+        *de = e;
+    }
+    s->st.seconds_bonds += now_s() - t0;
+    return FLOE_OK;
+}
+
+/* the trial of the last NM_TRIAL pass accepted (the implicit step): fl += dfl, the stresses,
+ * the bonds at or above their strength flagged */
+static void accept_pass(floe_newmark *s) {
+    const int nb = s->nb, n2 = 2 * s->nd, B = FLOE_PAR_BLOCK;
+    const int nblk = (nb + B - 1) / B, nt = nm_threads(s, nb);
+    nm_bond *bonds = s->b;
+    int *bbrk = s->bbrk;
+    unsigned char *bflag = s->bflag;
+    FLOE_OMP(omp parallel for num_threads(nt) schedule(static))
+    for (int blk = 0; blk < nblk; blk++) {
+        const int k1 = (blk + 1) * B < nb ? (blk + 1) * B : nb;
+        int brk = 0;
+        for (int k = blk * B; k < k1; k++) {
+            nm_bond *b = &bonds[k];
+            if (b->broken) continue;
+            for (int c = 0; c < n2; c++) b->fl[c] += b->dfl[c];
+            b->sigma = b->sig_tr;
+            b->tau = b->tau_tr;
+            bflag[k] = bond_ratio(b, b->sigma, b->tau) >= 1;
+            brk += bflag[k];
+        }
+        bbrk[blk] = brk;
+    }
+}
+
 
 /* ---- damping blocks (eq 8) ---- */
 
@@ -367,7 +497,9 @@ static void c_apply(const floe_newmark *s, const double *g, double *out) {
         memset(out, 0, (size_t)nd * s->n * sizeof *out);
         return;
     }
-    for (int i = 0; i < s->n; i++) {
+    const int n = s->n, nt = nm_threads(s, (long)nd * n);
+    FLOE_OMP(omp parallel for num_threads(nt) schedule(static))
+    for (int i = 0; i < n; i++) {
         const double *C = s->cblk + (size_t)nn * i, *q = g + (size_t)nd * i;
         double *o = out + (size_t)nd * i;
         for (int r = 0; r < nd; r++) {
@@ -490,6 +622,21 @@ int floe_newmark_prepare(floe_newmark *s) {
         if (s->eq[k] < 0) { s->u[k] = 0; s->v[k] = 0; }
     for (int k = 0; k < s->nb; k++) bond_dampers(s, &s->b[k]);
     build_cblk(s);
+    {
+        const int nblk = (s->nb + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK + 1;
+        double *gd = realloc(s->gdf, (size_t)(s->nb > 0 ? s->nb : 1) * 2 * nd * sizeof *gd);
+        if (gd) s->gdf = gd;
+        double *bs = realloc(s->bsum, (size_t)nblk * sizeof *bs);
+        if (bs) s->bsum = bs;
+        int *bk = realloc(s->bbrk, (size_t)nblk * sizeof *bk);
+        if (bk) s->bbrk = bk;
+        unsigned char *bf = realloc(s->bflag, (size_t)(s->nb > 0 ? s->nb : 1));
+        if (bf) s->bflag = bf;
+        double *vs = realloc(s->vsum, (size_t)4 * ((N + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK + 1) * sizeof *vs);
+        if (vs) s->vsum = vs;
+        if (!gd || !bs || !bk || !bf || !vs) return nm_error(s, FLOE_ENOMEM, "out of memory");
+        s->inc_epoch = -1; /* bonds may have been added: the gathers' index again */
+    }
     if (s->def.beta == 0) {
         double dtc = floe_newmark_critical_dt(s);
         if (s->def.dt > dtc && !s->def.allow_unstable_dt)
@@ -520,7 +667,8 @@ int floe_newmark_prepare(floe_newmark *s) {
 #endif
     }
     /* initial internal forces f_int = K u0 and bond forces; a0 from eq 15 at t = 0 */
-    double e0 = bonds_trial(s, s->u, s->fint);
+    double e0 = 0;
+    FLOE_TRY(bond_pass(s, s->u, s->fint, NM_TRIAL, &e0));
     for (int k = 0; k < s->nb; k++) {
         nm_bond *b = &s->b[k];
         if (b->broken) continue;
@@ -553,8 +701,10 @@ static int do_step(floe_newmark *s, double dt_full) {
      * steps while a crack runs, doubled back after a step without breaks) */
     int level = beta > 0 && s->def.line_search_eps >= 0 ? s->level : 0, k_over = -1, k_under = -1;
     double dt = level_dt(dt_full, level), de = 0, dt_lo = 0, dt_hi = 0, r_lo = 0, r_hi = 0;
-    int cuts = 0, final_trial = 0;
+    int cuts = 0, final_trial = 0, accepted = 0;
+    const int ntv = nm_threads(s, N); /* the element-wise loops (no sums) */
     for (;;) {
+        FLOE_OMP(omp parallel for num_threads(ntv) schedule(static))
         for (int k = 0; k < N; k++) {
             if (s->eq[k] < 0) { s->an[k] = s->bn[k] = 0; continue; }
             s->an[k] = dt * s->v[k] + 0.5 * dt * dt * (1 - 2 * beta) * s->a[k];
@@ -563,26 +713,29 @@ static int do_step(floe_newmark *s, double dt_full) {
         const double lam = load_factor(s, s->t + dt);
         c_apply(s, s->bn, s->rhs);
         if (beta == 0) {
-            /* central difference: du = a_n, internal forces at n+1 first (eqs 19-20) */
+            /* central difference: du = a_n, internal forces at n+1 first (eqs 19-20). The
+             * node blocks first: the bond pass accepts the step (nothing may fail after it) */
+            if (s->ablk_dt != dt || s->ablk_epoch != s->epoch) FLOE_TRY(build_ablk(s, dt));
             memcpy(s->du, s->an, (size_t)N * sizeof *s->du);
-            de = bonds_trial(s, s->du, s->kd);
+            FLOE_TRY(bond_pass(s, s->du, s->kd, NM_ACCEPT, &de));
+            accepted = 1;
+            FLOE_OMP(omp parallel for num_threads(ntv) schedule(static))
             for (int k = 0; k < N; k++) s->rhs[k] = lam * s->F[k] - s->fint[k] - s->kd[k] - s->rhs[k];
             FLOE_TRY(solve_explicit(s, dt, s->rhs, s->anew));
+            FLOE_OMP(omp parallel for num_threads(ntv) schedule(static))
             for (int k = 0; k < N; k++) s->vnew[k] = s->bn[k] + gamma * dt * s->anew[k];
             break;
         }
 #ifdef FLOE_HAVE_CHOLMOD
         /* eq 26 */
-        double tb = now_s();
-        k_apply(s, s->an, s->kd);
-        s->st.seconds_bonds += now_s() - tb;
+        FLOE_TRY(bond_pass(s, s->an, s->kd, NM_APPLY, NULL));
         for (int k = 0; k < N; k++) s->rhs[k] = lam * s->F[k] - s->fint[k] - s->kd[k] - s->rhs[k];
         FLOE_TRY(solve_implicit(s, dt, s->rhs, s->anew));
         for (int k = 0; k < N; k++) {
             s->du[k] = s->an[k] + beta * dt * dt * s->anew[k];
             s->vnew[k] = s->bn[k] + gamma * dt * s->anew[k];
         }
-        de = bonds_trial(s, s->du, s->kd);
+        FLOE_TRY(bond_pass(s, s->du, s->kd, NM_TRIAL, &de));
         /* line search (eqs 29-30): the fraction alpha of du at which the first bond reaches
          * its strength, and the step redone with dt sqrt(alpha); the steps are the levels
          * dt 2^(-k/2), searched by bisection between the longest step known to exceed the
@@ -643,32 +796,55 @@ static int do_step(floe_newmark *s, double dt_full) {
     const double lam0 = load_factor(s, s->t), lam1 = load_factor(s, s->t + dt);
     c_apply(s, s->v, s->cv0);
     c_apply(s, s->vnew, s->cv1);
-    double wext = 0, wdamp = 0;
-    for (int k = 0; k < N; k++) {
-        if (s->eq[k] < 0) continue;
-        wext += 0.5 * (lam0 + lam1) * s->F[k] * s->du[k];
-        wdamp += 0.5 * (s->cv0[k] + s->cv1[k]) * s->du[k];
-    }
-    for (int k = 0; k < N; k++) {
-        s->u[k] += s->du[k];
-        s->v[k] = s->vnew[k];
-        s->a[k] = s->anew[k];
-        s->fint[k] += s->kd[k];
+    /* the state, with the step's sums per block of dofs (in block order: the same bits for
+     * any thread count): the loads' and the dampers' work, the kinetic energy, and the
+     * kinetic energy the loads can give a free dof in one step (the instability check) */
+    double wext = 0, wdamp = 0, ke = 0, fsc = 0;
+    {
+        const int B = FLOE_PAR_BLOCK, nblk = (N + B - 1) / B;
+        double *vs = s->vsum;
+        FLOE_OMP(omp parallel for num_threads(ntv) schedule(static))
+        for (int blk = 0; blk < nblk; blk++) {
+            const int k1 = (blk + 1) * B < N ? (blk + 1) * B : N;
+            double we = 0, wd = 0, e = 0, fs = 0;
+            for (int k = blk * B; k < k1; k++) {
+                s->u[k] += s->du[k];
+                s->v[k] = s->vnew[k];
+                s->a[k] = s->anew[k];
+                s->fint[k] += s->kd[k];
+                const double m = node_m(s, k / nd, k % nd);
+                e += 0.5 * m * s->v[k] * s->v[k];
+                if (s->eq[k] < 0) continue;
+                we += 0.5 * (lam0 + lam1) * s->F[k] * s->du[k];
+                wd += 0.5 * (s->cv0[k] + s->cv1[k]) * s->du[k];
+                if (s->F[k] != 0) {
+                    const double fk = lam1 * s->F[k] * dt;
+                    fs += fk * fk / (2.0 * m);
+                }
+            }
+            vs[4 * blk] = we; vs[4 * blk + 1] = wd; vs[4 * blk + 2] = e; vs[4 * blk + 3] = fs;
+        }
+        for (int blk = 0; blk < nblk; blk++) {
+            wext += vs[4 * blk]; wdamp += vs[4 * blk + 1]; ke += vs[4 * blk + 2]; fsc += vs[4 * blk + 3];
+        }
     }
     s->t += dt;
     s->st.steps++;
     s->st.work_external += wext;
     s->st.dissipated += wdamp;
     s->st.energy_elastic += de;
-    /* breakage (eq 11): bonds at or beyond their strength */
+    /* breakage (eq 11): bonds at or beyond their strength (flagged by the accepting pass),
+     * in bond order */
+    if (!accepted) accept_pass(s);
     int broke = 0, *blist = NULL;
     for (int k = 0; k < s->nb; k++) {
+        if (k % FLOE_PAR_BLOCK == 0 && !s->bbrk[k / FLOE_PAR_BLOCK]) {
+            k += FLOE_PAR_BLOCK - 1; /* a block without a break */
+            continue;
+        }
         nm_bond *b = &s->b[k];
         if (b->broken) continue;
-        for (int c = 0; c < 2 * nd; c++) b->fl[c] += b->dfl[c];
-        b->sigma = b->sig_tr;
-        b->tau = b->tau_tr;
-        if (bond_ratio(b, b->sigma, b->tau) >= 1) {
+        if (s->bflag[k]) {
             /* released: its internal force leaves f_int, its energy is dissipated */
             add_global(s, b, b->fl, -1.0, s->fint);
             double eb = 0, ul[12];
@@ -711,16 +887,11 @@ static int do_step(floe_newmark *s, double dt_full) {
     /* the next step: the same level while bonds break, twice as long after a quiet step */
     if (dt != level_dt(dt_full, level) && k_under >= 0) level = k_under; /* off the ladder: the level below */
     s->level = broke ? level : (level >= 2 ? level - 2 : 0);
-    s->st.energy_kinetic = kinetic(s, s->v);
+    s->st.energy_kinetic = ke;
     double e = s->st.energy_kinetic + s->st.energy_elastic;
     /* what the energy may reach: what was put in, plus what the loads can give a free node
      * in one step (the explicit scheme books the work one step after the velocity) */
-    double scale = fabs(s->st.energy_initial) + fabs(s->st.work_external) + fabs(s->st.dissipated);
-    for (int k = 0; k < N; k++)
-        if (s->eq[k] >= 0 && s->F[k] != 0) {
-            double fk = lam1 * s->F[k] * dt;
-            scale += fk * fk / (2.0 * node_m(s, k / nd, k % nd));
-        }
+    double scale = fabs(s->st.energy_initial) + fabs(s->st.work_external) + fabs(s->st.dissipated) + fsc;
     if (!isfinite(e) || e > 100.0 * scale + 1e-300) {
         double dtc = floe_newmark_critical_dt(s);
         return nm_error(s, FLOE_EUNSTABLE,

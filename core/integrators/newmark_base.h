@@ -6,6 +6,7 @@
 #define FLOE_NEWMARK_BASE_H
 #include "floe_newmark.h"
 #include "world_internal.h"
+#include "floe_par.h"
 
 #include <stdarg.h>
 #include <stdio.h>
@@ -20,21 +21,23 @@
 #define NM_SLOTS 4      /* factors kept for different steps (implicit) */
 #define NM_LEVELS 20    /* shortest step of the step control: dt 2^(-20/2) ~ 1e-3 dt */
 
+/* what every step reads first (the bond passes stream the bonds: a 2D bond's step touches
+ * 6 of its 8 cache lines in this order, 7 in the order of the fields' meaning) */
 typedef struct nm_bond {
     int i, j;
-    floe_beam_section s;
+    int broken;
     double R[9];             /* rows: the local axes (e, y', z') in global components */
-    double fl[12];           /* local internal forces at the ends (eq 10), incremental (eq 20) */
-    double dfl[12];          /* the trial step's increment */
-    double c[6];             /* eq 8 dampers on the local components of each end (3 + 3) */
     double k[6];             /* EA/l, 12EI/(l^3(1+phi)), 6EI/(l^2(1+phi)), (4+phi)EI/(l(1+phi)),
                                 (2-phi)EI/(l(1+phi)), GJ/l: the entries of eq 7 */
     double inv_a, inv_w;     /* 1/A, 1/W for eq 11 */
     double sig_lim, tau_lim;
     double sigma, tau;       /* stresses at the last accepted step */
     double sig_tr, tau_tr;   /* at the trial step */
+    double fl[12];           /* local internal forces at the ends (eq 10), incremental (eq 20) */
+    double dfl[12];          /* the trial step's increment */
+    floe_beam_section s;
+    double c[6];             /* eq 8 dampers on the local components of each end (3 + 3) */
     double t_broken;
-    int broken;
 } nm_bond;
 
 struct floe_newmark {
@@ -63,6 +66,18 @@ struct floe_newmark {
     int level;               /* implicit step control: the step is dt 2^(-level/2) */
     floe_newmark_stats st;
     double energy_scale;     /* for the instability check */
+    /* threads (floe_newmark_set_threads; 0: OpenMP's default). The bond passes run over
+     * blocks of FLOE_PAR_BLOCK bonds; each bond writes its ends' forces in global components
+     * (gdf), and each node gathers its intact bonds' ends in bond order (inc), the order of
+     * the serial scatter: the same bits for any thread count */
+    int nthreads;
+    int *inc_off, *inc;      /* n + 1 offsets into inc; entries 2 k + e (bond k, end e) */
+    long inc_epoch;          /* the epoch inc was built for (-1: none) */
+    double *gdf;             /* nb 2 nd: each bond end's force of the last pass */
+    double *bsum;            /* per block: its bonds' change of stored energy */
+    int *bbrk;               /* per block: its bonds at or above their strength */
+    unsigned char *bflag;    /* nb: at or above its strength at the last accepted step */
+    double *vsum;            /* per block of FLOE_PAR_BLOCK dofs: 4 sums of the step */
 #ifdef FLOE_HAVE_CHOLMOD
     cholmod_common cc;
     int cc_started;
@@ -170,6 +185,13 @@ static inline void bond_damper_block(int nd, const nm_bond *b, double *D) {
                 D[p * 6 + q] = ct;
                 D[(3 + p) * 6 + 3 + q] = cr;
             }
+}
+
+/* the solver's threads for a loop of m items: 1 below a size where a parallel region costs
+ * more than it gives */
+static inline int nm_threads(const floe_newmark *s, long m) {
+    if (m < 2 * FLOE_PAR_BLOCK) return 1;
+    return s->nthreads > 0 ? s->nthreads : floe_par_max_threads();
 }
 
 static inline double node_m(const floe_newmark *s, int i, int k) {

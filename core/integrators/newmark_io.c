@@ -104,6 +104,7 @@ floe_newmark *floe_newmark_from_world(floe_world *w, const floe_newmark_def *def
     def.dim = w->def.dim;
     floe_newmark *s = floe_newmark_create(&def, err, errlen);
     if (!s) return NULL;
+    s->nthreads = w->nthreads; /* the world's threads */
     const floe_particles *p = &w->p;
     for (int i = 0; i < p->n && !rc; i++) {
         int wall = !isfinite(p->radius[i]) || !isfinite(p->mass[i]);

@@ -260,8 +260,10 @@ int downdate_bonds(floe_newmark *s, int slot, const int *broken, int nbr) {
 int solve_explicit(floe_newmark *s, double dt, const double *rhs, double *x) {
     if (s->ablk_dt != dt || s->ablk_epoch != s->epoch) FLOE_TRY(build_ablk(s, dt));
     double t0 = now_s();
-    const int nd = s->nd, nn = nd * nd;
-    for (int i = 0; i < s->n; i++) {
+    const int nd = s->nd, nn = nd * nd, n = s->n;
+    const int nt = nm_threads(s, (long)nd * n);
+    FLOE_OMP(omp parallel for num_threads(nt) schedule(static)) /* element-wise: the same bits */
+    for (int i = 0; i < n; i++) {
         const double *O = s->ablk + (size_t)nn * i, *r = rhs + (size_t)nd * i;
         double *o = x + (size_t)nd * i;
         for (int p = 0; p < nd; p++) {
@@ -277,8 +279,10 @@ int solve_explicit(floe_newmark *s, double dt, const double *rhs, double *x) {
 /* explicit: inverse of the free part of M + gamma dt C for every node (Gauss-Jordan on at
  * most 6 x 6, symmetric positive definite) */
 int build_ablk(floe_newmark *s, double dt) {
-    const int nd = s->nd, nn = nd * nd;
-    for (int i = 0; i < s->n; i++) {
+    const int nd = s->nd, nn = nd * nd, n = s->n, nt = nm_threads(s, (long)nd * n);
+    int bad = n; /* the lowest node whose block is not positive definite (any thread count) */
+    FLOE_OMP(omp parallel for num_threads(nt) schedule(static) reduction(min : bad))
+    for (int i = 0; i < n; i++) {
         double A[36], Inv[36];
         int fr[6], m = 0;
         for (int k = 0; k < nd; k++)
@@ -289,9 +293,14 @@ int build_ablk(floe_newmark *s, double dt) {
                 Inv[p * m + q] = p == q;
             }
         for (int p = 0; p < m; p++) A[p * m + p] += node_m(s, i, fr[p]);
-        for (int c = 0; c < m; c++) {
+        int pd = 1;
+        for (int c = 0; c < m && pd; c++) {
             double piv = A[c * m + c];
-            if (!(piv > 0)) return nm_error(s, FLOE_EUNSTABLE, "node %d: M + gamma dt C is not positive definite", i);
+            if (!(piv > 0)) {
+                pd = 0;
+                if (i < bad) bad = i;
+                break;
+            }
             for (int q = 0; q < m; q++) { A[c * m + q] /= piv; Inv[c * m + q] /= piv; }
             for (int r = 0; r < m; r++) {
                 if (r == c) continue;
@@ -304,6 +313,10 @@ int build_ablk(floe_newmark *s, double dt) {
         memset(O, 0, (size_t)nn * sizeof *O);
         for (int p = 0; p < m; p++)
             for (int q = 0; q < m; q++) O[fr[p] * nd + fr[q]] = Inv[p * m + q];
+    }
+    if (bad < n) {
+        s->ablk_epoch = -1; /* a partial set of blocks: built again at the next try */
+        return nm_error(s, FLOE_EUNSTABLE, "node %d: M + gamma dt C is not positive definite", bad);
     }
     s->ablk_dt = dt;
     s->ablk_epoch = s->epoch;

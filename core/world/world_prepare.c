@@ -231,8 +231,13 @@ int prepare_state(floe_world *w) {
         w->kin_old = ko;
         w->kin_old_n = p->n;
         /* written at a step's start and read at its end, with an MPI decomposition between
-         * them: registered as a per-particle row, so that it travels with its particle */
-        if (floe_world_pp_attach(w, &w->kin_old, &w->kin_old_n, 6)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+         * them: registered as a per-particle row, so that it travels with its particle, in a
+         * world that has kinematic particles (the others' migrations carry nothing more; a
+         * motion set later unprepares the world) */
+        int kin = 0;
+        for (int i = 0; i < p->n && !kin; i++) kin = p->motion[i] == FLOE_KINEMATIC;
+        if (kin && floe_world_pp_attach(w, &w->kin_old, &w->kin_old_n, 6))
+            return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
     /* the watchdog's floor on the energy scale: every free particle lifted by its size
      * against gravity (a resting pile has little kinetic energy, yet that is the energy
