@@ -398,7 +398,8 @@ static int bond_pass(floe_newmark *s, const double *g, double *out, int mode, do
             }
             local_stress(b, dim, f, &b->sig_tr, &b->tau_tr);
             if (mode == NM_ACCEPT) {
-                for (int c = 0; c < n2; c++) b->fl[c] = f[c];
+                if (n2 == 6) memcpy(b->fl, f, 6 * sizeof *f); /* constant sizes: inline moves */
+                else memcpy(b->fl, f, 12 * sizeof *f);
                 b->sigma = b->sig_tr;
                 b->tau = b->tau_tr;
                 bflag[k] = bond_ratio(b, b->sigma, b->tau) >= 1;
@@ -807,12 +808,13 @@ static int do_step(floe_newmark *s, double dt_full) {
         for (int blk = 0; blk < nblk; blk++) {
             const int k1 = (blk + 1) * B < N ? (blk + 1) * B : N;
             double we = 0, wd = 0, e = 0, fs = 0;
-            for (int k = blk * B; k < k1; k++) {
+            int node = blk * B / nd, comp = blk * B % nd; /* k's node and component */
+            for (int k = blk * B; k < k1; k++, comp = comp + 1 == nd ? 0 : comp + 1, node += comp == 0) {
                 s->u[k] += s->du[k];
                 s->v[k] = s->vnew[k];
                 s->a[k] = s->anew[k];
                 s->fint[k] += s->kd[k];
-                const double m = node_m(s, k / nd, k % nd);
+                const double m = node_m(s, node, comp);
                 e += 0.5 * m * s->v[k] * s->v[k];
                 if (s->eq[k] < 0) continue;
                 we += 0.5 * (lam0 + lam1) * s->F[k] * s->du[k];
@@ -881,7 +883,10 @@ static int do_step(floe_newmark *s, double dt_full) {
         for (int slot = 0; slot < NM_SLOTS; slot++)
             if (keep[slot]) s->Lepoch[slot] = s->epoch;
 #endif
-        build_cblk(s);
+        /* the node blocks of C hold the bonds' dampers; without them (damping_ratio 0) C is
+         * alpha M and the explicit blocks of M + gamma dt C stay as they are */
+        if (s->def.damping_ratio > 0) build_cblk(s);
+        else if (s->ablk_epoch == s->epoch - 1) s->ablk_epoch = s->epoch;
     }
     free(blist);
     /* the next step: the same level while bonds break, twice as long after a quiet step */
