@@ -340,7 +340,7 @@ static void gather_nodes(floe_newmark *s, double *out) {
     const int nd = s->nd, n = s->n, nt = nm_threads(s, (long)nd * n);
     const int *off = s->inc_off, *in = s->inc;
     const double *gdf = s->gdf;
-    FLOE_OMP(omp parallel for num_threads(nt) schedule(static))
+    FLOE_OMP(omp parallel for num_threads(nt) schedule(static) if(nt > 1))
     for (int i = 0; i < n; i++) {
         double acc[6] = {0, 0, 0, 0, 0, 0};
         for (int p = off[i]; p < off[i + 1]; p++) {
@@ -362,9 +362,9 @@ enum { NM_APPLY, NM_TRIAL, NM_ACCEPT };
  *             redoes a trial */
 static int bond_pass(floe_newmark *s, const double *g, double *out, int mode, double *de) {
     double t0 = now_s();
-    FLOE_TRY(build_incidence(s));
     const int nb = s->nb, n2 = 2 * s->nd, dim = s->dim, B = FLOE_PAR_BLOCK;
     const int nblk = (nb + B - 1) / B, nt = nm_threads(s, nb), nd = s->nd;
+    if (nt > 1) FLOE_TRY(build_incidence(s)); /* the gather's index (one thread scatters) */
     nm_bond *bonds = s->b;
     double *gdf = s->gdf, *bsum = s->bsum;
     int *bbrk = s->bbrk;
@@ -373,7 +373,7 @@ static int bond_pass(floe_newmark *s, const double *g, double *out, int mode, do
      * the gather adds in the same order (the same bits, without gdf's traffic) */
     const int scatter = nt == 1;
     if (scatter) memset(out, 0, (size_t)nd * s->n * sizeof *out);
-    FLOE_OMP(omp parallel for num_threads(nt) schedule(static))
+    FLOE_OMP(omp parallel for num_threads(nt) schedule(static) if(nt > 1))
     for (int blk = 0; blk < nblk; blk++) {
         const int k1 = (blk + 1) * B < nb ? (blk + 1) * B : nb;
         double sum = 0, ul[12], f[12], g12[12];
@@ -427,7 +427,7 @@ static void accept_pass(floe_newmark *s) {
     nm_bond *bonds = s->b;
     int *bbrk = s->bbrk;
     unsigned char *bflag = s->bflag;
-    FLOE_OMP(omp parallel for num_threads(nt) schedule(static))
+    FLOE_OMP(omp parallel for num_threads(nt) schedule(static) if(nt > 1))
     for (int blk = 0; blk < nblk; blk++) {
         const int k1 = (blk + 1) * B < nb ? (blk + 1) * B : nb;
         int brk = 0;
@@ -499,7 +499,7 @@ static void c_apply(const floe_newmark *s, const double *g, double *out) {
         return;
     }
     const int n = s->n, nt = nm_threads(s, (long)nd * n);
-    FLOE_OMP(omp parallel for num_threads(nt) schedule(static))
+    FLOE_OMP(omp parallel for num_threads(nt) schedule(static) if(nt > 1))
     for (int i = 0; i < n; i++) {
         const double *C = s->cblk + (size_t)nn * i, *q = g + (size_t)nd * i;
         double *o = out + (size_t)nd * i;
@@ -667,7 +667,9 @@ int floe_newmark_prepare(floe_newmark *s) {
         return nm_error(s, FLOE_ENOTSUP, "implicit Newmark needs CHOLMOD: this build has FLOE_WITH_CHOLMOD=OFF");
 #endif
     }
-    /* initial internal forces f_int = K u0 and bond forces; a0 from eq 15 at t = 0 */
+    /* initial internal forces f_int = K u0 and bond forces from zero (a system prepared
+     * again before its first step starts over); a0 from eq 15 at t = 0 */
+    for (int k = 0; k < s->nb; k++) memset(s->b[k].fl, 0, sizeof s->b[k].fl);
     double e0 = 0;
     FLOE_TRY(bond_pass(s, s->u, s->fint, NM_TRIAL, &e0));
     for (int k = 0; k < s->nb; k++) {
@@ -705,7 +707,7 @@ static int do_step(floe_newmark *s, double dt_full) {
     int cuts = 0, final_trial = 0, accepted = 0;
     const int ntv = nm_threads(s, N); /* the element-wise loops (no sums) */
     for (;;) {
-        FLOE_OMP(omp parallel for num_threads(ntv) schedule(static))
+        FLOE_OMP(omp parallel for num_threads(ntv) schedule(static) if(ntv > 1))
         for (int k = 0; k < N; k++) {
             if (s->eq[k] < 0) { s->an[k] = s->bn[k] = 0; continue; }
             s->an[k] = dt * s->v[k] + 0.5 * dt * dt * (1 - 2 * beta) * s->a[k];
@@ -720,10 +722,10 @@ static int do_step(floe_newmark *s, double dt_full) {
             memcpy(s->du, s->an, (size_t)N * sizeof *s->du);
             FLOE_TRY(bond_pass(s, s->du, s->kd, NM_ACCEPT, &de));
             accepted = 1;
-            FLOE_OMP(omp parallel for num_threads(ntv) schedule(static))
+            FLOE_OMP(omp parallel for num_threads(ntv) schedule(static) if(ntv > 1))
             for (int k = 0; k < N; k++) s->rhs[k] = lam * s->F[k] - s->fint[k] - s->kd[k] - s->rhs[k];
             FLOE_TRY(solve_explicit(s, dt, s->rhs, s->anew));
-            FLOE_OMP(omp parallel for num_threads(ntv) schedule(static))
+            FLOE_OMP(omp parallel for num_threads(ntv) schedule(static) if(ntv > 1))
             for (int k = 0; k < N; k++) s->vnew[k] = s->bn[k] + gamma * dt * s->anew[k];
             break;
         }
@@ -804,7 +806,7 @@ static int do_step(floe_newmark *s, double dt_full) {
     {
         const int B = FLOE_PAR_BLOCK, nblk = (N + B - 1) / B;
         double *vs = s->vsum;
-        FLOE_OMP(omp parallel for num_threads(ntv) schedule(static))
+        FLOE_OMP(omp parallel for num_threads(ntv) schedule(static) if(ntv > 1))
         for (int blk = 0; blk < nblk; blk++) {
             const int k1 = (blk + 1) * B < N ? (blk + 1) * B : N;
             double we = 0, wd = 0, e = 0, fs = 0;
@@ -838,7 +840,10 @@ static int do_step(floe_newmark *s, double dt_full) {
     /* breakage (eq 11): bonds at or beyond their strength (flagged by the accepting pass),
      * in bond order */
     if (!accepted) accept_pass(s);
-    int broke = 0, *blist = NULL;
+    int broke = 0, *blist = NULL, nbrk = 0;
+    for (int blk = 0; blk < (s->nb + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK; blk++) nbrk += s->bbrk[blk];
+    /* the list first: nothing fails once the bonds start breaking */
+    if (nbrk && !(blist = malloc((size_t)nbrk * sizeof *blist))) return nm_error(s, FLOE_ENOMEM, "out of memory");
     for (int k = 0; k < s->nb; k++) {
         if (k % FLOE_PAR_BLOCK == 0 && !s->bbrk[k / FLOE_PAR_BLOCK]) {
             k += FLOE_PAR_BLOCK - 1; /* a block without a break */
@@ -860,9 +865,6 @@ static int do_step(floe_newmark *s, double dt_full) {
             b->t_broken = s->t;
             s->st.broken++;
             if (s->st.t_first_break < 0) s->st.t_first_break = s->t;
-            int *nl = realloc(blist, (size_t)(broke + 1) * sizeof *nl);
-            if (!nl) { free(blist); return nm_error(s, FLOE_ENOMEM, "out of memory"); }
-            blist = nl;
             blist[broke++] = k;
         }
     }

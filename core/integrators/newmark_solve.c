@@ -262,7 +262,7 @@ int solve_explicit(floe_newmark *s, double dt, const double *rhs, double *x) {
     double t0 = now_s();
     const int nd = s->nd, nn = nd * nd, n = s->n;
     const int nt = nm_threads(s, (long)nd * n);
-    FLOE_OMP(omp parallel for num_threads(nt) schedule(static)) /* element-wise: the same bits */
+    FLOE_OMP(omp parallel for num_threads(nt) schedule(static) if(nt > 1)) /* element-wise: the same bits */
     for (int i = 0; i < n; i++) {
         const double *O = s->ablk + (size_t)nn * i, *r = rhs + (size_t)nd * i;
         double *o = x + (size_t)nd * i;
@@ -281,7 +281,7 @@ int solve_explicit(floe_newmark *s, double dt, const double *rhs, double *x) {
 int build_ablk(floe_newmark *s, double dt) {
     const int nd = s->nd, nn = nd * nd, n = s->n, nt = nm_threads(s, (long)nd * n);
     int bad = n; /* the lowest node whose block is not positive definite (any thread count) */
-    FLOE_OMP(omp parallel for num_threads(nt) schedule(static) reduction(min : bad))
+    FLOE_OMP(omp parallel for num_threads(nt) schedule(static) if(nt > 1) reduction(min : bad))
     for (int i = 0; i < n; i++) {
         double A[36], Inv[36];
         int fr[6], m = 0;

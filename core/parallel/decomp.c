@@ -335,7 +335,8 @@ static int par_room(floe_world *w, floe_par *P, int need) {
     double *ko = realloc(w->kin_old, (size_t)(need ? need : 1) * 6 * sizeof *ko);
     if (!ko) return FLOE_ENOMEM;
     w->kin_old = ko;
-    w->kin_old_n = need; /* a registered row (world_prepare.c): floe_par_pp_in sets the new ones */
+    w->kin_old_n = need; /* registered (world_prepare.c) where kinematic particles are: then floe_par_pp_in
+                            sets the new rows */
     return FLOE_OK;
 }
 

@@ -119,6 +119,8 @@ int floe_world_add_particle(floe_world *w, const floe_particle_def *d);
 /* Infinite wall: plane through point p with outward normal n (pointing into the domain). */
 int floe_world_add_wall(floe_world *w, const double p[3], const double n[3], int material,
                         floe_motion motion);
+/* A prescribed motion for a particle (it becomes kinematic). Set before a world is split
+ * over MPI ranks (floe_world_parallel_init): refused after (FLOE_EINVAL). */
 int floe_world_set_motion(floe_world *w, int particle, floe_motion_fn fn, void *user);
 int floe_world_set_body_force(floe_world *w, floe_body_force_fn fn, void *user);
 

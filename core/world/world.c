@@ -93,6 +93,16 @@ int floe_world_pp_attach(floe_world *w, double **arr, int *n, int m) {
     return FLOE_OK;
 }
 
+int floe_world_pp_attach_first(floe_world *w, double **arr, int *n, int m) {
+    FLOE_TRY(floe_world_pp_attach(w, arr, n, m));
+    int k = 0;
+    while (w->pps[k].arr != arr) k++;
+    const struct floe_pp_state s = w->pps[k];
+    memmove(w->pps + 1, w->pps, (size_t)k * sizeof *w->pps);
+    w->pps[0] = s;
+    return FLOE_OK;
+}
+
 floe_world *floe_world_create(const floe_world_def *def, char *err, size_t errlen) {
     const char *bad = NULL;
     if (def->dim != 2 && def->dim != 3) bad = "dim must be 2 or 3";
@@ -615,8 +625,13 @@ int floe_world_add_wall(floe_world *w, const double pt[3], const double n[3], in
 int floe_world_set_motion(floe_world *w, int i, floe_motion_fn fn, void *user) {
     if (i < 0 || i >= w->p.n) return floe_world_error(w, FLOE_EINVAL, "set_motion: particle %d out of range", i);
     if (!fn) return floe_world_error(w, FLOE_EINVAL, "set_motion: the motion function is NULL");
+    /* a motion makes the world prepare again, which a world split over MPI ranks does not
+     * (its ranks would have to agree on what each registers: kin_old's row) */
+    if (w->par)
+        return floe_world_error(w, FLOE_EINVAL, "set_motion: the world is split over MPI ranks: set motions before "
+                                "floe_world_parallel_init");
     if (grow((void **)&w->motions, &w->motions_cap, w->nmotions + 1, sizeof *w->motions)) return FLOE_ENOMEM;
-    w->motions[w->nmotions++] = (floe_motion_cb){i, fn, user, w->nl.gid ? w->nl.gid[i] : i};
+    w->motions[w->nmotions++] = (floe_motion_cb){i, fn, user, i};
     w->p.motion[i] = FLOE_KINEMATIC;
     w->p.inv_mass[i] = 0;   /* no longer moved by forces (also when called after prepare) */
     w->prepared = 0;

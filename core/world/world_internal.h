@@ -463,5 +463,9 @@ int floe_world_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact
  * owner grows it and keeps *n up to date) of a force stage (pps above); once per array (a
  * second call is nothing); FLOE_ENOMEM */
 int floe_world_pp_attach(floe_world *w, double **arr, int *n, int m);
+/* the same, the array first among the registered ones (an array registered at prepare, when it
+ * may come after others: the split world and a mirror prepared once then list the rows in
+ * the same order, which the checkpoint's gather (floe_par_pp_collect) relies on) */
+int floe_world_pp_attach_first(floe_world *w, double **arr, int *n, int m);
 
 #endif

@@ -233,10 +233,11 @@ int prepare_state(floe_world *w) {
         /* written at a step's start and read at its end, with an MPI decomposition between
          * them: registered as a per-particle row, so that it travels with its particle, in a
          * world that has kinematic particles (the others' migrations carry nothing more; a
-         * motion set later unprepares the world) */
+         * motion set later unprepares the world), first among the rows (its place then does
+         * not depend on when the world was prepared) */
         int kin = 0;
         for (int i = 0; i < p->n && !kin; i++) kin = p->motion[i] == FLOE_KINEMATIC;
-        if (kin && floe_world_pp_attach(w, &w->kin_old, &w->kin_old_n, 6))
+        if (kin && floe_world_pp_attach_first(w, &w->kin_old, &w->kin_old_n, 6))
             return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
     /* the watchdog's floor on the energy scale: every free particle lifted by its size

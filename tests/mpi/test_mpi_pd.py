@@ -223,8 +223,8 @@ def main():
                 compare_frames(d(key + "_1"), d(f"{key}_{np_}"), f"staggered {tag}, -np {np_}")
         # the staggered scheme with kinematic points (tests/mpi/pd_pull.yaml: ramped velocity
         # and displacement regions, the points changing rank at almost every step): a
-        # decomposition resets a kinematic point's force at the step start from the force it
-        # carries, which a sub-step has overwritten (step_staggered puts the start's back)
+        # kinematic point's force at the step start (kin_old, a registered row) must travel
+        # with it at a decomposition inside the step (the run stops without the row)
         pull = d("pd_pull_stag.yaml")
         open(pull, "w").write(open(os.path.join(here, "pd_pull.yaml")).read().replace(
             "safety: 0.5}", "safety: 0.5, pd_dem: {scheme: staggered, substeps: 2}}", 1))
