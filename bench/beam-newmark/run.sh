@@ -4,7 +4,10 @@
 # at the two finest sizes the explicit run stops early and its total is estimated from
 # its median step (as 004 Table 1 does). Builds floe in build-bench (Release).
 # Output: out/beam-newmark/ (VTU + CSV crack patterns), the log on stdout.
+# THREADS (default 1): the solver's threads (floe_newmark_set_threads takes OMP_NUM_THREADS);
+# the figures in bench/RESULTS.md before session 24 are one thread.
 set -euo pipefail
+export OMP_NUM_THREADS=${THREADS:-1}
 cd "$(dirname "$0")/../.."
 cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release -DFLOE_BUILD_BENCH=ON >/dev/null
 cmake --build build-bench -j2 --target bench_beam_newmark >/dev/null
