@@ -6,6 +6,7 @@
  * (FLOE_WITH_OPENMP=OFF) the pragmas vanish and the same code runs on one thread. */
 #ifndef FLOE_PAR_H
 #define FLOE_PAR_H
+#include "floe_base.h"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -21,6 +22,23 @@ static inline int floe_par_thread(void) { return 0; }
 static inline int floe_par_nthreads(void) { return 1; }
 static inline double floe_par_wtime(void) { return 0.0; }
 #endif
+
+/* why a thread count is refused (NULL: taken; *code the FLOE_E* code to return): the world's
+ * and the Newmark solver's set_threads */
+static inline const char *floe_par_threads_refused(int nthreads, int *code) {
+    if (nthreads < 0) {
+        *code = FLOE_EINVAL;
+        return "(0 for OpenMP's default, or >= 1)";
+    }
+#ifndef _OPENMP
+    if (nthreads > 1) {
+        *code = FLOE_ENOTSUP;
+        return "asked, but floe was built without OpenMP (configure with -DFLOE_WITH_OPENMP=ON)";
+    }
+#endif
+    (void)code;
+    return 0;
+}
 
 /* items (particles, pairs) per reduction block: fixed, so that the partial sums and their
  * order do not depend on the thread count */

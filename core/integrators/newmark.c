@@ -54,12 +54,9 @@ floe_newmark *floe_newmark_create(const floe_newmark_def *def, char *err, size_t
 }
 
 int floe_newmark_set_threads(floe_newmark *s, int nthreads) {
-    if (nthreads < 0) return nm_error(s, FLOE_EINVAL, "threads: %d (0 for OpenMP's default, or >= 1)", nthreads);
-#ifndef _OPENMP
-    if (nthreads > 1)
-        return nm_error(s, FLOE_ENOTSUP, "threads: %d asked, but floe was built without OpenMP (configure with "
-                        "-DFLOE_WITH_OPENMP=ON)", nthreads);
-#endif
+    int code;
+    const char *why = floe_par_threads_refused(nthreads, &code);
+    if (why) return nm_error(s, code, "threads: %d %s", nthreads, why);
     s->nthreads = nthreads;
     return FLOE_OK;
 }

@@ -135,12 +135,9 @@ floe_world *floe_world_create(const floe_world_def *def, char *err, size_t errle
 }
 
 int floe_world_set_threads(floe_world *w, int nthreads) {
-    if (nthreads < 0) return floe_world_error(w, FLOE_EINVAL, "threads: %d (0 for OpenMP's default, or >= 1)", nthreads);
-#ifndef _OPENMP
-    if (nthreads > 1)
-        return floe_world_error(w, FLOE_ENOTSUP, "threads: %d asked, but floe was built without OpenMP "
-                                "(configure with -DFLOE_WITH_OPENMP=ON)", nthreads);
-#endif
+    int code;
+    const char *why = floe_par_threads_refused(nthreads, &code);
+    if (why) return floe_world_error(w, code, "threads: %d %s", nthreads, why);
     w->nthreads = nthreads;
     return FLOE_OK;
 }
