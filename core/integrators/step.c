@@ -403,8 +403,8 @@ static __attribute__((noinline)) void kick_lanes(double *restrict V, double *res
  * q <- exp(h omega / 2) q) are a chain of latencies for one body (11 % of a settled bed of
  * polyhedra's step), independent across bodies. Each lane does rotate_drift_aniso's
  * operations in its order, with q_advance's small-turn series; a lane whose turn is not
- * small at some stage (|h omega|^2 >= 1e-4, not a stable step) is done again by
- * rotate_drift_aniso itself. Lanes beyond m repeat particle idx[0] and are not written. */
+ * small at some stage (|theta|^2 >= 1e-4, theta = h omega or at the last stage dt omega) is
+ * done again by rotate_drift_aniso itself. Lanes beyond m repeat particle idx[0] and are not written. */
 static inline __attribute__((always_inline)) void lane_omega(const double q[4], const double inv[3], const double L[3],
                                                               double om[3]) {
     const double qc[4] = {q[0], -q[1], -q[2], -q[3]};
