@@ -13,23 +13,30 @@
 #include <string.h>
 /* ---- rotation helpers ---- */
 
+/* q <- exp(h omega / 2) q for a small turn a = |h omega| (every stable step): the series of
+ * cos(a/2) and sin(a/2)/a to a^4, truncation below 1e-16 for a^2 < 1e-4, no trigonometry
+ * (profile of 5,000 polyhedra: sincos was 3 % and q_advance 6 % of the run), then one
+ * Newton step for 1/sqrt to keep |out| = 1. Returns 1 when the turn is not small (out is
+ * then not the rotation: q_advance takes the exact one); no branch, so that a loop over
+ * bodies (aniso_lanes) vectorises */
+static inline __attribute__((always_inline)) int q_advance_small(double out[4], const double q[4], const double om[3],
+                                                                  double h) {
+    const double th[3] = {h * om[0], h * om[1], h * om[2]};
+    const double a2 = floe_v3_dot(th, th);
+    const double c = 1.0 - a2 * (0.125 - a2 * (1.0 / 384.0)), s = 0.5 - a2 * (1.0 / 48.0 - a2 * (1.0 / 3840.0));
+    const double dq[4] = {c, s * th[0], s * th[1], s * th[2]};
+    floe_q_mul(out, dq, q);
+    const double n2 = out[0] * out[0] + out[1] * out[1] + out[2] * out[2] + out[3] * out[3];
+    const double sc = 1.5 - 0.5 * n2;
+    for (int k = 0; k < 4; k++) out[k] *= sc;
+    return !(a2 < 1e-4);
+}
+
 /* q <- exp(h omega / 2) q, i.e. rotate by the vector h*omega */
 static void q_advance(double out[4], const double q[4], const double om[3], double h) {
-    double th[3] = {h * om[0], h * om[1], h * om[2]}, dq[4];
-    double a2 = floe_v3_dot(th, th);
-    if (a2 < 1e-4) {
-        /* small turn (every stable step): the series of cos(a/2) and sin(a/2)/a to a^4,
-         * truncation below 1e-16 here, no trigonometry (profile of 5,000 polyhedra: sincos
-         * was 3 % and this function 6 % of the run) */
-        double c = 1.0 - a2 * (0.125 - a2 * (1.0 / 384.0)), s = 0.5 - a2 * (1.0 / 48.0 - a2 * (1.0 / 3840.0));
-        dq[0] = c; dq[1] = s * th[0]; dq[2] = s * th[1]; dq[3] = s * th[2];
-        floe_q_mul(out, dq, q);
-        /* |out| = 1 + O(round-off): one Newton step for 1/sqrt keeps it unit */
-        double n2 = out[0] * out[0] + out[1] * out[1] + out[2] * out[2] + out[3] * out[3];
-        double sc = 1.5 - 0.5 * n2;
-        for (int k = 0; k < 4; k++) out[k] *= sc;
-        return;
-    }
+    if (!q_advance_small(out, q, om, h)) return;
+    const double th[3] = {h * om[0], h * om[1], h * om[2]};
+    double dq[4];
     floe_q_from_rotvec(dq, th);
     floe_q_mul(out, dq, q);
     floe_q_normalize(out);
@@ -147,7 +154,8 @@ static inline void omega_update(floe_particles *p, int i) {
 
 /* omega = R diag(inv) R^T L (floe_omega_from_L with the moments' inverses taken once: five
  * calls a step made fifteen divisions, a chain of latencies in a settled bed's profile) */
-static inline void omega_inv(const double q[4], const double inv[3], const double L[3], double om[3]) {
+static inline __attribute__((always_inline)) void omega_inv(const double q[4], const double inv[3], const double L[3],
+                                                             double om[3]) {
     double Lb[3];
     floe_q_rotate_inv(Lb, q, L);
     for (int k = 0; k < 3; k++) Lb[k] *= inv[k];
@@ -405,26 +413,6 @@ static __attribute__((noinline)) void kick_lanes(double *restrict V, double *res
  * operations in its order, with q_advance's small-turn series; a lane whose turn is not
  * small at some stage (|theta|^2 >= 1e-4, theta = h omega or at the last stage dt omega) is
  * done again by rotate_drift_aniso itself. Lanes beyond m repeat particle idx[0] and are not written. */
-static inline __attribute__((always_inline)) void lane_omega(const double q[4], const double inv[3], const double L[3],
-                                                              double om[3]) {
-    const double qc[4] = {q[0], -q[1], -q[2], -q[3]};
-    double Lb[3];
-    floe_q_rotate(Lb, qc, L);
-    for (int k = 0; k < 3; k++) Lb[k] *= inv[k];
-    floe_q_rotate(om, q, Lb);
-}
-static inline __attribute__((always_inline)) int lane_advance(double out[4], const double q[4], const double om[3],
-                                                               double h) {
-    const double th[3] = {h * om[0], h * om[1], h * om[2]};
-    const double a2 = floe_v3_dot(th, th);
-    const double c = 1.0 - a2 * (0.125 - a2 * (1.0 / 384.0)), s = 0.5 - a2 * (1.0 / 48.0 - a2 * (1.0 / 3840.0));
-    const double dq[4] = {c, s * th[0], s * th[1], s * th[2]};
-    floe_q_mul(out, dq, q);
-    const double n2 = out[0] * out[0] + out[1] * out[1] + out[2] * out[2] + out[3] * out[3];
-    const double sc = 1.5 - 0.5 * n2;
-    for (int k = 0; k < 4; k++) out[k] *= sc;
-    return !(a2 < 1e-4);
-}
 static __attribute__((noinline FLOE_NO_SLP)) void aniso_lanes(double *restrict Qa, const double *restrict Ia,
                                                               const double *restrict La, double *restrict Wa,
                                                               const int *idx, int m, double dt) {
@@ -445,15 +433,15 @@ static __attribute__((noinline FLOE_NO_SLP)) void aniso_lanes(double *restrict Q
         const double L[3] = {LL[0][l], LL[1][l], LL[2][l]}, inv[3] = {INV[0][l], INV[1][l], INV[2][l]};
         double omm[3], qm[4], qn[4], om[3];
         int big = 0;
-        lane_omega(q, inv, L, omm);
-        big |= lane_advance(qm, q, omm, h);
+        omega_inv(q, inv, L, omm);
+        big |= q_advance_small(qm, q, omm, h);
         for (int it = 0; it < 2; it++) {
-            lane_omega(qm, inv, L, omm);
-            big |= lane_advance(qm, q, omm, h);
+            omega_inv(qm, inv, L, omm);
+            big |= q_advance_small(qm, q, omm, h);
         }
-        lane_omega(qm, inv, L, omm);
-        big |= lane_advance(qn, q, omm, dt);
-        lane_omega(qn, inv, L, om);
+        omega_inv(qm, inv, L, omm);
+        big |= q_advance_small(qn, q, omm, dt);
+        omega_inv(qn, inv, L, om);
         for (int k = 0; k < 4; k++) QN[k][l] = qn[k];
         for (int k = 0; k < 3; k++) OM[k][l] = om[k];
         BIG[l] = big;
