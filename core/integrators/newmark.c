@@ -287,28 +287,6 @@ static double bond_ratio(const nm_bond *b, double sig, double tau) {
 
 /* ---- the bond passes (threads: docs/parallel.md, "What runs threaded") ---- */
 
-/* gd = T fl: a bond's local end forces in global components (add_global's arithmetic) */
-static inline void ends_global(const floe_newmark *s, const nm_bond *b, const double *fl, double *gd) {
-    const double *R = b->R;
-    if (s->nd == 3)
-        for (int e = 0; e < 2; e++) {
-            const double *f = fl + 3 * e;
-            double *q = gd + 3 * e;
-            q[0] = R[0] * f[0] + R[3] * f[1];
-            q[1] = R[1] * f[0] + R[4] * f[1];
-            q[2] = f[2];
-        }
-    else
-        for (int e = 0; e < 2; e++) {
-            const double *f = fl + 6 * e;
-            double *q = gd + 6 * e;
-            for (int c = 0; c < 3; c++) {
-                q[c] = R[c] * f[0] + R[3 + c] * f[1] + R[6 + c] * f[2];
-                q[3 + c] = R[c] * f[3] + R[3 + c] * f[4] + R[6 + c] * f[5];
-            }
-        }
-}
-
 /* every node's intact bonds in bond order (entries 2 k + e), for the gathers; rebuilt when
  * bonds break (the epoch) */
 static int build_incidence(floe_newmark *s) {

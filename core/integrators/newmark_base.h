@@ -143,24 +143,37 @@ static inline void to_local(const floe_newmark *s, const nm_bond *b, const doubl
     }
 }
 
-/* g += T fl (local end forces back to global components), scaled by sc */
+/* gd = T fl: a bond's local end forces in global components, both ends (2 nd values) */
+static inline void ends_global(const floe_newmark *s, const nm_bond *b, const double *fl, double *gd) {
+    const double *R = b->R;
+    if (s->nd == 3)
+        for (int e = 0; e < 2; e++) {
+            const double *f = fl + 3 * e;
+            double *q = gd + 3 * e;
+            q[0] = R[0] * f[0] + R[3] * f[1];
+            q[1] = R[1] * f[0] + R[4] * f[1];
+            q[2] = f[2];
+        }
+    else
+        for (int e = 0; e < 2; e++) {
+            const double *f = fl + 6 * e;
+            double *q = gd + 6 * e;
+            for (int c = 0; c < 3; c++) {
+                q[c] = R[c] * f[0] + R[3 + c] * f[1] + R[6 + c] * f[2];
+                q[3 + c] = R[c] * f[3] + R[3 + c] * f[4] + R[6 + c] * f[5];
+            }
+        }
+}
+
+/* g += sc T fl: the same end forces added to the nodes' global rows, scaled by sc */
 static inline void add_global(const floe_newmark *s, const nm_bond *b, const double *fl, double sc, double *g) {
     const int nd = s->nd;
-    const double *R = b->R;
+    double gd[12];
+    ends_global(s, b, fl, gd);
     const int ends[2] = {b->i, b->j};
     for (int e = 0; e < 2; e++) {
         double *q = g + (size_t)nd * ends[e];
-        const double *f = fl + nd * e;
-        if (nd == 3) {
-            q[0] += sc * (R[0] * f[0] + R[3] * f[1]);
-            q[1] += sc * (R[1] * f[0] + R[4] * f[1]);
-            q[2] += sc * f[2];
-        } else {
-            for (int c = 0; c < 3; c++) {
-                q[c] += sc * (R[c] * f[0] + R[3 + c] * f[1] + R[6 + c] * f[2]);
-                q[3 + c] += sc * (R[c] * f[3] + R[3 + c] * f[4] + R[6 + c] * f[5]);
-            }
-        }
+        for (int c = 0; c < nd; c++) q[c] += sc * gd[nd * e + c];
     }
 }
 
