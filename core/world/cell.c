@@ -60,6 +60,7 @@ static int check_planar(floe_world *w, const double H[9], const char *what) {
 }
 
 int floe_world_set_cell(floe_world *w, const double origin[3], const double H[9]) {
+    FLOE_TRY(floe_world_refuse_split(w, "set_cell"));
     double Hc[9];
     memcpy(Hc, H, sizeof Hc);
     if (w->def.dim == 2) Hc[8] = 1.0;

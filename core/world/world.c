@@ -544,6 +544,7 @@ void floe_world_trim(floe_world *w, int released) {
 }
 
 int floe_world_add_particle(floe_world *w, const floe_particle_def *d) {
+    if (floe_world_refuse_split(w, "add_particle")) return -FLOE_ENOTSUP;
     if (d->geometry < 0 || d->geometry >= w->ngeoms)
         return -floe_world_error(w, FLOE_EINVAL, "particle: geometry index %d out of range", d->geometry);
     if (d->material < 0 || d->material >= w->nmats)
@@ -594,6 +595,7 @@ int floe_world_add_wall(floe_world *w, const double pt[3], const double n[3], in
     double nn = floe_v3_norm(n);
     if (!(nn > 0) || !isfinite(nn)) return -floe_world_error(w, FLOE_EINVAL, "wall: normal must be non-zero");
     if (motion == FLOE_FREE) return -floe_world_error(w, FLOE_EINVAL, "wall: motion must be fixed or kinematic");
+    if (floe_world_refuse_split(w, "add_wall")) return -FLOE_ENOTSUP;
     floe_geometry *pg = floe_plane_create();
     int g = floe_world_add_geometry(w, pg);
     if (g < 0) { /* not taken: still ours */
@@ -619,14 +621,18 @@ int floe_world_add_wall(floe_world *w, const double pt[3], const double n[3], in
     return i;
 }
 
+int floe_world_refuse_split(floe_world *w, const char *what) {
+    if (!w->par) return 0;
+    return floe_world_error(w, FLOE_ENOTSUP, "%s: the world is split over MPI ranks; make this change before "
+                            "floe_world_parallel_init (it would prepare each rank's part again, and the ranks "
+                            "would have to agree on the result)", what);
+}
+
 int floe_world_set_motion(floe_world *w, int i, floe_motion_fn fn, void *user) {
+    /* a motion makes the world prepare again (its ranks would disagree on kin_old's row) */
+    FLOE_TRY(floe_world_refuse_split(w, "set_motion"));
     if (i < 0 || i >= w->p.n) return floe_world_error(w, FLOE_EINVAL, "set_motion: particle %d out of range", i);
     if (!fn) return floe_world_error(w, FLOE_EINVAL, "set_motion: the motion function is NULL");
-    /* a motion makes the world prepare again, which a world split over MPI ranks does not
-     * (its ranks would have to agree on what each registers: kin_old's row) */
-    if (w->par)
-        return floe_world_error(w, FLOE_EINVAL, "set_motion: the world is split over MPI ranks: set motions before "
-                                "floe_world_parallel_init");
     if (grow((void **)&w->motions, &w->motions_cap, w->nmotions + 1, sizeof *w->motions)) return FLOE_ENOMEM;
     w->motions[w->nmotions++] = (floe_motion_cb){i, fn, user, i};
     w->p.motion[i] = FLOE_KINEMATIC;
@@ -636,6 +642,7 @@ int floe_world_set_motion(floe_world *w, int i, floe_motion_fn fn, void *user) {
 }
 
 int floe_world_set_body_force(floe_world *w, floe_body_force_fn fn, void *user) {
+    FLOE_TRY(floe_world_refuse_split(w, "set_body_force"));
     w->body_force = fn;
     w->body_force_user = user;
     w->prepared = 0;   /* prepare sizes the per-particle callback force (adaptive snapshots) */
@@ -832,6 +839,7 @@ int floe_world_set_pose(floe_world *w, int i, const double x[3], const double q[
 
 int floe_world_set_particle_geometry(floe_world *w, int i, int geometry) {
     floe_particles *p = &w->p;
+    FLOE_TRY(floe_world_refuse_split(w, "set_particle_geometry"));
     if (i < 0 || i >= p->n) return floe_world_error(w, FLOE_EINVAL, "set_particle_geometry: particle %d out of range", i);
     if (geometry < 0 || geometry >= w->ngeoms)
         return floe_world_error(w, FLOE_EINVAL, "set_particle_geometry: geometry index %d out of range", geometry);
@@ -851,6 +859,7 @@ int floe_world_set_particle_geometry(floe_world *w, int i, int geometry) {
 }
 
 int floe_world_set_dt(floe_world *w, double dt, int allow_unstable) {
+    FLOE_TRY(floe_world_refuse_split(w, "set_dt"));
     if (!(dt >= 0) || !isfinite(dt))
         return floe_world_error(w, FLOE_EINVAL, "set_dt: the time step must be >= 0 and finite (0 = automatic), got %g", dt);
     w->def.dt = dt;

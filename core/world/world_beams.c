@@ -44,14 +44,8 @@ static int group_ok(const floe_world *w, const floe_beam_params *par, int i) {
 
 /* a world split over MPI ranks (core/parallel) holds each bond on one rank, by global ids:
  * bonds are made before the split */
-static int refuse_split(floe_world *w) {
-    return w->par ? floe_world_error(w, FLOE_ENOTSUP, "beam bonds: add them before floe_world_parallel_init (a split "
-                                     "world's bonds are held by rank, docs/parallel.md)")
-                  : FLOE_OK;
-}
-
 int floe_world_add_beam_bond(floe_world *w, int i, int j, const floe_beam_params *par) {
-    TRY_NEG(refuse_split(w));
+    TRY_NEG(floe_world_refuse_split(w, "add_beam_bond"));
     TRY_NEG(check_params(w, par));
     const floe_particles *p = &w->p;
     if (i < 0 || j < 0 || i >= p->n || j >= p->n || i == j)
@@ -88,7 +82,7 @@ static void visit_push(int index, double d2, void *user) {
 static int cmp_int(const void *a, const void *b) { return (*(const int *)a > *(const int *)b) - (*(const int *)a < *(const int *)b); }
 
 int floe_world_add_beam_bonds(floe_world *w, double radius_factor, const floe_beam_params *par) {
-    TRY_NEG(refuse_split(w));
+    TRY_NEG(floe_world_refuse_split(w, "add_beam_bonds"));
     TRY_NEG(check_params(w, par));
     if (par->max_distance == 0 && (!(radius_factor > 0) || !isfinite(radius_factor)))
         return -floe_world_error(w, FLOE_EINVAL, "beam bonds: radius_factor must be > 0 (or set max_distance)");

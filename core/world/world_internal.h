@@ -393,6 +393,12 @@ int floe_world_error(floe_world *w, int code, const char *fmt, ...)
 #endif
     ;
 
+/* FLOE_ENOTSUP, with a message naming what, when the world is split over MPI ranks
+ * (floe_world_parallel_init): the changes that make a world prepare again (particles,
+ * shapes, bonds, the time step, the cell, motions, the body force) are made before the
+ * split, as every rank would have to agree on the new state; 0 otherwise (core/world/world.c) */
+int floe_world_refuse_split(floe_world *w, const char *what);
+
 /* neighbour list (core/world/neighbor.c) */
 int floe_nl_init(floe_neighbor_list *nl);
 void floe_nl_free(floe_neighbor_list *nl);

@@ -149,6 +149,10 @@ int floe_world_pd_periodic(floe_world *w, struct floe_pd_body *b, int k) {
 
 int floe_world_add_pd_body(floe_world *w, struct floe_pd_body *body, int material, const double v0[3], int *first) {
     if (!body) return floe_world_error(w, FLOE_EINVAL, "PD body: NULL");
+    if (floe_world_refuse_split(w, "add_pd_body")) {
+        floe_pd_body_destroy(body); /* owned, as on every error */
+        return FLOE_ENOTSUP;
+    }
     if (material < 0 || material >= w->nmats) {
         floe_pd_body_destroy(body);
         return floe_world_error(w, FLOE_EINVAL, "PD body: contact material index %d out of range", material);

@@ -14,10 +14,14 @@
  * Three worlds: spheres (Hertz-Mindlin with friction in a walled box); a mixture of
  * spheres, ellipsoids and boxes (short horizon only: positions 1e-8 x the side, as the
  * non-sphere detection iterates to a tolerance that the order of sums can tip); a gas of
- * small fast spheres (short horizon: few ghosts, many migrations). */
+ * small fast spheres (short horizon: few ghosts, many migrations).
+ * Refusals: on the split world, every setter that would prepare the world again (one rank's
+ * part alone) returns FLOE_ENOTSUP with a message naming it and changes nothing; the
+ * comparison above then runs on that world. */
 #include "floe.h"
 #include "world_internal.h"
 #include "par_internal.h"
+#include "floe_pd.h"
 #include "../check.h"
 #include "mpi_common.h"
 #include <stdlib.h>
@@ -127,6 +131,55 @@ static int cmp_rec(const void *a, const void *b) {
 
 /* the unsplit world on rank 0 and the split one on all: positions and velocities after
  * nshort steps, then (nlong > nshort) the statistics after nlong */
+static void nop_force(const floe_world *w, int i, double t, double f[3], double tq[3], void *u) {
+    (void)w; (void)i; (void)t; (void)f; (void)tq; (void)u;
+}
+static void nop_motion(double t, double v[3], double om[3], void *u) { (void)t; (void)v; (void)om; (void)u; }
+
+/* every re-preparing setter on a split world: refused, named, nothing changed */
+static void refusals(floe_world *w) {
+    static const char *name[] = {"set_dt", "add_particle", "add_wall", "set_particle_geometry", "set_body_force",
+                                 "set_motion", "set_cell", "add_beam_bonds", "add_pd_body"};
+    const int n0 = w->p.n, nmot = w->nmotions;
+    const double dt0 = w->dt;
+    floe_particle_def d = floe_default_particle_def();
+    d.geometry = w->p.geom[w->p.n - 1];
+    d.mass = 1e-3;
+    const double pt[3] = {0, 0, 0}, nz[3] = {0, 0, 1}, H[9] = {LX, 0, 0, 0, LY, 0, 0, 0, LZ};
+    const double X[3] = {0, 0, 0}, V[1] = {1e-9};
+    floe_beam_params bp;
+    memset(&bp, 0, sizeof bp);
+    int all = 1;
+    for (int k = 0; k < (int)(sizeof name / sizeof name[0]); k++) {
+        int rc = -1;
+        floe_pd_body *b = NULL;
+        switch (k) {
+        case 0: rc = floe_world_set_dt(w, 0.5 * DT, 0); break;
+        case 1: rc = -floe_world_add_particle(w, &d); break;
+        case 2: rc = -floe_world_add_wall(w, pt, nz, 0, FLOE_FIXED); break;
+        case 3: rc = floe_world_set_particle_geometry(w, 0, d.geometry); break;
+        case 4: rc = floe_world_set_body_force(w, nop_force, NULL); break;
+        case 5: rc = floe_world_set_motion(w, 0, nop_motion, NULL); break;
+        case 6: rc = floe_world_set_cell(w, pt, H); break;
+        case 7: rc = -floe_world_add_beam_bonds(w, 1.1, &bp); break;
+        case 8:
+            rc = floe_pd_body_create_points(&b, 3, 1, X, V, 1e-3, 0, 0);
+            if (rc == FLOE_OK) rc = floe_world_add_pd_body(w, b, 0, pt, NULL); /* owns b */
+            break;
+        }
+        char want[96];
+        snprintf(want, sizeof want, "%s: the world is split over MPI ranks", name[k]);
+        int ok = rc == FLOE_ENOTSUP && strstr(floe_world_last_error(w), want);
+        if (!ok) printf("  refusals: %s returned %d (%s)\n", name[k], rc, floe_world_last_error(w));
+        all &= ok;
+    }
+    CHECK(all, "refusals: the %d re-preparing setters on a split world return FLOE_ENOTSUP and say so",
+          (int)(sizeof name / sizeof name[0]));
+    CHECK(w->prepared && w->p.n == n0 && w->nmotions == nmot && w->dt == dt0 && !w->body_force && !w->cell &&
+              !w->beams && w->npd == 0,
+          "refusals: the split world is unchanged (still prepared, %d particles, dt %g)", w->p.n, w->dt);
+}
+
 static void compare(int shapes, long nshort, long nlong, double xtol, double vtol) {
     floe_world *w = build(shapes);
     const int N = w->p.n;
@@ -151,6 +204,7 @@ static void compare(int shapes, long nshort, long nlong, double xtol, double vto
     if (rc == 0) rc = floe_world_parallel_init(w, NULL);
     CHECK(rc == 0, "split: %s", rc ? floe_world_last_error(w) : "");
     if (rc) exit(1);
+    if (shapes == 0) refusals(w);
     bad |= run(w, 0, nshort, NULL);
     floe_world_parallel_gather(w, xp, vp, N);
     { /* every rank's touching pairs with their history, on rank 0 */
