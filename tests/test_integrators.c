@@ -15,7 +15,14 @@
  *      docs/integrators.md): spring w dt = 2 (Verlet, leapfrog), pure dashpot g dt = 2
  *      (Verlet, leapfrog) and g dt = 1 (RK2; it has no stable step for an undamped spring);
  *   4. a contact oscillator (a sphere pressed on a fixed sphere by a linear law with
- *      gravity) runs at 0.9x 2/w and stops at 1.1x, and the world's estimate is below 2/w. */
+ *      gravity) runs at 0.9x 2/w and stops at 1.1x, and the world's estimate is below 2/w;
+ *   5. a free spinning sphere whose radius grows with its mass (floe_growing_radius_create,
+ *      update_mass): it keeps its velocity and angular velocity (the state's rule: the added
+ *      mass moves with it), its angular momentum grows as R^5 with its inertia, and the
+ *      ledger closes (the kinetic energy the growth adds is booked as boundary work):
+ *      within 1e-12 after the radius doubled in 400 steps. Before session 25, RK2 set the
+ *      step's angular momentum from the start's without the growth, and the spin fell by
+ *      2^5 (1 / 32). */
 #include "check.h"
 #include "floe.h"
 #include "world_read.h"
@@ -256,6 +263,45 @@ static void test_contact_oscillator(int integ) {
     }
 }
 
+static void test_growing_spin(int integ) {
+    const double R0 = 0.01, T = 0.4, dt = 1e-3, om0 = 5.0, v0 = 0.2;
+    const int steps = (int)(T / dt + 0.5);
+    floe_world_def d = floe_default_world_def();
+    d.integrator = integ;
+    d.dt = dt;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material m = {"m", 1000, 1e7, 0.3};
+    floe_world_add_material(w, &m);
+    int g = floe_world_add_geometry(w, floe_sphere_create(R0));
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = g;
+    p.v[0] = v0;
+    p.w[0] = 0.6 * om0;
+    p.w[2] = 0.8 * om0;
+    floe_world_add_particle(w, &p);
+    floe_state *s = floe_growing_radius_create(w, 0, R0 / T, 1);
+    int rc = s ? floe_world_add_state(w, s) : FLOE_ENOMEM;
+    if (!rc) rc = floe_world_prepare(w);
+    const double m0 = pview(w).mass[0], I0 = pview(w).inertia[0];
+    for (int k = 0; k < steps && !rc; k++) rc = floe_world_step(w);
+    CHECK(rc == FLOE_OK, "%s: growing spin ran (%s)", name(integ), floe_world_last_error(w));
+    const floe_particles_view v = pview(w);
+    const double r = v.radius[0] / R0, Iexp = I0 * pow(r, 5);
+    double dw = fabs(v.w[0] - 0.6 * om0) + fabs(v.w[1]) + fabs(v.w[2] - 0.8 * om0);
+    double dv = fabs(v.v[0] - v0) + fabs(v.v[1]) + fabs(v.v[2]);
+    double dL = fabs(v.L[0] - Iexp * 0.6 * om0) + fabs(v.L[1]) + fabs(v.L[2] - Iexp * 0.8 * om0);
+    double bal = floe_world_energy_balance_error(w);
+    printf("  %-16s growing spin: R x %.4f, m x %.4f; |dw| %.2e rad/s, |dv| %.2e m/s, |dL| / L %.2e, "
+           "ledger %.2e\n", name(integ), r, v.mass[0] / m0, dw, dv, dL / (Iexp * om0), bal);
+    CHECK(fabs(r - 2.0) < 1e-9, "%s: the radius doubled (x %.12g)", name(integ), r);
+    CHECK(dw <= 1e-12 * om0, "%s: a growing sphere keeps its angular velocity (off %.3g rad/s)", name(integ), dw);
+    CHECK(dv <= 1e-12 * v0, "%s: a growing sphere keeps its velocity (off %.3g m/s)", name(integ), dv);
+    CHECK(dL <= 1e-12 * Iexp * om0, "%s: its angular momentum grows as R^5 (off %.3g of it)", name(integ),
+          dL / (Iexp * om0));
+    CHECK(bal <= 1e-12, "%s: the ledger closes with the growth's work (balance error %.3g)", name(integ), bal);
+    floe_world_destroy(w);
+}
+
 int main(void) {
     const int all[3] = {FLOE_VELOCITY_VERLET, FLOE_LEAPFROG, FLOE_RK2};
     for (int k = 0; k < 3; k++) {
@@ -264,6 +310,7 @@ int main(void) {
         test_energy(all[k]);
         test_stability(all[k]);
         test_contact_oscillator(all[k]);
+        test_growing_spin(all[k]);
     }
     /* leapfrog and velocity Verlet follow the same trajectory */
     osc o = {1.0, 0.1};

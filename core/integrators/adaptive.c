@@ -158,7 +158,7 @@ int step_adaptive(floe_world *w, int (*inner)(floe_world *w)) {
         double lim = 0.5 * w->nl.skin;
         /* MPI (docs/parallel.md, "Adaptive steps"): every rank decides alike, and a rebuild is a
          * decomposition (the particles may change owner) */
-        double need = predicted_disp2(w, dt) > lim * lim || floe_par_pending(w); /* (RK2's, par_hooks.h) */
+        double need = predicted_disp2(w, dt) > lim * lim;
         floe_par_max(w, &need, 1);
         if (need > 0) {
             int rc = w->par ? floe_world_parallel_rebuild(w) : floe_world_nl_build(w);

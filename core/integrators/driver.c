@@ -142,7 +142,9 @@ int floe_world_prepare(floe_world *w) {
     if (w->prepared) return FLOE_OK;
     /* a split world is prepared once, before the split (the setters that would need more
      * refuse on it: floe_world_refuse_split); its ranks would not agree on a second */
-    FLOE_TRY(floe_world_refuse_split(w, "prepare"));
+    if (w->par)
+        return floe_world_error(w, FLOE_ENOTSUP, "prepare: the world is split over MPI ranks and is prepared once, "
+                                "before floe_world_parallel_init; a change since then asked for another");
     w->err[0] = 0;
     FLOE_TRY(prepare_store(w));
     FLOE_TRY(floe_world_hist_layout(w)); /* the list's history stride, for these laws and shapes */

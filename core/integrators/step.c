@@ -252,7 +252,7 @@ static void advance_clock(floe_world *w) {
 }
 
 static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb) {
-    if (w->par) return floe_par_refresh(w, maxd2, have_xb, 0); /* MPI: all ranks, ghosts (core/parallel) */
+    if (w->par) return floe_par_refresh(w, maxd2, have_xb, NULL); /* MPI: all ranks, ghosts (core/parallel) */
     /* a law set since the build: pairs under the law "none" were left out (neighbor.c) */
     if (w->law_gen != w->nl_law_gen || (w->cell ? floe_nl_needs_rebuild_cell(&w->nl, &w->p)
                 : floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0))) {
@@ -847,7 +847,14 @@ typedef struct rk2_ctx {
     const double *x0, *v0, *q0, *fm, *xb;
     double *L0, *md; /* md: each block's largest squared displacement since the build */
     int *bad;        /* each block's first free particle that failed the quick checks */
+    double *rows;    /* the closing values (RK2_W a particle, w->rk2) */
+    int rw;          /* doubles a row: RK2_W, RK2_WD under MPI with the dashpots' column */
 } rk2_ctx;
+
+/* a row of w->rk2: v_n, F_mid, x_n of a free particle (the others' are not read), and under
+ * MPI the midpoint's dashpot accelerations (forces.c). v_{n+1} = v_n + dt F_mid / m is taken
+ * at the step's end, with the mass then (a state object may grow it in the step) */
+enum { RK2_V = 0, RK2_F = 3, RK2_X = 6, RK2_W = 9, RK2_DASH = 9, RK2_WD = 12 };
 
 /* 1. the midpoint state of the free particles (the fixed ones stay, the kinematic ones after) */
 static void rk2_mid_block(void *ctx, int i0, int i1, double *sums) {
@@ -869,13 +876,19 @@ static void rk2_mid_block(void *ctx, int i0, int i1, double *sums) {
     }
 }
 
-/* 3. the drift from the start with the midpoint velocities; sums: the body-force work */
+/* 3. the drift from the start with the midpoint velocities, the free particles' L_{n+1} (a
+ * growing radius's state then scales it with the inertia: the spin is kept, as in the other
+ * schemes) and what v_{n+1} needs into their rows; sums: the body-force work */
 static void rk2_end_block(void *ctx, int i0, int i1, double *sums) {
     const rk2_ctx *c = ctx;
     floe_particles *p = &c->w->p;
     const double dt = c->dt, *g = c->w->def.gravity;
+    const double *da = c->rw == RK2_WD && c->w->dash_on ? c->w->dash_a : NULL;
     double wb = 0, md = 0;
     for (int i = i0; i < i1; i++) {
+        double *r = c->rows + (size_t)i * c->rw;
+        if (c->rw == RK2_WD) /* the kept dashpot accelerations (0 where none are kept) */
+            for (int k = 0; k < 3; k++) r[RK2_DASH + k] = da ? da[3 * i + k] : 0.0;
         if (p->motion[i] == FLOE_FIXED) continue;
         double *x = p->x + 3 * i;
         for (int k = 0; k < 3; k++) x[k] = c->x0[3 * i + k] + dt * p->v[3 * i + k];
@@ -883,14 +896,20 @@ static void rk2_end_block(void *ctx, int i0, int i1, double *sums) {
         if (c->xb) note_disp(x, c->xb + 3 * i, &md);
         if (p->motion[i] == FLOE_FREE) {
             wb += dt * (p->mass[i] * floe_v3_dot(g, p->v + 3 * i));
-            for (int k = 0; k < 3; k++) c->L0[3 * i + k] += dt * p->t[3 * i + k]; /* L_{n+1} */
+            for (int k = 0; k < 3; k++) {
+                r[RK2_V + k] = c->v0[3 * i + k];
+                r[RK2_F + k] = c->fm[3 * i + k];
+                p->L[3 * i + k] = c->L0[3 * i + k] + dt * p->t[3 * i + k]; /* L_{n+1} */
+                r[RK2_X + k] = c->x0[3 * i + k];
+            }
         }
     }
     c->md[i0 / FLOE_PAR_BLOCK] = md;
     sums[0] = wb;
 }
 
-/* 4. the free particles' v_{n+1}, L_{n+1}; sums: their kinetic energies */
+/* 4. the free particles' v_{n+1} from their rows and omega from L_{n+1}; sums: their kinetic
+ * energies */
 static void rk2_close_block(void *ctx, int i0, int i1, double *sums) {
     const rk2_ctx *c = ctx;
     floe_particles *p = &c->w->p;
@@ -900,11 +919,9 @@ static void rk2_close_block(void *ctx, int i0, int i1, double *sums) {
     for (int i = i0; i < i1; i++) {
         if (p->motion[i] != FLOE_FREE) continue;
         double *v = p->v + 3 * i, *L = p->L + 3 * i, im = p->inv_mass[i];
+        const double *r = c->rows + (size_t)i * c->rw;
         double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * dt * dt, lim = 0.5 * p->radius[i];
-        for (int k = 0; k < 3; k++) {
-            v[k] = c->v0[3 * i + k] + dt * im * c->fm[3 * i + k];
-            L[k] = c->L0[3 * i + k];
-        }
+        for (int k = 0; k < 3; k++) v[k] = r[RK2_V + k] + dt * im * r[RK2_F + k];
         omega_update(p, i);
         double ke = 0.5 * p->mass[i] * floe_v3_dot(v, v), kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
         kt += ke;
@@ -927,9 +944,6 @@ static void rk2_close_block(void *ctx, int i0, int i1, double *sums) {
  * enters the next step's midpoint, where an O(dt) error costs O(dt^3) locally. */
 int step_rk2(floe_world *w) {
     floe_particles *p = &w->p;
-    /* MPI: the decomposition that the last step's end left pending (its rebuild kept every
-     * particle's owner: this step's scratch below is indexed by the owned particles) */
-    if (w->par) FLOE_TRY(floe_par_start(w));
     const int n = p->n;
     const double dt = w->dt, h = 0.5 * dt, t_n = w->time;
     double *b = ibuf_reserve(w, 16 * (size_t)(n ? n : 1));
@@ -942,7 +956,7 @@ int step_rk2(floe_world *w) {
     /* 1. the midpoint state: the free particles on the threads, then the kinematic ones */
     const int nbk = (n + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK;
     {
-        rk2_ctx c = {w, h, dt, x0, v0, q0, NULL, NULL, L0, NULL, NULL};
+        rk2_ctx c = {w, h, dt, x0, v0, q0, NULL, NULL, L0, NULL, NULL, NULL, 0};
         double s0;
         if (floe_world_blocks(w, n, 1, rk2_mid_block, &c, &s0)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
@@ -970,38 +984,52 @@ int step_rk2(floe_world *w) {
     x0 = b; v0 = b + 3 * (size_t)n; L0 = b + 6 * (size_t)n; q0 = b + 9 * (size_t)n;
     double *fm = b + 13 * (size_t)n; /* F_mid */
     floe_world_copy(w, fm, p->f, 3 * (size_t)n * sizeof *fm);
-    /* 3. x_{n+1} = x_n + dt v_mid, q_{n+1} = exp(dt w_mid) q_n; v, w stay at the midpoint
-     * values for the forces at the end; v_{n+1}, L_{n+1} from the midpoint forces */
+    /* 3. x_{n+1} = x_n + dt v_mid, q_{n+1} = exp(dt w_mid) q_n, L_{n+1} = L_n + dt T_mid
+     * (before the states: a growing radius scales it); v, w stay at the midpoint values for
+     * the forces at the end; v_n and F_mid into the rows, which the end's rebuild carries with
+     * their particles (MPI: a decomposition) */
     double wb = 0, maxd2 = 0;
     const double *xb = w->nl.x_build;
     const int have_xb = xb && w->nl.n_build == n;
+    const int rw = w->par ? RK2_WD : RK2_W;
+    int oom = 0; /* MPI: told to every rank at the refresh below (a collective) */
+    if (w->rk2_n < n || !w->rk2) {
+        double *t = realloc(w->rk2, (size_t)(n ? n : 1) * RK2_WD * sizeof *t);
+        if (t) {
+            const int old = w->rk2 ? w->rk2_n : 0; /* new rows zero (the others' are sent too) */
+            memset(t + (size_t)old * RK2_WD, 0, (size_t)((n ? n : 1) - old) * RK2_WD * sizeof *t);
+            w->rk2 = t;
+            w->rk2_n = n;
+        } else oom = 1;
+    }
     {
         /* the blocks' largest displacements since the build */
-        double *md = malloc((size_t)(nbk > 0 ? nbk : 1) * sizeof *md);
-        if (!md) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-        rk2_ctx c = {w, h, dt, x0, v0, q0, fm, have_xb ? xb : NULL, L0, md, NULL};
-        int rcb = floe_world_blocks(w, n, 1, rk2_end_block, &c, &wb);
-        for (int k = 0; k < nbk && !rcb; k++)
+        double *md = oom ? NULL : malloc((size_t)(nbk > 0 ? nbk : 1) * sizeof *md);
+        rk2_ctx c = {w, h, dt, x0, v0, q0, fm, have_xb ? xb : NULL, L0, md, NULL, w->rk2, rw};
+        if (!md || floe_world_blocks(w, n, 1, rk2_end_block, &c, &wb)) oom = 1;
+        for (int k = 0; k < nbk && !oom; k++)
             if (md[k] > maxd2) maxd2 = md[k];
         free(md);
-        if (rcb) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        if (oom && !w->par) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
-    FLOE_TRY(advance_states(w, dt));
+    if (!oom) FLOE_TRY(advance_states(w, dt));
     advance_clock(w);
-    /* MPI: a rebuild keeps the owners (and so the indices of x0 .. fm); the decomposition
-     * waits for the next step's start */
-    if (w->par) FLOE_TRY(floe_par_refresh(w, maxd2, have_xb, 1));
-    else FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
+    /* MPI: a rebuild is a decomposition; the rows travel with their particles (x0 .. fm do
+     * not: not read after this) */
+    if (w->par) {
+        const floe_par_carry carry = {&w->rk2, &w->rk2_n, rw, RK2_DASH, oom};
+        FLOE_TRY(floe_par_refresh(w, maxd2, have_xb, &carry));
+    } else FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
     FLOE_TRY(forces_advancing(w));
-    /* 4. v_{n+1} = v_n + dt F_mid / m, L_{n+1} = L_n + dt T_mid (MPI: the walls and the owned
-     * particles, whose indices the rebuild kept; the ghosts are new) */
+    /* 4. v_{n+1} = v_n + dt F_mid / m from the rows, omega from L_{n+1} (MPI: the walls
+     * and the owned particles; the ghosts are new) */
     double kt = 0, kr = 0, wbound = 0;
     const int nend = w->par ? w->nl.own_hi : n;
     {
         const int nbe = (nend + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK;
         int *bad = malloc((size_t)(nbe > 0 ? nbe : 1) * sizeof *bad);
         if (!bad) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-        rk2_ctx c = {w, h, dt, x0, v0, q0, fm, NULL, L0, NULL, bad};
+        rk2_ctx c = {w, h, dt, NULL, NULL, NULL, NULL, NULL, NULL, NULL, bad, w->rk2, rw};
         double s2[2];
         if (floe_world_blocks(w, nend, 2, rk2_close_block, &c, s2)) {
             free(bad);
@@ -1019,7 +1047,7 @@ int step_rk2(floe_world *w) {
         free(bad);
         for (int i = first; i < nend; i++) {
             if (p->motion[i] != FLOE_FREE) continue;
-            int rc2 = check_particle(w, i, x0 + 3 * i);
+            int rc2 = check_particle(w, i, w->rk2 + (size_t)i * rw + RK2_X);
             if (rc2) return rc2;
         }
     }
@@ -1313,8 +1341,6 @@ int step_staggered(floe_world *w) {
     floe_particles *p = &w->p;
     const int m = w->pd_sub, ke = w->pd_every;
     const double dt = w->dt, h = 0.5 * dt, K = ke * dt;
-    /* MPI: a decomposition left pending (none is: only RK2 keeps its owners) */
-    if (w->par) FLOE_TRY(floe_par_start(w));
     int nend = stag_nend(w);
     double *r = stag_rows(w);
     if (!r) return FLOE_ENOMEM;

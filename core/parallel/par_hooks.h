@@ -10,13 +10,18 @@
  * in step.c's rebuild_if_needed), all rebuild when one does (RCB, migration, ghosts,
  * history by global ids, floe_nl_build); otherwise the ghosts are refreshed from their
  * owners */
-int floe_par_refresh(floe_world *w, double maxd2, int have_xb, int keep);
-/* keep (RK2, whose scratch is indexed by the owned particles across its step): a rebuild
- * keeps every particle with its owner (new ghosts and list only) and leaves the
- * decomposition pending; floe_par_start does it before the next step, floe_par_pending says
- * whether one is pending (the same on every rank) */
-int floe_par_start(floe_world *w);
-int floe_par_pending(const floe_world *w);
+/* carry (NULL: none; RK2's closing values): *n rows of m doubles a particle that travel with
+ * their particles through this call's decomposition (registered for the call only; every
+ * rank passes the same m). dash >= 0: columns [dash, dash + 3) of the rows hold the RK2
+ * midpoint's kept dashpot accelerations (forces.c), put back into w->dash_a and sent to the
+ * new ghosts after a decomposition. bad: this rank could not make its rows (out of memory):
+ * agreed with the rebuild test, every rank returns FLOE_ENOMEM */
+typedef struct floe_par_carry {
+    double **rows;
+    int *n;
+    int m, dash, bad;
+} floe_par_carry;
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry);
 /* the ghosts' positions, velocities (and orientations, forces where the laws read them)
  * from their owners, without a rebuild (RK2's midpoint) */
 int floe_par_ghost_update(floe_world *w);

@@ -55,9 +55,6 @@ typedef struct floe_par {
     int blost;               /* bonds whose anchor was not owned at the export (internal error) */
     double bout_reach, bond_reach;
     long nl_rebuilds;
-    /* an RK2 step rebuilt its list keeping every particle's owner (its scratch is indexed by
-     * the owned particles): the decomposition is done before the next step (floe_par_start) */
-    int pending;
     /* the force stages' per-particle rows received at a decomposition (par_forcing.c):
      * records gid + the rows of every registered array, until the new store exists */
     double *ppin; int nppin;

@@ -169,10 +169,8 @@ static int hist_import(floe_world *w, floe_par *P, const double *in, int nin) {
 
 /* the decomposition again: RCB of the owned centres, the history of the pairs whose anchor
  * leaves routed to its new owner (pend: entries exported before, at the split), migration,
- * ghosts, the neighbour list. keep: no bisection, every particle stays with its owner (the
- * walls and owned particles keep their local indices; the ghosts and the list are new) and
- * the decomposition is left pending for the next step's start */
-static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend, int keep) {
+ * ghosts, the neighbour list */
+static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     const int m = hist_len(w), lo = P->nrep, hi = P->nrep + P->nown;
     double *recs = pend;
     int nrec = npend, rc = FLOE_OK;
@@ -184,11 +182,7 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend, int 
     if (!dest || !hd) rc = FLOE_ENOMEM;
     /* PD bodies: made whole before the migration (its own message, agreed by every rank) */
     if (!rc && (rc = floe_par_pd_sync(w, P)) != FLOE_OK) { free(dest); free(hd); free(recs); return rc; }
-    if (!rc) {
-        if (keep)
-            for (int k = 0; k < P->nown; k++) dest[k] = P->rank;
-        else rc = floe_par_rcb(w, P, dest);
-    }
+    if (!rc) rc = floe_par_rcb(w, P, dest);
     floe_par_index ix = {0};
     if (!rc) rc = floe_par_index_build(P, hi, &ix);
     if (!rc) /* each entry to its anchor's new owner: the owned particle of the pair with the
@@ -226,7 +220,6 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend, int 
     rc = floe_world_nl_build(w);
     if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
     P->nl_rebuilds = w->nl.rebuilds;
-    P->pending = keep;
     w->motion_idx_n = -1; /* the motion callbacks' particles found again (step.c motion_of) */
     /* the arrays of the whole world (at the split) or of a larger share, shrunk to this
      * rank's part (docs/parallel.md, "Memory per rank") */
@@ -351,7 +344,7 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     }
     w->par = P;
     w->par_free = floe_par_free;
-    FLOE_TRY(par_rebuild(w, P, recs, nrec, 0));
+    FLOE_TRY(par_rebuild(w, P, recs, nrec));
     /* the ledger: the values at prepare (the whole world) stay on rank 0; the others start
      * from nothing but their own kinetic energy */
     if (P->rank != 0) {
@@ -391,16 +384,10 @@ void floe_par_max(floe_world *w, double *v, int n) { reduce_in_place(w, v, n, MP
 
 int floe_world_parallel_rebuild(floe_world *w) {
     if (!w->par) return FLOE_OK;
-    return par_rebuild(w, w->par, NULL, 0, 0);
+    return par_rebuild(w, w->par, NULL, 0);
 }
 
-int floe_par_start(floe_world *w) {
-    return w->par && w->par->pending ? par_rebuild(w, w->par, NULL, 0, 0) : FLOE_OK;
-}
-
-int floe_par_pending(const floe_world *w) { return w->par && w->par->pending; }
-
-int floe_par_refresh(floe_world *w, double maxd2, int have_xb, int keep) {
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry) {
     floe_par *P = w->par;
     /* a periodic cell: the test that discounts the cell's affine map (step.c rebuild_if_needed) */
     int need = w->cell ? floe_nl_needs_rebuild_cell(&w->nl, &w->p)
@@ -410,23 +397,40 @@ int floe_par_refresh(floe_world *w, double maxd2, int have_xb, int keep) {
      * chosen for the list of the last decomposition, so decompose again */
     if (w->beams && w->nl.rebuilds != P->nl_rebuilds) need = 1;
     if (w->law_gen != w->nl_law_gen) need = 1; /* a law set since the build (step.c rebuild_if_needed) */
-    MPI_Allreduce(&need, &any, 1, MPI_INT, MPI_LOR, P->comm);
-    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof need);
-    if (!any) return floe_par_ghost_update(w);
-    FLOE_TRY(par_rebuild(w, P, NULL, 0, keep));
+    if (!carry) {
+        MPI_Allreduce(&need, &any, 1, MPI_INT, MPI_LOR, P->comm);
+        floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof need);
+        if (!any) return floe_par_ghost_update(w);
+        return par_rebuild(w, P, NULL, 0);
+    }
+    /* rows that travel with their particles: registered for this decomposition only (every
+     * rank is here with the same width), their memory agreed with the need */
+    double **rows = carry->rows;
+    const int m = carry->m;
+    int mine[2] = {need, carry->bad || floe_world_pp_attach(w, rows, carry->n, m) ? 1 : 0}, all[2];
+    MPI_Allreduce(mine, all, 2, MPI_INT, MPI_MAX, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof mine);
+    if (all[1]) {
+        floe_world_pp_detach(w, rows);
+        return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
+    int rc = all[0] ? par_rebuild(w, P, NULL, 0) : floe_par_ghost_update(w);
+    floe_world_pp_detach(w, rows);
+    if (rc || !all[0]) return rc;
     /* an RK2 step's end keeps its midpoint probe's accelerations for the linear dashpots
-     * (forces.c dashpot_accelerations): the new ghosts take their owners'. Decided from what
-     * every rank holds alike (dash_on is 0 on a rank without particles) */
-    if (keep && w->dash_keep && floe_par_laws_dashpot(w)) {
-        const size_t n3 = 3 * (size_t)w->p.n;
-        int bad = 0;
-        if (n3 > w->dash_cap) {
-            double *t = realloc(w->dash_a, n3 * sizeof *t);
-            if (t) { w->dash_a = t; w->dash_cap = n3; }
-            else bad = 1;
-        }
-        if (!bad) bad = floe_par_forward_rows(P, w->dash_a, 3);
-        if (bad) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+     * (forces.c dashpot_accelerations): the owned particles' from the rows they brought, the
+     * new ghosts' from their owners. Decided from what every rank holds alike (dash_on is 0
+     * on a rank without particles) */
+    if (carry->dash >= 0 && w->dash_keep && floe_par_laws_dashpot(w)) {
+        const int n = w->p.n, own_hi = w->nl.own_hi, d = carry->dash;
+        /* the forward below is collective: the memory agreed first */
+        int bad = floe_world_dash_reserve(w) ? 1 : 0, any_bad = 0;
+        MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, P->comm);
+        floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof bad);
+        if (any_bad) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        for (int i = 0; i < own_hi; i++) memcpy(w->dash_a + 3 * (size_t)i, *rows + (size_t)i * m + d, 3 * sizeof(double));
+        if (floe_par_forward_rows(P, w->dash_a, 3)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        w->dash_on = n > 0;
     }
     return FLOE_OK;
 }
@@ -1498,13 +1502,11 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
                             "-DFLOE_WITH_MPI=ON)");
 }
 int floe_world_parallel_rebuild(floe_world *w) { (void)w; return FLOE_OK; }
-int floe_par_refresh(floe_world *w, double maxd2, int have_xb, int keep) {
-    (void)w; (void)maxd2; (void)have_xb; (void)keep;
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry) {
+    (void)w; (void)maxd2; (void)have_xb; (void)carry;
     return FLOE_OK;
 }
 int floe_par_ghost_update(floe_world *w) { (void)w; return FLOE_OK; }
-int floe_par_start(floe_world *w) { (void)w; return FLOE_OK; }
-int floe_par_pending(const floe_world *w) { (void)w; return 0; }
 int floe_par_reverse(floe_world *w) { (void)w; return FLOE_OK; }
 void floe_par_max(floe_world *w, double *v, int n) { (void)w; (void)v; (void)n; }
 int floe_par_cell_stress(floe_world *w, double sigma[9], int *given) {

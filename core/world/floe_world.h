@@ -114,13 +114,17 @@ typedef struct floe_particle_def {
 } floe_particle_def;
 
 floe_particle_def floe_default_particle_def(void);
-/* Add a particle; returns its index >= 0, or -error (message in last_error). */
+/* Add a particle; returns its index >= 0, or -error (message in last_error).
+ * A world split over MPI ranks (floe_world_parallel_init) is prepared once, before the split:
+ * this call and the others that would prepare it again (add_wall, set_particle_geometry,
+ * set_motion, set_body_force, set_dt, set_cell, the beam bonds, PD bodies and regions)
+ * return FLOE_ENOTSUP on it (-FLOE_ENOTSUP where an index is returned), changing nothing. */
 int floe_world_add_particle(floe_world *w, const floe_particle_def *d);
 /* Infinite wall: plane through point p with outward normal n (pointing into the domain). */
 int floe_world_add_wall(floe_world *w, const double p[3], const double n[3], int material,
                         floe_motion motion);
 /* A prescribed motion for a particle (it becomes kinematic). Set before a world is split
- * over MPI ranks (floe_world_parallel_init): refused after (FLOE_EINVAL). */
+ * over MPI ranks (floe_world_parallel_init): refused after (FLOE_ENOTSUP). */
 int floe_world_set_motion(floe_world *w, int particle, floe_motion_fn fn, void *user);
 int floe_world_set_body_force(floe_world *w, floe_body_force_fn fn, void *user);
 
@@ -258,7 +262,7 @@ int floe_world_set_particle_geometry(floe_world *w, int i, int geometry);
 /* Set the time step of the definition (dt > 0 fixed, 0 = automatic: dt_safety x critical)
  * and whether a step above the critical estimate is allowed (allow_unstable_dt); the world
  * is prepared again before its next step (the step chosen and checked then). FLOE_EINVAL
- * for dt negative or not finite. */
+ * for dt negative or not finite; FLOE_ENOTSUP on a world split over MPI ranks. */
 int floe_world_set_dt(floe_world *w, double dt, int allow_unstable);
 
 /* The orientation of round particles (a sphere in 3D, a disc in 2D: geometry kind

@@ -2116,6 +2116,16 @@ const floe_provider_class floe_pd_provider_class = {
  * After an RK2 midpoint probe the copy of the probe is kept: the contact history (its last
  * force) was put back to the step's start, and the accelerations must be of the same
  * evaluation. */
+int floe_world_dash_reserve(floe_world *w) {
+    const size_t n3 = 3 * (size_t)w->p.n;
+    if (n3 <= w->dash_cap) return FLOE_OK;
+    double *t = realloc(w->dash_a, n3 * sizeof *t);
+    if (!t) return FLOE_ENOMEM;
+    w->dash_a = t;
+    w->dash_cap = n3;
+    return FLOE_OK;
+}
+
 static int dashpot_accelerations(floe_world *w, const floe_step_ctx *ctx, int *dash) {
     const floe_particles *p = &w->p;
     *dash = 0;
@@ -2126,13 +2136,7 @@ static int dashpot_accelerations(floe_world *w, const floe_step_ctx *ctx, int *d
     w->dash_keep = ctx->probe;
     w->dash_on = 0;
     if (!want || p->n == 0) return FLOE_OK;
-    const size_t n3 = 3 * (size_t)p->n;
-    if (n3 > w->dash_cap) {
-        double *t = realloc(w->dash_a, n3 * sizeof *t);
-        if (!t) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-        w->dash_a = t;
-        w->dash_cap = n3;
-    }
+    if (floe_world_dash_reserve(w)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     w->dash_on = 1;
     *dash = !keep; /* forces_clear computes them */
     return FLOE_OK;

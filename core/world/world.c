@@ -103,6 +103,15 @@ int floe_world_pp_attach_first(floe_world *w, double **arr, int *n, int m) {
     return FLOE_OK;
 }
 
+void floe_world_pp_detach(floe_world *w, double **arr) {
+    for (int k = 0; k < w->npps; k++)
+        if (w->pps[k].arr == arr) {
+            memmove(w->pps + k, w->pps + k + 1, (size_t)(w->npps - k - 1) * sizeof *w->pps);
+            w->npps--;
+            return;
+        }
+}
+
 floe_world *floe_world_create(const floe_world_def *def, char *err, size_t errlen) {
     const char *bad = NULL;
     if (def->dim != 2 && def->dim != 3) bad = "dim must be 2 or 3";
@@ -383,6 +392,7 @@ void floe_world_destroy(floe_world *w) {
     free(w->det.scratch);
     free(w->dt_part);
     free(w->ibuf);
+    free(w->rk2);
     free(w->stag);
     free(w->dash_a);
     if (w->snap && w->snap_free) w->snap_free(w->snap); /* the adaptive controller's (core/integrators) */

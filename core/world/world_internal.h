@@ -176,6 +176,11 @@ struct floe_world {
     double *dt_part;          /* n: critical estimate of each particle (limiting kinds) */
     double lf_dt_prev;        /* leapfrog: the previous step (0: velocities synchronised) */
     double *ibuf; size_t ibuf_cap; /* integrator scratch (RK2's start state) */
+    /* RK2's closing values per particle (step.c RK2_*: v_n, F_mid, x_n and, under MPI, the
+     * kept dashpot accelerations), rk2_n rows: written before the step's end rebuild and
+     * read after it, registered as a per-particle row for that rebuild only, so that under
+     * MPI they travel with their particles through a decomposition */
+    double *rk2; int rk2_n;
     double *stag; int stag_n;      /* the staggered PD-DEM scheme's rows (core/integrators/step.c
                                       stag_rows; registered as a force stage's pps), stag_n rows */
     double *dash_a; size_t dash_cap; /* 3n: each particle's acceleration f / m of the last force
@@ -387,6 +392,9 @@ int floe_world_pd_periodic(floe_world *w, struct floe_pd_body *b, int k);
  * either is added (core/world/world.c) */
 void floe_world_install_exclusion(floe_world *w);
 
+/* dash_a sized for every particle here (3 p.n doubles; forces.c); FLOE_ENOMEM */
+int floe_world_dash_reserve(floe_world *w);
+
 int floe_world_error(floe_world *w, int code, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
@@ -473,5 +481,7 @@ int floe_world_pp_attach(floe_world *w, double **arr, int *n, int m);
  * may come after others: the split world and a mirror prepared once then list the rows in
  * the same order, which the checkpoint's gather (floe_par_pp_collect) relies on) */
 int floe_world_pp_attach_first(floe_world *w, double **arr, int *n, int m);
+/* the array no longer registered (nothing if it is not) */
+void floe_world_pp_detach(floe_world *w, double **arr);
 
 #endif

@@ -354,6 +354,7 @@ static void pd_bc_free(floe_pd_bc_rec *r) {
 }
 
 int floe_world_pd_region(floe_world *w, int body, const floe_pd_bc *bc) {
+    if (floe_world_refuse_split(w, "pd_region")) return -FLOE_ENOTSUP;
     if (!bc) return -floe_world_error(w, FLOE_EINVAL, "PD region: NULL definition");
     if (body < 0 || body >= w->npd)
         return -floe_world_error(w, FLOE_EINVAL, "PD region: body %d out of range (%d PD bodies)", body, w->npd);
@@ -369,7 +370,6 @@ int floe_world_pd_region(floe_world *w, int body, const floe_pd_bc *bc) {
     else if (!bc->sdf)
         for (int k = 0; k < 3 && !bad; k++)
             if (!(bc->lo[k] <= bc->hi[k])) bad = "the box needs lo <= hi on every axis";
-    if (!bad && w->pd_split) bad = "regions are added before the run is split over MPI ranks";
     if (bad) return -floe_world_error(w, FLOE_EINVAL, "PD region %d: %s", w->npd_bc, bad);
     const floe_pd_body *pb = w->pd[body];
     const int f0 = w->pd_first[body];

@@ -129,8 +129,6 @@ static int cmp_rec(const void *a, const void *b) {
     return (x[1] > y[1]) - (x[1] < y[1]);
 }
 
-/* the unsplit world on rank 0 and the split one on all: positions and velocities after
- * nshort steps, then (nlong > nshort) the statistics after nlong */
 static void nop_force(const floe_world *w, int i, double t, double f[3], double tq[3], void *u) {
     (void)w; (void)i; (void)t; (void)f; (void)tq; (void)u;
 }
@@ -139,7 +137,7 @@ static void nop_motion(double t, double v[3], double om[3], void *u) { (void)t; 
 /* every re-preparing setter on a split world: refused, named, nothing changed */
 static void refusals(floe_world *w) {
     static const char *name[] = {"set_dt", "add_particle", "add_wall", "set_particle_geometry", "set_body_force",
-                                 "set_motion", "set_cell", "add_beam_bonds", "add_pd_body"};
+                                 "set_motion", "set_cell", "add_beam_bonds", "add_pd_body", "pd_region"};
     const int n0 = w->p.n, nmot = w->nmotions;
     const double dt0 = w->dt;
     floe_particle_def d = floe_default_particle_def();
@@ -166,6 +164,12 @@ static void refusals(floe_world *w) {
             rc = floe_pd_body_create_points(&b, 3, 1, X, V, 1e-3, 0, 0);
             if (rc == FLOE_OK) rc = floe_world_add_pd_body(w, b, 0, pt, NULL); /* owns b */
             break;
+        case 9: {
+            floe_pd_bc bc;
+            memset(&bc, 0, sizeof bc);
+            rc = -floe_world_pd_region(w, 0, &bc);
+            break;
+        }
         }
         char want[96];
         snprintf(want, sizeof want, "%s: the world is split over MPI ranks", name[k]);
@@ -180,6 +184,8 @@ static void refusals(floe_world *w) {
           "refusals: the split world is unchanged (still prepared, %d particles, dt %g)", w->p.n, w->dt);
 }
 
+/* the unsplit world on rank 0 and the split one on all: positions and velocities after
+ * nshort steps, then (nlong > nshort) the statistics after nlong */
 static void compare(int shapes, long nshort, long nlong, double xtol, double vtol) {
     floe_world *w = build(shapes);
     const int N = w->p.n;
