@@ -847,14 +847,14 @@ typedef struct rk2_ctx {
     const double *x0, *v0, *q0, *fm, *xb;
     double *L0, *md; /* md: each block's largest squared displacement since the build */
     int *bad;        /* each block's first free particle that failed the quick checks */
-    double *rows;    /* the closing values (RK2_W a particle, w->rk2) */
-    int rw;          /* doubles a row: RK2_W, RK2_WD under MPI with the dashpots' column */
+    double *rows;    /* MPI: the closing values (RK2_WD a particle, w->rk2); NULL in one
+                        process, where the end reads x0, v0, fm (no rebuild renumbers them) */
 } rk2_ctx;
 
-/* a row of w->rk2: v_n, F_mid, x_n of a free particle (the others' are not read), and under
- * MPI the midpoint's dashpot accelerations (forces.c). v_{n+1} = v_n + dt F_mid / m is taken
- * at the step's end, with the mass then (a state object may grow it in the step) */
-enum { RK2_V = 0, RK2_F = 3, RK2_X = 6, RK2_W = 9, RK2_DASH = 9, RK2_WD = 12 };
+/* a row of w->rk2 (MPI): v_n, F_mid, x_n of a free particle (the others' are not read) and
+ * the midpoint's dashpot accelerations (forces.c). v_{n+1} = v_n + dt F_mid / m is taken at
+ * the step's end, with the mass then (a state object may grow it in the step) */
+enum { RK2_V = 0, RK2_F = 3, RK2_X = 6, RK2_DASH = 9, RK2_WD = 12 };
 
 /* 1. the midpoint state of the free particles (the fixed ones stay, the kinematic ones after) */
 static void rk2_mid_block(void *ctx, int i0, int i1, double *sums) {
@@ -883,11 +883,11 @@ static void rk2_end_block(void *ctx, int i0, int i1, double *sums) {
     const rk2_ctx *c = ctx;
     floe_particles *p = &c->w->p;
     const double dt = c->dt, *g = c->w->def.gravity;
-    const double *da = c->rw == RK2_WD && c->w->dash_on ? c->w->dash_a : NULL;
+    const double *da = c->rows && c->w->dash_on ? c->w->dash_a : NULL;
     double wb = 0, md = 0;
     for (int i = i0; i < i1; i++) {
-        double *r = c->rows + (size_t)i * c->rw;
-        if (c->rw == RK2_WD) /* the kept dashpot accelerations (0 where none are kept) */
+        double *r = c->rows ? c->rows + (size_t)i * RK2_WD : NULL;
+        if (r) /* the kept dashpot accelerations (0 where none are kept) */
             for (int k = 0; k < 3; k++) r[RK2_DASH + k] = da ? da[3 * i + k] : 0.0;
         if (p->motion[i] == FLOE_FIXED) continue;
         double *x = p->x + 3 * i;
@@ -896,12 +896,13 @@ static void rk2_end_block(void *ctx, int i0, int i1, double *sums) {
         if (c->xb) note_disp(x, c->xb + 3 * i, &md);
         if (p->motion[i] == FLOE_FREE) {
             wb += dt * (p->mass[i] * floe_v3_dot(g, p->v + 3 * i));
-            for (int k = 0; k < 3; k++) {
-                r[RK2_V + k] = c->v0[3 * i + k];
-                r[RK2_F + k] = c->fm[3 * i + k];
-                p->L[3 * i + k] = c->L0[3 * i + k] + dt * p->t[3 * i + k]; /* L_{n+1} */
-                r[RK2_X + k] = c->x0[3 * i + k];
-            }
+            for (int k = 0; k < 3; k++) p->L[3 * i + k] = c->L0[3 * i + k] + dt * p->t[3 * i + k]; /* L_{n+1} */
+            if (r)
+                for (int k = 0; k < 3; k++) {
+                    r[RK2_V + k] = c->v0[3 * i + k];
+                    r[RK2_F + k] = c->fm[3 * i + k];
+                    r[RK2_X + k] = c->x0[3 * i + k];
+                }
         }
     }
     c->md[i0 / FLOE_PAR_BLOCK] = md;
@@ -919,9 +920,10 @@ static void rk2_close_block(void *ctx, int i0, int i1, double *sums) {
     for (int i = i0; i < i1; i++) {
         if (p->motion[i] != FLOE_FREE) continue;
         double *v = p->v + 3 * i, *L = p->L + 3 * i, im = p->inv_mass[i];
-        const double *r = c->rows + (size_t)i * c->rw;
+        const double *r = c->rows ? c->rows + (size_t)i * RK2_WD : NULL;
+        const double *v0 = r ? r + RK2_V : c->v0 + 3 * i, *fm = r ? r + RK2_F : c->fm + 3 * i;
         double d2 = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * dt * dt, lim = 0.5 * p->radius[i];
-        for (int k = 0; k < 3; k++) v[k] = r[RK2_V + k] + dt * im * r[RK2_F + k];
+        for (int k = 0; k < 3; k++) v[k] = v0[k] + dt * im * fm[k];
         omega_update(p, i);
         double ke = 0.5 * p->mass[i] * floe_v3_dot(v, v), kre = 0.5 * floe_v3_dot(L, p->w + 3 * i);
         kt += ke;
@@ -956,7 +958,7 @@ int step_rk2(floe_world *w) {
     /* 1. the midpoint state: the free particles on the threads, then the kinematic ones */
     const int nbk = (n + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK;
     {
-        rk2_ctx c = {w, h, dt, x0, v0, q0, NULL, NULL, L0, NULL, NULL, NULL, 0};
+        rk2_ctx c = {w, h, dt, x0, v0, q0, NULL, NULL, L0, NULL, NULL, NULL};
         double s0;
         if (floe_world_blocks(w, n, 1, rk2_mid_block, &c, &s0)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
@@ -991,9 +993,8 @@ int step_rk2(floe_world *w) {
     double wb = 0, maxd2 = 0;
     const double *xb = w->nl.x_build;
     const int have_xb = xb && w->nl.n_build == n;
-    const int rw = w->par ? RK2_WD : RK2_W;
     int oom = 0; /* MPI: told to every rank at the refresh below (a collective) */
-    if (w->rk2_n < n || !w->rk2) {
+    if (w->par && (w->rk2_n < n || !w->rk2)) {
         double *t = realloc(w->rk2, (size_t)(n ? n : 1) * RK2_WD * sizeof *t);
         if (t) {
             const int old = w->rk2 ? w->rk2_n : 0; /* new rows zero (the others' are sent too) */
@@ -1005,7 +1006,7 @@ int step_rk2(floe_world *w) {
     {
         /* the blocks' largest displacements since the build */
         double *md = oom ? NULL : malloc((size_t)(nbk > 0 ? nbk : 1) * sizeof *md);
-        rk2_ctx c = {w, h, dt, x0, v0, q0, fm, have_xb ? xb : NULL, L0, md, NULL, w->rk2, rw};
+        rk2_ctx c = {w, h, dt, x0, v0, q0, fm, have_xb ? xb : NULL, L0, md, NULL, w->par ? w->rk2 : NULL};
         if (!md || floe_world_blocks(w, n, 1, rk2_end_block, &c, &wb)) oom = 1;
         for (int k = 0; k < nbk && !oom; k++)
             if (md[k] > maxd2) maxd2 = md[k];
@@ -1015,9 +1016,9 @@ int step_rk2(floe_world *w) {
     if (!oom) FLOE_TRY(advance_states(w, dt));
     advance_clock(w);
     /* MPI: a rebuild is a decomposition; the rows travel with their particles (x0 .. fm do
-     * not: not read after this) */
+     * not: under MPI not read after this) */
     if (w->par) {
-        const floe_par_carry carry = {&w->rk2, &w->rk2_n, rw, RK2_DASH, oom};
+        const floe_par_carry carry = {&w->rk2, &w->rk2_n, RK2_WD, RK2_DASH, oom};
         FLOE_TRY(floe_par_refresh(w, maxd2, have_xb, &carry));
     } else FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
     FLOE_TRY(forces_advancing(w));
@@ -1029,7 +1030,7 @@ int step_rk2(floe_world *w) {
         const int nbe = (nend + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK;
         int *bad = malloc((size_t)(nbe > 0 ? nbe : 1) * sizeof *bad);
         if (!bad) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-        rk2_ctx c = {w, h, dt, NULL, NULL, NULL, NULL, NULL, NULL, NULL, bad, w->rk2, rw};
+        rk2_ctx c = {w, h, dt, x0, v0, q0, fm, NULL, L0, NULL, bad, w->par ? w->rk2 : NULL};
         double s2[2];
         if (floe_world_blocks(w, nend, 2, rk2_close_block, &c, s2)) {
             free(bad);
@@ -1047,7 +1048,7 @@ int step_rk2(floe_world *w) {
         free(bad);
         for (int i = first; i < nend; i++) {
             if (p->motion[i] != FLOE_FREE) continue;
-            int rc2 = check_particle(w, i, w->rk2 + (size_t)i * rw + RK2_X);
+            int rc2 = check_particle(w, i, w->par ? w->rk2 + (size_t)i * RK2_WD + RK2_X : x0 + 3 * i);
             if (rc2) return rc2;
         }
     }

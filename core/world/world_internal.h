@@ -176,10 +176,10 @@ struct floe_world {
     double *dt_part;          /* n: critical estimate of each particle (limiting kinds) */
     double lf_dt_prev;        /* leapfrog: the previous step (0: velocities synchronised) */
     double *ibuf; size_t ibuf_cap; /* integrator scratch (RK2's start state) */
-    /* RK2's closing values per particle (step.c RK2_*: v_n, F_mid, x_n and, under MPI, the
-     * kept dashpot accelerations), rk2_n rows: written before the step's end rebuild and
-     * read after it, registered as a per-particle row for that rebuild only, so that under
-     * MPI they travel with their particles through a decomposition */
+    /* MPI: RK2's closing values per particle (step.c RK2_*: v_n, F_mid, x_n, the kept dashpot
+     * accelerations), rk2_n rows: written before the step's end rebuild and read after it,
+     * registered as a per-particle row for that rebuild only, so that they travel with their
+     * particles through a decomposition (one process reads its scratch instead) */
     double *rk2; int rk2_n;
     double *stag; int stag_n;      /* the staggered PD-DEM scheme's rows (core/integrators/step.c
                                       stag_rows; registered as a force stage's pps), stag_n rows */
