@@ -236,8 +236,10 @@ static void free_pieces(vtk_pieces *vp, int from)
  * scene with only its vtk outputs, as the writers of its pieces, and keeps its subdomain
  * (floe_world_parallel_init), which the pieces then write (floe_world_parallel_add_output);
  * when the scene has other outputs, rank 0 also loads it with them (its vtk outputs left
- * out), an unsplit mirror that writes the gathered state. An error on one rank stops all
- * (MPI_Abort): the others would wait for it in a collective. */
+ * out), an unsplit mirror that writes the gathered state. An error inside the run that every
+ * rank returned (floe_world_parallel_error_agreed: a contact too deep, a particle's checks,
+ * the watchdog) ends the outputs on every rank and returns 1, as one process does; an error
+ * on one rank alone stops all (MPI_Abort): the others would wait for it in a collective. */
 static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
 {
     char err[1024];
@@ -381,9 +383,29 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
     double wall = now_s() - pr.t0;
     if (pr.printed) fprintf(stderr, "\r%*s\r", 100, "");
     if (rc != FLOE_OK && !(pr.stopped && rc == FLOE_ESTOP)) {
-        fprintf(stderr, "%s: error (rank %d): %s: %s (t = %g s, step %ld)\n", prog, rank, label,
-                floe_world_last_error(w), floe_world_time(w), floe_world_step_count(w));
-        MPI_Abort(MPI_COMM_WORLD, 1);
+        const int agreed = floe_world_parallel_error_agreed(w);
+        if (!agreed) { /* this rank alone: the others may wait in a collective */
+            fprintf(stderr, "%s: error (rank %d): %s: %s (t = %g s, step %ld)\n", prog, rank, label,
+                    floe_world_last_error(w), floe_world_time(w), floe_world_step_count(w));
+            MPI_Abort(MPI_COMM_WORLD, 1);
+        }
+        /* every rank returned it: the outputs end together, as in one process (floe_world_run
+         * wrote the state at the failure), unless a decomposition failed midway (agreed 2:
+         * the split state is not whole and is not written) */
+        char msg[1024];
+        snprintf(msg, sizeof msg, "%s", floe_world_last_error(w));
+        const int frc = agreed == 1 ? floe_world_parallel_finish(w) : FLOE_OK;
+        if (agreed != 1 && rank == 0)
+            fprintf(stderr, "%s: %s: the outputs were not ended (a decomposition failed midway)\n", prog, label);
+        if (rank == 0) {
+            fprintf(stderr, "%s: error: %s: %s (t = %g s, step %ld)\n", prog, label, msg, floe_world_time(w),
+                    floe_world_step_count(w));
+            if (frc != FLOE_OK) fprintf(stderr, "%s: error: %s: %s\n", prog, label, floe_world_last_error(w));
+            fprintf(stderr, "%s: outputs written so far are in %s\n", prog, o->outdir);
+        }
+        floe_world_destroy(w);
+        floe_world_destroy(mirror);
+        return 1;
     }
     rc = floe_world_parallel_finish(w);
     if (pr.stopped && rc == FLOE_OK) { /* every rank stopped at the same step: outputs closed */

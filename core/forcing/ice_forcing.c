@@ -30,7 +30,8 @@ static int field_covers_all(floe_world *w, const char *who, const floe_field *f,
     if (f->kind != FLOE_FIELD_GRID) return FLOE_OK;
     char msg[768];
     for (int i = 0; i < p->n; i++) {
-        if (p->motion[i] != FLOE_FREE || !floe_field_covers(f, p->x + 3 * i, p->radius[i], i, msg, sizeof msg))
+        if (p->motion[i] != FLOE_FREE ||
+            !floe_field_covers(f, p->x + 3 * i, p->radius[i], (int)floe_world_pid(w, i), msg, sizeof msg))
             continue;
         if (first) return floe_world_report_error(w, FLOE_EINVAL, "%s: %s", who, msg);
         return floe_world_report_error(w, FLOE_EINVAL, "%s: %s at t = %.9g s", who, msg, time);

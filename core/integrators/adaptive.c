@@ -169,9 +169,11 @@ int step_adaptive(floe_world *w, int (*inner)(floe_world *w)) {
         w->track_depth = 1;
         int rc = inner(w);
         w->track_depth = 0;
-        /* MPI: a failed trial stops the run (a rank that failed inside the step is not where
-         * the others wait); only the measures' rejections are redone, agreed over the ranks */
-        if (rc && w->par) return rc;
+        /* MPI: a trial that failed on some ranks is redone as in one process when every rank
+         * returned the failure with the state whole (w->err_agreed 1: a force evaluation's or
+         * the closing checks' error, floe_par_agree_error); any other failure stops the run (a
+         * rank that failed alone inside the step is not where the others wait) */
+        if (rc && w->par && w->err_agreed != 1) return rc;
         double eta_v = 0, eta_d = w->eta_depth;
         /* MPI: a decomposition inside the trial (rare: the test above predicts the drift)
          * reordered the store, so the saved velocities no longer match; the trial is accepted
@@ -206,6 +208,7 @@ int step_adaptive(floe_world *w, int (*inner)(floe_world *w)) {
             f = rc ? 0.25 : fmax(0.1, fmin(0.9, f));
             w->dt_next = fmax(w->dt_lo, dt * f);
             w->err[0] = 0;
+            w->err_agreed = 0;
             continue;
         }
         if (rc) return rc;

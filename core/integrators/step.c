@@ -100,10 +100,18 @@ static int forces_all(floe_world *w, floe_step_ctx *c) {
     const double t0 = w->par ? floe_par_clock() : 0.0;
     int rc = floe_world_forces(w, c, FLOE_GROUP_ALL);
     if (w->par) floe_par_force_time(w, floe_par_clock() - t0);
+    /* MPI: a rank whose evaluation failed (a contact too deep, a law's error) tells the others
+     * before the reverse sum, where they would wait for it: every rank returns its error */
+    if (w->par) rc = floe_par_agree_error(w, rc);
     if (!rc && w->par) rc = floe_par_reverse(w);
     if (!rc && w->par) rc = floe_par_servo_totals(w);
     return rc;
 }
+
+/* the outcome of a step's close (its kick and checks, after its last collective): under MPI
+ * agreed by every rank, each rank calling this once on its way out, failed or not
+ * (floe_par_agree_error: the ranks that did not fail return the failing rank's error) */
+static int step_close(floe_world *w, int rc) { return w->par ? floe_par_agree_error(w, rc) : rc; }
 
 /* forces at the end of a step, with the history and the ledger advancing */
 static int forces_advancing(floe_world *w) {
@@ -128,19 +136,19 @@ static int check_particle(floe_world *w, int i, const double xold[3]) {
     for (int k = 0; k < 3; k++)
         if (!isfinite(x[k]) || !isfinite(v[k]) || !isfinite(om[k]))
             return floe_world_error(w, FLOE_EUNSTABLE,
-                                    "unstable: particle %d (body %d) has a non-finite %s at step %ld, t = %g s "
+                                    "unstable: particle %lld (body %d) has a non-finite %s at step %ld, t = %g s "
                                     "(force %g %g %g N)",
-                                    i, p->group[i], !isfinite(x[k]) ? "position" : !isfinite(v[k]) ? "velocity" : "angular velocity",
+                                    floe_world_pid(w, i), p->group[i], !isfinite(x[k]) ? "position" : !isfinite(v[k]) ? "velocity" : "angular velocity",
                                     w->step, w->time, p->f[3 * i], p->f[3 * i + 1], p->f[3 * i + 2]);
     double d[3];
     floe_v3_sub(d, x, xold);
     double moved = floe_v3_norm(d);
     if (moved > 0.5 * p->radius[i])
         return floe_world_error(w, FLOE_EUNSTABLE,
-                                "unstable: particle %d (body %d) moved %.3g of its radius in one step at step %ld, "
+                                "unstable: particle %lld (body %d) moved %.3g of its radius in one step at step %ld, "
                                 "t = %g s (speed %g m/s): the time step %g s is too large for the contact stiffness "
                                 "or the velocities",
-                                i, p->group[i], moved / p->radius[i], w->step, w->time, floe_v3_norm(v), w->dt);
+                                floe_world_pid(w, i), p->group[i], moved / p->radius[i], w->step, w->time, floe_v3_norm(v), w->dt);
     return FLOE_OK;
 }
 
@@ -233,6 +241,14 @@ static int advance_states(floe_world *w, double dt) {
         }
     }
     return FLOE_OK;
+}
+
+/* the states over the step (skip: this rank does not advance them, having failed before:
+ * RK2's rows, told to every rank at the refresh); under MPI with state objects, the outcome
+ * agreed by every rank (a state's callback may fail on one rank alone) */
+static int states_step(floe_world *w, double dt, int skip) {
+    int rc = skip ? FLOE_OK : advance_states(w, dt);
+    return w->par && w->nstates ? floe_par_agree_error(w, rc) : rc;
 }
 
 /* the integrators' scratch: at least nd doubles (contents kept when it grows) */
@@ -733,7 +749,7 @@ int step_verlet(floe_world *w) {
     /* the periodic cell's affine map of the particles and of the cell itself */
     if (w->cell) FLOE_TRY(floe_cell_after_drift(w, dt));
     /* 2. state objects, RK2 midpoint (eq 21) */
-    FLOE_TRY(advance_states(w, dt));
+    FLOE_TRY(states_step(w, dt, 0));
     advance_clock(w);
     /* 3. neighbours and forces at t + dt */
     FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
@@ -756,7 +772,7 @@ int step_verlet(floe_world *w) {
         /* the blocks again: a rebuild may have changed the count (MPI) */
         const int nb2 = (n + B - 1) / B, nt2 = floe_world_loop_threads(w, n);
         double *red2 = floe_world_reduce_buf(w, 4 * (size_t)nb2);
-        if (nb2 > 0 && !red2) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        if (nb2 > 0 && !red2) return step_close(w, floe_world_error(w, FLOE_ENOMEM, "out of memory"));
         const kick_args ka = {h, dt, leap, shadow, w->par != NULL};
         if (nt2 > 1) {
             const int *cut = floe_loop_split_cuts(w, nt2, nb2); /* the drift's parts */
@@ -799,8 +815,10 @@ int step_verlet(floe_world *w) {
         if (motion[i] != FLOE_FREE) continue;
         double xold[3];
         for (int k = 0; k < 3; k++) xold[k] = p->x[3 * i + k] - dt * (p->v[3 * i + k] - k2 * p->inv_mass[i] * p->f[3 * i + k]);
-        FLOE_TRY(check_particle(w, i, xold));
+        const int rc = check_particle(w, i, xold);
+        if (rc) return step_close(w, rc);
     }
+    FLOE_TRY(step_close(w, FLOE_OK));
     if (leap) w->lf_dt_prev = dt;
     w->wd_shadow = shadow ? sh + hh2 * sh_iso : 0.0;
     w->energy.kinetic_trans = kt;
@@ -1013,7 +1031,7 @@ int step_rk2(floe_world *w) {
         free(md);
         if (oom && !w->par) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
-    if (!oom) FLOE_TRY(advance_states(w, dt));
+    FLOE_TRY(states_step(w, dt, oom));
     advance_clock(w);
     /* MPI: a rebuild is a decomposition; the rows travel with their particles (x0 .. fm do
      * not: under MPI not read after this) */
@@ -1029,12 +1047,12 @@ int step_rk2(floe_world *w) {
     {
         const int nbe = (nend + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK;
         int *bad = malloc((size_t)(nbe > 0 ? nbe : 1) * sizeof *bad);
-        if (!bad) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        if (!bad) return step_close(w, floe_world_error(w, FLOE_ENOMEM, "out of memory"));
         rk2_ctx c = {w, h, dt, x0, v0, q0, fm, NULL, L0, NULL, bad, w->par ? w->rk2 : NULL};
         double s2[2];
         if (floe_world_blocks(w, nend, 2, rk2_close_block, &c, s2)) {
             free(bad);
-            return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+            return step_close(w, floe_world_error(w, FLOE_ENOMEM, "out of memory"));
         }
         kt = s2[0];
         kr = s2[1];
@@ -1049,9 +1067,10 @@ int step_rk2(floe_world *w) {
         for (int i = first; i < nend; i++) {
             if (p->motion[i] != FLOE_FREE) continue;
             int rc2 = check_particle(w, i, w->par ? w->rk2 + (size_t)i * RK2_WD + RK2_X : x0 + 3 * i);
-            if (rc2) return rc2;
+            if (rc2) return step_close(w, rc2);
         }
     }
+    FLOE_TRY(step_close(w, FLOE_OK));
     w->energy.kinetic_trans = kt;
     w->energy.kinetic_rot = kr;
     w->energy.work_body += wb;
@@ -1113,6 +1132,7 @@ static int stag_forces(floe_world *w, const floe_step_ctx *ctx, int group) {
     const double t0 = w->par ? floe_par_clock() : 0.0;
     int rc = floe_world_forces(w, ctx, group);
     if (w->par) floe_par_force_time(w, floe_par_clock() - t0);
+    if (w->par) rc = floe_par_agree_error(w, rc); /* as forces_all */
     if (!rc && w->par && group == FLOE_GROUP_DEM) rc = floe_par_reverse(w);
     if (!rc && w->par && group == FLOE_GROUP_DEM) rc = floe_par_servo_totals(w);
     return rc;
@@ -1378,7 +1398,7 @@ int step_staggered(floe_world *w) {
             FLOE_TRY(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
         }
     }
-    FLOE_TRY(advance_states(w, dt));
+    FLOE_TRY(states_step(w, dt, 0));
     advance_clock(w);
     w->pd_cycle++;
     /* 3. F_C at the new positions; sub-cycled PD points move at their mean velocity over
@@ -1430,7 +1450,7 @@ int step_staggered(floe_world *w) {
     if (!bad || !xo) {
         free(bad);
         free(xo);
-        return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        return step_close(w, floe_world_error(w, FLOE_ENOMEM, "out of memory"));
     }
     c.bad = bad;
     c.xo = xo;
@@ -1443,7 +1463,7 @@ int step_staggered(floe_world *w) {
         if (bad[b] != INT_MAX) rc = check_particle(w, bad[b], xo + 3 * (size_t)b);
     free(bad);
     free(xo);
-    if (rc) return rc;
+    FLOE_TRY(step_close(w, rc));
     w->wd_shadow = s3[2];
     w->energy.kinetic_trans = s3[0];
     w->energy.kinetic_rot = s3[1];

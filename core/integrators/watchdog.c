@@ -111,6 +111,7 @@ static int energy_watchdog(floe_world *w) {
             fprintf(stderr, "floe: warning: %s (checks: energy: warn, the run goes on)\n", w->wd_msg);
             return FLOE_OK;
         }
+        w->err_agreed = 1; /* from the sums: every rank stops here */
         return floe_world_error(w, FLOE_EUNSTABLE, "%s", w->wd_msg);
     }
     char what[256], cause[512], name[96];
@@ -190,6 +191,7 @@ static int energy_watchdog(floe_world *w) {
 
 int floe_world_step(floe_world *w) {
     if (!w->prepared) FLOE_TRY(floe_world_prepare(w));
+    w->err_agreed = 0; /* MPI: set by an error every rank returns (core/parallel) */
     int rc = w->def.adaptive ? step_adaptive(w, step_once) : step_once(w);
     if (rc) return rc;
     floe_step_stats *s = &w->st;
@@ -273,6 +275,10 @@ int floe_world_run(floe_world *w, double t_end, floe_progress_fn progress, void 
         char keep[sizeof w->err];
         memcpy(keep, w->err, sizeof keep);
         observers_call(w, 1);
+        /* MPI: when every rank returned the error (and the state is whole: not a
+         * decomposition that failed midway), rank 0's mirror writes the state at the failure
+         * too (collective: the ranks are all here) */
+        if (w->par && w->err_agreed == 1) (void)floe_par_observe(w, 1);
         memcpy(w->err, keep, sizeof keep);
     }
     char keep[sizeof w->err];

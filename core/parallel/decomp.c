@@ -138,26 +138,37 @@ void floe_par_count_all(floe_par *P, int k, long long bytes) {
     floe_par_count(P, k, bytes * (P->size - 1), P->size - 1);
 }
 
+int floe_par_agree(floe_par *P, int rc) {
+    int all = rc;
+    MPI_Allreduce(&rc, &all, 1, MPI_INT, MPI_MAX, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof rc);
+    return all;
+}
+
 int floe_par_route(floe_par *P, int kind, const double *items, const int *dest, int nitems, int m, double **out, int *nout) {
     const int S = P->size;
-    int *sc = calloc((size_t)4 * S, sizeof *sc);
-    if (!sc) return FLOE_ENOMEM;
-    int *sd = sc + S, *rc = sc + 2 * S, *rd = sc + 3 * S;
+    int *sc = P->rt, *sd = sc + S, *rc = sc + 2 * S, *rd = sc + 3 * S, *pos = sc + 4 * S;
+    *out = NULL;
+    *nout = 0;
+    /* the counts (-1 to every rank: this rank failed before; every rank then returns) */
+    for (int r = 0; r < S; r++) sc[r] = nitems < 0 ? -1 : 0;
     for (int k = 0; k < nitems; k++) sc[dest[k]]++;
     MPI_Alltoall(sc, 1, MPI_INT, rc, 1, MPI_INT, P->comm);
     floe_par_count_all(P, kind, sizeof(int));
+    int failed = nitems < 0;
+    for (int r = 0; r < S; r++) failed |= rc[r] < 0;
+    if (failed) return FLOE_ENOMEM;
     floe_par_count_v(P, kind, sc, (long long)m * sizeof(double));
     int ns = 0, nr = 0;
     for (int r = 0; r < S; r++) { sd[r] = ns; ns += sc[r]; rd[r] = nr; nr += rc[r]; }
     double *sb = malloc((size_t)(ns ? ns : 1) * m * sizeof *sb);
     double *rb = malloc((size_t)(nr ? nr : 1) * m * sizeof *rb);
-    int *pos = malloc((size_t)S * sizeof *pos);
-    if (!sb || !rb || !pos) { free(sc); free(sb); free(rb); free(pos); return FLOE_ENOMEM; }
+    if (floe_par_agree(P, !sb || !rb ? FLOE_ENOMEM : FLOE_OK)) { free(sb); free(rb); return FLOE_ENOMEM; }
     memcpy(pos, sd, (size_t)S * sizeof *pos);
     for (int k = 0; k < nitems; k++) memcpy(sb + (size_t)pos[dest[k]]++ * m, items + (size_t)k * m, (size_t)m * sizeof *sb);
     for (int r = 0; r < S; r++) { sc[r] *= m; sd[r] *= m; rc[r] *= m; rd[r] *= m; }
     MPI_Alltoallv(sb, sc, sd, MPI_DOUBLE, rb, rc, rd, MPI_DOUBLE, P->comm);
-    free(sb); free(sc); free(pos);
+    free(sb);
     *out = rb;
     *nout = nr;
     return FLOE_OK;
@@ -327,6 +338,7 @@ static int par_room(floe_world *w, floe_par *P, int need) {
     if (need > P->gid_cap) {
         long long *g = realloc(P->gid, (size_t)need * sizeof *g);
         if (!g) return FLOE_ENOMEM;
+        if (w->nl.gid == P->gid) w->nl.gid = g; /* (the messages read it: floe_world_pid) */
         P->gid = g;
         P->gid_cap = need;
     }
@@ -347,16 +359,16 @@ int floe_par_migrate(floe_world *w, floe_par *P, const int *dest) {
     for (int k = 0; k < P->nown; k++) nleave += dest[k] != P->rank;
     double *out = malloc((size_t)(nleave ? nleave : 1) * m * sizeof *out);
     int *od = malloc((size_t)(nleave ? nleave : 1) * sizeof *od);
-    if (!out || !od) { free(out); free(od); return FLOE_ENOMEM; }
     int a = 0;
-    for (int k = 0; k < P->nown; k++)
+    for (int k = 0; out && od && k < P->nown; k++)
         if (dest[k] != P->rank) {
             floe_par_pack(p, lo + k, P->gid[lo + k], out + (size_t)a * m);
             od[a++] = dest[k];
         }
     double *in = NULL;
     int nin = 0;
-    int rc = floe_par_route(P, FLOE_COMM_MIGRATE, out, od, nleave, m, &in, &nin);
+    /* (out of memory here: the route tells every rank) */
+    int rc = floe_par_route(P, FLOE_COMM_MIGRATE, out, od, out && od ? nleave : -1, m, &in, &nin);
     free(out); free(od);
     if (rc) return rc;
     P->migrated += nleave;
@@ -419,23 +431,24 @@ static int cell_copies(const floe_cell_state *c, int dim, const double *y, const
     return n;
 }
 
-int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
+int floe_par_ghosts(floe_world *w, floe_par *P, double skin, int bad) {
     floe_particles *p = &w->p;
     const int S = P->size, dim = w->def.dim, lo = P->nrep, hi = P->nrep + P->nown;
     const floe_cell_state *cell = w->cell;
     /* a periodic cell: the owned centres wrapped into it (the bisection cut the wrapped
      * centres), their copies across the faces tested below; otherwise the centres */
     double *y = NULL;
-    if (cell) {
+    if (cell && !bad) {
         y = malloc((size_t)(hi > lo ? hi - lo : 1) * 3 * sizeof *y);
-        if (!y) return FLOE_ENOMEM;
-        for (int i = lo; i < hi; i++) floe_world_cell_wrap(w, p->x + 3 * i, y + 3 * (i - lo));
+        if (!y) bad = 1;
+        for (int i = lo; y && i < hi; i++) floe_world_cell_wrap(w, p->x + 3 * i, y + 3 * (i - lo));
     }
 #define CENTRE(i) (cell ? y + 3 * ((i) - lo) : p->x + 3 * (i))
-    /* each rank's box of owned centres and its largest bounding radius; an empty rank an
+    /* each rank's box of owned centres, its largest bounding radius and whether it failed
+     * (since the decomposition's last agreement: every rank then returns); an empty rank an
      * empty box (lo > hi: nothing reaches it) */
-    double mine[7] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY, 0};
-    for (int i = lo; i < hi; i++) {
+    double mine[8] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY, 0, bad ? 1.0 : 0.0};
+    for (int i = lo; !bad && i < hi; i++) {
         const double *x = CENTRE(i);
         for (int a = 0; a < 3; a++) {
             if (x[a] < mine[a]) mine[a] = x[a];
@@ -443,10 +456,11 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
         }
         if (p->radius[i] > mine[6]) mine[6] = p->radius[i];
     }
-    double *boxes = malloc((size_t)S * 7 * sizeof *boxes);
-    if (!boxes) { free(y); return FLOE_ENOMEM; }
-    MPI_Allgather(mine, 7, MPI_DOUBLE, boxes, 7, MPI_DOUBLE, P->comm);
-    floe_par_count_all(P, FLOE_COMM_GHOST, 7 * sizeof(double));
+    double *boxes = P->boxes;
+    MPI_Allgather(mine, 8, MPI_DOUBLE, boxes, 8, MPI_DOUBLE, P->comm);
+    floe_par_count_all(P, FLOE_COMM_GHOST, 8 * sizeof(double));
+    for (int r = 0; r < S; r++)
+        if (boxes[8 * r + 7] != 0) { free(y); return FLOE_ENOMEM; }
     /* a periodic cell: the widest reach of any pair (the copies that can matter) and the
      * cell's widths */
     double wd[3] = {INFINITY, INFINITY, INFINITY}, reach = 0;
@@ -454,7 +468,7 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
         floe_world_cell_widths(w, wd);
         double rmax = 0, rall = 0;
         for (int i = lo; i < hi; i++) rmax = fmax(rmax, p->radius[i]);
-        for (int r = 0; r < S; r++) rall = fmax(rall, boxes[7 * r + 6]);
+        for (int r = 0; r < S; r++) rall = fmax(rall, boxes[8 * r + 6]);
         reach = fmax(rmax + rall, fmax(P->bond_reach, P->pd_reach)) + skin;
     }
     /* a periodic cell: each owned centre's copies (cell_copies), once for every destination:
@@ -475,17 +489,17 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
             cpat[i - lo] = n;
             n += cell_copies(cell, dim, CENTRE(i), wd, reach, cpx + n);
         }
-        if (!cpat || !cpx) { free(cpat); free(cpx); free(boxes); free(y); return FLOE_ENOMEM; }
-        cpat[hi - lo] = n;
+        if (!cpat || !cpx) bad = 1;
+        else cpat[hi - lo] = n;
     }
     /* the send lists, grouped by destination */
     P->nsend = 0;
     for (int r = 0; r < S; r++) {
         P->sdispl[r] = P->nsend;
         P->scount[r] = 0;
-        const double *b = boxes + 7 * r;
-        if (r == P->rank || !(b[0] <= b[3])) continue;
-        for (int i = lo; i < hi; i++) {
+        const double *b = boxes + 8 * r;
+        if (bad || r == P->rank || !(b[0] <= b[3])) continue;
+        for (int i = lo; !bad && i < hi; i++) {
             /* beam bonds and PD bonds: the partner of a bond evaluated on r is within the
              * bond's length of one of r's centres (bond_reach, pd_reach: the longest,
              * par_beams.c and par_pd.c) */
@@ -499,7 +513,7 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
             if (P->nsend == P->send_cap) {
                 int nc = P->send_cap ? 2 * P->send_cap : 256;
                 int *t = realloc(P->send_idx, (size_t)nc * sizeof *t);
-                if (!t) { free(boxes); free(y); free(cpat); free(cpx); return FLOE_ENOMEM; }
+                if (!t) { bad = 1; break; }
                 P->send_idx = t;
                 P->send_cap = nc;
             }
@@ -508,35 +522,42 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
         }
     }
 #undef CENTRE
-    free(boxes);
     free(y);
     free(cpat);
     free(cpx);
+    const int m = FLOE_PAR_REC;
+    /* the counts (-1 to every rank: this rank failed; every rank then returns) */
+    if (!bad && floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)P->nsend * m)) bad = 1;
+    for (int r = 0; bad && r < S; r++) P->scount[r] = -1;
     MPI_Alltoall(P->scount, 1, MPI_INT, P->rcount, 1, MPI_INT, P->comm);
     floe_par_count_all(P, FLOE_COMM_GHOST, sizeof(int));
+    for (int r = 0; r < S; r++) bad |= P->rcount[r] < 0;
+    if (bad) {
+        P->nsend = 0;
+        for (int r = 0; r < S; r++) P->scount[r] = P->sdispl[r] = P->rcount[r] = P->rdispl[r] = 0;
+        return FLOE_ENOMEM;
+    }
     int nr = 0;
     for (int r = 0; r < S; r++) { P->rdispl[r] = nr; nr += P->rcount[r]; }
-    const int m = FLOE_PAR_REC;
-    if (floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)P->nsend * m) ||
-        floe_par_reserve(&P->rbuf, &P->rbuf_cap, (size_t)nr * m))
-        return FLOE_ENOMEM;
+    /* the room for what arrives, agreed before the exchange */
+    int nomem = floe_par_reserve(&P->rbuf, &P->rbuf_cap, (size_t)nr * m) || par_room(w, P, hi + nr);
+    if (!nomem && nr > P->gmotion_cap) {
+        unsigned char *g = realloc(P->gmotion, (size_t)nr);
+        if (g) {
+            P->gmotion = g;
+            P->gmotion_cap = nr;
+            w->gmotion = g;
+        } else nomem = 1;
+    }
+    if (floe_par_agree(P, nomem ? FLOE_ENOMEM : FLOE_OK)) return FLOE_ENOMEM;
     for (int k = 0; k < P->nsend; k++) floe_par_pack(p, P->send_idx[k], P->gid[P->send_idx[k]], P->sbuf + (size_t)k * m);
-    int *sc = malloc((size_t)4 * S * sizeof *sc);
-    if (!sc) return FLOE_ENOMEM;
+    int *sc = P->gc;
     for (int r = 0; r < S; r++) {
         sc[r] = P->scount[r] * m; sc[S + r] = P->sdispl[r] * m;
         sc[2 * S + r] = P->rcount[r] * m; sc[3 * S + r] = P->rdispl[r] * m;
     }
     MPI_Alltoallv(P->sbuf, sc, sc + S, MPI_DOUBLE, P->rbuf, sc + 2 * S, sc + 3 * S, MPI_DOUBLE, P->comm);
     floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, (long long)m * sizeof(double));
-    free(sc);
-    if (par_room(w, P, hi + nr)) return FLOE_ENOMEM;
-    if (nr > P->gmotion_cap) {
-        unsigned char *g = realloc(P->gmotion, (size_t)nr);
-        if (!g) return FLOE_ENOMEM;
-        P->gmotion = g;
-        P->gmotion_cap = nr;
-    }
     w->gmotion = P->gmotion;
     for (int k = 0; k < nr; k++) {
         floe_par_unpack(p, hi + k, P->rbuf + (size_t)k * m, P->gid + hi + k);
@@ -548,11 +569,11 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin) {
     return FLOE_OK;
 }
 
-/* counts and displacements of the ghost exchange in doubles, m per particle */
+/* counts and displacements of the ghost exchange in doubles, m per particle (P->gc: the
+ * exchanges of a step allocate nothing) */
 static int *ghost_counts(const floe_par *P, int m) {
     const int S = P->size;
-    int *c = malloc((size_t)4 * S * sizeof *c);
-    if (!c) return NULL;
+    int *c = P->gc;
     for (int r = 0; r < S; r++) {
         c[r] = P->scount[r] * m; c[S + r] = P->sdispl[r] * m;
         c[2 * S + r] = P->rcount[r] * m; c[3 * S + r] = P->rdispl[r] * m;
@@ -587,6 +608,8 @@ int floe_par_forward_comm(floe_world *w, floe_par *P) {
     int wq, wf;
     fwd_what(w, P, &wq, &wf);
     const int m = fwd_len(wq, wf), S = P->size, g0 = P->nrep + P->nown;
+    /* (the ghosts' choice left FLOE_PAR_REC doubles a ghost both ways: a step's exchanges
+     * allocate nothing, and cannot fail on one rank alone) */
     if (floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)P->nsend * m) ||
         floe_par_reserve(&P->rbuf, &P->rbuf_cap, (size_t)P->nghost * m))
         return FLOE_ENOMEM;
@@ -599,11 +622,9 @@ int floe_par_forward_comm(floe_world *w, floe_par *P) {
         if (wq) memcpy(r + 9, p->q + 4 * i, 4 * sizeof *r);
         if (wf) memcpy(r + 9 + 4 * wq, p->f + 3 * i, 3 * sizeof *r);
     }
-    int *c = ghost_counts(P, m);
-    if (!c) return FLOE_ENOMEM;
+    const int *c = ghost_counts(P, m);
     MPI_Alltoallv(P->sbuf, c, c + S, MPI_DOUBLE, P->rbuf, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->comm);
     floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, (long long)m * sizeof(double));
-    free(c);
     for (int k = 0; k < P->nghost; k++) {
         const int i = g0 + k;
         const double *r = P->rbuf + (size_t)k * m;
@@ -620,11 +641,9 @@ int floe_par_forward_rows(floe_par *P, double *a, int m) {
     const int S = P->size, g0 = P->nrep + P->nown;
     if (floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)P->nsend * m)) return FLOE_ENOMEM;
     for (int k = 0; k < P->nsend; k++) memcpy(P->sbuf + (size_t)k * m, a + (size_t)P->send_idx[k] * m, (size_t)m * sizeof *a);
-    int *c = ghost_counts(P, m);
-    if (!c) return FLOE_ENOMEM;
+    const int *c = ghost_counts(P, m);
     MPI_Alltoallv(P->sbuf, c, c + S, MPI_DOUBLE, a ? a + (size_t)g0 * m : NULL, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->comm);
     floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, (long long)m * sizeof(double));
-    free(c);
     return FLOE_OK;
 }
 
@@ -640,11 +659,9 @@ int floe_par_reverse_comm(floe_world *w, floe_par *P) {
         memcpy(P->rbuf + (size_t)k * m, p->f + 3 * i, 3 * sizeof(double));
         memcpy(P->rbuf + (size_t)k * m + 3, p->t + 3 * i, 3 * sizeof(double));
     }
-    int *c = ghost_counts(P, m);
-    if (!c) return FLOE_ENOMEM;
+    const int *c = ghost_counts(P, m);
     MPI_Alltoallv(P->rbuf, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->sbuf, c, c + S, MPI_DOUBLE, P->comm);
     floe_par_count_v(P, FLOE_COMM_REVERSE, P->rcount, (long long)m * sizeof(double));
-    free(c);
     for (int k = 0; k < P->nsend; k++) {
         const int i = P->send_idx[k];
         const double *r = P->sbuf + (size_t)k * m;
@@ -704,7 +721,7 @@ void floe_par_free(floe_par *P) {
     for (int k = 0; k < P->nouts; k++) floe_observer_destroy(P->outs[k]);
     free(P->outs);
     free(P->bout); free(P->bin); free(P->bpark); free(P->ppin); free(P->servo_buf);
-    free(P->gid); free(P->send_idx); free(P->scount); free(P->sbuf); free(P->rbuf);
+    free(P->gid); free(P->send_idx); free(P->scount); free(P->boxes); free(P->sbuf); free(P->rbuf);
     free(P->cost); free(P->bal_ids); free(P->bal_sz);
     floe_pd_split_free(P->pd_split); /* PD bodies' split (par_pd.c) */
     free(P->pd_counts);

@@ -236,6 +236,7 @@ int floe_par_servo_totals(floe_world *w) {
             free(P->servo_buf);
             P->servo_buf = NULL;
             P->servo_cap = 0;
+            w->err_agreed = 1;
             return floe_world_error(w, FLOE_ENOMEM, "MPI servo walls: out of memory");
         }
     }

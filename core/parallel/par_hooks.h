@@ -49,6 +49,15 @@ int floe_par_observe(floe_world *w, int force_all);
 void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min,
                               double *pdd, int npd);
 
+/* an outcome made every rank's (docs/parallel.md, "Errors inside a step"): rc is this rank's;
+ * when a rank failed, the lowest failing rank's code and message are every rank's (its
+ * message in last_error, naming particles by their global ids as one process does;
+ * w->err_agreed set) and returned on every rank.
+ * Called by every rank at the same point of the step: after a force evaluation (before its
+ * reverse sum) and after the step's closing checks. One MPI_Allreduce of an int when no rank
+ * failed; rc itself without MPI or a split */
+int floe_par_agree_error(floe_world *w, int rc);
+
 /* the adaptive step (core/integrators/adaptive.c) on a split world: v[0 .. n) replaced by
  * their largest values over the ranks, the same on every rank (untouched without MPI or a
  * split) */

@@ -34,6 +34,12 @@ typedef struct floe_par {
     int *send_idx; int nsend, send_cap;
     int *scount, *sdispl, *rcount, *rdispl;
     int *gcnt;               /* 2 size: counts and displacements of a gather to rank 0 */
+    /* scratch allocated at the split with the counts above, so that the exchanges of a step
+     * and the first collective of a route or of the ghosts' choice never allocate (a rank
+     * that failed alone there would leave the others waiting): the ghost exchanges' counts
+     * and displacements in doubles (4 size), a route's (5 size), the ranks' boxes (8 size) */
+    int *gc, *rt;
+    double *boxes;
     double *sbuf, *rbuf; size_t sbuf_cap, rbuf_cap;
     struct floe_world *mirror; /* rank 0 with outputs: the unsplit world whose observers write
                                   the gathered state (floe_world_parallel_outputs) */
@@ -117,18 +123,26 @@ void floe_par_unpack(floe_particles *p, int i, const double *r, long long *gid);
 void floe_par_pack_state(const floe_particles *p, int i, double *r);
 void floe_par_unpack_state(floe_particles *p, int i, const double *r);
 /* send nitems items of m doubles, item k to rank dest[k] (counted as kind); *out (malloc'ed, caller frees)
- * receives *nout items, ordered by source rank then the source's order */
+ * receives *nout items, ordered by source rank then the source's order. Its failures are
+ * every rank's: nitems < 0 (this rank failed before the route; nothing sent) or a rank out
+ * of memory for its buffers makes every rank return FLOE_ENOMEM (*out NULL). Collective */
 int floe_par_route(floe_par *P, int kind, const double *items, const int *dest, int nitems, int m, double **out, int *nout);
 /* destination rank of each owned particle by recursive coordinate bisection (Zoltan, weights
  * 1): dest[k] for owned particle nrep + k */
 int floe_par_rcb(floe_world *w, floe_par *P, int *dest);
 /* send the owned particles with dest[k] != rank to their new owner and keep those received:
- * the owned particles become [nrep, nrep + nown) sorted by global id; ghosts are dropped */
+ * the owned particles become [nrep, nrep + nown) sorted by global id; ghosts are dropped.
+ * A failure of its route is every rank's; one after it (the new store) this rank's alone:
+ * pass it to floe_par_ghosts */
 int floe_par_migrate(floe_world *w, floe_par *P, const int *dest);
 /* the ghosts: every owned particle whose bounding sphere, grown by the largest bounding radius
  * of a rank's owned particles and the skin, reaches the box of that rank's owned centres is
- * sent to it as a ghost (appended at nrep + nown, motion FLOE_FIXED) */
-int floe_par_ghosts(floe_world *w, floe_par *P, double skin);
+ * sent to it as a ghost (appended at nrep + nown, motion FLOE_FIXED). bad: this rank failed
+ * before (floe_par_migrate). Every failure, bad included, is every rank's (FLOE_ENOMEM) */
+int floe_par_ghosts(floe_world *w, floe_par *P, double skin, int bad);
+/* the largest of rc over the ranks (an MPI_Allreduce, counted as a reduction): a failure on
+ * one rank made every rank's before the next collective */
+int floe_par_agree(floe_par *P, int rc);
 /* refresh the ghosts from their owners: x v w always; q when a bounded particle is not round
  * or beam bonds read it; f when a law has a linear dashpot (its end-of-step velocity reads
  * the ghost's acceleration, pair_an_ext); a ghost's L and t are never read (the owner

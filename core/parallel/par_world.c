@@ -13,6 +13,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+int floe_world_parallel_error_agreed(const floe_world *w) { return !w || !w->par ? 1 : w->err_agreed; }
+
 const char *floe_comm_kind_name(floe_comm_kind k) {
     static const char *const names[FLOE_COMM_KINDS] = {"ghost", "reverse", "migrate", "reduce", "output"};
     return (int)k >= 0 && k < FLOE_COMM_KINDS ? names[k] : "?";
@@ -171,44 +173,63 @@ static int hist_import(floe_world *w, floe_par *P, const double *in, int nin) {
  * leaves routed to its new owner (pend: entries exported before, at the split), migration,
  * ghosts, the neighbour list */
 static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
+    /* Every failure is every rank's (w->err_agreed): a stage's own failure on one rank is told
+     * to the others before the next collective, by an agreement (floe_par_agree) or inside the
+     * collective itself (a route's counts, the ghosts' boxes), so that no rank waits for one
+     * that has left (docs/parallel.md, "Errors inside a step") */
     const int m = hist_len(w), lo = P->nrep, hi = P->nrep + P->nown;
     double *recs = pend;
     int nrec = npend, rc = FLOE_OK;
-    if (!recs) FLOE_TRY(hist_export(w, P->gid, NULL, lo, hi, &recs, &nrec));
+    if (!recs) rc = hist_export(w, P->gid, NULL, lo, hi, &recs, &nrec);
     int *dest = malloc((size_t)(P->nown ? P->nown : 1) * sizeof *dest);
     int *hd = malloc((size_t)(nrec ? nrec : 1) * sizeof *hd);
     double *in = NULL;
     int nin = 0;
     if (!dest || !hd) rc = FLOE_ENOMEM;
+    rc = floe_par_agree(P, rc);
     /* PD bodies: made whole before the migration (its own message, agreed by every rank) */
-    if (!rc && (rc = floe_par_pd_sync(w, P)) != FLOE_OK) { free(dest); free(hd); free(recs); return rc; }
-    if (!rc) rc = floe_par_rcb(w, P, dest);
+    if (!rc && (rc = floe_par_pd_sync(w, P)) != FLOE_OK) {
+        free(dest); free(hd); free(recs);
+        w->err_agreed = 1;
+        return rc;
+    }
     floe_par_index ix = {0};
-    if (!rc) rc = floe_par_index_build(P, hi, &ix);
-    if (!rc) /* each entry to its anchor's new owner: the owned particle of the pair with the
-              * lower id (walls and ghosts are not among the owned [lo, hi)) */
-        for (int k = 0; k < nrec; k++) {
-            const double *e = recs + (size_t)k * m;
-            int f[2];
-            for (int s = 0; s < 2; s++) {
-                const int a = floe_par_index_find(&ix, (long long)e[s]);
-                f[s] = a >= lo && a < hi ? a : -1;
+    if (!rc) {
+        rc = floe_par_rcb(w, P, dest);
+        if (!rc) rc = floe_par_index_build(P, hi, &ix);
+        if (!rc) /* each entry to its anchor's new owner: the owned particle of the pair with the
+                  * lower id (walls and ghosts are not among the owned [lo, hi)) */
+            for (int k = 0; k < nrec; k++) {
+                const double *e = recs + (size_t)k * m;
+                int f[2];
+                for (int s = 0; s < 2; s++) {
+                    const int a = floe_par_index_find(&ix, (long long)e[s]);
+                    f[s] = a >= lo && a < hi ? a : -1;
+                }
+                const int an = f[0] >= 0 && f[1] >= 0 ? (P->gid[f[0]] < P->gid[f[1]] ? f[0] : f[1]) : f[0] >= 0 ? f[0] : f[1];
+                hd[k] = an >= 0 ? dest[an - lo] : P->rank;
             }
-            const int an = f[0] >= 0 && f[1] >= 0 ? (P->gid[f[0]] < P->gid[f[1]] ? f[0] : f[1]) : f[0] >= 0 ? f[0] : f[1];
-            hd[k] = an >= 0 ? dest[an - lo] : P->rank;
-        }
-    floe_par_index_free(&ix);
+        floe_par_index_free(&ix);
+        rc = floe_par_agree(P, rc);
+    }
     long long diag[NDIAG];
     diag_save(w, P, diag);
-    if (!rc && (rc = floe_par_pd_out(w, P, dest)) != FLOE_OK) { free(in); free(dest); free(hd); free(recs); return rc; }
-    if (!rc) rc = floe_par_beams_out(w, P, dest); /* beam bonds (par_beams.c) */
-    if (!rc) rc = floe_par_pp_out(w, P, dest);    /* the force stages' rows (par_forcing.c) */
-    if (!rc) rc = floe_par_migrate(w, P, dest);
-    if (!rc) rc = floe_par_ghosts(w, P, w->nl.skin);
+    if (!rc && (rc = floe_par_pd_out(w, P, dest)) != FLOE_OK) {
+        free(dest); free(hd); free(recs);
+        w->err_agreed = 1;
+        return rc;
+    }
+    if (!rc) rc = floe_par_beams_out(w, P, dest); /* beam bonds (par_beams.c; agreed) */
+    if (!rc) rc = floe_par_pp_out(w, P, dest);    /* the force stages' rows (par_forcing.c; agreed) */
+    /* from the migration on, a failure leaves the store half rebuilt: every rank returns it,
+     * but the state is not written (w->err_agreed 2) */
+    const int moved = !rc;
+    if (!rc) rc = floe_par_ghosts(w, P, w->nl.skin, floe_par_migrate(w, P, dest)); /* agreed */
     if (!rc) diag_load(w, P, diag);
     if (!rc) rc = floe_par_route(P, FLOE_COMM_MIGRATE, recs, hd, nrec, m, &in, &nin);
-    if (!rc) rc = hist_import(w, P, in, nin);
+    if (!rc) rc = floe_par_agree(P, hist_import(w, P, in, nin));
     free(in); free(dest); free(hd); free(recs);
+    w->err_agreed = moved ? 2 : 1; /* from here on too: each failure below is every rank's */
     if (rc) return floe_world_error(w, rc, "MPI decomposition failed (out of memory or Zoltan)");
     FLOE_TRY(floe_par_beams_in(w, P)); /* its own message, agreed by every rank */
     FLOE_TRY(floe_par_pp_in(w, P));    /* the same */
@@ -217,8 +238,9 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     w->nl.gid = P->gid;
     w->nl.own_hi = P->nrep + P->nown;
     w->nl.rep_hi = P->nrep;
-    rc = floe_world_nl_build(w);
+    rc = floe_par_agree(P, floe_world_nl_build(w));
     if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
+    w->err_agreed = 0;
     P->nl_rebuilds = w->nl.rebuilds;
     w->motion_idx_n = -1; /* the motion callbacks' particles found again (step.c motion_of) */
     /* the arrays of the whole world (at the split) or of a larger share, shrunk to this
@@ -269,10 +291,13 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     MPI_Comm_rank(P->comm, &P->rank);
     MPI_Comm_size(P->comm, &P->size);
     const int S = P->size, n = p->n;
-    P->scount = malloc((size_t)6 * S * sizeof *P->scount);
+    P->scount = malloc((size_t)15 * S * sizeof *P->scount);
+    P->boxes = malloc((size_t)8 * S * sizeof *P->boxes);
     if (P->scount) {
         P->sdispl = P->scount + S; P->rcount = P->scount + 2 * S; P->rdispl = P->scount + 3 * S;
         P->gcnt = P->scount + 4 * S;
+        P->gc = P->scount + 6 * S;
+        P->rt = P->scount + 10 * S;
     }
     /* the same world on every rank? (count and a checksum of the positions) */
     double chk[2] = {n, 0}, chk0[2];
@@ -300,7 +325,7 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     int *newidx = malloc((size_t)(n ? n : 1) * sizeof *newidx);
     long long *gid0 = malloc((size_t)(n ? n : 1) * sizeof *gid0);
     double *recs = NULL, *buf = malloc((size_t)(n ? n : 1) * FLOE_PAR_REC * sizeof *buf);
-    int nrec = 0, rc = !P->scount || !mine || !newidx || !gid0 || !buf ? FLOE_ENOMEM : FLOE_OK;
+    int nrec = 0, rc = !P->scount || !P->boxes || !mine || !newidx || !gid0 || !buf ? FLOE_ENOMEM : FLOE_OK;
     if (!rc) {
         int kb = 0;
         for (int i = 0; i < n; i++) {
@@ -337,6 +362,7 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
         }
     }
     free(mine); free(newidx); free(gid0); free(buf);
+    rc = floe_par_agree(P, rc); /* every rank, before the decomposition's collectives */
     if (rc) {
         free(recs);
         floe_par_free(P);
@@ -410,8 +436,9 @@ int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_ca
     int mine[2] = {need, carry->bad || floe_world_pp_attach(w, rows, carry->n, m) ? 1 : 0}, all[2];
     MPI_Allreduce(mine, all, 2, MPI_INT, MPI_MAX, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof mine);
-    if (all[1]) {
+    if (all[1]) { /* a rank could not make its rows: every rank stops here */
         floe_world_pp_detach(w, rows);
+        w->err_agreed = 1;
         return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
     int rc = all[0] ? par_rebuild(w, P, NULL, 0) : floe_par_ghost_update(w);
@@ -427,7 +454,10 @@ int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_ca
         int bad = floe_world_dash_reserve(w) ? 1 : 0, any_bad = 0;
         MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, P->comm);
         floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof bad);
-        if (any_bad) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        if (any_bad) {
+            w->err_agreed = 1;
+            return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        }
         for (int i = 0; i < own_hi; i++) memcpy(w->dash_a + 3 * (size_t)i, *rows + (size_t)i * m + d, 3 * sizeof(double));
         if (floe_par_forward_rows(P, w->dash_a, 3)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
         w->dash_on = n > 0;
@@ -441,6 +471,30 @@ int floe_par_ghost_update(floe_world *w) {
     if (!rc) rc = floe_par_pd_s0_refresh(w, P); /* PD with alpha: the ghosts' s0 */
     return rc ? floe_world_error(w, rc, "out of memory") : FLOE_OK;
 }
+
+/* floe_par_agree_error, its reduction counted as kind */
+static int agree_error_kind(floe_world *w, int rc, int kind) {
+    floe_par *P = w->par;
+    if (!P) return rc;
+    int mine = rc ? P->rank : P->size, first = mine;
+    MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, P->comm);
+    floe_par_count_allreduce(P, kind, sizeof mine);
+    if (first == P->size) return FLOE_OK;
+    /* the code and the message of the lowest failing rank (particles named by their global
+     * ids, as one process names them: floe_world_pid) */
+    struct { int code; char msg[sizeof w->err]; } m;
+    if (P->rank == first) {
+        m.code = rc;
+        snprintf(m.msg, sizeof m.msg, "%s", w->err);
+    }
+    MPI_Bcast(&m, (int)sizeof m, MPI_BYTE, first, P->comm);
+    if (P->rank == first) floe_par_count(P, kind, sizeof m, 1); /* (as floe_par_count_bcast) */
+    floe_world_error(w, m.code, "%s", m.msg);
+    w->err_agreed = 1;
+    return m.code;
+}
+
+int floe_par_agree_error(floe_world *w, int rc) { return agree_error_kind(w, rc, FLOE_COMM_REDUCE); }
 
 double floe_par_clock(void) { return MPI_Wtime(); }
 void floe_par_force_time(floe_world *w, double seconds) {
@@ -1056,11 +1110,7 @@ static int split_outputs(floe_world *w, floe_par *P, const int *due) {
         }
         P->busy += MPI_Wtime() - t0;
     }
-    int all;
-    MPI_Allreduce(&rc, &all, 1, MPI_INT, MPI_MAX, P->comm);
-    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof rc);
-    if (all && !rc) return floe_world_error(w, all, "an output failed on rank 0");
-    return all;
+    return agree_error_kind(w, rc, FLOE_COMM_OUTPUT); /* the failing rank's message everywhere */
 }
 
 static int output_due(const floe_world *w, const floe_observer *o) {
@@ -1082,15 +1132,23 @@ static int output_call(floe_world *w, floe_observer *o, int end) {
 
 /* every rank's own outputs (floe_world_parallel_add_output) that are due, as the world calls
  * its observers; the same on every rank, so their collective calls meet */
+/* the due outputs of this rank, every one called (an output may hold a collective: the vtk
+ * pieces' agreement), the first failure returned after them and agreed by every rank when
+ * any was due (the same on every rank: their periods are) */
 static int outputs_call(floe_world *w, floe_par *P, int force_all) {
+    int first = FLOE_OK, called = 0;
+    char why[sizeof w->err];
     for (int k = 0; k < P->nouts; k++) {
         floe_observer *o = P->outs[k];
         if (!force_all && !output_due(w, o)) continue;
         if (o->period_time > 0 && o->period_steps <= 0)
             while (o->next_time <= w->time + 1e-9 * w->dt) o->next_time += o->period_time;
-        FLOE_TRY(output_call(w, o, 0));
+        called = 1;
+        const int rc = output_call(w, o, 0);
+        if (rc && !first) { first = rc; memcpy(why, w->err, sizeof why); }
     }
-    return FLOE_OK;
+    if (first) memcpy(w->err, why, sizeof why);
+    return called ? floe_par_agree_error(w, first) : first;
 }
 
 int floe_world_parallel_add_output(floe_world *w, floe_observer *o) {
@@ -1158,7 +1216,7 @@ static int mirror_observe(floe_world *w, floe_par *P, const int *due, int more, 
         MPI_Bcast(&contacts, 1, MPI_INT, 0, P->comm);
         floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof contacts);
     }
-    int rc = split_outputs(w, P, due), ok;
+    int rc = split_outputs(w, P, due);
     if (!rc && gather) rc = mirror_gather(w, P, contacts);
     if (P->rank == 0 && !rc) {
         const double t0 = MPI_Wtime();
@@ -1172,10 +1230,7 @@ static int mirror_observe(floe_world *w, floe_par *P, const int *due, int more, 
         if (rc) floe_world_error(w, rc, "%s", floe_world_last_error(P->mirror));
         P->busy += MPI_Wtime() - t0;
     }
-    MPI_Allreduce(&rc, &ok, 1, MPI_INT, MPI_MAX, P->comm);
-    floe_par_count_allreduce(P, FLOE_COMM_OUTPUT, sizeof rc);
-    if (ok && !rc) return floe_world_error(w, ok, "an output failed on rank 0");
-    return ok;
+    return agree_error_kind(w, rc, FLOE_COMM_OUTPUT); /* the failing rank's message everywhere */
 }
 
 int floe_par_observe(floe_world *w, int force_all) {
@@ -1187,7 +1242,7 @@ int floe_par_observe(floe_world *w, int force_all) {
     /* the outputs' own work (this rank's pieces; rank 0's observers on the mirror below) is
      * work the other ranks wait for: it counts in the load balance's measure (P->busy) */
     double t0 = MPI_Wtime();
-    FLOE_TRY(outputs_call(w, P, force_all));
+    FLOE_TRY(outputs_call(w, P, force_all)); /* agreed */
     P->busy += MPI_Wtime() - t0;
     int has = P->mirror != NULL;
     MPI_Bcast(&has, 1, MPI_INT, 0, P->comm);
@@ -1508,6 +1563,7 @@ int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_ca
 }
 int floe_par_ghost_update(floe_world *w) { (void)w; return FLOE_OK; }
 int floe_par_reverse(floe_world *w) { (void)w; return FLOE_OK; }
+int floe_par_agree_error(floe_world *w, int rc) { (void)w; return rc; }
 void floe_par_max(floe_world *w, double *v, int n) { (void)w; (void)v; (void)n; }
 int floe_par_cell_stress(floe_world *w, double sigma[9], int *given) {
     (void)w; (void)sigma;

@@ -102,8 +102,8 @@ static int manifold_springs(floe_world *w, const floe_contact_law *law, floe_con
             memset(&re, 0, sizeof re);
             int rc = law->klass->force(law, &ce, he, &re);
             if (rc)
-                return floe_world_error(w, rc, "contact law %s failed for particles %d and %d at a manifold vertex: %s",
-                                        law->klass->name, c->i, c->j, floe_strerror(rc));
+                return floe_world_error(w, rc, "contact law %s failed for particles %lld and %lld at a manifold vertex: %s",
+                                        law->klass->name, floe_world_pid(w, c->i), floe_world_pid(w, c->j), floe_strerror(rc));
         }
         const double fn = fmax(re.fn, 0.0);
         ftot += fn;
@@ -464,17 +464,18 @@ static __attribute__((noinline, cold)) int pair_too_deep(floe_world *w, int i, i
                                                          const double n[3]) {
     const floe_particles *p = &w->p;
     return floe_world_error(w, FLOE_EUNSTABLE,
-                            "unstable: particles %d and %d (bodies %d, %d) overlap by %.3g m, more than %s "
+                            "unstable: particles %lld and %lld (bodies %d, %d) overlap by %.3g m, more than %s "
                             "at step %ld, t = %g s: the contact is too soft for the speeds (relative "
                             "normal speed %.3g m/s) or the time step too large",
-                            i, j, p->group[i], p->group[j], depth, wall ? "the diameter" : "the smaller radius",
+                            floe_world_pid(w, i), floe_world_pid(w, j), p->group[i], p->group[j], depth, wall ? "the diameter" : "the smaller radius",
                             w->step, w->time, floe_v3_dot(p->v + 3 * i, n) - floe_v3_dot(p->v + 3 * j, n));
 }
 static __attribute__((noinline, cold)) int pair_law_failed(floe_world *w, const floe_contact_law *law, int rc,
                                                            int i, int j, const floe_contact *c) {
     /* the law has no message of its own: name its inputs */
-    return floe_world_error(w, rc, "contact law %s failed for particles %d and %d: %s (effective mass %g kg, "
-                            "effective radius %g m, overlap %g m)", law->klass->name, i, j, floe_strerror(rc),
+    return floe_world_error(w, rc, "contact law %s failed for particles %lld and %lld: %s (effective mass %g kg, "
+                            "effective radius %g m, overlap %g m)", law->klass->name, floe_world_pid(w, i),
+                            floe_world_pid(w, j), floe_strerror(rc),
                             c->m_eff, c->r_eff, c->depth);
 }
 
@@ -673,16 +674,18 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
             c.area = 0;
         } else if (r == -FLOE_ENOTSUP)
             return floe_world_error(w, FLOE_ENOTSUP,
-                                    "contact law %s needs two polytopes (polygons, boxes, prisms, polyhedra); particles %d and %d are %s-%s",
-                                    law->klass->name, i, j, w->geoms[p->geom[i]]->klass->name,
+                                    "contact law %s needs two polytopes (polygons, boxes, prisms, polyhedra); particles %lld and %lld are %s-%s",
+                                    law->klass->name, floe_world_pid(w, i), floe_world_pid(w, j), w->geoms[p->geom[i]]->klass->name,
                                     w->geoms[p->geom[j]]->klass->name);
     }
     if (r < 0 && r != -FLOE_ENOTSUP)
-        return floe_world_error(w, -r, "contact detection failed for particles %d and %d (%s-%s): %s", i, j,
+        return floe_world_error(w, -r, "contact detection failed for particles %lld and %lld (%s-%s): %s",
+                                floe_world_pid(w, i), floe_world_pid(w, j),
                                 w->geoms[p->geom[i]]->klass->name, w->geoms[p->geom[j]]->klass->name,
                                 r == -FLOE_ENOMEM ? "out of memory" : "degenerate polytope LP");
     if (r < 0)
-        return floe_world_error(w, -r, "no contact detector for particles %d and %d (%s-%s)", i, j,
+        return floe_world_error(w, -r, "no contact detector for particles %lld and %lld (%s-%s)", floe_world_pid(w, i),
+                                floe_world_pid(w, j),
                                 w->geoms[p->geom[i]]->klass->name, w->geoms[p->geom[j]]->klass->name);
     double *hist = nl->hist + (size_t)k * nl->hs;
     if (r == 0) {
@@ -1970,6 +1973,8 @@ static int pd_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, 
      * the change of the stored energy is dissipated; for intact bonds it is the integration
      * error only, a breaking bond releases its energy there. */
     if (w->pd_split) floe_pd_split_gather(w); /* MPI: the points here, contiguous per body */
+    int pd_fail = FLOE_OK;
+    char pd_why[sizeof w->err];
     for (int b = 0, off = 0; b < w->npd; b++) {
         floe_pd_body *pb = w->pd[b];
         int f0 = w->pd_first[b], np = pb->n;
@@ -2007,8 +2012,15 @@ static int pd_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, 
             vc.b = pb;
             vc.x = floe_pd_positions(w, b); /* MPI: the points here (each rank its owned rows' bonds) */
             int rc = floe_pd_bond_forces(pb, vc.x, pd_vir_visit, &vc);
-            if (rc != FLOE_OK)
-                return floe_world_error(w, rc, "PD body %d: its bond forces for the cell's stress: %s", b, floe_strerror(rc));
+            if (rc != FLOE_OK) {
+                rc = floe_world_error(w, rc, "PD body %d: its bond forces for the cell's stress: %s", b, floe_strerror(rc));
+                /* MPI: the later bodies' evaluations still run (an LPS body's exchange is a
+                 * collective), the first failure returned after them */
+                if (!w->par) return rc;
+                if (!pd_fail) { pd_fail = rc; memcpy(pd_why, w->err, sizeof pd_why); }
+                off += np;
+                continue;
+            }
             /* this body's share of the cell's work (its watchdog ledger; at the present virial) */
             double wcb = 0;
             for (int a = 0; a < 3; a++)
@@ -2023,6 +2035,10 @@ static int pd_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, 
         w->pd_eold[b] = e;
         elastic += e;
         off += np;
+    }
+    if (pd_fail) {
+        memcpy(w->err, pd_why, sizeof pd_why);
+        return pd_fail;
     }
     if (w->cell && w->npd) { /* the bonds' virial: the cell's stress and its work on the bonds */
         floe_cell_state *cs = w->cell;
@@ -2167,9 +2183,17 @@ int floe_world_forces(floe_world *w, const floe_step_ctx *ctx, int groups) {
     const int n = p->n;
     const int stepping = ctx->stepping;
     floe_provider_out od = {0, 0, 0, 0}, op = {0, 0, 0, 0};
+    /* a stage's failure: returned at once; on a split world (MPI) after the later stages have
+     * run, since a stage may hold a collective (an LPS body's dilatation exchange,
+     * core/parallel par_pd.c) that the other ranks reach: the step then agrees on the first
+     * failure (step.c forces_all). Its message is kept */
+    int first = FLOE_OK;
+    char why[sizeof w->err];
     if (groups & FLOE_GROUP_DEM) {
-        int dash;
-        FLOE_TRY(dashpot_accelerations(w, ctx, &dash));
+        int dash = 0;
+        first = dashpot_accelerations(w, ctx, &dash);
+        if (first && !w->par) return first;
+        if (first) memcpy(why, w->err, sizeof why);
         if (n > 0) forces_clear(w, dash);
         w->ncontacts = 0;
     }
@@ -2178,13 +2202,24 @@ int floe_world_forces(floe_world *w, const floe_step_ctx *ctx, int groups) {
         if (!(pv->klass->group & groups)) continue;
         floe_provider_out *o = pv->klass->group == FLOE_GROUP_PD ? &op : &od;
         o->rebuild = 0;
-        FLOE_TRY(pv->klass->forces(pv, w, ctx, o));
-        if (o->rebuild) { /* between stages, never inside one */
-            if (ctx->probe) return floe_world_error(w, FLOE_EINVAL, "internal: %s changed pairs at a probe", pv->klass->name);
-            int rc = floe_world_nl_build(w);
-            if (rc) return floe_world_error(w, rc, "neighbour list rebuild after %s changed pairs failed (out of memory)",
-                                            pv->klass->name);
+        int rc = pv->klass->forces(pv, w, ctx, o);
+        if (rc) {
+            if (!w->par) return rc;
+            if (!first) { first = rc; memcpy(why, w->err, sizeof why); }
+            continue;
         }
+        if (o->rebuild && !first) { /* between stages, never inside one */
+            if (ctx->probe) return floe_world_error(w, FLOE_EINVAL, "internal: %s changed pairs at a probe", pv->klass->name);
+            rc = floe_world_nl_build(w);
+            if (rc) rc = floe_world_error(w, rc, "neighbour list rebuild after %s changed pairs failed (out of memory)",
+                                          pv->klass->name);
+            if (rc && !w->par) return rc;
+            if (rc) { first = rc; memcpy(why, w->err, sizeof why); }
+        }
+    }
+    if (first) {
+        memcpy(w->err, why, sizeof why);
+        return first;
     }
     if (ctx->probe) { /* nothing booked: the caller restores the providers' state */
         if (w->def.dim == 2)

@@ -239,7 +239,18 @@ struct floe_world {
      * FLOE_FIXED here: its owner integrates it), set by core/parallel at each decomposition */
     const unsigned char *gmotion;
     void (*par_free)(struct floe_par *par);
+    /* a split world: the last error a step returned was agreed by every rank (each returned
+     * it: core/parallel floe_par_agree_error): 1, or 2 when a decomposition failed after the
+     * particles began to move (the state is not whole); 0 otherwise; reset at each step */
+    int err_agreed;
 };
+
+/* the index of local particle i in the unsplit world, as the messages name it (the serial
+ * run's index): its global id on a split world (nl.gid, set at each decomposition), i
+ * otherwise */
+static inline long long floe_world_pid(const floe_world *w, int i) {
+    return w->nl.gid && i >= 0 && i < w->p.n ? w->nl.gid[i] : (long long)i;
+}
 
 /* 1 when state object s runs on a world split over MPI ranks (state.c: the built-in
  * classes, which every rank keeps and advances alike; a user's class may read particles by

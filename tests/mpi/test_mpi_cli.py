@@ -30,7 +30,10 @@ force time line (mean between the smallest and the largest). `--balance fast` is
 With SCENE:K1,K2 arguments after the folder, only those scenes (in TESTS_MPI_DIR) are run and
 compared, under the ranks given (the traffic line is left out): test_mpi_servo, test_mpi_drag
 and test_mpi_sea_ice (tests/CMakeLists.txt) run the force providers of
-core/parallel/par_forcing.c that way.
+core/parallel/par_forcing.c that way. test_mpi_errors runs tests/mpi/errors.yaml and its
+variants (FAILING): runs that fail inside a step must exit 1 on every rank with rank 0's one
+error line equal to one process's (the particles by their index in the scene), without
+MPI_Abort, and with the outputs up to the failure equal to one process's.
 
 Usage: test_mpi_cli.py FLOE MPIEXEC TESTS_MPI_DIR [SCENE:K1,K2 ...]
 """
@@ -62,6 +65,26 @@ SCENES = [(os.path.join(here, "settle.yaml"), (2, 4)),
 VARIANTS = {"servo_rk2.yaml": ("servo.yaml", lambda t: t.replace("time: {duration: 0.03, safety: 0.2}",
                                                                   "time: {duration: 0.015, safety: 0.2, integrator: rk2}"))}
 SCENES.append((os.path.join(here, "servo_rk2.yaml"), (2, 3)))
+# runs that fail inside a step (tests/mpi/errors.yaml; test_mpi_errors): exit 1 on every rank
+# after the outputs end, one error line from rank 0 equal to one process's, no MPI_Abort;
+# the outputs up to the failure compared as any other
+FAILING = ("errors.yaml", "errors_motion.yaml", "errors_rk2.yaml", "errors_adaptive.yaml", "errors_lps.yaml")
+_hit = "velocity: [0, 0, -40]"
+VARIANTS["errors_motion.yaml"] = ("errors.yaml", lambda t: t.replace(_hit, "velocity: [0, 0, -50]"))
+VARIANTS["errors_rk2.yaml"] = ("errors.yaml", lambda t: t.replace("allow_unstable_dt: true}",
+                                                                  "allow_unstable_dt: true, integrator: rk2}"))
+VARIANTS["errors_adaptive.yaml"] = ("errors.yaml", lambda t: t.replace("allow_unstable_dt: true}",
+                                                                       "allow_unstable_dt: true, adaptive: true}"))
+# an LPS body beside (its dilatation exchange is a collective inside the force evaluation,
+# which the failing rank must still reach)
+VARIANTS["errors_lps.yaml"] = ("errors.yaml", lambda t: t.replace("outputs:", """peridynamics:
+  - name: slab
+    region: {box: {min: [0.0, 0.03, 0.0], max: [0.027, 0.036, 0.006]}}
+    spacing: 0.003
+    horizon: 2
+    material: {model: lps, density: 1000, bulk_modulus: 1.0e4, shear_modulus: 5.0e3}
+    contact_material: soft
+outputs:""", 1))
 if len(sys.argv) > 4:
     SCENES = [(os.path.join(here, a.split(":")[0]), tuple(int(k) for k in a.split(":")[1].split(",")))
               for a in sys.argv[4:]]
@@ -84,10 +107,22 @@ def run(scene, outdir, np_, extra=()):
     cmd = [floe, "run", scene, "-o", outdir, "-q"] + list(extra)
     if np_ > 1:
         cmd = [mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", str(np_)] + cmd
-    r = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    failing = os.path.basename(scene) in FAILING
+    try:  # (a failing run that never ends: the ranks did not agree on its failure)
+        r = subprocess.run(cmd, capture_output=True, text=True, timeout=120 if failing else 600)
+    except subprocess.TimeoutExpired:
+        sys.exit(f"FAIL: {' '.join(cmd)} did not end")
+    if failing:
+        errs = [ln for ln in r.stderr.splitlines() if ln.startswith("floe: error")]
+        if (r.returncode != 1 or len(errs) != 1 or "MPI_ABORT" in r.stdout + r.stderr
+                or f"outputs written so far are in {outdir}" not in r.stderr):
+            print(r.stdout, r.stderr)
+            sys.exit(f"FAIL: {' '.join(cmd)}: not one error line and exit 1 after the outputs (exit {r.returncode})")
+        return errs[0]
     if r.returncode != 0:
         print(r.stdout, r.stderr)
         sys.exit(f"FAIL: {' '.join(cmd)} exited {r.returncode}")
+    return None
 
 
 def csv_rows(path):
@@ -203,15 +238,19 @@ if len(sys.argv) <= 4:
 for scene, ranks in SCENES:
   with tempfile.TemporaryDirectory() as tmp:
     ref = os.path.join(tmp, "np1")
-    run(scene, ref, 1)
+    err1 = run(scene, ref, 1)
     # settle.yaml at -np 2 also under --balance time (cuts by the ranks' measured speeds)
     variants = [(k, ()) for k in ranks]
     if len(sys.argv) <= 4 and os.path.basename(scene) == "settle.yaml":
         variants.append((2, ("--balance", "time")))
     for k, extra in variants:
         out = os.path.join(tmp, f"np{k}{'_'.join(extra)}")
-        run(scene, out, k, extra)
+        errk = run(scene, out, k, extra)
         print(f"{os.path.basename(scene)}: mpirun -np {k} {' '.join(extra)} against one process:")
+        if err1 is not None:
+            ok = errk == err1
+            fails += not ok
+            print(f"  {'ok  ' if ok else 'FAIL'} the error: {errk}" + ("" if ok else f" (one process: {err1})"))
         files = sorted(os.listdir(ref))
         # the vtk output under mpirun: PREFIX_NNNNNN.pvtu and a piece per rank for each serial
         # PREFIX_NNNNNN.vtu (test_mpi_pvtu.py checks the pieces themselves)

@@ -14,12 +14,14 @@
  *     marked touching so that history travels): migration = 312 B per particle that left this
  *     rank + the history records of the touching pairs whose anchor left (4 +
  *     8 or 10 doubles each) + two count exchanges (4 B to each other rank); ghosts =
- *     312 B per new ghost sent (M after the move) + the box (56 B) and a count (4 B) to each
- *     other rank;
+ *     312 B per new ghost sent (M after the move) + the box (64 B: its corners, the largest
+ *     radius, a failure flag) and a count (4 B) to each other rank; reductions = the
+ *     decomposition's 7 agreements (4 B each: a failure on one rank is every rank's);
  *   - 200 steps of a gas of fast spheres (a few rebuilds on the way): each step's reverse
  *     traffic is 48 B x this rank's ghosts at the step's end, the ghost traffic summed over
- *     the ranks 72 B (312 B at a rebuild, + 60 B x (ranks - 1) per rank) x the ghosts of all
- *     ranks, the reductions 4 B (whether to rebuild) + 80 B (the watchdog's ledger) a step, the
+ *     the ranks 72 B (312 B at a rebuild, + 68 B x (ranks - 1) per rank) x the ghosts of all
+ *     ranks, the reductions 4 B (whether to rebuild) + 2 x 4 B (the forces' outcome and the
+ *     step's close agreed) + 28 B at a rebuild + 80 B (the watchdog's ledger) a step, the
  *     outputs' word 4 B on rank 0; the step count and the mean loads;
  *   - the end of a run with a mirror (rank 0): the gathered state 184 B per owned particle
  *     and 48 B per wall on every other rank, + the ledger (56 B), the words (4 B each).
@@ -210,14 +212,20 @@ static void check_rebuild(floe_world *w, const floe_world *ref) {
     const floe_comm_stats c = stats(w);
     const long long others = S - 1;
     const long long mig_b = 312 * left + 8LL * hl * hleft + 2 * 4 * others, mig_m = pm + hm + 2 * others;
-    const long long gh_b = 312 * send + (56 + 4) * others, gh_m = smsg + 2 * others;
+    const long long gh_b = 312 * send + (64 + 4) * others, gh_m = smsg + 2 * others;
     CHECK(c.bytes[FLOE_COMM_MIGRATE] == mig_b && c.messages[FLOE_COMM_MIGRATE] == mig_m,
           "rank %d: migration %lld B in %lld messages, expected %lld B (%lld particles x 312 B, %lld history records x %d B) "
           "in %lld", me, c.bytes[FLOE_COMM_MIGRATE], c.messages[FLOE_COMM_MIGRATE], mig_b, left, hleft, 8 * hl, mig_m);
     CHECK(c.bytes[FLOE_COMM_GHOST] == gh_b && c.messages[FLOE_COMM_GHOST] == gh_m,
           "rank %d: new ghosts %lld B in %lld messages, expected %lld B (%lld ghosts x 312 B) in %lld", me,
           c.bytes[FLOE_COMM_GHOST], c.messages[FLOE_COMM_GHOST], gh_b, send, gh_m);
-    CHECK(others_zero(&c, 1u << FLOE_COMM_GHOST | 1u << FLOE_COMM_MIGRATE), "rank %d: a rebuild sends nothing else", me);
+    /* the decomposition's agreements: before and after the bisection, in the two routes
+     * (particles, history), before the ghosts' exchange, after the history's import and after
+     * the list (par_rebuild: a failure on one rank is every rank's) */
+    CHECK(c.bytes[FLOE_COMM_REDUCE] == (S > 1 ? 7 * 4 : 0), "rank %d: a rebuild's agreements %lld B, expected %d", me,
+          c.bytes[FLOE_COMM_REDUCE], S > 1 ? 7 * 4 : 0);
+    CHECK(others_zero(&c, 1u << FLOE_COMM_GHOST | 1u << FLOE_COMM_MIGRATE | 1u << FLOE_COMM_REDUCE),
+          "rank %d: a rebuild sends nothing else", me);
     CHECK(c.rebuilds == 1 && c.steps == 0, "rank %d: one rebuild, no step counted (%ld, %ld)", me, c.rebuilds, c.steps);
     long long tot[2] = {left, hleft};
     MPI_Allreduce(MPI_IN_PLACE, tot, 2, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
@@ -247,20 +255,21 @@ static void check_steps(floe_world *w) {
         for (int k = 0; k < FLOE_COMM_KINDS; k++) d[k] = c.bytes[k] - c0.bytes[k];
         if (S > 1) {
             ok_rev &= d[FLOE_COMM_REVERSE] == 48LL * gh;
-            ok_red &= d[FLOE_COMM_REDUCE] == 4 + (wd ? 80 : 0);
+            /* whether to rebuild, the forces' outcome, the step's close; a rebuild's agreements */
+            ok_red &= d[FLOE_COMM_REDUCE] == 3 * 4 + (reb ? 7 * 4 : 0) + (wd ? 80 : 0);
             ok_out &= d[FLOE_COMM_OUTPUT] == (me == 0 ? 4 : 0);
             ok_red &= reb || d[FLOE_COMM_MIGRATE] == 0;
         } else {
             for (int k = 0; k < FLOE_COMM_KINDS; k++) ok_rev &= d[k] == 0;
         }
         /* over the ranks: every ghost held was sent once, by its owner */
-        long long v[2] = {d[FLOE_COMM_GHOST] - (reb ? 60 * others : 0), gh};
+        long long v[2] = {d[FLOE_COMM_GHOST] - (reb ? 68 * others : 0), gh};
         MPI_Allreduce(MPI_IN_PLACE, v, 2, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
         ok_gh &= v[0] == (reb ? 312 : 72) * v[1];
         c0 = c;
     }
     CHECK(ok_rev, "rank %d: every step's reverse traffic is 48 B x the ghosts held", me);
-    CHECK(ok_red, "rank %d: every step's reductions are 4 B (+ 80 B for the watchdog)", me);
+    CHECK(ok_red, "rank %d: every step's reductions are 12 B (+ 28 B at a rebuild, + 80 B for the watchdog)", me);
     CHECK(ok_out, "rank %d: every step's output word is 4 B on rank 0, nothing elsewhere", me);
     CHECK(ok_gh, "every step's ghost traffic over the ranks is 72 B (312 B at a rebuild) x all ghosts held");
     floe_comm_stats c = stats(w);

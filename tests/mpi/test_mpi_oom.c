@@ -1,0 +1,159 @@
+/* test_mpi_oom.c - out of memory on one rank of a split world, inside a decomposition and
+ * inside a step (docs/parallel.md, "Errors inside a step"): every rank returns, all with an
+ * error or all without, and an error is agreed (floe_world_parallel_error_agreed) with a
+ * message on every rank. Before, a rank that failed alone left the others waiting in the
+ * next collective: the run never ended.
+ *
+ * This executable wraps floe's allocations (-Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,
+ * tests/CMakeLists.txt; libfloe is static, so its calls go through the wrappers; MPI's,
+ * Zoltan's and libc's own do not). For each rank v and k = 0, 1, 2, ...: every rank builds
+ * the same world (216 spheres settling in a walled box, Hertz-Mindlin, one thread; then the
+ * same with every third one an ellipsoid under RK2, and with beam bonds between neighbours),
+ * splits it
+ * and takes WARM steps; then on rank v the k-th allocation of floe from then on fails
+ * (once), while every rank decomposes again (floe_world_parallel_rebuild: the sequence of
+ * a step's decomposition) and takes NSTEP steps (their forces, exchanges and closes). The
+ * sweep over k ends when the k-th allocation is never reached. An alarm of 60 s stops a rank
+ * that waits forever (the test then fails). Under one rank: the same sweep (no
+ * decomposition; a step of velocity Verlet in a steady state allocates nothing, RK2 twice). */
+#include "floe.h"
+#include "../check.h"
+#include "mpi_common.h"
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+void *__real_malloc(size_t n);
+void *__real_calloc(size_t a, size_t b);
+void *__real_realloc(void *p, size_t n);
+void *__wrap_malloc(size_t n);
+void *__wrap_calloc(size_t a, size_t b);
+void *__wrap_realloc(void *p, size_t n);
+
+static long armed = -1; /* allocations left before the one that fails; -1: none fails */
+static int fired;
+static int fail_now(void) {
+    if (armed < 0) return 0;
+    if (armed-- > 0) return 0;
+    fired = 1;
+    return 1;
+}
+void *__wrap_malloc(size_t n) { return fail_now() ? NULL : __real_malloc(n); }
+void *__wrap_calloc(size_t a, size_t b) { return fail_now() ? NULL : __real_calloc(a, b); }
+void *__wrap_realloc(void *p, size_t n) { return fail_now() ? NULL : __real_realloc(p, n); }
+
+enum { NX = 6, NY = 6, NZ = 6, WARM = 20, NSTEP = 3 };
+static const double R = 0.001, SP = 0.0022, DT = 2.5e-6;
+
+/* variant 0: spheres, velocity Verlet; 1: every third one an ellipsoid, RK2 (its rows travel
+ * through the decomposition); 2: spheres with beam bonds between neighbours, velocity Verlet */
+static floe_world *build(int variant) {
+    floe_world_def d = floe_default_world_def();
+    d.dim = 3; d.dt = DT;
+    d.gravity[2] = -9.81;
+    if (variant == 1) d.integrator = FLOE_RK2;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    mpi_test_add_glass(w, 1e7);
+    const int g = floe_world_add_geometry(w, floe_sphere_create(R));
+    const int ge = floe_world_add_geometry(w, floe_ellipsoid_create(R, 0.8 * R, 0.7 * R));
+    int cnt = 0;
+    mpi_test_box_walls(w, NX * SP + 0.0008, NY * SP + 0.0008, 0.03, 0, 6);
+    unsigned s = 99;
+    for (int c = 0; c < NZ; c++)
+        for (int b = 0; b < NY; b++)
+            for (int a = 0; a < NX; a++) {
+                floe_particle_def p = floe_default_particle_def();
+                p.geometry = variant == 1 && cnt++ % 3 == 2 ? ge : g;
+                double j[5];
+                for (int k = 0; k < 5; k++) { s = s * 1103515245u + 12345u; j[k] = (s >> 8) / 16777216.0 - 0.5; }
+                floe_v3_set(p.x, 0.0004 + (a + 0.5) * SP + 0.1 * j[0] * (SP - 2 * R),
+                            0.0004 + (b + 0.5) * SP + 0.1 * j[1] * (SP - 2 * R), 0.0012 + (c + 0.5) * SP);
+                floe_v3_set(p.v, 0.3 * j[2], 0.3 * j[3], 0.3 * j[4]);
+                floe_world_add_particle(w, &p);
+            }
+    if (variant == 2) {
+        floe_beam_params bp = floe_default_beam_params();
+        bp.young = 1e7;
+        bp.max_distance = 2.3 * R;
+        floe_world_add_beam_bonds(w, 1.2, &bp);
+    }
+    floe_world_set_threads(w, 1); /* the wrappers count on one thread */
+    return w;
+}
+
+static int cur_v;
+static long cur_k;
+static void on_alarm(int sig) {
+    (void)sig;
+    char msg[160];
+    int n = snprintf(msg, sizeof msg, "test_mpi_oom: rank %d waited 60 s after allocation %ld of rank %d failed: "
+                     "the ranks did not agree on the failure\n", rank_, cur_k, cur_v);
+    ssize_t r = write(2, msg, n > 0 ? (size_t)n : 0);
+    (void)r;
+    _exit(3);
+}
+
+/* one armed sequence: k-th allocation on rank v fails. Returns 1 when it was reached
+ * somewhere (the sweep goes on), 0 when no rank reached it */
+static int trial(int variant, int v, long k, int *errors) {
+    floe_world *w = build(variant);
+    int rc = floe_world_prepare(w);
+    if (!rc && size_ > 1) rc = floe_world_parallel_init(w, NULL);
+    for (int s = 0; !rc && s < WARM; s++) rc = floe_world_step(w);
+    CHECK(rc == FLOE_OK, "rank %d: the set-up failed: %s", rank_, floe_world_last_error(w));
+    if (rc) { floe_world_destroy(w); return 0; }
+    fired = 0;
+    armed = rank_ == v ? k : -1;
+    alarm(60);
+    cur_v = v;
+    cur_k = k;
+    rc = floe_world_parallel_rebuild(w);
+    for (int s = 0; !rc && s < NSTEP; s++) rc = floe_world_step(w);
+    armed = -1;
+    alarm(0);
+    /* every rank here: all failed or none, an error agreed with a message */
+    const int bad = rc != FLOE_OK;
+    int lo = bad, hi = bad, any_fired = fired;
+    MPI_Allreduce(MPI_IN_PLACE, &lo, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    MPI_Allreduce(MPI_IN_PLACE, &hi, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    MPI_Allreduce(MPI_IN_PLACE, &any_fired, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    CHECK(lo == hi, "rank %d: allocation %ld of rank %d failed: this rank returned %d (%s), another %s", rank_, k, v,
+          rc, bad ? floe_world_last_error(w) : "", bad ? "none" : "an error");
+    /* (every rank reduces: the ranks may disagree on bad) */
+    const int ag = bad ? floe_world_parallel_error_agreed(w) : 0;
+    int ag_lo = ag, ag_hi = ag;
+    MPI_Allreduce(MPI_IN_PLACE, &ag_lo, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    MPI_Allreduce(MPI_IN_PLACE, &ag_hi, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    if (bad) {
+        CHECK(ag && ag_lo == ag_hi, "rank %d: allocation %ld of rank %d: error not agreed (%d; %d to %d over the "
+              "ranks): %s", rank_, k, v, ag, ag_lo, ag_hi, floe_world_last_error(w));
+        CHECK(floe_world_last_error(w)[0] != 0, "rank %d: allocation %ld of rank %d: an error without a message",
+              rank_, k, v);
+        ++*errors;
+    }
+    CHECK(any_fired || !bad, "rank %d: an error without a failed allocation: %s", rank_, floe_world_last_error(w));
+    floe_world_destroy(w);
+    return any_fired;
+}
+
+int main(int argc, char **argv) {
+    mpi_test_init(&argc, &argv);
+    signal(SIGALRM, on_alarm);
+    for (int variant = 0; variant < 3; variant++)
+        for (int v = 0; v < size_; v++) {
+            int errors = 0;
+            long k = 0;
+            while (trial(variant, v, k, &errors) && k < 5000) k++;
+            if (rank_ == 0)
+                printf("world %d: rank %d out of memory at each of its %ld allocations: %d errors, every one on every "
+                       "rank\n", variant, v, k, errors);
+            if (size_ > 1) {
+                CHECK(k > 10 && k < 5000, "world %d, rank %d: %ld allocations in the armed sequence", variant, v, k);
+                CHECK(errors > 0, "world %d, rank %d: no allocation failure gave an error", variant, v);
+            }
+        }
+    const int fails = mpi_test_failed("test_mpi_oom");
+    MPI_Finalize();
+    return fails ? 1 : 0;
+}
