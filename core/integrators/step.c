@@ -96,9 +96,17 @@ static double kinematic_close(floe_world *w, int i, double h) {
 /* every provider's forces on every particle; under MPI, this rank's force time is booked
  * (its own work, for the balance), the ghosts' forces are summed to their owners and the
  * servo walls take their whole forces */
-static int forces_all(floe_world *w, floe_step_ctx *c) {
+static int forces_all(floe_world *w, floe_step_ctx *c, int pre) {
     const double t0 = w->par ? floe_par_clock() : 0.0;
+    /* pre (MPI): this rank failed since the last agreement, its message set; it evaluates
+     * all the same (a stage may hold a collective) and tells the others below */
+    char why[sizeof w->err];
+    if (pre) memcpy(why, w->err, sizeof why);
     int rc = floe_world_forces(w, c, FLOE_GROUP_ALL);
+    if (pre) {
+        rc = pre;
+        memcpy(w->err, why, sizeof why);
+    }
     if (w->par) floe_par_force_time(w, floe_par_clock() - t0);
     /* MPI: a rank whose evaluation failed (a contact too deep, a law's error) tells the others
      * before the reverse sum, where they would wait for it: every rank returns its error */
@@ -116,7 +124,7 @@ static int step_close(floe_world *w, int rc) { return w->par ? floe_par_agree_er
 /* forces at the end of a step, with the history and the ledger advancing */
 static int forces_advancing(floe_world *w) {
     floe_step_ctx c = ctx_step(w, contacts_wanted(w));
-    return forces_all(w, &c);
+    return forces_all(w, &c, FLOE_OK);
 }
 
 /* 1 when check_particle below fails for particle i (its conditions, without the message):
@@ -243,13 +251,16 @@ static int advance_states(floe_world *w, double dt) {
     return FLOE_OK;
 }
 
-/* the states over the step (skip: this rank does not advance them, having failed before:
- * RK2's rows, told to every rank at the refresh); under MPI with state objects, the outcome
- * agreed by every rank (a state's callback may fail on one rank alone) */
-static int states_step(floe_world *w, double dt, int skip) {
-    int rc = skip ? FLOE_OK : advance_states(w, dt);
+/* the states over the step, unless this rank failed since the step's last agreement (pre,
+ * its message set: MPI only, where the failing rank goes on to the next agreement); under MPI
+ * with state objects the outcome is agreed here by every rank (a state's callback may fail on
+ * one rank alone); without them it is pre, for the rebuild test to tell every rank. A caller
+ * returns a failure at once in one process or when agreed here (states_done) */
+static int states_step(floe_world *w, double dt, int pre) {
+    int rc = pre ? pre : advance_states(w, dt);
     return w->par && w->nstates ? floe_par_agree_error(w, rc) : rc;
 }
+static int states_done(const floe_world *w, int rc) { return rc && (!w->par || w->nstates); }
 
 /* the integrators' scratch: at least nd doubles (contents kept when it grows) */
 static double *ibuf_reserve(floe_world *w, size_t nd) {
@@ -267,8 +278,11 @@ static void advance_clock(floe_world *w) {
     w->time = w->t0 + (double)(w->step - w->step0) * w->dt;
 }
 
-static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb) {
-    if (w->par) return floe_par_refresh(w, maxd2, have_xb, NULL); /* MPI: all ranks, ghosts (core/parallel) */
+/* rc: this rank's failure since the step's last agreement (MPI: told to every rank by the
+ * rebuild test; one process: returned) */
+static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb, int rc) {
+    if (w->par) return floe_par_refresh(w, maxd2, have_xb, NULL, rc); /* MPI: all ranks, ghosts (core/parallel) */
+    if (rc) return rc;
     /* a law set since the build: pairs under the law "none" were left out (neighbor.c) */
     if (w->law_gen != w->nl_law_gen || (w->cell ? floe_nl_needs_rebuild_cell(&w->nl, &w->p)
                 : floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0))) {
@@ -679,7 +693,10 @@ int step_verlet(floe_world *w) {
      * bits for any number of threads, floe_par.h) */
     const int B = FLOE_PAR_BLOCK, nb = (n + B - 1) / B, nt = floe_world_loop_threads(w, n);
     double *red = floe_world_reduce_buf(w, (size_t)nb);
-    if (nb > 0 && !red) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    /* out of memory: under MPI this rank goes on (calling the collectives on the way, not
+     * moving) to the rebuild test, which tells every rank */
+    int pre = nb > 0 && !red ? floe_world_error(w, FLOE_ENOMEM, "out of memory") : FLOE_OK;
+    if (pre && !w->par) return pre;
     /* the blocks that hold a kinematic particle (NULL: the loops over them look at every
      * particle) */
     const int n0 = n;
@@ -694,7 +711,7 @@ int step_verlet(floe_world *w) {
     }
     /* 1. first half kick + drift (eq 22), rotation by the midpoint rule (eq 23); then the
      * kinematic particles at their prescribed velocity */
-    {
+    if (!pre) {
         const drift_args da = {k1, dt, h, {g0, g1, g2}, have_xb ? xb : NULL};
         if (nt > 1) {
             /* the threads' parts by their measured speeds (floe_loop_split; NULL: evenly) */
@@ -747,12 +764,16 @@ int step_verlet(floe_world *w) {
             memcpy(q, qn, sizeof qn);
         }
     /* the periodic cell's affine map of the particles and of the cell itself */
-    if (w->cell) FLOE_TRY(floe_cell_after_drift(w, dt));
+    if (w->cell && !pre) {
+        pre = floe_cell_after_drift(w, dt);
+        if (pre && !w->par) return pre;
+    }
     /* 2. state objects, RK2 midpoint (eq 21) */
-    FLOE_TRY(states_step(w, dt, 0));
+    pre = states_step(w, dt, pre);
+    if (states_done(w, pre)) return pre;
     advance_clock(w);
     /* 3. neighbours and forces at t + dt */
-    FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
+    FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb, pre));
     /* MPI (core/parallel): a rebuild migrates particles: the count and the store's arrays
      * may have changed */
     n = p->n;
@@ -832,22 +853,25 @@ int step_verlet(floe_world *w) {
  * start (its midpoint value) and put back afterwards, the body-force and external-force
  * memories of the energy ledger too; nothing is booked in the ledger, no contact recorded,
  * and PD bonds do not break (their forces come from floe_pd_forces_nobreak). */
-static int rk2_midpoint_forces(floe_world *w, double h) {
+static int rk2_midpoint_forces(floe_world *w, double h, int pre) {
     floe_neighbor_list *nl = &w->nl;
     /* a probe: every provider's state (contact history, the callbacks' last forces, ...)
      * saved, the forces evaluated with the history advanced by h and no breakage, the
-     * state restored: the step itself advances it at its end */
+     * state restored: the step itself advances it at its end. pre (MPI): this rank failed
+     * before: it still evaluates (forces_all), and every rank returns the failure */
     const size_t nb = providers_state_size(w);
-    if (nb > w->pbuf_cap) {
+    if (!pre && nb > w->pbuf_cap) {
         unsigned char *t = realloc(w->pbuf, nb);
-        if (!t) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-        w->pbuf = t;
-        w->pbuf_cap = nb;
+        if (t) {
+            w->pbuf = t;
+            w->pbuf_cap = nb;
+        } else pre = floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        if (pre && !w->par) return pre;
     }
-    providers_state_io(w, w->pbuf, 1);
+    if (!pre) providers_state_io(w, w->pbuf, 1);
     floe_step_ctx c = {&w->p, w->def.dim, 0, w->time, w->dt, h, 1, 0, 0};
     long rb = nl->rebuilds;
-    int rc = forces_all(w, &c);
+    int rc = forces_all(w, &c, pre);
     w->st.force_evaluations++;
     if (rc) return rc;
     if (nl->rebuilds != rb) return floe_world_error(w, FLOE_EINVAL, "internal: neighbour list rebuilt at the RK2 midpoint");
@@ -967,23 +991,29 @@ int step_rk2(floe_world *w) {
     const int n = p->n;
     const double dt = w->dt, h = 0.5 * dt, t_n = w->time;
     double *b = ibuf_reserve(w, 16 * (size_t)(n ? n : 1));
-    if (!b) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    /* out of memory before the midpoint forces: one process returns; under MPI this rank goes
+     * on to their agreement (calling the collectives on the way, not moving) */
+    int pre = b ? FLOE_OK : floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    if (pre && !w->par) return pre;
     double *x0 = b, *v0 = b + 3 * (size_t)n, *L0 = b + 6 * (size_t)n, *q0 = b + 9 * (size_t)n;
-    floe_world_copy(w, x0, p->x, 3 * (size_t)n * sizeof *x0);
-    floe_world_copy(w, v0, p->v, 3 * (size_t)n * sizeof *v0);
-    floe_world_copy(w, L0, p->L, 3 * (size_t)n * sizeof *L0);
-    floe_world_copy(w, q0, p->q, 4 * (size_t)n * sizeof *q0);
-    /* 1. the midpoint state: the free particles on the threads, then the kinematic ones */
     const int nbk = (n + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK;
-    {
+    if (!pre) {
+        floe_world_copy(w, x0, p->x, 3 * (size_t)n * sizeof *x0);
+        floe_world_copy(w, v0, p->v, 3 * (size_t)n * sizeof *v0);
+        floe_world_copy(w, L0, p->L, 3 * (size_t)n * sizeof *L0);
+        floe_world_copy(w, q0, p->q, 4 * (size_t)n * sizeof *q0);
+        /* 1. the midpoint state: the free particles on the threads, then the kinematic ones */
         rk2_ctx c = {w, h, dt, x0, v0, q0, NULL, NULL, L0, NULL, NULL, NULL};
         double s0;
-        if (floe_world_blocks(w, n, 1, rk2_mid_block, &c, &s0)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        if (floe_world_blocks(w, n, 1, rk2_mid_block, &c, &s0)) {
+            pre = floe_world_error(w, FLOE_ENOMEM, "out of memory");
+            if (!w->par) return pre;
+        }
     }
     /* MPI: the servo walls' measures at the free particles' midpoint (their controllers count
      * the particles that reach them, as in one process, where the walls come after the bodies) */
     if (w->par) FLOE_TRY(floe_par_servo_totals(w));
-    for (int i = 0; i < n; i++) {
+    for (int i = 0; i < n && !pre; i++) {
         if (p->motion[i] != FLOE_KINEMATIC) continue;
         double *x = p->x + 3 * i, *v = p->v + 3 * i, *q = p->q + 4 * i;
         memcpy(w->kin_old + 6 * i, p->f + 3 * i, 3 * sizeof(double));
@@ -997,7 +1027,7 @@ int step_rk2(floe_world *w) {
     /* 2. forces at the midpoint (MPI: the ghosts' midpoint state from their owners) */
     if (w->par) FLOE_TRY(floe_par_ghost_update(w));
     w->time = t_n + h;
-    int rc = rk2_midpoint_forces(w, h);
+    int rc = rk2_midpoint_forces(w, h, pre); /* (agreed under MPI) */
     w->time = t_n;
     if (rc) return rc;
     b = w->ibuf; /* the midpoint's scratch may have moved it */
@@ -1031,14 +1061,16 @@ int step_rk2(floe_world *w) {
         free(md);
         if (oom && !w->par) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
-    FLOE_TRY(states_step(w, dt, oom));
+    /* (MPI: out of memory for the rows goes on to the next agreement) */
+    pre = states_step(w, dt, oom ? floe_world_error(w, FLOE_ENOMEM, "out of memory") : FLOE_OK);
+    if (states_done(w, pre)) return pre;
     advance_clock(w);
     /* MPI: a rebuild is a decomposition; the rows travel with their particles (x0 .. fm do
      * not: under MPI not read after this) */
     if (w->par) {
-        const floe_par_carry carry = {&w->rk2, &w->rk2_n, RK2_WD, RK2_DASH, oom};
-        FLOE_TRY(floe_par_refresh(w, maxd2, have_xb, &carry));
-    } else FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
+        const floe_par_carry carry = {&w->rk2, &w->rk2_n, RK2_WD, RK2_DASH};
+        FLOE_TRY(floe_par_refresh(w, maxd2, have_xb, &carry, pre));
+    } else FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb, pre));
     FLOE_TRY(forces_advancing(w));
     /* 4. v_{n+1} = v_n + dt F_mid / m from the rows, omega from L_{n+1} (MPI: the walls
      * and the owned particles; the ghosts are new) */
@@ -1417,7 +1449,7 @@ int step_staggered(floe_world *w) {
         if (have_xb)
             for (int i = 0; i < n; i++)
                 if (p->motion[i] != FLOE_FIXED) note_disp(p->x + 3 * i, xb + 3 * i, &maxd2);
-        FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb));
+        FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb, FLOE_OK));
     }
     /* MPI: a decomposition migrates particles (the store, the rows and pd_of are new) */
     nend = stag_nend(w);

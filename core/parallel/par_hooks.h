@@ -14,14 +14,17 @@
  * their particles through this call's decomposition (registered for the call only; every
  * rank passes the same m). dash >= 0: columns [dash, dash + 3) of the rows hold the RK2
  * midpoint's kept dashpot accelerations (forces.c), put back into w->dash_a and sent to the
- * new ghosts after a decomposition. bad: this rank could not make its rows (out of memory):
- * agreed with the rebuild test, every rank returns FLOE_ENOMEM */
+ * new ghosts after a decomposition. A rank that could not make its rows passes the failure
+ * as rc (below) */
 typedef struct floe_par_carry {
     double **rows;
     int *n;
-    int m, dash, bad;
+    int m, dash;
 } floe_par_carry;
-int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry);
+/* rc: this rank's failure since the step's last agreement (its message set; FLOE_OK: none),
+ * told to every rank with the need: every rank then returns the lowest failing rank's error
+ * (w->err_agreed). Without MPI or a split: rc */
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry, int rc);
 /* the ghosts' positions, velocities (and orientations, forces where the laws read them)
  * from their owners, without a rebuild (RK2's midpoint) */
 int floe_par_ghost_update(floe_world *w);

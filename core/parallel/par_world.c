@@ -285,9 +285,19 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
             return refuse(w, what);
         }
     }
+    /* the communicator first (collective), then the memory agreed on it: a rank that failed
+     * alone would leave the others waiting */
+    MPI_Comm dup;
+    MPI_Comm_dup(comm ? *(const MPI_Comm *)comm : MPI_COMM_WORLD, &dup);
     floe_par *P = calloc(1, sizeof *P);
-    if (!P) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-    MPI_Comm_dup(comm ? *(const MPI_Comm *)comm : MPI_COMM_WORLD, &P->comm);
+    int nomem = !P, any_nomem = nomem;
+    MPI_Allreduce(&nomem, &any_nomem, 1, MPI_INT, MPI_MAX, dup);
+    if (any_nomem) {
+        free(P);
+        MPI_Comm_free(&dup);
+        return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    }
+    P->comm = dup;
     MPI_Comm_rank(P->comm, &P->rank);
     MPI_Comm_size(P->comm, &P->size);
     const int S = P->size, n = p->n;
@@ -413,35 +423,48 @@ int floe_world_parallel_rebuild(floe_world *w) {
     return par_rebuild(w, w->par, NULL, 0);
 }
 
-int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry) {
+/* every rank, after a reduction found that rank `first` (the lowest) failed with rc there:
+ * that rank's code and message (particles named by their global ids, as one process names
+ * them: floe_world_pid) become every rank's, w->err_agreed set; returns the code */
+static int error_from(floe_world *w, floe_par *P, int first, int rc, int kind) {
+    struct { int code; char msg[sizeof w->err]; } m;
+    if (P->rank == first) {
+        m.code = rc;
+        snprintf(m.msg, sizeof m.msg, "%s", w->err);
+    }
+    MPI_Bcast(&m, (int)sizeof m, MPI_BYTE, first, P->comm);
+    if (P->rank == first) floe_par_count(P, kind, sizeof m, 1); /* (as floe_par_count_bcast) */
+    floe_world_error(w, m.code, "%s", m.msg);
+    w->err_agreed = 1;
+    return m.code;
+}
+
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry, int rc) {
     floe_par *P = w->par;
     /* a periodic cell: the test that discounts the cell's affine map (step.c rebuild_if_needed) */
     int need = w->cell ? floe_nl_needs_rebuild_cell(&w->nl, &w->p)
-                       : floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0),
-        any = 0;
+                       : floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0);
     /* a bond broke and the list was rebuilt in the force stage (forces.c): the ghosts were
      * chosen for the list of the last decomposition, so decompose again */
     if (w->beams && w->nl.rebuilds != P->nl_rebuilds) need = 1;
     if (w->law_gen != w->nl_law_gen) need = 1; /* a law set since the build (step.c rebuild_if_needed) */
-    if (!carry) {
-        MPI_Allreduce(&need, &any, 1, MPI_INT, MPI_LOR, P->comm);
-        floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof need);
-        if (!any) return floe_par_ghost_update(w);
-        return par_rebuild(w, P, NULL, 0);
-    }
     /* rows that travel with their particles: registered for this decomposition only (every
      * rank is here with the same width), their memory agreed with the need */
-    double **rows = carry->rows;
-    const int m = carry->m;
-    int mine[2] = {need, carry->bad || floe_world_pp_attach(w, rows, carry->n, m) ? 1 : 0}, all[2];
+    double **rows = carry ? carry->rows : NULL;
+    const int m = carry ? carry->m : 0;
+    if (!rc && carry && floe_world_pp_attach(w, rows, carry->n, m))
+        rc = floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    /* the need, and this rank's failure since the last agreement (the lowest failing rank's
+     * error is every rank's), in one reduction */
+    int mine[2] = {need, rc ? P->size - P->rank : 0}, all[2];
     MPI_Allreduce(mine, all, 2, MPI_INT, MPI_MAX, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof mine);
-    if (all[1]) { /* a rank could not make its rows: every rank stops here */
-        floe_world_pp_detach(w, rows);
-        w->err_agreed = 1;
-        return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    if (all[1]) {
+        if (carry) floe_world_pp_detach(w, rows);
+        return error_from(w, P, P->size - all[1], rc, FLOE_COMM_REDUCE);
     }
-    int rc = all[0] ? par_rebuild(w, P, NULL, 0) : floe_par_ghost_update(w);
+    if (!carry) return all[0] ? par_rebuild(w, P, NULL, 0) : floe_par_ghost_update(w);
+    rc = all[0] ? par_rebuild(w, P, NULL, 0) : floe_par_ghost_update(w);
     floe_world_pp_detach(w, rows);
     if (rc || !all[0]) return rc;
     /* an RK2 step's end keeps its midpoint probe's accelerations for the linear dashpots
@@ -479,19 +502,7 @@ static int agree_error_kind(floe_world *w, int rc, int kind) {
     int mine = rc ? P->rank : P->size, first = mine;
     MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, P->comm);
     floe_par_count_allreduce(P, kind, sizeof mine);
-    if (first == P->size) return FLOE_OK;
-    /* the code and the message of the lowest failing rank (particles named by their global
-     * ids, as one process names them: floe_world_pid) */
-    struct { int code; char msg[sizeof w->err]; } m;
-    if (P->rank == first) {
-        m.code = rc;
-        snprintf(m.msg, sizeof m.msg, "%s", w->err);
-    }
-    MPI_Bcast(&m, (int)sizeof m, MPI_BYTE, first, P->comm);
-    if (P->rank == first) floe_par_count(P, kind, sizeof m, 1); /* (as floe_par_count_bcast) */
-    floe_world_error(w, m.code, "%s", m.msg);
-    w->err_agreed = 1;
-    return m.code;
+    return first == P->size ? FLOE_OK : error_from(w, P, first, rc, kind);
 }
 
 int floe_par_agree_error(floe_world *w, int rc) { return agree_error_kind(w, rc, FLOE_COMM_REDUCE); }
@@ -1557,9 +1568,9 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
                             "-DFLOE_WITH_MPI=ON)");
 }
 int floe_world_parallel_rebuild(floe_world *w) { (void)w; return FLOE_OK; }
-int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry) {
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry, int rc) {
     (void)w; (void)maxd2; (void)have_xb; (void)carry;
-    return FLOE_OK;
+    return rc;
 }
 int floe_par_ghost_update(floe_world *w) { (void)w; return FLOE_OK; }
 int floe_par_reverse(floe_world *w) { (void)w; return FLOE_OK; }

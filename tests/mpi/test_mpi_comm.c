@@ -20,8 +20,9 @@
  *   - 200 steps of a gas of fast spheres (a few rebuilds on the way): each step's reverse
  *     traffic is 48 B x this rank's ghosts at the step's end, the ghost traffic summed over
  *     the ranks 72 B (312 B at a rebuild, + 68 B x (ranks - 1) per rank) x the ghosts of all
- *     ranks, the reductions 4 B (whether to rebuild) + 2 x 4 B (the forces' outcome and the
- *     step's close agreed) + 28 B at a rebuild + 80 B (the watchdog's ledger) a step, the
+ *     ranks, the reductions 8 B (whether to rebuild, whether a rank failed) + 2 x 4 B (the
+ *     forces' outcome and the step's close agreed) + 28 B at a rebuild + 80 B (the
+ *     watchdog's ledger) a step, the
  *     outputs' word 4 B on rank 0; the step count and the mean loads;
  *   - the end of a run with a mirror (rank 0): the gathered state 184 B per owned particle
  *     and 48 B per wall on every other rank, + the ledger (56 B), the words (4 B each).
@@ -255,8 +256,9 @@ static void check_steps(floe_world *w) {
         for (int k = 0; k < FLOE_COMM_KINDS; k++) d[k] = c.bytes[k] - c0.bytes[k];
         if (S > 1) {
             ok_rev &= d[FLOE_COMM_REVERSE] == 48LL * gh;
-            /* whether to rebuild, the forces' outcome, the step's close; a rebuild's agreements */
-            ok_red &= d[FLOE_COMM_REDUCE] == 3 * 4 + (reb ? 7 * 4 : 0) + (wd ? 80 : 0);
+            /* whether to rebuild with whether a rank failed (2 ints), the forces' outcome, the
+             * step's close; a rebuild's agreements */
+            ok_red &= d[FLOE_COMM_REDUCE] == 8 + 4 + 4 + (reb ? 7 * 4 : 0) + (wd ? 80 : 0);
             ok_out &= d[FLOE_COMM_OUTPUT] == (me == 0 ? 4 : 0);
             ok_red &= reb || d[FLOE_COMM_MIGRATE] == 0;
         } else {
@@ -269,7 +271,7 @@ static void check_steps(floe_world *w) {
         c0 = c;
     }
     CHECK(ok_rev, "rank %d: every step's reverse traffic is 48 B x the ghosts held", me);
-    CHECK(ok_red, "rank %d: every step's reductions are 12 B (+ 28 B at a rebuild, + 80 B for the watchdog)", me);
+    CHECK(ok_red, "rank %d: every step's reductions are 16 B (+ 28 B at a rebuild, + 80 B for the watchdog)", me);
     CHECK(ok_out, "rank %d: every step's output word is 4 B on rank 0, nothing elsewhere", me);
     CHECK(ok_gh, "every step's ghost traffic over the ranks is 72 B (312 B at a rebuild) x all ghosts held");
     floe_comm_stats c = stats(w);

@@ -1,21 +1,23 @@
-/* test_mpi_oom.c - out of memory on one rank of a split world, inside a decomposition and
- * inside a step (docs/parallel.md, "Errors inside a step"): every rank returns, all with an
- * error or all without, and an error is agreed (floe_world_parallel_error_agreed) with a
- * message on every rank. Before, a rank that failed alone left the others waiting in the
- * next collective: the run never ended.
+/* test_mpi_oom.c - out of memory on one rank of a split world, in the split, inside a
+ * decomposition and inside a step (docs/parallel.md, "Errors inside a step"): every rank
+ * returns, all with an error or all without, and an error is agreed
+ * (floe_world_parallel_error_agreed, the same value on every rank) with a message. Before, a
+ * rank that failed alone left the others waiting in the next collective: the run never ended.
  *
  * This executable wraps floe's allocations (-Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,
  * tests/CMakeLists.txt; libfloe is static, so its calls go through the wrappers; MPI's,
- * Zoltan's and libc's own do not). For each rank v and k = 0, 1, 2, ...: every rank builds
- * the same world (216 spheres settling in a walled box, Hertz-Mindlin, one thread; then the
- * same with every third one an ellipsoid under RK2, and with beam bonds between neighbours),
- * splits it
- * and takes WARM steps; then on rank v the k-th allocation of floe from then on fails
- * (once), while every rank decomposes again (floe_world_parallel_rebuild: the sequence of
- * a step's decomposition) and takes NSTEP steps (their forces, exchanges and closes). The
- * sweep over k ends when the k-th allocation is never reached. An alarm of 60 s stops a rank
- * that waits forever (the test then fails). Under one rank: the same sweep (no
- * decomposition; a step of velocity Verlet in a steady state allocates nothing, RK2 twice). */
+ * Zoltan's and libc's own do not). Three worlds: 216 spheres settling in a walled box
+ * (Hertz-Mindlin, velocity Verlet, one thread); the same with every third one an ellipsoid
+ * under RK2; the spheres with beam bonds between neighbours. For each world, each rank v and
+ * k = 0, 1, 2, ...: every rank builds and prepares the world; then on rank v the k-th
+ * allocation of floe from a point on fails (once), while every rank splits the world, takes
+ * WARM steps, decomposes again (floe_world_parallel_rebuild: the sequence of a step's
+ * decomposition) and takes NSTEP steps (their forces, exchanges and closes). The point is
+ * after the WARM steps (warm: the buffers of a step sized), then before the split (cold: the
+ * split and the first steps, which size them). The sweep over k ends when the k-th
+ * allocation is never reached. An alarm of 60 s stops a rank that waits forever (the test
+ * then fails). Under one rank: the same sweeps without a split (a step of velocity Verlet in
+ * a steady state allocates nothing, RK2 twice). */
 #include "floe.h"
 #include "../check.h"
 #include "mpi_common.h"
@@ -96,19 +98,21 @@ static void on_alarm(int sig) {
 
 /* one armed sequence: k-th allocation on rank v fails. Returns 1 when it was reached
  * somewhere (the sweep goes on), 0 when no rank reached it */
-static int trial(int variant, int v, long k, int *errors) {
+static int trial(int variant, int warm, int v, long k, int *errors) {
     floe_world *w = build(variant);
     int rc = floe_world_prepare(w);
-    if (!rc && size_ > 1) rc = floe_world_parallel_init(w, NULL);
-    for (int s = 0; !rc && s < WARM; s++) rc = floe_world_step(w);
     CHECK(rc == FLOE_OK, "rank %d: the set-up failed: %s", rank_, floe_world_last_error(w));
     if (rc) { floe_world_destroy(w); return 0; }
     fired = 0;
-    armed = rank_ == v ? k : -1;
-    alarm(60);
     cur_v = v;
     cur_k = k;
-    rc = floe_world_parallel_rebuild(w);
+    alarm(60);
+    if (!warm) armed = rank_ == v ? k : -1; /* cold: from the split on */
+    if (size_ > 1) rc = floe_world_parallel_init(w, NULL);
+    for (int s = 0; !rc && s < warm; s++) rc = floe_world_step(w);
+    CHECK(rc == FLOE_OK || !warm, "rank %d: the set-up failed: %s", rank_, floe_world_last_error(w));
+    if (warm) armed = rank_ == v ? k : -1;
+    if (!rc) rc = floe_world_parallel_rebuild(w);
     for (int s = 0; !rc && s < NSTEP; s++) rc = floe_world_step(w);
     armed = -1;
     alarm(0);
@@ -140,14 +144,15 @@ static int trial(int variant, int v, long k, int *errors) {
 int main(int argc, char **argv) {
     mpi_test_init(&argc, &argv);
     signal(SIGALRM, on_alarm);
+    for (int cold = 0; cold < 2; cold++)
     for (int variant = 0; variant < 3; variant++)
         for (int v = 0; v < size_; v++) {
             int errors = 0;
             long k = 0;
-            while (trial(variant, v, k, &errors) && k < 5000) k++;
+            while (trial(variant, cold ? 0 : WARM, v, k, &errors) && k < 5000) k++;
             if (rank_ == 0)
-                printf("world %d: rank %d out of memory at each of its %ld allocations: %d errors, every one on every "
-                       "rank\n", variant, v, k, errors);
+                printf("world %d, %s: rank %d out of memory at each of its %ld allocations: %d errors, every one on "
+                       "every rank\n", variant, cold ? "from the split" : "warm", v, k, errors);
             if (size_ > 1) {
                 CHECK(k > 10 && k < 5000, "world %d, rank %d: %ld allocations in the armed sequence", variant, v, k);
                 CHECK(errors > 0, "world %d, rank %d: no allocation failure gave an error", variant, v);
