@@ -771,9 +771,11 @@ int step_verlet(floe_world *w) {
     /* 2. state objects, RK2 midpoint (eq 21) */
     pre = states_step(w, dt, pre);
     if (states_done(w, pre)) return pre;
-    advance_clock(w);
-    /* 3. neighbours and forces at t + dt */
+    /* 3. neighbours (MPI: a failure carried here is every rank's, the clock where one process
+     * leaves it: the rebuild test before the clock, which no rebuild reads) and forces at
+     * t + dt */
     FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb, pre));
+    advance_clock(w);
     /* MPI (core/parallel): a rebuild migrates particles: the count and the store's arrays
      * may have changed */
     n = p->n;
@@ -995,9 +997,9 @@ int step_rk2(floe_world *w) {
      * on to their agreement (calling the collectives on the way, not moving) */
     int pre = b ? FLOE_OK : floe_world_error(w, FLOE_ENOMEM, "out of memory");
     if (pre && !w->par) return pre;
-    double *x0 = b, *v0 = b + 3 * (size_t)n, *L0 = b + 6 * (size_t)n, *q0 = b + 9 * (size_t)n;
     const int nbk = (n + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK;
     if (!pre) {
+        double *x0 = b, *v0 = b + 3 * (size_t)n, *L0 = b + 6 * (size_t)n, *q0 = b + 9 * (size_t)n;
         floe_world_copy(w, x0, p->x, 3 * (size_t)n * sizeof *x0);
         floe_world_copy(w, v0, p->v, 3 * (size_t)n * sizeof *v0);
         floe_world_copy(w, L0, p->L, 3 * (size_t)n * sizeof *L0);
@@ -1031,7 +1033,7 @@ int step_rk2(floe_world *w) {
     w->time = t_n;
     if (rc) return rc;
     b = w->ibuf; /* the midpoint's scratch may have moved it */
-    x0 = b; v0 = b + 3 * (size_t)n; L0 = b + 6 * (size_t)n; q0 = b + 9 * (size_t)n;
+    double *x0 = b, *v0 = b + 3 * (size_t)n, *L0 = b + 6 * (size_t)n, *q0 = b + 9 * (size_t)n;
     double *fm = b + 13 * (size_t)n; /* F_mid */
     floe_world_copy(w, fm, p->f, 3 * (size_t)n * sizeof *fm);
     /* 3. x_{n+1} = x_n + dt v_mid, q_{n+1} = exp(dt w_mid) q_n, L_{n+1} = L_n + dt T_mid
@@ -1064,13 +1066,13 @@ int step_rk2(floe_world *w) {
     /* (MPI: out of memory for the rows goes on to the next agreement) */
     pre = states_step(w, dt, oom ? floe_world_error(w, FLOE_ENOMEM, "out of memory") : FLOE_OK);
     if (states_done(w, pre)) return pre;
-    advance_clock(w);
     /* MPI: a rebuild is a decomposition; the rows travel with their particles (x0 .. fm do
-     * not: under MPI not read after this) */
+     * not: under MPI not read after this). The clock after it, as velocity Verlet's */
     if (w->par) {
         const floe_par_carry carry = {&w->rk2, &w->rk2_n, RK2_WD, RK2_DASH};
         FLOE_TRY(floe_par_refresh(w, maxd2, have_xb, &carry, pre));
     } else FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb, pre));
+    advance_clock(w);
     FLOE_TRY(forces_advancing(w));
     /* 4. v_{n+1} = v_n + dt F_mid / m from the rows, omega from L_{n+1} (MPI: the walls
      * and the owned particles; the ghosts are new) */

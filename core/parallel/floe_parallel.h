@@ -103,12 +103,13 @@ int floe_parallel_agree(const void *comm, int rc);
  * rank returned it (docs/parallel.md, "Errors inside a step": a force evaluation's failure,
  * such as a contact deeper than its radius or a contact law's error, with the failing rank's
  * message on every rank; a particle's closing checks; the energy watchdog; an output's
- * failure; out of memory in a decomposition before the particles move). The ranks may then
- * go on together: finish the outputs (floe_world_parallel_finish) and stop. 2 when every
- * rank returned it but a decomposition failed after the particles began to move (out of
- * memory): the split world is not whole; destroy it without writing it. 0 when the error
- * happened on this rank alone (out of memory elsewhere in a step), while the other ranks may
- * wait in a collective: stop them (MPI_Abort). 1 for an unsplit world. Not collective. */
+ * failure). The ranks may then go on together: finish the outputs
+ * (floe_world_parallel_finish) and stop. 2 when every rank returned it but it is out of
+ * memory (in a decomposition, or on a rank that stopped short of the others on its way to
+ * the agreement): the split world is not whole; destroy it without writing it. 0 when the
+ * error happened on this rank alone (the few places docs/parallel.md lists), while the other
+ * ranks may wait in a collective: stop them (MPI_Abort). 1 for an unsplit world. Not
+ * collective. */
 int floe_world_parallel_error_agreed(const floe_world *w);
 
 /* rank and size of the world's communicator (0 and 1 for a serial world); not collective */

@@ -81,18 +81,28 @@ static void pp_install(floe_world *w, double **fresh, int n) {
     }
 }
 
-int floe_par_pp_split(floe_world *w, const int *newidx, int nold, int nnew) {
+int floe_par_pp_split_alloc(const floe_world *w, int nnew, double ***fresh) {
+    *fresh = NULL;
     if (!w->npps) return FLOE_OK;
-    double **fresh = malloc((size_t)(w->npps > 0 ? w->npps : 1) * sizeof *fresh);
-    if (!fresh || pp_alloc(w, nnew, fresh)) { free(fresh); return FLOE_ENOMEM; }
-    for (int k = 0; k < w->npps; k++) {
-        const struct floe_pp_state *s = &w->pps[k];
-        for (int i = 0; i < nold && i < *s->n; i++)
-            if (newidx[i] >= 0) memcpy(fresh[k] + (size_t)newidx[i] * s->m, *s->arr + (size_t)i * s->m, (size_t)s->m * sizeof **fresh);
-    }
-    pp_install(w, fresh, nnew);
-    free(fresh);
+    double **f = malloc((size_t)w->npps * sizeof *f);
+    if (!f || pp_alloc(w, nnew, f)) { free(f); return FLOE_ENOMEM; }
+    *fresh = f;
     return FLOE_OK;
+}
+
+void floe_par_pp_split(floe_world *w, double **fresh, const int *newidx, int nold, int nnew, int keep) {
+    if (!fresh) return;
+    if (keep) {
+        for (int k = 0; k < w->npps; k++) {
+            const struct floe_pp_state *s = &w->pps[k];
+            for (int i = 0; i < nold && i < *s->n; i++)
+                if (newidx[i] >= 0)
+                    memcpy(fresh[k] + (size_t)newidx[i] * s->m, *s->arr + (size_t)i * s->m, (size_t)s->m * sizeof **fresh);
+        }
+        pp_install(w, fresh, nnew);
+    } else
+        for (int k = 0; k < w->npps; k++) free(fresh[k]);
+    free(fresh);
 }
 
 /* after RCB, before the migration: every owned particle's rows to its new owner */
@@ -236,7 +246,7 @@ int floe_par_servo_totals(floe_world *w) {
             free(P->servo_buf);
             P->servo_buf = NULL;
             P->servo_cap = 0;
-            w->err_agreed = 1;
+            w->err_agreed = 2; /* (out of memory, as par_world.c error_from) */
             return floe_world_error(w, FLOE_ENOMEM, "MPI servo walls: out of memory");
         }
     }

@@ -205,7 +205,11 @@ int floe_par_pd_gather(floe_world *w, floe_par *P, struct floe_world *M);
 /* 1 for a force provider that runs split (par_forcing.c): the world's body forces, contacts,
  * beam bonds, servo walls, linear_drag, the ice drags and Coriolis (core/forcing) */
 int floe_par_provider_supported(const struct floe_provider *pv);
-int floe_par_pp_split(floe_world *w, const int *newidx, int nold, int nnew);
+/* at the split: the arrays of nnew rows (*fresh; NULL without arrays), allocated before the
+ * ranks agree on the split's memory; then installed with the rows of the particles kept
+ * (newidx: old index -> new, -1 dropped) when keep, or freed */
+int floe_par_pp_split_alloc(const floe_world *w, int nnew, double ***fresh);
+void floe_par_pp_split(floe_world *w, double **fresh, const int *newidx, int nold, int nnew, int keep);
 int floe_par_pp_out(floe_world *w, floe_par *P, const int *dest);
 int floe_par_pp_in(floe_world *w, floe_par *P);
 int floe_par_pp_collect(floe_world *w, floe_par *P, struct floe_world *full);

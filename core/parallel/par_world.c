@@ -190,7 +190,7 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     /* PD bodies: made whole before the migration (its own message, agreed by every rank) */
     if (!rc && (rc = floe_par_pd_sync(w, P)) != FLOE_OK) {
         free(dest); free(hd); free(recs);
-        w->err_agreed = 1;
+        w->err_agreed = 2;
         return rc;
     }
     floe_par_index ix = {0};
@@ -216,20 +216,19 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     diag_save(w, P, diag);
     if (!rc && (rc = floe_par_pd_out(w, P, dest)) != FLOE_OK) {
         free(dest); free(hd); free(recs);
-        w->err_agreed = 1;
+        w->err_agreed = 2;
         return rc;
     }
     if (!rc) rc = floe_par_beams_out(w, P, dest); /* beam bonds (par_beams.c; agreed) */
     if (!rc) rc = floe_par_pp_out(w, P, dest);    /* the force stages' rows (par_forcing.c; agreed) */
-    /* from the migration on, a failure leaves the store half rebuilt: every rank returns it,
-     * but the state is not written (w->err_agreed 2) */
-    const int moved = !rc;
     if (!rc) rc = floe_par_ghosts(w, P, w->nl.skin, floe_par_migrate(w, P, dest)); /* agreed */
     if (!rc) diag_load(w, P, diag);
     if (!rc) rc = floe_par_route(P, FLOE_COMM_MIGRATE, recs, hd, nrec, m, &in, &nin);
     if (!rc) rc = floe_par_agree(P, hist_import(w, P, in, nin));
     free(in); free(dest); free(hd); free(recs);
-    w->err_agreed = moved ? 2 : 1; /* from here on too: each failure below is every rank's */
+    /* a failed decomposition (out of memory; the store may be half rebuilt): every rank
+     * returns it, the state is not written (w->err_agreed 2); from here on too */
+    w->err_agreed = 2;
     if (rc) return floe_world_error(w, rc, "MPI decomposition failed (out of memory or Zoltan)");
     FLOE_TRY(floe_par_beams_in(w, P)); /* its own message, agreed by every rank */
     FLOE_TRY(floe_par_pp_in(w, P));    /* the same */
@@ -335,7 +334,10 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     int *newidx = malloc((size_t)(n ? n : 1) * sizeof *newidx);
     long long *gid0 = malloc((size_t)(n ? n : 1) * sizeof *gid0);
     double *recs = NULL, *buf = malloc((size_t)(n ? n : 1) * FLOE_PAR_REC * sizeof *buf);
-    int nrec = 0, rc = !P->scount || !P->boxes || !mine || !newidx || !gid0 || !buf ? FLOE_ENOMEM : FLOE_OK;
+    P->gid = malloc((size_t)(n ? n : 1) * sizeof *P->gid);
+    P->gid_cap = n;
+    double **fresh = NULL; /* the force stages' per-particle rows, this rank's part (par_forcing.c) */
+    int nrec = 0, rc = !P->scount || !P->boxes || !mine || !newidx || !gid0 || !buf || !P->gid ? FLOE_ENOMEM : FLOE_OK;
     if (!rc) {
         int kb = 0;
         for (int i = 0; i < n; i++) {
@@ -346,33 +348,33 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
         if (!rc) rc = floe_par_beams_split(w, P, mine); /* beam bonds: those anchored here */
         if (!rc) rc = floe_par_pd_split_reach(w, P);    /* PD bonds: the halo's reach */
     }
+    int a = 0;
     if (!rc) {
-        int a = 0;
         for (int i = 0; i < n; i++) newidx[i] = -1;
         for (int i = 0; i < n; i++)
             if (!isfinite(p->radius[i])) { newidx[i] = a; floe_par_pack(p, i, i, buf + (size_t)a++ * FLOE_PAR_REC); }
         for (int i = 0; i < n; i++)
             if (mine[i]) { newidx[i] = a; floe_par_pack(p, i, i, buf + (size_t)a++ * FLOE_PAR_REC); }
+        rc = floe_par_pp_split_alloc(w, a, &fresh);
+    }
+    /* every rank, before the store changes and before the decomposition's collectives: a
+     * failed split leaves the world as it was */
+    rc = floe_par_agree(P, rc);
+    floe_par_pp_split(w, fresh, newidx, n, a, !rc);
+    if (!rc) {
         P->ntotal = n;
         P->nrep = nw;
         P->nown = k1 - k0;
-        P->gid = malloc((size_t)(n ? n : 1) * sizeof *P->gid);
-        P->gid_cap = n;
-        if (!P->gid) rc = FLOE_ENOMEM;
-        else {
-            for (int k = 0; k < a; k++) floe_par_unpack(p, k, buf + (size_t)k * FLOE_PAR_REC, P->gid + k);
-            p->n = a;
-            floe_servo_renumber(w, newidx);
-            if (floe_par_pp_split(w, newidx, n, a)) rc = FLOE_ENOMEM;
-            for (int k = 0; k < w->nmotions; k++) {
-                const int i = w->motions[k].particle;
-                if (i >= 0 && i < n) w->motions[k].particle = newidx[i];
-            }
-            w->motion_idx_n = -1;
+        for (int k = 0; k < a; k++) floe_par_unpack(p, k, buf + (size_t)k * FLOE_PAR_REC, P->gid + k);
+        p->n = a;
+        floe_servo_renumber(w, newidx);
+        for (int k = 0; k < w->nmotions; k++) {
+            const int i = w->motions[k].particle;
+            if (i >= 0 && i < n) w->motions[k].particle = newidx[i];
         }
+        w->motion_idx_n = -1;
     }
     free(mine); free(newidx); free(gid0); free(buf);
-    rc = floe_par_agree(P, rc); /* every rank, before the decomposition's collectives */
     if (rc) {
         free(recs);
         floe_par_free(P);
@@ -435,7 +437,9 @@ static int error_from(floe_world *w, floe_par *P, int first, int rc, int kind) {
     MPI_Bcast(&m, (int)sizeof m, MPI_BYTE, first, P->comm);
     if (P->rank == first) floe_par_count(P, kind, sizeof m, 1); /* (as floe_par_count_bcast) */
     floe_world_error(w, m.code, "%s", m.msg);
-    w->err_agreed = 1;
+    /* out of memory: the failing rank may have stopped short of the others (a step's work
+     * skipped on its way to the agreement): the state is not written */
+    w->err_agreed = m.code == FLOE_ENOMEM ? 2 : 1;
     return m.code;
 }
 
@@ -478,7 +482,7 @@ int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_ca
         MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, P->comm);
         floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof bad);
         if (any_bad) {
-            w->err_agreed = 1;
+            w->err_agreed = 2; /* (out of memory, as error_from) */
             return floe_world_error(w, FLOE_ENOMEM, "out of memory");
         }
         for (int i = 0; i < own_hi; i++) memcpy(w->dash_a + 3 * (size_t)i, *rows + (size_t)i * m + d, 3 * sizeof(double));

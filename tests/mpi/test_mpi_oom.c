@@ -1,7 +1,8 @@
 /* test_mpi_oom.c - out of memory on one rank of a split world, in the split, inside a
  * decomposition and inside a step (docs/parallel.md, "Errors inside a step"): every rank
  * returns, all with an error or all without, and an error is agreed
- * (floe_world_parallel_error_agreed, the same value on every rank) with a message. Before, a
+ * (floe_world_parallel_error_agreed, the same value on every rank) with the same code and
+ * message on every rank. Before, a
  * rank that failed alone left the others waiting in the next collective: the run never ended.
  *
  * This executable wraps floe's allocations (-Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,
@@ -124,13 +125,20 @@ static int trial(int variant, int warm, int v, long k, int *errors) {
     MPI_Allreduce(MPI_IN_PLACE, &any_fired, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
     CHECK(lo == hi, "rank %d: allocation %ld of rank %d failed: this rank returned %d (%s), another %s", rank_, k, v,
           rc, bad ? floe_world_last_error(w) : "", bad ? "none" : "an error");
-    /* (every rank reduces: the ranks may disagree on bad) */
+    /* (every rank reduces: the ranks may disagree on bad) the agreement's value, the code and
+     * a checksum of the message, each the same on every rank */
     const int ag = bad ? floe_world_parallel_error_agreed(w) : 0;
-    int ag_lo = ag, ag_hi = ag;
-    MPI_Allreduce(MPI_IN_PLACE, &ag_lo, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-    MPI_Allreduce(MPI_IN_PLACE, &ag_hi, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    unsigned long sum = 5381;
+    for (const char *c = bad ? floe_world_last_error(w) : ""; *c; c++) sum = sum * 33 + (unsigned char)*c;
+    long v3[3] = {ag, rc, (long)(sum & 0x7fffffffL)}, v3lo[3], v3hi[3];
+    MPI_Allreduce(v3, v3lo, 3, MPI_LONG, MPI_MIN, MPI_COMM_WORLD);
+    MPI_Allreduce(v3, v3hi, 3, MPI_LONG, MPI_MAX, MPI_COMM_WORLD);
+    const long ag_lo = v3lo[0], ag_hi = v3hi[0];
+    CHECK(v3lo[1] == v3hi[1] && v3lo[2] == v3hi[2], "rank %d: allocation %ld of rank %d: the ranks returned "
+          "different errors (codes %ld to %ld; this one: %s)", rank_, k, v, v3lo[1], v3hi[1],
+          bad ? floe_world_last_error(w) : "none");
     if (bad) {
-        CHECK(ag && ag_lo == ag_hi, "rank %d: allocation %ld of rank %d: error not agreed (%d; %d to %d over the "
+        CHECK(ag && ag_lo == ag_hi, "rank %d: allocation %ld of rank %d: error not agreed (%d; %ld to %ld over the "
               "ranks): %s", rank_, k, v, ag, ag_lo, ag_hi, floe_world_last_error(w));
         CHECK(floe_world_last_error(w)[0] != 0, "rank %d: allocation %ld of rank %d: an error without a message",
               rank_, k, v);
