@@ -390,14 +390,13 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
             MPI_Abort(MPI_COMM_WORLD, 1);
         }
         /* every rank returned it: the outputs end together, as in one process (floe_world_run
-         * wrote the state at the failure), unless out of memory (agreed 2: the split state is
-         * not whole and is not written) */
+         * wrote the state at the failure), unless the split state is not whole (agreed 2: out of
+         * memory, a failed decomposition) and is not written */
         char msg[1024];
         snprintf(msg, sizeof msg, "%s", floe_world_last_error(w));
         const int frc = agreed == 1 ? floe_world_parallel_finish(w) : FLOE_OK;
         if (agreed != 1 && rank == 0)
-            fprintf(stderr, "%s: %s: the outputs were not ended (out of memory: the split state is not whole)\n", prog,
-                    label);
+            fprintf(stderr, "%s: %s: the outputs were not ended (the split state is not whole)\n", prog, label);
         if (rank == 0) {
             fprintf(stderr, "%s: error: %s: %s (t = %g s, step %ld)\n", prog, label, msg, floe_world_time(w),
                     floe_world_step_count(w));

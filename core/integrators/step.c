@@ -278,10 +278,22 @@ static void advance_clock(floe_world *w) {
     w->time = w->t0 + (double)(w->step - w->step0) * w->dt;
 }
 
+/* the clock back by a step: a failure that one process returns before advance_clock and MPI
+ * tells every rank at the rebuild test after it (floe_par_refresh's told) */
+static void retreat_clock(floe_world *w) {
+    w->step--;
+    w->time = w->t0 + (double)(w->step - w->step0) * w->dt;
+}
+
 /* rc: this rank's failure since the step's last agreement (MPI: told to every rank by the
  * rebuild test; one process: returned) */
 static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb, int rc) {
-    if (w->par) return floe_par_refresh(w, maxd2, have_xb, NULL, rc); /* MPI: all ranks, ghosts (core/parallel) */
+    if (w->par) { /* MPI: all ranks, ghosts (core/parallel) */
+        int told = 0;
+        rc = floe_par_refresh(w, maxd2, have_xb, NULL, rc, &told);
+        if (told) retreat_clock(w);
+        return rc;
+    }
     if (rc) return rc;
     /* a law set since the build: pairs under the law "none" were left out (neighbor.c) */
     if (w->law_gen != w->nl_law_gen || (w->cell ? floe_nl_needs_rebuild_cell(&w->nl, &w->p)
@@ -771,11 +783,10 @@ int step_verlet(floe_world *w) {
     /* 2. state objects, RK2 midpoint (eq 21) */
     pre = states_step(w, dt, pre);
     if (states_done(w, pre)) return pre;
-    /* 3. neighbours (MPI: a failure carried here is every rank's, the clock where one process
-     * leaves it: the rebuild test before the clock, which no rebuild reads) and forces at
-     * t + dt */
-    FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb, pre));
     advance_clock(w);
+    /* 3. neighbours and forces at t + dt (MPI: a failure carried here is every rank's, the
+     * clock put back where one process leaves it) */
+    FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb, pre));
     /* MPI (core/parallel): a rebuild migrates particles: the count and the store's arrays
      * may have changed */
     n = p->n;
@@ -1066,13 +1077,17 @@ int step_rk2(floe_world *w) {
     /* (MPI: out of memory for the rows goes on to the next agreement) */
     pre = states_step(w, dt, oom ? floe_world_error(w, FLOE_ENOMEM, "out of memory") : FLOE_OK);
     if (states_done(w, pre)) return pre;
+    advance_clock(w);
     /* MPI: a rebuild is a decomposition; the rows travel with their particles (x0 .. fm do
-     * not: under MPI not read after this). The clock after it, as velocity Verlet's */
+     * not: under MPI not read after this); a failure carried here puts the clock back, as
+     * velocity Verlet's */
     if (w->par) {
         const floe_par_carry carry = {&w->rk2, &w->rk2_n, RK2_WD, RK2_DASH};
-        FLOE_TRY(floe_par_refresh(w, maxd2, have_xb, &carry, pre));
+        int told = 0;
+        const int rc = floe_par_refresh(w, maxd2, have_xb, &carry, pre, &told);
+        if (told) retreat_clock(w);
+        if (rc) return rc;
     } else FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb, pre));
-    advance_clock(w);
     FLOE_TRY(forces_advancing(w));
     /* 4. v_{n+1} = v_n + dt F_mid / m from the rows, omega from L_{n+1} (MPI: the walls
      * and the owned particles; the ghosts are new) */

@@ -275,9 +275,9 @@ int floe_world_run(floe_world *w, double t_end, floe_progress_fn progress, void 
         char keep[sizeof w->err];
         memcpy(keep, w->err, sizeof keep);
         observers_call(w, 1);
-        /* MPI: when every rank returned the error (and the state is whole: not a
-         * decomposition that failed midway), rank 0's mirror writes the state at the failure
-         * too (collective: the ranks are all here) */
+        /* MPI: when every rank returned the error and the state is whole (err_agreed 1: not
+         * out of memory, not a failed decomposition), rank 0's mirror writes the state at the
+         * failure too (collective: the ranks are all here) */
         if (w->par && w->err_agreed == 1) (void)floe_par_observe(w, 1);
         memcpy(w->err, keep, sizeof keep);
     }

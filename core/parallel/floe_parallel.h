@@ -104,12 +104,13 @@ int floe_parallel_agree(const void *comm, int rc);
  * such as a contact deeper than its radius or a contact law's error, with the failing rank's
  * message on every rank; a particle's closing checks; the energy watchdog; an output's
  * failure). The ranks may then go on together: finish the outputs
- * (floe_world_parallel_finish) and stop. 2 when every rank returned it but it is out of
- * memory (in a decomposition, or on a rank that stopped short of the others on its way to
- * the agreement): the split world is not whole; destroy it without writing it. 0 when the
- * error happened on this rank alone (the few places docs/parallel.md lists), while the other
- * ranks may wait in a collective: stop them (MPI_Abort). 1 for an unsplit world. Not
- * collective. */
+ * (floe_world_parallel_finish) and stop. 2 when every rank returned it but the split world
+ * is not whole (out of memory on some rank, which may have stopped short of the others on
+ * its way to the agreement; a failed decomposition, also the split's first one in
+ * floe_world_parallel_init): destroy it without writing it. 0 when the error happened on
+ * this rank alone (the few places docs/parallel.md lists), while the other ranks may wait in
+ * a collective: stop them (MPI_Abort). 1 for an unsplit world (also after a split that failed
+ * before its first decomposition, which leaves the world as it was). Not collective. */
 int floe_world_parallel_error_agreed(const floe_world *w);
 
 /* rank and size of the world's communicator (0 and 1 for a serial world); not collective */

@@ -22,9 +22,11 @@ typedef struct floe_par_carry {
     int m, dash;
 } floe_par_carry;
 /* rc: this rank's failure since the step's last agreement (its message set; FLOE_OK: none),
- * told to every rank with the need: every rank then returns the lowest failing rank's error
- * (w->err_agreed). Without MPI or a split: rc */
-int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry, int rc);
+ * told to every rank with the need: every rank then returns that error (an out-of-memory
+ * one first, else the lowest failing rank's; w->err_agreed) and *told is set (the step puts
+ * its clock back: one process returns such a failure before the clock moves). Without MPI
+ * or a split: rc */
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry, int rc, int *told);
 /* the ghosts' positions, velocities (and orientations, forces where the laws read them)
  * from their owners, without a rebuild (RK2's midpoint) */
 int floe_par_ghost_update(floe_world *w);

@@ -443,8 +443,9 @@ static int error_from(floe_world *w, floe_par *P, int first, int rc, int kind) {
     return m.code;
 }
 
-int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry, int rc) {
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry, int rc, int *told) {
     floe_par *P = w->par;
+    *told = 0;
     /* a periodic cell: the test that discounts the cell's affine map (step.c rebuild_if_needed) */
     int need = w->cell ? floe_nl_needs_rebuild_cell(&w->nl, &w->p)
                        : floe_nl_needs_rebuild_after_drift(&w->nl, &w->p, maxd2, !have_xb || w->nstates > 0);
@@ -458,14 +459,17 @@ int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_ca
     const int m = carry ? carry->m : 0;
     if (!rc && carry && floe_world_pp_attach(w, rows, carry->n, m))
         rc = floe_world_error(w, FLOE_ENOMEM, "out of memory");
-    /* the need, and this rank's failure since the last agreement (the lowest failing rank's
-     * error is every rank's), in one reduction */
-    int mine[2] = {need, rc ? P->size - P->rank : 0}, all[2];
+    /* the need, and this rank's failure since the last agreement, in one reduction: the
+     * failing rank whose error is every rank's, an out-of-memory one first (S - rank + S),
+     * else the lowest (S - rank) */
+    const int S = P->size;
+    int mine[2] = {need, !rc ? 0 : rc == FLOE_ENOMEM ? 2 * S - P->rank : S - P->rank}, all[2];
     MPI_Allreduce(mine, all, 2, MPI_INT, MPI_MAX, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof mine);
     if (all[1]) {
         if (carry) floe_world_pp_detach(w, rows);
-        return error_from(w, P, P->size - all[1], rc, FLOE_COMM_REDUCE);
+        *told = 1;
+        return error_from(w, P, all[1] > S ? 2 * S - all[1] : S - all[1], rc, FLOE_COMM_REDUCE);
     }
     if (!carry) return all[0] ? par_rebuild(w, P, NULL, 0) : floe_par_ghost_update(w);
     rc = all[0] ? par_rebuild(w, P, NULL, 0) : floe_par_ghost_update(w);
@@ -503,10 +507,13 @@ int floe_par_ghost_update(floe_world *w) {
 static int agree_error_kind(floe_world *w, int rc, int kind) {
     floe_par *P = w->par;
     if (!P) return rc;
-    int mine = rc ? P->rank : P->size, first = mine;
+    /* the failing rank whose error is every rank's: an out-of-memory one first (rank - S < 0:
+     * a rank that stopped short of the others; the state is not whole), else the lowest */
+    const int S = P->size;
+    int mine = !rc ? S : rc == FLOE_ENOMEM ? P->rank - S : P->rank, first = mine;
     MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, P->comm);
     floe_par_count_allreduce(P, kind, sizeof mine);
-    return first == P->size ? FLOE_OK : error_from(w, P, first, rc, kind);
+    return first == S ? FLOE_OK : error_from(w, P, first < 0 ? first + S : first, rc, kind);
 }
 
 int floe_par_agree_error(floe_world *w, int rc) { return agree_error_kind(w, rc, FLOE_COMM_REDUCE); }
@@ -1572,8 +1579,9 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
                             "-DFLOE_WITH_MPI=ON)");
 }
 int floe_world_parallel_rebuild(floe_world *w) { (void)w; return FLOE_OK; }
-int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry, int rc) {
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry, int rc, int *told) {
     (void)w; (void)maxd2; (void)have_xb; (void)carry;
+    *told = 0;
     return rc;
 }
 int floe_par_ghost_update(floe_world *w) { (void)w; return FLOE_OK; }

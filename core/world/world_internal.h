@@ -240,9 +240,9 @@ struct floe_world {
     const unsigned char *gmotion;
     void (*par_free)(struct floe_par *par);
     /* a split world: the last error a step returned was agreed by every rank (each returned
-     * it: core/parallel floe_par_agree_error): 1, or 2 for out of memory (a decomposition, or
-     * a rank that stopped short on its way to the agreement: the state is not whole); 0
-     * otherwise; reset at each step */
+     * it: core/parallel floe_par_agree_error): 1, or 2 when the state is not whole (out of
+     * memory: a rank may have stopped short on its way to the agreement; a failed
+     * decomposition); 0 otherwise; reset at each step */
     int err_agreed;
 };
 

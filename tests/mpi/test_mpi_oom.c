@@ -1,8 +1,9 @@
 /* test_mpi_oom.c - out of memory on one rank of a split world, in the split, inside a
  * decomposition and inside a step (docs/parallel.md, "Errors inside a step"): every rank
  * returns, all with an error or all without, and an error is agreed
- * (floe_world_parallel_error_agreed, the same value on every rank) with the same code and
- * message on every rank. Before, a
+ * (floe_world_parallel_error_agreed, the same value on every rank: 2 on a split world, out
+ * of memory leaving it not whole; 1 after a split that failed before its decomposition,
+ * which leaves the world whole) with the same code and message on every rank. Before, a
  * rank that failed alone left the others waiting in the next collective: the run never ended.
  *
  * This executable wraps floe's allocations (-Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,
@@ -101,6 +102,7 @@ static void on_alarm(int sig) {
  * somewhere (the sweep goes on), 0 when no rank reached it */
 static int trial(int variant, int warm, int v, long k, int *errors) {
     floe_world *w = build(variant);
+    const int n_all = floe_world_particle_count(w);
     int rc = floe_world_prepare(w);
     CHECK(rc == FLOE_OK, "rank %d: the set-up failed: %s", rank_, floe_world_last_error(w));
     if (rc) { floe_world_destroy(w); return 0; }
@@ -138,6 +140,13 @@ static int trial(int variant, int warm, int v, long k, int *errors) {
           "different errors (codes %ld to %ld; this one: %s)", rank_, k, v, v3lo[1], v3hi[1],
           bad ? floe_world_last_error(w) : "none");
     if (bad) {
+        /* every failure here is out of memory: on a split world the state is not whole (2); a
+         * split that failed before its decomposition leaves the world unsplit and whole (1) */
+        int wr, ws;
+        floe_world_parallel_rank(w, &wr, &ws);
+        CHECK(ag == (ws > 1 ? 2 : 1) && (ws > 1 || floe_world_particle_count(w) == n_all),
+              "rank %d: allocation %ld of rank %d: agreed %d on a world of %d rank(s) and %d particles (%d whole): %s",
+              rank_, k, v, ag, ws, floe_world_particle_count(w), n_all, floe_world_last_error(w));
         CHECK(ag && ag_lo == ag_hi, "rank %d: allocation %ld of rank %d: error not agreed (%d; %ld to %ld over the "
               "ranks): %s", rank_, k, v, ag, ag_lo, ag_hi, floe_world_last_error(w));
         CHECK(floe_world_last_error(w)[0] != 0, "rank %d: allocation %ld of rank %d: an error without a message",
