@@ -251,6 +251,44 @@ static int advance_states(floe_world *w, double dt) {
     return FLOE_OK;
 }
 
+/* The state objects at the RK2 midpoint for its force evaluation (floe_state_class.probe:
+ * y_mid = y_n + dt/2 f(t_n, y_n), the step's own first stage), and (undo) put back; a state
+ * without a probe stays at y_n there */
+static int probe_states(floe_world *w, double h, int undo) {
+    int rc = FLOE_OK;
+    for (int s = 0; s < w->nstates; s++) {
+        floe_state *st = w->states[s];
+        if (!st->klass->probe) continue;
+        if (undo) {
+            int r = st->klass->probe(st, w, NULL);
+            if (!rc) rc = r;
+            continue;
+        }
+        size_t m = st->klass->size(st);
+        double buf[32];
+        double *y = m <= 16 ? buf : malloc(2 * m * sizeof(double));
+        w->err[0] = 0;
+        if (!y) rc = floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        else {
+            double *k1 = y + m;
+            st->klass->get(st, y);
+            rc = st->klass->rhs(st, w, w->time, y, k1);
+            for (size_t a = 0; a < m && !rc; a++) y[a] += h * k1[a];
+            if (!rc) rc = st->klass->probe(st, w, y);
+            if (y != buf) free(y);
+        }
+        if (rc) { /* the probed ones back; the state's own reason kept */
+            char why[sizeof w->err];
+            memcpy(why, w->err, sizeof why);
+            for (int u = 0; u < s; u++)
+                if (w->states[u]->klass->probe) w->states[u]->klass->probe(w->states[u], w, NULL);
+            return floe_world_error(w, rc, "state object %s failed at the RK2 midpoint of step %ld: %s",
+                                    st->klass->name, w->step, why[0] ? why : floe_strerror(rc));
+        }
+    }
+    return rc;
+}
+
 /* the states over the step, unless this rank failed since the step's last agreement (pre,
  * its message set: MPI only, where the failing rank goes on to the next agreement); under MPI
  * with state objects the outcome is agreed here by every rank (a state's callback may fail on
@@ -904,6 +942,8 @@ typedef struct rk2_ctx {
     int *bad;        /* each block's first free particle that failed the quick checks */
     double *rows;    /* MPI: the closing values (RK2_WD a particle, w->rk2); NULL in one
                         process, where the end reads x0, v0, fm (no rebuild renumbers them) */
+    double *mn;      /* a world with state objects: each particle's mass m_n (the end block
+                        writes it), and L0 then holds L_n + dt T_mid - L_mid (rk2_grow_block) */
 } rk2_ctx;
 
 /* a row of w->rk2 (MPI): v_n, F_mid, x_n of a free particle (the others' are not read) and
@@ -951,7 +991,12 @@ static void rk2_end_block(void *ctx, int i0, int i1, double *sums) {
         if (c->xb) note_disp(x, c->xb + 3 * i, &md);
         if (p->motion[i] == FLOE_FREE) {
             wb += dt * (p->mass[i] * floe_v3_dot(g, p->v + 3 * i));
-            for (int k = 0; k < 3; k++) p->L[3 * i + k] = c->L0[3 * i + k] + dt * p->t[3 * i + k]; /* L_{n+1} */
+            if (c->mn) { /* L stays L_mid for the states; L0 <- what the step adds to it */
+                c->mn[i] = p->mass[i];
+                for (int k = 0; k < 3; k++)
+                    c->L0[3 * i + k] = c->L0[3 * i + k] + dt * p->t[3 * i + k] - p->L[3 * i + k];
+            } else
+                for (int k = 0; k < 3; k++) p->L[3 * i + k] = c->L0[3 * i + k] + dt * p->t[3 * i + k]; /* L_{n+1} */
             if (r)
                 for (int k = 0; k < 3; k++) {
                     r[RK2_V + k] = c->v0[3 * i + k];
@@ -962,6 +1007,33 @@ static void rk2_end_block(void *ctx, int i0, int i1, double *sums) {
     }
     c->md[i0 / FLOE_PAR_BLOCK] = md;
     sums[0] = wb;
+}
+
+/* 3b. a world with state objects, after them: a state that grew a particle (its mass m_n ->
+ * m_{n+1}, its inertia I_n -> s I_n; floe_growing_radius_create with update_mass) scaled the
+ * L_mid it saw by s and kept v_mid; the added mass and inertia move with the particle, so
+ *   m_{n+1} v_{n+1} = m_n v_n + dt F_mid + (m_{n+1} - m_n) v_mid,
+ *   L_{n+1} = L_n + dt T_mid + (s - 1) L_mid:
+ * the midpoint rule on d(m v)/dt = F + m' v and dL/dt = T + I' w (second order; taking the
+ * mass and inertia after the growth instead is first order). L_{n+1} = s L_mid + (L_n + dt
+ * T_mid - L_mid) (kept in L0 by the end block); the momentum's growth term goes into F_mid,
+ * for v_{n+1} = v_n + dt F_mid / m_{n+1} at the close. Unchanged particles: L_{n+1} is the
+ * same sum as without states, to rounding. */
+static void rk2_grow_block(void *ctx, int i0, int i1, double *sums) {
+    const rk2_ctx *c = ctx;
+    floe_particles *p = &c->w->p;
+    const double inv_dt = 1.0 / c->dt;
+    sums[0] = 0.0;
+    for (int i = i0; i < i1; i++) {
+        if (p->motion[i] != FLOE_FREE) continue;
+        for (int k = 0; k < 3; k++) p->L[3 * i + k] += c->L0[3 * i + k];
+        const double dm = p->mass[i] - c->mn[i];
+        if (dm == 0) continue;
+        double *r = c->rows ? c->rows + (size_t)i * RK2_WD : NULL;
+        const double *v0 = r ? r + RK2_V : c->v0 + 3 * i;
+        double *fm = r ? r + RK2_F : (double *)c->fm + 3 * i;
+        for (int k = 0; k < 3; k++) fm[k] += dm * (p->v[3 * i + k] - v0[k]) * inv_dt;
+    }
 }
 
 /* 4. the free particles' v_{n+1} from their rows and omega from L_{n+1}; sums: their kinetic
@@ -1003,7 +1075,9 @@ int step_rk2(floe_world *w) {
     floe_particles *p = &w->p;
     const int n = p->n;
     const double dt = w->dt, h = 0.5 * dt, t_n = w->time;
-    double *b = ibuf_reserve(w, 16 * (size_t)(n ? n : 1));
+    /* x0 v0 L0 q0 F_mid, and m_n where state objects may grow a particle's mass */
+    const size_t nw = w->nstates ? 17 : 16;
+    double *b = ibuf_reserve(w, nw * (size_t)(n ? n : 1));
     /* out of memory before the midpoint forces: one process returns; under MPI this rank goes
      * on to their agreement (calling the collectives on the way, not moving) */
     int pre = b ? FLOE_OK : floe_world_error(w, FLOE_ENOMEM, "out of memory");
@@ -1016,7 +1090,7 @@ int step_rk2(floe_world *w) {
         floe_world_copy(w, L0, p->L, 3 * (size_t)n * sizeof *L0);
         floe_world_copy(w, q0, p->q, 4 * (size_t)n * sizeof *q0);
         /* 1. the midpoint state: the free particles on the threads, then the kinematic ones */
-        rk2_ctx c = {w, h, dt, x0, v0, q0, NULL, NULL, L0, NULL, NULL, NULL};
+        rk2_ctx c = {w, h, dt, x0, v0, q0, NULL, NULL, L0, NULL, NULL, NULL, NULL};
         double s0;
         if (floe_world_blocks(w, n, 1, rk2_mid_block, &c, &s0)) {
             pre = floe_world_error(w, FLOE_ENOMEM, "out of memory");
@@ -1039,13 +1113,21 @@ int step_rk2(floe_world *w) {
     }
     /* 2. forces at the midpoint (MPI: the ghosts' midpoint state from their owners) */
     if (w->par) FLOE_TRY(floe_par_ghost_update(w));
+    /* the state objects at the midpoint (a growing radius's contacts), for its forces only */
+    const int probed = w->nstates && !pre;
+    if (probed) {
+        pre = probe_states(w, h, 0);
+        if (pre && !w->par) return pre;
+    }
     w->time = t_n + h;
     int rc = rk2_midpoint_forces(w, h, pre); /* (agreed under MPI) */
     w->time = t_n;
+    if (probed && !pre) probe_states(w, h, 1);
     if (rc) return rc;
     b = w->ibuf; /* the midpoint's scratch may have moved it */
     double *x0 = b, *v0 = b + 3 * (size_t)n, *L0 = b + 6 * (size_t)n, *q0 = b + 9 * (size_t)n;
     double *fm = b + 13 * (size_t)n; /* F_mid */
+    double *mn = w->nstates ? b + 16 * (size_t)n : NULL; /* m_n */
     floe_world_copy(w, fm, p->f, 3 * (size_t)n * sizeof *fm);
     /* 3. x_{n+1} = x_n + dt v_mid, q_{n+1} = exp(dt w_mid) q_n, L_{n+1} = L_n + dt T_mid
      * (before the states: a growing radius scales it); v, w stay at the midpoint values for
@@ -1067,7 +1149,7 @@ int step_rk2(floe_world *w) {
     {
         /* the blocks' largest displacements since the build */
         double *md = oom ? NULL : malloc((size_t)(nbk > 0 ? nbk : 1) * sizeof *md);
-        rk2_ctx c = {w, h, dt, x0, v0, q0, fm, have_xb ? xb : NULL, L0, md, NULL, w->par ? w->rk2 : NULL};
+        rk2_ctx c = {w, h, dt, x0, v0, q0, fm, have_xb ? xb : NULL, L0, md, NULL, w->par ? w->rk2 : NULL, mn};
         if (!md || floe_world_blocks(w, n, 1, rk2_end_block, &c, &wb)) oom = 1;
         for (int k = 0; k < nbk && !oom; k++)
             if (md[k] > maxd2) maxd2 = md[k];
@@ -1077,6 +1159,12 @@ int step_rk2(floe_world *w) {
     /* (MPI: out of memory for the rows goes on to the next agreement) */
     pre = states_step(w, dt, oom ? floe_world_error(w, FLOE_ENOMEM, "out of memory") : FLOE_OK);
     if (states_done(w, pre)) return pre;
+    if (mn && !pre) { /* 3b. (before a rebuild renumbers the particles) */
+        rk2_ctx c = {w, h, dt, x0, v0, q0, fm, NULL, L0, NULL, NULL, w->par ? w->rk2 : NULL, mn};
+        double s3;
+        if (floe_world_blocks(w, n, 1, rk2_grow_block, &c, &s3)) pre = floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        if (pre && !w->par) return pre;
+    }
     advance_clock(w);
     /* MPI: a rebuild is a decomposition; the rows travel with their particles (x0 .. fm do
      * not: under MPI not read after this); a failure carried here puts the clock back, as
@@ -1097,7 +1185,7 @@ int step_rk2(floe_world *w) {
         const int nbe = (nend + FLOE_PAR_BLOCK - 1) / FLOE_PAR_BLOCK;
         int *bad = malloc((size_t)(nbe > 0 ? nbe : 1) * sizeof *bad);
         if (!bad) return step_close(w, floe_world_error(w, FLOE_ENOMEM, "out of memory"));
-        rk2_ctx c = {w, h, dt, x0, v0, q0, fm, NULL, L0, NULL, bad, w->par ? w->rk2 : NULL};
+        rk2_ctx c = {w, h, dt, x0, v0, q0, fm, NULL, L0, NULL, bad, w->par ? w->rk2 : NULL, NULL};
         double s2[2];
         if (floe_world_blocks(w, nend, 2, rk2_close_block, &c, s2)) {
             free(bad);

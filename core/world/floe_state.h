@@ -15,6 +15,12 @@ typedef struct floe_state_class {
     int (*set)(floe_state *s, floe_world *w, const double *y);
     int (*rhs)(const floe_state *s, const floe_world *w, double t, const double *y, double *dydt);
     void (*destroy)(floe_state *s);
+    /* optional (NULL: an RK2 midpoint's forces see the state of the step's start, which is
+     * first order in the coupling of a state and the forces): probe(s, w, y) puts what the
+     * forces read (a particle's radius and mass) at y, the state at the RK2 midpoint, for
+     * that force evaluation only; probe(s, w, NULL) then puts back exactly what was there.
+     * Between the two the world does not step, rebuild or write. */
+    int (*probe)(floe_state *s, floe_world *w, const double *y);
 } floe_state_class;
 
 struct floe_state {

@@ -14,6 +14,10 @@ typedef struct growing_radius {
     long cached_rebuilds;
     const long long *cached_gid;
     int cached_local;
+    /* what gr_probe changed and puts back: the sphere's radius, the particle's local index
+     * (-1: none on this rank), its radius, mass and inverse mass */
+    double probe_saved[4];
+    int probe_local;
 } growing_radius;
 
 static size_t gr_size(const floe_state *s) { (void)s; return 1; }
@@ -92,13 +96,50 @@ static int gr_set(floe_state *s, floe_world *w, const double *y) {
     return FLOE_OK;
 }
 
+/* The RK2 midpoint's radius (and, with update_mass, mass) for its force evaluation: the
+ * contact sees the sphere it touches then (floe_state_class.probe) */
+static int gr_probe(floe_state *s, floe_world *w, const double *y) {
+    growing_radius *g = (growing_radius *)s;
+    floe_sphere *sp = (floe_sphere *)w->geoms[g->geom];
+    floe_particles *p = &w->p;
+    if (!y) { /* put back */
+        sp->radius = g->probe_saved[0];
+        const int i = g->probe_local;
+        if (i >= 0) {
+            p->radius[i] = g->probe_saved[1];
+            p->mass[i] = g->probe_saved[2];
+            p->inv_mass[i] = g->probe_saved[3];
+        }
+        return FLOE_OK;
+    }
+    if (!(y[0] > 0) || !isfinite(y[0]))
+        return floe_world_error(w, FLOE_EUNSTABLE, "growing radius of particle %d became %g", g->particle, y[0]);
+    const int i = gr_local(g, w);
+    g->probe_saved[0] = sp->radius;
+    g->probe_local = i;
+    const double r = y[0] / sp->radius;
+    sp->radius = y[0];
+    if (i < 0) return FLOE_OK;
+    g->probe_saved[1] = p->radius[i];
+    g->probe_saved[2] = p->mass[i];
+    g->probe_saved[3] = p->inv_mass[i];
+    p->radius[i] = y[0];
+    if (g->update_mass && w->prepared) {
+        const double m = p->mass[i] * (w->def.dim == 2 && w->def.mass_2d_area ? r * r : r * r * r);
+        p->mass[i] = m;
+        if (p->inv_mass[i] > 0) p->inv_mass[i] = 1.0 / m; /* a free particle or its ghost (as gr_set) */
+    }
+    return FLOE_OK;
+}
+
 static int gr_rhs(const floe_state *s, const floe_world *w, double t, const double *y, double *dydt) {
     (void)w; (void)t; (void)y;
     dydt[0] = ((const growing_radius *)s)->rate;
     return FLOE_OK;
 }
 
-static const floe_state_class growing_radius_class = {1, "growing_radius", gr_size, gr_get_real, gr_set, gr_rhs, NULL};
+static const floe_state_class growing_radius_class = {1, "growing_radius", gr_size, gr_get_real, gr_set, gr_rhs, NULL,
+                                                      gr_probe};
 
 floe_state *floe_growing_radius_create(floe_world *w, int particle, double rate, int update_mass) {
     if (particle < 0 || particle >= w->p.n || !isfinite(rate)) return NULL;
@@ -145,7 +186,7 @@ static int sc_rhs(const floe_state *s, const floe_world *w, double t, const doub
     dydt[0] = c->f(t, y[0], c->user);
     return isfinite(dydt[0]) ? FLOE_OK : FLOE_EUNSTABLE;
 }
-static const floe_state_class scalar_state_class = {1, "scalar", sc_size, sc_get, sc_set, sc_rhs, NULL};
+static const floe_state_class scalar_state_class = {1, "scalar", sc_size, sc_get, sc_set, sc_rhs, NULL, NULL};
 
 floe_state *floe_scalar_state_create(double y0, floe_scalar_rhs_fn f, void *user) {
     if (!f) return NULL;

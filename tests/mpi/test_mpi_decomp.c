@@ -214,7 +214,7 @@ static int us_rhs(const floe_state *s, const floe_world *w, double t, const doub
     dydt[0] = 0;
     return FLOE_OK;
 }
-static const floe_state_class user_state_class = {1, "user_temperature", us_size, us_get, us_set, us_rhs, NULL};
+static const floe_state_class user_state_class = {1, "user_temperature", us_size, us_get, us_set, us_rhs, NULL, NULL};
 
 /* what is not supported yet is refused with FLOE_ENOTSUP and a message, on every rank (RK2,
  * the built-in state objects and motion callbacks on bounded particles run split since
