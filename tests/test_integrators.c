@@ -25,19 +25,22 @@
  *      2^5 (1 / 32);
  *   6. the same sphere growing under a constant force F and torque T: m v' = F, I w' = T
  *      (the added mass and inertia move with it), so with R = R0 (1 + t / Tg), m ~ R^3,
- *      I ~ R^5: v(t) = v0 + F Tg / (2 m0) (1 - (1 + t/Tg)^-2), w(t) = w0 + T Tg / (4 I0)
+ *      I ~ R^5, under gravity g too: v(t) = v0 + g t + F Tg / (2 m0) (1 - (1 + t/Tg)^-2),
+ *      w(t) = w0 + T Tg / (4 I0)
  *      (1 - (1 + t/Tg)^-4), at t = Tg (leapfrog: Tg - dt/2, its velocities' time). Every
  *      integrator second order in v, w and the ledger's balance error: the errors fall at
  *      least 3.5x when dt halves (before session 27, RK2's fell 2x: it closed with the mass
- *      and inertia after the growth);
- *   7. a sphere growing against a fixed sphere (linear law, no damping: the growth pushes
- *      it off): the ledger's balance error is second order for every integrator (falls at
- *      least 3x when dt halves, or stays at rounding), and the three integrators end within
- *      1e-6 m of each other at dt = 2.5e-5 s (RK2's midpoint forces see the midpoint radius,
- *      floe_state_class.probe; before session 27 they saw the step's start: balance error
- *      1.7e-2 -> 8.2e-3 -> 4.1e-3, first order, and 1.1e-5 m off velocity Verlet). */
+ *      and inertia after the growth); the staggered scheme too (a PD block far away);
+ *   7. a sphere growing on a fixed sphere under gravity (linear law, no damping: the growth
+ *      pushes it up): the ledger's balance error is second order for every integrator (falls at
+ *      least 2.8x when dt halves, or stays at rounding), and the three integrators end within
+ *      3e-6 m of each other at dt = 2.5e-5 s (RK2's midpoint forces see the midpoint radius
+ *      and mass, floe_state_class.probe; before session 27 they saw the step's start);
+ *      their grown masses and radii are the same bits, also with two growing radii on one
+ *      sphere (the probes put back in reverse order). */
 #include "check.h"
 #include "floe.h"
+#include "floe_pd.h"
 #include "world_read.h"
 
 #include <string.h>
@@ -326,12 +329,19 @@ static void grow_force(const floe_world *w, int i, double t, double f[3], double
 }
 
 /* the errors of v and w at Tg against the exact values, and the ledger's balance error */
+static const double grow_g[3] = {0, 0, -9.81};
+/* integ -1: the staggered PD-DEM scheme (velocity Verlet's kicks with its own rows) */
 static void grown_under_load(int integ, double dt, double err[3]) {
     const double R0 = 0.01, Tg = 0.4, om0 = 5.0, v0 = 0.2;
     const int steps = (int)(Tg / dt + 0.5);
     floe_world_def d = floe_default_world_def();
-    d.integrator = integ;
+    d.integrator = integ < 0 ? FLOE_VELOCITY_VERLET : integ;
+    if (integ < 0) {
+        d.pd_dem = FLOE_PD_DEM_STAGGERED;
+        d.allow_unstable_dt = 1; /* its contact estimate (the speed against the radius): no contact here */
+    }
     d.dt = dt;
+    floe_v3_copy(d.gravity, grow_g);
     floe_world *w = floe_world_create(&d, NULL, 0);
     floe_material m = {"m", 1000, 1e7, 0.3};
     floe_world_add_material(w, &m);
@@ -343,19 +353,37 @@ static void grown_under_load(int integ, double dt, double err[3]) {
     p.w[2] = 0.8 * om0;
     floe_world_add_particle(w, &p);
     floe_world_set_body_force(w, grow_force, NULL);
+    if (integ < 0) { /* the scheme needs a PD body: a soft block far away, falling freely */
+        floe_world_set_law(w, 0, 0, floe_linear_law_create(1e3, 0, 0, 0, 0)); /* (never touches) */
+        floe_pd_region reg;
+        memset(&reg, 0, sizeof reg);
+        reg.dim = 3;
+        reg.dx = 0.02;
+        reg.horizon_factor = 2;
+        floe_v3_set(reg.lo, 5.0, 5.0, 5.0);
+        floe_v3_set(reg.hi, 5.04, 5.04, 5.04);
+        floe_pd_body *b = NULL;
+        const double E = 100, nu = 0.25;
+        floe_pd_material pm = floe_pd_material_pmb(1100, E / (3 * (1 - 2 * nu)), 0);
+        int prc = floe_pd_body_create(&b, &reg);
+        if (!prc) prc = floe_pd_set_material(b, &pm);
+        if (!prc) prc = floe_world_add_pd_body(w, b, 0, NULL, NULL);
+        CHECK(prc == FLOE_OK, "staggered: the PD block added (%s)", floe_world_last_error(w));
+    }
     floe_state *s = floe_growing_radius_create(w, 0, R0 / Tg, 1);
     int rc = s ? floe_world_add_state(w, s) : FLOE_ENOMEM;
     if (!rc) rc = floe_world_prepare(w);
     const double m0 = pview(w).mass[0], I0 = pview(w).inertia[0];
     for (int k = 0; k < steps && !rc; k++) rc = floe_world_step(w);
-    CHECK(rc == FLOE_OK, "%s: growing under load ran (%s)", name(integ), floe_world_last_error(w));
+    CHECK(rc == FLOE_OK, "%s: growing under load ran (%s)", integ < 0 ? "staggered" : name(integ),
+          floe_world_last_error(w));
     const floe_particles_view v = pview(w);
     const double vx[3] = {v0, 0, 0}, wx[3] = {0.6 * om0, 0, 0.8 * om0};
     /* leapfrog keeps the velocities half a step back (v_{n-1/2}, w_{n-1/2}) */
     const double te = integ == FLOE_LEAPFROG ? Tg - 0.5 * dt : Tg, r = 1 + te / Tg;
     err[0] = err[1] = 0;
     for (int a = 0; a < 3; a++) {
-        err[0] = fmax(err[0], fabs(v.v[a] - (vx[a] + grow_F[a] * Tg / (2 * m0) * (1 - 1 / (r * r)))));
+        err[0] = fmax(err[0], fabs(v.v[a] - (vx[a] + grow_g[a] * te + grow_F[a] * Tg / (2 * m0) * (1 - 1 / (r * r)))));
         err[1] = fmax(err[1], fabs(v.w[a] - (wx[a] + grow_T[a] * Tg / (4 * I0) * (1 - 1 / (r * r * r * r)))));
     }
     err[2] = floe_world_energy_balance_error(w);
@@ -367,23 +395,26 @@ static void test_growing_under_load(int integ) {
     grown_under_load(integ, 1e-3, e1);
     grown_under_load(integ, 5e-4, e2);
     static const char *what[3] = {"v", "w", "ledger"};
+    /* bounds at dt = 1e-3 s (measured at most 9.2e-6 m/s (RK2), 1.9e-5 rad/s, 1.4e-6
+     * (velocity Verlet); RK2 before session 27: 2.1e-4 m/s, 8.7e-3 rad/s, 4e-4) */
+    static const double bound[3] = {3e-5, 6e-5, 5e-6};
     for (int k = 0; k < 3; k++) {
         const double ratio = e1[k] / e2[k];
-        printf("  %-16s growing under load: %-6s error %.3g -> %.3g (ratio %.2f)\n", name(integ), what[k], e1[k],
-               e2[k], ratio);
-        /* a second-order error falls 4x; tiny errors are rounding (none of them here: v and
-         * w change by 0.07 and 2.4 of their scales, 1e-5 of which is the first-order error) */
-        CHECK(ratio >= 3.5 || e1[k] < 1e-13, "%s: second order in %s under growth and load (%.3g -> %.3g)",
-              name(integ), what[k], e1[k], e2[k]);
+        const char *nm = integ < 0 ? "staggered" : name(integ);
+        printf("  %-16s growing under load: %-6s error %.3g -> %.3g (ratio %.2f)\n", nm, what[k], e1[k], e2[k], ratio);
+        /* a second-order error falls 4x */
+        CHECK(ratio >= 3.5 && e1[k] < bound[k], "%s: second order in %s under growth and load (%.3g -> %.3g)", nm,
+              what[k], e1[k], e2[k]);
     }
 }
 
 /* test 7: the growing sphere's end height and the ledger's balance error after 0.05 s */
-static void grown_in_contact(int integ, double dt, double *z, double *bal) {
+static void grown_in_contact(int integ, double dt, double *z, double *bal, double *m, double *r) {
     const double R0 = 0.01, Tg = 0.05;
     floe_world_def d = floe_default_world_def();
     d.integrator = integ;
     d.dt = dt;
+    floe_v3_set(d.gravity, 0, 0, -9.81); /* the weight at the midpoint: the probe's mass */
     d.allow_unstable_dt = 1; /* RK2 has no stable step for an undamped spring (it grows slowly) */
     floe_world *w = floe_world_create(&d, NULL, 0);
     floe_material mt = {"m", 1000, 1e7, 0.3};
@@ -404,21 +435,53 @@ static void grown_in_contact(int integ, double dt, double *z, double *bal) {
     CHECK(rc == FLOE_OK, "%s: growing in contact ran (%s)", name(integ), floe_world_last_error(w));
     *z = pview(w).x[5];
     *bal = floe_world_energy_balance_error(w);
+    *m = pview(w).mass[1];
+    *r = pview(w).radius[1];
+    floe_world_destroy(w);
+}
+
+/* two growing radii on one sphere, 10 steps: its mass and radius after them (the probes put
+ * back in reverse order: RK2 ends with velocity Verlet's bits) */
+static void two_growths(int integ, double *m, double *r) {
+    floe_world_def d = floe_default_world_def();
+    d.integrator = integ;
+    d.dt = 1e-4;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material mt = {"m", 1000, 1e7, 0.3};
+    floe_world_add_material(w, &mt);
+    floe_particle_def a = floe_default_particle_def();
+    a.geometry = floe_world_add_geometry(w, floe_sphere_create(0.01));
+    floe_world_add_particle(w, &a);
+    floe_state *s1 = floe_growing_radius_create(w, 0, 0.2, 1), *s2 = floe_growing_radius_create(w, 0, 0.1, 1);
+    int rc = s1 && s2 ? floe_world_add_state(w, s1) : FLOE_ENOMEM;
+    if (!rc) rc = floe_world_add_state(w, s2);
+    if (!rc) rc = floe_world_prepare(w);
+    for (int k = 0; k < 10 && !rc; k++) rc = floe_world_step(w);
+    CHECK(rc == FLOE_OK, "%s: two growths ran (%s)", name(integ), floe_world_last_error(w));
+    *m = pview(w).mass[0];
+    *r = pview(w).radius[0];
     floe_world_destroy(w);
 }
 
 static void test_growing_in_contact(const int *all, int nall) {
-    double zf[3];
+    double zf[3], mf[3], rf[3], m2[3], r2[3];
     for (int k = 0; k < nall; k++) {
-        double z, b1, b2, b3;
-        grown_in_contact(all[k], 1e-4, &z, &b1);
-        grown_in_contact(all[k], 5e-5, &z, &b2);
-        grown_in_contact(all[k], 2.5e-5, &zf[k], &b3);
+        double z, b1, b2, b3, m, r;
+        grown_in_contact(all[k], 1e-4, &z, &b1, &m, &r);
+        grown_in_contact(all[k], 5e-5, &z, &b2, &m, &r);
+        grown_in_contact(all[k], 2.5e-5, &zf[k], &b3, &mf[k], &rf[k]);
+        two_growths(all[k], &m2[k], &r2[k]);
         printf("  %-16s growing in contact: ledger %.3g -> %.3g -> %.3g, z %.10g m\n", name(all[k]), b1, b2, b3,
                zf[k]);
-        CHECK((b1 / b2 >= 3 && b2 / b3 >= 3) || b1 < 1e-12,
+        CHECK((b1 / b2 >= 2.8 && b2 / b3 >= 2.8) || b1 < 1e-12,
               "%s: the ledger is second order in a growing contact (%.3g -> %.3g -> %.3g)", name(all[k]), b1, b2, b3);
-        if (k) CHECK(fabs(zf[k] - zf[0]) < 1e-6, "%s ends %.3g m from %s", name(all[k]), zf[k] - zf[0], name(all[0]));
+        if (k) {
+            CHECK(fabs(zf[k] - zf[0]) < 3e-6, "%s ends %.3g m from %s", name(all[k]), zf[k] - zf[0], name(all[0]));
+            /* the states advance alike in every integrator: the probe leaves their bits */
+            CHECK(mf[k] == mf[0] && rf[k] == rf[0] && m2[k] == m2[0] && r2[k] == r2[0],
+                  "%s: the grown mass and radius are %s's bits (%.17g, %.17g; two growths %.17g, %.17g)", name(all[k]),
+                  name(all[0]), mf[k] - mf[0], rf[k] - rf[0], m2[k] - m2[0], r2[k] - r2[0]);
+        }
     }
 }
 
@@ -434,6 +497,7 @@ int main(void) {
         test_growing_under_load(all[k]);
     }
     test_growing_in_contact(all, 3);
+    test_growing_under_load(-1);
     /* leapfrog and velocity Verlet follow the same trajectory */
     osc o = {1.0, 0.1};
     floe_world *a = osc_world(FLOE_VELOCITY_VERLET, 0.05, &o, 1e-3), *b = osc_world(FLOE_LEAPFROG, 0.05, &o, 1e-3);

@@ -251,19 +251,53 @@ static int advance_states(floe_world *w, double dt) {
     return FLOE_OK;
 }
 
+/* State objects may change masses in a step (a growing radius with update_mass). Gravity's
+ * work over the step is booked with m_n at the drift, but the velocity the step gives is that
+ * of the force m_{n+1} g at its end (velocity Verlet's second half kick, the staggered
+ * scheme's) or of m_mid g (RK2's midpoint probe): the work is dt (m_n + m_{n+1})/2 g . v to
+ * second order (booked with m_n it is first order). growth_masses keeps m_n of the n
+ * particles before the states (in the integrators' scratch at doubles [off, off + n); NULL
+ * without state objects or gravity, or out of memory: *rc set); growth_gravity_work is the
+ * missing half of (m_{n+1} - m_n) dt g . v over the free particles (v: the velocity the
+ * states saw, the step's middle one), skipping the staggered scheme's sub-cycled PD points
+ * (pd_of, NULL: none; a growing PD point that sub-cycles is not booked: untested). */
+static double *ibuf_reserve(floe_world *w, size_t nd);
+static double *growth_masses(floe_world *w, int n, size_t off, int *rc) {
+    const double *g = w->def.gravity;
+    if (!w->nstates || *rc || (g[0] == 0 && g[1] == 0 && g[2] == 0)) return NULL;
+    double *b = ibuf_reserve(w, off + (size_t)(n ? n : 1));
+    if (!b) {
+        *rc = floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        return NULL;
+    }
+    memcpy(b + off, w->p.mass, (size_t)n * sizeof *b);
+    return b + off;
+}
+static double growth_gravity_work(const floe_world *w, const double *mn, int n, double dt, const int *pd_of) {
+    const floe_particles *p = &w->p;
+    double wb = 0;
+    for (int i = 0; i < n; i++) {
+        const double dm = p->mass[i] - mn[i];
+        if (dm == 0 || p->motion[i] != FLOE_FREE || (pd_of && pd_of[i] >= 0)) continue;
+        wb += 0.5 * dt * dm * floe_v3_dot(w->def.gravity, p->v + 3 * i);
+    }
+    return wb;
+}
+
 /* The state objects at the RK2 midpoint for its force evaluation (floe_state_class.probe:
  * y_mid = y_n + dt/2 f(t_n, y_n), the step's own first stage), and (undo) put back; a state
  * without a probe stays at y_n there */
+static int state_probes(const floe_state *st) { return st->klass->version >= 2 && st->klass->probe; }
 static int probe_states(floe_world *w, double h, int undo) {
     int rc = FLOE_OK;
+    if (undo) { /* in reverse: two states on one particle put back what each found */
+        for (int s = w->nstates - 1; s >= 0; s--)
+            if (state_probes(w->states[s])) w->states[s]->klass->probe(w->states[s], w, NULL);
+        return FLOE_OK;
+    }
     for (int s = 0; s < w->nstates; s++) {
         floe_state *st = w->states[s];
-        if (!st->klass->probe) continue;
-        if (undo) {
-            int r = st->klass->probe(st, w, NULL);
-            if (!rc) rc = r;
-            continue;
-        }
+        if (!state_probes(st)) continue;
         size_t m = st->klass->size(st);
         double buf[32];
         double *y = m <= 16 ? buf : malloc(2 * m * sizeof(double));
@@ -280,8 +314,8 @@ static int probe_states(floe_world *w, double h, int undo) {
         if (rc) { /* the probed ones back; the state's own reason kept */
             char why[sizeof w->err];
             memcpy(why, w->err, sizeof why);
-            for (int u = 0; u < s; u++)
-                if (w->states[u]->klass->probe) w->states[u]->klass->probe(w->states[u], w, NULL);
+            for (int u = s - 1; u >= 0; u--)
+                if (state_probes(w->states[u])) w->states[u]->klass->probe(w->states[u], w, NULL);
             return floe_world_error(w, rc, "state object %s failed at the RK2 midpoint of step %ld: %s",
                                     st->klass->name, w->step, why[0] ? why : floe_strerror(rc));
         }
@@ -818,9 +852,11 @@ int step_verlet(floe_world *w) {
         pre = floe_cell_after_drift(w, dt);
         if (pre && !w->par) return pre;
     }
-    /* 2. state objects, RK2 midpoint (eq 21) */
+    /* 2. state objects, RK2 midpoint (eq 21); the work of gravity on the mass they add */
+    const double *mn = growth_masses(w, n, 0, &pre);
     pre = states_step(w, dt, pre);
     if (states_done(w, pre)) return pre;
+    if (mn && !pre) wb += growth_gravity_work(w, mn, n, dt, NULL);
     advance_clock(w);
     /* 3. neighbours and forces at t + dt (MPI: a failure carried here is every rank's, the
      * clock put back where one process leaves it) */
@@ -971,9 +1007,10 @@ static void rk2_mid_block(void *ctx, int i0, int i1, double *sums) {
     }
 }
 
-/* 3. the drift from the start with the midpoint velocities, the free particles' L_{n+1} (a
- * growing radius's state then scales it with the inertia: the spin is kept, as in the other
- * schemes) and what v_{n+1} needs into their rows; sums: the body-force work */
+/* 3. the drift from the start with the midpoint velocities, the free particles' L_{n+1}
+ * (with state objects: L stays L_mid for them, and L0 takes L_n + dt T_mid - L_mid, added
+ * after them by rk2_grow_block) and what v_{n+1} needs into their rows; sums: the body-force
+ * work */
 static void rk2_end_block(void *ctx, int i0, int i1, double *sums) {
     const rk2_ctx *c = ctx;
     floe_particles *p = &c->w->p;
@@ -1022,18 +1059,20 @@ static void rk2_end_block(void *ctx, int i0, int i1, double *sums) {
 static void rk2_grow_block(void *ctx, int i0, int i1, double *sums) {
     const rk2_ctx *c = ctx;
     floe_particles *p = &c->w->p;
-    const double inv_dt = 1.0 / c->dt;
-    sums[0] = 0.0;
+    const double inv_dt = 1.0 / c->dt, *g = c->w->def.gravity;
+    double wb = 0;
     for (int i = i0; i < i1; i++) {
         if (p->motion[i] != FLOE_FREE) continue;
         for (int k = 0; k < 3; k++) p->L[3 * i + k] += c->L0[3 * i + k];
         const double dm = p->mass[i] - c->mn[i];
         if (dm == 0) continue;
+        wb += 0.5 * c->dt * dm * floe_v3_dot(g, p->v + 3 * i); /* growth_gravity_work's */
         double *r = c->rows ? c->rows + (size_t)i * RK2_WD : NULL;
         const double *v0 = r ? r + RK2_V : c->v0 + 3 * i;
         double *fm = r ? r + RK2_F : (double *)c->fm + 3 * i;
         for (int k = 0; k < 3; k++) fm[k] += dm * (p->v[3 * i + k] - v0[k]) * inv_dt;
     }
+    sums[0] = wb;
 }
 
 /* 4. the free particles' v_{n+1} from their rows and omega from L_{n+1}; sums: their kinetic
@@ -1130,7 +1169,8 @@ int step_rk2(floe_world *w) {
     double *mn = w->nstates ? b + 16 * (size_t)n : NULL; /* m_n */
     floe_world_copy(w, fm, p->f, 3 * (size_t)n * sizeof *fm);
     /* 3. x_{n+1} = x_n + dt v_mid, q_{n+1} = exp(dt w_mid) q_n, L_{n+1} = L_n + dt T_mid
-     * (before the states: a growing radius scales it); v, w stay at the midpoint values for
+     * (with state objects after them, 3b: a growing radius scales L_mid); v, w stay at the
+     * midpoint values for
      * the forces at the end; v_n and F_mid into the rows, which the end's rebuild carries with
      * their particles (MPI: a decomposition) */
     double wb = 0, maxd2 = 0;
@@ -1161,9 +1201,10 @@ int step_rk2(floe_world *w) {
     if (states_done(w, pre)) return pre;
     if (mn && !pre) { /* 3b. (before a rebuild renumbers the particles) */
         rk2_ctx c = {w, h, dt, x0, v0, q0, fm, NULL, L0, NULL, NULL, w->par ? w->rk2 : NULL, mn};
-        double s3;
+        double s3 = 0;
         if (floe_world_blocks(w, n, 1, rk2_grow_block, &c, &s3)) pre = floe_world_error(w, FLOE_ENOMEM, "out of memory");
         if (pre && !w->par) return pre;
+        wb += s3; /* gravity's work on the added mass */
     }
     advance_clock(w);
     /* MPI: a rebuild is a decomposition; the rows travel with their particles (x0 .. fm do
@@ -1535,7 +1576,10 @@ int step_staggered(floe_world *w) {
             FLOE_TRY(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
         }
     }
-    FLOE_TRY(states_step(w, dt, 0));
+    int grc = FLOE_OK;
+    const double *mn = growth_masses(w, nend, 0, &grc);
+    FLOE_TRY(states_step(w, dt, grc));
+    if (mn) wb += growth_gravity_work(w, mn, nend, dt, ke == 1 ? c.pd_of : NULL);
     advance_clock(w);
     w->pd_cycle++;
     /* 3. F_C at the new positions; sub-cycled PD points move at their mean velocity over

@@ -7,7 +7,7 @@
 #include "floe_world.h"
 
 typedef struct floe_state_class {
-    int version;   /* 1 */
+    int version;   /* 1, or 2 with probe */
     const char *name;
     size_t (*size)(const floe_state *s);
     void (*get)(const floe_state *s, double *y);
@@ -15,11 +15,15 @@ typedef struct floe_state_class {
     int (*set)(floe_state *s, floe_world *w, const double *y);
     int (*rhs)(const floe_state *s, const floe_world *w, double t, const double *y, double *dydt);
     void (*destroy)(floe_state *s);
-    /* optional (NULL: an RK2 midpoint's forces see the state of the step's start, which is
-     * first order in the coupling of a state and the forces): probe(s, w, y) puts what the
-     * forces read (a particle's radius and mass) at y, the state at the RK2 midpoint, for
-     * that force evaluation only; probe(s, w, NULL) then puts back exactly what was there.
-     * Between the two the world does not step, rebuild or write. */
+    /* version 2, optional (NULL, or version 1: an RK2 midpoint's forces see the state of the
+     * step's start, which is first order in the coupling of a state and the forces; a state
+     * that changes masses or radii should have one): probe(s, w, y) puts what the forces
+     * read (a particle's radius and mass) at y, the state at the RK2 midpoint, for that
+     * force evaluation only; probe(s, w, NULL) then puts back exactly what was there (the
+     * states are put back in reverse order). A probe that fails must change nothing.
+     * Between the two the world does not step, rebuild or write.
+     * RK2 hands set() the particles' midpoint L and v (the state may scale them with a
+     * grown inertia or mass: docs/models.md), velocity Verlet the half step's. */
     int (*probe)(floe_state *s, floe_world *w, const double *y);
 } floe_state_class;
 

@@ -138,7 +138,7 @@ static int gr_rhs(const floe_state *s, const floe_world *w, double t, const doub
     return FLOE_OK;
 }
 
-static const floe_state_class growing_radius_class = {1, "growing_radius", gr_size, gr_get_real, gr_set, gr_rhs, NULL,
+static const floe_state_class growing_radius_class = {2, "growing_radius", gr_size, gr_get_real, gr_set, gr_rhs, NULL,
                                                       gr_probe};
 
 floe_state *floe_growing_radius_create(floe_world *w, int particle, double rate, int update_mass) {

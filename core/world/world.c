@@ -661,6 +661,11 @@ int floe_world_set_body_force(floe_world *w, floe_body_force_fn fn, void *user) 
 
 int floe_world_add_state(floe_world *w, floe_state *s) {
     if (!s) return floe_world_error(w, FLOE_EINVAL, "state object is NULL");
+    const floe_state_class *k = s->klass;
+    if (!k || (k->version != 1 && k->version != 2) || !k->size || !k->get || !k->set || !k->rhs)
+        return floe_world_error(w, FLOE_EINVAL, "state object class %s: version %d unknown (1, or 2 with probe) or a "
+                                "member missing (size, get, set and rhs are required)",
+                                k && k->name ? k->name : "(unnamed)", k ? k->version : -1);
     if (grow((void **)&w->states, &w->states_cap, w->nstates + 1, sizeof *w->states)) return FLOE_ENOMEM;
     w->states[w->nstates++] = s;
     return FLOE_OK;
