@@ -1306,9 +1306,17 @@ static inline int stag_pd(const int *pd_of, int i) { return pd_of[i] >= 0; }
 /* the forces of one group (MPI: this rank's force time booked; the contact group's forces on
  * ghosts summed to their owners, with the servo walls' totals; the PD group writes owned
  * points only) */
-static int stag_forces(floe_world *w, const floe_step_ctx *ctx, int group) {
+static int stag_forces(floe_world *w, const floe_step_ctx *ctx, int group, int pre) {
     const double t0 = w->par ? floe_par_clock() : 0.0;
+    /* pre (MPI): this rank failed since the last agreement; it evaluates all the same (a
+     * stage may hold a collective) and tells the others below, as forces_all */
+    char why[sizeof w->err];
+    if (pre) memcpy(why, w->err, sizeof why);
     int rc = floe_world_forces(w, ctx, group);
+    if (pre) {
+        rc = pre;
+        memcpy(w->err, why, sizeof why);
+    }
     if (w->par) floe_par_force_time(w, floe_par_clock() - t0);
     if (w->par) rc = floe_par_agree_error(w, rc); /* as forces_all */
     if (!rc && w->par && group == FLOE_GROUP_DEM) rc = floe_par_reverse(w);
@@ -1320,7 +1328,7 @@ static int stag_forces(floe_world *w, const floe_step_ctx *ctx, int group) {
 int stag_split_forces(floe_world *w, const floe_step_ctx *ctx) {
     floe_particles *p = &w->p;
     if (!stag_rows(w)) return FLOE_ENOMEM;
-    FLOE_TRY(stag_forces(w, ctx, FLOE_GROUP_DEM));
+    FLOE_TRY(stag_forces(w, ctx, FLOE_GROUP_DEM, FLOE_OK));
     const int n = p->n;
     double *r = stag_rows(w);
     if (!r) return FLOE_ENOMEM;
@@ -1329,7 +1337,7 @@ int stag_split_forces(floe_world *w, const floe_step_ctx *ctx) {
         memcpy(r + (size_t)i * STAG_W + STAG_TS, p->t + 3 * (size_t)i, 3 * sizeof(double));
     }
     memset(p->f, 0, 3 * (size_t)n * sizeof *p->f);
-    FLOE_TRY(stag_forces(w, ctx, FLOE_GROUP_PD));
+    FLOE_TRY(stag_forces(w, ctx, FLOE_GROUP_PD, FLOE_OK));
     for (int i = 0; i < n; i++) {
         double *ri = r + (size_t)i * STAG_W;
         memcpy(ri + STAG_FPD, p->f + 3 * (size_t)i, 3 * sizeof(double));
@@ -1393,15 +1401,17 @@ static void stag_b_pd(void *ctx, int i0, int i1, double *sums) {
 
 /* PD bond forces at the present positions into the rows' fpd, with the PD points moving at
  * their mean velocity (x - xs) / span for the ledger's trapezoid work over that span */
-static int stag_pd_forces(floe_world *w, double span, int mean_velocity) {
+static int stag_pd_forces(floe_world *w, double span, int mean_velocity, int pre) {
     const int nend = stag_nend(w);
     stag_ctx c = {w, w->stag, w->pd_of, w->dt, span, w->pd_every, w->pd_sub, 2, NULL, NULL};
-    if (mean_velocity) FLOE_TRY(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
+    if (mean_velocity && !pre) pre = stag_blocks(w, nend, 1, stag_b_pd, &c, NULL);
     c.op = 4; /* the PD points' forces cleared */
-    FLOE_TRY(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
+    if (!pre) pre = stag_blocks(w, nend, 1, stag_b_pd, &c, NULL);
+    if (pre && !w->par) return pre;
     floe_step_ctx fc = ctx_step(w, 0);
     fc.dt = fc.hist_dt = span; /* the PD step spans the cycle */
-    int rc = stag_forces(w, &fc, FLOE_GROUP_PD);
+    int rc = stag_forces(w, &fc, FLOE_GROUP_PD, pre); /* (agreed under MPI) */
+    if (pre) return rc; /* (MPI) this rank's rows may be absent */
     double dummy;
     c.op = 5; /* F_PD into the rows (the forces' error, if any, keeps its message) */
     int rc2 = floe_world_blocks(w, nend, 1, stag_b_pd, &c, &dummy);
@@ -1542,7 +1552,16 @@ int step_staggered(floe_world *w) {
     const double dt = w->dt, h = 0.5 * dt, K = ke * dt;
     int nend = stag_nend(w);
     double *r = stag_rows(w);
-    if (!r) return FLOE_ENOMEM;
+    /* a failure on this rank (out of memory): one process returns; under MPI the rank goes
+     * on to the next agreement (the PD forces', the states', the rebuild test's or the
+     * close's), calling the collectives on the way and moving nothing more, as velocity
+     * Verlet's (pre; STAG_RUN) */
+    int pre = r ? FLOE_OK : FLOE_ENOMEM; /* (stag_rows set the message) */
+    if (pre && !w->par) return pre;
+#define STAG_RUN(call)                                                                          \
+    do {                                                                                       \
+        if (!pre && (pre = (call)) != FLOE_OK && !w->par) return pre;                          \
+    } while (0)
     const long cyc = ke > 1 ? w->pd_cycle % ke : 0;
     const int pd_start = ke > 1 && cyc % ke == 0, pd_end = ke > 1 && (cyc + 1) % ke == 0;
     double wb = 0, maxd2 = 0, s1;
@@ -1551,14 +1570,14 @@ int step_staggered(floe_world *w) {
     if (pd_start) {
         c.op = 0;
         c.a = 0.5 * K;
-        FLOE_TRY(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
+        STAG_RUN(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
     }
     /* 1. half kick with F_C; drift of everything except the PD points that sub-cycle; then
      * the kinematic particles (MPI: after the servo walls' measures are summed over the
      * ranks: their controllers count the free particles after this drift, as in one process) */
-    FLOE_TRY(stag_blocks(w, nend, 1, stag_b_open, &c, &wb));
+    STAG_RUN(stag_blocks(w, nend, 1, stag_b_open, &c, &wb));
     if (w->par) FLOE_TRY(floe_par_servo_totals(w));
-    for (int i = 0; i < nend; i++)
+    for (int i = 0; i < nend && !pre; i++)
         if (p->motion[i] == FLOE_KINEMATIC) stag_kinematic_open(w, i, ke, c.pd_of, dt);
     /* 2. dt_PD = dt / m: m velocity Verlet sub-steps of the PD points with F_PD (MPI: the
      * ghosts take their owners' new positions before each evaluation) */
@@ -1566,20 +1585,21 @@ int step_staggered(floe_world *w) {
         const double d = dt / m;
         for (int s = 0; s < m; s++) {
             c.a = d;
-            FLOE_TRY(stag_blocks(w, nend, 1, stag_b_sub, &c, &s1));
+            s1 = 0;
+            STAG_RUN(stag_blocks(w, nend, 1, stag_b_sub, &c, &s1));
             wb += s1;
             if (w->par) FLOE_TRY(floe_par_ghost_update(w));
-            FLOE_TRY(stag_pd_forces(w, d, 0));
+            FLOE_TRY(stag_pd_forces(w, d, 0, pre)); /* (agreed under MPI: pre is told here) */
             if (s == m - 1) break; /* the last sub-step closes with the final kick below */
             c.op = 1;
             c.a = 0.5 * d;
-            FLOE_TRY(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
+            STAG_RUN(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
         }
     }
-    int grc = FLOE_OK;
-    const double *mn = growth_masses(w, nend, 0, &grc);
-    FLOE_TRY(states_step(w, dt, grc));
-    if (mn) wb += growth_gravity_work(w, mn, nend, dt, ke == 1 ? c.pd_of : NULL);
+    const double *mn = growth_masses(w, nend, 0, &pre);
+    pre = states_step(w, dt, pre);
+    if (states_done(w, pre)) return pre;
+    if (mn && !pre) wb += growth_gravity_work(w, mn, nend, dt, ke == 1 ? c.pd_of : NULL);
     advance_clock(w);
     w->pd_cycle++;
     /* 3. F_C at the new positions; sub-cycled PD points move at their mean velocity over
@@ -1589,7 +1609,7 @@ int step_staggered(floe_world *w) {
     if (ke == 1) {
         c.op = 2;
         c.a = dt;
-        FLOE_TRY(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
+        STAG_RUN(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
     }
     {
         const int n = p->n;
@@ -1598,14 +1618,15 @@ int step_staggered(floe_world *w) {
         if (have_xb)
             for (int i = 0; i < n; i++)
                 if (p->motion[i] != FLOE_FIXED) note_disp(p->x + 3 * i, xb + 3 * i, &maxd2);
-        FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb, FLOE_OK));
+        /* (MPI: a failure carried here is every rank's, the clock put back) */
+        FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb, pre));
     }
     /* MPI: a decomposition migrates particles (the store, the rows and pd_of are new) */
     nend = stag_nend(w);
     c.r = r = w->stag;
     c.pd_of = w->pd_of;
     floe_step_ctx fc = ctx_step(w, contacts_wanted(w));
-    int rc = stag_forces(w, &fc, FLOE_GROUP_DEM);
+    int rc = stag_forces(w, &fc, FLOE_GROUP_DEM, FLOE_OK);
     if (rc) {
         if (ke == 1) { /* the true velocities back before the error returns (its message kept) */
             double dummy;
@@ -1614,14 +1635,16 @@ int step_staggered(floe_world *w) {
         }
         return rc;
     }
-    FLOE_TRY(stag_blocks(w, nend, 1, stag_b_rows, &c, NULL));
+    STAG_RUN(stag_blocks(w, nend, 1, stag_b_rows, &c, NULL));
     /* PD every k-th step: the closing evaluation and half kick of the cycle */
     if (pd_end) {
-        FLOE_TRY(stag_pd_forces(w, K, 1));
+        FLOE_TRY(stag_pd_forces(w, K, 1, pre)); /* (agreed under MPI) */
         c.op = 1;
         c.a = 0.5 * K;
-        FLOE_TRY(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
+        STAG_RUN(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));
     }
+#undef STAG_RUN
+    if (pre) return step_close(w, pre); /* (MPI: told at the close) */
     /* 4. closing half kick with F_C; p->f = F_C + F_PD for the observers; the kinematic
      * particles' step close, then the checks with a message (a block's first particle that
      * failed the quick ones) */

@@ -10,7 +10,8 @@
  * tests/CMakeLists.txt; libfloe is static, so its calls go through the wrappers; MPI's,
  * Zoltan's and libc's own do not). Three worlds: 216 spheres settling in a walled box
  * (Hertz-Mindlin, velocity Verlet, one thread); the same with every third one an ellipsoid
- * under RK2; the spheres with beam bonds between neighbours. For each world, each rank v and
+ * under RK2; the spheres with beam bonds between neighbours; the spheres and a PD block under
+ * the staggered PD-DEM scheme (session 27). For each world, each rank v and
  * k = 0, 1, 2, ...: every rank builds and prepares the world; then on rank v the k-th
  * allocation of floe from a point on fails (once), while every rank splits the world, takes
  * WARM steps, decomposes again (floe_world_parallel_rebuild: the sequence of a step's
@@ -21,6 +22,7 @@
  * then fails). Under one rank: the same sweeps without a split (a step of velocity Verlet in
  * a steady state allocates nothing, RK2 twice). */
 #include "floe.h"
+#include "floe_pd.h"
 #include "../check.h"
 #include "mpi_common.h"
 #include <signal.h>
@@ -51,12 +53,19 @@ enum { NX = 6, NY = 6, NZ = 6, WARM = 20, NSTEP = 3 };
 static const double R = 0.001, SP = 0.0022, DT = 2.5e-6;
 
 /* variant 0: spheres, velocity Verlet; 1: every third one an ellipsoid, RK2 (its rows travel
- * through the decomposition); 2: spheres with beam bonds between neighbours, velocity Verlet */
+ * through the decomposition); 2: spheres with beam bonds between neighbours, velocity Verlet;
+ * 3: the spheres and a PD block above them under the staggered scheme (2 PD sub-steps a
+ * step; its rows travel too) */
+enum { NVARIANT = 4 };
 static floe_world *build(int variant) {
     floe_world_def d = floe_default_world_def();
     d.dim = 3; d.dt = DT;
     d.gravity[2] = -9.81;
     if (variant == 1) d.integrator = FLOE_RK2;
+    if (variant == 3) {
+        d.pd_dem = FLOE_PD_DEM_STAGGERED;
+        d.pd_substeps = 2;
+    }
     floe_world *w = floe_world_create(&d, NULL, 0);
     mpi_test_add_glass(w, 1e7);
     const int g = floe_world_add_geometry(w, floe_sphere_create(R));
@@ -81,6 +90,22 @@ static floe_world *build(int variant) {
         bp.young = 1e7;
         bp.max_distance = 2.3 * R;
         floe_world_add_beam_bonds(w, 1.2, &bp);
+    }
+    if (variant == 3) { /* 4 x 4 x 2 points 2 mm apart, soft (PD step 1e-4 s), above the spheres */
+        floe_pd_region reg;
+        memset(&reg, 0, sizeof reg);
+        reg.dim = 3;
+        reg.dx = 0.002;
+        reg.horizon_factor = 2;
+        floe_v3_set(reg.lo, 0.003, 0.003, 0.018);
+        floe_v3_set(reg.hi, 0.011, 0.011, 0.022);
+        floe_pd_body *b = NULL;
+        const double E = 1e6, nu = 0.25;
+        floe_pd_material pm = floe_pd_material_pmb(2500, E / (3 * (1 - 2 * nu)), 0);
+        int rc = floe_pd_body_create(&b, &reg);
+        if (!rc) rc = floe_pd_set_material(b, &pm);
+        if (!rc) rc = floe_world_add_pd_body(w, b, 0, NULL, NULL);
+        CHECK(rc == FLOE_OK, "the PD block: %s", floe_world_last_error(w));
     }
     floe_world_set_threads(w, 1); /* the wrappers count on one thread */
     return w;
@@ -162,7 +187,7 @@ int main(int argc, char **argv) {
     mpi_test_init(&argc, &argv);
     signal(SIGALRM, on_alarm);
     for (int cold = 0; cold < 2; cold++)
-    for (int variant = 0; variant < 3; variant++)
+    for (int variant = 0; variant < NVARIANT; variant++)
         for (int v = 0; v < size_; v++) {
             int errors = 0;
             long k = 0;
