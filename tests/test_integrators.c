@@ -43,6 +43,7 @@
 #include "floe_pd.h"
 #include "world_read.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 typedef struct osc {
@@ -485,7 +486,33 @@ static void test_growing_in_contact(const int *all, int nall) {
     }
 }
 
+/* floe_world_add_state refuses a class of an unknown version or without a required member */
+static size_t bad_size(const floe_state *s) { (void)s; return 1; }
+static void bad_get(const floe_state *s, double *y) { (void)s; y[0] = 0; }
+static int bad_set(floe_state *s, floe_world *w, const double *y) { (void)s; (void)w; (void)y; return FLOE_OK; }
+static int bad_rhs(const floe_state *s, const floe_world *w, double t, const double *y, double *dydt) {
+    (void)s; (void)w; (void)t; (void)y;
+    dydt[0] = 0;
+    return FLOE_OK;
+}
+static void test_state_class_checked(void) {
+    static const floe_state_class v3 = {3, "v3", bad_size, bad_get, bad_set, bad_rhs, NULL, NULL},
+                                  norhs = {1, "norhs", bad_size, bad_get, bad_set, NULL, NULL, NULL},
+                                  ok = {1, "ok", bad_size, bad_get, bad_set, bad_rhs, NULL, NULL};
+    floe_state s3 = {&v3}, sn = {&norhs}, *so = malloc(sizeof *so); /* the world frees an added one */
+    if (!so) return;
+    so->klass = &ok;
+    floe_world_def d = floe_default_world_def();
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    const int r3 = floe_world_add_state(w, &s3), rn = floe_world_add_state(w, &sn);
+    CHECK(r3 == FLOE_EINVAL && rn == FLOE_EINVAL && strstr(floe_world_last_error(w), "norhs"),
+          "a state class of version 3 or without rhs refused (%d, %d: %s)", r3, rn, floe_world_last_error(w));
+    CHECK(floe_world_add_state(w, so) == FLOE_OK, "a version 1 class accepted: %s", floe_world_last_error(w));
+    floe_world_destroy(w);
+}
+
 int main(void) {
+    test_state_class_checked();
     const int all[3] = {FLOE_VELOCITY_VERLET, FLOE_LEAPFROG, FLOE_RK2};
     for (int k = 0; k < 3; k++) {
         test_order(all[k], 0.0);

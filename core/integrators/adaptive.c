@@ -140,8 +140,12 @@ int step_adaptive(floe_world *w, int (*inner)(floe_world *w)) {
     const double tv = w->def.adapt_velocity_tol, td = w->def.adapt_depth_tol;
     if (!w->snap) {
         w->snap = calloc(1, sizeof *w->snap);
-        if (!w->snap) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-        w->snap_free = snapshot_free; /* the world frees it (floe_world_destroy) */
+        int rc = w->snap ? FLOE_OK : floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        if (w->snap) w->snap_free = snapshot_free; /* the world frees it (floe_world_destroy) */
+        /* MPI: every rank calls step_adaptive at its first step: agreed there (a rank that
+         * returned alone would leave the others in the step's first collective) */
+        if (w->par) rc = floe_par_agree_error(w, rc);
+        if (rc) return rc;
     }
     for (;;) {
         double dt = fmin(w->dt_next, w->dt_cap);
@@ -164,7 +168,10 @@ int step_adaptive(floe_world *w, int (*inner)(floe_world *w)) {
             int rc = w->par ? floe_world_parallel_rebuild(w) : floe_world_nl_build(w);
             if (rc) return w->par ? rc : floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
         }
-        FLOE_TRY(snapshot_io(w, 1));
+        /* the snapshot (MPI: its memory agreed, one allreduce a trial) */
+        int src = snapshot_io(w, 1);
+        if (w->par) src = floe_par_agree_error(w, src);
+        if (src) return src;
         const long rb = w->nl.rebuilds;
         w->track_depth = 1;
         int rc = inner(w);
@@ -203,7 +210,11 @@ int step_adaptive(floe_world *w, int (*inner)(floe_world *w)) {
         double f = 0.9 * fmin(fv, fd);
         const int at_min = dt <= w->dt_lo * (1 + 1e-9);
         if ((rc == FLOE_EUNSTABLE || (rc == FLOE_OK && (eta_v > tv || eta_d > td))) && undoable && !at_min) {
-            FLOE_TRY(snapshot_io(w, 0));
+            /* (every rank redoes the trial: the decision is agreed above; a state's set()
+             * that fails on one rank is agreed here) */
+            int rrc = snapshot_io(w, 0);
+            if (w->par) rrc = floe_par_agree_error(w, rrc);
+            if (rrc) return rrc;
             w->st.rejected++;
             f = rc ? 0.25 : fmax(0.1, fmin(0.9, f));
             w->dt_next = fmax(w->dt_lo, dt * f);

@@ -1401,17 +1401,20 @@ static void stag_b_pd(void *ctx, int i0, int i1, double *sums) {
 
 /* PD bond forces at the present positions into the rows' fpd, with the PD points moving at
  * their mean velocity (x - xs) / span for the ledger's trapezoid work over that span */
-static int stag_pd_forces(floe_world *w, double span, int mean_velocity, int pre) {
+/* *pre: this rank's failure since the last agreement (MPI), told to every rank at the
+ * forces' agreement (the return value: agreed); a failure after it (the rows' blocks) is put
+ * into *pre for the caller to carry to the next one (one process: returned) */
+static int stag_pd_forces(floe_world *w, double span, int mean_velocity, int *pre) {
     const int nend = stag_nend(w);
     stag_ctx c = {w, w->stag, w->pd_of, w->dt, span, w->pd_every, w->pd_sub, 2, NULL, NULL};
-    if (mean_velocity && !pre) pre = stag_blocks(w, nend, 1, stag_b_pd, &c, NULL);
+    if (mean_velocity && !*pre) *pre = stag_blocks(w, nend, 1, stag_b_pd, &c, NULL);
     c.op = 4; /* the PD points' forces cleared */
-    if (!pre) pre = stag_blocks(w, nend, 1, stag_b_pd, &c, NULL);
-    if (pre && !w->par) return pre;
+    if (!*pre) *pre = stag_blocks(w, nend, 1, stag_b_pd, &c, NULL);
+    if (*pre && !w->par) return *pre;
     floe_step_ctx fc = ctx_step(w, 0);
     fc.dt = fc.hist_dt = span; /* the PD step spans the cycle */
-    int rc = stag_forces(w, &fc, FLOE_GROUP_PD, pre); /* (agreed under MPI) */
-    if (pre) return rc; /* (MPI) this rank's rows may be absent */
+    int rc = stag_forces(w, &fc, FLOE_GROUP_PD, *pre); /* (agreed under MPI) */
+    if (*pre) return rc; /* (MPI) this rank's rows may be absent */
     double dummy;
     c.op = 5; /* F_PD into the rows (the forces' error, if any, keeps its message) */
     int rc2 = floe_world_blocks(w, nend, 1, stag_b_pd, &c, &dummy);
@@ -1419,7 +1422,10 @@ static int stag_pd_forces(floe_world *w, double span, int mean_velocity, int pre
         c.op = 3;
         rc2 = floe_world_blocks(w, nend, 1, stag_b_pd, &c, &dummy);
     }
-    if (!rc && rc2) rc = floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    if (!rc && rc2) {
+        *pre = floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        if (!w->par) return *pre;
+    }
     return rc;
 }
 
@@ -1589,7 +1595,7 @@ int step_staggered(floe_world *w) {
             STAG_RUN(stag_blocks(w, nend, 1, stag_b_sub, &c, &s1));
             wb += s1;
             if (w->par) FLOE_TRY(floe_par_ghost_update(w));
-            FLOE_TRY(stag_pd_forces(w, d, 0, pre)); /* (agreed under MPI: pre is told here) */
+            FLOE_TRY(stag_pd_forces(w, d, 0, &pre)); /* (agreed under MPI: pre is told here) */
             if (s == m - 1) break; /* the last sub-step closes with the final kick below */
             c.op = 1;
             c.a = 0.5 * d;
@@ -1618,8 +1624,14 @@ int step_staggered(floe_world *w) {
         if (have_xb)
             for (int i = 0; i < n; i++)
                 if (p->motion[i] != FLOE_FIXED) note_disp(p->x + 3 * i, xb + 3 * i, &maxd2);
-        /* (MPI: a failure carried here is every rank's, the clock put back) */
-        FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb, pre));
+        /* (MPI: a failure carried here is every rank's, the clock put back, and the PD
+         * cycle's count with it) */
+        const long step_now = w->step;
+        const int rrc = rebuild_if_needed(w, maxd2, have_xb, pre);
+        if (rrc) {
+            if (w->step != step_now) w->pd_cycle--;
+            return rrc;
+        }
     }
     /* MPI: a decomposition migrates particles (the store, the rows and pd_of are new) */
     nend = stag_nend(w);
@@ -1638,7 +1650,7 @@ int step_staggered(floe_world *w) {
     STAG_RUN(stag_blocks(w, nend, 1, stag_b_rows, &c, NULL));
     /* PD every k-th step: the closing evaluation and half kick of the cycle */
     if (pd_end) {
-        FLOE_TRY(stag_pd_forces(w, K, 1, pre)); /* (agreed under MPI) */
+        FLOE_TRY(stag_pd_forces(w, K, 1, &pre)); /* (agreed under MPI) */
         c.op = 1;
         c.a = 0.5 * K;
         STAG_RUN(stag_blocks(w, nend, 1, stag_b_pd, &c, NULL));

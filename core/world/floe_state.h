@@ -23,7 +23,8 @@ typedef struct floe_state_class {
      * states are put back in reverse order). A probe that fails must change nothing.
      * Between the two the world does not step, rebuild or write.
      * RK2 hands set() the particles' midpoint L and v (the state may scale them with a
-     * grown inertia or mass: docs/models.md), velocity Verlet the half step's. */
+     * grown inertia or mass: docs/models.md), velocity Verlet, leapfrog and the staggered
+     * scheme the half step's. */
     int (*probe)(floe_state *s, floe_world *w, const double *y);
 } floe_state_class;
 

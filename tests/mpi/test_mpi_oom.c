@@ -11,7 +11,8 @@
  * Zoltan's and libc's own do not). Three worlds: 216 spheres settling in a walled box
  * (Hertz-Mindlin, velocity Verlet, one thread); the same with every third one an ellipsoid
  * under RK2; the spheres with beam bonds between neighbours; the spheres and a PD block under
- * the staggered PD-DEM scheme (session 27). For each world, each rank v and
+ * the staggered PD-DEM scheme, with PD sub-steps, and with PD every 2nd step and a growing
+ * radius; the spheres under adaptive steps (session 27). For each world, each rank v and
  * k = 0, 1, 2, ...: every rank builds and prepares the world; then on rank v the k-th
  * allocation of floe from a point on fails (once), while every rank splits the world, takes
  * WARM steps, decomposes again (floe_world_parallel_rebuild: the sequence of a step's
@@ -55,16 +56,23 @@ static const double R = 0.001, SP = 0.0022, DT = 2.5e-6;
 /* variant 0: spheres, velocity Verlet; 1: every third one an ellipsoid, RK2 (its rows travel
  * through the decomposition); 2: spheres with beam bonds between neighbours, velocity Verlet;
  * 3: the spheres and a PD block above them under the staggered scheme (2 PD sub-steps a
- * step; its rows travel too) */
-enum { NVARIANT = 4 };
+ * step; its rows travel too); 4: the same with the PD forces every 2nd step and a growing
+ * radius (a state object: the states' agreement, the growth's masses); 5: the spheres under
+ * adaptive steps (the snapshot of each trial) */
+enum { NVARIANT = 6 };
 static floe_world *build(int variant) {
     floe_world_def d = floe_default_world_def();
     d.dim = 3; d.dt = DT;
     d.gravity[2] = -9.81;
     if (variant == 1) d.integrator = FLOE_RK2;
-    if (variant == 3) {
+    if (variant == 5) {
+        d.adaptive = 1;
+        d.dt_max = DT;
+    }
+    if (variant == 3 || variant == 4) {
         d.pd_dem = FLOE_PD_DEM_STAGGERED;
-        d.pd_substeps = 2;
+        d.pd_substeps = variant == 3 ? 2 : 1;
+        d.pd_every = variant == 3 ? 1 : 2;
     }
     floe_world *w = floe_world_create(&d, NULL, 0);
     mpi_test_add_glass(w, 1e7);
@@ -91,7 +99,7 @@ static floe_world *build(int variant) {
         bp.max_distance = 2.3 * R;
         floe_world_add_beam_bonds(w, 1.2, &bp);
     }
-    if (variant == 3) { /* 4 x 4 x 2 points 2 mm apart, soft (PD step 1e-4 s), above the spheres */
+    if (variant == 3 || variant == 4) { /* 4 x 4 x 2 points 2 mm apart, soft (PD step 1e-4 s), above the spheres */
         floe_pd_region reg;
         memset(&reg, 0, sizeof reg);
         reg.dim = 3;
@@ -106,6 +114,10 @@ static floe_world *build(int variant) {
         if (!rc) rc = floe_pd_set_material(b, &pm);
         if (!rc) rc = floe_world_add_pd_body(w, b, 0, NULL, NULL);
         CHECK(rc == FLOE_OK, "the PD block: %s", floe_world_last_error(w));
+    }
+    if (variant == 4) {
+        floe_state *st = floe_growing_radius_create(w, 7, 0.01, 1);
+        CHECK(st && floe_world_add_state(w, st) == FLOE_OK, "the growing radius: %s", floe_world_last_error(w));
     }
     floe_world_set_threads(w, 1); /* the wrappers count on one thread */
     return w;
