@@ -37,7 +37,8 @@
  *      3e-6 m of each other at dt = 2.5e-5 s (RK2's midpoint forces see the midpoint radius
  *      and mass, floe_state_class.probe; before session 27 they saw the step's start);
  *      their grown masses and radii are the same bits, also with two growing radii on one
- *      sphere (the probes put back in reverse order). */
+ *      sphere (the probes put back in reverse order);
+ *   8. floe_world_add_state refuses a state class of an unknown version or without rhs. */
 #include "check.h"
 #include "floe.h"
 #include "floe_pd.h"

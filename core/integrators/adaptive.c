@@ -143,9 +143,14 @@ int step_adaptive(floe_world *w, int (*inner)(floe_world *w)) {
         int rc = w->snap ? FLOE_OK : floe_world_error(w, FLOE_ENOMEM, "out of memory");
         if (w->snap) w->snap_free = snapshot_free; /* the world frees it (floe_world_destroy) */
         /* MPI: every rank calls step_adaptive at its first step: agreed there (a rank that
-         * returned alone would leave the others in the step's first collective) */
+         * returned alone would leave the others in the step's first collective); after a
+         * failure no rank keeps one, so that a next step agrees again on every rank */
         if (w->par) rc = floe_par_agree_error(w, rc);
-        if (rc) return rc;
+        if (rc) {
+            if (w->snap) snapshot_free(w->snap);
+            w->snap = NULL;
+            return rc;
+        }
     }
     for (;;) {
         double dt = fmin(w->dt_next, w->dt_cap);
@@ -214,7 +219,10 @@ int step_adaptive(floe_world *w, int (*inner)(floe_world *w)) {
              * that fails on one rank is agreed here) */
             int rrc = snapshot_io(w, 0);
             if (w->par) rrc = floe_par_agree_error(w, rrc);
-            if (rrc) return rrc;
+            if (rrc) {
+                if (w->par) w->err_agreed = 2; /* a rank stopped partway through its restore */
+                return rrc;
+            }
             w->st.rejected++;
             f = rc ? 0.25 : fmax(0.1, fmin(0.9, f));
             w->dt_next = fmax(w->dt_lo, dt * f);

@@ -8,7 +8,7 @@
  *
  * This executable wraps floe's allocations (-Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,
  * tests/CMakeLists.txt; libfloe is static, so its calls go through the wrappers; MPI's,
- * Zoltan's and libc's own do not). Three worlds: 216 spheres settling in a walled box
+ * Zoltan's and libc's own do not). Six worlds: 216 spheres settling in a walled box
  * (Hertz-Mindlin, velocity Verlet, one thread); the same with every third one an ellipsoid
  * under RK2; the spheres with beam bonds between neighbours; the spheres and a PD block under
  * the staggered PD-DEM scheme, with PD sub-steps, and with PD every 2nd step and a growing
@@ -58,7 +58,8 @@ static const double R = 0.001, SP = 0.0022, DT = 2.5e-6;
  * 3: the spheres and a PD block above them under the staggered scheme (2 PD sub-steps a
  * step; its rows travel too); 4: the same with the PD forces every 2nd step and a growing
  * radius (a state object: the states' agreement, the growth's masses); 5: the spheres under
- * adaptive steps (the snapshot of each trial) */
+ * adaptive steps (the snapshot's allocations: reached from the split, sized before the warm
+ * sweep; no trial is redone in these few steps) */
 enum { NVARIANT = 6 };
 static floe_world *build(int variant) {
     floe_world_def d = floe_default_world_def();
