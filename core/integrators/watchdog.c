@@ -70,10 +70,8 @@ static int energy_watchdog(floe_world *w) {
     /* the PD bodies' dissipation (MPI: summed over the ranks, as the ledger) */
     const int npdd = w->npd < w->pd_diss_n ? w->npd : w->pd_diss_n;
     const double *pd_diss = w->pd_diss;
-    double pdd_buf[8], *pdd_sum = NULL; /* a copy to sum: on the stack for a few bodies */
-    if (w->par) {
-        pdd_sum = npdd <= 8 ? pdd_buf : malloc((size_t)npdd * sizeof *pdd_sum);
-        if (!pdd_sum) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+    if (w->par) { /* a copy to sum, kept with the world (prepare): nothing to allocate here */
+        double *pdd_sum = w->pd_diss_sum;
         if (npdd) memcpy(pdd_sum, w->pd_diss, (size_t)npdd * sizeof *pdd_sum);
         floe_par_watchdog_values(w, &er, &shadow, &shadow0, &pair_min, pdd_sum, npdd);
         pd_diss = pdd_sum;
@@ -90,7 +88,6 @@ static int energy_watchdog(floe_world *w) {
     int kb = -1;
     for (int k = 0; k < npdd; k++)
         if (-pd_diss[k] / S > c_pd) { c_pd = -pd_diss[k] / S; kb = k; }
-    if (pdd_sum != pdd_buf) free(pdd_sum);
     /* above half the critical step the measured energy of forces that are not linear (or
      * not exactly the gradient of the reported energy, as beam bonds) oscillates by tens of
      * per cent at a stable step (26 % at 0.95 x the bond limit, tests/test_beam.c): there

@@ -398,7 +398,7 @@ void floe_world_destroy(floe_world *w) {
     if (w->snap && w->snap_free) w->snap_free(w->snap); /* the adaptive controller's (core/integrators) */
     if (w->par && w->par_free) w->par_free(w->par);     /* the decomposition's (core/parallel) */
     for (int k = 0; k < w->npd; k++) floe_pd_body_destroy(w->pd[k]);
-    free(w->pd); free(w->pd_first); free(w->pd_of); free(w->pd_fold); free(w->pd_fnew); free(w->pd_eold); free(w->pd_diss);
+    free(w->pd); free(w->pd_first); free(w->pd_of); free(w->pd_fold); free(w->pd_fnew); free(w->pd_eold); free(w->pd_diss); free(w->pd_diss_sum);
     for (int k = 0; k < w->npd_bc; k++) { free(w->pd_bc[k]->pts); free(w->pd_bc[k]->fold); free(w->pd_bc[k]); }
     free(w->pd_bc); free(w->pd_nbroken_seen);
     floe_beam_set_destroy(w->beams);

@@ -206,6 +206,7 @@ struct floe_world {
      * bonds since it was added (npd), the contact with the most negative dissipation over
      * its life at the last advancing evaluation (forces.c, reset there) and over the run */
     double *pd_diss; int pd_diss_n;
+    double *pd_diss_sum; /* the watchdog's copy to sum over the ranks (pd_diss_n; MPI): no allocation in a step */
     double wd_pair_min; int wd_pair_i, wd_pair_j;
     double wd_worst; int wd_worst_i, wd_worst_j;
     double wd_scale;          /* the energy scale: largest K + elastic + |work| seen */

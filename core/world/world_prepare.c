@@ -214,6 +214,9 @@ int prepare_store(floe_world *w) {
             if (!pdd) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
             for (int k = w->pd_diss_n; k < w->npd; k++) pdd[k] = 0;
             w->pd_diss = pdd;
+            double *sum = realloc(w->pd_diss_sum, (size_t)w->npd * sizeof *sum);
+            if (!sum) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+            w->pd_diss_sum = sum;
             w->pd_diss_n = w->npd;
         }
         memset(w->pd_fold, 0, (size_t)3 * w->pd_npts * sizeof *fo);
