@@ -281,22 +281,28 @@ static void test_contact_oscillator(int integ) {
     }
 }
 
+/* tests 5 and 6: a world of one sphere of radius R0 moving at v0 along x and spinning at om0
+ * about (0.6, 0, 0.8) */
+static floe_world *spinning_sphere_world(const floe_world_def *d, double R0, double v0, double om0) {
+    floe_world *w = floe_world_create(d, NULL, 0);
+    floe_material m = {"m", 1000, 1e7, 0.3};
+    floe_world_add_material(w, &m);
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = floe_world_add_geometry(w, floe_sphere_create(R0));
+    p.v[0] = v0;
+    p.w[0] = 0.6 * om0;
+    p.w[2] = 0.8 * om0;
+    floe_world_add_particle(w, &p);
+    return w;
+}
+
 static void test_growing_spin(int integ) {
     const double R0 = 0.01, T = 0.4, dt = 1e-3, om0 = 5.0, v0 = 0.2;
     const int steps = (int)(T / dt + 0.5);
     floe_world_def d = floe_default_world_def();
     d.integrator = integ;
     d.dt = dt;
-    floe_world *w = floe_world_create(&d, NULL, 0);
-    floe_material m = {"m", 1000, 1e7, 0.3};
-    floe_world_add_material(w, &m);
-    int g = floe_world_add_geometry(w, floe_sphere_create(R0));
-    floe_particle_def p = floe_default_particle_def();
-    p.geometry = g;
-    p.v[0] = v0;
-    p.w[0] = 0.6 * om0;
-    p.w[2] = 0.8 * om0;
-    floe_world_add_particle(w, &p);
+    floe_world *w = spinning_sphere_world(&d, R0, v0, om0);
     floe_state *s = floe_growing_radius_create(w, 0, R0 / T, 1);
     int rc = s ? floe_world_add_state(w, s) : FLOE_ENOMEM;
     if (!rc) rc = floe_world_prepare(w);
@@ -344,16 +350,7 @@ static void grown_under_load(int integ, double dt, double err[3]) {
     }
     d.dt = dt;
     floe_v3_copy(d.gravity, grow_g);
-    floe_world *w = floe_world_create(&d, NULL, 0);
-    floe_material m = {"m", 1000, 1e7, 0.3};
-    floe_world_add_material(w, &m);
-    int g = floe_world_add_geometry(w, floe_sphere_create(R0));
-    floe_particle_def p = floe_default_particle_def();
-    p.geometry = g;
-    p.v[0] = v0;
-    p.w[0] = 0.6 * om0;
-    p.w[2] = 0.8 * om0;
-    floe_world_add_particle(w, &p);
+    floe_world *w = spinning_sphere_world(&d, R0, v0, om0);
     floe_world_set_body_force(w, grow_force, NULL);
     if (integ < 0) { /* the scheme needs a PD body: a soft block far away, falling freely */
         floe_world_set_law(w, 0, 0, floe_linear_law_create(1e3, 0, 0, 0, 0)); /* (never touches) */
