@@ -118,8 +118,23 @@ static int forces_all(floe_world *w, floe_step_ctx *c, int pre) {
 
 /* the outcome of a step's close (its kick and checks, after its last collective): under MPI
  * agreed by every rank, each rank calling this once on its way out, failed or not
- * (floe_par_agree_error: the ranks that did not fail return the failing rank's error) */
-static int step_close(floe_world *w, int rc) { return w->par ? floe_par_agree_error(w, rc) : rc; }
+ * (floe_par_agree_error: the ranks that did not fail return the failing rank's error). With
+ * w->close_defer (floe_world_step: a fixed step, the energy watchdog on) the agreement is
+ * the watchdog's reduction right after the step (floe_par_watchdog_values): this rank's
+ * outcome is kept and returned as it is, every rank then agreeing on it there (nothing
+ * collective lies between: the close is each integrator's last collective point) */
+static int step_close(floe_world *w, int rc) {
+    if (!w->par) return rc;
+    if (w->close_defer) {
+        if (!w->close_pending || !w->close_rc) w->close_rc = rc; /* (one close a step) */
+        w->close_pending = 1;
+        w->close_energy = w->energy; /* put back if another rank failed (floe_world_step) */
+        w->close_shadow = w->wd_shadow;
+        w->close_lf = w->lf_dt_prev;
+        return rc;
+    }
+    return floe_par_agree_error(w, rc);
+}
 
 /* forces at the end of a step, with the history and the ledger advancing */
 static int forces_advancing(floe_world *w) {
@@ -358,11 +373,12 @@ static void retreat_clock(floe_world *w) {
 }
 
 /* rc: this rank's failure since the step's last agreement (MPI: told to every rank by the
- * rebuild test; one process: returned) */
-static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb, int rc) {
+ * rebuild test; one process: returned); flag (or NULL), MPI: this rank's flag in, whether
+ * any rank's was set out (floe_par_refresh) */
+static int rebuild_if_needed(floe_world *w, double maxd2, int have_xb, int rc, int *flag) {
     if (w->par) { /* MPI: all ranks, ghosts (core/parallel) */
         int told = 0;
-        rc = floe_par_refresh(w, maxd2, have_xb, NULL, rc, &told);
+        rc = floe_par_refresh(w, maxd2, have_xb, NULL, rc, flag, &told);
         if (told) retreat_clock(w);
         return rc;
     }
@@ -860,7 +876,7 @@ int step_verlet(floe_world *w) {
     advance_clock(w);
     /* 3. neighbours and forces at t + dt (MPI: a failure carried here is every rank's, the
      * clock put back where one process leaves it) */
-    FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb, pre));
+    FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb, pre, &dbad));
     /* MPI (core/parallel): a rebuild migrates particles: the count and the store's arrays
      * may have changed */
     n = p->n;
@@ -881,7 +897,9 @@ int step_verlet(floe_world *w) {
         const int nb2 = (n + B - 1) / B, nt2 = floe_world_loop_threads(w, n);
         double *red2 = floe_world_reduce_buf(w, 4 * (size_t)nb2);
         if (nb2 > 0 && !red2) return step_close(w, floe_world_error(w, FLOE_ENOMEM, "out of memory"));
-        const kick_args ka = {h, dt, leap, shadow, w->par != NULL};
+        /* MPI: the drift's checks again only when a rank's drift found a failure (told by the
+         * rebuild test; the same values: v_half, x_{n+1}): else they would find nothing */
+        const kick_args ka = {h, dt, leap, shadow, w->par != NULL && dbad};
         if (nt2 > 1) {
             const int *cut = floe_loop_split_cuts(w, nt2, nb2); /* the drift's parts */
             double *sec = w->ls.sec;
@@ -1213,10 +1231,10 @@ int step_rk2(floe_world *w) {
     if (w->par) {
         const floe_par_carry carry = {&w->rk2, &w->rk2_n, RK2_WD, RK2_DASH};
         int told = 0;
-        const int rc = floe_par_refresh(w, maxd2, have_xb, &carry, pre, &told);
+        const int rc = floe_par_refresh(w, maxd2, have_xb, &carry, pre, NULL, &told);
         if (told) retreat_clock(w);
         if (rc) return rc;
-    } else FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb, pre));
+    } else FLOE_TRY(rebuild_if_needed(w, maxd2, have_xb, pre, NULL));
     FLOE_TRY(forces_advancing(w));
     /* 4. v_{n+1} = v_n + dt F_mid / m from the rows, omega from L_{n+1} (MPI: the walls
      * and the owned particles; the ghosts are new) */
@@ -1627,7 +1645,7 @@ int step_staggered(floe_world *w) {
         /* (MPI: a failure carried here is every rank's, the clock put back, and the PD
          * cycle's count with it) */
         const long step_now = w->step;
-        const int rrc = rebuild_if_needed(w, maxd2, have_xb, pre);
+        const int rrc = rebuild_if_needed(w, maxd2, have_xb, pre, NULL);
         if (rrc) {
             if (w->step != step_now) w->pd_cycle--;
             return rrc;

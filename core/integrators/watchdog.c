@@ -62,8 +62,19 @@ static const char *stag_cause(const floe_world *w, char *buf, size_t len) {
     return buf;
 }
 
-static int energy_watchdog(floe_world *w) {
-    if (w->def.energy_check == FLOE_CHECK_OFF) return FLOE_OK;
+/* a step taken: the statistics (floe_world_step_stats) */
+static void step_accepted(floe_world *w) {
+    floe_step_stats *s = &w->st;
+    s->accepted++;
+    if (s->dt_min_used == 0 || w->dt < s->dt_min_used) s->dt_min_used = w->dt;
+    if (w->dt > s->dt_max_used) s->dt_max_used = w->dt;
+}
+
+/* close_rc (MPI, or NULL): this rank's outcome of the step's close, agreed by the watchdog's
+ * reduction (floe_par_watchdog_values; step.c step_close deferred it): the agreed failure is
+ * returned, else the step is counted and checked */
+static int energy_watchdog(floe_world *w, const int *close_rc) {
+    if (w->def.energy_check == FLOE_CHECK_OFF) return close_rc ? *close_rc : FLOE_OK; /* (not deferred then) */
     /* MPI: the ledger summed over the ranks (core/parallel), the same on every rank */
     floe_energy er = w->energy;
     double shadow = w->wd_shadow, shadow0 = w->wd_shadow0, pair_min = w->wd_pair_min;
@@ -73,9 +84,11 @@ static int energy_watchdog(floe_world *w) {
     if (w->par) { /* a copy to sum, kept with the world (prepare): nothing to allocate here */
         double *pdd_sum = w->pd_diss_sum;
         if (npdd) memcpy(pdd_sum, w->pd_diss, (size_t)npdd * sizeof *pdd_sum);
-        floe_par_watchdog_values(w, &er, &shadow, &shadow0, &pair_min, pdd_sum, npdd);
+        const int arc = floe_par_watchdog_values(w, &er, &shadow, &shadow0, &pair_min, pdd_sum, npdd, close_rc);
+        if (arc) return arc; /* the step's close failed on some rank: every rank returns it */
         pd_diss = pdd_sum;
     }
+    if (close_rc) step_accepted(w);
     const floe_energy *e = &er;
     const double cur = e->kinetic_trans + e->kinetic_rot + e->elastic;
     double sc = fmax(fmax(cur + fabs(e->work_body) + fabs(e->work_boundary), fabs(e->initial)), w->wd_gscale);
@@ -189,13 +202,27 @@ static int energy_watchdog(floe_world *w) {
 int floe_world_step(floe_world *w) {
     if (!w->prepared) FLOE_TRY(floe_world_prepare(w));
     w->err_agreed = 0; /* MPI: set by an error every rank returns (core/parallel) */
+    /* MPI, a fixed step with the watchdog on: the step's close is agreed in the watchdog's
+     * reduction (one collective a step less; step.c step_close) */
+    w->close_defer = w->par && !w->def.adaptive && w->def.energy_check != FLOE_CHECK_OFF;
+    w->close_pending = 0;
     int rc = w->def.adaptive ? step_adaptive(w, step_once) : step_once(w);
-    if (rc) return rc;
-    floe_step_stats *s = &w->st;
-    s->accepted++;
-    if (s->dt_min_used == 0 || w->dt < s->dt_min_used) s->dt_min_used = w->dt;
-    if (w->dt > s->dt_max_used) s->dt_max_used = w->dt;
-    FLOE_TRY(energy_watchdog(w));
+    w->close_defer = 0;
+    if (w->close_pending) { /* every rank reached the close: agreed now */
+        w->close_pending = 0;
+        const int mine = rc ? rc : w->close_rc;
+        rc = energy_watchdog(w, &mine);
+        if (rc && !mine && w->err_agreed) { /* another rank's close failed: this one's commit undone */
+            w->energy = w->close_energy;
+            w->wd_shadow = w->close_shadow;
+            w->lf_dt_prev = w->close_lf;
+        }
+        if (rc) return rc;
+    } else {
+        if (rc) return rc; /* (agreed before the close, under MPI) */
+        step_accepted(w);
+        FLOE_TRY(energy_watchdog(w, NULL));
+    }
     if (w->par) FLOE_TRY(floe_par_observe(w, 0)); /* MPI: the outputs of rank 0's unsplit mirror */
     return observers_call(w, 0);
 }

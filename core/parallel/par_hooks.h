@@ -24,9 +24,11 @@ typedef struct floe_par_carry {
 /* rc: this rank's failure since the step's last agreement (its message set; FLOE_OK: none),
  * told to every rank with the need: every rank then returns that error (an out-of-memory
  * one first, else the lowest failing rank's; w->err_agreed) and *told is set (the step puts
- * its clock back: one process returns such a failure before the clock moves). Without MPI
- * or a split: rc */
-int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry, int rc, int *told);
+ * its clock back: one process returns such a failure before the clock moves). flag (or
+ * NULL): in, this rank's flag (velocity Verlet: a particle failed the drift's quick checks);
+ * out, whether any rank's was set, in the same reduction. Without MPI or a split: rc */
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry, int rc, int *flag,
+                     int *told);
 /* the ghosts' positions, velocities (and orientations, forces where the laws read them)
  * from their owners, without a rebuild (RK2's midpoint) */
 int floe_par_ghost_update(floe_world *w);
@@ -50,9 +52,14 @@ int floe_par_cell_stress(floe_world *w, double sigma[9], int *given);
  * called; nothing without a mirror */
 int floe_par_observe(floe_world *w, int force_all);
 /* the energy watchdog's inputs summed over the ranks (the most negative pair dissipation:
- * the minimum; pdd: the PD bodies' npd dissipations, in place) */
-void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min,
-                              double *pdd, int npd);
+ * the minimum; pdd: the PD bodies' npd dissipations, in place), in one MPI_Allreduce (a
+ * second one with more than 8 PD bodies). close_rc (or NULL): this rank's outcome of the
+ * step's close, agreed in the same reduction as floe_par_agree_error agrees it (the failing
+ * rank's code and message every rank's, returned; w->err_agreed set): the step's close
+ * then needs no reduction of its own (core/integrators/watchdog.c floe_world_step).
+ * Collective; without MPI or a split, *close_rc (or FLOE_OK) */
+int floe_par_watchdog_values(floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min,
+                             double *pdd, int npd, const int *close_rc);
 
 /* an outcome made every rank's (docs/parallel.md, "Errors inside a step"): rc is this rank's;
  * when a rank failed, the lowest failing rank's code and message are every rank's (its

@@ -254,6 +254,18 @@ static int refuse(floe_world *w, const char *what) {
     return floe_world_error(w, FLOE_ENOTSUP, "MPI decomposition: %s is not supported yet (docs/parallel.md)", what);
 }
 
+/* MPI_Op of floe_par.sum_min: the entries summed but the last two, which take the minimum
+ * (the watchdog's sums, its most negative pair dissipation and the step close's agreement
+ * in one reduction) */
+static void sum_then_min(void *in, void *inout, int *len, MPI_Datatype *type) {
+    (void)type;
+    const double *a = in;
+    double *b = inout;
+    const int n = *len, ns = n > 2 ? n - 2 : 0;
+    for (int k = 0; k < ns; k++) b[k] = a[k] + b[k];
+    for (int k = ns; k < n; k++) b[k] = a[k] < b[k] ? a[k] : b[k];
+}
+
 int floe_world_parallel_init(floe_world *w, const void *comm) {
     int inited = 0;
     MPI_Initialized(&inited);
@@ -297,6 +309,8 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
         return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
     P->comm = dup;
+    MPI_Op_create(sum_then_min, 1, &P->sum_min); /* a local call */
+    P->have_sum_min = 1;
     MPI_Comm_rank(P->comm, &P->rank);
     MPI_Comm_size(P->comm, &P->size);
     const int S = P->size, n = p->n;
@@ -425,6 +439,10 @@ int floe_world_parallel_rebuild(floe_world *w) {
     return par_rebuild(w, w->par, NULL, 0);
 }
 
+/* this rank's word in an agreement (agree_error_kind): the size when it did not fail, its
+ * rank less the size for out of memory (first), else its rank */
+static int agree_word(const floe_par *P, int rc) { return !rc ? P->size : rc == FLOE_ENOMEM ? P->rank - P->size : P->rank; }
+
 /* every rank, after a reduction found that rank `first` (the lowest) failed with rc there:
  * that rank's code and message (particles named by their global ids, as one process names
  * them: floe_world_pid) become every rank's, w->err_agreed set; returns the code */
@@ -443,7 +461,8 @@ static int error_from(floe_world *w, floe_par *P, int first, int rc, int kind) {
     return m.code;
 }
 
-int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry, int rc, int *told) {
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry, int rc, int *flag,
+                     int *told) {
     floe_par *P = w->par;
     *told = 0;
     /* a periodic cell: the test that discounts the cell's affine map (step.c rebuild_if_needed) */
@@ -463,9 +482,10 @@ int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_ca
      * failing rank whose error is every rank's, an out-of-memory one first (S - rank + S),
      * else the lowest (S - rank) */
     const int S = P->size;
-    int mine[2] = {need, !rc ? 0 : rc == FLOE_ENOMEM ? 2 * S - P->rank : S - P->rank}, all[2];
-    MPI_Allreduce(mine, all, 2, MPI_INT, MPI_MAX, P->comm);
+    int mine[3] = {need, !rc ? 0 : rc == FLOE_ENOMEM ? 2 * S - P->rank : S - P->rank, flag && *flag}, all[3];
+    MPI_Allreduce(mine, all, 3, MPI_INT, MPI_MAX, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof mine);
+    if (flag) *flag = all[2];
     if (all[1]) {
         if (carry) floe_world_pp_detach(w, rows);
         *told = 1;
@@ -510,7 +530,7 @@ static int agree_error_kind(floe_world *w, int rc, int kind) {
     /* the failing rank whose error is every rank's: an out-of-memory one first (rank - S < 0:
      * a rank that stopped short of the others; the state is not whole), else the lowest */
     const int S = P->size;
-    int mine = !rc ? S : rc == FLOE_ENOMEM ? P->rank - S : P->rank, first = mine;
+    int mine = agree_word(P, rc), first = mine;
     MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, P->comm);
     floe_par_count_allreduce(P, kind, sizeof mine);
     return first == S ? FLOE_OK : error_from(w, P, first < 0 ? first + S : first, rc, kind);
@@ -572,28 +592,35 @@ static void energy_unpack(floe_energy *e, const double *v) {
     e->work_boundary = v[4]; e->dissipated = v[5]; e->initial = v[6];
 }
 
-void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min,
-                              double *pdd, int npd) {
-    double v[9 + FLOE_PAR_WD_PD], s[9 + FLOE_PAR_WD_PD];
+
+int floe_par_watchdog_values(floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min,
+                             double *pdd, int npd, const int *close_rc) {
+    floe_par *P = w->par;
+    double v[11 + FLOE_PAR_WD_PD], s[11 + FLOE_PAR_WD_PD];
     energy_pack(e, v);
     v[7] = *shadow;
     v[8] = *shadow0;
     /* the PD bodies' dissipation with the rest (a scene with more bodies: a second sum) */
-    const int nin = npd <= FLOE_PAR_WD_PD ? npd : 0;
+    const int nin = npd <= FLOE_PAR_WD_PD ? npd : 0, n = 11 + nin;
     for (int k = 0; k < nin; k++) v[9 + k] = pdd[k];
-    MPI_Allreduce(v, s, 9 + nin, MPI_DOUBLE, MPI_SUM, w->par->comm);
-    floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, (9 + nin) * (long long)sizeof(double));
+    /* the minima last: the pair dissipation, the close's word (an int, exact as a double) */
+    v[n - 2] = *pair_min;
+    v[n - 1] = close_rc ? agree_word(P, *close_rc) : P->size;
+    MPI_Allreduce(v, s, n, MPI_DOUBLE, P->sum_min, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, n * (long long)sizeof(double));
     energy_unpack(e, s);
     *shadow = s[7];
     *shadow0 = s[8];
     for (int k = 0; k < nin; k++) pdd[k] = s[9 + k];
+    *pair_min = s[n - 2];
+    const int first = (int)s[n - 1];
+    if (first != P->size) /* the close failed on some rank: its error, every rank's */
+        return error_from(w, P, first < 0 ? first + P->size : first, close_rc ? *close_rc : FLOE_OK, FLOE_COMM_REDUCE);
     if (npd > nin) {
-        MPI_Allreduce(MPI_IN_PLACE, pdd, npd, MPI_DOUBLE, MPI_SUM, w->par->comm);
-        floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, npd * (long long)sizeof(double));
+        MPI_Allreduce(MPI_IN_PLACE, pdd, npd, MPI_DOUBLE, MPI_SUM, P->comm);
+        floe_par_count_allreduce(P, FLOE_COMM_REDUCE, npd * (long long)sizeof(double));
     }
-    double pm = *pair_min;
-    MPI_Allreduce(&pm, pair_min, 1, MPI_DOUBLE, MPI_MIN, w->par->comm);
-    floe_par_count_allreduce(w->par, FLOE_COMM_REDUCE, sizeof pm);
+    return FLOE_OK;
 }
 
 /* the ledger summed over the ranks, counted as kind */
@@ -760,6 +787,7 @@ int floe_world_parallel_outputs(floe_world *w, floe_world *mirror) {
     MPI_Bcast(&word, 1, MPI_INT, 0, P->comm);
     floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof word);
     if (!(word & 1)) P->mirror = NULL;
+    P->has_mirror = word & 1; /* every rank knows it from now on (floe_par_observe) */
     w->par_contacts = (word & 2 ? 1 : 0) | (word & 4 ? 2 : 0);
     if (word & 8) {
         w->orient_extra = 1;
@@ -1266,10 +1294,7 @@ int floe_par_observe(floe_world *w, int force_all) {
     double t0 = MPI_Wtime();
     FLOE_TRY(outputs_call(w, P, force_all)); /* agreed */
     P->busy += MPI_Wtime() - t0;
-    int has = P->mirror != NULL;
-    MPI_Bcast(&has, 1, MPI_INT, 0, P->comm);
-    floe_par_count_bcast(P, FLOE_COMM_OUTPUT, sizeof has);
-    if (!has) return FLOE_OK;
+    if (!P->has_mirror) return FLOE_OK; /* rank 0 has no mirror: told at floe_world_parallel_outputs */
     /* rank 0's word: the mirror is due now (bit 0), an output that reads contacts is due at
      * the next step (bit 1: every rank records its contacts then); when due, which of the
      * mirror's observers are (due[k]) */
@@ -1579,7 +1604,9 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
                             "-DFLOE_WITH_MPI=ON)");
 }
 int floe_world_parallel_rebuild(floe_world *w) { (void)w; return FLOE_OK; }
-int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry, int rc, int *told) {
+int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_carry *carry, int rc, int *flag,
+                     int *told) {
+    (void)flag;
     (void)w; (void)maxd2; (void)have_xb; (void)carry;
     *told = 0;
     return rc;
@@ -1613,9 +1640,10 @@ int floe_world_parallel_add_output(floe_world *w, floe_observer *o) {
     floe_observer_destroy(o);
     return floe_world_error(w, FLOE_ENOTSUP, "MPI outputs: floe was built without MPI");
 }
-void floe_par_watchdog_values(const floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min,
-                              double *pdd, int npd) {
+int floe_par_watchdog_values(floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min,
+                             double *pdd, int npd, const int *close_rc) {
     (void)w; (void)e; (void)shadow; (void)shadow0; (void)pair_min; (void)pdd; (void)npd;
+    return close_rc ? *close_rc : FLOE_OK;
 }
 int floe_world_parallel_energy(const floe_world *w, floe_energy *out) { *out = w->energy; return FLOE_OK; }
 int floe_world_parallel_sum(const floe_world *w, double *v, int n) { (void)w; (void)v; (void)n; return FLOE_OK; }

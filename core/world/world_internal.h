@@ -245,6 +245,17 @@ struct floe_world {
      * memory: a rank may have stopped short on its way to the agreement; a failed
      * decomposition); 0 otherwise; reset at each step */
     int err_agreed;
+    /* a split world's step close (core/integrators step.c step_close): with close_defer set
+     * (floe_world_step, a fixed step with the energy watchdog on) its agreement is not a
+     * reduction of its own but rides with the watchdog's (floe_par_watchdog_values):
+     * close_pending says the close was reached, close_rc is this rank's outcome there */
+    int close_defer, close_pending, close_rc;
+    /* what the integrator sets after a close that passed on this rank (the ledger's step
+     * sums, the watchdog's conserved form, leapfrog's last step), as it was at the close:
+     * put back when another rank failed there, so that every rank holds what one process
+     * holds after a failed close (the state written at the failure) */
+    floe_energy close_energy;
+    double close_shadow, close_lf;
 };
 
 /* the index of local particle i in the unsplit world, as the messages name it (the serial

@@ -20,16 +20,22 @@
  *   - 200 steps of a gas of fast spheres (a few rebuilds on the way): each step's reverse
  *     traffic is 48 B x this rank's ghosts at the step's end, the ghost traffic summed over
  *     the ranks 72 B (312 B at a rebuild, + 68 B x (ranks - 1) per rank) x the ghosts of all
- *     ranks, the reductions 8 B (whether to rebuild, whether a rank failed) + 2 x 4 B (the
- *     forces' outcome and the step's close agreed) + 28 B at a rebuild + 80 B (the
- *     watchdog's ledger) a step, the
- *     outputs' word 4 B on rank 0; the step count and the mean loads;
+ *     ranks, the reductions three a step (seven more at a rebuild): 12 B (whether to rebuild,
+ *     whether a rank failed, whether a drift check failed) + 4 B (the forces' outcome agreed)
+ *     + 88 B (the watchdog's ledger, its minimum and the step's close agreed, 11 doubles; 4 B
+ *     for the close alone with the watchdog off) + 28 B at a rebuild; no output word without
+ *     outputs; the step count and the mean loads;
+ *   - the watchdog's reduction itself (floe_par_watchdog_values): the sums and the minimum
+ *     over the ranks exact, the PD bodies' dissipations in the same reduction up to 8 and in
+ *     a second one beyond, the step's close agreed in it (a failure on one rank returned by
+ *     every rank with that rank's message, an out-of-memory one first, err_agreed 1 or 2);
  *   - the end of a run with a mirror (rank 0): the gathered state 184 B per owned particle
  *     and 48 B per wall on every other rank, + the ledger (56 B), the words (4 B each).
  * With one rank every count is 0. */
 #include "floe.h"
 #include "world_internal.h"
 #include "par_internal.h"
+#include "par_hooks.h"
 #include "../check.h"
 #include "mpi_common.h"
 #include <stdlib.h>
@@ -252,14 +258,21 @@ static void check_steps(floe_world *w) {
         gsum += gh; osum += own;
         const int reb = c.rebuilds > c0.rebuilds;
         nreb += reb;
-        long long d[FLOE_COMM_KINDS];
-        for (int k = 0; k < FLOE_COMM_KINDS; k++) d[k] = c.bytes[k] - c0.bytes[k];
+        long long d[FLOE_COMM_KINDS], dm[FLOE_COMM_KINDS];
+        for (int k = 0; k < FLOE_COMM_KINDS; k++) {
+            d[k] = c.bytes[k] - c0.bytes[k];
+            dm[k] = c.messages[k] - c0.messages[k];
+        }
         if (S > 1) {
             ok_rev &= d[FLOE_COMM_REVERSE] == 48LL * gh;
-            /* whether to rebuild with whether a rank failed (2 ints), the forces' outcome, the
-             * step's close; a rebuild's agreements */
-            ok_red &= d[FLOE_COMM_REDUCE] == 8 + 4 + 4 + (reb ? 7 * 4 : 0) + (wd ? 80 : 0);
-            ok_out &= d[FLOE_COMM_OUTPUT] == (me == 0 ? 4 : 0);
+            /* whether to rebuild with whether a rank failed and whether a drift check failed (3
+             * ints), the forces' outcome, the
+             * step's close (4 B; with the watchdog on, the watchdog's 9 sums, its minimum and
+             * the close's word, 11 doubles, in one reduction); a rebuild's agreements. Three
+             * reductions a step (+ seven at a rebuild) */
+            ok_red &= d[FLOE_COMM_REDUCE] == 12 + 4 + (reb ? 7 * 4 : 0) + (wd ? 88 : 4);
+            ok_red &= dm[FLOE_COMM_REDUCE] == 3 + (reb ? 7 : 0);
+            ok_out &= d[FLOE_COMM_OUTPUT] == 0 && dm[FLOE_COMM_OUTPUT] == 0;
             ok_red &= reb || d[FLOE_COMM_MIGRATE] == 0;
         } else {
             for (int k = 0; k < FLOE_COMM_KINDS; k++) ok_rev &= d[k] == 0;
@@ -271,8 +284,9 @@ static void check_steps(floe_world *w) {
         c0 = c;
     }
     CHECK(ok_rev, "rank %d: every step's reverse traffic is 48 B x the ghosts held", me);
-    CHECK(ok_red, "rank %d: every step's reductions are 16 B (+ 28 B at a rebuild, + 80 B for the watchdog)", me);
-    CHECK(ok_out, "rank %d: every step's output word is 4 B on rank 0, nothing elsewhere", me);
+    CHECK(ok_red, "rank %d: every step's reductions are three: 20 B (+ 28 B and seven more at a rebuild), the "
+          "close's 4 B carried by the watchdog's 88 B when it is on", me);
+    CHECK(ok_out, "rank %d: without outputs a step sends no output word", me);
     CHECK(ok_gh, "every step's ghost traffic over the ranks is 72 B (312 B at a rebuild) x all ghosts held");
     floe_comm_stats c = stats(w);
     CHECK(c.steps == NSTEP && c.rebuilds == nreb, "rank %d: %ld steps counted (%d), %ld rebuilds (%d)", me, c.steps, NSTEP,
@@ -293,7 +307,8 @@ static void check_steps(floe_world *w) {
 /* outputs reduced over the ranks (docs/parallel.md): a mirror whose observers are a
  * collection's stress (every step), the energy (every step) and a tracker of a wall and two
  * spheres (every 2 steps) gathers nothing: each step's output traffic is the words (rank 0:
- * whether it holds a mirror, whether it is due, which observers are), the ledger, three
+ * whether it is due, which observers are; whether it holds a mirror is told once, at
+ * floe_world_parallel_outputs), the ledger, three
  * checks and the reduced sums (13 + 6 doubles for the stress, 22 a tracked particle), whatever
  * the number of particles */
 static void check_reduced(void) {
@@ -330,7 +345,7 @@ static void check_reduced(void) {
         CHECK(rc == 0, "step %d: %s", s, rc ? floe_world_last_error(w) : "");
         if (size_ == 1) continue;
         const long step = floe_world_step_count(w);
-        want += me == 0 ? 4 + 4 + 3 * 4 + 56 + 3 * 4 : 56 + 3 * 4 + 8 * (13 + 6) + (step % 2 == 0 ? 8 * 22 * 3 : 0);
+        want += me == 0 ? 4 + 3 * 4 + 56 + 3 * 4 : 56 + 3 * 4 + 8 * (13 + 6) + (step % 2 == 0 ? 8 * 22 * 3 : 0);
     }
     const floe_comm_stats c = stats(w);
     got = c.bytes[FLOE_COMM_OUTPUT];
@@ -404,6 +419,55 @@ static void check_finish(floe_world *w, floe_world *ref) {
     CHECK(others_zero(&c, 1u << FLOE_COMM_OUTPUT), "rank %d: the gather sends nothing else", me);
 }
 
+/* floe_par_watchdog_values on the split world w: rank r's values are known functions of r,
+ * so the sums over the ranks are exact (small integers) */
+static void check_watchdog_sums(floe_world *w) {
+    const int S = size_, me = rank_;
+    for (int npd = 0; npd <= 10; npd += 5) { /* 0, 5 (with the rest), 10 (a second sum) */
+        floe_energy e;
+        memset(&e, 0, sizeof e);
+        e.kinetic_trans = 1 + me; e.kinetic_rot = 2 * (1 + me); e.elastic = 3; e.work_body = -me;
+        e.work_boundary = 0.5; e.dissipated = 4 * me; e.initial = 7;
+        double shadow = 10 + me, shadow0 = 20, pair_min = -1.0 - me, pdd[10];
+        for (int k = 0; k < npd; k++) pdd[k] = (k + 1) * (me + 1);
+        const floe_comm_stats c0 = stats(w);
+        const int rc = floe_par_watchdog_values(w, &e, &shadow, &shadow0, &pair_min, pdd, npd, NULL);
+        const floe_comm_stats c1 = stats(w);
+        const double s1 = S * (S + 1) / 2.0, s0 = S * (S - 1) / 2.0; /* sum of (1 + r), of r */
+        int ok = rc == FLOE_OK && e.kinetic_trans == s1 && e.kinetic_rot == 2 * s1 && e.elastic == 3 * S &&
+                 e.work_body == -s0 && e.work_boundary == 0.5 * S && e.dissipated == 4 * s0 && e.initial == 7 * S &&
+                 shadow == 10 * S + s0 && shadow0 == 20 * S && pair_min == -(double)S;
+        for (int k = 0; k < npd; k++) ok &= pdd[k] == (k + 1) * s1;
+        CHECK(ok, "rank %d: the watchdog's sums over %d ranks with %d PD bodies (%g %g, min %g)", me, S, npd,
+              e.kinetic_trans, shadow, pair_min);
+        const long long nred = c1.messages[FLOE_COMM_REDUCE] - c0.messages[FLOE_COMM_REDUCE];
+        if (S > 1)
+            CHECK(nred == (npd > 8 ? 2 : 1), "rank %d: %lld reductions with %d PD bodies (%d)", me, nred, npd,
+                  npd > 8 ? 2 : 1);
+    }
+    /* the close agreed in the same reduction: the last rank fails (its message), then rank 0
+     * runs out of memory while the last rank fails otherwise (out of memory first) */
+    for (int round = 0; round < 2; round++) {
+        floe_energy e;
+        memset(&e, 0, sizeof e);
+        double shadow = 0, shadow0 = 0, pair_min = 0, pdd[10] = {0};
+        int mine = FLOE_OK;
+        if (me == S - 1) mine = floe_world_error(w, FLOE_EUNSTABLE, "close failed on rank %d", me);
+        if (round == 1 && me == 0) mine = floe_world_error(w, FLOE_ENOMEM, "rank %d out of memory", me);
+        w->err_agreed = 0;
+        const int rc = floe_par_watchdog_values(w, &e, &shadow, &shadow0, &pair_min, pdd, 10, &mine);
+        char want[64];
+        if (round == 0) snprintf(want, sizeof want, "close failed on rank %d", S - 1);
+        else snprintf(want, sizeof want, "rank 0 out of memory");
+        const int code = round == 0 ? FLOE_EUNSTABLE : FLOE_ENOMEM;
+        CHECK(rc == code && strstr(floe_world_last_error(w), want) && w->err_agreed == (round == 0 ? 1 : 2),
+              "rank %d: the close agreed in the watchdog's reduction, round %d: %d '%s' agreed %d (want %d '%s')", me,
+              round, rc, floe_world_last_error(w), w->err_agreed, code, want);
+    }
+    w->err_agreed = 0;
+    w->err[0] = 0;
+}
+
 int main(int argc, char **argv) {
     mpi_test_init(&argc, &argv);
     floe_world *w = build(), *ref = build();
@@ -417,6 +481,7 @@ int main(int argc, char **argv) {
         else CHECK(others_zero(&c, 0), "one rank sends nothing");
         check_refresh(w, ref);
         check_steps(w);
+        check_watchdog_sums(w);
         check_rebuild(w, ref);
         check_finish(w, ref);
         check_reduced();
