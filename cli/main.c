@@ -152,15 +152,15 @@ static int on_progress(const floe_world *w, long step, long nsteps, void *user)
     /* under MPI every rank takes part in the agreement (one int, a collective), every k
      * steps: k about 20 ms of steps (from 1 to 1024), the least that any rank proposes,
      * agreed in the same word (the signal in the high bits, 1024 - k below: the largest word
-     * carries any signal and the smallest k), so that a signal stops the run within about
-     * 20 ms without a collective at every step of a fast run (each is a synchronisation of
-     * every rank: docs/parallel.md, "Collectives a step") */
+     * carries any signal and the smallest k), and at the last step, so that a signal stops
+     * the run within about 20 ms without a collective at every step of a fast run (each is a
+     * synchronisation of every rank: docs/parallel.md, "Collectives a step") */
     int sig = p->mpi ? 0 : (int)stop_signal;
-    if (p->mpi && step >= p->agree_at) {
+    if (p->mpi && (step >= p->agree_at || step == nsteps)) { /* (the last step too: a late signal) */
         const double t = now_s();
         const double per = p->agree_at > 0 && step > p->last_agreed ? (t - p->agree_t) / (double)(step - p->last_agreed) : 0;
-        long k = per > 0 ? (long)(0.02 / per) : 1;
-        k = k < 1 ? 1 : k > 1024 ? 1024 : k;
+        const double kd = per > 0 ? 0.02 / per : 1;
+        const long k = kd < 1 ? 1 : kd > 1024 ? 1024 : (long)kd;
         const int word = floe_parallel_agree(NULL, (int)stop_signal * 2048 + (int)(1024 - k));
         sig = word / 2048;
         p->agree_t = t;

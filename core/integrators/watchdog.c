@@ -85,7 +85,14 @@ static int energy_watchdog(floe_world *w, const int *close_rc) {
         double *pdd_sum = w->pd_diss_sum;
         if (npdd) memcpy(pdd_sum, w->pd_diss, (size_t)npdd * sizeof *pdd_sum);
         const int arc = floe_par_watchdog_values(w, &er, &shadow, &shadow0, &pair_min, pdd_sum, npdd, close_rc);
-        if (arc) return arc; /* the step's close failed on some rank: every rank returns it */
+        if (arc) { /* the step's close failed on some rank: every rank returns it */
+            if (close_rc && !*close_rc) { /* this rank's close passed: what its integrator set after it undone */
+                w->energy = w->close_energy;
+                w->wd_shadow = w->close_shadow;
+                w->lf_dt_prev = w->close_lf;
+            }
+            return arc;
+        }
         pd_diss = pdd_sum;
     }
     if (close_rc) step_accepted(w);
@@ -202,22 +209,19 @@ static int energy_watchdog(floe_world *w, const int *close_rc) {
 int floe_world_step(floe_world *w) {
     if (!w->prepared) FLOE_TRY(floe_world_prepare(w));
     w->err_agreed = 0; /* MPI: set by an error every rank returns (core/parallel) */
-    /* MPI, a fixed step with the watchdog on: the step's close is agreed in the watchdog's
-     * reduction (one collective a step less; step.c step_close) */
-    w->close_defer = w->par && !w->def.adaptive && w->def.energy_check != FLOE_CHECK_OFF;
+    /* MPI, a fixed step of velocity Verlet or leapfrog with the watchdog on: the step's close
+     * is agreed in the watchdog's reduction (one collective a step less; step.c step_close).
+     * RK2 and the staggered scheme keep their own agreement (tested so) */
+    w->close_defer = w->par && !w->def.adaptive && w->def.energy_check != FLOE_CHECK_OFF &&
+                     (w->def.integrator == FLOE_VELOCITY_VERLET || w->def.integrator == FLOE_LEAPFROG) &&
+                     !(w->def.pd_dem == FLOE_PD_DEM_STAGGERED && w->npd);
     w->close_pending = 0;
     int rc = w->def.adaptive ? step_adaptive(w, step_once) : step_once(w);
     w->close_defer = 0;
     if (w->close_pending) { /* every rank reached the close: agreed now */
         w->close_pending = 0;
         const int mine = rc ? rc : w->close_rc;
-        rc = energy_watchdog(w, &mine);
-        if (rc && !mine && w->err_agreed) { /* another rank's close failed: this one's commit undone */
-            w->energy = w->close_energy;
-            w->wd_shadow = w->close_shadow;
-            w->lf_dt_prev = w->close_lf;
-        }
-        if (rc) return rc;
+        FLOE_TRY(energy_watchdog(w, &mine));
     } else {
         if (rc) return rc; /* (agreed before the close, under MPI) */
         step_accepted(w);

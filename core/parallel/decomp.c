@@ -726,7 +726,10 @@ void floe_par_free(floe_par *P) {
     floe_pd_split_free(P->pd_split); /* PD bodies' split (par_pd.c) */
     free(P->pd_counts);
     free(P->gmotion); free(P->mkind); free(P->mgroup); free(P->mids_at); free(P->mids); free(P->mdue); free(P->red_buf);
-    if (P->have_sum_min) MPI_Op_free(&P->sum_min);
+    if (P->have_sum_min) {
+        MPI_Op_free(&P->sum_min);
+        MPI_Type_free(&P->wd_type);
+    }
     MPI_Comm_free(&P->comm);
     free(P);
 }

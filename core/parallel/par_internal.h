@@ -44,8 +44,9 @@ typedef struct floe_par {
     struct floe_world *mirror; /* rank 0 with outputs: the unsplit world whose observers write
                                   the gathered state (floe_world_parallel_outputs) */
     int has_mirror;          /* every rank: rank 0 has a mirror (set by floe_world_parallel_outputs) */
-    MPI_Op sum_min;          /* sums but the last two entries, which take the minimum (the energy
-                                watchdog's reduction, floe_par_watchdog_values); have_sum_min: created */
+    MPI_Op sum_min;          /* the energy watchdog's reduction (floe_par_watchdog_values): an
+                                element of wd_type, sums then two minima; have_sum_min: created */
+    MPI_Datatype wd_type;
     int have_sum_min;
     struct floe_observer **outs; int nouts; /* every rank's own outputs (floe_world_parallel_add_output) */
     int any_nonround;        /* a bounded particle of the world is not a sphere (disc), or the

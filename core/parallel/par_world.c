@@ -254,16 +254,22 @@ static int refuse(floe_world *w, const char *what) {
     return floe_world_error(w, FLOE_ENOTSUP, "MPI decomposition: %s is not supported yet (docs/parallel.md)", what);
 }
 
-/* MPI_Op of floe_par.sum_min: the entries summed but the last two, which take the minimum
- * (the watchdog's sums, its most negative pair dissipation and the step close's agreement
- * in one reduction) */
+/* The energy watchdog's reduction (floe_par_watchdog_values): one element of the type
+ * floe_par.wd_type, WD_LEN doubles: WD_SUMS summed (the ledger's 7, the conserved form's 2,
+ * up to 8 PD bodies' dissipations, zeros past them), then two minima (the most negative pair
+ * dissipation, the step close's agreement word). The operation takes whole elements: MPI may
+ * hand it any number of them, never a piece of one (a buffer of plain doubles would let a
+ * segmented algorithm split it, and the entries' roles with it) */
+#define FLOE_PAR_WD_PD 8
+enum { WD_SUMS = 9 + FLOE_PAR_WD_PD, WD_LEN = WD_SUMS + 2 };
 static void sum_then_min(void *in, void *inout, int *len, MPI_Datatype *type) {
     (void)type;
     const double *a = in;
     double *b = inout;
-    const int n = *len, ns = n > 2 ? n - 2 : 0;
-    for (int k = 0; k < ns; k++) b[k] = a[k] + b[k];
-    for (int k = ns; k < n; k++) b[k] = a[k] < b[k] ? a[k] : b[k];
+    for (int e = 0; e < *len; e++, a += WD_LEN, b += WD_LEN) {
+        for (int k = 0; k < WD_SUMS; k++) b[k] = a[k] + b[k];
+        for (int k = WD_SUMS; k < WD_LEN; k++) b[k] = fmin(a[k], b[k]); /* (commutative, NaN too) */
+    }
 }
 
 int floe_world_parallel_init(floe_world *w, const void *comm) {
@@ -309,7 +315,9 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
         return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     }
     P->comm = dup;
-    MPI_Op_create(sum_then_min, 1, &P->sum_min); /* a local call */
+    MPI_Op_create(sum_then_min, 1, &P->sum_min); /* local calls */
+    MPI_Type_contiguous(WD_LEN, MPI_DOUBLE, &P->wd_type);
+    MPI_Type_commit(&P->wd_type);
     P->have_sum_min = 1;
     MPI_Comm_rank(P->comm, &P->rank);
     MPI_Comm_size(P->comm, &P->size);
@@ -580,8 +588,6 @@ int floe_par_cell_stress(floe_world *w, double sigma[9], int *given) {
     return FLOE_OK;
 }
 
-/* PD bodies whose dissipation rides with the watchdog's sum (floe_par_watchdog_values) */
-#define FLOE_PAR_WD_PD 8
 
 static void energy_pack(const floe_energy *e, double *v) {
     v[0] = e->kinetic_trans; v[1] = e->kinetic_rot; v[2] = e->elastic; v[3] = e->work_body;
@@ -596,17 +602,17 @@ static void energy_unpack(floe_energy *e, const double *v) {
 int floe_par_watchdog_values(floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min,
                              double *pdd, int npd, const int *close_rc) {
     floe_par *P = w->par;
-    double v[11 + FLOE_PAR_WD_PD], s[11 + FLOE_PAR_WD_PD];
+    double v[WD_LEN] = {0}, s[WD_LEN];
     energy_pack(e, v);
     v[7] = *shadow;
     v[8] = *shadow0;
     /* the PD bodies' dissipation with the rest (a scene with more bodies: a second sum) */
-    const int nin = npd <= FLOE_PAR_WD_PD ? npd : 0, n = 11 + nin;
+    const int nin = npd <= FLOE_PAR_WD_PD ? npd : 0, n = WD_LEN;
     for (int k = 0; k < nin; k++) v[9 + k] = pdd[k];
     /* the minima last: the pair dissipation, the close's word (an int, exact as a double) */
     v[n - 2] = *pair_min;
     v[n - 1] = close_rc ? agree_word(P, *close_rc) : P->size;
-    MPI_Allreduce(v, s, n, MPI_DOUBLE, P->sum_min, P->comm);
+    MPI_Allreduce(v, s, 1, P->wd_type, P->sum_min, P->comm);
     floe_par_count_allreduce(P, FLOE_COMM_REDUCE, n * (long long)sizeof(double));
     energy_unpack(e, s);
     *shadow = s[7];
