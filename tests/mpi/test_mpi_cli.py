@@ -68,9 +68,14 @@ SCENES.append((os.path.join(here, "servo_rk2.yaml"), (2, 3)))
 # runs that fail inside a step (tests/mpi/errors.yaml; test_mpi_errors): exit 1 on every rank
 # after the outputs end, one error line from rank 0 equal to one process's, no MPI_Abort;
 # the outputs up to the failure compared as any other
-FAILING = ("errors.yaml", "errors_motion.yaml", "errors_rk2.yaml", "errors_adaptive.yaml", "errors_lps.yaml")
+FAILING = ("errors.yaml", "errors_motion.yaml", "errors_motion_lf.yaml", "errors_rk2.yaml", "errors_adaptive.yaml",
+           "errors_lps.yaml")
 _hit = "velocity: [0, 0, -40]"
 VARIANTS["errors_motion.yaml"] = ("errors.yaml", lambda t: t.replace(_hit, "velocity: [0, 0, -50]"))
+# the same under leapfrog: its close's agreement rides with the energy watchdog's reduction
+# too, and the ranks whose close passed put back its last step as one process leaves it
+VARIANTS["errors_motion_lf.yaml"] = ("errors.yaml", lambda t: t.replace(_hit, "velocity: [0, 0, -50]").replace(
+    "allow_unstable_dt: true}", "allow_unstable_dt: true, integrator: leapfrog}"))
 VARIANTS["errors_rk2.yaml"] = ("errors.yaml", lambda t: t.replace("allow_unstable_dt: true}",
                                                                   "allow_unstable_dt: true, integrator: rk2}"))
 VARIANTS["errors_adaptive.yaml"] = ("errors.yaml", lambda t: t.replace("allow_unstable_dt: true}",
