@@ -63,7 +63,8 @@ static void usage(FILE *f)
             "Ctrl-C (SIGINT), SIGTERM or SIGUSR1 stops a run after the current step with every\n"
             "output complete and a checkpoint written (exit 130 / 143 / 138; continue with\n"
             "--restart); a second signal kills at once. Under mpirun: signal mpirun with SIGUSR1\n"
-            "(it forwards it to every rank; SIGTERM is followed by SIGKILL after 1 s).\n"
+            "(it forwards it to every rank; SIGTERM is followed by SIGKILL after 1 s); the ranks\n"
+            "stop together within about 20 ms of steps.\n"
             "Scene files are YAML, described in docs/scene-format.md.\n",
             prog, prog, prog, prog, prog, prog);
 }
@@ -86,9 +87,10 @@ static void fmt_duration(char *buf, size_t len, double s)
 /* SIGINT / SIGTERM / SIGUSR1 during a run: the handler only records the signal; the progress
  * callback (called after every step) sees it and stops the run cleanly, so the observers
  * finish the frame they are writing and close their files. A second signal kills at once
- * (SA_RESETHAND). Under MPI the ranks agree after every step on whether any has one (mpirun
- * forwards SIGUSR1 to every rank; SIGTERM it forwards too, then kills the ranks after
- * odls_base_sigkill_timeout, 1 s by default), so that all stop at the same step. */
+ * (SA_RESETHAND). Under MPI the ranks agree every ~20 ms of steps on whether any has one
+ * (on_progress; mpirun forwards SIGUSR1 to every rank; SIGTERM it forwards too, then kills
+ * the ranks after odls_base_sigkill_timeout, 1 s by default), so that all stop at the same
+ * step. */
 static volatile sig_atomic_t stop_signal = 0;
 
 static void on_stop_signal(int sig) { stop_signal = sig; }
