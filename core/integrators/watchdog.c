@@ -119,23 +119,19 @@ static int energy_watchdog(floe_world *w, const int *close_rc) {
     /* (NaN passes no test: the particle checks report it) */
     if (!(c_pair > tol || c_pd > tol || c_led > tol || c_bal > tol_bal)) return FLOE_OK;
     if (w->wd_step >= 0 && w->def.energy_check == FLOE_CHECK_WARN) return FLOE_OK; /* warned once */
-    if (w->par) { /* MPI: the culprit may live on another rank; the measures only */
-        snprintf(w->wd_msg, sizeof w->wd_msg, "energy watchdog: %.1f %% of the energy scale %.3g J created by step %ld "
-                 "(t = %g s), summed over the MPI ranks: pair %.3g, ledger %.3g, balance %.3g of the scale",
-                 100 * created, S, w->step, w->time, c_pair, c_led, c_bal);
-        if (w->wd_step < 0) w->wd_step = w->step;
-        if (w->def.energy_check == FLOE_CHECK_WARN) {
-            fprintf(stderr, "floe: warning: %s (checks: energy: warn, the run goes on)\n", w->wd_msg);
-            return FLOE_OK;
-        }
-        w->err_agreed = 1; /* from the sums: every rank stops here */
-        return floe_world_error(w, FLOE_EUNSTABLE, "%s", w->wd_msg);
-    }
-    char what[256], cause[512], name[96];
+    /* MPI: every rank took this decision alike (from the sums); the culprit may live on
+     * another rank: each rank names its own candidate and the worst one's words are every
+     * rank's (floe_par_pick, collective: the branches below are taken alike on every rank) */
+    const int par = w->par != NULL;
+    char what[256], cause[512], cause0[512], name[96] = "";
     const floe_particles *p = &w->p;
-    stag_cause(w, cause, sizeof cause);
-    if (c_pair > tol || (c_led > tol && c_pd <= tol && w->wd_worst < 0)) {
-        /* a contact: this step's worst, or the run's worst when the ledger as a whole went negative */
+    stag_cause(w, cause0, sizeof cause0);
+    memcpy(cause, cause0, sizeof cause);
+    /* a contact: this step's worst, or the run's worst when the ledger as a whole went
+     * negative (under MPI: whether any rank's worst is negative, from the pick) */
+    int pair_case = c_pair > tol || (c_led > tol && c_pd <= tol && w->wd_worst < 0);
+    if (par && !(c_pair > tol)) pair_case = c_led > tol && c_pd <= tol;
+    if (pair_case) {
         int i = c_pair > tol ? w->wd_pair_i : w->wd_worst_i, j = c_pair > tol ? w->wd_pair_j : w->wd_worst_j;
         double d = c_pair > tol ? w->wd_pair_min : w->wd_worst;
         /* under MPI the run's worst contact may have left this rank since (index -1) */
@@ -155,12 +151,31 @@ static int energy_watchdog(floe_world *w, const int *close_rc) {
         if (!cause[0] || pdk < 0)
             snprintf(cause, sizeof cause, "the contact law creates energy (negative damping, or unloading stiffer "
                      "than loading), or the step %g s is too large for its stiffness", w->dt);
+        if (par) { /* the rank with the worst contact (one that left every rank: none) */
+            const double worst = floe_par_pick(w, here && d < 0 ? -d : -INFINITY, what, sizeof what, cause, sizeof cause);
+            if (!(c_pair > tol) && !(worst > 0)) { /* no rank's worst is negative */
+                pair_case = 0;
+                memcpy(cause, cause0, sizeof cause);
+                name[0] = 0;
+            }
+        }
+    }
+    if (pair_case) {
+        /* named */
     } else if (c_pd > tol || (c_led > tol && kb >= 0)) {
+        /* (MPI: kb and pd_diss are the sums' over the ranks, pd_first the global ids) */
         pd_body_name(w, kb, name, sizeof name);
-        snprintf(what, sizeof what, "the bonds of %s gave back %.3g J more than they took", name, -w->pd_diss[kb]);
+        snprintf(what, sizeof what, "the bonds of %s gave back %.3g J more than they took", name, -pd_diss[kb]);
         if (!cause[0])
             snprintf(cause, sizeof cause, "the bond forces' integration is unstable: the step %g s is too large "
                      "for the bond stiffness", w->dt);
+    } else if (par && w->npd) {
+        /* MPI with PD bodies: the bodies' energies are not summed here; the measures only */
+        snprintf(what, sizeof what, "summed over the MPI ranks: pair %.3g, ledger %.3g, balance %.3g of the scale",
+                 c_pair, c_led, c_bal);
+        if (!cause[0])
+            snprintf(cause, sizeof cause, "the integration created it: the step %g s is too large for the stiffness; "
+                     "lower dt or safety", w->dt);
     } else {
         /* energy appeared outside the ledger: name the PD body or particle that holds most */
         double best = -1;
@@ -180,7 +195,8 @@ static int energy_watchdog(floe_world *w, const int *close_rc) {
                 }
             if (bi >= 0 && (!cause[0] || kb < 0)) {
                 if (w->pd_of && w->pd_of[bi] >= 0) pd_body_name(w, w->pd_of[bi], name, sizeof name);
-                else snprintf(name, sizeof name, "particle %d (body %d)", bi, p->group[bi]);
+                else snprintf(name, sizeof name, "particle %d (body %d)", (int)floe_world_parallel_gid(w, bi),
+                              p->group[bi]);
             }
             if (!cause[0]) {
                 const floe_geometry_class *gk = bi >= 0 ? w->geoms[p->geom[bi]]->klass : NULL;
@@ -192,8 +208,11 @@ static int energy_watchdog(floe_world *w, const int *close_rc) {
                          "model: overlap_area has none)" : "");
             }
         }
+        /* MPI (no PD bodies): the rank holding the most energetic particle names it (owned
+         * free particles: a ghost is FIXED here) */
+        if (par) floe_par_pick(w, bi >= 0 ? best : -INFINITY, name, sizeof name, cause, sizeof cause);
         snprintf(what, sizeof what, "the energy grew %.3g J beyond the ledger (balance error), most of it in %s",
-                 c_bal * S, bi >= 0 || kb >= 0 ? name : "?");
+                 c_bal * S, bi >= 0 || kb >= 0 || (par && name[0]) ? name : "?");
     }
     snprintf(w->wd_msg, sizeof w->wd_msg,
              "energy watchdog: %.1f %% of the energy scale %.3g J created by step %ld (t = %g s): %s; likely cause: %s",
@@ -203,6 +222,7 @@ static int energy_watchdog(floe_world *w, const int *close_rc) {
         fprintf(stderr, "floe: warning: %s (checks: energy: warn, the run goes on)\n", w->wd_msg);
         return FLOE_OK;
     }
+    if (par) w->err_agreed = 1; /* from the sums: every rank stops here */
     return floe_world_error(w, FLOE_EUNSTABLE, "%s", w->wd_msg);
 }
 

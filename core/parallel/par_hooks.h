@@ -61,6 +61,12 @@ int floe_par_observe(floe_world *w, int force_all);
 int floe_par_watchdog_values(floe_world *w, floe_energy *e, double *shadow, double *shadow0, double *pair_min,
                              double *pdd, int npd, const int *close_rc);
 
+/* the words of the rank whose key is the largest (the lowest such rank; NaN counts as
+ * -infinity), a (alen bytes) and b (blen), made every rank's; returns that key. The energy
+ * watchdog names its culprit so: each rank its own candidate. Collective; without MPI or a
+ * split: key, a and b as they are */
+double floe_par_pick(floe_world *w, double key, char *a, int alen, char *b, int blen);
+
 /* an outcome made every rank's (docs/parallel.md, "Errors inside a step"): rc is this rank's;
  * when a rank failed, the lowest failing rank's code and message are every rank's (its
  * message in last_error, naming particles by their global ids as one process does;

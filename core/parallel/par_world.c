@@ -629,6 +629,20 @@ int floe_par_watchdog_values(floe_world *w, floe_energy *e, double *shadow, doub
     return FLOE_OK;
 }
 
+double floe_par_pick(floe_world *w, double key, char *a, int alen, char *b, int blen) {
+    floe_par *P = w->par;
+    if (!P) return key;
+    struct { double v; int r; } mine = {key == key ? key : -INFINITY, P->rank}, top;
+    MPI_Allreduce(&mine, &top, 1, MPI_DOUBLE_INT, MPI_MAXLOC, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, sizeof mine);
+    a[alen - 1] = 0;
+    b[blen - 1] = 0;
+    MPI_Bcast(a, alen, MPI_CHAR, top.r, P->comm);
+    MPI_Bcast(b, blen, MPI_CHAR, top.r, P->comm);
+    if (P->rank == top.r) floe_par_count(P, FLOE_COMM_REDUCE, (long long)alen + blen, 2); /* (as floe_par_count_bcast) */
+    return top.v;
+}
+
 /* the ledger summed over the ranks, counted as kind */
 static void energy_sum(const floe_world *w, floe_energy *out, int kind) {
     *out = w->energy;
@@ -1650,6 +1664,10 @@ int floe_par_watchdog_values(floe_world *w, floe_energy *e, double *shadow, doub
                              double *pdd, int npd, const int *close_rc) {
     (void)w; (void)e; (void)shadow; (void)shadow0; (void)pair_min; (void)pdd; (void)npd;
     return close_rc ? *close_rc : FLOE_OK;
+}
+double floe_par_pick(floe_world *w, double key, char *a, int alen, char *b, int blen) {
+    (void)w; (void)a; (void)alen; (void)b; (void)blen;
+    return key;
 }
 int floe_world_parallel_energy(const floe_world *w, floe_energy *out) { *out = w->energy; return FLOE_OK; }
 int floe_world_parallel_sum(const floe_world *w, double *v, int n) { (void)w; (void)v; (void)n; return FLOE_OK; }
