@@ -123,7 +123,7 @@ static int energy_watchdog(floe_world *w, const int *close_rc) {
      * another rank: each rank names its own candidate and the worst one's words are every
      * rank's (floe_par_pick, collective: the branches below are taken alike on every rank) */
     const int par = w->par != NULL;
-    char what[256], cause[512], cause0[512], name[96] = "";
+    char what[256] = "", cause[512] = "", cause0[512] = "", name[96] = ""; /* (zero-filled: broadcast whole) */
     const floe_particles *p = &w->p;
     stag_cause(w, cause0, sizeof cause0);
     memcpy(cause, cause0, sizeof cause);
@@ -153,7 +153,10 @@ static int energy_watchdog(floe_world *w, const int *close_rc) {
                      "than loading), or the step %g s is too large for its stiffness", w->dt);
         if (par) { /* the rank with the worst contact (one that left every rank: none) */
             const double worst = floe_par_pick(w, here && d < 0 ? -d : -INFINITY, what, sizeof what, cause, sizeof cause);
-            if (!(c_pair > tol) && !(worst > 0)) { /* no rank's worst is negative */
+            if (!(worst > 0) && c_pair > tol) /* (no rank holds this step's worst: not expected) */
+                snprintf(what, sizeof what, "summed over the MPI ranks: pair %.3g, ledger %.3g, balance %.3g of the "
+                         "scale", c_pair, c_led, c_bal);
+            else if (!(worst > 0)) { /* no rank's worst is negative */
                 pair_case = 0;
                 memcpy(cause, cause0, sizeof cause);
                 name[0] = 0;

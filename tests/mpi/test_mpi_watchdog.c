@@ -9,6 +9,7 @@
  *      more than the tolerance: the split run returns FLOE_EUNSTABLE at the same step with
  *      the same message, which names that sphere and the wall by their index in the whole
  *      scene and the law (before session 28 the split run named no pair, only the measures);
+ *      with more than one rank the culprit is owned by a rank other than 0 (checked).
  * The balance case (energy from outside the ledger: the rank with the most energetic
  * particle names it) is not reached here: velocity Verlet books a body force's work and
  * keeps a linear force's modified energy even above its limit, so the particle checks stop
@@ -87,10 +88,17 @@ static int run(floe_world *w, int nmax, long *step, char *msg, size_t len) {
 static void compare(const char *must) {
     const int variant = 1;
     floe_world *whole = build(), *split = build();
+    int owner = -1; /* the rank that owns particle 12, the culprit */
     char m1[1024], m2[1024];
     long s1 = 0, s2 = 0;
     int rc1 = floe_world_prepare(whole), rc2 = floe_world_prepare(split);
     if (!rc2) rc2 = floe_world_parallel_init(split, NULL);
+    if (!rc2) {
+        for (int i = 0; i < floe_world_particle_count(split); i++)
+            if (floe_world_parallel_gid(split, i) == 12 && floe_world_parallel_is_owned(split, i)) owner = rank_;
+        MPI_Allreduce(MPI_IN_PLACE, &owner, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+        CHECK(size_ == 1 || owner > 0, "the culprit, particle 12, is owned by rank %d (not 0)", owner);
+    }
     CHECK(rc1 == FLOE_OK && rc2 == FLOE_OK, "variant %d: set-up: %s / %s", variant, floe_world_last_error(whole),
           floe_world_last_error(split));
     if (!rc1 && !rc2) {
