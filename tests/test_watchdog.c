@@ -6,7 +6,7 @@
  *      finishes; with the default (stop) floe_world_run fails with FLOE_EUNSTABLE naming
  *      PD body 0 and suggesting fewer substeps, after the observers flushed (the energy
  *      CSV's last row is the stopping step); m = 2 runs to the end without tripping;
- *   2. a contact law that creates energy (a spring with negative damping, written here):
+ *   2. a contact law that creates energy (a spring with negative damping, tests/pump_law.h):
  *      stop names the pair and the law; warn prints once and the run goes on; off checks
  *      nothing;
  *   3. legit runs never trip it: an elastic bouncing sphere at the default step, and a
@@ -21,6 +21,7 @@
 #include "floe_scene.h"
 #include "floe.h"
 #include "world_read.h"
+#include "pump_law.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -140,28 +141,7 @@ static void test_staggered_blowup(void) {
     floe_world_destroy(w);
 }
 
-/* ---- 2. a contact law that creates energy ---- */
-
-typedef struct pump_law { floe_contact_law base; double k, c; } pump_law;
-
-/* linear spring with a dashpot of negative coefficient: F = (k d + c v_n) n towards i,
- * with c < 0 the dashpot pushes along the motion and feeds the collision */
-static int pump_force(const floe_contact_law *law, const floe_contact *c, double *h, floe_contact_result *out) {
-    (void)h;
-    const pump_law *l = (const pump_law *)law;
-    double fn = l->k * c->depth + l->c * c->vn;
-    for (int a = 0; a < 3; a++) out->force[a] = -fn * c->n[a];
-    out->energy = 0.5 * l->k * c->depth * c->depth;
-    out->fn = fabs(fn);
-    return FLOE_OK;
-}
-static void pump_stiffness(const floe_contact_law *law, double r, double m, double d, double *kn, double *cn) {
-    (void)r; (void)m; (void)d;
-    *kn = ((const pump_law *)law)->k;
-    *cn = 0;
-}
-static void pump_destroy(floe_contact_law *law) { free(law); }
-static const floe_contact_law_class pump_class = {1, "pump (test)", 0, pump_force, pump_stiffness, pump_destroy, NULL, NULL};
+/* ---- 2. a contact law that creates energy (pump_law.h) ---- */
 
 /* a sphere (R 0.1 m, steel-like) dropped at 1 m/s onto a wall with law l; returns rc */
 static int bounce(floe_contact_law *law, int mode, floe_world **out) {
@@ -183,14 +163,6 @@ static int bounce(floe_contact_law *law, int mode, floe_world **out) {
     int rc = floe_world_run(w, 0.02, NULL, NULL);
     *out = w;
     return rc;
-}
-
-static floe_contact_law *pump_create(double mass, double k, double zeta) {
-    pump_law *l = calloc(1, sizeof *l);
-    l->base.klass = &pump_class;
-    l->k = k;
-    l->c = -2 * zeta * sqrt(k * mass);
-    return &l->base;
 }
 
 static void test_creating_law(void) {

@@ -19,31 +19,12 @@
 #include "floe.h"
 #include "../check.h"
 #include "mpi_common.h"
+#include "../pump_law.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 enum { NS = 12 };
-
-typedef struct pump_law { floe_contact_law base; double k, c; } pump_law;
-
-/* F = (k d + c v_n) n towards i; c < 0 feeds the collision */
-static int pump_force(const floe_contact_law *law, const floe_contact *c, double *h, floe_contact_result *out) {
-    (void)h;
-    const pump_law *l = (const pump_law *)law;
-    const double fn = l->k * c->depth + l->c * c->vn;
-    for (int a = 0; a < 3; a++) out->force[a] = -fn * c->n[a];
-    out->energy = 0.5 * l->k * c->depth * c->depth;
-    out->fn = fabs(fn);
-    return FLOE_OK;
-}
-static void pump_stiffness(const floe_contact_law *law, double r, double m, double d, double *kn, double *cn) {
-    (void)r; (void)m; (void)d;
-    *kn = ((const pump_law *)law)->k;
-    *cn = 0;
-}
-static void pump_destroy(floe_contact_law *law) { free(law); }
-static const floe_contact_law_class pump_class = {1, "pump (test)", 0, pump_force, pump_stiffness, pump_destroy, NULL, NULL};
 
 /* the pump law, twelve spheres falling onto a wall */
 static floe_world *build(void) {
@@ -55,11 +36,7 @@ static floe_world *build(void) {
     floe_world *w = floe_world_create(&d, NULL, 0);
     floe_material mt = mpi_test_glass(1e7);
     const int mat = floe_world_add_material(w, &mt);
-    pump_law *l = calloc(1, sizeof *l);
-    l->base.klass = &pump_class;
-    l->k = k;
-    l->c = -2 * 0.1 * sqrt(k * m);
-    floe_world_set_law(w, mat, mat, &l->base);
+    floe_world_set_law(w, mat, mat, pump_create(m, k, 0.1));
     const double o[3] = {0, 0, 0}, n[3] = {0, 0, 1};
     floe_world_add_wall(w, o, n, mat, FLOE_FIXED);
     const int g = floe_world_add_geometry(w, floe_sphere_create(R));
