@@ -119,10 +119,11 @@ static int forces_all(floe_world *w, floe_step_ctx *c, int pre) {
 /* the outcome of a step's close (its kick and checks, after its last collective): under MPI
  * agreed by every rank, each rank calling this once on its way out, failed or not
  * (floe_par_agree_error: the ranks that did not fail return the failing rank's error). With
- * w->close_defer (floe_world_step: a fixed step, the energy watchdog on) the agreement is
- * the watchdog's reduction right after the step (floe_par_watchdog_values): this rank's
- * outcome is kept and returned as it is, every rank then agreeing on it there (nothing
- * collective lies between: the close is each integrator's last collective point) */
+ * w->close_defer (floe_world_step: a fixed step of velocity Verlet or leapfrog, the energy
+ * watchdog on) the agreement is the watchdog's reduction right after the step
+ * (floe_par_watchdog_values): this rank's outcome is kept and returned as it is, every rank
+ * then agreeing on it there (nothing collective lies between: the close is the step's last
+ * collective point) */
 static int step_close(floe_world *w, int rc) {
     if (!w->par) return rc;
     if (w->close_defer) {
