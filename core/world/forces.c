@@ -959,6 +959,10 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
     static const double L0[9];
     const int cel = env->cell != NULL;
     const double *LC = cel ? env->cell->L : L0;
+    /* the gradient's entries as locals: loaded inside the lanes' loop under the select below,
+     * GCC made them masked loads it cannot vectorize, and the whole kinematics loop ran scalar */
+    double LCl[9];
+    for (int a = 0; a < 9; a++) LCl[a] = LC[a];
     /* lane q's kinematics from its normal n and contact point pt (the lever arms, the relative
      * velocity at the point and its parts, the overlap change, pair_an_ext with gscale 1) */
 #define LANE_KIN(q, n, pt)                                                                                      \
@@ -974,7 +978,7 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         floe_cross3_l(uj_, wj_, rj_);                                                                           \
         for (int a = 0; a < 3; a++) {                                                                           \
             const double v_ = (VI[a][q] + ui_[a]) - (VJ[a][q] + uj_[a]);                                       \
-            const double la_ = LC[3 * a] * D[0][q] + LC[3 * a + 1] * D[1][q] + LC[3 * a + 2] * D[2][q];        \
+            const double la_ = LCl[3 * a] * D[0][q] + LCl[3 * a + 1] * D[1][q] + LCl[3 * a + 2] * D[2][q];     \
             vr_[a] = cel ? v_ - la_ : v_;                                                                       \
         }                                                                                                       \
         const double vn_ = floe_dot3_l(vr_, n);                                                                 \
