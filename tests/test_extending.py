@@ -11,6 +11,9 @@ scenes (tests/extending/):
     F = -k x oscillates as A cos(sqrt(k/m) t) (within 1e-3 A at every sample), the fixed
     beads do not move, and the provider's stored energy closes the energy balance
     (balance_error column below 1e-6);
+  - the same scene under `mpirun -np 2` (an MPI build): the anchor's class declares
+    per-particle forces (version 2, .splits), so the split world runs it: its tracker and
+    energy files are the same bytes as one process's;
   - line_packing.c (packing `line`): five beads at x = 0, 0.05, ..., 0.2 (exact to 1e-12 m);
   - `floe help pd_material spring_bond`, `floe help provider anchor` and `floe help packing
     line` print the plugins' schemas; a misspelt plugin key is refused with its line and
@@ -97,6 +100,19 @@ def main():
             check(bal < 1e-6 and abs(el - 0.5 * k * A * A) < 1e-6 * 0.5 * k * A * A,
                   "anchor: its stored energy (max %.9g J, k A^2/2 = %.9g J) closes the balance (error %.3g, tol 1e-6)"
                   % (el, 0.5 * k * A * A, bal))
+        # ---- the provider under mpirun (an MPI build): its class declares per-particle forces
+        # (floe_provider.h, version 2), so the split world runs it; the same bytes as one process ----
+        cache = os.path.join(build, "CMakeCache.txt")
+        mpi_build = os.path.exists(cache) and "FLOE_WITH_MPI:BOOL=ON" in open(cache).read()
+        mpiexec = shutil.which("mpirun")
+        if mpi_build and mpiexec and os.path.exists(os.path.join(wd, "anc", "anchored.csv")):
+            rc, out, err = run([mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", "2", floe, "run",
+                                "anchored.yaml", "-o", "anc2", "-q"], cwd=wd)
+            if check(rc == 0, "mpirun -np 2 floe run anchored.yaml: exit %d\n%s%s" % (rc, out, err)):
+                for f in ("anchored.csv", "energy.csv"):
+                    same = open(os.path.join(wd, "anc", f), "rb").read() == open(os.path.join(wd, "anc2", f), "rb").read()
+                    check(same, "anchor under mpirun -np 2: %s differs from one process's" % f)
+                print("  anchor under mpirun -np 2: anchored.csv and energy.csv the same bytes as one process's")
         rc, out, err = run([floe, "check", "anchored.yaml"], cwd=wd)
         check(rc == 0 and "particles:  6 (" in out and "body 1: particles 1..5" in out and "forces:     anchor" in out,
               "floe check anchored.yaml: 6 particles (a sphere and 5 beads), the anchor force:\n%s%s" % (out, err))

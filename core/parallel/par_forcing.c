@@ -31,10 +31,13 @@
 
 #ifdef FLOE_HAVE_MPI
 
-int floe_par_provider_supported(const floe_provider *pv) {
+int floe_par_provider_supported(const floe_world *w, const floe_provider *pv) {
+    if (floe_servo_is_provider(pv) || floe_linear_drag_is(pv) || floe_forcing_is_per_particle(pv)) return 1;
+    /* any other user provider (whatever its name): when its class declares per-particle
+     * forces (floe_provider.h, version 2); the world's own stages by their names */
+    if (floe_provider_is_user(w, pv)) return floe_provider_splits(pv) == FLOE_PROVIDER_PER_PARTICLE;
     const char *nm = pv->klass->name;
-    return !strcmp(nm, "body_forces") || !strcmp(nm, "contacts") || !strcmp(nm, "beam_bonds") || !strcmp(nm, "pd_bonds") ||
-           floe_servo_is_provider(pv) || floe_linear_drag_is(pv) || floe_forcing_is_per_particle(pv);
+    return !strcmp(nm, "body_forces") || !strcmp(nm, "contacts") || !strcmp(nm, "beam_bonds") || !strcmp(nm, "pd_bonds");
 }
 
 /* doubles per particle of every registered array */

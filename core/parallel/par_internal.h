@@ -209,7 +209,7 @@ int floe_par_pd_gather(floe_world *w, floe_par *P, struct floe_world *M);
  * (collective; errors agreed by every rank) */
 /* 1 for a force provider that runs split (par_forcing.c): the world's body forces, contacts,
  * beam bonds, servo walls, linear_drag, the ice drags and Coriolis (core/forcing) */
-int floe_par_provider_supported(const struct floe_provider *pv);
+int floe_par_provider_supported(const floe_world *w, const struct floe_provider *pv);
 /* at the split: the arrays of nnew rows (*fresh; NULL without arrays), allocated before the
  * ranks agree on the split's memory; then installed with the rows of the particles kept
  * (newidx: old index -> new, -1 dropped) when keep, or freed */

@@ -292,13 +292,17 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     if (w->nobs) return refuse(w, "an observer (outputs)");
     if (w->def.integrator != FLOE_VELOCITY_VERLET && w->def.integrator != FLOE_LEAPFROG && w->def.integrator != FLOE_RK2)
         return refuse(w, "a user integrator");
-    /* the providers that run split (par_forcing.c): not a user's, whose loops and state are
-     * its own */
+    /* the providers that run split (par_forcing.c): a user's only when its class declares
+     * per-particle forces (its loops and state are otherwise its own) */
     for (int k = 0; k < w->nprov + w->nuprov; k++) {
         const floe_provider *pv = k < w->nprov ? w->prov[k] : w->uprov[k - w->nprov];
-        if (!floe_par_provider_supported(pv)) {
-            char what[96];
-            snprintf(what, sizeof what, "the force provider %s", pv->klass->name);
+        if (!floe_par_provider_supported(w, pv)) {
+            char what[224];
+            if (floe_provider_is_user(w, pv))
+                snprintf(what, sizeof what, "the force provider %s (a user's provider runs split when its class, "
+                         "version 2, declares .splits = FLOE_PROVIDER_PER_PARTICLE: floe_provider.h)", pv->klass->name);
+            else
+                snprintf(what, sizeof what, "the force provider %s", pv->klass->name);
             return refuse(w, what);
         }
     }

@@ -42,8 +42,11 @@ typedef struct floe_provider_out {
                               next stage */
 } floe_provider_out;
 
+/* floe_provider_class.splits (version 2): how a provider's work splits over MPI ranks */
+enum { FLOE_PROVIDER_PER_PARTICLE = 1 };
+
 typedef struct floe_provider_class {
-    int version;           /* 1 */
+    int version;           /* 1, or 2 with splits */
     const char *name;
     int group;             /* FLOE_GROUP_DEM or FLOE_GROUP_PD */
     /* required: add forces and torques to ctx->p->f and ->t (zeroed by the world before the
@@ -62,6 +65,15 @@ typedef struct floe_provider_class {
      * 0 makes the adaptive controller refuse the scene, naming the provider */
     int (*can_save)(const floe_provider *pv, const floe_world *w);
     void (*destroy)(floe_provider *pv);
+    /* version 2: whether a world split over MPI ranks (floe_parallel.h) may run it. 0: not (the
+     * split is refused, naming it). FLOE_PROVIDER_PER_PARTICLE: the force and torque it adds
+     * to particle i depend only on i's own fields of floe_provider_ctx and on what every rank
+     * holds alike (its parameters, the time, the step); it adds them to free particles only
+     * (a rank's ghosts, its copies of the neighbouring ranks' particles, are stored
+     * FLOE_FIXED); its ledger terms (out) are sums over the particles it acts on; it keeps no
+     * state (no state_size) and excludes no pairs. Each rank then runs it on the particles
+     * it owns, and the ranks' ledger terms are summed. */
+    int splits;
 } floe_provider_class;
 
 struct floe_provider {
@@ -74,7 +86,9 @@ struct floe_provider {
  * before the world is prepared (its first step): FLOE_OK and the world owns it (freed by
  * klass->destroy, or free() when NULL, at floe_world_destroy); otherwise an error code with
  * the message in floe_world_last_error, and the caller keeps it (NULL, a class without
- * name or forces, a version other than 1, a world already prepared). User providers run
+ * name or forces, a version other than 1 or 2, a version-2 class whose splits is neither 0
+ * nor FLOE_PROVIDER_PER_PARTICLE or that declares per-particle forces with a state or
+ * excludes, a world already prepared). User providers run
  * after the body forces and before beam bonds and contacts, in the order they were added;
  * group FLOE_GROUP_PD ones run with the PD bonds (the staggered scheme's PD rate). Their
  * state (state_size/save/restore) is saved and restored with every other provider's
@@ -93,5 +107,8 @@ int floe_register_builtin_providers(char *err, size_t errlen);
  * a scene without bonds or PD has no such stage). */
 int floe_world_provider_count(const floe_world *w);
 const floe_provider *floe_world_provider(const floe_world *w, int k);
+
+/* pv's class's splits: 0 for a version-1 class (which has no such field) or NULL */
+int floe_provider_splits(const floe_provider *pv);
 
 #endif

@@ -33,13 +33,24 @@ floe_provider_ctx floe_provider_ctx_of(const struct floe_step_ctx *ctx) {
     return c;
 }
 
+int floe_provider_splits(const floe_provider *pv) {
+    return pv && pv->klass && pv->klass->version >= 2 ? pv->klass->splits : 0; /* (version 1 has no such field) */
+}
+
 int floe_world_add_provider(floe_world *w, floe_provider *pv) {
     if (!w) return FLOE_EINVAL;
     if (!pv || !pv->klass) return floe_world_error(w, FLOE_EINVAL, "provider is NULL or has no class");
     const floe_provider_class *k = pv->klass;
-    if (k->version != 1 || !k->name || !k->name[0] || !k->forces)
-        return floe_world_error(w, FLOE_EINVAL, "provider class %s: version 1, a name and forces() are required",
+    if ((k->version != 1 && k->version != 2) || !k->name || !k->name[0] || !k->forces)
+        return floe_world_error(w, FLOE_EINVAL, "provider class %s: version 1 or 2, a name and forces() are required",
                                 k->name ? k->name : "(unnamed)");
+    if (k->version == 2 && k->splits != 0 && k->splits != FLOE_PROVIDER_PER_PARTICLE)
+        return floe_world_error(w, FLOE_EINVAL, "provider %s: splits must be 0 or FLOE_PROVIDER_PER_PARTICLE (got %d)",
+                                k->name, k->splits);
+    if (floe_provider_splits(pv) == FLOE_PROVIDER_PER_PARTICLE && (k->state_size || k->excludes))
+        return floe_world_error(w, FLOE_EINVAL, "provider %s: declares per-particle forces (splits) but keeps %s: a "
+                                "per-particle provider keeps no state and excludes no pairs", k->name,
+                                k->state_size ? "a state (state_size)" : "pairs out of the list (excludes)");
     if (k->group != FLOE_GROUP_DEM && k->group != FLOE_GROUP_PD)
         return floe_world_error(w, FLOE_EINVAL, "provider %s: group must be FLOE_GROUP_DEM or FLOE_GROUP_PD", k->name);
     if (k->state_size && (!k->save || !k->restore))

@@ -37,8 +37,12 @@ static int anchor_forces(floe_provider *pv, floe_world *w, const struct floe_ste
     return FLOE_OK;
 }
 
+/* version 2 with splits: the force on particle i reads i's position alone, lands on free
+ * particles only, and the provider keeps no state, so `floe run` under mpirun runs it on each
+ * rank's own particles (floe_provider.h) */
 static const floe_provider_class anchor_class = {
-    .version = 1, .name = "anchor", .group = FLOE_GROUP_DEM, .forces = anchor_forces}; /* destroy NULL: free() */
+    .version = 2, .name = "anchor", .group = FLOE_GROUP_DEM, .forces = anchor_forces, /* destroy NULL: free() */
+    .splits = FLOE_PROVIDER_PER_PARTICLE};
 
 static floe_provider *anchor_create(const void *params, const floe_world *w, char *err, size_t errlen) {
     const anchor_params *p = params;

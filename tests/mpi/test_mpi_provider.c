@@ -1,0 +1,201 @@
+/* test_mpi_provider.c - a user's force provider in a world split over MPI ranks
+ * (floe_provider.h, version 2: .splits = FLOE_PROVIDER_PER_PARTICLE; docs/parallel.md
+ * "Forcing providers and servo walls"). Run under mpirun with 1, 2 and 4 ranks.
+ *
+ *  1. The provider: a tether F = -k m (x - c) towards the box's centre on every free sphere,
+ *     its stored energy k m |x - c|^2 / 2 booked as elastic, and a torque about z on spheres
+ *     moving in +x (a force that reads the particle's own velocity). 125 spheres in a walled
+ *     box, no gravity, 2,000 steps with contacts and migrations. Rank 0 first runs the
+ *     unsplit world alone; then every rank builds the same world, splits it and steps it:
+ *     positions within 1e-10 of the box side, velocities within 1e-8 of the largest speed,
+ *     the stored energy summed over the ranks within 1e-9 of the unsplit one (the tether's
+ *     share of it is more than half: the provider matters), the rotational kinetic energy
+ *     (the torque's and the contacts' friction's) within 1e-8.
+ *  2. The same provider declaring nothing (version 1, and version 2 with splits 0): the
+ *     split is refused on every rank (FLOE_ENOTSUP), the message naming the provider and
+ *     the declaration it lacks.
+ *  3. floe_world_add_provider refuses a version-2 class with splits other than 0 or
+ *     FLOE_PROVIDER_PER_PARTICLE, and a per-particle one that keeps a state or excludes
+ *     pairs (FLOE_EINVAL, the world unchanged: the caller keeps the provider). */
+#include "floe.h"
+#include "../check.h"
+#include "mpi_common.h"
+#include <math.h>
+#include <stdlib.h>
+
+enum { NS = 5, STEPS = 2000 };
+static const double R = 0.001, SP = 0.0024, DT = 2.5e-6, L = NS * 0.0024 + 0.001, K = 2e3;
+
+typedef struct tether { floe_provider base; double c[3], k; } tether;
+
+static int tether_forces(floe_provider *pv, floe_world *w, const struct floe_step_ctx *sc, floe_provider_out *out) {
+    (void)w;
+    const tether *t = (const tether *)pv;
+    floe_provider_ctx c = floe_provider_ctx_of(sc);
+    for (int i = 0; i < c.n; i++) {
+        if (c.motion[i] != FLOE_FREE) continue;
+        for (int d = 0; d < 3; d++) {
+            const double u = c.x[3 * i + d] - t->c[d];
+            c.f[3 * i + d] -= t->k * c.mass[i] * u;
+            out->elastic += 0.5 * t->k * c.mass[i] * u * u;
+        }
+        if (c.v[3 * i] > 0) c.t[3 * i + 2] += 1e-9; /* its own velocity decides */
+    }
+    return FLOE_OK;
+}
+static size_t no_state(const floe_provider *pv, const floe_world *w) { (void)pv; (void)w; return 0; }
+static void no_save(const floe_provider *pv, const floe_world *w, unsigned char *b) { (void)pv; (void)w; (void)b; }
+static void no_restore(floe_provider *pv, floe_world *w, const unsigned char *b) { (void)pv; (void)w; (void)b; }
+static int no_pairs(const floe_provider *pv, const floe_world *w, int i, int j) { (void)pv; (void)w; (void)i; (void)j; return 0; }
+
+static const floe_provider_class split_class = {.version = 2, .name = "tether", .group = FLOE_GROUP_DEM,
+                                                .forces = tether_forces, .splits = FLOE_PROVIDER_PER_PARTICLE};
+static const floe_provider_class v1_class = {.version = 1, .name = "tether_v1", .group = FLOE_GROUP_DEM,
+                                             .forces = tether_forces};
+static const floe_provider_class v2_none_class = {.version = 2, .name = "tether_v2_none", .group = FLOE_GROUP_DEM,
+                                                  .forces = tether_forces, .splits = 0};
+static const floe_provider_class bad_splits_class = {.version = 2, .name = "tether_bad", .group = FLOE_GROUP_DEM,
+                                                     .forces = tether_forces, .splits = 7};
+static const floe_provider_class stateful_class = {
+    .version = 2, .name = "tether_state", .group = FLOE_GROUP_DEM, .forces = tether_forces, .state_size = no_state,
+    .save = no_save, .restore = no_restore, .splits = FLOE_PROVIDER_PER_PARTICLE};
+static const floe_provider_class excluding_class = {.version = 2, .name = "tether_excl", .group = FLOE_GROUP_DEM,
+                                                    .forces = tether_forces, .excludes = no_pairs,
+                                                    .splits = FLOE_PROVIDER_PER_PARTICLE};
+
+static tether *new_tether(const floe_provider_class *k) {
+    tether *t = calloc(1, sizeof *t);
+    t->base.klass = k;
+    for (int d = 0; d < 3; d++) t->c[d] = 0.5 * L;
+    t->k = K;
+    return t;
+}
+
+static floe_world *build(const floe_provider_class *k) {
+    floe_world_def d = floe_default_world_def();
+    d.dim = 3; d.dt = DT;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    mpi_test_add_glass(w, 1e7);
+    const int g = floe_world_add_geometry(w, floe_sphere_create(R));
+    mpi_test_box_walls(w, L, L, L, 0, 6);
+    unsigned s = 99;
+    for (int c = 0; c < NS; c++)
+        for (int b = 0; b < NS; b++)
+            for (int a = 0; a < NS; a++) {
+                floe_particle_def p = floe_default_particle_def();
+                p.geometry = g;
+                double j[3];
+                for (int q = 0; q < 3; q++) { s = s * 1103515245u + 12345u; j[q] = (s >> 8) / 16777216.0 - 0.5; }
+                floe_v3_set(p.x, 0.0005 + (a + 0.5) * SP, 0.0005 + (b + 0.5) * SP, 0.0005 + (c + 0.5) * SP);
+                floe_v3_set(p.v, 0.3 * j[0], 0.3 * j[1], 0.3 * j[2]);
+                floe_world_add_particle(w, &p);
+            }
+    if (k) {
+        tether *t = new_tether(k);
+        if (floe_world_add_provider(w, &t->base)) { free(t); CHECK(0, "add_provider: %s", floe_world_last_error(w)); }
+    }
+    return w;
+}
+
+/* part 1: the split run against the unsplit one */
+static void split_matches(void) {
+    double *x0 = NULL, *v0 = NULL;
+    int N = 0;
+    floe_energy e0 = {0}, ep = {0};
+    if (rank_ == 0) { /* the unsplit run, and the same scene without the provider */
+        floe_world *w = build(&split_class);
+        for (int s = 0; s < STEPS; s++)
+            if (floe_world_step(w)) { CHECK(0, "serial: %s", floe_world_last_error(w)); break; }
+        N = floe_world_particle_count(w);
+        x0 = calloc((size_t)N * 3, sizeof *x0);
+        v0 = calloc((size_t)N * 3, sizeof *v0);
+        floe_world_parallel_gather(w, x0, v0, N);
+        e0 = floe_world_energy(w);
+        floe_world_destroy(w);
+        w = build(NULL);
+        floe_world_prepare(w);
+        ep = floe_world_energy(w);
+        floe_world_destroy(w);
+    }
+    floe_world *w = build(&split_class);
+    int rc = floe_world_prepare(w);
+    if (!rc) rc = floe_world_parallel_init(w, NULL);
+    CHECK(rc == 0, "split: %s", rc ? floe_world_last_error(w) : "");
+    for (int s = 0; !rc && s < STEPS; s++) rc = floe_world_step(w);
+    CHECK(rc == 0, "split run: %s", rc ? floe_world_last_error(w) : "");
+    const int n = 6 + NS * NS * NS;
+    double *xp = calloc((size_t)n * 3, sizeof *xp), *vp = calloc((size_t)n * 3, sizeof *vp);
+    floe_world_parallel_gather(w, xp, vp, n);
+    floe_energy e;
+    floe_world_parallel_energy(w, &e);
+    if (rank_ == 0) {
+        double dx = 0, dv = 0, vmax = 0;
+        for (int k = 3 * 6; k < 3 * n; k++) { /* the spheres (the walls are 0 .. 5) */
+            dx = fmax(dx, fabs(xp[k] - x0[k]));
+            dv = fmax(dv, fabs(vp[k] - v0[k]));
+            vmax = fmax(vmax, fabs(v0[k]));
+        }
+        CHECK(N == n, "particle count %d (%d)", N, n);
+        CHECK(dx <= 1e-10 * L, "positions: %.3g of the side (tol 1e-10)", dx / L);
+        CHECK(dv <= 1e-8 * vmax, "velocities: %.3g of the largest speed (tol 1e-8)", dv / vmax);
+        const double del = fabs(e.elastic - e0.elastic), dr = fabs(e.kinetic_rot - e0.kinetic_rot);
+        CHECK(del <= 1e-9 * e0.elastic, "stored energy %.17g vs %.17g (%.3g of it, tol 1e-9)", e.elastic, e0.elastic,
+              del / e0.elastic);
+        CHECK(dr <= 1e-8 * e0.kinetic_rot, "rotational kinetic energy %.17g vs %.17g (%.3g of it, tol 1e-8)",
+              e.kinetic_rot, e0.kinetic_rot, dr / e0.kinetic_rot);
+        /* the tether's own share of the initial stored energy: the sum k m |x - c|^2 / 2 over
+         * the spheres at their start is what the provider books (the scene without it
+         * stores only the contacts') */
+        CHECK(e0.initial > 0 && e0.initial - ep.initial > 0.5 * e0.initial, "the tether's energy %.3g J is more than "
+              "half of the initial %.3g J", e0.initial - ep.initial, e0.initial);
+        CHECK(e0.kinetic_rot > 0, "the spheres spin (%.3g J)", e0.kinetic_rot);
+        printf("  positions %.2e of the side, velocities %.2e of the largest speed, stored energy %.2e of it "
+               "(%.3g J), rotation %.2e of it (%.3g J)\n", dx / L, dv / vmax, del / e0.elastic, e0.elastic,
+               dr / e0.kinetic_rot, e0.kinetic_rot);
+    }
+    free(xp); free(vp); free(x0); free(v0);
+    floe_world_destroy(w);
+}
+
+/* part 2: providers that declare nothing: refused on every rank, named */
+static void undeclared_refused(void) {
+    const floe_provider_class *ks[2] = {&v1_class, &v2_none_class};
+    for (int q = 0; q < 2; q++) {
+        floe_world *w = build(ks[q]);
+        int rc = floe_world_prepare(w);
+        CHECK(rc == 0, "%s: prepare (%s)", ks[q]->name, rc ? floe_world_last_error(w) : "");
+        rc = floe_world_parallel_init(w, NULL);
+        const char *msg = floe_world_last_error(w);
+        CHECK(rc == FLOE_ENOTSUP && strstr(msg, ks[q]->name) && strstr(msg, "FLOE_PROVIDER_PER_PARTICLE"),
+              "%s: refused naming it and the declaration (rc %d: %s)", ks[q]->name, rc, msg);
+        if (rank_ == 0 && q == 0) printf("  refused: %s\n", msg);
+        floe_world_destroy(w);
+    }
+}
+
+/* part 3: the classes floe_world_add_provider refuses */
+static void bad_classes(void) {
+    const floe_provider_class *ks[3] = {&bad_splits_class, &stateful_class, &excluding_class};
+    const char *want[3] = {"splits must be", "a state", "excludes"};
+    for (int q = 0; q < 3; q++) {
+        floe_world *w = build(NULL);
+        tether *t = new_tether(ks[q]);
+        const int rc = floe_world_add_provider(w, &t->base);
+        const char *msg = floe_world_last_error(w);
+        CHECK(rc == FLOE_EINVAL && strstr(msg, ks[q]->name) && strstr(msg, want[q]), "%s: refused (rc %d: %s)",
+              ks[q]->name, rc, msg);
+        CHECK(floe_world_prepare(w) == 0, "%s: the world prepares without it", ks[q]->name);
+        free(t); /* refused: the caller keeps it */
+        floe_world_destroy(w);
+    }
+}
+
+int main(int argc, char **argv) {
+    mpi_test_init(&argc, &argv);
+    split_matches();
+    undeclared_refused();
+    bad_classes();
+    const int fails = mpi_test_failed("test_mpi_provider");
+    MPI_Finalize();
+    return fails ? 1 : 0;
+}
