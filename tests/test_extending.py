@@ -113,6 +113,8 @@ def main():
                     same = open(os.path.join(wd, "anc", f), "rb").read() == open(os.path.join(wd, "anc2", f), "rb").read()
                     check(same, "anchor under mpirun -np 2: %s differs from one process's" % f)
                 print("  anchor under mpirun -np 2: anchored.csv and energy.csv the same bytes as one process's")
+        else:
+            print("  anchor under mpirun: skipped (%s)" % ("no mpirun on PATH" if mpi_build else "not an MPI build"))
         rc, out, err = run([floe, "check", "anchored.yaml"], cwd=wd)
         check(rc == 0 and "particles:  6 (" in out and "body 1: particles 1..5" in out and "forces:     anchor" in out,
               "floe check anchored.yaml: 6 particles (a sphere and 5 beads), the anchor force:\n%s%s" % (out, err))

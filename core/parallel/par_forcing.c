@@ -2,7 +2,8 @@
  * ranks (docs/parallel.md, "Forcing providers and servo walls").
  *
  * Per-particle providers (linear_drag, ocean_drag, wind_drag, coriolis, the body-force
- * callback) act on free particles only, and ghosts are stored FLOE_FIXED, so each acts on the
+ * callback, a user's provider whose class declares FLOE_PROVIDER_PER_PARTICLE) act on free
+ * particles only, and ghosts are stored FLOE_FIXED, so each acts on the
  * owned particles of each rank: nothing of theirs reaches a ghost or travels back with the
  * reverse sum. What they keep per particle (their last force, for the trapezoid work of the
  * ledger and for a drag held between its evaluations) is registered with the world

@@ -208,7 +208,8 @@ int floe_par_pd_gather(floe_world *w, floe_par *P, struct floe_world *M);
  * after the ghosts), and by global id into rank 0's unsplit world full at a checkpoint
  * (collective; errors agreed by every rank) */
 /* 1 for a force provider that runs split (par_forcing.c): the world's body forces, contacts,
- * beam bonds, servo walls, linear_drag, the ice drags and Coriolis (core/forcing) */
+ * beam bonds, servo walls, linear_drag, the ice drags and Coriolis (core/forcing), and a
+ * user's provider whose class declares per-particle forces (floe_provider.h, version 2) */
 int floe_par_provider_supported(const floe_world *w, const struct floe_provider *pv);
 /* at the split: the arrays of nnew rows (*fresh; NULL without arrays), allocated before the
  * ranks agree on the split's memory; then installed with the rows of the particles kept

@@ -72,7 +72,10 @@ typedef struct floe_provider_class {
      * (a rank's ghosts, its copies of the neighbouring ranks' particles, are stored
      * FLOE_FIXED); its ledger terms (out) are sums over the particles it acts on; it keeps no
      * state (no state_size) and excludes no pairs. Each rank then runs it on the particles
-     * it owns, and the ranks' ledger terms are summed. */
+     * it owns, and the ranks' ledger terms are summed. On a split world i is the rank's
+     * local index, not the particle's id in the scene: the force must not depend on i itself
+     * (floe_world_parallel_gid gives the id) nor on the world as a whole through w (tested:
+     * velocity Verlet and RK2, FLOE_GROUP_DEM). */
     int splits;
 } floe_provider_class;
 

@@ -4,13 +4,17 @@
  *
  *  1. The provider: a tether F = -k m (x - c) towards the box's centre on every free sphere,
  *     its stored energy k m |x - c|^2 / 2 booked as elastic, and a torque about z on spheres
- *     moving in +x (a force that reads the particle's own velocity). 125 spheres in a walled
- *     box, no gravity, 2,000 steps with contacts and migrations. Rank 0 first runs the
- *     unsplit world alone; then every rank builds the same world, splits it and steps it:
- *     positions within 1e-10 of the box side, velocities within 1e-8 of the largest speed,
- *     the stored energy summed over the ranks within 1e-9 of the unsplit one (the tether's
- *     share of it is more than half: the provider matters), the rotational kinetic energy
- *     (the torque's and the contacts' friction's) within 1e-8.
+ *     moving in +x (a force that reads the particle's own velocity; its work tau w_z dt at
+ *     the evaluation's spin booked as work_boundary: the energy watchdog stops the run
+ *     without it). 125 spheres in a walled
+ *     box, no gravity, 2,000 steps of velocity Verlet and 1,000 of RK2 (its midpoint probe
+ *     calls the provider too) with contacts and migrations. Rank 0 first runs the unsplit
+ *     world alone; then every rank builds the same world, splits it and steps it: positions
+ *     within 1e-10 of the box side, velocities within 1e-8 of the largest speed, the stored
+ *     energy summed over the ranks within 1e-9 of the unsplit one (the tether's share of it
+ *     is more than half: the provider matters), the torque's work summed over the ranks
+ *     within 1e-9, the rotational kinetic energy within 1e-8 (more than twice that of the
+ *     same run without the torque: the torque matters).
  *  2. The same provider declaring nothing (version 1, and version 2 with splits 0): the
  *     split is refused on every rank (FLOE_ENOTSUP), the message naming the provider and
  *     the declaration it lacks.
@@ -27,6 +31,7 @@ enum { NS = 5, STEPS = 2000 };
 static const double R = 0.001, SP = 0.0024, DT = 2.5e-6, L = NS * 0.0024 + 0.001, K = 2e3;
 
 typedef struct tether { floe_provider base; double c[3], k; } tether;
+static double torque_ = 1e-6; /* N m, about z, on a sphere moving in +x (0: the reference run) */
 
 static int tether_forces(floe_provider *pv, floe_world *w, const struct floe_step_ctx *sc, floe_provider_out *out) {
     (void)w;
@@ -39,7 +44,10 @@ static int tether_forces(floe_provider *pv, floe_world *w, const struct floe_ste
             c.f[3 * i + d] -= t->k * c.mass[i] * u;
             out->elastic += 0.5 * t->k * c.mass[i] * u * u;
         }
-        if (c.v[3 * i] > 0) c.t[3 * i + 2] += 1e-9; /* its own velocity decides */
+        if (c.v[3 * i] > 0) { /* its own velocity decides; its work tau w_z dt booked as the boundary's */
+            c.t[3 * i + 2] += torque_;
+            if (c.stepping) out->work_boundary += torque_ * c.w[3 * i + 2] * c.dt;
+        }
     }
     return FLOE_OK;
 }
@@ -71,9 +79,9 @@ static tether *new_tether(const floe_provider_class *k) {
     return t;
 }
 
-static floe_world *build(const floe_provider_class *k) {
+static floe_world *build(const floe_provider_class *k, floe_integrator integ) {
     floe_world_def d = floe_default_world_def();
-    d.dim = 3; d.dt = DT;
+    d.dim = 3; d.dt = DT; d.integrator = integ;
     floe_world *w = floe_world_create(&d, NULL, 0);
     mpi_test_add_glass(w, 1e7);
     const int g = floe_world_add_geometry(w, floe_sphere_create(R));
@@ -98,31 +106,38 @@ static floe_world *build(const floe_provider_class *k) {
 }
 
 /* part 1: the split run against the unsplit one */
-static void split_matches(void) {
+static void split_matches(floe_integrator integ, int steps, const char *tag) {
     double *x0 = NULL, *v0 = NULL;
     int N = 0;
-    floe_energy e0 = {0}, ep = {0};
-    if (rank_ == 0) { /* the unsplit run, and the same scene without the provider */
-        floe_world *w = build(&split_class);
-        for (int s = 0; s < STEPS; s++)
-            if (floe_world_step(w)) { CHECK(0, "serial: %s", floe_world_last_error(w)); break; }
+    floe_energy e0 = {0}, ep = {0}, er = {0};
+    if (rank_ == 0) { /* the unsplit run, the same without the torque, and without the provider */
+        torque_ = 0;
+        floe_world *w = build(&split_class, integ);
+        for (int s = 0; s < steps; s++)
+            if (floe_world_step(w)) { CHECK(0, "%s serial without the torque: %s", tag, floe_world_last_error(w)); break; }
+        er = floe_world_energy(w);
+        floe_world_destroy(w);
+        torque_ = 1e-6;
+        w = build(&split_class, integ);
+        for (int s = 0; s < steps; s++)
+            if (floe_world_step(w)) { CHECK(0, "%s serial: %s", tag, floe_world_last_error(w)); break; }
         N = floe_world_particle_count(w);
         x0 = calloc((size_t)N * 3, sizeof *x0);
         v0 = calloc((size_t)N * 3, sizeof *v0);
         floe_world_parallel_gather(w, x0, v0, N);
         e0 = floe_world_energy(w);
         floe_world_destroy(w);
-        w = build(NULL);
+        w = build(NULL, FLOE_VELOCITY_VERLET);
         floe_world_prepare(w);
         ep = floe_world_energy(w);
         floe_world_destroy(w);
     }
-    floe_world *w = build(&split_class);
+    floe_world *w = build(&split_class, integ);
     int rc = floe_world_prepare(w);
     if (!rc) rc = floe_world_parallel_init(w, NULL);
     CHECK(rc == 0, "split: %s", rc ? floe_world_last_error(w) : "");
-    for (int s = 0; !rc && s < STEPS; s++) rc = floe_world_step(w);
-    CHECK(rc == 0, "split run: %s", rc ? floe_world_last_error(w) : "");
+    for (int s = 0; !rc && s < steps; s++) rc = floe_world_step(w);
+    CHECK(rc == 0, "%s split run: %s", tag, rc ? floe_world_last_error(w) : "");
     const int n = 6 + NS * NS * NS;
     double *xp = calloc((size_t)n * 3, sizeof *xp), *vp = calloc((size_t)n * 3, sizeof *vp);
     floe_world_parallel_gather(w, xp, vp, n);
@@ -148,10 +163,14 @@ static void split_matches(void) {
          * stores only the contacts') */
         CHECK(e0.initial > 0 && e0.initial - ep.initial > 0.5 * e0.initial, "the tether's energy %.3g J is more than "
               "half of the initial %.3g J", e0.initial - ep.initial, e0.initial);
-        CHECK(e0.kinetic_rot > 0, "the spheres spin (%.3g J)", e0.kinetic_rot);
-        printf("  positions %.2e of the side, velocities %.2e of the largest speed, stored energy %.2e of it "
-               "(%.3g J), rotation %.2e of it (%.3g J)\n", dx / L, dv / vmax, del / e0.elastic, e0.elastic,
-               dr / e0.kinetic_rot, e0.kinetic_rot);
+        const double dwb = fabs(e.work_boundary - e0.work_boundary);
+        CHECK(e0.work_boundary > 0 && dwb <= 1e-9 * e0.work_boundary, "%s: the torque's work summed over the ranks %.17g "
+              "vs %.17g (tol 1e-9 of it)", tag, e.work_boundary, e0.work_boundary);
+        CHECK(e0.kinetic_rot > 2 * er.kinetic_rot, "%s: the torque matters: rotational energy %.3g J, %.3g J without it",
+              tag, e0.kinetic_rot, er.kinetic_rot);
+        printf("  %s: positions %.2e of the side, velocities %.2e of the largest speed, stored energy %.2e of it "
+               "(%.3g J), rotation %.2e of it (%.3g J; %.3g J without the torque)\n", tag, dx / L, dv / vmax,
+               del / e0.elastic, e0.elastic, dr / e0.kinetic_rot, e0.kinetic_rot, er.kinetic_rot);
     }
     free(xp); free(vp); free(x0); free(v0);
     floe_world_destroy(w);
@@ -161,7 +180,7 @@ static void split_matches(void) {
 static void undeclared_refused(void) {
     const floe_provider_class *ks[2] = {&v1_class, &v2_none_class};
     for (int q = 0; q < 2; q++) {
-        floe_world *w = build(ks[q]);
+        floe_world *w = build(ks[q], FLOE_VELOCITY_VERLET);
         int rc = floe_world_prepare(w);
         CHECK(rc == 0, "%s: prepare (%s)", ks[q]->name, rc ? floe_world_last_error(w) : "");
         rc = floe_world_parallel_init(w, NULL);
@@ -178,7 +197,7 @@ static void bad_classes(void) {
     const floe_provider_class *ks[3] = {&bad_splits_class, &stateful_class, &excluding_class};
     const char *want[3] = {"splits must be", "a state", "excludes"};
     for (int q = 0; q < 3; q++) {
-        floe_world *w = build(NULL);
+        floe_world *w = build(NULL, FLOE_VELOCITY_VERLET);
         tether *t = new_tether(ks[q]);
         const int rc = floe_world_add_provider(w, &t->base);
         const char *msg = floe_world_last_error(w);
@@ -192,7 +211,8 @@ static void bad_classes(void) {
 
 int main(int argc, char **argv) {
     mpi_test_init(&argc, &argv);
-    split_matches();
+    split_matches(FLOE_VELOCITY_VERLET, STEPS, "velocity Verlet");
+    split_matches(FLOE_RK2, STEPS / 2, "RK2");
     undeclared_refused();
     bad_classes();
     const int fails = mpi_test_failed("test_mpi_provider");
