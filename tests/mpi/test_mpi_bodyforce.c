@@ -31,22 +31,7 @@ static void pull(const floe_world *w, int i, double t, double f[3], double torqu
 static floe_world *build(void) {
     floe_world_def d = floe_default_world_def();
     d.dim = 3; d.dt = DT;
-    floe_world *w = floe_world_create(&d, NULL, 0);
-    mpi_test_add_glass(w, 1e7);
-    const int g = floe_world_add_geometry(w, floe_sphere_create(R));
-    mpi_test_box_walls(w, L, L, L, 0, 6);
-    unsigned s = 99;
-    for (int c = 0; c < NS; c++)
-        for (int b = 0; b < NS; b++)
-            for (int a = 0; a < NS; a++) {
-                floe_particle_def p = floe_default_particle_def();
-                p.geometry = g;
-                double j[3];
-                for (int k = 0; k < 3; k++) { s = s * 1103515245u + 12345u; j[k] = (s >> 8) / 16777216.0 - 0.5; }
-                floe_v3_set(p.x, 0.0005 + (a + 0.5) * SP, 0.0005 + (b + 0.5) * SP, 0.0005 + (c + 0.5) * SP);
-                floe_v3_set(p.v, 0.3 * j[0], 0.3 * j[1], 0.3 * j[2]);
-                floe_world_add_particle(w, &p);
-            }
+    floe_world *w = mpi_test_sphere_box(d, NS, R, SP, L);
     floe_world_set_body_force(w, pull, NULL);
     return w;
 }
@@ -58,33 +43,21 @@ int main(int argc, char **argv) {
     floe_energy e0 = {0};
     if (rank_ == 0) { /* the unsplit run */
         floe_world *w = build();
-        for (int s = 0; s < STEPS; s++)
-            if (floe_world_step(w)) { fprintf(stderr, "serial: %s\n", floe_world_last_error(w)); return 1; }
-        N = floe_world_particle_count(w);
-        x0 = calloc((size_t)N * 3, sizeof *x0);
-        v0 = calloc((size_t)N * 3, sizeof *v0);
-        floe_world_parallel_gather(w, x0, v0, N);
-        e0 = floe_world_energy(w);
+        if (mpi_test_serial_run(w, STEPS, &N, &x0, &v0, &e0)) {
+            fprintf(stderr, "serial: %s\n", floe_world_last_error(w));
+            return 1;
+        }
         floe_world_destroy(w);
     }
     floe_world *w = build();
-    int rc = floe_world_prepare(w);
-    if (!rc) rc = floe_world_parallel_init(w, NULL);
-    CHECK(rc == 0, "split: %s", rc ? floe_world_last_error(w) : "");
-    for (int s = 0; !rc && s < STEPS; s++) rc = floe_world_step(w);
-    CHECK(rc == 0, "split run: %s", rc ? floe_world_last_error(w) : "");
     const int n = 6 + NS * NS * NS;
-    double *xp = calloc((size_t)n * 3, sizeof *xp), *vp = calloc((size_t)n * 3, sizeof *vp);
-    floe_world_parallel_gather(w, xp, vp, n);
+    double *xp, *vp;
     floe_energy e;
-    floe_world_parallel_energy(w, &e);
-    if (rank_ == 0) {
-        double dx = 0, dv = 0, vmax = 0;
-        for (int k = 3 * 6; k < 3 * n; k++) { /* the spheres (the walls are 0 .. 5) */
-            dx = fmax(dx, fabs(xp[k] - x0[k]));
-            dv = fmax(dv, fabs(vp[k] - v0[k]));
-            vmax = fmax(vmax, fabs(v0[k]));
-        }
+    const int rc = mpi_test_split_run(w, STEPS, n, &xp, &vp, &e);
+    CHECK(rc == 0, "split run: %s", rc ? floe_world_last_error(w) : "");
+    if (rank_ == 0 && rc == 0) {
+        double dx, dv, vmax;
+        mpi_test_max_diffs(xp, x0, vp, v0, 3 * 6, 3 * n, &dx, &dv, &vmax); /* the spheres (the walls are 0 .. 5) */
         CHECK(N == n, "particle count %d (%d)", N, n);
         CHECK(dx <= 1e-10 * L, "positions: %.3g of the side (tol 1e-10)", dx / L);
         CHECK(dv <= 1e-8 * vmax, "velocities: %.3g of the largest speed (tol 1e-8)", dv / vmax);
