@@ -75,7 +75,8 @@ typedef struct floe_provider_class {
      * it owns, and the ranks' ledger terms are summed. On a split world i is the rank's
      * local index, not the particle's id in the scene: the force must not depend on i itself
      * (floe_world_parallel_gid gives the id) nor on the world as a whole through w (tested:
-     * velocity Verlet and RK2, FLOE_GROUP_DEM). */
+     * velocity Verlet and RK2 in FLOE_GROUP_DEM; velocity Verlet and the staggered PD-DEM
+     * scheme in FLOE_GROUP_PD, on a PD body's points). */
     int splits;
 } floe_provider_class;
 

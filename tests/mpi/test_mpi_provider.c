@@ -15,6 +15,11 @@
  *     is more than half: the provider matters), the torque's work summed over the ranks
  *     within 1e-9, the rotational kinetic energy within 1e-8 (more than twice that of the
  *     same run without the torque: the torque matters).
+ *     The same provider in FLOE_GROUP_PD on the points of a PMB block (216 points, free in
+ *     space, the tether's centre at a corner so that the bonds work), 500 steps of velocity
+ *     Verlet and of the staggered PD-DEM scheme (two PD sub-steps a step: the provider runs
+ *     at the PD rate): positions within 1e-10 of the block, velocities within 1e-8, the
+ *     stored energy within 1e-9.
  *  2. The same provider declaring nothing (version 1, and version 2 with splits 0): the
  *     split is refused on every rank (FLOE_ENOTSUP), the message naming the provider and
  *     the declaration it lacks.
@@ -22,6 +27,7 @@
  *     FLOE_PROVIDER_PER_PARTICLE, and a per-particle one that keeps a state or excludes
  *     pairs (FLOE_EINVAL, the world unchanged: the caller keeps the provider). */
 #include "floe.h"
+#include "floe_pd.h"
 #include "../check.h"
 #include "mpi_common.h"
 #include <math.h>
@@ -147,6 +153,81 @@ static void split_matches(floe_integrator integ, int steps, const char *tag) {
     floe_world_destroy(w);
 }
 
+/* part 1b: a FLOE_GROUP_PD provider on the points of a PMB block (6 x 6 x 6 points, soft,
+ * free in space), the tether's centre at a corner of the block so that the points pull apart
+ * unevenly and the bonds work; velocity Verlet, then the staggered PD-DEM scheme with two PD
+ * sub-steps a step (the provider runs at the PD rate). The split run against the unsplit
+ * one: positions within 1e-10 of the block's size, velocities within 1e-8 of the largest
+ * speed, the stored energy (bonds and tether) within 1e-9. */
+static const floe_provider_class pd_class = {.version = 2, .name = "tether_pd", .group = FLOE_GROUP_PD,
+                                             .forces = tether_forces, .splits = FLOE_PROVIDER_PER_PARTICLE};
+enum { NPD = 6 };
+static const double PDX = 0.02;
+
+static floe_world *build_pd(int staggered) {
+    floe_world_def d = floe_default_world_def();
+    d.dim = 3; d.dt = 1e-3;
+    if (staggered) { d.pd_dem = FLOE_PD_DEM_STAGGERED; d.pd_substeps = 2; }
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    mpi_test_add_glass(w, 1e7);
+    floe_world_set_law(w, 0, 0, floe_linear_law_create(1e3, 0, 0, 0, 0)); /* soft: the points' own pairs */
+    floe_pd_region reg;
+    memset(&reg, 0, sizeof reg);
+    reg.dim = 3;
+    reg.dx = PDX;
+    reg.horizon_factor = 2;
+    floe_v3_set(reg.hi, NPD * PDX, NPD * PDX, NPD * PDX);
+    floe_pd_body *b = NULL;
+    const double E = 100, nu = 0.25;
+    floe_pd_material pm = floe_pd_material_pmb(1100, E / (3 * (1 - 2 * nu)), 0);
+    int rc = floe_pd_body_create(&b, &reg);
+    if (!rc) rc = floe_pd_set_material(b, &pm);
+    const double v0[3] = {0.01, -0.02, 0.005};
+    if (!rc) rc = floe_world_add_pd_body(w, b, 0, v0, NULL);
+    CHECK(rc == FLOE_OK, "the PD block (%s)", floe_world_last_error(w));
+    tether *t = new_tether(&pd_class);
+    for (int k = 0; k < 3; k++) t->c[k] = 0; /* a corner of the block */
+    t->k = 4;
+    if (floe_world_add_provider(w, &t->base)) { free(t); CHECK(0, "add_provider: %s", floe_world_last_error(w)); }
+    return w;
+}
+
+static void pd_split_matches(int staggered, int steps) {
+    const char *tag = staggered ? "PD group, staggered (2 PD sub-steps)" : "PD group, velocity Verlet";
+    const int n = NPD * NPD * NPD;
+    double *x0 = NULL, *v0 = NULL;
+    int N = 0;
+    floe_energy e0 = {0};
+    const double tq = torque_;
+    torque_ = 0; /* the points do not turn */
+    if (rank_ == 0) {
+        floe_world *w = build_pd(staggered);
+        const int src = mpi_test_serial_run(w, steps, &N, &x0, &v0, &e0);
+        CHECK(src == 0, "%s serial: %s", tag, src ? floe_world_last_error(w) : "");
+        floe_world_destroy(w);
+    }
+    floe_world *w = build_pd(staggered);
+    double *xp, *vp;
+    floe_energy e;
+    const int rc = mpi_test_split_run(w, steps, n, &xp, &vp, &e);
+    CHECK(rc == 0, "%s split run: %s", tag, rc ? floe_world_last_error(w) : "");
+    if (rank_ == 0 && rc == 0 && x0) {
+        double dx, dv, vmax;
+        mpi_test_max_diffs(xp, x0, vp, v0, 0, 3 * n, &dx, &dv, &vmax);
+        CHECK(N == n, "%s: point count %d (%d)", tag, N, n);
+        CHECK(dx <= 1e-10 * NPD * PDX, "%s: positions %.3g of the block (tol 1e-10)", tag, dx / (NPD * PDX));
+        CHECK(dv <= 1e-8 * vmax, "%s: velocities %.3g of the largest speed (tol 1e-8)", tag, dv / vmax);
+        const double del = fabs(e.elastic - e0.elastic);
+        CHECK(e0.elastic > 0 && del <= 1e-9 * e0.elastic, "%s: stored energy %.17g vs %.17g (tol 1e-9 of it)", tag,
+              e.elastic, e0.elastic);
+        printf("  %s: positions %.2e of the block, velocities %.2e of the largest speed, stored energy %.2e of it "
+               "(%.3g J)\n", tag, dx / (NPD * PDX), dv / vmax, del / e0.elastic, e0.elastic);
+    }
+    torque_ = tq;
+    free(xp); free(vp); free(x0); free(v0);
+    floe_world_destroy(w);
+}
+
 /* part 2: providers that declare nothing: refused on every rank, named */
 static void undeclared_refused(void) {
     const floe_provider_class *ks[2] = {&v1_class, &v2_none_class};
@@ -184,6 +265,8 @@ int main(int argc, char **argv) {
     mpi_test_init(&argc, &argv);
     split_matches(FLOE_VELOCITY_VERLET, STEPS, "velocity Verlet");
     split_matches(FLOE_RK2, STEPS / 2, "RK2");
+    pd_split_matches(0, 500);
+    pd_split_matches(1, 500);
     undeclared_refused();
     bad_classes();
     const int fails = mpi_test_failed("test_mpi_provider");
