@@ -11,8 +11,9 @@
  *
  * Arrays are indexed by particle id (the world's particle order; PD points are particles
  * too). On a world split over MPI ranks they are the rank's own particles and its ghosts,
- * by local index (floe_world_parallel_gid gives a particle's id in the scene). Forces and torques are ADDED to f and t (the world zeroes them before the DEM
- * group). In a 2D world the world drops z forces and x, y torques afterwards. */
+ * by local index (floe_world_parallel_gid gives a particle's id in the scene). Forces and
+ * torques are ADDED to f and t (the world zeroes them before the DEM group). In a 2D world
+ * the world drops z forces and x, y torques afterwards. */
 #ifndef FLOE_PROVIDER_CTX_H
 #define FLOE_PROVIDER_CTX_H
 
