@@ -189,6 +189,38 @@ static void test_add_convention(void) {
     floe_world_destroy(w);
 }
 
+/* a user's provider is taken to read orientations whatever its name: one named like the
+ * world's contact stage ("contacts") still has a spinning sphere's orientation integrated
+ * (core/world/world.c orientation_refresh; before, such a name was taken for the stage and
+ * the sphere's q was left unread and unchanged) */
+static void test_user_name_orientation(void) {
+    floe_world_def d = floe_default_world_def();
+    d.dt = 5e-5;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    floe_material m = {"m", 1000, 1e7, 0.3};
+    floe_world_add_material(w, &m);
+    floe_world_set_law(w, 0, 0, floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.0));
+    floe_particle_def p = floe_default_particle_def();
+    p.geometry = floe_world_add_geometry(w, floe_sphere_create(0.01));
+    p.w[2] = 10; /* rad/s about z */
+    floe_world_add_particle(w, &p);
+    static const floe_provider_class named = {.version = 1, .name = "contacts", .group = FLOE_GROUP_DEM,
+                                              .forces = noop_forces};
+    floe_provider *pv = malloc(sizeof *pv);
+    pv->klass = &named;
+    CHECK(floe_world_add_provider(w, pv) == FLOE_OK, "a user provider named contacts added");
+    int rc = floe_world_prepare(w);
+    for (int k = 0; k < 200 && !rc; k++) rc = floe_world_step(w);
+    floe_particles_view v;
+    floe_world_particles(w, &v);
+    /* 200 steps of 5e-5 s at 10 rad/s: a turn of 0.1 rad, q = (cos 0.05, 0, 0, sin 0.05) */
+    CHECK(rc == FLOE_OK && fabs(v.q[3] - sin(0.05)) < 1e-9 && fabs(v.q[0] - cos(0.05)) < 1e-9,
+          "the sphere's orientation integrated under a user provider named contacts: q = (%.9g, %.3g, %.3g, %.9g), "
+          "want (%.9g, 0, 0, %.9g) (rc %d: %s)", v.q[0], v.q[1], v.q[2], v.q[3], cos(0.05), sin(0.05), rc,
+          rc ? floe_world_last_error(w) : "");
+    floe_world_destroy(w);
+}
+
 static const char *scene =
     "dimension: 3\n"
     "time: {duration: 0.5, dt: 5.0e-5}\n"
@@ -299,6 +331,7 @@ int main(void) {
     test_decay();
     test_adaptive();
     test_add_convention();
+    test_user_name_orientation();
     test_scene();
     test_critical();
     return check_summary("test_providers");

@@ -320,6 +320,7 @@ int floe_world_add_servo_wall(floe_world *w, int wall, const floe_servo_def *def
             free(S);
             return rc;
         }
+        w->servo_pv = &S->base;
     }
     if (grow((void **)&S->s, &S->cap, S->n + 1, sizeof *S->s)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     servo_wall *r = calloc(1, sizeof *r);

@@ -710,9 +710,12 @@ void orientation_refresh(floe_world *w) {
      * provider reads floe_provider_ctx.q), and so may a body-force callback */
     if (w->body_force) need = 1;
     for (int k = 0; k < w->nprov + w->nuprov && !need; k++) {
-        const char *nm = (k < w->nprov ? w->prov[k] : w->uprov[k - w->nprov])->klass->name;
-        need = strcmp(nm, "body_forces") && strcmp(nm, "contacts") && strcmp(nm, "beam_bonds") && strcmp(nm, "pd_bonds") &&
-               strcmp(nm, "servo_walls");
+        const floe_provider *pv = k < w->nprov ? w->prov[k] : w->uprov[k - w->nprov];
+        const char *nm = pv->klass->name;
+        /* a user's provider whatever its name (the servo walls, added as one, known by their
+         * pointer); the world's own stages by name */
+        if (floe_provider_is_user(w, pv)) need = pv != w->servo_pv;
+        else need = strcmp(nm, "body_forces") && strcmp(nm, "contacts") && strcmp(nm, "beam_bonds") && strcmp(nm, "pd_bonds");
     }
     floe_particles *p = &w->p;
     for (int i = 0; i < p->n; i++)

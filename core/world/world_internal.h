@@ -224,6 +224,9 @@ struct floe_world {
     /* user providers (floe_world_add_provider, providers.c), owned by the world; prov
      * holds them too once prepared */
     struct floe_provider **uprov; int nuprov, uprov_cap;
+    const struct floe_provider *servo_pv; /* the servo walls' provider among uprov (servo_walls.c
+                                             sets it; orientation_refresh knows it reads no
+                                             orientation), NULL without servo walls */
     unsigned char *pbuf; size_t pbuf_cap;
     floe_cell_state *cell;    /* periodic cell (floe_cell.h, cell.c); NULL without */
     int obs_muted;            /* observers not called (the RVE's probes, core/integrators/rve.c) */
