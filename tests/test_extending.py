@@ -13,7 +13,8 @@ scenes (tests/extending/):
     (balance_error column below 1e-6);
   - the same scene under `mpirun -np 2` (an MPI build): the anchor's class declares
     per-particle forces (version 2, .splits), so the split world runs it: its tracker and
-    energy files are the same bytes as one process's;
+    energy files are the same bytes as one process's; and so they are after a checkpoint
+    written under 2 ranks and a restart from it under 2 ranks;
   - line_packing.c (packing `line`): five beads at x = 0, 0.05, ..., 0.2 (exact to 1e-12 m);
   - `floe help pd_material spring_bond`, `floe help provider anchor` and `floe help packing
     line` print the plugins' schemas; a misspelt plugin key is refused with its line and
@@ -113,6 +114,21 @@ def main():
                     same = open(os.path.join(wd, "anc", f), "rb").read() == open(os.path.join(wd, "anc2", f), "rb").read()
                     check(same, "anchor under mpirun -np 2: %s differs from one process's" % f)
                 print("  anchor under mpirun -np 2: anchored.csv and energy.csv the same bytes as one process's")
+            # a checkpoint written under 2 ranks (every 0.07 s: the file holds t = 0.14 s) and the
+            # run restarted from it under 2 ranks in the same folder: the outputs cut back to the
+            # checkpoint and continued, the same bytes as one process's uninterrupted run
+            rc, out, err = run([mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", "2", floe, "run",
+                                "anchored.yaml", "-o", "anc3", "-q", "--checkpoint-every", "0.07"], cwd=wd)
+            ck = os.path.join(wd, "anc3", "checkpoint.bin")
+            if check(rc == 0 and os.path.exists(ck), "mpirun -np 2 floe run --checkpoint-every 0.07: exit %d, "
+                     "checkpoint %s\n%s%s" % (rc, "written" if os.path.exists(ck) else "missing", out, err)):
+                rc, out, err = run([mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", "2", floe, "run",
+                                    "anchored.yaml", "-o", "anc3", "-q", "--restart", ck], cwd=wd)
+                if check(rc == 0, "mpirun -np 2 floe run --restart: exit %d\n%s%s" % (rc, out, err)):
+                    for f in ("anchored.csv", "energy.csv"):
+                        same = open(os.path.join(wd, "anc", f), "rb").read() == open(os.path.join(wd, "anc3", f), "rb").read()
+                        check(same, "anchor restarted under mpirun -np 2: %s differs from one process's" % f)
+                    print("  anchor restarted under mpirun -np 2 from t = 0.14 s: the same bytes as one process's")
         else:
             print("  anchor under mpirun: skipped (%s)" % ("no mpirun on PATH" if mpi_build else "not an MPI build"))
         rc, out, err = run([floe, "check", "anchored.yaml"], cwd=wd)

@@ -213,6 +213,46 @@ static double *gen_uniform(int n, double lo, double width)
     return p;
 }
 
+/* A build by 2 or 4 threads is the one-thread build: the same permutation, and the same
+ * radius and k-NN answers in the same order (the order of a radius query's points is the
+ * order the nodes are visited in: their splits, bounds and layout). Without OpenMP all are
+ * one thread's. */
+static void check_threaded(const char *name, const double *p, int n, int dim, int leaf, double r)
+{
+    int bad = 0, failed = 0;
+    floe_kdtree *t1 = floe_kdtree_build_threads(p, n, dim, leaf, 1);
+    int *a = malloc((size_t)n * sizeof *a), *b = malloc((size_t)n * sizeof *b);
+    double da[8], db[8];
+    for (int nt = 2; nt <= 4; nt += 2) {
+        floe_kdtree *tn = floe_kdtree_build_threads(p, n, dim, leaf, nt);
+        CHECK(t1 && tn, "%s: the build on %d threads failed", name, nt);
+        if (!t1 || !tn) {
+            failed = 1;
+            floe_kdtree_destroy(tn);
+            continue;
+        }
+        CHECK(!memcmp(floe_kdtree_order(t1), floe_kdtree_order(tn), (size_t)n * sizeof(int)),
+              "%s: the order of the build on %d threads differs", name, nt);
+        int badn = 0;
+        for (int iq = 0; iq < 50; iq++) {
+            const double *c = p + 3 * (size_t)((iq * 7919) % n);
+            const double q[3] = {c[0] + 0.3 * r * grand(), c[1] + 0.3 * r * grand(), c[2] + 0.3 * r * grand()};
+            const double rq = r * (1 + iq % 3);
+            const int na = floe_kdtree_radius(t1, q, rq, a, n), nb = floe_kdtree_radius(tn, q, rq, b, n);
+            badn += na != nb || memcmp(a, b, (size_t)(na < n ? na : n) * sizeof *a);
+            const int ka = floe_kdtree_knn(t1, q, 8, a, da), kb = floe_kdtree_knn(tn, q, 8, b, db);
+            badn += ka != kb || memcmp(a, b, (size_t)ka * sizeof *a) || memcmp(da, db, (size_t)ka * sizeof *da);
+        }
+        CHECK(badn == 0, "%s: %d of 100 queries differ on the build of %d threads", name, badn, nt);
+        bad += badn;
+        floe_kdtree_destroy(tn);
+    }
+    printf("  %-34s n=%-6d builds on 2 and 4 threads %s\n", name, n, bad || failed ? "FAILED" : "the same");
+    free(a);
+    free(b);
+    floe_kdtree_destroy(t1);
+}
+
 int main(void)
 {
     /* uniform 3D, 20k points, mean spacing ~ n^(-1/3) */
@@ -224,6 +264,8 @@ int main(void)
         run_case("uniform 3D", p, n, 3, 1, s, 60, 0);
         run_case("uniform 3D", p, n, 3, 0, s, 60, 0);
         run_case("uniform 3D", p, n, 3, 200, s, 60, 0);
+        check_threaded("uniform 3D", p, n, 3, 10, s);
+        check_threaded("uniform 3D, leaf 1", p, n, 3, 1, s);
         free(p);
     }
     /* gaussian clusters with scales from 1e-6 to 1e2 */
@@ -238,6 +280,7 @@ int main(void)
         run_case("clusters 1e-6..1e2", p, n, 3, 10, 1e-3, 120, 1);
         run_case("clusters 1e-6..1e2", p, n, 3, 10, 1.0, 60, 0);
         run_case("clusters 1e-6..1e2", p, n, 3, 10, 1e-6, 60, 0);
+        check_threaded("clusters 1e-6..1e2", p, n, 3, 10, 1e-3);
         free(p);
     }
     /* 2D: z holds garbage and must be ignored */
@@ -247,6 +290,7 @@ int main(void)
         for (int i = 0; i < n; i++) p[3 * i + 2] = 1e6 * grand();
         run_case("2D (z ignored)", p, n, 2, 10, 0.05, 150, 1);
         run_case("2D (z ignored)", p, n, 2, 3, 0.02, 60, 0);
+        check_threaded("2D (z ignored)", p, n, 2, 10, 0.05);
         free(p);
     }
     /* duplicates: 6000 points on 40 distinct positions, and all identical */
@@ -260,9 +304,11 @@ int main(void)
         }
         run_case("duplicates (40 sites)", p, n, 3, 10, 0.1, 80, 1);
         run_case("duplicates 2D", p, n, 2, 4, 0.1, 40, 1);
+        check_threaded("duplicates (40 sites)", p, n, 3, 10, 0.1);
         for (int i = 0; i < n; i++) { p[3 * i] = 0.25; p[3 * i + 1] = -7.5; p[3 * i + 2] = 1e3; }
         run_case("all identical", p, n, 3, 10, 1.0, 40, 1);
         run_case("all identical", p, 1000, 3, 1, 1.0, 20, 0);
+        check_threaded("all identical", p, n, 3, 10, 1.0);
         free(base);
         free(p);
     }
@@ -314,6 +360,10 @@ int main(void)
         for (int i = 0; i < 10; i++) p[3 * i] = p[3 * i + 1] = p[3 * i + 2] = NAN;
         floe_kdtree *t = floe_kdtree_build(p, n, 3, 8);
         CHECK(t != NULL, "NaN points: build failed");
+        double *p2 = malloc((size_t)3 * 3 * n * sizeof *p2); /* the same, three times over: a threaded build */
+        for (int c = 0; c < 3; c++) memcpy(p2 + 3 * (size_t)n * c, p, 3 * (size_t)n * sizeof *p2);
+        check_threaded("NaN/inf points", p2, 3 * n, 3, 8, 0.05);
+        free(p2);
         if (t) {
             alloc_scratch(n);
             CHECK(check_order(t, n), "NaN points: order is not a permutation");
@@ -341,6 +391,15 @@ int main(void)
         }
         run_case("geometric sequence (deep tree)", p, n, 3, 1, 1e-3, 60, 1);
         run_case("geometric sequence (deep tree)", p, n, 3, 1, 1.0, 20, 0);
+        free(p);
+        n = 6000; /* deep below the threads' top levels */
+        p = malloc((size_t)3 * n * sizeof(double));
+        for (int i = 0; i < n; i++) {
+            p[3 * i] = ldexp(1.0, -(i % 900));
+            p[3 * i + 1] = (double)(i / 900);
+            p[3 * i + 2] = 0.0;
+        }
+        check_threaded("geometric sequence (deep tree)", p, n, 3, 1, 1e-3);
         free(p);
     }
     return check_summary("test_kdtree");

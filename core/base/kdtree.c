@@ -14,12 +14,15 @@
  *  - the build partitions the packed coordinates in place with a branch-free block
  *    partition and computes each node's bounding box once;
  *  - searches use an explicit stack with a branch-free push of the far child and never
- *    allocate.
+ *    allocate;
+ *  - floe_kdtree_build_threads builds the subtrees below the top levels on OpenMP threads
+ *    and joins them into the one-thread tree (kd_build_threads).
  * The pruning tests carry a relative slack of 1e-12 so that rounding in the incremental
  * box distance can never drop a point whose own distance passes the exact test: radius
  * and k-NN results equal a brute-force scan computed as dx*dx + dy*dy + dz*dz (the same
  * expression, without contraction into fused multiply-adds, as under -std=c11). */
 #include "floe_kdtree.h"
+#include "floe_par.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -64,16 +67,22 @@ typedef struct kd_task {
     int is_right; /* which child of parent this is */
 } kd_task;
 
-static int kd_new_node(floe_kdtree *t)
+/* a growing array of nodes: the tree's, or a subtree's in a threaded build */
+typedef struct kd_buf {
+    kd_node *v;
+    int n, cap;
+} kd_buf;
+
+static int kd_new_node(kd_buf *B)
 {
-    if (t->nnodes == t->node_cap) {
-        int cap = t->node_cap ? 2 * t->node_cap : 16;
-        kd_node *nn = realloc(t->nodes, (size_t)cap * sizeof *nn);
+    if (B->n == B->cap) {
+        int cap = B->cap ? 2 * B->cap : 16;
+        kd_node *nn = realloc(B->v, (size_t)cap * sizeof *nn);
         if (!nn) return -1;
-        t->nodes = nn;
-        t->node_cap = cap;
+        B->v = nn;
+        B->cap = cap;
     }
-    return t->nnodes++;
+    return B->n++;
 }
 
 static void kd_bbox(const floe_kdtree *t, int b, int e, double lo[3], double hi[3])
@@ -151,21 +160,51 @@ static int kd_partition(floe_kdtree *t, int f, int b, int e, double cut, int str
     return i;
 }
 
-static int kd_build_nodes(floe_kdtree *t)
+/* the split of an internal node over [b, e) with box lo, hi: its dimension *f, and the
+ * points moved so that [b, b + split) go left (returns split) */
+static int kd_split(floe_kdtree *t, int b, int e, const double lo[3], const double hi[3], int *fp)
+{
+    /* nanoflann middleSplit_: widest dimension, first one on ties */
+    int f = 0;
+    double span = hi[0] - lo[0];
+    for (int d = 1; d < t->dim; d++)
+        if (hi[d] - lo[d] > span) { span = hi[d] - lo[d]; f = d; }
+    double cut = 0.5 * lo[f] + 0.5 * hi[f];
+    if (cut != cut) cut = 0.0; /* -inf .. +inf */
+    if (cut < lo[f]) cut = lo[f];
+    if (cut > hi[f]) cut = hi[f];
+    /* planeSplit: [< cut | == cut | > cut], then nanoflann's choice of index */
+    const int count = e - b, half = count / 2;
+    int split;
+    int lim1 = kd_partition(t, f, b, e, cut, 1) - b;
+    if (lim1 > half) {
+        split = lim1;
+    } else {
+        int lim2 = kd_partition(t, f, b + lim1, e, cut, 0) - b;
+        split = lim2 < half ? lim2 : half;
+    }
+    if (split <= 0 || split >= count) split = half; /* only with NaN coordinates */
+    *fp = f;
+    return split;
+}
+
+/* the subtree of points [begin, end) into B, depth first (left child next, its nodes'
+ * indices B's), its root's box into root_lo, root_hi */
+static int kd_build_nodes(floe_kdtree *t, kd_buf *B, int begin, int end, double root_lo[3], double root_hi[3])
 {
     int stack_cap = 64, sp = 0;
     kd_task *stack = malloc((size_t)stack_cap * sizeof *stack);
     if (!stack) return -1;
-    stack[sp++] = (kd_task){0, t->n, -1, 0};
+    stack[sp++] = (kd_task){begin, end, -1, 0};
     while (sp > 0) {
         kd_task tk = stack[--sp];
         for (;;) {
-            int id = kd_new_node(t);
+            int id = kd_new_node(B);
             if (id < 0) { free(stack); return -1; }
             double lo[3], hi[3];
             kd_bbox(t, tk.begin, tk.end, lo, hi);
             if (tk.parent >= 0) {
-                kd_node *p = &t->nodes[tk.parent];
+                kd_node *p = &B->v[tk.parent];
                 if (tk.is_right) {
                     p->hi = lo[p->b];
                     p->a = id;
@@ -173,36 +212,20 @@ static int kd_build_nodes(floe_kdtree *t)
                     p->lo = hi[p->b];
                 }
             } else {
-                memcpy(t->box_lo, lo, sizeof lo);
-                memcpy(t->box_hi, hi, sizeof hi);
+                memcpy(root_lo, lo, sizeof lo);
+                memcpy(root_hi, hi, sizeof hi);
             }
             int count = tk.end - tk.begin;
-            kd_node *nd = &t->nodes[id];
+            kd_node *nd = &B->v[id];
             if (count <= t->leaf_size) {
                 nd->lo = nd->hi = 0;
                 nd->a = tk.end;
                 nd->b = -1 - tk.begin;
                 break;
             }
-            /* nanoflann middleSplit_: widest dimension, first one on ties */
-            int f = 0;
-            double span = hi[0] - lo[0];
-            for (int d = 1; d < t->dim; d++)
-                if (hi[d] - lo[d] > span) { span = hi[d] - lo[d]; f = d; }
-            double cut = 0.5 * lo[f] + 0.5 * hi[f];
-            if (cut != cut) cut = 0.0; /* -inf .. +inf */
-            if (cut < lo[f]) cut = lo[f];
-            if (cut > hi[f]) cut = hi[f];
-            /* planeSplit: [< cut | == cut | > cut], then nanoflann's choice of index */
-            int half = count / 2, split;
-            int lim1 = kd_partition(t, f, tk.begin, tk.end, cut, 1) - tk.begin;
-            if (lim1 > half) {
-                split = lim1;
-            } else {
-                int lim2 = kd_partition(t, f, tk.begin + lim1, tk.end, cut, 0) - tk.begin;
-                split = lim2 < half ? lim2 : half;
-            }
-            if (split <= 0 || split >= count) split = half; /* only with NaN coordinates */
+            int f;
+            const int split = kd_split(t, tk.begin, tk.end, lo, hi, &f);
+            nd = &B->v[id];
             nd->b = f;
             nd->a = -1;
             if (sp == stack_cap) {
@@ -216,40 +239,187 @@ static int kd_build_nodes(floe_kdtree *t)
         }
     }
     free(stack);
-    if (t->nnodes < t->node_cap) { /* shrink to fit; keep the old block if that fails */
-        kd_node *nn = realloc(t->nodes, (size_t)t->nnodes * sizeof *nn);
-        if (nn) { t->nodes = nn; t->node_cap = t->nnodes; }
-    }
     return 0;
 }
 
-/* xyz per point -> x..., y..., z... per leaf, in place */
-static int kd_transpose_leaves(floe_kdtree *t)
+/* Threads: the nodes above a depth (top: 2^top >= 4 threads' subtrees) are built first, one thread (kd_top: the
+ * same splits in the same order as kd_build_nodes), the subtrees below them each by one
+ * thread into its own buffer (their points are disjoint ranges of c and vind), and the
+ * pieces joined in depth-first order (kd_join): the tree of a one-thread build, node for
+ * node (tests/test_kdtree.c). A top entry is a node, or a subtree (sub >= 0). */
+typedef struct kd_top_entry {
+    kd_node nd;
+    int sub;   /* >= 0: the subtree subs[sub] stands here */
+    int right; /* an internal node: the entry of its right child */
+} kd_top_entry;
+typedef struct kd_top {
+    kd_top_entry *e;
+    int n, cap;
+    int *sb, *se; /* the subtrees' point ranges */
+    int nsub, scap;
+    int depth;    /* the subtrees' depth */
+} kd_top;
+
+static int kd_top_entry_new(kd_top *T)
 {
+    if (T->n == T->cap) {
+        int cap = T->cap ? 2 * T->cap : 64;
+        kd_top_entry *ne = realloc(T->e, (size_t)cap * sizeof *ne);
+        if (!ne) return -1;
+        T->e = ne;
+        T->cap = cap;
+    }
+    return T->n++;
+}
+
+/* entry of the subtree [b, e) at depth; parent entry and side (parent < 0: the root) */
+static int kd_top_build(floe_kdtree *t, kd_top *T, int b, int e, int depth, int parent, int is_right)
+{
+    const int id = kd_top_entry_new(T);
+    if (id < 0) return -1;
+    double lo[3], hi[3];
+    kd_bbox(t, b, e, lo, hi);
+    if (parent >= 0) {
+        kd_node *p = &T->e[parent].nd;
+        if (is_right) {
+            p->hi = lo[p->b];
+            T->e[parent].right = id;
+        } else {
+            p->lo = hi[p->b];
+        }
+    } else {
+        memcpy(t->box_lo, lo, sizeof lo);
+        memcpy(t->box_hi, hi, sizeof hi);
+    }
+    kd_top_entry *en = &T->e[id];
+    en->sub = -1;
+    en->right = -1;
+    const int count = e - b;
+    if (count <= t->leaf_size) {
+        en->nd = (kd_node){0, 0, e, -1 - b};
+        return 0;
+    }
+    if (depth == T->depth) { /* below: a thread's */
+        if (T->nsub == T->scap) {
+            int cap = T->scap ? 2 * T->scap : 32;
+            int *nb = realloc(T->sb, (size_t)cap * sizeof *nb);
+            if (nb) T->sb = nb;
+            int *ne = nb ? realloc(T->se, (size_t)cap * sizeof *ne) : NULL;
+            if (!ne) return -1;
+            T->se = ne;
+            T->scap = cap;
+        }
+        T->sb[T->nsub] = b;
+        T->se[T->nsub] = e;
+        en->sub = T->nsub++;
+        return 0;
+    }
+    int f;
+    const int split = kd_split(t, b, e, lo, hi, &f);
+    en = &T->e[id];
+    en->nd = (kd_node){0, 0, -1, f};
+    if (kd_top_build(t, T, b, b + split, depth + 1, id, 0)) return -1;
+    return kd_top_build(t, T, b + split, e, depth + 1, id, 1);
+}
+
+static int kd_build_threads(floe_kdtree *t, int nt)
+{
+    kd_top T = {0};
+    while ((1 << T.depth) < 4 * nt && T.depth < 10) T.depth++;
+    int rc = kd_top_build(t, &T, 0, t->n, 0, -1, 0);
+    kd_buf *sub = rc ? NULL : calloc((size_t)(T.nsub ? T.nsub : 1), sizeof *sub);
+    if (!sub) rc = -1;
+    int fail = 0;
+    if (!rc) {
+        FLOE_OMP(omp parallel for schedule(dynamic, 1) num_threads(nt) reduction(|: fail))
+        for (int q = 0; q < T.nsub; q++) {
+            double lo[3], hi[3];
+            sub[q].cap = 2 * ((T.se[q] - T.sb[q]) / t->leaf_size) + 16;
+            sub[q].v = malloc((size_t)sub[q].cap * sizeof *sub[q].v);
+            if (!sub[q].v) sub[q].cap = 0;
+            fail |= kd_build_nodes(t, &sub[q], T.sb[q], T.se[q], lo, hi) != 0;
+        }
+        rc = fail ? -1 : 0;
+    }
+    /* joined depth first: each entry's first node index, then the nodes */
+    int *at = rc ? NULL : malloc((size_t)(T.n ? T.n : 1) * sizeof *at);
+    if (!rc && !at) rc = -1;
+    int total = 0;
+    for (int q = 0; !rc && q < T.n; q++) {
+        at[q] = total;
+        total += T.e[q].sub >= 0 ? sub[T.e[q].sub].n : 1;
+    }
+    kd_node *nodes = rc ? NULL : malloc((size_t)(total ? total : 1) * sizeof *nodes);
+    if (!rc && !nodes) rc = -1;
+    for (int q = 0; !rc && q < T.n; q++) {
+        const kd_top_entry *en = &T.e[q];
+        if (en->sub < 0) {
+            nodes[at[q]] = en->nd;
+            if (en->nd.b >= 0) nodes[at[q]].a = at[en->right];
+            continue;
+        }
+        const kd_buf *B = &sub[en->sub];
+        for (int k = 0; k < B->n; k++) {
+            kd_node nd = B->v[k];
+            if (nd.b >= 0) nd.a += at[q]; /* internal: its right child's index */
+            nodes[at[q] + k] = nd;
+        }
+    }
+    if (!rc) {
+        free(t->nodes);
+        t->nodes = nodes;
+        t->nnodes = t->node_cap = total;
+    }
+    for (int q = 0; sub && q < T.nsub; q++) free(sub[q].v);
+    free(sub);
+    free(at);
+    free(T.e);
+    free(T.sb);
+    free(T.se);
+    return rc;
+}
+
+/* xyz per point -> x..., y..., z... per leaf, in place (nt threads: leaves are disjoint) */
+static int kd_transpose_leaves(floe_kdtree *t, int nt)
+{
+    (void)nt; /* without OpenMP */
     int mmax = 0;
     for (int id = 0; id < t->nnodes; id++) {
         const kd_node *nd = &t->nodes[id];
         if (nd->b < 0 && nd->a - (-1 - nd->b) > mmax) mmax = nd->a - (-1 - nd->b);
     }
-    double *tmp = malloc((size_t)3 * (size_t)mmax * sizeof *tmp);
-    if (!tmp) return -1;
-    for (int id = 0; id < t->nnodes; id++) {
-        const kd_node *nd = &t->nodes[id];
-        if (nd->b >= 0) continue;
-        const int b = -1 - nd->b, m = nd->a - b;
-        double *L = t->c + 3 * (size_t)b;
-        memcpy(tmp, L, (size_t)3 * (size_t)m * sizeof *tmp);
-        for (size_t i = 0; i < (size_t)m; i++) {
-            L[i] = tmp[3 * i];
-            L[m + i] = tmp[3 * i + 1];
-            L[2 * m + i] = tmp[3 * i + 2];
+    int fail = 0;
+    FLOE_OMP(omp parallel num_threads(nt) if (nt > 1) reduction(|: fail))
+    {
+        double *tmp = malloc((size_t)3 * (size_t)(mmax ? mmax : 1) * sizeof *tmp);
+        fail |= !tmp;
+        FLOE_OMP(omp for schedule(static))
+        for (int id = 0; id < t->nnodes; id++) {
+            const kd_node *nd = &t->nodes[id];
+            if (nd->b >= 0 || !tmp) continue;
+            const int b = -1 - nd->b, m = nd->a - b;
+            double *L = t->c + 3 * (size_t)b;
+            memcpy(tmp, L, (size_t)3 * (size_t)m * sizeof *tmp);
+            for (size_t i = 0; i < (size_t)m; i++) {
+                L[i] = tmp[3 * i];
+                L[m + i] = tmp[3 * i + 1];
+                L[2 * m + i] = tmp[3 * i + 2];
+            }
         }
+        free(tmp);
     }
-    free(tmp);
-    return 0;
+    return fail ? -1 : 0;
 }
 
 floe_kdtree *floe_kdtree_build(const double *pts, int n, int dim, int leaf_size)
+{
+    return floe_kdtree_build_threads(pts, n, dim, leaf_size, 1);
+}
+
+/* below this many points a threaded build is not worth its threads' start */
+#define KD_THREADS_MIN 4096
+
+floe_kdtree *floe_kdtree_build_threads(const double *pts, int n, int dim, int leaf_size, int nthreads)
 {
     if (n < 0 || (n > 0 && !pts) || (dim != 2 && dim != 3)) return NULL;
     floe_kdtree *t = calloc(1, sizeof *t);
@@ -272,9 +442,23 @@ floe_kdtree *floe_kdtree_build(const double *pts, int n, int dim, int leaf_size)
     }
     /* a balanced tree has 2-3 n/leaf nodes; the array grows if the data needs more and is
      * trimmed to size at the end (untouched capacity costs no memory) */
-    t->node_cap = 4 * (n / t->leaf_size) + 16;
-    t->nodes = malloc((size_t)t->node_cap * sizeof *t->nodes);
-    if (!t->nodes || kd_build_nodes(t) != 0 || kd_transpose_leaves(t) != 0) {
+    const int nt = nthreads > 1 && n >= KD_THREADS_MIN ? nthreads : 1;
+    int rc;
+    if (nt > 1)
+        rc = kd_build_threads(t, nt);
+    else {
+        kd_buf B = {NULL, 0, 4 * (n / t->leaf_size) + 16};
+        B.v = malloc((size_t)B.cap * sizeof *B.v);
+        rc = B.v ? kd_build_nodes(t, &B, 0, n, t->box_lo, t->box_hi) : -1;
+        t->nodes = B.v;
+        t->nnodes = B.n;
+        t->node_cap = B.cap;
+        if (!rc && t->nnodes < t->node_cap) { /* shrink to fit; keep the old block if that fails */
+            kd_node *nn = realloc(t->nodes, (size_t)t->nnodes * sizeof *nn);
+            if (nn) { t->nodes = nn; t->node_cap = t->nnodes; }
+        }
+    }
+    if (rc != 0 || kd_transpose_leaves(t, nt) != 0) {
         floe_kdtree_destroy(t);
         return NULL;
     }

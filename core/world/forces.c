@@ -1310,9 +1310,11 @@ static __attribute__((noinline)) int sphere_wall_pair(floe_world *w, const floe_
 }
 
 /* One block of entries [k0, k1): the entries whose bounding spheres may touch go to cand
- * (k1 - k0 <= FLOE_PAR_BLOCK places: the calling thread's buffer), then each through its evaluation. */
+ * (k1 - k0 <= FLOE_PAR_BLOCK places: the calling thread's buffer), then each through its
+ * evaluation; b: the calling thread's batch (empty; zeroed once an evaluation, not once a
+ * block: 6 KiB, 1-2 % of a sphere bed's step) */
 static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env *env, int k0, int k1, int *cand,
-                       stage_acc *acc) {
+                       sph_batch *bp, stage_acc *acc) {
     const floe_neighbor_list *nl = env->nl;
     const floe_particles *p = env->p;
     const int *pi = nl->pi, *pj = nl->pj;
@@ -1348,8 +1350,7 @@ static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env 
     /* spheres under a point law: the lean body (sphere_pair); every other entry the general one */
     const unsigned char *kind = p->kind;
     if (!env->any_pieces && !env->any_overlap && !env->any_floe) {
-        sph_batch b;
-        memset(&b, 0, sizeof b); /* the lanes past a batch's end read zeros (sph_flush_lanes) */
+        sph_batch *b = bp; /* the lanes past a batch's end read zeros or an earlier batch's entries */
         const double *dash_a = w->dash_on ? w->dash_a : NULL;
         for (int q = 0; q < nc; q++) {
             const int k = cand[q];
@@ -1362,17 +1363,17 @@ static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env 
                 __builtin_prefetch(p->w + 3 * j8);
                 if (dash_a) __builtin_prefetch(dash_a + 3 * j8);
             }
-            if (kind[pi[k]] == FLOE_GEOM_SPHERE && kind[pj[k]] == FLOE_GEOM_SPHERE) FLOE_TRY(sphere_pair(w, ctx, env, k, acc, &b));
+            if (kind[pi[k]] == FLOE_GEOM_SPHERE && kind[pj[k]] == FLOE_GEOM_SPHERE) FLOE_TRY(sphere_pair(w, ctx, env, k, acc, b));
             else if (!env->img && ((kind[pi[k]] == FLOE_GEOM_SPHERE && kind[pj[k]] == FLOE_GEOM_PLANE) ||
                                    (kind[pi[k]] == FLOE_GEOM_PLANE && kind[pj[k]] == FLOE_GEOM_SPHERE)))
-                FLOE_TRY(sphere_wall_pair(w, ctx, env, k, acc, &b));
+                FLOE_TRY(sphere_wall_pair(w, ctx, env, k, acc, b));
             else {
-                if (b.n) sph_flush_lanes(w, ctx, env, acc, &b);
+                if (b->n) sph_flush_lanes(w, ctx, env, acc, b);
                 prefetch_ahead(nl, cand, q, nc);
                 FLOE_TRY(contact_pair(w, ctx, env, k, acc));
             }
         }
-        if (b.n) sph_flush_lanes(w, ctx, env, acc, &b);
+        if (b->n) sph_flush_lanes(w, ctx, env, acc, b);
         if (acc->oom) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
     } else
         for (int q = 0; q < nc; q++) {
@@ -1473,9 +1474,22 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         for (int i = n; i > 0; i--) off[i] = off[i - 1];
         off[0] = 0;
         unsigned char *hit = realloc(ps->hit, (size_t)(n ? n : 1));
-        if (!hit) return FLOE_ENOMEM;
+        if (hit) ps->hit = hit;
+        int *br = hit ? realloc(ps->brange, 2 * (size_t)(n ? n : 1) * sizeof *br) : NULL;
+        if (!br) return FLOE_ENOMEM;
+        ps->brange = br;
         memset(hit, 0, (size_t)(n ? n : 1));
-        ps->hit = hit;
+        /* each particle's blocks: from its first entry to its last (its row; adj in list order) */
+        for (int i = 0; i < n; i++) {
+            int lo = INT_MAX, hi = -1;
+            if (row[i + 1] > row[i]) { lo = row[i]; hi = row[i + 1] - 1; }
+            if (off[i + 1] > off[i]) {
+                if (ps->adj[off[i]] < lo) lo = ps->adj[off[i]];
+                if (ps->adj[off[i + 1] - 1] > hi) hi = ps->adj[off[i + 1] - 1];
+            }
+            br[2 * i] = hi >= 0 ? lo / FLOE_PAR_BLOCK : INT_MAX;
+            br[2 * i + 1] = hi >= 0 ? hi / FLOE_PAR_BLOCK : -1;
+        }
         ps->adj_gen = nl->gen;
         ps->adj_np = n;
         ps->pb_nt = 0; /* parts and own[] below */
@@ -1532,21 +1546,19 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         /* flags a failed evaluation left (no gather ran) would make a particle owned now
          * gather its buffered entries again */
         memset(ps->hit, 0, (size_t)(n ? n : 1));
-        const int *off = ps->adj_off, *adj = ps->adj;
-        for (int i = 0; i < n; i++) {
-            int lo = INT_MAX, hi = -1;
-            if (row[i + 1] > row[i]) { lo = row[i]; hi = row[i + 1] - 1; }
-            if (off[i + 1] > off[i]) { /* adj: in list order */
-                if (adj[off[i]] < lo) lo = adj[off[i]];
-                if (adj[off[i + 1] - 1] > hi) hi = adj[off[i + 1] - 1];
+        /* no part boundary between its first block and its last (none: owned); two threads
+         * (one boundary) in a loop the compiler vectorises: a cut by measured times comes
+         * every few steps */
+        const int *br = ps->brange;
+        if (nt == 2) {
+            const int c = pb[1];
+            for (int i = 0; i < n; i++) own[i] = (unsigned char)!(br[2 * i] < c && c <= br[2 * i + 1]);
+        } else
+            for (int i = 0; i < n; i++) {
+                int same = 1;
+                for (int q = 1; q < nt && same; q++) same = !(br[2 * i] < pb[q] && pb[q] <= br[2 * i + 1]);
+                own[i] = (unsigned char)same;
             }
-            int same = 1;
-            if (hi >= 0) { /* no part boundary between the blocks of lo and hi */
-                const int blo = lo / FLOE_PAR_BLOCK, bhi = hi / FLOE_PAR_BLOCK;
-                for (int q = 1; q < nt && same; q++) same = !(blo < pb[q] && pb[q] <= bhi);
-            }
-            own[i] = (unsigned char)same;
-        }
         ps->pb_nt = nt;
         ps->pb_gen = nl->gen;
     }
@@ -1738,11 +1750,13 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     memset(&tot, 0, sizeof tot);
     if (nt <= 1) {
         int cand[FLOE_PAR_BLOCK]; /* a block's candidates (stage_block), on the stack: 2 KiB, hot */
+        sph_batch batch;
+        memset(&batch, 0, sizeof batch);
         for (int b = 0; b < nb; b++) {
             stage_acc a;
             memset(&a, 0, sizeof a);
             const int k0 = b * B, k1 = k0 + B < npairs ? k0 + B : npairs;
-            FLOE_TRY(stage_block(w, ctx, &env, k0, k1, cand, &a));
+            FLOE_TRY(stage_block(w, ctx, &env, k0, k1, cand, &batch, &a));
             acc_merge(w, &tot, &a);
         }
     } else {
@@ -1763,6 +1777,8 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
         {
             const int t = floe_par_thread();
             int cand[FLOE_PAR_BLOCK]; /* this thread's block's candidates (stage_block) */
+            sph_batch batch;
+            memset(&batch, 0, sizeof batch);
             stage_env te = env;
             floe_detect_ctx td = {.dim = w->def.dim, .step = w->step, .det = &ps->det[t]};
             te.dctx = &td;
@@ -1786,7 +1802,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
                 const int k0 = b * B, k1 = k0 + B < npairs ? k0 + B : npairs;
                 const double t0 = floe_par_wtime();
                 memset(ps->act + k0, 0, (size_t)(k1 - k0));
-                int rc = stage_block(w, ctx, &te, k0, k1, cand, &la);
+                int rc = stage_block(w, ctx, &te, k0, k1, cand, &batch, &la);
                 ps->blk[b] = la;
                 ps->bs[b] = floe_par_wtime() - t0;
                 if (rc) {

@@ -662,7 +662,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     double skin = nl->skin;
     int rc = FLOE_OK;
     floe_kdtree_destroy(nl->tree);
-    nl->tree = nb ? floe_kdtree_build(bx, nb, dim, leaf_size) : NULL;
+    nl->tree = nb ? floe_kdtree_build_threads(bx, nb, dim, leaf_size, nt) : NULL;
     if (nb && !nl->tree) rc = FLOE_ENOMEM;
     /* mixed sizes: each pair is found from its larger particle (ties: the lower index),
      * whose query radius 2 r_i + skin covers every partner no larger than itself, so a few
@@ -676,15 +676,32 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             const double *h = cell->Hinv + 3 * r;
             S.wd[r] = 1.0 / sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
         }
+    /* walls: plane through x with normal q*(0,0,1); each bounded particle within its radius
+     * and the skin of one is paired with it, in the search's loop (its threads) */
+    double *wnrm = rc == FLOE_OK && nl->nwalls ? malloc((size_t)nl->nwalls * 3 * sizeof(double)) : NULL;
+    if (rc == FLOE_OK && nl->nwalls && !wnrm) rc = FLOE_ENOMEM;
+    for (int a = 0; a < nl->nwalls && rc == FLOE_OK; a++) {
+        const double ez[3] = {0, 0, 1};
+        floe_q_rotate(wnrm + 3 * a, p->q + 4 * nl->walls[a], ez);
+    }
     if (rc == FLOE_OK) {
         /* threads: each searches chunks of particles into its own buffer (nl_collect sorts) */
         FLOE_OMP(omp parallel for schedule(dynamic, 256) num_threads(nt) if (nt > 1))
         for (int a = 0; a < nb; a++) {
             struct floe_nl_found *fd = &nl->found[floe_par_thread()];
             if (fd->rc == FLOE_OK) fd->rc = search_one(&S, fd, a);
+            const int i = bidx[a];
+            for (int c = 0; c < nl->nwalls && fd->rc == FLOE_OK; c++) {
+                const int wi = nl->walls[c];
+                if (p->motion[i] != FLOE_FREE && p->motion[wi] != FLOE_FREE) continue;
+                double d[3];
+                floe_v3_sub(d, p->x + 3 * i, p->x + 3 * wi);
+                if (floe_v3_dot(d, wnrm + 3 * c) <= p->radius[i] + skin) fd->rc = push_pair(fd, nl, p, i, wi, NULL);
+            }
         }
         for (int t = 0; t < nt && rc == FLOE_OK; t++) rc = nl->found[t].rc;
     }
+    free(wnrm);
     /* the tree serves this search only: not kept between builds (28 B a particle and its nodes) */
     floe_kdtree_destroy(nl->tree);
     nl->tree = NULL;
@@ -694,20 +711,6 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
         else {
             nl->q_walls = qw;
             for (int a = 0; a < nl->nwalls; a++) memcpy(qw + 4 * a, p->q + 4 * nl->walls[a], 4 * sizeof(double));
-        }
-    }
-    /* walls: plane through x with normal q*(0,0,1) */
-    for (int a = 0; a < nl->nwalls && rc == FLOE_OK; a++) {
-        int wi = nl->walls[a];
-        double nw[3];
-        const double ez[3] = {0, 0, 1};
-        floe_q_rotate(nw, p->q + 4 * wi, ez);
-        for (int b = 0; b < nb && rc == FLOE_OK; b++) {
-            int i = bidx[b];
-            if (p->motion[i] != FLOE_FREE && p->motion[wi] != FLOE_FREE) continue;
-            double d[3];
-            floe_v3_sub(d, p->x + 3 * i, p->x + 3 * wi);
-            if (floe_v3_dot(d, nw) <= p->radius[i] + skin) rc = push_pair(&nl->found[0], nl, p, i, wi, NULL);
         }
     }
     free(bx);

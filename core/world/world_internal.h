@@ -319,6 +319,8 @@ typedef struct floe_par_scratch {
     unsigned char *own;                              /* per particle: every entry of it lies in one part
                                                        (its thread adds its forces directly; forces.c
                                                        par_prepare) */
+    int *brange;                                     /* 2n: per particle the first and last block holding
+                                                       an entry of it (INT_MAX, -1: none), per list build */
     int *pb; int pb_nt; long pb_gen;                 /* the parts: part t is blocks [pb[t], pb[t+1]) on
                                                        thread t, cut for pb_nt threads (pb[pb_nt]: the
                                                        blocks) and the list of build pb_gen

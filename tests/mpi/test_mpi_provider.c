@@ -7,8 +7,9 @@
  *     moving in +x (a force that reads the particle's own velocity; its work tau w_z dt at
  *     the evaluation's spin booked as work_boundary: the energy watchdog stops the run
  *     without it). 125 spheres in a walled
- *     box, no gravity, 2,000 steps of velocity Verlet and 1,000 of RK2 (its midpoint probe
- *     calls the provider too) with contacts and migrations. Rank 0 first runs the unsplit
+ *     box, no gravity, 2,000 steps of velocity Verlet, 1,000 of RK2 (its midpoint probe
+ *     calls the provider too), 2,000 of leapfrog and 1,000 accepted adaptive steps of velocity
+ *     Verlet (the trials agreed over the ranks) with contacts and migrations. Rank 0 first runs the unsplit
  *     world alone; then every rank builds the same world, splits it and steps it: positions
  *     within 1e-10 of the box side, velocities within 1e-8 of the largest speed, the stored
  *     energy summed over the ranks within 1e-9 of the unsplit one (the tether's share of it
@@ -85,9 +86,11 @@ static tether *new_tether(const floe_provider_class *k) {
     return t;
 }
 
+static int adaptive_ = 0; /* 1: adaptive steps (floe_world_def.adaptive) */
+
 static floe_world *build(const floe_provider_class *k, floe_integrator integ) {
     floe_world_def d = floe_default_world_def();
-    d.dim = 3; d.dt = DT; d.integrator = integ;
+    d.dim = 3; d.dt = DT; d.integrator = integ; d.adaptive = adaptive_;
     floe_world *w = mpi_test_sphere_box(d, NS, R, SP, L);
     if (k) {
         tether *t = new_tether(k);
@@ -265,6 +268,10 @@ int main(int argc, char **argv) {
     mpi_test_init(&argc, &argv);
     split_matches(FLOE_VELOCITY_VERLET, STEPS, "velocity Verlet");
     split_matches(FLOE_RK2, STEPS / 2, "RK2");
+    split_matches(FLOE_LEAPFROG, STEPS, "leapfrog");
+    adaptive_ = 1; /* each rank's trials agreed: the accepted steps are the unsplit run's */
+    split_matches(FLOE_VELOCITY_VERLET, STEPS / 2, "adaptive velocity Verlet");
+    adaptive_ = 0;
     pd_split_matches(0, 500);
     pd_split_matches(1, 500);
     undeclared_refused();
