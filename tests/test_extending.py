@@ -14,7 +14,8 @@ scenes (tests/extending/):
   - the same scene under `mpirun -np 2` (an MPI build): the anchor's class declares
     per-particle forces (version 2, .splits), so the split world runs it: its tracker and
     energy files are the same bytes as one process's; and so they are after a checkpoint
-    written under 2 ranks and a restart from it under 2 ranks;
+    written under 2 ranks (t = 0.14 s) and a restart from it under 2 ranks (rows appended to
+    the files after the run, which the restart must cut off);
   - line_packing.c (packing `line`): five beads at x = 0, 0.05, ..., 0.2 (exact to 1e-12 m);
   - `floe help pd_material spring_bond`, `floe help provider anchor` and `floe help packing
     line` print the plugins' schemas; a misspelt plugin key is refused with its line and
@@ -122,6 +123,11 @@ def main():
             ck = os.path.join(wd, "anc3", "checkpoint.bin")
             if check(rc == 0 and os.path.exists(ck), "mpirun -np 2 floe run --checkpoint-every 0.07: exit %d, "
                      "checkpoint %s\n%s%s" % (rc, "written" if os.path.exists(ck) else "missing", out, err)):
+                # rows after the checkpoint that the restart must cut off and write again: a
+                # restart that did nothing would leave them
+                for f in ("anchored.csv", "energy.csv"):
+                    with open(os.path.join(wd, "anc3", f), "a") as fh:
+                        fh.write("0.2,9,9,9\n")
                 rc, out, err = run([mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", "2", floe, "run",
                                     "anchored.yaml", "-o", "anc3", "-q", "--restart", ck], cwd=wd)
                 if check(rc == 0, "mpirun -np 2 floe run --restart: exit %d\n%s%s" % (rc, out, err)):

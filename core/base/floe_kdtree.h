@@ -13,8 +13,9 @@ typedef struct floe_kdtree floe_kdtree;
 /* Build over n points pts[3*i .. 3*i+2] (the z coordinate is ignored when dim == 2).
  * The tree copies the coordinates. leaf_size <= 0 selects 16. Returns NULL on ENOMEM. */
 floe_kdtree *floe_kdtree_build(const double *pts, int n, int dim, int leaf_size);
-/* The same tree (node for node) built by up to nthreads OpenMP threads (1, or a build
- * without OpenMP: one thread; few points: one thread). */
+/* The same tree (node for node) built on up to nthreads OpenMP threads: the subtrees below
+ * its top levels each on a thread, then joined (fewer than 4,096 points, or nthreads <= 1:
+ * floe_kdtree_build's path; without OpenMP the subtrees are built one after the other). */
 floe_kdtree *floe_kdtree_build_threads(const double *pts, int n, int dim, int leaf_size, int nthreads);
 void floe_kdtree_destroy(floe_kdtree *t);
 int floe_kdtree_size(const floe_kdtree *t);

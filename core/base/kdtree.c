@@ -242,22 +242,31 @@ static int kd_build_nodes(floe_kdtree *t, kd_buf *B, int begin, int end, double 
     return 0;
 }
 
-/* Threads: the nodes above a depth (top: 2^top >= 4 threads' subtrees) are built first, one thread (kd_top: the
- * same splits in the same order as kd_build_nodes), the subtrees below them each by one
- * thread into its own buffer (their points are disjoint ranges of c and vind), and the
- * pieces joined in depth-first order (kd_join): the tree of a one-thread build, node for
- * node (tests/test_kdtree.c). A top entry is a node, or a subtree (sub >= 0). */
+/* Threads (floe_kdtree_build_threads): the nodes over more than a quarter of a thread's
+ * share of the points (n / (4 threads)) and at most KD_TOP_MAX deep are built first, on one
+ * thread (kd_top_build: the same splits in the same order as kd_build_nodes); each subtree
+ * below them by one thread into its own buffer (their points are disjoint ranges of c and
+ * vind; its root's box bounds its parent); then the pieces are joined in depth-first order
+ * (kd_build_threads): the tree of a one-thread build, node for node, wherever the subtrees
+ * were cut (tests/test_kdtree.c). A top entry is a node, or a subtree (sub >= 0). */
+#define KD_TOP_MAX 24
 typedef struct kd_top_entry {
     kd_node nd;
-    int sub;   /* >= 0: the subtree subs[sub] stands here */
+    int sub;   /* >= 0: the subtree T.s[sub] stands here */
     int right; /* an internal node: the entry of its right child */
 } kd_top_entry;
+typedef struct kd_sub {
+    int b, e;            /* its points */
+    int parent, is_right; /* the entry it is a child of (-1: the root) */
+    double lo[3], hi[3]; /* its root's box (kd_build_nodes) */
+    kd_buf nodes;
+} kd_sub;
 typedef struct kd_top {
     kd_top_entry *e;
     int n, cap;
-    int *sb, *se; /* the subtrees' point ranges */
+    kd_sub *s;
     int nsub, scap;
-    int depth;    /* the subtrees' depth */
+    int target; /* a subtree at most this many points */
 } kd_top;
 
 static int kd_top_entry_new(kd_top *T)
@@ -272,46 +281,50 @@ static int kd_top_entry_new(kd_top *T)
     return T->n++;
 }
 
-/* entry of the subtree [b, e) at depth; parent entry and side (parent < 0: the root) */
+/* sets the bound of parent's side from its child's box (kd_build_nodes' rule) */
+static void kd_top_bound(kd_top *T, int parent, int is_right, int child, const double lo[3], const double hi[3])
+{
+    kd_node *p = &T->e[parent].nd;
+    if (is_right) {
+        p->hi = lo[p->b];
+        T->e[parent].right = child;
+    } else {
+        p->lo = hi[p->b];
+    }
+}
+
+/* the entry of points [b, e) at depth; parent entry and side (parent < 0: the root) */
 static int kd_top_build(floe_kdtree *t, kd_top *T, int b, int e, int depth, int parent, int is_right)
 {
     const int id = kd_top_entry_new(T);
     if (id < 0) return -1;
-    double lo[3], hi[3];
-    kd_bbox(t, b, e, lo, hi);
-    if (parent >= 0) {
-        kd_node *p = &T->e[parent].nd;
-        if (is_right) {
-            p->hi = lo[p->b];
-            T->e[parent].right = id;
-        } else {
-            p->lo = hi[p->b];
-        }
-    } else {
-        memcpy(t->box_lo, lo, sizeof lo);
-        memcpy(t->box_hi, hi, sizeof hi);
-    }
     kd_top_entry *en = &T->e[id];
     en->sub = -1;
     en->right = -1;
     const int count = e - b;
-    if (count <= t->leaf_size) {
-        en->nd = (kd_node){0, 0, e, -1 - b};
-        return 0;
-    }
-    if (depth == T->depth) { /* below: a thread's */
+    if (count > t->leaf_size && (count <= T->target || depth == KD_TOP_MAX)) { /* below: a thread's */
         if (T->nsub == T->scap) {
             int cap = T->scap ? 2 * T->scap : 32;
-            int *nb = realloc(T->sb, (size_t)cap * sizeof *nb);
-            if (nb) T->sb = nb;
-            int *ne = nb ? realloc(T->se, (size_t)cap * sizeof *ne) : NULL;
-            if (!ne) return -1;
-            T->se = ne;
+            kd_sub *ns = realloc(T->s, (size_t)cap * sizeof *ns);
+            if (!ns) return -1;
+            T->s = ns;
             T->scap = cap;
         }
-        T->sb[T->nsub] = b;
-        T->se[T->nsub] = e;
+        T->s[T->nsub] = (kd_sub){.b = b, .e = e, .parent = parent, .is_right = is_right};
         en->sub = T->nsub++;
+        if (parent >= 0 && is_right) T->e[parent].right = id;
+        return 0;
+    }
+    double lo[3], hi[3];
+    kd_bbox(t, b, e, lo, hi);
+    if (parent >= 0)
+        kd_top_bound(T, parent, is_right, id, lo, hi);
+    else {
+        memcpy(t->box_lo, lo, sizeof lo);
+        memcpy(t->box_hi, hi, sizeof hi);
+    }
+    if (count <= t->leaf_size) {
+        en->nd = (kd_node){0, 0, e, -1 - b};
         return 0;
     }
     int f;
@@ -325,21 +338,30 @@ static int kd_top_build(floe_kdtree *t, kd_top *T, int b, int e, int depth, int 
 static int kd_build_threads(floe_kdtree *t, int nt)
 {
     kd_top T = {0};
-    while ((1 << T.depth) < 4 * nt && T.depth < 10) T.depth++;
+    T.target = t->n / (4 * nt); /* nt <= KD_THREADS_MAX */
     int rc = kd_top_build(t, &T, 0, t->n, 0, -1, 0);
-    kd_buf *sub = rc ? NULL : calloc((size_t)(T.nsub ? T.nsub : 1), sizeof *sub);
-    if (!sub) rc = -1;
     int fail = 0;
     if (!rc) {
         FLOE_OMP(omp parallel for schedule(dynamic, 1) num_threads(nt) reduction(|: fail))
         for (int q = 0; q < T.nsub; q++) {
-            double lo[3], hi[3];
-            sub[q].cap = 2 * ((T.se[q] - T.sb[q]) / t->leaf_size) + 16;
-            sub[q].v = malloc((size_t)sub[q].cap * sizeof *sub[q].v);
-            if (!sub[q].v) sub[q].cap = 0;
-            fail |= kd_build_nodes(t, &sub[q], T.sb[q], T.se[q], lo, hi) != 0;
+            kd_sub *S = &T.s[q];
+            S->nodes.cap = 2 * ((S->e - S->b) / t->leaf_size) + 16;
+            S->nodes.v = malloc((size_t)S->nodes.cap * sizeof *S->nodes.v);
+            if (!S->nodes.v) S->nodes.cap = 0;
+            fail |= kd_build_nodes(t, &S->nodes, S->b, S->e, S->lo, S->hi) != 0;
         }
         rc = fail ? -1 : 0;
+    }
+    for (int q = 0; !rc && q < T.nsub; q++) { /* the subtrees' roots bound their parents */
+        const kd_sub *S = &T.s[q];
+        if (S->parent >= 0) {
+            kd_node *p = &T.e[S->parent].nd;
+            if (S->is_right) p->hi = S->lo[p->b];
+            else p->lo = S->hi[p->b];
+        } else {
+            memcpy(t->box_lo, S->lo, sizeof S->lo);
+            memcpy(t->box_hi, S->hi, sizeof S->hi);
+        }
     }
     /* joined depth first: each entry's first node index, then the nodes */
     int *at = rc ? NULL : malloc((size_t)(T.n ? T.n : 1) * sizeof *at);
@@ -347,7 +369,7 @@ static int kd_build_threads(floe_kdtree *t, int nt)
     int total = 0;
     for (int q = 0; !rc && q < T.n; q++) {
         at[q] = total;
-        total += T.e[q].sub >= 0 ? sub[T.e[q].sub].n : 1;
+        total += T.e[q].sub >= 0 ? T.s[T.e[q].sub].nodes.n : 1;
     }
     kd_node *nodes = rc ? NULL : malloc((size_t)(total ? total : 1) * sizeof *nodes);
     if (!rc && !nodes) rc = -1;
@@ -358,7 +380,7 @@ static int kd_build_threads(floe_kdtree *t, int nt)
             if (en->nd.b >= 0) nodes[at[q]].a = at[en->right];
             continue;
         }
-        const kd_buf *B = &sub[en->sub];
+        const kd_buf *B = &T.s[en->sub].nodes;
         for (int k = 0; k < B->n; k++) {
             kd_node nd = B->v[k];
             if (nd.b >= 0) nd.a += at[q]; /* internal: its right child's index */
@@ -370,12 +392,10 @@ static int kd_build_threads(floe_kdtree *t, int nt)
         t->nodes = nodes;
         t->nnodes = t->node_cap = total;
     }
-    for (int q = 0; sub && q < T.nsub; q++) free(sub[q].v);
-    free(sub);
+    for (int q = 0; q < T.nsub; q++) free(T.s[q].nodes.v);
     free(at);
     free(T.e);
-    free(T.sb);
-    free(T.se);
+    free(T.s);
     return rc;
 }
 
@@ -416,8 +436,10 @@ floe_kdtree *floe_kdtree_build(const double *pts, int n, int dim, int leaf_size)
     return floe_kdtree_build_threads(pts, n, dim, leaf_size, 1);
 }
 
-/* below this many points a threaded build is not worth its threads' start */
+/* below this many points a threaded build is not worth its threads' start; threads beyond
+ * KD_THREADS_MAX are not used */
 #define KD_THREADS_MIN 4096
+#define KD_THREADS_MAX 256
 
 floe_kdtree *floe_kdtree_build_threads(const double *pts, int n, int dim, int leaf_size, int nthreads)
 {
@@ -442,7 +464,7 @@ floe_kdtree *floe_kdtree_build_threads(const double *pts, int n, int dim, int le
     }
     /* a balanced tree has 2-3 n/leaf nodes; the array grows if the data needs more and is
      * trimmed to size at the end (untouched capacity costs no memory) */
-    const int nt = nthreads > 1 && n >= KD_THREADS_MIN ? nthreads : 1;
+    const int nt = nthreads > 1 && n >= KD_THREADS_MIN ? (nthreads < KD_THREADS_MAX ? nthreads : KD_THREADS_MAX) : 1;
     int rc;
     if (nt > 1)
         rc = kd_build_threads(t, nt);

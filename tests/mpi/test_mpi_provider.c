@@ -6,11 +6,10 @@
  *     its stored energy k m |x - c|^2 / 2 booked as elastic, and a torque about z on spheres
  *     moving in +x (a force that reads the particle's own velocity; its work tau w_z dt at
  *     the evaluation's spin booked as work_boundary: the energy watchdog stops the run
- *     without it). 125 spheres in a walled
- *     box, no gravity, 2,000 steps of velocity Verlet, 1,000 of RK2 (its midpoint probe
- *     calls the provider too), 2,000 of leapfrog and 1,000 accepted adaptive steps of velocity
- *     Verlet (the trials agreed over the ranks) with contacts and migrations. Rank 0 first runs the unsplit
- *     world alone; then every rank builds the same world, splits it and steps it: positions
+ *     without it). 125 spheres in a walled box, no gravity, 2,000 steps of velocity Verlet,
+ *     1,000 of RK2 (its midpoint probe calls the provider too), 2,000 of leapfrog and 1,000
+ *     accepted adaptive steps of velocity Verlet (the trials agreed over the ranks) with
+ *     contacts and migrations. Rank 0 first runs the unsplit world alone; then every rank builds the same world, splits it and steps it: positions
  *     within 1e-10 of the box side, velocities within 1e-8 of the largest speed, the stored
  *     energy summed over the ranks within 1e-9 of the unsplit one (the tether's share of it
  *     is more than half: the provider matters), the torque's work summed over the ranks
@@ -115,6 +114,14 @@ static void split_matches(floe_integrator integ, int steps, const char *tag) {
         w = build(&split_class, integ);
         const int src = mpi_test_serial_run(w, steps, &N, &x0, &v0, &e0);
         CHECK(src == 0, "%s serial: %s", tag, src ? floe_world_last_error(w) : "");
+        if (adaptive_) { /* the steps did adapt: not all of them DT */
+            floe_step_stats st;
+            floe_world_step_stats(w, &st);
+            CHECK(st.dt_max_used > 1.01 * st.dt_min_used && fabs(floe_world_time(w) - steps * DT) > 0.01 * steps * DT,
+                  "%s: the steps adapted (dt %.3g .. %.3g s, t %.6g s against %d x %.3g s)", tag, st.dt_min_used,
+                  st.dt_max_used, floe_world_time(w), steps, DT);
+            printf("  %s: dt from %.3g to %.3g s, %ld trials redone\n", tag, st.dt_min_used, st.dt_max_used, st.rejected);
+        }
         floe_world_destroy(w);
         w = build(NULL, FLOE_VELOCITY_VERLET);
         floe_world_prepare(w);

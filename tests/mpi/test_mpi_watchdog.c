@@ -10,12 +10,15 @@
  *      the same message, which names that sphere and the wall by their index in the whole
  *      scene and the law (before session 28 the split run named no pair, only the measures);
  *      with more than one rank the culprit is owned by a rank other than 0 (checked).
- * The balance case (energy from outside the ledger: the rank with the most energetic
- * particle names it) is not reached here: velocity Verlet books a body force's work and
- * keeps a linear force's modified energy even above its limit, so the particle checks stop
- * such runs first (tried: springs and an anti-damper; docs/parallel.md).
- * The spheres touch only the wall, so each sphere's force is one contact's, evaluated by one
- * rank: the split run's bits are one process's and the culprit is the same pair. */
+ *      The spheres touch only the wall, so each sphere's force is one contact's, evaluated by
+ *      one rank: the split run's bits are one process's and the culprit is the same pair.
+ *   2. the balance case (energy from outside the ledger: the rank holding the most energetic
+ *      particle names it; session 30): a user force provider (per-particle, so it runs split)
+ *      pushes every free sphere along its velocity, F = c m v, without booking its work; the
+ *      twelve spheres move apart along x, touching nothing, the last (on the last rank) the
+ *      fastest: the split run stops at the same step with the same message, which names that
+ *      sphere by its index in the whole scene. (A body force cannot reach this case: velocity
+ *      Verlet books a body force's work, so the particle checks stop such runs first.) */
 #include "floe.h"
 #include "../check.h"
 #include "mpi_common.h"
@@ -53,6 +56,50 @@ static floe_world *build(void) {
     return w;
 }
 
+/* variant 2: an unbooked push along each free particle's velocity, F = c m v (per particle:
+ * it runs split) */
+typedef struct push { floe_provider base; double c; } push;
+static int push_forces(floe_provider *pv, floe_world *w, const struct floe_step_ctx *sc, floe_provider_out *out) {
+    (void)w;
+    (void)out; /* its work not booked: energy from outside the ledger */
+    const double c = ((const push *)pv)->c;
+    floe_provider_ctx x = floe_provider_ctx_of(sc);
+    for (int i = 0; i < x.n; i++)
+        if (x.motion[i] == FLOE_FREE)
+            for (int d = 0; d < 3; d++) x.f[3 * i + d] += c * x.mass[i] * x.v[3 * i + d];
+    return FLOE_OK;
+}
+static const floe_provider_class push_class = {.version = 2, .name = "push", .group = FLOE_GROUP_DEM,
+                                               .forces = push_forces, .splits = FLOE_PROVIDER_PER_PARTICLE};
+
+/* twelve spheres 3 R apart in a row along x above a wall they never reach, moving along x at
+ * 1 + 0.1 s m/s (the last the fastest: the row spreads, no contact), under the push */
+static floe_world *build_push(void) {
+    floe_world_def d = floe_default_world_def();
+    d.dim = 3;
+    d.gravity[2] = 0.0;
+    d.dt = 1e-5;
+    const double R = 0.01;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    mpi_test_add_glass(w, 1e7);
+    const double o[3] = {0, 0, 0}, n[3] = {0, 0, 1};
+    floe_world_add_wall(w, o, n, 0, FLOE_FIXED);
+    const int g = floe_world_add_geometry(w, floe_sphere_create(R));
+    for (int s = 0; s < NS; s++) {
+        floe_particle_def p = floe_default_particle_def();
+        p.geometry = g;
+        floe_v3_set(p.x, 3 * R * s, 0, 5 * R);
+        floe_v3_set(p.v, 1 + 0.1 * s, 0, 0);
+        floe_world_add_particle(w, &p);
+    }
+    push *pu = calloc(1, sizeof *pu);
+    pu->base.klass = &push_class;
+    pu->c = 20; /* 1/s: the kinetic energy doubles in about 17 ms */
+    if (floe_world_add_provider(w, &pu->base)) free(pu);
+    floe_world_set_threads(w, 1);
+    return w;
+}
+
 /* steps until an error (at most nmax); the step count and the message */
 static int run(floe_world *w, int nmax, long *step, char *msg, size_t len) {
     int rc = FLOE_OK;
@@ -62,9 +109,8 @@ static int run(floe_world *w, int nmax, long *step, char *msg, size_t len) {
     return rc;
 }
 
-static void compare(const char *must) {
-    const int variant = 1;
-    floe_world *whole = build(), *split = build();
+static void compare(int variant, floe_world *(*mk)(void), const char *must) {
+    floe_world *whole = mk(), *split = mk();
     int owner = -1; /* the rank that owns particle 12, the culprit */
     char m1[1024], m2[1024];
     long s1 = 0, s2 = 0;
@@ -95,7 +141,8 @@ static void compare(const char *must) {
 
 int main(int argc, char **argv) {
     mpi_test_init(&argc, &argv);
-    compare("the contact of particles 0 and 12 (bodies -1, 0; law pump (test))");
+    compare(1, build, "the contact of particles 0 and 12 (bodies -1, 0; law pump (test))");
+    compare(2, build_push, "beyond the ledger (balance error), most of it in particle 12 (body 0)");
     int all = mpi_test_failed("test_mpi_watchdog");
     MPI_Finalize();
     return all ? 1 : 0;
