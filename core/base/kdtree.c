@@ -73,15 +73,22 @@ typedef struct kd_buf {
     int n, cap;
 } kd_buf;
 
+/* room for item n of an array *v of size-byte items that holds *cap (doubled, first when
+ * empty): 0, or -1 out of memory (the array untouched) */
+static int kd_grow(void **v, int *cap, int n, size_t size, int first)
+{
+    if (n < *cap) return 0;
+    const int c = *cap ? 2 * *cap : first;
+    void *t = realloc(*v, (size_t)c * size);
+    if (!t) return -1;
+    *v = t;
+    *cap = c;
+    return 0;
+}
+
 static int kd_new_node(kd_buf *B)
 {
-    if (B->n == B->cap) {
-        int cap = B->cap ? 2 * B->cap : 16;
-        kd_node *nn = realloc(B->v, (size_t)cap * sizeof *nn);
-        if (!nn) return -1;
-        B->v = nn;
-        B->cap = cap;
-    }
+    if (kd_grow((void **)&B->v, &B->cap, B->n, sizeof *B->v, 16)) return -1;
     return B->n++;
 }
 
@@ -271,13 +278,7 @@ typedef struct kd_top {
 
 static int kd_top_entry_new(kd_top *T)
 {
-    if (T->n == T->cap) {
-        int cap = T->cap ? 2 * T->cap : 64;
-        kd_top_entry *ne = realloc(T->e, (size_t)cap * sizeof *ne);
-        if (!ne) return -1;
-        T->e = ne;
-        T->cap = cap;
-    }
+    if (kd_grow((void **)&T->e, &T->cap, T->n, sizeof *T->e, 64)) return -1;
     return T->n++;
 }
 
@@ -303,13 +304,7 @@ static int kd_top_build(floe_kdtree *t, kd_top *T, int b, int e, int depth, int 
     en->right = -1;
     const int count = e - b;
     if (count > t->leaf_size && (count <= T->target || depth == KD_TOP_MAX)) { /* below: a thread's */
-        if (T->nsub == T->scap) {
-            int cap = T->scap ? 2 * T->scap : 32;
-            kd_sub *ns = realloc(T->s, (size_t)cap * sizeof *ns);
-            if (!ns) return -1;
-            T->s = ns;
-            T->scap = cap;
-        }
+        if (kd_grow((void **)&T->s, &T->scap, T->nsub, sizeof *T->s, 32)) return -1;
         T->s[T->nsub] = (kd_sub){.b = b, .e = e, .parent = parent, .is_right = is_right};
         en->sub = T->nsub++;
         if (parent >= 0 && is_right) T->e[parent].right = id;
