@@ -14,8 +14,9 @@ scenes (tests/extending/):
   - the same scene under `mpirun -np 2` (an MPI build): the anchor's class declares
     per-particle forces (version 2, .splits), so the split world runs it: its tracker and
     energy files are the same bytes as one process's; and so they are after a checkpoint
-    written under 2 ranks (t = 0.14 s) and a restart from it under 2 ranks (rows appended to
-    the files after the run, which the restart must cut off);
+    written under 2 ranks (t = 0.14 s) and a restart from it under 2 ranks (a row appended
+    to each file after the run, which the restart must cut off, and a digit changed in a row
+    before the checkpoint, which it must keep);
   - line_packing.c (packing `line`): five beads at x = 0, 0.05, ..., 0.2 (exact to 1e-12 m);
   - `floe help pd_material spring_bond`, `floe help provider anchor` and `floe help packing
     line` print the plugins' schemas; a misspelt plugin key is refused with its line and
@@ -123,18 +124,29 @@ def main():
             ck = os.path.join(wd, "anc3", "checkpoint.bin")
             if check(rc == 0 and os.path.exists(ck), "mpirun -np 2 floe run --checkpoint-every 0.07: exit %d, "
                      "checkpoint %s\n%s%s" % (rc, "written" if os.path.exists(ck) else "missing", out, err)):
-                # rows after the checkpoint that the restart must cut off and write again: a
-                # restart that did nothing would leave them
+                # a row appended after the run, which the restart must cut off (a restart that
+                # wrote nothing would leave it), and one digit changed in the 11th row, before the
+                # checkpoint, which the restart must keep (a run from t = 0 would write it again)
+                want = {}
                 for f in ("anchored.csv", "energy.csv"):
-                    with open(os.path.join(wd, "anc3", f), "a") as fh:
-                        fh.write("0.2,9,9,9\n")
+                    path = os.path.join(wd, "anc3", f)
+                    b = bytearray(open(path, "rb").read())
+                    at = [i for i, c in enumerate(b) if c == ord("\n")][10] - 1
+                    b[at] = ord("1") if b[at] != ord("1") else ord("2")
+                    w = bytearray(open(os.path.join(wd, "anc", f), "rb").read())
+                    w[at] = b[at]
+                    want[f] = bytes(w)
+                    open(path, "wb").write(bytes(b) + b"0.2,9,9,9\n")
                 rc, out, err = run([mpiexec, "--allow-run-as-root", "--oversubscribe", "-np", "2", floe, "run",
                                     "anchored.yaml", "-o", "anc3", "-q", "--restart", ck], cwd=wd)
                 if check(rc == 0, "mpirun -np 2 floe run --restart: exit %d\n%s%s" % (rc, out, err)):
+                    ok = True
                     for f in ("anchored.csv", "energy.csv"):
-                        same = open(os.path.join(wd, "anc", f), "rb").read() == open(os.path.join(wd, "anc3", f), "rb").read()
-                        check(same, "anchor restarted under mpirun -np 2: %s differs from one process's" % f)
-                    print("  anchor restarted under mpirun -np 2 from t = 0.14 s: the same bytes as one process's")
+                        same = want[f] == open(os.path.join(wd, "anc3", f), "rb").read()
+                        ok = check(same, "anchor restarted under mpirun -np 2: %s differs from one process's (with "
+                                   "the changed digit before the checkpoint)" % f) and ok
+                    if ok:
+                        print("  anchor restarted under mpirun -np 2 from t = 0.14 s: the same bytes as one process's")
         else:
             print("  anchor under mpirun: skipped (%s)" % ("no mpirun on PATH" if mpi_build else "not an MPI build"))
         rc, out, err = run([floe, "check", "anchored.yaml"], cwd=wd)

@@ -250,7 +250,7 @@ static int kd_build_nodes(floe_kdtree *t, kd_buf *B, int begin, int end, double 
 }
 
 /* Threads (floe_kdtree_build_threads): the nodes over more than a quarter of a thread's
- * share of the points (n / (4 threads)) and at most KD_TOP_MAX deep are built first, on one
+ * share of the points (n / (4 threads)), down to depth KD_TOP_MAX at most, are built first, on one
  * thread (kd_top_build: the same splits in the same order as kd_build_nodes); each subtree
  * below them by one thread into its own buffer (their points are disjoint ranges of c and
  * vind; its root's box bounds its parent); then the pieces are joined in depth-first order
@@ -457,13 +457,16 @@ floe_kdtree *floe_kdtree_build_threads(const double *pts, int n, int dim, int le
         t->c[3 * (size_t)i + 2] = dim == 3 ? pts[3 * (size_t)i + 2] : 0.0;
         t->vind[i] = i;
     }
-    /* a balanced tree has 2-3 n/leaf nodes; the array grows if the data needs more and is
-     * trimmed to size at the end (untouched capacity costs no memory) */
-    const int nt = nthreads > 1 && n >= KD_THREADS_MIN ? (nthreads < KD_THREADS_MAX ? nthreads : KD_THREADS_MAX) : 1;
+    /* as many threads as have 4 subtrees each of at least 256 points and 2 leaves (more
+     * threads would leave the top levels, built on one thread, most of the tree) */
+    int nt = nthreads > 1 && n >= KD_THREADS_MIN ? (nthreads < KD_THREADS_MAX ? nthreads : KD_THREADS_MAX) : 1;
+    while (nt > 1 && (n / (4 * nt) < 256 || n / (4 * nt) <= 2 * t->leaf_size)) nt--;
     int rc;
     if (nt > 1)
         rc = kd_build_threads(t, nt);
     else {
+        /* a balanced tree has 2-3 n/leaf nodes; the array grows if the data needs more and is
+         * trimmed to size at the end (untouched capacity costs no memory) */
         kd_buf B = {NULL, 0, 4 * (n / t->leaf_size) + 16};
         B.v = malloc((size_t)B.cap * sizeof *B.v);
         rc = B.v ? kd_build_nodes(t, &B, 0, n, t->box_lo, t->box_hi) : -1;

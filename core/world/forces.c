@@ -1311,7 +1311,7 @@ static __attribute__((noinline)) int sphere_wall_pair(floe_world *w, const floe_
 
 /* One block of entries [k0, k1): the entries whose bounding spheres may touch go to cand
  * (k1 - k0 <= FLOE_PAR_BLOCK places: the calling thread's buffer), then each through its
- * evaluation; b: the calling thread's batch (empty; zeroed once an evaluation, not once a
+ * evaluation; bp: the calling thread's batch (empty; zeroed once an evaluation, not once a
  * block: 6 KiB a block, dem-settle on one thread about 4 % faster, bench/RESULTS.md session 30) */
 static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env *env, int k0, int k1, int *cand,
                        sph_batch *bp, stage_acc *acc) {

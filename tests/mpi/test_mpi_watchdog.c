@@ -95,7 +95,10 @@ static floe_world *build_push(void) {
     push *pu = calloc(1, sizeof *pu);
     pu->base.klass = &push_class;
     pu->c = 20; /* 1/s: the kinetic energy doubles in about 17 ms */
-    if (floe_world_add_provider(w, &pu->base)) free(pu);
+    if (floe_world_add_provider(w, &pu->base)) {
+        CHECK(0, "add_provider push: %s", floe_world_last_error(w));
+        free(pu);
+    }
     floe_world_set_threads(w, 1);
     return w;
 }
