@@ -963,21 +963,40 @@ int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key)
             }
             if (rc == FLOE_OK && (double)s->nparticles + (double)pts.n > 2.0e9)
                 rc = sc_fail(s, FLOE_EINVAL, e, "%s: too many particles", what);
-            int gi = -1;
+            int gi = -1, *geo = NULL;
+            long *order = NULL;
             if (rc == FLOE_OK && !radii) rc = sc_add_geometry(s, &c.shape, e, what, &gi);
-            /* one shared geometry (drawn radii: one per distinct radius, the radii sorted);
-             * the growing-radius state gives its particle its own */
-            for (long i = 0; i < pts.n && rc == FLOE_OK; i++) {
-                int pidx;
-                if (radii && (i == 0 || radii[i] != radii[i - 1])) {
+            /* drawn radii: one geometry per distinct radius (the radii come sorted, largest
+             * first), geo[i] point i's */
+            if (rc == FLOE_OK && radii && !(geo = malloc((size_t)pts.n * sizeof *geo)))
+                rc = sc_fail(s, FLOE_ENOMEM, e, "out of memory");
+            for (long i = 0; radii && i < pts.n && rc == FLOE_OK; i++) {
+                if (i == 0 || radii[i] != radii[i - 1]) {
                     c.shape.radius = radii[i];
                     rc = sc_add_geometry(s, &c.shape, e, what, &gi);
-                    if (rc) break;
                 }
-                rc = sc_add_one(s, &c, gi, pts.x + 3 * i, entry, e, what, &pidx);
-                if (rc == FLOE_OK && c.grow && i == c.grow_index)
+                geo[i] = gi;
+            }
+            /* a random packing's particles numbered in Morton order of their centres, not
+             * in the order they were placed (a random one): the contact loop then reads its
+             * pairs' data from nearby memory (bench/RESULTS.md, issue 14 session 31) */
+            if (rc == FLOE_OK && packing == 2) {
+                double lo[3], hi[3];
+                rc = sc_parse_region(s, &m, lo, hi);
+                if (rc == FLOE_OK && (!(order = malloc((size_t)pts.n * sizeof *order)) ||
+                                      sc_morton_order(pts.x, pts.n, 3, s->dim, lo, hi, order)))
+                    rc = sc_fail(s, FLOE_ENOMEM, e, "out of memory");
+            }
+            /* the growing-radius state gives its particle its own geometry */
+            for (long k = 0; k < pts.n && rc == FLOE_OK; k++) {
+                const long i = order ? order[k] : k;
+                int pidx;
+                rc = sc_add_one(s, &c, radii ? geo[i] : gi, pts.x + 3 * i, entry, e, what, &pidx);
+                if (rc == FLOE_OK && c.grow && k == c.grow_index)
                     rc = sc_add_growth(s, &c, pidx, e, what);
             }
+            free(order);
+            free(geo);
             free(pts.x);
             free(radii);
             if (rc != FLOE_OK) return rc;

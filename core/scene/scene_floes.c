@@ -169,35 +169,6 @@ static int fsd_areas(sc *s, struct fy_node *at, const char *f, const fsd *d, dou
     return FLOE_OK;
 }
 
-/* a cell and its Morton key (the centroid's 16-bit grid coordinates in the region,
- * interleaved) */
-typedef struct morton_cell {
-    uint32_t key;
-    int cell;
-} morton_cell;
-
-static uint32_t spread16(uint32_t v) {
-    v &= 0xffff;
-    v = (v | (v << 8)) & 0x00ff00ff;
-    v = (v | (v << 4)) & 0x0f0f0f0f;
-    v = (v | (v << 2)) & 0x33333333;
-    v = (v | (v << 1)) & 0x55555555;
-    return v;
-}
-
-static uint32_t morton2(double x, double y, const double lo[2], const double hi[2]) {
-    double u = (x - lo[0]) / (hi[0] - lo[0]), w = (y - lo[1]) / (hi[1] - lo[1]);
-    u = u < 0 ? 0 : u > 1 ? 1 : u;
-    w = w < 0 ? 0 : w > 1 ? 1 : w;
-    return spread16((uint32_t)(u * 65535.0)) | (spread16((uint32_t)(w * 65535.0)) << 1);
-}
-
-static int by_morton(const void *a, const void *b) {
-    const morton_cell *x = a, *y = b;
-    if (x->key != y->key) return x->key < y->key ? -1 : 1;
-    return (x->cell > y->cell) - (x->cell < y->cell);
-}
-
 /* the keys every floe entry shares (a field, a GeoJSON file): material, velocity, motion */
 int sc_floe_entry(sc *s, const sc_map *m, int entry, const char *what, int *mat, double v[3], int *motion)
 {
@@ -308,19 +279,15 @@ int sc_floe_field(sc *s, struct fy_node *e, int entry, const char *what)
      * contact's two floes (and their polygons) sit near each other in memory (the random
      * seeds' order made every neighbour pair a cache miss: 10,000 floes stepped 1.4x
      * slower with contacts) */
-    morton_cell *ord = rc ? NULL : malloc((size_t)vor.n * sizeof *ord);
-    if (!rc && !ord) {
+    long *ord = rc ? NULL : malloc((size_t)(vor.n > 0 ? vor.n : 1) * sizeof *ord);
+    if (!rc && (!ord || sc_morton_order(vor.centroid, vor.n, 2, 2, lo, hi, ord))) {
+        free(ord);
         floe_voronoi_free(&vor);
         return sc_fail(s, FLOE_ENOMEM, fk, "%s: out of memory", f);
     }
-    for (int k = 0; k < vor.n && rc == FLOE_OK; k++) {
-        ord[k].key = morton2(vor.centroid[2 * k], vor.centroid[2 * k + 1], lo, hi);
-        ord[k].cell = k;
-    }
-    if (ord) qsort(ord, (size_t)vor.n, sizeof *ord, by_morton);
     unsigned long long rng = (unsigned long long)seed ^ 0x9e3779b97f4a7c15ull; /* thicknesses: their own stream */
     for (int kk = 0; kk < vor.n && rc == FLOE_OK; kk++) {
-        const int k = ord[kk].cell;
+        const int k = (int)ord[kk];
         int nv = vor.start[k + 1] - vor.start[k];
         floe_geometry *g = floe_polygon_create(vor.xy + 2 * vor.start[k], nv, err, sizeof err);
         if (!g) {

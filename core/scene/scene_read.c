@@ -615,6 +615,57 @@ int sc_read_schema(sc *s, const sc_map *m, const floe_registry_entry *ent, const
 
 double sc_rng_uniform(sc_rng *r) { return floe_rng_uniform(&r->s); }
 
+/* ------------------------------------------------------------------------------------ */
+/* Spatial order: Morton (Z-order) keys of points in a box                              */
+
+typedef struct sc_keyed { uint64_t key; long idx; } sc_keyed;
+
+/* the low 21 bits of v spread to every third bit (3D) or every second bit (2D) */
+static uint64_t sc_spread(uint64_t v, int dim)
+{
+    v &= 0x1fffff;
+    if (dim == 2) {
+        v = (v | (v << 16)) & 0x0000ffff0000ffffull;
+        v = (v | (v << 8)) & 0x00ff00ff00ff00ffull;
+        v = (v | (v << 4)) & 0x0f0f0f0f0f0f0f0full;
+        v = (v | (v << 2)) & 0x3333333333333333ull;
+        return (v | (v << 1)) & 0x5555555555555555ull;
+    }
+    v = (v | (v << 32)) & 0x001f00000000ffffull;
+    v = (v | (v << 16)) & 0x001f0000ff0000ffull;
+    v = (v | (v << 8)) & 0x100f00f00f00f00full;
+    v = (v | (v << 4)) & 0x10c30c30c30c30c3ull;
+    return (v | (v << 2)) & 0x1249249249249249ull;
+}
+
+static int sc_by_key(const void *a, const void *b)
+{
+    const sc_keyed *x = a, *y = b;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return (x->idx > y->idx) - (x->idx < y->idx);
+}
+
+int sc_morton_order(const double *x, long n, int stride, int dim, const double *lo, const double *hi, long *order)
+{
+    sc_keyed *k = malloc((size_t)(n > 0 ? n : 1) * sizeof *k);
+    if (!k) return FLOE_ENOMEM;
+    const double top = (double)0x1fffff;
+    for (long i = 0; i < n; i++) {
+        uint64_t key = 0;
+        for (int a = 0; a < dim; a++) {
+            double u = hi[a] > lo[a] ? (x[stride * i + a] - lo[a]) / (hi[a] - lo[a]) : 0.0;
+            u = u > 0 ? (u < 1 ? u : 1) : 0; /* NaN: 0 */
+            key |= sc_spread((uint64_t)(u * top), dim) << a;
+        }
+        k[i].key = key;
+        k[i].idx = i;
+    }
+    qsort(k, (size_t)n, sizeof *k, sc_by_key);
+    for (long i = 0; i < n; i++) order[i] = k[i].idx;
+    free(k);
+    return FLOE_OK;
+}
+
 /* Memory a scene needs (SC_BYTES_* in scene_read.h) */
 
 double sc_phys_mem(void)
