@@ -176,11 +176,14 @@ static void test_given(const char *by, int by_volume) {
     floe_world_destroy(w);
 }
 
-/* the Morton key of x in [lo, hi], written out bit by bit (the loader's is branch-free) */
+/* the Morton key of x in [lo, hi] (every axis scaled by the longest side), written out bit by
+ * bit (the loader's spreads the bits by masks) */
 static unsigned long long morton_naive(const double *x, int dim, const double *lo, const double *hi) {
     unsigned long long key = 0, q[3] = {0, 0, 0};
+    double side = 0;
+    for (int a = 0; a < dim; a++) side = fmax(side, hi[a] - lo[a]);
     for (int a = 0; a < dim; a++) {
-        double u = (x[a] - lo[a]) / (hi[a] - lo[a]);
+        double u = (x[a] - lo[a]) / side;
         u = u < 0 ? 0 : u > 1 ? 1 : u;
         q[a] = (unsigned long long)(u * 2097151.0);
     }
@@ -239,6 +242,35 @@ static void test_spatial_order(int dim, const char *region, const double *lo, co
     floe_world_destroy(w);
 }
 
+/* grow.index names a random packing's particle in its final (Morton) numbering: particle I
+ * of the entry, and no other, gets its own geometry */
+static void test_grow_index(void) {
+    char err[1024], text[1200];
+    snprintf(text, sizeof text,
+             "dimension: 3\n"
+             "time: {duration: 0.01, dt: 1e-5}\n"
+             "materials: [{name: g, density: 2500}]\n"
+             "laws: [{materials: [g, g], model: viscoelastic, kn: 1e5, gn: 0, ks: 0, gs: 0, friction: 0}]\n"
+             "bodies:\n"
+             "  - {packing: lattice, shape: {sphere: {radius: 0.01}}, material: g, spacing: 0.03, counts: [2, 1, 1],\n"
+             "     origin: [0.5, 0.5, 0.5]}\n"
+             "  - {packing: random, shape: {sphere: {radius: 0.01}}, material: g, count: 40, seed: 9,\n"
+             "     region: {min: [0, 0, 0], max: [0.3, 0.3, 0.3]}, grow: {index: 7, rate: 0.001}}\n");
+    floe_world *w = load(text, err, sizeof err);
+    CHECK(w != NULL, "grow on a random packing: %s", err);
+    if (!w) return;
+    const floe_geometry *shared = floe_world_particle_geometry(w, 2);
+    int own = 0, which = -1;
+    for (int i = 2; i < 42; i++)
+        if (floe_world_particle_geometry(w, i) != shared) {
+            own++;
+            which = i;
+        }
+    CHECK(own == 1 && which == 2 + 7, "grow.index 7 of the second entry: %d particles with their own geometry, "
+          "the last %d (want particle 9 alone)", own, which);
+    floe_world_destroy(w);
+}
+
 static void test_refusals(void) {
     char err[1024];
     /* far too many for the region: refused before placement, at the count's line */
@@ -279,6 +311,7 @@ int main(void) {
     test_spatial_order(3, "{min: [0, 0, 0], max: [0.5, 0.5, 0.5]}", lo, hi3, 3000,
                        "{given: [[0.004, 0.2], [0.006, 0.3], [0.008, 0.5]], by: number}", 3);
     test_spatial_order(2, "{min: [0, 0], max: [1, 0.5]}", lo, hi2, 2000, "{given: [[0.004, 1], [0.006, 1]]}", 2);
+    test_grow_index();
     test_refusals();
     return check_summary("test_packing_psd");
 }

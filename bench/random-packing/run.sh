@@ -8,9 +8,10 @@
 # interleaved.
 #   REPS=3 N=20000 DURATION=0.06 bench/random-packing/run.sh
 #   BASE=/tmp/base/floe REPS=3 bench/random-packing/run.sh
-# Prints each run's particle-steps/s (floe run's summary, the whole run, placement included),
-# the medians, the ratio new / BASE and the last stress rows of both (the same physics: they
-# agree to rounding, not to the bit, as the sums run in another order).
+# Prints each run's particle-steps/s (floe run's summary: the steps, not the scene's loading
+# and placement), the medians, the ratio new / BASE and the last stress rows of both (the same
+# physics in another order of the sums: a chaotic packing's rows agree statistically, and to
+# many digits only over a short run).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -46,6 +47,7 @@ run() { # $1 label, $2 CLI
     echo "$out" >&2; exit 1
   fi
   local pss; pss=$(echo "$out" | sed -n 's/.*particle-steps\/s: *\([0-9.e+-]*\).*/\1/p' | tail -1)
+  [[ -n "$pss" ]] || { echo "$out" >&2; echo "no particle-steps/s in $2's summary" >&2; exit 1; }
   echo "$1: N=$N duration=$DURATION particle_steps_per_s=$pss $(echo "$out" | grep -o 'contacts (current): *[0-9]*')"
   echo "$pss" >> "$work/$1.txt"
 }

@@ -64,7 +64,8 @@ const floe_registry_entry floe_packing_entry_hexagonal = {
 const floe_registry_entry floe_packing_entry_random = {
     .kind = FLOE_KIND_PACKING, .name = "random", .title = "random sequential placement",
     .doc = "count particles placed at random inside the region without overlap of their bounding spheres (random "
-           "sequential addition; fails with a message when the region is jammed).",
+           "sequential addition; fails with a message when the region is jammed), numbered in Morton order of their centres "
+           "(neighbours in space get nearby indices).",
     .source = "docs/scene-format.md, \"bodies\"",
     .params = random_schema, .nparams = 5, .params_size = sizeof(packing_doc), .create = (floe_fn)loader_reads,
     .flags = FLOE_ENTRY_LOADER_PARSES};

@@ -649,11 +649,17 @@ int sc_morton_order(const double *x, long n, int stride, int dim, const double *
 {
     sc_keyed *k = malloc((size_t)(n > 0 ? n : 1) * sizeof *k);
     if (!k) return FLOE_ENOMEM;
+    /* one scale for every axis, the box's longest side: a thin axis scaled to the same 21
+     * bits would own the key's top bit, and neighbours across its middle would get far
+     * ranks (a slab a few diameters thick) */
     const double top = (double)0x1fffff;
+    double side = 0;
+    for (int a = 0; a < dim; a++)
+        if (hi[a] - lo[a] > side) side = hi[a] - lo[a];
     for (long i = 0; i < n; i++) {
         uint64_t key = 0;
         for (int a = 0; a < dim; a++) {
-            double u = hi[a] > lo[a] ? (x[stride * i + a] - lo[a]) / (hi[a] - lo[a]) : 0.0;
+            double u = side > 0 ? (x[stride * i + a] - lo[a]) / side : 0.0;
             u = u > 0 ? (u < 1 ? u : 1) : 0; /* NaN: 0 */
             key |= sc_spread((uint64_t)(u * top), dim) << a;
         }

@@ -223,8 +223,8 @@ int sc_node_list(sc *s, struct fy_node *v, struct fy_node *k, const char *field,
                         int n2, double *out, int *got);
 int sc_node_long(sc *s, struct fy_node *v, struct fy_node *k, const char *field, long *out);
 /* order[0..n) = the indices of the n points x (stride doubles apart, dim coordinates in the
- * box [lo, hi], each axis scaled to it) in Morton order: neighbours in space get nearby
- * ranks (ties by index). FLOE_ENOMEM when out of memory */
+ * box [lo, hi], every axis scaled by its longest side) in Morton order: neighbours in space
+ * get nearby ranks (ties by index). FLOE_ENOMEM when out of memory */
 int sc_morton_order(const double *x, long n, int stride, int dim, const double *lo, const double *hi, long *order);
 int sc_num(sc *s, const sc_map *m, const char *key, int required, double def, double *out);
 int sc_parse_bodies(sc *s, struct fy_node *seq, struct fy_node *key);
