@@ -176,13 +176,21 @@ int floe_world_cell_velocity_gradient(const floe_world *w, double L[9]) {
     return FLOE_OK;
 }
 
+/* the sums in nine locals, not through mvv (which may alias the store: every term was a
+ * load and a store, and this pass cost as much as a drift: 11 % of a periodic compaction's
+ * step, bench/RESULTS.md issue 14 session 31); the same additions in the same order */
 void floe_cell_mvv(const floe_particles *p, int lo, int hi, double mvv[9]) {
+    double s[9];
+    memcpy(s, mvv, sizeof s);
+    const double *restrict vv = p->v, *restrict mass = p->mass;
+    const unsigned char *restrict motion = p->motion;
     for (int i = lo; i < hi; i++) {
-        if (p->motion[i] != FLOE_FREE) continue;
-        const double *v = p->v + 3 * i, m = p->mass[i];
+        if (motion[i] != FLOE_FREE) continue;
+        const double *v = vv + 3 * i, m = mass[i];
         for (int a = 0; a < 3; a++)
-            for (int b = 0; b < 3; b++) mvv[3 * a + b] += m * v[a] * v[b];
+            for (int b = 0; b < 3; b++) s[3 * a + b] += m * v[a] * v[b];
     }
+    memcpy(mvv, s, sizeof s);
 }
 
 void floe_cell_stress_of(const double vir[9], const double pvir[9], const double mvv[9], double V, double sigma[9]) {
@@ -379,14 +387,24 @@ int floe_nl_needs_rebuild_cell(const floe_neighbor_list *nl, const floe_particle
     double lim = 0.5 * nl->skin - 0.5 * sqrt(an) * (2 * nl->rmax_b + nl->skin);
     if (lim <= 0) return 1;
     const double lim2 = lim * lim;
-    for (int i = 0; i < p->n; i++) {
-        const double *x = p->x + 3 * i, *b = nl->x_build + 3 * i;
-        if (p->radius[i] > nl->r_build[i]) return 1;
-        double d[3], ad[3];
-        floe_v3_sub(d, b, c->o);
-        mv3(A, d, ad);
-        double e0 = x[0] - b[0] - ad[0], e1 = x[1] - b[1] - ad[1], e2 = x[2] - b[2] - ad[2];
-        if (e0 * e0 + e1 * e1 + e2 * e2 > lim2) return 1;
+    /* blocks of particles without an exit inside (the compiler vectorises them: a rebuild
+     * is rare, the pass is every step), the block's verdict after it; the same test for
+     * each particle (a NaN displacement fails neither) */
+    const double *restrict xs = p->x, *restrict xb = nl->x_build, *restrict rad = p->radius,
+                           *restrict rb = nl->r_build;
+    const double o0 = c->o[0], o1 = c->o[1], o2 = c->o[2];
+    for (int i0 = 0; i0 < p->n; i0 += 256) {
+        const int i1 = i0 + 256 < p->n ? i0 + 256 : p->n;
+        int out = 0;
+        for (int i = i0; i < i1; i++) {
+            const double *x = xs + 3 * i, *b = xb + 3 * i;
+            const double d0 = b[0] - o0, d1 = b[1] - o1, d2 = b[2] - o2;
+            const double e0 = x[0] - b[0] - (A[0] * d0 + A[1] * d1 + A[2] * d2);
+            const double e1 = x[1] - b[1] - (A[3] * d0 + A[4] * d1 + A[5] * d2);
+            const double e2 = x[2] - b[2] - (A[6] * d0 + A[7] * d1 + A[8] * d2);
+            out |= (rad[i] > rb[i]) | (e0 * e0 + e1 * e1 + e2 * e2 > lim2);
+        }
+        if (out) return 1;
     }
     return 0;
 }
