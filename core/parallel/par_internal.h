@@ -78,9 +78,11 @@ typedef struct floe_par {
      * measured seconds per unit of RCB weight (smoothed over decompositions; 0: none yet) */
     int balance;
     double busy;
+    long long *rcb_sum;      /* 4 size: the parts' weights under a cut, this rank's and the sums (rcb_imbalance) */
+    double rcb_tried;        /* the kept directions' imbalance when fresh ones last did no better (0: none) */
     double *cost;            /* 2 size: the costs, then a gather's scratch */
-    int *bal_ids;            /* 2 size: the parts 0 .. size - 1, then the weight index 0 each */
-    float *bal_sz;           /* size: the parts' target sizes */
+    int *bal_ids;            /* 4 size: the parts 0 .. size - 1 twice, then the weight index of each (0s, 1s) */
+    float *bal_sz;           /* 2 size: the parts' target sizes, for each criterion (the same) */
     /* PD bodies (par_pd.c): the split's per-body index and masks (w->pd_split points here),
      * the halo's reach for their bonds (the longest acting bond at the last decomposition) */
     struct floe_pd_split *pd_split;

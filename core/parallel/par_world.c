@@ -328,6 +328,7 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     const int S = P->size, n = p->n;
     P->scount = malloc((size_t)15 * S * sizeof *P->scount);
     P->boxes = malloc((size_t)8 * S * sizeof *P->boxes);
+    P->rcb_sum = malloc((size_t)4 * S * sizeof *P->rcb_sum);
     if (P->scount) {
         P->sdispl = P->scount + S; P->rcount = P->scount + 2 * S; P->rdispl = P->scount + 3 * S;
         P->gcnt = P->scount + 4 * S;
@@ -363,7 +364,7 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     P->gid = malloc((size_t)(n ? n : 1) * sizeof *P->gid);
     P->gid_cap = n;
     double **fresh = NULL; /* the force stages' per-particle rows, this rank's part (par_forcing.c) */
-    int nrec = 0, rc = !P->scount || !P->boxes || !mine || !newidx || !gid0 || !buf || !P->gid ? FLOE_ENOMEM : FLOE_OK;
+    int nrec = 0, rc = !P->scount || !P->boxes || !P->rcb_sum || !mine || !newidx || !gid0 || !buf || !P->gid ? FLOE_ENOMEM : FLOE_OK;
     if (!rc) {
         int kb = 0;
         for (int i = 0; i < n; i++) {

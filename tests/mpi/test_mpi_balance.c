@@ -12,6 +12,7 @@
  *   - the next measure (equal costs) is averaged with the last: the slow rank's share moves
  *     half way back (cost 1.5: 2/3 / (2/3 + S - 1));
  *   - back to FLOE_BALANCE_WEIGHTS: even shares again;
+ *   - a bed under a cloud: both the particles and the contacts balanced (build_bed_cloud);
  *   - a run of 300 steps under the time balance (the real timings, cuts at every rebuild)
  *     ends with the same kinetic energy as under the weights within 1e-9 (the decompositions
  *     differ: only round-off may), and the force time it measured is positive. */
@@ -87,6 +88,87 @@ static void check_shares(const int *all, double slow, const char *when) {
         CHECK(fabs(all[r] - want) <= 0.1 * want, "%s: rank %d owns %d, want %.0f", when, r, all[r], want);
 }
 
+/* A bed under a cloud (docs/parallel.md "Subdomains"): a bed of touching spheres (25 x 25 x 3,
+ * spacing 0.79 mm for radius 0.4 mm: every lattice neighbour in contact) at the bottom of a
+ * box 20 x 20 x 40 mm, and as many loose spheres (11 x 11 x 16, spacing 1.8 mm) above it, no
+ * gravity. The split cuts across the height (the only direction within 2/3 of the longest
+ * extent): one rank the bed, the other the cloud. After a step (the contacts known) a
+ * decomposition must balance both the particles (their integration and list) and the contacts:
+ * each rank's owned count and its count of owned particles in contact within 15 % of the
+ * mean. One weight (the work's sum) cut the bed across its height: at 2 ranks 0.53 of the bed
+ * on one rank, the rest with the whole cloud on the other (owned 1,000 and 2,800) */
+static floe_world *build_bed_cloud(int *nbed) {
+    floe_world_def d = floe_default_world_def();
+    d.dim = 3; d.dt = 1e-6;
+    d.energy_check = FLOE_CHECK_OFF;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    mpi_test_add_glass(w, 1e7);
+    const double r = 0.0004, Lb = 0.02;
+    const int g = floe_world_add_geometry(w, floe_sphere_create(r));
+    mpi_test_box_walls(w, Lb, Lb, 2 * Lb, 0, 6);
+    *nbed = 0;
+    for (int c = 0; c < 3; c++)
+        for (int b = 0; b < 25; b++)
+            for (int a = 0; a < 25; a++, ++*nbed) {
+                floe_particle_def p = floe_default_particle_def();
+                p.geometry = g;
+                floe_v3_set(p.x, r + a * 0.00079, r + b * 0.00079, r + c * 0.00079);
+                floe_world_add_particle(w, &p);
+            }
+    for (int c = 0; c < 16; c++)
+        for (int b = 0; b < 11; b++)
+            for (int a = 0; a < 11; a++) {
+                floe_particle_def p = floe_default_particle_def();
+                p.geometry = g;
+                floe_v3_set(p.x, 0.001 + a * 0.0018, 0.001 + b * 0.0018, 0.005 + c * 0.0018);
+                floe_world_add_particle(w, &p);
+            }
+    if (floe_world_prepare(w)) { fprintf(stderr, "prepare: %s\n", floe_world_last_error(w)); exit(2); }
+    return w;
+}
+
+static void check_bed_cloud(void) {
+    int nbed = 0;
+    floe_world *w = build_bed_cloud(&nbed);
+    const int ntot = nbed + 11 * 11 * 16;
+    int rc = floe_world_parallel_init(w, NULL);
+    if (!rc) rc = floe_world_step(w); /* the contacts known */
+    if (!rc) rc = floe_world_parallel_rebuild(w);
+    if (!rc) rc = floe_world_step(w);
+    CHECK(rc == 0, "bed and cloud: %s", rc ? floe_world_last_error(w) : "");
+    if (!rc) {
+        /* this rank's owned particles, and those of them in contact with another sphere */
+        const floe_particles *p = &w->p;
+        const floe_neighbor_list *nl = &w->nl;
+        const int lo = w->par->nrep, hi = lo + w->par->nown;
+        unsigned char *t = calloc((size_t)p->n + 1, 1);
+        for (int k = 0; k < nl->npairs; k++)
+            if (nl->touching[k] && p->kind[nl->pi[k]] == FLOE_GEOM_SPHERE && p->kind[nl->pj[k]] == FLOE_GEOM_SPHERE)
+                t[nl->pi[k]] = t[nl->pj[k]] = 1;
+        int mine[2] = {w->par->nown, 0}, all[2 * 64];
+        for (int i = lo; i < hi; i++) mine[1] += t[i];
+        free(t);
+        if (size_ <= 64) {
+            MPI_Allgather(mine, 2, MPI_INT, all, 2, MPI_INT, MPI_COMM_WORLD);
+            long tot[2] = {0, 0};
+            for (int q = 0; q < size_; q++) { tot[0] += all[2 * q]; tot[1] += all[2 * q + 1]; }
+            if (rank_ == 0) {
+                printf("  bed and cloud (%d + %d spheres), owned / in contact:", nbed, ntot - nbed);
+                for (int q = 0; q < size_; q++) printf(" %d / %d", all[2 * q], all[2 * q + 1]);
+                printf("\n");
+            }
+            CHECK(tot[0] == ntot && tot[1] >= nbed * 9 / 10, "bed and cloud: %ld owned (of %d), %ld in contact", tot[0], ntot,
+                  tot[1]);
+            for (int q = 0; q < size_; q++)
+                for (int c = 0; c < 2; c++)
+                    CHECK(fabs(all[2 * q + c] - (double)tot[c] / size_) <= 0.15 * tot[c] / size_,
+                          "bed and cloud: rank %d %s %d, the mean %.0f", q, c ? "in contact" : "owns", all[2 * q + c],
+                          (double)tot[c] / size_);
+        }
+    }
+    floe_world_destroy(w);
+}
+
 static double kinetic_after(floe_balance mode, int steps, double *force_s) {
     floe_world *w = build();
     int rc = floe_world_parallel_init(w, NULL);
@@ -128,6 +210,7 @@ int main(int argc, char **argv) {
         }
     }
     floe_world_destroy(w);
+    check_bed_cloud();
     /* a run under each mode: the same physics within round-off */
     double fw, ft;
     const double kw = kinetic_after(FLOE_BALANCE_WEIGHTS, 300, &fw), kt = kinetic_after(FLOE_BALANCE_TIME, 300, &ft);

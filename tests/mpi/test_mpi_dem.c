@@ -250,8 +250,10 @@ static void compare(int shapes, long nshort, long nlong, double xtol, double vto
                tag, size_, nshort, dx, dx / LX, dv, dv / vmax, vmax, t1 - t0, t2 - t1);
         printf("  %lld contact-steps with a ghost, %lld migrations, %lld decompositions (summed over the ranks)\n",
                exs[0], exs[1], exs[2] / size_);
-        if (size_ > 1 && shapes == 2)
-            CHECK(exs[1] > 100, "%s: particles migrated (%lld)", tag, exs[1]);
+        if (size_ > 1 && shapes == 2) /* (the bisection keeps its directions and moves its cuts only
+                                         past Zoltan's tolerance: 55 at 2 ranks, 339 at 4; when
+                                         it turned them, more than 100 at 2) */
+            CHECK(exs[1] > 30, "%s: particles migrated (%lld)", tag, exs[1]);
         else if (size_ > 1)
             CHECK(exs[0] > 1000 && exs[1] > 0 && exs[2] > size_, "%s: contacts across ranks (%lld contact-steps), "
                   "migrations (%lld) and rebuilds (%lld) happened", tag, exs[0], exs[1], exs[2] / size_);
