@@ -96,38 +96,48 @@ static double kinematic_close(floe_world *w, int i, double h) {
 /* every provider's forces on every particle; under MPI, this rank's force time is booked
  * (its own work, for the balance), the ghosts' forces are summed to their owners and the
  * servo walls take their whole forces */
-static int forces_all(floe_world *w, floe_step_ctx *c, int pre) {
+/* floe_world_forces(groups), its failure agreed under MPI. pre (MPI): this rank failed since
+ * the last agreement, its message set; it evaluates all the same (a stage may hold a
+ * collective) and tells the others. A rank whose evaluation failed (a contact too deep, a
+ * law's error) tells the others before the reverse sum, where they would wait for it: every
+ * rank returns the error. A rank whose own evaluation passed then puts back what the
+ * evaluation booked (the tail of floe_world_forces: the elastic energies, the dissipation, the
+ * boundary work, the counts), as one process books nothing from an evaluation that failed;
+ * before, those parts of the failed evaluation were in the written energies (an LPS body's
+ * elastic energy 2e-10 to 2e-8 of the run's energy off at -np 3, depending on the cut). The
+ * body forces' work, booked as their stage runs (first), stays as one process keeps it. */
+static int forces_agreed(floe_world *w, const floe_step_ctx *c, int groups, int pre) {
     const double t0 = w->par ? floe_par_clock() : 0.0;
-    /* pre (MPI): this rank failed since the last agreement, its message set; it evaluates
-     * all the same (a stage may hold a collective) and tells the others below */
     char why[sizeof w->err];
     if (pre) memcpy(why, w->err, sizeof why);
-    /* the ledger as an evaluation that fails leaves it (floe_world_forces books nothing then) */
-    const floe_energy e0 = w->energy;
+    const double el0 = w->energy.elastic, dis0 = w->energy.dissipated, wb0 = w->energy.work_boundary;
     const double ec0 = w->elastic_contact, ep0 = w->elastic_pd;
     const long fe0 = w->st.force_evaluations, pe0 = w->st.pd_evaluations;
-    int rc = floe_world_forces(w, c, FLOE_GROUP_ALL);
+    const int cv0 = w->contacts_valid;
+    const int own = floe_world_forces(w, c, groups);
+    int rc = own;
     if (pre) {
         rc = pre;
         memcpy(w->err, why, sizeof why);
     }
-    if (w->par) floe_par_force_time(w, floe_par_clock() - t0);
-    /* MPI: a rank whose evaluation failed (a contact too deep, a law's error) tells the others
-     * before the reverse sum, where they would wait for it: every rank returns its error. The
-     * ranks whose own evaluation passed put their ledger back, so that the ranks' sums are what
-     * one process holds after the failure (before, their parts of the failed evaluation were
-     * in it: an LPS body's elastic energy 2e-10 to 2e-8 of the run's energy off at -np 3) */
-    if (w->par) {
-        const int own = rc;
-        rc = floe_par_agree_error(w, rc);
-        if (rc && !own) {
-            w->energy = e0;
-            w->elastic_contact = ec0;
-            w->elastic_pd = ep0;
-            w->st.force_evaluations = fe0;
-            w->st.pd_evaluations = pe0;
-        }
+    if (!w->par) return rc;
+    floe_par_force_time(w, floe_par_clock() - t0);
+    rc = floe_par_agree_error(w, rc);
+    if (rc && !own) {
+        w->energy.elastic = el0;
+        w->energy.dissipated = dis0;
+        w->energy.work_boundary = wb0;
+        w->elastic_contact = ec0;
+        w->elastic_pd = ep0;
+        w->st.force_evaluations = fe0;
+        w->st.pd_evaluations = pe0;
+        w->contacts_valid = cv0;
     }
+    return rc;
+}
+
+static int forces_all(floe_world *w, floe_step_ctx *c, int pre) {
+    int rc = forces_agreed(w, c, FLOE_GROUP_ALL, pre);
     if (!rc && w->par) rc = floe_par_reverse(w);
     if (!rc && w->par) rc = floe_par_servo_totals(w);
     return rc;
@@ -1343,18 +1353,7 @@ static inline int stag_pd(const int *pd_of, int i) { return pd_of[i] >= 0; }
  * ghosts summed to their owners, with the servo walls' totals; the PD group writes owned
  * points only) */
 static int stag_forces(floe_world *w, const floe_step_ctx *ctx, int group, int pre) {
-    const double t0 = w->par ? floe_par_clock() : 0.0;
-    /* pre (MPI): this rank failed since the last agreement; it evaluates all the same (a
-     * stage may hold a collective) and tells the others below, as forces_all */
-    char why[sizeof w->err];
-    if (pre) memcpy(why, w->err, sizeof why);
-    int rc = floe_world_forces(w, ctx, group);
-    if (pre) {
-        rc = pre;
-        memcpy(w->err, why, sizeof why);
-    }
-    if (w->par) floe_par_force_time(w, floe_par_clock() - t0);
-    if (w->par) rc = floe_par_agree_error(w, rc); /* as forces_all */
+    int rc = forces_agreed(w, ctx, group, pre); /* as forces_all */
     if (!rc && w->par && group == FLOE_GROUP_DEM) rc = floe_par_reverse(w);
     if (!rc && w->par && group == FLOE_GROUP_DEM) rc = floe_par_servo_totals(w);
     return rc;

@@ -219,8 +219,9 @@ static void z_geom_multi(void *data, int ngid, int nlid, int nobj, ZOLTAN_ID_PTR
  *   [2k + 1] all of its work: that + 1.2 more per entry in contact at the last step (the pair's
  *            evaluation).
  * NULL before a list exists (every particle 1 and 1). The two are balanced each on its own
- * (Zoltan's multicriteria bisection, which tries every direction and keeps the cut whose worse
- * criterion is the most even), so the contacts' phase is balanced too: the step's phases each
+ * (Zoltan's multicriteria bisection places each cut where the worse criterion is the most
+ * even, and chooses among directions as floe_par_rcb says), so the contacts' phase is
+ * balanced too: the step's phases each
  * end at a collective (the forces at the ghosts' sums, the drift and the list at the ghosts'
  * positions), and a rank that holds the contacts of a settled bed and one that holds the
  * falling particles above it waited for each other twice a step with their total work equal:
@@ -250,6 +251,14 @@ static float *rcb_weights(const floe_world *w, const floe_par *P) {
     return wt;
 }
 
+/* the parts' target sizes (P->bal_sz, both criteria) given to zz, those given before cleared
+ * (Zoltan appends each call's to its list) */
+static void set_part_sizes(floe_par *P, struct Zoltan_Struct *zz) {
+    if (!P->bal_sz || !zz) return;
+    Zoltan_LB_Set_Part_Sizes(zz, 1, -1, NULL, NULL, NULL);
+    Zoltan_LB_Set_Part_Sizes(zz, 1, 2 * P->size, P->bal_ids, P->bal_ids + 2 * P->size, P->bal_sz);
+}
+
 /* the balance's mode; its scratch at the first call; back to even shares when the weights
  * take over again */
 int floe_par_set_balance(floe_par *P, int mode) {
@@ -272,7 +281,7 @@ int floe_par_set_balance(floe_par *P, int mode) {
     }
     if (mode == FLOE_BALANCE_WEIGHTS && P->balance != mode && P->zz) { /* back to even shares */
         for (int r = 0; r < S; r++) { P->bal_sz[r] = P->bal_sz[S + r] = 1.0f / (float)S; P->cost[r] = 0; }
-        Zoltan_LB_Set_Part_Sizes(P->zz, 1, 2 * S, P->bal_ids, P->bal_ids + 2 * S, P->bal_sz);
+        set_part_sizes(P, P->zz);
     }
     P->balance = mode;
     return FLOE_OK;
@@ -288,8 +297,8 @@ int floe_par_set_balance(floe_par *P, int mode) {
 static void time_shares(floe_par *P, const float *wts) {
     const int S = P->size;
     double ws = 0, *all = P->cost + S;
-    if (wts) /* both criteria: the rank's work */
-        for (int k = 0; k < 2 * P->nown; k++) ws += wts[k];
+    if (wts) /* the total criterion: the rank's work */
+        for (int k = 0; k < P->nown; k++) ws += wts[2 * k + 1];
     else
         ws = P->nown;
     const double mine = ws > 0 && P->busy > 0 ? P->busy / ws : 0.0;
@@ -308,7 +317,7 @@ static void time_shares(floe_par *P, const float *wts) {
         tot += all[r];
     }
     for (int r = 0; r < S; r++) P->bal_sz[r] = P->bal_sz[S + r] = (float)(all[r] / tot);
-    Zoltan_LB_Set_Part_Sizes(P->zz, 1, 2 * S, P->bal_ids, P->bal_ids + 2 * S, P->bal_sz);
+    set_part_sizes(P, P->zz);
 }
 
 /* a Zoltan object for RCB under both criteria (rcb_weights) with its directions locked after
@@ -329,7 +338,7 @@ static struct Zoltan_Struct *rcb_new(floe_par *P, const char *aspect) {
     Zoltan_Set_Param(zz, "RETURN_LISTS", "EXPORT");
     Zoltan_Set_Param(zz, "RCB_REUSE", "1");
     Zoltan_Set_Param(zz, "KEEP_CUTS", "1");
-    if (P->bal_sz) Zoltan_LB_Set_Part_Sizes(zz, 1, 2 * P->size, P->bal_ids, P->bal_ids + 2 * P->size, P->bal_sz);
+    set_part_sizes(P, zz);
     return zz;
 }
 
@@ -356,15 +365,23 @@ static int rcb_run(struct Zoltan_Struct *zz, zctx *z, int *dest) {
 /* the parts' imbalance under dest: over both criteria and every part, the largest of a part's
  * weight over its target share (1: even). The weights are summed as integers (tenths: 1 +
  * 0.1 per entry + 1.2 per contact are whole tenths), so the sums, and the decisions taken on
- * them, are the same on every rank whatever the reduction's order */
-static double rcb_imbalance(floe_par *P, const float *wts, const int *dest) {
-    const int S = P->size;
-    long long *loc = P->rcb_sum, *tot = loc + 2 * (size_t)S;
-    memset(loc, 0, 2 * (size_t)S * sizeof *loc);
-    for (int k = 0; k < P->nown; k++)
+ * them, are the same on every rank whatever the reduction's order. *rc: this rank's outcome
+ * so far, carried in the same reduction (every rank calls this, failed or not: a rank whose
+ * bisection failed must not skip the collective); on return the first failure of any rank,
+ * and INFINITY */
+static double rcb_imbalance(floe_par *P, const float *wts, const int *dest, int *rc) {
+    const int S = P->size, m = 2 * S + 1;
+    long long *loc = P->rcb_sum, *tot = loc + m;
+    memset(loc, 0, (size_t)m * sizeof *loc);
+    for (int k = 0; !*rc && k < P->nown; k++)
         for (int c = 0; c < 2; c++) loc[2 * dest[k] + c] += wts ? llroundf(10.0f * wts[2 * k + c]) : 10;
-    MPI_Allreduce(loc, tot, 2 * S, MPI_LONG_LONG, MPI_SUM, P->comm);
-    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, 2 * S * (long long)sizeof *tot);
+    loc[2 * S] = *rc != FLOE_OK;
+    MPI_Allreduce(loc, tot, m, MPI_LONG_LONG, MPI_SUM, P->comm);
+    floe_par_count_allreduce(P, FLOE_COMM_REDUCE, m * (long long)sizeof *tot);
+    if (tot[2 * S]) {
+        if (!*rc) *rc = FLOE_EINVAL; /* another rank's bisection failed */
+        return INFINITY;
+    }
     double worst = 0;
     for (int c = 0; c < 2; c++) {
         long long sum = 0;
@@ -404,14 +421,15 @@ int floe_par_rcb(floe_world *w, floe_par *P, int *dest) {
     P->busy = 0; /* the measure starts again with the new cut */
     zctx z = {w, P, wts};
     int rc = rcb_run(P->zz, &z, dest);
-    const double kept = rc ? INFINITY : rcb_imbalance(P, wts, dest);
+    const double kept = rcb_imbalance(P, wts, dest, &rc); /* (rc: now every rank's) */
     if (!rc && kept > 1.05 && kept > P->rcb_tried + 0.05) {
         int *alt = malloc((size_t)(P->nown ? P->nown : 1) * sizeof *alt);
         struct Zoltan_Struct *zn = rcb_new(P, "10");
         int ok = floe_par_agree(P, alt && zn ? FLOE_OK : FLOE_ENOMEM) == FLOE_OK;
         ok = ok && floe_par_agree(P, rcb_run(zn, &z, alt)) == FLOE_OK;
-        const double fresh = ok ? rcb_imbalance(P, wts, alt) : INFINITY;
-        if (ok && fresh < kept - 0.03) { /* the new directions: zn's cuts are kept from now on */
+        int frc = FLOE_OK;
+        const double fresh = ok ? rcb_imbalance(P, wts, alt, &frc) : INFINITY; /* (ok: agreed) */
+        if (ok && !frc && fresh < kept - 0.03) { /* the new directions: zn's cuts are kept from now on */
             memcpy(dest, alt, (size_t)P->nown * sizeof *dest);
             struct Zoltan_Struct *old = P->zz;
             P->zz = zn;

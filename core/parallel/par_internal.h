@@ -78,7 +78,7 @@ typedef struct floe_par {
      * measured seconds per unit of RCB weight (smoothed over decompositions; 0: none yet) */
     int balance;
     double busy;
-    long long *rcb_sum;      /* 4 size: the parts' weights under a cut, this rank's and the sums (rcb_imbalance) */
+    long long *rcb_sum;      /* 2 (2 size + 1): the parts' weights under a cut and a failure flag, this rank's and the sums (rcb_imbalance) */
     double rcb_tried;        /* the kept directions' imbalance when fresh ones last did no better (0: none) */
     double *cost;            /* 2 size: the costs, then a gather's scratch */
     int *bal_ids;            /* 4 size: the parts 0 .. size - 1 twice, then the weight index of each (0s, 1s) */

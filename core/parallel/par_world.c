@@ -328,7 +328,7 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     const int S = P->size, n = p->n;
     P->scount = malloc((size_t)15 * S * sizeof *P->scount);
     P->boxes = malloc((size_t)8 * S * sizeof *P->boxes);
-    P->rcb_sum = malloc((size_t)4 * S * sizeof *P->rcb_sum);
+    P->rcb_sum = malloc(((size_t)4 * S + 2) * sizeof *P->rcb_sum);
     if (P->scount) {
         P->sdispl = P->scount + S; P->rcount = P->scount + 2 * S; P->rdispl = P->scount + 3 * S;
         P->gcnt = P->scount + 4 * S;

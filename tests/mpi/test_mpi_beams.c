@@ -384,7 +384,7 @@ static void traffic(void) {
     const long long mig = S > 1 ? 312 * left + 408 * bleft + 3 * 4 * others : 0;
     const long long fb = 8LL * floe_par_fwd_doubles(w, P);
     CHECK(fb == 104, "traffic: a ghost refresh carries x v w q with beam bonds (%lld B, expected 104)", fb);
-    const long long gh = S > 1 ? fb * nsend0 + 312 * nsend1 + 68 * others : 0, red = S > 1 ? 20 + 8 * 4 + 16 * S : 0; /* + the bisection's balance */
+    const long long gh = S > 1 ? fb * nsend0 + 312 * nsend1 + 68 * others : 0, red = S > 1 ? 20 + 8 * 4 + 16 * S + 8 : 0; /* + the bisection's balance */
     CHECK(c.bytes[FLOE_COMM_MIGRATE] == mig, "rank %d: migration %lld B, expected %lld (%lld particles x 312, %lld bonds x "
           "408)", rank_, c.bytes[FLOE_COMM_MIGRATE], mig, left, bleft);
     CHECK(c.bytes[FLOE_COMM_GHOST] == gh, "rank %d: ghosts %lld B, expected %lld (%lld refreshed x %lld, %lld new x 312)",

@@ -229,9 +229,9 @@ static void check_rebuild(floe_world *w, const floe_world *ref) {
     /* the decomposition's agreements: before and after the bisection, in the two routes
      * (particles, history), before the ghosts' exchange, after the history's import and after
      * the list (par_rebuild: a failure on one rank is every rank's); and the bisection's
-     * balance (decomp.c rcb_imbalance: each part's two sums, 8-byte integers) */
-    CHECK(c.bytes[FLOE_COMM_REDUCE] == (S > 1 ? 7 * 4 + 16 * S : 0), "rank %d: a rebuild's reductions %lld B, expected %d",
-          me, c.bytes[FLOE_COMM_REDUCE], S > 1 ? 7 * 4 + 16 * S : 0);
+     * balance (decomp.c rcb_imbalance: each part's two sums and a failure flag, 8-byte integers) */
+    CHECK(c.bytes[FLOE_COMM_REDUCE] == (S > 1 ? 7 * 4 + 16 * S + 8 : 0), "rank %d: a rebuild's reductions %lld B, expected %d",
+          me, c.bytes[FLOE_COMM_REDUCE], S > 1 ? 7 * 4 + 16 * S + 8 : 0);
     CHECK(others_zero(&c, 1u << FLOE_COMM_GHOST | 1u << FLOE_COMM_MIGRATE | 1u << FLOE_COMM_REDUCE),
           "rank %d: a rebuild sends nothing else", me);
     CHECK(c.rebuilds == 1 && c.steps == 0, "rank %d: one rebuild, no step counted (%ld, %ld)", me, c.rebuilds, c.steps);
@@ -274,8 +274,8 @@ static void check_steps(floe_world *w) {
              * step's close (4 B; with the watchdog on, the watchdog's 9 sums, its minimum and
              * the close's word, 19 doubles, in one reduction); a rebuild's agreements. Three
              * reductions a step (+ eight at a rebuild: seven agreements and the bisection's
-             * balance, the parts' two sums as 8-byte integers) */
-            ok_red &= d[FLOE_COMM_REDUCE] == 12 + 4 + (reb ? 7 * 4 + 16 * S : 0) + (wd ? 152 : 4);
+             * balance, the parts' two sums and a failure flag as 8-byte integers) */
+            ok_red &= d[FLOE_COMM_REDUCE] == 12 + 4 + (reb ? 7 * 4 + 16 * S + 8 : 0) + (wd ? 152 : 4);
             ok_red &= dm[FLOE_COMM_REDUCE] == 3 + (reb ? 8 : 0);
             ok_out &= d[FLOE_COMM_OUTPUT] == 0 && dm[FLOE_COMM_OUTPUT] == 0;
             ok_red &= reb || d[FLOE_COMM_MIGRATE] == 0;
@@ -290,7 +290,7 @@ static void check_steps(floe_world *w) {
     }
     w->def.energy_check = check0;
     CHECK(ok_rev, "rank %d: every step's reverse traffic is 48 B x the ghosts held", me);
-    CHECK(ok_red, "rank %d: every step's reductions are three: 16 B (+ 28 + 16 x ranks B and eight more at a rebuild), the "
+    CHECK(ok_red, "rank %d: every step's reductions are three: 16 B (+ 36 + 16 x ranks B and eight more at a rebuild), the "
           "close's 4 B, carried by the watchdog's 152 B when it is on", me);
     CHECK(ok_out, "rank %d: without outputs a step sends no output word", me);
     CHECK(ok_gh, "every step's ghost traffic over the ranks is 72 B (312 B at a rebuild) x all ghosts held");
