@@ -93,19 +93,19 @@ static double kinematic_close(floe_world *w, int i, double h) {
     return wb;
 }
 
-/* every provider's forces on every particle; under MPI, this rank's force time is booked
- * (its own work, for the balance), the ghosts' forces are summed to their owners and the
- * servo walls take their whole forces */
 /* floe_world_forces(groups), its failure agreed under MPI. pre (MPI): this rank failed since
  * the last agreement, its message set; it evaluates all the same (a stage may hold a
  * collective) and tells the others. A rank whose evaluation failed (a contact too deep, a
  * law's error) tells the others before the reverse sum, where they would wait for it: every
  * rank returns the error. A rank whose own evaluation passed then puts back what the
- * evaluation booked (the tail of floe_world_forces: the elastic energies, the dissipation, the
- * boundary work, the counts), as one process books nothing from an evaluation that failed;
- * before, those parts of the failed evaluation were in the written energies (an LPS body's
- * elastic energy 2e-10 to 2e-8 of the run's energy off at -np 3, depending on the cut). The
- * body forces' work, booked as their stage runs (first), stays as one process keeps it. */
+ * evaluation booked at its end (the tail of floe_world_forces: the elastic energies, the
+ * dissipation, the boundary work, the counts, whether the contacts are valid), as one process
+ * books none of that from an evaluation that failed; before, those parts of the failed
+ * evaluation were in the written energies (an LPS body's elastic energy 2e-10 to 2e-8 of the
+ * run's energy off at -np 3, depending on the cut). The body forces' work, booked as their
+ * stage runs (first), stays as one process keeps it when a later stage fails; when the
+ * stage before it fails (the dashpot's buffers out of memory), one process books none and
+ * the ranks keep theirs. This rank's force time is booked (its own work, for the balance). */
 static int forces_agreed(floe_world *w, const floe_step_ctx *c, int groups, int pre) {
     const double t0 = w->par ? floe_par_clock() : 0.0;
     char why[sizeof w->err];
@@ -136,6 +136,8 @@ static int forces_agreed(floe_world *w, const floe_step_ctx *c, int groups, int 
     return rc;
 }
 
+/* every provider's forces on every particle (forces_agreed); under MPI the ghosts' forces are
+ * then summed to their owners and the servo walls take their whole forces */
 static int forces_all(floe_world *w, floe_step_ctx *c, int pre) {
     int rc = forces_agreed(w, c, FLOE_GROUP_ALL, pre);
     if (!rc && w->par) rc = floe_par_reverse(w);

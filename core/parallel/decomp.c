@@ -288,8 +288,8 @@ int floe_par_set_balance(floe_par *P, int mode) {
 }
 
 /* FLOE_BALANCE_TIME: each rank's seconds per unit of weight since the last cut (the seconds
- * of its own work, P->busy: force evaluations and outputs, over its weights' sum: the same
- * list, the same touching flags), averaged with the previous measure (half each: a single
+ * of its own work, P->busy: force evaluations and outputs, over the sum of its total
+ * criterion (rcb_weights; the same list, the same touching flags), averaged with the previous measure (half each: a single
  * noisy interval moves the cut by half as much), gathered; the parts' target sizes are the
  * ranks' speeds (1 / cost) over their sum, kept within [1/4, 4] of the even share, the same on
  * every rank. Before any measure, or if a rank has none (no weights, no time), the sizes stay
@@ -367,8 +367,8 @@ static int rcb_run(struct Zoltan_Struct *zz, zctx *z, int *dest) {
  * 0.1 per entry + 1.2 per contact are whole tenths), so the sums, and the decisions taken on
  * them, are the same on every rank whatever the reduction's order. *rc: this rank's outcome
  * so far, carried in the same reduction (every rank calls this, failed or not: a rank whose
- * bisection failed must not skip the collective); on return the first failure of any rank,
- * and INFINITY */
+ * bisection failed must not skip the collective); on return, when any rank failed, a
+ * failure on every rank (this rank's own, else FLOE_EINVAL) and INFINITY */
 static double rcb_imbalance(floe_par *P, const float *wts, const int *dest, int *rc) {
     const int S = P->size, m = 2 * S + 1;
     long long *loc = P->rcb_sum, *tot = loc + m;
@@ -411,16 +411,17 @@ static double rcb_imbalance(floe_par *P, const float *wts, const int *dest, int 
 int floe_par_rcb(floe_world *w, floe_par *P, int *dest) {
     for (int k = 0; k < P->nown; k++) dest[k] = P->rank;
     if (P->size == 1) return FLOE_OK;
-    if (!P->zz) {
+    int rc = FLOE_OK;
+    if (!P->zz) { /* (a failure here joins the collectives below all the same, and is agreed there) */
         float zver;
-        if (Zoltan_Initialize(0, NULL, &zver) != ZOLTAN_OK) return FLOE_EINVAL;
-        if (!(P->zz = rcb_new(P, "1.5"))) return FLOE_ENOMEM;
+        if (Zoltan_Initialize(0, NULL, &zver) != ZOLTAN_OK) rc = FLOE_EINVAL;
+        else if (!(P->zz = rcb_new(P, "1.5"))) rc = FLOE_ENOMEM;
     }
     float *wts = rcb_weights(w, P);
     if (P->balance == FLOE_BALANCE_TIME) time_shares(P, wts);
     P->busy = 0; /* the measure starts again with the new cut */
     zctx z = {w, P, wts};
-    int rc = rcb_run(P->zz, &z, dest);
+    if (!rc) rc = rcb_run(P->zz, &z, dest);
     const double kept = rcb_imbalance(P, wts, dest, &rc); /* (rc: now every rank's) */
     if (!rc && kept > 1.05 && kept > P->rcb_tried + 0.05) {
         int *alt = malloc((size_t)(P->nown ? P->nown : 1) * sizeof *alt);
