@@ -459,7 +459,7 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
     floe_comm_stats cs;
     floe_world_parallel_comm(w, &cs);
     const double st = cs.steps > 0 ? (double)cs.steps : 1.0;
-    double mine[FLOE_COMM_KINDS + 4], sum[FLOE_COMM_KINDS + 4], mx = 0;
+    double mine[FLOE_COMM_KINDS + 5], sum[FLOE_COMM_KINDS + 5], mx = 0;
     double ft[2] = {cs.force_seconds, -cs.force_seconds}, ftx[2] = {0, 0}, ftsum = 0;
     mine[FLOE_COMM_KINDS] = 0;
     mine[FLOE_COMM_KINDS + 1] = 0;
@@ -470,7 +470,8 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
     }
     mine[FLOE_COMM_KINDS + 2] = cs.ghost_steps / st;
     mine[FLOE_COMM_KINDS + 3] = cs.owned_steps / st;
-    MPI_Reduce(mine, sum, FLOE_COMM_KINDS + 4, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
+    mine[FLOE_COMM_KINDS + 4] = cs.refreshed_steps / st;
+    MPI_Reduce(mine, sum, FLOE_COMM_KINDS + 5, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
     MPI_Reduce(mine + FLOE_COMM_KINDS, &mx, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
     /* the ranks' own work: their seconds in force evaluations, largest, smallest and mean */
     MPI_Reduce(ft, ftx, 2, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
@@ -488,11 +489,12 @@ static int cmd_run_mpi(const char *scene, const run_opts *o, int rank, int size)
                wall > 0 ? red[1] * (double)steps / wall : 0, (int)red[1], size);
         printf("  ghosts (all ranks): %d\n", (int)red[2]);
         printf("  comm/step/rank:     %.0f B mean, %.0f B max, %.2f messages (ghost %.0f, reverse %.0f, migrate %.0f, "
-               "reduce %.0f, output %.0f B); ghosts/rank %.1f, particles/rank %.1f; %ld rebuilds\n",
+               "reduce %.0f, output %.0f B); ghosts/rank %.1f, particles/rank %.1f; %ld rebuilds; "
+               "refreshed ghosts/rank %.1f\n",
                sum[FLOE_COMM_KINDS] / size, mx, sum[FLOE_COMM_KINDS + 1] / size, sum[FLOE_COMM_GHOST] / size,
                sum[FLOE_COMM_REVERSE] / size, sum[FLOE_COMM_MIGRATE] / size, sum[FLOE_COMM_REDUCE] / size,
                sum[FLOE_COMM_OUTPUT] / size, sum[FLOE_COMM_KINDS + 2] / size, sum[FLOE_COMM_KINDS + 3] / size,
-               cs.rebuilds);
+               cs.rebuilds, sum[FLOE_COMM_KINDS + 4] / size);
         printf("  force time/rank:    %.3f s mean, %.3f s max, %.3f s min (max/mean %.3f: the load imbalance)\n",
                ftsum / size, ftx[0], -ftx[1], ftsum > 0 ? ftx[0] * size / ftsum : 1.0);
         printf("  contacts (current): %d\n", (int)red[0]);

@@ -610,7 +610,9 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin, int bad) {
         if (!cpat || !cpx) bad = 1;
         else cpat[hi - lo] = n;
     }
-    /* the send lists, grouped by destination */
+    /* the send lists, grouped by destination (the refreshed subsets are chosen again after
+     * the list: floe_par_choose_refreshed) */
+    P->fgen = -1;
     P->nsend = 0;
     for (int r = 0; r < S; r++) {
         P->sdispl[r] = P->nsend;
@@ -644,8 +646,16 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin, int bad) {
     free(cpat);
     free(cpx);
     const int m = FLOE_PAR_REC;
-    /* the counts (-1 to every rank: this rank failed; every rank then returns) */
+    /* the counts (-1 to every rank: this rank failed; every rank then returns); the room for
+     * the refreshed subset of the sent ones */
     if (!bad && floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)P->nsend * m)) bad = 1;
+    if (!bad && P->nsend > P->fsend_cap) {
+        int *t = realloc(P->fsend, (size_t)P->nsend * sizeof *t);
+        if (t) {
+            P->fsend = t;
+            P->fsend_cap = P->nsend;
+        } else bad = 1;
+    }
     for (int r = 0; bad && r < S; r++) P->scount[r] = -1;
     MPI_Alltoall(P->scount, 1, MPI_INT, P->rcount, 1, MPI_INT, P->comm);
     floe_par_count_all(P, FLOE_COMM_GHOST, sizeof(int));
@@ -665,6 +675,13 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin, int bad) {
             P->gmotion = g;
             P->gmotion_cap = nr;
             w->gmotion = g;
+        } else nomem = 1;
+    }
+    if (!nomem && nr > P->frecv_cap) {
+        int *t = realloc(P->frecv, (size_t)nr * sizeof *t);
+        if (t) {
+            P->frecv = t;
+            P->frecv_cap = nr;
         } else nomem = 1;
     }
     if (floe_par_agree(P, nomem ? FLOE_ENOMEM : FLOE_OK)) return FLOE_ENOMEM;
@@ -687,14 +704,35 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin, int bad) {
     return FLOE_OK;
 }
 
+/* The lists of a ghost exchange: every ghost received at the decomposition (the send
+ * lists, and the ghosts [g0, n) in the order received) or the refreshed subset of both sides
+ * (floe_par_choose_refreshed: fsend, frecv) */
+typedef struct ghost_lists {
+    const int *sidx;  /* local indices sent, grouped by destination */
+    const int *ridx;  /* the ghosts filled, grouped by source (NULL: g0, g0 + 1, ...) */
+    const int *cnt;   /* 4 size: send counts, displacements, receive counts, displacements */
+    int ns, nr, g0;
+} ghost_lists;
+
+static ghost_lists lists_of(const floe_world *w, const floe_par *P, int every) {
+    const int g0 = P->nrep + P->nown;
+    if (!every && P->fgen == w->nl.gen)
+        return (ghost_lists){P->fsend, P->frecv, P->fcnt, P->nfsend, P->nfrecv, g0};
+    return (ghost_lists){P->send_idx, NULL, P->scount, P->nsend, P->nghost, g0};
+}
+
+/* the local index of the k-th ghost an exchange fills */
+static inline int ghost_at(const ghost_lists *L, int k) { return L->ridx ? L->ridx[k] : L->g0 + k; }
+
 /* counts and displacements of the ghost exchange in doubles, m per particle (P->gc: the
  * exchanges of a step allocate nothing) */
-static int *ghost_counts(const floe_par *P, int m) {
+static int *ghost_counts(const floe_par *P, const ghost_lists *L, int m) {
     const int S = P->size;
+    const int *sc = L->cnt;
     int *c = P->gc;
     for (int r = 0; r < S; r++) {
-        c[r] = P->scount[r] * m; c[S + r] = P->sdispl[r] * m;
-        c[2 * S + r] = P->rcount[r] * m; c[3 * S + r] = P->rdispl[r] * m;
+        c[r] = sc[r] * m; c[S + r] = sc[S + r] * m;
+        c[2 * S + r] = sc[2 * S + r] * m; c[3 * S + r] = sc[3 * S + r] * m;
     }
     return c;
 }
@@ -721,18 +759,55 @@ int floe_par_fwd_doubles(const floe_world *w, const floe_par *P) {
     return fwd_len(wq, wf);
 }
 
-int floe_par_forward_comm(floe_world *w, floe_par *P) {
+void floe_par_choose_refreshed(floe_world *w, floe_par *P) {
+    const floe_neighbor_list *nl = &w->nl;
+    const int S = P->size, g0 = P->nrep + P->nown, ng = P->nghost;
+    if (P->refresh_all) return; /* every ghost, at every step (the same on every rank) */
+    /* a byte per ghost held (in the order received) and per particle sent (in send_idx's
+     * order): the exchange buffers hold FLOE_PAR_REC doubles each (floe_par_ghosts) */
+    unsigned char *read = (unsigned char *)P->rbuf, *wanted = (unsigned char *)P->sbuf;
+    memset(read, 0, (size_t)ng);
+    for (int k = 0; k < nl->npairs; k++) { /* a pair's ends (ghost pairs are never listed) */
+        if (nl->pi[k] >= g0) read[nl->pi[k] - g0] = 1;
+        if (nl->pj[k] >= g0) read[nl->pj[k] - g0] = 1;
+    }
+    /* each ghost's byte to its owner: back along the decomposition's exchange */
+    int *c = P->gc;
+    for (int r = 0; r < S; r++) {
+        c[r] = P->rcount[r]; c[S + r] = P->rdispl[r];
+        c[2 * S + r] = P->scount[r]; c[3 * S + r] = P->sdispl[r];
+    }
+    MPI_Alltoallv(read, c, c + S, MPI_UNSIGNED_CHAR, wanted, c + 2 * S, c + 3 * S, MPI_UNSIGNED_CHAR, P->comm);
+    floe_par_count_v(P, FLOE_COMM_GHOST, P->rcount, 1);
+    int *fc = P->fcnt, ns = 0, nr = 0;
+    for (int r = 0; r < S; r++) {
+        fc[S + r] = ns;
+        for (int k = P->sdispl[r]; k < P->sdispl[r] + P->scount[r]; k++)
+            if (wanted[k]) P->fsend[ns++] = P->send_idx[k];
+        fc[r] = ns - fc[S + r];
+        fc[3 * S + r] = nr;
+        for (int k = P->rdispl[r]; k < P->rdispl[r] + P->rcount[r]; k++)
+            if (read[k]) P->frecv[nr++] = g0 + k;
+        fc[2 * S + r] = nr - fc[3 * S + r];
+    }
+    P->nfsend = ns;
+    P->nfrecv = nr;
+    P->fgen = nl->gen;
+}
+
+int floe_par_forward_comm(floe_world *w, floe_par *P, int every) {
     floe_particles *p = &w->p;
     int wq, wf;
     fwd_what(w, P, &wq, &wf);
-    const int m = fwd_len(wq, wf), S = P->size, g0 = P->nrep + P->nown;
+    const int m = fwd_len(wq, wf), S = P->size;
+    const ghost_lists L = lists_of(w, P, every);
     /* (the ghosts' choice left FLOE_PAR_REC doubles a ghost both ways: a step's exchanges
      * allocate nothing, and cannot fail on one rank alone) */
-    if (floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)P->nsend * m) ||
-        floe_par_reserve(&P->rbuf, &P->rbuf_cap, (size_t)P->nghost * m))
+    if (floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)L.ns * m) ||
+        floe_par_reserve(&P->rbuf, &P->rbuf_cap, (size_t)L.nr * m))
         return FLOE_ENOMEM;
-    for (int k = 0; k < P->nsend; k++) {
-        const int i = P->send_idx[k];
+    for (int k = 0; k < L.ns; k++) {
+        const int i = L.sidx[k];
         double *r = P->sbuf + (size_t)k * m;
         memcpy(r, p->x + 3 * i, 3 * sizeof *r);
         memcpy(r + 3, p->v + 3 * i, 3 * sizeof *r);
@@ -740,11 +815,11 @@ int floe_par_forward_comm(floe_world *w, floe_par *P) {
         if (wq) memcpy(r + 9, p->q + 4 * i, 4 * sizeof *r);
         if (wf) memcpy(r + 9 + 4 * wq, p->f + 3 * i, 3 * sizeof *r);
     }
-    const int *c = ghost_counts(P, m);
+    const int *c = ghost_counts(P, &L, m);
     MPI_Alltoallv(P->sbuf, c, c + S, MPI_DOUBLE, P->rbuf, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->comm);
-    floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, (long long)m * sizeof(double));
-    for (int k = 0; k < P->nghost; k++) {
-        const int i = g0 + k;
+    floe_par_count_v(P, FLOE_COMM_GHOST, L.cnt, (long long)m * sizeof(double));
+    for (int k = 0; k < L.nr; k++) {
+        const int i = ghost_at(&L, k);
         const double *r = P->rbuf + (size_t)k * m;
         memcpy(p->x + 3 * i, r, 3 * sizeof *r);
         memcpy(p->v + 3 * i, r + 3, 3 * sizeof *r);
@@ -759,7 +834,8 @@ int floe_par_forward_rows(floe_par *P, double *a, int m) {
     const int S = P->size, g0 = P->nrep + P->nown;
     if (floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)P->nsend * m)) return FLOE_ENOMEM;
     for (int k = 0; k < P->nsend; k++) memcpy(P->sbuf + (size_t)k * m, a + (size_t)P->send_idx[k] * m, (size_t)m * sizeof *a);
-    const int *c = ghost_counts(P, m);
+    const ghost_lists L = {P->send_idx, NULL, P->scount, P->nsend, P->nghost, g0};
+    const int *c = ghost_counts(P, &L, m);
     MPI_Alltoallv(P->sbuf, c, c + S, MPI_DOUBLE, a ? a + (size_t)g0 * m : NULL, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->comm);
     floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, (long long)m * sizeof(double));
     return FLOE_OK;
@@ -767,21 +843,22 @@ int floe_par_forward_rows(floe_par *P, double *a, int m) {
 
 int floe_par_reverse_comm(floe_world *w, floe_par *P) {
     floe_particles *p = &w->p;
-    const int m = 6, S = P->size, g0 = P->nrep + P->nown;
+    const int m = 6, S = P->size;
+    const ghost_lists L = lists_of(w, P, 0);
     /* the reverse of the forward exchange: ghosts send, owners receive */
-    if (floe_par_reserve(&P->rbuf, &P->rbuf_cap, (size_t)P->nghost * m) ||
-        floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)P->nsend * m))
+    if (floe_par_reserve(&P->rbuf, &P->rbuf_cap, (size_t)L.nr * m) ||
+        floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)L.ns * m))
         return FLOE_ENOMEM;
-    for (int k = 0; k < P->nghost; k++) {
-        const int i = g0 + k;
+    for (int k = 0; k < L.nr; k++) {
+        const int i = ghost_at(&L, k);
         memcpy(P->rbuf + (size_t)k * m, p->f + 3 * i, 3 * sizeof(double));
         memcpy(P->rbuf + (size_t)k * m + 3, p->t + 3 * i, 3 * sizeof(double));
     }
-    const int *c = ghost_counts(P, m);
+    const int *c = ghost_counts(P, &L, m);
     MPI_Alltoallv(P->rbuf, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->sbuf, c, c + S, MPI_DOUBLE, P->comm);
-    floe_par_count_v(P, FLOE_COMM_REVERSE, P->rcount, (long long)m * sizeof(double));
-    for (int k = 0; k < P->nsend; k++) {
-        const int i = P->send_idx[k];
+    floe_par_count_v(P, FLOE_COMM_REVERSE, L.cnt + 2 * S, (long long)m * sizeof(double));
+    for (int k = 0; k < L.ns; k++) {
+        const int i = L.sidx[k];
         const double *r = P->sbuf + (size_t)k * m;
         for (int a = 0; a < 3; a++) {
             p->f[3 * i + a] += r[a];
@@ -839,7 +916,7 @@ void floe_par_free(floe_par *P) {
     for (int k = 0; k < P->nouts; k++) floe_observer_destroy(P->outs[k]);
     free(P->outs);
     free(P->bout); free(P->bin); free(P->bpark); free(P->ppin); free(P->servo_buf);
-    free(P->gid); free(P->send_idx); free(P->scount); free(P->boxes); free(P->rcb_sum); free(P->sbuf); free(P->rbuf);
+    free(P->gid); free(P->send_idx); free(P->fsend); free(P->frecv); free(P->scount); free(P->boxes); free(P->rcb_sum); free(P->sbuf); free(P->rbuf);
     free(P->cost); free(P->bal_ids); free(P->bal_sz);
     floe_pd_split_free(P->pd_split); /* PD bodies' split (par_pd.c) */
     free(P->pd_counts);

@@ -180,6 +180,8 @@ typedef struct floe_comm_stats {
     long rebuilds;                       /* decompositions among them (the split's included) */
     double owned_steps, ghost_steps;     /* sums over those steps of the particles owned and the
                                           * ghosts held at the step's end */
+    double refreshed_steps;              /* the same of the ghosts a step refreshes (those the
+                                          * step's work reads: docs/parallel.md, "Ghosts") */
     double force_seconds;                /* this rank's wall seconds in force evaluations (its
                                           * own work between the exchanges: the ranks'
                                           * spread is the load imbalance) */

@@ -77,7 +77,7 @@ int floe_par_beams_out(floe_world *w, floe_par *P, const int *dest) {
     if (!recs) {
         /* the ghosts at their present state: the bonds' lengths now (one more refresh per
          * decomposition, only in a world with bonds) */
-        rc = floe_par_forward_comm(w, P);
+        rc = floe_par_forward_comm(w, P, 1);
         if (!rc) rc = beams_export(w, P->gid, NULL, P->bpark, P->npark, &recs, &n, &reach);
         if (rc) n = 0; /* the collectives below still run: every rank meets them */
     }

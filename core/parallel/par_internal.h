@@ -33,6 +33,21 @@ typedef struct floe_par {
      * them to rank r, from sdispl[r]); and those it receives (rcount, rdispl) */
     int *send_idx; int nsend, send_cap;
     int *scount, *sdispl, *rcount, *rdispl;
+    /* the ghosts a step refreshes (floe_par_choose_refreshed; docs/parallel.md, "Ghosts"): of
+     * those received at the last decomposition, the ones this rank's work between
+     * decompositions reads (an end of a listed pair). fsend: the
+     * owned particles sent at each refresh, grouped by destination; frecv: the ghosts (local
+     * indices) they fill, grouped by source; fcnt: their counts and displacements (send counts,
+     * send displacements, receive counts, receive displacements: 4 size, in scount's block).
+     * Valid for the neighbour list of build fgen (nl.gen) alone. */
+    int *fsend, *frecv; int nfsend, nfrecv, fsend_cap, frecv_cap;
+    int *fcnt;
+    long fgen;               /* -1: no subset (every ghost is refreshed) */
+    int refresh_all;         /* a force stage may build the list again on one rank alone, from
+                                every ghost's present state (a bond that breaks: beam bonds, PD
+                                bodies, a user's provider; forces.c): no subset, every ghost
+                                refreshed at every step. Set at the split from the whole world:
+                                the same on every rank */
     int *gcnt;               /* 2 size: counts and displacements of a gather to rank 0 */
     /* scratch allocated at the split with the counts above, so that the exchanges of a step
      * and the first collective of a route or of the ghosts' choice never allocate (a rank
@@ -153,11 +168,19 @@ int floe_par_agree(floe_par *P, int rc);
 /* refresh the ghosts from their owners: x v w always; q when a bounded particle is not round
  * or beam bonds read it; f when a law has a linear dashpot (its end-of-step velocity reads
  * the ghost's acceleration, pair_an_ext); a ghost's L and t are never read (the owner
- * integrates it) */
-int floe_par_forward_comm(floe_world *w, floe_par *P);
+ * integrates it). every = 0: the ghosts the step's work reads (P->fsend, P->frecv) while the
+ * list is the one they were chosen for, else all; every = 1: all (a decomposition's own
+ * refreshes, before the ghosts are chosen again) */
+int floe_par_forward_comm(floe_world *w, floe_par *P, int every);
+/* after a decomposition's list (collective; allocates nothing: floe_par_ghosts reserved the
+ * room): the ghosts this rank reads, told to their owners (a byte a ghost), and the
+ * refreshed subsets (P->fsend, P->frecv) of both sides kept for this list */
+void floe_par_choose_refreshed(floe_world *w, floe_par *P);
 /* the doubles a ghost refresh carries a ghost: 9, + 4 (q), + 3 (f) */
 int floe_par_fwd_doubles(const floe_world *w, const floe_par *P);
-/* add the ghosts' forces and torques to their owners */
+/* add the ghosts' forces and torques to their owners (the refreshed ghosts while the list
+ * is the one they were chosen for: no other ghost is an end of anything that exerts a force,
+ * so the others' forces are zero) */
 int floe_par_reverse_comm(floe_world *w, floe_par *P);
 /* 1 when a law of the world has a linear dashpot (its end-of-step velocity reads the
  * particles' last accelerations, forces.c pair_an_ext): the same on every rank */

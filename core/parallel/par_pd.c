@@ -385,7 +385,7 @@ int floe_par_pd_sync(floe_world *w, floe_par *P) {
     double L = 0;
     /* the ghosts at their present state (the halo's reach reads them): one more refresh per
      * decomposition, only in a world with PD bodies */
-    if (floe_par_forward_comm(w, P)) return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: out of memory");
+    if (floe_par_forward_comm(w, P, 1)) return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: out of memory");
     floe_pd_split_gather(w);
     /* the broken flags: a bond breaks once and never heals */
     if (flags_sync(w, P)) return floe_world_error(w, FLOE_ENOMEM, "MPI decomposition: PD bodies: out of memory");

@@ -239,6 +239,7 @@ static int par_rebuild(floe_world *w, floe_par *P, double *pend, int npend) {
     w->nl.rep_hi = P->nrep;
     rc = floe_par_agree(P, floe_world_nl_build(w));
     if (rc) return floe_world_error(w, rc, "neighbour list rebuild failed (out of memory)");
+    floe_par_choose_refreshed(w, P); /* the ghosts a step refreshes: those this list reads */
     w->err_agreed = 0;
     P->nl_rebuilds = w->nl.rebuilds;
     w->motion_idx_n = -1; /* the motion callbacks' particles found again (step.c motion_of) */
@@ -326,7 +327,7 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     MPI_Comm_rank(P->comm, &P->rank);
     MPI_Comm_size(P->comm, &P->size);
     const int S = P->size, n = p->n;
-    P->scount = malloc((size_t)15 * S * sizeof *P->scount);
+    P->scount = malloc((size_t)19 * S * sizeof *P->scount);
     P->boxes = malloc((size_t)8 * S * sizeof *P->boxes);
     P->rcb_sum = malloc(((size_t)4 * S + 2) * sizeof *P->rcb_sum);
     if (P->scount) {
@@ -334,7 +335,9 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
         P->gcnt = P->scount + 4 * S;
         P->gc = P->scount + 6 * S;
         P->rt = P->scount + 10 * S;
+        P->fcnt = P->scount + 15 * S;
     }
+    P->fgen = -1;
     /* the same world on every rank? (count and a checksum of the positions) */
     double chk[2] = {n, 0}, chk0[2];
     for (int i = 0; i < n; i++)
@@ -355,6 +358,7 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     P->any_nonround = 0; /* the ranks hold the same world: the same answer everywhere */
     for (int i = 0; i < n; i++) P->any_nonround |= isfinite(p->radius[i]) && p->kind[i] != FLOE_GEOM_SPHERE;
     if (w->beams && floe_beam_set_count(w->beams) > 0) P->any_nonround = 1;
+    P->refresh_all = (w->beams && floe_beam_set_count(w->beams) > 0) || w->npd > 0 || w->nuprov > 0;
     nb = n - nw;
     const int k0 = (int)((long long)nb * P->rank / S), k1 = (int)((long long)nb * (P->rank + 1) / S);
     unsigned char *mine = calloc((size_t)(n ? n : 1), 1);
@@ -531,7 +535,7 @@ int floe_par_refresh(floe_world *w, double maxd2, int have_xb, const floe_par_ca
 
 int floe_par_ghost_update(floe_world *w) {
     floe_par *P = w->par;
-    int rc = floe_par_forward_comm(w, P);
+    int rc = floe_par_forward_comm(w, P, 0);
     if (!rc) rc = floe_par_pd_s0_refresh(w, P); /* PD with alpha: the ghosts' s0 */
     return rc ? floe_world_error(w, rc, "out of memory") : FLOE_OK;
 }
@@ -1314,6 +1318,7 @@ int floe_par_observe(floe_world *w, int force_all) {
     P->traffic.steps++;
     P->traffic.owned_steps += P->nown;
     P->traffic.ghost_steps += P->nghost;
+    P->traffic.refreshed_steps += P->fgen == w->nl.gen ? P->nfrecv : P->nghost;
     /* the outputs' own work (this rank's pieces; rank 0's observers on the mirror below) is
      * work the other ranks wait for: it counts in the load balance's measure (P->busy) */
     double t0 = MPI_Wtime();

@@ -79,7 +79,10 @@ int floe_nl_needs_rebuild_after_drift(const floe_neighbor_list *nl, const floe_p
 int floe_nl_needs_rebuild(const floe_neighbor_list *nl, const floe_particles *p) {
     if (!nl->x_build || nl->n_build != p->n) return 1;
     double lim = 0.5 * nl->skin, lim2 = lim * lim;
-    for (int i = 0; i < p->n; i++) {
+    /* MPI: the owned particles (and walls); a ghost is tested by its owner (the refreshed ghosts
+     * alone follow it: parallel.md, "Ghosts") */
+    const int n = nl->gid ? nl->own_hi : p->n;
+    for (int i = 0; i < n; i++) {
         const double *a = p->x + 3 * i, *b = nl->x_build + 3 * i;
         double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
         double grow = p->radius[i] - nl->r_build[i]; /* NaN for walls (inf - inf): not > 0 */

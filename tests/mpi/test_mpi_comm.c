@@ -126,6 +126,30 @@ static long long *ghost_matrix(const double *x, const floe_particles *q, const i
     return M;
 }
 
+/* R[o * S + r]: ghosts of rank o that rank r's neighbour list reads (an end of one of its
+ * pairs): the ghosts a step refreshes (docs/parallel.md, "Ghosts"); every rank the whole
+ * matrix. *held: those this rank reads */
+static long long *read_matrix(const floe_world *w, const int *own, long long *held) {
+    const floe_par *P = w->par;
+    const floe_neighbor_list *nl = &w->nl;
+    const int S = size_, g0 = nl->own_hi, n = w->p.n;
+    unsigned char *rd = calloc((size_t)(n - g0 + 1), 1);
+    for (int k = 0; k < nl->npairs; k++) {
+        if (nl->pi[k] >= g0) rd[nl->pi[k] - g0] = 1;
+        if (nl->pj[k] >= g0) rd[nl->pj[k] - g0] = 1;
+    }
+    long long *R = calloc((size_t)S * S, sizeof *R);
+    *held = 0;
+    for (int i = g0; i < n; i++)
+        if (rd[i - g0]) {
+            R[own[P->gid[i]] * S + rank_]++;
+            ++*held;
+        }
+    MPI_Allreduce(MPI_IN_PLACE, R, S * S, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+    free(rd);
+    return R;
+}
+
 static floe_comm_stats stats(const floe_world *w) {
     floe_comm_stats c;
     floe_world_parallel_comm(w, &c);
@@ -151,25 +175,47 @@ static void check_refresh(floe_world *w, const floe_world *ref) {
         recv += M[r * S + me]; rmsg += M[r * S + me] > 0;
     }
     CHECK(recv == P->nghost, "rank %d: the ghosts the decomposition implies (%lld) are those held (%d)", me, recv, P->nghost);
+    /* the refreshed ghosts: those the list reads, of each owner (fsend, frecv) */
+    long long held;
+    long long *R = read_matrix(w, own, &held);
+    long long fsend = 0, fsmsg = 0, frmsg = 0;
+    for (int r = 0; r < S; r++) {
+        fsend += R[me * S + r]; fsmsg += R[me * S + r] > 0;
+        frmsg += R[r * S + me] > 0;
+    }
+    CHECK(P->fgen == w->nl.gen && P->nfrecv == held && P->nfsend == fsend,
+          "rank %d: the refreshed ghosts are those the list reads: holds %d (%lld), sends %d (%lld)", me, P->nfrecv, held,
+          P->nfsend, fsend);
     floe_world_parallel_comm_reset(w);
-    for (int k = 0; k < K; k++) floe_par_forward_comm(w, P);
+    for (int k = 0; k < K; k++) floe_par_forward_comm(w, P, 0);
     floe_comm_stats c = stats(w);
     CHECK(floe_par_fwd_doubles(w, P) == 9, "rank %d: a refresh of spheres without a linear dashpot carries x v w (%d doubles)",
           me, floe_par_fwd_doubles(w, P));
-    CHECK(c.bytes[FLOE_COMM_GHOST] == K * 72LL * send && c.messages[FLOE_COMM_GHOST] == K * smsg,
+    CHECK(c.bytes[FLOE_COMM_GHOST] == K * 72LL * fsend && c.messages[FLOE_COMM_GHOST] == K * fsmsg,
           "rank %d: %d refreshes: ghost traffic %lld B in %lld messages, expected %lld B (%lld ghosts x 72 B) in %lld",
-          me, K, c.bytes[FLOE_COMM_GHOST], c.messages[FLOE_COMM_GHOST], K * 72LL * send, send, K * smsg);
+          me, K, c.bytes[FLOE_COMM_GHOST], c.messages[FLOE_COMM_GHOST], K * 72LL * fsend, fsend, K * fsmsg);
     CHECK(others_zero(&c, 1u << FLOE_COMM_GHOST), "rank %d: a refresh sends nothing else", me);
+    /* every ghost (a decomposition's own refreshes) */
+    floe_world_parallel_comm_reset(w);
+    floe_par_forward_comm(w, P, 1);
+    c = stats(w);
+    CHECK(c.bytes[FLOE_COMM_GHOST] == 72LL * send && c.messages[FLOE_COMM_GHOST] == smsg,
+          "rank %d: a refresh of every ghost: %lld B in %lld messages, expected %lld B (%lld ghosts x 72 B) in %lld", me,
+          c.bytes[FLOE_COMM_GHOST], c.messages[FLOE_COMM_GHOST], 72LL * send, send, smsg);
     floe_world_parallel_comm_reset(w);
     for (int k = 0; k < K; k++) floe_par_reverse_comm(w, P);
     c = stats(w);
-    CHECK(c.bytes[FLOE_COMM_REVERSE] == K * 48LL * recv && c.messages[FLOE_COMM_REVERSE] == K * rmsg,
+    CHECK(c.bytes[FLOE_COMM_REVERSE] == K * 48LL * held && c.messages[FLOE_COMM_REVERSE] == K * frmsg,
           "rank %d: %d reverse sums: %lld B in %lld messages, expected %lld B (%lld ghosts x 48 B) in %lld", me, K,
-          c.bytes[FLOE_COMM_REVERSE], c.messages[FLOE_COMM_REVERSE], K * 48LL * recv, recv, K * rmsg);
+          c.bytes[FLOE_COMM_REVERSE], c.messages[FLOE_COMM_REVERSE], K * 48LL * held, held, K * frmsg);
     CHECK(others_zero(&c, 1u << FLOE_COMM_REVERSE), "rank %d: a reverse sum sends nothing else", me);
+    long long tot[2] = {held, recv};
+    MPI_Allreduce(MPI_IN_PLACE, tot, 2, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+    CHECK(tot[0] <= tot[1], "the ghosts read are among those held (%lld of %lld)", tot[0], tot[1]);
     if (me == 0)
-        printf("  refresh: rank 0 sends %lld ghosts (%lld B a refresh) to %lld ranks, holds %lld\n", send, 72 * send, smsg, recv);
-    free(own); free(M); free(x);
+        printf("  refresh: rank 0 sends %lld of its %lld ghosts (%lld B a refresh) to %lld ranks, holds %lld of %lld; "
+               "all ranks: %lld of %lld ghosts refreshed\n", fsend, send, 72 * fsend, fsmsg, held, recv, tot[0], tot[1]);
+    free(own); free(M); free(x); free(R);
 }
 
 /* the shift move of test_mpi_decomp, a third of the pairs marked touching, a rebuild (the
@@ -214,18 +260,22 @@ static void check_rebuild(floe_world *w, const floe_world *ref) {
     for (int r = 0; r < S; r++) { pm += pdest[r]; hm += hdest[r]; }
     double *x = positions(w);
     long long *M = ghost_matrix(x, &ref->p, after, w->nl.skin);
-    long long send = 0, smsg = 0;
-    for (int r = 0; r < S; r++) { send += M[me * S + r]; smsg += M[me * S + r] > 0; }
+    long long send = 0, smsg = 0, recv = 0, rmsg = 0;
+    for (int r = 0; r < S; r++) {
+        send += M[me * S + r]; smsg += M[me * S + r] > 0;
+        recv += M[r * S + me]; rmsg += M[r * S + me] > 0;
+    }
     const floe_comm_stats c = stats(w);
     const long long others = S - 1;
     const long long mig_b = 312 * left + 8LL * hl * hleft + 2 * 4 * others, mig_m = pm + hm + 2 * others;
-    const long long gh_b = 312 * send + (64 + 4) * others, gh_m = smsg + 2 * others;
+    /* + a byte per ghost held back to its owner: whether this rank's list reads it */
+    const long long gh_b = 312 * send + (64 + 4) * others + recv, gh_m = smsg + 2 * others + rmsg;
     CHECK(c.bytes[FLOE_COMM_MIGRATE] == mig_b && c.messages[FLOE_COMM_MIGRATE] == mig_m,
           "rank %d: migration %lld B in %lld messages, expected %lld B (%lld particles x 312 B, %lld history records x %d B) "
           "in %lld", me, c.bytes[FLOE_COMM_MIGRATE], c.messages[FLOE_COMM_MIGRATE], mig_b, left, hleft, 8 * hl, mig_m);
     CHECK(c.bytes[FLOE_COMM_GHOST] == gh_b && c.messages[FLOE_COMM_GHOST] == gh_m,
-          "rank %d: new ghosts %lld B in %lld messages, expected %lld B (%lld ghosts x 312 B) in %lld", me,
-          c.bytes[FLOE_COMM_GHOST], c.messages[FLOE_COMM_GHOST], gh_b, send, gh_m);
+          "rank %d: new ghosts %lld B in %lld messages, expected %lld B (%lld ghosts x 312 B, %lld read flags) in %lld", me,
+          c.bytes[FLOE_COMM_GHOST], c.messages[FLOE_COMM_GHOST], gh_b, send, recv, gh_m);
     /* the decomposition's agreements: before and after the bisection, in the two routes
      * (particles, history), before the ghosts' exchange, after the history's import and after
      * the list (par_rebuild: a failure on one rank is every rank's); and the bisection's
@@ -249,8 +299,8 @@ static void check_steps(floe_world *w) {
     CHECK(check0 != FLOE_CHECK_OFF, "the energy watchdog is on (the default)");
     floe_world_parallel_comm_reset(w);
     floe_comm_stats c0 = stats(w);
-    int ok_rev = 1, ok_red = 1, ok_out = 1, ok_gh = 1, nreb = 0;
-    double gsum = 0, osum = 0;
+    int ok_rev = 1, ok_red = 1, ok_out = 1, ok_gh = 1, ok_read = 1, nreb = 0;
+    double gsum = 0, osum = 0, fsum = 0;
     for (int s = 0; s < NSTEP; s++) {
         if (s == NSTEP - 50) w->def.energy_check = FLOE_CHECK_OFF; /* the close agreed alone */
         const int wd = w->def.energy_check != FLOE_CHECK_OFF;
@@ -260,6 +310,13 @@ static void check_steps(floe_world *w) {
         int own, gh;
         floe_world_parallel_counts(w, &own, &gh);
         gsum += gh; osum += own;
+        /* the ghosts this step refreshed: those its list reads */
+        int *owner = owners(w);
+        long long held;
+        long long *R = read_matrix(w, owner, &held);
+        free(owner); free(R);
+        ok_read &= w->par->fgen == w->nl.gen && w->par->nfrecv == held;
+        fsum += (double)held;
         const int reb = c.rebuilds > c0.rebuilds;
         nreb += reb;
         long long d[FLOE_COMM_KINDS], dm[FLOE_COMM_KINDS];
@@ -268,7 +325,7 @@ static void check_steps(floe_world *w) {
             dm[k] = c.messages[k] - c0.messages[k];
         }
         if (S > 1) {
-            ok_rev &= d[FLOE_COMM_REVERSE] == 48LL * gh;
+            ok_rev &= d[FLOE_COMM_REVERSE] == 48LL * held;
             /* whether to rebuild with whether a rank failed and whether a drift check failed (3
              * ints), the forces' outcome, the
              * step's close (4 B; with the watchdog on, the watchdog's 9 sums, its minimum and
@@ -282,26 +339,34 @@ static void check_steps(floe_world *w) {
         } else {
             for (int k = 0; k < FLOE_COMM_KINDS; k++) ok_rev &= d[k] == 0;
         }
-        /* over the ranks: every ghost held was sent once, by its owner */
-        long long v[2] = {d[FLOE_COMM_GHOST] - (reb ? 68 * others : 0), gh};
+        /* over the ranks: every ghost held was sent once by its owner at a rebuild (312 B, and
+         * a byte back: whether it is read), every ghost read at the other steps (72 B) */
+        long long v[2] = {d[FLOE_COMM_GHOST] - (reb ? 68 * others : 0), reb ? gh : held};
         MPI_Allreduce(MPI_IN_PLACE, v, 2, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
-        ok_gh &= v[0] == (reb ? 312 : 72) * v[1];
+        ok_gh &= v[0] == (reb ? 313 : 72) * v[1];
         c0 = c;
     }
     w->def.energy_check = check0;
-    CHECK(ok_rev, "rank %d: every step's reverse traffic is 48 B x the ghosts held", me);
+    CHECK(ok_read, "rank %d: every step refreshes the ghosts its list reads", me);
+    CHECK(ok_rev, "rank %d: every step's reverse traffic is 48 B x the ghosts its list reads", me);
     CHECK(ok_red, "rank %d: every step's reductions are three: 16 B (+ 36 + 16 x ranks B and eight more at a rebuild), the "
           "close's 4 B, carried by the watchdog's 152 B when it is on", me);
     CHECK(ok_out, "rank %d: without outputs a step sends no output word", me);
-    CHECK(ok_gh, "every step's ghost traffic over the ranks is 72 B (312 B at a rebuild) x all ghosts held");
+    CHECK(ok_gh, "every step's ghost traffic over the ranks is 72 B x the ghosts read (313 B x all ghosts held at a "
+          "rebuild)");
     floe_comm_stats c = stats(w);
     CHECK(c.steps == NSTEP && c.rebuilds == nreb, "rank %d: %ld steps counted (%d), %ld rebuilds (%d)", me, c.steps, NSTEP,
           c.rebuilds, nreb);
-    CHECK(c.ghost_steps == gsum && c.owned_steps == osum, "rank %d: the mean loads: ghosts %g (%g), owned %g (%g)", me,
-          c.ghost_steps, gsum, c.owned_steps, osum);
+    CHECK(c.ghost_steps == gsum && c.owned_steps == osum && (S == 1 || c.refreshed_steps == fsum),
+          "rank %d: the mean loads: ghosts %g (%g), refreshed %g (%g), owned %g (%g)", me, c.ghost_steps, gsum,
+          c.refreshed_steps, fsum, c.owned_steps, osum);
     int any = nreb;
     MPI_Allreduce(MPI_IN_PLACE, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
     CHECK(any > 0, "the gas rebuilds within %d steps (%d)", NSTEP, any);
+    double ld[2] = {fsum, gsum};
+    MPI_Allreduce(MPI_IN_PLACE, ld, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    if (S > 1) CHECK(ld[0] > 0 && ld[0] < ld[1], "the steps refresh some ghosts, not all (%g of %g ghost-steps)", ld[0], ld[1]);
+    if (me == 0) printf("  %d steps: %g of %g ghost-steps refreshed (all ranks)\n", NSTEP, ld[0], ld[1]);
     if (me == 0) {
         printf("  %d steps, %d rebuilds: rank 0 sent per step (B):", NSTEP, nreb);
         for (int k = 0; k < FLOE_COMM_KINDS; k++)

@@ -171,17 +171,41 @@ static void check_comm(floe_world *w) {
     double *vsave = malloc((size_t)p->n * 3 * sizeof *vsave);
     memcpy(vsave, p->v, (size_t)p->n * 3 * sizeof *vsave);
     for (int i = P->nrep; i < g0; i++) floe_v3_set(p->v + 3 * i, (double)P->gid[i], 2.0 * P->gid[i], -1.0);
-    floe_par_forward_comm(w, P);
+    floe_par_forward_comm(w, P, 1);
     int fwd = 1;
     for (int i = g0; i < p->n; i++) fwd &= p->v[3 * i] == (double)P->gid[i] && p->v[3 * i + 1] == 2.0 * P->gid[i];
     CHECK(fwd, "rank %d: forward refresh: each of %d ghosts holds its owner's velocity", rank_, P->nghost);
+    /* a step's refresh: the ghosts the list reads (an end of a listed pair) hold their owners'
+     * velocities, the others keep theirs (docs/parallel.md, "Ghosts") */
+    unsigned char *rd = calloc((size_t)(p->n - g0 + 1), 1);
+    for (int k = 0; k < w->nl.npairs; k++) {
+        if (w->nl.pi[k] >= g0) rd[w->nl.pi[k] - g0] = 1;
+        if (w->nl.pj[k] >= g0) rd[w->nl.pj[k] - g0] = 1;
+    }
+    for (int i = P->nrep; i < g0; i++) floe_v3_set(p->v + 3 * i, (double)P->gid[i], 3.0 * P->gid[i], -2.0);
+    floe_par_forward_comm(w, P, 0);
+    int sub = 1;
+    long long nread[2] = {0, P->nghost};
+    for (int i = g0; i < p->n; i++) {
+        nread[0] += rd[i - g0];
+        sub &= rd[i - g0] ? p->v[3 * i + 1] == 3.0 * P->gid[i] && p->v[3 * i + 2] == -2.0
+                          : p->v[3 * i + 1] == 2.0 * P->gid[i] && p->v[3 * i + 2] == -1.0;
+    }
+    CHECK(sub, "rank %d: a step's refresh: the %lld ghosts the list reads hold their owners' velocities, the other %lld "
+          "keep theirs", rank_, nread[0], nread[1] - nread[0]);
+    MPI_Allreduce(MPI_IN_PLACE, nread, 2, MPI_LONG_LONG, MPI_SUM, P->comm);
+    if (size_ > 1) CHECK(nread[0] > 0 && nread[0] < nread[1], "the list reads some ghosts, not all (%lld of %lld)", nread[0],
+                         nread[1]);
+    if (rank_ == 0) printf("  a step's refresh: %lld of %lld ghosts (all ranks)\n", nread[0], nread[1]);
     memcpy(p->v, vsave, (size_t)p->n * 3 * sizeof *vsave);
-    floe_par_forward_comm(w, P);
+    floe_par_forward_comm(w, P, 1);
     free(vsave);
-    /* reverse: ghosts carry 1, owners 0: each owner receives its number of ghost copies */
+    /* reverse: ghosts carry 1, owners 0: each owner receives its number of ghost copies that
+     * an end of a listed pair is (the others exert nothing: docs/parallel.md, "Ghosts") */
     for (int i = P->nrep; i < p->n; i++) floe_v3_set(p->f + 3 * i, i >= g0 ? 1.0 : 0.0, 0, 0);
     int *copies = calloc((size_t)(N > 0 ? N : 1), sizeof *copies);
-    for (int i = g0; i < p->n; i++) copies[P->gid[i]]++;
+    for (int i = g0; i < p->n; i++) copies[P->gid[i]] += rd[i - g0];
+    free(rd);
     MPI_Allreduce(MPI_IN_PLACE, copies, N, MPI_INT, MPI_SUM, P->comm);
     floe_par_reverse_comm(w, P);
     int rev = 1;
