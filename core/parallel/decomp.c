@@ -3,6 +3,7 @@
  * owned particles, ghosts by bounding radius and their forward and reverse refresh. The
  * world-level sequence (par_world.c) calls these, never the reverse. */
 #include "par_internal.h"
+#include "alloc_util.h"
 #include "floe_observer_base.h"
 
 #ifdef FLOE_HAVE_MPI
@@ -259,19 +260,26 @@ static void set_part_sizes(floe_par *P, struct Zoltan_Struct *zz) {
     Zoltan_LB_Set_Part_Sizes(zz, 1, 2 * P->size, P->bal_ids, P->bal_ids + 2 * P->size, P->bal_sz);
 }
 
-/* the balance's mode; its scratch at the first call; back to even shares when the weights
- * take over again */
+/* the balance's mode; its scratch at the first call, agreed (collective): a rank out of
+ * memory there is every rank's and no rank changes its mode (the ranks would otherwise
+ * decompose in different modes, and their collectives part); back to even shares when the
+ * weights take over again */
 int floe_par_set_balance(floe_par *P, int mode) {
     const int S = P->size;
-    if (!P->cost) {
+    const int first = !P->cost;
+    if (first) {
         P->cost = calloc(2 * (size_t)S, sizeof *P->cost);
         P->bal_ids = malloc(4 * (size_t)S * sizeof *P->bal_ids);
         P->bal_sz = malloc(2 * (size_t)S * sizeof *P->bal_sz);
-        if (!P->cost || !P->bal_ids || !P->bal_sz) {
-            free(P->cost); free(P->bal_ids); free(P->bal_sz);
-            P->cost = NULL; P->bal_ids = NULL; P->bal_sz = NULL;
-            return FLOE_ENOMEM;
-        }
+    }
+    /* (first is every rank's: the scratch is kept, or freed on every rank below) */
+    const int bad = !P->cost || !P->bal_ids || !P->bal_sz;
+    if (first && floe_par_agree(P, bad ? FLOE_ENOMEM : FLOE_OK)) { /* as before the call, on every rank */
+        free(P->cost); free(P->bal_ids); free(P->bal_sz);
+        P->cost = NULL; P->bal_ids = NULL; P->bal_sz = NULL;
+        return FLOE_ENOMEM;
+    }
+    if (first) {
         for (int r = 0; r < S; r++) { /* each part's size for both criteria (rcb_weights) */
             P->bal_ids[r] = P->bal_ids[S + r] = r;
             P->bal_ids[2 * S + r] = 0;
@@ -649,13 +657,7 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin, int bad) {
     /* the counts (-1 to every rank: this rank failed; every rank then returns); the room for
      * the refreshed subset of the sent ones */
     if (!bad && floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)P->nsend * m)) bad = 1;
-    if (!bad && P->nsend > P->fsend_cap) {
-        int *t = realloc(P->fsend, (size_t)P->nsend * sizeof *t);
-        if (t) {
-            P->fsend = t;
-            P->fsend_cap = P->nsend;
-        } else bad = 1;
-    }
+    if (!bad && floe_reserve((void **)&P->fsend, &P->fsend_cap, (size_t)P->nsend, sizeof *P->fsend)) bad = 1;
     for (int r = 0; bad && r < S; r++) P->scount[r] = -1;
     MPI_Alltoall(P->scount, 1, MPI_INT, P->rcount, 1, MPI_INT, P->comm);
     floe_par_count_all(P, FLOE_COMM_GHOST, sizeof(int));
@@ -677,13 +679,7 @@ int floe_par_ghosts(floe_world *w, floe_par *P, double skin, int bad) {
             w->gmotion = g;
         } else nomem = 1;
     }
-    if (!nomem && nr > P->frecv_cap) {
-        int *t = realloc(P->frecv, (size_t)nr * sizeof *t);
-        if (t) {
-            P->frecv = t;
-            P->frecv_cap = nr;
-        } else nomem = 1;
-    }
+    if (!nomem && floe_reserve((void **)&P->frecv, &P->frecv_cap, (size_t)nr, sizeof *P->frecv)) nomem = 1;
     if (floe_par_agree(P, nomem ? FLOE_ENOMEM : FLOE_OK)) return FLOE_ENOMEM;
     for (int k = 0; k < P->nsend; k++) floe_par_pack(p, P->send_idx[k], P->gid[P->send_idx[k]], P->sbuf + (size_t)k * m);
     int *sc = P->gc;
@@ -714,12 +710,21 @@ typedef struct ghost_lists {
     int ns, nr, g0;
 } ghost_lists;
 
-static ghost_lists lists_of(const floe_world *w, const floe_par *P, int every) {
-    const int g0 = P->nrep + P->nown;
-    if (!every && P->fgen == w->nl.gen)
-        return (ghost_lists){P->fsend, P->frecv, P->fcnt, P->nfsend, P->nfrecv, g0};
-    return (ghost_lists){P->send_idx, NULL, P->scount, P->nsend, P->nghost, g0};
+static ghost_lists every_ghost(const floe_par *P) {
+    return (ghost_lists){P->send_idx, NULL, P->scount, P->nsend, P->nghost, P->nrep + P->nown};
 }
+
+/* every = 0: the subset while the list is the one it was chosen for. A list built since on
+ * one rank alone cannot happen where a subset was chosen (refresh_all; forces.c refuses a
+ * user's provider's rebuild under MPI): were it to, the ranks' counts would differ and MPI
+ * would fail loudly (MPI_ERR_TRUNCATE) rather than a rank read stale ghosts */
+static ghost_lists lists_of(const floe_world *w, const floe_par *P, int every) {
+    if (!every && P->fgen == w->nl.gen)
+        return (ghost_lists){P->fsend, P->frecv, P->fcnt, P->nfsend, P->nfrecv, P->nrep + P->nown};
+    return every_ghost(P);
+}
+
+int floe_par_nrefreshed(const floe_world *w, const floe_par *P) { return lists_of(w, P, 0).nr; }
 
 /* the local index of the k-th ghost an exchange fills */
 static inline int ghost_at(const ghost_lists *L, int k) { return L->ridx ? L->ridx[k] : L->g0 + k; }
@@ -831,13 +836,13 @@ int floe_par_forward_comm(floe_world *w, floe_par *P, int every) {
 }
 
 int floe_par_forward_rows(floe_par *P, double *a, int m) {
-    const int S = P->size, g0 = P->nrep + P->nown;
-    if (floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)P->nsend * m)) return FLOE_ENOMEM;
-    for (int k = 0; k < P->nsend; k++) memcpy(P->sbuf + (size_t)k * m, a + (size_t)P->send_idx[k] * m, (size_t)m * sizeof *a);
-    const ghost_lists L = {P->send_idx, NULL, P->scount, P->nsend, P->nghost, g0};
+    const int S = P->size;
+    const ghost_lists L = every_ghost(P);
+    if (floe_par_reserve(&P->sbuf, &P->sbuf_cap, (size_t)L.ns * m)) return FLOE_ENOMEM;
+    for (int k = 0; k < L.ns; k++) memcpy(P->sbuf + (size_t)k * m, a + (size_t)L.sidx[k] * m, (size_t)m * sizeof *a);
     const int *c = ghost_counts(P, &L, m);
-    MPI_Alltoallv(P->sbuf, c, c + S, MPI_DOUBLE, a ? a + (size_t)g0 * m : NULL, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->comm);
-    floe_par_count_v(P, FLOE_COMM_GHOST, P->scount, (long long)m * sizeof(double));
+    MPI_Alltoallv(P->sbuf, c, c + S, MPI_DOUBLE, a ? a + (size_t)L.g0 * m : NULL, c + 2 * S, c + 3 * S, MPI_DOUBLE, P->comm);
+    floe_par_count_v(P, FLOE_COMM_GHOST, L.cnt, (long long)m * sizeof(double));
     return FLOE_OK;
 }
 

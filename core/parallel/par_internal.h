@@ -40,14 +40,15 @@ typedef struct floe_par {
      * indices) they fill, grouped by source; fcnt: their counts and displacements (send counts,
      * send displacements, receive counts, receive displacements: 4 size, in scount's block).
      * Valid for the neighbour list of build fgen (nl.gen) alone. */
-    int *fsend, *frecv; int nfsend, nfrecv, fsend_cap, frecv_cap;
+    int *fsend, *frecv; int nfsend, nfrecv;
     int *fcnt;
     long fgen;               /* -1: no subset (every ghost is refreshed) */
     int refresh_all;         /* a force stage may build the list again on one rank alone, from
                                 every ghost's present state (a bond that breaks: beam bonds, PD
-                                bodies, a user's provider; forces.c): no subset, every ghost
-                                refreshed at every step. Set at the split from the whole world:
-                                the same on every rank */
+                                bodies; forces.c; a user's provider may not ask for it under
+                                MPI): no subset, every ghost refreshed at every step. Set at the
+                                split from the whole world: the same on every rank */
+    size_t fsend_cap, frecv_cap;
     int *gcnt;               /* 2 size: counts and displacements of a gather to rank 0 */
     /* scratch allocated at the split with the counts above, so that the exchanges of a step
      * and the first collective of a route or of the ghosts' choice never allocate (a rank
@@ -176,6 +177,8 @@ int floe_par_forward_comm(floe_world *w, floe_par *P, int every);
  * room): the ghosts this rank reads, told to their owners (a byte a ghost), and the
  * refreshed subsets (P->fsend, P->frecv) of both sides kept for this list */
 void floe_par_choose_refreshed(floe_world *w, floe_par *P);
+/* the ghosts a step refreshes now (the subset's size, or every ghost held) */
+int floe_par_nrefreshed(const floe_world *w, const floe_par *P);
 /* the doubles a ghost refresh carries a ghost: 9, + 4 (q), + 3 (f) */
 int floe_par_fwd_doubles(const floe_world *w, const floe_par *P);
 /* add the ghosts' forces and torques to their owners (the refreshed ghosts while the list

@@ -357,8 +357,9 @@ int floe_world_parallel_init(floe_world *w, const void *comm) {
     for (int i = 0; i < n; i++) nw += !isfinite(p->radius[i]);
     P->any_nonround = 0; /* the ranks hold the same world: the same answer everywhere */
     for (int i = 0; i < n; i++) P->any_nonround |= isfinite(p->radius[i]) && p->kind[i] != FLOE_GEOM_SPHERE;
-    if (w->beams && floe_beam_set_count(w->beams) > 0) P->any_nonround = 1;
-    P->refresh_all = (w->beams && floe_beam_set_count(w->beams) > 0) || w->npd > 0 || w->nuprov > 0;
+    const int bonds = w->beams && floe_beam_set_count(w->beams) > 0;
+    if (bonds) P->any_nonround = 1;
+    P->refresh_all = bonds || w->npd > 0; /* (a user's provider may not rebuild the list: forces.c) */
     nb = n - nw;
     const int k0 = (int)((long long)nb * P->rank / S), k1 = (int)((long long)nb * (P->rank + 1) / S);
     unsigned char *mine = calloc((size_t)(n ? n : 1), 1);
@@ -564,7 +565,9 @@ void floe_par_force_time(floe_world *w, double seconds) {
 int floe_world_parallel_set_balance(floe_world *w, floe_balance mode) {
     const int rc = balance_check(w, mode);
     if (rc || !w->par) return rc;
-    return floe_par_set_balance(w->par, mode) ? floe_world_error(w, FLOE_ENOMEM, "out of memory") : FLOE_OK;
+    if (!floe_par_set_balance(w->par, mode)) return FLOE_OK;
+    w->err_agreed = 1; /* every rank's (the world is as it was) */
+    return floe_world_error(w, FLOE_ENOMEM, "out of memory");
 }
 
 int floe_par_reverse(floe_world *w) {
@@ -1318,7 +1321,7 @@ int floe_par_observe(floe_world *w, int force_all) {
     P->traffic.steps++;
     P->traffic.owned_steps += P->nown;
     P->traffic.ghost_steps += P->nghost;
-    P->traffic.refreshed_steps += P->fgen == w->nl.gen ? P->nfrecv : P->nghost;
+    P->traffic.refreshed_steps += floe_par_nrefreshed(w, P);
     /* the outputs' own work (this rank's pieces; rank 0's observers on the mirror below) is
      * work the other ranks wait for: it counts in the load balance's measure (P->busy) */
     double t0 = MPI_Wtime();

@@ -393,8 +393,7 @@ int floe_nl_needs_rebuild_cell(const floe_neighbor_list *nl, const floe_particle
     const double *restrict xs = p->x, *restrict xb = nl->x_build, *restrict rad = p->radius,
                            *restrict rb = nl->r_build;
     const double o0 = c->o[0], o1 = c->o[1], o2 = c->o[2];
-    /* MPI: the owned particles (and walls); a ghost is tested by its owner (the refreshed ghosts
-     * alone follow it: parallel.md, "Ghosts") */
+    /* MPI: the walls and owned particles (floe_nl_needs_rebuild) */
     const int n = nl->gid ? nl->own_hi : p->n;
     for (int i0 = 0; i0 < n; i0 += 256) {
         const int i1 = i0 + 256 < n ? i0 + 256 : n;

@@ -71,7 +71,8 @@ typedef struct floe_provider_class {
      * holds alike (its parameters, the time, the step); it adds them to free particles only
      * (a rank's ghosts, its copies of the neighbouring ranks' particles, are stored
      * FLOE_FIXED); its ledger terms (out) are sums over the particles it acts on; it keeps no
-     * state (no state_size) and excludes no pairs. Each rank then runs it on the particles
+     * state (no state_size), excludes no pairs and never asks for a rebuild (out->rebuild: a
+     * split world refuses it with FLOE_ENOTSUP, naming the provider). Each rank then runs it on the particles
      * it owns, and the ranks' ledger terms are summed. On a split world i is the rank's
      * local index, not the particle's id in the scene: the force must not depend on i itself
      * (floe_world_parallel_gid gives the id) nor on the world as a whole through w (tested:

@@ -2230,9 +2230,16 @@ int floe_world_forces(floe_world *w, const floe_step_ctx *ctx, int groups) {
         }
         if (o->rebuild && !first) { /* between stages, never inside one */
             if (ctx->probe) return floe_world_error(w, FLOE_EINVAL, "internal: %s changed pairs at a probe", pv->klass->name);
-            rc = floe_world_nl_build(w);
-            if (rc) rc = floe_world_error(w, rc, "neighbour list rebuild after %s changed pairs failed (out of memory)",
-                                          pv->klass->name);
+            /* MPI: a user's provider runs on each rank's own particles, and a list built on
+             * one rank alone would read the ghosts the decomposition chose not to refresh
+             * (docs/parallel.md, "Ghosts a step refreshes"; floe_provider.h) */
+            if (w->par && floe_provider_is_user(w, pv))
+                rc = floe_world_error(w, FLOE_ENOTSUP, "MPI decomposition: the force provider %s asked for a "
+                                      "neighbour-list rebuild, which a provider that runs split may not (floe_provider.h)",
+                                      pv->klass->name);
+            else if ((rc = floe_world_nl_build(w)) != FLOE_OK)
+                rc = floe_world_error(w, rc, "neighbour list rebuild after %s changed pairs failed (out of memory)",
+                                      pv->klass->name);
             if (rc && !w->par) return rc;
             if (rc) { first = rc; memcpy(why, w->err, sizeof why); }
         }

@@ -79,8 +79,8 @@ int floe_nl_needs_rebuild_after_drift(const floe_neighbor_list *nl, const floe_p
 int floe_nl_needs_rebuild(const floe_neighbor_list *nl, const floe_particles *p) {
     if (!nl->x_build || nl->n_build != p->n) return 1;
     double lim = 0.5 * nl->skin, lim2 = lim * lim;
-    /* MPI: the owned particles (and walls); a ghost is tested by its owner (the refreshed ghosts
-     * alone follow it: parallel.md, "Ghosts") */
+    /* MPI: the walls and owned particles; a ghost's test is its owner's, which every rank's
+     * verdict joins (docs/parallel.md, "Ghosts a step refreshes") */
     const int n = nl->gid ? nl->own_hi : p->n;
     for (int i = 0; i < n; i++) {
         const double *a = p->x + 3 * i, *b = nl->x_build + 3 * i;

@@ -223,6 +223,17 @@ static int impostor_forces(floe_provider *pv, floe_world *w, const struct floe_s
 static const floe_provider_class impostor_class = {.version = 1, .name = "linear_drag", .group = FLOE_GROUP_DEM,
                                                    .forces = impostor_forces};
 
+/* a user's provider that runs split (per particle) but asks for a neighbour-list rebuild: a
+ * split world refuses it (a list built on one rank alone would read ghosts the decomposition
+ * does not refresh: docs/parallel.md, "Ghosts a step refreshes") */
+static int rebuilder_forces(floe_provider *pv, floe_world *w, const struct floe_step_ctx *ctx, floe_provider_out *out) {
+    (void)pv; (void)w; (void)ctx;
+    out->rebuild = 1;
+    return FLOE_OK;
+}
+static const floe_provider_class rebuilder_class = {.version = 2, .name = "user_rebuilder", .group = FLOE_GROUP_DEM,
+                                                    .forces = rebuilder_forces, .splits = FLOE_PROVIDER_PER_PARTICLE};
+
 static void spin(double t, double v[3], double om[3], void *user) {
     (void)t; (void)user;
     v[0] = v[1] = v[2] = 0;
@@ -244,7 +255,7 @@ static const floe_state_class user_state_class = {1, "user_temperature", us_size
  * the built-in state objects and motion callbacks on bounded particles run split since
  * session 22: tests/mpi/rk2_grow.yaml, pd_pull.yaml and the first case below) */
 static void check_refusals(void) {
-    for (int k = 0; k < 3; k++) {
+    for (int k = 0; k < 4; k++) {
         floe_world_def d = floe_default_world_def();
         d.dt = 1e-6;
         floe_world *w = floe_world_create(&d, NULL, 0);
@@ -264,9 +275,9 @@ static void check_refusals(void) {
             st->klass = &user_state_class;
             floe_world_add_state(w, st); /* the world frees it */
         }
-        if (k == 2) {
+        if (k == 2 || k == 3) {
             floe_provider *pv = malloc(sizeof *pv);
-            pv->klass = &impostor_class;
+            pv->klass = k == 2 ? &impostor_class : &rebuilder_class;
             floe_world_add_provider(w, pv); /* the world frees it */
         }
         int rc = floe_world_prepare(w);
@@ -282,6 +293,16 @@ static void check_refusals(void) {
                 if (floe_world_parallel_is_owned(w, i) && floe_world_parallel_gid(w, i) == 2 && w->p.w[3 * i + 2] == 1) spun++;
             MPI_Allreduce(&spun, &all, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
             CHECK(all == 1, "the callback's sphere spins on the rank that owns it (%d ranks)", all);
+            floe_world_destroy(w);
+            continue;
+        }
+        if (k == 3) { /* split, then refused at the step, on every rank */
+            CHECK(rc == 0, "a provider that runs split: the split (rc %d: %s)", rc, rc ? floe_world_last_error(w) : "");
+            if (rc == 0) rc = floe_world_step(w);
+            CHECK(rc == FLOE_ENOTSUP && strstr(floe_world_last_error(w), "asked for a neighbour-list rebuild") &&
+                      strstr(floe_world_last_error(w), "user_rebuilder"),
+                  "a split provider's rebuild refused at the step (rc %d: %s)", rc, floe_world_last_error(w));
+            if (rank_ == 0) printf("  refused at the step: %s\n", floe_world_last_error(w));
             floe_world_destroy(w);
             continue;
         }
