@@ -478,6 +478,12 @@ static int par_room(floe_world *w, floe_par *P, int need) {
     return FLOE_OK;
 }
 
+/* The owned particles stay sorted by global id (floe_world_local_of searches them so). The
+ * stayers keep their order: they are closed up over the leavers' rows, then the arrivals,
+ * sorted, are merged in from the back, each run of stayers above an arrival moved up at once
+ * (floe_world_move_particles, array by array). A decomposition moves a few particles of
+ * thousands: packing, sorting and unpacking every owned particle's record cost 1.5 % of a
+ * rank's step on dem-settle (bench/RESULTS.md, issue 14 session 33). */
 int floe_par_migrate(floe_world *w, floe_par *P, const int *dest) {
     floe_particles *p = &w->p;
     const int m = FLOE_PAR_REC, lo = P->nrep;
@@ -498,20 +504,35 @@ int floe_par_migrate(floe_world *w, floe_par *P, const int *dest) {
     free(out); free(od);
     if (rc) return rc;
     P->migrated += nleave;
-    /* stayers and arrivals, sorted by global id */
     const int nkeep = P->nown - nleave, nnew = nkeep + nin;
-    double *all = malloc((size_t)(nnew ? nnew : 1) * m * sizeof *all);
-    if (!all) { free(in); return FLOE_ENOMEM; }
-    a = 0;
-    for (int k = 0; k < P->nown; k++)
-        if (dest[k] == P->rank) floe_par_pack(p, lo + k, P->gid[lo + k], all + (size_t)a++ * m);
-    memcpy(all + (size_t)a * m, in, (size_t)nin * m * sizeof *all);
+    rc = par_room(w, P, lo + nnew); /* (the stayers' rows are within the present count) */
+    if (rc) { free(in); return rc; }
+    int c = lo; /* the stayers closed up over the leavers */
+    for (int k = 0; k < P->nown;) {
+        int e = k;
+        while (e < P->nown && dest[e] == P->rank) e++;
+        if (e > k && c != lo + k) {
+            floe_world_move_particles(w, c, lo + k, e - k);
+            memmove(P->gid + c, P->gid + lo + k, (size_t)(e - k) * sizeof *P->gid);
+        }
+        c += e - k;
+        k = e + 1; /* (past the leaver at e) */
+    }
+    qsort(in, nin, (size_t)m * sizeof *in, cmp_rec);
+    for (int s = nkeep, r = nin; r > 0; r--) { /* the arrivals from the last: r - 1 after the stayers [0, s0) */
+        const double *rec = in + (size_t)(r - 1) * m;
+        int s0 = 0, s1 = s;
+        while (s0 < s1) { /* the first stayer with a larger id */
+            const int mid = s0 + (s1 - s0) / 2;
+            if ((double)P->gid[lo + mid] < rec[0]) s0 = mid + 1;
+            else s1 = mid;
+        }
+        floe_world_move_particles(w, lo + s0 + r, lo + s0, s - s0);
+        memmove(P->gid + lo + s0 + r, P->gid + lo + s0, (size_t)(s - s0) * sizeof *P->gid);
+        floe_par_unpack(p, lo + s0 + r - 1, rec, P->gid + lo + s0 + r - 1);
+        s = s0;
+    }
     free(in);
-    qsort(all, nnew, (size_t)m * sizeof *all, cmp_rec);
-    rc = par_room(w, P, lo + nnew);
-    if (rc) { free(all); return rc; }
-    for (int k = 0; k < nnew; k++) floe_par_unpack(p, lo + k, all + (size_t)k * m, P->gid + lo + k);
-    free(all);
     P->nown = nnew;
     P->nghost = 0;
     p->n = lo + nnew;

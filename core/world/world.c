@@ -473,6 +473,21 @@ int floe_world_add_geometry(floe_world *w, floe_geometry *g) {
  * "The store in one block"). */
 static int particles_layout(floe_particles *p, int nc);
 
+/* the store's arrays in the block, with the doubles or items per particle of each (thick,
+ * outside the block, apart) */
+#define STORE_FIELDS(X) X(x, 3); X(v, 3); X(q, 4); X(w, 3); X(L, 3); X(f, 3); X(t, 3); X(mass, 1); X(inv_mass, 1); \
+    X(inertia, 3); X(inv_iso, 1); X(radius, 1); X(rdot, 1); X(geom, 1); X(material, 1); X(group, 1); X(pieces, 1);  \
+    X(motion, 1); X(kind, 1); X(iso, 1)
+
+void floe_world_move_particles(floe_world *w, int dst, int src, int n) {
+    floe_particles *p = &w->p;
+    if (n <= 0 || dst == src) return;
+#define SHIFT(field, k) memmove(p->field + (size_t)dst * (k), p->field + (size_t)src * (k), (size_t)n * (k) * sizeof *p->field)
+    STORE_FIELDS(SHIFT);
+    if (p->thick) SHIFT(thick, 1);
+#undef SHIFT
+}
+
 static int particles_reserve(floe_particles *p, int need) {
     if (need <= p->cap) return FLOE_OK;
     int nc = p->cap ? p->cap : 64;
@@ -490,10 +505,7 @@ static int particles_layout(floe_particles *p, int nc) {
         off[nf] = base_ + (size_t)((nf + 1) * STAGGER) % PAGE; \
         total = off[nf] + (size_t)nc * (k) * sizeof *p->field; \
         nf++; } while (0)
-#define FIELDS(X) X(x, 3); X(v, 3); X(q, 4); X(w, 3); X(L, 3); X(f, 3); X(t, 3); X(mass, 1); X(inv_mass, 1); \
-    X(inertia, 3); X(inv_iso, 1); X(radius, 1); X(rdot, 1); X(geom, 1); X(material, 1); X(group, 1); X(pieces, 1);            \
-    X(motion, 1); X(kind, 1); X(iso, 1)
-    FIELDS(LAY);
+    STORE_FIELDS(LAY);
     char *b = malloc(total);
     if (!b) return FLOE_ENOMEM;
     if (p->thick) { /* floes' thickness: its own allocation, present only when used (before
@@ -510,10 +522,9 @@ static int particles_layout(floe_particles *p, int nc) {
         void *dst_ = b + off[nf++]; \
         if (p->n > 0) memcpy(dst_, p->field, (size_t)p->n * (k) * sizeof *p->field); \
         p->field = dst_; } while (0)
-    FIELDS(MOVE);
+    STORE_FIELDS(MOVE);
 #undef MOVE
 #undef LAY
-#undef FIELDS
     free(p->block);
     p->block = b;
     p->cap = nc;

@@ -339,6 +339,9 @@ void floe_par_scratch_free(floe_par_scratch *ps);
 
 /* room for at least need particles in the store (world.c; contents kept) */
 int floe_world_reserve_particles(floe_world *w, int need);
+/* the n particles from index src moved to index dst, every array of the store (the ranges may
+ * overlap; within the capacity; world.c) */
+void floe_world_move_particles(floe_world *w, int dst, int src, int n);
 /* the local index of the particle whose index in the unsplit world is id: itself in one
  * process; on a world split over MPI ranks its wall or owned copy (binary search of the two
  * ranges, each sorted by global id), with ghosts 1 also a ghost copy (a scan), -1 when this
