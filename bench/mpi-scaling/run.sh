@@ -16,7 +16,7 @@
 #
 # Prints one line per run (series, ranks, particles, steps, wall time of the stepping loop,
 # particle-steps/s, mean and largest bytes per step per rank, messages per step per rank,
-# ghosts per rank, rebuilds) and a table at the end. Ranks above the machine's cores are
+# ghosts per rank, of them refreshed each step per rank, rebuilds) and a table at the end. Ranks above the machine's cores are
 # labelled "oversubscribed": their times say nothing about scaling. -np 1 under mpirun is
 # the serial program (no decomposition, no traffic).
 set -euo pipefail
@@ -71,8 +71,8 @@ print(nx * nx * nz)
 EOF
 }
 
-printf '%-7s %-22s %9s %6s %9s %12s %12s %12s %8s %10s %8s\n' series ranks particles steps wall_s \
-  psteps_per_s B/step/rank maxB/step msg/step ghosts/rank rebuilds | tee "$work/table.txt"
+printf '%-7s %-22s %9s %6s %9s %12s %12s %12s %8s %10s %10s %8s\n' series ranks particles steps wall_s \
+  psteps_per_s B/step/rank maxB/step msg/step ghosts/rank refreshed rebuilds | tee "$work/table.txt"
 run() { # series ranks n
   local series=$1 r=$2 n=$3
   local yaml=$work/s_$n.yaml
@@ -92,6 +92,8 @@ steps = int(re.search(r"steps: +([0-9]+)", log).group(1))
 wall = float(re.search(r"wall time: +([0-9.]+) s", log).group(1))
 m = re.search(r"comm/step/rank: +([0-9.]+) B mean, ([0-9.]+) B max, ([0-9.]+) messages.*ghosts/rank ([0-9.]+), "
               r"particles/rank ([0-9.]+); ([0-9]+) rebuilds", log)
+rf = re.search(r"refreshed ghosts/rank ([0-9.]+)", log)
+rf = rf.group(1) if rf else "0"
 if m:
     mean, mx, msg, gh, _, reb = m.groups()
 else:  # one rank: the serial program, no traffic
@@ -99,7 +101,7 @@ else:  # one rank: the serial program, no traffic
     reb = re.search(r"neighbour rebuilds: +([0-9]+)", log).group(1)
 pss = n * steps / wall if wall > 0 else 0
 print(f"{series:<7s} {label:<22s} {n:9d} {steps:6d} {wall:9.3f} {pss:12.4e} {float(mean):12.0f} {float(mx):12.0f} "
-      f"{float(msg):8.2f} {float(gh):10.1f} {int(reb):8d}")
+      f"{float(msg):8.2f} {float(gh):10.1f} {float(rf):10.1f} {int(reb):8d}")
 EOF
 }
 
