@@ -73,7 +73,9 @@ void floe_par_unpack_state(floe_particles *p, int i, const double *r) {
 }
 
 /* the record: gid, the state (x3 v3 q4 w3 L3 f3 t3), mass inv_mass inertia3 radius, geom
- * material group motion kind iso, inv_iso rdot pieces thick = 39 doubles */
+ * material group motion kind iso, inv_iso rdot pieces thick = 39 doubles: every array of the
+ * store (a migration moves the stayers with floe_world_move_particles, world.c's list of
+ * them: a field added to one must be added to the other) */
 void floe_par_pack(const floe_particles *p, int i, long long gid, double *r) {
     int k = 0;
     r[k++] = (double)gid;
@@ -511,7 +513,7 @@ int floe_par_migrate(floe_world *w, floe_par *P, const int *dest) {
     for (int k = 0; k < P->nown;) {
         int e = k;
         while (e < P->nown && dest[e] == P->rank) e++;
-        if (e > k && c != lo + k) {
+        if (c != lo + k) {
             floe_world_move_particles(w, c, lo + k, e - k);
             memmove(P->gid + c, P->gid + lo + k, (size_t)(e - k) * sizeof *P->gid);
         }
@@ -519,7 +521,7 @@ int floe_par_migrate(floe_world *w, floe_par *P, const int *dest) {
         k = e + 1; /* (past the leaver at e) */
     }
     qsort(in, nin, (size_t)m * sizeof *in, cmp_rec);
-    for (int s = nkeep, r = nin; r > 0; r--) { /* the arrivals from the last: r - 1 after the stayers [0, s0) */
+    for (int s = nkeep, r = nin; r > 0; r--) { /* arrival r - 1 to s0 + r - 1: after stayers [0, s0) and arrivals [0, r - 1) */
         const double *rec = in + (size_t)(r - 1) * m;
         int s0 = 0, s1 = s;
         while (s0 < s1) { /* the first stayer with a larger id */

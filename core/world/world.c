@@ -474,7 +474,8 @@ int floe_world_add_geometry(floe_world *w, floe_geometry *g) {
 static int particles_layout(floe_particles *p, int nc);
 
 /* the store's arrays in the block, with the doubles or items per particle of each (thick,
- * outside the block, apart) */
+ * outside the block, apart). core/parallel/decomp.c's record (floe_par_pack) carries the
+ * same fields: a field added here must be added there */
 #define STORE_FIELDS(X) X(x, 3); X(v, 3); X(q, 4); X(w, 3); X(L, 3); X(f, 3); X(t, 3); X(mass, 1); X(inv_mass, 1); \
     X(inertia, 3); X(inv_iso, 1); X(radius, 1); X(rdot, 1); X(geom, 1); X(material, 1); X(group, 1); X(pieces, 1);  \
     X(motion, 1); X(kind, 1); X(iso, 1)
