@@ -13,6 +13,11 @@
  *     half way back (cost 1.5: 2/3 / (2/3 + S - 1));
  *   - back to FLOE_BALANCE_WEIGHTS: even shares again;
  *   - a bed under a cloud: both the particles and the contacts balanced (build_bed_cloud);
+ *   - an imbalance no cut can mend (three spheres far apart: a part holds one, its share is
+ *     3 / S): the fresh choice of directions does no better and is rejected, its imbalance
+ *     kept; the next decompositions do not try again (the kept cuts are no worse), and with
+ *     that memory cleared one does, at the cost of its three reductions, and rejects it
+ *     again (check_rejected_fresh);
  *   - a run of 300 steps under the time balance (the real timings, cuts at every rebuild)
  *     ends with the same kinetic energy as under the weights within 1e-9 (the decompositions
  *     differ: only round-off may), and the force time it measured is positive. */
@@ -169,6 +174,53 @@ static void check_bed_cloud(void) {
     floe_world_destroy(w);
 }
 
+/* the reductions (FLOE_COMM_REDUCE messages) of one decomposition */
+static long long rebuild_reductions(floe_world *w) {
+    floe_world_parallel_comm_reset(w);
+    const int rc = floe_world_parallel_rebuild(w);
+    CHECK(rc == 0, "rebuild: %s", rc ? floe_world_last_error(w) : "");
+    floe_comm_stats cs;
+    floe_world_parallel_comm(w, &cs);
+    return cs.messages[FLOE_COMM_REDUCE];
+}
+
+static void check_rejected_fresh(void) {
+    floe_world_def d = floe_default_world_def();
+    d.dim = 3; d.dt = 1e-6;
+    d.energy_check = FLOE_CHECK_OFF;
+    floe_world *w = floe_world_create(&d, NULL, 0);
+    mpi_test_add_glass(w, 1e7);
+    const int g = floe_world_add_geometry(w, floe_sphere_create(0.0004));
+    for (int k = 0; k < 3; k++) {
+        floe_particle_def p = floe_default_particle_def();
+        p.geometry = g;
+        floe_v3_set(p.x, 0.01 * k, 0.001 * k, 0);
+        floe_world_add_particle(w, &p);
+    }
+    if (floe_world_prepare(w)) { fprintf(stderr, "prepare: %s\n", floe_world_last_error(w)); exit(2); }
+    int rc = floe_world_parallel_init(w, NULL);
+    CHECK(rc == 0, "three spheres: split: %s", rc ? floe_world_last_error(w) : "");
+    const double worst = ceil(3.0 / size_) / (3.0 / size_); /* the fullest part over its share */
+    if (rc == 0 && worst > 1.05) { /* (2 and 4 ranks: 4/3; one rank or three: balanced) */
+        floe_par *P = w->par;
+        const void *zz = P->zz;
+        CHECK(fabs(P->rcb_tried - worst) < 1e-12, "three spheres: the fresh choice rejected at the split, the kept "
+              "imbalance %.4f remembered (%.4f)", P->rcb_tried, worst);
+        const long long r1 = rebuild_reductions(w), r2 = rebuild_reductions(w);
+        CHECK(r1 == r2 && fabs(P->rcb_tried - worst) < 1e-12 && P->zz == zz,
+              "three spheres: no fresh choice while the kept cuts are no worse (%lld, %lld reductions; %.4f)", r1, r2,
+              P->rcb_tried);
+        P->rcb_tried = 0; /* forgotten: the next decomposition tries again */
+        const long long r3 = rebuild_reductions(w);
+        CHECK(r3 == r1 + 3 && fabs(P->rcb_tried - worst) < 1e-12 && P->zz == zz,
+              "three spheres: a fresh choice tried again (%lld reductions against %lld: + 2 agreements and its "
+              "imbalance), rejected, the kept directions' object kept (%.4f)", r3, r1, P->rcb_tried);
+        if (rank_ == 0) printf("  three spheres: fresh choice rejected, imbalance %.4f kept; %lld reductions a "
+                               "decomposition, %lld with a fresh try\n", P->rcb_tried, r1, r3);
+    }
+    floe_world_destroy(w);
+}
+
 static double kinetic_after(floe_balance mode, int steps, double *force_s) {
     floe_world *w = build();
     int rc = floe_world_parallel_init(w, NULL);
@@ -211,6 +263,7 @@ int main(int argc, char **argv) {
     }
     floe_world_destroy(w);
     check_bed_cloud();
+    check_rejected_fresh();
     /* a run under each mode: the same physics within round-off */
     double fw, ft;
     const double kw = kinetic_after(FLOE_BALANCE_WEIGHTS, 300, &fw), kt = kinetic_after(FLOE_BALANCE_TIME, 300, &ft);
