@@ -13,8 +13,8 @@
  *     half way back (cost 1.5: 2/3 / (2/3 + S - 1));
  *   - back to FLOE_BALANCE_WEIGHTS: even shares again;
  *   - a bed under a cloud: both the particles and the contacts balanced (build_bed_cloud);
- *   - an imbalance no cut can mend (three spheres far apart: a part holds one, its share is
- *     3 / S): the fresh choice of directions does no better and is rejected, its imbalance
+ *   - an imbalance no cut can mend (three spheres far apart: the fullest part holds ceil(3 / S)
+ *     of them against a share of 3 / S, 4/3 of it at 2 and 4 ranks): the fresh choice of directions does no better and is rejected, its imbalance
  *     kept; the next decompositions do not try again (the kept cuts are no worse), and with
  *     that memory cleared one does, at the cost of its three reductions, and rejects it
  *     again (check_rejected_fresh);
