@@ -356,7 +356,6 @@ struct stage_acc {
      * entry, act[k] = 1), gathered per particle afterwards; NULL: added to p->f, p->t */
     double *pf;
     unsigned char *act;
-    unsigned char *hit;      /* per particle: some entry of it has a force (the gather skips the rest) */
     const unsigned char *own; /* per particle: all its entries lie in one part (floe_par_scratch.own) */
     floe_rec_sink *rs;        /* threads, recording: the part's contact records (NULL: the world's) */
     int oom;                  /* a record of the lanes' books found no memory (stage_block reports it) */
@@ -384,12 +383,7 @@ static inline __attribute__((always_inline)) void pair_apply(floe_particles *p, 
         if (oi & oj) return;
         double *b = acc->pf + 9 * (size_t)k;
         for (int a = 0; a < 3; a++) { b[a] = F[a]; b[3 + a] = ti[a]; b[6 + a] = tj[a]; }
-        acc->act[k] = 1;
-        /* two threads may mark the same particle: the same value, a relaxed atomic store, made
-         * only when not yet marked (a wall met by both threads' contacts: a store per entry
-         * moved its flag's cache line between the cores at every entry) */
-        if (!oi && !__atomic_load_n(acc->hit + i, __ATOMIC_RELAXED)) __atomic_store_n(acc->hit + i, (unsigned char)1, __ATOMIC_RELAXED);
-        if (!oj && !__atomic_load_n(acc->hit + j, __ATOMIC_RELAXED)) __atomic_store_n(acc->hit + j, (unsigned char)1, __ATOMIC_RELAXED);
+        acc->act[k] = 1; /* (the gather reads it for the end not owned: par_prepare's gl) */
         return;
     }
     for (int a = 0; a < 3; a++) {
@@ -1473,12 +1467,9 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         for (int k = 0; k < npairs; k++) ps->adj[off[nl->pj[k]]++] = k; /* in list order */
         for (int i = n; i > 0; i--) off[i] = off[i - 1];
         off[0] = 0;
-        unsigned char *hit = realloc(ps->hit, (size_t)(n ? n : 1));
-        if (hit) ps->hit = hit;
-        int *br = hit ? realloc(ps->brange, 2 * (size_t)(n ? n : 1) * sizeof *br) : NULL;
+        int *br = realloc(ps->brange, 2 * (size_t)(n ? n : 1) * sizeof *br);
         if (!br) return FLOE_ENOMEM;
         ps->brange = br;
-        memset(hit, 0, (size_t)(n ? n : 1));
         /* each particle's blocks: from its first entry to its last (its row; adj in list order) */
         for (int i = 0; i < n; i++) {
             int lo = INT_MAX, hi = -1;
@@ -1543,9 +1534,6 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         }
         for (; t <= nt; t++) pb[t] = nb;
         ps->recut = 0;
-        /* flags a failed evaluation left (no gather ran) would make a particle owned now
-         * gather its buffered entries again */
-        memset(ps->hit, 0, (size_t)(n ? n : 1));
         /* no part boundary between its first block and its last (none: owned); two threads
          * (one boundary) in a loop the compiler vectorises: a cut by measured times comes
          * every few steps */
@@ -1559,6 +1547,29 @@ static int par_prepare(floe_world *w, int nt, int nb) {
                 for (int q = 1; q < nt && same; q++) same = !(br[2 * i] < pb[q] && pb[q] <= br[2 * i + 1]);
                 own[i] = (unsigned char)same;
             }
+        /* the gather's particles (not owned, with entries) and their shares by entries */
+        if (floe_reserve((void **)&ps->gl, &ps->gl_cap, (size_t)(n ? n : 1), sizeof(int)) ||
+            floe_reserve((void **)&ps->gc, &ps->gc_cap, (size_t)nt + 1, sizeof(int))) {
+            ps->pb_nt = 0;
+            return FLOE_ENOMEM;
+        }
+        int ngl = 0;
+        long ent = 0;
+        for (int i = 0; i < n; i++)
+            if (!own[i] && br[2 * i + 1] >= 0) {
+                ps->gl[ngl++] = i;
+                ent += (long)(ps->row[i + 1] - ps->row[i]) + (ps->adj_off[i + 1] - ps->adj_off[i]);
+            }
+        ps->ngl = ngl;
+        int *gc = ps->gc, s = 1;
+        long acc = 0;
+        gc[0] = 0;
+        for (int q = 0; q < ngl && s < nt; q++) {
+            const int i = ps->gl[q];
+            acc += (long)(ps->row[i + 1] - ps->row[i]) + (ps->adj_off[i + 1] - ps->adj_off[i]);
+            for (; s < nt && acc * nt >= ent * s; s++) gc[s] = q + 1;
+        }
+        for (; s <= nt; s++) gc[s] = ngl;
         ps->pb_nt = nt;
         ps->pb_gen = nl->gen;
     }
@@ -1709,6 +1720,37 @@ static int sep_update(floe_world *w) {
     return FLOE_OK;
 }
 
+/* particle i's forces from the entries buffered for it (pair_apply: it is not owned by one
+ * part), added in list order as one thread adds them: the entries it is j of before its row,
+ * its row, those after it */
+static inline void gather_one(const floe_par_scratch *ps, floe_particles *p, int i) {
+    const int *off = ps->adj_off, *adj = ps->adj, *row = ps->row;
+    const double *pf = ps->pf;
+    const unsigned char *act = ps->act;
+    double *f = p->f, *tq = p->t;
+    double fi[3] = {f[3 * i], f[3 * i + 1], f[3 * i + 2]}, ti[3] = {tq[3 * i], tq[3 * i + 1], tq[3 * i + 2]};
+    const int r0 = row[i], r1 = row[i + 1], e1 = off[i + 1];
+    int e = off[i];
+    for (; e < e1 && adj[e] < r0; e++) {
+        const int k = adj[e];
+        if (!act[k]) continue;
+        const double *bk = pf + 9 * (size_t)k;
+        for (int a = 0; a < 3; a++) { fi[a] -= bk[a]; ti[a] += bk[6 + a]; }
+    }
+    for (int k = r0; k < r1; k++) {
+        if (!act[k]) continue;
+        const double *bk = pf + 9 * (size_t)k;
+        for (int a = 0; a < 3; a++) { fi[a] += bk[a]; ti[a] += bk[3 + a]; }
+    }
+    for (; e < e1; e++) {
+        const int k = adj[e];
+        if (!act[k]) continue;
+        const double *bk = pf + 9 * (size_t)k;
+        for (int a = 0; a < 3; a++) { fi[a] -= bk[a]; ti[a] += bk[6 + a]; }
+    }
+    for (int a = 0; a < 3; a++) { f[3 * i + a] = fi[a]; tq[3 * i + a] = ti[a]; }
+}
+
 static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, floe_provider_out *out) {
     (void)pv;
     floe_particles *p = ctx->p;
@@ -1787,6 +1829,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
             /* thread t's part: its blocks in order (par_prepare); the lowest failed block of
              * all threads is the first error */
             const int nth = floe_par_nthreads();
+            double t0 = floe_par_wtime(); /* a block's start: the last one's end */
             for (int part = t; part < nt; part += nth)
             for (int b = ps->pb[part]; b < ps->pb[part + 1]; b++) {
                 if (failed) continue; /* this thread's first error is the one its blocks met first */
@@ -1796,15 +1839,15 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
                 memset(&la, 0, sizeof la);
                 la.pf = ps->pf;
                 la.act = ps->act;
-                la.hit = ps->hit;
                 la.own = ps->own;
                 la.rs = ctx->record ? &ps->rs[part] : NULL;
                 const int k0 = b * B, k1 = k0 + B < npairs ? k0 + B : npairs;
-                const double t0 = floe_par_wtime();
                 memset(ps->act + k0, 0, (size_t)(k1 - k0));
                 int rc = stage_block(w, ctx, &te, k0, k1, cand, &batch, &la);
                 ps->blk[b] = la;
-                ps->bs[b] = floe_par_wtime() - t0;
+                const double t1 = floe_par_wtime();
+                ps->bs[b] = t1 - t0;
+                t0 = t1;
                 if (rc) {
                     failed = 1;
                     ps->fail_b[t] = b;
@@ -1812,6 +1855,12 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
                 }
             }
             floe_world_error_to(NULL, 0);
+            /* every block's buffered entries written: the particles not owned by one part take
+             * their forces, each in list order as one thread adds them (pair_apply), a share of
+             * them by entries per thread (par_prepare). After a failure the forces are not read */
+            FLOE_OMP(omp barrier)
+            for (int part = t; part < nt; part += nth)
+                for (int q = ps->gc[part]; q < ps->gc[part + 1]; q++) gather_one(ps, p, ps->gl[q]);
         }
         par_merge_detect(w, nt);
         int tf = -1; /* the error a serial run meets first: of the lowest failed block */
@@ -1838,46 +1887,6 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
                     memcpy(w->contacts + w->ncontacts, ps->rs[t].r, (size_t)ps->rs[t].n * sizeof *ps->rs[t].r);
                 w->ncontacts += ps->rs[t].n;
             }
-        }
-        /* each particle's forces, in list order as one thread adds them (pair_apply) */
-        const int n = p->n, *off = ps->adj_off, *adj = ps->adj, *row = ps->row;
-        const double *pf = ps->pf;
-        const unsigned char *act = ps->act;
-        unsigned char *hit = ps->hit;
-        double *f = p->f, *tq = p->t;
-        /* in chunks handed out from the end: the walls (the last particles) gather the most
-         * entries (a side wall of the RVE: a few thousand), and the thread that takes them
-         * first leaves the rest to the other */
-        const int GC = FLOE_PAR_BLOCK, nch = (n + GC - 1) / GC;
-        FLOE_OMP(omp parallel for schedule(dynamic, 1) num_threads(nt))
-        for (int q = 0; q < nch; q++) {
-          const int c = nch - 1 - q, ie = (c + 1) * GC < n ? (c + 1) * GC : n;
-          for (int i = c * GC; i < ie; i++) {
-            if (!hit[i]) continue; /* no force on it this evaluation */
-            hit[i] = 0;
-            double fi[3] = {f[3 * i], f[3 * i + 1], f[3 * i + 2]}, ti[3] = {tq[3 * i], tq[3 * i + 1], tq[3 * i + 2]};
-            /* list order: the entries it is j of before its row, its row, those after it */
-            const int r0 = row[i], r1 = row[i + 1], e1 = off[i + 1];
-            int e = off[i];
-            for (; e < e1 && adj[e] < r0; e++) {
-                const int k = adj[e];
-                if (!act[k]) continue;
-                const double *bk = pf + 9 * (size_t)k;
-                for (int a = 0; a < 3; a++) { fi[a] -= bk[a]; ti[a] += bk[6 + a]; }
-            }
-            for (int k = r0; k < r1; k++) {
-                if (!act[k]) continue;
-                const double *bk = pf + 9 * (size_t)k;
-                for (int a = 0; a < 3; a++) { fi[a] += bk[a]; ti[a] += bk[3 + a]; }
-            }
-            for (; e < e1; e++) {
-                const int k = adj[e];
-                if (!act[k]) continue;
-                const double *bk = pf + 9 * (size_t)k;
-                for (int a = 0; a < 3; a++) { fi[a] -= bk[a]; ti[a] += bk[6 + a]; }
-            }
-            for (int a = 0; a < 3; a++) { f[3 * i + a] = fi[a]; tq[3 * i + a] = ti[a]; }
-          }
         }
     }
     w->ncontacts += (int)tot.ncontacts;

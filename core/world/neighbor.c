@@ -39,11 +39,17 @@ int floe_nl_set_stride(floe_neighbor_list *nl, int hs) {
 }
 
 /* one search thread's entries found, (i, j, sub, img) each, and its tree-query scratch */
+/* a search thread's buffer, 128 bytes apart from the next one's: its count and capacity are
+ * written at every entry found, and two threads' in one cache line moved it between the
+ * cores at each (the array is 16-byte aligned: 128 keeps each one's fields off the next's
+ * lines) */
 struct floe_nl_found {
     int *e; size_t n, cap;
     int *scr; int scap;
     int rc;
+    char pad[128 - 2 * sizeof(int *) - 2 * sizeof(size_t) - 2 * sizeof(int)];
 };
+_Static_assert(sizeof(struct floe_nl_found) == 128, "floe_nl_found: one per 128 bytes");
 
 void floe_nl_free(floe_neighbor_list *nl) {
     for (int t = 0; t < nl->nfound; t++) { free(nl->found[t].e); free(nl->found[t].scr); }
