@@ -1498,11 +1498,16 @@ static int par_prepare(floe_world *w, int nt, int nb) {
      * only writer, and adds its forces in list order */
     const int same = ps->pb_nt == nt && ps->pb[nt] == nb && ps->pb_gen == nl->gen;
     if (!same || ps->recut) {
+        ps->pb_nt = 0; /* (cut again at the next evaluation if anything below fails) */
         int *pb = realloc(ps->pb, (size_t)(nt + 1) * sizeof *pb);
         unsigned char *own = pb ? realloc(ps->own, (size_t)(n ? n : 1)) : NULL;
         if (pb) ps->pb = pb;
         if (!own) return FLOE_ENOMEM;
         ps->own = own;
+        /* the gather's particles and their shares (below) */
+        if (floe_reserve((void **)&ps->gl, &ps->gl_cap, (size_t)(n ? n : 1), sizeof(int)) ||
+            floe_reserve((void **)&ps->gc, &ps->gc_cap, (size_t)nt + 1, sizeof(int)))
+            return FLOE_ENOMEM;
         const int *row = ps->row, B = FLOE_PAR_BLOCK;
         pb[0] = 0;
         int t = 1;
@@ -1547,26 +1552,22 @@ static int par_prepare(floe_world *w, int nt, int nb) {
                 for (int q = 1; q < nt && same; q++) same = !(br[2 * i] < pb[q] && pb[q] <= br[2 * i + 1]);
                 own[i] = (unsigned char)same;
             }
-        /* the gather's particles (not owned, with entries) and their shares by entries */
-        if (floe_reserve((void **)&ps->gl, &ps->gl_cap, (size_t)(n ? n : 1), sizeof(int)) ||
-            floe_reserve((void **)&ps->gc, &ps->gc_cap, (size_t)nt + 1, sizeof(int))) {
-            ps->pb_nt = 0;
-            return FLOE_ENOMEM;
-        }
+        /* the gather's particles: those not owned (a particle without entries is owned), cut
+         * into one share per thread by their entries */
+        const int *off = ps->adj_off;
         int ngl = 0;
         long ent = 0;
         for (int i = 0; i < n; i++)
-            if (!own[i] && br[2 * i + 1] >= 0) {
+            if (!own[i]) {
                 ps->gl[ngl++] = i;
-                ent += (long)(ps->row[i + 1] - ps->row[i]) + (ps->adj_off[i + 1] - ps->adj_off[i]);
+                ent += (long)(row[i + 1] - row[i]) + (off[i + 1] - off[i]);
             }
-        ps->ngl = ngl;
         int *gc = ps->gc, s = 1;
         long acc = 0;
         gc[0] = 0;
         for (int q = 0; q < ngl && s < nt; q++) {
             const int i = ps->gl[q];
-            acc += (long)(ps->row[i + 1] - ps->row[i]) + (ps->adj_off[i + 1] - ps->adj_off[i]);
+            acc += (long)(row[i + 1] - row[i]) + (off[i + 1] - off[i]);
             for (; s < nt && acc * nt >= ent * s; s++) gc[s] = q + 1;
         }
         for (; s <= nt; s++) gc[s] = ngl;
@@ -1857,9 +1858,12 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
             floe_world_error_to(NULL, 0);
             /* every block's buffered entries written: the particles not owned by one part take
              * their forces, each in list order as one thread adds them (pair_apply), a share of
-             * them by entries per thread (par_prepare). After a failure the forces are not read */
+             * them by entries per thread (par_prepare); not after a failure (the blocks a thread
+             * skipped left their flags of an earlier evaluation), the same choice on every thread */
             FLOE_OMP(omp barrier)
-            for (int part = t; part < nt; part += nth)
+            int any_failed = 0;
+            for (int q = 0; q < nt; q++) any_failed |= ps->fail_rc[q] != 0;
+            for (int part = t; part < nt && !any_failed; part += nth)
                 for (int q = ps->gc[part]; q < ps->gc[part + 1]; q++) gather_one(ps, p, ps->gl[q]);
         }
         par_merge_detect(w, nt);

@@ -38,11 +38,10 @@ int floe_nl_set_stride(floe_neighbor_list *nl, int hs) {
     return FLOE_OK;
 }
 
-/* one search thread's entries found, (i, j, sub, img) each, and its tree-query scratch */
-/* a search thread's buffer, 128 bytes apart from the next one's: its count and capacity are
- * written at every entry found, and two threads' in one cache line moved it between the
- * cores at each (the array is 16-byte aligned: 128 keeps each one's fields off the next's
- * lines) */
+/* one search thread's entries found, (i, j, sub, img) each, and its tree-query scratch;
+ * 128 bytes apart from the next thread's: its count is written at every entry found, and two
+ * threads' in one cache line moved it between the cores at each (the array is 16-byte
+ * aligned: 128 keeps each one's fields off the next's lines) */
 struct floe_nl_found {
     int *e; size_t n, cap;
     int *scr; int scap;

@@ -312,11 +312,11 @@ typedef struct floe_rec_sink {
 
 typedef struct floe_par_scratch {
     double *pf; unsigned char *act; size_t pf_cap, act_cap; /* per entry: force on i, torques of i, j */
-    int *gl, ngl; size_t gl_cap;                     /* the particles not owned by one part that have
-                                                       entries (the gather's), in index order, and
-                                                       their cut into the parts' shares by entries:
-                                                       share t is gl[gc[t] .. gc[t+1]) (forces.c
-                                                       par_prepare, with own[]) */
+    int *gl; size_t gl_cap;                          /* the particles not owned by one part (the
+                                                       gather's), in index order, and their cut into
+                                                       the threads' shares by entries: share t is
+                                                       gl[gc[t] .. gc[t+1]) (forces.c par_prepare,
+                                                       with own[]) */
     int *gc; size_t gc_cap;
     int *adj, *adj_off; size_t adj_cap; int adj_np; long adj_gen; /* per particle: the entries it is
                                                        j of, in list order (adj_off: n + 1 offsets) */
