@@ -8,7 +8,14 @@
  *      a walled box under gravity, Hertz-Mindlin with friction, 400 steps;
  *   B. the same spheres only (the sphere path), leapfrog, 400 steps;
  *   C. A again with the particle loops' parts (floe_loop_split: the drift's and the kick's
- *      blocks per thread, cut by measured speed) moved to a random cut after every step.
+ *      blocks per thread, cut by measured speed) moved to a random cut after every step;
+ *   D. B's lattice with 6,000 spheres (a list of several blocks) under a user law that wraps
+ *      Hertz-Mindlin and fails for every contact deeper than 5 % of the deepest that a run
+ *      without failures reaches in 100 steps: the step that fails, its code and its message
+ *      (the first failing contact in list order, as one thread meets it) the same on 2-4
+ *      threads, with failures in several threads' parts at once (the lowest block's error
+ *      wins; no thread gathers the shared particles' forces after a failure). Taking the
+ *      highest failed block's error instead fails it.
  * And floe_loop_split itself: even at first; a thread at twice the seconds per block gets
  * a third of the blocks; a measure within 5 % keeps the cut; a new block count cuts evenly
  * again; every part keeps at least one block.
@@ -17,6 +24,8 @@
 #include "floe.h"
 #include "world_internal.h"
 
+#include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -25,7 +34,7 @@ static double urand(unsigned long long *s) {
     return (double)(*s >> 11) / 9007199254740992.0;
 }
 
-static floe_world *build(int boxes, int leapfrog) {
+static floe_world *build_n(int boxes, int leapfrog, int ns) {
     floe_world_def def = floe_default_world_def();
     def.gravity[2] = -9.81;
     if (leapfrog) def.integrator = FLOE_LEAPFROG;
@@ -42,7 +51,7 @@ static floe_world *build(int boxes, int leapfrog) {
     int gs[3], gb = floe_world_add_geometry(w, floe_box_create(0.0016, 0.0012, 0.001));
     for (int k = 0; k < 3; k++) gs[k] = floe_world_add_geometry(w, floe_sphere_create(0.0005 + 0.0001 * k));
     unsigned long long seed = 12345;
-    const int ns = 1200, nb = boxes ? 60 : 0;
+    const int nb = boxes ? 60 : 0;
     /* a loose lattice with jitter, random velocities */
     int placed = 0;
     for (int c = 0; placed < ns + nb; c++) {
@@ -68,6 +77,8 @@ static floe_world *build(int boxes, int leapfrog) {
     w->par_grain = 64;
     return w;
 }
+
+static floe_world *build(int boxes, int leapfrog) { return build_n(boxes, leapfrog, 1200); }
 
 typedef struct run_out {
     double *state; size_t nstate;
@@ -158,6 +169,96 @@ static __attribute__((unused)) void check_loop_split(void) {
     floe_world_destroy(w);
 }
 
+/* D: a law that fails for contacts deeper than fail_depth, else Hertz-Mindlin's force; with
+ * fail_depth infinite it records the deepest contact of a one-thread run (max_depth) */
+static floe_contact_law *hm_inner;
+static double fail_depth = INFINITY, max_depth;
+static int armed; /* 0 during the prepare's evaluation (the lattice's first overlaps) */
+static long fails_seen; /* failing calls (several threads: counted, not compared) */
+static int failing_force(const floe_contact_law *law, const floe_contact *c, double *hist, floe_contact_result *out) {
+    (void)law;
+    if (armed && c->depth > fail_depth) {
+        __atomic_add_fetch(&fails_seen, 1, __ATOMIC_RELAXED);
+        return FLOE_EINVAL;
+    }
+    if (armed && isinf(fail_depth) && c->depth > max_depth) max_depth = c->depth; /* (one thread) */
+    return hm_inner->klass->force(hm_inner, c, hist, out);
+}
+static void failing_stiffness(const floe_contact_law *law, double r, double m, double d, double *kn, double *cn) {
+    (void)law;
+    hm_inner->klass->stiffness(hm_inner, r, m, d, kn, cn);
+}
+static void failing_tstiffness(const floe_contact_law *law, double r, double m, double d, double *kt, double *ct) {
+    (void)law;
+    hm_inner->klass->tangential_stiffness(hm_inner, r, m, d, kt, ct);
+}
+static void failing_destroy(floe_contact_law *law) { free(law); }
+static floe_contact_law_class failing_class = {1, "failing", 0, failing_force, failing_stiffness, failing_destroy,
+                                               failing_tstiffness, NULL};
+
+/* D's world (6,000 spheres, leapfrog) under the failing law on `threads` threads, stepped
+ * until a step fails (at most `steps`): the failed step (-1: none; -2: the setup failed; -3:
+ * the contact stage never ran threaded), its code and message */
+static __attribute__((unused)) int run_failing(int threads, int steps, char *msg, size_t cap, int *code) {
+    floe_world *w = build_n(0, 1, 6000); /* a list of several blocks from the first step */
+    floe_contact_law *fl = malloc(sizeof *fl);
+    fl->klass = &failing_class;
+    fl->friction = hm_inner->friction;
+    failing_class.history_size = hm_inner->klass->history_size;
+    floe_world_set_law(w, 0, 0, fl);
+    int at = -1;
+    *code = 0;
+    msg[0] = 0;
+    armed = 0;
+    if (floe_world_set_threads(w, threads) || floe_world_prepare(w)) {
+        snprintf(msg, cap, "setup: %s", floe_world_last_error(w));
+        *code = -1;
+        floe_world_destroy(w);
+        return -2;
+    }
+    armed = 1;
+    for (int s = 0; s < steps && at < 0; s++) {
+        const int rc = floe_world_step(w);
+        if (rc) {
+            at = s;
+            *code = rc;
+            snprintf(msg, cap, "%s", floe_world_last_error(w));
+        }
+    }
+    if (threads > 1 && !w->thr) at = -3; /* the contact stage never ran threaded: the case tests nothing */
+    floe_world_destroy(w);
+    return at;
+}
+
+static __attribute__((unused)) void check_failure(void) {
+    floe_material m = {"grain", 2500, 1e7, 0.3};
+    hm_inner = floe_hertz_mindlin_law_create(&m, &m, 0.5, 0.5);
+    char ref[1024], msg[1024];
+    int code_ref, code;
+    fail_depth = INFINITY;
+    max_depth = 0;
+    const int steps = 100;
+    CHECK(run_failing(1, steps, ref, sizeof ref, &code_ref) == -1, "D: without a failure the %d steps run (%s)", steps, ref);
+    CHECK(max_depth > 0, "D: contacts were made (deepest %.3e m)", max_depth);
+    fail_depth = 0.05 * max_depth; /* many contacts go deeper at once: several parts fail */
+    fails_seen = 0;
+    const int at = run_failing(1, steps, ref, sizeof ref, &code_ref);
+    CHECK(at >= 0 && code_ref != 0, "D: one thread: the step fails (at step %d, code %d: %s)", at, code_ref, ref);
+    CHECK(fails_seen == 1, "D: one thread stops at the first failing contact (%ld failing calls)", fails_seen);
+    long most = 0;
+    for (int t = 2; t <= 4; t++) {
+        fails_seen = 0;
+        const int at_t = run_failing(t, steps, msg, sizeof msg, &code);
+        if (fails_seen > most) most = fails_seen;
+        CHECK(at_t == at && code == code_ref && !strcmp(msg, ref),
+              "D: %d threads: fails at step %d with code %d and \"%s\" (one thread: step %d, code %d, \"%s\")", t,
+              at_t, code, msg, at, code_ref, ref);
+    }
+    CHECK(most >= 2, "D: on some thread count more than one part met a failing contact (%ld failing calls at most)", most);
+    printf("D: a failing law: step %d, \"%s\"; the same on 2-4 threads (failing calls at most %ld)\n", at, ref, most);
+    floe_contact_law_destroy(hm_inner);
+}
+
 /* unused without OpenMP (main skips) */
 static __attribute__((unused)) void compare(const char *what, int boxes, int leapfrog, int steps, int skew) {
     run_out ref, o;
@@ -201,6 +302,7 @@ int main(void) {
     compare("spheres, leapfrog", 0, 1, 400, 0);
     compare("spheres and boxes, the particle loops' parts moved at every step", 1, 0, 400, 1);
     check_loop_split();
+    check_failure();
     return check_summary("test_threads");
 #endif
 }
