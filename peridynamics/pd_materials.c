@@ -94,7 +94,7 @@ void floe_pd_par_free(floe_pd_body *b)
 {
     if (!b || !b->par) return;
     floe_pd_par *P = b->par;
-    free(P->roff); free(P->rk); free(P->g); free(P->row); free(P->blk); free(P->blkn); free(P->own); free(P->border);
+    free(P->roff); free(P->rk); free(P->cut); free(P->g); free(P->row); free(P->blk); free(P->blkn); free(P->own); free(P->border);
     free(P->gslot); free(P->bslot); free(P->bsplit);
     free(P);
     b->par = NULL;
@@ -135,6 +135,19 @@ static int pd_row_of(const floe_pd_body *b, int64_t k)
     return lo;
 }
 
+/* the part that holds row r (parts cut[t] <= r's block < cut[t + 1]; an empty part holds none) */
+static int pd_part_of(const int *cut, int nt, int r)
+{
+    const int c = r / FLOE_PD_ROW_BLOCK;
+    int lo = 0, hi = nt - 1;
+    while (lo < hi) {
+        const int mid = lo + (hi - lo + 1) / 2;
+        if (cut[mid] <= c) lo = mid;
+        else hi = mid - 1;
+    }
+    return lo;
+}
+
 /* The buffers of a threaded evaluation on nt threads: the parts, the owned and border
  * points, gs doubles per border bond and rs per point (cut again when the bonds or the
  * thread count changed); NULL when out of memory: the caller then runs the serial loop,
@@ -153,10 +166,12 @@ static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs, int nt)
      * thread handed out dynamically (on bench/pd-impact 1.15-1.25x faster than one part per
      * thread on the dynamic schedule, a breaking region unbalancing them); the fixed parts ran
      * pd-impact's 2-thread steps 1.0-1.25x faster than those (bench/RESULTS.md, "Issue 14,
-     * session 7"): moving a part between the cores cost more than the imbalance */
-    const int G = (nblk + nt - 1) / nt;
+     * session 7"): moving a part between the cores cost more than the imbalance. The parts
+     * are cut at equal bonds, not equal rows (session 36): a row holds its bonds to higher
+     * indices, so the last rows of a body numbered layer by layer hold fewer (pd-impact's
+     * first half of the rows held 6 % more bonds than its second). */
     /* the reverse index (kept only while the parts are cut: its bond list is freed after) */
-    if (!P->roff || P->n != n || P->nbond != nb || (P->part_blocks != G && !P->rk)) {
+    if (!P->roff || P->n != n || P->nbond != nb || (P->nparts != nt && !P->rk)) {
         free(P->roff); /* a failure below leaves the index unbuilt */
         free(P->rk);
         P->roff = P->rk = NULL;
@@ -171,11 +186,23 @@ static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs, int nt)
         P->rk = rk;
         P->n = n;
         P->nbond = nb;
-        P->part_blocks = 0; /* own[] below */
+        P->nparts = 0; /* own[] below */
     }
-    if (P->part_blocks != G) {
-        P->part_blocks = 0; /* until all of it is built */
+    if (P->nparts != nt) {
+        P->nparts = 0; /* until all of it is built */
         if (nb > INT32_MAX) return NULL; /* slots are int32: the serial loop then */
+        int *cut = realloc(P->cut, (size_t)(nt + 1) * sizeof *cut);
+        if (!cut) return NULL;
+        P->cut = cut;
+        /* part t: blocks [cut[t], cut[t + 1]), its first block the one where the bonds of the
+         * blocks before reach t / nt of all */
+        int t = 1;
+        cut[0] = 0;
+        for (int c = 0; c < nblk && t < nt; c++) {
+            const int64_t below = b->off[(c + 1) * FLOE_PD_ROW_BLOCK < n ? (c + 1) * FLOE_PD_ROW_BLOCK : n];
+            while (t < nt && below * nt >= nb * t) cut[t++] = c + 1;
+        }
+        while (t <= nt) cut[t++] = nblk;
         uint8_t *own = realloc(P->own, (size_t)(n > 0 ? n : 1));
         if (own) P->own = own;
         int *bd = own ? realloc(P->border, (size_t)(n > 0 ? n : 1) * sizeof *bd) : NULL;
@@ -188,11 +215,11 @@ static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs, int nt)
         if (!bsplit) return NULL;
         P->bsplit = bsplit;
         P->nborder = 0;
-        const long span = (long)G * FLOE_PD_ROW_BLOCK;
         const int64_t *roff = P->roff, *rk = P->rk;
-        for (int q = 0; q < n; q++) {
+        for (int q = 0; q < n; q++) { /* the rows that add to q: its own and those below it, in order */
             const int64_t e0 = roff[q], e1 = roff[q + 1];
-            own[q] = e0 == e1 || (pd_row_of(b, rk[e0]) / span == q / span && pd_row_of(b, rk[e1 - 1]) / span == q / span);
+            const int pq = pd_part_of(cut, nt, q);
+            own[q] = e0 == e1 || (pd_part_of(cut, nt, pd_row_of(b, rk[e0])) == pq && pd_part_of(cut, nt, pd_row_of(b, rk[e1 - 1])) == pq);
             if (!own[q]) bd[P->nborder++] = q;
         }
         /* the border points' bonds in slots, point by point in the gather's order */
@@ -210,7 +237,7 @@ static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs, int nt)
         }
         bslot[P->nborder] = ns;
         P->nslot = ns;
-        P->part_blocks = G;
+        P->nparts = nt;
         free(P->rk); /* 8 B a bond: the slots took its place */
         P->rk = NULL;
     }
@@ -357,8 +384,10 @@ static inline __attribute__((always_inline)) double pmb_row(floe_pd_body *b, con
             double sck = s_c;
             if (alpha_on) {
                 t = s_c - alpha * s;
-                if (t > s0ni) s0ni = t;
-                if (ownj && t > s0n[j]) s0n[j] = t;
+                /* selects, not branches: once a wave runs through the body the comparisons
+                 * go either way and a branch on them mispredicts (pd-impact 1.2x faster) */
+                s0ni = t > s0ni ? t : s0ni;
+                if (ownj) s0n[j] = t > s0n[j] ? t : s0n[j];
                 sck = s0i < s0[j] ? s0i : s0[j];
             }
             if (s_c > 0 && s > sck) {
@@ -428,7 +457,6 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
                 if (!sm || sm[i] == FLOE_PD_OWNED) b->s0[i] = s0n[i] == -INFINITY ? DBL_MAX : s0n[i];
     } else {
         const uint8_t *own = P->own;
-        const int G = P->part_blocks, nparts = (nblk + G - 1) / G;
         FLOE_OMP(omp parallel num_threads(nt))
         {
             if (alpha_on) {
@@ -437,8 +465,8 @@ static inline double pmb_forces_impl(floe_pd_body *b, const double *x, double *f
                     if (own[q]) s0n[q] = -INFINITY;
             }
             FLOE_OMP(omp for schedule(static))
-            for (int pt = 0; pt < nparts; pt++)
-                for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
+            for (int pt = 0; pt < P->nparts; pt++)
+                for (int c = P->cut[pt]; c < P->cut[pt + 1]; c++) {
                     const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
                     double eb = 0.0;
                     int64_t nbk = 0;
@@ -549,12 +577,11 @@ static double pmb_forces_plastic(floe_pd_body *b, const double *x, double *f)
         }
     } else {
         const uint8_t *own = P->own;
-        const int G = P->part_blocks, nparts = (nblk + G - 1) / G;
         FLOE_OMP(omp parallel num_threads(nt))
         {
             FLOE_OMP(omp for schedule(static))
-            for (int pt = 0; pt < nparts; pt++)
-                for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
+            for (int pt = 0; pt < P->nparts; pt++)
+                for (int c = P->cut[pt]; c < P->cut[pt + 1]; c++) {
                     const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
                     double eb = 0.0;
                     int64_t nbk = 0;
@@ -794,7 +821,6 @@ static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, cons
         return nbroken;
     }
     const uint8_t *own = P->own;
-    const int G = P->part_blocks, nparts = (nblk + G - 1) / G;
     FLOE_OMP(omp parallel num_threads(nt))
     {
         FLOE_OMP(omp for schedule(static))
@@ -804,8 +830,8 @@ static inline int64_t lps_dilatation_impl(floe_pd_body *b, const double *x, cons
                 if (p) p[q] = mi[q] = 0;
             }
         FLOE_OMP(omp for schedule(static))
-        for (int pt = 0; pt < nparts; pt++)
-            for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
+        for (int pt = 0; pt < P->nparts; pt++)
+            for (int c = P->cut[pt]; c < P->cut[pt + 1]; c++) {
                 const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
                 int64_t nbk = 0;
                 for (int i = c * B; i < i1; i++) nbk += lps_dil_row(b, x, i, P->g, P->row, own, P->gslot, per, sm);
@@ -944,12 +970,11 @@ static inline double lps_forces_impl(floe_pd_body *b, const double *x, double *f
         return energy;
     }
     const uint8_t *own = P->own;
-    const int G = P->part_blocks, nparts = (nblk + G - 1) / G;
     FLOE_OMP(omp parallel num_threads(nt))
     {
         FLOE_OMP(omp for schedule(static))
-        for (int pt = 0; pt < nparts; pt++)
-            for (int c = pt * G; c < (pt + 1) * G && c < nblk; c++) {
+        for (int pt = 0; pt < P->nparts; pt++)
+            for (int c = P->cut[pt]; c < P->cut[pt + 1]; c++) {
                 const int i1 = (c + 1) * B < n ? (c + 1) * B : n;
                 double eb = 0.0;
                 for (int i = c * B; i < i1; i++) eb += lps_row(b, x, f, i, kd, P->g, P->row, own, P->gslot, per, sm);

@@ -26,7 +26,8 @@ typedef struct floe_pd_par {
     double *g; size_t g_cap;     /* per border bond: its share of the partner (stride set by the loop) */
     double *row; size_t row_cap; /* per point: its row's sums */
     double *blk; int64_t *blkn; int blk_cap; /* per block of rows: energy, broken bonds */
-    /* parts of part_blocks consecutive blocks of rows, each on one thread in order; own[p]
+    /* nparts parts (one per thread), part t the blocks of rows [cut[t], cut[t + 1]), cut at
+     * equal bonds, each on one thread in order (pd_materials.c pd_par_get); own[p]
      * when every row that adds to p (its own, and those of the bonds whose partner it is)
      * lies in p's part: that thread then adds to p directly, in the serial loop's order, and
      * only the points on the parts' borders go through g, row and the gather */
@@ -36,7 +37,7 @@ typedef struct floe_pd_par {
      * in slots [bslot[e], bslot[e + 1]) in increasing bond index, those of the rows below its
      * own before bsplit[e]; gslot[k] is bond k's slot (-1: its partner is owned) */
     int32_t *gslot; int64_t *bslot, *bsplit, nslot;
-    int part_blocks;
+    int *cut, nparts;
 } floe_pd_par;
 
 /* frees b->par (the bond arrays changed: pd_crack.c, floe_pd_make_periodic; or the body goes) */

@@ -5,7 +5,9 @@
  * neighbour-list rebuilds and the detection statistics must be equal to the last bit
  * (memcmp, tolerance 0):
  *   A. 1,200 spheres of three radii and 60 boxes (the polytope LP, warm starts) settling in
- *      a walled box under gravity, Hertz-Mindlin with friction, 400 steps;
+ *      a walled box under gravity, Hertz-Mindlin with friction, 400 steps; in A-C a body-force
+ *      callback (a drag and a push) as well, called from several threads (checked), its work
+ *      in the ledger;
  *   B. the same spheres only (the sphere path), leapfrog, 400 steps;
  *   C. A again with the particle loops' parts (floe_loop_split: the drift's and the kick's
  *      blocks per thread, cut by measured speed) moved to a random cut after every step;
@@ -28,10 +30,32 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 static double urand(unsigned long long *s) {
     *s = *s * 6364136223846793005ULL + 1442695040888963407ULL;
     return (double)(*s >> 11) / 9007199254740992.0;
+}
+
+/* A-C's body-force callback: a drag on the velocity and the spin, and a push that depends
+ * on the position (its work booked by the ledger per block of particles in block order).
+ * It marks the threads that call it (the threaded path runs it on several at once). */
+static unsigned cb_threads;
+static void swirl_force(const floe_world *w, int i, double t, double f[3], double torque[3], void *user) {
+    (void)t;
+    (void)user;
+    floe_particle_state s;
+    floe_world_get_particle(w, i, &s);
+    for (int a = 0; a < 3; a++) {
+        f[a] = -0.5 * s.mass * s.v[a];
+        torque[a] = -1e-9 * s.w[a];
+    }
+    f[0] += 2e-3 * s.mass * sin(400.0 * s.x[1]);
+#ifdef _OPENMP
+    __atomic_fetch_or(&cb_threads, 1u << (omp_get_thread_num() & 31), __ATOMIC_RELAXED);
+#endif
 }
 
 static floe_world *build_n(int boxes, int leapfrog, int ns) {
@@ -88,12 +112,14 @@ typedef struct run_out {
     int threaded;
     int *list; int npairs; /* the neighbour list's entries (i, j, piece pair) at the end */
     int nl_threads;        /* the threads of its last build's search */
+    int cb_threads;        /* the threads that called the body-force callback */
 } run_out;
 
 static int run(int boxes, int leapfrog, int threads, int steps, run_out *o, int skew) {
     floe_world *w = build(boxes, leapfrog);
     if (!w) return 1;
-    if (floe_world_set_threads(w, threads) || floe_world_prepare(w)) {
+    cb_threads = 0;
+    if (floe_world_set_body_force(w, swirl_force, NULL) || floe_world_set_threads(w, threads) || floe_world_prepare(w)) {
         fprintf(stderr, "%s\n", floe_world_last_error(w));
         floe_world_destroy(w);
         return 1;
@@ -132,6 +158,7 @@ static int run(int boxes, int leapfrog, int threads, int steps, run_out *o, int 
     o->rebuilds = ns.rebuilds;
     floe_world_detect_stats(w, &o->ds);
     o->threaded = w->thr != NULL;
+    o->cb_threads = __builtin_popcount(cb_threads);
     o->npairs = w->nl.npairs;
     o->nl_threads = w->nl.threads;
     o->list = malloc((size_t)(o->npairs ? o->npairs : 1) * 3 * sizeof(int));
@@ -270,6 +297,7 @@ static __attribute__((unused)) void compare(const char *what, int boxes, int lea
         memset(&o, 0, sizeof o);
         CHECK(run(boxes, leapfrog, t, steps, &o, skew) == 0, "%s: %d threads run", what, t);
         CHECK(o.threaded, "%s: %d threads took the threaded path", what, t);
+        CHECK(o.cb_threads > 1, "%s: %d threads: the body-force callback ran on %d of them", what, t, o.cb_threads);
         CHECK(o.nstate == ref.nstate && !memcmp(o.state, ref.state, ref.nstate * sizeof(double)),
               "%s: %d threads: positions, velocities, orientations, momenta, forces, torques bit-identical", what, t);
         CHECK(!memcmp(&o.e, &ref.e, sizeof o.e), "%s: %d threads: energy ledger bit-identical (dissipated %.17g vs %.17g)",
@@ -284,8 +312,8 @@ static __attribute__((unused)) void compare(const char *what, int boxes, int lea
         free(o.state);
         free(o.list);
     }
-    printf("%s: %d contacts after %d steps, dissipated %.6e J, LP evaluations %ld: same bits for 1-4 threads\n", what,
-           ref.ncontacts, steps, ref.e.dissipated, ref.ds.evaluations);
+    printf("%s: %d contacts after %d steps, dissipated %.6e J, body-force work %.6e J, LP evaluations %ld: same bits "
+           "for 1-4 threads\n", what, ref.ncontacts, steps, ref.e.dissipated, ref.e.work_body, ref.ds.evaluations);
     free(ref.state);
     free(ref.list);
 }

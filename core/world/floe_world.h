@@ -126,6 +126,9 @@ int floe_world_add_wall(floe_world *w, const double p[3], const double n[3], int
 /* A prescribed motion for a particle (it becomes kinematic). Set before a world is split
  * over MPI ranks (floe_world_parallel_init): refused after (FLOE_ENOTSUP). */
 int floe_world_set_motion(floe_world *w, int particle, floe_motion_fn fn, void *user);
+/* The body force is called once per free particle and evaluation; with threads on it is
+ * called from several threads at once (docs/parallel.md): it must not keep state without
+ * protecting it, nor read other particles' forces. */
 int floe_world_set_body_force(floe_world *w, floe_body_force_fn fn, void *user);
 
 /* State objects evolved by RK2 (ParticLS eq 21), see floe_state.h. World takes ownership. */

@@ -224,6 +224,33 @@ int floe_world_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact
 
 /* ---- provider "body": gravity, PD body-force regions, the body-force callback (the
  * body forces m b of 000 eq 40, counted once) ---- */
+/* the body-force callback on particles [i0, i1): its forces added, its work over the step
+ * (trapezoid, with the velocities at mid-step: dx = v dt) summed in particle order */
+typedef struct {
+    floe_world *w;
+    floe_particles *p;
+    double t, dt;
+} body_cb_ctx;
+
+static void body_cb_block(void *ctx, int i0, int i1, double *sum) {
+    const body_cb_ctx *c = ctx;
+    floe_world *w = c->w;
+    floe_particles *p = c->p;
+    double wb = 0;
+    for (int i = i0; i < i1; i++) {
+        if (p->motion[i] != FLOE_FREE) continue;
+        double f[3] = {0, 0, 0}, t[3] = {0, 0, 0}, *old = w->fb_old + 6 * i;
+        w->body_force(w, i, c->t, f, t, w->body_force_user);
+        floe_v3_add(p->f + 3 * i, p->f + 3 * i, f);
+        floe_v3_add(p->t + 3 * i, p->t + 3 * i, t);
+        for (int a = 0; a < 3; a++)
+            wb += 0.5 * c->dt * ((f[a] + old[a]) * p->v[3 * i + a] + (t[a] + old[3 + a]) * p->w[3 * i + a]);
+        memcpy(old, f, sizeof f);
+        memcpy(old + 3, t, sizeof t);
+    }
+    *sum = wb;
+}
+
 static int body_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, floe_provider_out *out) {
     (void)pv;
     (void)out;
@@ -256,19 +283,11 @@ static int body_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx
             w->fb_n = n;
         }
         if (floe_world_pp_attach(w, &w->fb_old, &w->fb_n, 6)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-        double wb = 0;
-        for (int i = 0; i < n; i++) {
-            if (p->motion[i] != FLOE_FREE) continue;
-            double f[3] = {0, 0, 0}, t[3] = {0, 0, 0}, *old = w->fb_old + 6 * i;
-            w->body_force(w, i, ctx->time, f, t, w->body_force_user);
-            floe_v3_add(p->f + 3 * i, p->f + 3 * i, f);
-            floe_v3_add(p->t + 3 * i, p->t + 3 * i, t);
-            /* velocities are at mid-step here (dx = v dt): work = (F_old + F_new)/2 . dx */
-            for (int a = 0; a < 3; a++)
-                wb += 0.5 * ctx->dt * ((f[a] + old[a]) * p->v[3 * i + a] + (t[a] + old[3 + a]) * p->w[3 * i + a]);
-            memcpy(old, f, sizeof f);
-            memcpy(old + 3, t, sizeof t);
-        }
+        /* on the world's threads, a block of particles each (the callback is called from
+         * several threads at once, as contact laws are: docs/parallel.md) */
+        body_cb_ctx bc = {w, p, ctx->time, ctx->dt};
+        double wb;
+        if (floe_world_blocks(w, n, 1, body_cb_block, &bc, &wb)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
         if (stepping) w->energy.work_body += wb;
     }
     return FLOE_OK;
@@ -2012,7 +2031,7 @@ static int pd_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx, 
         floe_pd_body *pb = w->pd[b];
         int f0 = w->pd_first[b], np = pb->n;
         double *fold = w->pd_fold + 3 * (size_t)off, *fnew = w->pd_fnew + 3 * (size_t)off;
-        memset(fnew, 0, (size_t)3 * np * sizeof *fnew);
+        floe_world_zero(w, fnew, (size_t)3 * np * sizeof *fnew);
         double e = floe_pd_forces(pb, floe_pd_positions(w, b), fnew);
         /* the forces onto the particles and their work, summed per block of points in block
          * order (the same bits threaded or not) */

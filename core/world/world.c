@@ -248,20 +248,30 @@ int floe_world_blocks(floe_world *w, int n, int nsum, floe_block_fn fn, void *ct
     return FLOE_OK;
 }
 
-void floe_world_copy(const floe_world *w, void *dst, const void *src, size_t bytes) {
-    const size_t grain = (size_t)1 << 20; /* below 2 grains a copy on one thread */
+/* a copy of src (NULL: zeros) into dst on the world's threads, one chunk a thread (below 2
+ * grains on one thread) */
+static void world_fill(const floe_world *w, void *dst, const void *src, size_t bytes, size_t grain) {
     const int nt = bytes >= 2 * grain ? floe_world_threads(w) : 1;
     if (nt <= 1) {
-        memcpy(dst, src, bytes);
+        if (src) memcpy(dst, src, bytes);
+        else memset(dst, 0, bytes);
         return;
     }
     const size_t chunk = ((bytes + (size_t)nt - 1) / (size_t)nt + 63) & ~(size_t)63;
     FLOE_OMP(omp parallel for num_threads(nt) schedule(static))
     for (int t = 0; t < nt; t++) {
         const size_t a = (size_t)t * chunk, b = a + chunk < bytes ? a + chunk : bytes;
-        if (a < b) memcpy((char *)dst + a, (const char *)src + a, b - a);
+        if (a < b && src) memcpy((char *)dst + a, (const char *)src + a, b - a);
+        else if (a < b) memset((char *)dst + a, 0, b - a);
     }
 }
+
+void floe_world_copy(const floe_world *w, void *dst, const void *src, size_t bytes) {
+    world_fill(w, dst, src, bytes, (size_t)1 << 20);
+}
+
+/* zeros: a parallel region (a few microseconds) is worth it from 512 KiB */
+void floe_world_zero(const floe_world *w, void *dst, size_t bytes) { world_fill(w, dst, NULL, bytes, (size_t)1 << 18); }
 
 /* the list's view of the law "none" (floe_neighbor_list.none, .inert): the pairs of
  * materials under it, and the materials whose particles touch nothing in the store (the law

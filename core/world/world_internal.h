@@ -291,6 +291,8 @@ static inline void floe_loop_split_range(const int *cut, int nb, int nt, int par
 }
 /* memcpy on the world's threads (from 2 MiB on: one chunk a thread; the same bytes) */
 void floe_world_copy(const floe_world *w, void *dst, const void *src, size_t bytes);
+/* memset to 0 on the world's threads (from 512 KiB on) */
+void floe_world_zero(const floe_world *w, void *dst, size_t bytes);
 /* threads for a loop over `items` items (1 below the grain or without OpenMP) */
 int floe_world_loop_threads(const floe_world *w, long items);
 /* A particle loop on the world's threads (the forcing providers): fn(ctx, i0, i1, sums) over
