@@ -135,7 +135,14 @@ static int pd_row_of(const floe_pd_body *b, int64_t k)
     return lo;
 }
 
-/* the part that holds row r (parts cut[t] <= r's block < cut[t + 1]; an empty part holds none) */
+/* the bonds of the rows in blocks [0, c) */
+static int64_t pd_bonds_below(const floe_pd_body *b, int c)
+{
+    const int64_t r = (int64_t)c * FLOE_PD_ROW_BLOCK;
+    return b->off[r < b->n ? r : b->n];
+}
+
+/* the part that holds row r (parts cut[t] <= r's block < cut[t + 1]) */
 static int pd_part_of(const int *cut, int nt, int r)
 {
     const int c = r / FLOE_PD_ROW_BLOCK;
@@ -194,15 +201,18 @@ static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs, int nt)
         int *cut = realloc(P->cut, (size_t)(nt + 1) * sizeof *cut);
         if (!cut) return NULL;
         P->cut = cut;
-        /* part t: blocks [cut[t], cut[t + 1]), its first block the one where the bonds of the
-         * blocks before reach t / nt of all */
-        int t = 1;
+        /* part t: blocks [cut[t], cut[t + 1]), cut at the block border nearest to where the
+         * bonds below reach t / nt of all, a block at least each (nt <= nblk: pd_threads) */
         cut[0] = 0;
-        for (int c = 0; c < nblk && t < nt; c++) {
-            const int64_t below = b->off[(c + 1) * FLOE_PD_ROW_BLOCK < n ? (c + 1) * FLOE_PD_ROW_BLOCK : n];
-            while (t < nt && below * nt >= nb * t) cut[t++] = c + 1;
+        for (int t = 1, c = 0; t < nt; t++) {
+            const int64_t aim = nb * t; /* bonds below the border, times nt */
+            while (c < nblk && pd_bonds_below(b, c + 1) * nt < aim) c++;
+            int k = c < nblk && pd_bonds_below(b, c + 1) * nt - aim < aim - pd_bonds_below(b, c) * nt ? c + 1 : c;
+            if (k < cut[t - 1] + 1) k = cut[t - 1] + 1;
+            if (k > nblk - (nt - t)) k = nblk - (nt - t);
+            cut[t] = k;
         }
-        while (t <= nt) cut[t++] = nblk;
+        cut[nt] = nblk;
         uint8_t *own = realloc(P->own, (size_t)(n > 0 ? n : 1));
         if (own) P->own = own;
         int *bd = own ? realloc(P->border, (size_t)(n > 0 ? n : 1) * sizeof *bd) : NULL;
@@ -216,10 +226,11 @@ static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs, int nt)
         P->bsplit = bsplit;
         P->nborder = 0;
         const int64_t *roff = P->roff, *rk = P->rk;
-        for (int q = 0; q < n; q++) { /* the rows that add to q: its own and those below it, in order */
+        for (int q = 0; q < n; q++) { /* the rows that add to q: its own and rows below it, the
+                                         * lowest that of its first bond as partner (the parts
+                                         * are runs of rows: the rows between lie in them too) */
             const int64_t e0 = roff[q], e1 = roff[q + 1];
-            const int pq = pd_part_of(cut, nt, q);
-            own[q] = e0 == e1 || (pd_part_of(cut, nt, pd_row_of(b, rk[e0])) == pq && pd_part_of(cut, nt, pd_row_of(b, rk[e1 - 1])) == pq);
+            own[q] = e0 == e1 || pd_part_of(cut, nt, pd_row_of(b, rk[e0])) == pd_part_of(cut, nt, q);
             if (!own[q]) bd[P->nborder++] = q;
         }
         /* the border points' bonds in slots, point by point in the gather's order */
@@ -229,9 +240,9 @@ static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs, int nt)
             const int q = bd[e];
             bslot[e] = ns;
             bsplit[e] = -1;
-            for (int64_t t = roff[q]; t < roff[q + 1]; t++) {
-                if (bsplit[e] < 0 && rk[t] >= b->off[q]) bsplit[e] = ns;
-                gslot[rk[t]] = (int32_t)ns++;
+            for (int64_t r = roff[q]; r < roff[q + 1]; r++) {
+                if (bsplit[e] < 0 && rk[r] >= b->off[q]) bsplit[e] = ns;
+                gslot[rk[r]] = (int32_t)ns++;
             }
             if (bsplit[e] < 0) bsplit[e] = ns;
         }

@@ -6,8 +6,8 @@
  * (memcmp, tolerance 0):
  *   A. 1,200 spheres of three radii and 60 boxes (the polytope LP, warm starts) settling in
  *      a walled box under gravity, Hertz-Mindlin with friction, 400 steps; in A-C a body-force
- *      callback (a drag and a push) as well, called from several threads (checked), its work
- *      in the ledger;
+ *      callback declared thread-safe (a drag and a push) as well, called from several threads
+ *      (checked), its work in the ledger;
  *   B. the same spheres only (the sphere path), leapfrog, 400 steps;
  *   C. A again with the particle loops' parts (floe_loop_split: the drift's and the kick's
  *      blocks per thread, cut by measured speed) moved to a random cut after every step;
@@ -54,7 +54,8 @@ static void swirl_force(const floe_world *w, int i, double t, double f[3], doubl
     }
     f[0] += 2e-3 * s.mass * sin(400.0 * s.x[1]);
 #ifdef _OPENMP
-    __atomic_fetch_or(&cb_threads, 1u << (omp_get_thread_num() & 31), __ATOMIC_RELAXED);
+    const unsigned bit = 1u << (omp_get_thread_num() & 31);
+    if (!(__atomic_load_n(&cb_threads, __ATOMIC_RELAXED) & bit)) __atomic_fetch_or(&cb_threads, bit, __ATOMIC_RELAXED);
 #endif
 }
 
@@ -119,7 +120,8 @@ static int run(int boxes, int leapfrog, int threads, int steps, run_out *o, int 
     floe_world *w = build(boxes, leapfrog);
     if (!w) return 1;
     cb_threads = 0;
-    if (floe_world_set_body_force(w, swirl_force, NULL) || floe_world_set_threads(w, threads) || floe_world_prepare(w)) {
+    if (floe_world_set_body_force_threaded(w, swirl_force, NULL) || floe_world_set_threads(w, threads) ||
+        floe_world_prepare(w)) {
         fprintf(stderr, "%s\n", floe_world_last_error(w));
         floe_world_destroy(w);
         return 1;

@@ -274,6 +274,42 @@ static void compare(int kind, int steps) {
 }
 #endif
 
+/* the PD rows' parts (pd_materials.c pd_par_get): on 3 and 4 threads each part a run of
+ * whole blocks, at least one, cut at the block border nearest to an equal share of the bonds
+ * (within one block's bonds of it). The 3D block's rows hold fewer bonds toward its end (a
+ * row holds its bonds to higher indices): equal rows would not give equal bonds. */
+static __attribute__((unused)) void check_cut(void) {
+    for (int nt = 3; nt <= 4; nt++) {
+        floe_world *w = pd_world(PMB_3D);
+        int ok = w && !floe_world_set_threads(w, nt) && !floe_world_prepare(w) && !floe_world_step(w);
+        const floe_pd_body *b = ok ? w->pd[0] : NULL;
+        const floe_pd_par *P = b ? b->par : NULL;
+        CHECK(ok && P && P->nparts == nt, "PD parts: %d threads cut %d parts", nt, P ? P->nparts : -1);
+        if (!P || P->nparts != nt) { floe_world_destroy(w); continue; }
+        const int B = FLOE_PD_ROW_BLOCK, nblk = (b->n + B - 1) / B;
+        int64_t blkmax = 0;
+        for (int c = 0; c < nblk; c++) {
+            const int64_t bb = b->off[(c + 1) * B < b->n ? (c + 1) * B : b->n] - b->off[c * B];
+            if (bb > blkmax) blkmax = bb;
+        }
+        int whole = P->cut[0] == 0 && P->cut[nt] == nblk, near = 1;
+        double worst = 0;
+        for (int t = 0; t < nt; t++) {
+            whole &= P->cut[t + 1] >= P->cut[t] + 1;
+            const int r0 = P->cut[t] * B, r1 = P->cut[t + 1] * B < b->n ? P->cut[t + 1] * B : b->n;
+            const double dev = fabs((double)(b->off[r1] - b->off[r0]) - (double)b->nbond / nt);
+            near &= dev <= (double)blkmax;
+            if (dev > worst) worst = dev;
+        }
+        const double even = fabs((double)b->off[nblk / 2 * B] - (double)b->nbond / 2);
+        CHECK(whole && near, "PD parts on %d threads: runs of whole blocks, each within one block's bonds (%lld) of "
+              "an equal share (worst %.0f of %lld bonds)", nt, (long long)blkmax, worst, (long long)b->nbond);
+        if (nt == 3) printf("PD parts: %lld bonds, %d blocks; on 3 threads at most %.0f bonds from an equal share (half "
+                            "the rows hold %.0f more or less than half the bonds)\n", (long long)b->nbond, nblk, worst, even);
+        floe_world_destroy(w);
+    }
+}
+
 int main(void) {
 #ifndef _OPENMP
     floe_world *w = pd_world(PMB);
@@ -291,6 +327,7 @@ int main(void) {
     compare(PLASTIC, 240);
     compare(PMB_RK2, 240);
     compare(PMB_3D, 160);
+    check_cut();
     compare(PMB_CELL, 240);
     compare(LPS_CELL, 240);
     compare(BEAM_2D, 400);

@@ -191,7 +191,7 @@ int main(int argc, char **argv) {
     if (rc) { fprintf(stderr, "add_pd_body: %s\n", floe_world_last_error(w)); return 1; }
     bf_user bfu = {first, n, K_IND * V};
     if (body_force_mode) {
-        floe_world_set_body_force(w, indent_body_force, &bfu);
+        floe_world_set_body_force_threaded(w, indent_body_force, &bfu); /* it reads only */
     } else {
         int g = floe_world_add_geometry(w, floe_sphere_create(RS - Rp));
         floe_particle_def p = floe_default_particle_def();

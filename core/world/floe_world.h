@@ -126,10 +126,12 @@ int floe_world_add_wall(floe_world *w, const double p[3], const double n[3], int
 /* A prescribed motion for a particle (it becomes kinematic). Set before a world is split
  * over MPI ranks (floe_world_parallel_init): refused after (FLOE_ENOTSUP). */
 int floe_world_set_motion(floe_world *w, int particle, floe_motion_fn fn, void *user);
-/* The body force is called once per free particle and evaluation; with threads on it is
- * called from several threads at once (docs/parallel.md): it must not keep state without
- * protecting it, nor read other particles' forces. */
+/* The body force, called once per free particle and evaluation, on one thread, in index
+ * order. The _threaded form declares fn safe to call from several threads at once: with
+ * threads on (from the loop grain's 2,048 particles) the world calls it from its threads, a
+ * block of particles each; its work is then summed per block (docs/api.md). */
 int floe_world_set_body_force(floe_world *w, floe_body_force_fn fn, void *user);
+int floe_world_set_body_force_threaded(floe_world *w, floe_body_force_fn fn, void *user);
 
 /* State objects evolved by RK2 (ParticLS eq 21), see floe_state.h. World takes ownership. */
 typedef struct floe_state floe_state;

@@ -283,11 +283,13 @@ static int body_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx
             w->fb_n = n;
         }
         if (floe_world_pp_attach(w, &w->fb_old, &w->fb_n, 6)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
-        /* on the world's threads, a block of particles each (the callback is called from
-         * several threads at once, as contact laws are: docs/parallel.md) */
+        /* a callback declared thread-safe on the world's threads, a block of particles each
+         * (its work summed per block); else on this one, its work one running sum */
         body_cb_ctx bc = {w, p, ctx->time, ctx->dt};
         double wb;
-        if (floe_world_blocks(w, n, 1, body_cb_block, &bc, &wb)) return floe_world_error(w, FLOE_ENOMEM, "out of memory");
+        if (!w->body_force_threaded) body_cb_block(&bc, 0, n, &wb);
+        else if (floe_world_blocks(w, n, 1, body_cb_block, &bc, &wb))
+            return floe_world_error(w, FLOE_ENOMEM, "out of memory");
         if (stepping) w->energy.work_body += wb;
     }
     return FLOE_OK;

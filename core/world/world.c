@@ -673,12 +673,21 @@ int floe_world_set_motion(floe_world *w, int i, floe_motion_fn fn, void *user) {
     return FLOE_OK;
 }
 
-int floe_world_set_body_force(floe_world *w, floe_body_force_fn fn, void *user) {
-    FLOE_TRY(floe_world_refuse_split(w, "set_body_force"));
+static int set_body_force(floe_world *w, floe_body_force_fn fn, void *user, int threaded, const char *what) {
+    FLOE_TRY(floe_world_refuse_split(w, what));
     w->body_force = fn;
     w->body_force_user = user;
+    w->body_force_threaded = threaded;
     w->prepared = 0;   /* prepare sizes the per-particle callback force (adaptive snapshots) */
     return FLOE_OK;
+}
+
+int floe_world_set_body_force(floe_world *w, floe_body_force_fn fn, void *user) {
+    return set_body_force(w, fn, user, 0, "set_body_force");
+}
+
+int floe_world_set_body_force_threaded(floe_world *w, floe_body_force_fn fn, void *user) {
+    return set_body_force(w, fn, user, 1, "set_body_force_threaded");
 }
 
 int floe_world_add_state(floe_world *w, floe_state *s) {

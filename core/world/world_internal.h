@@ -107,6 +107,7 @@ struct floe_world {
     floe_motion_cb *motions; int nmotions, motions_cap;
     int *motion_idx; int motion_idx_n, motion_idx_cnt; /* particle -> motion callback (world.c) */
     floe_body_force_fn body_force; void *body_force_user;
+    int body_force_threaded; /* floe_world_set_body_force_threaded: called from the threads */
     double *fb_old; int fb_n;   /* last callback force and torque per particle (6n) */
     double *kin_old; int kin_old_n; /* force and torque of kinematic particles at the step start
                                        (6 a particle, kin_old_n rows; a pps row: under MPI it moves
