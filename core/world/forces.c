@@ -257,17 +257,8 @@ static int body_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *ctx
     floe_particles *p = ctx->p;
     const int n = p->n;
     const int stepping = ctx->stepping;
-    const int nt = floe_world_loop_threads(w, n);
-    const double g[3] = {w->def.gravity[0], w->def.gravity[1], w->def.gravity[2]};
-    if (nt > 1) {
-        FLOE_OMP(omp parallel for schedule(static) num_threads(nt))
-        for (int i = 0; i < n; i++)
-            if (p->motion[i] == FLOE_FREE)
-                for (int k = 0; k < 3; k++) p->f[3 * i + k] = p->mass[i] * g[k];
-    } else
-        for (int i = 0; i < n; i++)
-            if (p->motion[i] == FLOE_FREE)
-                for (int k = 0; k < 3; k++) p->f[3 * i + k] = p->mass[i] * g[k];
+    /* gravity, m g on every free particle, was set where the forces were cleared (forces_clear:
+     * this stage is the first) */
     /* PD boundary regions: the external force b V of body-force regions (ParticLS eq 37),
      * its work booked like the body-force callback's (core/world/world.c floe_pd_bc_forces) */
     if (w->npd_bc) {
@@ -2216,18 +2207,28 @@ static int dashpot_accelerations(floe_world *w, const floe_step_ctx *ctx, int *d
  * dashpot_accelerations), then the forces and torques cleared; on the threads, each its even
  * share of the particles, as the integrator's loops (one thread clearing them all pulled
  * every particle's force into its core's caches, for the other thread to pull back) */
+/* The forces at the start of an evaluation: m g on the free particles (gravity, the body
+ * stage's first term; 0 on the others), no torque; the linear dashpots' accelerations of the
+ * last forces kept first (dash). One pass over the store, on the world's threads. */
 static void forces_clear(floe_world *w, int dash) {
     floe_particles *p = &w->p;
     const int n = p->n, B = FLOE_PAR_BLOCK, nb = (n + B - 1) / B, nt = floe_world_loop_threads(w, n);
     double *f = p->f, *t = p->t, *da = w->dash_a;
-    const double *im = p->inv_mass;
+    const double *im = p->inv_mass, *m = p->mass;
+    const uint8_t *mo = p->motion;
+    const double g0 = w->def.gravity[0], g1 = w->def.gravity[1], g2 = w->def.gravity[2];
     FLOE_OMP(omp parallel for schedule(static) num_threads(nt) if (nt > 1))
     for (int b = 0; b < nb; b++) {
         const int i0 = b * B, i1 = i0 + B < n ? i0 + B : n;
         if (dash)
             for (int i = i0; i < i1; i++)
                 for (int a = 0; a < 3; a++) da[3 * i + a] = f[3 * i + a] * im[i];
-        memset(f + 3 * (size_t)i0, 0, (size_t)(i1 - i0) * 3 * sizeof(double));
+        for (int i = i0; i < i1; i++) {
+            const int fr = mo[i] == FLOE_FREE;
+            f[3 * i] = fr ? m[i] * g0 : 0.0;
+            f[3 * i + 1] = fr ? m[i] * g1 : 0.0;
+            f[3 * i + 2] = fr ? m[i] * g2 : 0.0;
+        }
         memset(t + 3 * (size_t)i0, 0, (size_t)(i1 - i0) * 3 * sizeof(double));
     }
 }
