@@ -206,8 +206,9 @@ static floe_pd_par *pd_par_get(floe_pd_body *b, int gs, int rs, int nt)
         cut[0] = 0;
         for (int t = 1, c = 0; t < nt; t++) {
             const int64_t aim = nb * t; /* bonds below the border, times nt */
-            while (c < nblk && pd_bonds_below(b, c + 1) * nt < aim) c++;
-            int k = c < nblk && pd_bonds_below(b, c + 1) * nt - aim < aim - pd_bonds_below(b, c) * nt ? c + 1 : c;
+            /* (the bonds below nblk are all: c stops below it) */
+            while (pd_bonds_below(b, c + 1) * nt < aim) c++;
+            int k = pd_bonds_below(b, c + 1) * nt - aim < aim - pd_bonds_below(b, c) * nt ? c + 1 : c;
             if (k < cut[t - 1] + 1) k = cut[t - 1] + 1;
             if (k > nblk - (nt - t)) k = nblk - (nt - t);
             cut[t] = k;

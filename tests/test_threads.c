@@ -18,6 +18,8 @@
  *      threads, with failures in several threads' parts at once (the lowest block's error
  *      wins; no thread gathers the shared particles' forces after a failure). Taking the
  *      highest failed block's error instead fails it.
+ * A body-force callback set by floe_world_set_body_force (not declared thread-safe) is called
+ * on one thread, in particle order, on 2 threads too.
  * And floe_loop_split itself: even at first; a thread at twice the seconds per block gets
  * a third of the blocks; a measure within 5 % keeps the cut; a new block count cuts evenly
  * again; every part keeps at least one block.
@@ -171,6 +173,34 @@ static int run(int boxes, int leapfrog, int threads, int steps, run_out *o, int 
     }
     floe_world_destroy(w);
     return 0;
+}
+
+/* A callback set by floe_world_set_body_force (not declared thread-safe) on 2 threads: every
+ * call outside a parallel region, each evaluation's calls in particle order (one sequence of
+ * the free particles per evaluation) */
+static long plain_calls, plain_par, plain_drops;
+static int plain_last = -1;
+static void plain_force(const floe_world *w, int i, double t, double f[3], double torque[3], void *user) {
+    (void)w; (void)t; (void)torque; (void)user;
+    plain_calls++;
+#ifdef _OPENMP
+    plain_par += omp_in_parallel() != 0;
+#endif
+    plain_drops += i <= plain_last;
+    plain_last = i;
+    f[2] -= 1e-9;
+}
+
+static __attribute__((unused)) void check_plain_body_force(void) {
+    floe_world *w = build(0, 0);
+    int ok = w && !floe_world_set_body_force(w, plain_force, NULL) && !floe_world_set_threads(w, 2) &&
+             !floe_world_prepare(w);
+    for (int s = 0; ok && s < 20; s++) ok = !floe_world_step(w);
+    const long nfree = 1200; /* the spheres; the walls are fixed */
+    CHECK(ok && plain_calls > 0 && plain_calls % nfree == 0 && plain_par == 0 && plain_drops == plain_calls / nfree - 1,
+          "a plain body force on 2 threads: %ld calls, %ld inside a parallel region, %ld sequences of the %ld free "
+          "particles in order (%ld restarts)", plain_calls, plain_par, plain_calls / nfree, nfree, plain_drops);
+    floe_world_destroy(w);
 }
 
 /* floe_loop_split's cuts (unused without OpenMP) */
@@ -332,6 +362,7 @@ int main(void) {
     compare("spheres, leapfrog", 0, 1, 400, 0);
     compare("spheres and boxes, the particle loops' parts moved at every step", 1, 0, 400, 1);
     check_loop_split();
+    check_plain_body_force();
     check_failure();
     return check_summary("test_threads");
 #endif

@@ -292,18 +292,28 @@ static __attribute__((unused)) void check_cut(void) {
             const int64_t bb = b->off[(c + 1) * B < b->n ? (c + 1) * B : b->n] - b->off[c * B];
             if (bb > blkmax) blkmax = bb;
         }
-        int whole = P->cut[0] == 0 && P->cut[nt] == nblk, near = 1;
+        int whole = P->cut[0] == 0 && P->cut[nt] == nblk, near = 1, nearest = 1;
         double worst = 0;
         for (int t = 0; t < nt; t++) {
             whole &= P->cut[t + 1] >= P->cut[t] + 1;
+            if (t > 0) { /* no border one block up or down (within the clamps) is nearer the share */
+                const int64_t aim = b->nbond * t;
+                int64_t d[3];
+                for (int e = -1; e <= 1; e++) {
+                    const int64_t r = (int64_t)(P->cut[t] + e) * B;
+                    d[e + 1] = llabs(b->off[r < 0 ? 0 : r < b->n ? r : b->n] * nt - aim);
+                }
+                nearest &= (P->cut[t] - 1 <= P->cut[t - 1] || d[1] <= d[0]) && (P->cut[t] + 1 >= P->cut[t + 1] || d[1] <= d[2]);
+            }
             const int r0 = P->cut[t] * B, r1 = P->cut[t + 1] * B < b->n ? P->cut[t + 1] * B : b->n;
             const double dev = fabs((double)(b->off[r1] - b->off[r0]) - (double)b->nbond / nt);
             near &= dev <= (double)blkmax;
             if (dev > worst) worst = dev;
         }
         const double even = fabs((double)b->off[nblk / 2 * B] - (double)b->nbond / 2);
-        CHECK(whole && near, "PD parts on %d threads: runs of whole blocks, each within one block's bonds (%lld) of "
-              "an equal share (worst %.0f of %lld bonds)", nt, (long long)blkmax, worst, (long long)b->nbond);
+        CHECK(whole && near && nearest, "PD parts on %d threads: runs of whole blocks, each within one block's bonds "
+              "(%lld) of an equal share (worst %.0f of %lld bonds), each border the block border nearest its share",
+              nt, (long long)blkmax, worst, (long long)b->nbond);
         if (nt == 3) printf("PD parts: %lld bonds, %d blocks; on 3 threads at most %.0f bonds from an equal share (half "
                             "the rows hold %.0f more or less than half the bonds)\n", (long long)b->nbond, nblk, worst, even);
         floe_world_destroy(w);

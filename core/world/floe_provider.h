@@ -1,7 +1,8 @@
 /* floe_provider.h - force providers and the staged step (issue #11, docs/architecture.md).
  *
- * Everything that puts forces on particles is a provider: body forces (gravity, PD
- * body-force regions, the body-force callback), user providers (floe_world_add_provider,
+ * Everything that puts forces on particles is a provider: body forces (PD body-force
+ * regions, the body-force callback; gravity is set where the forces are cleared, before the
+ * first stage), user providers (floe_world_add_provider,
  * a scene's forces:, e.g. linear_drag in user_providers.c), beam bonds, contacts, PD bonds
  * (later: periodic cells). The world evaluates them in a fixed order through a
  * per-step context (particle_store.h floe_step_ctx: stepping, probe, history step, record),

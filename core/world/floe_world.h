@@ -117,7 +117,7 @@ floe_particle_def floe_default_particle_def(void);
 /* Add a particle; returns its index >= 0, or -error (message in last_error).
  * A world split over MPI ranks (floe_world_parallel_init) is prepared once, before the split:
  * this call and the others that would prepare it again (add_wall, set_particle_geometry,
- * set_motion, set_body_force, set_dt, set_cell, the beam bonds, PD bodies and regions)
+ * set_motion, set_body_force(_threaded), set_dt, set_cell, the beam bonds, PD bodies and regions)
  * return FLOE_ENOTSUP on it (-FLOE_ENOTSUP where an index is returned), changing nothing. */
 int floe_world_add_particle(floe_world *w, const floe_particle_def *d);
 /* Infinite wall: plane through point p with outward normal n (pointing into the domain). */
@@ -129,7 +129,8 @@ int floe_world_set_motion(floe_world *w, int particle, floe_motion_fn fn, void *
 /* The body force, called once per free particle and evaluation, on one thread, in index
  * order. The _threaded form declares fn safe to call from several threads at once: with
  * threads on (from the loop grain's 2,048 particles) the world calls it from its threads, a
- * block of particles each; its work is then summed per block (docs/api.md). */
+ * block of 512 particles each; its work is summed per block, on any thread count
+ * (docs/api.md). */
 int floe_world_set_body_force(floe_world *w, floe_body_force_fn fn, void *user);
 int floe_world_set_body_force_threaded(floe_world *w, floe_body_force_fn fn, void *user);
 

@@ -222,8 +222,9 @@ int floe_world_detect_overlap(floe_world *w, int i, int j, int sub, floe_contact
     return floe_detect_overlap(&ctx, &bi, &bj, sub, NULL, c);
 }
 
-/* ---- provider "body": gravity, PD body-force regions, the body-force callback (the
- * body forces m b of 000 eq 40, counted once) ---- */
+/* ---- provider "body": PD body-force regions, the body-force callback (with gravity, set
+ * where the forces are cleared (forces_clear), the body forces m b of 000 eq 40, counted
+ * once) ---- */
 /* the body-force callback on particles [i0, i1): its forces added, its work over the step
  * (trapezoid, with the velocities at mid-step: dx = v dt) summed in particle order */
 typedef struct {
@@ -2203,13 +2204,12 @@ static int dashpot_accelerations(floe_world *w, const floe_step_ctx *ctx, int *d
     return FLOE_OK;
 }
 
-/* the DEM group's start: the accelerations of the last evaluation into dash_a (dash: from
- * dashpot_accelerations), then the forces and torques cleared; on the threads, each its even
- * share of the particles, as the integrator's loops (one thread clearing them all pulled
- * every particle's force into its core's caches, for the other thread to pull back) */
-/* The forces at the start of an evaluation: m g on the free particles (gravity, the body
- * stage's first term; 0 on the others), no torque; the linear dashpots' accelerations of the
- * last forces kept first (dash). One pass over the store, on the world's threads. */
+/* The DEM group's start: the accelerations of the last evaluation into dash_a (dash: from
+ * dashpot_accelerations), then the forces set to gravity, m g on the free particles and 0 on
+ * the others (the body stage, always the first, assigned it here before), and the torques
+ * cleared. One pass over the store, on the threads, each its even share of the particles, as
+ * the integrator's loops (one thread clearing them all pulled every particle's force into its
+ * core's caches, for the other thread to pull back). */
 static void forces_clear(floe_world *w, int dash) {
     floe_particles *p = &w->p;
     const int n = p->n, B = FLOE_PAR_BLOCK, nb = (n + B - 1) / B, nt = floe_world_loop_threads(w, n);
@@ -2223,11 +2223,12 @@ static void forces_clear(floe_world *w, int dash) {
         if (dash)
             for (int i = i0; i < i1; i++)
                 for (int a = 0; a < 3; a++) da[3 * i + a] = f[3 * i + a] * im[i];
-        for (int i = i0; i < i1; i++) {
+        for (int i = i0; i < i1; i++) { /* (mi: no inf x 0 for a fixed particle's infinite mass) */
             const int fr = mo[i] == FLOE_FREE;
-            f[3 * i] = fr ? m[i] * g0 : 0.0;
-            f[3 * i + 1] = fr ? m[i] * g1 : 0.0;
-            f[3 * i + 2] = fr ? m[i] * g2 : 0.0;
+            const double mi = fr ? m[i] : 0.0;
+            f[3 * i] = fr ? mi * g0 : 0.0;
+            f[3 * i + 1] = fr ? mi * g1 : 0.0;
+            f[3 * i + 2] = fr ? mi * g2 : 0.0;
         }
         memset(t + 3 * (size_t)i0, 0, (size_t)(i1 - i0) * 3 * sizeof(double));
     }

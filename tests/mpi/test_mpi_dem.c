@@ -137,7 +137,8 @@ static void nop_motion(double t, double v[3], double om[3], void *u) { (void)t; 
 /* every re-preparing setter on a split world: refused, named, nothing changed */
 static void refusals(floe_world *w) {
     static const char *name[] = {"set_dt", "add_particle", "add_wall", "set_particle_geometry", "set_body_force",
-                                 "set_motion", "set_cell", "add_beam_bonds", "add_pd_body", "pd_region"};
+                                 "set_motion", "set_cell", "add_beam_bonds", "add_pd_body", "pd_region",
+                                 "set_body_force_threaded"};
     const int n0 = w->p.n, nmot = w->nmotions;
     const double dt0 = w->dt;
     floe_particle_def d = floe_default_particle_def();
@@ -170,6 +171,7 @@ static void refusals(floe_world *w) {
             rc = -floe_world_pd_region(w, 0, &bc);
             break;
         }
+        case 10: rc = floe_world_set_body_force_threaded(w, nop_force, NULL); break;
         }
         char want[96];
         snprintf(want, sizeof want, "%s: the world is split over MPI ranks", name[k]);
