@@ -35,7 +35,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define FLOE_CHECKPOINT_FORMAT 5 /* 5: a random packing's particles numbered in Morton order (a format 4 file would put its particles' states on others); 4: NLST entries of FLOE_HIST_COMPACT or FLOE_MAX_HISTORY doubles, the ledger first; 3: the CELL section holds the PD bonds' virial */
+#define FLOE_CHECKPOINT_FORMAT 6 /* 6: a sphere-wall entry in the bounded particle's row (its history's pair the other way round where the wall's index is lower); 5: a random packing's particles numbered in Morton order (a format 4 file would put its particles' states on others); 4: NLST entries of FLOE_HIST_COMPACT or FLOE_MAX_HISTORY doubles, the ledger first; 3: the CELL section holds the PD bonds' virial */
 
 /* FNV-1a 64-bit hash of n bytes continuing from h (start with FLOE_CHECKPOINT_HASH0) */
 #define FLOE_CHECKPOINT_HASH0 0xcbf29ce484222325ULL

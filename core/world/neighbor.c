@@ -123,9 +123,14 @@ static int push_one(struct floe_nl_found *fd, int i, int j, int sub, int img) {
 static int push_pair(struct floe_nl_found *fd, const floe_neighbor_list *nl, const floe_particles *p, int i, int j,
                      const int n[3]) {
     int img = 0;
-    /* MPI: the pair in global-id order, as in the serial world (a history's sign convention
-     * follows its order) */
-    if (nl->gid ? nl->gid[i] > nl->gid[j] : i > j) {
+    /* A bounded particle and an unbounded one (a wall): the bounded one is i, the entry in its
+     * row whatever the indices (session 36): a wall's entries then lie in its neighbours'
+     * rows, not all in the walls' rows at the list's start when walls are declared first,
+     * so that the threads' parts share those neighbours no more than others
+     * (docs/parallel.md). Else the pair in index order; MPI: in global-id order, as in the
+     * serial world (a history's sign convention follows its order). */
+    const int ui = !isfinite(p->radius[i]), uj = !isfinite(p->radius[j]);
+    if (ui != uj ? ui : nl->gid ? nl->gid[i] > nl->gid[j] : i > j) {
         int t = i; i = j; j = t;
         if (n) img = floe_img_encode(-n[0], -n[1], -n[2]);
     } else if (n) img = floe_img_encode(n[0], n[1], n[2]);

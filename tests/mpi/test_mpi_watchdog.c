@@ -144,7 +144,7 @@ static void compare(int variant, floe_world *(*mk)(void), const char *must) {
 
 int main(int argc, char **argv) {
     mpi_test_init(&argc, &argv);
-    compare(1, build, "the contact of particles 0 and 12 (bodies -1, 0; law pump (test))");
+    compare(1, build, "the contact of particles 12 and 0 (bodies 0, -1; law pump (test))"); /* a wall is j */
     compare(2, build_push, "beyond the ledger (balance error), most of it in particle 12 (body 0)");
     int all = mpi_test_failed("test_mpi_watchdog");
     MPI_Finalize();
