@@ -305,11 +305,18 @@ static int restore_neighbors(floe_world *w, ibuf *r, char *err, size_t errlen) {
         nl->npairs = nl->n_build = 0; /* consistent: the next step rebuilds */
         return floe_error_set(err, errlen, FLOE_EINVAL, "section NLST is short");
     }
-    for (int a = 0; a < np; a++)
+    for (int a = 0; a < np; a++) {
         if (nl->pi[a] < 0 || nl->pi[a] >= w->p.n || nl->pj[a] < 0 || nl->pj[a] >= w->p.n) {
             nl->npairs = nl->n_build = 0;
             return floe_error_set(err, errlen, FLOE_EINVAL, "section NLST: pair %d (%d, %d) out of range", a, nl->pi[a], nl->pj[a]);
         }
+        /* a bounded particle and a wall: the bounded one is i (neighbor.c push_pair) */
+        if (!isfinite(w->p.radius[nl->pi[a]]) && isfinite(w->p.radius[nl->pj[a]])) {
+            nl->npairs = nl->n_build = 0;
+            return floe_error_set(err, errlen, FLOE_EINVAL, "section NLST: pair %d (%d, %d) has the wall first "
+                                  "(a damaged file: format 6 lists the bounded particle first)", a, nl->pi[a], nl->pj[a]);
+        }
+    }
     w->err[0] = 0;
     if (floe_world_hist_layout(w)) /* this world's stride (the same for the scene that wrote it) */
         return floe_error_set(err, errlen, FLOE_ENOMEM, "%s", w->err);

@@ -127,7 +127,8 @@ typedef struct floe_memory_stats {
 } floe_memory_stats;
 int floe_world_memory(const floe_world *w, floe_memory_stats *out);
 
-/* The candidate pairs of the neighbour list (i < j, walls included, a wall always j; pairs excluded by bonds,
+/* The candidate pairs of the neighbour list (i < j, walls included, except that a pair of a bounded particle and a
+ * wall has the bounded particle as i, so i > j where the wall's index is lower; pairs excluded by bonds,
  * PD families and beam bonds, are never listed): sets *pi and *pj to arrays of the returned
  * count (either may be NULL). Valid until the next step or prepare. -FLOE_EINVAL for w NULL.
  * Their number and the rebuilds: floe_world_neighbor_stats below. */

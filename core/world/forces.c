@@ -652,7 +652,8 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
             const int sph = p->kind[i] == FLOE_GEOM_SPHERE ? i : j, pl = sph == i ? j : i;
             r = floe_sphere_plane_contact(p->x + 3 * sph, p->radius[sph], p->x + 3 * pl, p->q + 4 * pl, &c);
             c.i = i; c.j = j;
-            if (r && sph == j) { /* seen from i, as floe_detect swaps the roles back */
+            if (r && sph == j) { /* seen from i, as floe_detect swaps the roles back (defensive: the
+                                  * list holds no wall as i, neighbor.c push_pair) */
                 double t[3];
                 floe_v3_copy(t, c.x1); floe_v3_copy(c.x1, c.x2); floe_v3_copy(c.x2, t);
                 floe_v3_scale(c.n, -1.0);
@@ -1300,8 +1301,9 @@ static __attribute__((noinline)) int sphere_wall_pair(floe_world *w, const floe_
                             law->klass == &floe_linear_law_class);
             b->law = law;
             b->k[q] = k; b->i[q] = i; b->j[q] = j;
-            /* the geometry seen from i: n from the sphere into the wall, flipped when the
-             * wall is i (as contact_pair swaps the roles back) */
+            /* the geometry seen from i: n from the sphere into the wall (flipped were the wall
+             * i, as contact_pair swaps the roles back; defensive: the list holds no wall as i,
+             * neighbor.c push_pair) */
             for (int a = 0; a < 3; a++) {
                 b->wn[a][q] = sph == i ? c.n[a] : -c.n[a];
                 b->wpt[a][q] = c.point[a];

@@ -29,8 +29,9 @@ typedef floe_contact_info floe_contact_rec;
 typedef struct floe_neighbor_list {
     floe_kdtree *tree;       /* during a build's search only (NULL otherwise) */
     int npairs, cap;
-    int *pi, *pj;            /* candidate pairs, i < j, walls included, but a wall is j of a
-                              * bounded particle whatever their indices (neighbor.c push_pair) */
+    int *pi, *pj;            /* candidate pairs, i < j (MPI: by global id), walls included,
+                              * except a bounded particle and a wall: the bounded one is i, so
+                              * i > j where the wall's index is lower (neighbor.c push_pair) */
     int *sub;                /* piece pair FLOE_SUB(a, b) of compound bodies (0 otherwise) */
     int *img;                /* periodic cell: image code of j (floe_img_encode); NULL without */
     const floe_cell_state *cell; /* the world's cell (NULL: none), set before a build */
