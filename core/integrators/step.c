@@ -458,6 +458,9 @@ static inline int run_len(const unsigned char *MO, const unsigned char *iso, int
 typedef struct drift_args {
     double k1, dt, h, g[3];
     const double *xb; /* positions at the list build (NULL: none) */
+    int clear;        /* the free particles' forces to m g and torques to 0 once read (the force
+                         evaluation's clearing of them, forces_clear: w->drift_cleared) */
+    double *da;       /* clear: their accelerations f / m into dash_a first (NULL: not wanted) */
 } drift_args;
 /* drift_block's isotropic case for a run of IL particles, in lanes (the arrays from the run's
  * first particle): the body-force work, the squared displacement since the list build (XB;
@@ -469,10 +472,10 @@ typedef struct drift_args {
  * -ffp-contract=off), which drift_lanes_rot is kept from doing (no-tree-slp-vectorize): a
  * turning particle's orientation may differ in the last digit from before (session 14). */
 static inline __attribute__((always_inline)) void drift_lanes_body(
-    double *restrict X, double *restrict V, double *restrict W, double *restrict LL, const double *restrict F,
-    const double *restrict T, const double *restrict IM, const double *restrict M, const double *restrict II,
+    double *restrict X, double *restrict V, double *restrict W, double *restrict LL, double *restrict F,
+    double *restrict T, const double *restrict IM, const double *restrict M, const double *restrict II,
     const double *restrict R, const double *restrict XB, const drift_args *a, double *restrict WB,
-    double *restrict D2, int *restrict FB, double *restrict Q, const int rot) {
+    double *restrict D2, int *restrict FB, double *restrict Q, const int rot, double *restrict DA) {
     const double k1 = a->k1, dt = a->dt, h = a->h, g0 = a->g[0], g1 = a->g[1], g2 = a->g[2];
     double TH[3][IL];
     for (int q = 0; q < IL; q++) {
@@ -493,6 +496,14 @@ static inline __attribute__((always_inline)) void drift_lanes_body(
         TH[0][q] = h * (L0 * ii); /* rotate_drift_iso's theta = h omega */
         TH[1][q] = h * (L1 * ii);
         TH[2][q] = h * (L2 * ii);
+    }
+    if (a->clear) { /* as forces_clear: the same operations (the lines are in the cache now) */
+        if (DA)
+            for (int q = 0; q < 3 * IL; q++) DA[q] = F[q] * IM[q / 3];
+        for (int q = 0; q < IL; q++) {
+            F[3 * q] = M[q] * g0; F[3 * q + 1] = M[q] * g1; F[3 * q + 2] = M[q] * g2;
+            T[3 * q] = T[3 * q + 1] = T[3 * q + 2] = 0.0;
+        }
     }
     if (rot) {
         /* the orientations into arrays by component, advanced, and back: three loops the
@@ -526,12 +537,12 @@ static inline __attribute__((always_inline)) void drift_lanes_body(
 }
 /* the two cases each in its own function (a test of Q inside the loop kept it scalar) */
 #define DRIFT_LANES_ARGS                                                                                             \
-    double *restrict X, double *restrict V, double *restrict W, double *restrict LL, const double *restrict F,    \
-        const double *restrict T, const double *restrict IM, const double *restrict M, const double *restrict II, \
+    double *restrict X, double *restrict V, double *restrict W, double *restrict LL, double *restrict F,          \
+        double *restrict T, const double *restrict IM, const double *restrict M, const double *restrict II,       \
         const double *restrict R, const double *restrict XB, const drift_args *a, double *restrict WB,            \
-        double *restrict D2, int *restrict FB
+        double *restrict D2, int *restrict FB, double *restrict DA
 static __attribute__((noinline)) void drift_lanes(DRIFT_LANES_ARGS) {
-    drift_lanes_body(X, V, W, LL, F, T, IM, M, II, R, XB, a, WB, D2, FB, NULL, 0);
+    drift_lanes_body(X, V, W, LL, F, T, IM, M, II, R, XB, a, WB, D2, FB, NULL, 0, DA);
 }
 #if defined(__clang__) /* GCC's optimize attribute; clang ignores it with a warning */
 #define FLOE_NO_SLP
@@ -539,7 +550,7 @@ static __attribute__((noinline)) void drift_lanes(DRIFT_LANES_ARGS) {
 #define FLOE_NO_SLP , optimize("no-tree-slp-vectorize")
 #endif
 static __attribute__((noinline FLOE_NO_SLP)) void drift_lanes_rot(DRIFT_LANES_ARGS, double *restrict Q) {
-    drift_lanes_body(X, V, W, LL, F, T, IM, M, II, R, XB, a, WB, D2, FB, Q, 1);
+    drift_lanes_body(X, V, W, LL, F, T, IM, M, II, R, XB, a, WB, D2, FB, Q, 1, DA);
 }
 #undef DRIFT_LANES_ARGS
 
@@ -621,7 +632,8 @@ static double drift_block(floe_particles *p, const drift_args *a, int i0, int i1
     /* restrict: within this block nothing else writes what they point to */
     double *restrict X = p->x, *restrict V = p->v, *restrict Q = p->q, *restrict W = p->w, *restrict LL = p->L;
     const unsigned char *restrict MO = p->motion, *restrict iso = p->iso;
-    const double *restrict F = p->f, *restrict T = p->t, *restrict IM = p->inv_mass, *restrict M = p->mass;
+    double *restrict F = p->f, *restrict T = p->t, *restrict DA = a->da;
+    const double *restrict IM = p->inv_mass, *restrict M = p->mass;
     const double *restrict II = p->inv_iso, *restrict XB = a->xb, *restrict R = p->radius;
     const double k1 = a->k1, dt = a->dt, h = a->h, g0 = a->g[0], g1 = a->g[1], g2 = a->g[2];
     double wb = 0, md = *maxd2; /* locals: kept in registers */
@@ -641,11 +653,13 @@ static double drift_block(floe_particles *p, const drift_args *a, int i0, int i1
             int FB[IL];
             const size_t o3 = 3 * (size_t)i;
             const double *xb = XB ? XB + o3 : NULL;
+            double *da = DA ? DA + o3 : NULL;
             if (iso[i] == 1)
                 drift_lanes_rot(X + o3, V + o3, W + o3, LL + o3, F + o3, T + o3, IM + i, M + i, II + i, R + i, xb, a, WB, D2,
-                                FB, Q + 4 * (size_t)i);
+                                FB, da, Q + 4 * (size_t)i);
             else
-                drift_lanes(X + o3, V + o3, W + o3, LL + o3, F + o3, T + o3, IM + i, M + i, II + i, R + i, xb, a, WB, D2, FB);
+                drift_lanes(X + o3, V + o3, W + o3, LL + o3, F + o3, T + o3, IM + i, M + i, II + i, R + i, xb, a, WB, D2, FB,
+                            da);
             for (int q = 0; q < IL; q++) {
                 kb |= FB[q];
                 if (XB && D2[q] > md) md = D2[q]; /* note_disp */
@@ -668,6 +682,13 @@ static double drift_block(floe_particles *p, const drift_args *a, int i0, int i1
         /* rotation: L by the half kick, then the orientation over dt (the isotropic fast
          * path q <- exp(dt omega / 2) q without trig, or the midpoint rule) */
         floe_v3_axpy(LL + 3 * i, k1, T + 3 * i);
+        if (a->clear) { /* as forces_clear */
+            for (int k = 0; k < 3; k++) {
+                if (DA) DA[3 * i + k] = F[3 * i + k] * im;
+                T[3 * i + k] = 0.0;
+            }
+            F[3 * i] = M[i] * g0; F[3 * i + 1] = M[i] * g1; F[3 * i + 2] = M[i] * g2;
+        }
         if (iso[i] == 2) /* a round particle whose orientation nothing reads: omega only */
             for (int k = 0; k < 3; k++) W[3 * i + k] = LL[3 * i + k] * II[i];
         else if (iso[i]) rotate_drift_iso(Q + 4 * i, LL + 3 * i, W + 3 * i, II[i], h);
@@ -839,10 +860,17 @@ int step_verlet(floe_world *w) {
             w->kinb_cap = (size_t)nb;
         }
     }
+    /* the drift clears the free particles' forces as it reads them (forces_clear's work for
+     * them, while their lines are in the cache): not where something between the drift and
+     * the force evaluation may read them or change masses (state objects), nor where the
+     * evaluation clears a decomposed store (MPI: migration and ghosts); with a linear dashpot
+     * once its buffer has room (the evaluation takes f / m first) */
+    const int dash = floe_world_dash_next(w);
+    const int fuse = !w->par && !w->nstates && (!dash || w->dash_cap >= 3 * (size_t)n);
     /* 1. first half kick + drift (eq 22), rotation by the midpoint rule (eq 23); then the
      * kinematic particles at their prescribed velocity */
     if (!pre) {
-        const drift_args da = {k1, dt, h, {g0, g1, g2}, have_xb ? xb : NULL};
+        const drift_args da = {k1, dt, h, {g0, g1, g2}, have_xb ? xb : NULL, fuse, fuse && dash ? w->dash_a : NULL};
         if (nt > 1) {
             /* the threads' parts by their measured speeds (floe_loop_split; NULL: evenly) */
             const int *cut = floe_loop_split_cuts(w, nt, nb);
@@ -915,7 +943,10 @@ int step_verlet(floe_world *w) {
      * boundary work, its velocity) is this rank's now (a rank without one at the drift
      * skipped it, and its work was lost from the ledger) */
     if (w->par) kin = 1;
-    FLOE_TRY(forces_advancing(w));
+    w->drift_cleared = fuse;
+    const int frc = forces_advancing(w);
+    w->drift_cleared = 0;
+    FLOE_TRY(frc);
     /* 4. second half kick (leapfrog: none; its kinetic energy is that of the synchronised
      * velocity v_{n+1/2} + dt/2 a_{n+1}) */
     double kt = 0, kr = 0, wbound = 0, sh_iso = 0, sh = 0;

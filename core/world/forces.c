@@ -2190,12 +2190,20 @@ int floe_world_dash_reserve(floe_world *w) {
     return FLOE_OK;
 }
 
-static int dashpot_accelerations(floe_world *w, const floe_step_ctx *ctx, int *dash) {
-    const floe_particles *p = &w->p;
-    *dash = 0;
+/* a law with a linear dashpot asks for the accelerations (floe_contact.an_ext) */
+static int dash_wanted(const floe_world *w) {
     int want = 0;
     for (int k = 0; k < w->nmats * w->nmats && !want; k++)
         want = w->laws[k] && floe_contact_law_info(w->laws[k]).linear_gn > 0;
+    return want;
+}
+
+int floe_world_dash_next(const floe_world *w) { return dash_wanted(w) && !(w->dash_keep && w->dash_on); }
+
+static int dashpot_accelerations(floe_world *w, const floe_step_ctx *ctx, int *dash) {
+    const floe_particles *p = &w->p;
+    *dash = 0;
+    const int want = dash_wanted(w);
     const int keep = w->dash_keep && w->dash_on;
     w->dash_keep = ctx->probe;
     w->dash_on = 0;
@@ -2211,7 +2219,9 @@ static int dashpot_accelerations(floe_world *w, const floe_step_ctx *ctx, int *d
  * the others (the body stage, always the first, assigned it here before), and the torques
  * cleared. One pass over the store, on the threads, each its even share of the particles, as
  * the integrator's loops (one thread clearing them all pulled every particle's force into its
- * core's caches, for the other thread to pull back). */
+ * core's caches, for the other thread to pull back). After velocity Verlet's drift, which did
+ * this for the free particles as it read their forces (w->drift_cleared, step.c), the pass sees
+ * to the others alone: a scan of the motion bytes, on one thread. */
 static void forces_clear(floe_world *w, int dash) {
     floe_particles *p = &w->p;
     const int n = p->n, B = FLOE_PAR_BLOCK, nb = (n + B - 1) / B, nt = floe_world_loop_threads(w, n);
@@ -2219,6 +2229,17 @@ static void forces_clear(floe_world *w, int dash) {
     const double *im = p->inv_mass, *m = p->mass;
     const uint8_t *mo = p->motion;
     const double g0 = w->def.gravity[0], g1 = w->def.gravity[1], g2 = w->def.gravity[2];
+    if (w->drift_cleared) {
+        w->drift_cleared = 0;
+        for (int i = 0; i < n; i++) {
+            if (mo[i] == FLOE_FREE) continue;
+            for (int a = 0; a < 3; a++) {
+                if (dash) da[3 * i + a] = f[3 * i + a] * im[i];
+                f[3 * i + a] = t[3 * i + a] = 0.0;
+            }
+        }
+        return;
+    }
     FLOE_OMP(omp parallel for schedule(static) num_threads(nt) if (nt > 1))
     for (int b = 0; b < nb; b++) {
         const int i0 = b * B, i1 = i0 + B < n ? i0 + B : n;

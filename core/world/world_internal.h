@@ -191,6 +191,10 @@ struct floe_world {
                                    linear dashpot asks for it (forces.c, floe_contact.an_ext) */
     int dash_on;              /* dash_a holds this evaluation's copy */
     int dash_keep;            /* the last evaluation was an RK2 probe: keep its copy */
+    int drift_cleared;        /* velocity Verlet's drift set the free particles' forces to m g and
+                                 their torques to 0 (and their dash_a first, when the evaluation
+                                 takes them): forces_clear sees to the others alone; set for the
+                                 step's force evaluation only (step.c, forces.c) */
     struct floe_snapshot *snap; /* adaptive: the state at the start of the trial step (owned by
                                    the controller, core/integrators/adaptive.c; freed by
                                    floe_world_destroy through snap_free) */
@@ -436,6 +440,8 @@ void floe_world_install_exclusion(floe_world *w);
 
 /* dash_a sized for every particle here (3 p.n doubles; forces.c); FLOE_ENOMEM */
 int floe_world_dash_reserve(floe_world *w);
+/* 1 when the next force evaluation (not an RK2 probe) copies the accelerations into dash_a */
+int floe_world_dash_next(const floe_world *w);
 
 int floe_world_error(floe_world *w, int code, const char *fmt, ...)
 #if defined(__GNUC__)
