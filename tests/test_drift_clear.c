@@ -3,14 +3,17 @@
  * then clears only the fixed and kinematic particles (core/world/forces.c forces_clear). A
  * world with a state object (a no-op one here) keeps the full clearing pass, so two worlds
  * that differ by that state alone must step to the same bits:
- *   a bed of 300 spheres pressed together on a fixed floor under gravity, beside a fixed sphere and a
- *   kinematic sphere driven through the bed, the floor declared before or after the spheres;
+ *   a bed of 300 particles pressed together on a fixed floor under gravity (spheres, a few
+ *   boxes among them), beside a fixed sphere and a kinematic sphere driven through the bed,
+ *   the floor declared before or after them; the spheres' orientations left alone (the
+ *   drift's lanes without them) or integrated (FLOE_ORIENT_ALWAYS: the lanes with them);
  *   Hertz-Mindlin (no dashpot accelerations) and a linear viscoelastic law (the drift also
  *   copies f / m for the dashpot, floe_contact.an_ext); velocity Verlet and leapfrog; one
  *   thread and two (the drift's and the contact stage's threaded loops).
  * Every 25 steps of 300: positions, velocities, angular velocities, forces and torques of
  * every particle (the fixed and kinematic ones included) the same bytes, and the energy
- * ledger's terms equal. */
+ * ledger's terms equal; the first world's drift took the clearing at every step, the
+ * second's at none. */
 #include "check.h"
 #include "floe.h"
 #include "world_internal.h"
@@ -46,7 +49,7 @@ static double urand(unsigned *s) {
     return ((*s >> 8) & 0xffffff) / (double)0x1000000;
 }
 
-static floe_world *build(int law, int integrator, int state, int floor_first, int nt) {
+static floe_world *build(int law, int integrator, int state, int floor_first, int orient, int nt) {
     const double R = 1e-3;
     floe_world_def d = floe_default_world_def();
     d.integrator = integrator;
@@ -60,10 +63,11 @@ static floe_world *build(int law, int integrator, int state, int floor_first, in
     const double o[3] = {0, 0, 0}, nz[3] = {0, 0, 1};
     if (floor_first) floe_world_add_wall(w, o, nz, mi, FLOE_FIXED);
     const int geo = floe_world_add_geometry(w, floe_sphere_create(R));
+    const int box = floe_world_add_geometry(w, floe_box_create(1.4 * R, 1.2 * R, 1.0 * R));
     unsigned seed = 7;
     for (int k = 0; k < 300; k++) {
         floe_particle_def p = floe_default_particle_def();
-        p.geometry = geo;
+        p.geometry = k % 37 == 5 ? box : geo; /* boxes: the drift's scalar path, turning bodies */
         p.material = mi;
         /* a lattice pressed together (overlaps of about 1 % of the radius) on the floor */
         floe_v3_set(p.x, 1.98 * R * (k % 10) + 0.01 * R * urand(&seed), 1.98 * R * ((k / 10) % 10) + 0.01 * R * urand(&seed),
@@ -79,16 +83,19 @@ static floe_world *build(int law, int integrator, int state, int floor_first, in
         s->klass = &noop_class;
         floe_world_add_state(w, s);
     }
+    if (orient) floe_world_set_orientation(w, FLOE_ORIENT_ALWAYS);
     w->par_grain = 64; /* threads for 300 particles */
-    if (nt > 1 && floe_world_set_threads(w, nt) != FLOE_OK) floe_world_set_threads(w, 1);
+    if (floe_world_set_threads(w, nt) != FLOE_OK) floe_world_set_threads(w, 1);
     floe_world_set_dt(w, 2e-6, 0);
     return w;
 }
 
 static int same(const double *a, const double *b, int n) { return memcmp(a, b, (size_t)n * sizeof *a) == 0; }
 
-static void compare(int law, int integrator, int floor_first, int nt) {
-    floe_world *A = build(law, integrator, 0, floor_first, nt), *B = build(law, integrator, 1, floor_first, nt);
+static void compare(int law, int integrator, int floor_first, int orient, int nt) {
+    floe_world *A = build(law, integrator, 0, floor_first, orient, nt),
+               *B = build(law, integrator, 1, floor_first, orient, nt);
+    nt = floe_world_threads(A);
     CHECK(floe_world_prepare(A) == FLOE_OK && floe_world_prepare(B) == FLOE_OK, "prepare: %s / %s",
           floe_world_last_error(A), floe_world_last_error(B));
     const char *name = integrator == FLOE_LEAPFROG ? "leapfrog" : "velocity Verlet";
@@ -109,8 +116,8 @@ static void compare(int law, int integrator, int floor_first, int nt) {
         const int le = ea.kinetic_trans == eb.kinetic_trans && ea.kinetic_rot == eb.kinetic_rot &&
                        ea.elastic == eb.elastic && ea.work_body == eb.work_body &&
                        ea.work_boundary == eb.work_boundary && ea.dissipated == eb.dissipated;
-        CHECK(eq && le, "law %d, %s, floor %s, %d thread(s): the same bits at step %d (state %d, ledger %d)", law,
-              name, floor_first ? "first" : "last", nt, s, eq, le);
+        CHECK(eq && le, "law %d, %s, floor %s, orientations %d, %d thread(s): the same bits at step %d (state %d, "
+              "ledger %d)", law, name, floor_first ? "first" : "last", orient, nt, s, eq, le);
         ok = eq && le;
         steps = s;
         contacts = floe_world_contact_count(A);
@@ -120,8 +127,10 @@ static void compare(int law, int integrator, int floor_first, int nt) {
     /* the comparison means something: contacts, and the floor carries part of the bed */
     CHECK(contacts > 300 && fabs(fwall) > 0, "law %d, %s: %d contacts, floor force %.3e N at step %d", law, name, contacts,
           fwall, steps);
-    printf("  law %d, %s, floor %s, %d thread(s): %d steps the same bits, %d contacts, floor force %.3e N\n", law, name,
-           floor_first ? "first" : "last", nt, steps, contacts, fwall);
+    CHECK(A->st_drift_clears == steps && B->st_drift_clears == 0, "law %d, %s: the drift cleared the forces at %ld "
+          "of %d steps (with a state object: %ld)", law, name, A->st_drift_clears, steps, B->st_drift_clears);
+    printf("  law %d, %s, floor %s, orientations %d, %d thread(s): %d steps the same bits, %d contacts, floor force "
+           "%.3e N\n", law, name, floor_first ? "first" : "last", orient, nt, steps, contacts, fwall);
     floe_world_destroy(A);
     floe_world_destroy(B);
 }
@@ -130,6 +139,6 @@ int main(void) {
     for (int law = 0; law < 2; law++)
         for (int lf = 0; lf < 2; lf++)
             for (int ff = 0; ff < 2; ff++)
-                for (int nt = 1; nt <= 2; nt++) compare(law, lf ? FLOE_LEAPFROG : FLOE_VELOCITY_VERLET, ff, nt);
+                for (int nt = 1; nt <= 2; nt++) compare(law, lf ? FLOE_LEAPFROG : FLOE_VELOCITY_VERLET, ff, ff, nt);
     return check_summary("test_drift_clear");
 }

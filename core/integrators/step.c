@@ -499,7 +499,8 @@ static inline __attribute__((always_inline)) void drift_lanes_body(
     }
     if (a->clear) { /* as forces_clear: the same operations (the lines are in the cache now) */
         if (DA)
-            for (int q = 0; q < 3 * IL; q++) DA[q] = F[q] * IM[q / 3];
+            for (int q = 0; q < IL; q++)
+                for (int k = 0; k < 3; k++) DA[3 * q + k] = F[3 * q + k] * IM[q];
         for (int q = 0; q < IL; q++) {
             F[3 * q] = M[q] * g0; F[3 * q + 1] = M[q] * g1; F[3 * q + 2] = M[q] * g2;
             T[3 * q] = T[3 * q + 1] = T[3 * q + 2] = 0.0;
@@ -864,9 +865,12 @@ int step_verlet(floe_world *w) {
      * them, while their lines are in the cache): not where something between the drift and
      * the force evaluation may read them or change masses (state objects), nor where the
      * evaluation clears a decomposed store (MPI: migration and ghosts); with a linear dashpot
-     * once its buffer has room (the evaluation takes f / m first) */
+     * once its buffer has room (the evaluation takes f / m first). Between the two, a free
+     * particle's force reads m g and its torque 0 (a kinematic particle's motion callback, a
+     * provider's exclusion at a rebuild; a step that fails there leaves them so, docs/api.md) */
     const int dash = floe_world_dash_next(w);
     const int fuse = !w->par && !w->nstates && (!dash || w->dash_cap >= 3 * (size_t)n);
+    w->st_drift_clears += fuse;
     /* 1. first half kick + drift (eq 22), rotation by the midpoint rule (eq 23); then the
      * kinematic particles at their prescribed velocity */
     if (!pre) {

@@ -414,18 +414,21 @@ static uint64_t entry_hash(uint64_t key, int sub, int img) {
     return mix(key ^ ((uint64_t)(uint32_t)sub * 0x9E3779B97F4A7C15ULL) ^ ((uint64_t)(uint32_t)img << 17));
 }
 
-/* the list's entries strictly in order (i, j, piece pair, image), as nl_collect leaves them */
-static int nl_sorted(const floe_neighbor_list *nl) {
+/* the list's entries strictly in order (i, j, piece pair, image), as nl_collect leaves them
+ * (nt threads: each a run of the entries, every one compared with the one before it) */
+static int nl_sorted(const floe_neighbor_list *nl, int nt) {
     const int *pi = nl->pi, *pj = nl->pj, *sub = nl->sub, *img = nl->img;
+    int ok = 1;
+    FLOE_OMP(omp parallel for schedule(static) num_threads(nt) reduction(&: ok) if (nt > 1))
     for (int k = 1; k < nl->npairs; k++) {
         if (pi[k - 1] != pi[k]) {
-            if (pi[k - 1] > pi[k]) return 0;
+            ok &= pi[k - 1] < pi[k];
             continue;
         }
         const int a[3] = {pj[k - 1], sub[k - 1], img ? img[k - 1] : 0}, b[3] = {pj[k], sub[k], img ? img[k] : 0};
-        if (!entry_less(a, b)) return 0;
+        ok &= entry_less(a, b);
     }
-    return nl->npairs == 0 || pi[0] >= 0;
+    return ok && (nl->npairs == 0 || pi[0] >= 0);
 }
 
 /* Rows by a counting sort on i, each row by insertion on (j, piece pair, image), entry_less
@@ -525,19 +528,24 @@ static inline void nl_move_one(floe_neighbor_list *nl, int k, int s, int warm) {
  * down has written when they go in increasing k, nor one moving up (src[k] < k) in decreasing
  * k, and neither kind reads what the other writes; the new entries without history last.
  * warm_old: the old warm starts are kept (else every new one is NaN) */
-static void nl_move_history(floe_neighbor_list *nl, const int *src, int np, int warm_old) {
+static void nl_move_history(floe_neighbor_list *nl, const int *src, int np, int warm_old, int nt) {
     const int W = FLOE_DETECT_WARM, H = nl->hs;
     for (int k = 0; k < np; k++)
         if (src[k] > k) nl_move_one(nl, k, src[k], warm_old);
     for (int k = np - 1; k >= 0; k--)
         if (src[k] >= 0 && src[k] < k) nl_move_one(nl, k, src[k], warm_old);
+    /* every move done: each new entry's slot is its own (threads: runs of entries) */
+    double *hist = nl->hist, *warm = nl->warm;
+    unsigned char *touching = nl->touching;
+    const int uw = nl->use_warm;
+    FLOE_OMP(omp parallel for schedule(static) num_threads(nt) if (nt > 1))
     for (int k = 0; k < np; k++) {
         if (src[k] < 0) {
-            memset(nl->hist + (size_t)k * H, 0, H * sizeof(double));
-            nl->touching[k] = 0;
+            for (int q = 0; q < H; q++) hist[(size_t)k * H + q] = 0.0;
+            touching[k] = 0;
         }
-        if (nl->use_warm && (src[k] < 0 || !warm_old))
-            for (int q = 0; q < W; q++) nl->warm[(size_t)k * W + q] = NAN;
+        if (uw && (src[k] < 0 || !warm_old))
+            for (int q = 0; q < W; q++) warm[(size_t)k * W + q] = NAN;
     }
 }
 
@@ -564,7 +572,10 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
      * core/parallel hist_import) goes through a hash of its entries */
     nl_old old = {0};
     const int ocap = nl->cap;
-    const int merge = nl->npairs > 0 && nl->hist && nl->touching && nl_sorted(nl);
+    /* the serial loops over every entry or particle below take the search's threads (a list
+     * this long: nl->threads), each a run of the items */
+    const int ntl = nl->threads > 1 && nl->npairs >= 4096 ? nl->threads : 1;
+    const int merge = nl->npairs > 0 && nl->hist && nl->touching && nl_sorted(nl, ntl);
     const int W = FLOE_DETECT_WARM, use_warm = nl->use_warm && nl->warm;
     const size_t HS = (size_t)nl->hs; /* doubles of history per entry */
     if (merge) {
@@ -757,10 +768,21 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     int *src = orow ? malloc((size_t)(nl->npairs ? nl->npairs : 1) * sizeof *src) : NULL;
     if (merge && rc == FLOE_OK && !src) rc = FLOE_ENOMEM;
     if (rc == FLOE_OK && merge) {
-        /* the old rows of particles [0, n] (an old row of a particle since removed: none) */
-        for (int i = 0, k = 0; i <= n; i++) {
-            while (k < old.npairs && old.pi[k] < i) k++;
-            orow[i] = k;
+        /* the old rows of particles [0, n] (an old row of a particle since removed: none);
+         * threads: runs of particles, each from its first row found by bisection */
+        FLOE_OMP(omp parallel for schedule(static, 1) num_threads(nt) if (nt > 1))
+        for (int t = 0; t < nt; t++) {
+            const int i0 = (int)((long long)(n + 1) * t / nt), i1 = (int)((long long)(n + 1) * (t + 1) / nt);
+            int lo = 0, hi = old.npairs; /* the first entry with pi >= i0 */
+            while (lo < hi) {
+                const int mid = lo + (hi - lo) / 2;
+                if (old.pi[mid] < i0) lo = mid + 1;
+                else hi = mid;
+            }
+            for (int i = i0, k = lo; i < i1; i++) {
+                while (k < old.npairs && old.pi[k] < i) k++;
+                orow[i] = k;
+            }
         }
         if (nt > 1) {
             /* rows in nt runs of about the same number of entries */
@@ -772,7 +794,7 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
             }
         } else
             nl_match_rows(nl, &old, row, orow, 0, n, use_warm, src);
-        nl_move_history(nl, src, nl->npairs, use_warm);
+        nl_move_history(nl, src, nl->npairs, use_warm, nt);
         if ((size_t)nl->npairs < np_old) { /* fewer entries: the arrays shrink (a smaller block keeps its start) */
             const size_t np = nl->npairs ? nl->npairs : 1;
             double *h = realloc(nl->hist, np * HS * sizeof(double));

@@ -191,10 +191,11 @@ struct floe_world {
                                    linear dashpot asks for it (forces.c, floe_contact.an_ext) */
     int dash_on;              /* dash_a holds this evaluation's copy */
     int dash_keep;            /* the last evaluation was an RK2 probe: keep its copy */
-    int drift_cleared;        /* velocity Verlet's drift set the free particles' forces to m g and
-                                 their torques to 0 (and their dash_a first, when the evaluation
-                                 takes them): forces_clear sees to the others alone; set for the
-                                 step's force evaluation only (step.c, forces.c) */
+    int drift_cleared;        /* velocity Verlet's or leapfrog's drift set the free particles'
+                                 forces to m g and their torques to 0 (and their dash_a first,
+                                 when the evaluation takes them): forces_clear sees to the others
+                                 alone; set for the step's force evaluation only (step.c, forces.c) */
+    long st_drift_clears;     /* steps whose drift did so (tests/test_drift_clear.c) */
     struct floe_snapshot *snap; /* adaptive: the state at the start of the trial step (owned by
                                    the controller, core/integrators/adaptive.c; freed by
                                    floe_world_destroy through snap_free) */
