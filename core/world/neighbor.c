@@ -572,8 +572,9 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
      * core/parallel hist_import) goes through a hash of its entries */
     nl_old old = {0};
     const int ocap = nl->cap;
-    /* the serial loops over every entry or particle below take the search's threads (a list
-     * this long: nl->threads), each a run of the items */
+    /* the old list's order check on the world's threads (nl->threads) when it is long, each
+     * thread a run of its entries; the rows' offsets and the history's clearing below take the
+     * search's (nt) */
     const int ntl = nl->threads > 1 && nl->npairs >= 4096 ? nl->threads : 1;
     const int merge = nl->npairs > 0 && nl->hist && nl->touching && nl_sorted(nl, ntl);
     const int W = FLOE_DETECT_WARM, use_warm = nl->use_warm && nl->warm;
