@@ -10,7 +10,12 @@
  *      (checked), its work in the ledger;
  *   B. the same spheres only (the sphere path), leapfrog, 400 steps;
  *   C. A again with the particle loops' parts (floe_loop_split: the drift's and the kick's
- *      blocks per thread, cut by measured speed) moved to a random cut after every step;
+ *      blocks per thread, cut by measured speed) moved to a random cut after every step, and
+ *      the contact stage's parts cut by random block times (parts of one block: a particle
+ *      whose entries lie in three parts, its forces added by the part of its first entry
+ *      and gathered from the others);
+ *   E. B's lattice with 6,000 spheres (a dozen blocks: the contact stage in 3 and 4 parts,
+ *      cut at random as in C), 120 steps;
  *   D. B's lattice with 6,000 spheres (a list of several blocks) under a user law that wraps
  *      Hertz-Mindlin and fails for every contact deeper than 5 % of the deepest that a run
  *      without failures reaches in 100 steps: the step that fails, its code and its message
@@ -105,7 +110,8 @@ static floe_world *build_n(int boxes, int leapfrog, int ns) {
     return w;
 }
 
-static floe_world *build(int boxes, int leapfrog) { return build_n(boxes, leapfrog, 1200); }
+static int run_spheres = 1200; /* the spheres of run()'s worlds (E: more) */
+static floe_world *build(int boxes, int leapfrog) { return build_n(boxes, leapfrog, run_spheres); }
 
 typedef struct run_out {
     double *state; size_t nstate;
@@ -142,6 +148,17 @@ static int run(int boxes, int leapfrog, int threads, int steps, run_out *o, int 
                 const int lo = ls->cut[t - 1] + 1, hi = ls->nb - (ls->nt - t);
                 ls->cut[t] = lo + (int)(urand(&seed) * (hi - lo + 1));
             }
+        floe_par_scratch *ps = w->thr;
+        if (skew && ps && ps->bt_nb > 0) {
+            /* the contact stage's parts cut again at the next evaluation by random block times
+             * (u^4: parts of one block among long ones, thinner than a particle's reach, so
+             * that a particle's entries span three parts) */
+            for (int b = 0; b < ps->bt_nb; b++) {
+                const double u = urand(&seed);
+                ps->bt[b] = 1e-6 * u * u * u * u + 1e-12;
+            }
+            ps->recut = 1;
+        }
     }
     const floe_particles *p = &w->p;
     const size_t n = (size_t)p->n;
@@ -361,6 +378,9 @@ int main(void) {
     compare("spheres and boxes, velocity Verlet", 1, 0, 400, 0);
     compare("spheres, leapfrog", 0, 1, 400, 0);
     compare("spheres and boxes, the particle loops' parts moved at every step", 1, 0, 400, 1);
+    run_spheres = 6000; /* a list of a dozen blocks: 3 and 4 parts in the contact stage */
+    compare("6,000 spheres, the contact stage's parts cut at random", 0, 0, 120, 1);
+    run_spheres = 1200;
     check_loop_split();
     check_plain_body_force();
     check_failure();

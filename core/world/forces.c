@@ -365,11 +365,14 @@ struct stage_acc {
      * core/integrators/watchdog.c */
     double wd_min; int wd_i, wd_j;
     long ncontacts;          /* contacts counted (not recorded) */
-    /* threads: each entry's force on i and torque increments of i and j go to pf (9 per
-     * entry, act[k] = 1), gathered per particle afterwards; NULL: added to p->f, p->t */
+    /* threads: an entry's force on i and torque increments of i and j go to pf (9 per entry,
+     * act[k]: 1 for i, 2 for j) when an end is not led by this block's part, gathered per particle
+     * afterwards; NULL: added to p->f, p->t */
     double *pf;
     unsigned char *act;
-    const unsigned char *own; /* per particle: all its entries lie in one part (floe_par_scratch.own) */
+    const unsigned char *lead; /* per particle: the part that adds its forces directly
+                                  (floe_par_scratch.lead) */
+    int part;                  /* this block's part */
     floe_rec_sink *rs;        /* threads, recording: the part's contact records (NULL: the world's) */
     int oom;                  /* a record of the lanes' books found no memory (stage_block reports it) */
 };
@@ -381,14 +384,17 @@ static inline void acc_life(stage_acc *acc, int i, int j, double d) {
 }
 
 /* entry k's force F on i (-F on j) and torque increments ti, tj, added as a serial loop adds
- * them (threads: stored for the gather, which adds them in the same order) */
+ * them (threads: an end led by another part stored for the gather, which adds them after the
+ * lead part's, in the same order) */
 static inline __attribute__((always_inline)) void pair_apply(floe_particles *p, stage_acc *acc, int k, int i, int j,
                                                              const double F[3], const double ti[3], const double tj[3]) {
     double *fi = p->f + 3 * i, *fj = p->f + 3 * j, *Ti = p->t + 3 * i, *Tj = p->t + 3 * j;
     if (acc->pf) {
-        /* an end whose entries all lie in this thread's part takes its share directly, in
-         * list order as one thread adds it; the other end's share waits for the gather */
-        const int oi = acc->own[i], oj = acc->own[j];
+        /* an end led by this part (its first entry lies here: the part of every entry of a
+         * particle owned by one) takes its share directly, in list order as one thread adds
+         * it; an end led by an earlier part waits for the gather, which adds it after all of
+         * that part's */
+        const int oi = acc->lead[i] == acc->part, oj = acc->lead[j] == acc->part;
         if (oi)
             for (int a = 0; a < 3; a++) { fi[a] += F[a]; Ti[a] += ti[a]; }
         if (oj)
@@ -396,7 +402,7 @@ static inline __attribute__((always_inline)) void pair_apply(floe_particles *p, 
         if (oi & oj) return;
         double *b = acc->pf + 9 * (size_t)k;
         for (int a = 0; a < 3; a++) { b[a] = F[a]; b[3 + a] = ti[a]; b[6 + a] = tj[a]; }
-        acc->act[k] = 1; /* (the gather reads it for the end not owned: par_prepare's gl) */
+        acc->act[k] = (unsigned char)((oi ? 0 : 1) | (oj ? 0 : 2)); /* the ends the gather adds: 1 i, 2 j */
         return;
     }
     for (int a = 0; a < 3; a++) {
@@ -1398,10 +1404,11 @@ static void acc_merge(floe_world *w, stage_acc *tot, const stage_acc *a) {
     tot->elastic += a->elastic;
     tot->diss += a->diss;
     tot->wgrow += a->wgrow;
-    for (int q = 0; q < 9; q++) {
-        tot->vir[q] += a->vir[q];
-        tot->kdiag[q] += a->kdiag[q];
-    }
+    if (w->cell) /* (zeros without a periodic cell) */
+        for (int q = 0; q < 9; q++) {
+            tot->vir[q] += a->vir[q];
+            tot->kdiag[q] += a->kdiag[q];
+        }
     tot->ncontacts += a->ncontacts;
     if (a->wd_min < w->wd_pair_min) { w->wd_pair_min = a->wd_min; w->wd_pair_i = a->wd_i; w->wd_pair_j = a->wd_j; }
     if (a->wd_min < w->wd_worst) { w->wd_worst = a->wd_min; w->wd_worst_i = a->wd_i; w->wd_worst_j = a->wd_j; }
@@ -1415,6 +1422,100 @@ static inline double part_weight(const floe_particles *p, const floe_neighbor_li
     return p->kind[nl->pi[k]] == FLOE_GEOM_SPHERE && p->kind[nl->pj[k]] == FLOE_GEOM_SPHERE ? 17.0 : 49.0;
 }
 
+/* the sum of the blocks' smoothed times (balance_parts) */
+static double par_times(const floe_par_scratch *ps) {
+    double tot = 0;
+    for (int b = 0; b < ps->bt_nb; b++) tot += ps->bt[b];
+    return tot;
+}
+
+/* particle i's blocks: from its first entry to its last (its row; adj in list order) */
+static inline void par_brange(const floe_par_scratch *ps, int i) {
+    const int *row = ps->row, *off = ps->adj_off;
+    int lo = INT_MAX, hi = -1;
+    if (row[i + 1] > row[i]) { lo = row[i]; hi = row[i + 1] - 1; }
+    if (off[i + 1] > off[i]) {
+        if (ps->adj[off[i]] < lo) lo = ps->adj[off[i]];
+        if (ps->adj[off[i + 1] - 1] > hi) hi = ps->adj[off[i + 1] - 1];
+    }
+    ps->brange[2 * i] = hi >= 0 ? lo / FLOE_PAR_BLOCK : INT_MAX;
+    ps->brange[2 * i + 1] = hi >= 0 ? hi / FLOE_PAR_BLOCK : -1;
+}
+
+/* A new list's particle entries (par_prepare): its rows (row), the entries each particle is j
+ * of in list order (adj_off, adj: a counting sort by j) and each particle's blocks (brange).
+ * FLOE_EINVAL when the list is not sorted by i. On nt threads (up to 8, a list of 4,096
+ * entries or more): each counts the j of a run of entries, the offsets per thread and j come
+ * from one pass over the particles, and each thread puts its run's entries after those of the
+ * runs before (the same order as one pass) and finds the rows and blocks of a run of
+ * particles; one thread took 250 us a list of 56,000 entries (dem-settle), while the others
+ * waited. */
+static int par_adjacency(const floe_neighbor_list *nl, int n, int nt, floe_par_scratch *ps) {
+    const int npairs = nl->npairs, *pi = nl->pi, *pj = nl->pj;
+    int *off = ps->adj_off, *row = ps->row, *adj = ps->adj;
+    int *cnt = nt > 1 && nt <= 8 && npairs >= 4096 ? calloc((size_t)nt * ((size_t)n + 1), sizeof *cnt) : NULL;
+    if (!cnt) {
+        memset(off, 0, (size_t)(n + 1) * sizeof *off);
+        memset(row, 0, (size_t)(n + 1) * sizeof *row);
+        for (int k = 0; k < npairs; k++) {
+            if (k > 0 && pi[k] < pi[k - 1]) return FLOE_EINVAL; /* not sorted by i */
+            row[pi[k] + 1]++;
+            off[pj[k] + 1]++;
+        }
+        for (int i = 0; i < n; i++) {
+            row[i + 1] += row[i];
+            off[i + 1] += off[i];
+        }
+        for (int k = 0; k < npairs; k++) adj[off[pj[k]]++] = k; /* in list order */
+        for (int i = n; i > 0; i--) off[i] = off[i - 1];
+        off[0] = 0;
+        for (int i = 0; i < n; i++) par_brange(ps, i);
+        return FLOE_OK;
+    }
+    int bad = 0;
+    FLOE_OMP(omp parallel for schedule(static, 1) num_threads(nt) reduction(|: bad))
+    for (int t = 0; t < nt; t++) {
+        const int k0 = (int)((long long)npairs * t / nt), k1 = (int)((long long)npairs * (t + 1) / nt);
+        int *c = cnt + (size_t)t * ((size_t)n + 1);
+        for (int k = k0 > 0 ? k0 : 1; k < k1; k++) bad |= pi[k] < pi[k - 1];
+        for (int k = k0; k < k1; k++) c[pj[k]]++;
+    }
+    if (bad) {
+        free(cnt);
+        return FLOE_EINVAL; /* not sorted by i */
+    }
+    int acc = 0;
+    for (int i = 0; i < n; i++) {
+        off[i] = acc;
+        for (int t = 0; t < nt; t++) { /* thread t's first place among the entries of j = i */
+            int *c = cnt + (size_t)t * ((size_t)n + 1) + i;
+            const int m = *c;
+            *c = acc;
+            acc += m;
+        }
+    }
+    off[n] = acc;
+    row[n] = npairs;
+    FLOE_OMP(omp parallel num_threads(nt))
+    {
+        const int nth = floe_par_nthreads();
+        for (int t = floe_par_thread(); t < nt; t += nth) {
+            const int k0 = (int)((long long)npairs * t / nt), k1 = (int)((long long)npairs * (t + 1) / nt);
+            int *c = cnt + (size_t)t * ((size_t)n + 1);
+            for (int k = k0; k < k1; k++) adj[c[pj[k]]++] = k;
+            /* the rows of a run of particles */
+            floe_list_rows(pi, npairs, (int)((long long)n * t / nt), (int)((long long)n * (t + 1) / nt), row);
+        }
+        FLOE_OMP(omp barrier)
+        for (int t = floe_par_thread(); t < nt; t += nth) {
+            const int i0 = (int)((long long)n * t / nt), i1 = (int)((long long)n * (t + 1) / nt);
+            for (int i = i0; i < i1; i++) par_brange(ps, i);
+        }
+    }
+    free(cnt);
+    return FLOE_OK;
+}
+
 /* the buffers for nt threads, nb blocks, the list's entries and n particles; the particles'
  * entries rebuilt after each list build */
 static int par_prepare(floe_world *w, int nt, int nb) {
@@ -1422,8 +1523,12 @@ static int par_prepare(floe_world *w, int nt, int nb) {
     const int n = w->p.n, npairs = nl->npairs;
     if (!w->thr && !(w->thr = calloc(1, sizeof *w->thr))) return FLOE_ENOMEM;
     floe_par_scratch *ps = w->thr;
-    if (floe_reserve((void **)&ps->pf, &ps->pf_cap, (size_t)(npairs ? npairs : 1) * 9, sizeof(double)) ||
-        floe_reserve((void **)&ps->act, &ps->act_cap, (size_t)(npairs ? npairs : 1), 1))
+    /* a quarter more room than the list when it grows (a settling bed's lists grow at most
+     * builds: each growth of the 72-byte records was a realloc on one thread, 2 us a step of
+     * dem-settle) */
+    const size_t ne = npairs ? (size_t)npairs : 1, room = ne > ps->act_cap || !ps->act ? ne + ne / 4 : ne;
+    if (floe_reserve((void **)&ps->pf, &ps->pf_cap, room * 9, sizeof(double)) ||
+        floe_reserve((void **)&ps->act, &ps->act_cap, room, 1))
         return FLOE_ENOMEM;
     if (nb > ps->blk_cap) {
         stage_acc *t = realloc(ps->blk, (size_t)nb * sizeof *t);
@@ -1436,9 +1541,8 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         if (bs) ps->bs = bs;
         double *bt = bs ? realloc(ps->bt, (size_t)nb * sizeof *bt) : NULL;
         if (!bt) return FLOE_ENOMEM;
-        ps->bt = bt;
+        ps->bt = bt; /* (the times of bt_nb blocks kept: the next list's first cut) */
         ps->bt_cap = nb;
-        ps->bt_nb = 0;
     }
     if (nt > ps->ndet) {
         floe_detect_state *d = realloc(ps->det, (size_t)nt * sizeof *d);
@@ -1468,37 +1572,13 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         size_t c2 = ps->adj_cap;
         if (floe_reserve((void **)&ps->adj, &c2, npairs ? (size_t)npairs : 1, sizeof(int))) return FLOE_ENOMEM;
         ps->adj_cap = c2;
-        memset(off, 0, (size_t)(n + 1) * sizeof *off);
-        memset(row, 0, (size_t)(n + 1) * sizeof *row);
-        for (int k = 0; k < npairs; k++) {
-            if (k > 0 && nl->pi[k] < nl->pi[k - 1]) return FLOE_EINVAL; /* not sorted by i */
-            row[nl->pi[k] + 1]++;
-            off[nl->pj[k] + 1]++;
-        }
-        for (int i = 0; i < n; i++) {
-            row[i + 1] += row[i];
-            off[i + 1] += off[i];
-        }
-        for (int k = 0; k < npairs; k++) ps->adj[off[nl->pj[k]]++] = k; /* in list order */
-        for (int i = n; i > 0; i--) off[i] = off[i - 1];
-        off[0] = 0;
         int *br = realloc(ps->brange, 2 * (size_t)(n ? n : 1) * sizeof *br);
         if (!br) return FLOE_ENOMEM;
         ps->brange = br;
-        /* each particle's blocks: from its first entry to its last (its row; adj in list order) */
-        for (int i = 0; i < n; i++) {
-            int lo = INT_MAX, hi = -1;
-            if (row[i + 1] > row[i]) { lo = row[i]; hi = row[i + 1] - 1; }
-            if (off[i + 1] > off[i]) {
-                if (ps->adj[off[i]] < lo) lo = ps->adj[off[i]];
-                if (ps->adj[off[i + 1] - 1] > hi) hi = ps->adj[off[i + 1] - 1];
-            }
-            br[2 * i] = hi >= 0 ? lo / FLOE_PAR_BLOCK : INT_MAX;
-            br[2 * i + 1] = hi >= 0 ? hi / FLOE_PAR_BLOCK : -1;
-        }
+        FLOE_TRY(par_adjacency(nl, n, nt, ps));
         ps->adj_gen = nl->gen;
         ps->adj_np = n;
-        ps->pb_nt = 0; /* parts and own[] below */
+        ps->pb_nt = 0; /* parts and lead[] below */
     }
     /* one part per thread: a run of blocks that one thread takes in order, the same thread
      * every evaluation (a schedule by hand, not dynamic), so that the particles of a part stay
@@ -1515,10 +1595,10 @@ static int par_prepare(floe_world *w, int nt, int nb) {
     if (!same || ps->recut) {
         ps->pb_nt = 0; /* (cut again at the next evaluation if anything below fails) */
         int *pb = realloc(ps->pb, (size_t)(nt + 1) * sizeof *pb);
-        unsigned char *own = pb ? realloc(ps->own, (size_t)(n ? n : 1)) : NULL;
+        unsigned char *lead = pb ? realloc(ps->lead, (size_t)(n ? n : 1)) : NULL;
         if (pb) ps->pb = pb;
-        if (!own) return FLOE_ENOMEM;
-        ps->own = own;
+        if (!lead) return FLOE_ENOMEM;
+        ps->lead = lead;
         /* the gather's particles and their shares (below) */
         if (floe_reserve((void **)&ps->gl, &ps->gl_cap, (size_t)(n ? n : 1), sizeof(int)) ||
             floe_reserve((void **)&ps->gc, &ps->gc_cap, (size_t)nt + 1, sizeof(int)))
@@ -1535,6 +1615,26 @@ static int par_prepare(floe_world *w, int nt, int nb) {
                 for (; t < nt && acc >= tot * t / nt; t++) {
                     const int bt = acc - tot * t / nt < 0.5 * ps->bt[b] ? b + 1 : b;
                     pb[t] = bt < pb[t - 1] ? pb[t - 1] : bt;
+                }
+            }
+        } else if (ps->bf_nb > 0 && ps->bf_nb == ps->bt_nb && ps->bf_n == n && npairs > 0 && par_times(ps) > 0) {
+            /* a new list of the same particles: cut by the last list's measured times (a
+             * part's share ends at a particle, found by the last list's blocks' first particles
+             * and in proportion within a block), at the block nearest that particle's place in
+             * this list's rows. The estimate below was a pass over the entries on one thread
+             * (150 us a dem-settle list) and cut the first evaluation of a list worse */
+            const double *bt = ps->bt, tot = par_times(ps);
+            const int *bf = ps->bf;
+            double acc = 0;
+            for (int b = 0; b < ps->bt_nb && t < nt; b++) {
+                const double a0 = acc;
+                acc += bt[b];
+                for (; t < nt && acc >= tot * t / nt; t++) {
+                    const double ph = bt[b] > 0 ? (tot * t / nt - a0) / bt[b] : 0.0, P = bf[b] + ph * (bf[b + 1] - bf[b]);
+                    const int i = P < 0 ? 0 : P >= n ? n - 1 : (int)P;
+                    const double e = row[i] + (P - i) * (row[i + 1] - row[i]);
+                    const int c = (int)((e + 0.5 * B) / B);
+                    pb[t] = c > nb ? nb : c < pb[t - 1] ? pb[t - 1] : c;
                 }
             }
         } else {
@@ -1554,26 +1654,25 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         }
         for (; t <= nt; t++) pb[t] = nb;
         ps->recut = 0;
-        /* no part boundary between its first block and its last (none: owned); two threads
-         * (one boundary) in a loop the compiler vectorises: a cut by measured times comes
-         * every few steps */
+        /* each particle's lead part: that of its first block (a particle without entries: 0);
+         * the gather's particles: those with a part boundary between their first block and
+         * their last. Two threads (one boundary) in loops the compiler vectorises: a cut by
+         * measured times comes every few steps */
         const int *br = ps->brange;
         if (nt == 2) {
             const int c = pb[1];
-            for (int i = 0; i < n; i++) own[i] = (unsigned char)!(br[2 * i] < c && c <= br[2 * i + 1]);
+            for (int i = 0; i < n; i++) lead[i] = (unsigned char)(br[2 * i] != INT_MAX && br[2 * i] >= c);
         } else
             for (int i = 0; i < n; i++) {
-                int same = 1;
-                for (int q = 1; q < nt && same; q++) same = !(br[2 * i] < pb[q] && pb[q] <= br[2 * i + 1]);
-                own[i] = (unsigned char)same;
+                int part = 0;
+                for (int q = 1; q < nt; q++) part += br[2 * i] != INT_MAX && pb[q] <= br[2 * i];
+                lead[i] = (unsigned char)part;
             }
-        /* the gather's particles: those not owned (a particle without entries is owned), cut
-         * into one share per thread by their entries */
         const int *off = ps->adj_off;
         int ngl = 0;
         long ent = 0;
         for (int i = 0; i < n; i++)
-            if (!own[i]) {
+            if (br[2 * i + 1] >= pb[lead[i] + 1]) { /* its last block past its lead part */
                 ps->gl[ngl++] = i;
                 ent += (long)(row[i + 1] - row[i]) + (off[i + 1] - off[i]);
             }
@@ -1611,7 +1710,19 @@ static int par_prepare(floe_world *w, int nt, int nb) {
  * next evaluation cuts the parts again by these times (the list's blocks unchanged; a new list
  * is cut by the estimate first). Which thread adds which force never changes the bits
  * (pair_apply, the gather): a cut by measured times keeps the results those of one thread. */
-static void balance_parts(floe_par_scratch *ps, int nt, int nb) {
+static void balance_parts(floe_par_scratch *ps, const floe_neighbor_list *nl, int n, int nt, int nb) {
+    /* the first particle of each block of this list (its times cut the next list's parts:
+     * par_prepare) */
+    if (ps->bf_gen != nl->gen || ps->bf_nb != nb) {
+        ps->bf_nb = 0;
+        if (!floe_reserve((void **)&ps->bf, &ps->bf_cap, (size_t)nb + 1, sizeof(int))) {
+            for (int b = 0; b < nb; b++) ps->bf[b] = nl->pi[(size_t)b * FLOE_PAR_BLOCK];
+            ps->bf[nb] = n;
+            ps->bf_nb = nb;
+            ps->bf_n = n;
+            ps->bf_gen = nl->gen;
+        }
+    }
     if (ps->bt_nb != nb) {
         memcpy(ps->bt, ps->bs, (size_t)nb * sizeof *ps->bt);
         ps->bt_nb = nb;
@@ -1736,31 +1847,34 @@ static int sep_update(floe_world *w) {
     return FLOE_OK;
 }
 
-/* particle i's forces from the entries buffered for it (pair_apply: it is not owned by one
- * part), added in list order as one thread adds them: the entries it is j of before its row,
- * its row, those after it */
+/* particle i's forces from the entries buffered for it (pair_apply: act[k] bit 1 for i, 2 for
+ * j; entries of the parts after its lead part), added in list order after the lead part's as
+ * one thread adds them: the entries it is j of before its row, its row, those after it */
 static inline void gather_one(const floe_par_scratch *ps, floe_particles *p, int i) {
     const int *off = ps->adj_off, *adj = ps->adj, *row = ps->row;
     const double *pf = ps->pf;
     const unsigned char *act = ps->act;
     double *f = p->f, *tq = p->t;
     double fi[3] = {f[3 * i], f[3 * i + 1], f[3 * i + 2]}, ti[3] = {tq[3 * i], tq[3 * i + 1], tq[3 * i + 2]};
-    const int r0 = row[i], r1 = row[i + 1], e1 = off[i + 1];
+    /* the lead part's entries hold nothing for i: from the first entry past them */
+    const int k0 = ps->pb[ps->lead[i] + 1] * FLOE_PAR_BLOCK;
+    const int r0 = row[i] > k0 ? row[i] : k0, r1 = row[i + 1], e1 = off[i + 1];
     int e = off[i];
+    while (e < e1 && adj[e] < k0) e++;
     for (; e < e1 && adj[e] < r0; e++) {
         const int k = adj[e];
-        if (!act[k]) continue;
+        if (!(act[k] & 2)) continue;
         const double *bk = pf + 9 * (size_t)k;
         for (int a = 0; a < 3; a++) { fi[a] -= bk[a]; ti[a] += bk[6 + a]; }
     }
     for (int k = r0; k < r1; k++) {
-        if (!act[k]) continue;
+        if (!(act[k] & 1)) continue;
         const double *bk = pf + 9 * (size_t)k;
         for (int a = 0; a < 3; a++) { fi[a] += bk[a]; ti[a] += bk[3 + a]; }
     }
     for (; e < e1; e++) {
         const int k = adj[e];
-        if (!act[k]) continue;
+        if (!(act[k] & 2)) continue;
         const double *bk = pf + 9 * (size_t)k;
         for (int a = 0; a < 3; a++) { fi[a] -= bk[a]; ti[a] += bk[6 + a]; }
     }
@@ -1804,6 +1918,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
     const int npairs = nl->npairs, B = FLOE_PAR_BLOCK, nb = (npairs + B - 1) / B;
     int nt = floe_world_loop_threads(w, npairs);
     if (nt > nb) nt = nb;
+    if (nt > 255) nt = 255; /* a particle's lead part is a byte (par_prepare) */
     stage_acc tot;
     memset(&tot, 0, sizeof tot);
     if (nt <= 1) {
@@ -1855,7 +1970,8 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
                 memset(&la, 0, sizeof la);
                 la.pf = ps->pf;
                 la.act = ps->act;
-                la.own = ps->own;
+                la.lead = ps->lead;
+                la.part = part;
                 la.rs = ctx->record ? &ps->rs[part] : NULL;
                 const int k0 = b * B, k1 = k0 + B < npairs ? k0 + B : npairs;
                 memset(ps->act + k0, 0, (size_t)(k1 - k0));
@@ -1891,7 +2007,7 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
             return ps->fail_rc[tf];
         }
         for (int b = 0; b < nb; b++) acc_merge(w, &tot, &ps->blk[b]);
-        balance_parts(ps, nt, nb);
+        balance_parts(ps, nl, p->n, nt, nb);
         if (ctx->record) { /* the parts' records joined in part order: the list's order */
             int nrec = 0;
             for (int t = 0; t < nt; t++) nrec += ps->rs[t].n;
@@ -2231,11 +2347,21 @@ static void forces_clear(floe_world *w, int dash) {
     const double g0 = w->def.gravity[0], g1 = w->def.gravity[1], g2 = w->def.gravity[2];
     if (w->drift_cleared) {
         w->drift_cleared = 0;
-        for (int i = 0; i < n; i++) {
-            if (mo[i] == FLOE_FREE) continue;
-            for (int a = 0; a < 3; a++) {
-                if (dash) da[3 * i + a] = f[3 * i + a] * im[i];
-                f[3 * i + a] = t[3 * i + a] = 0.0;
+        /* runs of 64 motion bytes, each skipped when their OR is 0 (FLOE_FREE): a loop the
+         * compiler vectorises, where a test per particle cost a cycle each (7 us of a
+         * dem-settle step, on one thread while the others wait) */
+        _Static_assert(FLOE_FREE == 0, "the scan below ORs motion bytes");
+        for (int i0 = 0; i0 < n; i0 += 64) {
+            const int i1 = i0 + 64 < n ? i0 + 64 : n;
+            unsigned any = 0;
+            for (int i = i0; i < i1; i++) any |= mo[i];
+            if (!any) continue;
+            for (int i = i0; i < i1; i++) {
+                if (mo[i] == FLOE_FREE) continue;
+                for (int a = 0; a < 3; a++) {
+                    if (dash) da[3 * i + a] = f[3 * i + a] * im[i];
+                    f[3 * i + a] = t[3 * i + a] = 0.0;
+                }
             }
         }
         return;

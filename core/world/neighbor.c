@@ -770,21 +770,11 @@ int floe_nl_build(floe_neighbor_list *nl, const floe_particles *p, int dim, int 
     if (merge && rc == FLOE_OK && !src) rc = FLOE_ENOMEM;
     if (rc == FLOE_OK && merge) {
         /* the old rows of particles [0, n] (an old row of a particle since removed: none);
-         * threads: runs of particles, each from its first row found by bisection */
+         * threads: runs of particles */
         FLOE_OMP(omp parallel for schedule(static, 1) num_threads(nt) if (nt > 1))
-        for (int t = 0; t < nt; t++) {
-            const int i0 = (int)((long long)(n + 1) * t / nt), i1 = (int)((long long)(n + 1) * (t + 1) / nt);
-            int lo = 0, hi = old.npairs; /* the first entry with pi >= i0 */
-            while (lo < hi) {
-                const int mid = lo + (hi - lo) / 2;
-                if (old.pi[mid] < i0) lo = mid + 1;
-                else hi = mid;
-            }
-            for (int i = i0, k = lo; i < i1; i++) {
-                while (k < old.npairs && old.pi[k] < i) k++;
-                orow[i] = k;
-            }
-        }
+        for (int t = 0; t < nt; t++)
+            floe_list_rows(old.pi, old.npairs, (int)((long long)(n + 1) * t / nt), (int)((long long)(n + 1) * (t + 1) / nt),
+                           orow);
         if (nt > 1) {
             /* rows in nt runs of about the same number of entries */
             FLOE_OMP(omp parallel for schedule(static, 1) num_threads(nt))
