@@ -11,11 +11,8 @@
  *   B. the same spheres only (the sphere path), leapfrog, 400 steps;
  *   C. A again with the particle loops' parts (floe_loop_split: the drift's and the kick's
  *      blocks per thread, cut by measured speed) moved to a random cut after every step, and
- *      the contact stage's parts cut by random block times (parts of one block: a particle
- *      whose entries lie in three parts, its forces added by the part of its first entry
- *      and gathered from the others);
- *   E. B's lattice with 6,000 spheres (a dozen blocks: the contact stage in 3 and 4 parts,
- *      cut at random as in C), 120 steps;
+ *      the contact stage's parts cut by random block times (its list has two blocks: two
+ *      parts here, more in E);
  *   D. B's lattice with 6,000 spheres (a list of several blocks) under a user law that wraps
  *      Hertz-Mindlin and fails for every contact deeper than 5 % of the deepest that a run
  *      without failures reaches in 100 steps: the step that fails, its code and its message
@@ -23,6 +20,8 @@
  *      threads, with failures in several threads' parts at once (the lowest block's error
  *      wins; no thread gathers the shared particles' forces after a failure). Taking the
  *      highest failed block's error instead fails it.
+ *   E. A's spheres without the boxes, 6,000 of them (a dozen blocks: the contact stage in 3
+ *      and 4 parts), the parts cut at random as in C (some of one block), 120 steps.
  * A body-force callback set by floe_world_set_body_force (not declared thread-safe) is called
  * on one thread, in particle order, on 2 threads too.
  * And floe_loop_split itself: even at first; a thread at twice the seconds per block gets
@@ -151,8 +150,7 @@ static int run(int boxes, int leapfrog, int threads, int steps, run_out *o, int 
         floe_par_scratch *ps = w->thr;
         if (skew && ps && ps->bt_nb > 0) {
             /* the contact stage's parts cut again at the next evaluation by random block times
-             * (u^4: parts of one block among long ones, thinner than a particle's reach, so
-             * that a particle's entries span three parts) */
+             * (u^4: some parts of one block among long ones) */
             for (int b = 0; b < ps->bt_nb; b++) {
                 const double u = urand(&seed);
                 ps->bt[b] = 1e-6 * u * u * u * u + 1e-12;

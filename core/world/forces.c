@@ -390,8 +390,8 @@ static inline __attribute__((always_inline)) void pair_apply(floe_particles *p, 
                                                              const double F[3], const double ti[3], const double tj[3]) {
     double *fi = p->f + 3 * i, *fj = p->f + 3 * j, *Ti = p->t + 3 * i, *Tj = p->t + 3 * j;
     if (acc->pf) {
-        /* an end led by this part (its first entry lies here: the part of every entry of a
-         * particle owned by one) takes its share directly, in list order as one thread adds
+        /* an end led by this part (its first entry lies here; every entry of a particle whose
+         * entries lie in one part) takes its share directly, in list order as one thread adds
          * it; an end led by an earlier part waits for the gather, which adds it after all of
          * that part's */
         const int oi = acc->lead[i] == acc->part, oj = acc->lead[j] == acc->part;
@@ -1442,6 +1442,13 @@ static inline void par_brange(const floe_par_scratch *ps, int i) {
     ps->brange[2 * i + 1] = hi >= 0 ? hi / FLOE_PAR_BLOCK : -1;
 }
 
+/* the entries of particle i (as i or j) past its lead part's blocks: those the gather takes */
+static inline long par_gathered(const floe_par_scratch *ps, int i) {
+    const int k0 = ps->pb[ps->lead[i] + 1] * FLOE_PAR_BLOCK, *row = ps->row, *off = ps->adj_off;
+    const int r0 = row[i] > k0 ? row[i] : k0, r1 = row[i + 1] > r0 ? row[i + 1] : r0;
+    return (long)(r1 - r0) + (off[i + 1] - off[i]) - floe_int_lower(ps->adj + off[i], off[i + 1] - off[i], k0);
+}
+
 /* A new list's particle entries (par_prepare): its rows (row), the entries each particle is j
  * of in list order (adj_off, adj: a counting sort by j) and each particle's blocks (brange).
  * FLOE_EINVAL when the list is not sorted by i. On nt threads (up to 8, a list of 4,096
@@ -1585,12 +1592,14 @@ static int par_prepare(floe_world *w, int nt, int nb) {
      * in that core's caches from one step to the next. Handed out dynamically (a few parts per
      * thread, as before 2026-12-03), a part and its particles' cache lines moved between the
      * cores from step to step: the §5.3 RVE on two threads ran 1.16-1.21x faster with these
-     * (bench/RESULTS.md, "Issue 14, session 7"). The parts are cut at a build so that each
-     * gets the same estimated work: the rows of a run of particles, each particle 4 (its
-     * share of the integrator's loops), each entry of its row by part_weight (its touching flag
-     * carried over from the last build); the cut at the nearest block. A particle is owned by
-     * a part when every entry it is i or j of lies in it: the thread of that part is then its
-     * only writer, and adds its forces in list order */
+     * (bench/RESULTS.md, "Issue 14, session 7"). The first list is cut so that each part gets
+     * the same estimated work: the rows of a run of particles, each particle 4 (its share of
+     * the integrator's loops), each entry of its row by part_weight (its touching flag carried
+     * over from the last build); the cut at the nearest block. A later list of as many
+     * particles is cut by the last list's measured times, the same list again by its own
+     * (balance_parts). A particle's lead part (that of its first entry, as i or j) is its only
+     * direct writer and adds its forces in list order; the later parts' ends wait for the
+     * gather (pair_apply) */
     const int same = ps->pb_nt == nt && ps->pb[nt] == nb && ps->pb_gen == nl->gen;
     if (!same || ps->recut) {
         ps->pb_nt = 0; /* (cut again at the next evaluation if anything below fails) */
@@ -1599,6 +1608,7 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         if (pb) ps->pb = pb;
         if (!lead) return FLOE_ENOMEM;
         ps->lead = lead;
+        if (floe_reserve((void **)&ps->bpart, &ps->bpart_cap, (size_t)(nb ? nb : 1), 1)) return FLOE_ENOMEM;
         /* the gather's particles and their shares (below) */
         if (floe_reserve((void **)&ps->gl, &ps->gl_cap, (size_t)(n ? n : 1), sizeof(int)) ||
             floe_reserve((void **)&ps->gc, &ps->gc_cap, (size_t)nt + 1, sizeof(int)))
@@ -1606,6 +1616,7 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         const int *row = ps->row, B = FLOE_PAR_BLOCK;
         pb[0] = 0;
         int t = 1;
+        double told = 0; /* the last list's times, summed */
         if (same && ps->bt_nb == nb) {
             /* the same list: cut again by the blocks' measured times (balance_parts) */
             double tot = 0, acc = 0;
@@ -1617,13 +1628,13 @@ static int par_prepare(floe_world *w, int nt, int nb) {
                     pb[t] = bt < pb[t - 1] ? pb[t - 1] : bt;
                 }
             }
-        } else if (ps->bf_nb > 0 && ps->bf_nb == ps->bt_nb && ps->bf_n == n && npairs > 0 && par_times(ps) > 0) {
+        } else if (ps->bf_nb > 0 && ps->bf_nb == ps->bt_nb && ps->bf_n == n && npairs > 0 && (told = par_times(ps)) > 0) {
             /* a new list of the same particles: cut by the last list's measured times (a
              * part's share ends at a particle, found by the last list's blocks' first particles
              * and in proportion within a block), at the block nearest that particle's place in
              * this list's rows. The estimate below was a pass over the entries on one thread
              * (150 us a dem-settle list) and cut the first evaluation of a list worse */
-            const double *bt = ps->bt, tot = par_times(ps);
+            const double *bt = ps->bt, tot = told;
             const int *bf = ps->bf;
             double acc = 0;
             for (int b = 0; b < ps->bt_nb && t < nt; b++) {
@@ -1654,34 +1665,27 @@ static int par_prepare(floe_world *w, int nt, int nb) {
         }
         for (; t <= nt; t++) pb[t] = nb;
         ps->recut = 0;
-        /* each particle's lead part: that of its first block (a particle without entries: 0);
-         * the gather's particles: those with a part boundary between their first block and
-         * their last. Two threads (one boundary) in loops the compiler vectorises: a cut by
-         * measured times comes every few steps */
+        /* each particle's lead part: that of its first block, through the blocks' parts (a
+         * particle without entries: 0); the gather's particles: those whose last block lies
+         * past their lead part, weighed by their entries there (a wall's entries in every part:
+         * those of its lead part are not gathered) */
         const int *br = ps->brange;
-        if (nt == 2) {
-            const int c = pb[1];
-            for (int i = 0; i < n; i++) lead[i] = (unsigned char)(br[2 * i] != INT_MAX && br[2 * i] >= c);
-        } else
-            for (int i = 0; i < n; i++) {
-                int part = 0;
-                for (int q = 1; q < nt; q++) part += br[2 * i] != INT_MAX && pb[q] <= br[2 * i];
-                lead[i] = (unsigned char)part;
-            }
-        const int *off = ps->adj_off;
+        unsigned char *bpart = ps->bpart;
+        for (int q = 0; q < nt; q++)
+            for (int b = pb[q]; b < pb[q + 1]; b++) bpart[b] = (unsigned char)q;
+        for (int i = 0; i < n; i++) lead[i] = br[2 * i] < nb ? bpart[br[2 * i]] : 0;
         int ngl = 0;
         long ent = 0;
         for (int i = 0; i < n; i++)
             if (br[2 * i + 1] >= pb[lead[i] + 1]) { /* its last block past its lead part */
                 ps->gl[ngl++] = i;
-                ent += (long)(row[i + 1] - row[i]) + (off[i + 1] - off[i]);
+                ent += par_gathered(ps, i);
             }
         int *gc = ps->gc, s = 1;
         long acc = 0;
         gc[0] = 0;
         for (int q = 0; q < ngl && s < nt; q++) {
-            const int i = ps->gl[q];
-            acc += (long)(row[i + 1] - row[i]) + (off[i + 1] - off[i]);
+            acc += par_gathered(ps, ps->gl[q]);
             for (; s < nt && acc * nt >= ent * s; s++) gc[s] = q + 1;
         }
         for (; s <= nt; s++) gc[s] = ngl;
@@ -1708,7 +1712,8 @@ static int par_prepare(floe_world *w, int nt, int nb) {
  * measured and smoothed (bt; a sample at most 3x the smoothed time: a preempted thread's block
  * does not move the cut), and when the slowest part takes more than 5 % above the mean the
  * next evaluation cuts the parts again by these times (the list's blocks unchanged; a new list
- * is cut by the estimate first). Which thread adds which force never changes the bits
+ * of as many particles by the last list's, through bf). Which thread adds which force never
+ * changes the bits
  * (pair_apply, the gather): a cut by measured times keeps the results those of one thread. */
 static void balance_parts(floe_par_scratch *ps, const floe_neighbor_list *nl, int n, int nt, int nb) {
     /* the first particle of each block of this list (its times cut the next list's parts:
@@ -1859,8 +1864,7 @@ static inline void gather_one(const floe_par_scratch *ps, floe_particles *p, int
     /* the lead part's entries hold nothing for i: from the first entry past them */
     const int k0 = ps->pb[ps->lead[i] + 1] * FLOE_PAR_BLOCK;
     const int r0 = row[i] > k0 ? row[i] : k0, r1 = row[i + 1], e1 = off[i + 1];
-    int e = off[i];
-    while (e < e1 && adj[e] < k0) e++;
+    int e = off[i] + floe_int_lower(adj + off[i], e1 - off[i], k0);
     for (; e < e1 && adj[e] < r0; e++) {
         const int k = adj[e];
         if (!(act[k] & 2)) continue;
@@ -1987,10 +1991,11 @@ static int contact_stage(floe_provider *pv, floe_world *w, const floe_step_ctx *
                 }
             }
             floe_world_error_to(NULL, 0);
-            /* every block's buffered entries written: the particles not owned by one part take
-             * their forces, each in list order as one thread adds them (pair_apply), a share of
-             * them by entries per thread (par_prepare); not after a failure (the blocks a thread
-             * skipped left their flags of an earlier evaluation), the same choice on every thread */
+            /* every block's buffered entries written: the particles with entries past their lead
+             * part take those, each in list order as one thread adds them (pair_apply), a share
+             * of them by entries per thread (par_prepare); not after a failure (the blocks a
+             * thread skipped left their flags of an earlier evaluation), the same choice on every
+             * thread */
             FLOE_OMP(omp barrier)
             int any_failed = 0;
             for (int q = 0; q < nt; q++) any_failed |= ps->fail_rc[q] != 0;

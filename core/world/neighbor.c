@@ -311,22 +311,12 @@ static int nl_sort_rows(floe_neighbor_list *nl, const int *row, int i0, int i1) 
     return FLOE_OK;
 }
 
-/* the first particle in [0, n) whose row starts at or after entry e (n: none) */
-static int first_row_from(const int *row, int n, long e) {
-    int lo = 0, hi = n;
-    while (lo < hi) {
-        const int mid = lo + (hi - lo) / 2;
-        if (row[mid] < e) lo = mid + 1;
-        else hi = mid;
-    }
-    return lo;
-}
-
 /* thread t's run of rows [*i0, *i1) of nt, about the same number of the tot entries each:
  * from the first row that starts at or after t / nt of them */
 static void row_run(const int *row, int n, long tot, int t, int nt, int *i0, int *i1) {
-    *i0 = t == 0 ? 0 : first_row_from(row, n, tot * t / nt);
-    *i1 = t == nt - 1 ? n : first_row_from(row, n, tot * (t + 1) / nt);
+    /* (the first particle whose row starts at or after that entry) */
+    *i0 = t == 0 ? 0 : floe_int_lower(row, n, (int)(tot * t / nt));
+    *i1 = t == nt - 1 ? n : floe_int_lower(row, n, (int)(tot * (t + 1) / nt));
 }
 
 /* found entry e (i, j, piece pair, image) into slot k of the list */

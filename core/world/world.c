@@ -155,7 +155,7 @@ int floe_world_threads(const floe_world *w) { return w->nthreads > 0 ? w->nthrea
 
 void floe_par_scratch_free(floe_par_scratch *ps) {
     if (!ps) return;
-    free(ps->pf); free(ps->act); free(ps->gl); free(ps->gc); free(ps->adj); free(ps->adj_off); free(ps->row); free(ps->lead); free(ps->brange); free(ps->pb); free(ps->blk); free(ps->bs); free(ps->bt); free(ps->bf);
+    free(ps->pf); free(ps->act); free(ps->gl); free(ps->gc); free(ps->adj); free(ps->adj_off); free(ps->row); free(ps->lead); free(ps->bpart); free(ps->brange); free(ps->pb); free(ps->blk); free(ps->bs); free(ps->bt); free(ps->bf);
     for (int t = 0; t < ps->ndet; t++) free(ps->det[t].scratch);
     for (int t = 0; t < ps->nrs; t++) free(ps->rs[t].r);
     free(ps->rs);

@@ -269,32 +269,6 @@ struct floe_world {
     double close_shadow, close_lf;
 };
 
-/* the first of the n sorted values a[] that is >= v (n if none) */
-static inline int floe_int_lower(const int *a, int n, int v) {
-    int lo = 0, hi = n;
-    while (lo < hi) {
-        const int mid = lo + (hi - lo) / 2;
-        if (a[mid] < v) lo = mid + 1;
-        else hi = mid;
-    }
-    return lo;
-}
-
-/* the rows [i0, i1) of a list of np entries sorted by their first particles pi: row[i] the
- * first entry with pi >= i (np if none). Each particle's entries stored backwards (the last
- * store is its first entry), then the empty rows from the next one's start: no branch per
- * entry (a loop that stepped the entries per particle mispredicted one at each row's end:
- * 90 us a dem-settle list on one thread) */
-static inline void floe_list_rows(const int *pi, int np, int i0, int i1, int *row) {
-    const int e0 = floe_int_lower(pi, np, i0), e1 = floe_int_lower(pi, np, i1);
-    for (int i = i0; i < i1; i++) row[i] = -1;
-    for (int k = e1 - 1; k >= e0; k--) row[pi[k]] = k;
-    for (int i = i1 - 1, next = e1; i >= i0; i--) {
-        row[i] = row[i] < 0 ? next : row[i];
-        next = row[i];
-    }
-}
-
 /* the index of local particle i in the unsplit world, as the messages name it (the serial
  * run's index): its global id on a split world (nl.gid, set at each decomposition), i
  * otherwise */
@@ -352,11 +326,12 @@ typedef struct floe_par_scratch {
                                                        part (the gather's), in index order, and their cut into
                                                        the threads' shares by entries: share t is
                                                        gl[gc[t] .. gc[t+1]) (forces.c par_prepare,
-                                                       with own[]) */
+                                                       with lead[]) */
     int *gc; size_t gc_cap;
     int *adj, *adj_off; size_t adj_cap; int adj_np; long adj_gen; /* per particle: the entries it is
                                                        j of, in list order (adj_off: n + 1 offsets) */
     int *row;                                        /* n + 1: entries [row[i], row[i+1]) have pi = i */
+    unsigned char *bpart; size_t bpart_cap;          /* per block: its part (par_prepare) */
     unsigned char *lead;                             /* per particle: the part of its first entry, whose
                                                        thread adds its forces directly (those of the
                                                        parts after it are gathered; forces.c
