@@ -5,8 +5,8 @@
  * neighbour-list rebuilds and the detection statistics must be equal to the last bit
  * (memcmp, tolerance 0):
  *   A. 1,200 spheres of three radii and 60 boxes (the polytope LP, warm starts) settling in
- *      a walled box under gravity, Hertz-Mindlin with friction, 400 steps; in A-C a body-force
- *      callback declared thread-safe (a drag and a push) as well, called from several threads
+ *      a walled box under gravity, Hertz-Mindlin with friction, 400 steps; in A-C and E a
+ *      body-force callback declared thread-safe (a drag and a push) as well, called from several threads
  *      (checked), its work in the ledger;
  *   B. the same spheres only (the sphere path), leapfrog, 400 steps;
  *   C. A again with the particle loops' parts (floe_loop_split: the drift's and the kick's

@@ -1451,12 +1451,12 @@ static inline long par_gathered(const floe_par_scratch *ps, int i) {
 
 /* A new list's particle entries (par_prepare): its rows (row), the entries each particle is j
  * of in list order (adj_off, adj: a counting sort by j) and each particle's blocks (brange).
- * FLOE_EINVAL when the list is not sorted by i. On nt threads (up to 8, a list of 4,096
- * entries or more): each counts the j of a run of entries, the offsets per thread and j come
- * from one pass over the particles, and each thread puts its run's entries after those of the
- * runs before (the same order as one pass) and finds the rows and blocks of a run of
- * particles; one thread took 250 us a list of 56,000 entries (dem-settle), while the others
- * waited. */
+ * FLOE_EINVAL when the list is not sorted by i. On nt threads when nt is 2-8 and the list
+ * holds 4,096 entries or more (otherwise on one): each counts the j of a run of entries, the
+ * offsets per thread and j come from one pass over the particles, and each thread puts its
+ * run's entries after those of the runs before (the same order as one pass) and finds the rows
+ * and blocks of a run of particles; one thread took 250 us a list of 56,000 entries
+ * (dem-settle), while the others waited. */
 static int par_adjacency(const floe_neighbor_list *nl, int n, int nt, floe_par_scratch *ps) {
     const int npairs = nl->npairs, *pi = nl->pi, *pj = nl->pj;
     int *off = ps->adj_off, *row = ps->row, *adj = ps->adj;
