@@ -66,24 +66,30 @@ static inline void floe_hertz_normal(double e_star, double beta, const floe_cont
 /* Mindlin tangential spring kt = 8 G* sqrt(R* d) on the stored force Fs (history[0..2],
  * rotated with the contact frame), dashpot gt = gn sqrt(4 G* / E*) (tdr) from the normal
  * dashpot, Coulomb limit mu (Fn + fn_extra); adds the spring energy |Fs|^2 / (2 kt) to
- * *energy and the dashpot and slip losses to *diss. */
-static inline __attribute__((always_inline)) void floe_mindlin_tangential_lane(double g_star, double tdr, double mu,
-                                                                            double dt, double r_eff, double depth,
-                                                                            const double n[3], const double vt_in[3],
-                                                                            double gn, double fn, double fn_extra,
-                                                                            double S[3], double Ft[3], double *energy,
-                                                                            double *diss) {
+ * *energy and the dashpot and slip losses to *diss. In parts that a batch of contacts runs
+ * in lanes (core/world/forces.c sph_flush_lanes; floe_mindlin_tangential_lane is the three in
+ * order): the trial (the rotated spring advanced by -kt vt dt, the force it and the dashpot
+ * give, the limit, |Ft|^2, 1 / (2 kt) and gt), then the slip onto the limit where |Ft| >
+ * limit, which a batch without a slipping contact leaves out; neither has a branch. */
+static inline __attribute__((always_inline)) void floe_mindlin_trial(double g_star, double tdr, double mu, double dt,
+                                                                  double r_eff, double depth, const double vt[3],
+                                                                  double gn, double fn, double fn_extra, double S[3],
+                                                                  double Ft[3], double *gt_out, double *limit,
+                                                                  double *ft2, double *half_inv_kt, double *diss) {
     const double kt = 8.0 * g_star * sqrt(r_eff * depth);
     const double gt = gn * tdr; /* sqrt(kt m) = sqrt(Sn m) sqrt(4 G* / E*) */
-    const double vt[3] = {vt_in[0], vt_in[1], vt_in[2]};
-    floe_contact_rotate_history(S, n);
     for (int k = 0; k < 3; ++k) S[k] += -kt * dt * vt[k]; /* floe_v3_axpy(S, -kt dt, vt) */
     for (int k = 0; k < 3; ++k) Ft[k] = S[k] - gt * vt[k];
     const double vt2 = floe_dot3_l(vt, vt);
-    const double limit = mu * (fn + fn_extra); /* + the manifold's other springs */
-    const double ft2 = floe_dot3_l(Ft, Ft);
+    *limit = mu * (fn + fn_extra); /* + the manifold's other springs */
+    *ft2 = floe_dot3_l(Ft, Ft);
     *diss += gt * vt2 * dt;
-    const double half_inv_kt = 0.5 / kt;
+    *half_inv_kt = 0.5 / kt;
+    *gt_out = gt;
+}
+static inline __attribute__((always_inline)) void floe_mindlin_slip(double gt, const double vt[3], double limit,
+                                                                 double ft2, double half_inv_kt, double S[3],
+                                                                 double Ft[3], double *diss) {
     /* sliding or not without a branch (as floe_coulomb_k: the branches' values selected) */
     const int slip = ft2 > limit * limit;
     const double ftmag = sqrt(ft2), e_before = floe_dot3_l(S, S) * half_inv_kt, sc = limit / ftmag;
@@ -97,6 +103,19 @@ static inline __attribute__((always_inline)) void floe_mindlin_tangential_lane(d
     }
     const double dd = *diss + dslip;
     *diss = slip ? dd : *diss;
+}
+static inline __attribute__((always_inline)) void floe_mindlin_tangential_lane(double g_star, double tdr, double mu,
+                                                                            double dt, double r_eff, double depth,
+                                                                            const double n[3], const double vt_in[3],
+                                                                            double gn, double fn, double fn_extra,
+                                                                            double S[3], double Ft[3], double *energy,
+                                                                            double *diss) {
+    const double vt[3] = {vt_in[0], vt_in[1], vt_in[2]};
+    double gt, limit, ft2, half_inv_kt;
+    floe_contact_rotate_history(S, n);
+    floe_mindlin_trial(g_star, tdr, mu, dt, r_eff, depth, vt, gn, fn, fn_extra, S, Ft, &gt, &limit, &ft2, &half_inv_kt,
+                       diss);
+    floe_mindlin_slip(gt, vt, limit, ft2, half_inv_kt, S, Ft, diss);
     *energy += floe_dot3_l(S, S) * half_inv_kt;
 }
 
@@ -117,16 +136,22 @@ static inline void floe_mindlin_tangential(double g_star, double tdr, double mu,
  * it and the dashpot give, with the Coulomb limit mu |Fn| and |Ft|^2; then the force onto
  * the limit and the spring to match (minus_inv_ks = -1 / ks; no spring: s = 0), which the
  * caller keeps for a contact that slips (|Ft| > limit). Neither has a branch. */
-static inline __attribute__((always_inline)) void floe_coulomb_trial(const double n[3], const double vt[3], double dt,
-                                                                      double ks, double gs, double mu, double Fn,
-                                                                      double *s, double Ft[3], double *limit,
-                                                                      double *ft2) {
-    floe_contact_rotate_history(s, n);
+static inline __attribute__((always_inline)) void floe_coulomb_trial_rotated(const double vt[3], double dt,
+                                                                              double ks, double gs, double mu,
+                                                                              double Fn, double *s, double Ft[3],
+                                                                              double *limit, double *ft2) {
     for (int k = 0; k < 3; ++k) s[k] += dt * vt[k];
     for (int k = 0; k < 3; ++k) Ft[k] = 0.0 + -ks * s[k];
     for (int k = 0; k < 3; ++k) Ft[k] += -gs * vt[k];
     *limit = mu * fabs(Fn);
     *ft2 = floe_dot3_l(Ft, Ft);
+}
+static inline __attribute__((always_inline)) void floe_coulomb_trial(const double n[3], const double vt[3], double dt,
+                                                                      double ks, double gs, double mu, double Fn,
+                                                                      double *s, double Ft[3], double *limit,
+                                                                      double *ft2) {
+    floe_contact_rotate_history(s, n);
+    floe_coulomb_trial_rotated(vt, dt, ks, gs, mu, Fn, s, Ft, limit, ft2);
 }
 
 static inline __attribute__((always_inline)) void floe_coulomb_slip(const double vt[3], double ks, double gs,
@@ -208,12 +233,13 @@ static inline double floe_linear_an_ext(const floe_contact *c) { return floe_lin
  * divisions of the cases not taken are done and dropped). */
 static inline __attribute__((always_inline)) double floe_linear_phase_lane(double kn, double gn, int tension, double d,
                                                                         double vn, double dt, double an_ext,
-                                                                        double hm, double *h3)
+                                                                        double hm, double *h3, int may_first)
 {
     const double h = *h3;
     const int live = dt > 0.0; /* else prepare: nothing advances, the factor is 1 */
-    /* the first evaluation (h == 0): the contact began d / vn ago */
-    const double r = d / (vn * dt);
+    /* the first evaluation (h == 0): the contact began d / vn ago (may_first = 0, a constant:
+     * the caller knows h != 0, and the division drops out) */
+    const double r = may_first ? d / (vn * dt) : 0.0;
     const double f_first = ((vn > 0.0) & (d <= 2.0 * vn * dt)) ? 0.5 + (r < 1.0 ? r : 1.0) : 1.0;
     /* later ones: the part of this evaluation's window that the previous one already
      * covered, when it took itself for the last one and the contact went on */
@@ -232,7 +258,7 @@ static inline __attribute__((always_inline)) double floe_linear_phase_lane(doubl
 
 static inline double floe_linear_dashpot_phase(double kn, double gn, int tension, const floe_contact *c, double *hist, double hm)
 {
-    return floe_linear_phase_lane(kn, gn, tension, c->depth, c->vn, c->dt, c->an_ext, hm, hist + 3);
+    return floe_linear_phase_lane(kn, gn, tension, c->depth, c->vn, c->dt, c->an_ext, hm, hist + 3, 1);
 }
 
 /* floe_linear_normal_k in lane form: the contact's depth, vn, dt, m_eff and an_ext; *h3 its
@@ -241,11 +267,12 @@ static inline double floe_linear_dashpot_phase(double kn, double gn, int tension
 static inline __attribute__((always_inline)) void floe_linear_normal_lane(double kn, double gn, int tension, double d,
                                                                        double vn, double dt, double m_eff,
                                                                        double an_ext, double *h3, double *fn,
-                                                                       double *fel_out, double *energy) {
+                                                                       double *fel_out, double *energy,
+                                                                       int may_first) {
     const double fel = kn * d;
     /* the dashpot at the velocity of the step's end (floe_linear_dashpot_phase) */
     const double hm_v = 0.5 * dt / m_eff, hm = ((m_eff > 0.0) & (m_eff < INFINITY)) ? hm_v : 0.0;
-    const double gph = gn * floe_linear_phase_lane(kn, gn, tension, d, vn, dt, an_ext, hm, h3);
+    const double gph = gn * floe_linear_phase_lane(kn, gn, tension, d, vn, dt, an_ext, hm, h3, may_first);
     const double Fn = (fel + gph * (vn + 0.5 * dt * floe_linear_an_ext_v(dt, an_ext))) / (1.0 + gph * hm);
     *fn = ((tension != 0) | !(0.0 > Fn)) ? Fn : 0.0; /* floe_clamp0 unless tension (NaN and -0 kept) */
     *fel_out = fel;
@@ -257,7 +284,8 @@ static inline __attribute__((always_inline)) void floe_linear_normal_k(double kn
                                                                   floe_normal_force *o)
 {
     double Fn, fel, energy;
-    floe_linear_normal_lane(kn, gn, tension, c->depth, c->vn, c->dt, c->m_eff, c->an_ext, hist + 3, &Fn, &fel, &energy);
+    floe_linear_normal_lane(kn, gn, tension, c->depth, c->vn, c->dt, c->m_eff, c->an_ext, hist + 3, &Fn, &fel, &energy,
+                            1);
     o->fn = Fn;
     o->fel = fel;
     o->kn = kn;

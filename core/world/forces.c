@@ -383,20 +383,18 @@ static inline void acc_life(stage_acc *acc, int i, int j, double d) {
     if (d < acc->wd_min) { acc->wd_min = d; acc->wd_i = i; acc->wd_j = j; }
 }
 
-/* entry k's force F on i (-F on j) and torque increments ti, tj, added as a serial loop adds
- * them (threads: an end led by another part stored for the gather, which adds them after the
- * lead part's, in the same order) */
-static inline __attribute__((always_inline)) void pair_apply(floe_particles *p, stage_acc *acc, int k, int i, int j,
-                                                             const double F[3], const double ti[3], const double tj[3]) {
-    double *fi = p->f + 3 * i, *fj = p->f + 3 * j, *Ti = p->t + 3 * i, *Tj = p->t + 3 * j;
+/* pair_apply less i's direct share (oi: i led by this part, or one thread), which the caller
+ * has added (the sphere batches' books keep it in registers over a row's run of entries) */
+static inline __attribute__((always_inline)) void pair_apply_rest(floe_particles *p, stage_acc *acc, int k, int oi,
+                                                                  int j, const double F[3], const double ti[3],
+                                                                  const double tj[3]) {
+    double *fj = p->f + 3 * j, *Tj = p->t + 3 * j;
     if (acc->pf) {
         /* an end led by this part (its first entry lies here; every entry of a particle whose
          * entries lie in one part) takes its share directly, in list order as one thread adds
          * it; an end led by an earlier part waits for the gather, which adds it after all of
          * that part's */
-        const int oi = acc->lead[i] == acc->part, oj = acc->lead[j] == acc->part;
-        if (oi)
-            for (int a = 0; a < 3; a++) { fi[a] += F[a]; Ti[a] += ti[a]; }
+        const int oj = acc->lead[j] == acc->part;
         if (oj)
             for (int a = 0; a < 3; a++) { fj[a] -= F[a]; Tj[a] += tj[a]; }
         if (oi & oj) return;
@@ -406,11 +404,24 @@ static inline __attribute__((always_inline)) void pair_apply(floe_particles *p, 
         return;
     }
     for (int a = 0; a < 3; a++) {
-        fi[a] += F[a];
         fj[a] -= F[a];
-        Ti[a] += ti[a];
         Tj[a] += tj[a];
     }
+}
+/* i leads in this part (or one thread): its forces are added directly */
+static inline int pair_leads(const stage_acc *acc, int i) { return !acc->pf || acc->lead[i] == acc->part; }
+
+/* entry k's force F on i (-F on j) and torque increments ti, tj, added as a serial loop adds
+ * them (threads: an end led by another part stored for the gather, which adds them after the
+ * lead part's, in the same order) */
+static inline __attribute__((always_inline)) void pair_apply(floe_particles *p, stage_acc *acc, int k, int i, int j,
+                                                             const double F[3], const double ti[3], const double tj[3]) {
+    const int oi = pair_leads(acc, i);
+    if (oi) {
+        double *fi = p->f + 3 * i, *Ti = p->t + 3 * i;
+        for (int a = 0; a < 3; a++) { fi[a] += F[a]; Ti[a] += ti[a]; }
+    }
+    pair_apply_rest(p, acc, k, oi, j, F, ti, tj);
 }
 typedef struct stage_env {
     floe_particles *p;
@@ -843,24 +854,84 @@ typedef struct sph_batch {
     double wn[3][SPH_BATCH], wdep[SPH_BATCH], wreff[SPH_BATCH], wpt[3][SPH_BATCH];
 } sph_batch;
 
+/* What a batch's books add up, held in locals over the batch (sph_flush_lanes) and written
+ * back at its end: the stage's sums, and i's force and torque over a run of entries of one row
+ * (the list is sorted by i; no entry of the run has i as its j). Added through acc and p->f one
+ * entry after the other, each sum was a chain of loads and stores through memory (the history's
+ * and the forces' stores may alias them, so the compiler keeps them there). The same additions
+ * in the same order: the same bits. */
+typedef struct sph_sums {
+    double elastic, diss, wd_min;
+    int wd_i, wd_j;
+    long ncontacts;
+    int ci, ci_leads; /* the row held (-1: none) and whether its i leads in this part (pair_leads) */
+    double fi[3], ti[3];
+} sph_sums;
+
+static inline __attribute__((always_inline)) void sph_sums_take(sph_sums *ls, const stage_acc *acc) {
+    ls->elastic = acc->elastic;
+    ls->diss = acc->diss;
+    ls->wd_min = acc->wd_min;
+    ls->wd_i = acc->wd_i;
+    ls->wd_j = acc->wd_j;
+    ls->ncontacts = acc->ncontacts;
+    ls->ci = -1;
+    ls->ci_leads = 0;
+}
+/* the row held back into the particles' forces */
+static inline __attribute__((always_inline)) void sph_row_put(floe_particles *p, const sph_sums *ls) {
+    if (ls->ci < 0 || !ls->ci_leads) return;
+    double *fi = p->f + 3 * (size_t)ls->ci, *Ti = p->t + 3 * (size_t)ls->ci;
+    for (int a = 0; a < 3; a++) {
+        fi[a] = ls->fi[a];
+        Ti[a] = ls->ti[a];
+    }
+}
+static inline __attribute__((always_inline)) void sph_sums_put(floe_particles *p, const sph_sums *ls, stage_acc *acc) {
+    sph_row_put(p, ls);
+    acc->elastic = ls->elastic;
+    acc->diss = ls->diss;
+    acc->wd_min = ls->wd_min;
+    acc->wd_i = ls->wd_i;
+    acc->wd_j = ls->wd_j;
+    acc->ncontacts = ls->ncontacts;
+}
+
 /* the book of entry k: the particles' sums and the ledger, in list order; dk the work the
  * contact did less the change of its stored energy (pair_book's ledger) */
 static inline __attribute__((always_inline)) void sphere_fused_book(floe_world *w, const stage_env *env, int k,
-                                                                   stage_acc *acc,
+                                                                   stage_acc *acc, sph_sums *ls,
                                                                    int i, int j, double *hist, const sph_out *o,
                                                                    double dk) {
-    pair_apply(env->p, acc, k, i, j, o->F, o->Ti, o->Tj);
+    floe_particles *p = env->p;
+    if (i != ls->ci) { /* a new row: the last one's i-side back, this one's taken */
+        sph_row_put(p, ls);
+        ls->ci = i;
+        ls->ci_leads = pair_leads(acc, i);
+        if (ls->ci_leads)
+            for (int a = 0; a < 3; a++) {
+                ls->fi[a] = p->f[3 * (size_t)i + a];
+                ls->ti[a] = p->t[3 * (size_t)i + a];
+            }
+    }
+    if (ls->ci_leads)
+        for (int a = 0; a < 3; a++) {
+            ls->fi[a] += o->F[a];
+            ls->ti[a] += o->Ti[a];
+        }
+    pair_apply_rest(p, acc, k, ls->ci_leads, j, o->F, o->Ti, o->Tj);
     const double energy = o->energy;
-    acc->elastic += energy;
+    ls->elastic += energy;
     if (env->stepping) { /* pair_book's ledger: dk from the lanes (sph_flush_lanes) */
-        acc->diss += dk;
+        ls->diss += dk;
         hist[FLOE_DISS_SLOT] += dk;
-        acc_life(acc, i, j, hist[FLOE_DISS_SLOT] + energy);
+        const double life = hist[FLOE_DISS_SLOT] + energy; /* acc_life */
+        if (life < ls->wd_min) { ls->wd_min = life; ls->wd_i = i; ls->wd_j = j; }
     }
     hist[FLOE_ENERGY_SLOT] = energy;
     memcpy(hist + FLOE_FORCE_SLOT, o->F, 3 * sizeof(double));
     if (!env->record) {
-        acc->ncontacts++;
+        ls->ncontacts++;
         return;
     }
     /* pair_book's record: the manifold's force, fn_extra and energy (zeros) added as it adds them */
@@ -911,16 +982,22 @@ static inline __attribute__((always_inline)) void sph_lane_gather(const floe_wor
 /* A batch in lanes: every stage's operations on arrays of the batch's contacts, one array
  * per quantity, so that the compiler runs each stage over 8 contacts at a time (AVX-512; 4
  * with AVX2) where the scalar stages before ran one contact after the other: the geometry
- * and velocities with the other forces' normal acceleration (pair_an_ext), then the law's
- * normal force and tangential spring (floe_hertz_normal_lane and floe_mindlin_tangential_lane,
- * or floe_linear_normal_lane, floe_coulomb_trial and floe_coulomb_slip: every case computed
- * and the one that applies selected, without a branch) and the torques; then the books in
- * list order. The inputs are the batch's arrays (sph_lane_gather, as each entry joined; the
+ * and velocities with the other forces' normal acceleration (pair_an_ext), the springs
+ * turned with the contact frames, then the law's normal force and tangential spring
+ * (floe_hertz_normal_lane, floe_mindlin_trial and floe_mindlin_slip, or floe_linear_normal_lane,
+ * floe_coulomb_trial_rotated and floe_coulomb_slip: every case computed and the one that
+ * applies selected, without a branch per lane) and the torques; then the books in list order.
+ * A rare case's full form (a spring turned by more than 0.01 rad, a linear contact's first
+ * evaluation or its last under tension, a slip) runs only for a batch where a live lane
+ * needs it: one branch a batch, and its divisions and square roots left out of the others
+ * (issue 14 session 39; a linear contact's divisions and square roots 12 and 3 before, 5
+ * and 1 after; Hertz-Mindlin's 8 and 5, then 5 and 3). The inputs are the batch's arrays (sph_lane_gather, as each entry joined; the
  * lanes past nb hold an earlier batch's entries or zeros, their results are dropped). Each
  * lane does the scalar operations in their order (no contraction in ISO C): the same bits
- * as the law's own force function (tests/test_sphere_path.c). Out of line: inlined at each
- * flush of stage_block, some copies stayed scalar (the RVE 1.5x slower). The ParticLS 5.3
- * RVE 14 % and dem-settle 8 % faster on one thread (bench/RESULTS.md, issue 14 session 13). */
+ * as the law's own force function (tests/test_sphere_path.c, which also counts the batches
+ * that took each rare case, w->st_lanes). Out of line: inlined at each flush of stage_block,
+ * some copies stayed scalar (the RVE 1.5x slower). The ParticLS 5.3 RVE 14 % and dem-settle
+ * 8 % faster on one thread (bench/RESULTS.md, issue 14 session 13). */
 #define SL SPH_BATCH
 /* lane q's results: the force -Fn n + Ft on i, the spring s, the energy, and the torques
  * about the centres from the lever arms Ri, Rj (+ the law's couples, zero, as sphere_pair
@@ -964,9 +1041,11 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
     /* dist = |x_j - x_i|, depth = r_i + r_j - dist, r_eff = r_i r_j / (r_i + r_j), m_eff =
      * 1 / (1/m_i + 1/m_j) */
     double depth[SL], reff[SL], meff[SL];
+    /* r_eff: Hertz-Mindlin's, and the record's and a periodic cell's stiffness sums (a
+     * division a lane: the linear law alone leaves it) */
+    const int want_reff = hm || env->record || (env->cell && env->cell->want_kdiag);
     /* geometry, velocities, the other forces' normal acceleration */
-    double N[3][SL], Ri[3][SL], Rj[3][SL], VR[3][SL], VT[3][SL], VN[SL], AN[SL], ETA[SL], PT[3][SL], FN[SL];
-    const double wdt = w->dt;
+    double N[3][SL], Ri[3][SL], Rj[3][SL], VR[3][SL], VT[3][SL], VN[SL], AN[SL], PT[3][SL], FN[SL];
     /* a periodic cell: the mean field's velocity of i relative to j's image, -L l with l =
      * (dx, dy, dz) (pair_affine_sub's operations; selected, so a world without a cell keeps
      * its bits) */
@@ -1005,7 +1084,6 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
             VT[a][q] = vr_[a] - vn_ * (n)[a];                                                                   \
         }                                                                                                       \
         VN[q] = vn_;                                                                                            \
-        ETA[q] = fabs(vn_) * wdt / (RI[q] < RJ[q] ? RI[q] : RJ[q]); /* adaptive steps: read when env->track */ \
         const double an_ = AIJ[0][q] * (n)[0] + AIJ[1][q] * (n)[1] + AIJ[2][q] * (n)[2];                        \
         const double fo_ = FO[0][q] * (n)[0] + FO[1][q] * (n)[1] + FO[2][q] * (n)[2];                           \
         AN[q] = dash ? an_ - fo_ * IM[q] : 0.0;                                                                 \
@@ -1017,9 +1095,10 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
             const int wl = b->wall[q] != 0.0;
             dist[q] = sqrt(b->d2[q]);
             depth[q] = wl ? b->wdep[q] : rs - dist[q];
-            reff[q] = wl ? b->wreff[q] : RI[q] * RJ[q] / rs;
             meff[q] = 1.0 / IM[q];
         }
+        if (want_reff)
+            for (int q = 0; q < SL; q++) reff[q] = b->wall[q] != 0.0 ? b->wreff[q] : RI[q] * RJ[q] / (RI[q] + RJ[q]);
         for (int q = 0; q < SL; q++) {
             const double inv = 1.0 / dist[q];
             const int wl = b->wall[q] != 0.0;
@@ -1034,12 +1113,12 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
     } else {
         double dist[SL];
         for (int q = 0; q < SL; q++) {
-            const double rs = RI[q] + RJ[q];
             dist[q] = sqrt(b->d2[q]);
-            depth[q] = rs - dist[q];
-            reff[q] = RI[q] * RJ[q] / rs;
+            depth[q] = (RI[q] + RJ[q]) - dist[q];
             meff[q] = 1.0 / IM[q];
         }
+        if (want_reff)
+            for (int q = 0; q < SL; q++) reff[q] = RI[q] * RJ[q] / (RI[q] + RJ[q]);
         for (int q = 0; q < SL; q++) {
             const double inv = 1.0 / dist[q];
             double n[3], pt[3];
@@ -1052,46 +1131,151 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         }
     }
 #undef LANE_KIN
+    /* the springs turned with the contact frames (floe_contact_rotate_history): its common
+     * cases on every lane, its full form on every lane only when a live lane's frame turned by
+     * more than 0.01 rad in the step (a square root and a division a lane left out otherwise) */
+    double S0[3][SL];
+    {
+        double TURN[SL];
+        for (int q = 0; q < SL; q++) {
+            double s[3], n[3];
+            for (int a = 0; a < 3; a++) {
+                s[a] = b->s[a][q];
+                n[a] = N[a][q];
+            }
+            TURN[q] = floe_contact_rotate_history_small(s, n);
+            for (int a = 0; a < 3; a++) S0[a][q] = s[a];
+        }
+        int turn = 0;
+        for (int q = 0; q < nb; q++) turn |= TURN[q] != 0.0;
+        if (!acc->pf) { /* one thread only: the counts are the tests' */
+            w->st_lanes[0]++;
+            w->st_lanes[1] += turn;
+        }
+        if (turn)
+            for (int q = 0; q < SL; q++) {
+                double s[3], n[3];
+                for (int a = 0; a < 3; a++) {
+                    s[a] = b->s[a][q];
+                    n[a] = N[a][q];
+                }
+                floe_contact_rotate_history(s, n);
+                for (int a = 0; a < 3; a++) S0[a][q] = s[a];
+            }
+    }
     /* the normal force, the tangential spring, the force and torques */
     double F[3][SL], TI[3][SL], TJ[3][SL], E[SL];
     if (hm) { /* floe_hm_kernel: floe_hertz_normal, floe_mindlin_tangential */
         const floe_hertz_mindlin_law *H = (const floe_hertz_mindlin_law *)b->law;
         const double e_star = H->e_star, beta = H->damping_ratio, g_star = H->g_star, tdr = H->tangent_damping_ratio,
                      mu_h = H->mu;
+        /* the normal force and the trial, then the slip's values where a live lane slips
+         * (floe_mindlin_slip: its square root and division a lane only for such a batch),
+         * then the force and torques; the dissipation sums (diss) are not read here */
+        double S1[3][SL], FT[3][SL], LIM[SL], FT2[SL], GT[SL], HIK[SL], EN[SL];
         for (int q = 0; q < SL; q++) {
-            double fn, fel, Sn, gnq, en, diss = 0.0, s[3], n[3], vt[3], Ft[3];
+            double fn, fel, Sn, gnq, en, diss = 0.0, s[3], vt[3], Ft[3];
             floe_hertz_normal_lane(e_star, beta, depth[q], VN[q], reff[q], meff[q], &fn, &fel, &Sn, &gnq, &en);
             for (int a = 0; a < 3; a++) {
-                s[a] = b->s[a][q];
-                n[a] = N[a][q];
+                s[a] = S0[a][q];
                 vt[a] = VT[a][q];
             }
-            floe_mindlin_tangential_lane(g_star, tdr, mu_h, dt, reff[q], depth[q], n, vt, gnq, fn, 0.0, s, Ft, &en, &diss);
-            lane_out(q, fn, n, Ft, s, en, Ri, Rj, S, F, TI, TJ, E);
+            floe_mindlin_trial(g_star, tdr, mu_h, dt, reff[q], depth[q], vt, gnq, fn, 0.0, s, Ft, &GT[q], &LIM[q], &FT2[q],
+                               &HIK[q], &diss);
+            for (int a = 0; a < 3; a++) {
+                S1[a][q] = s[a];
+                FT[a][q] = Ft[a];
+            }
+            EN[q] = en;
             FN[q] = fn;
         }
-    } else
-    for (int q = 0; q < SL; q++) {
-        double fn, fel, en, h3 = H3i[q];
-        floe_linear_normal_lane(kn, gn, tension, depth[q], VN[q], dt, meff[q], AN[q], &h3, &fn, &fel, &en);
-        H3[q] = h3;
-        double s[3], n[3], vt[3], Ft[3];
-        for (int a = 0; a < 3; a++) {
-            s[a] = b->s[a][q];
-            n[a] = N[a][q];
-            vt[a] = VT[a][q];
+        int slips = 0;
+        for (int q = 0; q < nb; q++) slips |= FT2[q] > LIM[q] * LIM[q];
+        if (!acc->pf) w->st_lanes[3] += slips;
+#define HM_OUT(SLIPS)                                                                                           \
+    for (int q = 0; q < SL; q++) {                                                                             \
+        double diss = 0.0, s[3], n[3], vt[3], Ft[3];                                                           \
+        for (int a = 0; a < 3; a++) {                                                                          \
+            s[a] = S1[a][q];                                                                                   \
+            n[a] = N[a][q];                                                                                    \
+            vt[a] = VT[a][q];                                                                                  \
+            Ft[a] = FT[a][q];                                                                                  \
+        }                                                                                                      \
+        if (SLIPS) floe_mindlin_slip(GT[q], vt, LIM[q], FT2[q], HIK[q], s, Ft, &diss);                         \
+        lane_out(q, FN[q], n, Ft, s, EN[q] + floe_dot3_l(s, s) * HIK[q], Ri, Rj, S, F, TI, TJ, E);             \
+    }
+        if (slips) HM_OUT(1)
+        else HM_OUT(0)
+#undef HM_OUT
+    } else {
+        /* the linear law: the normal force and the Coulomb trial, then the slip's values where a
+         * live lane slips, then the force and torques. The first two in four copies, one for
+         * each value of the law's tension switch and of "a live lane's first evaluation"
+         * (history[3] == 0): without tension (the usual case) the dashpot's last-evaluation
+         * phase is never taken, and without a first evaluation (most batches) its onset
+         * phase neither: their divisions drop out (floe_linear_phase_lane); the slip's square
+         * root and division only for a batch with a slipping lane. The same operations on the
+         * lanes whose results are kept. */
+        int first = 0;
+        for (int q = 0; q < nb; q++) first |= H3i[q] == 0.0;
+        if (!acc->pf) w->st_lanes[2] += first;
+        double S1[3][SL], FT[3][SL], LIM[SL], FT2[SL], EN[SL];
+#define LIN_TRIAL(TENSION, FIRST)                                                                               \
+    for (int q = 0; q < SL; q++) {                                                                             \
+        double fn, fel, en, h3 = H3i[q], s[3], vt[3], Ft[3], lim, ft2;                                         \
+        floe_linear_normal_lane(kn, gn, (TENSION), depth[q], VN[q], dt, meff[q], AN[q], &h3, &fn, &fel, &en,   \
+                                (FIRST));                                                                      \
+        H3[q] = h3;                                                                                            \
+        for (int a = 0; a < 3; a++) {                                                                          \
+            s[a] = S0[a][q];                                                                                   \
+            vt[a] = VT[a][q];                                                                                  \
+        }                                                                                                      \
+        floe_coulomb_trial_rotated(vt, dt, ks, gs, mu, fabs(fn) + 0.0, s, Ft, &lim, &ft2); /* + fn_extra, 0 */ \
+        for (int a = 0; a < 3; a++) {                                                                          \
+            S1[a][q] = s[a];                                                                                   \
+            FT[a][q] = Ft[a];                                                                                  \
+        }                                                                                                      \
+        LIM[q] = lim;                                                                                          \
+        FT2[q] = ft2;                                                                                          \
+        EN[q] = en;                                                                                            \
+        FN[q] = fn;                                                                                            \
+    }
+        if (tension) {
+            if (first) LIN_TRIAL(1, 1)
+            else LIN_TRIAL(1, 0)
+        } else {
+            if (first) LIN_TRIAL(0, 1)
+            else LIN_TRIAL(0, 0)
         }
-        double lim, ft2, fs[3], ss[3];
-        floe_coulomb_trial(n, vt, dt, ks, gs, mu, fabs(fn) + 0.0, s, Ft, &lim, &ft2); /* + fn_extra, 0 */
+#undef LIN_TRIAL
+        int slips = 0;
+        for (int q = 0; q < nb; q++) slips |= FT2[q] > LIM[q] * LIM[q];
+        if (!acc->pf) w->st_lanes[3] += slips;
         /* floe_coulomb_slip's values where it slips */
-        const int slip = ft2 > lim * lim;
-        floe_coulomb_slip(vt, ks, gs, minus_inv_ks, lim / sqrt(ft2), Ft, fs, ss);
-        for (int a = 0; a < 3; a++) {
-            Ft[a] = slip ? fs[a] : Ft[a];
-            s[a] = slip ? ss[a] : s[a];
-        }
-        lane_out(q, fn, n, Ft, s, en + 0.5 * ks * floe_dot3_l(s, s), Ri, Rj, S, F, TI, TJ, E);
-        FN[q] = fn;
+#define LIN_OUT(SLIPS)                                                                                          \
+    for (int q = 0; q < SL; q++) {                                                                             \
+        double s[3], n[3], vt[3], Ft[3];                                                                       \
+        for (int a = 0; a < 3; a++) {                                                                          \
+            s[a] = S1[a][q];                                                                                   \
+            n[a] = N[a][q];                                                                                    \
+            vt[a] = VT[a][q];                                                                                  \
+            Ft[a] = FT[a][q];                                                                                  \
+        }                                                                                                      \
+        if (SLIPS) {                                                                                           \
+            const double lim = LIM[q], ft2 = FT2[q];                                                           \
+            const int slip = ft2 > lim * lim;                                                                  \
+            double fs[3], ss[3];                                                                               \
+            floe_coulomb_slip(vt, ks, gs, minus_inv_ks, lim / sqrt(ft2), Ft, fs, ss);                          \
+            for (int a = 0; a < 3; a++) {                                                                      \
+                Ft[a] = slip ? fs[a] : Ft[a];                                                                  \
+                s[a] = slip ? ss[a] : s[a];                                                                    \
+            }                                                                                                  \
+        }                                                                                                      \
+        lane_out(q, FN[q], n, Ft, s, EN[q] + 0.5 * ks * floe_dot3_l(s, s), Ri, Rj, S, F, TI, TJ, E);           \
+    }
+        if (slips) LIN_OUT(1)
+        else LIN_OUT(0)
+#undef LIN_OUT
     }
     /* the ledger's work less the change of stored energy: (F_old + F_new)/2 . vr dt - dE */
     double DK[SL];
@@ -1104,8 +1288,12 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         DK[q] = -floe_dot3_l(fav, vr) * dt - (E[q] - b->eo[q]);
     }
     if (env->track) /* the largest overlap change over the step, relative to the size (a max: any order) */
-        for (int q = 0; q < nb; q++)
-            if (ETA[q] > acc->eta_d) acc->eta_d = ETA[q];
+        for (int q = 0; q < nb; q++) {
+            const double eta = fabs(VN[q]) * w->dt / (RI[q] < RJ[q] ? RI[q] : RJ[q]);
+            if (eta > acc->eta_d) acc->eta_d = eta;
+        }
+    sph_sums ls;
+    sph_sums_take(&ls, acc);
     for (int q = 0; q < nb; q++) {
         double *h = env->nl->hist + (size_t)b->k[q] * hs;
         for (int a = 0; a < 3; a++) h[FLOE_LAW_SLOT + a] = S[a][q];
@@ -1150,8 +1338,9 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
             o.r_eff = reff[q];
             o.m_eff = meff[q];
         }
-        sphere_fused_book(w, env, b->k[q], acc, b->i[q], b->j[q], h, &o, DK[q]);
+        sphere_fused_book(w, env, b->k[q], acc, &ls, b->i[q], b->j[q], h, &o, DK[q]);
     }
+    sph_sums_put(env->p, &ls, acc);
     b->n = 0;
     b->nwall = 0; /* the flags past the next batch's end are stale, their lanes dropped */
 }

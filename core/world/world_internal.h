@@ -196,6 +196,10 @@ struct floe_world {
                                  when the evaluation takes them): forces_clear sees to the others
                                  alone; set for the step's force evaluation only (step.c, forces.c) */
     long st_drift_clears;     /* steps whose drift did so (tests/test_drift_clear.c) */
+    /* the sphere batches (forces.c sph_flush_lanes) on one thread: [0] all, then those that
+     * took a rare case's full form: [1] a spring turned by more than 0.01 rad, [2] a linear
+     * contact's first evaluation, [3] a slipping contact (tests/test_sphere_path.c) */
+    long st_lanes[4];
     struct floe_snapshot *snap; /* adaptive: the state at the start of the trial step (owned by
                                    the controller, core/integrators/adaptive.c; freed by
                                    floe_world_destroy through snap_free) */
