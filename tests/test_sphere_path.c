@@ -12,8 +12,12 @@
  *     two materials whose spheres alternate, under three laws (Hertz-Mindlin for each
  *     material with itself, two different objects, the linear law between them): the
  *     fused path's batches of entries (sph_flush_lanes) end at every change of law, and the
- *     sums still come in list order; and Hertz-Mindlin under adaptive steps (the stage
- *     measures each contact's overlap change: the batches' lanes too);
+ *     sums still come in list order; Hertz-Mindlin under adaptive steps (the stage
+ *     measures each contact's overlap change: the batches' lanes too); and the linear law
+ *     with tension among fast spheres (10 m/s: a grazing contact's frame turns by up to
+ *     0.05 rad a step). Each case counts the batches that took a rare case's full form (a
+ *     turned spring, a linear contact's first evaluation, a slip; w->st_lanes) and checks
+ *     that both copies of each ran where the scene has them;
  *  2. every sphere-wall contact the stage recorded (the inline kernel, seen from i) against
  *     detection's own answer for the pair (floe_world_probe_contact): normal, depth and
  *     point equal bit for bit, for walls declared before the spheres and after them, the
@@ -40,7 +44,8 @@ static double urand(void) {
 }
 
 /* the box: walls 0..4 first (floor tilted), spheres 5..5+NS-1, then the last wall; with a
- * compound, a fixed body of two spheres near the ceiling (index 6 + NS) */
+ * compound, a fixed body of two spheres near the ceiling, above it for the fast spheres
+ * (index 6 + NS) */
 static floe_world *scene(int with_compound, int linear) {
     floe_world_def def = floe_default_world_def();
     def.dt = 5e-6;
@@ -169,8 +174,9 @@ static floe_world *compare_paths(int linear) {
            diff, NS, contacts, moving);
     CHECK(diff == 0, "%s: %d spheres differ between sphere_pair and contact_pair", law, diff);
     /* the lattice falls as a block onto the tilted floor and breaks up: few contacts at the end */
-    CHECK(contacts > (linear == 5 ? -1 : linear == 4 ? 0 : linear == 3 ? NS / 4 : NS / 2),
-          "%s: the pile is in contact (%d contacts)", law, contacts);
+    if (linear != 5) /* the fast spheres make no pile */
+        CHECK(contacts > (linear == 4 ? 0 : linear == 3 ? NS / 4 : NS / 2), "%s: the pile is in contact (%d contacts)",
+              law, contacts);
     /* the batches' rare cases (sph_flush_lanes: the full form only where a live lane needs
      * it) taken and left, so that both copies of each met the general body above */
     const long *st = a->st_lanes;

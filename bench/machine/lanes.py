@@ -62,6 +62,29 @@ def function_lines(src, name):
     return None
 
 
+def batch_loops(lines, span):
+    """the lines (1-based) where GCC reports each batch loop of the span: the loop's own line,
+    or, for a loop inside a macro defined there (sph_flush_lanes' copies of a loop for each
+    value of a constant: LIN_TRIAL, LIN_OUT, HM_OUT), each line that uses the macro"""
+    out, in_macro, macros = [], None, {}  # out: (line, a macro's use)
+    for n in range(span[0] - 1, span[1]):
+        line = lines[n]
+        m = re.match(r"\s*#define ([A-Z_0-9]+)\(", line)
+        if m:
+            in_macro = m.group(1)
+            macros[in_macro] = False
+        if in_macro:
+            macros[in_macro] |= bool(BATCH_LOOP.search(line))
+            if not line.rstrip().endswith("\\"):
+                in_macro = None
+            continue
+        if BATCH_LOOP.search(line):
+            out.append((n + 1, False))
+        elif any(v and re.search(rf"\b{k}\(", line) and "#undef" not in line for k, v in macros.items()):
+            out.append((n + 1, True))
+    return out
+
+
 def main():
     build = os.path.abspath(sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "build-bench"))
     flags = build_flags(build)
@@ -89,12 +112,15 @@ def main():
                 print(f"{rel}: function {f} not found (renamed? update KERNELS in this script)")
                 bad += 1
                 continue
-            loops = [n + 1 for n in range(span[0] - 1, span[1]) if BATCH_LOOP.search(lines[n])]
-            for ln in loops:
+            loops = batch_loops(lines, span)
+            for ln, use in loops:
                 if ln in vec:
                     print(f"{rel}:{ln}: {f}: vector")
                 elif ln in why and "__builtin_mem" not in why[ln]:
                     print(f"{rel}:{ln}: {f}: SCALAR ({why[ln]})")
+                    bad += 1
+                elif use:  # a macro's copy of a batch loop with no report: not known to be vector code
+                    print(f"{rel}:{ln}: {f}: NO REPORT for the macro's batch loop")
                     bad += 1
                 else:  # e.g. a loop that only zeroes, made a memset call
                     print(f"{rel}:{ln}: {f}: no loop left to report (a library call, or unrolled)")

@@ -202,25 +202,6 @@ static inline void floe_contact_rotate_history(double s[3], const double n[3]) {
     }
 }
 
-/* floe_contact_rotate_history's common cases alone, with its operations: a zero spring (kept)
- * and the small turn (q < 1e-4); returns 1, s unchanged, where the turn is larger (the full
- * form's square root and second division). A batch of contacts in lanes (the world's sphere
- * batches) runs this over all its lanes and the full form only when one of them returns 1:
- * a contact frame turns by sqrt(q) a step, 0.01 rad, almost never. */
-#if defined(__GNUC__)
-__attribute__((always_inline))
-#endif
-static inline int floe_contact_rotate_history_small(double s[3], const double n[3]) {
-    const double mag2 = s[0] * s[0] + s[1] * s[1] + s[2] * s[2], sn = s[0] * n[0] + s[1] * n[1] + s[2] * n[2];
-    const double q = sn * sn / mag2, small = 1.0 + q * (0.5 + 0.375 * q);
-    const int keep = mag2 == 0.0, is_small = q < 1e-4;
-    for (int k = 0; k < 3; k++) {
-        const double ts = (s[k] + -sn * n[k]) * small;
-        s[k] = keep | !is_small ? s[k] : ts;
-    }
-    return !keep & !is_small;
-}
-
 /* Constructors (caller owns the result, or the world after floe_world_set_law). */
 floe_contact_law *floe_linear_law_create(double kn, double ks, double gn, double gs, double mu);
 floe_contact_law *floe_hertz_mindlin_law_create(const floe_material *a, const floe_material *b,

@@ -63,6 +63,23 @@ static inline void floe_hertz_normal(double e_star, double beta, const floe_cont
     o->energy = energy;
 }
 
+/* floe_contact_rotate_history's common cases alone, with its operations: a zero spring (kept)
+ * and the small turn (q < 1e-4); returns 1, s unchanged, where the turn is larger (the full
+ * form's square root and second division). A batch of contacts in lanes (the world's sphere
+ * batches) runs this over all its lanes and the full form only when one of them returns 1:
+ * a contact frame turns by sqrt(q) a step, 0.01 rad, almost never (internal: not in the
+ * public floe_contact.h). */
+static inline __attribute__((always_inline)) int floe_contact_rotate_history_small(double s[3], const double n[3]) {
+    const double mag2 = s[0] * s[0] + s[1] * s[1] + s[2] * s[2], sn = s[0] * n[0] + s[1] * n[1] + s[2] * n[2];
+    const double q = sn * sn / mag2, small = 1.0 + q * (0.5 + 0.375 * q);
+    const int keep = mag2 == 0.0, is_small = q < 1e-4;
+    for (int k = 0; k < 3; k++) {
+        const double ts = (s[k] + -sn * n[k]) * small;
+        s[k] = keep | !is_small ? s[k] : ts;
+    }
+    return !keep & !is_small;
+}
+
 /* Mindlin tangential spring kt = 8 G* sqrt(R* d) on the stored force Fs (history[0..2],
  * rotated with the contact frame), dashpot gt = gn sqrt(4 G* / E*) (tdr) from the normal
  * dashpot, Coulomb limit mu (Fn + fn_extra); adds the spring energy |Fs|^2 / (2 kt) to
@@ -230,7 +247,8 @@ static inline double floe_linear_an_ext(const floe_contact *c) { return floe_lin
 /* In lane form (the world's vectorised sphere batch, forces.c): the scalars of one contact, *h3 its
  * history[3] (written back whatever the case), each case's value computed and the one that
  * applies selected, without a branch (the same values as the cases taken one by one; the
- * divisions of the cases not taken are done and dropped). */
+ * divisions of the cases not taken are done and dropped, except where the caller passes
+ * tension = 0 or may_first = 0 as constants: then those cases' divisions drop out). */
 static inline __attribute__((always_inline)) double floe_linear_phase_lane(double kn, double gn, int tension, double d,
                                                                         double vn, double dt, double an_ext,
                                                                         double hm, double *h3, int may_first)

@@ -383,18 +383,20 @@ static inline void acc_life(stage_acc *acc, int i, int j, double d) {
     if (d < acc->wd_min) { acc->wd_min = d; acc->wd_i = i; acc->wd_j = j; }
 }
 
-/* pair_apply less i's direct share (oi: i led by this part, or one thread), which the caller
- * has added (the sphere batches' books keep it in registers over a row's run of entries) */
-static inline __attribute__((always_inline)) void pair_apply_rest(floe_particles *p, stage_acc *acc, int k, int oi,
-                                                                  int j, const double F[3], const double ti[3],
-                                                                  const double tj[3]) {
-    double *fj = p->f + 3 * j, *Tj = p->t + 3 * j;
+/* entry k's force F on i (-F on j) and torque increments ti, tj, added as a serial loop adds
+ * them (threads: an end led by another part stored for the gather, which adds them after the
+ * lead part's, in the same order) */
+static inline __attribute__((always_inline)) void pair_apply(floe_particles *p, stage_acc *acc, int k, int i, int j,
+                                                             const double F[3], const double ti[3], const double tj[3]) {
+    double *fi = p->f + 3 * i, *fj = p->f + 3 * j, *Ti = p->t + 3 * i, *Tj = p->t + 3 * j;
     if (acc->pf) {
         /* an end led by this part (its first entry lies here; every entry of a particle whose
          * entries lie in one part) takes its share directly, in list order as one thread adds
          * it; an end led by an earlier part waits for the gather, which adds it after all of
          * that part's */
-        const int oj = acc->lead[j] == acc->part;
+        const int oi = acc->lead[i] == acc->part, oj = acc->lead[j] == acc->part;
+        if (oi)
+            for (int a = 0; a < 3; a++) { fi[a] += F[a]; Ti[a] += ti[a]; }
         if (oj)
             for (int a = 0; a < 3; a++) { fj[a] -= F[a]; Tj[a] += tj[a]; }
         if (oi & oj) return;
@@ -404,24 +406,11 @@ static inline __attribute__((always_inline)) void pair_apply_rest(floe_particles
         return;
     }
     for (int a = 0; a < 3; a++) {
+        fi[a] += F[a];
         fj[a] -= F[a];
+        Ti[a] += ti[a];
         Tj[a] += tj[a];
     }
-}
-/* i leads in this part (or one thread): its forces are added directly */
-static inline int pair_leads(const stage_acc *acc, int i) { return !acc->pf || acc->lead[i] == acc->part; }
-
-/* entry k's force F on i (-F on j) and torque increments ti, tj, added as a serial loop adds
- * them (threads: an end led by another part stored for the gather, which adds them after the
- * lead part's, in the same order) */
-static inline __attribute__((always_inline)) void pair_apply(floe_particles *p, stage_acc *acc, int k, int i, int j,
-                                                             const double F[3], const double ti[3], const double tj[3]) {
-    const int oi = pair_leads(acc, i);
-    if (oi) {
-        double *fi = p->f + 3 * i, *Ti = p->t + 3 * i;
-        for (int a = 0; a < 3; a++) { fi[a] += F[a]; Ti[a] += ti[a]; }
-    }
-    pair_apply_rest(p, acc, k, oi, j, F, ti, tj);
 }
 typedef struct stage_env {
     floe_particles *p;
@@ -854,18 +843,17 @@ typedef struct sph_batch {
     double wn[3][SPH_BATCH], wdep[SPH_BATCH], wreff[SPH_BATCH], wpt[3][SPH_BATCH];
 } sph_batch;
 
-/* What a batch's books add up, held in locals over the batch (sph_flush_lanes) and written
- * back at its end: the stage's sums, and i's force and torque over a run of entries of one row
- * (the list is sorted by i; no entry of the run has i as its j). Added through acc and p->f one
- * entry after the other, each sum was a chain of loads and stores through memory (the history's
- * and the forces' stores may alias them, so the compiler keeps them there). The same additions
- * in the same order: the same bits. */
+/* A batch's book sums (the stage's elastic energy and dissipation, the watchdog's minimum,
+ * the contact count), held in locals over the batch (sph_flush_lanes) and written back at its
+ * end: added through acc one entry after the other, each was a chain of loads and stores
+ * through memory (the history's and the forces' stores may alias them, so the compiler kept
+ * them there). The same additions in the same order: the same bits. (The i-side of a row's
+ * run of entries held the same way, tried in session 39: a mispredicted branch at each row's
+ * change, the settled dem-settle bed 3-5 % slower; not kept.) */
 typedef struct sph_sums {
     double elastic, diss, wd_min;
     int wd_i, wd_j;
     long ncontacts;
-    int ci, ci_leads; /* the row held (-1: none) and whether its i leads in this part (pair_leads) */
-    double fi[3], ti[3];
 } sph_sums;
 
 static inline __attribute__((always_inline)) void sph_sums_take(sph_sums *ls, const stage_acc *acc) {
@@ -875,20 +863,8 @@ static inline __attribute__((always_inline)) void sph_sums_take(sph_sums *ls, co
     ls->wd_i = acc->wd_i;
     ls->wd_j = acc->wd_j;
     ls->ncontacts = acc->ncontacts;
-    ls->ci = -1;
-    ls->ci_leads = 0;
 }
-/* the row held back into the particles' forces */
-static inline __attribute__((always_inline)) void sph_row_put(floe_particles *p, const sph_sums *ls) {
-    if (ls->ci < 0 || !ls->ci_leads) return;
-    double *fi = p->f + 3 * (size_t)ls->ci, *Ti = p->t + 3 * (size_t)ls->ci;
-    for (int a = 0; a < 3; a++) {
-        fi[a] = ls->fi[a];
-        Ti[a] = ls->ti[a];
-    }
-}
-static inline __attribute__((always_inline)) void sph_sums_put(floe_particles *p, const sph_sums *ls, stage_acc *acc) {
-    sph_row_put(p, ls);
+static inline __attribute__((always_inline)) void sph_sums_put(const sph_sums *ls, stage_acc *acc) {
     acc->elastic = ls->elastic;
     acc->diss = ls->diss;
     acc->wd_min = ls->wd_min;
@@ -903,23 +879,7 @@ static inline __attribute__((always_inline)) void sphere_fused_book(floe_world *
                                                                    stage_acc *acc, sph_sums *ls,
                                                                    int i, int j, double *hist, const sph_out *o,
                                                                    double dk) {
-    floe_particles *p = env->p;
-    if (i != ls->ci) { /* a new row: the last one's i-side back, this one's taken */
-        sph_row_put(p, ls);
-        ls->ci = i;
-        ls->ci_leads = pair_leads(acc, i);
-        if (ls->ci_leads)
-            for (int a = 0; a < 3; a++) {
-                ls->fi[a] = p->f[3 * (size_t)i + a];
-                ls->ti[a] = p->t[3 * (size_t)i + a];
-            }
-    }
-    if (ls->ci_leads)
-        for (int a = 0; a < 3; a++) {
-            ls->fi[a] += o->F[a];
-            ls->ti[a] += o->Ti[a];
-        }
-    pair_apply_rest(p, acc, k, ls->ci_leads, j, o->F, o->Ti, o->Tj);
+    pair_apply(env->p, acc, k, i, j, o->F, o->Ti, o->Tj);
     const double energy = o->energy;
     ls->elastic += energy;
     if (env->stepping) { /* pair_book's ledger: dk from the lanes (sph_flush_lanes) */
@@ -988,8 +948,9 @@ static inline __attribute__((always_inline)) void sph_lane_gather(const floe_wor
  * floe_coulomb_trial_rotated and floe_coulomb_slip: every case computed and the one that
  * applies selected, without a branch per lane) and the torques; then the books in list order.
  * A rare case's full form (a spring turned by more than 0.01 rad, a linear contact's first
- * evaluation or its last under tension, a slip) runs only for a batch where a live lane
- * needs it: one branch a batch, and its divisions and square roots left out of the others
+ * evaluation, a slip) runs only for a batch where a live lane needs it, and the linear law's
+ * last-evaluation phase only under a law with tension: one branch a batch (or a law), and
+ * their divisions and square roots left out of the others
  * (issue 14 session 39; a linear contact's divisions and square roots 12 and 3 before, 5
  * and 1 after; Hertz-Mindlin's 8 and 5, then 5 and 3). The inputs are the batch's arrays (sph_lane_gather, as each entry joined; the
  * lanes past nb hold an earlier batch's entries or zeros, their results are dropped). Each
@@ -1136,7 +1097,7 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
      * more than 0.01 rad in the step (a square root and a division a lane left out otherwise) */
     double S0[3][SL];
     {
-        double TURN[SL];
+        double TURN[SL]; /* 0 or 1: doubles, as the lanes' other arrays (the loop stays vector code) */
         for (int q = 0; q < SL; q++) {
             double s[3], n[3];
             for (int a = 0; a < 3; a++) {
@@ -1163,16 +1124,16 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
                 for (int a = 0; a < 3; a++) S0[a][q] = s[a];
             }
     }
-    /* the normal force, the tangential spring, the force and torques */
+    /* the normal force and the tangential trial on every lane (S1: the spring, FT: the force,
+     * LIM: the Coulomb limit, FT2: |FT|^2, EN: the normal part's stored energy), then the slip's
+     * values only for a batch with a live lane that slips (the law's slip: a square root and a
+     * division a lane), then the forces and torques (F, TI, TJ, E) */
     double F[3][SL], TI[3][SL], TJ[3][SL], E[SL];
-    if (hm) { /* floe_hm_kernel: floe_hertz_normal, floe_mindlin_tangential */
+    double S1[3][SL], FT[3][SL], LIM[SL], FT2[SL], EN[SL], GT[SL], HIK[SL];
+    if (hm) { /* floe_hm_kernel: floe_hertz_normal, floe_mindlin_tangential (its dissipation sums, diss, unread here) */
         const floe_hertz_mindlin_law *H = (const floe_hertz_mindlin_law *)b->law;
         const double e_star = H->e_star, beta = H->damping_ratio, g_star = H->g_star, tdr = H->tangent_damping_ratio,
                      mu_h = H->mu;
-        /* the normal force and the trial, then the slip's values where a live lane slips
-         * (floe_mindlin_slip: its square root and division a lane only for such a batch),
-         * then the force and torques; the dissipation sums (diss) are not read here */
-        double S1[3][SL], FT[3][SL], LIM[SL], FT2[SL], GT[SL], HIK[SL], EN[SL];
         for (int q = 0; q < SL; q++) {
             double fn, fel, Sn, gnq, en, diss = 0.0, s[3], vt[3], Ft[3];
             floe_hertz_normal_lane(e_star, beta, depth[q], VN[q], reff[q], meff[q], &fn, &fel, &Sn, &gnq, &en);
@@ -1189,37 +1150,15 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
             EN[q] = en;
             FN[q] = fn;
         }
-        int slips = 0;
-        for (int q = 0; q < nb; q++) slips |= FT2[q] > LIM[q] * LIM[q];
-        if (!acc->pf) w->st_lanes[3] += slips;
-#define HM_OUT(SLIPS)                                                                                           \
-    for (int q = 0; q < SL; q++) {                                                                             \
-        double diss = 0.0, s[3], n[3], vt[3], Ft[3];                                                           \
-        for (int a = 0; a < 3; a++) {                                                                          \
-            s[a] = S1[a][q];                                                                                   \
-            n[a] = N[a][q];                                                                                    \
-            vt[a] = VT[a][q];                                                                                  \
-            Ft[a] = FT[a][q];                                                                                  \
-        }                                                                                                      \
-        if (SLIPS) floe_mindlin_slip(GT[q], vt, LIM[q], FT2[q], HIK[q], s, Ft, &diss);                         \
-        lane_out(q, FN[q], n, Ft, s, EN[q] + floe_dot3_l(s, s) * HIK[q], Ri, Rj, S, F, TI, TJ, E);             \
-    }
-        if (slips) HM_OUT(1)
-        else HM_OUT(0)
-#undef HM_OUT
     } else {
-        /* the linear law: the normal force and the Coulomb trial, then the slip's values where a
-         * live lane slips, then the force and torques. The first two in four copies, one for
-         * each value of the law's tension switch and of "a live lane's first evaluation"
-         * (history[3] == 0): without tension (the usual case) the dashpot's last-evaluation
-         * phase is never taken, and without a first evaluation (most batches) its onset
-         * phase neither: their divisions drop out (floe_linear_phase_lane); the slip's square
-         * root and division only for a batch with a slipping lane. The same operations on the
-         * lanes whose results are kept. */
+        /* the linear law in four copies, one for each value of the law's tension switch and of
+         * "a live lane's first evaluation" (history[3] == 0): without tension (the usual case)
+         * the dashpot's last-evaluation phase is never taken, and without a first evaluation
+         * (most batches) its onset phase neither: their divisions drop out
+         * (floe_linear_phase_lane). The same operations on the lanes whose results are kept. */
         int first = 0;
         for (int q = 0; q < nb; q++) first |= H3i[q] == 0.0;
         if (!acc->pf) w->st_lanes[2] += first;
-        double S1[3][SL], FT[3][SL], LIM[SL], FT2[SL], EN[SL];
 #define LIN_TRIAL(TENSION, FIRST)                                                                               \
     for (int q = 0; q < SL; q++) {                                                                             \
         double fn, fel, en, h3 = H3i[q], s[3], vt[3], Ft[3], lim, ft2;                                         \
@@ -1248,11 +1187,14 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
             else LIN_TRIAL(0, 0)
         }
 #undef LIN_TRIAL
-        int slips = 0;
-        for (int q = 0; q < nb; q++) slips |= FT2[q] > LIM[q] * LIM[q];
-        if (!acc->pf) w->st_lanes[3] += slips;
-        /* floe_coulomb_slip's values where it slips */
-#define LIN_OUT(SLIPS)                                                                                          \
+    }
+    int slips = 0;
+    for (int q = 0; q < nb; q++) slips |= FT2[q] > LIM[q] * LIM[q];
+    if (!acc->pf) w->st_lanes[3] += slips;
+    /* the slip's values where a lane slips (SLIPS, a constant: the copy without them for a
+     * batch where none does), its stored energy, the force and torques; HM a constant too (a
+     * test of hm inside the loop kept it scalar) */
+#define LANES_OUT(HM, SLIPS)                                                                                     \
     for (int q = 0; q < SL; q++) {                                                                             \
         double s[3], n[3], vt[3], Ft[3];                                                                       \
         for (int a = 0; a < 3; a++) {                                                                          \
@@ -1261,22 +1203,32 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
             vt[a] = VT[a][q];                                                                                  \
             Ft[a] = FT[a][q];                                                                                  \
         }                                                                                                      \
-        if (SLIPS) {                                                                                           \
-            const double lim = LIM[q], ft2 = FT2[q];                                                           \
-            const int slip = ft2 > lim * lim;                                                                  \
-            double fs[3], ss[3];                                                                               \
-            floe_coulomb_slip(vt, ks, gs, minus_inv_ks, lim / sqrt(ft2), Ft, fs, ss);                          \
-            for (int a = 0; a < 3; a++) {                                                                      \
-                Ft[a] = slip ? fs[a] : Ft[a];                                                                  \
-                s[a] = slip ? ss[a] : s[a];                                                                    \
+        if (HM) {                                                                                              \
+            double diss = 0.0;                                                                                 \
+            if (SLIPS) floe_mindlin_slip(GT[q], vt, LIM[q], FT2[q], HIK[q], s, Ft, &diss);                     \
+            lane_out(q, FN[q], n, Ft, s, EN[q] + floe_dot3_l(s, s) * HIK[q], Ri, Rj, S, F, TI, TJ, E);         \
+        } else {                                                                                               \
+            if (SLIPS) { /* floe_coulomb_slip's values where it slips */                                       \
+                const double lim = LIM[q], ft2 = FT2[q];                                                       \
+                const int slip = ft2 > lim * lim;                                                              \
+                double fs[3], ss[3];                                                                           \
+                floe_coulomb_slip(vt, ks, gs, minus_inv_ks, lim / sqrt(ft2), Ft, fs, ss);                      \
+                for (int a = 0; a < 3; a++) {                                                                  \
+                    Ft[a] = slip ? fs[a] : Ft[a];                                                              \
+                    s[a] = slip ? ss[a] : s[a];                                                                \
+                }                                                                                              \
             }                                                                                                  \
+            lane_out(q, FN[q], n, Ft, s, EN[q] + 0.5 * ks * floe_dot3_l(s, s), Ri, Rj, S, F, TI, TJ, E);       \
         }                                                                                                      \
-        lane_out(q, FN[q], n, Ft, s, EN[q] + 0.5 * ks * floe_dot3_l(s, s), Ri, Rj, S, F, TI, TJ, E);           \
     }
-        if (slips) LIN_OUT(1)
-        else LIN_OUT(0)
-#undef LIN_OUT
+    if (hm) {
+        if (slips) LANES_OUT(1, 1)
+        else LANES_OUT(1, 0)
+    } else {
+        if (slips) LANES_OUT(0, 1)
+        else LANES_OUT(0, 0)
     }
+#undef LANES_OUT
     /* the ledger's work less the change of stored energy: (F_old + F_new)/2 . vr dt - dE */
     double DK[SL];
     for (int q = 0; q < SL; q++) {
@@ -1340,7 +1292,7 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         }
         sphere_fused_book(w, env, b->k[q], acc, &ls, b->i[q], b->j[q], h, &o, DK[q]);
     }
-    sph_sums_put(env->p, &ls, acc);
+    sph_sums_put(&ls, acc);
     b->n = 0;
     b->nwall = 0; /* the flags past the next batch's end are stale, their lanes dropped */
 }
