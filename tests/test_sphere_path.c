@@ -14,8 +14,8 @@
  *     fused path's batches of entries (sph_flush_lanes) end at every change of law, and the
  *     sums still come in list order; Hertz-Mindlin under adaptive steps (the stage
  *     measures each contact's overlap change: the batches' lanes too); and the linear law
- *     with tension among fast spheres (10 m/s: a grazing contact's frame turns by up to
- *     0.05 rad a step). Each case counts the batches that took a rare case's full form (a
+ *     with tension among fast spheres (up to 5 m/s a component: a grazing contact's frame
+ *     turns by several hundredths of a radian a step). Each case counts the batches that took a rare case's full form (a
  *     turned spring, a linear contact's first evaluation, a slip; w->st_lanes) and checks
  *     that both copies of each ran where the scene has them;
  *  2. every sphere-wall contact the stage recorded (the inline kernel, seen from i) against
@@ -106,7 +106,7 @@ static floe_world *scene(int with_compound, int linear) {
         floe_v3_set(p.x, 0.0022 + 0.0023 * a + 0.00005 * urand(), 0.0022 + 0.0023 * b + 0.00005 * urand(),
                     0.0025 + 0.0023 * c + 0.00005 * urand());
         floe_v3_set(p.v, 0.1 * (urand() - 0.5), 0.1 * (urand() - 0.5), -0.3 - 0.2 * urand());
-        if (linear == 5) /* fast: a grazing contact's frame turns by up to 0.05 rad a step */
+        if (linear == 5) /* fast: a grazing contact's frame turns by several hundredths of a radian a step */
             floe_v3_set(p.v, 10 * (urand() - 0.5), 10 * (urand() - 0.5), 10 * (urand() - 0.5));
         floe_v3_set(p.w, 20 * (urand() - 0.5), 20 * (urand() - 0.5), 20 * (urand() - 0.5));
         floe_world_add_particle(w, &p);

@@ -65,11 +65,15 @@ def function_lines(src, name):
 def batch_loops(lines, span):
     """the lines (1-based) where GCC reports each batch loop of the span: the loop's own line,
     or, for a loop inside a macro defined there (sph_flush_lanes' copies of a loop for each
-    value of a constant: LIN_TRIAL, LIN_OUT, HM_OUT), each line that uses the macro"""
+    value of a constant: LIN_TRIAL, LANES_OUT), each line that uses the macro"""
     out, in_macro, macros = [], None, {}  # out: (line, a macro's use)
     for n in range(span[0] - 1, span[1]):
         line = lines[n]
-        m = re.match(r"\s*#define ([A-Z_0-9]+)\(", line)
+        u = re.match(r"\s*#\s*undef ([A-Za-z_0-9]+)", line)
+        if u:
+            macros.pop(u.group(1), None)
+            continue
+        m = re.match(r"\s*#\s*define ([A-Za-z_0-9]+)\(", line)
         if m:
             in_macro = m.group(1)
             macros[in_macro] = False
@@ -80,7 +84,7 @@ def batch_loops(lines, span):
             continue
         if BATCH_LOOP.search(line):
             out.append((n + 1, False))
-        elif any(v and re.search(rf"\b{k}\(", line) and "#undef" not in line for k, v in macros.items()):
+        elif any(v and re.search(rf"\b{k}\(", line) for k, v in macros.items()):
             out.append((n + 1, True))
     return out
 

@@ -848,8 +848,8 @@ typedef struct sph_batch {
  * end: added through acc one entry after the other, each was a chain of loads and stores
  * through memory (the history's and the forces' stores may alias them, so the compiler kept
  * them there). The same additions in the same order: the same bits. (The i-side of a row's
- * run of entries held the same way, tried in session 39: a mispredicted branch at each row's
- * change, the settled dem-settle bed 3-5 % slower; not kept.) */
+ * run of entries held the same way was slower, in sessions 37 and 39: a mispredicted branch
+ * at each change of row; not kept.) */
 typedef struct sph_sums {
     double elastic, diss, wd_min;
     int wd_i, wd_j;
@@ -950,10 +950,9 @@ static inline __attribute__((always_inline)) void sph_lane_gather(const floe_wor
  * A rare case's full form (a spring turned by more than 0.01 rad, a linear contact's first
  * evaluation, a slip) runs only for a batch where a live lane needs it, and the linear law's
  * last-evaluation phase only under a law with tension: one branch a batch (or a law), and
- * their divisions and square roots left out of the others
- * (issue 14 session 39; a linear contact's divisions and square roots 12 and 3 before, 5
- * and 1 after; Hertz-Mindlin's 8 and 5, then 5 and 3). The inputs are the batch's arrays (sph_lane_gather, as each entry joined; the
- * lanes past nb hold an earlier batch's entries or zeros, their results are dropped). Each
+ * their divisions and square roots left out of the others (issue 14 session 39; the counts
+ * in docs/architecture.md, "Session 39"). The inputs are the batch's arrays
+ * (sph_lane_gather, as each entry joined; the lanes past nb hold an earlier batch's entries or zeros, their results are dropped). Each
  * lane does the scalar operations in their order (no contraction in ISO C): the same bits
  * as the law's own force function (tests/test_sphere_path.c, which also counts the batches
  * that took each rare case, w->st_lanes). Out of line: inlined at each flush of stage_block,
@@ -1203,10 +1202,11 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
             vt[a] = VT[a][q];                                                                                  \
             Ft[a] = FT[a][q];                                                                                  \
         }                                                                                                      \
+        double en;                                                                                             \
         if (HM) {                                                                                              \
             double diss = 0.0;                                                                                 \
             if (SLIPS) floe_mindlin_slip(GT[q], vt, LIM[q], FT2[q], HIK[q], s, Ft, &diss);                     \
-            lane_out(q, FN[q], n, Ft, s, EN[q] + floe_dot3_l(s, s) * HIK[q], Ri, Rj, S, F, TI, TJ, E);         \
+            en = EN[q] + floe_dot3_l(s, s) * HIK[q];                                                           \
         } else {                                                                                               \
             if (SLIPS) { /* floe_coulomb_slip's values where it slips */                                       \
                 const double lim = LIM[q], ft2 = FT2[q];                                                       \
@@ -1218,8 +1218,9 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
                     s[a] = slip ? ss[a] : s[a];                                                                \
                 }                                                                                              \
             }                                                                                                  \
-            lane_out(q, FN[q], n, Ft, s, EN[q] + 0.5 * ks * floe_dot3_l(s, s), Ri, Rj, S, F, TI, TJ, E);       \
+            en = EN[q] + 0.5 * ks * floe_dot3_l(s, s);                                                         \
         }                                                                                                      \
+        lane_out(q, FN[q], n, Ft, s, en, Ri, Rj, S, F, TI, TJ, E);                                             \
     }
     if (hm) {
         if (slips) LANES_OUT(1, 1)
