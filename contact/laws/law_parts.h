@@ -75,7 +75,7 @@ static inline __attribute__((always_inline)) int floe_contact_rotate_history_sma
     const int keep = mag2 == 0.0, is_small = q < 1e-4;
     for (int k = 0; k < 3; k++) {
         const double ts = (s[k] + -sn * n[k]) * small;
-        s[k] = keep | !is_small ? s[k] : ts;
+        s[k] = (keep | !is_small) ? s[k] : ts;
     }
     return !keep & !is_small;
 }
