@@ -60,9 +60,12 @@ typedef struct floe_detect_ctx {
  * round-off, is below it; the pair is then apart without a look at the shapes. Only a
  * convex pair found apart keeps a gap (detect.c sep_keep), so a caller may ask before the
  * detector's dispatch (the world's contact stage does, for pairs beyond spheres and walls). */
+static inline int floe_detect_sep_open(const double *sc, double motion) {
+    return motion - sc[1] + 1e-9 * motion < sc[0]; /* NaN (no gap kept, no bound): 0 */
+}
 static inline int floe_detect_sep_holds(floe_detect_ctx *w) {
     const double *sc = w->sep;
-    if (!(sc && w->motion - sc[1] + 1e-9 * w->motion < sc[0])) return 0;
+    if (!(sc && floe_detect_sep_open(sc, w->motion))) return 0;
     w->det->sep_cached++;
     w->det->separated++;
     return 1;

@@ -90,7 +90,16 @@ static inline void plane_row(const double *pl, int is_b, int dim, double r[4], d
  * = 1 - (the others' B multipliers), R^T z = -c: z_k = -u_k.c / det. 0 if there is no B row
  * or |det| < 1e-12 (singular: the caller takes the LU path). Every basis kind (a corner of p
  * on a face of p', edge on edge, face on a corner) the same way. */
-static inline int basis_solve3(const double M[4][4], const double h[4], double y[4], double lam[4]) {
+typedef struct basis3 {
+    const double *c;  /* the first B row's plane */
+    int ib;           /* its place in the basis */
+    double sb[3];     /* the other rows: 1 for a B row, 0 for an A row */
+    double u[3][3];   /* the cofactor rows of R */
+    double inv;       /* 1 / det R */
+} basis3;
+
+/* the reduction of basis rows M (above): 0 without a B row or when |det| < 1e-12 */
+static inline int basis3_setup(const double M[4][4], basis3 *B) {
     /* which rows are B rows decides nothing by a branch: the basis kind varies from pair to
      * pair, and a branch on it was mispredicted (a tenth of the LP's time); a B row's shift
      * by c is a product by 1 or 0, exact, so the same values as the selection */
@@ -98,30 +107,44 @@ static inline int basis_solve3(const double M[4][4], const double h[4], double y
     if (!(b0 | b1 | b2 | b3)) return 0;
     const int ib = !b0 * (1 + !b1 * (1 + !b2)); /* the first B row */
     const double *c = M[ib];
-    double r[3][3], g[3], sb[3];
+    double r[3][3];
+    B->c = c;
+    B->ib = ib;
     for (int k = 0; k < 3; k++) {
-        const int o = k + (k >= ib); /* the other rows, in order */
-        const double *q = M[o];
-        sb[k] = (double)(q[3] != 0.0);
-        for (int i = 0; i < 3; i++) r[k][i] = q[i] - sb[k] * c[i];
-        g[k] = h[o] - sb[k] * h[ib];
+        const double *q = M[k + (k >= ib)]; /* the other rows, in order */
+        B->sb[k] = (double)(q[3] != 0.0);
+        for (int i = 0; i < 3; i++) r[k][i] = q[i] - B->sb[k] * c[i];
     }
-    double u[3][3];
-    floe_v3_cross(u[0], r[1], r[2]);
-    floe_v3_cross(u[1], r[2], r[0]);
-    floe_v3_cross(u[2], r[0], r[1]);
-    const double det = floe_v3_dot(r[0], u[0]);
+    floe_v3_cross(B->u[0], r[1], r[2]);
+    floe_v3_cross(B->u[1], r[2], r[0]);
+    floe_v3_cross(B->u[2], r[0], r[1]);
+    const double det = floe_v3_dot(r[0], B->u[0]);
     if (!(fabs(det) >= 1e-12)) return 0;
-    const double inv = 1.0 / det;
-    for (int i = 0; i < 3; i++) y[i] = (g[0] * u[0][i] + g[1] * u[1][i] + g[2] * u[2][i]) * inv;
+    B->inv = 1.0 / det;
+    return 1;
+}
+
+/* M y = h by the reduction: R x = g, then s = c.x - h_ib */
+static inline void basis3_solve(const basis3 *B, const double h[4], double y[4]) {
+    const int ib = B->ib;
+    const double *c = B->c;
+    double g[3];
+    for (int k = 0; k < 3; k++) g[k] = h[k + (k >= ib)] - B->sb[k] * h[ib];
+    for (int i = 0; i < 3; i++) y[i] = (g[0] * B->u[0][i] + g[1] * B->u[1][i] + g[2] * B->u[2][i]) * B->inv;
     y[3] = c[0] * y[0] + c[1] * y[1] + c[2] * y[2] - h[ib];
+}
+
+static inline int basis_solve3(const double M[4][4], const double h[4], double y[4], double lam[4]) {
+    basis3 B;
+    if (!basis3_setup(M, &B)) return 0;
+    basis3_solve(&B, h, y);
     double lc = 1.0;
     for (int k = 0; k < 3; k++) {
-        const double z = -floe_v3_dot(u[k], c) * inv;
-        lam[k + (k >= ib)] = z;
-        lc -= sb[k] * z;
+        const double z = -floe_v3_dot(B.u[k], B.c) * B.inv;
+        lam[k + (k >= B.ib)] = z;
+        lc -= B.sb[k] * z;
     }
-    lam[ib] = lc;
+    lam[B.ib] = lc;
     return 1;
 }
 
@@ -218,6 +241,90 @@ static inline void b_plane(const floe_lp_problem *P, int k, double o[4]) {
 static void lp_finish(const floe_lp_problem *P, const int *basis, const double y[4], const double (*brow)[4],
                       floe_lp_result *res);
 
+/* the ratios of rows [k0, k0 + nk) of one kind (planes pl, 4 doubles each; e = 0 for p's,
+ * -1 for p''s) from y along d: (h - r.y) / (r.d) where r.d > 1e-12 (at least 0), else
+ * infinite; the sums as the LU path's loops add them. Without a branch (a vector loop) */
+static inline void ratios(int dim, const double *pl, double e, int nk, const double y[4], const double d[4],
+                          double *rat) {
+    if (dim == 3)
+        for (int k = 0; k < nk; k++) {
+            const double *r = pl + 4 * k;
+            const double rd = 0.0 + r[0] * d[0] + r[1] * d[1] + r[2] * d[2] + e * d[3];
+            const double ry = 0.0 + r[0] * y[0] + r[1] * y[1] + r[2] * y[2] + e * y[3];
+            const double a = (r[3] - ry) / rd;
+            rat[k] = rd <= 1e-12 ? INFINITY : a < 0 ? 0.0 : a;
+        }
+    else
+        for (int k = 0; k < nk; k++) {
+            const double *r = pl + 4 * k;
+            const double rd = 0.0 + r[0] * d[0] + r[1] * d[1] + e * d[2];
+            const double ry = 0.0 + r[0] * y[0] + r[1] * y[1] + e * y[2];
+            const double a = (r[3] - ry) / rd;
+            rat[k] = rd <= 1e-12 ? INFINITY : a < 0 ? 0.0 : a;
+        }
+}
+
+/* the primal simplex's ratio test from y along the edge d: the row outside the basis that
+ * becomes tight first (the lowest row on a tie within 1e-15), *alpha the step; -1 when none
+ * (unbounded). The ratios a chunk of rows at a time without a branch, then the choice in
+ * row order (a branch per row, two of them unpredictable, cost about 50 cycles a row) */
+static int ratio_test(const floe_lp_problem *P, const int *basis, const double y[4], const double d[4], double *alpha) {
+    const int n = P->dim + 1, na = P->na, m = na + P->nb;
+    int enter = -1;
+    double al = INFINITY, rat[64];
+    for (int k0 = 0; k0 < m; k0 += 64) {
+        const int k1 = k0 + 64 < m ? k0 + 64 : m, ka = k1 < na ? k1 : na; /* [k0, ka) A rows, [ka, k1) B rows */
+        if (ka > k0) ratios(P->dim, P->a + 4 * k0, 0.0, ka - k0, y, d, rat);
+        if (k1 > ka) ratios(P->dim, P->b + 4 * (ka - na), -1.0, k1 - ka, y, d, rat + (ka - k0));
+        for (int i = 0; i < n; i++)
+            if (basis[i] >= k0 && basis[i] < k1) rat[basis[i] - k0] = INFINITY; /* the basis rows: out */
+        for (int k = k0; k < k1; k++) {
+            const double a = rat[k - k0];
+            if (a < al - 1e-15 || (a <= al + 1e-15 && enter >= 0 && k < enter)) { al = a; enter = k; }
+        }
+    }
+    *alpha = al;
+    return enter;
+}
+
+/* 3D, a warm basis feasible at y but not optimal (lam, a multiplier below -1e-12; every row
+ * of P->b): the simplex's pivots with each basis solved in closed form (basis3: the edge
+ * M d = -e_leave, then the new basis' point and multipliers as a kept basis gets them), not
+ * by the LU path's factorisations. A resting contact whose deepest point moves to the next
+ * corner of a face needs one pivot (98 % of the pivoting halves of a settled polyhedra bed,
+ * 3 % of all): on the LU path each cost about ten kept halves. 1 with the optimum's basis,
+ * y and lam and *pivots; 0 (basis untouched) when a basis is singular, an edge unbounded
+ * or no optimum within LP_PIVOTS3 pivots: the LU path then starts from the given basis */
+#define LP_PIVOTS3 8
+static int lp_pivot3(const floe_lp_problem *P, int *basis, double y[4], double lam[4], int *pivots) {
+    int bs[4];
+    memcpy(bs, basis, sizeof bs);
+    for (int it = 1; it <= LP_PIVOTS3; it++) {
+        int leave = -1; /* Bland: the lowest row among the negative multipliers */
+        for (int i = 0; i < 4; i++)
+            if (lam[i] < -1e-12 && (leave < 0 || bs[i] < bs[leave])) leave = i;
+        double M[4][4], h[4], e[4] = {0, 0, 0, 0}, d[4], alpha;
+        for (int i = 0; i < 4; i++) row(P, bs[i], M[i], &h[i]);
+        basis3 B;
+        if (leave < 0 || !basis3_setup(M, &B)) return 0;
+        e[leave] = -1.0; /* r_leave . d = -1, the other basis rows stay tight */
+        basis3_solve(&B, e, d);
+        const int enter = ratio_test(P, bs, y, d, &alpha);
+        if (enter < 0) return 0;
+        bs[leave] = enter;
+        for (int i = 0; i < 4; i++) row(P, bs[i], M[i], &h[i]);
+        if (!basis_solve3(M, h, y, lam)) return 0;
+        int opt = 1;
+        for (int i = 0; i < 4; i++) opt &= lam[i] >= -1e-12;
+        if (opt) {
+            memcpy(basis, bs, sizeof bs);
+            *pivots = it;
+            return 1;
+        }
+    }
+    return 0;
+}
+
 /* The lazy problem's warm start (b_body): 1 when the given basis is feasible and optimal (res
  * set, no pivot), 0 when the full problem must be solved. The basis rows are those of the
  * full problem (the same planes, the same factorisation: the same result); the other rows of
@@ -280,9 +387,10 @@ int floe_lp_deepest(const floe_lp_problem *P, int *basis, floe_lp_result *res) {
     if (ok && dim == 3) { /* kept as it is (the lazy path's test, the same operations) */
         double M[4][4], lam[4];
         for (int i = 0; i < n; i++) row(P, basis[i], M[i], &h[i]);
-        int kept = basis_solve3(M, h, y, lam) && feasible(P, y, 1e3 * tol);
+        const int feas = basis_solve3(M, h, y, lam) && feasible(P, y, 1e3 * tol);
+        int kept = feas;
         for (int i = 0; kept && i < n; i++) kept = lam[i] >= -1e-12;
-        if (kept) {
+        if (kept || (feas && lp_pivot3(P, basis, y, lam, &res->pivots))) {
             res->warm = 1;
             memcpy(res->lambda, lam, sizeof lam);
             lp_finish(P, basis, y, NULL, res);
@@ -315,23 +423,10 @@ int floe_lp_deepest(const floe_lp_problem *P, int *basis, floe_lp_result *res) {
             break;
         }
         /* edge direction: r_leave . d = -1, other basis rows stay tight */
-        double e[4] = {0, 0, 0, 0}, d[4];
+        double e[4] = {0, 0, 0, 0}, d[4], alpha;
         e[leave] = -1.0;
         lu_solve(&f, e, d);
-        int enter = -1;
-        double alpha = INFINITY;
-        for (int k = 0; k < m; k++) {
-            int inb = 0;
-            for (int i = 0; i < n; i++) inb |= basis[i] == k;
-            if (inb) continue;
-            double r[4], hk, rd = 0, ry = 0;
-            row(P, k, r, &hk);
-            for (int i = 0; i < n; i++) { rd += r[i] * d[i]; ry += r[i] * y[i]; }
-            if (rd <= 1e-12) continue;
-            double a = (hk - ry) / rd;
-            if (a < 0) a = 0;
-            if (a < alpha - 1e-15 || (a <= alpha + 1e-15 && enter >= 0 && k < enter)) { alpha = a; enter = k; }
-        }
+        const int enter = ratio_test(P, basis, y, d, &alpha);
         if (enter < 0) return FLOE_EINVAL; /* unbounded: cannot happen for bounded p */
         for (int i = 0; i < n; i++) y[i] += alpha * d[i];
         basis[leave] = enter;

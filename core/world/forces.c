@@ -1406,6 +1406,7 @@ static inline void prefetch_ahead(const floe_neighbor_list *nl, const int *cand,
     const size_t k2 = (size_t)cand[q + 2];
     __builtin_prefetch(nl->warm + k2 * FLOE_DETECT_WARM);
     __builtin_prefetch(nl->warm + k2 * FLOE_DETECT_WARM + 8);
+    __builtin_prefetch(nl->warm + k2 * FLOE_DETECT_WARM + FLOE_DETECT_WARM - 1);
     __builtin_prefetch(nl->hist + k2 * nl->hs);
 }
 
@@ -1478,9 +1479,40 @@ static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env 
     const unsigned char *touching = nl->touching;
     const double *x = p->x, *rad = p->radius;
     int nc = 0;
-    if (env->any_pieces || nl->use_warm)
+    if (env->any_pieces || (nl->use_warm && (env->img || env->any_none)))
         for (int k = k0; k < k1; k++) cand[nc++] = k;
-    else if (env->img)
+    else if (nl->use_warm) {
+        /* convex shapes (warm starts): an untouched entry whose bounding spheres are apart, or
+         * whose pair's kept gap is still open (the separation cache), does nothing in
+         * contact_pair but the apart one's warm[0] = NaN (its next approach starts cold) and
+         * the gap's counts: done here, without a branch per entry, and the entry left out (a
+         * settled polyhedra bed: two thirds of its entries, each a call of contact_pair). A
+         * kept gap is a convex pair's only (sphere and wall pairs' slots stay NaN, their test
+         * false); NaN centres or bounds fail both tests and go to contact_pair. (A law "none"
+         * returns before both in contact_pair: such a world keeps the loop above) */
+        const double *sp = w->sep_on && !env->overlap2d ? w->sep_pair : NULL, *sd = w->sep_d;
+        int apart_k[FLOE_PAR_BLOCK]; /* the apart entries (k1 - k0 <= FLOE_PAR_BLOCK) */
+        int na = 0;
+        long held = 0;
+        for (int k = k0; k < k1; k++) {
+            const int i = pi[k], j = pj[k];
+            const double dx = x[3 * j] - x[3 * i], dy = x[3 * j + 1] - x[3 * i + 1], dz = x[3 * j + 2] - x[3 * i + 2];
+            const double rs = rad[i] + rad[j], d2 = dx * dx + dy * dy + dz * dz;
+            const int apart = (rs < INFINITY) & (d2 >= rs * rs);
+            int hold = 0;
+            if (sp) /* where contact_pair asks: d2 < rs^2 (a wall's rs is infinite) */
+                hold = (d2 < rs * rs) & floe_detect_sep_open(sp + 2 * (size_t)k, sd[i] + sd[j]);
+            const int skip = (apart | hold) & !touching[k];
+            held += hold & !touching[k];
+            apart_k[na] = k;
+            na += apart;
+            cand[nc] = k;
+            nc += !skip;
+        }
+        for (int q = 0; q < na; q++) nl->warm[(size_t)apart_k[q] * FLOE_DETECT_WARM] = NAN;
+        env->dctx->det->sep_cached += held;
+        env->dctx->det->separated += held;
+    } else if (env->img)
         for (int k = k0; k < k1; k++) {
             /* periodic cell: the same test with j's image */
             const int i = pi[k], j = pj[k];
