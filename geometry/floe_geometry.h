@@ -46,6 +46,12 @@ typedef struct floe_polytope_view {
     int nv;
     int ccw;              /* optional, 2D: 1 when the corners are in counter-clockwise order
                              (0, the default: detection sorts them) */
+    /* optional, 3D (NULL, the default: none): the same planes as four rows of np_soa doubles
+     * each (the normals' x, y, z, then d), np_soa >= np a multiple of 8, the rows past np
+     * padded with (0, 0, 0, +inf), which every point satisfies: the polytope LP's tests of
+     * all planes read them in vector lanes (contact/detect/polytope_lp.c) */
+    const double *plane_soa;
+    int np_soa;
 } floe_polytope_view;
 
 typedef struct floe_geometry_class {

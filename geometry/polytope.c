@@ -21,6 +21,8 @@
 typedef struct poly_priv {
     floe_polytope p;
     int *face_start; /* np + 1 (3D): triangles of face f are face_start[f] .. face_start[f+1]-1 */
+    double *plane_soa; /* 3D: the planes by coordinate, np_soa each (floe_polytope_view) */
+    int np_soa;
 } poly_priv;
 
 
@@ -243,7 +245,7 @@ static int poly_mass(const floe_geometry *g, int dim, double rho, floe_mass_prop
 static void poly_destroy(floe_geometry *g) {
     poly_priv *pp = (poly_priv *)g;
     if (!pp) return;
-    free(pp->p.v); free(pp->p.plane); free(pp->p.tri); free(pp->face_start);
+    free(pp->p.v); free(pp->p.plane); free(pp->p.tri); free(pp->face_start); free(pp->plane_soa);
     free(pp);
 }
 
@@ -256,6 +258,22 @@ static void poly_polytope(const floe_geometry *g, int dim, floe_polytope_view *o
     out->v = p->v;
     out->nv = p->nv;
     out->ccw = p->dim == 2; /* a polygon's hull, counter-clockwise */
+    out->plane_soa = ((const poly_priv *)g)->plane_soa;
+    out->np_soa = ((const poly_priv *)g)->np_soa;
+}
+
+/* the planes by coordinate (floe_polytope_view.plane_soa), padded to a multiple of 8 with
+ * (0, 0, 0, +inf); FLOE_ENOMEM */
+static int poly_planes_soa(poly_priv *pp) {
+    const floe_polytope *p = &pp->p;
+    const int m = (p->np + 7) / 8 * 8;
+    double *s = malloc((size_t)(4 * m) * sizeof *s);
+    if (!s) return FLOE_ENOMEM;
+    for (int k = 0; k < m; k++)
+        for (int c = 0; c < 4; c++) s[c * m + k] = k < p->np ? p->plane[4 * k + c] : c == 3 ? INFINITY : 0.0;
+    pp->plane_soa = s;
+    pp->np_soa = m;
+    return FLOE_OK;
 }
 static int poly_dimension(const floe_geometry *g) { return ((const floe_polytope *)g)->dim; }
 
@@ -465,6 +483,7 @@ static floe_geometry *assemble_polyhedron(const double *V0, int nv, const double
         for (int k = 0; k < cnt; k++) s += floe_v3_dot(o, p->v + 3 * used[F[k]]);
         o[3] = s / cnt;
     }
+    if (poly_planes_soa(pp)) goto oom;
     floe_v3_copy(p->frame_x, cx);
     floe_q_from_matrix(p->frame_q, R);
     result = &p->base;

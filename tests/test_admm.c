@@ -223,7 +223,7 @@ static void lp_vs_glpk(const floe_pose *a, const floe_pose *b, int *basis, lp_ch
         plane_to(pb + 4 * k, b, a, Bl + 4 * k);
     }
     double size = fmin(floe_geometry_bounding_radius(a->g), floe_geometry_bounding_radius(b->g));
-    floe_lp_problem P = {3, pa, na, Bl, nb, va, nva, size, NULL, NULL, NULL};
+    floe_lp_problem P = {.dim = 3, .a = pa, .na = na, .b = Bl, .nb = nb, .va = va, .nva = nva, .scale = size};
     floe_lp_result r;
     int rc = floe_lp_deepest(&P, basis, &r);
     double xg[3], tg;

@@ -15,9 +15,10 @@
  *     basis must not be kept (a pivot, or a cold start when its point is infeasible), both
  *     cases must occur, and the result must be the cold solve's; unmoved, it is kept.
  *  3. The lazy problem (floe_lp_problem.b_body: p''s planes in its own frame and the map, as
- *     detect.c gives it) against the same planes mapped first (by the library's own map, a
- *     cold lazy solve's buffer): at 400 poses, warm (kept, or needing a pivot or a cold
- *     start) and cold, the same basis, point, value, normal and multipliers to the bit.
+ *     detect.c gives it, with the planes by coordinate at odd poses and without at even ones)
+ *     against the same planes mapped first (by the library's own map, a cold lazy solve's
+ *     buffer): at 400 poses, warm (kept, or needing a pivot or a cold start) and cold, the
+ *     same basis, point, value, normal and multipliers to the bit.
  *  4. The separation cache against moves by the API that the list does not see (a turn, a
  *     move, a new shape): the next step finds the contact (sep_cache_moves). */
 #include "floe.h"
@@ -168,7 +169,7 @@ static int solve_half(const floe_geometry *ga, const floe_geometry *gb, const do
         floe_q_rotate(tb + 4 * k, qb, B.plane + 4 * k);
         tb[4 * k + 3] = B.plane[4 * k + 3] + floe_v3_dot(tb + 4 * k, xb);
     }
-    floe_lp_problem P = {3, A.plane, A.np, tb, B.np, A.v, A.nv, R, NULL, NULL, NULL};
+    floe_lp_problem P = {.dim = 3, .a = A.plane, .na = A.np, .b = tb, .nb = B.np, .va = A.v, .nva = A.nv, .scale = R};
     int rc = floe_lp_deepest(&P, basis, r);
     free(tb);
     return rc;
@@ -219,7 +220,7 @@ static void negative_control(void) {
 }
 
 static void lazy_equals_full(void) {
-    int poses = 400, same = 0, lazy_kept = 0, lazy_full = 0;
+    int poses = 400, same = 0, lazy_kept = 0, lazy_full = 0, with_soa = 0;
     for (int t = 0; t < poses; t++) {
         floe_geometry *ga = grain(), *gb = grain();
         floe_polytope_view A, B;
@@ -249,8 +250,15 @@ static void lazy_equals_full(void) {
                     }
                 }
             }
-            floe_lp_problem F = {3, A.plane, A.np, tb, B.np, A.v, A.nv, R, NULL, NULL, NULL};
-            floe_lp_problem L = {3, A.plane, A.np, NULL, B.np, A.v, A.nv, R, B.plane, map, buf};
+            floe_lp_problem F = {.dim = 3, .a = A.plane, .na = A.np, .b = tb, .nb = B.np, .va = A.v, .nva = A.nv,
+                                 .scale = R};
+            /* the lazy problem with the planes by coordinate, as detect.c gives it (odd poses)
+             * and without them (even): both the same bits as the mapped planes' */
+            const int soa = t % 2 && A.plane_soa && B.plane_soa;
+            floe_lp_problem L = {.dim = 3, .a = A.plane, .na = A.np, .nb = B.np, .va = A.v, .nva = A.nv, .scale = R,
+                                 .b_body = B.plane, .map = map, .b_buf = buf, .a_soa = soa ? A.plane_soa : NULL,
+                                 .na_soa = A.np_soa, .b_soa = soa ? B.plane_soa : NULL, .nb_soa = B.np_soa};
+            with_soa += soa;
             {   /* the mapped planes as the library maps them: a cold lazy solve maps them all
                  * into its buffer (one formula, one compilation: the comparison is of the
                  * paths, not of two compilations of the map) */
@@ -278,9 +286,11 @@ static void lazy_equals_full(void) {
         floe_geometry_destroy(ga);
         floe_geometry_destroy(gb);
     }
-    printf("  lazy problem, %d solves: the same bits as the mapped planes' in %d; basis kept %d, full problem %d\n",
-           3 * poses, same, lazy_kept, lazy_full);
+    printf("  lazy problem, %d solves (%d with the planes by coordinate): the same bits as the mapped planes' in %d; basis "
+           "kept %d, full problem %d\n",
+           3 * poses, with_soa, same, lazy_kept, lazy_full);
     CHECK(same == 3 * poses, "lazy and mapped problems give the same bits: %d of %d", same, 3 * poses);
+    CHECK(with_soa == 3 * poses / 2, "the lazy problem with the planes by coordinate in half the solves: %d", with_soa);
     CHECK(lazy_kept > poses / 2 && lazy_full > poses, "both lazy paths taken: kept %d, full %d", lazy_kept, lazy_full);
 }
 

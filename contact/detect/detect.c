@@ -258,12 +258,6 @@ static int convex_plane(floe_detect_ctx *w, const shape_ref *a, const shape_ref 
 /* a convex polytope: its class gives its planes and corners (floe_geometry_class.polytope) */
 static int is_polytope(const floe_geometry *g) { return g->klass->polytope != NULL; }
 
-/* the planes and corners of a polytope for the world's dimension (body frame) */
-static void body_polytope(const floe_geometry *g, int dim, floe_polytope_view *pv) {
-    pv->ccw = 0; /* a class that does not say */
-    g->klass->polytope(g, dim, pv);
-}
-
 /* planes and vertices of b expressed in a's body frame (scratch owned by the world) */
 static int lp_scratch(floe_detect_ctx *w, int need) {
     if (w->det->scratch_cap >= need) return FLOE_OK;
@@ -274,7 +268,8 @@ static int lp_scratch(floe_detect_ctx *w, int need) {
     return FLOE_OK;
 }
 
-/* one half: a's point deepest in b, in world coordinates (f: the map from a's frame to b's) */
+/* one half: a's point deepest in b, in world coordinates (f: the map from a's frame to b's),
+ * and b's outward normal there in a's frame (the caller turns the deeper half's alone) */
 static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, const floe_polytope_view *pva,
                    const floe_polytope_view *pvb, const rel_map *f, double *warm4, double x[3], double *s, double n[3],
                    double *gnorm, int *pivots, int *face) {
@@ -286,7 +281,9 @@ static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, c
     /* b's planes in a's frame (n_a = M^T n_b, d_a = d_b - n_b . m with Xb = M Xa + m): the LP
      * maps them into tb when it needs them all (a warm basis that stays optimal in 3D reads
      * its own rows only) */
-    floe_lp_problem P = {w->dim, pa, na, NULL, nb, va, nva, fmin(a->r, b->r), pb, &f->M[0][0], tb};
+    floe_lp_problem P = {.dim = w->dim, .a = pa, .na = na, .nb = nb, .va = va, .nva = nva,
+                         .scale = fmin(a->r, b->r), .b_body = pb, .map = &f->M[0][0], .b_buf = tb,
+                         .a_soa = A.plane_soa, .na_soa = A.np_soa, .b_soa = B.plane_soa, .nb_soa = B.np_soa};
     int basis[4];
     const int have = warm4 && isfinite(warm4[0]);
     for (int k = 0; k < 4; k++) basis[k] = have && isfinite(warm4[k]) ? (int)warm4[k] : -1;
@@ -303,7 +300,7 @@ static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, c
         for (int k = 0; k < 4; k++) warm4[k] = k <= w->dim ? basis[k] : NAN;
     floe_q_rotate(x, a->q, r.x);
     floe_v3_add(x, x, a->x);
-    floe_q_rotate(n, a->q, r.normal); /* outward normal of b at x */
+    floe_v3_copy(n, r.normal); /* outward normal of b at x, in a's frame */
     *s = r.s;
     *gnorm = r.gnorm;
     *pivots = r.pivots + 1;
@@ -330,7 +327,7 @@ static void ov_rot2(const shape_ref *s, double *c, double *sn) {
 
 static int ov_polygon(const shape_ref *s, const double o[2], double (*P)[2]) {
     floe_polytope_view pv;
-    body_polytope(s->g, 2, &pv);
+    floe_geometry_polytope(s->g, 2, &pv);
     const double *V = pv.v;
     const int k = pv.nv < OV_MAX ? pv.nv : OV_MAX;
     double c, sn, tx = s->x[0] - o[0], ty = s->x[1] - o[1], cx = 0, cy = 0;
@@ -374,7 +371,7 @@ static void ov_line1(const shape_ref *s, const double o[2], const double *pl, do
 
 static int ov_lines(const shape_ref *s, const double o[2], double (*Lh)[3]) {
     floe_polytope_view pv;
-    body_polytope(s->g, 2, &pv);
+    floe_geometry_polytope(s->g, 2, &pv);
     const int np = pv.np < OV_MAX ? pv.np : OV_MAX;
     for (int k = 0; k < np; k++) ov_line1(s, o, pv.plane + 4 * k, Lh[k]);
     return np;
@@ -383,7 +380,7 @@ static int ov_lines(const shape_ref *s, const double o[2], double (*Lh)[3]) {
 /* world-frame planes (n, h) and corners of a polytope */
 static int ov_planes3(const shape_ref *s, double *pl, double *V, int *nv) {
     floe_polytope_view pv;
-    body_polytope(s->g, 3, &pv);
+    floe_geometry_polytope(s->g, 3, &pv);
     const double *bp = pv.plane, *bv = pv.v;
     const int np = pv.np, n = pv.nv;
     if (np > FLOE_POLY3_FACES || n > 4 * FLOE_POLY3_FACES * FLOE_POLY3_CORNERS) return -1;
@@ -453,8 +450,8 @@ int floe_detect_overlap(const floe_detect_ctx *w, const floe_body_ref *bi, const
         int apart = 0;
         if (axis) {
             floe_polytope_view va, vb;
-            body_polytope(a.g, 2, &va);
-            body_polytope(b.g, 2, &vb);
+            floe_geometry_polytope(a.g, 2, &va);
+            floe_geometry_polytope(b.g, 2, &vb);
             double P[OV_MAX][2], L[3];
             if (axis <= va.np && axis <= OV_MAX) {
                 ov_line1(&a, o, va.plane + 4 * (axis - 1), L);
@@ -772,8 +769,8 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
     double Ra[3][3];
     rel_make(&fab, a, b, Ra);
     floe_polytope_view va, vb; /* each body's planes and corners, fetched once for the pair */
-    body_polytope(a->g, w->dim, &va);
-    body_polytope(b->g, w->dim, &vb);
+    floe_geometry_polytope(a->g, w->dim, &va);
+    floe_geometry_polytope(b->g, w->dim, &vb);
     int rc = lp_half(w, a, b, &va, &vb, &fab, warm, x1, &s1, n1, &g1, &p1, &fb);
     if (rc) return -rc;
     w->det->lp_calls++;
@@ -797,13 +794,15 @@ static int polytope_pair(floe_detect_ctx *w, const shape_ref *a, const shape_ref
     /* the deeper half sets depth, normal and the point the force acts at (the deepest
      * point itself: the force is then the gradient of the stored energy) */
     if (-s1 >= -s2) {
+        double n[3];
+        floe_q_rotate(n, a->q, n1); /* into the world */
         c->depth = -s1;
-        floe_v3_set(c->n, -n1[0], -n1[1], -n1[2]);
+        floe_v3_set(c->n, -n[0], -n[1], -n[2]);
         floe_v3_copy(c->point, x1);
         c->gscale = g1;
     } else {
         c->depth = -s2;
-        floe_v3_copy(c->n, n2);
+        floe_q_rotate(c->n, b->q, n2);
         floe_v3_copy(c->point, x2);
         c->gscale = g2;
     }

@@ -22,6 +22,10 @@ typedef struct floe_lp_problem {
     const double *b_body;
     const double *map;
     double *b_buf;
+    /* optional, 3D (NULL: none): p's planes a and p''s b_body as four rows of na_soa / nb_soa
+     * doubles (floe_polytope_view.plane_soa): a warm basis's tests of every plane read them */
+    const double *a_soa, *b_soa;
+    int na_soa, nb_soa;
 } floe_lp_problem;
 
 typedef struct floe_lp_result {

@@ -344,17 +344,29 @@ static int lp_warm_lazy(const floe_lp_problem *P, const int *basis, floe_lp_resu
     }
     double lam[4];
     if (!basis_solve3(M, h, y, lam)) return 0;
-    /* every row tested, without an exit per row (the same decisions; the loops vectorise) */
+    /* every row tested, without an exit per row (the same decisions; the loops vectorise;
+     * from the planes' rows by coordinate where the shapes give them, 8 planes a vector, the
+     * padded ones always held) */
     const double *a = P->a;
     int bad = 0;
-    for (int k = 0; k < na; k++)
-        bad |= a[4 * k] * y[0] + a[4 * k + 1] * y[1] + a[4 * k + 2] * y[2] > a[4 * k + 3] + ftol;
+    if (P->a_soa) {
+        const int m4 = P->na_soa;
+        const double *n0 = P->a_soa, *n1 = n0 + m4, *n2 = n1 + m4, *d = n2 + m4;
+        for (int k = 0; k < m4; k++) bad |= n0[k] * y[0] + n1[k] * y[1] + n2[k] * y[2] > d[k] + ftol;
+    } else
+        for (int k = 0; k < na; k++)
+            bad |= a[4 * k] * y[0] + a[4 * k + 1] * y[1] + a[4 * k + 2] * y[2] > a[4 * k + 3] + ftol;
     const double *Mm = P->map, *mm = P->map + 9;
     double X[3];
     for (int i = 0; i < 3; i++) X[i] = Mm[3 * i] * y[0] + Mm[3 * i + 1] * y[1] + Mm[3 * i + 2] * y[2] + mm[i];
     const double *b = P->b_body;
-    for (int k = 0; k < P->nb; k++)
-        bad |= b[4 * k] * X[0] + b[4 * k + 1] * X[1] + b[4 * k + 2] * X[2] - y[3] > b[4 * k + 3] + ftol;
+    if (P->b_soa) {
+        const int m4 = P->nb_soa;
+        const double *n0 = P->b_soa, *n1 = n0 + m4, *n2 = n1 + m4, *d = n2 + m4;
+        for (int k = 0; k < m4; k++) bad |= n0[k] * X[0] + n1[k] * X[1] + n2[k] * X[2] - y[3] > d[k] + ftol;
+    } else
+        for (int k = 0; k < P->nb; k++)
+            bad |= b[4 * k] * X[0] + b[4 * k + 1] * X[1] + b[4 * k + 2] * X[2] - y[3] > b[4 * k + 3] + ftol;
     if (bad) return 0;
     for (int i = 0; i < n; i++)
         if (lam[i] < -1e-12) return 0; /* a pivot: the full problem */
