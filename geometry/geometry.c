@@ -379,7 +379,9 @@ void floe_set_err(char *err, size_t errlen, const char *fmt, ...) {
 
 int floe_geometry_polytope(const floe_geometry *g, int dim, floe_polytope_view *out) {
     if (!g->klass->polytope) return 0;
-    memset(out, 0, sizeof *out); /* the optional fields a class may leave */
+    out->ccw = 0; /* the optional fields a class may leave */
+    out->plane_soa = NULL;
+    out->np_soa = 0;
     g->klass->polytope(g, dim, out);
     if (dim != 3 || out->np_soa < out->np) { /* the planes by coordinate: 3D, all of them */
         out->plane_soa = NULL;

@@ -2,8 +2,8 @@
 """bench/machine/lanes.py: are the lane kernels still vector code?
 
 The contact stage's sphere lanes (core/world/forces.c sph_flush_lanes) and the integrator's
-particle lanes (core/integrators/step.c drift_lanes_body, kick_lanes) are written so that the
-compiler runs each loop over a batch (`for (int q = 0; q < SL; q++)`, `... < IL; ...`) in
+particle lanes (core/integrators/step.c drift_lanes_body, kick_lanes, kick_lanes_aniso) are
+written so that the compiler runs each loop over a batch (`for (int q = 0; q < SL; q++)`, `... < IL; ...`) in
 vector registers. Nothing fails when one of them silently goes scalar: the results are the
 same bits, only slower. From session 20 (50ff56b) to session 29 the kinematics loop of
 sph_flush_lanes ran scalar in every sphere scene (a load under a select became a masked load
@@ -29,7 +29,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 # file -> the functions whose batch loops must be vector code
 KERNELS = {
     "core/world/forces.c": ["sph_flush_lanes"],
-    "core/integrators/step.c": ["drift_lanes_body", "kick_lanes"],
+    "core/integrators/step.c": ["drift_lanes_body", "kick_lanes", "kick_lanes_aniso"],
 }
 BATCH_LOOP = re.compile(r"for \(int [a-z]+ = 0; [a-z]+ < (SL|IL|SPH_BATCH); [a-z]+\+\+\)")
 

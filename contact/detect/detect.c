@@ -282,7 +282,7 @@ static int lp_half(floe_detect_ctx *w, const shape_ref *a, const shape_ref *b, c
      * maps them into tb when it needs them all (a warm basis that stays optimal in 3D reads
      * its own rows only) */
     floe_lp_problem P = {.dim = w->dim, .a = pa, .na = na, .nb = nb, .va = va, .nva = nva,
-                         .scale = fmin(a->r, b->r), .b_body = pb, .map = &f->M[0][0], .b_buf = tb,
+                         .scale = a->r < b->r ? a->r : b->r, .b_body = pb, .map = &f->M[0][0], .b_buf = tb,
                          .a_soa = A.plane_soa, .na_soa = A.np_soa, .b_soa = B.plane_soa, .nb_soa = B.np_soa};
     int basis[4];
     const int have = warm4 && isfinite(warm4[0]);
