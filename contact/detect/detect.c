@@ -194,19 +194,27 @@ static int vertices_plane(floe_detect_ctx *w, const shape_ref *a, const shape_re
     floe_q_rotate_inv(nb_, a->q, nw);
     const int K = w->dim == 2 ? 2 : 4;
     mf_vertex best[4];
-    int nb = 0;
-    for (int v = 0; v < nv; v++) {
-        const double *X = V + 3 * v;
-        const double s0 = h0 + (X[0] * nb_[0] + X[1] * nb_[1] + X[2] * nb_[2]);
-        if (!(s0 < 0)) continue;
-        double xw[3];
-        floe_q_rotate(xw, a->q, X);
-        floe_v3_add(xw, xw, a->x);
-        floe_v3_sub(rel, xw, b->x);
-        double s = floe_v3_dot(rel, nw);
-        if (s < 0) {
-            mf_vertex m = {-s, {xw[0], xw[1], xw[2]}, {-nw[0], -nw[1], -nw[2]}};
-            mf_insert(best, &nb, K, &m);
+    int nb = 0, below[64];
+    /* the corners below, a chunk at a time without a branch per corner (which are below is
+     * data: a branch per corner was mispredicted), then each of them in order */
+    for (int v0 = 0; v0 < nv; v0 += 64) {
+        const int v1 = v0 + 64 < nv ? v0 + 64 : nv;
+        int n = 0;
+        for (int v = v0; v < v1; v++) {
+            const double *X = V + 3 * v;
+            below[n] = v;
+            n += h0 + (X[0] * nb_[0] + X[1] * nb_[1] + X[2] * nb_[2]) < 0;
+        }
+        for (int q = 0; q < n; q++) {
+            double xw[3];
+            floe_q_rotate(xw, a->q, V + 3 * below[q]);
+            floe_v3_add(xw, xw, a->x);
+            floe_v3_sub(rel, xw, b->x);
+            const double s = floe_v3_dot(rel, nw);
+            if (s < 0) {
+                mf_vertex m = {-s, {xw[0], xw[1], xw[2]}, {-nw[0], -nw[1], -nw[2]}};
+                mf_insert(best, &nb, K, &m);
+            }
         }
     }
     if (nb == 0) return 0;
