@@ -161,7 +161,7 @@ static void plane_to(const double P[4], const floe_pose *from, const floe_pose *
 /* random convex polyhedron: n (>= 12) random tangent planes of a sphere of radius about r,
  * offsets jittered (irregular faces); retried until bounded */
 static floe_geometry *rand_polyhedron(double r, int n) {
-    double pl[4 * 32];
+    double pl[4 * 64];
     char err[256];
     for (;;) {
         for (int i = 0; i < n; i++) {
@@ -318,6 +318,38 @@ static void test_lp_vs_glpk(void) {
           C.max_phi_err);
     CHECK(C.warm_used >= C.warm_runs * 9 / 10, "warm LP basis reused in %d of %d small motions", C.warm_used,
           C.warm_runs);
+    /* many planes: more than 64 rows, so that the ratio test's chunks of 64 rows (polytope_lp.c
+     * ratio_test) start past p's rows (a box's 6, or a 40-60-plane polyhedron's) */
+    lp_check M;
+    memset(&M, 0, sizeof M);
+    int many_rows = 0;
+    for (int t = 0; t < 24; t++) {
+        floe_geometry *g[2] = {t % 3 == 0 ? floe_box_create(uni(0.3, 2), uni(0.3, 2), uni(0.3, 2))
+                                          : rand_polyhedron(uni(0.5, 1.0), 60),
+                               rand_polyhedron(uni(0.5, 1.0), 60)};
+        floe_pose a = {g[0], {uni(-1, 1), uni(-1, 1), uni(-1, 1)}, {1, 0, 0, 0}}, b = {g[1], {0, 0, 0}, {1, 0, 0, 0}};
+        rand_quat(a.q);
+        rand_quat(b.q);
+        double u[3], ra = floe_geometry_bounding_radius(g[0]), rb = floe_geometry_bounding_radius(g[1]);
+        rand_unit(u);
+        const double d = uni(0.2, 0.8) * (ra + rb);
+        for (int k = 0; k < 3; k++) b.x[k] = a.x[k] + d * u[k];
+        floe_polytope_view va, vb;
+        floe_geometry_polytope(g[0], 3, &va);
+        floe_geometry_polytope(g[1], 3, &vb);
+        many_rows += va.np + vb.np > 64;
+        for (int half = 0; half < 2; half++) {
+            int basis[4] = {-1, -1, -1, -1};
+            lp_vs_glpk(half ? &b : &a, half ? &a : &b, basis, &M, 0);
+        }
+        floe_geometry_destroy(g[0]);
+        floe_geometry_destroy(g[1]);
+    }
+    printf("  LP vs GLPK, 24 pairs with many planes (%d of them more than 64 rows): max |s - s_glpk| / size = %.2e, "
+           "failures %d\n", many_rows, M.max_err_s, M.fails);
+    CHECK(many_rows >= 16, "pairs with more than 64 rows: %d of 24 (the 16 of two polyhedra)", many_rows);
+    CHECK(M.fails == 0 && M.max_err_s <= 1e-9 && M.max_in_p <= 1e-9 && M.max_phi_err <= 1e-9,
+          "LP against GLPK with many planes: %d failures, s err %.3g (tol 1e-9 x size)", M.fails, M.max_err_s);
     double mx = 0;
     for (int i = 0; i < nerr; i++) mx = fmax(mx, admm_err[i]);
     double med = median(admm_err, nerr);

@@ -273,7 +273,8 @@ static int ratio_test(const floe_lp_problem *P, const int *basis, const double y
     int enter = -1;
     double al = INFINITY, rat[64];
     for (int k0 = 0; k0 < m; k0 += 64) {
-        const int k1 = k0 + 64 < m ? k0 + 64 : m, ka = k1 < na ? k1 : na; /* [k0, ka) A rows, [ka, k1) B rows */
+        const int k1 = k0 + 64 < m ? k0 + 64 : m;
+        const int ka = na < k0 ? k0 : na < k1 ? na : k1; /* [k0, ka) A rows, [ka, k1) B rows */
         if (ka > k0) ratios(P->dim, P->a + 4 * k0, 0.0, ka - k0, y, d, rat);
         if (k1 > ka) ratios(P->dim, P->b + 4 * (ka - na), -1.0, k1 - ka, y, d, rat + (ka - k0));
         for (int i = 0; i < n; i++)
@@ -293,18 +294,21 @@ static int ratio_test(const floe_lp_problem *P, const int *basis, const double y
  * by the LU path's factorisations. A resting contact whose deepest point moves to the next
  * corner of a face needs one pivot (98 % of the pivoting halves of a settled polyhedra bed,
  * 3 % of all): on the LU path each cost about ten kept halves. 1 with the optimum's basis,
- * y and lam and *pivots; 0 (basis untouched) when a basis is singular, an edge unbounded
- * or no optimum within LP_PIVOTS3 pivots: the LU path then starts from the given basis */
+ * y and lam and *pivots (its point tested against every row, as a kept basis's); 0 (basis
+ * untouched) when a basis is singular, an edge unbounded, the optimum's point outside a row
+ * by more than the tolerance or no optimum within LP_PIVOTS3 pivots: the LU path then
+ * starts from the given basis */
 #define LP_PIVOTS3 8
 static int lp_pivot3(const floe_lp_problem *P, int *basis, double y[4], double lam[4], int *pivots) {
     int bs[4];
     memcpy(bs, basis, sizeof bs);
+    double M[4][4], h[4];
+    for (int i = 0; i < 4; i++) row(P, bs[i], M[i], &h[i]);
     for (int it = 1; it <= LP_PIVOTS3; it++) {
         int leave = -1; /* Bland: the lowest row among the negative multipliers */
         for (int i = 0; i < 4; i++)
             if (lam[i] < -1e-12 && (leave < 0 || bs[i] < bs[leave])) leave = i;
-        double M[4][4], h[4], e[4] = {0, 0, 0, 0}, d[4], alpha;
-        for (int i = 0; i < 4; i++) row(P, bs[i], M[i], &h[i]);
+        double e[4] = {0, 0, 0, 0}, d[4], alpha;
         basis3 B;
         if (leave < 0 || !basis3_setup(M, &B)) return 0;
         e[leave] = -1.0; /* r_leave . d = -1, the other basis rows stay tight */
@@ -312,11 +316,13 @@ static int lp_pivot3(const floe_lp_problem *P, int *basis, double y[4], double l
         const int enter = ratio_test(P, bs, y, d, &alpha);
         if (enter < 0) return 0;
         bs[leave] = enter;
-        for (int i = 0; i < 4; i++) row(P, bs[i], M[i], &h[i]);
+        row(P, enter, M[leave], &h[leave]);
         if (!basis_solve3(M, h, y, lam)) return 0;
         int opt = 1;
         for (int i = 0; i < 4; i++) opt &= lam[i] >= -1e-12;
-        if (opt) {
+        if (opt) { /* the new basis's own point, tested as a kept basis's is */
+            const double tol = 1e-12 * (P->scale > 0 ? P->scale : 1.0); /* floe_lp_deepest's */
+            if (!feasible(P, y, 1e3 * tol)) return 0;
             memcpy(basis, bs, sizeof bs);
             *pivots = it;
             return 1;

@@ -455,11 +455,11 @@ static inline int run_len(const unsigned char *MO, const unsigned char *iso, int
     return q;
 }
 
-/* IL free anisotropic bodies from i (kick_lanes_aniso) */
-static inline int aniso_run(const unsigned char *MO, const unsigned char *iso, int i) {
-    int ok = 1;
-    for (int q = 0; q < IL; q++) ok &= (MO[i + q] == FLOE_FREE) & (iso[i + q] == 0);
-    return ok;
+/* the free anisotropic bodies from i, at most IL (kick_lanes_aniso) */
+static inline int aniso_len(const unsigned char *MO, const unsigned char *iso, int i) {
+    int q = 0;
+    while (q < IL && MO[i + q] == FLOE_FREE && iso[i + q] == 0) q++;
+    return q;
 }
 
 typedef struct drift_args {
@@ -776,10 +776,10 @@ static void kick_block(floe_particles *p, const kick_args *a, int i0, int i1, do
     for (int i = i0; i < i1; i++) {
         while (i >= next && i + IL <= i1) {
             /* a run of isotropic free bodies, in lanes (the isotropic case below) */
-            const int n = run_len(MO, iso, i, 0);
+            const int n = run_len(MO, iso, i, 0), na = n == 0 && !leap && !recheck ? aniso_len(MO, iso, i) : 0;
             double KE[IL], KR[IL], SH[IL];
             const size_t o3 = 3 * (size_t)i;
-            if (n == 0 && !leap && !recheck && aniso_run(MO, iso, i)) { /* a run of anisotropic free bodies */
+            if (na == IL) { /* a run of anisotropic free bodies */
                 kick_lanes_aniso(V + o3, W + o3, LL + o3, F + o3, T + o3, IM + i, M + i, p->inertia + o3,
                                  p->q + 4 * (size_t)i, h, KE, KR, SH);
                 for (int q = 0; q < IL; q++) { /* in order, as one by one */
@@ -791,8 +791,8 @@ static void kick_block(floe_particles *p, const kick_args *a, int i0, int i1, do
                 i += IL;
                 continue;
             }
-            if (n < IL) { /* particle i + n breaks it: one by one up to there */
-                next = i + n + 1;
+            if (n < IL) { /* particle i + n (i + na) breaks it: one by one up to there */
+                next = i + (na > 0 ? na : n + 1);
                 break;
             }
             if (recheck) /* MPI: the drift's checks on v_half, before the kick (bad_i is a minimum) */

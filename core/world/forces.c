@@ -1488,8 +1488,11 @@ static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env 
          * the gap's counts: done here, without a branch per entry, and the entry left out (a
          * settled polyhedra bed: two thirds of its entries, each a call of contact_pair). A
          * kept gap is a convex pair's only (sphere and wall pairs' slots stay NaN, their test
-         * false); NaN centres or bounds fail both tests and go to contact_pair. (A law "none"
-         * returns before both in contact_pair: such a world keeps the loop above) */
+         * false; a sphere pair's warm slot, never written, is NaN already); NaN centres or
+         * bounds fail both tests and go to contact_pair. (A law "none" returns before both in
+         * contact_pair: such a world keeps the loop above.) The resets and counts are made for
+         * the whole block first: an evaluation that fails in the block has made them for the
+         * entries after it too (warm starts of apart pairs, statistics) */
         const double *sp = w->sep_on && !env->overlap2d ? w->sep_pair : NULL, *sd = w->sep_d;
         int apart_k[FLOE_PAR_BLOCK]; /* the apart entries (k1 - k0 <= FLOE_PAR_BLOCK) */
         int na = 0;
@@ -1505,7 +1508,7 @@ static int stage_block(floe_world *w, const floe_step_ctx *ctx, const stage_env 
             const int skip = (apart | hold) & !touching[k];
             held += hold & !touching[k];
             apart_k[na] = k;
-            na += apart;
+            na += apart & !touching[k]; /* (contact_pair resets a touching one's) */
             cand[nc] = k;
             nc += !skip;
         }
