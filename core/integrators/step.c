@@ -791,8 +791,9 @@ static void kick_block(floe_particles *p, const kick_args *a, int i0, int i1, do
                 i += IL;
                 continue;
             }
-            if (n < IL) { /* particle i + n (i + na) breaks it: one by one up to there */
-                next = i + (na > 0 ? na : n + 1);
+            if (n < IL) { /* particle i + n (or i + na) breaks it: one by one up to there, where a
+                           * run of the other kind may start */
+                next = i + (n > 0 ? n : na > 0 ? na : 1);
                 break;
             }
             if (recheck) /* MPI: the drift's checks on v_half, before the kick (bad_i is a minimum) */
