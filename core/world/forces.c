@@ -534,6 +534,20 @@ static inline __attribute__((always_inline)) void sphere_contact(floe_contact *c
     }
 }
 
+/* the lever arms of a sphere pair's contact point c->point (the middle of the overlap on the
+ * line of centres) from i's centre and from j's, (dx, dy, dz) = x_j - x_i (j's image in a
+ * periodic cell): ri = (r_i - depth/2) n, rj = ri - (dx, dy, dz); the same operations as
+ * the lanes' (sph_flush_lanes), so the same bits. From the centre line rather than as
+ * c->point - x: the lanes need not gather the centres (issue 14 session 41) */
+static inline __attribute__((always_inline)) void sphere_arms(const floe_contact *c, double rad_i, double dx,
+                                                              double dy, double dz, double ri[3], double rj[3]) {
+    const double ci = rad_i - 0.5 * c->depth, d[3] = {dx, dy, dz};
+    for (int a = 0; a < 3; a++) {
+        ri[a] = ci * c->n[a];
+        rj[a] = ri[a] - d[a];
+    }
+}
+
 /* The end of a pair evaluation, the same for both bodies: the stored energy (res.energy +
  * the manifold springs' ex), the dissipation ledger, the pair's history, and its record (with
  * the manifold's force fx) or its count. */
@@ -630,7 +644,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     c.gscale = 1.0;
     c.nextra = 0;
     c.fn_extra = 0.0;
-    int r = 0, ov_done = 0;
+    int r = 0, ov_done = 0, spheres = 0;
     /* bounding spheres apart: no contact for any pair of shapes (most list pairs) */
     double xs[3];
     const double *xa = p->x + 3 * i, *xb = pair_image(env, k, p->x + 3 * j, xs);
@@ -650,7 +664,7 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
         if (p->kind[i] == FLOE_GEOM_SPHERE && p->kind[j] == FLOE_GEOM_SPHERE) {
             /* sphere-sphere inline (the bounding test above is the exact test) */
             sphere_contact(&c, i, j, xa, xb, p->radius[i], p->radius[j], dx, dy, dz, d2);
-            r = 1;
+            r = spheres = 1;
         } else if (!sub && ((p->kind[i] == FLOE_GEOM_SPHERE && p->kind[j] == FLOE_GEOM_PLANE) ||
                             (p->kind[i] == FLOE_GEOM_PLANE && p->kind[j] == FLOE_GEOM_SPHERE))) {
             /* sphere-wall inline (detection's own kernel, without the call through its
@@ -713,8 +727,11 @@ static inline int contact_pair(floe_world *w, const floe_step_ctx *ctx, const st
     if (c.depth > (rs < INFINITY ? rmin(rad_i, rad_j) : 2 * rmin(rad_i, rad_j)))
         return pair_too_deep(w, i, j, c.depth, !(rs < INFINITY), c.n);
     double ri[3], rj[3], ui[3], uj[3];
-    floe_v3_sub(ri, c.point, xa);
-    floe_v3_sub(rj, c.point, xb);
+    if (spheres) sphere_arms(&c, p->radius[i], dx, dy, dz, ri, rj);
+    else {
+        floe_v3_sub(ri, c.point, xa);
+        floe_v3_sub(rj, c.point, xb);
+    }
     floe_v3_cross(ui, p->w + 3 * i, ri);
     floe_v3_cross(uj, p->w + 3 * j, rj);
     for (int a = 0; a < 3; a++) c.vr[a] = (p->v[3 * i + a] + ui[a]) - (p->v[3 * j + a] + uj[a]);
@@ -914,17 +931,21 @@ static inline __attribute__((always_inline)) void sphere_fused_book(floe_world *
 
 /* entry q's inputs to the lanes (sph_flush_lanes), as it joins the batch (xb: j's centre,
  * or its image's in a periodic cell); lin: the linear law's too (the dashpot's phase and
- * a_i - a_j, the last force) */
+ * a_i - a_j, the last force); centres: the two centres too (a wall's entry, or a stage that
+ * records its contacts: the point; a sphere pair's lever arms come from the centre line) */
 static inline __attribute__((always_inline)) void sph_lane_gather(const floe_world *w, const floe_particles *p,
                                                                  sph_batch *b, int q, int i, int j, const double *xb,
                                                                  const double *hist, double rad_i, double rad_j,
-                                                                 double im, int lin) {
+                                                                 double im, int lin, int centres) {
     b->ra[q] = rad_i;
     b->rb[q] = rad_j;
     b->im[q] = im;
+    if (centres) /* a wall's lever arms, a record's point (sphere pairs' arms: sphere_arms) */
+        for (int a = 0; a < 3; a++) {
+            b->xa[a][q] = p->x[3 * i + a];
+            b->xb[a][q] = xb[a];
+        }
     for (int a = 0; a < 3; a++) {
-        b->xa[a][q] = p->x[3 * i + a];
-        b->xb[a][q] = xb[a];
         b->vi[a][q] = p->v[3 * i + a];
         b->vj[a][q] = p->v[3 * j + a];
         b->wi[a][q] = p->w[3 * i + a];
@@ -1016,14 +1037,15 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
      * GCC made them masked loads it cannot vectorize, and the whole kinematics loop ran scalar */
     double LCl[9];
     for (int a = 0; a < 9; a++) LCl[a] = LC[a];
-    /* lane q's kinematics from its normal n and contact point pt (the lever arms, the relative
-     * velocity at the point and its parts, the overlap change, pair_an_ext with gscale 1) */
-#define LANE_KIN(q, n, pt)                                                                                      \
+    /* lane q's kinematics from its normal n and lever arms ri, rj (from the centres to the
+     * contact point: the relative velocity there and its parts, the overlap change,
+     * pair_an_ext with gscale 1) */
+#define LANE_KIN(q, n, ri, rj)                                                                                  \
     do {                                                                                                        \
         double ri_[3], rj_[3], wi_[3], wj_[3], ui_[3], uj_[3], vr_[3];                                          \
         for (int a = 0; a < 3; a++) {                                                                           \
-            ri_[a] = (pt)[a] - XA[a][q];                                                                        \
-            rj_[a] = (pt)[a] - XB[a][q];                                                                        \
+            ri_[a] = (ri)[a];                                                                                   \
+            rj_[a] = (rj)[a];                                                                                   \
             wi_[a] = WI[a][q];                                                                                  \
             wj_[a] = WJ[a][q];                                                                                  \
         }                                                                                                       \
@@ -1037,7 +1059,6 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         const double vn_ = floe_dot3_l(vr_, n);                                                                 \
         for (int a = 0; a < 3; a++) {                                                                           \
             N[a][q] = (n)[a];                                                                                   \
-            PT[a][q] = (pt)[a];                                                                                 \
             Ri[a][q] = ri_[a];                                                                                  \
             Rj[a][q] = rj_[a];                                                                                  \
             VR[a][q] = vr_[a];                                                                                  \
@@ -1060,16 +1081,25 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         if (want_reff)
             for (int q = 0; q < SL; q++) reff[q] = b->wall[q] != 0.0 ? b->wreff[q] : RI[q] * RJ[q] / (RI[q] + RJ[q]);
         for (int q = 0; q < SL; q++) {
-            const double inv = 1.0 / dist[q];
+            const double inv = 1.0 / dist[q], ci = RI[q] - 0.5 * depth[q];
             const int wl = b->wall[q] != 0.0;
-            double n[3], pt[3];
-            for (int a = 0; a < 3; a++) {
-                const double ns = D[a][q] * inv, x1 = XA[a][q] + RI[q] * ns, x2 = XB[a][q] - RJ[q] * ns;
+            double n[3], ri[3], rj[3];
+            for (int a = 0; a < 3; a++) { /* a wall's lanes: from its contact point (XA, XB gathered) */
+                const double ns = D[a][q] * inv, rs = ci * ns, pw = b->wpt[a][q];
                 n[a] = wl ? b->wn[a][q] : ns;
-                pt[a] = wl ? b->wpt[a][q] : 0.5 * (x1 + x2);
+                ri[a] = wl ? pw - XA[a][q] : rs;
+                rj[a] = wl ? pw - XB[a][q] : rs - D[a][q];
             }
-            LANE_KIN(q, n, pt);
+            LANE_KIN(q, n, ri, rj);
         }
+        if (env->record)
+            for (int q = 0; q < SL; q++) {
+                const double inv = 1.0 / dist[q];
+                for (int a = 0; a < 3; a++) {
+                    const double ns = D[a][q] * inv, x1 = XA[a][q] + RI[q] * ns, x2 = XB[a][q] - RJ[q] * ns;
+                    PT[a][q] = b->wall[q] != 0.0 ? b->wpt[a][q] : 0.5 * (x1 + x2);
+                }
+            }
     } else {
         double dist[SL];
         for (int q = 0; q < SL; q++) {
@@ -1080,15 +1110,23 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         if (want_reff)
             for (int q = 0; q < SL; q++) reff[q] = RI[q] * RJ[q] / (RI[q] + RJ[q]);
         for (int q = 0; q < SL; q++) {
-            const double inv = 1.0 / dist[q];
-            double n[3], pt[3];
+            const double inv = 1.0 / dist[q], ci = RI[q] - 0.5 * depth[q];
+            double n[3], ri[3], rj[3];
             for (int a = 0; a < 3; a++) n[a] = D[a][q] * inv;
-            for (int a = 0; a < 3; a++) { /* the mid point of the two surface points */
-                const double x1 = XA[a][q] + RI[q] * n[a], x2 = XB[a][q] - RJ[q] * n[a];
-                pt[a] = 0.5 * (x1 + x2);
+            for (int a = 0; a < 3; a++) { /* sphere_arms */
+                ri[a] = ci * n[a];
+                rj[a] = ri[a] - D[a][q];
             }
-            LANE_KIN(q, n, pt);
+            LANE_KIN(q, n, ri, rj);
         }
+        if (env->record) /* the record's point: the mid point of the two surface points */
+            for (int q = 0; q < SL; q++) {
+                const double inv = 1.0 / dist[q];
+                for (int a = 0; a < 3; a++) {
+                    const double ns = D[a][q] * inv, x1 = XA[a][q] + RI[q] * ns, x2 = XB[a][q] - RJ[q] * ns;
+                    PT[a][q] = 0.5 * (x1 + x2);
+                }
+            }
     }
 #undef LANE_KIN
     /* the springs turned with the contact frames (floe_contact_rotate_history): its common
@@ -1345,7 +1383,7 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
             const int q = b->n++;
             b->wall[q] = 0.0;
             /* the lanes' inputs now (stage_block prefetched them 8 entries ahead) */
-            sph_lane_gather(w, p, b, q, i, j, xb, hist, rad_i, rad_j, im, lin);
+            sph_lane_gather(w, p, b, q, i, j, xb, hist, rad_i, rad_j, im, lin, env->record);
             b->law = law;
             b->k[q] = k; b->i[q] = i; b->j[q] = j;
             b->dx[q] = dx; b->dy[q] = dy; b->dz[q] = dz; b->d2[q] = d2;
@@ -1363,8 +1401,7 @@ static inline __attribute__((always_inline)) int sphere_pair(floe_world *w, cons
     if (c.depth > rmin(rad_i, rad_j)) return pair_too_deep(w, i, j, c.depth, 0, c.n);
     const double *wi = p->w + 3 * i, *wj = p->w + 3 * j, *vi = p->v + 3 * i, *vj = p->v + 3 * j;
     double ri[3], rj[3], ui[3], uj[3];
-    floe_v3_sub(ri, c.point, xa);
-    floe_v3_sub(rj, c.point, xb);
+    sphere_arms(&c, rad_i, dx, dy, dz, ri, rj);
     floe_v3_cross(ui, wi, ri);
     floe_v3_cross(uj, wj, rj);
     for (int a = 0; a < 3; a++) c.vr[a] = (vi[a] + ui[a]) - (vj[a] + uj[a]);
@@ -1447,7 +1484,7 @@ static __attribute__((noinline)) int sphere_wall_pair(floe_world *w, const floe_
             b->d2[q] = 1.0; /* the sphere pairs' geometry, computed for every lane, is dropped */
             b->dx[q] = b->dy[q] = b->dz[q] = 0.0;
             sph_lane_gather(w, p, b, q, i, j, p->x + 3 * j, hist, p->radius[i], p->radius[j], im,
-                            law->klass == &floe_linear_law_class);
+                            law->klass == &floe_linear_law_class, 1);
             b->law = law;
             b->k[q] = k; b->i[q] = i; b->j[q] = j;
             /* the geometry seen from i: n from the sphere into the wall (flipped were the wall
