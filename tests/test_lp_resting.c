@@ -14,6 +14,9 @@
  *  2. Negative control: a pair solved once, then one body turned by 0.3 .. 1 rad: the old
  *     basis must not be kept (a pivot, or a cold start when its point is infeasible), both
  *     cases must occur, and the result must be the cold solve's; unmoved, it is kept.
+ *     2b. The same turned pairs with the pivots in closed form capped (none, one): the LU
+ *     path takes over from the given basis (floe_lp_result.taken_over) and still gives the
+ *     cold solve's result.
  *  3. The lazy problem (floe_lp_problem.b_body: p''s planes in its own frame and the map, as
  *     detect.c gives it, with the planes by coordinate at odd poses and without at even ones)
  *     against the same planes mapped first (by the library's own map, a cold lazy solve's
@@ -160,8 +163,8 @@ static void settling_run(void) {
 }
 
 /* the LP of a's point deepest in b, b's planes in a's frame (as detect.c) */
-static int solve_half(const floe_geometry *ga, const floe_geometry *gb, const double xb[3], const double qb[4],
-                      int basis[4], floe_lp_result *r) {
+static int solve_half_cap(const floe_geometry *ga, const floe_geometry *gb, const double xb[3], const double qb[4],
+                          int basis[4], floe_lp_result *r, int cap) {
     floe_polytope_view A, B;
     CHECK(floe_geometry_polytope(ga, 3, &A) && floe_geometry_polytope(gb, 3, &B), "polytope views");
     double *tb = malloc(sizeof(double) * 4 * (size_t)B.np);
@@ -169,10 +172,15 @@ static int solve_half(const floe_geometry *ga, const floe_geometry *gb, const do
         floe_q_rotate(tb + 4 * k, qb, B.plane + 4 * k);
         tb[4 * k + 3] = B.plane[4 * k + 3] + floe_v3_dot(tb + 4 * k, xb);
     }
-    floe_lp_problem P = {.dim = 3, .a = A.plane, .na = A.np, .b = tb, .nb = B.np, .va = A.v, .nva = A.nv, .scale = R};
+    floe_lp_problem P = {.dim = 3, .a = A.plane, .na = A.np, .b = tb, .nb = B.np, .va = A.v, .nva = A.nv, .scale = R,
+                         .pivots3_cap = cap};
     int rc = floe_lp_deepest(&P, basis, r);
     free(tb);
     return rc;
+}
+static int solve_half(const floe_geometry *ga, const floe_geometry *gb, const double xb[3], const double qb[4],
+                      int basis[4], floe_lp_result *r) {
+    return solve_half_cap(ga, gb, xb, qb, basis, r, 0);
 }
 
 static void negative_control(void) {
@@ -217,6 +225,57 @@ static void negative_control(void) {
     CHECK(pivoted > trials / 10 && recold > trials / 10,
           "a turned pair's old basis is given up, by pivots (%d) and by a cold start (%d), both > 10 %%", pivoted, recold);
     CHECK(agree == trials, "after the basis changed the result is the cold LP's within 1e-10 R: %d of %d", agree, trials);
+}
+
+/* 2b. The LU path taking over from the pivots in closed form (polytope_lp.c lp_pivot3 gives
+ * up: a singular basis, an unbounded edge, an optimum outside a row, or more pivots than its
+ * cap): from the given basis, after the closed form has moved its own copy of the point and
+ * multipliers. With the cap at none (every pivoting half taken over at once) and at one
+ * pivot (the halves that need more taken over after one), each turned pair's result is the
+ * cold solve's, and the take-overs happen. */
+static void pivots_taken_over(void) {
+    const int trials = 200, caps[3] = {-1, 1, 0};
+    int over[3] = {0, 0, 0}, agree[3] = {0, 0, 0}, multi = 0;
+    double worst = 0;
+    for (int t = 0; t < trials; t++) {
+        floe_geometry *ga = grain(), *gb = grain();
+        double u[3], xb[3], qb[4], th[3], dq[4], q2[4];
+        rand_unit(u);
+        for (int k = 0; k < 3; k++) xb[k] = 1.7 * R * u[k];
+        rand_quat(qb);
+        rand_unit(th);
+        floe_v3_scale(th, uni(0.3, 1.0));
+        floe_q_from_rotvec(dq, th);
+        floe_q_mul(q2, dq, qb);
+        floe_q_normalize(q2);
+        int basis[4] = {-1, -1, -1, -1}, c[4] = {-1, -1, -1, -1};
+        floe_lp_result r0, rc;
+        CHECK(solve_half(ga, gb, xb, qb, basis, &r0) == FLOE_OK, "cold solve");
+        CHECK(solve_half(ga, gb, xb, q2, c, &rc) == FLOE_OK, "cold solve, turned");
+        for (int m = 0; m < 3; m++) {
+            int b2[4];
+            floe_lp_result r;
+            memcpy(b2, basis, sizeof b2);
+            CHECK(solve_half_cap(ga, gb, xb, q2, b2, &r, caps[m]) == FLOE_OK, "warm solve, turned, cap %d", caps[m]);
+            over[m] += r.taken_over;
+            if (m == 2) multi += r.warm && !r.taken_over && r.pivots > 1;
+            const double e = fmax(fabs(r.s - rc.s), dist3(r.x, rc.x));
+            worst = fmax(worst, e);
+            agree[m] += e <= 1e-10 * R;
+        }
+        floe_geometry_destroy(ga);
+        floe_geometry_destroy(gb);
+    }
+    printf("  the LU path taking over, %d turned pairs: taken over with no closed-form pivot %d, after one %d, by "
+           "default %d (%d solved in closed form with more than one pivot); equal to the cold solve %d, %d, %d "
+           "(worst %.2e R)\n",
+           trials, over[0], over[1], over[2], multi, agree[0], agree[1], agree[2], worst / R);
+    CHECK(over[0] > trials / 10, "with no closed-form pivot the LU path takes over: %d of %d", over[0], trials);
+    CHECK(over[1] > 0 && over[1] < over[0], "after one closed-form pivot: some halves taken over (%d, fewer than %d)",
+          over[1], over[0]);
+    for (int m = 0; m < 3; m++)
+        CHECK(agree[m] == trials, "cap %d: the result is the cold LP's within 1e-10 R: %d of %d", caps[m], agree[m],
+              trials);
 }
 
 static void lazy_equals_full(void) {
@@ -355,6 +414,7 @@ static void sep_cache_moves(void) {
 int main(void) {
     setvbuf(stdout, NULL, _IOLBF, 0);
     negative_control();
+    pivots_taken_over();
     lazy_equals_full();
     sep_cache_moves();
     settling_run();

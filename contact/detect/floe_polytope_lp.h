@@ -26,6 +26,10 @@ typedef struct floe_lp_problem {
      * doubles (floe_polytope_view.plane_soa): a warm basis's tests of every plane read them */
     const double *a_soa, *b_soa;
     int na_soa, nb_soa;
+    /* the pivots in closed form a feasible warm basis (3D) may take before the LU path takes
+     * over from it: 0 for the default (8), negative for none (tests exercise the LU path's
+     * take-over with it) */
+    int pivots3_cap;
 } floe_lp_problem;
 
 typedef struct floe_lp_result {
@@ -38,6 +42,8 @@ typedef struct floe_lp_result {
     double lambda[4];
     int pivots;         /* simplex pivots taken */
     int warm;           /* 1 if the given basis was feasible and used */
+    int taken_over;     /* 1 if the pivots in closed form gave up and the LU path went on
+                           from the given basis (floe_lp_problem.pivots3_cap) */
 } floe_lp_result;
 
 /* basis: dim + 1 row indices (A rows 0..na-1, then B rows), in: the previous optimum

@@ -300,11 +300,12 @@ static int ratio_test(const floe_lp_problem *P, const int *basis, const double y
  * starts from the given basis */
 #define LP_PIVOTS3 8
 static int lp_pivot3(const floe_lp_problem *P, int *basis, double y[4], double lam[4], int *pivots) {
+    const int cap = P->pivots3_cap ? P->pivots3_cap : LP_PIVOTS3;
     int bs[4];
     memcpy(bs, basis, sizeof bs);
     double M[4][4], h[4];
     for (int i = 0; i < 4; i++) row(P, bs[i], M[i], &h[i]);
-    for (int it = 1; it <= LP_PIVOTS3; it++) {
+    for (int it = 1; it <= cap; it++) {
         int leave = -1; /* Bland: the lowest row among the negative multipliers */
         for (int i = 0; i < 4; i++)
             if (lam[i] < -1e-12 && (leave < 0 || bs[i] < bs[leave])) leave = i;
@@ -414,6 +415,7 @@ int floe_lp_deepest(const floe_lp_problem *P, int *basis, floe_lp_result *res) {
             lp_finish(P, basis, y, NULL, res);
             return FLOE_OK;
         }
+        res->taken_over = feas; /* (y and lam are the LU path's from here) */
     }
     if (ok) ok = basis_factor(P, basis, &f, h);
     if (ok) {
