@@ -235,7 +235,7 @@ static void negative_control(void) {
  * cold solve's, and the take-overs happen. */
 static void pivots_taken_over(void) {
     const int trials = 200, caps[3] = {-1, 1, 0};
-    int over[3] = {0, 0, 0}, agree[3] = {0, 0, 0}, multi = 0;
+    int over[3] = {0, 0, 0}, agree[3] = {0, 0, 0}, multi = 0, over_cold = 0;
     double worst = 0;
     for (int t = 0; t < trials; t++) {
         floe_geometry *ga = grain(), *gb = grain();
@@ -258,6 +258,7 @@ static void pivots_taken_over(void) {
             memcpy(b2, basis, sizeof b2);
             CHECK(solve_half_cap(ga, gb, xb, q2, b2, &r, caps[m]) == FLOE_OK, "warm solve, turned, cap %d", caps[m]);
             over[m] += r.taken_over;
+            over_cold += r.taken_over && !r.warm;
             if (m == 2) multi += r.warm && !r.taken_over && r.pivots > 1;
             const double e = fmax(fabs(r.s - rc.s), dist3(r.x, rc.x));
             worst = fmax(worst, e);
@@ -271,6 +272,7 @@ static void pivots_taken_over(void) {
            "(worst %.2e R)\n",
            trials, over[0], over[1], over[2], multi, agree[0], agree[1], agree[2], worst / R);
     CHECK(over[0] > trials / 10, "with no closed-form pivot the LU path takes over: %d of %d", over[0], trials);
+    CHECK(over_cold == 0, "the LU path goes on from the given (feasible) basis, not cold: %d cold", over_cold);
     CHECK(over[1] > 0 && over[1] < over[0], "after one closed-form pivot: some halves taken over (%d, fewer than %d)",
           over[1], over[0]);
     for (int m = 0; m < 3; m++)
@@ -331,7 +333,7 @@ static void lazy_equals_full(void) {
             memcpy(bl, basis0, sizeof bl);
             floe_lp_result rf, rl;
             const int rcf = floe_lp_deepest(&F, bf, &rf), rcl = floe_lp_deepest(&L, bl, &rl);
-            const int eq = rcf == rcl && !memcmp(bf, bl, sizeof bf) && rf.warm == rl.warm && rf.pivots == rl.pivots &&
+            const int eq = rcf == rcl && !memcmp(bf, bl, sizeof bf) && rf.warm == rl.warm && rf.pivots == rl.pivots && rf.taken_over == rl.taken_over &&
                            !memcmp(rf.x, rl.x, sizeof rf.x) && !memcmp(&rf.s, &rl.s, sizeof rf.s) &&
                            !memcmp(rf.normal, rl.normal, sizeof rf.normal) && !memcmp(&rf.gnorm, &rl.gnorm, sizeof rf.gnorm) &&
                            !memcmp(rf.lambda, rl.lambda, sizeof rf.lambda);

@@ -27,8 +27,8 @@ typedef struct floe_lp_problem {
     const double *a_soa, *b_soa;
     int na_soa, nb_soa;
     /* the pivots in closed form a feasible warm basis (3D) may take before the LU path takes
-     * over from it: 0 for the default (8), negative for none (tests exercise the LU path's
-     * take-over with it) */
+     * over from it: 0 for the default (LP_PIVOTS3, polytope_lp.c), negative for none (tests
+     * exercise the LU path's take-over with it) */
     int pivots3_cap;
 } floe_lp_problem;
 
@@ -42,8 +42,9 @@ typedef struct floe_lp_result {
     double lambda[4];
     int pivots;         /* simplex pivots taken */
     int warm;           /* 1 if the given basis was feasible and used */
-    int taken_over;     /* 1 if the pivots in closed form gave up and the LU path went on
-                           from the given basis (floe_lp_problem.pivots3_cap) */
+    int taken_over;     /* 1 if the pivots in closed form gave up (floe_lp_problem.pivots3_cap)
+                           and the LU path went on: from the given basis (warm 1), or cold
+                           where the basis failed its own factorisation or test (warm 0) */
 } floe_lp_result;
 
 /* basis: dim + 1 row indices (A rows 0..na-1, then B rows), in: the previous optimum

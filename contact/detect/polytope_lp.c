@@ -296,8 +296,8 @@ static int ratio_test(const floe_lp_problem *P, const int *basis, const double y
  * 3 % of all): on the LU path each cost about ten kept halves. 1 with the optimum's basis,
  * y and lam and *pivots (its point tested against every row, as a kept basis's); 0 (basis
  * untouched) when a basis is singular, an edge unbounded, the optimum's point outside a row
- * by more than the tolerance or no optimum within LP_PIVOTS3 pivots: the LU path then
- * starts from the given basis */
+ * by more than the tolerance or no optimum within LP_PIVOTS3 pivots (P->pivots3_cap where set):
+ * the LU path then starts from the given basis */
 #define LP_PIVOTS3 8
 static int lp_pivot3(const floe_lp_problem *P, int *basis, double y[4], double lam[4], int *pivots) {
     const int cap = P->pivots3_cap ? P->pivots3_cap : LP_PIVOTS3;

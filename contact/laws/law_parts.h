@@ -129,10 +129,12 @@ static inline __attribute__((always_inline)) void floe_mindlin_tangential_lane(d
                                                                             double *diss) {
     const double vt[3] = {vt_in[0], vt_in[1], vt_in[2]};
     double gt, limit, ft2, half_inv_kt;
-    floe_contact_rotate_history(S, n);
+    /* one contact (the general path): the turn's full form and the slip only where taken, as
+     * a sphere batch takes them (the same operations for the case taken: the same bits) */
+    if (floe_contact_rotate_history_small(S, n)) floe_contact_rotate_history(S, n);
     floe_mindlin_trial(g_star, tdr, mu, dt, r_eff, depth, vt, gn, fn, fn_extra, S, Ft, &gt, &limit, &ft2, &half_inv_kt,
                        diss);
-    floe_mindlin_slip(gt, vt, limit, ft2, half_inv_kt, S, Ft, diss);
+    if (ft2 > limit * limit) floe_mindlin_slip(gt, vt, limit, ft2, half_inv_kt, S, Ft, diss);
     *energy += floe_dot3_l(S, S) * half_inv_kt;
 }
 
@@ -188,13 +190,22 @@ static inline __attribute__((always_inline)) void floe_coulomb_k(const floe_cont
 {
     const double dt = c->dt;
     double limit, ft2;
-    floe_coulomb_trial(c->n, c->vt, dt, ks, gs, mu, Fn, s, Ft, &limit, &ft2);
+    /* the spring's turn: the full form's square root and second division only for a turn
+     * above 0.01 rad (the same operations either way: the same bits) */
+    if (floe_contact_rotate_history_small(s, c->n)) floe_contact_rotate_history(s, c->n);
+    floe_coulomb_trial_rotated(c->vt, dt, ks, gs, mu, Fn, s, Ft, &limit, &ft2);
     const double vt2 = floe_v3_dot(c->vt, c->vt);
-    /* sliding or not, without a branch: in a dense bed contacts stick and slip at random, and
-     * a mispredicted branch per contact cost more than the slip's arithmetic done always (the
-     * values selected are those of the branches, so the same bits) */
+    /* the slip's values (a square root, two divisions) only for a contact that slips: one
+     * contact at a time, the general path (polytopes, compounds: a sphere pair's batch has its
+     * own copies, sph_flush_lanes). It was branch-free when the spheres came this way too: in
+     * a dense bed they stick and slip at random. A settled bed of polyhedra 3-4 % faster with
+     * the branch (issue 14 session 41); the same operations where it slips, the same bits */
     const int slip = ft2 > limit * limit;
-    const double ratio = limit / sqrt(ft2); /* read only when slipping: ft2 > 0 then */
+    if (!slip) {
+        *diss += gs * vt2 * dt;
+        return;
+    }
+    const double ratio = limit / sqrt(ft2); /* ft2 > 0 */
     double Fs[3], ss[3], dslip;
     floe_coulomb_slip(c->vt, ks, gs, ks > 0.0 ? -1.0 / ks : 0.0, ratio, Ft, Fs, ss);
     if (ks > 0.0) {
@@ -204,10 +215,10 @@ static inline __attribute__((always_inline)) void floe_coulomb_k(const floe_cont
         dslip = ratio * gs * vt2 * dt;
     }
     for (int k = 0; k < 3; ++k) {
-        Ft[k] = slip ? Fs[k] : Ft[k];
-        s[k] = slip ? ss[k] : s[k];
+        Ft[k] = Fs[k];
+        s[k] = ss[k];
     }
-    *diss += slip ? dslip : gs * vt2 * dt;
+    *diss += dslip;
 }
 
 /* the other forces' rate of change of vn (floe_contact.an_ext); 0 at dt = 0 (prepare,
@@ -302,8 +313,21 @@ static inline __attribute__((always_inline)) void floe_linear_normal_k(double kn
                                                                   floe_normal_force *o)
 {
     double Fn, fel, energy;
-    floe_linear_normal_lane(kn, gn, tension, c->depth, c->vn, c->dt, c->m_eff, c->an_ext, hist + 3, &Fn, &fel, &energy,
-                            1);
+    /* the lane form with its switches as constants, as the sphere batches call it: the onset
+     * phase's division only for a first evaluation, the last-evaluation phase's two only
+     * under tension (the same operations for the case taken: the same bits) */
+#define LIN_NORMAL_K(TENSION, FIRST)                                                                             \
+    floe_linear_normal_lane(kn, gn, (TENSION), c->depth, c->vn, c->dt, c->m_eff, c->an_ext, hist + 3, &Fn, &fel, \
+                            &energy, (FIRST))
+    const int first = (hist[3] == 0.0) & (c->dt > 0.0); /* (dt 0: nothing advances, f = 1) */
+    if (tension) {
+        if (first) LIN_NORMAL_K(1, 1);
+        else LIN_NORMAL_K(1, 0);
+    } else {
+        if (first) LIN_NORMAL_K(0, 1);
+        else LIN_NORMAL_K(0, 0);
+    }
+#undef LIN_NORMAL_K
     o->fn = Fn;
     o->fel = fel;
     o->kn = kn;

@@ -534,18 +534,23 @@ static inline __attribute__((always_inline)) void sphere_contact(floe_contact *c
     }
 }
 
-/* the lever arms of a sphere pair's contact point c->point (the middle of the overlap on the
- * line of centres) from i's centre and from j's, (dx, dy, dz) = x_j - x_i (j's image in a
- * periodic cell): ri = (r_i - depth/2) n, rj = ri - (dx, dy, dz); the same operations as
- * the lanes' (sph_flush_lanes), so the same bits. From the centre line rather than as
- * c->point - x: the lanes need not gather the centres (issue 14 session 41) */
-static inline __attribute__((always_inline)) void sphere_arms(const floe_contact *c, double rad_i, double dx,
-                                                              double dy, double dz, double ri[3], double rj[3]) {
-    const double ci = rad_i - 0.5 * c->depth, d[3] = {dx, dy, dz};
+/* the lever arms of a sphere pair's contact point (the middle of the overlap on the line of
+ * centres) from i's centre and from j's, d = x_j - x_i (j's image in a periodic cell), n the
+ * unit normal: ri = (r_i - depth/2) n, rj = ri - d. One body for the general path
+ * (sphere_arms) and each lane of sph_flush_lanes: the same bits. From the centre line rather
+ * than as point - x: the lanes need not gather the centres (issue 14 session 41) */
+static inline __attribute__((always_inline)) void sphere_arms_l(double rad_i, double depth, const double n[3],
+                                                                const double d[3], double ri[3], double rj[3]) {
+    const double ci = rad_i - 0.5 * depth;
     for (int a = 0; a < 3; a++) {
-        ri[a] = ci * c->n[a];
+        ri[a] = ci * n[a];
         rj[a] = ri[a] - d[a];
     }
+}
+static inline __attribute__((always_inline)) void sphere_arms(const floe_contact *c, double rad_i, double dx,
+                                                              double dy, double dz, double ri[3], double rj[3]) {
+    const double d[3] = {dx, dy, dz};
+    sphere_arms_l(rad_i, c->depth, c->n, d, ri, rj);
 }
 
 /* The end of a pair evaluation, the same for both bodies: the stored energy (res.energy +
@@ -847,8 +852,9 @@ typedef struct sph_batch {
     int k[SPH_BATCH], i[SPH_BATCH], j[SPH_BATCH];
     double dx[SPH_BATCH], dy[SPH_BATCH], dz[SPH_BATCH], d2[SPH_BATCH];
     /* the lanes' inputs (sph_flush_lanes), gathered as each entry joins: the radii, 1/m_i +
-     * 1/m_j, the centres, velocities and spins, a_i - a_j (w->dash_a), the history's spring,
-     * dashpot phase, last force and stored energy */
+     * 1/m_j, the velocities and spins, a_i - a_j (w->dash_a), the history's spring, dashpot
+     * phase, last force and stored energy; the centres only for a wall's entry or a stage
+     * that records its contacts (sph_lane_gather's centres) */
     double ra[SPH_BATCH], rb[SPH_BATCH], im[SPH_BATCH], xa[3][SPH_BATCH], xb[3][SPH_BATCH], vi[3][SPH_BATCH],
         vj[3][SPH_BATCH], wi[3][SPH_BATCH], wj[3][SPH_BATCH], aij[3][SPH_BATCH], s[3][SPH_BATCH], h3[SPH_BATCH],
         fo[3][SPH_BATCH], eo[SPH_BATCH];
@@ -973,7 +979,9 @@ static inline __attribute__((always_inline)) void sph_lane_gather(const floe_wor
  * last-evaluation phase only under a law with tension: one branch a batch (or a law), and
  * their divisions and square roots left out of the others (issue 14 session 39; the counts
  * in docs/architecture.md, "Session 39"). The inputs are the batch's arrays
- * (sph_lane_gather, as each entry joined; the lanes past nb hold an earlier batch's entries or zeros, their results are dropped). Each
+ * (sph_lane_gather, as each entry joined; the lanes past nb hold an earlier batch's entries or
+ * zeros, their results are dropped; the centres XA, XB are a wall lane's, or every lane's
+ * when recording: a sphere pair's lane otherwise holds stale ones, read by no kept result). Each
  * lane does the scalar operations in their order (no contraction in ISO C): the same bits
  * as the law's own force function (tests/test_sphere_path.c, which also counts the batches
  * that took each rare case, w->st_lanes). Out of line: inlined at each flush of stage_block,
@@ -1011,7 +1019,9 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
     const size_t hs = (size_t)env->nl->hs;
     const double dt = env->stepping ? ctx->dt : ctx->hist_dt;
     /* the batch's arrays (sph_lane_gather), all SL lanes: those past nb hold an earlier
-     * batch's entries or zeros, their results dropped */
+     * batch's entries or zeros, their results dropped (and XA, XB stale in a sphere pair's
+     * lane unless the stage records: only a wall lane's arms and the record's point read
+     * them) */
     const double *RI = b->ra, *RJ = b->rb, *IM = b->im, *H3i = b->h3;
     const double *D[3] = {b->dx, b->dy, b->dz};
     double (*XA)[SL] = b->xa, (*XB)[SL] = b->xb, (*VI)[SL] = b->vi, (*VJ)[SL] = b->vj, (*WI)[SL] = b->wi,
@@ -1081,25 +1091,22 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         if (want_reff)
             for (int q = 0; q < SL; q++) reff[q] = b->wall[q] != 0.0 ? b->wreff[q] : RI[q] * RJ[q] / (RI[q] + RJ[q]);
         for (int q = 0; q < SL; q++) {
-            const double inv = 1.0 / dist[q], ci = RI[q] - 0.5 * depth[q];
+            const double inv = 1.0 / dist[q];
             const int wl = b->wall[q] != 0.0;
-            double n[3], ri[3], rj[3];
-            for (int a = 0; a < 3; a++) { /* a wall's lanes: from its contact point (XA, XB gathered) */
-                const double ns = D[a][q] * inv, rs = ci * ns, pw = b->wpt[a][q];
-                n[a] = wl ? b->wn[a][q] : ns;
-                ri[a] = wl ? pw - XA[a][q] : rs;
-                rj[a] = wl ? pw - XB[a][q] : rs - D[a][q];
+            double n[3], ns[3], d[3], si[3], sj[3], ri[3], rj[3];
+            for (int a = 0; a < 3; a++) {
+                ns[a] = D[a][q] * inv;
+                d[a] = D[a][q];
+            }
+            sphere_arms_l(RI[q], depth[q], ns, d, si, sj);
+            for (int a = 0; a < 3; a++) { /* a wall's lane: from its contact point (XA, XB gathered) */
+                const double pw = b->wpt[a][q];
+                n[a] = wl ? b->wn[a][q] : ns[a];
+                ri[a] = wl ? pw - XA[a][q] : si[a];
+                rj[a] = wl ? pw - XB[a][q] : sj[a];
             }
             LANE_KIN(q, n, ri, rj);
         }
-        if (env->record)
-            for (int q = 0; q < SL; q++) {
-                const double inv = 1.0 / dist[q];
-                for (int a = 0; a < 3; a++) {
-                    const double ns = D[a][q] * inv, x1 = XA[a][q] + RI[q] * ns, x2 = XB[a][q] - RJ[q] * ns;
-                    PT[a][q] = b->wall[q] != 0.0 ? b->wpt[a][q] : 0.5 * (x1 + x2);
-                }
-            }
     } else {
         double dist[SL];
         for (int q = 0; q < SL; q++) {
@@ -1110,25 +1117,24 @@ static __attribute__((noinline)) void sph_flush_lanes(floe_world *w, const floe_
         if (want_reff)
             for (int q = 0; q < SL; q++) reff[q] = RI[q] * RJ[q] / (RI[q] + RJ[q]);
         for (int q = 0; q < SL; q++) {
-            const double inv = 1.0 / dist[q], ci = RI[q] - 0.5 * depth[q];
-            double n[3], ri[3], rj[3];
-            for (int a = 0; a < 3; a++) n[a] = D[a][q] * inv;
-            for (int a = 0; a < 3; a++) { /* sphere_arms */
-                ri[a] = ci * n[a];
-                rj[a] = ri[a] - D[a][q];
+            const double inv = 1.0 / dist[q];
+            double n[3], d[3], ri[3], rj[3];
+            for (int a = 0; a < 3; a++) {
+                n[a] = D[a][q] * inv;
+                d[a] = D[a][q];
             }
+            sphere_arms_l(RI[q], depth[q], n, d, ri, rj);
             LANE_KIN(q, n, ri, rj);
         }
-        if (env->record) /* the record's point: the mid point of the two surface points */
-            for (int q = 0; q < SL; q++) {
-                const double inv = 1.0 / dist[q];
-                for (int a = 0; a < 3; a++) {
-                    const double ns = D[a][q] * inv, x1 = XA[a][q] + RI[q] * ns, x2 = XB[a][q] - RJ[q] * ns;
-                    PT[a][q] = 0.5 * (x1 + x2);
-                }
-            }
     }
 #undef LANE_KIN
+    if (env->record) /* the record's point: a wall's from its detector, else the middle of the two
+                      * surface points (sphere_contact's; N holds a sphere lane's normal) */
+        for (int q = 0; q < SL; q++)
+            for (int a = 0; a < 3; a++) {
+                const double x1 = XA[a][q] + RI[q] * N[a][q], x2 = XB[a][q] - RJ[q] * N[a][q];
+                PT[a][q] = b->wall[q] != 0.0 ? b->wpt[a][q] : 0.5 * (x1 + x2);
+            }
     /* the springs turned with the contact frames (floe_contact_rotate_history): its common
      * cases on every lane, its full form on every lane only when a live lane's frame turned by
      * more than 0.01 rad in the step (a square root and a division a lane left out otherwise) */
