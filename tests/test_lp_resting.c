@@ -333,7 +333,8 @@ static void lazy_equals_full(void) {
             memcpy(bl, basis0, sizeof bl);
             floe_lp_result rf, rl;
             const int rcf = floe_lp_deepest(&F, bf, &rf), rcl = floe_lp_deepest(&L, bl, &rl);
-            const int eq = rcf == rcl && !memcmp(bf, bl, sizeof bf) && rf.warm == rl.warm && rf.pivots == rl.pivots && rf.taken_over == rl.taken_over &&
+            const int eq = rcf == rcl && !memcmp(bf, bl, sizeof bf) && rf.warm == rl.warm && rf.pivots == rl.pivots &&
+                           rf.taken_over == rl.taken_over &&
                            !memcmp(rf.x, rl.x, sizeof rf.x) && !memcmp(&rf.s, &rl.s, sizeof rf.s) &&
                            !memcmp(rf.normal, rl.normal, sizeof rf.normal) && !memcmp(&rf.gnorm, &rl.gnorm, sizeof rf.gnorm) &&
                            !memcmp(rf.lambda, rl.lambda, sizeof rf.lambda);

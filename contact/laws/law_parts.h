@@ -87,7 +87,9 @@ static inline __attribute__((always_inline)) int floe_contact_rotate_history_sma
  * in lanes (core/world/forces.c sph_flush_lanes; floe_mindlin_tangential_lane is the three in
  * order): the trial (the rotated spring advanced by -kt vt dt, the force it and the dashpot
  * give, the limit, |Ft|^2, 1 / (2 kt) and gt), then the slip onto the limit where |Ft| >
- * limit, which a batch without a slipping contact leaves out; neither has a branch. */
+ * limit, which a batch without a slipping contact leaves out; neither has a branch.
+ * floe_mindlin_tangential_lane, one contact at a time (the general path), takes the full turn
+ * and the slip only where they apply (two branches: not for lanes). */
 static inline __attribute__((always_inline)) void floe_mindlin_trial(double g_star, double tdr, double mu, double dt,
                                                                   double r_eff, double depth, const double vt[3],
                                                                   double gn, double fn, double fn_extra, double S[3],
@@ -107,7 +109,8 @@ static inline __attribute__((always_inline)) void floe_mindlin_trial(double g_st
 static inline __attribute__((always_inline)) void floe_mindlin_slip(double gt, const double vt[3], double limit,
                                                                  double ft2, double half_inv_kt, double S[3],
                                                                  double Ft[3], double *diss) {
-    /* sliding or not without a branch (as floe_coulomb_k: the branches' values selected) */
+    /* sliding or not without a branch (the branches' values selected: a batch's lanes run it;
+     * floe_mindlin_tangential_lane calls it only for a contact that slips) */
     const int slip = ft2 > limit * limit;
     const double ftmag = sqrt(ft2), e_before = floe_dot3_l(S, S) * half_inv_kt, sc = limit / ftmag;
     double Fl[3], Ss[3];
@@ -151,7 +154,7 @@ static inline void floe_mindlin_tangential(double g_star, double tdr, double mu,
 
 /* Coulomb friction with a shear spring (ParticLS eqs 17-18), in two parts that a batch of
  * contacts runs in lanes (core/world/forces.c sph_flush_lanes): the trial, the spring s
- * (rotated with the contact frame, floe_contact_rotate_history) advanced by vt dt and the force
+ * (rotated with the contact frame by the caller first, floe_contact_rotate_history) advanced by vt dt and the force
  * it and the dashpot give, with the Coulomb limit mu |Fn| and |Ft|^2; then the force onto
  * the limit and the spring to match (minus_inv_ks = -1 / ks; no spring: s = 0), which the
  * caller keeps for a contact that slips (|Ft| > limit). Neither has a branch. */
@@ -165,14 +168,6 @@ static inline __attribute__((always_inline)) void floe_coulomb_trial_rotated(con
     *limit = mu * fabs(Fn);
     *ft2 = floe_dot3_l(Ft, Ft);
 }
-static inline __attribute__((always_inline)) void floe_coulomb_trial(const double n[3], const double vt[3], double dt,
-                                                                      double ks, double gs, double mu, double Fn,
-                                                                      double *s, double Ft[3], double *limit,
-                                                                      double *ft2) {
-    floe_contact_rotate_history(s, n);
-    floe_coulomb_trial_rotated(vt, dt, ks, gs, mu, Fn, s, Ft, limit, ft2);
-}
-
 static inline __attribute__((always_inline)) void floe_coulomb_slip(const double vt[3], double ks, double gs,
                                                                      double minus_inv_ks, double ratio,
                                                                      const double Ft[3], double Fs[3], double ss[3]) {
@@ -267,7 +262,8 @@ static inline __attribute__((always_inline)) double floe_linear_phase_lane(doubl
     const double h = *h3;
     const int live = dt > 0.0; /* else prepare: nothing advances, the factor is 1 */
     /* the first evaluation (h == 0): the contact began d / vn ago (may_first = 0, a constant:
-     * the caller knows h != 0, and the division drops out) */
+     * the caller knows h != 0, or that dt is not > 0 (not live: the factor is 1 and h kept
+     * whatever r is), and the division drops out) */
     const double r = may_first ? d / (vn * dt) : 0.0;
     const double f_first = ((vn > 0.0) & (d <= 2.0 * vn * dt)) ? 0.5 + (r < 1.0 ? r : 1.0) : 1.0;
     /* later ones: the part of this evaluation's window that the previous one already
